@@ -1,0 +1,248 @@
+"""Physical fog media: exponential height layers, optionally clipped to a box.
+
+A :class:`FogMedium` has extinction ``sigma_t(p) = sigma_t_rgb * rho(p)`` [1/m] with
+relative density ``rho(p) = sum_l density_l * exp(-falloff_l * (p_y - height_l))``
+inside ``bounds`` (everywhere when ``bounds`` is None) and 0 outside.  World space
+is y-up, metres.  Special cases, all exact:
+
+* one or two exponential layers (Unreal's fog is two);
+* ``falloff = 0``: a homogeneous medium;
+* homogeneous + ``bounds``: the bounded box slab of seed 004.
+
+The methods take an array back end ``ops`` (``fogref.media.NP`` for numpy float64,
+``fogref.media.drjit_ops()`` inside Mitsuba), positions and directions as
+3-sequences of arrays ``(x, y, z)``, and return shape optical depths (metres;
+multiply by ``sigma_t`` per channel) or distances.  Directions are unit vectors.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import functools
+
+from fogref.media import closed_form as cf
+from fogref.errors import ParameterError
+
+
+def _quiet(fn):
+    """Silence numpy's overflow warnings: the closed forms saturate on purpose."""
+
+    @functools.wraps(fn)
+    def wrapper(self, ops, *args, **kw):
+        with ops.errstate():
+            return fn(self, ops, *args, **kw)
+
+    return wrapper
+
+
+@dataclass(frozen=True)
+class ExpLayer:
+    """One exponential layer: ``density * exp(-falloff * (y - height))``.
+
+    density: relative scale, dimensionless, >= 0 (multiplies ``sigma_t``).
+    falloff: b [1/m], 0 (homogeneous) to 1e3.
+    height:  h [m], the height where the layer's relative density is ``density``.
+
+    Every height profile ("component") answers the same three questions, with
+    ``ops`` the array back end, ``oy`` the ray origin's height [m] and ``dy`` the
+    ray direction's y component: :meth:`rho`, :meth:`depth`, :meth:`sample`.
+    """
+
+    density: float = 1.0
+    falloff: float = 0.0
+    height: float = 0.0
+
+    def validate(self, src, i):
+        for name, v, lo, hi in (("density", self.density, 0.0, 1e6), ("falloff", self.falloff, 0.0, 1e3),
+                                ("height", self.height, -1e7, 1e7)):
+            if not (lo <= v <= hi) or not math.isfinite(v):
+                raise ParameterError(src, f"layer{i}.{name}", f"value {v} outside [{lo}, {hi}]")
+
+    def log_c(self, ops, oy):
+        log_density = math.log(self.density) if self.density > 0 else -1.0e4
+        return log_density - self.falloff * (oy - self.height)
+
+    @_quiet
+    def rho(self, ops, y):
+        """Relative density at height y (dimensionless)."""
+        return ops.exp(ops.minimum(self.log_c(ops, y), ops.exp_limit))
+
+    @_quiet
+    def depth(self, ops, oy, dy, t):
+        """Shape optical depth [m] over ``[0, t]`` along a ray (t = ops.largest: infinity)."""
+        return cf.exp_layer_optical_depth(ops, self.log_c(ops, oy), self.falloff * dy, t)
+
+    @_quiet
+    def sample(self, ops, oy, dy, s):
+        """Distance [m] where the shape optical depth reaches ``s``; ops.largest if never."""
+        return cf.exp_layer_sample(ops, self.log_c(ops, oy), self.falloff * dy, s)
+
+
+@dataclass(frozen=True)
+class Box:
+    """Axis-aligned box [m]: ``lo`` and ``hi`` corners, each (x, y, z)."""
+
+    lo: tuple
+    hi: tuple
+
+
+def _rgb(name, v, lo, hi, source):
+    if isinstance(v, (int, float)):
+        v = (float(v),) * 3
+    v = tuple(float(x) for x in v)
+    if len(v) != 3:
+        raise ParameterError(source, name, f"expected 1 or 3 values, got {len(v)}")
+    for x in v:
+        if not (lo <= x <= hi) or not math.isfinite(x):
+            raise ParameterError(source, name, f"value {x} outside [{lo}, {hi}]")
+    return v
+
+
+@dataclass(frozen=True)
+class FogMedium:
+    """Exponential height fog with RGB extinction and albedo and an HG phase.
+
+    sigma_t: RGB extinction at each layer's reference height [1/m], 0 to 1e2.
+    albedo:  RGB single-scattering albedo, 0 to 1.
+    g:       Henyey–Greenstein asymmetry, -0.999 to 0.999.
+    layers:  1 to 4 height components (:class:`ExpLayer` or another profile with
+             the same interface); layers with density 0 are dropped.
+    bounds:  optional :class:`Box`; the fog is 0 outside it.
+    """
+
+    sigma_t: tuple = (0.01, 0.01, 0.01)
+    albedo: tuple = (0.9, 0.9, 0.9)
+    g: float = 0.0
+    layers: tuple = (ExpLayer(),)
+    bounds: Box | None = None
+    source: str = field(default="<FogMedium>", compare=False, repr=False)
+
+    def __post_init__(self):
+        src = self.source
+        object.__setattr__(self, "sigma_t", _rgb("sigma_t", self.sigma_t, 0.0, 1e2, src))
+        object.__setattr__(self, "albedo", _rgb("albedo", self.albedo, 0.0, 1.0, src))
+        if not (-0.999 <= float(self.g) <= 0.999):
+            raise ParameterError(src, "g", f"value {self.g} outside [-0.999, 0.999]")
+        object.__setattr__(self, "g", float(self.g))
+        layers = tuple(self.layers)
+        if not 1 <= len(layers) <= 4:
+            raise ParameterError(src, "layers", f"expected 1 to 4 layers, got {len(layers)}")
+        for i, L in enumerate(layers):
+            L.validate(src, i)
+        kept = tuple(L for L in layers if getattr(L, "density", 1.0) > 0)
+        object.__setattr__(self, "layers", kept or layers[:1])
+        if self.bounds is not None:
+            lo, hi = tuple(map(float, self.bounds.lo)), tuple(map(float, self.bounds.hi))
+            if len(lo) != 3 or len(hi) != 3 or any(a >= b for a, b in zip(lo, hi)):
+                raise ParameterError(src, "bounds", f"need lo < hi per axis, got {lo}, {hi}")
+            object.__setattr__(self, "bounds", Box(lo, hi))
+
+    # -- what the scene needs (trace-time specialisation) ---------------------
+    @property
+    def is_vacuum(self) -> bool:
+        return max(self.sigma_t) == 0 or all(getattr(L, "density", 1.0) == 0 for L in self.layers)
+
+    @property
+    def scatters(self) -> bool:
+        return not self.is_vacuum and max(self.albedo) > 0
+
+    @property
+    def is_homogeneous(self) -> bool:
+        return all(getattr(L, "falloff", None) == 0 for L in self.layers)
+
+    # -- relative density ----------------------------------------------------
+    @_quiet
+    def density(self, ops, p):
+        """Relative density rho(p) (dimensionless); ``sigma_t * rho`` is 1/m."""
+        y = p[1]
+        rho = 0.0
+        for L in self.layers:
+            rho = rho + L.rho(ops, y)
+        if self.bounds is not None:
+            rho = ops.where(self._inside(ops, p), rho, 0.0)
+        return rho
+
+    def _inside(self, ops, p):
+        lo, hi = self.bounds.lo, self.bounds.hi
+        m = True
+        for a in range(3):
+            m = m & (p[a] >= lo[a]) & (p[a] <= hi[a])
+        return m
+
+    # -- clipping to the box -------------------------------------------------
+    @_quiet
+    def clip(self, ops, o, d):
+        """Ray interval ``[t0, t1]`` (t0 >= 0) inside the bounds; ``t1 < t0`` if none."""
+        if self.bounds is None:
+            return 0.0, ops.largest
+        t0, t1 = 0.0, ops.largest
+        for a in range(3):
+            lo, hi = self.bounds.lo[a], self.bounds.hi[a]
+            da = d[a]
+            par = da == 0
+            inv = 1.0 / ops.where(par, 1.0, da)
+            ta = (lo - o[a]) * inv
+            tb = (hi - o[a]) * inv
+            near = ops.minimum(ta, tb)
+            far = ops.maximum(ta, tb)
+            outside = (o[a] < lo) | (o[a] > hi)
+            near = ops.where(par, ops.where(outside, ops.largest, -ops.largest), near)
+            far = ops.where(par, ops.where(outside, -ops.largest, ops.largest), far)
+            t0 = ops.maximum(t0, near)
+            t1 = ops.minimum(t1, far)
+        return t0, t1
+
+    # -- optical depth -------------------------------------------------------
+    def _layers_depth(self, ops, oy, dy, t):
+        tau = 0.0
+        for L in self.layers:
+            tau = tau + L.depth(ops, oy, dy, t)
+        return ops.minimum(tau, cf.TAU_MAX)
+
+    @_quiet
+    def optical_depth(self, ops, o, d, t):
+        """Shape optical depth [m] over ``[0, t]`` (``t = ops.largest``: to infinity)."""
+        if self.bounds is None:
+            return self._layers_depth(ops, o[1], d[1], t)
+        t0, t1 = self.clip(ops, o, d)
+        t_end = ops.minimum(t, t1)
+        length = ops.maximum(t_end - t0, 0.0)
+        oy = o[1] + ops.where(length > 0, t0, 0.0) * d[1]
+        tau = self._layers_depth(ops, oy, d[1], length)
+        return ops.where(length > 0, tau, 0.0)
+
+    @_quiet
+    def transmittance(self, ops, o, d, t):
+        """RGB transmittance over ``[0, t]`` as a 3-tuple of arrays."""
+        tau = self.optical_depth(ops, o, d, t)
+        return tuple(ops.exp(-s * tau) for s in self.sigma_t)
+
+    def sun_optical_depth(self, ops, p, w):
+        """Shape optical depth from ``p`` to infinity toward ``w`` (unit, to the sun)."""
+        return self.optical_depth(ops, p, w, ops.largest)
+
+    # -- free-flight sampling ------------------------------------------------
+    @_quiet
+    def sample_distance(self, ops, o, d, exp_variates, sigma):
+        """Exact free-flight distance for extinction ``sigma * rho`` [1/m].
+
+        ``exp_variates``: one Exp(1) variate (``-log1p(-u)``) per layer.  Each layer
+        is inverted in closed form and the nearest collision wins (exact: the
+        layers' transmittances multiply).  Returns ``ops.largest`` when the ray
+        leaves the fog without a collision.
+        """
+        t0, t1 = (0.0, ops.largest) if self.bounds is None else self.clip(ops, o, d)
+        if self.bounds is not None:
+            t0 = ops.where(t1 >= t0, t0, 0.0)
+        oy = o[1] + t0 * d[1] if self.bounds is not None else o[1]
+        inv_sigma = 1.0 / ops.maximum(sigma, 1e-30)
+        t = ops.largest
+        for L, e in zip(self.layers, exp_variates):
+            tl = L.sample(ops, oy, d[1], e * inv_sigma)
+            t = ops.minimum(t, tl)
+        if self.bounds is not None:
+            hit = (t < ops.largest) & (t0 + t <= t1) & (t1 >= t0)
+            t = ops.where(hit, t0 + t, ops.largest)
+        return t

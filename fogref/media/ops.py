@@ -1,0 +1,144 @@
+"""Array back ends, so that every closed form is written once.
+
+The physics in :mod:`fogref.media` is written against a tiny namespace ``ops``
+that is either :data:`NP` (numpy, float64, used for references and analysis) or
+:func:`drjit_ops` (Dr.Jit, the variant's float type, usually float32, used inside
+the renderer).  The two back ends differ only in their primitives; the formulas
+are shared, and ``tests/test_media_twins.py`` holds the two forms equal.
+
+Dr.Jit has no ``expm1``/``log1p``; they are built here from ``exp``/``log``
+with Kahan's correction, which is accurate to a few ulp (W. Kahan, "Interval
+arithmetic options in the proposed IEEE floating point arithmetic standard",
+1980; also Goldberg 1991, Theorem 4).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class NumpyOps:
+    """numpy float64 back end."""
+
+    name = "numpy"
+    dtype = np.float64
+    largest = float(np.finfo(np.float64).max)
+    #: exponent arguments are clamped to +-EXP_LIMIT so exp() never overflows.
+    exp_limit = 700.0
+
+    @staticmethod
+    def asarray(x):
+        return np.asarray(x, dtype=np.float64)
+
+    exp = staticmethod(np.exp)
+    log = staticmethod(np.log)
+    expm1 = staticmethod(np.expm1)
+    log1p = staticmethod(np.log1p)
+    sqrt = staticmethod(np.sqrt)
+    abs = staticmethod(np.abs)
+    minimum = staticmethod(np.minimum)
+    maximum = staticmethod(np.maximum)
+    isfinite = staticmethod(np.isfinite)
+
+    @staticmethod
+    def where(cond, a, b):
+        return np.where(cond, a, b)
+
+    @staticmethod
+    def safe_div(a, b):
+        """a / b, with b == 0 giving 0 (callers select the limit themselves)."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(b != 0, a / np.where(b != 0, b, 1.0), 0.0)
+
+    @staticmethod
+    def errstate():
+        return np.errstate(all="ignore")
+
+
+class _NullContext:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+
+class DrJitOps:
+    """Dr.Jit back end for the current Mitsuba variant's ``Float``."""
+
+    name = "drjit"
+
+    def __init__(self, Float):
+        import drjit as dr
+
+        self.dr = dr
+        self.Float = Float
+        single = dr.type_v(Float) == dr.VarType.Float32
+        self.largest = float(np.finfo(np.float32 if single else np.float64).max)
+        self.exp_limit = 87.0 if single else 700.0
+
+    def asarray(self, x):
+        return x if isinstance(x, self.Float) else self.Float(x)
+
+    def exp(self, x):
+        return self.dr.exp(x)
+
+    def log(self, x):
+        return self.dr.log(x)
+
+    def expm1(self, x):
+        dr = self.dr
+        u = dr.exp(x)
+        um1 = u - 1
+        big = dr.abs(x) > 0.5
+        r = dr.select(u == 1, x, um1 * x / dr.log(u))
+        r = dr.select(um1 == -1, -1.0, r)
+        return dr.select(big, um1, r)
+
+    def log1p(self, x):
+        dr = self.dr
+        u = 1 + x
+        r = dr.select(u == 1, x, dr.log(u) * x / (u - 1))
+        return dr.select(dr.abs(x) > 0.5, dr.log(u), r)
+
+    def sqrt(self, x):
+        return self.dr.sqrt(x)
+
+    def abs(self, x):
+        return self.dr.abs(x)
+
+    def minimum(self, a, b):
+        return self.dr.minimum(a, b)
+
+    def maximum(self, a, b):
+        return self.dr.maximum(a, b)
+
+    def isfinite(self, x):
+        return self.dr.isfinite(x)
+
+    def where(self, cond, a, b):
+        return self.dr.select(cond, a, b)
+
+    def safe_div(self, a, b):
+        dr = self.dr
+        nz = b != 0
+        return dr.select(nz, a / dr.select(nz, b, 1.0), 0.0)
+
+    def errstate(self):
+        return _NullContext()
+
+
+NP = NumpyOps()
+
+_cache: dict = {}
+
+
+def drjit_ops(Float=None) -> DrJitOps:
+    """The Dr.Jit back end for ``Float`` (default: ``mitsuba.Float`` of the variant)."""
+    if Float is None:
+        import mitsuba as mi
+
+        Float = mi.Float
+    if Float not in _cache:
+        _cache[Float] = DrJitOps(Float)
+    return _cache[Float]

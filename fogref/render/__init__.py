@@ -1,0 +1,1 @@
+"""Mitsuba glue: variant and LLVM set-up, scene loading, EXR layers."""

@@ -1,0 +1,12 @@
+"""fogref's Mitsuba plugins, registered for the current variant by ``register()``."""
+
+
+def register() -> None:
+    """Register the fog media and the ``fogpath`` integrator with Mitsuba."""
+    import mitsuba as mi
+
+    from plugins.fog_medium import register as register_media
+    from plugins.fogpath import FogPathIntegrator
+
+    register_media()
+    mi.register_integrator("fogpath", lambda props: FogPathIntegrator(props))
