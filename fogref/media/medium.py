@@ -181,7 +181,7 @@ class FogMedium:
         for a in range(3):
             lo, hi = self.bounds.lo[a], self.bounds.hi[a]
             da = d[a]
-            par = da == 0
+            par = ops.abs(da) < 1e-30
             inv = 1.0 / ops.where(par, 1.0, da)
             ta = (lo - o[a]) * inv
             tb = (hi - o[a]) * inv

@@ -25,6 +25,12 @@ class NumpyOps:
     largest = float(np.finfo(np.float64).max)
     #: exponent arguments are clamped to +-EXP_LIMIT so exp() never overflows.
     exp_limit = 700.0
+    #: log(largest): exp() of anything above overflows.
+    log_largest = float(np.log(np.finfo(np.float64).max))
+    #: smallest normal number.
+    tiny = float(np.finfo(np.float64).tiny)
+    #: unit roundoff (half an ulp of 1).
+    eps = float(np.finfo(np.float64).eps) / 2
 
     @staticmethod
     def asarray(x):
@@ -76,18 +82,28 @@ class DrJitOps:
         single = dr.type_v(Float) == dr.VarType.Float32
         self.largest = float(np.finfo(np.float32 if single else np.float64).max)
         self.exp_limit = 87.0 if single else 700.0
+        fi = np.finfo(np.float32 if single else np.float64)
+        self.log_largest = float(np.log(fi.max))
+        self.tiny = float(fi.tiny)
+        self.eps = float(fi.eps) / 2
 
     def asarray(self, x):
         return x if isinstance(x, self.Float) else self.Float(x)
 
+    def _f(self, x):
+        # Python scalars become Float so that Kahan's tricks run in the variant's
+        # precision (and never raise ZeroDivisionError in Python arithmetic).
+        return x if isinstance(x, self.Float) else self.Float(x)
+
     def exp(self, x):
-        return self.dr.exp(x)
+        return self.dr.exp(self._f(x))
 
     def log(self, x):
-        return self.dr.log(x)
+        return self.dr.log(self._f(x))
 
     def expm1(self, x):
         dr = self.dr
+        x = self._f(x)
         u = dr.exp(x)
         um1 = u - 1
         big = dr.abs(x) > 0.5
@@ -97,6 +113,7 @@ class DrJitOps:
 
     def log1p(self, x):
         dr = self.dr
+        x = self._f(x)
         u = 1 + x
         r = dr.select(u == 1, x, dr.log(u) * x / (u - 1))
         return dr.select(dr.abs(x) > 0.5, dr.log(u), r)

@@ -36,7 +36,7 @@ def single_scatter_sun(ops, medium, o, d, D, w, E):
     if medium.bounds is not None:
         raise ParameterError(medium.source, "bounds", "closed-form single scattering needs an unbounded medium")
     wy = float(w[1])
-    if wy <= 0 or any(L.falloff == 0 for L in medium.layers):
+    if wy <= 0 or any(getattr(L, "falloff", 1.0) == 0 for L in medium.layers):
         zero = 0.0 * d[0]
         return (zero, zero, zero)
     cos_theta = d[0] * w[0] + d[1] * w[1] + d[2] * w[2]
@@ -44,13 +44,18 @@ def single_scatter_sun(ops, medium, o, d, D, w, E):
     tau = medium.optical_depth(ops, o, d, D)
     tau_sun_o = medium.sun_optical_depth(ops, o, w)
     m = 1.0 - d[1] / wy
+    tau_sun_end = medium.sun_optical_depth(ops, tuple(o[i] + D * d[i] for i in range(3)), w)
     out = []
     for sig, alb, e in zip(medium.sigma_t, medium.albedo, E):
         tc = sig * tau
-        # at D = inf with m <= 0 the sun is nearly behind the viewer's ascent:
-        # tc*phi(m tc) stays finite because phi saturates at ops.largest.
-        integral = ops.minimum(tc * cf.phi(ops, m * tc), ops.largest)
-        out.append(alb * e * phase * ops.exp(-sig * tau_sun_o) * integral)
+        # m >= 0: T_sun(o) * tc * phi(m tc), all factors bounded.
+        pos = ops.exp(-sig * tau_sun_o) * ops.minimum(tc * cf.phi(ops, ops.maximum(m, 0.0) * tc), ops.largest)
+        # m < 0 (looking up more steeply than the sun): fold both exponentials,
+        # exp(-sig (tau_sun(D) + tau)) (1 - exp(m tc)) / (-m), whose exponent is <= 0.
+        neg_m = ops.where(m < 0, -m, 1.0)
+        neg = ops.exp(-sig * (tau_sun_end + tau)) * (-ops.expm1(-neg_m * tc)) / neg_m
+        integral = ops.where(m < 0, neg, pos)
+        out.append(alb * e * phase * integral)
     return tuple(out)
 
 

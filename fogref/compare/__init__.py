@@ -1,0 +1,108 @@
+"""Compare game fog models with the path-traced ground truth.
+
+Modules (one concept each):
+
+* :mod:`~fogref.compare.metrics`       RMSE, relMSE, ΔE2000, HDR-FLIP, per-pixel maps
+* :mod:`~fogref.compare.ground_truth`  the ground-truth EXR: parts, geometry, parameters
+* :mod:`~fogref.compare.report`        ``compare()``: evaluate a model, write the report
+* :mod:`~fogref.compare.binning`       errors binned by distance or sun angle
+* :mod:`~fogref.compare.plots`         heatmaps, side-by-side pictures, binned plots
+* :mod:`~fogref.compare.tonemap`       the shared display tone map
+* :mod:`~fogref.compare.model_factory` build a model from ``--param`` / ``--from-scene``
+* :mod:`~fogref.compare.atomic`        atomic writes of report files
+
+Command line (added to fogref's CLI by :func:`add_cli`)::
+
+    fogref compare EXR --model ue4 [--param KEY=VALUE ...] [--from-scene]
+                       [--out reports/compare/NAME] [--precision float32] [--sky-distance M]
+                       [--no-figures]
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from fogref.compare.report import DEFAULT_SKY_DISTANCE, compare
+
+__all__ = ["compare", "add_cli", "run_compare_command", "main", "DEFAULT_SKY_DISTANCE"]
+
+
+def default_out_dir(exr_path, model_name: str) -> Path:
+    """``reports/compare/<EXR stem>-<model>`` (relative to the working directory)."""
+    return Path("reports") / "compare" / f"{Path(exr_path).stem}-{model_name}"
+
+
+def run_compare_command(args: argparse.Namespace) -> int:
+    """Handler of ``fogref compare``: build the model, call :func:`compare`, print a summary."""
+    from fogref.compare.model_factory import build_model, model_class, parse_param_assignments
+    from fogref.exrio import read_exr
+
+    cls = model_class(args.model)
+    scene_params = None
+    if args.from_scene:
+        _, attrs = read_exr(args.exr)
+        scene_params = attrs.get("fogref.params")
+        if not isinstance(scene_params, dict):
+            from fogref.errors import FogrefError
+
+            raise FogrefError(f"{args.exr}: header attribute 'fogref.params' missing; --from-scene needs it")
+    model = build_model(cls, parse_param_assignments(args.param), scene_params)
+    out = Path(args.out) if args.out else default_out_dir(args.exr, args.model)
+    report = compare(args.exr, model, out, precision=args.precision, sky_distance=args.sky_distance,
+                     figures=not args.no_figures)
+    final = report["metrics"]["final"]["all"]
+    print(
+        f"{args.model} vs {args.exr}: final RMSE {final.get('rmse', 0):.4g}, relMSE {final.get('relmse', 0):.4g}, "
+        f"ΔE2000 mean {final.get('delta_e2000_mean', 0):.3g}, FLIP mean {final.get('flip_mean', 0):.3g}"
+    )
+    print(f"report: {out / 'index.md'}")
+    return 0
+
+
+def add_cli(subparsers) -> argparse.ArgumentParser:
+    """Add the ``compare`` subcommand to an argparse ``subparsers`` object.
+
+    The parser's ``func`` default is :func:`run_compare_command`, so a main program
+    dispatches with ``args.func(args)``.  Returns the new subparser.
+    """
+    p = subparsers.add_parser("compare", help=_HELP, description=_DESCRIPTION)
+    _configure(p)
+    return p
+
+
+_HELP = "measure a game fog model against a ground-truth EXR and write a report"
+_DESCRIPTION = (
+    "Evaluate a game fog model on the pixels of a ground-truth EXR and write metrics.json, errors.exr, "
+    "PNG heatmaps, error-vs-distance/sun-angle plots and index.md."
+)
+
+
+def _configure(p: argparse.ArgumentParser) -> None:
+    """The ``compare`` arguments, shared by :func:`add_cli` and :func:`main`."""
+    p.add_argument("exr", help="ground-truth EXR written by the fogref renderer")
+    p.add_argument("--model", required=True, help="registered fog model name, e.g. ue4")
+    p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
+                   help="set a model parameter by name (VALUE parsed as JSON when possible); repeatable")
+    p.add_argument("--from-scene", action="store_true",
+                   help="derive the model parameters from the EXR's physical fog (model.from_physical); "
+                   "--param values then override")
+    p.add_argument("--out", default=None, help="report folder (default reports/compare/<EXR stem>-<model>)")
+    p.add_argument("--precision", choices=("float32", "float64"), default="float32",
+                   help="arithmetic precision of the model evaluation")
+    p.add_argument("--sky-distance", type=float, default=DEFAULT_SKY_DISTANCE, metavar="M",
+                   help=f"distance [m] at which sky pixels are fogged (default {DEFAULT_SKY_DISTANCE:g})")
+    p.add_argument("--no-figures", action="store_true",
+                   help="write only metrics.json, errors.exr and index.md (no PNGs; faster, for CI)")
+    p.set_defaults(func=run_compare_command)
+
+
+def main(argv=None) -> int:
+    """Stand-alone entry point: ``python -m fogref.compare EXR --model NAME ...``.
+
+    Same options as ``fogref compare``; ``argv`` excludes the program name.
+    """
+    parser = argparse.ArgumentParser(prog="fogref compare", description=_DESCRIPTION)
+    _configure(parser)
+    args = parser.parse_args(argv)
+    return args.func(args)

@@ -1,0 +1,38 @@
+"""Atomic file writes for report outputs: a file appears only when complete.
+
+Each writer writes a temporary file in the destination folder, then renames it
+over the destination (``os.replace``, atomic on POSIX within one file system).
+EXR files use :func:`fogref.exrio.write_exr`, which is atomic already.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+
+def _atomic(path, write) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp" + path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def write_text_atomic(path, text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` atomically; returns the path."""
+    return _atomic(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
+
+
+def save_figure_atomic(figure, path, dpi: int = 110) -> Path:
+    """Save a matplotlib ``Figure`` to ``path`` (format from the suffix) atomically."""
+    fmt = Path(path).suffix.lstrip(".") or "png"
+    return _atomic(path, lambda tmp: figure.savefig(tmp, format=fmt, dpi=dpi, bbox_inches="tight"))

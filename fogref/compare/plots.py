@@ -1,0 +1,134 @@
+"""Report figures: error heatmaps, side-by-side pictures, errors binned by distance/angle.
+
+Uses matplotlib's object API with the Agg canvas (no pyplot, no global backend
+change, no display needed).  Every figure is written atomically.
+Image row 0 is the top of the picture, as in the EXR.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from fogref.compare.atomic import save_figure_atomic
+from fogref.compare.metrics import ErrorMaps
+from fogref.compare.tonemap import tone_map
+
+
+def _figure(width_in: float, height_in: float):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width_in, height_in))
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _panel_size(shape: tuple[int, int]) -> tuple[float, float]:
+    h, w = shape
+    aspect = h / max(w, 1)
+    return 4.0, max(1.5, 4.0 * aspect)
+
+
+def _robust_max(m: np.ndarray) -> float:
+    """Upper colour limit: the 99.5th percentile of finite values (> 0), else 1."""
+    v = m[np.isfinite(m)]
+    if v.size == 0:
+        return 1.0
+    hi = float(np.percentile(v, 99.5))
+    if not hi > 0:
+        hi = float(v.max())
+    return hi if hi > 0 else 1.0
+
+
+def plot_error_heatmaps(errors: ErrorMaps, part: str, units: str, path) -> Path:
+    """Four heatmaps of one part, each with a colour bar and its units.
+
+    |error| (mean over RGB) [``units``], relative squared error [1],
+    ΔE2000 [1] and HDR-FLIP [0..1].  Colour limits: 0 to the 99.5th percentile
+    (FLIP: 0 to 1), so a few outliers do not flatten the map.
+    """
+    panels = [
+        (errors.absolute, "|model − reference|", f"[{units}]", "viridis", _robust_max(errors.absolute)),
+        (errors.relative_squared, "relative squared error", "[1]", "viridis", _robust_max(errors.relative_squared)),
+        (errors.delta_e2000, "ΔE2000", "[1]", "viridis", _robust_max(errors.delta_e2000)),
+        (errors.flip, "HDR-FLIP", "[0..1]", "magma", 1.0),
+    ]
+    pw, ph = _panel_size(errors.absolute.shape)
+    fig = _figure(pw * len(panels) + 1.0, ph + 0.8)
+    axes = fig.subplots(1, len(panels))
+    fig.subplots_adjust(wspace=0.3)
+    for ax, (m, title, unit, cmap, vmax) in zip(axes, panels):
+        im = ax.imshow(m, cmap=cmap, vmin=0.0, vmax=vmax, interpolation="nearest")
+        ax.set_title(f"{title} {unit}", fontsize=9)
+        ax.set_axis_off()
+        fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04).set_label(unit, fontsize=8)
+    fig.suptitle(f"{part}: per-pixel error of the model", fontsize=10)
+    return save_figure_atomic(fig, path)
+
+
+def plot_side_by_side(reference, model, exposure: float, part: str, units: str, path) -> Path:
+    """Reference | model | |model − reference|, all through one tone map.
+
+    Tone map: :func:`fogref.compare.tonemap.tone_map` with the shared ``exposure``
+    [1/``units``] (exposure, clip to [0, 1], sRGB OETF).
+    """
+    reference, model = np.asarray(reference, dtype=np.float64), np.asarray(model, dtype=np.float64)
+    images = [
+        (reference, "reference"),
+        (model, "model"),
+        (np.abs(np.nan_to_num(model - reference, nan=0.0, posinf=0.0, neginf=0.0)), "|model − reference|"),
+    ]
+    pw, ph = _panel_size(reference.shape[:2])
+    fig = _figure(pw * 3, ph + 0.8)
+    axes = fig.subplots(1, 3)
+    for ax, (img, title) in zip(axes, images):
+        ax.imshow(tone_map(img, exposure), interpolation="nearest")
+        ax.set_title(title, fontsize=9)
+        ax.set_axis_off()
+    fig.suptitle(
+        f"{part} — shared tone map: ×{exposure:.4g} [1/{units}], clip to [0, 1], sRGB OETF", fontsize=10
+    )
+    return save_figure_atomic(fig, path)
+
+
+def plot_binned_errors(
+    binned: dict, part_units: dict[str, str], xlabel: str, title: str, path, log_x: bool
+) -> Path:
+    """Errors per bin of a coordinate, one line per part, in a 2×2 grid.
+
+    Panels: RMSE of the radiance parts [their units], RMSE of dimensionless parts
+    [1], mean ΔE2000 [1], mean HDR-FLIP [0..1].  ``binned``: the output of
+    :func:`fogref.compare.binning.binned_errors`; ``part_units``: part -> units
+    ("1" marks a dimensionless part).  Markers sit at the bin centres.
+    """
+    fig = _figure(10.0, 7.0)
+    axes = fig.subplots(2, 2, sharex=True).ravel()
+    x = np.asarray(binned.get("center", []), dtype=np.float64)
+    radiance_units = sorted({u for u in part_units.values() if u != "1"}) or ["radiance"]
+    labels = [
+        f"RMSE [{', '.join(radiance_units)}]",
+        "RMSE, dimensionless parts [1]",
+        "mean ΔE2000 [1]",
+        "mean HDR-FLIP [0..1]",
+    ]
+    for i, (part, stats) in enumerate(binned.get("parts", {}).items()):
+        style = {"marker": "o", "ms": 3, "label": part, "color": f"C{i}"}  # one colour per part
+        dimensionless = part_units.get(part) == "1"
+        axes[1 if dimensionless else 0].plot(x, stats["rmse"], **style)
+        axes[2].plot(x, stats["delta_e2000_mean"], **style)
+        axes[3].plot(x, stats["flip_mean"], **style)
+    for ax, label in zip(axes, labels):
+        ax.set_ylabel(label, fontsize=9)
+        ax.grid(True, which="both", alpha=0.3)
+        if log_x:
+            ax.set_xscale("log")
+        if ax.lines:
+            ax.legend(fontsize=8)
+        else:
+            ax.text(0.5, 0.5, "no data", transform=ax.transAxes, ha="center", va="center")
+    for ax in axes[2:]:
+        ax.set_xlabel(xlabel, fontsize=9)
+    fig.suptitle(title, fontsize=10)
+    return save_figure_atomic(fig, path)

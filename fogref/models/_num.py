@@ -1,0 +1,64 @@
+"""Small numeric helpers shared by the game fog models (numpy only).
+
+``precision="float32"`` mirrors a GPU shader: every intermediate is rounded to
+float32 (numpy keeps float32 when mixing float32 arrays with Python floats).
+``precision="float64"`` evaluates the same model in double precision and, where
+the shader uses a numerical shortcut (a Taylor branch), its exact closed form.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fogref.errors import ParameterError
+
+LN2 = 0.6931471805599453
+
+
+def dtype_of(precision: str):
+    """numpy dtype for ``precision`` ("float32" or "float64")."""
+    if precision == "float32":
+        return np.float32
+    if precision == "float64":
+        return np.float64
+    raise ParameterError("<model>", "precision", f"expected 'float32' or 'float64', got {precision!r}")
+
+
+def saturate(x):
+    """HLSL ``saturate``: clamp to [0, 1] (NaN-free for finite or inf input)."""
+    return np.minimum(np.maximum(x, 0), 1)
+
+
+def phi(x):
+    """``(1 - exp(-x)) / x`` with ``phi(0) = 1``, stable for all x (float64 or float32)."""
+    x = np.asarray(x)
+    with np.errstate(all="ignore"):
+        safe = np.where(x == 0, 1, x)
+        r = -np.expm1(-safe) / safe
+    return np.where(x == 0, 1, r).astype(x.dtype, copy=False)
+
+
+def rgb(v, name: str = "colour", source: str = "<model>") -> tuple:
+    """A colour given as a scalar or 3 values -> 3-tuple of floats."""
+    if np.isscalar(v):
+        return (float(v),) * 3
+    t = tuple(float(x) for x in v)
+    if len(t) != 3:
+        raise ParameterError(source, name, f"expected 1 or 3 values, got {len(t)}")
+    return t
+
+
+def split(camera, world_pos):
+    """camera (3,) and world positions (..., 3) as float64 arrays, checked."""
+    from fogref.models.base import as_points
+
+    cam = as_points(camera)
+    if cam.shape != (3,):
+        raise ValueError(f"camera must have shape (3,), got {cam.shape}")
+    return cam, as_points(world_pos)
+
+
+def grey(x, dt):
+    """Broadcast a (...,) scalar field to (..., 3) RGB."""
+    x = np.asarray(x, dtype=dt)
+    return np.repeat(x[..., None], 3, axis=-1)

@@ -1,0 +1,229 @@
+"""Unity altitude fog with a power-law density (seed 001, "积分解 Unity 高度雾").
+
+Source: seed 001 (``integral``, ``integralZeroK``, ``GetAltitudeFog`` and the
+final ``lerp(color, _FogColor, saturate(fog * _FogColor.a))``).
+
+Units: Unity, y-up **metres** (same as fogref; no conversion).  Density profile
+(dimensionless): ``T(y) = 1`` below ``_FogStart = S``, ``0`` above ``_FogEnd = E``
+and ``((E - y)/(E - S))^p`` between (``p = _FogPower``).  ``GetAltitudeFog``
+returns the path integral ``I = int T ds`` [m] in closed form via the
+antiderivative ``F(x)`` along the horizontal coordinate x (``y = k x + b``, times
+``sqrt(1 + k^2)``), with a separate branch for ``k = 0``.  No exp/exp2 appears.
+
+Compositing: the fog blends **linearly in optical depth**:
+``opacity = saturate(I * _FogColor.a)``, ``final = lerp(scene, _FogColor.rgb,
+opacity)``, i.e. ``transmittance = 1 - opacity`` and ``inscatter =
+_FogColor.rgb * opacity``.  The physical counterpart (:func:`altitude_to_medium`)
+is the medium ``sigma_t(y) = _FogColor.a * T(y)`` [1/m] (a :class:`PowerLayer`),
+whose optical depth is exactly ``_FogColor.a * I``; only the blend differs
+(``1 - saturate(tau)`` instead of Beer–Lambert ``exp(-tau)``).
+
+Robustness (deviation): a vertical ray (``hDist = 0``) gives ``k = inf`` and NaN
+in the shader; where the seed's formula is not finite both modes use the same
+integral written in y, ``I = |G(y1) - G(y0)| * dist / |dy|``.  The float64 mode
+uses that y-form everywhere (with the midpoint rule when ``|dy|`` is tiny), which
+is free of the seed's cancellation at small slopes ``k``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fogref.errors import ParameterError
+from fogref.models._num import dtype_of, grey, saturate, split
+from fogref.models.base import FogResult, register
+
+
+@dataclass(frozen=True)
+class AltitudeFogParams:
+    """Material properties of seed 001 (metres).  ``_FogColor``: RGB + a [1/m]."""
+
+    _FogStart: float = 0.0
+    _FogEnd: float = 50.0
+    _FogPower: float = 2.0
+    _FogColor: tuple = (0.6, 0.65, 0.7, 0.01)
+
+    def __post_init__(self):
+        src = "<AltitudeFogParams>"
+        if not self._FogEnd > self._FogStart:
+            raise ParameterError(src, "_FogEnd", "must be greater than _FogStart")
+        if not (math.isfinite(self._FogPower) and self._FogPower >= 0):
+            raise ParameterError(src, "_FogPower", f"value {self._FogPower} must be >= 0")
+        c = tuple(float(x) for x in self._FogColor)
+        if len(c) != 4 or c[3] < 0:
+            raise ParameterError(src, "_FogColor", "expected (r, g, b, a) with a >= 0")
+        object.__setattr__(self, "_FogColor", c)
+
+
+def _integral(x, k, b, s, e, p, dt):
+    """Seed 001 ``integral(x, k, b)`` (vectorised; branches as np.where)."""
+    s_bk = (s - b) / k
+    y = k * x + b
+    below = x - s_bk
+    above = (e - s) / ((p + dt(1.0)) * k)
+    mid = (np.power(e - s, p + dt(1.0)) - np.power(np.maximum(e - y, dt(0.0)), p + dt(1.0))) / (
+        k * (p + dt(1.0)) * np.power(e - s, p))
+    return np.where(y <= s, below, np.where(y >= e, above, mid))
+
+
+def _integral_zero_k(x, b, s, e, p, dt):
+    """Seed 001 ``integralZeroK(x, b)``."""
+    mid = x * np.power(np.maximum((e - b) / (e - s), dt(0.0)), p)
+    return np.where(b >= e, dt(0.0), np.where(b <= s, x, mid))
+
+
+def antiderivative_y(y, s, e, p):
+    """``G(y) = int_S^y T(u) du`` [m]; G is increasing, 0 at S, ``(E-S)/(p+1)`` above E."""
+    w = e - s
+    u = np.clip((e - y) / w, 0.0, 1.0)
+    return np.where(y <= s, y - s, w / (p + 1.0) * (1.0 - np.power(u, p + 1.0)))
+
+
+def density(y, s, e, p):
+    """Relative density ``T(y)`` (dimensionless)."""
+    u = np.clip((e - y) / (e - s), 0.0, 1.0)
+    return np.power(u, p)
+
+
+def path_integral_exact(cam, wp, s, e, p) -> np.ndarray:
+    """``I = int T ds`` [m] in float64 via the y-antiderivative (stable at all slopes)."""
+    d = wp - cam
+    dist = np.sqrt(np.sum(d * d, axis=-1))
+    y0 = cam[1]
+    y1 = wp[..., 1]
+    dy = y1 - y0
+    small = np.abs(dy) <= 1e-7 * (e - s)
+    with np.errstate(all="ignore"):
+        gi = np.abs(antiderivative_y(y1, s, e, p) - antiderivative_y(y0, s, e, p)) * dist / np.where(small, 1.0, np.abs(dy))
+    mid = dist * density(0.5 * (y0 + y1), s, e, p)
+    return np.where(small, mid, gi)
+
+
+@register("altitude")
+class AltitudeFog:
+    """Seed 001 altitude fog (see module doc)."""
+
+    Params = AltitudeFogParams
+
+    def __init__(self, params: AltitudeFogParams | None = None):
+        self.params = params or AltitudeFogParams()
+
+    def path_integral(self, camera, world_pos, precision: str = "float32") -> np.ndarray:
+        """``GetAltitudeFog``: the density path integral I [m] of each pixel."""
+        dt = dtype_of(precision)
+        q = self.params
+        cam, wp = split(camera, world_pos)
+        s, e, p = dt(q._FogStart), dt(q._FogEnd), dt(q._FogPower)
+        if dt is np.float64:
+            return path_integral_exact(cam, wp, float(s), float(e), float(p))
+        with np.errstate(all="ignore"):
+            dist_dir = (wp - cam).astype(dt)
+            h = np.sqrt(dist_dir[..., 0] * dist_dir[..., 0] + dist_dir[..., 2] * dist_dir[..., 2])
+            v = dist_dir[..., 1]
+            k = v / h
+            b = dt(cam[1])
+            stretch = np.sqrt(dt(1.0) + k * k)
+            nz = k != 0
+            k_safe = np.where(nz, k, dt(1.0))
+            i_k = stretch * (_integral(h, k_safe, b, s, e, p, dt) - _integral(dt(0.0), k_safe, b, s, e, p, dt))
+            i_0 = stretch * _integral_zero_k(h, b, s, e, p, dt)
+            out = np.where(nz, i_k, i_0)
+            bad = ~np.isfinite(out)
+            if np.any(bad):
+                exact = path_integral_exact(cam, wp[bad] if wp.ndim > 1 else wp, float(s), float(e), float(p))
+                out = out.copy() if out.ndim else np.asarray(out)
+                out[bad] = exact.astype(dt)
+        return out.astype(dt, copy=False)
+
+    def evaluate(self, camera, world_pos, precision: str = "float32") -> FogResult:
+        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
+        dt = dtype_of(precision)
+        I = self.path_integral(camera, world_pos, precision)
+        opacity = saturate(I * dt(self.params._FogColor[3])).astype(dt)
+        color = np.asarray(self.params._FogColor[:3], dtype=dt)
+        return FogResult(inscatter=color * opacity[..., None], transmittance=grey(dt(1.0) - opacity, dt))
+
+    def to_medium(self, **kw):
+        return altitude_to_medium(self.params, **kw)
+
+
+# -- physical counterpart ---------------------------------------------------------
+@dataclass(frozen=True)
+class PowerLayer:
+    """Height profile ``rho(y) = density * clamp((E - y)/(E - S), 0, 1)^p`` for FogMedium.
+
+    start S, end E [m], power p >= 0.  Implements the component interface of
+    :class:`fogref.media.ExpLayer` (``rho``, ``depth``, ``sample``) for any ``ops``.
+    """
+
+    start: float = 0.0
+    end: float = 50.0
+    power: float = 2.0
+    density: float = 1.0
+
+    def validate(self, src, i):
+        if not (self.end > self.start and self.power >= 0 and self.density >= 0):
+            raise ParameterError(src, f"layer{i}", "PowerLayer needs end > start, power >= 0, density >= 0")
+
+    def _u(self, ops, y):
+        w = self.end - self.start
+        return ops.minimum(ops.maximum((self.end - y) / w, 0.0), 1.0)
+
+    def _pow(self, ops, u, q):
+        tiny = 1e-300 if ops.exp_limit > 100 else 1e-37
+        return ops.where(u > 0, ops.exp(q * ops.log(ops.maximum(u, tiny))), 0.0 if q > 0 else 1.0)
+
+    def G(self, ops, y):
+        """Antiderivative of the unit-density profile [m], 0 at ``start``."""
+        w = self.end - self.start
+        q = self.power + 1.0
+        return ops.where(y <= self.start, y - self.start, w / q * (1.0 - self._pow(ops, self._u(ops, y), q)))
+
+    def rho(self, ops, y):
+        return self.density * self._pow(ops, self._u(ops, y), self.power)
+
+    def depth(self, ops, oy, dy, t):
+        """Shape optical depth over [0, t] (t = ops.largest: to infinity)."""
+        from fogref.media.closed_form import TAU_MAX
+
+        with ops.errstate():
+            w = self.end - self.start
+            span = t * dy
+            small = ops.abs(span) <= 1e-7 * w
+            y1 = oy + ops.where(small, 0.0, span)
+            g = (self.G(ops, y1) - self.G(ops, oy)) / ops.where(small, 1.0, dy)
+            mid = t * self.rho(ops, oy + 0.5 * ops.where(small, span, 0.0)) / max(self.density, 1e-300)
+            tau = self.density * ops.where(small, mid, g)
+            tau = ops.where(ops.isfinite(tau), tau, TAU_MAX)
+            return ops.where(t > 0, ops.minimum(tau, TAU_MAX), 0.0)
+
+    def sample(self, ops, oy, dy, s):
+        """Distance where the shape optical depth reaches s; ops.largest if never."""
+        with ops.errstate():
+            w = self.end - self.start
+            q = self.power + 1.0
+            s1 = s / max(self.density, 1e-300)
+            g0 = self.G(ops, oy)
+            gt = g0 + s1 * dy
+            small = ops.abs(s1 * dy) <= 1e-7 * w
+            arg = ops.maximum(1.0 - gt * q / w, 0.0)
+            yt = ops.where(gt <= 0, self.start + gt, self.end - w * self._pow(ops, arg, 1.0 / q))
+            t_big = (yt - oy) / ops.where(small, 1.0, dy)
+            escape_big = (dy > 0) & (gt >= w / q)
+            r0 = self.rho(ops, oy) / max(self.density, 1e-300)
+            t_small = s1 / ops.maximum(r0, 1e-300)
+            t = ops.where(small, ops.where(r0 > 0, t_small, ops.largest), ops.where(escape_big, ops.largest, t_big))
+            t = ops.where(ops.isfinite(t), t, ops.largest)
+            return ops.where(s > 0, t, 0.0)
+
+
+def altitude_to_medium(params: AltitudeFogParams, albedo=(1.0, 1.0, 1.0), g: float = 0.0):
+    """The medium ``sigma_t = _FogColor.a * T(y)`` [1/m]: its optical depth is ``a * I``."""
+    from fogref.media import FogMedium
+
+    return FogMedium(sigma_t=params._FogColor[3], albedo=albedo, g=g,
+                     layers=(PowerLayer(params._FogStart, params._FogEnd, params._FogPower),),
+                     source="<altitude_to_medium>")

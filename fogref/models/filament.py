@@ -1,0 +1,160 @@
+"""Google Filament height fog (``View::FogOptions``).
+
+Source: Filament ``shaders/src/fog.fs`` (the "Real-time Atmospheric Effects in
+Games (Carsten Wenzel)" version, ``exp`` based) and ``PerViewUniforms::prepareFog``
+(CPU: ``fogDensity = density * exp(-heightFalloff * (camera.y - height))``).
+
+Units: Filament is y-up **metres** (same as fogref) and uses **exp** (not exp2):
+density [1/m], heightFalloff [1/m], so the medium is exactly
+``sigma_t(y) = density * exp(-heightFalloff * (y - height))`` [1/m] (one
+:class:`~fogref.media.ExpLayer`).  Shader: ``h = falloff * view.y`` (view =
+world - camera, unnormalised), line integral ``A (1 - exp(-h))/h`` if
+``|h| > 0.01`` else ``A`` (zeroth-order branch: up to 0.5 % low), times
+``max(d - distance, 0)``; note that the start distance only shortens the ray, the
+density is still averaged from the camera (unlike Unreal).
+
+Compositing: ``opacity = min(1 - exp(-integral), maximumOpacity)``,
+``final = scene * (1 - opacity) + color * opacity + sun term``, with the sun term
+``sunColor * pow(max(dot(view, l)/d, 0), inScatteringSize) * (1 - exp(-insc))``
+when ``inScatteringSize > 0`` (``insc`` uses ``inScatteringStart``).  So
+``transmittance = 1 - opacity`` (grey).  ``cutOffDistance`` (newer versions):
+pixels farther than it get no fog.  Robustness (deviations): ``d`` is floored at
+1e-30 in the sun term (the shader divides 0/0 at the camera), the density at the
+camera is capped at the largest float, and where the shader's line integral is
+not finite (``0 * inf`` far above the fog looking down) the log-form closed
+form is used; float64 always uses that closed form (no 0.01 branch).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fogref.errors import ParameterError
+from fogref.models._num import dtype_of, grey, phi, rgb, split
+from fogref.models.base import FogResult, register
+
+
+@dataclass(frozen=True)
+class FilamentFogParams:
+    """View::FogOptions (metres) plus the sun (``lightDirection``: toward the sun)."""
+
+    distance: float = 0.0
+    cutOffDistance: float = math.inf
+    maximumOpacity: float = 1.0
+    height: float = 0.0
+    heightFalloff: float = 1.0
+    color: tuple = (1.0, 1.0, 1.0)
+    density: float = 0.1
+    inScatteringStart: float = 0.0
+    inScatteringSize: float = -1.0
+    lightDirection: tuple = (0.0, 1.0, 0.0)
+    lightColorIntensity: tuple = (1.0, 1.0, 1.0, 1.0)
+
+    def __post_init__(self):
+        src = "<FilamentFogParams>"
+        for name in ("distance", "density", "heightFalloff"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ParameterError(src, name, f"value {v} must be finite and >= 0")
+        if not 0 <= self.maximumOpacity <= 1:
+            raise ParameterError(src, "maximumOpacity", "outside [0, 1]")
+        object.__setattr__(self, "color", rgb(self.color, "color", src))
+        w = np.asarray(self.lightDirection, dtype=np.float64)
+        object.__setattr__(self, "lightDirection", tuple(float(x) for x in w / np.linalg.norm(w)))
+        if len(self.lightColorIntensity) != 4:
+            raise ParameterError(src, "lightColorIntensity", "expected (r, g, b, intensity)")
+
+
+@register("filament")
+class FilamentFog:
+    """Filament height fog (see module doc)."""
+
+    Params = FilamentFogParams
+
+    def __init__(self, params: FilamentFogParams | None = None):
+        self.params = params or FilamentFogParams()
+
+    def evaluate(self, camera, world_pos, precision: str = "float32") -> FogResult:
+        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
+        dt = dtype_of(precision)
+        q = self.params
+        cam, wp = split(camera, world_pos)
+        # CPU: density at the viewer's height
+        with np.errstate(all="ignore"):
+            A = dt(q.density) * np.exp(dt(-q.heightFalloff) * (dt(cam[1]) - dt(q.height)))
+            A = min(A, dt(np.finfo(dt).max))           # robustness: no inf density
+        falloff = dt(q.heightFalloff)
+        with np.errstate(all="ignore"):
+            view = (wp - cam).astype(dt)
+            h = falloff * view[..., 1]
+            # robust line integral in log form (no 0 * inf when the camera is far above)
+            def robust(hh):
+                log_a = (math.log(q.density) if q.density > 0 else -1e4) - q.heightFalloff * (cam[1] - q.height)
+                h64 = hh.astype(np.float64)
+                return np.where(h64 > -1.0, np.exp(min(log_a, 700.0)) * phi(np.maximum(h64, -1.0)),
+                                np.exp(np.minimum(log_a - h64, 700.0)) * (-np.expm1(np.minimum(h64, 0.0)))
+                                / np.where(h64 < 0, -h64, 1.0))
+            if dt is np.float64:
+                fi = robust(h)
+            else:
+                fi = np.where(np.abs(h) > dt(0.01), A * ((dt(1.0) - np.exp(-h)) / h), A)
+                bad = ~np.isfinite(fi)
+                if np.any(bad):
+                    fi[bad] = np.minimum(robust(h[bad]), np.finfo(dt).max).astype(dt)
+            d = np.sqrt(np.sum(view * view, axis=-1))
+            run = np.maximum(d - dt(q.distance), dt(0.0))
+            integral = np.where(run > 0, fi * run, dt(0.0))
+            if dt is np.float64:      # same value, without the cancellation of 1 - (1 - T)
+                trans = np.maximum(np.exp(-integral), dt(1.0) - dt(q.maximumOpacity))
+                opacity = dt(1.0) - trans
+            else:
+                opacity = np.minimum(dt(1.0) - np.exp(-integral), dt(q.maximumOpacity))
+                trans = dt(1.0) - opacity
+            fog_color = np.asarray(q.color, dtype=dt) * opacity[..., None]
+            if q.inScatteringSize > 0:
+                run_i = np.maximum(d - dt(q.inScatteringStart), dt(0.0))
+                insc = np.where(run_i > 0, fi * run_i, dt(0.0))
+                insc_opacity = dt(1.0) - np.exp(-insc)
+                lc = q.lightColorIntensity
+                sun = np.asarray(lc[:3], dtype=dt) * dt(lc[3])
+                l = np.asarray(q.lightDirection, dtype=dt)
+                amount = np.maximum((view[..., 0] * l[0] + view[..., 1] * l[1] + view[..., 2] * l[2])
+                                    / np.maximum(d, dt(1e-30)), dt(0.0))
+                fog_color = fog_color + sun * (np.power(amount, dt(q.inScatteringSize)) * insc_opacity)[..., None]
+            if math.isfinite(q.cutOffDistance):
+                cut = d > dt(q.cutOffDistance)
+                trans = np.where(cut, dt(1.0), trans)
+                fog_color = np.where(cut[..., None], dt(0.0), fog_color)
+        return FogResult(inscatter=fog_color.astype(dt), transmittance=grey(trans, dt))
+
+    def to_medium(self, **kw):
+        return filament_to_medium(self.params, **kw)
+
+    @classmethod
+    def from_medium(cls, medium, **kw) -> "FilamentFog":
+        return cls(medium_to_filament(medium, **kw))
+
+
+def filament_to_medium(params: FilamentFogParams, albedo=(1.0, 1.0, 1.0), g: float = 0.0):
+    """Exact medium ``sigma_t = density`` [1/m], ``ExpLayer(1, heightFalloff, height)``."""
+    from fogref.media import ExpLayer, FogMedium
+
+    return FogMedium(sigma_t=params.density, albedo=albedo, g=g,
+                     layers=(ExpLayer(1.0, params.heightFalloff, params.height),), source="<filament_to_medium>")
+
+
+def medium_to_filament(medium, **kw) -> FilamentFogParams:
+    """Filament options for an unbounded grey medium with one ExpLayer (``kw``: other options)."""
+    from fogref.media import ExpLayer
+
+    src = getattr(medium, "source", "<medium>")
+    if medium.bounds is not None or len(medium.layers) != 1 or not isinstance(medium.layers[0], ExpLayer):
+        raise ParameterError(src, "layers", "Filament fog needs one unbounded ExpLayer")
+    s = medium.sigma_t
+    if max(s) - min(s) > 1e-12 * max(max(s), 1e-300):
+        raise ParameterError(src, "sigma_t", f"Filament's fog is grey; got {s}")
+    L = medium.layers[0]
+    return FilamentFogParams(density=s[0] * L.density, heightFalloff=L.falloff, height=L.height, **kw)

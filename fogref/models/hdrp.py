@@ -1,0 +1,227 @@
+"""Unity HDRP height fog (Fog volume override, non-volumetric path).
+
+Source: HDRP ``Fog.cs`` (``UpdateShaderVariablesGlobalCB``),
+``VolumeRendering.cs`` (``ScaleHeightFromLayerDepth``, ``ExtinctionFromMeanFreePath``)
+and ``AtmosphericScattering.hlsl`` (``OpticalDepthHeightFog``,
+``EvaluateAtmosphericScattering``); seed 003 (parameter list).
+
+Units: HDRP is y-up **metres** (same as fogref), and uses **exp** (not exp2).
+CPU set-up: ``extinction = 1 / meanFreePath`` (the "Fog Attenuation Distance" is
+the mean free path at the base height), ``layerDepth = max(0.01, maximumHeight -
+baseHeight)``, ``H = layerDepth * 0.144765`` (= layerDepth / ln 1000: the density
+has fallen to 0.001 at maximumHeight), ``_HeightFogExponents = (1/H, H)``,
+``_HeightFogBaseScattering = albedo * extinction``.
+
+Density: ``sigma_t(y) = extinction * exp(-max(y - baseHeight, 0) / H)``:
+homogeneous below the base height, exponential above (:class:`HeightFogProfile`).
+``OpticalDepthHeightFog`` integrates it exactly, except that it clamps
+``|cos zenith| >= 0.001`` (horizontal rays above the base saturate at
+``1000 H``); float64 mode drops that clamp (exact closed form with ``phi``).
+
+Compositing: ``T = exp(-od)`` (grey), ``inscatter = fogColor * albedo * (1 - T)``
+(constant "Color" mode; exposure 1), ``final = scene * T + inscatter``.  The ray
+is integrated over ``min(distance, maxFogDistance)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fogref.errors import ParameterError
+from fogref.models._num import dtype_of, grey, phi, rgb, split
+from fogref.models.base import FogResult, register
+
+#: VolumeRendering.cs ScaleHeightFromLayerDepth: 1 / ln(1000).
+LAYER_DEPTH_TO_H = 0.144765
+
+
+@dataclass(frozen=True)
+class HDRPFogParams:
+    """HDRP Fog override (metres).  meanFreePath = "Fog Attenuation Distance"."""
+
+    meanFreePath: float = 400.0
+    baseHeight: float = 0.0
+    maximumHeight: float = 50.0
+    albedo: tuple = (1.0, 1.0, 1.0)
+    color: tuple = (0.5, 0.6, 0.7)
+    maxFogDistance: float = 5000.0
+
+    def __post_init__(self):
+        src = "<HDRPFogParams>"
+        if not (math.isfinite(self.meanFreePath) and self.meanFreePath > 0):
+            raise ParameterError(src, "meanFreePath", f"value {self.meanFreePath} must be > 0")
+        if not self.maxFogDistance >= 0:
+            raise ParameterError(src, "maxFogDistance", "must be >= 0")
+        object.__setattr__(self, "albedo", rgb(self.albedo, "albedo", src))
+        object.__setattr__(self, "color", rgb(self.color, "color", src))
+
+    def scale_height(self, dt=np.float64) -> float:
+        """H [m] as the CPU computes it."""
+        depth = max(dt(0.01), dt(self.maximumHeight) - dt(self.baseHeight))
+        return dt(depth * dt(LAYER_DEPTH_TO_H))
+
+
+def optical_depth_height_fog(base_extinction, base_height, exps, cos_zenith, start_height, interval, dt,
+                             exact: bool = False):
+    """AtmosphericScattering.hlsl ``OpticalDepthHeightFog`` (vectorised)."""
+    rcpH, H = exps
+    Z = cos_zenith
+    end_height = start_height + interval * Z
+    min_height = np.minimum(start_height, end_height)
+    h = np.maximum(min_height - base_height, dt(0.0))
+    if exact:
+        absZ = np.abs(Z)
+        hom = np.where(absZ > 0, np.clip((base_height - min_height) / np.where(absZ > 0, absZ, dt(1.0)), 0.0, interval),
+                       np.where(start_height <= base_height, interval, dt(0.0)))
+        exp_dist = interval - hom
+        mult = np.exp(-h * rcpH) * exp_dist * phi(exp_dist * absZ * rcpH)
+        return base_extinction * (hom + mult)
+    absZ = np.maximum(np.abs(Z), dt(0.001))
+    rcpAbsZ = dt(1.0) / absZ
+    hom = np.clip((base_height - min_height) * rcpAbsZ, dt(0.0), interval)
+    exp_dist = interval - hom
+    mult = np.exp(-h * rcpH) * (dt(1.0) - np.exp(-exp_dist * absZ * rcpH)) * (rcpAbsZ * H)
+    return base_extinction * (hom + mult)
+
+
+@register("hdrp")
+class HDRPFog:
+    """HDRP height fog (see module doc)."""
+
+    Params = HDRPFogParams
+
+    def __init__(self, params: HDRPFogParams | None = None):
+        self.params = params or HDRPFogParams()
+
+    def optical_depth(self, camera, world_pos, precision: str = "float32") -> np.ndarray:
+        """Optical depth (dimensionless) of each pixel's ray."""
+        dt = dtype_of(precision)
+        q = self.params
+        cam, wp = split(camera, world_pos)
+        H = q.scale_height(dt)
+        ext = dt(1.0) / dt(q.meanFreePath)
+        with np.errstate(all="ignore"):
+            v = (wp - cam).astype(dt)
+            dist = np.sqrt(np.sum(v * v, axis=-1))
+            cos_z = np.where(dist > 0, v[..., 1] / np.where(dist > 0, dist, dt(1.0)), dt(0.0))
+            interval = np.minimum(dist, dt(q.maxFogDistance))
+            od = optical_depth_height_fog(ext, dt(q.baseHeight), (dt(1.0) / H, H), cos_z, dt(cam[1]),
+                                          interval, dt, exact=(dt is np.float64))
+        return od.astype(dt, copy=False)
+
+    def evaluate(self, camera, world_pos, precision: str = "float32") -> FogResult:
+        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
+        dt = dtype_of(precision)
+        q = self.params
+        T = np.exp(-self.optical_depth(camera, world_pos, precision))
+        col = np.asarray(q.color, dtype=dt) * np.asarray(q.albedo, dtype=dt)
+        return FogResult(inscatter=col * (dt(1.0) - T)[..., None], transmittance=grey(T, dt))
+
+    def to_medium(self, **kw):
+        return hdrp_to_medium(self.params, **kw)
+
+    @classmethod
+    def from_medium(cls, medium, **kw) -> "HDRPFog":
+        return cls(medium_to_hdrp(medium, **kw))
+
+
+# -- physical counterpart ---------------------------------------------------------
+@dataclass(frozen=True)
+class HeightFogProfile:
+    """``rho(y) = density * exp(-falloff * max(y - height, 0))``: flat below ``height``.
+
+    falloff [1/m] (= 1/H), height [m].  FogMedium component interface
+    (``rho``, ``depth``, ``sample``), written for any ``ops`` back end.
+    """
+
+    density: float = 1.0
+    falloff: float = 0.0
+    height: float = 0.0
+
+    def validate(self, src, i):
+        if not (self.density >= 0 and 0 <= self.falloff <= 1e3 and math.isfinite(self.height)):
+            raise ParameterError(src, f"layer{i}", "HeightFogProfile needs density >= 0, 0 <= falloff <= 1e3")
+
+    def _log_density(self):
+        return math.log(self.density) if self.density > 0 else -1.0e4
+
+    def rho(self, ops, y):
+        return self.density * ops.exp(-self.falloff * ops.maximum(y - self.height, 0.0))
+
+    def depth(self, ops, oy, dy, t):
+        """Shape optical depth [m] over [0, t] (t = ops.largest: to infinity)."""
+        from fogref.media.closed_form import TAU_MAX
+
+        with ops.errstate():
+            b = self.falloff
+            absz = ops.abs(dy)
+            y1 = oy + t * dy
+            min_h = ops.minimum(oy, y1)
+            hom = ops.where(absz > 0, ops.minimum(ops.maximum((self.height - min_h) / ops.where(absz > 0, absz, 1.0), 0.0), t),
+                            ops.where(oy <= self.height, t, 0.0))
+            exp_dist = ops.maximum(t - hom, 0.0)
+            h = ops.maximum(min_h - self.height, 0.0)
+            x = exp_dist * absz * b
+            rate = absz * b
+            lin = ops.where(rate > 0, -ops.expm1(-ops.minimum(x, 700.0)) / ops.where(rate > 0, rate, 1.0), exp_dist)
+            tau = self.density * (hom + ops.exp(-b * h) * lin)
+            tau = ops.where(ops.isfinite(tau), tau, TAU_MAX)
+            return ops.where(t > 0, ops.minimum(tau, TAU_MAX), 0.0)
+
+    def sample(self, ops, oy, dy, s):
+        """Distance where the shape optical depth reaches s; ops.largest if never."""
+        from fogref.media import closed_form as cf
+
+        with ops.errstate():
+            b, d0 = self.falloff, max(self.density, 1e-300)
+            flat = s / d0
+            # start below/at the base height
+            up = dy > 0
+            l_h = ops.where(up, (self.height - oy) / ops.where(up, dy, 1.0), ops.largest)
+            t_a_exp = l_h + cf.exp_layer_sample(ops, self._log_density() + 0.0 * oy, b * dy,
+                                                ops.maximum(s - d0 * l_h, 0.0))
+            t_a = ops.where(flat <= l_h, flat, t_a_exp)
+            # start above the base height
+            log_c = self._log_density() - b * (oy - self.height)
+            down = dy < 0
+            l_e = ops.where(down, (oy - self.height) / ops.where(down, -dy, 1.0), ops.largest)
+            d_e = cf.exp_layer_optical_depth(ops, log_c, b * dy, l_e)
+            t_b_exp = cf.exp_layer_sample(ops, log_c, b * dy, s)
+            t_b = ops.where(down & (s > d_e), l_e + (s - d_e) / d0, t_b_exp)
+            t = ops.where(oy <= self.height, t_a, t_b)
+            t = ops.where(ops.isfinite(t), t, ops.largest)
+            return ops.where(s > 0, t, 0.0)
+
+
+def hdrp_to_medium(params: HDRPFogParams, g: float = 0.0):
+    """Exact medium: ``sigma_t = 1/meanFreePath`` [1/m] with a :class:`HeightFogProfile`."""
+    from fogref.media import FogMedium
+
+    H = float(params.scale_height(np.float64))
+    return FogMedium(sigma_t=1.0 / params.meanFreePath, albedo=params.albedo, g=g,
+                     layers=(HeightFogProfile(1.0, 1.0 / H, params.baseHeight),), source="<hdrp_to_medium>")
+
+
+def medium_to_hdrp(medium, color=(0.5, 0.6, 0.7), maxFogDistance: float = 5000.0) -> HDRPFogParams:
+    """HDRP parameters for a grey medium with one :class:`HeightFogProfile` (or a
+    homogeneous layer); ``maximumHeight = baseHeight + H ln(1000)``."""
+    from fogref.media import ExpLayer
+
+    src = getattr(medium, "source", "<medium>")
+    if medium.bounds is not None or len(medium.layers) != 1:
+        raise ParameterError(src, "layers", "HDRP fog needs one unbounded height profile")
+    L = medium.layers[0]
+    s = medium.sigma_t
+    if max(s) - min(s) > 1e-12 * max(max(s), 1e-300):
+        raise ParameterError(src, "sigma_t", f"HDRP's extinction is grey; got {s}")
+    if isinstance(L, ExpLayer) and L.falloff != 0:
+        raise ParameterError(src, "layers", "an unclamped ExpLayer has no HDRP counterpart")
+    if not isinstance(L, (ExpLayer, HeightFogProfile)):
+        raise ParameterError(src, "layers", f"unsupported profile {type(L).__name__}")
+    ext = s[0] * L.density
+    depth = (1.0 / L.falloff) / LAYER_DEPTH_TO_H if L.falloff > 0 else 1e9
+    return HDRPFogParams(meanFreePath=1.0 / ext, baseHeight=L.height, maximumHeight=L.height + depth,
+                         albedo=medium.albedo, color=color, maxFogDistance=maxFogDistance)

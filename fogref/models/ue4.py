@@ -1,0 +1,342 @@
+"""Unreal Engine Exponential Height Fog (UE4.22–4.27; UE5's EndDistance option).
+
+Source: ``Engine/Shaders/Private/HeightFogCommon.ush`` (``GetExponentialHeightFog``,
+``CalculateLineIntegralShared``) and ``Engine/Source/Runtime/Renderer/Private/
+FogRendering.cpp`` (``InitFogConstants``, ``SetupFogUniformParameters``); seed
+documents 000 (shader, ported to y-up) and 002 (CPU set-up, uniform layout).
+
+Units: Unreal is **z-up, centimetres**; fogref is **y-up, metres**.  Positions are
+converted internally by ``(x, y, z)_ue = 100 * (x, z, y)_fogref`` (this swap also
+turns fogref's right-handed frame into Unreal's left-handed one; fog depends only
+on heights and distances, so nothing else changes).  The editor's FogDensity ``D``
+and FogHeightFalloff ``f`` are divided by 1000 on the CPU; the shader uses
+**exp2**.  The exact physical medium is therefore (per cm)
+
+    sigma_t(z) = (ln 2)^2 * D/1000 * 2^(-(f/1000) (z - H)),
+
+i.e. per metre ``a = 100 (ln 2)^2 D/1000`` and ``b = 100 ln 2 f/1000`` (one factor
+ln 2 turns the exp2 of the line integral into exp, the other comes from
+integrating 2^(-x)).  See :func:`ue4_to_medium` / :func:`medium_to_ue4`.
+
+Compositing rule (``FogRendering.cpp`` blend ``One, SourceAlpha``):
+``final = scene * ExpFogFactor + FogColor``, so ``transmittance = ExpFogFactor``
+(grey) and ``inscatter = FogInscatteringColor * (1 - ExpFogFactor) +
+DirectionalInscattering``.
+
+``precision="float32"`` follows the shader line by line in float32 (CPU set-up in
+float32 too): observer-height clamp, the ``[-125, 126]`` clamp of the collapsed
+exponent, ``max(-127, ...)``, the Taylor branch below ``|Falloff| <= FLT_EPSILON2
+= 0.01``, ``saturate``, ``exp2``.  ``precision="float64"`` keeps every engine rule
+(clamps, start distance, max opacity, cutoff) but computes in float64 and
+replaces the Taylor branch by the exact ``(1 - 2^-F)/F``.  Deviation for
+robustness, as in UE5: ``rsqrt(max(|v|^2, 1e-8))`` so a pixel at the camera gives
+no NaN.
+
+Example:
+    >>> import numpy as np
+    >>> from fogref.models import get
+    >>> fog = get("ue4")(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
+    >>> r = fog.evaluate(np.zeros(3), np.array([[100.0, 0.0, 0.0]]))
+    >>> bool(0.0 < r.transmittance[0, 0] < 1.0)
+    True
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from fogref.errors import ParameterError
+from fogref.models._num import LN2, dtype_of, grey, phi, rgb, saturate, split
+from fogref.models.base import FogResult, register
+
+CM_PER_M = 100.0
+#: HeightFogCommon.ush: threshold of the Taylor branch of the line integral.
+FLT_EPSILON2 = 0.01
+#: FogRendering.cpp: the observer is clamped to FogHeight + this [cm].
+MAX_OBSERVER_HEIGHT_DIFFERENCE = 65536.0
+
+
+def world_to_unreal(p) -> np.ndarray:
+    """fogref (..., 3) y-up metres -> Unreal (..., 3) z-up centimetres."""
+    p = np.asarray(p, dtype=np.float64)
+    return np.stack([p[..., 0], p[..., 2], p[..., 1]], axis=-1) * CM_PER_M
+
+
+def unreal_to_world(p) -> np.ndarray:
+    """Unreal (..., 3) z-up centimetres -> fogref (..., 3) y-up metres."""
+    p = np.asarray(p, dtype=np.float64)
+    return np.stack([p[..., 0], p[..., 2], p[..., 1]], axis=-1) / CM_PER_M
+
+
+def direction_to_unreal(w) -> tuple:
+    """A fogref direction (y-up) -> unit Unreal direction (z-up)."""
+    w = np.asarray(w, dtype=np.float64)
+    v = np.array([w[0], w[2], w[1]])
+    return tuple(float(x) for x in v / np.linalg.norm(v))
+
+
+@dataclass(frozen=True)
+class SecondFogData:
+    """UExponentialHeightFogComponent::SecondFogData (editor units)."""
+
+    FogDensity: float = 0.0          #: editor density (x 1/1000 per cm)
+    FogHeightFalloff: float = 0.2    #: editor falloff (x 1/1000 per cm)
+    FogHeightOffset: float = 0.0     #: cm, relative to the component's Z
+
+
+@dataclass(frozen=True)
+class UE4FogParams:
+    """Exponential height fog component, in Unreal's names and units (cm, z-up).
+
+    FogHeight: world Z of the first layer [cm] (component Z, plus its height
+    offset where the engine version has one); the second layer sits at
+    ``FogHeight + SecondFogData.FogHeightOffset``.
+    InscatteringLightDirection: unit vector **toward** the sun in Unreal's frame
+    (``-SunLight->GetDirection()``), or None when there is no atmosphere sun
+    light (directional inscattering off).  SunLuminance: the sun light colour's
+    luminance, which multiplies DirectionalInscatteringColor on the CPU.
+    EndDistance (UE5, cm, 0 = off): fog is integrated only up to this distance.
+    FogCutoffDistance (cm, 0 = off): pixels farther than this get no fog.
+    DirectionalInscatteringExponent is clamped to [1e-6, 1000] as the engine does.
+    """
+
+    FogDensity: float = 0.02
+    FogHeightFalloff: float = 0.2
+    FogHeight: float = 0.0
+    SecondFogData: SecondFogData = field(default_factory=SecondFogData)
+    FogInscatteringColor: tuple = (0.447, 0.638, 1.0)
+    FogMaxOpacity: float = 1.0
+    StartDistance: float = 0.0
+    FogCutoffDistance: float = 0.0
+    EndDistance: float = 0.0
+    DirectionalInscatteringExponent: float = 4.0
+    DirectionalInscatteringStartDistance: float = 10000.0
+    DirectionalInscatteringColor: tuple = (0.25, 0.25, 0.125)
+    InscatteringLightDirection: tuple | None = None
+    SunLuminance: float = 1.0
+
+    def __post_init__(self):
+        for name in ("FogDensity", "FogHeightFalloff", "FogMaxOpacity", "StartDistance",
+                     "FogCutoffDistance", "EndDistance", "DirectionalInscatteringStartDistance"):
+            v = float(getattr(self, name))
+            if not math.isfinite(v) or v < 0:
+                raise ParameterError("<UE4FogParams>", name, f"value {v} must be finite and >= 0")
+        if not 0 <= self.FogMaxOpacity <= 1:
+            raise ParameterError("<UE4FogParams>", "FogMaxOpacity", f"value {self.FogMaxOpacity} outside [0, 1]")
+        object.__setattr__(self, "FogInscatteringColor", rgb(self.FogInscatteringColor, "FogInscatteringColor"))
+        object.__setattr__(self, "DirectionalInscatteringColor",
+                           rgb(self.DirectionalInscatteringColor, "DirectionalInscatteringColor"))
+        if self.InscatteringLightDirection is not None:
+            w = np.asarray(self.InscatteringLightDirection, dtype=np.float64)
+            object.__setattr__(self, "InscatteringLightDirection", tuple(float(x) for x in w / np.linalg.norm(w)))
+
+    def with_sun(self, direction_world, luminance: float = 1.0) -> "UE4FogParams":
+        """Copy with the sun given in **fogref's** frame (y-up, toward the sun)."""
+        return replace(self, InscatteringLightDirection=direction_to_unreal(direction_world),
+                       SunLuminance=float(luminance))
+
+
+def fog_constants(p: UE4FogParams, camera_z_cm: float, dt=np.float32) -> dict:
+    """The uniforms of FogRendering.cpp for an observer at ``camera_z_cm``.
+
+    Returns ExponentialFogParameters{,2,3}, the colour parameter and the
+    directional-inscattering uniforms as dtype ``dt`` scalars (float32 mimics
+    the engine's CPU arithmetic).
+    """
+    f = dt
+    dens = [f(p.FogDensity) / f(1000.0), f(p.SecondFogData.FogDensity) / f(1000.0)]
+    fall = [f(p.FogHeightFalloff) / f(1000.0), f(p.SecondFogData.FogHeightFalloff) / f(1000.0)]
+    height = [f(p.FogHeight), f(p.FogHeight) + f(p.SecondFogData.FogHeightOffset)]
+    max_obs = f(np.finfo(np.float32).max)
+    for i in range(2):
+        if dens[i] > 0:
+            max_obs = min(max_obs, f(height[i] + f(MAX_OBSERVER_HEIGHT_DIFFERENCE)))
+    obs = min(f(camera_z_cm), max_obs)
+    collapsed = []
+    for i in range(2):
+        power = np.clip(-fall[i] * (obs - height[i]), f(-126.0 + 1.0), f(127.0 - 1.0)).astype(dt)
+        collapsed.append(dens[i] * np.power(f(2.0), power))
+    light_w = f(max(0.0, p.DirectionalInscatteringStartDistance)) if p.InscatteringLightDirection is not None else f(-1.0)
+    light_dir = p.InscatteringLightDirection or (0.0, 0.0, 0.0)
+    return dict(
+        P=(f(collapsed[0]), fall[0], max_obs, f(p.StartDistance)),
+        P2=(f(collapsed[1]), fall[1], dens[1], height[1]),
+        P3=(dens[0], height[0], f(0.0), f(p.FogCutoffDistance)),
+        color=tuple(f(c) for c in p.FogInscatteringColor),
+        min_opacity=f(1.0) - f(p.FogMaxOpacity),
+        light=(f(light_dir[0]), f(light_dir[1]), f(light_dir[2]), light_w),
+        dir_color=tuple(f(c) * f(p.SunLuminance) for c in p.DirectionalInscatteringColor),
+        dir_exponent=f(np.clip(f(p.DirectionalInscatteringExponent), f(0.000001), f(1000.0))),
+        end_distance=f(p.EndDistance),
+    )
+
+
+def _line_integral_shared(falloff, ray_dir_z, origin_terms, dt, exact: bool):
+    """CalculateLineIntegralShared (HeightFogCommon.ush).  ``exact``: no Taylor branch."""
+    F = np.maximum(dt(-127.0), falloff * ray_dir_z)
+    if exact:
+        return origin_terms * (dt(LN2) * phi(dt(LN2) * F))
+    with np.errstate(all="ignore"):
+        li = (dt(1.0) - np.exp2(-F)) / F
+    ln2 = dt(np.log(dt(2.0)))
+    taylor = ln2 - (dt(0.5) * (ln2 * ln2)) * F
+    return origin_terms * np.where(np.abs(F) > dt(FLT_EPSILON2), li, taylor)
+
+
+def shade(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt, exact: bool):
+    """GetExponentialHeightFog on camera-relative receiver positions (Unreal cm).
+
+    Returns ``(FogColor (..., 3), ExpFogFactor (...))``.
+    """
+    P, P2, P3 = C["P"], C["P2"], C["P3"]
+    rel = np.asarray(rel_cm, dtype=dt)
+    min_opacity = C["min_opacity"]
+    obs_z = min(dt(cam_z_cm), P[2])
+    cx, cy = rel[..., 0], rel[..., 1]
+    cz = rel[..., 2] + (dt(cam_z_cm) - obs_z)
+    len_sqr = cx * cx + cy * cy + cz * cz
+    len_inv = dt(1.0) / np.sqrt(np.maximum(len_sqr, dt(1e-8)))
+    length = len_sqr * len_inv
+    nx, ny, nz = cx * len_inv, cy * len_inv, cz * len_inv
+
+    ray_length = length
+    ray_dir_z = cz
+    # UE5 EndDistance (reconstructed): integrate the fog only up to EndDistance.
+    end = C["end_distance"]
+    if end > 0:
+        scale = np.minimum(dt(1.0), end * len_inv)
+        ray_length = ray_length * scale
+        ray_dir_z = ray_dir_z * scale
+    ro = np.broadcast_to(P[0], length.shape)
+    ro2 = np.broadcast_to(P2[0], length.shape)
+    exclude = P[3]
+    if exclude > 0:
+        t = exclude * len_inv
+        cam_to_excl_z = t * cz
+        excl_z = obs_z + cam_to_excl_z
+        ray_length = (dt(1.0) - t) * ray_length if end <= 0 else ray_length - exclude
+        ray_dir_z = ray_dir_z - cam_to_excl_z
+        expo = np.maximum(dt(-127.0), P[1] * (excl_z - P3[1]))
+        ro = P3[0] * np.exp2(-expo)
+        expo2 = np.maximum(dt(-127.0), P2[1] * (excl_z - P2[3]))
+        ro2 = P2[2] * np.exp2(-expo2)
+    shared = (_line_integral_shared(P[1], ray_dir_z, ro, dt, exact)
+              + _line_integral_shared(P2[1], ray_dir_z, ro2, dt, exact))
+    integral = shared * ray_length
+
+    color = np.asarray(C["color"], dtype=dt)
+    light = C["light"]
+    dir_inscatter = None
+    if light[3] >= 0:
+        cos = saturate(nx * light[0] + ny * light[1] + nz * light[2])
+        lobe = np.power(cos, C["dir_exponent"])
+        dir_integral = shared * np.maximum(ray_length - light[3], dt(0.0))
+        dir_factor = saturate(np.exp2(-dir_integral))
+        dir_inscatter = (lobe * (dt(1.0) - dir_factor))[..., None] * np.asarray(C["dir_color"], dtype=dt)
+    factor = np.maximum(saturate(np.exp2(-integral)), min_opacity)
+    if P3[3] > 0:
+        cut = length > P3[3]
+        factor = np.where(cut, dt(1.0), factor)
+        if dir_inscatter is not None:
+            dir_inscatter = np.where(cut[..., None], dt(0.0), dir_inscatter)
+    fog_color = color * (dt(1.0) - factor)[..., None]
+    if dir_inscatter is not None:
+        fog_color = fog_color + dir_inscatter
+    return fog_color.astype(dt, copy=False), factor.astype(dt, copy=False)
+
+
+@register("ue4")
+class UE4ExponentialHeightFog:
+    """Unreal's exponential height fog; ``params`` in Unreal units (see module doc)."""
+
+    Params = UE4FogParams
+
+    def __init__(self, params: UE4FogParams | None = None):
+        self.params = params or UE4FogParams()
+
+    def evaluate(self, camera, world_pos, precision: str = "float32") -> FogResult:
+        """Fog of each pixel: camera (3,) and world_pos (..., 3) in fogref metres."""
+        dt = dtype_of(precision)
+        cam, wp = split(camera, world_pos)
+        cam_z_cm = float(np.float32(cam[1] * CM_PER_M)) if dt is np.float32 else cam[1] * CM_PER_M
+        rel = world_to_unreal(wp - cam)
+        C = fog_constants(self.params, cam_z_cm, dt)
+        with np.errstate(all="ignore"):
+            fog_color, factor = shade(C, cam_z_cm, rel, dt, exact=(dt is np.float64))
+        return FogResult(inscatter=fog_color, transmittance=grey(factor, dt))
+
+    @classmethod
+    def from_medium(cls, medium, **kw) -> "UE4ExponentialHeightFog":
+        """The Unreal fog whose extinction equals ``medium``'s (see :func:`medium_to_ue4`)."""
+        return cls(medium_to_ue4(medium, **kw))
+
+    def to_medium(self, **kw):
+        """The physical medium of this fog's extinction (see :func:`ue4_to_medium`)."""
+        return ue4_to_medium(self.params, **kw)
+
+
+# -- exact physical mapping -----------------------------------------------------
+def unreal_to_sigma(density: float, falloff: float) -> tuple[float, float]:
+    """Editor (FogDensity, FogHeightFalloff) -> (a [1/m], b [1/m]) of ``a exp(-b (y - h))``."""
+    return CM_PER_M * LN2 * LN2 * density / 1000.0, CM_PER_M * LN2 * falloff / 1000.0
+
+
+def sigma_to_unreal(a: float, b: float) -> tuple[float, float]:
+    """Inverse of :func:`unreal_to_sigma`."""
+    return a * 1000.0 / (CM_PER_M * LN2 * LN2), b * 1000.0 / (CM_PER_M * LN2)
+
+
+def ue4_to_medium(params: UE4FogParams, albedo=(1.0, 1.0, 1.0), g: float = 0.0):
+    """The physical medium with the same extinction as the Unreal fog.
+
+    ``sigma_t(y) = a_i exp(-b_i (y - h_i))`` per metre for each layer i with
+    density > 0 (see module doc).  Albedo and g are free (Unreal has neither;
+    its FogInscatteringColor stands for ``albedo * L_sky``).
+    """
+    from fogref.media import ExpLayer, FogMedium
+
+    sfd = params.SecondFogData
+    specs = [(params.FogDensity, params.FogHeightFalloff, params.FogHeight),
+             (sfd.FogDensity, sfd.FogHeightFalloff, params.FogHeight + sfd.FogHeightOffset)]
+    specs = [s for s in specs if s[0] > 0]
+    if not specs:
+        return FogMedium(sigma_t=0.0, albedo=albedo, g=g, layers=(ExpLayer(),), source="<ue4_to_medium>")
+    a0, _ = unreal_to_sigma(specs[0][0], specs[0][1])
+    layers = []
+    for d, f, h in specs:
+        a, b = unreal_to_sigma(d, f)
+        layers.append(ExpLayer(density=a / a0, falloff=b, height=h / CM_PER_M))
+    return FogMedium(sigma_t=a0, albedo=albedo, g=g, layers=tuple(layers), source="<ue4_to_medium>")
+
+
+def medium_to_ue4(medium, base: UE4FogParams | None = None) -> UE4FogParams:
+    """Unreal parameters (density, falloff, height parts) for a 1–2 layer medium.
+
+    The medium must be unbounded, grey (equal sigma_t per channel) and made of
+    at most two :class:`~fogref.media.ExpLayer`.  Other fields come from ``base``.
+    """
+    from fogref.media import ExpLayer
+
+    src = getattr(medium, "source", "<medium>")
+    if medium.bounds is not None:
+        raise ParameterError(src, "bounds", "Unreal's height fog is unbounded")
+    s = medium.sigma_t
+    if max(s) - min(s) > 1e-12 * max(max(s), 1e-300):
+        raise ParameterError(src, "sigma_t", f"Unreal's fog is grey; got {s}")
+    layers = [L for L in medium.layers if isinstance(L, ExpLayer)]
+    if len(layers) != len(medium.layers) or not 1 <= len(layers) <= 2:
+        raise ParameterError(src, "layers", "need 1 or 2 ExpLayer")
+    vals = []
+    for L in layers:
+        d, f = sigma_to_unreal(s[0] * L.density, L.falloff)
+        vals.append((d, f, L.height * CM_PER_M))
+    base = base or UE4FogParams()
+    second = SecondFogData(FogDensity=0.0, FogHeightFalloff=base.SecondFogData.FogHeightFalloff)
+    if len(vals) == 2:
+        second = SecondFogData(FogDensity=vals[1][0], FogHeightFalloff=vals[1][1],
+                               FogHeightOffset=vals[1][2] - vals[0][2])
+    return replace(base, FogDensity=vals[0][0], FogHeightFalloff=vals[0][1], FogHeight=vals[0][2],
+                   SecondFogData=second)

@@ -1,0 +1,178 @@
+"""Unity built-in render pipeline fog: Linear, Exp and Exp2 (forward fog).
+
+Source: ``UnityCG.cginc`` (``UNITY_CALC_FOG_FACTOR_RAW``,
+``UNITY_Z_0_FAR_FROM_CLIPSPACE``) and ``UnityShaderVariables.cginc``
+(``unity_FogParams``); seed 003 (catlikecoding "Rendering 14: Fog", in Chinese).
+
+Units: Unity is y-up, **metres** (left-handed; irrelevant to fog), the same
+lengths as fogref, so no conversion.  ``unity_FogParams`` (CPU, float32):
+``x = density / sqrt(ln 2)`` (Exp2), ``y = density / ln 2`` (Exp),
+``z = -1 / (end - start)``, ``w = end / (end - start)`` (Linear).  The factor is
+evaluated with **exp2**: ``Exp``: ``exp2(-y c) = exp(-density c)``; ``Exp2``:
+``exp2(-(x c)^2) = exp(-(density c)^2)``; ``Linear``: ``c z + w``.
+
+Fog coordinate ``c``: ``"depth"`` (Unity's default: the clip-space depth fed
+through ``UNITY_Z_0_FAR_FROM_CLIPSPACE``, which on D3D-style APIs equals
+``far (z_eye - near) / (far - near)``; with ``clip_near = None`` the plain eye
+depth ``z_eye = dot(p - camera, camera_forward)``) or ``"distance"``
+(``length(p - camera)``, catlikecoding's FOG_DISTANCE).
+
+Compositing: ``color.rgb = lerp(unity_FogColor.rgb, color.rgb, saturate(f))``,
+i.e. ``transmittance = saturate(f)`` (grey), ``inscatter = fogColor (1 - T)``.
+
+Physical counterpart: Exp fog on *distance* is exactly a homogeneous medium with
+``sigma_t = density`` [1/m].  Exp2 and Linear have none; :func:`unity_to_medium`
+gives the homogeneous medium that matches the transmittance at a reference
+distance (default: Linear at ``(start + end) / 2``, Exp2 at ``1 / density``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fogref.errors import ParameterError
+from fogref.models._num import LN2, dtype_of, grey, rgb, saturate, split
+from fogref.models.base import FogResult, register
+
+MODES = ("linear", "exp", "exp2")
+
+
+@dataclass(frozen=True)
+class UnityFogParams:
+    """RenderSettings fog (Lighting window), Unity units (metres).
+
+    fogMode: "linear", "exp" or "exp2".  fogDensity [1/m] (Exp, Exp2).
+    fogStartDistance, fogEndDistance [m] (Linear).  fogColor: linear RGB.
+    fog_coordinate: "depth" or "distance".  camera_forward: fogref-frame unit
+    view direction (for "depth").  clip_near, clip_far [m]: if given, the depth
+    is remapped as UNITY_Z_0_FAR_FROM_CLIPSPACE does on D3D/Metal/Vulkan.
+    """
+
+    fogMode: str = "exp2"
+    fogDensity: float = 0.01
+    fogStartDistance: float = 0.0
+    fogEndDistance: float = 300.0
+    fogColor: tuple = (0.5, 0.5, 0.5)
+    fog_coordinate: str = "depth"
+    camera_forward: tuple = (0.0, 0.0, -1.0)
+    clip_near: float | None = None
+    clip_far: float | None = None
+
+    def __post_init__(self):
+        src = "<UnityFogParams>"
+        if self.fogMode not in MODES:
+            raise ParameterError(src, "fogMode", f"expected one of {MODES}, got {self.fogMode!r}")
+        if self.fog_coordinate not in ("depth", "distance"):
+            raise ParameterError(src, "fog_coordinate", f"expected 'depth' or 'distance', got {self.fog_coordinate!r}")
+        if not (math.isfinite(self.fogDensity) and self.fogDensity >= 0):
+            raise ParameterError(src, "fogDensity", f"value {self.fogDensity} must be >= 0")
+        if self.fogMode == "linear" and not self.fogEndDistance > self.fogStartDistance:
+            raise ParameterError(src, "fogEndDistance", "must be greater than fogStartDistance")
+        object.__setattr__(self, "fogColor", rgb(self.fogColor, "fogColor", src))
+        f = np.asarray(self.camera_forward, dtype=np.float64)
+        object.__setattr__(self, "camera_forward", tuple(float(x) for x in f / np.linalg.norm(f)))
+
+    def fog_params(self, dt=np.float32) -> tuple:
+        """unity_FogParams (x, y, z, w) as the CPU computes them (in ``dt``)."""
+        d = dt(self.fogDensity)
+        rng = dt(self.fogEndDistance) - dt(self.fogStartDistance)
+        rng = rng if rng != 0 else dt(1e-30)
+        return (d / dt(math.sqrt(LN2)), d / dt(LN2), dt(-1.0) / rng, dt(self.fogEndDistance) / rng)
+
+
+def unity_fog_factor(mode: str, fog_params, coord, dt):
+    """UNITY_CALC_FOG_FACTOR_RAW: the un-saturated fog factor for coordinate ``coord``."""
+    x, y, z, w = fog_params
+    if mode == "linear":
+        return coord * z + w
+    if mode == "exp":
+        f = y * coord
+        return np.exp2(-f)
+    f = x * coord
+    return np.exp2(-f * f)
+
+
+@register("unity")
+class UnityBuiltinFog:
+    """Unity built-in Linear/Exp/Exp2 fog (see module doc)."""
+
+    Params = UnityFogParams
+
+    def __init__(self, params: UnityFogParams | None = None):
+        self.params = params or UnityFogParams()
+
+    def fog_coordinate(self, camera, world_pos, dt=np.float64) -> np.ndarray:
+        """The fog coordinate c [m] of each pixel (eye depth or distance)."""
+        p = self.params
+        cam, wp = split(camera, world_pos)
+        v = (wp - cam).astype(dt)
+        if p.fog_coordinate == "distance":
+            return np.sqrt(np.sum(v * v, axis=-1))
+        fwd = np.asarray(p.camera_forward, dtype=dt)
+        z = v[..., 0] * fwd[0] + v[..., 1] * fwd[1] + v[..., 2] * fwd[2]
+        if p.clip_near is None:
+            return z
+        n, f = dt(p.clip_near), dt(p.clip_far)
+        zc = n * (f - z) / (f - n)                      # reversed-Z clip-space z
+        return np.maximum((dt(1.0) - zc / n) * f, dt(0.0))
+
+    def evaluate(self, camera, world_pos, precision: str = "float32") -> FogResult:
+        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
+        dt = dtype_of(precision)
+        p = self.params
+        with np.errstate(all="ignore"):
+            c = self.fog_coordinate(camera, world_pos, dt)
+            factor = saturate(unity_fog_factor(p.fogMode, p.fog_params(dt), c, dt)).astype(dt)
+        color = np.asarray(p.fogColor, dtype=dt)
+        return FogResult(inscatter=color * (dt(1.0) - factor)[..., None], transmittance=grey(factor, dt))
+
+    @classmethod
+    def from_medium(cls, medium, **kw) -> "UnityBuiltinFog":
+        """Exp fog on distance with the homogeneous medium's extinction."""
+        return cls(medium_to_unity(medium, **kw))
+
+    def to_medium(self, **kw):
+        return unity_to_medium(self.params, **kw)
+
+
+def unity_sigma(params: UnityFogParams, reference_distance: float | None = None) -> float:
+    """Extinction [1/m] of the homogeneous medium nearest to ``params``.
+
+    Exp: ``density`` (exact on distance).  Exp2: ``density^2 r`` (equal
+    transmittance ``exp(-(density r)^2)`` at ``r``, default ``1/density``).
+    Linear: ``-ln(T(r)) / r`` with ``T(r) = (end - r)/(end - start)`` at ``r``
+    (default ``(start + end)/2``).
+    """
+    if params.fogMode == "exp":
+        return params.fogDensity
+    if params.fogMode == "exp2":
+        r = reference_distance or (1.0 / params.fogDensity if params.fogDensity > 0 else 1.0)
+        return params.fogDensity ** 2 * r
+    s, e = params.fogStartDistance, params.fogEndDistance
+    r = reference_distance if reference_distance is not None else 0.5 * (s + e)
+    T = min(max((e - r) / (e - s), 1e-12), 1.0)
+    return -math.log(T) / r if r > 0 else 0.0
+
+
+def unity_to_medium(params: UnityFogParams, reference_distance: float | None = None,
+                    albedo=(1.0, 1.0, 1.0), g: float = 0.0):
+    """Homogeneous :class:`~fogref.media.FogMedium` for ``params`` (see :func:`unity_sigma`)."""
+    from fogref.media import ExpLayer, FogMedium
+
+    return FogMedium(sigma_t=unity_sigma(params, reference_distance), albedo=albedo, g=g,
+                     layers=(ExpLayer(1.0, 0.0, 0.0),), source="<unity_to_medium>")
+
+
+def medium_to_unity(medium, fogColor=(0.5, 0.5, 0.5)) -> UnityFogParams:
+    """Exp fog on distance equal to a homogeneous, unbounded, grey medium."""
+    src = getattr(medium, "source", "<medium>")
+    if medium.bounds is not None or not medium.is_homogeneous:
+        raise ParameterError(src, "layers", "Unity Exp fog needs an unbounded homogeneous medium")
+    s = medium.sigma_t
+    if max(s) - min(s) > 1e-12 * max(max(s), 1e-300):
+        raise ParameterError(src, "sigma_t", f"Unity fog is grey; got {s}")
+    density = s[0] * sum(L.density for L in medium.layers)
+    return UnityFogParams(fogMode="exp", fogDensity=density, fogColor=fogColor, fog_coordinate="distance")

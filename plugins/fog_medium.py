@@ -1,0 +1,123 @@
+"""Mitsuba medium plugin ``heightfog``: fogref's exact fog for stock integrators.
+
+Stock ``volpath`` cannot call a Python medium's free-flight sampling (that method
+is not virtual); it does delta tracking against ``get_majorant``.  This plugin
+gives it a *tight per-ray majorant*: ``intersect_aabb`` clips the ray to the fog's
+bounds and records the largest density on the clipped segment (the density is
+monotone in height, so the maximum sits at the segment's lowest point), and
+``get_majorant`` returns it.  ``fogpath`` instead uses :attr:`fog` (the physics
+object) for analytic free flight and closed-form transmittance.
+
+XML parameters (SI units, y-up):
+
+==============  =========  ==================================================  ========
+name            type       meaning                                             default
+==============  =========  ==================================================  ========
+profile         string     ``exponential`` | ``homogeneous`` | ``box`` |      exponential
+                           ``hdrp`` | ``powerlaw``
+sigma_t         rgb/float  extinction at the reference height [1/m], 0..1e2   0.01
+albedo          rgb/float  single-scattering albedo, 0..1                     0.9
+g               float      Henyey–Greenstein asymmetry, -0.999..0.999         0
+density         float      layer 1 relative density (>= 0)                    1
+falloff         float      layer 1 falloff b [1/m], 0..1e3                    0.01
+height          float      layer 1 reference height h [m]                     0
+density2        float      layer 2 relative density; 0 = no second layer      0
+falloff2        float      layer 2 falloff [1/m]                              0.01
+height2         float      layer 2 reference height [m]                       0
+base_height     float      ``hdrp``: top of the constant part [m]             0
+start, end      float      ``powerlaw``: seed 001's S and E heights [m]       0, 100
+power           float      ``powerlaw``: exponent p >= 0                      1
+bounds_min/max  point      the fog's box [m] (required for ``box``)           none
+floor           float      lowest height the majorant considers when the fog   -1e4
+                           is unbounded below [m] (stock integrators only)
+==============  =========  ==================================================  ========
+
+A ``<phase>`` child overrides ``g``.
+"""
+
+from __future__ import annotations
+
+import drjit as dr
+import mitsuba as mi
+
+from fogref.errors import ParameterError
+from fogref.media import NP, drjit_ops  # noqa: F401  (NP used by medium_from_params callers)
+from fogref.render.params import medium_from_params
+
+
+def _props_to_dict(props) -> dict:
+    out = {}
+    for key in props.keys():
+        try:
+            v = props[key]
+        except Exception:
+            continue
+        if isinstance(v, (bool, int, float, str)):
+            out[key] = v
+        else:
+            try:
+                out[key] = [float(x) for x in v]
+            except TypeError:
+                pass
+    return out
+
+
+class HeightFogMedium(mi.Medium):
+    """Exact fog medium (see module docstring); ``self.fog`` is the physics."""
+
+    def __init__(self, props):
+        params = _props_to_dict(props)
+        has_phase = any(isinstance(props[k], mi.PhaseFunction) for k in props.keys())
+        src = f"heightfog '{props.id()}'" if props.id() else "heightfog"
+        self.fog = medium_from_params(params, src)
+        if not has_phase:
+            props["phase"] = mi.load_dict({"type": "hg", "g": self.fog.g})
+        super().__init__(props)
+        self.floor = float(params.get("floor", -1.0e4))
+        self.m_is_homogeneous = False
+        self.m_has_spectral_extinction = True
+        self._maj = None
+
+    # -- stock-integrator interface -----------------------------------------
+    def intersect_aabb(self, ray):
+        ops = drjit_ops()
+        t0, t1 = self.fog.clip(ops, ray.o, ray.d)
+        t1 = dr.minimum(t1, ray.maxt)
+        active = t1 > t0
+        # lowest point of the segment -> densest (every profile is monotone non-increasing in y)
+        far = dr.select(dr.isfinite(t1) & (t1 < 1e30), t1, 1e30)
+        y0 = ray.o.y + t0 * ray.d.y
+        y1 = ray.o.y + far * ray.d.y
+        y_low = dr.maximum(dr.minimum(y0, y1), self.floor)
+        if self.fog.bounds is not None:
+            y_low = dr.maximum(y_low, self.fog.bounds.lo[1])
+        rho_max = 0.0
+        for L in self.fog.layers:
+            rho_max = rho_max + L.rho(ops, y_low)
+        self._maj = mi.Float(rho_max) * 1.0001 + 1e-7
+        return active, dr.select(active, t0, dr.inf), dr.select(active, t1, dr.inf)
+
+    def _majorant(self):
+        maj = self._maj if self._maj is not None else mi.Float(1.0)
+        return mi.UnpolarizedSpectrum(*(s * maj for s in self.fog.sigma_t))
+
+    def get_majorant(self, mei, active=True):
+        return self._majorant()
+
+    def get_scattering_coefficients(self, mei, active=True):
+        ops = drjit_ops()
+        rho = self.fog.density(ops, mei.p)
+        sigma_t = mi.UnpolarizedSpectrum(*(s * rho for s in self.fog.sigma_t))
+        sigma_s = sigma_t * mi.UnpolarizedSpectrum(*self.fog.albedo)
+        sigma_n = dr.maximum(self._majorant() - sigma_t, 0.0)
+        return sigma_s, sigma_n, sigma_t
+
+    def to_string(self):
+        return f"HeightFogMedium[{self.fog!r}]"
+
+
+def register() -> None:
+    mi.register_medium("heightfog", lambda props: HeightFogMedium(props))
+
+
+__all__ = ["HeightFogMedium", "register", "ParameterError"]

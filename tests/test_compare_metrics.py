@@ -1,0 +1,161 @@
+"""fogref.compare.metrics / binning / tonemap: hand-computed values and edge cases."""
+
+import colour
+import numpy as np
+import pytest
+
+from fogref.compare import metrics as M
+from fogref.compare.binning import angle_edges, binned_errors, log_distance_edges
+from fogref.compare.tonemap import srgb_oetf, tone_map
+
+
+def _rand(shape=(12, 16, 3), seed=0, scale=1.0):
+    return np.random.default_rng(seed).random(shape) * scale
+
+
+def test_rmse_and_relmse_hand_computed():
+    r = np.array([[[1.0, 2.0, 0.0], [0.0, 0.0, 0.0]]])  # (1, 2, 3)
+    x = np.array([[[2.0, 2.0, 0.0], [0.0, 0.0, 3.0]]])
+    # squared errors: 1, 0, 0, 0, 0, 9 -> mean 10/6
+    assert M.rmse(r, x) == pytest.approx(np.sqrt(10 / 6))
+    eps = 0.01
+    expected = (1 / (1 + eps) + 9 / eps) / 6
+    assert M.relmse(r, x, eps=eps) == pytest.approx(expected)
+    assert M.relmse(r, x) == pytest.approx((1 / (1 + M.RELMSE_EPS) + 9 / M.RELMSE_EPS) / 6)
+    # masks: first pixel only
+    assert M.rmse(r, x, mask=np.array([[True, False]])) == pytest.approx(np.sqrt(1 / 3))
+    assert M.rmse(r, x, mask=np.array([[False, False]])) is None
+    np.testing.assert_allclose(M.abs_error_map(r, x), [[1 / 3, 1.0]])
+    np.testing.assert_allclose(M.signed_error(r, x), x - r)
+
+
+def test_relmse_rejects_nonpositive_eps():
+    with pytest.raises(ValueError):
+        M.relmse(np.ones((1, 1, 3)), np.ones((1, 1, 3)), eps=0.0)
+
+
+def test_shape_mismatch_is_an_error():
+    with pytest.raises(ValueError, match="differ"):
+        M.rmse(np.ones((2, 2, 3)), np.ones((2, 3, 3)))
+
+
+def test_identical_images_give_exactly_zero():
+    r = _rand(scale=5.0)
+    assert M.rmse(r, r) == 0.0
+    assert M.relmse(r, r) == 0.0
+    assert np.all(M.delta_e2000_map(r, r) == 0.0)
+    flip, params = M.flip_map(r, r)
+    assert flip.shape == r.shape[:2] and np.all(flip == 0.0)
+    s = M.error_maps(r, r).summary()
+    for k in ("rmse", "relmse", "mean_abs_error", "max_abs_error", "delta_e2000_mean", "flip_mean"):
+        assert s[k] == 0.0, k
+
+
+def test_delta_e2000_matches_colour_science_directly():
+    ref = np.array([[0.2, 0.4, 0.6], [1.5, 0.1, 0.05], [0.0, 0.0, 0.0]])
+    test = np.array([[0.25, 0.35, 0.6], [1.2, 0.2, 0.1], [0.01, 0.02, 0.0]])
+    white = 2.0
+    d65 = colour.RGB_COLOURSPACES["sRGB"].whitepoint
+
+    def lab(rgb):
+        return colour.XYZ_to_Lab(colour.RGB_to_XYZ(rgb / white, "sRGB", apply_cctf_decoding=False), d65)
+
+    expected = colour.delta_E(lab(ref), lab(test), method="CIE 2000")
+    np.testing.assert_allclose(M.delta_e2000_map(ref, test, white=white), expected, rtol=1e-12)
+    # white = 1 maps linear (1, 1, 1) to L* = 100
+    assert M.linear_rgb_to_lab(np.ones(3), 1.0)[0] == pytest.approx(100.0, abs=1e-3)
+
+
+def test_delta_e2000_default_white_is_the_reference_p99_luminance():
+    r = _rand(seed=1, scale=3.0)
+    x = r * 1.2
+    w = M.exposure_white(r)
+    y = M.luminance(r).ravel()
+    assert w == pytest.approx(np.percentile(y[y > 0], 99))
+    np.testing.assert_allclose(M.delta_e2000_map(r, x), M.delta_e2000_map(r, x, white=w))
+    # exposure-normalised: scaling both images leaves ΔE unchanged
+    np.testing.assert_allclose(M.delta_e2000_map(10 * r, 10 * x), M.delta_e2000_map(r, x), rtol=1e-9, atol=1e-9)
+
+
+def test_exposure_white_of_black_image_is_one():
+    assert M.exposure_white(np.zeros((4, 4, 3))) == 1.0
+    assert M.exposure_white(-np.ones((4, 4, 3))) == 1.0
+
+
+def test_flip_detects_a_difference_and_stays_in_range():
+    r = _rand(seed=2)
+    flip, params = M.flip_map(r, r * 1.5)
+    assert 0 < flip.mean() <= 1 and np.all(np.isfinite(flip))
+    assert params["ppd"] == pytest.approx(M.FLIP_PPD, rel=1e-3)
+
+
+def test_flip_black_reference_does_not_abort():
+    # flip_evaluator exits the process when the reference has no positive luminance
+    z = np.zeros((8, 8, 3))
+    flip, _ = M.flip_map(z, z)
+    assert np.all(flip == 0)
+    t = z.copy()
+    t[2:5, 2:5] = 1.0
+    flip, params = M.flip_map(z, t)
+    assert flip.max() > 0 and np.all(np.isfinite(flip))
+    assert params["startExposure"] == params["stopExposure"]
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf, -5.0, 0.0, 1e30])
+def test_bad_pixels_give_finite_metrics(bad):
+    r = _rand(seed=3)
+    x = r.copy()
+    x[3, 4, 1] = bad
+    r2 = r.copy()
+    r2[5, 6, :] = bad
+    for ref, test in ((r, x), (r2, r), (r2, x)):
+        e = M.error_maps(ref, test)
+        for name in ("signed", "absolute", "squared", "relative_squared", "delta_e2000", "flip"):
+            assert np.all(np.isfinite(getattr(e, name))), (bad, name)
+        s = e.summary()
+        assert all(np.isfinite(v) for v in s.values()), (bad, s)
+    assert M.count_nonfinite(x) == (0 if np.isfinite(bad) else 1)
+
+
+def test_inf_in_model_is_a_huge_finite_error():
+    r = np.ones((4, 4, 3))
+    x = r.copy()
+    x[0, 0, 0] = np.inf
+    assert np.isfinite(M.rmse(r, x)) and M.rmse(r, x) > 1e30
+
+
+def test_vectorised_over_leading_axes():
+    r, x = _rand((5, 3), seed=4), _rand((5, 3), seed=5)
+    assert M.squared_error_map(r, x).shape == (5,)
+    assert M.delta_e2000_map(r, x).shape == (5,)
+    r4, x4 = _rand((2, 3, 4, 3), seed=6), _rand((2, 3, 4, 3), seed=7)
+    assert M.relative_squared_error_map(r4, x4).shape == (2, 3, 4)
+
+
+def test_binned_errors_hand_computed():
+    r = np.zeros((1, 4, 3))
+    x = np.array([[[1.0] * 3, [2.0] * 3, [3.0] * 3, [4.0] * 3]])
+    e = M.error_maps(r, x, white=1.0)
+    d = np.array([[1.0, 2.0, 10.0, 15.0]])
+    edges = np.array([1.0, 5.0, 20.0, 100.0])
+    b = binned_errors(d, {"p": e}, edges)
+    assert b["pixels"] == [2, 2]  # third bin empty, dropped
+    np.testing.assert_allclose(b["parts"]["p"]["rmse"], [np.sqrt(2.5), np.sqrt(12.5)])
+    np.testing.assert_allclose(b["center"], [np.sqrt(5.0), np.sqrt(100.0)])
+    masked = binned_errors(d, {"p": e}, edges, mask=np.array([[True, False, False, False]]))
+    assert masked["pixels"] == [1]
+
+
+def test_bin_edges():
+    e = log_distance_edges(np.array([0.0, 1.0, 1000.0, np.inf]), n_bins=3)
+    np.testing.assert_allclose(e, [1.0, 10.0, 100.0, 1000.0])
+    assert log_distance_edges(np.zeros(4)).size == 0
+    assert binned_errors(np.zeros((1, 1)), {}, np.empty(0))["pixels"] == []
+    a = angle_edges(5.0)
+    assert a[0] == 0 and a[-1] == 180 and len(a) == 37
+
+
+def test_tone_map_is_exposure_clip_srgb():
+    assert srgb_oetf(np.array([0.0, 1.0, 2.0, -1.0, np.nan])).tolist() == pytest.approx([0, 1, 1, 0, 0])
+    assert srgb_oetf(np.array([0.18]))[0] == pytest.approx(0.4613561, rel=1e-6)
+    np.testing.assert_allclose(tone_map(np.full(3, 0.09), 2.0), srgb_oetf(np.full(3, 0.18)))

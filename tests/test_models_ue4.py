@@ -1,0 +1,196 @@
+"""Unreal exponential height fog: shader transcription, physics, robustness."""
+
+import math
+
+import numpy as np
+import pytest
+
+from fogref.media import NP
+from fogref.models import get
+from fogref.models.ue4 import (SecondFogData, UE4ExponentialHeightFog, UE4FogParams, medium_to_ue4,
+                               ue4_to_medium)
+
+f32 = np.float32
+
+
+def seed000_fog(cam_m, wp_m, D, f, H, D2, f2, H2, color, max_opacity, start, cutoff,
+                light=None, dir_color=(0, 0, 0), dir_exp=4.0, dir_start=0.0):
+    """Independent float32 transcription of seed 000 (UE 4.22 GetExponentialHeightFog,
+    y-up port) with the uniforms of seed 002, in centimetres.  One pixel."""
+    cam = (np.asarray(cam_m, np.float64) * 100).astype(f32)
+    rel = ((np.asarray(wp_m, np.float64) - np.asarray(cam_m, np.float64)) * 100).astype(f32)
+    d0, fa0 = f32(D) / f32(1000), f32(f) / f32(1000)
+    d1, fa1 = f32(D2) / f32(1000), f32(f2) / f32(1000)
+    H, H2 = f32(H), f32(H2)
+    max_obs = min(H + f32(65536) if d0 > 0 else f32(3e38), H2 + f32(65536) if d1 > 0 else f32(3e38))
+    # ExponentialFogParameters(.x .y .z .w), 2, 3 (seed 002 comments)
+    P = (d0 * f32(2) ** (-fa0 * (cam[1] - H)), fa0, max_obs, f32(start))
+    P2 = (d1 * f32(2) ** (-fa1 * (cam[1] - H2)), fa1, d1, H2)
+    P3 = (d0, H, f32(0), f32(cutoff))
+    MinFogOpacity = f32(1) - f32(max_opacity)
+
+    def CalculateLineIntegralShared(FogHeightFalloff, RayDirectionY, RayOriginTerms):
+        Falloff = max(f32(-127.0), FogHeightFalloff * RayDirectionY)
+        if abs(Falloff) > f32(0.01):
+            return RayOriginTerms * ((f32(1) - np.exp2(-Falloff)) / Falloff)
+        ln2 = f32(math.log(2.0))
+        return RayOriginTerms * (ln2 - (f32(0.5) * ln2 * ln2) * Falloff)
+
+    observer_y = min(cam[1], P[2])
+    c2r = rel.copy()
+    c2r[1] += cam[1] - observer_y
+    lsq = f32(c2r[0] * c2r[0] + c2r[1] * c2r[1] + c2r[2] * c2r[2])
+    linv = f32(1) / np.sqrt(lsq)
+    length = lsq * linv
+    normd = c2r * linv
+    ro, ro2 = P[0], P2[0]
+    ray_len, ray_dy = length, c2r[1]
+    if P[3] > 0:
+        t = P[3] * linv
+        cdy = t * c2r[1]
+        ey = observer_y + cdy
+        ray_len = (f32(1) - t) * length
+        ray_dy = c2r[1] - cdy
+        ro = P3[0] * np.exp2(-max(f32(-127), P[1] * (ey - P3[1])))
+        ro2 = P2[2] * np.exp2(-max(f32(-127), P2[1] * (ey - P2[3])))
+    shared = CalculateLineIntegralShared(P[1], ray_dy, ro) + CalculateLineIntegralShared(P2[1], ray_dy, ro2)
+    integral = shared * ray_len
+    dir_insc = np.zeros(3, f32)
+    if light is not None:
+        lobe = np.asarray(dir_color, f32) * np.power(np.clip(f32(np.dot(normd, np.asarray(light, f32))), 0, 1), f32(dir_exp))
+        dint = shared * max(ray_len - f32(dir_start), f32(0))
+        dff = np.clip(np.exp2(-dint), 0, 1)
+        dir_insc = lobe * (f32(1) - dff)
+    factor = max(np.clip(np.exp2(-integral), 0, 1), MinFogOpacity)
+    if P3[3] > 0 and length > P3[3]:
+        factor = f32(1)
+        dir_insc = np.zeros(3, f32)
+    return np.asarray(color, f32) * (f32(1) - factor) + dir_insc, factor
+
+
+def _rays(rng, n, cam):
+    d = rng.normal(size=(n, 3))
+    d[: n // 4, 1] = 0.0                                   # horizontal rays
+    d[n // 4: n // 2, 1] = rng.uniform(-1e-4, 1e-4, n // 4)  # Taylor branch
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    return cam + d * 10 ** rng.uniform(-1, 4, (n, 1))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_float32_matches_seed_transcription(seed):
+    rng = np.random.default_rng(seed)
+    # sun given in the seed's y-up frame; the model takes Unreal's z-up frame
+    sun_y_up = np.array([0.4, 0.6, -0.2]); sun_y_up /= np.linalg.norm(sun_y_up)
+    kw = dict(D=rng.uniform(0.005, 0.2), f=rng.uniform(0.0, 1.0), H=rng.uniform(-500, 500),
+              D2=rng.uniform(0, 0.1), f2=rng.uniform(0, 2.0), H2=rng.uniform(-2000, 2000),
+              color=(0.4, 0.5, 0.9), max_opacity=rng.uniform(0.5, 1.0), start=[0.0, 0.0, 3000.0][seed],
+              cutoff=[0.0, 200000.0, 0.0][seed], light=sun_y_up, dir_color=(1.0, 0.8, 0.5),
+              dir_exp=rng.uniform(1, 16), dir_start=[0.0, 5000.0, 100.0][seed])
+    params = UE4FogParams(FogDensity=kw["D"], FogHeightFalloff=kw["f"], FogHeight=kw["H"],
+                          SecondFogData=SecondFogData(kw["D2"], kw["f2"], kw["H2"] - kw["H"]),
+                          FogInscatteringColor=kw["color"], FogMaxOpacity=kw["max_opacity"],
+                          StartDistance=kw["start"], FogCutoffDistance=kw["cutoff"],
+                          DirectionalInscatteringExponent=kw["dir_exp"],
+                          DirectionalInscatteringStartDistance=kw["dir_start"],
+                          DirectionalInscatteringColor=kw["dir_color"]).with_sun(sun_y_up)
+    cam = np.array([3.0, rng.uniform(-2, 20), -7.0])
+    wp = _rays(rng, 64, cam)
+    res = UE4ExponentialHeightFog(params).evaluate(cam, wp, "float32")
+    assert res.transmittance.dtype == np.float32
+    for i in range(len(wp)):
+        col, fac = seed000_fog(cam, wp[i], **kw)
+        np.testing.assert_allclose(res.transmittance[i], fac, rtol=2e-5, atol=1e-6)
+        np.testing.assert_allclose(res.inscatter[i], col, rtol=2e-5, atol=1e-6)
+
+
+def _exact_T(params, cam, wp):
+    m = ue4_to_medium(params)
+    d = wp - cam
+    L = np.linalg.norm(d, axis=-1)
+    d = d / L[:, None]
+    return m.transmittance(NP, tuple(cam), tuple(d.T), L)[0]
+
+
+def test_float64_equals_physical_medium():
+    rng = np.random.default_rng(5)
+    params = UE4FogParams(FogDensity=0.05, FogHeightFalloff=0.3, FogHeight=150.0,
+                          SecondFogData=SecondFogData(0.02, 0.05, 3000.0))
+    cam = np.array([0.0, 12.0, 0.0])
+    wp = _rays(rng, 400, cam)
+    T64 = UE4ExponentialHeightFog(params).evaluate(cam, wp, "float64").transmittance[:, 0]
+    T_exact = _exact_T(params, cam, wp)
+    np.testing.assert_allclose(T64, T_exact, rtol=1e-10, atol=1e-13)
+    T32 = UE4ExponentialHeightFog(params).evaluate(cam, wp, "float32").transmittance[:, 0]
+    np.testing.assert_allclose(T32, T_exact, rtol=2e-3, atol=2e-5)
+
+
+def test_sigma_formula_and_roundtrip():
+    p = UE4FogParams(FogDensity=0.04, FogHeightFalloff=0.25, FogHeight=-120.0,
+                     SecondFogData=SecondFogData(0.01, 0.5, 700.0))
+    m = ue4_to_medium(p)
+    a = 100 * math.log(2) ** 2 * 0.04 / 1000
+    b = 100 * math.log(2) * 0.25 / 1000
+    assert m.sigma_t[0] == pytest.approx(a, rel=1e-14)
+    assert m.layers[0].falloff == pytest.approx(b, rel=1e-14)
+    assert m.layers[0].height == pytest.approx(-1.2)
+    # density at a point (per metre) equals (ln2)^2 D/1000 2^(-f/1000 (z - H)) per cm, x 100
+    y = 3.0
+    z_cm = 300.0
+    per_cm = math.log(2) ** 2 * 0.04 / 1000 * 2 ** (-0.25 / 1000 * (z_cm + 120.0)) \
+        + math.log(2) ** 2 * 0.01 / 1000 * 2 ** (-0.5 / 1000 * (z_cm - 580.0))
+    assert m.sigma_t[0] * m.density(NP, (0.0, np.array(y), 0.0)) == pytest.approx(100 * per_cm, rel=1e-12)
+    q = medium_to_ue4(m)
+    for k in ("FogDensity", "FogHeightFalloff", "FogHeight"):
+        assert getattr(q, k) == pytest.approx(getattr(p, k), rel=1e-12, abs=1e-9)
+    assert q.SecondFogData.FogDensity == pytest.approx(0.01, rel=1e-12)
+    assert q.SecondFogData.FogHeightOffset == pytest.approx(700.0, rel=1e-12)
+
+
+def test_start_distance_is_exact_fog_from_the_exclusion_point():
+    p = UE4FogParams(FogDensity=0.05, FogHeightFalloff=0.2, StartDistance=2000.0)
+    cam = np.array([0.0, 5.0, 0.0])
+    rng = np.random.default_rng(3)
+    wp = _rays(rng, 100, cam)
+    wp = wp[np.linalg.norm(wp - cam, axis=1) > 25.0]
+    T = UE4ExponentialHeightFog(p).evaluate(cam, wp, "float64").transmittance[:, 0]
+    d = (wp - cam) / np.linalg.norm(wp - cam, axis=1, keepdims=True)
+    o = cam + 20.0 * d
+    L = np.linalg.norm(wp - o, axis=1)
+    T_exact = ue4_to_medium(p).transmittance(NP, tuple(o.T), tuple(d.T), L)[0]
+    np.testing.assert_allclose(T, T_exact, rtol=1e-10)
+
+
+def test_engine_rules():
+    cam = np.zeros(3)
+    wp = np.array([[1000.0, 0.0, 0.0], [200.0, 0.0, 0.0]])
+    fog = UE4ExponentialHeightFog(UE4FogParams(FogDensity=1.0, FogMaxOpacity=0.7, FogCutoffDistance=50000.0))
+    r = fog.evaluate(cam, wp, "float64")
+    assert r.transmittance[0, 0] == 1.0 and np.all(r.inscatter[0] == 0)     # beyond the cutoff
+    assert r.transmittance[1, 0] == pytest.approx(0.3)                      # max opacity
+    p = UE4FogParams(DirectionalInscatteringExponent=1e9)
+    assert UE4ExponentialHeightFog(p).evaluate(cam, wp).transmittance.shape == (2, 3)
+
+
+def test_observer_height_clamp_and_extremes_are_finite():
+    fog = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.05, FogHeightFalloff=0.2).with_sun((0, 1, 0)))
+    rng = np.random.default_rng(9)
+    for cam_y in (-1e5, -10.0, 0.0, 3.0, 655.0, 700.0, 1e6):
+        cam = np.array([0.0, cam_y, 0.0])
+        d = rng.normal(size=(200, 3))
+        d[:50, 1] = 0
+        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        wp = cam + d * 10 ** rng.uniform(-4, 7, (200, 1))
+        wp = np.vstack([wp, cam])                     # a pixel at the camera
+        for prec in ("float32", "float64"):
+            r = fog.evaluate(cam, wp, prec)
+            assert np.all(np.isfinite(r.transmittance)) and np.all(np.isfinite(r.inscatter))
+            assert np.all((r.transmittance >= 0) & (r.transmittance <= 1))
+
+
+def test_registry_and_end_distance():
+    assert get("ue4") is UE4ExponentialHeightFog
+    cam = np.zeros(3)
+    wp = np.array([[0.0, 0.0, 500.0], [0.0, 0.0, 5000.0]])
+    p = UE4FogParams(FogDensity=0.1, FogHeightFalloff=0.0, EndDistance=100000.0)
+    T = UE4ExponentialHeightFog(p).evaluate(cam, wp, "float64").transmittance[:, 0]
+    assert T[0] < 1 and T[1] == pytest.approx(T[0] ** 2, rel=1e-9)   # fog stops at 1 km
