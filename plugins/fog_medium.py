@@ -75,7 +75,11 @@ class HeightFogMedium(mi.Medium):
         super().__init__(props)
         self.floor = float(params.get("floor", -1.0e4))
         self.m_is_homogeneous = False
-        self.m_has_spectral_extinction = True
+        # Stock volpath's spectral mode gives every ray that escapes to infinity
+        # weight 0 (its transmittance pdf uses t = inf), so stock comparisons need
+        # grey extinction, which runs in its non-spectral mode.
+        st = self.fog.sigma_t
+        self.m_has_spectral_extinction = not (st[0] == st[1] == st[2])
         self._maj = None
 
     # -- stock-integrator interface -----------------------------------------

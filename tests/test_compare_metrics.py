@@ -44,7 +44,7 @@ def test_identical_images_give_exactly_zero():
     assert M.rmse(r, r) == 0.0
     assert M.relmse(r, r) == 0.0
     assert np.all(M.delta_e2000_map(r, r) == 0.0)
-    flip, params = M.flip_map(r, r)
+    flip, _ = M.flip_map(r, r)
     assert flip.shape == r.shape[:2] and np.all(flip == 0.0)
     s = M.error_maps(r, r).summary()
     for k in ("rmse", "relmse", "mean_abs_error", "max_abs_error", "delta_e2000_mean", "flip_mean"):

@@ -261,7 +261,7 @@ def registered_models():
 def _registry_importable():
     try:
         import fogref.models  # noqa: F401  (being written by another engineer)
-    except Exception:
+    except ImportError:
         return False
     return True
 

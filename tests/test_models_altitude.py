@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from fogref.media import NP
-from fogref.models.altitude import AltitudeFog, AltitudeFogParams, PowerLayer, altitude_to_medium
+from fogref.media import PowerLawLayer
+from fogref.models.altitude import AltitudeFog, AltitudeFogParams, altitude_to_medium
 
 f32 = np.float32
 
@@ -115,7 +116,7 @@ def test_linear_blend_not_beer_lambert():
 
 
 def test_power_layer_sampling_inverts_depth():
-    L = PowerLayer(0.0, 30.0, 1.5)
+    L = PowerLawLayer(density=1.0, start=0.0, end=30.0, power=1.5)
     oy = np.array([-5.0, 5.0, 20.0, 40.0, 5.0])
     dy = np.array([0.3, -0.6, 0.9, -0.2, 0.0])
     s = np.array([3.0, 4.0, 0.5, 2.0, 0.7])

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from fogref.media import NP
-from fogref.models.hdrp import HDRPFog, HDRPFogParams, HeightFogProfile, hdrp_to_medium, medium_to_hdrp
+from fogref.media import HDRPLayer
+from fogref.models.hdrp import HDRPFog, HDRPFogParams, hdrp_to_medium, medium_to_hdrp
 
 f32 = np.float32
 
@@ -80,7 +81,7 @@ def test_float64_against_mpmath_and_medium():
 
 
 def test_profile_sampling_inverts_depth_and_roundtrip():
-    L = HeightFogProfile(1.0, 0.1, 2.0)
+    L = HDRPLayer(density=1.0, base_height=2.0, falloff=0.1)
     oy = np.array([0.0, 0.0, 10.0, 10.0, 10.0, 1.0])
     dy = np.array([0.5, -0.5, -0.5, 0.5, 0.0, 0.0])
     s = np.array([5.0, 5.0, 20.0, 1.0, 2.0, 3.0])

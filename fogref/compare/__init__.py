@@ -25,7 +25,7 @@ from pathlib import Path
 
 from fogref.compare.report import DEFAULT_SKY_DISTANCE, compare
 
-__all__ = ["compare", "add_cli", "run_compare_command", "main", "DEFAULT_SKY_DISTANCE"]
+__all__ = ["DEFAULT_SKY_DISTANCE", "add_cli", "compare", "main", "run_compare_command"]
 
 
 def default_out_dir(exr_path, model_name: str) -> Path:

@@ -31,7 +31,7 @@ def log_distance_edges(distance, n_bins: int = 24) -> np.ndarray:
 
 def angle_edges(step_deg: float = 5.0) -> np.ndarray:
     """Bin edges over [0, 180] degrees with ``step_deg`` spacing."""
-    n = max(1, int(round(180.0 / step_deg)))
+    n = max(1, round(180.0 / step_deg))
     return np.linspace(0.0, 180.0, n + 1)
 
 

@@ -92,7 +92,7 @@ def _model_description(model) -> dict | str:
     """JSON-ready parameters of ``model`` (see :func:`~fogref.compare.model_factory.current_parameters`)."""
     try:
         return _json_safe(current_parameters(model))
-    except Exception:
+    except (TypeError, AttributeError, ValueError):
         return repr(model)
 
 
@@ -191,23 +191,23 @@ def _index_markdown(report: dict, has_sun: bool, figures: bool) -> str:
     lines = [
         f"# fogref compare: `{report['model']['name']}` vs `{Path(report['exr']).name}`",
         "",
-        f"- ground truth: `{report['exr']}` ({report['image']['width']}×{report['image']['height']} px, "
-        f"{report['image']['surface_pixels']} surface, {report['image']['sky_pixels']} sky)",
-        f"- model: `{report['model']['name']}`, precision `{report['precision']}`, "
-        f"parameters `{json.dumps(report['model']['parameters'])}`",
+        (f"- ground truth: `{report['exr']}` ({report['image']['width']}×{report['image']['height']} px, "
+         f"{report['image']['surface_pixels']} surface, {report['image']['sky_pixels']} sky)"),
+        (f"- model: `{report['model']['name']}`, precision `{report['precision']}`, "
+         f"parameters `{json.dumps(report['model']['parameters'])}`"),
         f"- sky pixels fogged at {report['sky_distance_m']:.6g} m; composited over the EXR's `surface.*`",
-        f"- model non-finite values (replaced: NaN→0, ±inf→±FLT_MAX): "
-        f"{report['diagnostics']['model_nonfinite_values']}",
-        f"- reference identity |R,G,B − (T·surface + inscatter)| max: "
-        f"{_fmt(report['diagnostics']['reference_identity_max_abs'])}",
+        (f"- model non-finite values (replaced: NaN→0, ±inf→±FLT_MAX): "
+         f"{report['diagnostics']['model_nonfinite_values']}"),
+        (f"- reference identity |R,G,B − (T·surface + inscatter)| max: "
+         f"{_fmt(report['diagnostics']['reference_identity_max_abs'])}"),
         "",
         "## Metrics",
         "",
-        "RMSE and |error| are in each part's units (radiance: the scene's radiance units; "
-        "transmittance: 1). relMSE = mean((x−r)²/(r²+ε)), "
-        f"ε = {c['relmse_eps']}. ΔE2000: linear sRGB ÷ white → XYZ → CIELAB (D65); "
-        "white = 99th percentile of the reference part's luminance (transmittance: 1). "
-        f"FLIP: HDR-FLIP at {c['flip_ppd']} px/degree.",
+        ("RMSE and |error| are in each part's units (radiance: the scene's radiance units; "
+         "transmittance: 1). relMSE = mean((x−r)²/(r²+ε)), "
+         f"ε = {c['relmse_eps']}. ΔE2000: linear sRGB ÷ white → XYZ → CIELAB (D65); "
+         "white = 99th percentile of the reference part's luminance (transmittance: 1). "
+         f"FLIP: HDR-FLIP at {c['flip_ppd']} px/degree."),
         "",
         "| part | region | pixels | RMSE | relMSE | mean \\|err\\| | ΔE2000 mean | ΔE2000 p95 | FLIP mean |",
         "|---|---|---:|---:|---:|---:|---:|---:|---:|",
@@ -222,8 +222,8 @@ def _index_markdown(report: dict, has_sun: bool, figures: bool) -> str:
             )
     lines += [
         "",
-        "FLIP is a spatial metric: near the horizon its filters spread errors across regions, "
-        "so a region without any pixel error can still show a small FLIP mean.",
+        ("FLIP is a spatial metric: near the horizon its filters spread errors across regions, "
+         "so a region without any pixel error can still show a small FLIP mean."),
         "",
     ]
     if figures:
@@ -272,6 +272,8 @@ def compare(
     Returns the dict written to ``metrics.json``.  Raises :class:`FogrefError` naming
     the file and the missing channel(s) if the EXR lacks any.
     """
+    if precision not in ("float32", "float64"):
+        raise FogrefError(f"precision must be 'float32' or 'float64', got {precision!r}")
     gt = load_ground_truth(exr_path)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

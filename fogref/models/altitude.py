@@ -14,7 +14,7 @@ Compositing: the fog blends **linearly in optical depth**:
 ``opacity = saturate(I * _FogColor.a)``, ``final = lerp(scene, _FogColor.rgb,
 opacity)``, i.e. ``transmittance = 1 - opacity`` and ``inscatter =
 _FogColor.rgb * opacity``.  The physical counterpart (:func:`altitude_to_medium`)
-is the medium ``sigma_t(y) = _FogColor.a * T(y)`` [1/m] (a :class:`PowerLayer`),
+is the medium ``sigma_t(y) = _FogColor.a * T(y)`` [1/m] (a :class:`fogref.media.PowerLawLayer`),
 whose optical depth is exactly ``_FogColor.a * I``; only the blend differs
 (``1 - saturate(tau)`` instead of Beer–Lambert ``exp(-tau)``).
 
@@ -151,79 +151,11 @@ class AltitudeFog:
 
 
 # -- physical counterpart ---------------------------------------------------------
-@dataclass(frozen=True)
-class PowerLayer:
-    """Height profile ``rho(y) = density * clamp((E - y)/(E - S), 0, 1)^p`` for FogMedium.
-
-    start S, end E [m], power p >= 0.  Implements the component interface of
-    :class:`fogref.media.ExpLayer` (``rho``, ``depth``, ``sample``) for any ``ops``.
-    """
-
-    start: float = 0.0
-    end: float = 50.0
-    power: float = 2.0
-    density: float = 1.0
-
-    def validate(self, src, i):
-        if not (self.end > self.start and self.power >= 0 and self.density >= 0):
-            raise ParameterError(src, f"layer{i}", "PowerLayer needs end > start, power >= 0, density >= 0")
-
-    def _u(self, ops, y):
-        w = self.end - self.start
-        return ops.minimum(ops.maximum((self.end - y) / w, 0.0), 1.0)
-
-    def _pow(self, ops, u, q):
-        tiny = 1e-300 if ops.exp_limit > 100 else 1e-37
-        return ops.where(u > 0, ops.exp(q * ops.log(ops.maximum(u, tiny))), 0.0 if q > 0 else 1.0)
-
-    def G(self, ops, y):
-        """Antiderivative of the unit-density profile [m], 0 at ``start``."""
-        w = self.end - self.start
-        q = self.power + 1.0
-        return ops.where(y <= self.start, y - self.start, w / q * (1.0 - self._pow(ops, self._u(ops, y), q)))
-
-    def rho(self, ops, y):
-        return self.density * self._pow(ops, self._u(ops, y), self.power)
-
-    def depth(self, ops, oy, dy, t):
-        """Shape optical depth over [0, t] (t = ops.largest: to infinity)."""
-        from fogref.media.closed_form import TAU_MAX
-
-        with ops.errstate():
-            w = self.end - self.start
-            span = t * dy
-            small = ops.abs(span) <= 1e-7 * w
-            y1 = oy + ops.where(small, 0.0, span)
-            g = (self.G(ops, y1) - self.G(ops, oy)) / ops.where(small, 1.0, dy)
-            mid = t * self.rho(ops, oy + 0.5 * ops.where(small, span, 0.0)) / max(self.density, 1e-300)
-            tau = self.density * ops.where(small, mid, g)
-            tau = ops.where(ops.isfinite(tau), tau, TAU_MAX)
-            return ops.where(t > 0, ops.minimum(tau, TAU_MAX), 0.0)
-
-    def sample(self, ops, oy, dy, s):
-        """Distance where the shape optical depth reaches s; ops.largest if never."""
-        with ops.errstate():
-            w = self.end - self.start
-            q = self.power + 1.0
-            s1 = s / max(self.density, 1e-300)
-            g0 = self.G(ops, oy)
-            gt = g0 + s1 * dy
-            small = ops.abs(s1 * dy) <= 1e-7 * w
-            arg = ops.maximum(1.0 - gt * q / w, 0.0)
-            yt = ops.where(gt <= 0, self.start + gt, self.end - w * self._pow(ops, arg, 1.0 / q))
-            t_big = (yt - oy) / ops.where(small, 1.0, dy)
-            escape_big = (dy > 0) & (gt >= w / q)
-            r0 = self.rho(ops, oy) / max(self.density, 1e-300)
-            t_small = s1 / ops.maximum(r0, 1e-300)
-            t = ops.where(small, ops.where(r0 > 0, t_small, ops.largest), ops.where(escape_big, ops.largest, t_big))
-            t = ops.where(ops.isfinite(t), t, ops.largest)
-            return ops.where(s > 0, t, 0.0)
-
-
 def altitude_to_medium(params: AltitudeFogParams, albedo=(1.0, 1.0, 1.0), g: float = 0.0):
     """The medium ``sigma_t = _FogColor.a * T(y)`` [1/m]: its optical depth is ``a * I``."""
-    from fogref.media import FogMedium
+    from fogref.media import FogMedium, PowerLawLayer
 
     return FogMedium(sigma_t=params._FogColor[3], albedo=albedo, g=g,
-                     layers=(PowerLayer(params._FogStart, params._FogEnd, params._FogPower),),
+                     layers=(PowerLawLayer(density=1.0, start=params._FogStart, end=params._FogEnd,
+                                           power=params._FogPower),),
                      source="<altitude_to_medium>")

@@ -13,7 +13,7 @@ has fallen to 0.001 at maximumHeight), ``_HeightFogExponents = (1/H, H)``,
 ``_HeightFogBaseScattering = albedo * extinction``.
 
 Density: ``sigma_t(y) = extinction * exp(-max(y - baseHeight, 0) / H)``:
-homogeneous below the base height, exponential above (:class:`HeightFogProfile`).
+homogeneous below the base height, exponential above (:class:`fogref.media.HDRPLayer`).
 ``OpticalDepthHeightFog`` integrates it exactly, except that it clamps
 ``|cos zenith| >= 0.001`` (horizontal rays above the base saturate at
 ``1000 H``); float64 mode drops that clamp (exact closed form with ``phi``).
@@ -129,86 +129,19 @@ class HDRPFog:
 
 
 # -- physical counterpart ---------------------------------------------------------
-@dataclass(frozen=True)
-class HeightFogProfile:
-    """``rho(y) = density * exp(-falloff * max(y - height, 0))``: flat below ``height``.
-
-    falloff [1/m] (= 1/H), height [m].  FogMedium component interface
-    (``rho``, ``depth``, ``sample``), written for any ``ops`` back end.
-    """
-
-    density: float = 1.0
-    falloff: float = 0.0
-    height: float = 0.0
-
-    def validate(self, src, i):
-        if not (self.density >= 0 and 0 <= self.falloff <= 1e3 and math.isfinite(self.height)):
-            raise ParameterError(src, f"layer{i}", "HeightFogProfile needs density >= 0, 0 <= falloff <= 1e3")
-
-    def _log_density(self):
-        return math.log(self.density) if self.density > 0 else -1.0e4
-
-    def rho(self, ops, y):
-        return self.density * ops.exp(-self.falloff * ops.maximum(y - self.height, 0.0))
-
-    def depth(self, ops, oy, dy, t):
-        """Shape optical depth [m] over [0, t] (t = ops.largest: to infinity)."""
-        from fogref.media.closed_form import TAU_MAX
-
-        with ops.errstate():
-            b = self.falloff
-            absz = ops.abs(dy)
-            y1 = oy + t * dy
-            min_h = ops.minimum(oy, y1)
-            hom = ops.where(absz > 0, ops.minimum(ops.maximum((self.height - min_h) / ops.where(absz > 0, absz, 1.0), 0.0), t),
-                            ops.where(oy <= self.height, t, 0.0))
-            exp_dist = ops.maximum(t - hom, 0.0)
-            h = ops.maximum(min_h - self.height, 0.0)
-            x = exp_dist * absz * b
-            rate = absz * b
-            lin = ops.where(rate > 0, -ops.expm1(-ops.minimum(x, 700.0)) / ops.where(rate > 0, rate, 1.0), exp_dist)
-            tau = self.density * (hom + ops.exp(-b * h) * lin)
-            tau = ops.where(ops.isfinite(tau), tau, TAU_MAX)
-            return ops.where(t > 0, ops.minimum(tau, TAU_MAX), 0.0)
-
-    def sample(self, ops, oy, dy, s):
-        """Distance where the shape optical depth reaches s; ops.largest if never."""
-        from fogref.media import closed_form as cf
-
-        with ops.errstate():
-            b, d0 = self.falloff, max(self.density, 1e-300)
-            flat = s / d0
-            # start below/at the base height
-            up = dy > 0
-            l_h = ops.where(up, (self.height - oy) / ops.where(up, dy, 1.0), ops.largest)
-            t_a_exp = l_h + cf.exp_layer_sample(ops, self._log_density() + 0.0 * oy, b * dy,
-                                                ops.maximum(s - d0 * l_h, 0.0))
-            t_a = ops.where(flat <= l_h, flat, t_a_exp)
-            # start above the base height
-            log_c = self._log_density() - b * (oy - self.height)
-            down = dy < 0
-            l_e = ops.where(down, (oy - self.height) / ops.where(down, -dy, 1.0), ops.largest)
-            d_e = cf.exp_layer_optical_depth(ops, log_c, b * dy, l_e)
-            t_b_exp = cf.exp_layer_sample(ops, log_c, b * dy, s)
-            t_b = ops.where(down & (s > d_e), l_e + (s - d_e) / d0, t_b_exp)
-            t = ops.where(oy <= self.height, t_a, t_b)
-            t = ops.where(ops.isfinite(t), t, ops.largest)
-            return ops.where(s > 0, t, 0.0)
-
-
 def hdrp_to_medium(params: HDRPFogParams, g: float = 0.0):
-    """Exact medium: ``sigma_t = 1/meanFreePath`` [1/m] with a :class:`HeightFogProfile`."""
-    from fogref.media import FogMedium
+    """Exact medium: ``sigma_t = 1/meanFreePath`` [1/m] with a :class:`~fogref.media.HDRPLayer`."""
+    from fogref.media import FogMedium, HDRPLayer
 
     H = float(params.scale_height(np.float64))
     return FogMedium(sigma_t=1.0 / params.meanFreePath, albedo=params.albedo, g=g,
-                     layers=(HeightFogProfile(1.0, 1.0 / H, params.baseHeight),), source="<hdrp_to_medium>")
+                     layers=(HDRPLayer(density=1.0, base_height=params.baseHeight, falloff=1.0 / H),), source="<hdrp_to_medium>")
 
 
 def medium_to_hdrp(medium, color=(0.5, 0.6, 0.7), maxFogDistance: float = 5000.0) -> HDRPFogParams:
-    """HDRP parameters for a grey medium with one :class:`HeightFogProfile` (or a
+    """HDRP parameters for a grey medium with one :class:`~fogref.media.HDRPLayer` (or a
     homogeneous layer); ``maximumHeight = baseHeight + H ln(1000)``."""
-    from fogref.media import ExpLayer
+    from fogref.media import ExpLayer, HDRPLayer
 
     src = getattr(medium, "source", "<medium>")
     if medium.bounds is not None or len(medium.layers) != 1:
@@ -219,9 +152,10 @@ def medium_to_hdrp(medium, color=(0.5, 0.6, 0.7), maxFogDistance: float = 5000.0
         raise ParameterError(src, "sigma_t", f"HDRP's extinction is grey; got {s}")
     if isinstance(L, ExpLayer) and L.falloff != 0:
         raise ParameterError(src, "layers", "an unclamped ExpLayer has no HDRP counterpart")
-    if not isinstance(L, (ExpLayer, HeightFogProfile)):
+    if not isinstance(L, (ExpLayer, HDRPLayer)):
         raise ParameterError(src, "layers", f"unsupported profile {type(L).__name__}")
     ext = s[0] * L.density
     depth = (1.0 / L.falloff) / LAYER_DEPTH_TO_H if L.falloff > 0 else 1e9
-    return HDRPFogParams(meanFreePath=1.0 / ext, baseHeight=L.height, maximumHeight=L.height + depth,
+    base = L.base_height if isinstance(L, HDRPLayer) else L.height
+    return HDRPFogParams(meanFreePath=1.0 / ext, baseHeight=base, maximumHeight=base + depth,
                          albedo=medium.albedo, color=color, maxFogDistance=maxFogDistance)

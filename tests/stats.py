@@ -1,0 +1,64 @@
+"""Statistical comparison of Monte Carlo images, used by the render tests.
+
+Images are compared on blocks of pixels.  For each block, the block mean of each
+independent run (different seeds) is one observation; two estimators agree when
+Welch's t-test does not reject equal means at level ``alpha / n_blocks``
+(Bonferroni), so the whole image comparison has family-wise confidence
+``1 - alpha``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import stats
+
+
+def block_means(img: np.ndarray, block: int) -> np.ndarray:
+    """(H, W, C) -> (H//block * W//block * C,) block means."""
+    H, W = img.shape[:2]
+    h, w = H // block, W // block
+    x = img[: h * block, : w * block].reshape(h, block, w, block, -1).mean(axis=(1, 3))
+    return x.reshape(-1)
+
+
+def welch_blocks(runs_a, runs_b, block: int = 4, alpha: float = 1e-3, floor: float = 0.0):
+    """Welch t-test per block between two lists of independent images.
+
+    ``floor``: an absolute tolerance added to the standard error, for known
+    deterministic differences (e.g. float32 round-off); 0 by default.
+    Returns (p_min, alpha_per_block, worst_index, details).
+    """
+    a = np.stack([block_means(r, block) for r in runs_a])
+    b = np.stack([block_means(r, block) for r in runs_b])
+    ma, mb = a.mean(0), b.mean(0)
+    va, vb = a.var(0, ddof=1) / len(a), b.var(0, ddof=1) / len(b)
+    se = np.sqrt(va + vb) + floor
+    t = np.where(se > 0, np.abs(ma - mb) / np.where(se > 0, se, 1.0), np.where(ma == mb, 0.0, np.inf))
+    num = (va + vb) ** 2
+    den = va**2 / max(len(a) - 1, 1) + vb**2 / max(len(b) - 1, 1)
+    df = np.where(den > 0, num / np.where(den > 0, den, 1.0), 1e9)
+    p = 2 * stats.t.sf(t, df)
+    per = alpha / len(p)
+    i = int(np.argmin(p))
+    return float(p[i]), per, i, {"mean_a": ma[i], "mean_b": mb[i], "se": se[i]}
+
+
+def assert_agree(runs_a, runs_b, block=4, alpha=1e-3, floor=0.0, what=""):
+    p, per, i, d = welch_blocks(runs_a, runs_b, block, alpha, floor)
+    assert p >= per, (f"{what}: block {i} differs (p={p:.2e} < {per:.2e}, family-wise alpha={alpha}): "
+                      f"{d['mean_a']:.6g} vs {d['mean_b']:.6g} (se {d['se']:.3g})")
+
+
+def one_sample_blocks(runs, reference, block=4, alpha=1e-3, floor=0.0, what=""):
+    """t-test of Monte Carlo runs against a noise-free reference image, per block (Bonferroni)."""
+    a = np.stack([block_means(r, block) for r in runs])
+    ref = block_means(reference, block)
+    m = a.mean(0)
+    se = a.std(0, ddof=1) / np.sqrt(len(a)) + floor
+    t = np.where(se > 0, np.abs(m - ref) / np.where(se > 0, se, 1.0), np.where(np.isclose(m, ref), 0.0, np.inf))
+    p = 2 * stats.t.sf(t, len(a) - 1)
+    per = alpha / len(p)
+    i = int(np.argmin(p))
+    assert p[i] >= per, (f"{what}: block {i} differs from the reference (p={p[i]:.2e} < {per:.2e}, "
+                         f"family-wise alpha={alpha}): {m[i]:.6g} vs {ref[i]:.6g} (se {se[i]:.3g})")
+    return float(p[i])
