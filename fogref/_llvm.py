@@ -31,7 +31,7 @@ HELP = (
 
 def _major(path: str) -> int:
     name = os.path.basename(path)
-    m = re.search(r"LLVM[-.]?(\d+)", name) or re.search(r"llvm-(\d+)", path)
+    m = re.search(r"LLVM(?:-|\.so\.)(\d+)", name) or re.search(r"llvm-(\d+)", path)
     return int(m.group(1)) if m else -1
 
 

@@ -1,0 +1,303 @@
+"""Error budget of Unreal's Exponential Height Fog against the path-traced truth.
+
+A chain of images ``S_0 .. S_K`` goes from the ground truth (``S_0``, the EXR's
+``R,G,B``) to what Unreal computes (``S_K``), switching **one** effect at a time.
+Every image is final radiance composited on the EXR's unfogged ``surface``
+(``T * surface + inscatter``), so only the fog differs:
+
+==  ==========================  ====================================================================
+k   effect removed / switched   S_k
+==  ==========================  ====================================================================
+0   (truth)                     R,G,B  = T surface + single + multiple
+1   multiple scattering [d]     T surface + single
+2   geometric shadows [e]       T surface + SUN_cf + SKY_render   (SKY_render: ``single`` of a
+                                render with the sun removed; SUN_cf: closed-form sun single
+                                scattering at the pixel's distance, HG, with sun attenuation)
+3   sky occlusion & sky         T surface + SUN_cf + alpha L_sky (1 - T)
+    attenuation [c]
+4   sun attenuation [b]         T surface + alpha E p_HG(cos) (1 - T) + alpha L_sky (1 - T)
+5   HG -> cosine lobe [a]       T surface + Unreal64(lobe fit: colours and exponent fitted to the
+                                unattenuated target of step 4, start distances 0, no max opacity,
+                                no cutoff); Unreal's T replaces the EXR's T here too
+6   colour/exponent re-fit      T surface + Unreal64(the study's colours and exponent, fitted to the
+                                attenuated target; start distances 0)
+7   start distances [f]         ... + DirectionalInscatteringStartDistance and StartDistance
+8   max opacity & cutoff [g]    ... + FogMaxOpacity and FogCutoffDistance
+9   float32 [h]                 Unreal as the shader computes it (float32): the compared model
+==  ==========================  ====================================================================
+
+Each step's signed image ``Δ_k = S_k - S_{k-1}`` telescopes: ``Σ Δ_k = S_K - S_0``
+= model - truth, exactly (float64).  Reported per step: the RMSE of ``Δ_k`` (its
+own size), its **share** ``<Δ_k, E> / <E, E>`` of the total squared error
+``E = S_K - S_0`` (shares sum to 1 exactly; a negative share means the step
+cancels part of the others), and the RMSE of ``S_k`` against the truth.
+
+Monte Carlo noise: steps 1–3 use rendered terms.  With a second pair of renders
+(another seed), each statistic is recomputed and its noise is estimated as
+``|x(seed a) - x(seed b)| / sqrt(2)`` (RMSE of the difference image / sqrt 2 for
+the per-pixel noise of ``Δ_k``).  Steps 4–9 are closed forms (noise-free).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fogref.media import NP, hg_phase, single_scatter_sun
+from fogref.media.single_scatter import single_scatter_sky
+from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+
+#: Step keys, effect letters of issue 3 and labels, in chain order (step k = 1..9).
+STEPS: tuple[tuple[str, str, str], ...] = (
+    ("multiple", "d", "multiple scattering"),
+    ("shadows", "e", "geometric shadows (sun)"),
+    ("sky", "c", "sky occlusion by the ground + sky attenuation"),
+    ("sun_attenuation", "b", "sun attenuation in the fog"),
+    ("lobe", "a", "cosine lobe vs Henyey–Greenstein"),
+    ("refit", "a/b", "colours/exponent re-fitted to the attenuated target"),
+    ("start_distance", "f", "start distances (directional + fog)"),
+    ("opacity_cutoff", "g", "max opacity + cutoff distance"),
+    ("float32", "h", "float32 shader arithmetic"),
+)
+#: Steps whose images come from renders (carry Monte Carlo noise).
+RENDERED = ("multiple", "shadows", "sky")
+
+
+@dataclass
+class Pixels:
+    """What the budget needs from a ground-truth EXR (arrays (H, W[, 3]) float64)."""
+
+    final: np.ndarray
+    T: np.ndarray
+    surface: np.ndarray
+    single: np.ndarray
+    multiple: np.ndarray
+    distance: np.ndarray
+    position: np.ndarray
+    view: np.ndarray
+    hit: np.ndarray
+    camera: np.ndarray
+
+    @classmethod
+    def from_channels(cls, c: dict, attrs: dict) -> "Pixels":
+        def g(name):
+            return np.stack([c[f"{name}.{k}"] for k in "RGB"], -1).astype(np.float64)
+
+        final = np.stack([c[k] for k in "RGB"], -1).astype(np.float64)
+        view = np.stack([c[f"view.{k}"] for k in "XYZ"], -1).astype(np.float64)
+        view /= np.maximum(np.linalg.norm(view, axis=-1, keepdims=True), 1e-30)
+        cam = np.asarray(attrs["fogref.params"]["camera"]["origin"], dtype=np.float64)
+        return cls(final=final, T=g("T"), surface=g("surface"), single=g("single"), multiple=g("multiple"),
+                   distance=c["distance"].astype(np.float64),
+                   position=np.stack([c[f"P.{k}"] for k in "XYZ"], -1).astype(np.float64),
+                   view=view, hit=c["hit"] > 0.5, camera=cam)
+
+    @classmethod
+    def read(cls, path) -> "Pixels":
+        from fogref.exrio import read_exr
+
+        c, a = read_exr(path)
+        return cls.from_channels(c, a)
+
+    def world_positions(self, sky_distance: float) -> np.ndarray:
+        far = self.camera + self.view * sky_distance
+        return np.where(self.hit[..., None], self.position, far)
+
+    def rays(self):
+        """Per-pixel (o, d, D) as 3-tuples of flat arrays for the closed forms (D = inf: sky)."""
+        n = self.hit.size
+        o = tuple(np.full(n, c) for c in self.camera)
+        v = self.view.reshape(-1, 3)
+        d = tuple(v[:, i] for i in range(3))
+        D = np.where(self.hit.reshape(-1), self.distance.reshape(-1), NP.largest)
+        return o, d, D
+
+
+def closed_forms(px: Pixels, pf) -> dict:
+    """Closed-form single-scattering images (H, W, 3) of the physical fog ``pf``
+    (a :class:`fogref.study.fit.PhysicalFog`) at each pixel's distance."""
+    m = pf.medium
+    o, d, D = px.rays()
+    shape = px.final.shape
+    w = pf.sun_direction
+    E = np.asarray(pf.sun_irradiance)
+    alb = np.asarray(m.albedo)
+    T = np.stack(m.transmittance(NP, o, d, D), -1)
+    sun_att = np.stack(single_scatter_sun(NP, m, o, d, D, w, tuple(E)), -1)
+    if w[1] > 0:
+        cos = d[0] * w[0] + d[1] * w[1] + d[2] * w[2]
+        sun_noatt = alb * E * hg_phase(NP, cos, m.g)[:, None] * (1.0 - T)
+    else:
+        sun_noatt = np.zeros_like(T)
+    sky = np.stack(single_scatter_sky(NP, m, o, d, D, pf.sky_radiance), -1)
+    return {"T": T.reshape(shape), "sun_att": sun_att.reshape(shape), "sun_noatt": sun_noatt.reshape(shape),
+            "sky": sky.reshape(shape)}
+
+
+def _unreal(params: UE4FogParams, px: Pixels, precision: str, sky_distance: float):
+    r = UE4ExponentialHeightFog(params).evaluate(px.camera, px.world_positions(sky_distance), precision)
+    return np.asarray(r.transmittance, np.float64), np.asarray(r.inscatter, np.float64)
+
+
+def chain(px: Pixels, sky_single: np.ndarray, pf, lobe_params: UE4FogParams, model_params: UE4FogParams,
+          sky_distance: float = 1.0e5) -> list[np.ndarray]:
+    """The images ``S_0 .. S_9`` (see the module doc).
+
+    ``sky_single``: (H, W, 3) ``single.*`` of a render of the same scene with the sun
+    removed.  ``lobe_params``: Unreal fitted to the unattenuated single scattering
+    (start distances 0).  ``model_params``: the Unreal parameters under study.
+    """
+    from dataclasses import replace
+
+    cf = closed_forms(px, pf)
+    surfT = px.T * px.surface
+    S = [px.final,
+         surfT + px.single,
+         surfT + cf["sun_att"] + sky_single,
+         surfT + cf["sun_att"] + cf["sky"],
+         surfT + cf["sun_noatt"] + cf["sky"]]
+    plain = dict(DirectionalInscatteringStartDistance=0.0, StartDistance=0.0, FogMaxOpacity=1.0,
+                 FogCutoffDistance=0.0)
+    configs = [replace(lobe_params, **plain),
+               replace(model_params, **plain),
+               replace(model_params, FogMaxOpacity=1.0, FogCutoffDistance=0.0),
+               model_params]
+    for p in configs:
+        Tm, Lm = _unreal(p, px, "float64", sky_distance)
+        S.append(px.surface * Tm + Lm)
+    Tm, Lm = _unreal(model_params, px, "float32", sky_distance)
+    S.append(px.surface * Tm + Lm)
+    return S
+
+
+def _rmse(x, mask=None):
+    if mask is not None:
+        x = x[mask]
+    return float(np.sqrt(np.mean(x * x))) if x.size else 0.0
+
+
+def attribute(S: list[np.ndarray], hit: np.ndarray) -> dict:
+    """Per-step statistics of a chain; ``telescoping_residual`` is the largest
+    ``|Σ Δ_k - (S_K - S_0)|`` (0 up to float64 rounding)."""
+    E = S[-1] - S[0]
+    e2 = float(np.sum(E * E))
+    deltas = [S[k] - S[k - 1] for k in range(1, len(S))]
+    resid = float(np.max(np.abs(sum(deltas) - E)))
+    masks = {"all": None, "surface": hit, "sky": ~hit}
+    steps = []
+    for (key, letter, label), dk, Sk in zip(STEPS, deltas, S[1:]):
+        steps.append({
+            "key": key, "effect": letter, "label": label,
+            "rmse": {r: _rmse(dk, m) for r, m in masks.items()},
+            "mean": float(np.mean(dk)),
+            "share": float(np.sum(dk * E) / e2) if e2 > 0 else 0.0,
+            "rmse_vs_truth_after": _rmse(Sk - S[0]),
+        })
+    return {"total": {"rmse": {r: _rmse(E, m) for r, m in masks.items()}, "mean": float(np.mean(E)),
+                      "truth_rms": _rmse(S[0])},
+            "steps": steps, "telescoping_residual": resid,
+            "share_sum": float(sum(s["share"] for s in steps))}
+
+
+def add_noise(result: dict, S_a: list[np.ndarray], S_b: list[np.ndarray], hit: np.ndarray) -> dict:
+    """Add Monte Carlo noise estimates from a second chain ``S_b`` (other seeds) to ``result``
+    (computed from ``S_a``)."""
+    other = attribute(S_b, hit)
+    da = [S_a[k] - S_a[k - 1] for k in range(1, len(S_a))]
+    db = [S_b[k] - S_b[k - 1] for k in range(1, len(S_b))]
+    r2 = math.sqrt(2.0)
+    for s, so, a, b in zip(result["steps"], other["steps"], da, db):
+        s["noise"] = {
+            "pixel_rms": _rmse(a - b) / r2,     # per-pixel noise of Δ_k
+            "rmse": abs(s["rmse"]["all"] - so["rmse"]["all"]) / r2,
+            "share": abs(s["share"] - so["share"]) / r2,
+        }
+        s["rmse_other_seed"] = so["rmse"]["all"]
+        s["share_other_seed"] = so["share"]
+    result["total"]["noise_rmse"] = abs(result["total"]["rmse"]["all"] - other["total"]["rmse"]["all"]) / r2
+    result["total"]["rmse_other_seed"] = other["total"]["rmse"]["all"]
+    return result
+
+
+def what_if(px: Pixels, model_params: UE4FogParams, variants: dict, sky_distance: float = 1.0e5) -> list[dict]:
+    """RMSE against the truth of the model with some fields changed (``variants``:
+    name -> dict of UE4FogParams fields), float32; and the change vs the model."""
+    from dataclasses import replace
+
+    Tm, Lm = _unreal(model_params, px, "float32", sky_distance)
+    base = _rmse(px.surface * Tm + Lm - px.final)
+    rows = []
+    for name, kw in variants.items():
+        Tm, Lm = _unreal(replace(model_params, **kw), px, "float32", sky_distance)
+        r = _rmse(px.surface * Tm + Lm - px.final)
+        rows.append({"variant": name, "fields": kw, "rmse": r, "delta_rmse": r - base})
+    return rows
+
+
+def markdown(result: dict, title: str = "Error budget of Unreal's exponential height fog") -> str:
+    """The budget table as Markdown."""
+    t = result["total"]
+    lines = [f"# {title}", "",
+             f"Total error of the Unreal model (float32, as compared) against the path-traced truth: "
+             f"**RMSE {t['rmse']['all']:.4g}** (surface pixels {t['rmse']['surface']:.4g}, sky {t['rmse']['sky']:.4g}; "
+             f"truth RMS {t['truth_rms']:.4g}; Monte Carlo noise of the total ±{t.get('noise_rmse', float('nan')):.2g}).",
+             "",
+             "Each row switches one effect, going from the truth to Unreal; Δ_k = S_k − S_{k−1}. "
+             "*Share* = ⟨Δ_k, E⟩/⟨E, E⟩ with E = model − truth: the shares add up to 100 % exactly "
+             f"(sum {100 * result['share_sum']:.6f} %, largest |ΣΔ_k − E| = {result['telescoping_residual']:.2g}); "
+             "a negative share means the step cancels part of the other errors. "
+             "*Noise*: per-pixel Monte Carlo noise of Δ_k and the noise of its share, from a second render with "
+             "another seed (closed-form steps are noise-free).", "",
+             "| k | effect | step | RMSE of Δ_k | (surface / sky) | share of E² | noise: pixel RMS / share | "
+             "RMSE vs truth after step |",
+             "|---|---|---|---|---|---|---|---|"]
+    for k, s in enumerate(result["steps"], 1):
+        n = s.get("noise")
+        ns = f"{n['pixel_rms']:.2g} / ±{100 * n['share']:.2g} %" if n and s["key"] in RENDERED else "0 (closed form)"
+        lines.append(f"| {k} | [{s['effect']}] | {s['label']} | {s['rmse']['all']:.4g} | "
+                     f"{s['rmse']['surface']:.3g} / {s['rmse']['sky']:.3g} | {100 * s['share']:+.1f} % | {ns} | "
+                     f"{s['rmse_vs_truth_after']:.4g} |")
+    if result.get("what_if"):
+        lines += ["", "## What if (engine settings the study leaves at their defaults)", "",
+                  "RMSE of the float32 model against the truth with one setting changed:", "",
+                  "| variant | fields | RMSE | Δ RMSE |", "|---|---|---|---|"]
+        for r in result["what_if"]:
+            lines.append(f"| {r['variant']} | `{r['fields']}` | {r['rmse']:.4g} | {r['delta_rmse']:+.3g} |")
+    lines += ["", "![budget](budget.png)", ""]
+    return "\n".join(lines)
+
+
+def plot(result: dict, path) -> None:
+    """Bar chart: each step's RMSE (with noise bars) and its share of the total."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from fogref.study._io import save_figure
+
+    steps = result["steps"]
+    labels = [f"[{s['effect']}] {s['label']}" for s in steps]
+    rm = [s["rmse"]["all"] for s in steps]
+    err = [s["noise"]["pixel_rms"] if s.get("noise") and s["key"] in RENDERED else 0.0 for s in steps]
+    share = [100 * s["share"] for s in steps]
+    y = np.arange(len(steps))[::-1]
+    fig, ax = plt.subplots(1, 2, figsize=(13, 4.2), sharey=True)
+    ax[0].barh(y, rm, xerr=err, color="#4a78b0", capsize=3)
+    ax[0].axvline(result["total"]["rmse"]["all"], color="k", ls="--", lw=1, label="total model − truth")
+    ax[0].set_yticks(y, labels)
+    ax[0].set_xlabel("RMSE of the step's image change Δ_k (radiance); bars: MC noise per pixel")
+    ax[0].legend(loc="lower right", fontsize=8)
+    ax[1].barh(y, share, color=["#c0504d" if v > 0 else "#9bbb59" for v in share])
+    ax[1].axvline(0, color="k", lw=0.8)
+    ax[1].set_xlabel("share of the total squared error ⟨Δ_k, E⟩/⟨E, E⟩ [%] (sums to 100)")
+    for yy, v in zip(y, share):
+        ax[1].text(v, yy, f" {v:+.1f}%", va="center", ha="left" if v >= 0 else "right", fontsize=8)
+    for a in ax:
+        a.grid(axis="x", alpha=0.3)
+    fig.suptitle(f"Unreal exponential height fog: error budget (total RMSE {result['total']['rmse']['all']:.4g})")
+    fig.tight_layout()
+    save_figure(fig, path)
+    plt.close(fig)
