@@ -190,4 +190,7 @@ def build(mi, name: str, method: str, res=(96, 54), max_depth: int = 8, sun: boo
     if sky:
         d["sky"] = {"type": "constant", "radiance": _rgb(spec["sky"])}
     d.update(extra)
-    return mi.load_dict(d)
+    # optimize=False: Mitsuba 3.9.1 merges meshes sharing a BSDF and the merged
+    # mesh keeps a wrong bbox (the ground rectangle drops out of scene.bbox()), so
+    # the directional emitter's shadow rays (2x bounding-sphere radius) fall short.
+    return mi.load_dict(d, optimize=False)

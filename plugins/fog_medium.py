@@ -28,8 +28,10 @@ base_height     float      ``hdrp``: top of the constant part [m]             0
 start, end      float      ``powerlaw``: seed 001's S and E heights [m]       0, 100
 power           float      ``powerlaw``: exponent p >= 0                      1
 bounds_min/max  point      the fog's box [m] (required for ``box``)           none
-floor           float      lowest height the majorant considers when the fog   -1e4
-                           is unbounded below [m] (stock integrators only)
+floor           float      lowest height the majorant considers [m] (stock     see text
+                           integrators only): no ray may go below it in fog.
+                           Default: bounds_min.y, else the lowest layer's
+                           reference height (scenes put it at ground level).
 ==============  =========  ==================================================  ========
 
 A ``<phase>`` child overrides ``g``.
@@ -73,7 +75,10 @@ class HeightFogMedium(mi.Medium):
         if not has_phase:
             props["phase"] = mi.load_dict({"type": "hg", "g": self.fog.g})
         super().__init__(props)
-        self.floor = float(params.get("floor", -1.0e4))
+        default_floor = (self.fog.bounds.lo[1] if self.fog.bounds is not None
+                         else min(getattr(L, "height", getattr(L, "base_height", getattr(L, "start", 0.0)))
+                                  for L in self.fog.layers))
+        self.floor = float(params.get("floor", default_floor))
         self.m_is_homogeneous = False
         # Stock volpath's spectral mode gives every ray that escapes to infinity
         # weight 0 (its transmittance pdf uses t = inf), so stock comparisons need

@@ -12,6 +12,12 @@
  * - hide_emitters
    - bool
    - Camera rays that escape see black instead of the sky. Default: false.
+ * - sun_sampling
+   - bool
+   - Estimate the sun's single scattering along camera rays by sampling the
+     exact single-scattering integrand (zero variance without shadows); the
+     first medium vertex then skips sun NEE. Used when the fog is one unbounded
+     exponential layer and the sun is above the horizon. Default: true.
 
 What it does:
 
@@ -48,6 +54,7 @@ import drjit as dr
 import mitsuba as mi
 
 from fogref.media import drjit_ops
+from fogref.media.single_scatter import sample_sun_single_scatter, sun_sampling_applies
 
 AOV_NAMES = (
     ["T.R", "T.G", "T.B"]
@@ -88,6 +95,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         self.max_depth = 2**31 - 1 if md < 0 else int(md)
         self.rr_depth = int(props.get("rr_depth", 5))
         self.hide_emitters = bool(props.get("hide_emitters", False))
+        self.sun_sampling = bool(props.get("sun_sampling", True))
 
     def aov_names(self):
         return list(AOV_NAMES)
@@ -112,6 +120,24 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             else:
                 has_smooth = True
         return has_delta, has_smooth
+
+    @staticmethod
+    def _scene_sun(scene):
+        """(emitter, direction toward the sun, RGB irradiance) of the only delta
+        directional emitter, or None (trace-time, Python floats)."""
+        delta = [e for e in scene.emitters() if mi.has_flag(e.flags(), mi.EmitterFlags.Delta)]
+        if len(delta) != 1:
+            return None
+        p = mi.traverse(delta[0])
+        if "irradiance.value" not in p or "to_world" not in p:
+            return None
+        m = p["to_world"].matrix
+        w = [-float(m[i][2][0]) for i in range(3)]
+        n = sum(x * x for x in w) ** 0.5
+        E = p["irradiance.value"]
+        E = [float(E[i][0]) for i in range(3)] if len(E) == 3 else [float(E[0][0])] * 3
+        weight = float(p["sampling_weight"]) if "sampling_weight" in p else 1.0
+        return delta[0], [x / n for x in w], E, weight
 
     def _transmittance(self, fog, ops, o, d, t):
         tau = fog.optical_depth(ops, o, d, t)
@@ -181,6 +207,17 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         T_cam = mi.Spectrum(1.0)
         if dr.hint(fog is not None, mode="scalar"):
             T_cam = self._transmittance(fog, ops, ray.o, ray.d, dr.select(hit0, si0.t, ops.largest))
+        L_sun_ss = mi.Spectrum(0.0)
+        sun = self._scene_sun(scene) if (fog is not None and self.sun_sampling) else None
+        use_sun_ss = sun is not None and sun_sampling_applies(fog._obj, sun[1]) and self.max_depth >= 2
+        if dr.hint(use_sun_ss, mode="scalar"):
+            _, w_sun, E_sun, _ = sun
+            D0 = dr.select(hit0, si0.t, ops.largest)
+            t_ss, w_ss = sample_sun_single_scatter(ops, fog._obj, ray.o, ray.d, D0, w_sun, E_sun,
+                                                   sampler.next_1d(active), channel)
+            p_ss = ray.o + ray.d * t_ss
+            vis_ss = active & ~scene.ray_test(mi.Ray3f(p_ss, mi.Vector3f(*w_sun)), active)
+            L_sun_ss = dr.select(vis_ss, mi.Spectrum(*w_ss), 0.0)
         aov_g = [dr.select(hit0, si0.t, 0.0)] + [dr.select(hit0, si0.p[i], 0.0) for i in range(3)] \
             + [ray.d[i] for i in range(3)] + [dr.select(hit0, 1.0, 0.0)]
 
@@ -248,6 +285,8 @@ class FogPathIntegrator(mi.SamplingIntegrator):
                     Ld = β * em_w * self._shadow_T(fog, ops, p_med, ds_m, inf_m) * ph_val \
                         * dr.select(ds_m.delta, 1.0, mis_weight(ds_m.pdf, ph_pdf))
                     Ld = dr.select(vis, Ld, 0.0)
+                    if dr.hint(use_sun_ss, mode="scalar"):  # the sun's share at depth 0 is estimated above
+                        Ld = dr.select(ds_m.delta & (depth == 0), 0.0, Ld)
                     L += Ld
                     L_single += dr.select(depth == 0, Ld, 0.0)
                     L_multi += dr.select(depth > 0, Ld, 0.0)
@@ -303,6 +342,8 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             β[rr] *= dr.rcp(q)
             active &= ~rr | (sampler.next_1d(rr) < q)
 
+        L += L_sun_ss
+        L_single += L_sun_ss
         L_tsurf = L - L_single - L_multi
         aovs = [T_cam[0], T_cam[1], T_cam[2]]
         for part in (L_tsurf, L_single, L_multi):

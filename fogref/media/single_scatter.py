@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
+from fogref.media.closed_form import phi, psi
 
 
 def single_scatter_sun(ops, medium, o, d, D, w, E):
@@ -63,3 +64,69 @@ def single_scatter_sky(ops, medium, o, d, D, L_sky):
     """Single-scattered uniform sky, unoccluded and unattenuated: alpha L (1 - T(D))."""
     tau = medium.optical_depth(ops, o, d, D)
     return tuple(alb * L * -ops.expm1(-sig * tau) for sig, alb, L in zip(medium.sigma_t, medium.albedo, L_sky))
+
+
+def _log_x_phi(ops, X, mX):
+    """log(X * phi(m X)) for X > 0, stable for any sign and size of m X."""
+    big_neg = mX < -20.0
+    z = ops.where(big_neg, -1.0, mX)
+    direct = ops.log(ops.maximum(X, 1e-37)) + ops.log(phi(ops, z))
+    zneg = ops.minimum(mX, -20.0)
+    via = ops.log(ops.maximum(X, 1e-37)) - zneg - ops.log(-zneg)
+    return ops.where(big_neg, via, direct)
+
+
+def sample_sun_single_scatter(ops, medium, o, d, D, w, E, u, channel):
+    """Sample a point on ``[0, D]`` in proportion to the sun's single-scattering
+    integrand and return ``(t, weights)`` with ``weights[c] = f_c(t) / pdf(t)``.
+
+    Multiply the weights by the sun's geometric visibility at ``o + t d`` and the
+    estimate of each channel is unbiased for :func:`single_scatter_sun`; without
+    occluders it is exact (zero variance).  Valid for one exponential layer with
+    ``falloff > 0``, no bounds and the sun above the horizon (``w_y > 0``); the
+    caller checks (see :func:`sun_sampling_applies`).
+
+    Per channel, with ``x = sigma_c tau(t)``, ``X = sigma_c tau(D)`` and
+    ``m = 1 - d_y / w_y``, the integrand is proportional to ``exp(-m x) dx``: its
+    CDF ``x phi(m x) / (X phi(m X))`` inverts to ``x = Y psi(m Y)`` with
+    ``Y = u X phi(m X)``, and ``t`` follows from the layer's exact inversion.
+    The channel used for sampling (``channel`` in {0,1,2}, uniform) is combined
+    by one-sample MIS: ``weights_c = CF_c pdf_c(t) / mean_k pdf_k(t)``.
+    """
+    (L,) = medium.layers
+    wy = float(w[1])
+    m = 1.0 - d[1] / wy
+    tau_D = medium.optical_depth(ops, o, d, D)
+    sig = medium.sigma_t
+    s_ch = ops.where(channel == 1, sig[1], ops.where(channel == 2, sig[2], sig[0]))
+    X = s_ch * tau_D
+    mX = m * X
+    # m >= -eps: Y psi(mY); strongly rising (m X < -20): log form, no overflow.
+    Y = u * X * phi(ops, ops.maximum(mX, -20.0))
+    x_pos = Y * psi(ops, ops.minimum(m * Y, 0.999999))
+    abs_m = ops.where(m < 0, -m, 1.0)
+    x_neg = X + ops.log(ops.maximum(u + (1.0 - u) * ops.exp(-abs_m * X), 1e-37)) / abs_m
+    x = ops.where(mX < -20.0, x_neg, x_pos)
+    x = ops.minimum(ops.maximum(x, 0.0), X)
+    t = L.sample(ops, o[1], d[1], x / ops.maximum(s_ch, 1e-30))
+    t = ops.minimum(t, D)
+    tau_t = medium.optical_depth(ops, o, d, t)
+    # log pdf_c(t) / rho(t) for each channel
+    logs = []
+    for s in sig:
+        Xc = s * tau_D
+        logs.append(ops.log(ops.maximum(s, 1e-37)) - m * s * tau_t - _log_x_phi(ops, Xc, m * Xc))
+    lmax = ops.maximum(ops.maximum(logs[0], logs[1]), logs[2])
+    r = [ops.exp(lc - lmax) for lc in logs]
+    mean_r = (r[0] + r[1] + r[2]) / 3.0
+    cf = single_scatter_sun(ops, medium, o, d, D, w, E)
+    weights = tuple(ops.where((mean_r > 0) & (tau_D > 0), cf_c * rc / mean_r, 0.0) for cf_c, rc in zip(cf, r))
+    return t, weights
+
+
+def sun_sampling_applies(medium, w) -> bool:
+    """Whether :func:`sample_sun_single_scatter` handles this medium and sun (trace-time)."""
+    from fogref.media.medium import ExpLayer
+
+    return (medium.bounds is None and len(medium.layers) == 1 and isinstance(medium.layers[0], ExpLayer)
+            and medium.layers[0].falloff > 0 and float(w[1]) > 0 and medium.scatters)

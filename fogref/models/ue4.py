@@ -225,7 +225,10 @@ def shade(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt, exact: bool):
         ro2 = P2[2] * np.exp2(-expo2)
     shared = (_line_integral_shared(P[1], ray_dir_z, ro, dt, exact)
               + _line_integral_shared(P2[1], ray_dir_z, ro2, dt, exact))
-    integral = shared * ray_length
+    # Robustness (deviation): the shader's ``shared * length`` is NaN when an
+    # overflowed (inf) density meets a zero-length ray; an empty ray has no fog.
+    # Identical to the shader wherever the shader is not NaN.
+    integral = np.where(ray_length > 0, shared * ray_length, dt(0.0))
 
     color = np.asarray(C["color"], dtype=dt)
     light = C["light"]
@@ -233,7 +236,8 @@ def shade(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt, exact: bool):
     if light[3] >= 0:
         cos = saturate(nx * light[0] + ny * light[1] + nz * light[2])
         lobe = np.power(cos, C["dir_exponent"])
-        dir_integral = shared * np.maximum(ray_length - light[3], dt(0.0))
+        dir_run = np.maximum(ray_length - light[3], dt(0.0))
+        dir_integral = np.where(dir_run > 0, shared * dir_run, dt(0.0))  # no inf * 0 (see above)
         dir_factor = saturate(np.exp2(-dir_integral))
         dir_inscatter = (lobe * (dt(1.0) - dir_factor))[..., None] * np.asarray(C["dir_color"], dtype=dt)
     factor = np.maximum(saturate(np.exp2(-integral)), min_opacity)

@@ -76,7 +76,7 @@ class PhysicalFog:
             object.__setattr__(self, name, tuple(float(x) for x in np.broadcast_to(getattr(self, name), 3)))
 
     @classmethod
-    def from_params(cls, params: dict, camera=None) -> "PhysicalFog":
+    def from_params(cls, params: dict, camera=None) -> PhysicalFog:
         """From ``describe_scene``'s dict or an EXR's ``fogref.params``."""
         from fogref.render.params import medium_from_params
 
@@ -90,7 +90,7 @@ class PhysicalFog:
         return cls(med, tuple(sun["direction"]), tuple(sun["irradiance"]), tuple(L), tuple(camera))
 
     @classmethod
-    def from_scene(cls, path, camera=None) -> "PhysicalFog":
+    def from_scene(cls, path, camera=None) -> PhysicalFog:
         """From a fogref XML scene (no Mitsuba needed): fog, sun, sky and the sensor's origin."""
         from fogref.render.scene import describe_scene
 
@@ -415,6 +415,7 @@ def lobe_table(gs=None, pf: PhysicalFog | None = None, views: Views | None = Non
         gs = np.round(np.arange(-0.9, 0.9001, 0.1), 10)
     rows = []
     for g in gs:
+        g = float(round(float(g), 10)) + 0.0  # no "-0.0"
         row = lobe_fit(g)
         only = lobe_fit(g, isotropic=False)
         row["lobe_only_exponent"] = only["exponent"]
@@ -422,8 +423,10 @@ def lobe_table(gs=None, pf: PhysicalFog | None = None, views: Views | None = Non
         if pf is not None:
             m = replace(pf.medium, g=float(g))
             r = fit_unreal(replace(pf, medium=m), views)
-            row["scene_exponent"] = r.params.DirectionalInscatteringExponent
-            row["scene_start_distance_cm"] = r.params.DirectionalInscatteringStartDistance
+            p = r.params
+            lobe_on = max(p.DirectionalInscatteringColor) > 1e-6 * max(max(p.FogInscatteringColor), 1e-300)
+            row["scene_exponent"] = p.DirectionalInscatteringExponent if lobe_on else None
+            row["scene_start_distance_cm"] = p.DirectionalInscatteringStartDistance if lobe_on else 0.0
             row["scene_fog_colour"] = list(r.params.FogInscatteringColor)
             row["scene_dir_colour"] = list(r.params.DirectionalInscatteringColor)
             row["scene_rel_rmse"] = r.rel_rmse
@@ -454,14 +457,16 @@ def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -
     head = "| g | exponent n | lobe c·4π | iso a·4π | rel. error | lobe only: n | lobe only: rel. error |"
     sep = "|---|---|---|---|---|---|---|"
     if has_scene:
-        head += f" scene fit: n | scene fit: start [m] | scene fit: rel. RMSE |"
+        head += " scene fit: n | scene fit: start [m] | scene fit: rel. RMSE |"
         sep += "---|---|---|"
     lines = ["# Cosine lobe vs Henyey–Greenstein", "",
              "Best `a + c·max(cosθ, 0)^n` (Unreal: FogInscatteringColor carries `a`, "
              "DirectionalInscatteringColor carries `c`, DirectionalInscatteringExponent is `n`) for the HG phase "
              "function of asymmetry g; least squares over the sphere of directions.  `c·4π`, `a·4π` are relative to "
              "the isotropic phase 1/(4π) (multiply by albedo × sun irradiance for the colours).  "
-             "`rel. error` = ‖fit − p‖/‖p‖.  *Lobe only*: without the isotropic term.", ""]
+             "`rel. error` = ‖fit − p‖/‖p‖.  *Lobe only*: without the isotropic term.  — : the best lobe is 0 "
+             "(flat: the isotropic term does everything); for g ≤ 0 the cosine lobe cannot help (it only adds light "
+             "forward), and n = 0.01 is the search bound (the lobe degenerates to a half-sphere step).", ""]
     if has_scene:
         lines += [f"*Scene fit*: the full fit of `fogref fit` (sun + sky single scattering with sun attenuation, "
                   f"views from the camera) on {scene_name or 'the scene'}'s fog with that g; relative RMSE of the "
@@ -471,7 +476,7 @@ def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -
         s = (f"| {r['g']:+.1f} | {f(r['exponent'])} | {r['lobe']:.3g} | {r['iso']:.3g} | {r['rel_error']:.3f} | "
              f"{f(r['lobe_only_exponent'])} | {r['lobe_only_rel_error']:.3f} |")
         if has_scene:
-            s += (f" {f(r.get('scene_exponent'))} | {r.get('scene_start_distance_cm', 0) / 100:.3g} | "
+            s += (f" {f(r.get('scene_exponent'))} | {r.get('scene_start_distance_cm', 0) / 100:.1f} | "
                   f"{f(r.get('scene_rel_rmse'), '{:.3f}')} |")
         lines.append(s)
     lines += ["", "![lobe table](lobe_table.png)", ""]
@@ -489,7 +494,8 @@ def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -
     ax[0].semilogy(g, n, "o-", label="lobe + iso")
     ax[0].semilogy(g, n_only, "s--", label="lobe only")
     if has_scene:
-        ax[0].semilogy(g, [r.get("scene_exponent", np.nan) for r in rows], "^:", label="scene fit")
+        ax[0].semilogy(g, [np.nan if r.get("scene_exponent") is None else r["scene_exponent"] for r in rows], "^:",
+                       label="scene fit")
     ax[0].set_xlabel("g"), ax[0].set_ylabel("best exponent n"), ax[0].legend(), ax[0].grid(alpha=0.3)
     ax[1].plot(g, [r["rel_error"] for r in rows], "o-", label="lobe + iso (phase)")
     ax[1].plot(g, [r["lobe_only_rel_error"] for r in rows], "s--", label="lobe only (phase)")

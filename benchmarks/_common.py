@@ -1,0 +1,82 @@
+"""Shared timing helpers for the benchmarks (wall clock, Dr.Jit kernel history)."""
+
+from __future__ import annotations
+
+import os
+import platform
+import statistics
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import fogref  # noqa: E402,F401  (LLVM, variant, plugins)
+import drjit as dr  # noqa: E402
+import mitsuba as mi  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def timed_render(scene, spp: int, seed: int):
+    """(rgb float64 image, wall seconds): ``mi.render`` then ``dr.sync_thread()``
+    inside the timed region; the copy to numpy is outside it."""
+    t0 = time.perf_counter()
+    img = mi.render(scene, spp=spp, seed=seed)
+    dr.eval(img)
+    dr.sync_thread()
+    t = time.perf_counter() - t0
+    return np.array(img, dtype=np.float64)[..., :3], t
+
+
+def kernel_profile(scene, spp: int, seed: int) -> dict:
+    """One render with Dr.Jit's kernel history on: where the wall time goes."""
+    dr.kernel_history_clear() if hasattr(dr, "kernel_history_clear") else dr.kernel_history()
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        t0 = time.perf_counter()
+        img = mi.render(scene, spp=spp, seed=seed)
+        dr.eval(img)
+        dr.sync_thread()
+        wall = time.perf_counter() - t0
+        hist = dr.kernel_history()
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    jit = [k for k in hist if str(k.get("type")).endswith("JIT")]
+    other = [k for k in hist if not str(k.get("type")).endswith("JIT")]
+    main = max(jit, key=lambda k: k["execution_time"]) if jit else None
+    exec_ms = sum(k["execution_time"] for k in hist)
+    return {
+        "spp": spp,
+        "wall_s": wall,
+        "kernels": len(hist),
+        "jit_kernels": len(jit),
+        "exec_s_all": exec_ms / 1e3,
+        "exec_s_main_kernel": (main["execution_time"] / 1e3) if main else None,
+        "main_kernel_ops": main.get("operation_count") if main else None,
+        "main_kernel_size": main.get("size") if main else None,
+        "exec_s_other_jit": sum(k["execution_time"] for k in jit if k is not main) / 1e3,
+        "exec_s_non_jit": sum(k["execution_time"] for k in other) / 1e3,
+        "codegen_s": sum(k.get("codegen_time", 0.0) for k in jit) / 1e3,
+        "backend_s": sum(k.get("backend_time", 0.0) for k in jit) / 1e3,
+        "host_overhead_s": wall - exec_ms / 1e3,  # Python tracing, scene/film set-up, launches
+    }
+
+
+def machine_info() -> dict:
+    cpu = platform.processor()
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version(),
+            "mitsuba": mi.__version__, "drjit": dr.__version__, "variant": mi.variant(),
+            "llvm": os.environ.get("DRJIT_LIBLLVM_PATH", "")}
+
+
+def median(xs):
+    return float(statistics.median(xs))

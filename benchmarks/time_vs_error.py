@@ -1,0 +1,338 @@
+"""Time vs error: fogpath against stock Mitsuba on bounded height-fog scenes.
+
+    .venv/bin/python benchmarks/time_vs_error.py            # full (~10-15 min, 2 cores)
+    .venv/bin/python benchmarks/time_vs_error.py --quick    # tiny images, spp <= 64
+
+For every scene in ``benchmarks/_scenes.py`` and every method that applies, render
+a ladder of sample counts (1, 4, 16, 64, 256, 1024) and record
+
+* the RMSE against a converged ``fogpath`` reference (``--ref-spp``, rendered in 8
+  independent chunks so that its own per-pixel variance is known and subtracted:
+  ``MSE = mean((img - ref)^2) - mean(Var[ref])``);
+* the wall time: the first call (tracing + compilation, or the kernel-cache load)
+  apart from the steady time (median of repeated calls, ``dr.sync_thread()`` before
+  the clock stops).  Methods are interleaved round-robin so that load from other
+  processes on the machine falls on all of them alike.
+
+All the ladder renders of a method (independent seeds) are pooled into one
+"converged" image of N = sum(spp) samples whose per-pixel variance is estimated
+from the spread of the ladder images (``s^2 = sum n_i (X_i - X)^2 / (k - 1)``).  Its
+**bias** against the reference is ``b^2 = mean((X - ref)^2 - s^2/N - Var[ref])``,
+with a bootstrap (over pixels) 95% interval; the **noise** at each spp is the rest,
+``sqrt(MSE - b^2)``.
+
+The **equal-error time ratio** of a method at one of its ladder points is its steady
+time divided by the time fogpath needs for the same RMSE (linear interpolation of
+log time against log RMSE on fogpath's ladder; beyond fogpath's ladder, t ~ RMSE^-2
+toward low error and fogpath's 1-spp time toward high error).  > 1 means fogpath
+is faster.
+
+Writes ``reports/benchmarks/time_vs_error.{json,csv,png}`` and ``summary.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import time
+from pathlib import Path
+
+from _common import ROOT, dr, kernel_profile, machine_info, median, mi, np, timed_render  # noqa: F401
+import _scenes as S
+
+LADDER = (1, 4, 16, 64, 256, 1024)
+REPEATS = {1: 5, 4: 5, 16: 5, 64: 3, 256: 2, 1024: 1}
+LABEL = {"fogpath": "fogpath (analytic)", "volpath_hf": "volpath + heightfog (delta tracking)",
+         "grid64": "volpath + heterogeneous 1x64x1", "grid256": "volpath + heterogeneous 1x256x1",
+         "homogeneous": "volpath + homogeneous (null cube)"}
+
+
+def rel(x, ref_mean):
+    return x / ref_mean if ref_mean > 0 else float("nan")
+
+
+def render_reference(scene, spp, chunks=8, seed0=900_000):
+    """Mean and per-pixel variance of the mean from ``chunks`` independent renders."""
+    per = max(spp // chunks, 1)
+    imgs, ts = [], []
+    for k in range(chunks):
+        img, t = timed_render(scene, per, seed0 + k)
+        imgs.append(img)
+        ts.append(t)
+    a = np.stack(imgs)
+    return a.mean(0), a.var(0, ddof=1) / chunks, sum(ts), per * chunks
+
+
+def pooled(imgs_spp):
+    """Sample-weighted mean of independent estimates, its per-pixel variance, N."""
+    n = np.array([s for _, s in imgs_spp], dtype=np.float64)
+    X = np.stack([im for im, _ in imgs_spp])
+    N = n.sum()
+    mean = np.tensordot(n, X, axes=1) / N
+    s2 = np.tensordot(n, (X - mean) ** 2, axes=1) / (len(n) - 1)
+    return mean, s2 / N, int(N)
+
+
+def bias_stats(img, var_img, ref, var_ref, rng, n_boot=1000):
+    d = img - ref
+    v = var_img + var_ref
+    e = (d * d - v).ravel()
+    b2 = float(e.mean())
+    idx = rng.integers(0, e.size, size=(n_boot, e.size))
+    boot = e[idx].mean(1)
+    lo, hi = np.percentile(boot, [2.5, 97.5])
+    ref_mean = float(ref.mean())
+    mean_d = float(d.mean())
+    se_mean = float(math.sqrt(v.sum()) / v.size)
+    return {
+        "bias_rms": math.sqrt(max(b2, 0.0)),
+        "bias2": b2,
+        "bias2_ci95": [float(lo), float(hi)],
+        "bias_rms_ci95": [math.sqrt(max(lo, 0.0)), math.sqrt(max(hi, 0.0))],
+        "rel_bias_rms": rel(math.sqrt(max(b2, 0.0)), ref_mean),
+        "rel_bias_rms_ci95": [rel(math.sqrt(max(lo, 0.0)), ref_mean), rel(math.sqrt(max(hi, 0.0)), ref_mean)],
+        "mean_diff": mean_d,
+        "mean_diff_se": se_mean,
+        "rel_mean_diff": rel(mean_d, ref_mean),
+        "rel_mean_diff_ci95": [rel(mean_d - 1.96 * se_mean, ref_mean), rel(mean_d + 1.96 * se_mean, ref_mean)],
+        "mean_diff_z": mean_d / se_mean if se_mean > 0 else float("nan"),
+        "chi2_per_pixel": float((d * d).mean() / v.mean()),  # ~1 if unbiased
+    }
+
+
+def fogpath_time_at(err, f_pts):
+    """Steady time fogpath needs for RMSE ``err`` (f_pts: [(time, rmse)] by spp)."""
+    pts = sorted((e, t) for t, e in f_pts if e > 0)  # increasing error
+    le = [math.log(e) for e, _ in pts]
+    lt = [math.log(t) for _, t in pts]
+    x = math.log(err)
+    if x <= le[0]:  # more accurate than fogpath's best point: t ~ e^-2
+        return math.exp(lt[0] - 2.0 * (x - le[0])), "extrapolated (t ~ e^-2)"
+    if x >= le[-1]:  # noisier than fogpath at 1 spp: fixed per-call cost
+        return math.exp(lt[-1]), "clamped (fogpath 1 spp)"
+    for i in range(len(le) - 1):
+        if le[i] <= x <= le[i + 1]:
+            w = (x - le[i]) / (le[i + 1] - le[i]) if le[i + 1] > le[i] else 0.0
+            return math.exp(lt[i] + w * (lt[i + 1] - lt[i])), "interpolated"
+    return float("nan"), "none"
+
+
+def run_scene(name, args, rng):
+    methods = S.methods_for(name)
+    scenes = {m: S.build(mi, name, m, res=args.res, max_depth=args.max_depth) for m in methods}
+    out = {"methods": {}}
+    print(f"[{name}] methods: {methods}", flush=True)
+
+    # first call: tracing + compilation (or kernel-cache load), per method
+    first = {}
+    for m in methods:
+        _, t = timed_render(scenes[m], 1, 12345)
+        first[m] = t
+    # reference
+    ref, var_ref, t_ref, ref_spp = render_reference(scenes["fogpath"], args.ref_spp)
+    ref_mean = float(ref.mean())
+    out["reference"] = {"method": "fogpath", "spp": ref_spp, "chunks": 8, "time_s": t_ref, "mean": ref_mean,
+                        "rms_sd_of_mean": float(math.sqrt(var_ref.mean())),
+                        "rel_rms_sd_of_mean": rel(math.sqrt(var_ref.mean()), ref_mean)}
+    print(f"[{name}] reference {ref_spp} spp: {t_ref:.1f} s, mean {ref_mean:.4f}, "
+          f"rel sd {out['reference']['rel_rms_sd_of_mean']:.2e}", flush=True)
+    vref = float(var_ref.mean())
+
+    # ladder, round-robin over methods (rotated each repeat)
+    rec = {m: {} for m in methods}
+    pool = {m: [] for m in methods}
+    seed = 0
+    for spp in args.ladder:
+        reps = REPEATS.get(spp, 1)
+        for r in range(reps):
+            order = methods[r % len(methods):] + methods[:r % len(methods)]
+            for m in order:
+                seed += 1
+                img, t = timed_render(scenes[m], spp, seed)
+                mse = float(((img - ref) ** 2).mean())
+                d = rec[m].setdefault(spp, {"times": [], "mse_raw": []})
+                d["times"].append(t)
+                d["mse_raw"].append(mse)
+                pool[m].append((img, spp))
+        print(f"[{name}] spp {spp}: " + ", ".join(
+            f"{m} {median(rec[m][spp]['times']):.3f}s" for m in methods), flush=True)
+
+    for m in methods:
+        P, var_P, N = pooled(pool[m])
+        b = bias_stats(P, var_P, ref, var_ref, rng)
+        b["pooled_spp"] = N
+        ladder = []
+        for spp in args.ladder:
+            d = rec[m][spp]
+            mse = float(np.mean(d["mse_raw"])) - vref
+            rmse = math.sqrt(max(mse, 1e-30))
+            noise = math.sqrt(max(mse - max(b["bias2"], 0.0), 1e-30))
+            ladder.append({"spp": spp, "repeats": len(d["times"]), "time_median_s": median(d["times"]),
+                           "time_min_s": float(min(d["times"])), "times_s": d["times"],
+                           "mse_raw": float(np.mean(d["mse_raw"])), "mse": mse, "rmse": rmse,
+                           "rel_rmse": rel(rmse, ref_mean), "noise_rmse": noise, "rel_noise_rmse": rel(noise, ref_mean)})
+        steady1 = ladder[0]["time_median_s"]
+        out["methods"][m] = {"label": LABEL[m], "first_call_s": first[m], "steady_1spp_s": steady1,
+                             "compile_s": first[m] - steady1, "ladder": ladder, "bias": b}
+    # equal-error ratios against fogpath
+    f_pts = [(p["time_median_s"], p["rmse"]) for p in out["methods"]["fogpath"]["ladder"]]
+    f_pts_noise = [(p["time_median_s"], p["noise_rmse"]) for p in out["methods"]["fogpath"]["ladder"]]
+    for m in methods:
+        for p in out["methods"][m]["ladder"]:
+            tf, how = fogpath_time_at(p["rmse"], f_pts)
+            p["fogpath_time_at_equal_error_s"] = tf
+            p["equal_error_ratio"] = p["time_median_s"] / tf
+            p["equal_error_how"] = how
+            tfn, hown = fogpath_time_at(p["noise_rmse"], f_pts_noise)
+            p["equal_noise_ratio"] = p["time_median_s"] / tfn
+            p["equal_noise_how"] = hown
+        top = out["methods"][m]["ladder"][-1]
+        out["methods"][m]["equal_error_ratio_top"] = top["equal_error_ratio"]
+        out["methods"][m]["equal_noise_ratio_top"] = top["equal_noise_ratio"]
+        # time per sample per pixel at the top spp (steady)
+        out["methods"][m]["ns_per_sample_top"] = top["time_median_s"] / (top["spp"] * args.res[0] * args.res[1]) * 1e9
+    # where the time goes (kernel history), fogpath and the slowest stock method
+    prof_spp = args.ladder[-2] if len(args.ladder) > 1 else args.ladder[-1]
+    out["profile"] = {}
+    for m in methods:
+        out["profile"][m] = kernel_profile(scenes[m], prof_spp, 777_777)
+    return out
+
+
+def write_reports(res, args, outdir: Path):
+    outdir.mkdir(parents=True, exist_ok=True)
+    (outdir / "time_vs_error.json").write_text(json.dumps(res, indent=1))
+    with open(outdir / "time_vs_error.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["scene", "method", "spp", "repeats", "time_median_s", "time_min_s", "rmse", "rel_rmse",
+                    "noise_rmse", "equal_error_ratio", "equal_error_how", "equal_noise_ratio",
+                    "first_call_s", "compile_s", "bias_rms", "rel_bias_rms"])
+        for sname, sc in res["scenes"].items():
+            for m, d in sc["methods"].items():
+                for p in d["ladder"]:
+                    w.writerow([sname, m, p["spp"], p["repeats"], f"{p['time_median_s']:.5f}", f"{p['time_min_s']:.5f}",
+                                f"{p['rmse']:.6g}", f"{p['rel_rmse']:.6g}", f"{p['noise_rmse']:.6g}",
+                                f"{p['equal_error_ratio']:.4g}", p["equal_error_how"], f"{p['equal_noise_ratio']:.4g}",
+                                f"{d['first_call_s']:.4f}", f"{d['compile_s']:.4f}", f"{d['bias']['bias_rms']:.6g}",
+                                f"{d['bias']['rel_bias_rms']:.6g}"])
+    # plots
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = list(res["scenes"])
+    fig, axes = plt.subplots(1, len(names), figsize=(5.2 * len(names), 4.4), squeeze=False)
+    colors = {"fogpath": "C3", "volpath_hf": "C0", "grid64": "C2", "grid256": "C1", "homogeneous": "C4"}
+    for ax, sname in zip(axes[0], names):
+        sc = res["scenes"][sname]
+        for m, d in sc["methods"].items():
+            t = [p["time_median_s"] for p in d["ladder"]]
+            e = [p["rel_rmse"] for p in d["ladder"]]
+            ax.loglog(t, e, "o-", color=colors[m], label=d["label"], lw=2 if m == "fogpath" else 1.2, ms=4)
+            for p in d["ladder"]:
+                if p["spp"] in (1, args.ladder[-1]):
+                    ax.annotate(f"{p['spp']}", (p["time_median_s"], p["rel_rmse"]), fontsize=7,
+                                xytext=(3, 3), textcoords="offset points", color=colors[m])
+            if m.startswith("grid") and d["bias"]["rel_bias_rms"] > 0:
+                ax.axhline(d["bias"]["rel_bias_rms"], color=colors[m], ls=":", lw=1)
+        ax.set_title(f"{sname} ({args.res[0]}x{args.res[1]}, max_depth {args.max_depth})")
+        ax.set_xlabel("steady wall time per render [s]")
+        ax.set_ylabel("relative RMSE vs reference")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0][0].legend(fontsize=7)
+    fig.suptitle("time vs error (dotted: grid discretisation bias)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(outdir / "time_vs_error.png", dpi=110)
+    plt.close(fig)
+    (outdir / "summary.md").write_text(summary_md(res, args))
+
+
+def summary_md(res, args) -> str:
+    cfg = res["config"]
+    L = [f"# Time vs error: fogpath vs stock Mitsuba\n",
+         f"Command: `{cfg['command']}`  ",
+         f"Machine: {cfg['machine']['cpu']}, {cfg['machine']['cores']} cores (shared), mitsuba "
+         f"{cfg['machine']['mitsuba']}, drjit {cfg['machine']['drjit']}, `{cfg['machine']['variant']}`  ",
+         f"Images {cfg['res'][0]}x{cfg['res'][1]}, max_depth {cfg['max_depth']} for every method, rr_depth 5; "
+         f"ladder {cfg['ladder']} spp (repeats {cfg['repeats']}); reference fogpath {cfg['ref_spp']} spp "
+         f"in 8 chunks. Total run {cfg['total_s']:.0f} s.\n",
+         "Times are steady wall times (median of repeats, methods interleaved); the first call "
+         "(tracing + LLVM compilation or kernel-cache load) is reported apart. Grids: density sampled at "
+         "cell **centres** of a 1xNx1 `gridvolume` over the fog box, trilinear, `has_spectral_extinction` false.\n",
+         "![time vs error](time_vs_error.png)\n",
+         "## Equal-error time ratio (method time / fogpath time at the same RMSE; > 1: fogpath faster)\n",
+         "| scene | method | " + " | ".join(f"{s} spp" for s in cfg["ladder"]) + " | noise-only @top |",
+         "|---|---|" + "---|" * len(cfg["ladder"]) + "---|"]
+    for sname, sc in res["scenes"].items():
+        for m, d in sc["methods"].items():
+            if m == "fogpath":
+                continue
+            cells = []
+            for p in d["ladder"]:
+                mark = "" if p["equal_error_how"] == "interpolated" else "*"
+                cells.append(f"{p['equal_error_ratio']:.2f}{mark}")
+            L.append(f"| {sname} | {m} | " + " | ".join(cells) + f" | {d['equal_noise_ratio_top']:.2f} |")
+    L.append("\n`*`: outside fogpath's measured range (extrapolated with t ~ RMSE^-2, or clamped at fogpath's "
+             "1-spp time).  Noise-only: the same ratio with the method's bias removed from its error.\n")
+    L += ["## Bias against the fogpath reference (pooled ladder images vs reference)\n",
+          "| scene | method | pooled spp | rel. RMS bias [95% CI] | rel. mean diff [95% CI] | chi2/pixel |",
+          "|---|---|---|---|---|---|"]
+    for sname, sc in res["scenes"].items():
+        for m, d in sc["methods"].items():
+            b = d["bias"]
+            L.append(f"| {sname} | {m} | {b['pooled_spp']} | {b['rel_bias_rms']:.2e} "
+                     f"[{b['rel_bias_rms_ci95'][0]:.1e}, {b['rel_bias_rms_ci95'][1]:.1e}] | "
+                     f"{b['rel_mean_diff']:+.2e} [{b['rel_mean_diff_ci95'][0]:+.1e}, {b['rel_mean_diff_ci95'][1]:+.1e}] | "
+                     f"{b['chi2_per_pixel']:.3f} |")
+    L.append("\nRMS bias = sqrt(mean((X - ref)^2 - Var X - Var ref)) over pixels and RGB; chi2/pixel = "
+             "mean((X-ref)^2) / mean(Var X + Var ref), ~1 when the two agree within noise.\n")
+    L += ["## Time (seconds)\n", "| scene | method | first call | compile (first - steady 1 spp) | steady "
+          f"{cfg['ladder'][-1]} spp | ns / sample / pixel | rel. RMSE @ {cfg['ladder'][-1]} spp |", "|---|---|---|---|---|---|---|"]
+    for sname, sc in res["scenes"].items():
+        for m, d in sc["methods"].items():
+            top = d["ladder"][-1]
+            L.append(f"| {sname} | {m} | {d['first_call_s']:.2f} | {d['compile_s']:.2f} | {top['time_median_s']:.3f} | "
+                     f"{d['ns_per_sample_top']:.0f} | {top['rel_rmse']:.2e} |")
+    L += ["\n## Where the time goes (Dr.Jit kernel history, one render each)\n",
+          "| scene | method | spp | wall | main kernel exec | other kernels | host (trace, launch) | main kernel ops |",
+          "|---|---|---|---|---|---|---|---|"]
+    for sname, sc in res["scenes"].items():
+        for m, p in sc["profile"].items():
+            L.append(f"| {sname} | {m} | {p['spp']} | {p['wall_s']:.3f} | {p['exec_s_main_kernel']:.3f} | "
+                     f"{p['exec_s_other_jit'] + p['exec_s_non_jit']:.3f} | {p['host_overhead_s']:.3f} | "
+                     f"{p['main_kernel_ops']} |")
+    return "\n".join(L) + "\n"
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="32x18 images, spp <= 64, 512-spp reference")
+    ap.add_argument("--scenes", nargs="*", default=list(S.SCENES))
+    ap.add_argument("--max-depth", type=int, default=8)
+    ap.add_argument("--ref-spp", type=int, default=None)
+    ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
+    args = ap.parse_args(argv)
+    if args.quick:
+        args.res, args.ladder = (32, 18), [s for s in LADDER if s <= 64]
+        args.ref_spp = args.ref_spp or 512
+    else:
+        args.res, args.ladder = (96, 54), list(LADDER)
+        args.ref_spp = args.ref_spp or 4096
+    rng = np.random.default_rng(0)
+    t0 = time.perf_counter()
+    res = {"config": {"command": "python benchmarks/time_vs_error.py" + (" --quick" if args.quick else ""),
+                      "res": list(args.res), "ladder": args.ladder, "repeats": {s: REPEATS[s] for s in args.ladder},
+                      "ref_spp": args.ref_spp, "max_depth": args.max_depth, "machine": machine_info()},
+           "scenes": {}}
+    for name in args.scenes:
+        res["scenes"][name] = run_scene(name, args, rng)
+        res["config"]["total_s"] = time.perf_counter() - t0
+        write_reports(res, args, Path(args.out))  # partial results survive an interruption
+    print(f"done in {time.perf_counter() - t0:.0f} s -> {args.out}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
