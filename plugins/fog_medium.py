@@ -103,7 +103,11 @@ class HeightFogMedium(mi.Medium):
         rho_max = 0.0
         for L in self.fog.layers:
             rho_max = rho_max + L.rho(ops, y_low)
-        self._maj = mi.Float(rho_max) * 1.0001 + 1e-7
+        # No additive floor: where the fog fades to nothing (rays rising out of
+        # an unbounded layer) the majorant underflows to 0, the next tentative
+        # collision lands at infinity and the ray escapes instead of taking
+        # endless null steps.
+        self._maj = mi.Float(rho_max) * 1.0001
         return active, dr.select(active, t0, dr.inf), dr.select(active, t1, dr.inf)
 
     def _majorant(self):
