@@ -221,8 +221,9 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         aov_g = [dr.select(hit0, si0.t, 0.0)] + [dr.select(hit0, si0.p[i], 0.0) for i in range(3)] \
             + [ray.d[i] for i in range(3)] + [dr.select(hit0, 1.0, 0.0)]
 
+        active &= has_lights  # no emitter: nothing to trace beyond the G-buffer
+        si = si0  # the camera ray's intersection is reused by the first bounce
         while dr.hint(active, max_iterations=-1, label="fogpath"):
-            si = scene.ray_intersect(ray, active)
             t_surf = dr.select(si.is_valid(), si.t, dr.inf)
 
             # ---------------- free flight through the fog ----------------
@@ -237,7 +238,8 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             bucket_single = medium_first & (depth == 1)
 
             # ---------------- emission reached by the last sample ----------------
-            if dr.hint(has_lights, mode="scalar"):
+            # (only non-delta emitters can be hit: skipped for a sun-only scene)
+            if dr.hint(has_smooth, mode="scalar"):
                 em_active = (is_surface | escaped)
                 if dr.hint(self.hide_emitters, mode="scalar"):
                     em_active &= ~((depth == 0) & escaped)
@@ -282,8 +284,9 @@ class FogPathIntegrator(mi.SamplingIntegrator):
                     sray.maxt = dr.select(inf_m, dr.inf, ds_m.dist * (1.0 - 1e-4))
                     vis = med_active & (ds_m.pdf != 0) & ~scene.ray_test(sray, med_active)
                     ph_val, ph_pdf = phase.eval_pdf(phase_ctx, mei, ds_m.d, med_active)
-                    Ld = β * em_w * self._shadow_T(fog, ops, p_med, ds_m, inf_m) * ph_val \
-                        * dr.select(ds_m.delta, 1.0, mis_weight(ds_m.pdf, ph_pdf))
+                    Ld = β * em_w * self._shadow_T(fog, ops, p_med, ds_m, inf_m) * ph_val
+                    if dr.hint(has_smooth, mode="scalar"):  # MIS only matters for hittable emitters
+                        Ld *= dr.select(ds_m.delta, 1.0, mis_weight(ds_m.pdf, ph_pdf))
                     Ld = dr.select(vis, Ld, 0.0)
                     if dr.hint(use_sun_ss, mode="scalar"):  # the sun's share at depth 0 is estimated above
                         Ld = dr.select(ds_m.delta & (depth == 0), 0.0, Ld)
@@ -308,8 +311,9 @@ class FogPathIntegrator(mi.SamplingIntegrator):
                 vis_s = em_ok & (ds_s.pdf != 0) & ~scene.ray_test(sray_s, em_ok)
                 wo_l = si.to_local(ds_s.d)
                 b_val, b_pdf = bsdf.eval_pdf(bsdf_ctx, si, wo_l, em_ok)
-                Ls = β * em_ws * self._shadow_T(fog, ops, si.p, ds_s, inf_s) * b_val \
-                    * dr.select(ds_s.delta, 1.0, mis_weight(ds_s.pdf, b_pdf))
+                Ls = β * em_ws * self._shadow_T(fog, ops, si.p, ds_s, inf_s) * b_val
+                if dr.hint(has_smooth, mode="scalar"):
+                    Ls *= dr.select(ds_s.delta, 1.0, mis_weight(ds_s.pdf, b_pdf))
                 Ls = dr.select(vis_s, Ls, 0.0)
                 L += Ls
                 L_multi += dr.select(medium_first, Ls, 0.0)
@@ -341,6 +345,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             q = dr.minimum(β_max, 0.95)
             β[rr] *= dr.rcp(q)
             active &= ~rr | (sampler.next_1d(rr) < q)
+            si = scene.ray_intersect(ray, active)
 
         L += L_sun_ss
         L_single += L_sun_ss
