@@ -48,7 +48,7 @@ import math
 
 import numpy as np
 
-SCENES = ("valley", "two_layer", "zero_falloff")
+SCENES = ("valley", "valley_open", "two_layer", "zero_falloff")
 METHODS = ("fogpath", "volpath_hf", "grid64", "grid256", "homogeneous")
 
 
@@ -78,6 +78,14 @@ def scene_spec(name: str) -> dict:
             ground=(3000, [0.12, 0.16, 0.08]), rock=[0.25, 0.23, 0.20], boxes=boxes,
             spheres=[((15, 0, 90), 9)],
         )
+    if name == "valley_open":
+        # The default scene as fogpath renders it: unbounded fog, where fogpath
+        # samples the sun's single scattering from its exact integrand.  Stock
+        # volpath + heightfog is fair here too: its sun shadow rays stop at 2R
+        # (~8.5 km), where the fog they would still cross has density < 1e-7.
+        spec = scene_spec("valley")
+        spec["bounds"] = None
+        return spec
     if name == "two_layer":
         boxes = [((6, 25, 6), 0, (-20, 0, 150)), ((6, 35, 6), 0, (30, 0, 320)), ((8, 45, 8), 0, (-60, 0, 600))]
         return dict(
@@ -102,6 +110,8 @@ def methods_for(name: str) -> list[str]:
     """The methods that apply to a scene (``homogeneous`` needs zero falloff)."""
     spec = scene_spec(name)
     homog = all(L[1] == 0 for L in spec["fog"]["layers"])
+    if spec["bounds"] is None:  # grids and stock homogeneous need a box
+        return ["fogpath", "volpath_hf"]
     return [m for m in METHODS if m != "homogeneous" or homog]
 
 
@@ -117,8 +127,9 @@ def heightfog_dict(mi, spec, **over):
     f.update(over)
     layers = f.pop("layers")
     d = {"type": "heightfog", "profile": "exponential", "sigma_t": f["sigma_t"], "albedo": f["albedo"],
-         "g": f["g"], "density": layers[0][0], "falloff": layers[0][1], "height": layers[0][2],
-         "bounds_min": mi.ScalarPoint3f(*spec["bounds"][0]), "bounds_max": mi.ScalarPoint3f(*spec["bounds"][1])}
+         "g": f["g"], "density": layers[0][0], "falloff": layers[0][1], "height": layers[0][2]}
+    if spec["bounds"] is not None:
+        d.update(bounds_min=mi.ScalarPoint3f(*spec["bounds"][0]), bounds_max=mi.ScalarPoint3f(*spec["bounds"][1]))
     if len(layers) > 1:
         d.update(density2=layers[1][0], falloff2=layers[1][1], height2=layers[1][2])
     return d

@@ -139,3 +139,39 @@ def test_vertical_and_extreme_rays_are_finite():
         for prec in ("float32", "float64"):
             r = fog.evaluate(cam, wp, prec)
             assert np.all(np.isfinite(r.transmittance)) and np.all(np.isfinite(r.inscatter))
+
+
+def _mp_power_integral(cam, wp, S, E, p):
+    """I = int T ds in 60 digits, the power piece without G(y1) - G(y0) cancellation."""
+    mpmath.mp.dps = 60
+    c = [mpmath.mpf(float(x)) for x in cam]
+    w = [mpmath.mpf(float(x)) for x in wp]
+    S, E, p = mpmath.mpf(S), mpmath.mpf(E), mpmath.mpf(p)
+    L = mpmath.sqrt(sum((a - b) ** 2 for a, b in zip(w, c)))
+    dy = w[1] - c[1]
+    if dy == 0:
+        return L * (1 if c[1] <= S else (0 if c[1] >= E else ((E - c[1]) / (E - S)) ** p))
+    lo, hi = min(c[1], w[1]), max(c[1], w[1])
+    ya, yb = max(lo, S), min(hi, E)
+    power = 0
+    if yb > ya:
+        power = (E - S) / (p + 1) * ((E - ya) / (E - S)) ** (p + 1) * (1 - ((E - yb) / (E - ya)) ** (p + 1))
+    return (max(0, min(hi, S) - lo) + power) * L / abs(dy)
+
+
+def test_float64_near_fog_end_and_near_horizontal():
+    """Regressions: G(y1) - G(y0) cancelled near _FogEnd (100 % error, camera at 1e6 m)
+    and the old midpoint rule for near-horizontal rays (25 % error)."""
+    fog = AltitudeFog(AltitudeFogParams(0.0, 1e6, 2.0, (1, 1, 1, 1.0)))
+    cam = np.array([0.0, 1e6, 0.0])
+    wp = np.array([[0.0, 1e6 - 0.2, 0.0], [30.0, 1e6 - 1e-6, 0.0], [1e3, 1e6 - 1e-4, 0.0],
+                   [1e6, 1e6 - 0.1, 0.0], [0.0, 5e5, 0.0]])
+    I = fog.path_integral(cam, wp, "float64")
+    for i in range(len(wp)):
+        assert I[i] == pytest.approx(float(_mp_power_integral(cam, wp[i], 0.0, 1e6, 2.0)), rel=1e-13, abs=0)
+    fog = AltitudeFog(AltitudeFogParams(0.0, 10.0, 2.0, (1, 1, 1, 1.0)))
+    cam = np.array([0.0, 5.0, 0.0])
+    wp = np.array([[1e7, 5.0 + 5e-7 * s, 0.0] for s in (-9.0, -1.0, 0.0, 1.0, 9.0)])   # cross 0 and 10 m
+    I = fog.path_integral(cam, wp, "float64")
+    for i in range(len(wp)):
+        assert I[i] == pytest.approx(float(_mp_power_integral(cam, wp[i], 0.0, 10.0, 2.0)), rel=1e-13, abs=0)

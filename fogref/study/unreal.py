@@ -66,12 +66,23 @@ def sunless_scene(scene: Path, out_dir: Path) -> Path:
     return out
 
 
+def _renderer_hash() -> str:
+    """Hash of the renderer's source, so cached renders are redone when it changes."""
+    import hashlib
+
+    root = Path(__file__).resolve().parents[2]
+    h = hashlib.sha1()
+    for p in sorted([*root.glob("plugins/*.py"), *root.glob("fogref/media/*.py"), *root.glob("fogref/render/*.py")]):
+        h.update(p.read_bytes())
+    return h.hexdigest()[:16]
+
+
 def _render_cached(scene: Path, out: Path, spp: int, seed: int, overrides: dict, log) -> Path:
     from fogref.exrio import read_exr
     from fogref.render.render import render
 
     key = {"scene": str(scene.resolve()), "mtime": scene.stat().st_mtime, "spp": spp, "seed": seed,
-           "overrides": overrides}
+           "overrides": overrides, "renderer": _renderer_hash()}
     stamp = out.with_suffix(".key.json")
     if out.is_file() and stamp.is_file():
         try:
