@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 
-os.environ.setdefault("FOGREF_NO_MITSUBA", "1")
+# (no FOGREF_NO_MITSUBA here: it would turn off the render tests for the whole session)
 
 import math
 

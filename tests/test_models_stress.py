@@ -76,7 +76,7 @@ import os
 import pathlib
 import sys
 
-os.environ.setdefault("FOGREF_NO_MITSUBA", "1")
+# (no FOGREF_NO_MITSUBA here: it would turn off the render tests for the whole session)
 
 import mpmath as mp  # noqa: E402
 import numpy as np  # noqa: E402

@@ -137,6 +137,53 @@ class FilamentFog:
     def from_medium(cls, medium, **kw) -> "FilamentFog":
         return cls(medium_to_filament(medium, **kw))
 
+    @classmethod
+    def from_physical(cls, params: dict) -> "FilamentFog":
+        """The Filament fog that best represents a ground truth's physical scene.
+
+        ``params``: an EXR's ``fogref.params`` (see :mod:`fogref.models._physical`).
+        Extinction: exact (:func:`medium_to_filament`) for one unbounded grey
+        exponential layer (profiles "exponential" and "homogeneous"); ``distance``
+        0, no cutoff, ``maximumOpacity`` 1.  ``color = albedo * sky radiance``
+        (uniform unoccluded sky, single scattering).
+
+        Sun (the inscattering lobe), a simple documented choice: the sun's single
+        scattering without its attenuation along the view ray,
+        ``albedo E p_HG(cos) (1 - T)``, with the Henyey–Greenstein phase replaced by
+        its best pure cosine lobe ``c max(cos, 0)^n`` over the sphere
+        (:func:`fogref.study.fit.lobe_fit` with ``isotropic=False``), and the sun
+        irradiance dimmed by the fog between the camera and the sun,
+        ``T_sun(camera)``.  So ``inScatteringSize = n``, ``lightDirection`` = the
+        sun, ``lightColorIntensity = (albedo E T_sun(camera) c, 1)``,
+        ``inScatteringStart = 0``.  Without a sun, with the sun at or below the
+        horizon, or when the best lobe is 0 (g <= 0): no lobe
+        (``inScatteringSize = -1``).  Raises ParameterError naming 'profile' for
+        "hdrp", "powerlaw", "box" or any bounded fog, 'density2' for two layers,
+        'sigma_t' for a coloured extinction.
+        """
+        from fogref.models._physical import physical_scene
+
+        ps = physical_scene(params)
+        ps.require_profile("Filament", ("exponential", "homogeneous"),
+                           "Filament's fog is one exponential height layer")
+        ps.require_unbounded("Filament")
+        ps.grey_sigma_t("Filament")
+        if len(ps.medium.layers) != 1:
+            raise ParameterError(ps.source, "density2", "Filament fog has a single exponential layer")
+        kw = dict(distance=0.0, cutOffDistance=math.inf, maximumOpacity=1.0, color=ps.sky_colour(),
+                  inScatteringStart=0.0, inScatteringSize=-1.0)
+        w = ps.sun_direction
+        if w is not None and w[1] > 0 and max(ps.sun_irradiance) > 0:
+            from fogref.study.fit import lobe_fit
+
+            lobe = lobe_fit(ps.medium.g, isotropic=False)
+            if lobe["exponent"] is not None:
+                c = lobe["lobe"] / (4.0 * math.pi)
+                sun = ps.albedo * ps.sun_irradiance * ps.sun_transmittance_at_camera() * c
+                kw.update(inScatteringSize=float(lobe["exponent"]), lightDirection=tuple(float(x) for x in w),
+                          lightColorIntensity=(*(float(x) for x in sun), 1.0))
+        return cls(medium_to_filament(ps.medium, **kw))
+
 
 def filament_to_medium(params: FilamentFogParams, albedo=(1.0, 1.0, 1.0), g: float = 0.0):
     """Exact medium ``sigma_t = density`` [1/m], ``ExpLayer(1, heightFalloff, height)``."""

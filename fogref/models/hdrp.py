@@ -36,6 +36,10 @@ from fogref.models.base import FogResult, register
 
 #: VolumeRendering.cs ScaleHeightFromLayerDepth: 1 / ln(1000).
 LAYER_DEPTH_TO_H = 0.144765
+#: from_physical: base height [m] that makes HDRP's fog homogeneous everywhere below it.
+HOMOGENEOUS_BASE_HEIGHT = 1.0e7
+#: from_physical: maxFogDistance [m], beyond any sky distance (the physical ray is not cut).
+FROM_PHYSICAL_MAX_FOG_DISTANCE = 1.0e7
 
 
 @dataclass(frozen=True)
@@ -126,6 +130,51 @@ class HDRPFog:
     @classmethod
     def from_medium(cls, medium, **kw) -> "HDRPFog":
         return cls(medium_to_hdrp(medium, **kw))
+
+    @classmethod
+    def from_physical(cls, params: dict) -> "HDRPFog":
+        """The HDRP fog that best represents a ground truth's physical scene.
+
+        ``params``: an EXR's ``fogref.params`` (see :mod:`fogref.models._physical`).
+        Extinction (grey ``sigma_t`` required):
+
+        * "hdrp": exact (:func:`medium_to_hdrp`).
+        * "homogeneous" (or falloff 0): exact, ``baseHeight = 1e7`` m
+          (:data:`HOMOGENEOUS_BASE_HEIGHT`: constant density below it).
+        * "exponential", one layer ``sigma_t exp(-b (y - h))``: the same exponential
+          above ``baseHeight = min(h, camera height)``, held constant below it
+          (HDRP's profile); exact for every ray that stays at or above that height.
+        * two exponential layers: ParameterError naming 'density2'; "powerlaw",
+          "box" or any bounded fog: ParameterError naming 'profile'.
+
+        Colour: ``albedo`` = the medium's albedo and ``color`` = sky radiance, so the
+        inscatter is ``albedo * L_sky * (1 - T)`` (uniform unoccluded sky, single
+        scattering; the sun is not represented).  ``maxFogDistance`` =
+        :data:`FROM_PHYSICAL_MAX_FOG_DISTANCE` (no truncation of the physical ray).
+        """
+        from fogref.media import FogMedium, HDRPLayer
+        from fogref.models._physical import physical_scene
+
+        ps = physical_scene(params)
+        ps.require_profile("HDRP", ("hdrp", "homogeneous", "exponential"),
+                           "HDRP's fog is constant below a base height and exponential above")
+        ps.require_unbounded("HDRP")
+        sigma = ps.grey_sigma_t("HDRP")
+        m = ps.medium
+        if len(m.layers) != 1:
+            raise ParameterError(ps.source, "density2", "HDRP fog has a single height layer")
+        L = m.layers[0]
+        if m.is_homogeneous:
+            layer = HDRPLayer(density=L.density, base_height=HOMOGENEOUS_BASE_HEIGHT, falloff=0.0)
+        elif isinstance(L, HDRPLayer):
+            layer = L
+        else:  # ExpLayer with falloff > 0
+            base = min(L.height, float(ps.camera[1]))
+            layer = HDRPLayer(density=L.density * math.exp(-L.falloff * (base - L.height)), base_height=base,
+                              falloff=L.falloff)
+        m = FogMedium(sigma_t=sigma, albedo=m.albedo, g=m.g, layers=(layer,), source=ps.source)
+        return cls(medium_to_hdrp(m, color=tuple(float(x) for x in ps.sky_radiance),
+                                  maxFogDistance=FROM_PHYSICAL_MAX_FOG_DISTANCE))
 
 
 # -- physical counterpart ---------------------------------------------------------

@@ -57,6 +57,9 @@ CM_PER_M = 100.0
 FLT_EPSILON2 = 0.01
 #: FogRendering.cpp: the observer is clamped to FogHeight + this [cm].
 MAX_OBSERVER_HEIGHT_DIFFERENCE = 65536.0
+#: from_physical: views of the colour fit (Fibonacci directions; distances [m]).
+FIT_DIRECTIONS = 128
+FIT_DISTANCES = tuple(float(x) for x in np.geomspace(10.0, 2.0e4, 8))
 
 
 def world_to_unreal(p) -> np.ndarray:
@@ -280,6 +283,53 @@ class UE4ExponentialHeightFog:
     def to_medium(self, **kw):
         """The physical medium of this fog's extinction (see :func:`ue4_to_medium`)."""
         return ue4_to_medium(self.params, **kw)
+
+    @classmethod
+    def from_physical(cls, params: dict, n_dirs: int = FIT_DIRECTIONS,
+                      distances=FIT_DISTANCES) -> "UE4ExponentialHeightFog":
+        """The Unreal fog that best represents a ground truth's physical scene.
+
+        ``params``: an EXR's ``fogref.params`` (see :mod:`fogref.models._physical`).
+        Density, falloff, height (and the second layer) are exact
+        (:func:`medium_to_ue4`; profiles "exponential" with 1–2 layers and
+        "homogeneous", unbounded, grey ``sigma_t``), so the float64 transmittance is
+        the physical one.  With a sun, FogInscatteringColor,
+        DirectionalInscatteringColor, DirectionalInscatteringExponent and
+        DirectionalInscatteringStartDistance come from
+        :func:`fogref.study.fit.fit_unreal` (closed-form sun + sky single
+        scattering, sun attenuation included) on ``n_dirs`` Fibonacci directions
+        from the camera at ``distances`` [m] plus the sky (about 0.1 s); the
+        light direction is the scene's sun (:meth:`UE4FogParams.with_sun`).
+        Without a sun: no directional inscattering and FogInscatteringColor =
+        albedo * sky radiance.  Other fields: start distances 0, max opacity 1,
+        no cutoff.  Raises ParameterError naming 'profile' for "hdrp",
+        "powerlaw", "box" or any bounded fog, 'sigma_t' for a coloured extinction.
+        """
+        from fogref.models._physical import physical_scene
+
+        ps = physical_scene(params)
+        ps.require_profile("Unreal", ("exponential", "homogeneous"),
+                           "Unreal's height fog is 1-2 exponential layers (homogeneous = falloff 0)")
+        ps.require_unbounded("Unreal")
+        ps.grey_sigma_t("Unreal")
+        base = replace(UE4FogParams(), StartDistance=0.0, FogMaxOpacity=1.0, FogCutoffDistance=0.0,
+                       EndDistance=0.0, DirectionalInscatteringStartDistance=0.0, SunLuminance=1.0,
+                       FogInscatteringColor=ps.sky_colour(), DirectionalInscatteringColor=(0.0, 0.0, 0.0),
+                       InscatteringLightDirection=None)
+        p = medium_to_ue4(ps.medium, base)
+        if ps.sun_direction is None or max(ps.sun_irradiance) <= 0:
+            return cls(p)
+        from fogref.study.fit import PhysicalFog, fit_unreal, sample_views
+
+        pf = PhysicalFog(ps.medium, tuple(ps.sun_direction), tuple(ps.sun_irradiance), tuple(ps.sky_radiance),
+                         tuple(ps.camera))
+        fit = fit_unreal(pf, sample_views(pf.camera, n_dirs=n_dirs, distances=distances))
+        q = fit.params
+        p = replace(p, FogInscatteringColor=q.FogInscatteringColor,
+                    DirectionalInscatteringColor=q.DirectionalInscatteringColor,
+                    DirectionalInscatteringExponent=q.DirectionalInscatteringExponent,
+                    DirectionalInscatteringStartDistance=q.DirectionalInscatteringStartDistance)
+        return cls(p.with_sun(ps.sun_direction, 1.0))
 
 
 # -- exact physical mapping -----------------------------------------------------

@@ -137,6 +137,37 @@ class UnityBuiltinFog:
     def to_medium(self, **kw):
         return unity_to_medium(self.params, **kw)
 
+    @classmethod
+    def from_physical(cls, params: dict) -> "UnityBuiltinFog":
+        """The Unity fog that best represents a ground truth's physical scene.
+
+        ``params``: an EXR's ``fogref.params`` (see :mod:`fogref.models._physical`).
+        Always Exp fog on distance.  Profile "homogeneous": exact
+        (:func:`medium_to_unity`, ``fogDensity = sigma_t``).  Height profiles
+        ("exponential", "hdrp", "powerlaw") have no exact counterpart (Unity's fog
+        does not depend on height); the nearest choice is the extinction at the
+        camera, ``fogDensity = sigma_t * rho(camera)``, exact for horizontal rays
+        (rays climbing out of the fog get too much of it, descending ones too
+        little).  ``fogColor = albedo * sky radiance`` (uniform unoccluded sky,
+        single scattering; the sun is not represented).  Raises ParameterError
+        naming 'profile' for "box" or any bounded fog, 'sigma_t' for a coloured
+        extinction.
+        """
+        from fogref.media import NP, ExpLayer, FogMedium
+        from fogref.models._physical import physical_scene
+
+        ps = physical_scene(params)
+        ps.require_profile("Unity", ("homogeneous", "exponential", "hdrp", "powerlaw"),
+                           "Unity's built-in fog fills all space (no bounds)")
+        ps.require_unbounded("Unity")
+        sigma = ps.grey_sigma_t("Unity")
+        m = ps.medium
+        if not m.is_homogeneous:
+            rho = float(np.asarray(m.density(NP, tuple(np.asarray([c]) for c in ps.camera))).reshape(-1)[0])
+            m = FogMedium(sigma_t=sigma * rho, albedo=m.albedo, g=m.g, layers=(ExpLayer(1.0, 0.0, 0.0),),
+                          source=ps.source)
+        return cls(medium_to_unity(m, fogColor=ps.sky_colour()))
+
 
 def unity_sigma(params: UnityFogParams, reference_distance: float | None = None) -> float:
     """Extinction [1/m] of the homogeneous medium nearest to ``params``.
