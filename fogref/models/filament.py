@@ -170,8 +170,8 @@ class FilamentFog:
         ps.grey_sigma_t("Filament")
         if len(ps.medium.layers) != 1:
             raise ParameterError(ps.source, "density2", "Filament fog has a single exponential layer")
-        kw = dict(distance=0.0, cutOffDistance=math.inf, maximumOpacity=1.0, color=ps.sky_colour(),
-                  inScatteringStart=0.0, inScatteringSize=-1.0)
+        kw = {"distance": 0.0, "cutOffDistance": math.inf, "maximumOpacity": 1.0, "color": ps.sky_colour(),
+              "inScatteringStart": 0.0, "inScatteringSize": -1.0}
         w = ps.sun_direction
         if w is not None and w[1] > 0 and max(ps.sun_irradiance) > 0:
             from fogref.study.fit import lobe_fit

@@ -226,8 +226,9 @@ def shade(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt, exact: bool):
         ro = P3[0] * np.exp2(-expo)
         expo2 = np.maximum(dt(-127.0), P2[1] * (excl_z - P2[3]))
         ro2 = P2[2] * np.exp2(-expo2)
-    shared = (_line_integral_shared(P[1], ray_dir_z, ro, dt, exact)
-              + _line_integral_shared(P2[1], ray_dir_z, ro2, dt, exact))
+    shared = _line_integral_shared(P[1], ray_dir_z, ro, dt, exact)
+    if P2[2] > 0:  # second layer only when it exists (exact: a zero-density layer adds 0)
+        shared = shared + _line_integral_shared(P2[1], ray_dir_z, ro2, dt, exact)
     # Robustness (deviation): the shader's ``shared * length`` is NaN when an
     # overflowed (inf) density meets a zero-length ray; an empty ray has no fog.
     # Identical to the shader wherever the shader is not NaN.

@@ -1,0 +1,266 @@
+"""``from_physical``: every game fog model built from a ground truth's ``fogref.params``.
+
+Exact mappings give the physical float64 transmittance; colours follow the light
+(albedo * sky radiance; Unreal's from the fit of fogref.study.fit); a profile
+without a counterpart raises ParameterError naming 'profile'.
+"""
+
+import copy
+import math
+
+import numpy as np
+import pytest
+
+from fogref.compare.model_factory import build_model
+from fogref.errors import ParameterError
+from fogref.media import NP
+from fogref.models import get
+from fogref.models.ue4 import direction_to_unreal
+from fogref.render.params import medium_from_params
+
+SUN = np.array([0.4, 0.139, 0.906]) / np.linalg.norm([0.4, 0.139, 0.906])
+VALLEY = {
+    "scene": "valley.xml",
+    "medium": {"profile": "exponential", "sigma_t": 0.000960906, "albedo": 0.9, "g": 0.6,
+               "falloff": 0.0138629, "height": 0.0},
+    "sun": {"direction": SUN.tolist(), "irradiance": [3.2, 2.9, 2.4]},
+    "sky": {"type": "constant", "radiance": [0.2, 0.3, 0.5]},
+    "camera": {"origin": [0.0, 2.0, 0.0]},
+}
+CAMERA = np.array([0.0, 2.0, 0.0])
+ALBEDO_SKY = np.array([0.18, 0.27, 0.45])
+
+
+def scene(**medium):
+    """VALLEY with its medium dict replaced by ``medium``."""
+    p = copy.deepcopy(VALLEY)
+    p["medium"] = medium
+    return p
+
+
+def views(camera=CAMERA, min_y=0.0):
+    """World points (N, 3) seen from ``camera``: 200 directions x 8 distances (10 m to
+    100 km, the compare's sky distance), kept at or above ``min_y``."""
+    i = np.arange(200) + 0.5
+    y = 1.0 - 2.0 * i / 200
+    r = np.sqrt(1.0 - y * y)
+    a = i * math.pi * (3.0 - math.sqrt(5.0))
+    d = np.stack([r * np.cos(a), y, r * np.sin(a)], -1)
+    D = np.geomspace(10.0, 1.0e5, 8)
+    pts = (camera + d[:, None, :] * D[None, :, None]).reshape(-1, 3)
+    return pts[pts[:, 1] >= min_y]
+
+
+def physical_transmittance(params, camera, pts):
+    """Exact RGB transmittance (N, 3) of the scene's medium from camera to each point."""
+    m = medium_from_params(params["medium"])
+    v = pts - camera
+    D = np.linalg.norm(v, axis=-1)
+    d = v / D[:, None]
+    o = tuple(np.full(len(D), c) for c in camera)
+    return np.stack(m.transmittance(NP, o, tuple(d.T), D), -1)
+
+
+def check_finite(model, camera, pts):
+    for precision in ("float32", "float64"):
+        r = model.evaluate(camera, pts, precision=precision)
+        assert np.all(np.isfinite(r.inscatter)) and np.all(np.isfinite(r.transmittance)), precision
+        assert np.all(r.inscatter >= 0)
+
+
+# -- exact transmittance -------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["ue4", "hdrp", "filament"])
+def test_valley_transmittance_is_exact(name):
+    pts = views()
+    model = get(name).from_physical(VALLEY)
+    got = model.evaluate(CAMERA, pts, precision="float64").transmittance
+    np.testing.assert_allclose(got, physical_transmittance(VALLEY, CAMERA, pts), rtol=1e-9, atol=1e-14)
+    check_finite(model, CAMERA, pts)
+
+
+@pytest.mark.parametrize("name", ["ue4", "unity", "hdrp", "filament"])
+def test_homogeneous_transmittance_is_exact(name):
+    p = scene(profile="homogeneous", sigma_t=0.002, albedo=0.8, g=0.3)
+    pts = views(min_y=-1e9)[:800]
+    model = get(name).from_physical(p)
+    got = model.evaluate(CAMERA, pts, precision="float64").transmittance
+    np.testing.assert_allclose(got, physical_transmittance(p, CAMERA, pts), rtol=1e-9, atol=1e-14)
+    check_finite(model, CAMERA, pts)
+
+
+def test_ue4_two_layers_exact():
+    p = scene(profile="exponential", sigma_t=0.001, albedo=0.9, g=0.6, falloff=0.01, height=0.0,
+              density2=0.5, falloff2=0.05, height2=20.0)
+    pts = views()
+    model = get("ue4").from_physical(p)
+    got = model.evaluate(CAMERA, pts, precision="float64").transmittance
+    np.testing.assert_allclose(got, physical_transmittance(p, CAMERA, pts), rtol=1e-9, atol=1e-14)
+
+
+def test_hdrp_profile_exact_and_camera_below_fog_height():
+    p = scene(profile="hdrp", sigma_t=0.003, albedo=0.7, g=0.2, base_height=10.0, falloff=0.02)
+    pts = views(min_y=-1e9)
+    model = get("hdrp").from_physical(p)
+    np.testing.assert_allclose(model.evaluate(CAMERA, pts, precision="float64").transmittance,
+                               physical_transmittance(p, CAMERA, pts), rtol=1e-9, atol=1e-14)
+    # exponential layer referenced above the camera: HDRP's base goes down to the camera
+    q = scene(profile="exponential", sigma_t=0.001, falloff=0.01, height=50.0)
+    model = get("hdrp").from_physical(q)
+    assert model.params.baseHeight == pytest.approx(2.0)
+    pts = views()
+    pts = pts[pts[:, 1] >= 2.0]
+    np.testing.assert_allclose(model.evaluate(CAMERA, pts, precision="float64").transmittance,
+                               physical_transmittance(q, CAMERA, pts), rtol=1e-9, atol=1e-14)
+
+
+def test_box_exact():
+    p = scene(profile="box", sigma_t=0.05, albedo=0.9, g=0.0, bounds_min=[-30, 0, 20], bounds_max=[30, 15, 80])
+    pts = views(min_y=-1e9)
+    model = get("box").from_physical(p)
+    assert model.params.mode == "beer"
+    np.testing.assert_allclose(model.evaluate(CAMERA, pts, precision="float64").transmittance,
+                               physical_transmittance(p, CAMERA, pts), rtol=1e-9, atol=1e-14)
+    np.testing.assert_allclose(model.params.fog_color, ALBEDO_SKY)
+    check_finite(model, CAMERA, pts)
+
+
+def test_altitude_optical_depth_exact():
+    p = scene(profile="powerlaw", sigma_t=0.004, albedo=0.9, g=0.0, start=0.0, end=60.0, power=2.0)
+    pts = views()
+    model = get("altitude").from_physical(p)
+    tau = -np.log(physical_transmittance(p, CAMERA, pts))[:, 0]
+    got = model.path_integral(CAMERA, pts, precision="float64") * model.params._FogColor[3]
+    np.testing.assert_allclose(got, tau, rtol=1e-9, atol=1e-14)
+    # the blend is linear in optical depth (only that differs from Beer-Lambert)
+    T = model.evaluate(CAMERA, pts, precision="float64").transmittance[:, 0]
+    np.testing.assert_allclose(T, 1.0 - np.minimum(tau, 1.0), rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(model.params._FogColor[:3], ALBEDO_SKY)
+    check_finite(model, CAMERA, pts)
+
+
+def test_unity_valley_uses_density_at_camera():
+    pts = views()
+    model = get("unity").from_physical(VALLEY)
+    q = model.params
+    assert (q.fogMode, q.fog_coordinate) == ("exp", "distance")
+    assert q.fogDensity == pytest.approx(0.000960906 * math.exp(-0.0138629 * 2.0), rel=1e-12)
+    # exact for horizontal rays
+    flat = CAMERA + np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]) * np.array([[50.0], [5000.0]])
+    np.testing.assert_allclose(model.evaluate(CAMERA, flat, precision="float64").transmittance,
+                               physical_transmittance(VALLEY, CAMERA, flat), rtol=1e-9)
+    np.testing.assert_allclose(q.fogColor, ALBEDO_SKY)
+    check_finite(model, CAMERA, pts)
+
+
+# -- colours -------------------------------------------------------------------------
+
+def test_ue4_colours_from_fit():
+    from fogref.models.ue4 import FIT_DIRECTIONS, FIT_DISTANCES
+    from fogref.study.fit import PhysicalFog, fit_unreal, sample_views
+
+    q = get("ue4").from_physical(VALLEY).params
+    assert q.InscatteringLightDirection == pytest.approx(direction_to_unreal(SUN))
+    assert q.SunLuminance == 1.0 and q.StartDistance == 0.0 and q.FogMaxOpacity == 1.0
+    pf = PhysicalFog.from_params(VALLEY)
+    fit = fit_unreal(pf, sample_views(pf.camera, n_dirs=FIT_DIRECTIONS, distances=FIT_DISTANCES)).params
+    for k in ("FogInscatteringColor", "DirectionalInscatteringColor", "DirectionalInscatteringExponent",
+              "DirectionalInscatteringStartDistance"):
+        assert getattr(q, k) == pytest.approx(getattr(fit, k), rel=1e-9, abs=1e-12), k
+    # a low forward-scattering sun: a strong lobe, a sky-dominated isotropic colour
+    assert max(q.DirectionalInscatteringColor) > 0.1 and q.DirectionalInscatteringExponent > 1
+    np.testing.assert_allclose(q.FogInscatteringColor, ALBEDO_SKY, rtol=0.5)
+
+
+def test_filament_colours_and_lobe():
+    from fogref.study.fit import lobe_fit
+
+    q = get("filament").from_physical(VALLEY).params
+    np.testing.assert_allclose(q.color, ALBEDO_SKY)
+    lobe = lobe_fit(0.6, isotropic=False)
+    assert q.inScatteringSize == pytest.approx(lobe["exponent"])
+    np.testing.assert_allclose(q.lightDirection, SUN)
+    # light colour = albedo * E * T_sun(camera) * c, with T_sun in (0, 1) for this low sun
+    c = lobe["lobe"] / (4 * math.pi)
+    t_sun = np.asarray(q.lightColorIntensity[:3]) / (0.9 * np.array([3.2, 2.9, 2.4]) * c)
+    assert np.allclose(t_sun, t_sun[0]) and 0.3 < t_sun[0] < 1.0
+    assert q.lightColorIntensity[3] == 1.0
+
+
+def test_hdrp_colour():
+    q = get("hdrp").from_physical(VALLEY).params
+    np.testing.assert_allclose(np.asarray(q.color) * np.asarray(q.albedo), ALBEDO_SKY)
+    assert q.maxFogDistance >= 1e5
+
+
+@pytest.mark.parametrize("name", ["ue4", "unity", "hdrp", "filament"])
+def test_no_sun_no_sky(name):
+    p = copy.deepcopy(VALLEY)
+    p["sun"] = None
+    p["sky"] = None
+    model = get(name).from_physical(p)
+    r = model.evaluate(CAMERA, views(), precision="float64")
+    assert np.all(r.inscatter == 0) and np.all(np.isfinite(r.transmittance))
+
+
+def test_ue4_no_sun_colour_is_albedo_sky():
+    p = copy.deepcopy(VALLEY)
+    p["sun"] = None
+    q = get("ue4").from_physical(p).params
+    assert q.InscatteringLightDirection is None
+    np.testing.assert_allclose(q.FogInscatteringColor, ALBEDO_SKY)
+
+
+def test_filament_sun_below_horizon_has_no_lobe():
+    p = copy.deepcopy(VALLEY)
+    p["sun"]["direction"] = [0.3, -0.2, 0.9]
+    assert get("filament").from_physical(p).params.inScatteringSize < 0
+
+
+# -- through the compare factory -----------------------------------------------------
+
+def test_build_model_from_scene_with_override():
+    model = build_model(get("ue4"), {"FogMaxOpacity": 0.9}, VALLEY)
+    assert model.params.FogMaxOpacity == 0.9
+    assert model.params.FogDensity == pytest.approx(get("ue4").from_physical(VALLEY).params.FogDensity)
+    model = build_model(get("filament"), {"distance": 5.0}, VALLEY)
+    assert model.params.distance == 5.0 and model.params.inScatteringSize > 0
+
+
+# -- no counterpart ------------------------------------------------------------------
+
+BOX = {"profile": "box", "sigma_t": 0.01, "bounds_min": [-10, 0, -10], "bounds_max": [10, 10, 10]}
+HDRP = {"profile": "hdrp", "sigma_t": 0.01, "base_height": 0.0, "falloff": 0.02}
+POWER = {"profile": "powerlaw", "sigma_t": 0.01, "start": 0.0, "end": 50.0, "power": 2.0}
+EXP = {"profile": "exponential", "sigma_t": 0.01, "falloff": 0.01}
+BOUNDED_EXP = {**EXP, "bounds_min": [-10, 0, -10], "bounds_max": [10, 10, 10]}
+
+
+@pytest.mark.parametrize("name, medium", [
+    ("ue4", HDRP), ("ue4", POWER), ("ue4", BOX), ("ue4", BOUNDED_EXP),
+    ("unity", BOX), ("unity", BOUNDED_EXP),
+    ("hdrp", POWER), ("hdrp", BOX),
+    ("filament", HDRP), ("filament", POWER), ("filament", BOX),
+    ("altitude", EXP), ("altitude", HDRP), ("altitude", BOX),
+    ("box", EXP), ("box", POWER), ("box", BOUNDED_EXP),
+])
+def test_no_counterpart_raises_profile(name, medium):
+    with pytest.raises(ParameterError) as e:
+        get(name).from_physical(scene(**medium))
+    assert e.value.name == "profile"
+    assert "valley.xml: medium" in str(e.value) and "'profile'" in str(e.value)
+
+
+@pytest.mark.parametrize("name", ["hdrp", "filament"])
+def test_two_layers_raise(name):
+    p = scene(**EXP, density2=0.5, falloff2=0.05, height2=20.0)
+    with pytest.raises(ParameterError) as e:
+        get(name).from_physical(p)
+    assert e.value.name == "density2"
+
+
+@pytest.mark.parametrize("name", ["ue4", "unity", "hdrp", "filament"])
+def test_coloured_extinction_raises(name):
+    with pytest.raises(ParameterError) as e:
+        get(name).from_physical(scene(**{**EXP, "sigma_t": [0.01, 0.02, 0.03]}))
+    assert e.value.name == "sigma_t"
