@@ -13,10 +13,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-import fogref  # noqa: E402,F401  (LLVM, variant, plugins)
 import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
+
+import fogref  # noqa: E402,F401  (LLVM, variant, plugins)
 
 
 def timed_render(scene, spp: int, seed: int):

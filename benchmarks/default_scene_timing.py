@@ -18,7 +18,6 @@ import time
 from pathlib import Path
 
 
-
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--spp", type=int, default=64)

@@ -24,8 +24,9 @@ import json
 import time
 from pathlib import Path
 
-from _common import ROOT, kernel_profile, machine_info, median, mi, np, timed_render
 import _scenes as S
+from _common import ROOT, kernel_profile, machine_info, median, mi, np, timed_render
+
 from plugins.fogpath import FogPathIntegrator
 
 

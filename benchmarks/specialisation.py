@@ -32,8 +32,8 @@ import json
 import time
 from pathlib import Path
 
-from _common import ROOT, kernel_profile, machine_info, median, mi, np, timed_render
 import _scenes as S
+from _common import ROOT, kernel_profile, machine_info, median, mi, np, timed_render
 
 BASE = "two_layer"
 GENERAL = dict(fog_over={"albedo": 0.9, "layers": [(1.0, 0.04, 0.0), (1e-6, 0.002, 200.0)]},

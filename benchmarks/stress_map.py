@@ -23,16 +23,17 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(ROOT))
 
-import fogref  # noqa: E402,F401
 import matplotlib  # noqa: E402
+
+import fogref  # noqa: E402,F401
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import mpmath as mp  # noqa: E402
 from drjit.llvm import Float  # noqa: E402
+from test_media_stress import mp_exp_depth, mp_exp_sample  # noqa: E402
 
 from fogref.media import NP, ExpLayer, drjit_ops  # noqa: E402
-from test_media_stress import mp_exp_depth, mp_exp_sample  # noqa: E402
 
 D32 = drjit_ops(Float)
 FALLOFF = [0.0, 1e-6, 1e-3, 0.1, 10.0]

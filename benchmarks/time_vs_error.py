@@ -39,8 +39,8 @@ import math
 import time
 from pathlib import Path
 
-from _common import ROOT, dr, kernel_profile, machine_info, median, mi, np, timed_render  # noqa: F401
 import _scenes as S
+from _common import ROOT, dr, kernel_profile, machine_info, median, mi, np, timed_render  # noqa: F401
 
 LADDER = (1, 4, 16, 64, 256, 1024)
 REPEATS = {1: 5, 4: 5, 16: 5, 64: 3, 256: 2, 1024: 1}
@@ -252,7 +252,7 @@ def write_reports(res, args, outdir: Path):
 
 def summary_md(res, args) -> str:
     cfg = res["config"]
-    L = [f"# Time vs error: fogpath vs stock Mitsuba\n",
+    L = ["# Time vs error: fogpath vs stock Mitsuba\n",
          f"Command: `{cfg['command']}`  ",
          f"Machine: {cfg['machine']['cpu']}, {cfg['machine']['cores']} cores (shared), mitsuba "
          f"{cfg['machine']['mitsuba']}, drjit {cfg['machine']['drjit']}, `{cfg['machine']['variant']}`  ",

@@ -44,8 +44,13 @@ import mpmath as mp  # noqa: E402
 
 from fogref.media import NP  # noqa: E402
 from fogref.media.closed_form import exp_layer_optical_depth  # noqa: E402
-from fogref.models.ue4 import (FLT_EPSILON2, UE4FogParams, _line_integral_shared, fog_constants,  # noqa: E402
-                               unreal_to_sigma)
+from fogref.models.ue4 import (  # noqa: E402
+    FLT_EPSILON2,
+    UE4FogParams,
+    _line_integral_shared,
+    fog_constants,
+    unreal_to_sigma,
+)
 
 mp.mp.dps = 30
 OUT = ROOT / "reports" / "stress"
@@ -56,9 +61,9 @@ LN2 = math.log(2.0)
 TAU_VALID = 1e25
 
 try:  # Dr.Jit float32 twin (optional)
-    import fogref  # noqa: F401
     from drjit.llvm import Float
 
+    import fogref  # noqa: F401
     from fogref.media import drjit_ops
     D32 = drjit_ops(Float)
 except Exception as exc:  # pragma: no cover - no LLVM here

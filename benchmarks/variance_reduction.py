@@ -15,7 +15,6 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
-
 import time
 
 from _common import ROOT, dr, mi, np
@@ -49,7 +48,7 @@ def main():
             chunks.append(img)
         ref = np.mean(chunks, axis=0)
         rows = {"on": [], "off": []}
-        for integ, key in ((integ_on, "on"), (integ_off, "off")):
+        for integ in (integ_on, integ_off):
             mi.render(scene_on, integrator=integ, spp=1, seed=0)  # compile outside the timings
         for spp in ladder:
             for integ, key in ((integ_on, "on"), (integ_off, "off")):  # interleaved, side by side

@@ -21,12 +21,11 @@ import math
 
 import mpmath as mp
 import numpy as np
+from drjit.llvm import Float  # noqa: E402
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import fogref  # noqa: F401
-from drjit.llvm import Float  # noqa: E402
-
 from fogref.media import NP, ExpLayer, FogMedium, drjit_ops, single_scatter_sun  # noqa: E402
 
 D32 = drjit_ops(Float)

@@ -17,11 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-import fogref  # noqa: F401  (LLVM set-up before drjit)
-import drjit as dr  # noqa: E402
 from drjit.llvm import Float  # noqa: E402
 
+import fogref  # noqa: F401  (LLVM set-up before drjit)
 from fogref.media import NP, ExpLayer, HDRPLayer, PowerLawLayer, drjit_ops  # noqa: E402
 from fogref.media import closed_form as cf  # noqa: E402
 

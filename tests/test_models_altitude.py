@@ -6,8 +6,7 @@ import mpmath
 import numpy as np
 import pytest
 
-from fogref.media import NP
-from fogref.media import PowerLawLayer
+from fogref.media import NP, PowerLawLayer
 from fogref.models.altitude import AltitudeFog, AltitudeFogParams, altitude_to_medium
 
 f32 = np.float32

@@ -6,8 +6,7 @@ import mpmath
 import numpy as np
 import pytest
 
-from fogref.media import NP
-from fogref.media import HDRPLayer
+from fogref.media import NP, HDRPLayer
 from fogref.models.hdrp import HDRPFog, HDRPFogParams, hdrp_to_medium, medium_to_hdrp
 
 f32 = np.float32

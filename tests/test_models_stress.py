@@ -72,20 +72,30 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import pathlib
 import sys
 
 # (no FOGREF_NO_MITSUBA here: it would turn off the render tests for the whole session)
-
 import mpmath as mp  # noqa: E402
 import numpy as np  # noqa: E402
 from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
-from fogref.models import (AltitudeFog, AltitudeFogParams, BoxFog, BoxFogParams, FilamentFog,  # noqa: E402
-                           FilamentFogParams, HDRPFog, HDRPFogParams, SecondFogData, UE4ExponentialHeightFog,
-                           UE4FogParams, UnityBuiltinFog, UnityFogParams)
+from fogref.models import (  # noqa: E402
+    AltitudeFog,
+    AltitudeFogParams,
+    BoxFog,
+    BoxFogParams,
+    FilamentFog,
+    FilamentFogParams,
+    HDRPFog,
+    HDRPFogParams,
+    SecondFogData,
+    UE4ExponentialHeightFog,
+    UE4FogParams,
+    UnityBuiltinFog,
+    UnityFogParams,
+)
 from fogref.models.hdrp import LAYER_DEPTH_TO_H  # noqa: E402
 from fogref.models.ue4 import MAX_OBSERVER_HEIGHT_DIFFERENCE, sigma_to_unreal  # noqa: E402
 

@@ -7,8 +7,13 @@ import pytest
 
 from fogref.media import NP
 from fogref.models import get
-from fogref.models.ue4 import (SecondFogData, UE4ExponentialHeightFog, UE4FogParams, medium_to_ue4,
-                               ue4_to_medium)
+from fogref.models.ue4 import (
+    SecondFogData,
+    UE4ExponentialHeightFog,
+    UE4FogParams,
+    medium_to_ue4,
+    ue4_to_medium,
+)
 
 f32 = np.float32
 

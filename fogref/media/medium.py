@@ -17,13 +17,12 @@ multiply by ``sigma_t`` per channel) or distances.  Directions are unit vectors.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
-import functools
-
-from fogref.media import closed_form as cf
 from fogref.errors import ParameterError
+from fogref.media import closed_form as cf
 
 
 def _quiet(fn):

@@ -15,13 +15,19 @@ Every model: ``Model(params).evaluate(camera (3,), world_pos (..., 3),
 precision="float32" | "float64") -> FogResult`` in fogref's y-up metre frame.
 """
 
-from fogref.models.base import FogResult, as_points, available, get, register
 from fogref.models import altitude, box, filament, hdrp, ue4, unity_builtin  # noqa: F401  (registration)
 from fogref.models.altitude import AltitudeFog, AltitudeFogParams
+from fogref.models.base import FogResult, as_points, available, get, register
 from fogref.models.box import BoxFog, BoxFogParams
 from fogref.models.filament import FilamentFog, FilamentFogParams
 from fogref.models.hdrp import HDRPFog, HDRPFogParams
-from fogref.models.ue4 import SecondFogData, UE4ExponentialHeightFog, UE4FogParams, medium_to_ue4, ue4_to_medium
+from fogref.models.ue4 import (
+           SecondFogData,
+           UE4ExponentialHeightFog,
+           UE4FogParams,
+           medium_to_ue4,
+           ue4_to_medium,
+)
 from fogref.models.unity_builtin import UnityBuiltinFog, UnityFogParams
 
 __all__ = ["FogResult", "as_points", "available", "get", "register",

@@ -46,7 +46,7 @@ def split_channels(img: np.ndarray, names: list[str]) -> dict:
     """
     c = {n: img[..., i] for i, n in enumerate(names)}
     out = {}
-    for k, ch in enumerate("RGB"):
+    for ch in "RGB":
         T = c[f"T.{ch}"]
         ts = c[f"Tsurface.{ch}"]
         single, multiple = c[f"single.{ch}"], c[f"multiple.{ch}"]
