@@ -27,7 +27,7 @@ from pathlib import Path
 import _scenes as S
 from _common import ROOT, kernel_profile, machine_info, median, mi, np, timed_render
 
-from plugins.fogpath import FogPathIntegrator
+from fogref_plugins.fogpath import FogPathIntegrator
 
 
 class FogPathNoAOV(FogPathIntegrator):

@@ -1,12 +1,12 @@
-"""fogref's Mitsuba plugins, registered for the current variant by ``register()``."""
+"""fogref's Mitsuba plugins (installed as ``fogref_plugins``), registered for the current variant by ``register()``."""
 
 
 def register() -> None:
     """Register the fog media and the ``fogpath`` integrator with Mitsuba."""
     import mitsuba as mi
 
-    from plugins.fog_medium import register as register_media
-    from plugins.fogpath import FogPathIntegrator
+    from fogref_plugins.fog_medium import register as register_media
+    from fogref_plugins.fogpath import FogPathIntegrator
 
     register_media()
     mi.register_integrator("fogpath", lambda props: FogPathIntegrator(props))

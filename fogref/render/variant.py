@@ -32,7 +32,7 @@ def set_variant(name: str | None = None) -> str:
         except Exception as e:  # CUDA without a GPU, LLVM missing, ...
             raise FogrefError(f"cannot use Mitsuba variant '{name}': {e}") from e
     if name not in _registered:
-        import plugins
+        import fogref_plugins as plugins
 
         plugins.register()
         _registered.add(name)
