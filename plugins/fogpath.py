@@ -12,6 +12,10 @@
  * - hide_emitters
    - bool
    - Camera rays that escape see black instead of the sky. Default: false.
+ * - aovs
+   - bool
+   - Write the AOVs below (needed by ``fogref render``). Off, the integrator
+     returns radiance only and skips the G-buffer and the split. Default: true.
  * - sun_sampling
    - bool
    - Estimate the sun's single scattering along camera rays by sampling the
@@ -96,9 +100,10 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         self.rr_depth = int(props.get("rr_depth", 5))
         self.hide_emitters = bool(props.get("hide_emitters", False))
         self.sun_sampling = bool(props.get("sun_sampling", True))
+        self.aovs = bool(props.get("aovs", True))
 
     def aov_names(self):
-        return list(AOV_NAMES)
+        return list(AOV_NAMES) if self.aovs else []
 
     # ---------------------------------------------------------------- helpers
     @staticmethod
@@ -205,7 +210,8 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         si0 = scene.ray_intersect(ray, active)
         hit0 = si0.is_valid()
         T_cam = mi.Spectrum(1.0)
-        if dr.hint(fog is not None, mode="scalar"):
+        track = self.aovs  # trace-time: split L into parts and write the G-buffer
+        if dr.hint(track and fog is not None, mode="scalar"):
             T_cam = self._transmittance(fog, ops, ray.o, ray.d, dr.select(hit0, si0.t, ops.largest))
         L_sun_ss = mi.Spectrum(0.0)
         sun = self._scene_sun(scene) if (fog is not None and self.sun_sampling) else None
@@ -218,8 +224,10 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             p_ss = ray.o + ray.d * t_ss
             vis_ss = active & ~scene.ray_test(mi.Ray3f(p_ss, mi.Vector3f(*w_sun)), active)
             L_sun_ss = dr.select(vis_ss, mi.Spectrum(*w_ss), 0.0)
-        aov_g = [dr.select(hit0, si0.t, 0.0)] + [dr.select(hit0, si0.p[i], 0.0) for i in range(3)] \
-            + [ray.d[i] for i in range(3)] + [dr.select(hit0, 1.0, 0.0)]
+        aov_g = []
+        if dr.hint(track, mode="scalar"):
+            aov_g = [dr.select(hit0, si0.t, 0.0)] + [dr.select(hit0, si0.p[i], 0.0) for i in range(3)] \
+                + [ray.d[i] for i in range(3)] + [dr.select(hit0, 1.0, 0.0)]
 
         active &= has_lights  # no emitter: nothing to trace beyond the G-buffer
         si = si0  # the camera ray's intersection is reused by the first bounce
@@ -248,8 +256,9 @@ class FogPathIntegrator(mi.SamplingIntegrator):
                 Le = β * mis_weight(prev_pdf, dr.select(prev_delta, 0.0, em_pdf)) * ds.emitter.eval(si, em_active)
                 Le = dr.select(em_active, Le, 0.0)
                 L += Le
-                L_single += dr.select(bucket_single, Le, 0.0)
-                L_multi += dr.select(medium_first & ~bucket_single, Le, 0.0)
+                if dr.hint(track, mode="scalar"):
+                    L_single += dr.select(bucket_single, Le, 0.0)
+                    L_multi += dr.select(medium_first & ~bucket_single, Le, 0.0)
 
             # NEE and a new direction only where a longer path is allowed
             # (Mitsuba's convention: max_depth = 2 is single scattering)
@@ -291,8 +300,9 @@ class FogPathIntegrator(mi.SamplingIntegrator):
                     if dr.hint(use_sun_ss, mode="scalar"):  # the sun's share at depth 0 is estimated above
                         Ld = dr.select(ds_m.delta & (depth == 0), 0.0, Ld)
                     L += Ld
-                    L_single += dr.select(depth == 0, Ld, 0.0)
-                    L_multi += dr.select(depth > 0, Ld, 0.0)
+                    if dr.hint(track, mode="scalar"):
+                        L_single += dr.select(depth == 0, Ld, 0.0)
+                        L_multi += dr.select(depth > 0, Ld, 0.0)
                 wo_m, ph_w, ph_pdf_s = phase.sample(phase_ctx, mei, sampler.next_1d(med_active),
                                                     sampler.next_2d(med_active), med_active)
                 wo_next[med_active] = wo_m
@@ -316,7 +326,8 @@ class FogPathIntegrator(mi.SamplingIntegrator):
                     Ls *= dr.select(ds_s.delta, 1.0, mis_weight(ds_s.pdf, b_pdf))
                 Ls = dr.select(vis_s, Ls, 0.0)
                 L += Ls
-                L_multi += dr.select(medium_first, Ls, 0.0)
+                if dr.hint(track, mode="scalar"):
+                    L_multi += dr.select(medium_first, Ls, 0.0)
             bs, b_w = bsdf.sample(bsdf_ctx, si, sampler.next_1d(surf_active), sampler.next_2d(surf_active),
                                   surf_active)
             wo_next[surf_active] = si.to_world(bs.wo)
@@ -349,9 +360,11 @@ class FogPathIntegrator(mi.SamplingIntegrator):
 
         L += L_sun_ss
         L_single += L_sun_ss
-        L_tsurf = L - L_single - L_multi
-        aovs = [T_cam[0], T_cam[1], T_cam[2]]
-        for part in (L_tsurf, L_single, L_multi):
-            aovs += [part[0], part[1], part[2]]
-        aovs += aov_g
+        aovs = []
+        if dr.hint(track, mode="scalar"):
+            L_tsurf = L - L_single - L_multi
+            aovs = [T_cam[0], T_cam[1], T_cam[2]]
+            for part in (L_tsurf, L_single, L_multi):
+                aovs += [part[0], part[1], part[2]]
+            aovs += aov_g
         return L, mi.Bool(True), aovs
