@@ -1,7 +1,7 @@
 """Does sampling the sun's single scattering from its exact integrand pay off?
 
 fogpath with ``sun_sampling`` on vs off, side by side in one run, on the default
-valley and the open plane (96x54, max_depth 16): RMSE against a converged
+valley, the open plane and the two-layer scene (96x54, max_depth 16): RMSE against a converged
 reference (fogpath, 2048 spp, independent seeds) and wall time over an spp
 ladder.  The equal-error speed-up is the ratio of efficiencies
 ``1 / (RMSE^2 * time)`` (Monte Carlo error falls as 1/sqrt(time)), taken as the
@@ -21,7 +21,7 @@ from _common import ROOT, dr, mi, np
 
 from fogref.render.scene import load_scene
 
-SCENES = {"valley": "valley.xml", "open_plane": "open_plane.xml"}
+SCENES = {"valley": "valley.xml", "open_plane": "open_plane.xml", "two_layer_sun": "two_layer_sun.xml"}
 
 
 def build(name, sun_sampling, res):

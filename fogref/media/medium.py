@@ -245,3 +245,29 @@ class FogMedium:
             hit = (t < ops.largest) & (t0 + t <= t1) & (t1 >= t0)
             t = ops.where(hit, t0 + t, ops.largest)
         return t
+
+    @_quiet
+    def invert_optical_depth(self, ops, o, d, s, t_max, iterations: int = 16):
+        """Distance ``t`` in ``[0, t_max]`` where the shape optical depth reaches ``s``.
+
+        Unbounded media only.  One layer: the exact closed form.  Several layers:
+        Newton on ``tau(t) - s`` (``tau' = rho > 0``) started where it converges
+        monotonically: at 0 for rays that rise or stay level (``tau`` concave or
+        linear), at the upper bound ``min_l t_l`` for descending rays (``tau``
+        convex), ``t_l`` being where layer ``l`` alone reaches ``s``.  ``s`` must
+        lie in ``[0, tau(t_max)]``.
+        """
+        oy, dy = o[1], d[1]
+        hi = ops.minimum(t_max, ops.largest)
+        for L in self.layers:
+            hi = ops.minimum(hi, L.sample(ops, oy, dy, s))
+        if len(self.layers) == 1:
+            return hi
+        t = ops.where(dy < 0, hi, 0.0 * hi)
+        for _ in range(iterations):
+            f = self._layers_depth(ops, oy, dy, t) - s
+            rho = 0.0
+            for L in self.layers:
+                rho = rho + L.rho(ops, oy + t * dy)
+            t = ops.minimum(ops.maximum(t - f / ops.maximum(rho, 1e-30), 0.0), hi)
+        return t

@@ -82,9 +82,10 @@ def sample_sun_single_scatter(ops, medium, o, d, D, w, E, u, channel):
 
     Multiply the weights by the sun's geometric visibility at ``o + t d`` and the
     estimate of each channel is unbiased for :func:`single_scatter_sun`; without
-    occluders it is exact (zero variance).  Valid for one exponential layer with
-    ``falloff > 0``, no bounds and the sun above the horizon (``w_y > 0``); the
-    caller checks (see :func:`sun_sampling_applies`).
+    occluders it is exact (zero variance).  Valid for exponential layers with
+    ``falloff > 0`` (one layer: closed-form inversion; several: Newton, see
+    :meth:`FogMedium.invert_optical_depth`), no bounds and the sun above the
+    horizon (``w_y > 0``); the caller checks (see :func:`sun_sampling_applies`).
 
     Per channel, with ``x = sigma_c tau(t)``, ``X = sigma_c tau(D)`` and
     ``m = 1 - d_y / w_y``, the integrand is proportional to ``exp(-m x) dx``: its
@@ -93,7 +94,6 @@ def sample_sun_single_scatter(ops, medium, o, d, D, w, E, u, channel):
     The channel used for sampling (``channel`` in {0,1,2}, uniform) is combined
     by one-sample MIS: ``weights_c = CF_c pdf_c(t) / mean_k pdf_k(t)``.
     """
-    (L,) = medium.layers
     wy = float(w[1])
     m = 1.0 - d[1] / wy
     tau_D = medium.optical_depth(ops, o, d, D)
@@ -108,7 +108,7 @@ def sample_sun_single_scatter(ops, medium, o, d, D, w, E, u, channel):
     x_neg = X + ops.log(ops.maximum(u + (1.0 - u) * ops.exp(-abs_m * X), 1e-37)) / abs_m
     x = ops.where(mX < -20.0, x_neg, x_pos)
     x = ops.minimum(ops.maximum(x, 0.0), X)
-    t = L.sample(ops, o[1], d[1], x / ops.maximum(s_ch, 1e-30))
+    t = medium.invert_optical_depth(ops, o, d, x / ops.maximum(s_ch, 1e-30), D)
     t = ops.minimum(t, D)
     tau_t = medium.optical_depth(ops, o, d, t)
     # log pdf_c(t) / rho(t) for each channel
@@ -128,5 +128,5 @@ def sun_sampling_applies(medium, w) -> bool:
     """Whether :func:`sample_sun_single_scatter` handles this medium and sun (trace-time)."""
     from fogref.media.medium import ExpLayer
 
-    return (medium.bounds is None and len(medium.layers) == 1 and isinstance(medium.layers[0], ExpLayer)
-            and medium.layers[0].falloff > 0 and float(w[1]) > 0 and medium.scatters)
+    return (medium.bounds is None and all(isinstance(L, ExpLayer) and L.falloff > 0 for L in medium.layers)
+            and float(w[1]) > 0 and medium.scatters)
