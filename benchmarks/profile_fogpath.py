@@ -26,7 +26,6 @@ from pathlib import Path
 
 import _scenes as S
 from _common import ROOT, kernel_profile, machine_info, median, mi, np, timed_render
-
 from fogref_plugins.fogpath import FogPathIntegrator
 
 

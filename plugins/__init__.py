@@ -4,7 +4,6 @@
 def register() -> None:
     """Register the fog media and the ``fogpath`` integrator with Mitsuba."""
     import mitsuba as mi
-
     from fogref_plugins.fog_medium import register as register_media
     from fogref_plugins.fogpath import FogPathIntegrator
 

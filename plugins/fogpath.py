@@ -21,7 +21,12 @@
    - Estimate the sun's single scattering along camera rays by sampling the
      exact single-scattering integrand (zero variance without shadows); the
      first medium vertex then skips sun NEE. Used when the fog is one unbounded
-     exponential layer and the sun is above the horizon. Default: true.
+     exponential layer (see ``sun_sampling_layers``) and the sun is above the
+     horizon. Default: true.
+ * - sun_sampling_layers
+   - int
+   - Most layers for which ``sun_sampling`` is used (several layers need a
+     Newton inversion, which did not pay off in the benchmark). Default: 1.
 
 What it does:
 
@@ -100,6 +105,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         self.rr_depth = int(props.get("rr_depth", 5))
         self.hide_emitters = bool(props.get("hide_emitters", False))
         self.sun_sampling = bool(props.get("sun_sampling", True))
+        self.sun_sampling_layers = int(props.get("sun_sampling_layers", 1))
         self.aovs = bool(props.get("aovs", True))
 
     def aov_names(self):
@@ -215,7 +221,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             T_cam = self._transmittance(fog, ops, ray.o, ray.d, dr.select(hit0, si0.t, ops.largest))
         L_sun_ss = mi.Spectrum(0.0)
         sun = self._scene_sun(scene) if (fog is not None and self.sun_sampling) else None
-        use_sun_ss = sun is not None and sun_sampling_applies(fog._obj, sun[1]) and self.max_depth >= 2
+        use_sun_ss = sun is not None and sun_sampling_applies(fog._obj, sun[1], self.sun_sampling_layers) and self.max_depth >= 2
         if dr.hint(use_sun_ss, mode="scalar"):
             _, w_sun, E_sun, _ = sun
             D0 = dr.select(hit0, si0.t, ops.largest)

@@ -124,9 +124,16 @@ def sample_sun_single_scatter(ops, medium, o, d, D, w, E, u, channel):
     return t, weights
 
 
-def sun_sampling_applies(medium, w) -> bool:
-    """Whether :func:`sample_sun_single_scatter` handles this medium and sun (trace-time)."""
+def sun_sampling_applies(medium, w, max_layers: int = 1) -> bool:
+    """Whether :func:`sample_sun_single_scatter` handles this medium and sun (trace-time).
+
+    ``max_layers``: fogpath uses it for one layer only by default: with two
+    layers the Newton inversion costs more time than the variance it removes
+    (``reports/benchmarks/variance_reduction.md``: 0.84x at equal error on the
+    two-layer scene, 4.4x on the one-layer valley).
+    """
     from fogref.media.medium import ExpLayer
 
-    return (medium.bounds is None and all(isinstance(L, ExpLayer) and L.falloff > 0 for L in medium.layers)
+    return (medium.bounds is None and len(medium.layers) <= max_layers
+            and all(isinstance(L, ExpLayer) and L.falloff > 0 for L in medium.layers)
             and float(w[1]) > 0 and medium.scatters)
