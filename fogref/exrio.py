@@ -22,12 +22,11 @@ Header attributes are strings prefixed ``fogref.`` (JSON where structured):
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from fogref.atomic import atomic_write
 from fogref.errors import FogrefError
 
 GROUPS = ("", "T.", "inscatter.", "surface.", "single.", "multiple.")
@@ -48,16 +47,12 @@ def write_exr(path, channels: dict, attrs: dict | None = None) -> None:
     for k, v in (attrs or {}).items():
         header[k] = v if isinstance(v, str) else json.dumps(v)
     chans = {k: np.ascontiguousarray(np.nan_to_num(np.asarray(v, dtype=np.float32))) for k, v in channels.items()}
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp.exr", dir=path.parent)
-    os.close(fd)
-    try:
+
+    def write(tmp):
         with OpenEXR.File(header, chans) as f:
             f.write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+
+    atomic_write(path, write)
 
 
 def read_exr(path) -> tuple[dict, dict]:

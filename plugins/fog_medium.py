@@ -42,8 +42,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from fogref.errors import ParameterError
-from fogref.media import NP, drjit_ops  # noqa: F401  (NP used by medium_from_params callers)
+from fogref.media import drjit_ops
 from fogref.render.params import medium_from_params
 
 
@@ -133,4 +132,4 @@ def register() -> None:
     mi.register_medium("heightfog", lambda props: HeightFogMedium(props))
 
 
-__all__ = ["HeightFogMedium", "register", "ParameterError"]
+__all__ = ["HeightFogMedium", "register"]

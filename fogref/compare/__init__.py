@@ -9,7 +9,6 @@ Modules (one concept each):
 * :mod:`~fogref.compare.plots`         heatmaps, side-by-side pictures, binned plots
 * :mod:`~fogref.compare.tonemap`       the shared display tone map
 * :mod:`~fogref.compare.model_factory` build a model from ``--param`` / ``--from-scene``
-* :mod:`~fogref.compare.atomic`        atomic writes of report files
 
 Command line (added to fogref's CLI by :func:`add_cli`)::
 

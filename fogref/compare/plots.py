@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fogref.compare.atomic import save_figure_atomic
+from fogref.atomic import save_figure_atomic
 from fogref.compare.metrics import ErrorMaps
 from fogref.compare.tonemap import tone_map
 

@@ -47,8 +47,8 @@ from pathlib import Path
 
 import numpy as np
 
+from fogref.atomic import write_text_atomic
 from fogref.compare import metrics as M
-from fogref.compare.atomic import write_text_atomic
 from fogref.compare.binning import angle_edges, binned_errors, log_distance_edges
 from fogref.compare.ground_truth import GroundTruth, load_ground_truth
 from fogref.compare.model_factory import current_parameters

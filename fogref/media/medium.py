@@ -25,8 +25,9 @@ from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
 
 
-def _quiet(fn):
-    """Silence numpy's overflow warnings: the closed forms saturate on purpose."""
+def quiet_numpy(fn):
+    """Method decorator: silence numpy's overflow warnings (the closed forms
+    saturate on purpose).  Shared by every height profile."""
 
     @functools.wraps(fn)
     def wrapper(self, ops, *args, **kw):
@@ -34,6 +35,15 @@ def _quiet(fn):
             return fn(self, ops, *args, **kw)
 
     return wrapper
+
+
+
+
+def check_layer_param(src, i, name, v, lo, hi):
+    """Raise ParameterError naming ``layer{i}.{name}`` unless ``lo <= v <= hi`` (finite)."""
+    v = float(v)
+    if not math.isfinite(v) or not (lo <= v <= hi):
+        raise ParameterError(src, f"layer{i}.{name}", f"value {v} outside [{lo}, {hi}]")
 
 
 @dataclass(frozen=True)
@@ -54,26 +64,25 @@ class ExpLayer:
     height: float = 0.0
 
     def validate(self, src, i):
-        for name, v, lo, hi in (("density", self.density, 0.0, 1e6), ("falloff", self.falloff, 0.0, 1e3),
-                                ("height", self.height, -1e7, 1e7)):
-            if not (lo <= v <= hi) or not math.isfinite(v):
-                raise ParameterError(src, f"layer{i}.{name}", f"value {v} outside [{lo}, {hi}]")
+        check_layer_param(src, i, "density", self.density, 0.0, 1e6)
+        check_layer_param(src, i, "falloff", self.falloff, 0.0, 1e3)
+        check_layer_param(src, i, "height", self.height, -1e7, 1e7)
 
     def log_c(self, ops, oy):
         log_density = math.log(self.density) if self.density > 0 else -1.0e4
         return log_density - self.falloff * (oy - self.height)
 
-    @_quiet
+    @quiet_numpy
     def rho(self, ops, y):
         """Relative density at height y (dimensionless)."""
         return ops.exp(ops.minimum(self.log_c(ops, y), ops.exp_limit))
 
-    @_quiet
+    @quiet_numpy
     def depth(self, ops, oy, dy, t):
         """Shape optical depth [m] over ``[0, t]`` along a ray (t = ops.largest: infinity)."""
         return cf.exp_layer_optical_depth(ops, self.log_c(ops, oy), self.falloff * dy, t)
 
-    @_quiet
+    @quiet_numpy
     def sample(self, ops, oy, dy, s):
         """Distance [m] where the shape optical depth reaches ``s``; ops.largest if never."""
         return cf.exp_layer_sample(ops, self.log_c(ops, oy), self.falloff * dy, s)
@@ -152,7 +161,7 @@ class FogMedium:
         return all(getattr(L, "falloff", None) == 0 for L in self.layers)
 
     # -- relative density ----------------------------------------------------
-    @_quiet
+    @quiet_numpy
     def density(self, ops, p):
         """Relative density rho(p) (dimensionless); ``sigma_t * rho`` is 1/m."""
         y = p[1]
@@ -171,7 +180,7 @@ class FogMedium:
         return m
 
     # -- clipping to the box -------------------------------------------------
-    @_quiet
+    @quiet_numpy
     def clip(self, ops, o, d):
         """Ray interval ``[t0, t1]`` (t0 >= 0) inside the bounds; ``t1 < t0`` if none."""
         if self.bounds is None:
@@ -200,7 +209,7 @@ class FogMedium:
             tau = tau + L.depth(ops, oy, dy, t)
         return ops.minimum(tau, cf.TAU_MAX)
 
-    @_quiet
+    @quiet_numpy
     def optical_depth(self, ops, o, d, t):
         """Shape optical depth [m] over ``[0, t]`` (``t = ops.largest``: to infinity)."""
         if self.bounds is None:
@@ -212,7 +221,7 @@ class FogMedium:
         tau = self._layers_depth(ops, oy, d[1], length)
         return ops.where(length > 0, tau, 0.0)
 
-    @_quiet
+    @quiet_numpy
     def transmittance(self, ops, o, d, t):
         """RGB transmittance over ``[0, t]`` as a 3-tuple of arrays."""
         tau = self.optical_depth(ops, o, d, t)
@@ -223,7 +232,7 @@ class FogMedium:
         return self.optical_depth(ops, p, w, ops.largest)
 
     # -- free-flight sampling ------------------------------------------------
-    @_quiet
+    @quiet_numpy
     def sample_distance(self, ops, o, d, exp_variates, sigma):
         """Exact free-flight distance for extinction ``sigma * rho`` [1/m].
 
@@ -246,7 +255,7 @@ class FogMedium:
             t = ops.where(hit, t0 + t, ops.largest)
         return t
 
-    @_quiet
+    @quiet_numpy
     def invert_optical_depth(self, ops, o, d, s, t_max, iterations: int = 16):
         """Distance ``t`` in ``[0, t_max]`` where the shape optical depth reaches ``s``.
 

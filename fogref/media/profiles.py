@@ -40,29 +40,16 @@ inverse is ``L = sigma h(w, q)``, ``sigma = s / (density u_a^p)``,
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 
 from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
+from fogref.media.medium import check_layer_param, quiet_numpy
 
 __all__ = ["HDRPLayer", "PowerLawLayer"]
 
 
-def _quiet(fn):
-    @functools.wraps(fn)
-    def wrapper(self, ops, *args, **kw):
-        with ops.errstate():
-            return fn(self, ops, *args, **kw)
-
-    return wrapper
-
-
-def _check(src, i, name, v, lo, hi):
-    v = float(v)
-    if not math.isfinite(v) or not (lo <= v <= hi):
-        raise ParameterError(src, f"layer{i}.{name}", f"value {v} outside [{lo}, {hi}]")
 
 
 def _crossing(ops, oy, dy, y):
@@ -96,9 +83,9 @@ class HDRPLayer:
     falloff: float = 0.0
 
     def validate(self, src, i):
-        _check(src, i, "density", self.density, 0.0, 1e6)
-        _check(src, i, "base_height", self.base_height, -1e7, 1e7)
-        _check(src, i, "falloff", self.falloff, 0.0, 1e3)
+        check_layer_param(src, i, "density", self.density, 0.0, 1e6)
+        check_layer_param(src, i, "base_height", self.base_height, -1e7, 1e7)
+        check_layer_param(src, i, "falloff", self.falloff, 0.0, 1e3)
 
     @property
     def _log_density(self):
@@ -108,7 +95,7 @@ class HDRPLayer:
         """log of the exponential piece's density at ``y`` (valid for y >= base)."""
         return self._log_density - self.falloff * (y - self.base_height)
 
-    @_quiet
+    @quiet_numpy
     def rho(self, ops, y):
         """Relative density at height y."""
         h = ops.maximum(y - self.base_height, 0.0)
@@ -120,7 +107,7 @@ class HDRPLayer:
         below0 = oy <= self.base_height
         return t_b, below0, dy > 0, dy < 0
 
-    @_quiet
+    @quiet_numpy
     def depth(self, ops, oy, dy, t):
         """Shape optical depth [m] over ``[0, t]`` (``t = ops.largest``: infinity)."""
         L = ops.largest
@@ -145,7 +132,7 @@ class HDRPLayer:
         tau_e = ops.where(len_e > 0, tau_e, 0.0)
         return ops.minimum(tau_c + tau_e, cf.TAU_MAX)
 
-    @_quiet
+    @quiet_numpy
     def sample(self, ops, oy, dy, s):
         """Distance [m] where the shape optical depth reaches ``s``; ops.largest if never."""
         L = ops.largest
@@ -191,10 +178,10 @@ class PowerLawLayer:
     power: float = 1.0
 
     def validate(self, src, i):
-        _check(src, i, "density", self.density, 0.0, 1e6)
-        _check(src, i, "start", self.start, -1e7, 1e7)
-        _check(src, i, "end", self.end, -1e7, 1e7)
-        _check(src, i, "power", self.power, 0.0, 100.0)
+        check_layer_param(src, i, "density", self.density, 0.0, 1e6)
+        check_layer_param(src, i, "start", self.start, -1e7, 1e7)
+        check_layer_param(src, i, "end", self.end, -1e7, 1e7)
+        check_layer_param(src, i, "power", self.power, 0.0, 100.0)
         if not self.end > self.start:
             raise ParameterError(src, f"layer{i}.end",
                                  f"value {float(self.end)} outside [start={float(self.start)}, 1e7]"
@@ -207,7 +194,7 @@ class PowerLawLayer:
     def _u(self, ops, y):
         return ops.minimum(ops.maximum((self.end - y) / self._H, 0.0), 1.0)
 
-    @_quiet
+    @quiet_numpy
     def rho(self, ops, y):
         """Relative density at height y."""
         u = self._u(ops, y)
@@ -238,7 +225,7 @@ class PowerLawLayer:
         val = ops.minimum(length, L) * _pow(ops, u_hi, p) * g
         return ops.where((length > 0) & (gap > 0), ops.minimum(val, L), 0.0)
 
-    @_quiet
+    @quiet_numpy
     def depth(self, ops, oy, dy, t):
         """Shape optical depth [m] over ``[0, t]`` (``t = ops.largest``: infinity)."""
         L = ops.largest
@@ -302,7 +289,7 @@ class PowerLawLayer:
         t = ops.where((dy > 0) & (lw >= 0.0), L, t)
         return ops.where(sig > 0, t, 0.0)
 
-    @_quiet
+    @quiet_numpy
     def sample(self, ops, oy, dy, s):
         """Distance [m] where the shape optical depth reaches ``s``; ops.largest if never."""
         L = ops.largest

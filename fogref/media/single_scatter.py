@@ -21,7 +21,7 @@ from fogref.media import closed_form as cf
 from fogref.media.closed_form import phi, psi
 
 
-def single_scatter_sun(ops, medium, o, d, D, w, E):
+def single_scatter_sun(ops, medium, o, d, D, w, E, tau=None):
     """Single-scattered sun radiance along ``[0, D]`` of ``o + t d`` (RGB tuple).
 
     medium: :class:`~fogref.media.FogMedium` without bounds.
@@ -29,6 +29,8 @@ def single_scatter_sun(ops, medium, o, d, D, w, E):
     D:      distance to the first surface [m] (``ops.largest`` for the sky).
     w:      unit direction toward the sun (a 3-tuple of floats).
     E:      RGB sun irradiance on a plane facing the sun [W/m^2 or any unit].
+    tau:    optional shape optical depth over ``[0, D]`` when the caller has it
+            (saves recomputing it; default: computed here).
 
     Returns radiance in E's unit per steradian, no occlusion, no sky.  Zero when
     the sun is at or below the horizon (``w_y <= 0``) or a layer is homogeneous
@@ -42,7 +44,8 @@ def single_scatter_sun(ops, medium, o, d, D, w, E):
         return (zero, zero, zero)
     cos_theta = d[0] * w[0] + d[1] * w[1] + d[2] * w[2]
     phase = cf.hg_phase(ops, cos_theta, medium.g)
-    tau = medium.optical_depth(ops, o, d, D)
+    if tau is None:
+        tau = medium.optical_depth(ops, o, d, D)
     tau_sun_o = medium.sun_optical_depth(ops, o, w)
     m = 1.0 - d[1] / wy
     tau_sun_end = medium.sun_optical_depth(ops, tuple(o[i] + D * d[i] for i in range(3)), w)
@@ -119,8 +122,8 @@ def sample_sun_single_scatter(ops, medium, o, d, D, w, E, u, channel):
     lmax = ops.maximum(ops.maximum(logs[0], logs[1]), logs[2])
     r = [ops.exp(lc - lmax) for lc in logs]
     mean_r = (r[0] + r[1] + r[2]) / 3.0
-    cf = single_scatter_sun(ops, medium, o, d, D, w, E)
-    weights = tuple(ops.where((mean_r > 0) & (tau_D > 0), cf_c * rc / mean_r, 0.0) for cf_c, rc in zip(cf, r))
+    closed = single_scatter_sun(ops, medium, o, d, D, w, E, tau=tau_D)
+    weights = tuple(ops.where((mean_r > 0) & (tau_D > 0), cf_c * rc / mean_r, 0.0) for cf_c, rc in zip(closed, r))
     return t, weights
 
 

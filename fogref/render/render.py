@@ -11,13 +11,12 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
+from fogref.atomic import atomic_write, savez_atomic
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 
@@ -31,10 +30,8 @@ def pass_seed(seed: int, k: int) -> int:
 
 
 def _atomic_savez(path: Path, **arrays):
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp.npz", dir=path.parent)
-    os.close(fd)
-    np.savez(tmp, **arrays)
-    os.replace(tmp, path)
+    """The checkpoint writer (a seam: the resume test interrupts the run here)."""
+    savez_atomic(path, **arrays)
 
 
 def split_channels(img: np.ndarray, names: list[str]) -> dict:
@@ -75,10 +72,7 @@ def tonemap_png(rgb: np.ndarray, path: Path, exposure: float | None = None) -> f
         m = float(np.mean(lum))
         exposure = 0.18 / m if m > 0 else 1.0
     img = np.clip(colour.cctf_encoding(np.clip(rgb * exposure, 0, None), function="sRGB"), 0, 1)
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp.png", dir=path.parent)
-    os.close(fd)
-    plt.imsave(tmp, img, format="png")
-    os.replace(tmp, path)
+    atomic_write(path, lambda tmp: plt.imsave(tmp, img, format="png"))
     return exposure
 
 

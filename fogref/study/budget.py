@@ -315,7 +315,7 @@ def plot(result: dict, path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from fogref.study._io import save_figure
+    from fogref.atomic import save_figure_atomic as save_figure
 
     steps = result["steps"]
     labels = [f"[{s['effect']}] {s['label']}" for s in steps]

@@ -439,7 +439,8 @@ def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -
     import json
     from pathlib import Path
 
-    from fogref.study._io import save_figure, write_text
+    from fogref.atomic import save_figure_atomic as save_figure
+    from fogref.atomic import write_text_atomic as write_text
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -25,9 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
+from fogref.atomic import write_text_atomic as write_text
 from fogref.errors import FogrefError
 from fogref.study import budget as B
-from fogref.study._io import write_text
 from fogref.study.fit import PhysicalFog, fit_unreal, sample_views
 
 #: What-if variants of the engine settings (Unreal units, cm).

@@ -1,8 +1,10 @@
-"""Atomic file writes for report outputs: a file appears only when complete.
+"""Atomic file writes: a file appears only when complete.
 
 Each writer writes a temporary file in the destination folder, then renames it
 over the destination (``os.replace``, atomic on POSIX within one file system).
-EXR files use :func:`fogref.exrio.write_exr`, which is atomic already.
+Every fogref output goes through :func:`atomic_write`: EXRs
+(:func:`fogref.exrio.write_exr`), render checkpoints and previews, report text
+and figures.
 """
 
 from __future__ import annotations
@@ -12,7 +14,12 @@ import tempfile
 from pathlib import Path
 
 
-def _atomic(path, write) -> Path:
+def atomic_write(path, write) -> Path:
+    """Call ``write(tmp_path)`` then rename the temporary file onto ``path``.
+
+    The temporary file keeps ``path``'s suffix (writers that infer the format
+    from it still work) and is removed if ``write`` fails.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp" + path.suffix, dir=path.parent)
@@ -29,10 +36,17 @@ def _atomic(path, write) -> Path:
 
 def write_text_atomic(path, text: str) -> Path:
     """Write ``text`` (UTF-8) to ``path`` atomically; returns the path."""
-    return _atomic(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
+    return atomic_write(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
 
 
 def save_figure_atomic(figure, path, dpi: int = 110) -> Path:
     """Save a matplotlib ``Figure`` to ``path`` (format from the suffix) atomically."""
     fmt = Path(path).suffix.lstrip(".") or "png"
-    return _atomic(path, lambda tmp: figure.savefig(tmp, format=fmt, dpi=dpi, bbox_inches="tight"))
+    return atomic_write(path, lambda tmp: figure.savefig(tmp, format=fmt, dpi=dpi, bbox_inches="tight"))
+
+
+def savez_atomic(path, **arrays) -> Path:
+    """``numpy.savez`` to ``path`` atomically (``path`` should end in ``.npz``)."""
+    import numpy as np
+
+    return atomic_write(path, lambda tmp: np.savez(tmp, **arrays))
