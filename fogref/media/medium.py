@@ -243,7 +243,10 @@ class FogMedium:
         """
         t0, t1 = (0.0, ops.largest) if self.bounds is None else self.clip(ops, o, d)
         if self.bounds is not None:
-            t0 = ops.where(t1 >= t0, t0, 0.0)
+            # A ray that misses the box must never collide: decide that from the
+            # clipped interval itself, before t0 is reset for the inversion below.
+            meets_box = t1 >= t0
+            t0 = ops.where(meets_box, t0, 0.0)
         oy = o[1] + t0 * d[1] if self.bounds is not None else o[1]
         inv_sigma = 1.0 / ops.maximum(sigma, 1e-30)
         t = ops.largest
@@ -251,7 +254,7 @@ class FogMedium:
             tl = L.sample(ops, oy, d[1], e * inv_sigma)
             t = ops.minimum(t, tl)
         if self.bounds is not None:
-            hit = (t < ops.largest) & (t0 + t <= t1) & (t1 >= t0)
+            hit = (t < ops.largest) & (t0 + t <= t1) & meets_box
             t = ops.where(hit, t0 + t, ops.largest)
         return t
 
