@@ -1,0 +1,384 @@
+"""The ground-truth schema: its channel groups, declared once, and its one reader.
+
+A fogref ground truth is one multi-channel float32 EXR.  Every part of it, the
+integrator's per-sample outputs, the EXR writer, ``compare``, ``study`` and the
+README table derive from :data:`GROUPS` below; :func:`load_truth` is the one
+reader and :class:`Truth` the one object the rest of fogref sees.
+
+Parts (``(H, W, 3)`` linear RGB unless noted) and their identities::
+
+    final              = attenuated_surface + inscatter          (per pixel, exactly)
+    inscatter          = single + multiple                       (per pixel, exactly)
+    attenuated_surface ~ T * surface                             (each estimated directly)
+
+``surface`` (the radiance of the first surface or of the sky, before the fog
+attenuates it) is a ratio estimator over the samples whose camera ray reached the
+surface without scattering: it is bounded by the surface radiance itself and is
+*undefined* where ``surface_coverage == 0`` (no such sample; it is written as 0
+there).  No part is ever divided by ``T``.
+
+Each Monte Carlo part carries its per-pixel standard error in
+``stderr.<part>.R,G,B`` (``stderr.R,G,B`` for the total), computed from the
+per-sample second moments (the delta method for the ratio ``surface``).
+
+Examples
+--------
+>>> [g.name for g in GROUPS][:4]
+['final', 'T', 'attenuated_surface', 'inscatter']
+>>> channel_names("inscatter")
+['inscatter.R', 'inscatter.G', 'inscatter.B']
+>>> channel_names("final"), channel_names("hit")
+(['R', 'G', 'B'], ['hit'])
+>>> stderr_names("final")
+['stderr.R', 'stderr.G', 'stderr.B']
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from fogref.errors import FogrefError
+
+#: Version of the channel layout below; stored in the header as ``fogref.schema``.
+SCHEMA_VERSION = 2
+RGB = ("R", "G", "B")
+XYZ = ("X", "Y", "Z")
+
+
+@dataclass(frozen=True)
+class Group:
+    """One channel group of the ground truth.
+
+    name:       the group's name (``final`` is written as bare ``R,G,B``).
+    components: ``("R","G","B")``, ``("X","Y","Z")`` or ``()`` for one scalar channel.
+    meaning:    one line for the docs (units in brackets).
+    noisy:      a Monte Carlo part: it has ``stderr.`` channels.
+    """
+
+    name: str
+    components: tuple
+    meaning: str
+    noisy: bool = False
+
+    @property
+    def prefix(self) -> str:
+        return "" if self.name == "final" else self.name + "."
+
+
+#: Every group of the ground-truth EXR, in the order the README lists them.
+GROUPS: tuple[Group, ...] = (
+    Group("final", RGB, "total radiance = attenuated_surface + inscatter", True),
+    Group("T", RGB, "camera-ray transmittance to the first surface (or to infinity), closed form", True),
+    Group("attenuated_surface", RGB, "surface (or sky) radiance as it reaches the camera through the fog", True),
+    Group("inscatter", RGB, "radiance the medium adds = single + multiple", True),
+    Group("single", RGB, "direct sun and sky light scattered once, at the first medium vertex", True),
+    Group("multiple", RGB, "everything else the medium adds", True),
+    Group("surface", RGB, "surface (or sky) radiance before the fog; defined where surface_coverage > 0", True),
+    Group("surface_coverage", (), "fraction of samples whose camera ray reached the surface or sky unscattered"),
+    Group("distance", (), "distance from the camera to the first surface [m]; 0 for sky"),
+    Group("P", XYZ, "world position of the first surface [m]; 0 for sky"),
+    Group("view", XYZ, "unit camera-ray direction (world, y-up)"),
+    Group("hit", (), "fraction of samples whose camera ray hits a surface (0 or 1 when pixel-exact)"),
+)
+_BY_NAME = {g.name: g for g in GROUPS}
+#: The radiance-like parts compared against models (each ``(H, W, 3)``).
+PARTS: tuple[str, ...] = tuple(g.name for g in GROUPS if g.components == RGB)
+#: What the integrator writes per sample (besides R,G,B), in this order:
+#: the parts above with ``surface`` as the unattenuated sample (0 where it did
+#: not reach the surface), then the coverage indicator and the G-buffer.
+SAMPLE_GROUPS: tuple[str, ...] = ("T", "attenuated_surface", "inscatter", "single", "multiple", "surface",
+                                  "surface_coverage", "distance", "P", "view", "hit")
+#: Per-sample groups whose second moments the renderer accumulates.
+SQUARED_GROUPS: tuple[str, ...] = ("final", "T", "attenuated_surface", "inscatter", "single", "multiple",
+                                   "surface")
+
+
+def group(name: str) -> Group:
+    """The :class:`Group` called ``name``; FogrefError listing the groups if unknown."""
+    try:
+        return _BY_NAME[name]
+    except KeyError:
+        raise FogrefError(f"no channel group '{name}' (groups: {', '.join(_BY_NAME)})") from None
+
+
+def channel_names(name: str) -> list[str]:
+    """EXR channel names of group ``name`` (``final`` -> ``R, G, B``)."""
+    g = group(name)
+    if not g.components:
+        return [g.name]
+    return [g.prefix + c for c in g.components]
+
+
+def stderr_names(name: str) -> list[str]:
+    """EXR channel names of the standard error of group ``name``."""
+    if not group(name).noisy:
+        raise FogrefError(f"channel group '{name}' is not a Monte Carlo part: it has no standard error")
+    return ["stderr." + c for c in channel_names(name)]
+
+
+def sample_channel_names() -> list[str]:
+    """Per-sample AOV names of the integrator (after its R,G,B), from :data:`SAMPLE_GROUPS`."""
+    return [c for g in SAMPLE_GROUPS for c in channel_names(g)]
+
+
+def exr_channel_names() -> list[str]:
+    """Every channel of a schema-2 ground-truth EXR."""
+    names = [c for g in GROUPS for c in channel_names(g.name)]
+    return names + [s for g in GROUPS if g.noisy for s in stderr_names(g.name)]
+
+
+def readme_table() -> str:
+    """The README's channel table, generated from :data:`GROUPS`."""
+    rows = ["| channels | meaning |", "|---|---|"]
+    for g in GROUPS:
+        names = channel_names(g.name)
+        label = ",".join(names) if len(names) == 1 or g.name == "final" else f"{g.prefix}*"
+        rows.append(f"| `{label}` | {g.meaning} |")
+    rows.append("| `stderr.<part>.*` | per-pixel standard error of each Monte Carlo part |")
+    return "\n".join(rows)
+
+
+# ---------------------------------------------------------------- derivation
+
+
+def moments_to_channels(sums: dict, squares: dict, n: int) -> dict:
+    """EXR channels from per-pixel sums of the per-sample outputs.
+
+    Parameters
+    ----------
+    sums:    group name -> ``(H, W, k)`` float64 sum over the ``n`` samples of a pixel,
+             for every name in ``("final",) + SAMPLE_GROUPS``.
+    squares: group name -> ``(H, W, k)`` float64 sum of squares, for :data:`SQUARED_GROUPS`.
+    n:       samples per pixel (>= 1).
+
+    Returns
+    -------
+    dict channel name -> ``(H, W)`` float64: means, the ratio estimator ``surface``
+    (0 where no sample reached the surface), and ``stderr.*`` (0 when ``n == 1``).
+
+    Examples
+    --------
+    Two samples of one pixel: one reached the surface (radiance 2), one scattered.
+
+    >>> import numpy as np
+    >>> one = lambda v: np.full((1, 1, 3), float(v))
+    >>> sums = {g: one(0) for g in ("final",) + SAMPLE_GROUPS}
+    >>> sums["surface"], sums["surface_coverage"] = one(2), np.ones((1, 1, 1))
+    >>> squares = {g: one(0) for g in SQUARED_GROUPS}
+    >>> squares["surface"] = one(4)
+    >>> c = moments_to_channels(sums, squares, 2)
+    >>> float(c["surface.R"][0, 0]), float(c["surface_coverage"][0, 0]), float(c["stderr.surface.R"][0, 0])
+    (2.0, 0.5, 0.0)
+    """
+    out = {}
+    mean = {g: np.asarray(s, dtype=np.float64) / n for g, s in sums.items()}
+    for g in ("final",) + SAMPLE_GROUPS:
+        if g == "surface":
+            continue
+        for i, c in enumerate(channel_names(g)):
+            out[c] = mean[g][..., i]
+    cover = mean["surface_coverage"][..., 0]
+    valid = cover > 0
+    safe = np.where(valid, cover, 1.0)
+    for i, c in enumerate(channel_names("surface")):
+        ratio = mean["surface"][..., i] / safe
+        out[c] = np.where(valid, ratio, 0.0)
+    for g in SQUARED_GROUPS:
+        m2 = np.asarray(squares[g], dtype=np.float64) / n
+        if g == "surface":
+            # delta method for the ratio r = E[s]/E[c] with c in {0, 1}, s = 0 where c = 0:
+            # Var(r_hat) ~ (E[s^2] - 2 r E[s] + r^2 E[c]) / (n E[c]^2)
+            r = np.stack([out[c] for c in channel_names("surface")], -1)
+            var = (m2 - 2 * r * mean["surface"] + r * r * cover[..., None]) / np.where(valid, cover, 1.0)[..., None] ** 2
+        else:
+            var = m2 - mean[g] ** 2
+        se = np.sqrt(np.maximum(var, 0.0) / max(n - 1, 1)) if n > 1 else np.zeros_like(var)
+        for i, c in enumerate(stderr_names(g)):
+            out[c] = np.where(valid, se[..., i], 0.0) if g == "surface" else se[..., i]
+    return out
+
+
+# ---------------------------------------------------------------- the reader
+
+
+@dataclass
+class Truth:
+    """One ground truth, as every part of fogref reads it.
+
+    Arrays are float64; ``(H, W, 3)`` for the parts, ``(H, W)`` for scalars.
+
+    final, transmittance, attenuated_surface, inscatter, single, multiple, surface:
+        the parts (see the module docstring); ``transmittance`` is the ``T`` group.
+    stderr:       part name -> its per-pixel standard error, same shape.
+    surface_coverage: fraction of samples that reached the surface unscattered, [0, 1].
+    distance:     [m], 0 for sky pixels.  position: [m].  view: unit, world, y-up.
+    hit:          ``(H, W)`` bool, the camera ray hits a surface (most samples do).
+    hit_fraction: ``(H, W)`` in [0, 1]; strictly between 0 and 1 only on silhouettes
+                  of an anti-aliased render.
+    camera:       ``(3,)`` [m].  sun_direction: ``(3,)`` unit toward the sun, or None.
+    params:       the decoded ``fogref.params`` header; attrs: every header attribute.
+    """
+
+    path: Path
+    final: np.ndarray
+    transmittance: np.ndarray
+    attenuated_surface: np.ndarray
+    inscatter: np.ndarray
+    single: np.ndarray
+    multiple: np.ndarray
+    surface: np.ndarray
+    stderr: dict
+    surface_coverage: np.ndarray
+    distance: np.ndarray
+    position: np.ndarray
+    view: np.ndarray
+    hit_fraction: np.ndarray
+    camera: np.ndarray
+    sun_direction: np.ndarray | None
+    params: dict
+    attrs: dict = field(default_factory=dict)
+
+    # -- derived ---------------------------------------------------------------
+    @property
+    def hit(self) -> np.ndarray:
+        return self.hit_fraction > 0.5
+
+    @property
+    def sky(self) -> np.ndarray:
+        """``(H, W)`` bool: pixels whose ray escapes."""
+        return ~self.hit
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.hit_fraction.shape
+
+    @property
+    def surface_valid(self) -> np.ndarray:
+        """``(H, W)`` bool: ``surface`` is defined (some sample reached it)."""
+        return self.surface_coverage > 0
+
+    @property
+    def pixel_exact(self) -> bool:
+        """Every sample of a pixel went through its centre (exact G-buffer and T)."""
+        return self.attrs.get("fogref.pixel_filter") == "centre"
+
+    @property
+    def spp(self) -> int:
+        return int(self.attrs.get("fogref.spp", 0))
+
+    def part(self, name: str) -> np.ndarray:
+        """A part by its schema name (``T`` and ``transmittance`` are the same)."""
+        if name == "T":
+            name = "transmittance"
+        if name not in ("final", "transmittance", "attenuated_surface", "inscatter", "single", "multiple",
+                        "surface"):
+            raise FogrefError(f"{self.path}: no part '{name}' (parts: {', '.join(PARTS)})")
+        return getattr(self, name)
+
+    def world_positions(self, sky_distance: float) -> np.ndarray:
+        """The point each pixel shades [m], as an engine sees it: ``P`` on surfaces,
+        ``camera + view * sky_distance`` on sky pixels."""
+        if not (np.isfinite(sky_distance) and sky_distance > 0):
+            raise FogrefError(f"sky distance: {sky_distance} must be finite and > 0 m")
+        far = self.camera + self.view * float(sky_distance)
+        return np.where(self.hit[..., None], self.position, far)
+
+    def sun_angle_deg(self) -> np.ndarray | None:
+        """``(H, W)`` angle between the view ray and the direction to the sun [deg]; None without a sun."""
+        if self.sun_direction is None:
+            return None
+        return np.degrees(np.arccos(np.clip(self.view @ self.sun_direction, -1.0, 1.0)))
+
+    def identity_residual(self) -> float:
+        """Largest ``|final - (attenuated_surface + inscatter)|``: the file's own consistency."""
+        return float(np.abs(self.final - (self.attenuated_surface + self.inscatter)).max(initial=0.0))
+
+    def rays(self):
+        """Per-pixel ``(o, d, D)`` as 3-tuples of flat arrays (``D`` = 1.8e308 for sky)."""
+        n = self.hit.size
+        o = tuple(np.full(n, c) for c in self.camera)
+        v = self.view.reshape(-1, 3)
+        D = np.where(self.hit.reshape(-1), self.distance.reshape(-1), np.finfo(np.float64).max)
+        return o, tuple(v[:, i] for i in range(3)), D
+
+
+def _vector(source: str, params: dict, keys: tuple[str, ...]) -> np.ndarray:
+    node = params
+    for k in keys:
+        if not isinstance(node, dict) or k not in node:
+            raise FogrefError(f"{source}: header attribute 'fogref.params' lacks '{'.'.join(keys)}'")
+        node = node[k]
+    v = np.asarray(node, dtype=np.float64)
+    if v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise FogrefError(f"{source}: 'fogref.params' {'.'.join(keys)} must be 3 finite numbers, got {node!r}")
+    return v
+
+
+def nonfinite_report(channels: dict) -> str | None:
+    """None when every channel is finite; else a message with counts and the first pixels."""
+    bad = []
+    for name, v in channels.items():
+        m = ~np.isfinite(np.asarray(v))
+        if m.any():
+            ys, xs = np.nonzero(m)
+            where = ", ".join(f"(x={x}, y={y})" for y, x in list(zip(ys, xs))[:3])
+            bad.append(f"'{name}': {int(m.sum())} pixel(s), first at {where}")
+    return None if not bad else "non-finite values in " + "; ".join(bad)
+
+
+def truth_from_channels(channels: dict, attrs: dict, source: str = "<memory>") -> Truth:
+    """Build a :class:`Truth` from decoded EXR channels and header attributes.
+
+    Raises FogrefError naming ``source`` for a missing channel, an older or foreign
+    layout, a non-finite value, or a missing/malformed ``fogref.params``.
+    """
+    version = str(attrs.get("fogref.schema", "1"))
+    if version != str(SCHEMA_VERSION):
+        hint = ("it was written by an older fogref (schema 1: no per-pixel noise, surface = Tsurface/T); "
+                "render it again" if "fogref.version" in attrs else "it is not a fogref ground truth")
+        raise FogrefError(f"{source}: ground-truth schema {version}, expected {SCHEMA_VERSION}: {hint}")
+    missing = [c for c in exr_channel_names() if c not in channels]
+    if missing:
+        raise FogrefError(f"{source}: missing channel(s) {', '.join(repr(c) for c in missing[:8])}"
+                          f"{' ...' if len(missing) > 8 else ''}")
+    bad = nonfinite_report({k: channels[k] for k in exr_channel_names()})
+    if bad:
+        raise FogrefError(f"{source}: refusing a truth with {bad}")
+    params = attrs.get("fogref.params")
+    if not isinstance(params, dict):
+        raise FogrefError(f"{source}: header attribute 'fogref.params' missing or not a JSON object")
+    camera = _vector(source, params, ("camera", "origin"))
+    sun = None
+    if params.get("sun"):
+        sun = _vector(source, params, ("sun", "direction"))
+        sun = sun / np.linalg.norm(sun)
+
+    def get(name):
+        a = np.stack([channels[c] for c in channel_names(name)], -1).astype(np.float64)
+        return a[..., 0] if not group(name).components else a
+
+    def se(name):
+        return np.stack([channels[c] for c in stderr_names(name)], -1).astype(np.float64)
+
+    view = get("view")
+    view = view / np.maximum(np.linalg.norm(view, axis=-1, keepdims=True), 1e-30)
+    noisy = [g.name for g in GROUPS if g.noisy]
+    return Truth(
+        path=Path(source), final=get("final"), transmittance=get("T"),
+        attenuated_surface=get("attenuated_surface"), inscatter=get("inscatter"), single=get("single"),
+        multiple=get("multiple"), surface=get("surface"),
+        stderr={("transmittance" if g == "T" else g): se(g) for g in noisy},
+        surface_coverage=get("surface_coverage"), distance=get("distance"), position=get("P"), view=view,
+        hit_fraction=get("hit"), camera=camera, sun_direction=sun, params=params, attrs=attrs,
+    )
+
+
+def load_truth(path) -> Truth:
+    """Read and check a ground-truth EXR written by ``fogref render``."""
+    from fogref.exrio import read_exr
+
+    channels, attrs = read_exr(path)
+    return truth_from_channels(channels, attrs, str(path))
