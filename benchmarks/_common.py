@@ -17,7 +17,9 @@ import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
 
-import fogref  # noqa: E402,F401  (LLVM, variant, plugins)
+import fogref  # noqa: E402
+
+fogref.set_variant()  # LLVM, the variant ($FOGREF_VARIANT or llvm_ad_rgb), the plugins
 
 
 def timed_render(scene, spp: int, seed: int):

@@ -41,9 +41,6 @@ def timeit(fn, repeats):
 
 
 def main():
-    import os
-
-    os.environ.setdefault("FOGREF_NO_MITSUBA", "1")
     from fogref.models import get
     from fogref.models.ue4 import SecondFogData
 

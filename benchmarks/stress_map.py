@@ -25,7 +25,7 @@ sys.path.insert(0, str(ROOT))
 
 import matplotlib  # noqa: E402
 
-import fogref  # noqa: E402,F401
+import fogref  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -35,6 +35,7 @@ from test_media_stress import mp_exp_depth, mp_exp_sample  # noqa: E402
 
 from fogref.media import NP, ExpLayer, drjit_ops  # noqa: E402
 
+fogref.ensure_llvm()  # Dr.Jit's LLVM back end needs LLVM >= 16; before the first array
 D32 = drjit_ops(Float)
 FALLOFF = [0.0, 1e-6, 1e-3, 0.1, 10.0]
 HEIGHT = [-1e4, -10.0, 0.0, 50.0, 1e3, 1e6]

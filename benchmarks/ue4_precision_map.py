@@ -1,6 +1,6 @@
 """Where Unreal's own float32 height-fog formula loses accuracy, and fogref's doesn't.
 
-    FOGREF_NO_MITSUBA=1 .venv/bin/python benchmarks/ue4_precision_map.py
+    .venv/bin/python benchmarks/ue4_precision_map.py
 
 Quantity: the optical depth of the camera ray, tau = ln2 * integral with
 ``integral = CalculateLineIntegralShared(...) * RayLength`` of HeightFogCommon.ush
@@ -25,14 +25,12 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import pathlib
 import sys
 import time
 
 import numpy as np
 
-os.environ.setdefault("FOGREF_NO_MITSUBA", "1")
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
@@ -63,8 +61,9 @@ TAU_VALID = 1e25
 try:  # Dr.Jit float32 twin (optional)
     from drjit.llvm import Float
 
-    import fogref  # noqa: F401
+    import fogref
     from fogref.media import drjit_ops
+    fogref.ensure_llvm()
     D32 = drjit_ops(Float)
 except Exception as exc:  # pragma: no cover - no LLVM here
     D32, Float = None, None
@@ -128,7 +127,7 @@ def main():
     fall = F_EDITOR / 1000.0   # per cm
     a, b = unreal_to_sigma(D_EDITOR, F_EDITOR)
     OUT.mkdir(parents=True, exist_ok=True)
-    report = dict(command="FOGREF_NO_MITSUBA=1 .venv/bin/python benchmarks/ue4_precision_map.py",
+    report = dict(command=".venv/bin/python benchmarks/ue4_precision_map.py",
                   params=dict(FogDensity=D_EDITOR, FogHeightFalloff=F_EDITOR, FogHeight_cm=H_CM,
                               a_per_m=a, b_per_m=b),
                   quantity="relative error of the ray's optical depth tau = ln2 * LineIntegral * RayLength vs mpmath")

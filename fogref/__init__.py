@@ -1,35 +1,83 @@
 """fogref: a physically based reference for real-time fog.
 
-Importing fogref finds an LLVM for Dr.Jit, selects a Mitsuba variant (the one
-already set, else ``$FOGREF_VARIANT``, else ``llvm_ad_rgb``) and registers the
-plugins in ``plugins/`` so that ``mi.load_file`` works on fogref's XML scenes.
-The physics (:mod:`fogref.media`) and the game models (:mod:`fogref.models`) do
-not need Mitsuba; import them as usual.
+Importing fogref (or :mod:`fogref.media`, :mod:`fogref.models`) does no work:
+it neither looks for LLVM nor imports Mitsuba or Dr.Jit. The physics
+(:mod:`fogref.media`) and the game models (:mod:`fogref.models`) need neither.
+
+Mitsuba is set up by one explicit call, :func:`set_variant`: it points Dr.Jit at
+an LLVM >= 16, selects the variant and registers fogref's plugins (the
+``heightfog`` medium and the ``fogpath`` integrator). The render driver and
+:func:`fogref.render.scene.load_scene` call it; ``mi.load_file`` users call it
+themselves::
+
+    import fogref, mitsuba as mi
+    fogref.set_variant()                     # llvm_ad_rgb unless told otherwise
+    scene = mi.load_file("scenes/valley.xml", res=160, resy=90)
+
+Code that uses Dr.Jit's LLVM arrays without Mitsuba calls :func:`ensure_llvm`
+before the first array is built.
+
+Examples
+--------
+>>> import fogref
+>>> fogref.__version__
+'0.1.0'
+>>> callable(fogref.set_variant) and callable(fogref.ensure_llvm)
+True
 """
 
-from fogref._llvm import ensure_llvm as _ensure_llvm
+from __future__ import annotations
 
-__version__ = "0.1.0"
+from fogref._version import __version__
 
-_ensure_llvm()
+__all__ = ["__version__", "ensure_llvm", "set_variant"]
 
 
 def set_variant(name: str | None = None) -> str:
-    """Select a Mitsuba variant (default: as above) and register fogref's plugins."""
-    from fogref.render.variant import set_variant as _sv
+    """Set up Mitsuba for fogref: LLVM, the variant, the plugins.
 
-    return _sv(name)
+    Parameters
+    ----------
+    name
+        A Mitsuba variant, e.g. ``"llvm_ad_rgb"`` or ``"cuda_ad_rgb"``. None keeps
+        the variant already set, else takes ``$FOGREF_VARIANT``, else
+        ``"llvm_ad_rgb"``.
+
+    Returns
+    -------
+    str
+        The variant now set.
+
+    Raises
+    ------
+    fogref.errors.FogrefError
+        The variant is unknown or cannot start (no GPU for ``cuda_*``), or an
+        ``llvm_*`` variant was asked for and no LLVM >= 16 is installed (the
+        message says what to install).
+
+    Notes
+    -----
+    Calling it again is cheap: the plugins are registered once per variant. See
+    :func:`fogref.render.variant.set_variant`.
+    """
+    from fogref.render.variant import set_variant as _set_variant
+
+    return _set_variant(name)
 
 
-def _autoload():
-    import os
+def ensure_llvm() -> str:
+    """Point Dr.Jit at an LLVM >= 16 (``$DRJIT_LIBLLVM_PATH``) and return its path.
 
-    if os.environ.get("FOGREF_NO_MITSUBA"):
-        return
-    try:
-        set_variant(None)
-    except ImportError:  # mitsuba not installed: physics and models still work
-        pass
+    Needed only by code that builds Dr.Jit LLVM arrays (``drjit.llvm.Float``)
+    without :func:`set_variant`; call it before the first array is built, since
+    Dr.Jit reads the variable when its LLVM back end starts.
 
+    Raises
+    ------
+    fogref.errors.FogrefError
+        No LLVM >= 16 was found and ``$DRJIT_LIBLLVM_PATH`` is unset; the message
+        says what to install.
+    """
+    from fogref._llvm import require_llvm
 
-_autoload()
+    return require_llvm()

@@ -1,4 +1,18 @@
-"""fogref's command line: ``fogref render``, ``fogref compare``, ``fogref study``, ``fogref fit``."""
+"""fogref's command line: ``fogref render``, ``fogref compare``, ``fogref study``, ``fogref fit``.
+
+``render`` is defined here; :mod:`fogref.compare` and :mod:`fogref.study` add
+their subcommands through their ``add_cli(subparsers)``. Errors meant for the
+user (:class:`fogref.errors.FogrefError`) print as one line and exit with 2.
+
+Examples
+--------
+>>> p = build_parser()
+>>> a = p.parse_args(["render", "scenes/valley.xml", "--out", "out/v.exr", "--set", "res=64"])
+>>> a.cmd, a.spp, a.seed, _kv(a.set)
+('render', 64, 0, {'res': '64'})
+>>> sorted(p._subparsers._group_actions[0].choices)
+['compare', 'fit', 'render', 'study']
+"""
 
 from __future__ import annotations
 
@@ -8,7 +22,14 @@ import sys
 from fogref.errors import FogrefError
 
 
-def _kv(items):
+def _kv(items) -> dict[str, str]:
+    """``["NAME=VALUE", ...]`` (the ``--set`` options) as a dict of strings.
+
+    >>> _kv(["res=64", "title=a=b"])
+    {'res': '64', 'title': 'a=b'}
+    >>> _kv(None)
+    {}
+    """
     out = {}
     for it in items or []:
         if "=" not in it:
@@ -40,12 +61,12 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.add_argument("--no-resume", action="store_true", help="ignore a checkpoint of an interrupted run")
     r.set_defaults(func=cmd_render)
-    for mod in ("fogref.compare", "fogref.study"):
-        try:
-            m = __import__(mod, fromlist=["add_cli"])
-            m.add_cli(sub)
-        except (ImportError, AttributeError):
-            pass
+    # each subcommand package adds its own parser; an import error here is a bug and is raised
+    from fogref.compare import add_cli as add_compare_cli
+    from fogref.study import add_cli as add_study_cli
+
+    add_compare_cli(sub)
+    add_study_cli(sub)
     return p
 
 

@@ -31,3 +31,29 @@ def test_clear_message_when_missing(monkeypatch, tmp_path):
     monkeypatch.setattr(L, "_SEARCH", [str(tmp_path / "none*")])
     assert L.ensure_llvm() is None
     assert "apt-get install libllvm19" in L.HELP and "DRJIT_LIBLLVM_PATH" in L.HELP
+
+
+def test_require_llvm_raises_with_help(monkeypatch, tmp_path):
+    from fogref.errors import FogrefError
+
+    monkeypatch.delenv("DRJIT_LIBLLVM_PATH", raising=False)
+    monkeypatch.setattr(L, "_SEARCH", [str(tmp_path / "none*")])
+    try:
+        L.require_llvm()
+    except FogrefError as e:
+        assert "apt-get install libllvm19" in str(e)
+    else:
+        raise AssertionError("require_llvm() found an LLVM in an empty folder")
+
+
+def test_import_does_not_touch_the_environment():
+    """``import fogref`` finds no LLVM and imports neither Mitsuba nor Dr.Jit."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("import os, sys, fogref, fogref.media, fogref.models; "
+            "assert 'DRJIT_LIBLLVM_PATH' not in os.environ; "
+            "assert 'mitsuba' not in sys.modules and 'drjit' not in sys.modules")
+    env = {k: v for k, v in os.environ.items() if k != "DRJIT_LIBLLVM_PATH"}
+    subprocess.run([sys.executable, "-c", code], check=True, env=env)

@@ -8,7 +8,6 @@ fixed seed) of the exact free-flight sampler including the escape probability.
 
 from __future__ import annotations
 
-# (no FOGREF_NO_MITSUBA here: it would turn off the render tests for the whole session)
 import math
 
 import mpmath as mp

@@ -25,9 +25,10 @@ from drjit.llvm import Float  # noqa: E402
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import fogref  # noqa: F401
+import fogref
 from fogref.media import NP, ExpLayer, FogMedium, drjit_ops, single_scatter_sun  # noqa: E402
 
+fogref.ensure_llvm()  # Dr.Jit's LLVM back end needs LLVM >= 16; before the first array
 D32 = drjit_ops(Float)
 EPS = {"f64": 2.0 ** -53, "f32": 2.0 ** -24}
 mp.mp.dps = 50

@@ -19,10 +19,11 @@ import numpy as np
 import pytest
 from drjit.llvm import Float  # noqa: E402
 
-import fogref  # noqa: F401  (LLVM set-up before drjit)
+import fogref
 from fogref.media import NP, ExpLayer, HDRPLayer, PowerLawLayer, drjit_ops  # noqa: E402
 from fogref.media import closed_form as cf  # noqa: E402
 
+fogref.ensure_llvm()  # Dr.Jit's LLVM back end needs LLVM >= 16; before the first array
 D = drjit_ops(Float)
 EPS32 = 2.0 ** -24
 L32 = float(np.finfo(np.float32).max)

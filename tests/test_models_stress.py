@@ -75,7 +75,6 @@ import math
 import pathlib
 import sys
 
-# (no FOGREF_NO_MITSUBA here: it would turn off the render tests for the whole session)
 import mpmath as mp  # noqa: E402
 import numpy as np  # noqa: E402
 from hypothesis import HealthCheck, given, settings  # noqa: E402
@@ -497,7 +496,7 @@ def sweep() -> dict:
                      "the transmittance (absolute where T_ref is subnormal); hdrp/altitude: relative error of "
                      "the optical depth (ref in [1e-30, 1e30]). Regions: 'exact' = bound asserted by "
                      "tests/test_models_stress.py; others recorded only (engine rule or shader formula)."),
-        command="FOGREF_NO_MITSUBA=1 .venv/bin/python tests/test_models_stress.py",
+        command=".venv/bin/python tests/test_models_stress.py",
         errors=res, nonfinite_or_out_of_range_outputs=nonfinite)
 
 

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fogref._version import __version__
 from fogref.atomic import atomic_write, savez_atomic
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
@@ -84,13 +85,13 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
     ``overrides``: XML ``$name`` defaults to replace (e.g. ``{"res": 64}``).
     Returns the EXR path.  Raises FogrefError/ParameterError for bad input.
     """
-    import fogref
+    from fogref.render.variant import set_variant
 
     if not isinstance(spp, int) or not 1 <= spp <= 1 << 20:
         raise FogrefError(f"--spp: {spp} outside [1, 1048576]")
     if not isinstance(seed, int) or not 0 <= seed < 1 << 31:
         raise FogrefError(f"--seed: {seed} outside [0, 2^31)")
-    variant = fogref.set_variant(variant)
+    variant = set_variant(variant)
     import drjit as dr
     import mitsuba as mi
 
@@ -137,7 +138,7 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
         "fogref.spp": str(spp),
         "fogref.seed": str(seed),
         "fogref.variant": variant,
-        "fogref.version": fogref.__version__,
+        "fogref.version": __version__,
         "fogref.mitsuba": mi.__version__,
         "fogref.scene": str(scene_path),
         "fogref.overrides": overrides or {},

@@ -98,10 +98,15 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
 
 
 def load_scene(path, overrides: dict | None = None):
-    """``mi.load_file`` with fogref's plugins registered and errors made readable."""
-    import mitsuba as mi
+    """``mi.load_file`` with fogref's plugins registered and errors made readable.
 
-    import fogref  # noqa: F401  (variant + plugins)
+    Sets Mitsuba up first (:func:`fogref.render.variant.set_variant`: the variant
+    already set, else ``$FOGREF_VARIANT``, else ``llvm_ad_rgb``).
+    """
+    from fogref.render.variant import set_variant
+
+    set_variant()
+    import mitsuba as mi
 
     desc = describe_scene(path, overrides)
     try:

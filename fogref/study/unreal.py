@@ -164,16 +164,12 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
     model = UE4ExponentialHeightFog(model_params)
     cmp_summary = None
     if compare_report:
-        try:
-            from fogref.compare import compare
-        except ImportError:
-            compare = None
-            log("fogref.compare not available: skipping the comparison report")
-        if compare is not None:
-            log("comparing (fogref.compare) ...")
-            rep = compare(exr, model, out / "compare", precision="float32")
-            m = rep["metrics"]
-            cmp_summary = {part: m[part]["all"] for part in ("final", "inscatter", "transmittance")}
+        from fogref.compare import compare
+
+        log("comparing (fogref.compare) ...")
+        rep = compare(exr, model, out / "compare", precision="float32")
+        m = rep["metrics"]
+        cmp_summary = {part: m[part]["all"] for part in ("final", "inscatter", "transmittance")}
 
     # -- 3. renders for the budget -------------------------------------------
     log("rendering the budget's extra images ...")
