@@ -1,0 +1,708 @@
+"""``check``: a statistically sound verdict on a fog model or an engine's images against a truth.
+
+A ground truth is a Monte Carlo estimate: each pixel carries noise, and a
+candidate that is *exactly* right still differs from it.  :func:`check` measures
+the candidate's error with that noise taken out, gives a confidence interval for
+every metric, and a verdict per part and region.
+
+What is measured (``e = candidate - truth`` per pixel and RGB channel, ``r`` the
+truth's part, ``s`` the per-pixel standard error of ``e`` that the truth's noise
+causes, from its ``stderr.*`` channels; sums run over the region's pixels and RGB):
+
+=============  =====================================================  ==========
+metric         estimate                                               range
+=============  =====================================================  ==========
+``rel_rmse``   ``sqrt(max(0, Σ(e² - s²)) / Σ(r² - s_r²))``             [0, inf)
+``rel_bias``   ``Σ e / Σ r`` (mean signed error relative to the mean)  (-inf, inf)
+``rmse``       ``sqrt(max(0, Σ(e² - s²)) / n)`` [the part's units]     [0, inf)
+``bias``       ``Σ e / n`` [the part's units]                          (-inf, inf)
+=============  =====================================================  ==========
+
+``E[e²] = (true error)² + s²``, so ``e² - s²`` is an unbiased estimate of the
+squared true error of a pixel: an exact candidate has ``rel_rmse`` near 0 at any
+sample count, not near the noise level.
+
+**Confidence intervals: block bootstrap.**  Neighbouring pixels are correlated
+(the candidate's error is smooth; anti-aliased truths share samples across
+pixels).  The image is cut into ``block`` × ``block`` pixel blocks; the per-block
+sums of the quantities above are resampled with replacement (``n_boot``
+replicates, ``seed``).  The bootstrap's standard deviation of each ratio of sums
+(on the squared scale for the RMSEs) gives a Student-t interval with ``k - 1``
+degrees of freedom for ``k`` blocks at ``confidence`` (two-sided); the RMSE
+intervals are its square roots, clamped at 0.  Blocks that are partly outside a
+region contribute their pixels inside it; a region needs at least 2 blocks.
+
+**Verdict** for a metric with tolerance ``tol`` (for the signed metrics the
+tolerance bounds ``|bias|``): *pass* when the whole interval lies within the
+tolerance, *fail* when it lies wholly outside, else *inconclusive*: the truth is
+too noisy, or the image too small, to decide at this confidence.  Each of the
+two wrong verdicts happens with probability at most ``(1 - confidence) / 2`` per
+row.  :func:`fogref.pytest_plugin.assert_fog_matches` treats inconclusive as a
+failure unless told otherwise.
+
+Parts (``(H, W, 3)`` linear RGB):
+
+* ``T``: the transmittance; ``inscatter``: the radiance the fog adds.
+* ``final``: for a **model**, the model's fog composited over the truth's own
+  surface radiance, as the engine composites, ``surface * T_model + inscatter_model``,
+  against ``surface * T + inscatter`` (pixels where ``surface`` is defined,
+  ``truth.surface_valid``); the surface is common to both, so only the fog's error is
+  measured.  For **foreign images**, the engine's own final image against the
+  truth's ``R,G,B``: it means something only if the engine's surface lighting
+  matches the truth's ``surface`` part.
+* ``composite``: foreign images with both T and inscatter: the engine's fog over
+  the truth's surface (the fair version of ``final``).
+
+Regions: ``all``, ``surface`` (hit pixels), ``sky``, and distance bands of the
+surface pixels, ``d<100m``, ``d100-1000m``, ``d>1000m`` for the default band edges
+``(100, 1000)`` [m].
+
+Examples
+--------
+>>> from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+>>> model = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
+>>> truth = synthetic_truth(model, noise=0.02, seed=1)
+>>> result = check(truth, model, tolerances={"inscatter": 0.02})
+>>> result.verdict
+'pass'
+>>> result.row("inscatter", "all").verdict
+'pass'
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from fogref.errors import FogrefError
+from fogref.gbuffer import Truth, nonfinite_report
+
+#: Distance [m] at which a model fogs sky pixels (a stand-in for infinity; as ``compare``).
+DEFAULT_SKY_DISTANCE = 1.0e5
+METRICS = ("rel_rmse", "rel_bias", "rmse", "bias")
+SIGNED = ("rel_bias", "bias")
+#: Default tolerances per part: metric -> largest acceptable value (``|value|`` for signed metrics).
+DEFAULT_TOLERANCES: dict = {
+    "T": {"rel_rmse": 0.01, "rel_bias": 0.005},
+    "inscatter": {"rel_rmse": 0.05, "rel_bias": 0.02},
+    "final": {"rel_rmse": 0.05, "rel_bias": 0.02},
+    "composite": {"rel_rmse": 0.05, "rel_bias": 0.02},
+}
+PART_NAMES = ("T", "inscatter", "final", "composite")
+VERDICTS = ("pass", "fail", "inconclusive")
+
+
+# ---------------------------------------------------------------- candidates
+
+
+@dataclass
+class CandidateParts:
+    """A candidate's images and the noise variance of its error, as :func:`check` compares them.
+
+    parts:     part name -> ``(H, W, 3)`` candidate image.
+    reference: part name -> ``(H, W, 3)`` the truth's matching image.
+    noise_var: part name -> ``(H, W, 3)`` variance of ``candidate - reference`` due to
+               Monte Carlo noise (the truth's, plus the candidate's own if it has any).
+    ref_var:   part name -> ``(H, W, 3)`` noise variance of ``reference``.
+    valid:     part name -> ``(H, W)`` bool, pixels where the part is defined.
+    name:      what the candidate is, for messages.
+    """
+
+    parts: dict
+    reference: dict
+    noise_var: dict
+    ref_var: dict
+    valid: dict
+    name: str = "candidate"
+
+
+def _as_image(x, shape, what: str) -> np.ndarray:
+    a = np.asarray(x, dtype=np.float64)
+    try:
+        a = np.broadcast_to(a, (*shape, 3))
+    except ValueError:
+        raise FogrefError(f"{what}: shape {a.shape}, expected {(*shape, 3)} (the truth's H, W, RGB)") from None
+    bad = nonfinite_report({what: a[..., 0]}) or nonfinite_report({what: a[..., 1]}) or nonfinite_report(
+        {what: a[..., 2]})
+    if bad:
+        raise FogrefError(f"candidate has {bad}")
+    return a
+
+
+def evaluate_model(truth: Truth, model, precision: str = "float32",
+                   sky_distance: float = DEFAULT_SKY_DISTANCE) -> dict:
+    """A fog model evaluated on a truth's G-buffer: ``{"T", "inscatter"}`` -> ``(H, W, 3)``.
+
+    The model shades the point each pixel sees, ``truth.world_positions(sky_distance)``
+    (surface points; ``camera + view * sky_distance`` for sky pixels), from
+    ``truth.camera``, at ``precision`` (``"float32"`` or ``"float64"``).
+
+    Parameters
+    ----------
+    truth : Truth
+        The ground truth (see :func:`fogref.gbuffer.load_truth`).
+    model : object
+        Anything with ``evaluate(camera (3,), positions (H, W, 3), precision)``
+        returning an object with ``transmittance`` and ``inscatter`` (broadcastable to
+        ``(H, W, 3)``); world frame y-up, metres.
+    precision : str
+        ``"float32"`` or ``"float64"``.
+    sky_distance : float
+        Distance [m] at which sky pixels are fogged, > 0.
+
+    Returns
+    -------
+    dict
+        ``{"T": (H, W, 3), "inscatter": (H, W, 3)}`` float64, finite.
+
+    Raises
+    ------
+    FogrefError
+        The model returns the wrong shape or a non-finite value.
+
+    Examples
+    --------
+    >>> from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+    >>> model = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
+    >>> parts = evaluate_model(synthetic_truth(model), model)
+    >>> parts["T"].shape, bool((parts["T"] <= 1).all())
+    ((18, 32, 3), True)
+    """
+    if precision not in ("float32", "float64"):
+        raise FogrefError(f"precision must be 'float32' or 'float64', got {precision!r}")
+    if not callable(getattr(model, "evaluate", None)):
+        raise FogrefError(f"{model!r} is not a fog model: it has no evaluate(camera, positions, precision)")
+    result = model.evaluate(truth.camera, truth.world_positions(sky_distance), precision=precision)
+    name = str(getattr(model, "name", None) or type(model).__name__)
+    for attr in ("transmittance", "inscatter"):
+        if not hasattr(result, attr):
+            raise FogrefError(f"model '{name}': evaluate() returned {type(result).__name__} without "
+                              f"'{attr}' (expected an object with transmittance and inscatter)")
+    return {"T": _as_image(result.transmittance, truth.shape, f"model '{name}' transmittance"),
+            "inscatter": _as_image(result.inscatter, truth.shape, f"model '{name}' inscatter")}
+
+
+def _composite_parts(truth: Truth, T, L, cand_var_T=None, cand_var_L=None):
+    """The fog ``(T, L)`` over the truth's surface vs the truth's own fog over it.
+
+    Returns ``(candidate, reference, noise_var, ref_var)``; the noise of the difference
+    is ``var(L_truth) + surface² var(T_truth) + (T - T_truth)² var(surface)`` (plus the
+    candidate's own where given).
+    """
+    s = truth.surface
+    se = truth.stderr
+    cand = s * T + L
+    ref = s * truth.transmittance + truth.inscatter
+    var = (se["inscatter"] ** 2 + (s * se["transmittance"]) ** 2
+           + ((T - truth.transmittance) * se["surface"]) ** 2)
+    if cand_var_T is not None:
+        var = var + cand_var_L + (s**2) * cand_var_T
+    return cand, ref, var, se["final"] ** 2
+
+
+def candidate_parts(truth: Truth, candidate, precision: str = "float32",
+                    sky_distance: float = DEFAULT_SKY_DISTANCE) -> CandidateParts:
+    """What :func:`check` compares, for any kind of candidate.
+
+    ``candidate`` is one of:
+
+    * a fog model (has ``evaluate``): parts ``T``, ``inscatter``, ``final`` (its fog over
+      the truth's surface);
+    * :class:`fogref.compare.foreign.EngineImages` (an engine's images): the parts it has,
+      ``final`` direct, and ``composite`` when it has both T and inscatter;
+    * another :class:`~fogref.gbuffer.Truth` (e.g. an independent render): ``T``,
+      ``inscatter``, ``final``, with both truths' noise taken out;
+    * a dict with any of ``"T"``, ``"inscatter"``, ``"final"`` -> ``(H, W, 3)`` images
+      (taken as noise-free engine images).
+
+    Examples
+    --------
+    >>> from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+    >>> model = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
+    >>> sorted(candidate_parts(synthetic_truth(model), model).parts)
+    ['T', 'final', 'inscatter']
+    """
+    se = truth.stderr
+    valid_all = np.ones(truth.shape, bool)
+    T_ref, L_ref = truth.transmittance, truth.inscatter
+    parts, ref, var, rvar, valid = {}, {}, {}, {}, {}
+
+    def put(name, c, r, v, rv, m):
+        parts[name], ref[name], var[name], rvar[name], valid[name] = c, r, v, rv, m
+
+    if isinstance(candidate, Truth):
+        if candidate.shape != truth.shape:
+            raise FogrefError(f"{candidate.path}: {candidate.shape[1]}x{candidate.shape[0]} px, but the truth "
+                              f"{truth.path} is {truth.shape[1]}x{truth.shape[0]}")
+        cs = candidate.stderr
+        put("T", candidate.transmittance, T_ref, se["transmittance"] ** 2 + cs["transmittance"] ** 2,
+            se["transmittance"] ** 2, valid_all)
+        put("inscatter", candidate.inscatter, L_ref, se["inscatter"] ** 2 + cs["inscatter"] ** 2,
+            se["inscatter"] ** 2, valid_all)
+        put("final", *_composite_parts(truth, candidate.transmittance, candidate.inscatter,
+                                       cs["transmittance"] ** 2, cs["inscatter"] ** 2),
+            truth.surface_valid)
+        return CandidateParts(parts, ref, var, rvar, valid, name=str(candidate.path))
+
+    if callable(getattr(candidate, "evaluate", None)):
+        m = evaluate_model(truth, candidate, precision, sky_distance)
+        put("T", m["T"], T_ref, se["transmittance"] ** 2, se["transmittance"] ** 2, valid_all)
+        put("inscatter", m["inscatter"], L_ref, se["inscatter"] ** 2, se["inscatter"] ** 2, valid_all)
+        put("final", *_composite_parts(truth, m["T"], m["inscatter"]), truth.surface_valid)
+        name = str(getattr(candidate, "name", None) or type(candidate).__name__)
+        return CandidateParts(parts, ref, var, rvar, valid, name=f"model '{name}'")
+
+    if isinstance(candidate, dict):
+        images, name = candidate, "images"
+    elif hasattr(candidate, "as_dict"):
+        images, name = candidate.as_dict(), str(getattr(candidate, "description", "engine images"))
+    else:
+        raise FogrefError(f"cannot check {type(candidate).__name__}: give a fog model (with evaluate), "
+                          "EngineImages, a Truth, or a dict of 'T'/'inscatter'/'final' images")
+    unknown = sorted(set(images) - {"T", "inscatter", "final"})
+    if unknown:
+        raise FogrefError(f"unknown image part(s) {unknown}: expected 'T', 'inscatter', 'final'")
+    img = {k: _as_image(v, truth.shape, f"{name} {k}") for k, v in images.items() if v is not None}
+    if not img:
+        raise FogrefError(f"{name}: no image given (need at least one of final, T, inscatter)")
+    if "T" in img:
+        put("T", img["T"], T_ref, se["transmittance"] ** 2, se["transmittance"] ** 2, valid_all)
+    if "inscatter" in img:
+        put("inscatter", img["inscatter"], L_ref, se["inscatter"] ** 2, se["inscatter"] ** 2, valid_all)
+    if "final" in img:
+        put("final", img["final"], truth.final, se["final"] ** 2, se["final"] ** 2, valid_all)
+    if "T" in img and "inscatter" in img:
+        put("composite", *_composite_parts(truth, img["T"], img["inscatter"]), truth.surface_valid)
+    return CandidateParts(parts, ref, var, rvar, valid, name=name)
+
+
+# ---------------------------------------------------------------- regions
+
+
+def _band_name(lo: float, hi: float) -> str:
+    if lo <= 0:
+        return f"d<{hi:g}m"
+    if math.isinf(hi):
+        return f"d>{lo:g}m"
+    return f"d{lo:g}-{hi:g}m"
+
+
+def region_masks(truth: Truth, distance_bands=(100.0, 1000.0)) -> dict:
+    """Region name -> ``(H, W)`` bool mask: ``all``, ``surface``, ``sky`` and one per distance band.
+
+    ``distance_bands``: increasing band edges [m], each > 0; the bands split the
+    surface pixels at them (``(100, 1000)`` gives ``d<100m``, ``d100-1000m``, ``d>1000m``).
+
+    Examples
+    --------
+    >>> from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+    >>> truth = synthetic_truth(UE4ExponentialHeightFog(UE4FogParams()))
+    >>> list(region_masks(truth))
+    ['all', 'surface', 'sky', 'd<100m', 'd100-1000m', 'd>1000m']
+    """
+    edges = [float(e) for e in (distance_bands or ())]
+    if any(not (math.isfinite(e) and e > 0) for e in edges) or edges != sorted(set(edges)):
+        raise FogrefError(f"distance_bands: {list(distance_bands)} must be increasing, finite and > 0 m")
+    out = {"all": np.ones(truth.shape, bool), "surface": truth.hit, "sky": truth.sky}
+    if edges:
+        bounds = [0.0, *edges, math.inf]
+        for lo, hi in zip(bounds[:-1], bounds[1:]):
+            out[_band_name(lo, hi)] = truth.hit & (truth.distance >= lo) & (truth.distance < hi)
+    return out
+
+
+# ---------------------------------------------------------------- statistics
+
+_Q = ("sq", "power", "err", "ref", "n")  # per-block sums
+
+
+def _block_sums(cand, ref, var, rvar, mask, block: int) -> np.ndarray:
+    """``(n_blocks, 5)`` per-block sums of ``e² - s²``, ``r² - s_r²``, ``e``, ``r`` and the count."""
+    e = cand - ref
+    q = np.stack([(e * e - var).sum(-1), (ref * ref - rvar).sum(-1), e.sum(-1), ref.sum(-1),
+                  np.full(mask.shape, 3.0)], -1) * mask[..., None]
+    H, W = mask.shape
+    hb, wb = -(-H // block), -(-W // block)
+    pad = np.zeros((hb * block, wb * block, len(_Q)))
+    pad[:H, :W] = q
+    sums = pad.reshape(hb, block, wb, block, len(_Q)).sum(axis=(1, 3)).reshape(-1, len(_Q))
+    return sums[sums[:, 4] > 0]
+
+
+def _linear_from_sums(s: np.ndarray) -> dict:
+    """The four near-linear statistics (ratios of sums) from summed quantities ``(..., 5)``.
+
+    ``rel_ms`` and ``ms`` are the noise-corrected squared errors (may be < 0 by noise);
+    ``rel_rmse = sqrt(max(rel_ms, 0))`` and ``rmse = sqrt(max(ms, 0))``.
+    """
+    sq, power, err, ref, n = (s[..., i] for i in range(5))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return {"rel_rmse": sq / np.where(power > 0, power, np.nan),
+                "rel_bias": err / np.where(ref != 0, ref, np.nan),
+                "rmse": sq / n, "bias": err / n}
+
+
+def block_bootstrap(sums: np.ndarray, n_boot: int, seed: int, chunk: int = 256) -> dict:
+    """Bootstrap replicates of the near-linear statistics from per-block sums.
+
+    Blocks are drawn with replacement (``n_boot`` replicates of ``len(sums)`` blocks,
+    seeded).  Returns metric -> ``(n_boot,)`` replicates of :func:`_linear_from_sums`
+    (squared-error scale for ``rel_rmse`` and ``rmse``; NaN where undefined).
+    """
+    rng = np.random.default_rng(seed)
+    k = len(sums)
+    reps = {m: [] for m in METRICS}
+    for start in range(0, n_boot, chunk):
+        m = min(chunk, n_boot - start)
+        counts = rng.multinomial(k, np.full(k, 1.0 / k), size=m)
+        vals = _linear_from_sums(counts.astype(np.float64) @ sums)
+        for name in METRICS:
+            reps[name].append(vals[name])
+    return {name: np.concatenate(v) for name, v in reps.items()}
+
+
+def _interval(est: float, reps: np.ndarray, k: int, alpha: float) -> tuple[float, float]:
+    """Student-t interval ``est ± t(k-1) * sd_boot * sqrt(k / (k-1))`` from ``k`` blocks.
+
+    The bootstrap's spread underestimates the variance by ``(k-1)/k`` and the normal
+    quantile is too narrow for few blocks; both are corrected here (measured on
+    synthetic truths with 40 blocks: the percentile interval's false-alarm rate was
+    1.8 % at a nominal 1 %).
+    """
+    from scipy.stats import t as student_t
+
+    sd = float(np.std(reps, ddof=1)) * math.sqrt(k / max(k - 1, 1))
+    q = float(student_t.ppf(1.0 - alpha, max(k - 1, 1)))
+    return est - q * sd, est + q * sd
+
+
+# ---------------------------------------------------------------- results
+
+
+@dataclass
+class Row:
+    """One metric of one part in one region.
+
+    ``estimate`` and the interval ``[low, high]`` (at the result's confidence) are
+    None when the region has no pixels or the metric is undefined there (e.g.
+    ``rel_bias`` of a zero reference); ``tolerance`` is None when the metric is only
+    reported; ``verdict`` is ``pass``, ``fail``, ``inconclusive``, ``reported`` (no
+    tolerance) or ``empty`` (no pixels).
+    """
+
+    part: str
+    region: str
+    metric: str
+    estimate: float | None
+    low: float | None
+    high: float | None
+    tolerance: float | None
+    verdict: str
+    pixels: int
+
+    def describe(self) -> str:
+        """One line: ``inscatter/sky rel_bias = 0.0498 [0.0471, 0.0524] > tolerance 0.02: fail``."""
+        if self.estimate is None:
+            return f"{self.part}/{self.region} {self.metric}: {self.verdict} ({self.pixels} px)"
+        tol = "" if self.tolerance is None else f", tolerance {'|x| ' if self.metric in SIGNED else ''}" \
+                                                f"<= {self.tolerance:g}"
+        return (f"{self.part}/{self.region} {self.metric} = {self.estimate:.4g} "
+                f"[{self.low:.4g}, {self.high:.4g}]{tol}: {self.verdict} ({self.pixels} px)")
+
+
+@dataclass
+class CheckResult:
+    """What :func:`check` returns: one :class:`Row` per part, region and metric.
+
+    ``verdict``: ``fail`` if any row fails, else ``inconclusive`` if any row is,
+    else ``pass``.  ``confidence``: two-sided level of every interval.  ``errors``:
+    part -> ``(H, W, 3)`` signed error ``candidate - truth`` (0 where undefined).
+    """
+
+    rows: list
+    confidence: float
+    candidate: str
+    truth: str
+    settings: dict
+    errors: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def verdict(self) -> str:
+        v = {r.verdict for r in self.rows}
+        return "fail" if "fail" in v else "inconclusive" if "inconclusive" in v else "pass"
+
+    @property
+    def passed(self) -> bool:
+        return self.verdict == "pass"
+
+    def row(self, part: str, region: str, metric: str = "rel_rmse") -> Row:
+        """The row of ``part``/``region``/``metric``; FogrefError listing what exists."""
+        for r in self.rows:
+            if (r.part, r.region, r.metric) == (part, region, metric):
+                return r
+        have = sorted({f"{r.part}/{r.region}" for r in self.rows})
+        raise FogrefError(f"no row {part}/{region} {metric} (rows: {', '.join(have)})")
+
+    def failures(self, include_inconclusive: bool = True) -> list:
+        """Rows that failed (and, by default, the inconclusive ones), worst first."""
+        keep = ("fail", "inconclusive") if include_inconclusive else ("fail",)
+        bad = [r for r in self.rows if r.verdict in keep]
+        return sorted(bad, key=lambda r: (r.verdict != "fail",
+                                          -(abs(r.estimate) / r.tolerance if r.tolerance else 0.0)))
+
+    def summary(self) -> str:
+        """A text table of every row with a tolerance, then the verdict."""
+        lines = [f"check: {self.candidate} vs {self.truth} ({self.confidence:.0%} intervals, "
+                 f"{self.settings['block']}x{self.settings['block']} px block bootstrap)"]
+        lines += ["  " + r.describe() for r in self.rows if r.tolerance is not None]
+        lines.append(f"verdict: {self.verdict}")
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """JSON-ready (no NaN): settings, verdict and rows."""
+        return {"truth": self.truth, "candidate": self.candidate, "confidence": self.confidence,
+                "verdict": self.verdict, "settings": self.settings,
+                "rows": [dict(vars(r)) for r in self.rows]}
+
+    def write(self, out_dir) -> Path:
+        """Write ``check.json`` and ``errors.exr`` (signed error per part) to ``out_dir``; return the EXR path."""
+        from fogref.atomic import write_text_atomic
+        from fogref.exrio import write_exr
+
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        ch = {}
+        for part, e in self.errors.items():
+            for i, c in enumerate("RGB"):
+                ch[f"{part}.error.{c}"] = e[..., i]
+            ch[f"{part}.abs_error"] = np.abs(e).mean(-1)
+        big = float(np.finfo(np.float32).max)
+        write_exr(out / "errors.exr", {k: np.clip(v, -big, big) for k, v in ch.items()},
+                  {"fogref.check": {"truth": self.truth, "candidate": self.candidate}})
+        write_text_atomic(out / "check.json", json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n")
+        return out / "errors.exr"
+
+
+def _tolerance_table(tolerances) -> dict:
+    """Normalise ``tolerances`` to ``{(part, region|None): {metric: tol}}``."""
+    table = {(p, None): dict(v) for p, v in DEFAULT_TOLERANCES.items()}
+    for key, value in (tolerances or {}).items():
+        part, _, region = str(key).partition("/")
+        if part not in PART_NAMES:
+            raise FogrefError(f"tolerances: unknown part '{part}' in '{key}' (parts: {', '.join(PART_NAMES)}; "
+                              "write 'part' or 'part/region')")
+        spec = value if isinstance(value, dict) else {"rel_rmse": value}
+        clean = {}
+        for metric, tol in spec.items():
+            if metric not in METRICS:
+                raise FogrefError(f"tolerances['{key}']: unknown metric '{metric}' (metrics: {', '.join(METRICS)})")
+            if tol is not None:
+                tol = float(tol)
+                if not (math.isfinite(tol) and tol >= 0):
+                    raise FogrefError(f"tolerances['{key}']['{metric}']: {tol} must be finite and >= 0")
+            clean[metric] = tol
+        k = (part, region or None)
+        table[k] = {**table.get(k, {}), **clean} if region else {**table[(part, None)], **clean}
+    return table
+
+
+def _verdict(metric: str, low: float, high: float, tol: float | None) -> str:
+    if tol is None:
+        return "reported"
+    if metric in SIGNED:
+        if -tol <= low and high <= tol:
+            return "pass"
+        return "fail" if (low > tol or high < -tol) else "inconclusive"
+    if high <= tol:
+        return "pass"
+    return "fail" if low > tol else "inconclusive"
+
+
+def _finite(x) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def check(truth: Truth, candidate, tolerances: dict | None = None, *, parts=None,
+          distance_bands=(100.0, 1000.0), confidence: float = 0.99, block: int = 8, n_boot: int = 2000,
+          seed: int = 0, precision: str = "float32", sky_distance: float = DEFAULT_SKY_DISTANCE) -> CheckResult:
+    """Check a fog model or an engine's images against a ground truth, with confidence intervals.
+
+    Parameters
+    ----------
+    truth : Truth
+        From :func:`fogref.gbuffer.load_truth` (or :func:`synthetic_truth`).
+    candidate : model, EngineImages, Truth or dict
+        See :func:`candidate_parts`.
+    tolerances : dict, optional
+        ``"part"`` or ``"part/region"`` -> a number (the ``rel_rmse`` tolerance) or a
+        dict ``{metric: tolerance}``; ``None`` as a tolerance only reports the metric.
+        Part keys apply to every region; ``part/region`` keys override them.  Defaults:
+        :data:`DEFAULT_TOLERANCES` (relative, dimensionless: 0.05 is 5 %).
+    parts : sequence of str, optional
+        Parts to check (default: every part the candidate has).
+    distance_bands : sequence of float
+        Edges [m] of the distance-band regions, increasing, > 0; ``()`` for none.
+    confidence : float
+        Two-sided level of the intervals, in (0, 1); default 0.99.
+    block : int
+        Side [px] of the bootstrap blocks, >= 1 (default 8: larger than the error's
+        correlation length on fogref's truths).
+    n_boot : int
+        Bootstrap replicates, >= 100.
+    seed : int
+        Seed of the bootstrap (same seed, same intervals).
+    precision, sky_distance :
+        How a model is evaluated (see :func:`evaluate_model`).
+
+    Returns
+    -------
+    CheckResult
+        Rows for every part, region and metric; ``result.verdict`` is ``pass``,
+        ``fail`` or ``inconclusive``.
+
+    Examples
+    --------
+    An inscatter 5 % too bright is caught; the exact one passes:
+
+    >>> from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+    >>> model = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
+    >>> truth = synthetic_truth(model, noise=0.02)
+    >>> parts = evaluate_model(truth, model)
+    >>> check(truth, {"T": parts["T"], "inscatter": 1.05 * parts["inscatter"]}).verdict
+    'fail'
+    >>> r = check(truth, {"inscatter": 1.05 * parts["inscatter"]}).row("inscatter", "all", "rel_bias")
+    >>> round(r.estimate, 2), r.verdict
+    (0.05, 'fail')
+    >>> check(truth, parts).verdict
+    'pass'
+    """
+    if not (isinstance(confidence, float | int) and 0 < confidence < 1):
+        raise FogrefError(f"confidence: {confidence!r} must be in (0, 1)")
+    if not (isinstance(block, int) and block >= 1):
+        raise FogrefError(f"block: {block!r} must be an integer >= 1 [px]")
+    if not (isinstance(n_boot, int) and n_boot >= 100):
+        raise FogrefError(f"n_boot: {n_boot!r} must be an integer >= 100")
+    table = _tolerance_table(tolerances)
+    cp = candidate_parts(truth, candidate, precision, sky_distance)
+    wanted = list(cp.parts) if parts is None else list(parts)
+    for p in wanted:
+        if p not in cp.parts:
+            raise FogrefError(f"part '{p}': {cp.name} has only {', '.join(cp.parts)}")
+    regions = region_masks(truth, distance_bands)
+    alpha = (1.0 - confidence) / 2.0
+    rows, errors = [], {}
+    for k, part in enumerate(wanted):
+        c, r, v, rv, ok = cp.parts[part], cp.reference[part], cp.noise_var[part], cp.ref_var[part], cp.valid[part]
+        errors[part] = np.where(ok[..., None], c - r, 0.0)
+        for j, (region, mask) in enumerate(regions.items()):
+            m = mask & ok
+            tols = {**table.get((part, None), {}), **table.get((part, region), {})}
+            n_px = int(m.sum())
+            if n_px == 0:
+                rows += [Row(part, region, met, None, None, None, tols.get(met), "empty", 0) for met in METRICS]
+                continue
+            sums = _block_sums(c, r, v, rv, m, block)
+            point = _linear_from_sums(sums.sum(0))
+            reps = block_bootstrap(sums, n_boot, seed + 7919 * k + 104729 * j)
+            for met in METRICS:
+                est = _finite(point[met])
+                rep = reps[met][np.isfinite(reps[met])]
+                tol = tols.get(met)
+                if est is None or rep.size < n_boot // 2 or len(sums) < 2:
+                    rows.append(Row(part, region, met, None, None, None, tol, "empty", n_px))
+                    continue
+                lo, hi = _interval(est, rep, len(sums), alpha)
+                if met in SIGNED:
+                    est, lo, hi = (_finite(x) for x in (est, lo, hi))
+                else:  # squared scale -> root scale (monotone), clamped at 0
+                    est, lo, hi = (math.sqrt(max(x, 0.0)) for x in (est, lo, hi))
+                rows.append(Row(part, region, met, est, lo, hi, tol, _verdict(met, lo, hi, tol), n_px))
+    settings = {"block": block, "n_boot": n_boot, "seed": seed, "distance_bands_m": list(distance_bands or ()),
+                "precision": precision, "sky_distance_m": sky_distance,
+                "tolerances": {f"{p}{'/' + r if r else ''}": t for (p, r), t in table.items()}}
+    return CheckResult(rows, float(confidence), cp.name, str(truth.path), settings, errors)
+
+
+# ---------------------------------------------------------------- synthetic truths
+
+
+def synthetic_truth(model, shape=(18, 32), noise: float = 0.01, seed: int = 0, fov_deg: float = 70.0,
+                    surface_radiance=(0.3, 0.25, 0.2), sky_radiance=(0.2, 0.3, 0.5),
+                    sky_distance: float = DEFAULT_SKY_DISTANCE, correlated: bool = False) -> Truth:
+    """A pixel-exact :class:`~fogref.gbuffer.Truth` on which ``model`` is exact, plus known noise.
+
+    The camera (at 2 m) looks over a ground plane (y = 0) below the horizon and a
+    sky above; ``T`` and ``inscatter`` are the model's own values, ``surface`` is
+    constant per region, and Gaussian noise of relative standard deviation ``noise``
+    is added to ``inscatter`` and ``surface`` (``stderr.*`` says how much); ``T`` is
+    noise-free, as in a pixel-exact render.  For testing statistics without a render.
+
+    Parameters
+    ----------
+    model : fog model
+        Evaluated at float64 on the G-buffer.
+    shape : (int, int)
+        ``(H, W)`` pixels.
+    noise : float
+        Relative standard error of the noisy parts, >= 0.
+    seed : int
+        Seed of the noise.
+    correlated : bool
+        Make the noise of 2×2 pixel groups identical (to test the block bootstrap
+        against spatial correlation); ``stderr`` stays per pixel.
+
+    Examples
+    --------
+    >>> from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+    >>> t = synthetic_truth(UE4ExponentialHeightFog(UE4FogParams()), shape=(9, 16))
+    >>> t.shape, bool(t.hit.any() and t.sky.any()), t.pixel_exact
+    ((9, 16), True, True)
+    """
+    if not (math.isfinite(noise) and noise >= 0):
+        raise FogrefError(f"noise: {noise} must be finite and >= 0")
+    H, W = (int(x) for x in shape)
+    camera = np.array([0.0, 2.0, 0.0])
+    tan = math.tan(math.radians(fov_deg) / 2)
+    u = (np.arange(W) + 0.5) / W * 2 - 1
+    v = 1 - (np.arange(H) + 0.5) / H * 2
+    x = u[None, :] * tan
+    y = v[:, None] * tan * H / W + 0.02
+    d = np.stack(np.broadcast_arrays(x, y, np.ones((H, W))), -1)
+    d = d / np.linalg.norm(d, axis=-1, keepdims=True)
+    hit = d[..., 1] < -1e-3
+    t = np.where(hit, -camera[1] / np.where(hit, d[..., 1], -1.0), 0.0)
+    pos = np.where(hit[..., None], camera + d * t[..., None], 0.0)
+    world = np.where(hit[..., None], pos, camera + d * sky_distance)
+    res = model.evaluate(camera, world, precision="float64")
+    T = np.broadcast_to(np.asarray(res.transmittance, float), (H, W, 3)).copy()
+    L = np.broadcast_to(np.asarray(res.inscatter, float), (H, W, 3)).copy()
+    surface = np.where(hit[..., None], np.asarray(surface_radiance, float), np.asarray(sky_radiance, float))
+    rng = np.random.default_rng(seed)
+
+    def gauss():
+        if not correlated:
+            return rng.standard_normal((H, W, 3))
+        z = rng.standard_normal((-(-H // 2), -(-W // 2), 3))
+        return np.repeat(np.repeat(z, 2, 0), 2, 1)[:H, :W]
+
+    se_L, se_s = noise * np.abs(L), noise * surface
+    L_hat = L + se_L * gauss()
+    s_hat = surface + se_s * gauss()
+    att = T * s_hat
+    final = att + L_hat
+    zero = np.zeros((H, W, 3))
+    stderr = {"final": np.sqrt(se_L**2 + (T * se_s) ** 2), "transmittance": zero, "attenuated_surface": T * se_s,
+              "inscatter": se_L, "single": se_L, "multiple": zero, "surface": se_s}
+    params = {"camera": {"origin": camera.tolist()}, "sun": None, "sky": {"type": "constant",
+                                                                         "radiance": list(sky_radiance)}}
+    attrs = {"fogref.schema": "2", "fogref.pixel_filter": "centre", "fogref.spp": 0, "fogref.seed": seed,
+             "fogref.params": params, "fogref.synthetic": True}
+    return Truth(path=Path(f"<synthetic truth, seed {seed}>"), final=final, transmittance=T, attenuated_surface=att,
+                 inscatter=L_hat, single=L_hat, multiple=zero, surface=s_hat, stderr=stderr,
+                 surface_coverage=np.ones((H, W)), distance=t, position=pos, view=d,
+                 hit_fraction=hit.astype(float), camera=camera, sun_direction=None, params=params, attrs=attrs)
