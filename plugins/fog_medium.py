@@ -3,9 +3,9 @@
 Stock ``volpath`` cannot call a Python medium's free-flight sampling (that method
 is not virtual); it does delta tracking against ``get_majorant``.  This plugin
 gives it a *tight per-ray majorant*: ``intersect_aabb`` clips the ray to the fog's
-bounds and records the largest density on the clipped segment (the density is
-monotone in height, so the maximum sits at the segment's lowest point), and
-``get_majorant`` returns it.  ``fogpath`` instead uses :attr:`fog` (the physics
+bounds and records the largest density on the clipped segment, which it asks the
+height profiles for (``max_density`` over the segment's height range, see
+:class:`fogref.media.protocol.HeightProfile`), and ``get_majorant`` returns it.  ``fogpath`` instead uses :attr:`fog` (the physics
 object) for analytic free flight and closed-form transmittance.
 
 XML parameters (SI units, y-up):
@@ -25,13 +25,13 @@ density2        float      layer 2 relative density; 0 = no second layer      0
 falloff2        float      layer 2 falloff [1/m]                              0.01
 height2         float      layer 2 reference height [m]                       0
 base_height     float      ``hdrp``: top of the constant part [m]             0
-start, end      float      ``powerlaw``: seed 001's S and E heights [m]       0, 100
+start, end      float      ``powerlaw``: full and zero density heights [m]   0, 100
 power           float      ``powerlaw``: exponent p >= 0                      1
 bounds_min/max  point      the fog's box [m] (required for ``box``)           none
 floor           float      lowest height the majorant considers [m] (stock     see text
                            integrators only): no ray may go below it in fog.
                            Default: bounds_min.y, else the lowest layer's
-                           reference height (scenes put it at ground level).
+                           ``reference_height`` (scenes put it at ground level).
 ==============  =========  ==================================================  ========
 
 A ``<phase>`` child overrides ``g``.
@@ -43,7 +43,7 @@ import drjit as dr
 import mitsuba as mi
 
 from fogref.media import drjit_ops
-from fogref.render.params import medium_from_params
+from fogref.media.params import medium_from_params
 
 
 def _props_to_dict(props) -> dict:
@@ -75,8 +75,7 @@ class HeightFogMedium(mi.Medium):
             props["phase"] = mi.load_dict({"type": "hg", "g": self.fog.g})
         super().__init__(props)
         default_floor = (self.fog.bounds.lo[1] if self.fog.bounds is not None
-                         else min(getattr(L, "height", getattr(L, "base_height", getattr(L, "start", 0.0)))
-                                  for L in self.fog.layers))
+                         else min(L.reference_height for L in self.fog.layers))
         self.floor = float(params.get("floor", default_floor))
         self.m_is_homogeneous = False
         # Stock volpath's spectral mode gives every ray that escapes to infinity
@@ -92,16 +91,16 @@ class HeightFogMedium(mi.Medium):
         t0, t1 = self.fog.clip(ops, ray.o, ray.d)
         t1 = dr.minimum(t1, ray.maxt)
         active = t1 > t0
-        # lowest point of the segment -> densest (every profile is monotone non-increasing in y)
+        # the segment's height range, floored; the profiles give their largest density on it
         far = dr.select(dr.isfinite(t1) & (t1 < 1e30), t1, 1e30)
         y0 = ray.o.y + t0 * ray.d.y
         y1 = ray.o.y + far * ray.d.y
         y_low = dr.maximum(dr.minimum(y0, y1), self.floor)
+        y_high = dr.maximum(dr.maximum(y0, y1), y_low)
         if self.fog.bounds is not None:
             y_low = dr.maximum(y_low, self.fog.bounds.lo[1])
-        rho_max = 0.0
-        for L in self.fog.layers:
-            rho_max = rho_max + L.rho(ops, y_low)
+            y_high = dr.maximum(dr.minimum(y_high, self.fog.bounds.hi[1]), y_low)
+        rho_max = self.fog.max_density(ops, y_low, y_high)
         # No additive floor: where the fog fades to nothing (rays rising out of
         # an unbounded layer) the majorant underflows to 0, the next tentative
         # collision lands at infinity and the ray escapes instead of taking

@@ -1,7 +1,7 @@
-"""``from_physical``: every game fog model built from a ground truth's ``fogref.params``.
+"""``fogref.mapping.from_physical``: every game fog model built from a ground truth's ``fogref.params``.
 
 Exact mappings give the physical float64 transmittance; colours follow the light
-(albedo * sky radiance; Unreal's from the fit of fogref.study.fit); a profile
+(albedo * sky radiance; Unreal's from the fit of fogref.mapping.unreal); a profile
 without a counterpart raises ParameterError naming 'profile'.
 """
 
@@ -13,10 +13,18 @@ import pytest
 
 from fogref.compare.model_factory import build_model
 from fogref.errors import ParameterError
-from fogref.media import NP
+from fogref.mapping import (
+    FIT_DIRECTIONS,
+    FIT_DISTANCES,
+    PhysicalScene,
+    fit_unreal,
+    from_physical,
+    lobe_fit,
+    sample_views,
+)
+from fogref.media import NP, medium_from_params
 from fogref.models import get
 from fogref.models.ue4 import direction_to_unreal
-from fogref.render.params import medium_from_params
 
 SUN = np.array([0.4, 0.139, 0.906]) / np.linalg.norm([0.4, 0.139, 0.906])
 VALLEY = {
@@ -73,7 +81,7 @@ def check_finite(model, camera, pts):
 @pytest.mark.parametrize("name", ["ue4", "hdrp", "filament"])
 def test_valley_transmittance_is_exact(name):
     pts = views()
-    model = get(name).from_physical(VALLEY)
+    model = from_physical(name, VALLEY)
     got = model.evaluate(CAMERA, pts, precision="float64").transmittance
     np.testing.assert_allclose(got, physical_transmittance(VALLEY, CAMERA, pts), rtol=1e-9, atol=1e-14)
     check_finite(model, CAMERA, pts)
@@ -83,7 +91,7 @@ def test_valley_transmittance_is_exact(name):
 def test_homogeneous_transmittance_is_exact(name):
     p = scene(profile="homogeneous", sigma_t=0.002, albedo=0.8, g=0.3)
     pts = views(min_y=-1e9)[:800]
-    model = get(name).from_physical(p)
+    model = from_physical(name, p)
     got = model.evaluate(CAMERA, pts, precision="float64").transmittance
     np.testing.assert_allclose(got, physical_transmittance(p, CAMERA, pts), rtol=1e-9, atol=1e-14)
     check_finite(model, CAMERA, pts)
@@ -93,7 +101,7 @@ def test_ue4_two_layers_exact():
     p = scene(profile="exponential", sigma_t=0.001, albedo=0.9, g=0.6, falloff=0.01, height=0.0,
               density2=0.5, falloff2=0.05, height2=20.0)
     pts = views()
-    model = get("ue4").from_physical(p)
+    model = from_physical("ue4", p)
     got = model.evaluate(CAMERA, pts, precision="float64").transmittance
     np.testing.assert_allclose(got, physical_transmittance(p, CAMERA, pts), rtol=1e-9, atol=1e-14)
 
@@ -101,12 +109,12 @@ def test_ue4_two_layers_exact():
 def test_hdrp_profile_exact_and_camera_below_fog_height():
     p = scene(profile="hdrp", sigma_t=0.003, albedo=0.7, g=0.2, base_height=10.0, falloff=0.02)
     pts = views(min_y=-1e9)
-    model = get("hdrp").from_physical(p)
+    model = from_physical("hdrp", p)
     np.testing.assert_allclose(model.evaluate(CAMERA, pts, precision="float64").transmittance,
                                physical_transmittance(p, CAMERA, pts), rtol=1e-9, atol=1e-14)
     # exponential layer referenced above the camera: HDRP's base goes down to the camera
     q = scene(profile="exponential", sigma_t=0.001, falloff=0.01, height=50.0)
-    model = get("hdrp").from_physical(q)
+    model = from_physical("hdrp", q)
     assert model.params.baseHeight == pytest.approx(2.0)
     pts = views()
     pts = pts[pts[:, 1] >= 2.0]
@@ -117,7 +125,7 @@ def test_hdrp_profile_exact_and_camera_below_fog_height():
 def test_box_exact():
     p = scene(profile="box", sigma_t=0.05, albedo=0.9, g=0.0, bounds_min=[-30, 0, 20], bounds_max=[30, 15, 80])
     pts = views(min_y=-1e9)
-    model = get("box").from_physical(p)
+    model = from_physical("box", p)
     assert model.params.mode == "beer"
     np.testing.assert_allclose(model.evaluate(CAMERA, pts, precision="float64").transmittance,
                                physical_transmittance(p, CAMERA, pts), rtol=1e-9, atol=1e-14)
@@ -128,7 +136,7 @@ def test_box_exact():
 def test_altitude_optical_depth_exact():
     p = scene(profile="powerlaw", sigma_t=0.004, albedo=0.9, g=0.0, start=0.0, end=60.0, power=2.0)
     pts = views()
-    model = get("altitude").from_physical(p)
+    model = from_physical("altitude", p)
     tau = -np.log(physical_transmittance(p, CAMERA, pts))[:, 0]
     got = model.path_integral(CAMERA, pts, precision="float64") * model.params._FogColor[3]
     np.testing.assert_allclose(got, tau, rtol=1e-9, atol=1e-14)
@@ -141,7 +149,7 @@ def test_altitude_optical_depth_exact():
 
 def test_unity_valley_uses_density_at_camera():
     pts = views()
-    model = get("unity").from_physical(VALLEY)
+    model = from_physical("unity", VALLEY)
     q = model.params
     assert (q.fogMode, q.fog_coordinate) == ("exp", "distance")
     assert q.fogDensity == pytest.approx(0.000960906 * math.exp(-0.0138629 * 2.0), rel=1e-12)
@@ -156,13 +164,10 @@ def test_unity_valley_uses_density_at_camera():
 # -- colours -------------------------------------------------------------------------
 
 def test_ue4_colours_from_fit():
-    from fogref.models.ue4 import FIT_DIRECTIONS, FIT_DISTANCES
-    from fogref.study.fit import PhysicalFog, fit_unreal, sample_views
-
-    q = get("ue4").from_physical(VALLEY).params
+    q = from_physical("ue4", VALLEY).params
     assert q.InscatteringLightDirection == pytest.approx(direction_to_unreal(SUN))
     assert q.SunLuminance == 1.0 and q.StartDistance == 0.0 and q.FogMaxOpacity == 1.0
-    pf = PhysicalFog.from_params(VALLEY)
+    pf = PhysicalScene.from_params(VALLEY)
     fit = fit_unreal(pf, sample_views(pf.camera, n_dirs=FIT_DIRECTIONS, distances=FIT_DISTANCES)).params
     for k in ("FogInscatteringColor", "DirectionalInscatteringColor", "DirectionalInscatteringExponent",
               "DirectionalInscatteringStartDistance"):
@@ -173,9 +178,7 @@ def test_ue4_colours_from_fit():
 
 
 def test_filament_colours_and_lobe():
-    from fogref.study.fit import lobe_fit
-
-    q = get("filament").from_physical(VALLEY).params
+    q = from_physical("filament", VALLEY).params
     np.testing.assert_allclose(q.color, ALBEDO_SKY)
     lobe = lobe_fit(0.6, isotropic=False)
     assert q.inScatteringSize == pytest.approx(lobe["exponent"])
@@ -188,7 +191,7 @@ def test_filament_colours_and_lobe():
 
 
 def test_hdrp_colour():
-    q = get("hdrp").from_physical(VALLEY).params
+    q = from_physical("hdrp", VALLEY).params
     np.testing.assert_allclose(np.asarray(q.color) * np.asarray(q.albedo), ALBEDO_SKY)
     assert q.maxFogDistance >= 1e5
 
@@ -198,7 +201,7 @@ def test_no_sun_no_sky(name):
     p = copy.deepcopy(VALLEY)
     p["sun"] = None
     p["sky"] = None
-    model = get(name).from_physical(p)
+    model = from_physical(name, p)
     r = model.evaluate(CAMERA, views(), precision="float64")
     assert np.all(r.inscatter == 0) and np.all(np.isfinite(r.transmittance))
 
@@ -206,7 +209,7 @@ def test_no_sun_no_sky(name):
 def test_ue4_no_sun_colour_is_albedo_sky():
     p = copy.deepcopy(VALLEY)
     p["sun"] = None
-    q = get("ue4").from_physical(p).params
+    q = from_physical("ue4", p).params
     assert q.InscatteringLightDirection is None
     np.testing.assert_allclose(q.FogInscatteringColor, ALBEDO_SKY)
 
@@ -214,7 +217,7 @@ def test_ue4_no_sun_colour_is_albedo_sky():
 def test_filament_sun_below_horizon_has_no_lobe():
     p = copy.deepcopy(VALLEY)
     p["sun"]["direction"] = [0.3, -0.2, 0.9]
-    assert get("filament").from_physical(p).params.inScatteringSize < 0
+    assert from_physical("filament", p).params.inScatteringSize < 0
 
 
 # -- through the compare factory -----------------------------------------------------
@@ -222,7 +225,7 @@ def test_filament_sun_below_horizon_has_no_lobe():
 def test_build_model_from_scene_with_override():
     model = build_model(get("ue4"), {"FogMaxOpacity": 0.9}, VALLEY)
     assert model.params.FogMaxOpacity == 0.9
-    assert model.params.FogDensity == pytest.approx(get("ue4").from_physical(VALLEY).params.FogDensity)
+    assert model.params.FogDensity == pytest.approx(from_physical("ue4", VALLEY).params.FogDensity)
     model = build_model(get("filament"), {"distance": 5.0}, VALLEY)
     assert model.params.distance == 5.0 and model.params.inScatteringSize > 0
 
@@ -246,7 +249,7 @@ BOUNDED_EXP = {**EXP, "bounds_min": [-10, 0, -10], "bounds_max": [10, 10, 10]}
 ])
 def test_no_counterpart_raises_profile(name, medium):
     with pytest.raises(ParameterError) as e:
-        get(name).from_physical(scene(**medium))
+        from_physical(name, scene(**medium))
     assert e.value.name == "profile"
     assert "valley.xml: medium" in str(e.value) and "'profile'" in str(e.value)
 
@@ -255,12 +258,12 @@ def test_no_counterpart_raises_profile(name, medium):
 def test_two_layers_raise(name):
     p = scene(**EXP, density2=0.5, falloff2=0.05, height2=20.0)
     with pytest.raises(ParameterError) as e:
-        get(name).from_physical(p)
+        from_physical(name, p)
     assert e.value.name == "density2"
 
 
 @pytest.mark.parametrize("name", ["ue4", "unity", "hdrp", "filament"])
 def test_coloured_extinction_raises(name):
     with pytest.raises(ParameterError) as e:
-        get(name).from_physical(scene(**{**EXP, "sigma_t": [0.01, 0.02, 0.03]}))
+        from_physical(name, scene(**{**EXP, "sigma_t": [0.01, 0.02, 0.03]}))
     assert e.value.name == "sigma_t"

@@ -16,7 +16,7 @@ from render_scenes import render_runs
 from stats import one_sample_blocks
 
 from fogref.media import NP, hg_phase, single_scatter_sun
-from fogref.render.params import medium_from_params
+from fogref.media.params import medium_from_params
 
 pytestmark = pytest.mark.render
 W, H, SUB = 16, 12, 8

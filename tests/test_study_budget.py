@@ -3,9 +3,10 @@
 import numpy as np
 import pytest
 
+from fogref.mapping import PhysicalScene as PhysicalFog
+from fogref.mapping import base_params
 from fogref.media import ExpLayer, FogMedium
 from fogref.study import budget as B
-from fogref.study.fit import PhysicalFog, base_params
 
 
 def _pixels(pf, h=12, w=20, seed=0):

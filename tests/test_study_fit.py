@@ -1,13 +1,12 @@
-"""fogref.study.fit: recovering known Unreal parameters, the lobe table's limits."""
+"""fogref.mapping's fits (Unreal, cosine lobe): recovering known Unreal parameters, the lobe table's limits."""
 
 import math
 
 import numpy as np
 import pytest
 
-from fogref.media import ExpLayer, FogMedium
-from fogref.study.fit import (
-    PhysicalFog,
+from fogref.mapping import (
+    PhysicalScene,
     base_params,
     fit_unreal,
     lobe_fit,
@@ -15,11 +14,12 @@ from fogref.study.fit import (
     sample_views,
     unreal_inscatter,
 )
+from fogref.media import ExpLayer, FogMedium
 
 
 def _pf(g=0.6):
     med = FogMedium(sigma_t=0.002, albedo=0.9, g=g, layers=(ExpLayer(1.0, 0.02, 0.0),))
-    return PhysicalFog(med, (0.4, 0.3, 0.87), (3.0, 2.8, 2.4), (0.2, 0.3, 0.5), (0.0, 2.0, 0.0))
+    return PhysicalScene(med, (0.4, 0.3, 0.87), (3.0, 2.8, 2.4), (0.2, 0.3, 0.5), (0.0, 2.0, 0.0))
 
 
 def test_fit_recovers_parameters_of_synthetic_unreal_data():

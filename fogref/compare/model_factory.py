@@ -1,23 +1,18 @@
 """Build a game fog model for a comparison: by name, from ``KEY=VALUE`` settings or
 from the ground truth's physical fog.
 
-Model classes come from the registry (``fogref.models.get``).  Contract used here:
-
-* ``cls.from_physical(params: dict)`` (classmethod, optional): the model whose
-  parameters best represent the physical scene; ``params`` is the EXR's whole
-  ``fogref.params`` object (camera, medium, sun, sky).
-* ``cls.from_dict(d: dict)`` (classmethod, optional); else, when the class names its
-  parameter dataclass as ``cls.Params``, ``cls(cls.Params(**d))``; else ``cls(**d)``:
-  the model with parameters set by name.
-* ``model.to_dict()`` (optional), else the fields of a dataclass model, else the
-  fields of its ``model.params`` dataclass, else ``vars(model)``: the current
-  parameters, used to apply ``KEY=VALUE`` on top of ``from_physical``.
+Model classes come from the registry (``fogref.models.get``) and follow
+:class:`fogref.models.base.FogModel`.  One way to construct a model:
+``cls(cls.Params(**values))`` (a model's parameters are a dataclass, ``cls.Params``;
+its instances keep them as ``model.params``).  ``--from-scene`` asks
+:func:`fogref.mapping.from_physical` (the mapping registry, or the class's own
+``from_physical(physical)`` classmethod for a model without a registered mapping)
+and applies ``KEY=VALUE`` on top of the parameters it chose.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import importlib
 import json
 
 from fogref.errors import FogrefError
@@ -25,8 +20,8 @@ from fogref.errors import FogrefError
 
 def model_class(name: str) -> type:
     """The registered model class called ``name`` (e.g. ``"ue4"``); FogrefError if unknown."""
-    pkg = importlib.import_module("fogref.models")
-    get = getattr(pkg, "get", None) or importlib.import_module("fogref.models.base").get
+    from fogref.models import get
+
     try:
         return get(name)
     except KeyError as e:
@@ -52,25 +47,28 @@ def parse_param_assignments(assignments) -> dict:
     return out
 
 
+def _params_class(cls: type, params: dict) -> type:
+    params_class = getattr(cls, "Params", None)
+    if not (isinstance(params_class, type) and dataclasses.is_dataclass(params_class)):
+        raise FogrefError(f"model '{getattr(cls, 'name', cls.__name__)}': cannot set parameters {sorted(params)}: "
+                          f"it has no parameter dataclass 'Params'")
+    return params_class
+
+
 def current_parameters(model) -> dict:
-    """The parameters of a model instance as a dict (``to_dict``, dataclass or ``vars``)."""
-    if callable(getattr(model, "to_dict", None)):
-        return dict(model.to_dict())
-    for obj in (model, getattr(model, "params", None)):
-        if obj is not None and dataclasses.is_dataclass(obj) and not isinstance(obj, type):
-            return {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj) if f.init}
-    return {k: v for k, v in vars(model).items() if not k.startswith("_")}
+    """The parameters of a model instance as a dict: the fields of its ``params`` dataclass."""
+    params = getattr(model, "params", None)
+    if params is None or not dataclasses.is_dataclass(params) or isinstance(params, type):
+        raise FogrefError(f"model '{getattr(model, 'name', type(model).__name__)}' keeps no parameter "
+                          f"dataclass in 'params'")
+    return {f.name: getattr(params, f.name) for f in dataclasses.fields(params) if f.init}
 
 
 def _construct(cls: type, params: dict):
     name = getattr(cls, "name", cls.__name__)
+    params_class = _params_class(cls, params)
     try:
-        if callable(getattr(cls, "from_dict", None)):
-            return cls.from_dict(dict(params))
-        params_class = getattr(cls, "Params", None)
-        if isinstance(params_class, type) and dataclasses.is_dataclass(params_class):
-            return cls(params_class(**params))
-        return cls(**params)
+        return cls(params_class(**params))
     except (TypeError, ValueError, KeyError) as e:
         raise FogrefError(f"model '{name}': cannot set parameters {sorted(params)}: {e}") from e
 
@@ -78,21 +76,22 @@ def _construct(cls: type, params: dict):
 def build_model(cls: type, params: dict | None = None, scene_params: dict | None = None):
     """An instance of ``cls``.
 
-    ``scene_params`` (the EXR's ``fogref.params``) given: ``cls.from_physical(scene_params)``,
-    then ``params`` override its parameters by name.  Otherwise the model built from
-    ``params`` alone (``from_dict`` or the constructor; ``{}`` gives the defaults).
+    ``scene_params`` (the EXR's ``fogref.params``) given: the model that stands for
+    its physical scene (:func:`fogref.mapping.from_physical`), then ``params``
+    override its parameters by name.  Otherwise ``cls(cls.Params(**params))``
+    (``{}`` gives the defaults).
     """
     params = dict(params or {})
-    name = getattr(cls, "name", cls.__name__)
     if scene_params is None:
         return _construct(cls, params)
-    from_physical = getattr(cls, "from_physical", None)
-    if not callable(from_physical):
+    from fogref.mapping import PhysicalScene, from_physical, has_mapping
+
+    if not has_mapping(cls):
         raise FogrefError(
-            f"model '{name}' has no from_physical(params) classmethod, so --from-scene cannot derive its "
-            f"parameters; set them with --param KEY=VALUE instead"
-        )
-    model = from_physical(scene_params)
+            f"model '{getattr(cls, 'name', cls.__name__)}' has no physical mapping (fogref.mapping) and no "
+            f"from_physical(physical) classmethod, so --from-scene cannot derive its parameters; "
+            f"set them with --param KEY=VALUE instead")
+    model = from_physical(cls, PhysicalScene.from_params(scene_params))
     if not params:
         return model
     merged = current_parameters(model)

@@ -1,10 +1,21 @@
-"""Physics of fog media: density profiles and their closed forms (no Mitsuba)."""
+"""Physics of fog media: density profiles and their closed forms (numpy and Dr.Jit, no Mitsuba).
+
+* :mod:`~fogref.media.protocol`      the height-profile protocol, the profile registry, parameter parsers
+* :mod:`~fogref.media.medium`        :class:`FogMedium`, :class:`ExpLayer` (exponential, homogeneous, box)
+* :mod:`~fogref.media.profiles`      :class:`HDRPLayer`, :class:`PowerLawLayer`
+* :mod:`~fogref.media.params`        :func:`medium_from_params` (the ``heightfog`` XML parameters)
+* :mod:`~fogref.media.closed_form`   optical depth, free flight, ``phi``/``psi``, HG phase
+* :mod:`~fogref.media.single_scatter` closed-form and sampled sun single scattering
+"""
 
 from fogref.media.closed_form import TAU_MAX, hg_phase, phi, psi
 from fogref.media.medium import Box, ExpLayer, FogMedium
 from fogref.media.ops import NP, drjit_ops
+from fogref.media.params import medium_from_params
 from fogref.media.profiles import HDRPLayer, PowerLawLayer
+from fogref.media.protocol import PROFILES, HeightProfile, register_profile, rgb
 from fogref.media.single_scatter import single_scatter_sun
 
-__all__ = ["TAU_MAX", "NP", "Box", "ExpLayer", "FogMedium", "HDRPLayer", "PowerLawLayer", "drjit_ops", "hg_phase",
-           "phi", "psi", "single_scatter_sun"]
+__all__ = ["TAU_MAX", "NP", "PROFILES", "Box", "ExpLayer", "FogMedium", "HDRPLayer", "HeightProfile",
+           "PowerLawLayer", "drjit_ops", "hg_phase", "medium_from_params", "phi", "psi", "register_profile",
+           "rgb", "single_scatter_sun"]

@@ -7,7 +7,10 @@ is y-up, metres.  Special cases, all exact:
 
 * one or two exponential layers (Unreal's fog is two);
 * ``falloff = 0``: a homogeneous medium;
-* homogeneous + ``bounds``: the bounded box slab of seed 004.
+* homogeneous + ``bounds``: a box of constant fog (Unity-style fog volumes).
+
+Every layer follows :class:`fogref.media.protocol.HeightProfile`; the medium only
+asks the protocol (density, depth, inversion, is-constant, is-empty).
 
 The methods take an array back end ``ops`` (``fogref.media.NP`` for numpy float64,
 ``fogref.media.drjit_ops()`` inside Mitsuba), positions and directions as
@@ -23,6 +26,7 @@ from dataclasses import dataclass, field
 
 from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
+from fogref.media.protocol import check_range, number, register_profile, rgb
 
 
 def quiet_numpy(fn):
@@ -37,13 +41,14 @@ def quiet_numpy(fn):
     return wrapper
 
 
-
-
 def check_layer_param(src, i, name, v, lo, hi):
-    """Raise ParameterError naming ``layer{i}.{name}`` unless ``lo <= v <= hi`` (finite)."""
-    v = float(v)
-    if not math.isfinite(v) or not (lo <= v <= hi):
-        raise ParameterError(src, f"layer{i}.{name}", f"value {v} outside [{lo}, {hi}]")
+    """Raise ParameterError naming ``layer{i}.{name}`` unless ``lo <= v <= hi`` (finite).
+
+    Examples
+    --------
+    >>> check_layer_param("<doc>", 0, "density", 2.0, 0.0, 1e6)
+    """
+    check_range(src, f"layer{i}.{name}", v, lo, hi)
 
 
 @dataclass(frozen=True)
@@ -54,14 +59,71 @@ class ExpLayer:
     falloff: b [1/m], 0 (homogeneous) to 1e3.
     height:  h [m], the height where the layer's relative density is ``density``.
 
-    Every height profile ("component") answers the same three questions, with
-    ``ops`` the array back end, ``oy`` the ray origin's height [m] and ``dy`` the
-    ray direction's y component: :meth:`rho`, :meth:`depth`, :meth:`sample`.
+    A :class:`~fogref.media.protocol.HeightProfile`: ``ops`` is the array back
+    end, ``oy`` the ray origin's height [m] and ``dy`` the ray direction's y
+    component.  ``falloff = 0`` is a homogeneous layer.
+
+    Examples
+    --------
+    >>> from fogref.media import NP
+    >>> L = ExpLayer(density=2.0, falloff=0.1, height=10.0)
+    >>> float(L.rho(NP, 10.0))
+    2.0
+    >>> float(L.depth(NP, 10.0, 1.0, NP.largest))   # density / falloff, straight up
+    20.0
+    >>> float(L.max_density(NP, 0.0, 10.0)) == float(L.rho(NP, 0.0))
+    True
     """
+
+    profile = "exponential"
 
     density: float = 1.0
     falloff: float = 0.0
     height: float = 0.0
+
+    @classmethod
+    def from_params(cls, params: dict, src: str = "<params>") -> tuple:
+        """Profile "exponential": ``density, falloff, height`` and an optional second
+        layer ``density2, falloff2, height2`` (``density2 = 0``: none).
+
+        Examples
+        --------
+        >>> ExpLayer.from_params({"falloff": 0.02, "height": 5.0})
+        (ExpLayer(density=1.0, falloff=0.02, height=5.0),)
+        """
+        layers = [cls(number(params, "density", 1.0, src, 0.0, 1e6), number(params, "falloff", 0.01, src, 0.0, 1e3),
+                      number(params, "height", 0.0, src, -1e7, 1e7))]
+        d2 = number(params, "density2", 0.0, src, 0.0, 1e6)
+        if d2 > 0:
+            layers.append(cls(d2, number(params, "falloff2", 0.01, src, 0.0, 1e3),
+                              number(params, "height2", 0.0, src, -1e7, 1e7)))
+        return tuple(layers)
+
+    @classmethod
+    def homogeneous_from_params(cls, params: dict, src: str = "<params>") -> tuple:
+        """Profiles "homogeneous" and "box": one constant layer of ``density``.
+
+        Examples
+        --------
+        >>> ExpLayer.homogeneous_from_params({"density": 0.5})
+        (ExpLayer(density=0.5, falloff=0.0, height=0.0),)
+        """
+        return (cls(number(params, "density", 1.0, src, 0.0, 1e6), 0.0, 0.0),)
+
+    @property
+    def is_constant(self) -> bool:
+        """The density does not depend on height (``falloff == 0``)."""
+        return self.falloff == 0
+
+    @property
+    def is_empty(self) -> bool:
+        """The density is 0 everywhere."""
+        return self.density <= 0
+
+    @property
+    def reference_height(self) -> float:
+        """``height`` [m]: where the relative density equals ``density``."""
+        return float(self.height)
 
     def validate(self, src, i):
         check_layer_param(src, i, "density", self.density, 0.0, 1e6)
@@ -87,6 +149,15 @@ class ExpLayer:
         """Distance [m] where the shape optical depth reaches ``s``; ops.largest if never."""
         return cf.exp_layer_sample(ops, self.log_c(ops, oy), self.falloff * dy, s)
 
+    def max_density(self, ops, y_lo, y_hi):
+        """Largest relative density on heights ``[y_lo, y_hi]``: at ``y_lo`` (non-increasing)."""
+        return self.rho(ops, y_lo)
+
+
+register_profile("exponential", ExpLayer.from_params)
+register_profile("homogeneous", ExpLayer.homogeneous_from_params)
+register_profile("box", ExpLayer.homogeneous_from_params, needs_bounds=True)
+
 
 @dataclass(frozen=True)
 class Box:
@@ -96,18 +167,6 @@ class Box:
     hi: tuple
 
 
-def _rgb(name, v, lo, hi, source):
-    if isinstance(v, (int, float)):
-        v = (float(v),) * 3
-    v = tuple(float(x) for x in v)
-    if len(v) != 3:
-        raise ParameterError(source, name, f"expected 1 or 3 values, got {len(v)}")
-    for x in v:
-        if not (lo <= x <= hi) or not math.isfinite(x):
-            raise ParameterError(source, name, f"value {x} outside [{lo}, {hi}]")
-    return v
-
-
 @dataclass(frozen=True)
 class FogMedium:
     """Exponential height fog with RGB extinction and albedo and an HG phase.
@@ -115,9 +174,17 @@ class FogMedium:
     sigma_t: RGB extinction at each layer's reference height [1/m], 0 to 1e2.
     albedo:  RGB single-scattering albedo, 0 to 1.
     g:       Henyey–Greenstein asymmetry, -0.999 to 0.999.
-    layers:  1 to 4 height components (:class:`ExpLayer` or another profile with
-             the same interface); layers with density 0 are dropped.
+    layers:  1 to 4 :class:`~fogref.media.protocol.HeightProfile` layers; empty
+             layers are dropped (one is kept if all are empty).
     bounds:  optional :class:`Box`; the fog is 0 outside it.
+
+    Examples
+    --------
+    >>> from fogref.media import NP
+    >>> fog = FogMedium(sigma_t=0.01, layers=(ExpLayer(1.0, 0.0, 0.0),))
+    >>> T = fog.transmittance(NP, (0.0, 0.0, 0.0), (1.0, 0.0, 0.0), 100.0)
+    >>> [round(float(x), 6) for x in T]
+    [0.367879, 0.367879, 0.367879]
     """
 
     sigma_t: tuple = (0.01, 0.01, 0.01)
@@ -129,8 +196,8 @@ class FogMedium:
 
     def __post_init__(self):
         src = self.source
-        object.__setattr__(self, "sigma_t", _rgb("sigma_t", self.sigma_t, 0.0, 1e2, src))
-        object.__setattr__(self, "albedo", _rgb("albedo", self.albedo, 0.0, 1.0, src))
+        object.__setattr__(self, "sigma_t", rgb(self.sigma_t, "sigma_t", src, 0.0, 1e2))
+        object.__setattr__(self, "albedo", rgb(self.albedo, "albedo", src, 0.0, 1.0))
         if not (-0.999 <= float(self.g) <= 0.999):
             raise ParameterError(src, "g", f"value {self.g} outside [-0.999, 0.999]")
         object.__setattr__(self, "g", float(self.g))
@@ -139,7 +206,7 @@ class FogMedium:
             raise ParameterError(src, "layers", f"expected 1 to 4 layers, got {len(layers)}")
         for i, L in enumerate(layers):
             L.validate(src, i)
-        kept = tuple(L for L in layers if getattr(L, "density", 1.0) > 0)
+        kept = tuple(L for L in layers if not L.is_empty)
         object.__setattr__(self, "layers", kept or layers[:1])
         if self.bounds is not None:
             lo, hi = tuple(map(float, self.bounds.lo)), tuple(map(float, self.bounds.hi))
@@ -150,7 +217,7 @@ class FogMedium:
     # -- what the scene needs (trace-time specialisation) ---------------------
     @property
     def is_vacuum(self) -> bool:
-        return max(self.sigma_t) == 0 or all(getattr(L, "density", 1.0) == 0 for L in self.layers)
+        return max(self.sigma_t) == 0 or all(L.is_empty for L in self.layers)
 
     @property
     def scatters(self) -> bool:
@@ -158,7 +225,29 @@ class FogMedium:
 
     @property
     def is_homogeneous(self) -> bool:
-        return all(getattr(L, "falloff", None) == 0 for L in self.layers)
+        return all(L.is_constant for L in self.layers)
+
+    def grey_sigma_t(self, who: str = "this model") -> float:
+        """The extinction scale [1/m] when it is grey (equal RGB channels).
+
+        Raises ParameterError naming 'sigma_t' (``who``'s fog is grey) otherwise.
+
+        Examples
+        --------
+        >>> FogMedium(sigma_t=0.02).grey_sigma_t()
+        0.02
+        """
+        s = self.sigma_t
+        if max(s) - min(s) > 1e-12 * max(max(s), 1e-300):
+            raise ParameterError(self.source, "sigma_t", f"{who}'s fog is grey; got {tuple(s)}")
+        return float(s[0])
+
+    def max_density(self, ops, y_lo, y_hi):
+        """Largest relative density on heights ``[y_lo, y_hi]`` (sum over the layers)."""
+        rho = 0.0
+        for L in self.layers:
+            rho = rho + L.max_density(ops, y_lo, y_hi)
+        return rho
 
     # -- relative density ----------------------------------------------------
     @quiet_numpy

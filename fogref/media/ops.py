@@ -29,8 +29,6 @@ class NumpyOps:
     log_largest = float(np.log(np.finfo(np.float64).max))
     #: smallest normal number.
     tiny = float(np.finfo(np.float64).tiny)
-    #: unit roundoff (half an ulp of 1).
-    eps = float(np.finfo(np.float64).eps) / 2
 
     @staticmethod
     def asarray(x):
@@ -85,7 +83,6 @@ class DrJitOps:
         fi = np.finfo(np.float32 if single else np.float64)
         self.log_largest = float(np.log(fi.max))
         self.tiny = float(fi.tiny)
-        self.eps = float(fi.eps) / 2
 
     def asarray(self, x):
         return x if isinstance(x, self.Float) else self.Float(x)

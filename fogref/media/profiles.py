@@ -1,7 +1,8 @@
 """More height profiles with exact closed-form optical depth and free flight.
 
-Each profile is a *component* with the same interface as
-:class:`fogref.media.ExpLayer` and can be put in ``FogMedium(layers=...)``:
+Each profile follows :class:`fogref.media.protocol.HeightProfile` (like
+:class:`fogref.media.ExpLayer`), can be put in ``FogMedium(layers=...)`` and
+registers its XML ``profile`` name here:
 
 * ``validate(src, i)`` raises :class:`fogref.errors.ParameterError`;
 * ``rho(ops, y)``: relative density at height ``y`` (dimensionless);
@@ -9,7 +10,9 @@ Each profile is a *component* with the same interface as
   leaving height ``oy`` with direction y-component ``dy`` (``t = ops.largest``:
   to infinity), saturating at :data:`~fogref.media.closed_form.TAU_MAX`;
 * ``sample(ops, oy, dy, s)``: the exact inverse of ``depth`` in ``t``; returns
-  ``ops.largest`` when the ray leaves the fog before reaching ``s`` (escape).
+  ``ops.largest`` when the ray leaves the fog before reaching ``s`` (escape);
+* ``max_density(ops, y_lo, y_hi)``, ``is_constant``, ``is_empty``,
+  ``reference_height``, ``from_params(params, src)``.
 
 Everything is written once against the array back end ``ops`` (numpy float64 or
 Dr.Jit float32) and is branch-free on array values: every piece of the ray is
@@ -22,7 +25,8 @@ Profiles
     rho(y) = density                                  y <= base_height
     rho(y) = density * exp(-falloff (y - base_height))  y >  base_height
 
-:class:`PowerLawLayer` (seed 001, Unity "altitude fog" made physical)::
+:class:`PowerLawLayer` (Unity "altitude fog", the power-law height fade of
+:mod:`fogref.models.altitude`, made physical)::
 
     rho(y) = density                                   y <= start
     rho(y) = density * ((end - y) / (end - start))**power   start < y < end
@@ -46,10 +50,9 @@ from dataclasses import dataclass
 from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
 from fogref.media.medium import check_layer_param, quiet_numpy
+from fogref.media.protocol import number, register_profile
 
 __all__ = ["HDRPLayer", "PowerLawLayer"]
-
-
 
 
 def _crossing(ops, oy, dy, y):
@@ -76,11 +79,52 @@ class HDRPLayer:
     density:     relative scale (multiplies ``sigma_t``), 0 to 1e6.
     base_height: [m], -1e7 to 1e7.
     falloff:     b [1/m] above the base, 0 (homogeneous) to 1e3.
+
+    Examples
+    --------
+    >>> from fogref.media import NP
+    >>> L = HDRPLayer(density=1.0, base_height=10.0, falloff=0.1)
+    >>> float(L.rho(NP, 0.0)), float(L.depth(NP, 0.0, 0.0, 5.0))
+    (1.0, 5.0)
     """
+
+    profile = "hdrp"
 
     density: float = 1.0
     base_height: float = 0.0
     falloff: float = 0.0
+
+    @classmethod
+    def from_params(cls, params: dict, src: str = "<params>") -> tuple:
+        """Profile "hdrp": ``density``, ``base_height`` [m], ``falloff`` [1/m].
+
+        Examples
+        --------
+        >>> HDRPLayer.from_params({"base_height": 5.0})
+        (HDRPLayer(density=1.0, base_height=5.0, falloff=0.01),)
+        """
+        return (cls(number(params, "density", 1.0, src, 0.0, 1e6),
+                    number(params, "base_height", 0.0, src, -1e7, 1e7),
+                    number(params, "falloff", 0.01, src, 0.0, 1e3)),)
+
+    @property
+    def is_constant(self) -> bool:
+        """Constant everywhere when ``falloff == 0``."""
+        return self.falloff == 0
+
+    @property
+    def is_empty(self) -> bool:
+        """The density is 0 everywhere."""
+        return self.density <= 0
+
+    @property
+    def reference_height(self) -> float:
+        """``base_height`` [m]: the top of the constant part."""
+        return float(self.base_height)
+
+    def max_density(self, ops, y_lo, y_hi):
+        """Largest relative density on heights ``[y_lo, y_hi]``: at ``y_lo`` (non-increasing)."""
+        return self.rho(ops, y_lo)
 
     def validate(self, src, i):
         check_layer_param(src, i, "density", self.density, 0.0, 1e6)
@@ -164,18 +208,58 @@ class HDRPLayer:
 
 @dataclass(frozen=True)
 class PowerLawLayer:
-    """Power-law altitude profile of seed 001 (Unity altitude fog), physical.
+    """Power-law altitude profile (Unity altitude fog, :mod:`fogref.models.altitude`), physical.
 
     density: relative scale (multiplies ``sigma_t``), 0 to 1e6.
     start:   S [m], full density at and below; -1e7 to 1e7.
     end:     E [m] > start, zero density at and above; -1e7 to 1e7.
     power:   p >= 0 (0: a slab of constant density up to ``end``), at most 100.
+
+    Examples
+    --------
+    >>> from fogref.media import NP
+    >>> L = PowerLawLayer(density=1.0, start=0.0, end=100.0, power=1.0)
+    >>> float(L.rho(NP, 50.0)), float(L.depth(NP, 0.0, 1.0, NP.largest))
+    (0.5, 50.0)
     """
+
+    profile = "powerlaw"
 
     density: float = 1.0
     start: float = 0.0
     end: float = 100.0
     power: float = 1.0
+
+    @classmethod
+    def from_params(cls, params: dict, src: str = "<params>") -> tuple:
+        """Profile "powerlaw": ``density``, ``start``, ``end`` [m] and ``power``.
+
+        Examples
+        --------
+        >>> PowerLawLayer.from_params({"end": 50.0, "power": 2.0})
+        (PowerLawLayer(density=1.0, start=0.0, end=50.0, power=2.0),)
+        """
+        return (cls(number(params, "density", 1.0, src, 0.0, 1e6), number(params, "start", 0.0, src, -1e7, 1e7),
+                    number(params, "end", 100.0, src, -1e7, 1e7), number(params, "power", 1.0, src, 0.0, 1e3)),)
+
+    @property
+    def is_constant(self) -> bool:
+        """Never: the density is 0 at and above ``end``."""
+        return False
+
+    @property
+    def is_empty(self) -> bool:
+        """The density is 0 everywhere."""
+        return self.density <= 0
+
+    @property
+    def reference_height(self) -> float:
+        """``start`` [m]: full density at and below it."""
+        return float(self.start)
+
+    def max_density(self, ops, y_lo, y_hi):
+        """Largest relative density on heights ``[y_lo, y_hi]``: at ``y_lo`` (non-increasing)."""
+        return self.rho(ops, y_lo)
 
     def validate(self, src, i):
         check_layer_param(src, i, "density", self.density, 0.0, 1e6)
@@ -321,3 +405,7 @@ class PowerLawLayer:
         t = ops.where(up, t_up, ops.where(down, t_dn, t_h))
         t = ops.where(t >= L, L, t)
         return ops.where(s > 0, t, 0.0)
+
+
+register_profile("hdrp", HDRPLayer.from_params)
+register_profile("powerlaw", PowerLawLayer.from_params)

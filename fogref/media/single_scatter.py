@@ -11,7 +11,9 @@ sun ``w`` (unit, ``w_y > 0``)::
     L_ss = alpha p(d.w) E T_sun(o) int_0^D sigma e^{-m tau} dt,   m = 1 - d_y / w_y
          = alpha p(d.w) E T_sun(o) tau(D) phi(m tau(D))
 
-which is stable everywhere through ``phi`` (see DESIGN.md).
+which is stable everywhere through ``phi`` (:func:`fogref.media.closed_form.phi`).
+The first identity holds for any height profile; the sun's optical depth is
+infinite (no sun light) when a layer is constant in height.
 """
 
 from __future__ import annotations
@@ -35,11 +37,19 @@ def single_scatter_sun(ops, medium, o, d, D, w, E, tau=None):
     Returns radiance in E's unit per steradian, no occlusion, no sky.  Zero when
     the sun is at or below the horizon (``w_y <= 0``) or a layer is homogeneous
     and unbounded (the sun is then fully extinguished).
+
+    Examples
+    --------
+    >>> from fogref.media import NP, ExpLayer, FogMedium
+    >>> fog = FogMedium(sigma_t=0.01, albedo=1.0, layers=(ExpLayer(1.0, 0.05, 0.0),))
+    >>> L = single_scatter_sun(NP, fog, (0.0, 1.0, 0.0), (1.0, 0.0, 0.0), 100.0, (0.0, 1.0, 0.0), (1.0, 1.0, 1.0))
+    >>> round(float(L[0]), 4)   # (1 - T) p T_sun = 0.61 * 1/(4 pi) * 0.83
+    0.0404
     """
     if medium.bounds is not None:
         raise ParameterError(medium.source, "bounds", "closed-form single scattering needs an unbounded medium")
     wy = float(w[1])
-    if wy <= 0 or any(getattr(L, "falloff", 1.0) == 0 for L in medium.layers):
+    if wy <= 0 or any(L.is_constant for L in medium.layers):
         zero = 0.0 * d[0]
         return (zero, zero, zero)
     cos_theta = d[0] * w[0] + d[1] * w[1] + d[2] * w[2]

@@ -3,21 +3,24 @@
 ==============  =============================================  ==========================
 registry name   class                                          source
 ==============  =============================================  ==========================
-``ue4``         :class:`~fogref.models.ue4.UE4ExponentialHeightFog`   HeightFogCommon.ush (seeds 000, 002)
-``unity``       :class:`~fogref.models.unity_builtin.UnityBuiltinFog`  UnityCG.cginc (seed 003)
-``altitude``    :class:`~fogref.models.altitude.AltitudeFog`           seed 001
-``box``         :class:`~fogref.models.box.BoxFog`                     seed 004
+``ue4``         :class:`~fogref.models.ue4.UE4ExponentialHeightFog`   HeightFogCommon.ush, FogRendering.cpp
+``unity``       :class:`~fogref.models.unity_builtin.UnityBuiltinFog`  UnityCG.cginc
+``altitude``    :class:`~fogref.models.altitude.AltitudeFog`           power-law altitude fog (Unity)
+``box``         :class:`~fogref.models.box.BoxFog`                     box volume fog (Unity)
 ``hdrp``        :class:`~fogref.models.hdrp.HDRPFog`                   HDRP AtmosphericScattering.hlsl
 ``filament``    :class:`~fogref.models.filament.FilamentFog`           Filament fog.fs
 ==============  =============================================  ==========================
 
-Every model: ``Model(params).evaluate(camera (3,), world_pos (..., 3),
-precision="float32" | "float64") -> FogResult`` in fogref's y-up metre frame.
+Every model follows :class:`~fogref.models.base.FogModel`:
+``Model(params).evaluate(camera (3,), positions (..., 3), precision="float32" |
+"float64") -> FogResult`` in fogref's y-up metre frame.  Models depend on numpy
+and :mod:`fogref.media` only; :mod:`fogref.mapping` builds them from a physical
+scene (``fogref.mapping.from_physical("ue4", scene)``).
 """
 
 from fogref.models import altitude, box, filament, hdrp, ue4, unity_builtin  # noqa: F401  (registration)
 from fogref.models.altitude import AltitudeFog, AltitudeFogParams
-from fogref.models.base import FogResult, as_points, available, get, register
+from fogref.models.base import SKY_DISTANCE, FogModel, FogResult, as_points, get, register
 from fogref.models.box import BoxFog, BoxFogParams
 from fogref.models.filament import FilamentFog, FilamentFogParams
 from fogref.models.hdrp import HDRPFog, HDRPFogParams
@@ -30,7 +33,7 @@ from fogref.models.ue4 import (
 )
 from fogref.models.unity_builtin import UnityBuiltinFog, UnityFogParams
 
-__all__ = ["FogResult", "as_points", "available", "get", "register",
+__all__ = ["SKY_DISTANCE", "FogModel", "FogResult", "as_points", "get", "register",
            "AltitudeFog", "AltitudeFogParams", "BoxFog", "BoxFogParams",
            "FilamentFog", "FilamentFogParams", "HDRPFog", "HDRPFogParams",
            "SecondFogData", "UE4ExponentialHeightFog", "UE4FogParams", "medium_to_ue4", "ue4_to_medium",

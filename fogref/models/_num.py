@@ -29,25 +29,6 @@ def saturate(x):
     return np.minimum(np.maximum(x, 0), 1)
 
 
-def phi(x):
-    """``(1 - exp(-x)) / x`` with ``phi(0) = 1``, stable for all x (float64 or float32)."""
-    x = np.asarray(x)
-    with np.errstate(all="ignore"):
-        safe = np.where(x == 0, 1, x)
-        r = -np.expm1(-safe) / safe
-    return np.where(x == 0, 1, r).astype(x.dtype, copy=False)
-
-
-def rgb(v, name: str = "colour", source: str = "<model>") -> tuple:
-    """A colour given as a scalar or 3 values -> 3-tuple of floats."""
-    if np.isscalar(v):
-        return (float(v),) * 3
-    t = tuple(float(x) for x in v)
-    if len(t) != 3:
-        raise ParameterError(source, name, f"expected 1 or 3 values, got {len(t)}")
-    return t
-
-
 def split(camera, world_pos):
     """camera (3,) and world positions (..., 3) as float64 arrays, checked."""
     from fogref.models.base import as_points

@@ -155,31 +155,6 @@ class AltitudeFog:
     def to_medium(self, **kw):
         return altitude_to_medium(self.params, **kw)
 
-    @classmethod
-    def from_physical(cls, params: dict) -> "AltitudeFog":
-        """The altitude fog of a ground truth's physical scene (inverse of :func:`altitude_to_medium`).
-
-        ``params``: an EXR's ``fogref.params`` (see :mod:`fogref.models._physical`).
-        Needs the "powerlaw" profile (unbounded, grey ``sigma_t``):
-        ``_FogStart/_FogEnd/_FogPower = start/end/power`` and ``_FogColor.a =
-        sigma_t * density`` [1/m], so the optical depth ``a * I`` is exact; only the
-        blend differs (``1 - saturate(tau)`` instead of ``exp(-tau)``).
-        ``_FogColor.rgb = albedo * sky radiance`` (uniform unoccluded sky, single
-        scattering; the sun is not represented).  Raises ParameterError naming
-        'profile' for any other profile or a bounded fog, 'sigma_t' for a coloured
-        extinction.
-        """
-        from fogref.models._physical import physical_scene
-
-        ps = physical_scene(params)
-        ps.require_profile("altitude fog", ("powerlaw",),
-                           "the altitude fog's density is the power law ((end - y)/(end - start))^power")
-        ps.require_unbounded("altitude fog")
-        sigma = ps.grey_sigma_t("altitude fog")
-        L = ps.medium.layers[0]
-        return cls(AltitudeFogParams(_FogStart=L.start, _FogEnd=L.end, _FogPower=L.power,
-                                     _FogColor=(*ps.sky_colour(), sigma * L.density)))
-
 
 # -- physical counterpart ---------------------------------------------------------
 def altitude_to_medium(params: AltitudeFogParams, albedo=(1.0, 1.0, 1.0), g: float = 0.0):

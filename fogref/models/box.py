@@ -30,7 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from fogref.errors import ParameterError
-from fogref.models._num import dtype_of, grey, rgb, saturate, split
+from fogref.media import rgb
+from fogref.models._num import dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
 
 BOX_MODES = ("ratio", "thickness", "beer")
@@ -133,34 +134,6 @@ class BoxFog:
 
     def to_medium(self, **kw):
         return box_to_medium(self.params, **kw)
-
-    @classmethod
-    def from_physical(cls, params: dict) -> "BoxFog":
-        """The box fog of a ground truth's physical scene (inverse of :func:`box_to_medium`).
-
-        ``params``: an EXR's ``fogref.params`` (see :mod:`fogref.models._physical`).
-        Needs a homogeneous fog inside bounds (profile "box", or "homogeneous" /
-        falloff-0 "exponential" with ``bounds_min``/``bounds_max``) and a grey
-        ``sigma_t``: mode "beer" with ``density = sigma_t * density`` [1/m] and the
-        same box, exactly the physical transmittance.  ``fog_color = albedo * sky
-        radiance`` (uniform unoccluded sky, single scattering; the sun is not
-        represented).  Raises ParameterError naming 'profile' otherwise.
-        """
-        from fogref.models._physical import physical_scene
-
-        ps = physical_scene(params)
-        m = ps.medium
-        if m.bounds is None:
-            raise ParameterError(ps.source, "profile",
-                                 f"'{ps.profile}' fog is unbounded; box fog needs a box (profile 'box', "
-                                 f"bounds_min and bounds_max)")
-        if not m.is_homogeneous:
-            raise ParameterError(ps.source, "profile",
-                                 f"'{ps.profile}' varies with height; box fog is homogeneous inside its box")
-        sigma = ps.grey_sigma_t("box fog")
-        k = sigma * sum(L.density for L in m.layers)
-        return cls(BoxFogParams(box_min=m.bounds.lo, box_max=m.bounds.hi, density=k,
-                                fog_color=ps.sky_colour(), mode="beer"))
 
 
 def box_to_medium(params: BoxFogParams, reference_chord: float | None = None,

@@ -33,7 +33,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from fogref.errors import ParameterError
-from fogref.models._num import dtype_of, grey, phi, rgb, split
+from fogref.media import NP, rgb
+from fogref.media.closed_form import phi
+from fogref.models._num import dtype_of, grey, split
 from fogref.models.base import FogResult, register
 
 
@@ -94,7 +96,7 @@ class FilamentFog:
             def robust(hh):
                 log_a = (math.log(q.density) if q.density > 0 else -1e4) - q.heightFalloff * (cam[1] - q.height)
                 h64 = hh.astype(np.float64)
-                return np.where(h64 > -1.0, np.exp(min(log_a, 700.0)) * phi(np.maximum(h64, -1.0)),
+                return np.where(h64 > -1.0, np.exp(min(log_a, 700.0)) * phi(NP, np.maximum(h64, -1.0)),
                                 np.exp(np.minimum(log_a - h64, 700.0)) * (-np.expm1(np.minimum(h64, 0.0)))
                                 / np.where(h64 < 0, -h64, 1.0))
             if dt is np.float64:
@@ -137,53 +139,6 @@ class FilamentFog:
     def from_medium(cls, medium, **kw) -> "FilamentFog":
         return cls(medium_to_filament(medium, **kw))
 
-    @classmethod
-    def from_physical(cls, params: dict) -> "FilamentFog":
-        """The Filament fog that best represents a ground truth's physical scene.
-
-        ``params``: an EXR's ``fogref.params`` (see :mod:`fogref.models._physical`).
-        Extinction: exact (:func:`medium_to_filament`) for one unbounded grey
-        exponential layer (profiles "exponential" and "homogeneous"); ``distance``
-        0, no cutoff, ``maximumOpacity`` 1.  ``color = albedo * sky radiance``
-        (uniform unoccluded sky, single scattering).
-
-        Sun (the inscattering lobe), a simple documented choice: the sun's single
-        scattering without its attenuation along the view ray,
-        ``albedo E p_HG(cos) (1 - T)``, with the Henyey–Greenstein phase replaced by
-        its best pure cosine lobe ``c max(cos, 0)^n`` over the sphere
-        (:func:`fogref.study.fit.lobe_fit` with ``isotropic=False``), and the sun
-        irradiance dimmed by the fog between the camera and the sun,
-        ``T_sun(camera)``.  So ``inScatteringSize = n``, ``lightDirection`` = the
-        sun, ``lightColorIntensity = (albedo E T_sun(camera) c, 1)``,
-        ``inScatteringStart = 0``.  Without a sun, with the sun at or below the
-        horizon, or when the best lobe is 0 (g <= 0): no lobe
-        (``inScatteringSize = -1``).  Raises ParameterError naming 'profile' for
-        "hdrp", "powerlaw", "box" or any bounded fog, 'density2' for two layers,
-        'sigma_t' for a coloured extinction.
-        """
-        from fogref.models._physical import physical_scene
-
-        ps = physical_scene(params)
-        ps.require_profile("Filament", ("exponential", "homogeneous"),
-                           "Filament's fog is one exponential height layer")
-        ps.require_unbounded("Filament")
-        ps.grey_sigma_t("Filament")
-        if len(ps.medium.layers) != 1:
-            raise ParameterError(ps.source, "density2", "Filament fog has a single exponential layer")
-        kw = {"distance": 0.0, "cutOffDistance": math.inf, "maximumOpacity": 1.0, "color": ps.sky_colour(),
-              "inScatteringStart": 0.0, "inScatteringSize": -1.0}
-        w = ps.sun_direction
-        if w is not None and w[1] > 0 and max(ps.sun_irradiance) > 0:
-            from fogref.study.fit import lobe_fit
-
-            lobe = lobe_fit(ps.medium.g, isotropic=False)
-            if lobe["exponent"] is not None:
-                c = lobe["lobe"] / (4.0 * math.pi)
-                sun = ps.albedo * ps.sun_irradiance * ps.sun_transmittance_at_camera() * c
-                kw.update(inScatteringSize=float(lobe["exponent"]), lightDirection=tuple(float(x) for x in w),
-                          lightColorIntensity=(*(float(x) for x in sun), 1.0))
-        return cls(medium_to_filament(ps.medium, **kw))
-
 
 def filament_to_medium(params: FilamentFogParams, albedo=(1.0, 1.0, 1.0), g: float = 0.0):
     """Exact medium ``sigma_t = density`` [1/m], ``ExpLayer(1, heightFalloff, height)``."""
@@ -200,8 +155,6 @@ def medium_to_filament(medium, **kw) -> FilamentFogParams:
     src = getattr(medium, "source", "<medium>")
     if medium.bounds is not None or len(medium.layers) != 1 or not isinstance(medium.layers[0], ExpLayer):
         raise ParameterError(src, "layers", "Filament fog needs one unbounded ExpLayer")
-    s = medium.sigma_t
-    if max(s) - min(s) > 1e-12 * max(max(s), 1e-300):
-        raise ParameterError(src, "sigma_t", f"Filament's fog is grey; got {s}")
+    s = medium.grey_sigma_t("Filament")
     L = medium.layers[0]
-    return FilamentFogParams(density=s[0] * L.density, heightFalloff=L.falloff, height=L.height, **kw)
+    return FilamentFogParams(density=s * L.density, heightFalloff=L.falloff, height=L.height, **kw)

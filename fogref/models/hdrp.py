@@ -31,7 +31,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from fogref.errors import ParameterError
-from fogref.models._num import dtype_of, grey, phi, rgb, split
+from fogref.media import NP, rgb
+from fogref.media.closed_form import phi
+from fogref.models._num import dtype_of, grey, split
 from fogref.models.base import FogResult, register
 
 #: VolumeRendering.cs ScaleHeightFromLayerDepth: 1 / ln(1000).
@@ -81,7 +83,7 @@ def optical_depth_height_fog(base_extinction, base_height, exps, cos_zenith, sta
         hom = np.where(absZ > 0, np.clip((base_height - min_height) / np.where(absZ > 0, absZ, dt(1.0)), 0.0, interval),
                        np.where(start_height <= base_height, interval, dt(0.0)))
         exp_dist = interval - hom
-        mult = np.exp(-h * rcpH) * exp_dist * phi(exp_dist * absZ * rcpH)
+        mult = np.exp(-h * rcpH) * exp_dist * phi(NP, exp_dist * absZ * rcpH)
         return base_extinction * (hom + mult)
     absZ = np.maximum(np.abs(Z), dt(0.001))
     rcpAbsZ = dt(1.0) / absZ
@@ -131,51 +133,6 @@ class HDRPFog:
     def from_medium(cls, medium, **kw) -> "HDRPFog":
         return cls(medium_to_hdrp(medium, **kw))
 
-    @classmethod
-    def from_physical(cls, params: dict) -> "HDRPFog":
-        """The HDRP fog that best represents a ground truth's physical scene.
-
-        ``params``: an EXR's ``fogref.params`` (see :mod:`fogref.models._physical`).
-        Extinction (grey ``sigma_t`` required):
-
-        * "hdrp": exact (:func:`medium_to_hdrp`).
-        * "homogeneous" (or falloff 0): exact, ``baseHeight = 1e7`` m
-          (:data:`HOMOGENEOUS_BASE_HEIGHT`: constant density below it).
-        * "exponential", one layer ``sigma_t exp(-b (y - h))``: the same exponential
-          above ``baseHeight = min(h, camera height)``, held constant below it
-          (HDRP's profile); exact for every ray that stays at or above that height.
-        * two exponential layers: ParameterError naming 'density2'; "powerlaw",
-          "box" or any bounded fog: ParameterError naming 'profile'.
-
-        Colour: ``albedo`` = the medium's albedo and ``color`` = sky radiance, so the
-        inscatter is ``albedo * L_sky * (1 - T)`` (uniform unoccluded sky, single
-        scattering; the sun is not represented).  ``maxFogDistance`` =
-        :data:`FROM_PHYSICAL_MAX_FOG_DISTANCE` (no truncation of the physical ray).
-        """
-        from fogref.media import FogMedium, HDRPLayer
-        from fogref.models._physical import physical_scene
-
-        ps = physical_scene(params)
-        ps.require_profile("HDRP", ("hdrp", "homogeneous", "exponential"),
-                           "HDRP's fog is constant below a base height and exponential above")
-        ps.require_unbounded("HDRP")
-        sigma = ps.grey_sigma_t("HDRP")
-        m = ps.medium
-        if len(m.layers) != 1:
-            raise ParameterError(ps.source, "density2", "HDRP fog has a single height layer")
-        L = m.layers[0]
-        if m.is_homogeneous:
-            layer = HDRPLayer(density=L.density, base_height=HOMOGENEOUS_BASE_HEIGHT, falloff=0.0)
-        elif isinstance(L, HDRPLayer):
-            layer = L
-        else:  # ExpLayer with falloff > 0
-            base = min(L.height, float(ps.camera[1]))
-            layer = HDRPLayer(density=L.density * math.exp(-L.falloff * (base - L.height)), base_height=base,
-                              falloff=L.falloff)
-        m = FogMedium(sigma_t=sigma, albedo=m.albedo, g=m.g, layers=(layer,), source=ps.source)
-        return cls(medium_to_hdrp(m, color=tuple(float(x) for x in ps.sky_radiance),
-                                  maxFogDistance=FROM_PHYSICAL_MAX_FOG_DISTANCE))
-
 
 # -- physical counterpart ---------------------------------------------------------
 def hdrp_to_medium(params: HDRPFogParams, g: float = 0.0):
@@ -196,9 +153,7 @@ def medium_to_hdrp(medium, color=(0.5, 0.6, 0.7), maxFogDistance: float = 5000.0
     if medium.bounds is not None or len(medium.layers) != 1:
         raise ParameterError(src, "layers", "HDRP fog needs one unbounded height profile")
     L = medium.layers[0]
-    s = medium.sigma_t
-    if max(s) - min(s) > 1e-12 * max(max(s), 1e-300):
-        raise ParameterError(src, "sigma_t", f"HDRP's extinction is grey; got {s}")
+    s = (medium.grey_sigma_t("HDRP"),) * 3
     if isinstance(L, ExpLayer) and L.falloff != 0:
         raise ParameterError(src, "layers", "an unclamped ExpLayer has no HDRP counterpart")
     if not isinstance(L, (ExpLayer, HDRPLayer)):

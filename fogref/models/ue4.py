@@ -2,8 +2,9 @@
 
 Source: ``Engine/Shaders/Private/HeightFogCommon.ush`` (``GetExponentialHeightFog``,
 ``CalculateLineIntegralShared``) and ``Engine/Source/Runtime/Renderer/Private/
-FogRendering.cpp`` (``InitFogConstants``, ``SetupFogUniformParameters``); seed
-documents 000 (shader, ported to y-up) and 002 (CPU set-up, uniform layout).
+FogRendering.cpp`` (``InitFogConstants``, ``SetupFogUniformParameters``), ported
+to y-up.  The physical scene -> Unreal mapping and colour fit live in
+:mod:`fogref.mapping.unreal`.
 
 Units: Unreal is **z-up, centimetres**; fogref is **y-up, metres**.  Positions are
 converted internally by ``(x, y, z)_ue = 100 * (x, z, y)_fogref`` (this swap also
@@ -49,7 +50,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from fogref.errors import ParameterError
-from fogref.models._num import LN2, dtype_of, grey, phi, rgb, saturate, split
+from fogref.media import NP, rgb
+from fogref.media.closed_form import phi
+from fogref.models._num import LN2, dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
 
 CM_PER_M = 100.0
@@ -57,21 +60,12 @@ CM_PER_M = 100.0
 FLT_EPSILON2 = 0.01
 #: FogRendering.cpp: the observer is clamped to FogHeight + this [cm].
 MAX_OBSERVER_HEIGHT_DIFFERENCE = 65536.0
-#: from_physical: views of the colour fit (Fibonacci directions; distances [m]).
-FIT_DIRECTIONS = 128
-FIT_DISTANCES = tuple(float(x) for x in np.geomspace(10.0, 2.0e4, 8))
 
 
 def world_to_unreal(p) -> np.ndarray:
     """fogref (..., 3) y-up metres -> Unreal (..., 3) z-up centimetres."""
     p = np.asarray(p, dtype=np.float64)
     return np.stack([p[..., 0], p[..., 2], p[..., 1]], axis=-1) * CM_PER_M
-
-
-def unreal_to_world(p) -> np.ndarray:
-    """Unreal (..., 3) z-up centimetres -> fogref (..., 3) y-up metres."""
-    p = np.asarray(p, dtype=np.float64)
-    return np.stack([p[..., 0], p[..., 2], p[..., 1]], axis=-1) / CM_PER_M
 
 
 def direction_to_unreal(w) -> tuple:
@@ -181,7 +175,7 @@ def _line_integral_shared(falloff, ray_dir_z, origin_terms, dt, exact: bool):
     """CalculateLineIntegralShared (HeightFogCommon.ush).  ``exact``: no Taylor branch."""
     F = np.maximum(dt(-127.0), falloff * ray_dir_z)
     if exact:
-        return origin_terms * (dt(LN2) * phi(dt(LN2) * F))
+        return origin_terms * (dt(LN2) * phi(NP, dt(LN2) * F))
     with np.errstate(all="ignore"):
         li = (dt(1.0) - np.exp2(-F)) / F
     ln2 = dt(np.log(dt(2.0)))
@@ -285,53 +279,6 @@ class UE4ExponentialHeightFog:
         """The physical medium of this fog's extinction (see :func:`ue4_to_medium`)."""
         return ue4_to_medium(self.params, **kw)
 
-    @classmethod
-    def from_physical(cls, params: dict, n_dirs: int = FIT_DIRECTIONS,
-                      distances=FIT_DISTANCES) -> "UE4ExponentialHeightFog":
-        """The Unreal fog that best represents a ground truth's physical scene.
-
-        ``params``: an EXR's ``fogref.params`` (see :mod:`fogref.models._physical`).
-        Density, falloff, height (and the second layer) are exact
-        (:func:`medium_to_ue4`; profiles "exponential" with 1–2 layers and
-        "homogeneous", unbounded, grey ``sigma_t``), so the float64 transmittance is
-        the physical one.  With a sun, FogInscatteringColor,
-        DirectionalInscatteringColor, DirectionalInscatteringExponent and
-        DirectionalInscatteringStartDistance come from
-        :func:`fogref.study.fit.fit_unreal` (closed-form sun + sky single
-        scattering, sun attenuation included) on ``n_dirs`` Fibonacci directions
-        from the camera at ``distances`` [m] plus the sky (about 0.1 s); the
-        light direction is the scene's sun (:meth:`UE4FogParams.with_sun`).
-        Without a sun: no directional inscattering and FogInscatteringColor =
-        albedo * sky radiance.  Other fields: start distances 0, max opacity 1,
-        no cutoff.  Raises ParameterError naming 'profile' for "hdrp",
-        "powerlaw", "box" or any bounded fog, 'sigma_t' for a coloured extinction.
-        """
-        from fogref.models._physical import physical_scene
-
-        ps = physical_scene(params)
-        ps.require_profile("Unreal", ("exponential", "homogeneous"),
-                           "Unreal's height fog is 1-2 exponential layers (homogeneous = falloff 0)")
-        ps.require_unbounded("Unreal")
-        ps.grey_sigma_t("Unreal")
-        base = replace(UE4FogParams(), StartDistance=0.0, FogMaxOpacity=1.0, FogCutoffDistance=0.0,
-                       EndDistance=0.0, DirectionalInscatteringStartDistance=0.0, SunLuminance=1.0,
-                       FogInscatteringColor=ps.sky_colour(), DirectionalInscatteringColor=(0.0, 0.0, 0.0),
-                       InscatteringLightDirection=None)
-        p = medium_to_ue4(ps.medium, base)
-        if ps.sun_direction is None or max(ps.sun_irradiance) <= 0:
-            return cls(p)
-        from fogref.study.fit import PhysicalFog, fit_unreal, sample_views
-
-        pf = PhysicalFog(ps.medium, tuple(ps.sun_direction), tuple(ps.sun_irradiance), tuple(ps.sky_radiance),
-                         tuple(ps.camera))
-        fit = fit_unreal(pf, sample_views(pf.camera, n_dirs=n_dirs, distances=distances))
-        q = fit.params
-        p = replace(p, FogInscatteringColor=q.FogInscatteringColor,
-                    DirectionalInscatteringColor=q.DirectionalInscatteringColor,
-                    DirectionalInscatteringExponent=q.DirectionalInscatteringExponent,
-                    DirectionalInscatteringStartDistance=q.DirectionalInscatteringStartDistance)
-        return cls(p.with_sun(ps.sun_direction, 1.0))
-
 
 # -- exact physical mapping -----------------------------------------------------
 def unreal_to_sigma(density: float, falloff: float) -> tuple[float, float]:
@@ -378,9 +325,7 @@ def medium_to_ue4(medium, base: UE4FogParams | None = None) -> UE4FogParams:
     src = getattr(medium, "source", "<medium>")
     if medium.bounds is not None:
         raise ParameterError(src, "bounds", "Unreal's height fog is unbounded")
-    s = medium.sigma_t
-    if max(s) - min(s) > 1e-12 * max(max(s), 1e-300):
-        raise ParameterError(src, "sigma_t", f"Unreal's fog is grey; got {s}")
+    s = (medium.grey_sigma_t("Unreal"),) * 3
     layers = [L for L in medium.layers if isinstance(L, ExpLayer)]
     if len(layers) != len(medium.layers) or not 1 <= len(layers) <= 2:
         raise ParameterError(src, "layers", "need 1 or 2 ExpLayer")

@@ -34,7 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from fogref.errors import ParameterError
-from fogref.models._num import LN2, dtype_of, grey, rgb, saturate, split
+from fogref.media import rgb
+from fogref.models._num import LN2, dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
 
 MODES = ("linear", "exp", "exp2")
@@ -137,37 +138,6 @@ class UnityBuiltinFog:
     def to_medium(self, **kw):
         return unity_to_medium(self.params, **kw)
 
-    @classmethod
-    def from_physical(cls, params: dict) -> "UnityBuiltinFog":
-        """The Unity fog that best represents a ground truth's physical scene.
-
-        ``params``: an EXR's ``fogref.params`` (see :mod:`fogref.models._physical`).
-        Always Exp fog on distance.  Profile "homogeneous": exact
-        (:func:`medium_to_unity`, ``fogDensity = sigma_t``).  Height profiles
-        ("exponential", "hdrp", "powerlaw") have no exact counterpart (Unity's fog
-        does not depend on height); the nearest choice is the extinction at the
-        camera, ``fogDensity = sigma_t * rho(camera)``, exact for horizontal rays
-        (rays climbing out of the fog get too much of it, descending ones too
-        little).  ``fogColor = albedo * sky radiance`` (uniform unoccluded sky,
-        single scattering; the sun is not represented).  Raises ParameterError
-        naming 'profile' for "box" or any bounded fog, 'sigma_t' for a coloured
-        extinction.
-        """
-        from fogref.media import NP, ExpLayer, FogMedium
-        from fogref.models._physical import physical_scene
-
-        ps = physical_scene(params)
-        ps.require_profile("Unity", ("homogeneous", "exponential", "hdrp", "powerlaw"),
-                           "Unity's built-in fog fills all space (no bounds)")
-        ps.require_unbounded("Unity")
-        sigma = ps.grey_sigma_t("Unity")
-        m = ps.medium
-        if not m.is_homogeneous:
-            rho = float(np.asarray(m.density(NP, tuple(np.asarray([c]) for c in ps.camera))).reshape(-1)[0])
-            m = FogMedium(sigma_t=sigma * rho, albedo=m.albedo, g=m.g, layers=(ExpLayer(1.0, 0.0, 0.0),),
-                          source=ps.source)
-        return cls(medium_to_unity(m, fogColor=ps.sky_colour()))
-
 
 def unity_sigma(params: UnityFogParams, reference_distance: float | None = None) -> float:
     """Extinction [1/m] of the homogeneous medium nearest to ``params``.
@@ -202,8 +172,6 @@ def medium_to_unity(medium, fogColor=(0.5, 0.5, 0.5)) -> UnityFogParams:
     src = getattr(medium, "source", "<medium>")
     if medium.bounds is not None or not medium.is_homogeneous:
         raise ParameterError(src, "layers", "Unity Exp fog needs an unbounded homogeneous medium")
-    s = medium.sigma_t
-    if max(s) - min(s) > 1e-12 * max(max(s), 1e-300):
-        raise ParameterError(src, "sigma_t", f"Unity fog is grey; got {s}")
+    s = (medium.grey_sigma_t("Unity"),) * 3
     density = s[0] * sum(L.density for L in medium.layers)
     return UnityFogParams(fogMode="exp", fogDensity=density, fogColor=fogColor, fog_coordinate="distance")

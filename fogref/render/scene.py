@@ -14,7 +14,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from fogref.errors import FogrefError, ParameterError
-from fogref.render.params import medium_from_params
+from fogref.media.params import medium_from_params
 
 
 def _subst(value: str, defaults: dict) -> str:

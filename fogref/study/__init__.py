@@ -2,8 +2,8 @@
 
 Modules (one concept each):
 
-* :mod:`~fogref.study.fit`     Unreal's colours/exponent/start distance fitted to the
-  closed-form physical single scattering; the cosine-lobe vs HG table
+* :mod:`~fogref.study.fit`     ``fogref fit``'s scene reading and the cosine-lobe vs HG
+  table's pages (the fits themselves are :mod:`fogref.mapping`)
 * :mod:`~fogref.study.budget`  the error budget: a telescoping chain from the
   path-traced truth to Unreal, one effect per step
 * :mod:`~fogref.study.unreal`  ``fogref study``: fit + comparison + budget + README
@@ -24,20 +24,21 @@ __all__ = ["add_cli"]
 
 
 def _physical_from_args(a):
+    from fogref.mapping import PhysicalScene
     from fogref.media import ExpLayer, FogMedium
-    from fogref.study.fit import PhysicalFog
+    from fogref.study.fit import physical_from_scene
 
     if a.scene and a.exr:
         from fogref.errors import FogrefError
 
         raise FogrefError("give --scene or --exr, not both")
     if a.scene:
-        pf = PhysicalFog.from_scene(a.scene, camera=a.camera)
+        pf = physical_from_scene(a.scene, camera=a.camera)
     elif a.exr:
         from fogref.exrio import read_exr
 
         _, attrs = read_exr(a.exr)
-        pf = PhysicalFog.from_params(attrs["fogref.params"], camera=a.camera)
+        pf = PhysicalScene.from_params(attrs["fogref.params"], camera=a.camera)
     else:
         med = FogMedium(sigma_t=a.sigma_t if a.sigma_t is not None else 0.000960906,
                         albedo=a.albedo if a.albedo is not None else 0.9,
@@ -45,8 +46,8 @@ def _physical_from_args(a):
                         layers=(ExpLayer(1.0, a.falloff if a.falloff is not None else 0.0138629,
                                          a.height if a.height is not None else 0.0),),
                         source="<fogref fit flags>")
-        pf = PhysicalFog(med, tuple(a.sun_dir or (0.4, 0.139, 0.906)), tuple(a.sun_irradiance or (3.2, 2.9, 2.4)),
-                         tuple(a.sky or (0.2, 0.3, 0.5)), tuple(a.camera or (0.0, 2.0, 0.0)))
+        pf = PhysicalScene(med, tuple(a.sun_dir or (0.4, 0.139, 0.906)), tuple(a.sun_irradiance or (3.2, 2.9, 2.4)),
+                           tuple(a.sky or (0.2, 0.3, 0.5)), tuple(a.camera or (0.0, 2.0, 0.0)))
         return pf
     from dataclasses import replace
 
@@ -69,7 +70,8 @@ def _physical_from_args(a):
 
 
 def cmd_fit(a) -> int:
-    from fogref.study.fit import fit_unreal, lobe_table, sample_views, write_lobe_table
+    from fogref.mapping import fit_unreal, lobe_table, sample_views
+    from fogref.study.fit import write_lobe_table
 
     pf = _physical_from_args(a)
     views = sample_views(pf.camera, n_dirs=a.directions)

@@ -28,7 +28,7 @@ import numpy as np
 from fogref.atomic import write_text_atomic as write_text
 from fogref.errors import FogrefError
 from fogref.study import budget as B
-from fogref.study.fit import PhysicalFog, fit_unreal, sample_views
+from fogref.mapping import PhysicalScene, fit_unreal, sample_views
 
 #: What-if variants of the engine settings (Unreal units, cm).
 WHAT_IF = {
@@ -115,7 +115,7 @@ def open_plane_check(scene: Path, rdir: Path, log, spp: int = 64, res=(160, 90))
     sb = _render_cached(nosun, rdir / f"{scene.stem}_nosun_s1.exr", spp, 1, ov, log)
     c, attrs = read_exr(a)
     px = B.Pixels.from_channels(c, attrs)
-    pf = PhysicalFog.from_params(attrs["fogref.params"])
+    pf = PhysicalScene.from_params(attrs["fogref.params"])
     sun = B.closed_forms(px, pf)["sun_att"]
     sh = px.single - B.Pixels.read(sa).single - sun
     sh_b = B.Pixels.read(b).single - B.Pixels.read(sb).single - sun
@@ -139,7 +139,7 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
     params = attrs.get("fogref.params")
     if not isinstance(params, dict) or not params.get("medium"):
         raise FogrefError(f"{exr}: header 'fogref.params' with the medium is missing")
-    pf = PhysicalFog.from_params(params)
+    pf = PhysicalScene.from_params(params)
     spp = int(attrs.get("fogref.spp", 64))
     seed = int(attrs.get("fogref.seed", 0))
     overrides = attrs.get("fogref.overrides") or {}

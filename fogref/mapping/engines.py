@@ -1,0 +1,221 @@
+"""``from_physical`` of the non-Unreal models: Unity, altitude, box, HDRP, Filament.
+
+Each function maps a :class:`~fogref.mapping.physical.PhysicalScene` to the
+model that best represents it, exactly where the model can (its extinction
+mapping, ``medium_to_*`` in the model's module) and by a documented choice where
+it cannot.  Colours follow the convention of :mod:`fogref.mapping.physical`
+(``albedo * L_sky``).  A scene without a counterpart raises
+:class:`~fogref.errors.ParameterError` naming 'profile', 'density2' or 'sigma_t'.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from fogref.errors import ParameterError
+from fogref.mapping.lobe import lobe_fit
+from fogref.mapping.physical import PhysicalScene
+from fogref.mapping.registry import register_mapping
+from fogref.media import NP, ExpLayer, FogMedium, HDRPLayer
+from fogref.models.altitude import AltitudeFog, AltitudeFogParams
+from fogref.models.box import BoxFog, BoxFogParams
+from fogref.models.filament import FilamentFog, medium_to_filament
+from fogref.models.hdrp import (
+    FROM_PHYSICAL_MAX_FOG_DISTANCE,
+    HOMOGENEOUS_BASE_HEIGHT,
+    HDRPFog,
+    medium_to_hdrp,
+)
+from fogref.models.unity_builtin import UnityBuiltinFog, medium_to_unity
+
+__all__ = ["altitude_from_physical", "box_from_physical", "filament_from_physical", "hdrp_from_physical",
+           "unity_from_physical"]
+
+
+@register_mapping("unity")
+def unity_from_physical(ps: PhysicalScene) -> UnityBuiltinFog:
+    """The Unity built-in fog that best represents a physical scene.
+
+    Always Exp fog on distance.  Profile "homogeneous": exact
+    (:func:`~fogref.models.unity_builtin.medium_to_unity`, ``fogDensity =
+    sigma_t`` [1/m]).  Height profiles ("exponential", "hdrp", "powerlaw") have no
+    exact counterpart (Unity's fog does not depend on height); the nearest choice
+    is the extinction at the camera, ``fogDensity = sigma_t * rho(camera)``, exact
+    for horizontal rays (rays climbing out of the fog get too much of it,
+    descending ones too little).  ``fogColor = albedo * sky radiance`` (the sun is
+    not represented).  Raises ParameterError naming 'profile' for "box" or any
+    bounded fog, 'sigma_t' for a coloured extinction.
+
+    Examples
+    --------
+    >>> from fogref.media import ExpLayer, FogMedium
+    >>> ps = PhysicalScene(FogMedium(sigma_t=0.01, layers=(ExpLayer(1.0, 0.1, 0.0),)), camera=(0.0, 0.0, 0.0))
+    >>> unity_from_physical(ps).params.fogDensity
+    0.01
+    """
+    ps.require_profile("Unity", ("homogeneous", "exponential", "hdrp", "powerlaw"),
+                       "Unity's built-in fog fills all space (no bounds)")
+    ps.require_unbounded("Unity")
+    sigma = ps.grey_sigma_t("Unity")
+    m = ps.medium
+    if not m.is_homogeneous:
+        rho = float(np.asarray(m.density(NP, tuple(np.asarray([c]) for c in ps.camera))).reshape(-1)[0])
+        m = FogMedium(sigma_t=sigma * rho, albedo=m.albedo, g=m.g, layers=(ExpLayer(1.0, 0.0, 0.0),),
+                      source=ps.source)
+    return UnityBuiltinFog(medium_to_unity(m, fogColor=ps.sky_colour()))
+
+
+@register_mapping("altitude")
+def altitude_from_physical(ps: PhysicalScene) -> AltitudeFog:
+    """The altitude fog of a physical scene (inverse of :func:`~fogref.models.altitude.altitude_to_medium`).
+
+    Needs the "powerlaw" profile (unbounded, grey ``sigma_t``):
+    ``_FogStart/_FogEnd/_FogPower = start/end/power`` and ``_FogColor.a =
+    sigma_t * density`` [1/m], so the optical depth ``a * I`` is exact; only the
+    blend differs (``1 - saturate(tau)`` instead of ``exp(-tau)``).
+    ``_FogColor.rgb = albedo * sky radiance`` (the sun is not represented).
+
+    Examples
+    --------
+    >>> from fogref.media import FogMedium, PowerLawLayer
+    >>> ps = PhysicalScene(FogMedium(sigma_t=0.01, layers=(PowerLawLayer(2.0, 0.0, 50.0, 1.0),)))
+    >>> altitude_from_physical(ps).params._FogColor[3]
+    0.02
+    """
+    ps.require_profile("altitude fog", ("powerlaw",),
+                       "the altitude fog's density is the power law ((end - y)/(end - start))^power")
+    ps.require_unbounded("altitude fog")
+    sigma = ps.grey_sigma_t("altitude fog")
+    L = ps.medium.layers[0]
+    return AltitudeFog(AltitudeFogParams(_FogStart=L.start, _FogEnd=L.end, _FogPower=L.power,
+                                         _FogColor=(*ps.sky_colour(), sigma * L.density)))
+
+
+@register_mapping("box")
+def box_from_physical(ps: PhysicalScene) -> BoxFog:
+    """The box fog of a physical scene (inverse of :func:`~fogref.models.box.box_to_medium`).
+
+    Needs a homogeneous fog inside bounds (profile "box", or "homogeneous" /
+    falloff-0 "exponential" with ``bounds_min``/``bounds_max``) and a grey
+    ``sigma_t``: mode "beer" with ``density = sigma_t * density`` [1/m] and the
+    same box, exactly the physical transmittance.  ``fog_color = albedo * sky
+    radiance`` (the sun is not represented).  Raises ParameterError naming
+    'profile' otherwise.
+
+    Examples
+    --------
+    >>> from fogref.media import Box, ExpLayer, FogMedium
+    >>> m = FogMedium(sigma_t=0.05, layers=(ExpLayer(1.0, 0.0, 0.0),), bounds=Box((0, 0, 0), (10, 10, 10)))
+    >>> box_from_physical(PhysicalScene(m)).params.density
+    0.05
+    """
+    m = ps.medium
+    if m.bounds is None:
+        raise ParameterError(ps.source, "profile",
+                             f"'{ps.profile}' fog is unbounded; box fog needs a box (profile 'box', "
+                             f"bounds_min and bounds_max)")
+    if not m.is_homogeneous:
+        raise ParameterError(ps.source, "profile",
+                             f"'{ps.profile}' varies with height; box fog is homogeneous inside its box")
+    sigma = ps.grey_sigma_t("box fog")
+    k = sigma * sum(L.density for L in m.layers)
+    return BoxFog(BoxFogParams(box_min=m.bounds.lo, box_max=m.bounds.hi, density=k,
+                               fog_color=ps.sky_colour(), mode="beer"))
+
+
+@register_mapping("hdrp")
+def hdrp_from_physical(ps: PhysicalScene) -> HDRPFog:
+    """The HDRP fog that best represents a physical scene.
+
+    Extinction (grey ``sigma_t`` required):
+
+    * "hdrp": exact (:func:`~fogref.models.hdrp.medium_to_hdrp`).
+    * "homogeneous" (or falloff 0): exact, ``baseHeight = 1e7`` m
+      (:data:`~fogref.models.hdrp.HOMOGENEOUS_BASE_HEIGHT`: constant density below it).
+    * "exponential", one layer ``sigma_t exp(-b (y - h))``: the same exponential
+      above ``baseHeight = min(h, camera height)``, held constant below it
+      (HDRP's profile); exact for every ray that stays at or above that height.
+    * two exponential layers: ParameterError naming 'density2'; "powerlaw",
+      "box" or any bounded fog: ParameterError naming 'profile'.
+
+    Colour: ``albedo`` = the medium's albedo and ``color`` = sky radiance, so the
+    inscatter is ``albedo * L_sky * (1 - T)`` (the sun is not represented).
+    ``maxFogDistance`` = :data:`~fogref.models.hdrp.FROM_PHYSICAL_MAX_FOG_DISTANCE`
+    (no truncation of the physical ray).
+
+    Examples
+    --------
+    >>> from fogref.media import FogMedium, HDRPLayer
+    >>> ps = PhysicalScene(FogMedium(sigma_t=0.01, layers=(HDRPLayer(1.0, 5.0, 0.02),)))
+    >>> hdrp_from_physical(ps).params.baseHeight
+    5.0
+    """
+    ps.require_profile("HDRP", ("hdrp", "homogeneous", "exponential"),
+                       "HDRP's fog is constant below a base height and exponential above")
+    ps.require_unbounded("HDRP")
+    sigma = ps.grey_sigma_t("HDRP")
+    m = ps.medium
+    if len(m.layers) != 1:
+        raise ParameterError(ps.source, "density2", "HDRP fog has a single height layer")
+    L = m.layers[0]
+    if m.is_homogeneous:
+        layer = HDRPLayer(density=L.density, base_height=HOMOGENEOUS_BASE_HEIGHT, falloff=0.0)
+    elif isinstance(L, HDRPLayer):
+        layer = L
+    else:  # ExpLayer with falloff > 0
+        base = min(L.height, float(ps.camera[1]))
+        layer = HDRPLayer(density=L.density * math.exp(-L.falloff * (base - L.height)), base_height=base,
+                          falloff=L.falloff)
+    m = FogMedium(sigma_t=sigma, albedo=m.albedo, g=m.g, layers=(layer,), source=ps.source)
+    return HDRPFog(medium_to_hdrp(m, color=tuple(float(x) for x in ps.sky_radiance),
+                                  maxFogDistance=FROM_PHYSICAL_MAX_FOG_DISTANCE))
+
+
+@register_mapping("filament")
+def filament_from_physical(ps: PhysicalScene) -> FilamentFog:
+    """The Filament fog that best represents a physical scene.
+
+    Extinction: exact (:func:`~fogref.models.filament.medium_to_filament`) for one
+    unbounded grey exponential layer (profiles "exponential" and "homogeneous");
+    ``distance`` 0, no cutoff, ``maximumOpacity`` 1.  ``color = albedo * sky
+    radiance``.
+
+    Sun (the inscattering lobe), a simple documented choice: the sun's single
+    scattering without its attenuation along the view ray,
+    ``albedo E p_HG(cos) (1 - T)``, with the Henyey–Greenstein phase replaced by
+    its best pure cosine lobe ``c max(cos, 0)^n`` over the sphere
+    (:func:`~fogref.mapping.lobe.lobe_fit` with ``isotropic=False``), and the sun
+    irradiance dimmed by the fog between the camera and the sun,
+    ``T_sun(camera)``.  So ``inScatteringSize = n``, ``lightDirection`` = the
+    sun, ``lightColorIntensity = (albedo E T_sun(camera) c, 1)``,
+    ``inScatteringStart = 0``.  Without a sun, with the sun at or below the
+    horizon, or when the best lobe is 0 (g <= 0): no lobe
+    (``inScatteringSize = -1``).  Raises ParameterError naming 'profile' for
+    "hdrp", "powerlaw", "box" or any bounded fog, 'density2' for two layers,
+    'sigma_t' for a coloured extinction.
+
+    Examples
+    --------
+    >>> from fogref.media import ExpLayer, FogMedium
+    >>> ps = PhysicalScene(FogMedium(sigma_t=0.01, g=-0.2, layers=(ExpLayer(1.0, 0.02, 0.0),)))
+    >>> filament_from_physical(ps).params.inScatteringSize
+    -1.0
+    """
+    ps.require_profile("Filament", ("exponential", "homogeneous"), "Filament's fog is one exponential height layer")
+    ps.require_unbounded("Filament")
+    ps.grey_sigma_t("Filament")
+    if len(ps.medium.layers) != 1:
+        raise ParameterError(ps.source, "density2", "Filament fog has a single exponential layer")
+    kw = {"distance": 0.0, "cutOffDistance": math.inf, "maximumOpacity": 1.0, "color": ps.sky_colour(),
+          "inScatteringStart": 0.0, "inScatteringSize": -1.0}
+    w = ps.sun_direction
+    if ps.has_sun and w[1] > 0:
+        lobe = lobe_fit(ps.medium.g, isotropic=False)
+        if lobe["exponent"] is not None:
+            c = lobe["lobe"] / (4.0 * math.pi)
+            sun = ps.albedo * np.asarray(ps.sun_irradiance) * ps.sun_transmittance_at_camera() * c
+            kw.update(inScatteringSize=float(lobe["exponent"]), lightDirection=tuple(float(x) for x in w),
+                      lightColorIntensity=(*(float(x) for x in sun), 1.0))
+    return FilamentFog(medium_to_filament(ps.medium, **kw))

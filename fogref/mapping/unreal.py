@@ -1,0 +1,373 @@
+"""Unreal's fog fitted to the physical single scattering, and its ``from_physical``.
+
+Unreal's Exponential Height Fog adds, per pixel (start distances 0, see
+:mod:`fogref.models.ue4`)::
+
+    inscatter = FogInscatteringColor (1 - T) + DirectionalInscatteringColor max(cos, 0)^n (1 - T_dir)
+
+where ``T_dir`` is the transmittance of the part of the ray beyond
+DirectionalInscatteringStartDistance.  The physical single scattering of a sun
+(irradiance E, toward ``w``) and a uniform sky ``L_sky`` in the same medium is
+(closed forms of :mod:`fogref.media.single_scatter`)::
+
+    L = alpha E p_HG(cos) T_sun(o) tau phi(m tau)  +  alpha L_sky (1 - T)
+
+Given the exponent ``n`` and the start distance, the model is **linear** in the
+two colours, so each colour channel is a 2-parameter non-negative least-squares
+problem on two basis images (the model evaluated with unit colours); ``n`` and
+the start distance are then found by scipy (a grid, then Nelder–Mead on
+``(log10 n, start)``).  Density, falloff and height come from the exact mapping
+:func:`fogref.models.ue4.medium_to_ue4`; the model is evaluated in float64.
+
+The loss is the mean squared error of the inscattered radiance over a set of
+views (:func:`sample_views`): directions on a Fibonacci sphere from the scene's
+camera, at log-spaced distances, plus the sky (an infinite distance, fogged by
+the model at :data:`~fogref.models.base.SKY_DISTANCE`) for upward views.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from fogref.mapping.physical import PhysicalScene
+from fogref.mapping.registry import register_mapping
+from fogref.media import NP, hg_phase, single_scatter_sun
+from fogref.media.single_scatter import single_scatter_sky
+from fogref.models.base import SKY_DISTANCE
+from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams, medium_to_ue4
+
+__all__ = ["Basis", "EXPONENT_RANGE", "FIT_DIRECTIONS", "FIT_DISTANCES", "FitResult", "LOG_N_RANGE",
+           "MAX_START_CM", "Views", "base_params", "fibonacci_directions", "fit_unreal",
+           "physical_single_scattering", "sample_views", "solve_colours", "ue4_from_physical", "unreal_basis",
+           "unreal_inscatter"]
+
+#: Unreal clamps DirectionalInscatteringExponent to this range.
+EXPONENT_RANGE = (1e-6, 1000.0)
+#: Search range of log10(exponent) in the fits.
+LOG_N_RANGE = (-2.0, 3.0)
+#: Upper bound of the fitted DirectionalInscatteringStartDistance [cm] (1 km).
+MAX_START_CM = 1.0e5
+#: ue4_from_physical: views of the colour fit (Fibonacci directions; distances [m]).
+FIT_DIRECTIONS = 128
+FIT_DISTANCES = tuple(float(x) for x in np.geomspace(10.0, 2.0e4, 8))
+
+
+@dataclass
+class Views:
+    """Sample views: unit directions ``d`` (N, 3), distances ``D`` (N,) [m] (inf: sky)."""
+
+    camera: np.ndarray
+    d: np.ndarray
+    D: np.ndarray
+
+    @property
+    def sky(self) -> np.ndarray:
+        return ~np.isfinite(self.D)
+
+    def world_positions(self, sky_distance: float = SKY_DISTANCE) -> np.ndarray:
+        D = np.where(self.sky, sky_distance, self.D)
+        return self.camera + self.d * D[:, None]
+
+
+def fibonacci_directions(n: int) -> np.ndarray:
+    """``n`` nearly uniform unit directions on the sphere (y-up), (n, 3)."""
+    i = np.arange(n) + 0.5
+    y = 1.0 - 2.0 * i / n
+    r = np.sqrt(np.maximum(0.0, 1.0 - y * y))
+    phi = i * math.pi * (3.0 - math.sqrt(5.0))
+    return np.stack([r * np.cos(phi), y, r * np.sin(phi)], axis=-1)
+
+
+def sample_views(camera, n_dirs: int = 400, distances=None, min_dy: float = -0.5,
+                 sky_min_dy: float = 0.0) -> Views:
+    """Views from ``camera``: Fibonacci directions with ``d_y >= min_dy`` at each of
+    ``distances`` [m] (default 12 log-spaced from 10 m to 20 km), plus the sky
+    (infinite distance) for directions with ``d_y > sky_min_dy``."""
+    if distances is None:
+        distances = np.geomspace(10.0, 2.0e4, 12)
+    dirs = fibonacci_directions(n_dirs)
+    dirs = dirs[dirs[:, 1] >= min_dy]
+    D = np.asarray(distances, dtype=float)
+    d_all = np.repeat(dirs, len(D), axis=0)
+    D_all = np.tile(D, len(dirs))
+    up = dirs[dirs[:, 1] > sky_min_dy]
+    d_all = np.concatenate([d_all, up])
+    D_all = np.concatenate([D_all, np.full(len(up), np.inf)])
+    return Views(np.asarray(camera, dtype=float), d_all, D_all)
+
+
+def physical_single_scattering(pf: PhysicalScene, views: Views, sun_attenuation: bool = True,
+                               sky: bool = True, sun: bool = True) -> np.ndarray:
+    """Closed-form single scattering (sun + sky, no occluders) of each view, (N, 3).
+
+    ``sun_attenuation=False``: the sun term without its attenuation in the fog,
+    ``alpha E p (1 - T)``.  The sky term is ``alpha L_sky (1 - T)`` (unoccluded,
+    unattenuated: what FogInscatteringColor stands for).
+    """
+    m = pf.medium
+    o = tuple(np.full(len(views.D), c) for c in views.camera)
+    d = tuple(views.d[:, i] for i in range(3))
+    D = np.where(views.sky, NP.largest, views.D)
+    out = np.zeros((len(D), 3))
+    if sun and max(pf.sun_irradiance) > 0:
+        w = pf.sun_direction
+        if sun_attenuation:
+            out += np.stack(single_scatter_sun(NP, m, o, d, D, w, pf.sun_irradiance), axis=-1)
+        elif w[1] > 0:
+            cos = d[0] * w[0] + d[1] * w[1] + d[2] * w[2]
+            p = hg_phase(NP, cos, m.g)
+            T = np.stack(m.transmittance(NP, o, d, D), axis=-1)
+            out += (np.asarray(m.albedo) * np.asarray(pf.sun_irradiance)) * p[:, None] * (1.0 - T)
+    if sky and max(pf.sky_radiance) > 0:
+        out += np.stack(single_scatter_sky(NP, m, o, d, D, pf.sky_radiance), axis=-1)
+    return out
+
+
+def base_params(pf: PhysicalScene, **kw) -> UE4FogParams:
+    """Unreal parameters with the exact density/falloff/height of ``pf.medium``, the
+    sun direction, and ``kw`` (other fields; start distances default to 0)."""
+    defaults = dict(DirectionalInscatteringStartDistance=0.0, StartDistance=0.0, FogMaxOpacity=1.0,
+                    FogCutoffDistance=0.0, SunLuminance=1.0)
+    defaults.update(kw)
+    p = medium_to_ue4(pf.medium, replace(UE4FogParams(), **defaults))
+    return p.with_sun(pf.sun_direction, p.SunLuminance)
+
+
+def unreal_inscatter(params: UE4FogParams, camera, world_pos, precision: str = "float64") -> np.ndarray:
+    """Unreal's inscatter (N, 3) for the given parameters."""
+    return np.asarray(UE4ExponentialHeightFog(params).evaluate(camera, world_pos, precision).inscatter, dtype=float)
+
+
+@dataclass
+class Basis:
+    """The two basis images of Unreal's inscatter at fixed exponent and start distance."""
+
+    iso: np.ndarray   # (N,) 1 - T
+    lobe: np.ndarray  # (N,) max(cos,0)^n (1 - T_dir)
+
+
+def unreal_basis(pf: PhysicalScene, views: Views, exponent: float, start_cm: float,
+                 sky_distance: float = SKY_DISTANCE) -> Basis:
+    """Unreal (float64) evaluated with unit colours: the isotropic and lobe images."""
+    wp = views.world_positions(sky_distance)
+    p = base_params(pf, DirectionalInscatteringExponent=exponent, DirectionalInscatteringStartDistance=start_cm,
+                    FogInscatteringColor=(1.0, 0.0, 0.0), DirectionalInscatteringColor=(0.0, 1.0, 0.0))
+    ins = unreal_inscatter(p, np.asarray(pf.camera), wp)
+    return Basis(iso=ins[:, 0], lobe=ins[:, 1])
+
+
+def solve_colours(basis: Basis, target: np.ndarray, weights=None) -> tuple[np.ndarray, np.ndarray, float]:
+    """Non-negative least squares per channel: ``target ≈ C_fog iso + C_dir lobe``.
+
+    Returns ``(C_fog (3,), C_dir (3,), sse)`` with ``sse`` the weighted sum of
+    squared residuals over all channels.
+    """
+    from scipy.optimize import nnls
+
+    A = np.stack([basis.iso, basis.lobe], axis=-1)
+    sw = np.ones(len(A)) if weights is None else np.sqrt(np.asarray(weights, dtype=float))
+    Aw = A * sw[:, None]
+    cf, cd, sse = np.zeros(3), np.zeros(3), 0.0
+    for c in range(3):
+        x, r = nnls(Aw, target[:, c] * sw)
+        cf[c], cd[c] = x
+        sse += r * r
+    return cf, cd, float(sse)
+
+
+@dataclass
+class FitResult:
+    """Best Unreal parameters for a physical fog, and how well they do on the views."""
+
+    params: UE4FogParams
+    rmse: float                  #: RMSE of the inscatter over the views (radiance)
+    rel_rmse: float              #: rmse / RMS of the physical inscatter
+    target_rms: float
+    n_views: int
+    sun_attenuation: bool
+    fit_start: bool
+    history: dict = field(default_factory=dict)
+
+    def editor_properties(self) -> dict:
+        """The fitted values under the names of Unreal's details panel."""
+        p = self.params
+        return {
+            "Fog Density": p.FogDensity,
+            "Fog Height Falloff": p.FogHeightFalloff,
+            "Fog Height Offset": p.FogHeight,
+            "Fog Inscattering Color": list(p.FogInscatteringColor),
+            "Directional Inscattering Color": list(p.DirectionalInscatteringColor),
+            "Directional Inscattering Exponent": p.DirectionalInscatteringExponent,
+            "Directional Inscattering Start Distance": p.DirectionalInscatteringStartDistance,
+            "Start Distance": p.StartDistance,
+            "Fog Max Opacity": p.FogMaxOpacity,
+            "Fog Cutoff Distance": p.FogCutoffDistance,
+        }
+
+    def to_dict(self) -> dict:
+        p = self.params
+        return {
+            "unreal": {
+                "FogDensity": p.FogDensity, "FogHeightFalloff": p.FogHeightFalloff,
+                "FogHeight_cm": p.FogHeight,
+                "FogInscatteringColor": list(p.FogInscatteringColor),
+                "DirectionalInscatteringColor": list(p.DirectionalInscatteringColor),
+                "DirectionalInscatteringExponent": p.DirectionalInscatteringExponent,
+                "DirectionalInscatteringStartDistance_cm": p.DirectionalInscatteringStartDistance,
+                "InscatteringLightDirection_unreal": list(p.InscatteringLightDirection or ()),
+                "SunLuminance": p.SunLuminance,
+                "SecondFogData": {"FogDensity": p.SecondFogData.FogDensity,
+                                  "FogHeightFalloff": p.SecondFogData.FogHeightFalloff,
+                                  "FogHeightOffset_cm": p.SecondFogData.FogHeightOffset},
+            },
+            "unreal_editor": self.editor_properties(),
+            "error": {"rmse": self.rmse, "rel_rmse": self.rel_rmse, "target_rms": self.target_rms,
+                      "n_views": self.n_views},
+            "fit": {"sun_attenuation_in_target": self.sun_attenuation, "start_distance_fitted": self.fit_start,
+                    "loss": "mean squared inscatter error over views (all RGB channels), model float64",
+                    **self.history},
+        }
+
+
+def fit_unreal(pf: PhysicalScene, views: Views | None = None, *, sun_attenuation: bool = True,
+               fit_start: bool = True, target: np.ndarray | None = None,
+               sky_distance: float = SKY_DISTANCE, exponent: float | None = None) -> FitResult:
+    """Best FogInscatteringColor, DirectionalInscatteringColor, exponent and (if
+    ``fit_start``) DirectionalInscatteringStartDistance for ``pf``.
+
+    ``target``: the (N, 3) inscatter to match (default: the closed-form physical
+    single scattering of sun and sky, :func:`physical_single_scattering`).
+    ``exponent``: keep the exponent fixed (only colours, and start, are fitted).
+    """
+    from scipy.optimize import minimize
+
+    if views is None:
+        views = sample_views(pf.camera)
+    if target is None:
+        target = physical_single_scattering(pf, views, sun_attenuation=sun_attenuation)
+    target = np.asarray(target, dtype=float)
+    N = len(views.D)
+    cache: dict = {}
+
+    def sse(log_n: float, start_cm: float):
+        log_n = float(np.clip(log_n, *LOG_N_RANGE))
+        start_cm = float(np.clip(start_cm, 0.0, MAX_START_CM)) if fit_start else 0.0
+        key = (round(log_n, 12), round(start_cm, 9))
+        if key not in cache:
+            b = unreal_basis(pf, views, 10.0 ** log_n, start_cm, sky_distance)
+            cache[key] = solve_colours(b, target)
+        return cache[key]
+
+    # coarse grid, then Nelder–Mead (or 1-D bounded search) from the best point
+    log_ns = [math.log10(exponent)] if exponent is not None else np.linspace(*LOG_N_RANGE, 21)
+    starts = [0.0, 2e3, 1e4, 3e4] if fit_start else [0.0]
+    grid = [(ln, s, sse(ln, s)[2]) for ln in log_ns for s in starts]
+    ln0, s0, _ = min(grid, key=lambda r: r[2])
+    if exponent is None or fit_start:
+        x0 = []
+        if exponent is None:
+            x0.append(ln0)
+        if fit_start:
+            x0.append(s0 / 1e4)
+
+        def f(x):
+            i = 0
+            ln = ln0
+            if exponent is None:
+                ln = x[0]
+                i = 1
+            s = x[i] * 1e4 if fit_start else 0.0
+            pen = 0.0
+            if fit_start and s < 0:
+                pen = s * s
+            return sse(ln, max(s, 0.0))[2] * (1.0 + pen)
+
+        res = minimize(f, np.asarray(x0), method="Nelder-Mead",
+                       options={"xatol": 1e-4, "fatol": 1e-12 * max(1.0, float(np.sum(target ** 2))),
+                                "maxiter": 400, "initial_simplex": None})
+        x = res.x
+        i = 0
+        if exponent is None:
+            ln0 = float(np.clip(x[0], *LOG_N_RANGE))
+            i = 1
+        if fit_start:
+            s0 = float(np.clip(x[i] * 1e4, 0.0, MAX_START_CM))
+    cf, cd, best = sse(ln0, s0)
+    params = base_params(pf, FogInscatteringColor=tuple(cf), DirectionalInscatteringColor=tuple(cd),
+                         DirectionalInscatteringExponent=10.0 ** ln0,
+                         DirectionalInscatteringStartDistance=s0 if fit_start else 0.0)
+    rmse = math.sqrt(best / (3 * N))
+    trms = math.sqrt(float(np.mean(target ** 2)))
+    return FitResult(params=params, rmse=rmse, rel_rmse=rmse / trms if trms > 0 else 0.0, target_rms=trms,
+                     n_views=N, sun_attenuation=sun_attenuation, fit_start=fit_start,
+                     history={"evaluations": len(cache)})
+
+
+
+
+@register_mapping("ue4")
+def ue4_from_physical(ps: PhysicalScene, n_dirs: int = FIT_DIRECTIONS,
+                      distances=FIT_DISTANCES) -> UE4ExponentialHeightFog:
+    """The Unreal fog that best represents a physical scene.
+
+    Density, falloff, height (and the second layer) are exact
+    (:func:`~fogref.models.ue4.medium_to_ue4`; profiles "exponential" with 1–2
+    layers and "homogeneous", unbounded, grey ``sigma_t``), so the float64
+    transmittance is the physical one.  With a sun, FogInscatteringColor,
+    DirectionalInscatteringColor, DirectionalInscatteringExponent and
+    DirectionalInscatteringStartDistance come from :func:`fit_unreal`
+    (closed-form sun + sky single scattering, sun attenuation included) on
+    ``n_dirs`` Fibonacci directions from the camera at ``distances`` [m] plus the
+    sky (about 0.1 s); the light direction is the scene's sun
+    (:meth:`~fogref.models.ue4.UE4FogParams.with_sun`).  Without a sun: no
+    directional inscattering and FogInscatteringColor = albedo * sky radiance.
+    Other fields: start distances 0, max opacity 1, no cutoff.
+
+    Parameters
+    ----------
+    ps : PhysicalScene
+    n_dirs : int
+        Directions of the colour fit.
+    distances : sequence of float
+        Distances [m] of the colour fit.
+
+    Returns
+    -------
+    UE4ExponentialHeightFog
+
+    Raises
+    ------
+    fogref.errors.ParameterError
+        Naming 'profile' for "hdrp", "powerlaw", "box" or any bounded fog,
+        'sigma_t' for a coloured extinction.
+
+    Examples
+    --------
+    >>> from fogref.media import ExpLayer, FogMedium
+    >>> ps = PhysicalScene(FogMedium(sigma_t=0.002, albedo=0.9, layers=(ExpLayer(1.0, 0.02, 0.0),)),
+    ...                    sky_radiance=(0.2, 0.3, 0.5))
+    >>> p = ue4_from_physical(ps).params
+    >>> round(p.FogHeightFalloff, 4), [round(c, 3) for c in p.FogInscatteringColor]
+    (0.2885, [0.18, 0.27, 0.45])
+    """
+    ps.require_profile("Unreal", ("exponential", "homogeneous"),
+                       "Unreal's height fog is 1-2 exponential layers (homogeneous = falloff 0)")
+    ps.require_unbounded("Unreal")
+    ps.grey_sigma_t("Unreal")
+    base = replace(UE4FogParams(), StartDistance=0.0, FogMaxOpacity=1.0, FogCutoffDistance=0.0,
+                   EndDistance=0.0, DirectionalInscatteringStartDistance=0.0, SunLuminance=1.0,
+                   FogInscatteringColor=ps.sky_colour(), DirectionalInscatteringColor=(0.0, 0.0, 0.0),
+                   InscatteringLightDirection=None)
+    p = medium_to_ue4(ps.medium, base)
+    if not ps.has_sun:
+        return UE4ExponentialHeightFog(p)
+    fit = fit_unreal(ps, sample_views(ps.camera, n_dirs=n_dirs, distances=distances))
+    q = fit.params
+    p = replace(p, FogInscatteringColor=q.FogInscatteringColor,
+                DirectionalInscatteringColor=q.DirectionalInscatteringColor,
+                DirectionalInscatteringExponent=q.DirectionalInscatteringExponent,
+                DirectionalInscatteringStartDistance=q.DirectionalInscatteringStartDistance)
+    return UE4ExponentialHeightFog(p.with_sun(ps.sun_direction, 1.0))

@@ -1,0 +1,209 @@
+"""The height-profile protocol, its registry, and the parameter parsers it uses.
+
+A *height profile* is the relative density ``rho(y)`` of one fog layer as a
+function of height only (y-up, metres).  Modelled on pbrt-v4's density providers
+(``src/pbrt/media.h``: ``HomogeneousMedium``, ``GridMedium``'s
+``DensityGrid``/``MajorantGrid`` queries, ``IsEmptyInterval``), every profile
+answers the same questions, so the medium, the closed-form single scattering and
+the Mitsuba plugin ask instead of sniffing attributes:
+
+==================================  ============================================
+``validate(src, i)``                raise :class:`~fogref.errors.ParameterError`
+                                    naming ``layer{i}.<field>`` on a bad value
+``rho(ops, y)``                     relative density at height ``y`` (>= 0)
+``depth(ops, oy, dy, t)``           shape optical depth [m] over ``[0, t]``
+``sample(ops, oy, dy, s)``          the distance where ``depth`` reaches ``s``
+``max_density(ops, y_lo, y_hi)``    largest ``rho`` on ``[y_lo, y_hi]``
+``is_constant``                     ``rho`` does not depend on height
+``is_empty``                        ``rho`` is 0 everywhere
+``reference_height``                the profile's characteristic height [m]
+``from_params(params, src)``        the layers of a flat parameter dict
+==================================  ============================================
+
+The registry maps the ``heightfog`` XML ``profile`` names to a parser
+(``from_params``-like callable) and says whether the profile needs a box.  A new
+profile is one file: its class, and a :func:`register_profile` call next to it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable, ClassVar, Protocol, runtime_checkable
+
+from fogref.errors import ParameterError
+
+__all__ = ["HeightProfile", "ProfileEntry", "PROFILES", "register_profile", "profile_entry", "check_range",
+           "number", "rgb"]
+
+
+@runtime_checkable
+class HeightProfile(Protocol):
+    """One layer's relative density as a function of height (see the module doc).
+
+    ``ops`` is an array back end (:data:`fogref.media.NP` or
+    :func:`fogref.media.drjit_ops`); heights ``y``, ``oy`` are metres; ``dy`` is
+    the y component of a unit ray direction; ``t`` a distance [m] along the ray
+    (``ops.largest``: to infinity); ``s`` a shape optical depth [m].  Depths
+    saturate at :data:`fogref.media.closed_form.TAU_MAX`; ``sample`` returns
+    ``ops.largest`` when the ray escapes before reaching ``s``.
+    """
+
+    #: the XML profile name the class is registered under.
+    profile: ClassVar[str]
+
+    def validate(self, src: str, i: int) -> None: ...
+
+    def rho(self, ops, y): ...
+
+    def depth(self, ops, oy, dy, t): ...
+
+    def sample(self, ops, oy, dy, s): ...
+
+    def max_density(self, ops, y_lo, y_hi): ...
+
+    @property
+    def is_constant(self) -> bool: ...
+
+    @property
+    def is_empty(self) -> bool: ...
+
+    @property
+    def reference_height(self) -> float: ...
+
+
+@dataclass(frozen=True)
+class ProfileEntry:
+    """A registered profile: its name, its parser ``(params, src) -> layers`` and
+    whether it needs ``bounds_min``/``bounds_max``."""
+
+    name: str
+    parse: Callable[[dict, str], tuple]
+    needs_bounds: bool = False
+
+
+#: XML profile name -> :class:`ProfileEntry` (filled by :func:`register_profile`).
+PROFILES: dict[str, ProfileEntry] = {}
+
+
+def register_profile(name: str, parse: Callable[[dict, str], tuple], needs_bounds: bool = False) -> None:
+    """Make ``profile="<name>"`` parse with ``parse(params, src) -> tuple of layers``.
+
+    Parameters
+    ----------
+    name : str
+        The ``heightfog`` XML ``profile`` value.
+    parse : callable
+        ``parse(params: dict, src: str)`` returning a tuple of 1 to 4
+        :class:`HeightProfile` layers; raises ParameterError on a bad value.
+    needs_bounds : bool
+        The profile is only meaningful inside a box (``box``).
+
+    Examples
+    --------
+    >>> from fogref.media import ExpLayer
+    >>> from fogref.media.protocol import PROFILES, register_profile
+    >>> register_profile("doc_example", lambda params, src: (ExpLayer(1.0, 0.0, 0.0),))
+    >>> PROFILES["doc_example"].parse({}, "<doc>")
+    (ExpLayer(density=1.0, falloff=0.0, height=0.0),)
+    >>> del PROFILES["doc_example"]
+    """
+    PROFILES[name] = ProfileEntry(name, parse, needs_bounds)
+
+
+def profile_entry(name: str, src: str = "<params>") -> ProfileEntry:
+    """The registered profile ``name``; ParameterError naming 'profile' if unknown.
+
+    Examples
+    --------
+    >>> import fogref.media
+    >>> profile_entry("box").needs_bounds
+    True
+    """
+    try:
+        return PROFILES[name]
+    except KeyError:
+        raise ParameterError(src, "profile", f"'{name}' is not one of {tuple(PROFILES)}") from None
+
+
+def check_range(src: str, name: str, v, lo: float, hi: float) -> float:
+    """``float(v)``, or ParameterError naming ``name`` unless finite and in ``[lo, hi]``.
+
+    Examples
+    --------
+    >>> check_range("<doc>", "layer0.falloff", 0.5, 0.0, 1e3)
+    0.5
+    >>> check_range("<doc>", "layer0.falloff", -1, 0.0, 1e3)
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: <doc>: parameter 'layer0.falloff': value -1.0 outside [0.0, 1000.0]
+    """
+    v = float(v)
+    if not math.isfinite(v) or not (lo <= v <= hi):
+        raise ParameterError(src, name, f"value {v} outside [{lo}, {hi}]")
+    return v
+
+
+def number(params: dict, key: str, default: float, src: str, lo: float = -math.inf, hi: float = math.inf) -> float:
+    """``params[key]`` (or ``default``) as a float in ``[lo, hi]``; ParameterError naming ``key``.
+
+    Examples
+    --------
+    >>> number({"g": "0.5"}, "g", 0.0, "<doc>", -0.999, 0.999)
+    0.5
+    >>> number({}, "g", 0.0, "<doc>")
+    0.0
+    """
+    v = params.get(key, default)
+    try:
+        v = float(v)
+    except (TypeError, ValueError):
+        raise ParameterError(src, key, f"expected a number, got {v!r}") from None
+    if not (lo <= v <= hi) or math.isnan(v):
+        raise ParameterError(src, key, f"value {v} outside [{lo}, {hi}]")
+    return v
+
+
+def rgb(v, name: str = "colour", source: str = "<params>", lo: float = -math.inf,
+        hi: float = math.inf) -> tuple[float, float, float]:
+    """An RGB triple (or a 3-vector) from 1 or 3 numbers, a sequence or a string.
+
+    Parameters
+    ----------
+    v : float, sequence of 1 or 3 floats, or str
+        ``0.5``, ``[0.1, 0.2, 0.3]`` or ``"0.1, 0.2 0.3"`` (XML style).
+    name, source : str
+        Named in the ParameterError.
+    lo, hi : float
+        Every component must be finite and in ``[lo, hi]``.
+
+    Returns
+    -------
+    tuple of 3 floats
+
+    Examples
+    --------
+    >>> rgb(0.5)
+    (0.5, 0.5, 0.5)
+    >>> rgb("1, 2 3")
+    (1.0, 2.0, 3.0)
+    >>> rgb([1, 2], "albedo", "<doc>")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: <doc>: parameter 'albedo': expected 1 or 3 values, got 2
+    """
+    if isinstance(v, str):
+        v = v.replace(",", " ").split()
+    try:
+        t = (float(v),) if isinstance(v, (int, float)) or getattr(v, "ndim", 1) == 0 else tuple(
+            float(x) for x in v)
+    except (TypeError, ValueError):
+        raise ParameterError(source, name, f"expected 1 or 3 numbers, got {v!r}") from None
+    if len(t) == 1:
+        t = t * 3
+    if len(t) != 3:
+        raise ParameterError(source, name, f"expected 1 or 3 values, got {len(t)}")
+    for x in t:
+        if not (lo <= x <= hi) or not math.isfinite(x):
+            raise ParameterError(source, name, f"value {x} outside [{lo}, {hi}]")
+    return t
