@@ -5,6 +5,23 @@ over the destination (``os.replace``, atomic on POSIX within one file system).
 Every fogref output goes through :func:`atomic_write`: EXRs
 (:func:`fogref.exrio.write_exr`), render checkpoints and previews, report text
 and figures.
+
+Examples
+--------
+>>> import tempfile
+>>> from pathlib import Path
+>>> folder = Path(tempfile.mkdtemp())
+>>> write_text_atomic(folder / "sub" / "a.md", "# fog").read_text()
+'# fog'
+>>> def broken(tmp):
+...     Path(tmp).write_text("half")
+...     raise OSError("disk full")
+>>> atomic_write(folder / "b.txt", broken)
+Traceback (most recent call last):
+...
+OSError: disk full
+>>> sorted(p.name for p in folder.iterdir())      # no b.txt, no temporary left behind
+['sub']
 """
 
 from __future__ import annotations
@@ -15,10 +32,26 @@ from pathlib import Path
 
 
 def atomic_write(path, write) -> Path:
-    """Call ``write(tmp_path)`` then rename the temporary file onto ``path``.
+    """Call ``write(tmp_path)``, then rename the temporary file onto ``path``.
 
-    The temporary file keeps ``path``'s suffix (writers that infer the format
-    from it still work) and is removed if ``write`` fails.
+    Parameters
+    ----------
+    path
+        Destination; its parent folders are created.
+    write
+        Callable that writes the whole file at the ``str`` path it is given. The
+        temporary file sits in ``path``'s folder and keeps ``path``'s suffix, so
+        writers that infer the format from the suffix still work.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Notes
+    -----
+    If ``write`` raises (or is interrupted), the temporary file is removed, the
+    exception propagates and ``path`` keeps its previous content, if any.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

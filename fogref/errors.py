@@ -1,4 +1,17 @@
-"""Errors that name the file, the parameter and the allowed range."""
+"""Errors that name the file, the parameter and the allowed range.
+
+:class:`FogrefError` is what the command line prints as one line (exit status
+2); everything else is a bug and keeps its traceback. This module imports no
+other fogref module, so every layer may raise these.
+
+Examples
+--------
+>>> e = ParameterError("scenes/valley.xml: medium 'fog'", "falloff", "-1.0 must be >= 0 [1/m]")
+>>> str(e)
+"scenes/valley.xml: medium 'fog': parameter 'falloff': -1.0 must be >= 0 [1/m]"
+>>> isinstance(e, FogrefError) and isinstance(e, ValueError), e.name
+(True, 'falloff')
+"""
 
 
 class FogrefError(Exception):

@@ -1,22 +1,9 @@
 """Multi-channel EXR files with the official OpenEXR bindings, written atomically.
 
-fogref's ground-truth EXR layout (all float32, one value per pixel):
-
-=================  ==========================================================
-``R,G,B``          total radiance = ``T * surface + inscatter``
-``T.R,T.G,T.B``    transmittance camera -> first surface (or infinity), closed form
-``inscatter.*``    radiance added by the medium (= ``single.* + multiple.*``)
-``surface.*``      radiance leaving the first surface toward the camera, before fog
-``single.*``       medium single scattering (first medium vertex, direct light)
-``multiple.*``     all other medium-added radiance
-``distance``       distance to the first surface [m] (0 where the ray escapes)
-``P.X,P.Y,P.Z``    world position of the first surface [m] (0 where it escapes)
-``hit``            1 where the camera ray hits a surface, else 0
-=================  ==========================================================
-
-Header attributes are strings prefixed ``fogref.`` (JSON where structured):
-``fogref.params`` (the scene's fog, sun, sky, camera), ``fogref.spp``,
-``fogref.seed``, ``fogref.variant``, ``fogref.version``, ``fogref.mitsuba``.
+This module only reads and writes files: the ground-truth layout (which channels,
+what they mean) is :mod:`fogref.gbuffer`.  Header attributes are strings; values
+that are not strings are stored as JSON and ``fogref.*`` attributes that hold
+JSON are decoded on reading.
 """
 
 from __future__ import annotations
@@ -29,15 +16,20 @@ import numpy as np
 from fogref.atomic import atomic_write
 from fogref.errors import FogrefError
 
-GROUPS = ("", "T.", "inscatter.", "surface.", "single.", "multiple.")
-
 
 def write_exr(path, channels: dict, attrs: dict | None = None) -> None:
-    """Write ``channels`` (name -> HxW float array) atomically to ``path``.
+    """Write ``channels`` atomically to the EXR ``path`` (ZIP-compressed scan lines).
 
-    ``attrs``: header attributes; non-string values are stored as JSON strings.
-    The file appears only when complete (written to a temporary file in the same
-    folder, then renamed).
+    Parameters
+    ----------
+    path
+        Destination; its folder is created. The file appears only when complete
+        (:func:`fogref.atomic.atomic_write`).
+    channels
+        Channel name -> ``(H, W)`` array, stored as float32; NaN becomes 0 and
+        +-inf the largest float32 (``numpy.nan_to_num``).
+    attrs
+        Header attributes; values that are not strings are stored as JSON strings.
     """
     import OpenEXR
 
@@ -46,7 +38,10 @@ def write_exr(path, channels: dict, attrs: dict | None = None) -> None:
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     for k, v in (attrs or {}).items():
         header[k] = v if isinstance(v, str) else json.dumps(v)
-    chans = {k: np.ascontiguousarray(np.nan_to_num(np.asarray(v, dtype=np.float32))) for k, v in channels.items()}
+    chans = {k: np.ascontiguousarray(np.asarray(v, dtype=np.float32)) for k, v in channels.items()}
+    bad = [k for k, v in chans.items() if not np.all(np.isfinite(v))]
+    if bad:
+        raise FogrefError(f"{path}: refusing to write non-finite values in channel(s) {', '.join(bad)}")
 
     def write(tmp):
         with OpenEXR.File(header, chans) as f:
@@ -56,9 +51,15 @@ def write_exr(path, channels: dict, attrs: dict | None = None) -> None:
 
 
 def read_exr(path) -> tuple[dict, dict]:
-    """Read an EXR: returns ``(channels, attrs)``; channels are HxW float32 arrays.
+    """Read an EXR: ``(channels, attrs)``, channels as ``(H, W)`` float32 arrays.
 
-    ``fogref.*`` attributes that hold JSON are decoded.
+    ``fogref.*`` attributes that hold JSON are decoded; other attributes are
+    returned as the bindings give them.
+
+    Raises
+    ------
+    fogref.errors.FogrefError
+        The file is missing or not a readable EXR (the message names it).
     """
     import OpenEXR
 
@@ -83,5 +84,9 @@ def read_exr(path) -> tuple[dict, dict]:
 
 
 def rgb(channels: dict, group: str = "") -> np.ndarray:
-    """Stack ``group``'s R,G,B channels into an HxWx3 array (group '' is the total)."""
+    """Stack ``group + "R"``, ``"G"``, ``"B"`` into an ``(H, W, 3)`` array.
+
+    ``group`` is a channel prefix such as ``"inscatter."``; ``""`` (the default)
+    is the total radiance ``R,G,B``.
+    """
     return np.stack([channels[group + c] for c in "RGB"], axis=-1)
