@@ -102,26 +102,43 @@ def test_flip_black_reference_does_not_abort():
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf, -5.0, 0.0, 1e30])
-def test_bad_pixels_give_finite_metrics(bad):
+def test_bad_model_pixels_are_excluded_and_counted_never_zeroed(bad):
     r = _rand(seed=3)
     x = r.copy()
     x[3, 4, 1] = bad
-    r2 = r.copy()
-    r2[5, 6, :] = bad
-    for ref, test in ((r, x), (r2, r), (r2, x)):
-        e = M.error_maps(ref, test)
-        for name in ("signed", "absolute", "squared", "relative_squared", "delta_e2000", "flip"):
-            assert np.all(np.isfinite(getattr(e, name))), (bad, name)
-        s = e.summary()
-        assert all(np.isfinite(v) for v in s.values()), (bad, s)
-    assert M.count_nonfinite(x) == (0 if np.isfinite(bad) else 1)
+    e = M.error_maps(r, x)
+    for name in ("signed", "absolute", "squared", "relative_squared", "delta_e2000", "flip"):
+        assert np.all(np.isfinite(getattr(e, name))), (bad, name)
+    s = e.summary()
+    assert all(np.isfinite(v) for v in s.values() if not isinstance(v, bool)), (bad, s)
+    finite = np.isfinite(bad)
+    assert s["model_nonfinite_pixels"] == s["excluded_pixels"] == (0 if finite else 1)
+    assert s["pixels"] == r.shape[0] * r.shape[1] - (0 if finite else 1)
+    assert M.count_nonfinite(x) == (0 if finite else 1)
+    if not finite:  # the old code turned NaN into 0 and inf into FLT_MAX and averaged them in
+        clean = M.error_maps(r, np.where(np.isfinite(x), x, r)).summary(e.valid)
+        assert s["rmse"] == clean["rmse"] == 0.0
 
 
-def test_inf_in_model_is_a_huge_finite_error():
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_nonfinite_reference_is_refused(bad):
+    r = _rand(seed=3)
+    r[5, 6, :] = bad
+    with pytest.raises(ValueError, match="non-finite"):
+        M.error_maps(r, _rand(seed=4))
+    with pytest.raises(ValueError, match="non-finite"):
+        M.rmse(r, _rand(seed=4))
+
+
+def test_inf_in_model_is_an_error_for_scalar_metrics():
     r = np.ones((4, 4, 3))
     x = r.copy()
     x[0, 0, 0] = np.inf
-    assert np.isfinite(M.rmse(r, x)) and M.rmse(r, x) > 1e30
+    with pytest.raises(ValueError, match="non-finite"):
+        M.rmse(r, x)
+    mask = np.ones((4, 4), bool)
+    mask[0, 0] = False
+    assert M.rmse(r, x, mask=mask) == 0.0
 
 
 def test_vectorised_over_leading_axes():

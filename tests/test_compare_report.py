@@ -1,9 +1,11 @@
-"""fogref.compare.report / ground_truth / CLI, end to end on a small synthetic EXR.
+"""fogref.compare.report / CLI, end to end on a small synthetic schema-2 EXR.
 
 The scene: a camera 2 m above a ground plane y = 0, looking along -z; the lower
 rows hit the ground, the upper rows see the sky.  The "ground truth" is a
 homogeneous medium (Beer–Lambert, constant ambient inscatter), so a fake model with
-the same coefficients reproduces it up to float32 storage.
+the same coefficients reproduces it up to float32 storage.  Sky pixels have T = 0,
+so no sample reaches the sky unscattered: their surface is undefined (coverage 0)
+and they are excluded from the composited parts.
 """
 
 import json
@@ -11,13 +13,14 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from truth_factory import truth_attrs, truth_channels
 
 from fogref.compare import add_cli, compare, main
-from fogref.compare.ground_truth import REQUIRED_CHANNELS, load_ground_truth
 from fogref.compare.model_factory import build_model, parse_param_assignments
 from fogref.compare.report import PARTS, REGIONS
 from fogref.errors import FogrefError
 from fogref.exrio import read_exr, write_exr
+from fogref.gbuffer import load_truth
 
 W, H = 32, 24
 CAMERA = np.array([0.0, 2.0, 0.0])
@@ -33,20 +36,28 @@ class FakeResult:
     transmittance: np.ndarray
 
 
+@dataclass
+class BeerLambertParams:
+    sigma: tuple = tuple(SIGMA)
+    ambient: tuple = tuple(AMBIENT)
+    nan_rows: int = 0
+
+
 class BeerLambertFog:
     """Homogeneous fog: T = exp(-sigma d), inscatter = ambient (1 - T)."""
 
     name = "beer_lambert_test"
+    Params = BeerLambertParams
 
-    def __init__(self, sigma=tuple(SIGMA), ambient=tuple(AMBIENT), nan_rows: int = 0):
-        self.sigma, self.ambient, self.nan_rows = np.asarray(sigma, float), np.asarray(ambient, float), nan_rows
+    def __init__(self, params: BeerLambertParams | None = None, **kw):
+        self.params = params or BeerLambertParams(**kw)
+        self.sigma = np.asarray(self.params.sigma, float)
+        self.ambient = np.asarray(self.params.ambient, float)
+        self.nan_rows = self.params.nan_rows
 
     @classmethod
-    def from_physical(cls, params: dict) -> "BeerLambertFog":
-        return cls(sigma=params["medium"]["sigma_t"], ambient=params["sky"]["radiance"])
-
-    def to_dict(self) -> dict:
-        return {"sigma": self.sigma.tolist(), "ambient": self.ambient.tolist(), "nan_rows": self.nan_rows}
+    def from_physical(cls, physical) -> "BeerLambertFog":
+        return cls(sigma=tuple(np.broadcast_to(physical.medium.sigma_t, 3)), ambient=tuple(physical.sky_radiance))
 
     def evaluate(self, camera, world_pos, precision="float32"):
         dt = np.float32 if precision == "float32" else np.float64
@@ -59,11 +70,17 @@ class BeerLambertFog:
         return FakeResult(inscatter=inscatter, transmittance=t)
 
 
+@dataclass
+class NoPhysicalParams:
+    k: float = 1.0
+
+
 class NoPhysical:
     name = "no_physical_test"
+    Params = NoPhysicalParams
 
-    def __init__(self, k: float = 1.0):
-        self.k = k
+    def __init__(self, params: NoPhysicalParams | None = None):
+        self.params = params or NoPhysicalParams()
 
 
 def synthetic_channels(with_sun: bool = True):
@@ -81,26 +98,15 @@ def synthetic_channels(with_sun: bool = True):
     surface = np.where(hit[..., None], 0.2 + 0.6 * checker * np.array([1.0, 0.8, 0.6]), SKY)
     trans = np.where(hit[..., None], np.exp(-SIGMA * dist[..., None]), 0.0)  # sky: T(inf) = 0
     inscatter = AMBIENT * (1 - trans)
-    final = trans * surface + inscatter
-    ch = {}
-    for i, c in enumerate("RGB"):
-        ch[c] = final[..., i]
-        ch[f"T.{c}"] = trans[..., i]
-        ch[f"inscatter.{c}"] = inscatter[..., i]
-        ch[f"surface.{c}"] = surface[..., i]
-        ch[f"single.{c}"] = 0.7 * inscatter[..., i]
-        ch[f"multiple.{c}"] = 0.3 * inscatter[..., i]
-    for i, c in enumerate("XYZ"):
-        ch[f"P.{c}"] = pos[..., i]
-        ch[f"view.{c}"] = view[..., i]
-    ch["distance"], ch["hit"] = dist, hit.astype(np.float32)
+    ch = truth_channels(T=trans, surface=surface, inscatter=inscatter, distance=dist, position=pos, view=view,
+                        hit=hit, rel_stderr=0.01)
     params = {
         "camera": {"origin": CAMERA.tolist()},
         "medium": {"kind": "homogeneous", "sigma_t": SIGMA.tolist()},
         "sun": {"direction": SUN.tolist(), "irradiance": [3.0, 3.0, 2.8]} if with_sun else None,
         "sky": {"radiance": AMBIENT.tolist()},
     }
-    return ch, {"fogref.params": params, "fogref.spp": "16"}
+    return ch, truth_attrs(params, spp=16, seed=3, overrides={"res": 32}, scene="scenes/synthetic.xml")
 
 
 @pytest.fixture(scope="module")
@@ -146,22 +152,28 @@ def test_report_writes_every_file(perturbed_report):
 
 def test_report_metrics_structure_and_values(perturbed_report):
     _, report = perturbed_report
-    assert report["image"] == {"width": W, "height": H, "surface_pixels": report["image"]["surface_pixels"],
-                               "sky_pixels": W * H - report["image"]["surface_pixels"]}
-    assert 0 < report["image"]["surface_pixels"] < W * H
+    surface_px = report["image"]["surface_pixels"]
+    assert report["image"] == {"width": W, "height": H, "surface_pixels": surface_px,
+                               "sky_pixels": W * H - surface_px}
+    assert 0 < surface_px < W * H
     for part in PARTS:
         for region in REGIONS:
             s = report["metrics"][part][region]
-            assert s["pixels"] > 0
-            assert all(np.isfinite(v) for v in s.values())
+            composited_sky = part in ("final", "attenuated_surface") and region == "sky"
+            # the sky's surface is undefined here (T = 0: no sample reached it): excluded, counted
+            assert (s["pixels"] == 0) == composited_sky, (part, region)
+            if composited_sky:
+                assert s["excluded_pixels"] == W * H - surface_px
+            assert all(np.isfinite(v) for v in s.values() if not isinstance(v, bool)), (part, region)
         assert report["metrics"][part]["all"]["rmse"] > 0
     # sky pixels: T = 0 on both sides (sky_distance 100 km), so only inscatter differs there
     assert report["metrics"]["transmittance"]["sky"]["rmse"] < 1e-6
     b = report["binned"]["distance_m"]
-    assert sum(b["pixels"]) == report["image"]["surface_pixels"]
+    assert sum(b["pixels"]) == surface_px
     assert all(lo < hi for lo, hi in zip(b["bin_lo"], b["bin_hi"]))
     assert sum(report["binned"]["sun_angle_deg"]["pixels"]) == W * H
     assert report["diagnostics"]["reference_identity_max_abs"] < 1e-5
+    assert report["diagnostics"]["surface_undefined_pixels"] == W * H - surface_px
 
 
 def test_errors_exr_has_no_nan(perturbed_report):
@@ -181,6 +193,7 @@ def test_exact_model_gives_zero_error(exr_path, tmp_path):
         s = report["metrics"][part]["all"]
         assert s["rmse"] < 2e-7, part  # float32 storage of the EXR only
         assert s["delta_e2000_mean"] < 1e-3 and s["flip_mean"] < 1e-3, part
+        assert s["rmse_below_noise"] and s["mean_error_below_noise"], part
 
 
 def test_nonfinite_model_output_is_reported_not_propagated(tmp_path):
@@ -191,6 +204,11 @@ def test_nonfinite_model_output_is_reported_not_propagated(tmp_path):
     (out / "heatmaps" / "final.png").write_bytes(b"stale")
     report = compare(path, BeerLambertFog(nan_rows=2), out, figures=False)
     assert report["diagnostics"]["model_nonfinite_values"] == {"transmittance": 2 * 2 * 3, "inscatter": 2 * W * 3}
+    assert report["metrics"]["inscatter"]["all"]["model_nonfinite_pixels"] == 2 * W
+    assert report["metrics"]["inscatter"]["all"]["pixels"] == (H - 2) * W
+    assert report["metrics"]["transmittance"]["all"]["excluded_pixels"] == 2 * 2
+    assert any("non-finite" in w for w in report["warnings"])
+    assert "**Warning:**" in (out / "index.md").read_text()
     assert report["binned"]["sun_angle_deg"] is None
     assert not list(out.rglob("*.png")), "stale figures must be removed"
     assert "no sun" in (out / "index.md").read_text()
@@ -212,22 +230,22 @@ def test_missing_channel_error_names_file_and_channel(tmp_path):
 
 
 def test_missing_params_header_is_a_clear_error(tmp_path):
-    ch, _ = synthetic_channels()
+    ch, attrs = synthetic_channels()
+    del attrs["fogref.params"]
     path = tmp_path / "noparams.exr"
-    write_exr(path, ch, {})
+    write_exr(path, ch, attrs)
     with pytest.raises(FogrefError, match="fogref.params"):
-        load_ground_truth(path)
+        load_truth(path)
 
 
-def test_ground_truth_geometry(exr_path):
-    gt = load_ground_truth(exr_path)
+def test_truth_geometry(exr_path):
+    gt = load_truth(exr_path)
     wp = gt.world_positions(1000.0)
     np.testing.assert_allclose(wp[gt.hit], gt.position[gt.hit])
     np.testing.assert_allclose(np.linalg.norm(wp[gt.sky] - CAMERA, axis=-1), 1000.0, rtol=1e-6)
     ang = gt.sun_angle_deg()
     assert ang.shape == (H, W) and 0 <= ang.min() and ang.max() <= 180
-    assert len(REQUIRED_CHANNELS) == 20
-    with pytest.raises(ValueError):
+    with pytest.raises(FogrefError):
         gt.world_positions(0.0)
 
 

@@ -3,8 +3,8 @@
 Modules (one concept each):
 
 * :mod:`~fogref.compare.metrics`       RMSE, relMSE, ΔE2000, HDR-FLIP, per-pixel maps
-* :mod:`~fogref.compare.ground_truth`  the ground-truth EXR: parts, geometry, parameters
-* :mod:`~fogref.compare.report`        ``compare()``: evaluate a model, write the report
+* :mod:`~fogref.compare.report`        ``compare()``: evaluate a model on a truth
+  (:func:`fogref.gbuffer.load_truth`, the one reader), write the report
 * :mod:`~fogref.compare.binning`       errors binned by distance or sun angle
 * :mod:`~fogref.compare.plots`         heatmaps, side-by-side pictures, binned plots
 * :mod:`~fogref.compare.tonemap`       the shared display tone map
@@ -20,6 +20,7 @@ Command line (added to fogref's CLI by :func:`add_cli`)::
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from fogref.compare.report import DEFAULT_SKY_DISTANCE, compare
@@ -33,28 +34,34 @@ def default_out_dir(exr_path, model_name: str) -> Path:
 
 
 def run_compare_command(args: argparse.Namespace) -> int:
-    """Handler of ``fogref compare``: build the model, call :func:`compare`, print a summary."""
+    """Handler of ``fogref compare``: build the model, call :func:`compare`, print a summary.
+
+    Options are checked before anything is read (FogrefError naming the option);
+    warnings (model non-finite values, excluded pixels) go to stderr.
+    """
     from fogref.compare.model_factory import build_model, model_class, parse_param_assignments
-    from fogref.exrio import read_exr
+    from fogref.compare.report import check_sky_distance
+    from fogref.gbuffer import load_truth
 
+    sky_distance = check_sky_distance(args.sky_distance, "--sky-distance")
     cls = model_class(args.model)
-    scene_params = None
-    if args.from_scene:
-        _, attrs = read_exr(args.exr)
-        scene_params = attrs.get("fogref.params")
-        if not isinstance(scene_params, dict):
-            from fogref.errors import FogrefError
-
-            raise FogrefError(f"{args.exr}: header attribute 'fogref.params' missing; --from-scene needs it")
-    model = build_model(cls, parse_param_assignments(args.param), scene_params)
+    truth = load_truth(args.exr)
+    model = build_model(cls, parse_param_assignments(args.param), truth.params if args.from_scene else None)
     out = Path(args.out) if args.out else default_out_dir(args.exr, args.model)
-    report = compare(args.exr, model, out, precision=args.precision, sky_distance=args.sky_distance,
+    report = compare(truth, model, out, precision=args.precision, sky_distance=sky_distance,
                      figures=not args.no_figures)
     final = report["metrics"]["final"]["all"]
-    print(
-        f"{args.model} vs {args.exr}: final RMSE {final.get('rmse', 0):.4g}, relMSE {final.get('relmse', 0):.4g}, "
-        f"ΔE2000 mean {final.get('delta_e2000_mean', 0):.3g}, FLIP mean {final.get('flip_mean', 0):.3g}"
-    )
+
+    def pm(key):
+        v = final.get(key)
+        return "—" if v is None else f"{v:.4g} ± {final.get(key + '_stderr', 0):.2g}"
+
+    print(f"{args.model} vs {args.exr}: final RMSE {pm('rmse')} (noise floor {final.get('rmse_noise_floor', 0):.2g}"
+          f"{', below the noise' if final.get('rmse_below_noise') else ''}), relMSE {pm('relmse')}, "
+          f"mean error {pm('mean_error')}, ΔE2000 mean {final.get('delta_e2000_mean', 0):.3g}, "
+          f"FLIP mean {final.get('flip_mean', 0):.3g}")
+    for w in report["warnings"]:
+        print(f"fogref compare: warning: {w}", file=sys.stderr)
     print(f"report: {out / 'index.md'}")
     return 0
 
@@ -90,7 +97,8 @@ def _configure(p: argparse.ArgumentParser) -> None:
     p.add_argument("--precision", choices=("float32", "float64"), default="float32",
                    help="arithmetic precision of the model evaluation")
     p.add_argument("--sky-distance", type=float, default=DEFAULT_SKY_DISTANCE, metavar="M",
-                   help=f"distance [m] at which sky pixels are fogged (default {DEFAULT_SKY_DISTANCE:g})")
+                   help=f"distance [m] at which sky pixels are fogged, finite and > 0 "
+                   f"(default {DEFAULT_SKY_DISTANCE:g})")
     p.add_argument("--no-figures", action="store_true",
                    help="write only metrics.json, errors.exr and index.md (no PNGs; faster, for CI)")
     p.set_defaults(func=run_compare_command)

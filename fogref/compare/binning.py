@@ -1,8 +1,12 @@
 """Errors binned against a per-pixel coordinate (distance, angle to the sun).
 
-Each bin reports, over its pixels: ``rmse`` (image units), ``relmse`` (1),
-``delta_e2000_mean`` (1) and ``flip_mean`` (0..1).  Empty bins are dropped, so no
-value is ever NaN.
+Each bin reports, over its pixels: ``rmse`` (image units), ``rmse_noise_floor``
+(the RMSE a perfect model would get from the truth's noise, image units),
+``mean_error`` (signed, image units), ``relmse`` (1), ``delta_e2000_mean`` (1) and
+``flip_mean`` (0..1), and ``pixels``: how many of its pixels each part used (a
+part's excluded pixels, see :class:`~fogref.compare.metrics.ErrorMaps`, are left
+out).  Bins empty for every part are dropped; a bin empty for one part holds None
+for it, so no value is ever NaN.
 """
 
 from __future__ import annotations
@@ -60,14 +64,27 @@ def binned_errors(coordinate, errors: dict[str, ErrorMaps], edges, mask=None) ->
     center = np.where(lo > 0, np.sqrt(np.abs(lo * hi)), 0.5 * (lo + hi))
     out.update(bin_lo=lo.tolist(), bin_hi=hi.tolist(), center=center.tolist(), pixels=counts[keep].tolist())
 
-    def mean(m: np.ndarray) -> np.ndarray:
-        return np.bincount(idx, weights=m[sel], minlength=nb)[keep] / counts[keep]
-
     for part, e in errors.items():
+        use = e.valid[sel]
+        n = np.bincount(idx[use], minlength=nb)[keep]
+
+        def mean(m: np.ndarray, use=use, n=n) -> list:
+            v = np.asarray(m)[sel]
+            if v.ndim > 1:
+                v = v.mean(-1)
+            tot = np.bincount(idx[use], weights=v[use], minlength=nb)[keep]
+            return [float(t / k) if k else None for t, k in zip(tot, n)]
+
+        def root(values: list) -> list:
+            return [None if v is None else float(np.sqrt(v)) for v in values]
+
         out["parts"][part] = {
-            "rmse": np.sqrt(mean(e.squared)).tolist(),
-            "relmse": mean(e.relative_squared).tolist(),
-            "delta_e2000_mean": mean(e.delta_e2000).tolist(),
-            "flip_mean": mean(e.flip).tolist(),
+            "pixels": n.tolist(),
+            "rmse": root(mean(e.squared)),
+            "rmse_noise_floor": root(mean(e.sigma ** 2)),
+            "mean_error": mean(e.signed),
+            "relmse": mean(e.relative_squared),
+            "delta_e2000_mean": mean(e.delta_e2000),
+            "flip_mean": mean(e.flip),
         }
     return out

@@ -6,17 +6,25 @@ Conventions shared by every function here:
 * Images are **linear** RGB arrays of shape ``(..., 3)`` with Rec.709 / sRGB
   primaries and a D65 white, in the scene's radiance units (or dimensionless, for
   transmittance).  Per-pixel maps have shape ``(...)``: the channel axis is reduced.
-* Nothing returned is NaN or infinite, on purpose:
+* The reference (a ground truth) must be finite: a non-finite reference value is a
+  ``ValueError`` (:func:`fogref.gbuffer.load_truth` already refuses such truths).
+* A non-finite *test* (model) value is never replaced by a number.  The per-pixel
+  maps of :func:`error_maps` mark such pixels invalid (``ErrorMaps.valid``) and every
+  summary excludes and counts them; the scalar :func:`rmse` / :func:`relmse` raise
+  ``ValueError`` when the pixels they average hold one.
+* relMSE divides by ``reference² + eps`` (``eps > 0``), so zero reference pixels
+  are fine; ΔE2000 and FLIP are colour metrics of physical radiances: they clip
+  negative values to 0 (see :func:`to_display_radiance`); FLIP also clips to a
+  multiple of the reference's largest value (see :func:`flip_map`).
+* A mean over an empty mask is reported as ``None``, never NaN.
 
-  - every input is first passed through :func:`sanitize` (``NaN -> 0``,
-    ``+inf -> +FLT_MAX``, ``-inf -> -FLT_MAX``) and computed in float64, so a broken
-    pixel shows up as a huge, finite error instead of poisoning a mean;
-  - relMSE divides by ``reference² + eps`` (``eps > 0``), so zero reference pixels
-    are fine;
-  - ΔE2000 and FLIP are colour metrics of physical radiances: they clip negative
-    values to 0 (see :func:`to_display_radiance`); FLIP also clips to a multiple of
-    the reference's largest finite value (see :func:`flip_map`);
-  - a mean over an empty mask is reported as ``None`` by the callers, never NaN.
+Monte Carlo noise of the reference: given the per-pixel standard error ``sigma`` of
+``test - reference`` (from the truth's ``stderr.*`` channels), :func:`mse_noise`
+splits an MSE into the part the truth's noise adds (the *noise floor*, the MSE a
+perfect model would get) and the rest, with the standard error of the estimate;
+:func:`mean_noise` does the same for the mean signed error.  A metric is *below the
+noise* when it is within ``NOISE_Z`` standard errors of what a perfect model would
+score.
 
 Metrics (per part: final image, transmittance, inscatter, ...):
 
@@ -34,6 +42,7 @@ FLIP             HDR-FLIP (Andersson et al. 2021) via ``flip_evaluator``,
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 
@@ -53,43 +62,67 @@ FLIP_MAX_STOPS = 20
 REC709_LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 
 _FLT_MAX = float(np.finfo(np.float32).max)
-
-
-def sanitize(image) -> np.ndarray:
-    """``image`` as float64 with ``NaN -> 0`` and ``±inf -> ±FLT_MAX`` (float32's max).
-
-    Used on every metric input, so that a non-finite pixel of a model (e.g. a float32
-    overflow) counts as a huge but finite error.
-    """
-    x = np.asarray(image, dtype=np.float64)
-    return np.nan_to_num(x, nan=0.0, posinf=_FLT_MAX, neginf=-_FLT_MAX)
+#: A metric is "below the noise" within this many standard errors of a perfect model's.
+NOISE_Z = 3.0
+#: Relative rounding of the truth's float32 storage, counted as noise (2**-23).
+FLOAT32_STORAGE = float(np.finfo(np.float32).eps)
 
 
 def count_nonfinite(image) -> int:
-    """Number of NaN or infinite values in ``image`` (all channels counted)."""
+    """Number of NaN or infinite values in ``image`` (all channels counted).
+
+    Examples
+    --------
+    >>> count_nonfinite(np.array([1.0, np.nan, np.inf, -2.0]))
+    2
+    """
     return int(np.size(image) - np.count_nonzero(np.isfinite(image)))
+
+
+def finite_pixels(image) -> np.ndarray:
+    """``(...)`` bool: every channel of the pixel of ``image (..., 3)`` is finite.
+
+    Examples
+    --------
+    >>> finite_pixels(np.array([[1.0, 2.0, 3.0], [0.0, np.nan, 0.0]])).tolist()
+    [True, False]
+    """
+    return np.all(np.isfinite(np.asarray(image, dtype=np.float64)), axis=-1)
 
 
 def luminance(rgb) -> np.ndarray:
     """Rec.709 relative luminance ``Y`` of linear RGB ``(..., 3)`` -> ``(...)``; same units."""
-    return sanitize(rgb) @ REC709_LUMINANCE
+    return np.asarray(rgb, dtype=np.float64) @ REC709_LUMINANCE
 
 
 def _check_pair(reference, test) -> tuple[np.ndarray, np.ndarray]:
-    r, x = sanitize(reference), sanitize(test)
+    r, x = np.asarray(reference, dtype=np.float64), np.asarray(test, dtype=np.float64)
     if r.shape != x.shape:
         raise ValueError(f"reference and test shapes differ: {r.shape} vs {x.shape}")
     if r.ndim == 0 or r.shape[-1] != 3:
         raise ValueError(f"expected (..., 3) RGB images, got shape {r.shape}")
+    n = count_nonfinite(r)
+    if n:
+        raise ValueError(f"the reference holds {n} non-finite value(s); a ground truth must be finite")
     return r, x
 
 
-def _masked_mean(per_pixel: np.ndarray, mask) -> float | None:
-    """Mean of a per-pixel map over ``mask`` (all pixels if None); None if empty."""
+def _require_finite_test(x: np.ndarray, what: str) -> None:
+    n = count_nonfinite(x)
+    if n:
+        raise ValueError(f"{what}: the test image holds {n} non-finite value(s); mask those pixels out "
+                         "(error_maps does, and counts them)")
+
+
+def _masked_mean(per_pixel: np.ndarray, mask, what: str = "metric") -> float | None:
+    """Mean of a per-pixel map over ``mask`` (all pixels if None); None if empty.
+
+    Raises ValueError when a selected value is not finite (never averaged away)."""
     if mask is not None:
         per_pixel = per_pixel[np.asarray(mask, dtype=bool)]
     if per_pixel.size == 0:
         return None
+    _require_finite_test(per_pixel, what)
     return float(np.mean(per_pixel))
 
 
@@ -129,18 +162,161 @@ def relative_squared_error_map(reference, test, eps: float = RELMSE_EPS) -> np.n
 
 
 def rmse(reference, test, mask=None) -> float | None:
-    """Root mean squared error over pixels (in ``mask``) and channels; image units.
+    """Root mean squared error over pixels (in ``mask``) and channels.
 
-    ``mask``: boolean array of the image's pixel shape ``(...)``, or None for all.
-    Returns None when the mask selects no pixel.
+    Parameters
+    ----------
+    reference, test : array_like, ``(..., 3)``
+        Linear RGB images in the same units; ``reference`` finite.
+    mask : array_like of bool, ``(...)``, optional
+        Pixels to average over (default: all).
+
+    Returns
+    -------
+    float or None
+        RMSE in the images' units, in ``[0, inf)``; None when ``mask`` selects no
+        pixel.  ValueError if a selected test value is not finite.
+
+    Examples
+    --------
+    >>> r = np.zeros((1, 2, 3))
+    >>> x = np.array([[[1.0, 1.0, 1.0], [3.0, 3.0, 3.0]]])
+    >>> rmse(r, x)
+    2.23606797749979
+    >>> rmse(r, x, mask=np.array([[True, False]]))
+    1.0
     """
-    m = _masked_mean(squared_error_map(reference, test), mask)
+    m = _masked_mean(squared_error_map(reference, test), mask, "rmse")
     return None if m is None else float(np.sqrt(m))
 
 
 def relmse(reference, test, eps: float = RELMSE_EPS, mask=None) -> float | None:
-    """Relative MSE ``mean((x - r)² / (r² + eps))`` over pixels and channels; unitless."""
-    return _masked_mean(relative_squared_error_map(reference, test, eps), mask)
+    """Relative MSE ``mean((x - r)² / (r² + eps))`` over pixels and channels.
+
+    Parameters
+    ----------
+    reference, test : array_like, ``(..., 3)``
+        Linear RGB images; ``reference`` finite.
+    eps : float
+        Stabiliser (> 0) in image units squared.
+    mask : array_like of bool, ``(...)``, optional
+
+    Returns
+    -------
+    float or None
+        Unitless, in ``[0, inf)``; None for an empty mask.
+
+    Examples
+    --------
+    >>> relmse(np.ones((1, 1, 3)), np.full((1, 1, 3), 2.0), eps=1.0)
+    0.5
+    """
+    return _masked_mean(relative_squared_error_map(reference, test, eps), mask, "relmse")
+
+
+def _noise_inputs(diff, sigma, mask, weight):
+    d = np.asarray(diff, dtype=np.float64)
+    s = np.broadcast_to(np.asarray(sigma, dtype=np.float64), d.shape)
+    w = np.ones_like(d) if weight is None else np.broadcast_to(np.asarray(weight, dtype=np.float64), d.shape)
+    if mask is not None:
+        m = np.asarray(mask, dtype=bool)
+        d, s, w = d[m], s[m], w[m]
+    d, s, w = d.reshape(-1, d.shape[-1]), s.reshape(-1, d.shape[-1]), w.reshape(-1, d.shape[-1])
+    _require_finite_test(d, "noise")
+    if count_nonfinite(s) or np.any(s < 0):
+        raise ValueError("standard errors must be finite and >= 0")
+    return d, s, w
+
+
+def mse_noise(diff, sigma, mask=None, weight=None, z: float = NOISE_Z) -> dict | None:
+    """A (weighted) MSE and the part of it that the reference's Monte Carlo noise explains.
+
+    With ``d = test - reference`` per channel and ``sigma`` the standard error of
+    ``d`` due to the reference's noise (independent between pixels), the estimate
+    ``mean(w d²)`` has expectation ``mean(w bias²) + mean(w sigma²)``.  The second
+    term is the *noise floor*: what a perfect model would score.  The standard error
+    of the estimate uses ``Var(d²) = 4 bias² sigma² + 2 sigma⁴`` (normal noise, the
+    bias² estimated by ``max(d² - sigma², 0)``); channels of a pixel are taken as
+    fully correlated (an upper bound: they come from the same samples).
+
+    Parameters
+    ----------
+    diff : array_like, ``(..., 3)``
+        ``test - reference`` [image units]; finite.
+    sigma : array_like, ``(..., 3)`` or broadcastable
+        Standard error of ``diff`` [image units], >= 0.
+    mask : array_like of bool, ``(...)``, optional
+        Pixels to use (default all).
+    weight : array_like, optional
+        Per-value weight (e.g. ``1 / (r² + eps)`` for relMSE); default 1.
+    z : float
+        Standard errors within which a value counts as *below the noise*.
+
+    Returns
+    -------
+    dict or None
+        ``mse`` (>= 0), ``noise_floor`` (>= 0), ``stderr`` of ``mse`` (>= 0),
+        ``debiased`` = ``max(mse - noise_floor, 0)``, ``null_stderr`` (the stderr a
+        perfect model would have) and ``below_noise``: ``mse - noise_floor <= z *
+        null_stderr``.  None for an empty selection.
+
+    Examples
+    --------
+    A model that is off by exactly the noise level everywhere:
+
+    >>> r = mse_noise(np.full((10, 10, 3), 0.1), 0.1)
+    >>> round(r["mse"], 6), round(r["noise_floor"], 6), r["below_noise"]
+    (0.01, 0.01, True)
+    >>> mse_noise(np.full((10, 10, 3), 0.5), 0.1)["below_noise"]
+    False
+    """
+    d, s, w = _noise_inputs(diff, sigma, mask, weight)
+    n = d.shape[0]
+    if n == 0:
+        return None
+    d2, s2 = d * d, s * s
+    mse = float(np.mean(w * d2))
+    floor = float(np.mean(w * s2))
+    var = w * w * (4.0 * np.maximum(d2 - s2, 0.0) * s2 + 2.0 * s2 * s2)
+    stderr = float(np.sqrt(np.sum(np.mean(np.sqrt(var), axis=-1) ** 2)) / n)
+    null = float(np.sqrt(np.sum(np.mean(np.sqrt(2.0) * w * s2, axis=-1) ** 2)) / n)
+    return {"mse": mse, "noise_floor": floor, "stderr": stderr, "debiased": max(mse - floor, 0.0),
+            "null_stderr": null, "below_noise": bool(mse - floor <= z * null)}
+
+
+def mean_noise(diff, sigma, mask=None, z: float = NOISE_Z) -> dict | None:
+    """Mean signed error over pixels and channels, with its standard error from the noise.
+
+    Parameters
+    ----------
+    diff : array_like, ``(..., 3)``
+        ``test - reference`` [image units]; finite.
+    sigma : array_like, broadcastable to ``diff``
+        Standard error of ``diff`` [image units], >= 0.
+    mask : array_like of bool, ``(...)``, optional
+    z : float
+        Standard errors within which the mean counts as *below the noise*.
+
+    Returns
+    -------
+    dict or None
+        ``mean`` [image units; > 0: the model is too bright], ``stderr`` (channels of
+        a pixel fully correlated, pixels independent) and ``below_noise``:
+        ``|mean| <= z * stderr``.  None for an empty selection.
+
+    Examples
+    --------
+    >>> m = mean_noise(np.full((4, 4, 3), 0.01), 0.1)
+    >>> round(m["mean"], 6), round(m["stderr"], 6), m["below_noise"]
+    (0.01, 0.025, True)
+    """
+    d, s, _ = _noise_inputs(diff, sigma, mask, None)
+    n = d.shape[0]
+    if n == 0:
+        return None
+    mean = float(np.mean(d))
+    stderr = float(np.sqrt(np.sum(np.mean(s, axis=-1) ** 2)) / n)
+    return {"mean": mean, "stderr": stderr, "below_noise": bool(abs(mean) <= z * stderr)}
 
 
 # ---------------------------------------------------------------- ΔE2000
@@ -155,7 +331,7 @@ def exposure_white(reference, percentile: float = WHITE_PERCENTILE) -> float:
     Units: those of ``reference``.
     """
     y = luminance(reference).ravel()
-    y = y[y > 0]
+    y = y[np.isfinite(y) & (y > 0)]
     if y.size == 0:
         return 1.0
     w = float(np.percentile(y, percentile))
@@ -165,12 +341,13 @@ def exposure_white(reference, percentile: float = WHITE_PERCENTILE) -> float:
 
 
 def to_display_radiance(image, ceiling: float | None = None) -> np.ndarray:
-    """Sanitised ``image`` with negatives clipped to 0 and values clipped to ``ceiling``.
+    """``image`` (finite) with negatives clipped to 0 and values clipped to ``ceiling``.
 
     Colour metrics (ΔE2000, FLIP) treat pixels as physical, non-negative radiances.
-    ``ceiling`` (default FLT_MAX) bounds ``+inf`` replacements.
+    ``ceiling``: default FLT_MAX.  ValueError for a non-finite value.
     """
-    x = sanitize(image)
+    x = np.asarray(image, dtype=np.float64)
+    _require_finite_test(x, "colour metric")
     return np.clip(x, 0.0, _FLT_MAX if ceiling is None else ceiling)
 
 
@@ -202,8 +379,9 @@ def delta_e2000_map(reference, test, white: float | None = None) -> np.ndarray:
     r, x = _check_pair(reference, test)
     if white is None:
         white = exposure_white(r)
+    _require_finite_test(x, "ΔE2000")
     de = colour.delta_E(linear_rgb_to_lab(r, white), linear_rgb_to_lab(x, white), method="CIE 2000")
-    return sanitize(de)
+    return np.asarray(de, dtype=np.float64)
 
 
 # ---------------------------------------------------------------- FLIP
@@ -287,7 +465,7 @@ def flip_map(reference, test, ppd: float = FLIP_PPD) -> tuple[np.ndarray, dict]:
     err, _, used = flip_evaluator.evaluate(
         r.astype(np.float32), x.astype(np.float32), "HDR", applyMagma=False, parameters=params
     )
-    err = sanitize(np.asarray(err)).reshape(r.shape[:2])
+    err = np.asarray(err, dtype=np.float64).reshape(r.shape[:2])
     return np.clip(err, 0.0, 1.0), {k: (float(v) if isinstance(v, (int, float)) else v) for k, v in used.items()}
 
 
@@ -303,6 +481,15 @@ class ErrorMaps:
     [units²]; ``relative_squared``: relMSE's per-pixel term [1]; ``delta_e2000`` [1];
     ``flip`` [0..1].  ``white``: the ΔE exposure white [image units];
     ``flip_params``: what FLIP used.
+
+    ``valid``: ``(H, W)`` bool, the pixels that count.  An invalid pixel (its
+    reference undefined, e.g. ``surface`` with zero coverage, or a non-finite model
+    value) holds error 0 in every map and is excluded from every summary, which
+    counts it.  ``nonfinite``: ``(H, W)`` bool, the model was not finite there.
+    ``sigma``: ``(H, W, 3)`` standard error of ``signed`` from the reference's noise
+    (0: noise-free).  ``relative_weight``: ``1 / (r² + eps)``, relMSE's weight.
+    ``delta_e2000_noise`` / ``flip_noise``: the maps of a perfect model plus one
+    seeded draw of that noise (the colour metrics' noise floors), or None.
     """
 
     signed: np.ndarray
@@ -313,42 +500,139 @@ class ErrorMaps:
     flip: np.ndarray
     white: float
     flip_params: dict
+    valid: np.ndarray | None = None
+    nonfinite: np.ndarray | None = None
+    sigma: np.ndarray | None = None
+    relative_weight: np.ndarray | None = None
+    delta_e2000_noise: np.ndarray | None = None
+    flip_noise: np.ndarray | None = None
 
-    def summary(self, mask=None) -> dict:
-        """Scalar metrics over ``mask`` (pixel-shaped bool, None = all); None if empty.
+    def __post_init__(self):
+        shape = self.absolute.shape
+        if self.valid is None:
+            self.valid = np.ones(shape, dtype=bool)
+        if self.nonfinite is None:
+            self.nonfinite = np.zeros(shape, dtype=bool)
+        if self.sigma is None:
+            self.sigma = np.zeros(self.signed.shape)
 
-        Keys: ``pixels``, ``rmse``, ``relmse``, ``mean_abs_error``, ``max_abs_error``,
-        ``delta_e2000_mean``, ``delta_e2000_p95``, ``flip_mean``.
-        """
+    def selection(self, mask=None) -> np.ndarray:
+        """``(H, W)`` bool: the valid pixels of ``mask`` (None: all)."""
         sel = np.ones(self.absolute.shape, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+        return sel & self.valid
+
+    def summary(self, mask=None, z: float = NOISE_Z) -> dict:
+        """Scalar metrics over the valid pixels of ``mask`` (pixel-shaped bool, None = all).
+
+        Keys: ``pixels`` (used), ``excluded_pixels`` (in ``mask`` but invalid),
+        ``model_nonfinite_pixels``; then, when a pixel is used: ``rmse``,
+        ``rmse_stderr`` (half-width of the MSE's ±1 standard error mapped through
+        the square root), ``rmse_noise_floor`` (the RMSE of a perfect model),
+        ``rmse_debiased``, ``rmse_below_noise``; ``relmse`` with the same suffixes;
+        ``mean_error`` (signed, > 0: too bright), ``mean_error_stderr``,
+        ``mean_error_below_noise``; ``mean_abs_error`` and its
+        ``mean_abs_error_noise_floor`` (``sqrt(2/pi) mean sigma``);
+        ``max_abs_error``; ``delta_e2000_mean``, ``delta_e2000_p95``, ``flip_mean``
+        and their ``*_noise_floor`` where noise maps exist.
+        """
+        region = np.ones(self.absolute.shape, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+        sel = region & self.valid
         n = int(np.count_nonzero(sel))
+        out = {"pixels": n, "excluded_pixels": int(np.count_nonzero(region & ~self.valid)),
+               "model_nonfinite_pixels": int(np.count_nonzero(region & self.nonfinite))}
         if n == 0:
-            return {"pixels": 0}
-        mse = float(np.mean(self.squared[sel]))
-        return {
-            "pixels": n,
-            "rmse": float(np.sqrt(mse)),
-            "relmse": float(np.mean(self.relative_squared[sel])),
+            return out
+        for name, weight in (("rmse", None), ("relmse", self.relative_weight)):
+            m = mse_noise(self.signed, self.sigma, sel, weight, z)
+            value = m["mse"] if name == "relmse" else float(np.sqrt(m["mse"]))
+            if name == "rmse":
+                hi, lo = math.sqrt(m["mse"] + m["stderr"]), math.sqrt(max(m["mse"] - m["stderr"], 0.0))
+                extra = {"rmse_stderr": 0.5 * (hi - lo), "rmse_noise_floor": math.sqrt(m["noise_floor"]),
+                         "rmse_debiased": math.sqrt(m["debiased"])}
+            else:
+                extra = {"relmse_stderr": m["stderr"], "relmse_noise_floor": m["noise_floor"],
+                         "relmse_debiased": m["debiased"]}
+            out.update({name: value, **extra, f"{name}_below_noise": m["below_noise"]})
+        if self.relative_weight is None:  # relMSE without its weight: the map's mean, no noise split
+            out["relmse"] = float(np.mean(self.relative_squared[sel]))
+        me = mean_noise(self.signed, self.sigma, sel, z)
+        out.update({
+            "mean_error": me["mean"], "mean_error_stderr": me["stderr"], "mean_error_below_noise": me["below_noise"],
             "mean_abs_error": float(np.mean(self.absolute[sel])),
+            "mean_abs_error_noise_floor": float(math.sqrt(2.0 / math.pi) * np.mean(self.sigma[sel])),
             "max_abs_error": float(np.max(self.absolute[sel])),
             "delta_e2000_mean": float(np.mean(self.delta_e2000[sel])),
             "delta_e2000_p95": float(np.percentile(self.delta_e2000[sel], 95)),
             "flip_mean": float(np.mean(self.flip[sel])),
-        }
+        })
+        if self.delta_e2000_noise is not None:
+            out["delta_e2000_mean_noise_floor"] = float(np.mean(self.delta_e2000_noise[sel]))
+        if self.flip_noise is not None:
+            out["flip_mean_noise_floor"] = float(np.mean(self.flip_noise[sel]))
+        return out
 
 
 def error_maps(
-    reference, test, *, white: float | None = None, eps: float = RELMSE_EPS, ppd: float = FLIP_PPD
+    reference, test, *, white: float | None = None, eps: float = RELMSE_EPS, ppd: float = FLIP_PPD,
+    sigma=None, valid=None, noise_seed: int | None = 0,
 ) -> ErrorMaps:
     """All per-pixel errors of ``test`` against ``reference`` (both ``(H, W, 3)``).
 
-    ``white``: ΔE exposure white (default :func:`exposure_white` of the reference;
-    pass 1 for transmittance, whose white is T = 1).  ``eps``: relMSE stabiliser.
+    Parameters
+    ----------
+    reference : array_like, ``(H, W, 3)``
+        Finite linear RGB (ValueError otherwise).
+    test : array_like, ``(H, W, 3)``
+        The model; non-finite pixels are marked invalid and counted, never averaged.
+    white : float, optional
+        ΔE exposure white (default :func:`exposure_white` of the reference; pass 1
+        for transmittance, whose white is T = 1).
+    eps : float
+        relMSE stabiliser (> 0) [image units²].
+    ppd : float
+        FLIP pixels per degree (> 0).
+    sigma : array_like, broadcastable to ``(H, W, 3)``, optional
+        Standard error of ``test - reference`` from the reference's Monte Carlo
+        noise [image units]; default 0 (noise-free).
+    valid : array_like of bool, ``(H, W)``, optional
+        Pixels where the comparison is defined (default all).
+    noise_seed : int or None
+        Seed of the noise draw for the ΔE2000/FLIP noise floors (None: skip them;
+        they are also skipped when ``sigma`` is 0 everywhere, where they are 0).
+
+    Returns
+    -------
+    ErrorMaps
+
+    Examples
+    --------
+    >>> r = np.full((2, 2, 3), 0.5)
+    >>> x = r.copy(); x[0, 0] = np.nan
+    >>> e = error_maps(r, x, white=1.0)
+    >>> s = e.summary()
+    >>> s["pixels"], s["excluded_pixels"], s["model_nonfinite_pixels"], s["rmse"]
+    (3, 1, 1, 0.0)
     """
     r, x = _check_pair(reference, test)
+    if r.ndim != 3:
+        raise ValueError(f"error_maps needs (H, W, 3) images, got shape {r.shape}")
+    if not eps > 0:
+        raise ValueError(f"relMSE eps must be > 0, got {eps}")
+    nonfinite = ~finite_pixels(x)
+    ok = ~nonfinite if valid is None else (np.asarray(valid, dtype=bool) & ~nonfinite)
+    x = np.where(ok[..., None], x, r)  # excluded pixels: error 0 in the maps, left out of every summary
+    s = np.zeros(r.shape) if sigma is None else np.broadcast_to(np.asarray(sigma, dtype=np.float64), r.shape)
+    if count_nonfinite(s) or np.any(s < 0):
+        raise ValueError("sigma must be finite and >= 0")
+    s = np.where(ok[..., None], s, 0.0)
     if white is None:
         white = exposure_white(r)
     flip, flip_params = flip_map(r, x, ppd)
+    de_noise = flip_noise = None
+    if noise_seed is not None and np.any(s > 0):
+        noisy = r + s * np.random.default_rng(noise_seed).standard_normal(r.shape)
+        de_noise = delta_e2000_map(r, noisy, white)
+        flip_noise, _ = flip_map(r, noisy, ppd)
     return ErrorMaps(
         signed=x - r,
         absolute=abs_error_map(r, x),
@@ -358,4 +642,10 @@ def error_maps(
         flip=flip,
         white=float(white),
         flip_params=flip_params,
+        valid=ok,
+        nonfinite=nonfinite,
+        sigma=s,
+        relative_weight=1.0 / (r * r + eps),
+        delta_e2000_noise=de_noise,
+        flip_noise=flip_noise,
     )

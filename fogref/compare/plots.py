@@ -42,55 +42,82 @@ def _robust_max(m: np.ndarray) -> float:
     return hi if hi > 0 else 1.0
 
 
-def plot_error_heatmaps(errors: ErrorMaps, part: str, units: str, path) -> Path:
-    """Four heatmaps of one part, each with a colour bar and its units.
+def _symmetric_limit(m: np.ndarray) -> float:
+    """Symmetric colour limit of a signed map: the 99.5th percentile of ``|m|`` (> 0), else 1."""
+    return _robust_max(np.abs(m))
 
-    |error| (mean over RGB) [``units``], relative squared error [1],
-    ΔE2000 [1] and HDR-FLIP [0..1].  Colour limits: 0 to the 99.5th percentile
-    (FLIP: 0 to 1), so a few outliers do not flatten the map.
+
+def plot_error_heatmaps(errors: ErrorMaps, part: str, units: str, path) -> Path:
+    """Five heatmaps of one part, each with a colour bar and its units.
+
+    The signed error ``model − reference`` (mean over RGB) [``units``] on the
+    diverging ``RdBu_r`` map centred at 0 with symmetric limits (red: the model is
+    too bright, blue: too dark); |error| (mean over RGB) [``units``], relative
+    squared error [1], ΔE2000 [1] and HDR-FLIP [0..1].  Colour limits: the 99.5th
+    percentile (FLIP: 0 to 1), so a few outliers do not flatten the map.  Excluded
+    pixels (``errors.valid`` False) are grey.
     """
+    signed = errors.signed.mean(-1)
+    lim = _symmetric_limit(signed[errors.valid]) if errors.valid.any() else 1.0
     panels = [
-        (errors.absolute, "|model − reference|", f"[{units}]", "viridis", _robust_max(errors.absolute)),
-        (errors.relative_squared, "relative squared error", "[1]", "viridis", _robust_max(errors.relative_squared)),
-        (errors.delta_e2000, "ΔE2000", "[1]", "viridis", _robust_max(errors.delta_e2000)),
-        (errors.flip, "HDR-FLIP", "[0..1]", "magma", 1.0),
+        (signed, "model − reference (signed)", f"[{units}]", "RdBu_r", -lim, lim),
+        (errors.absolute, "|model − reference|", f"[{units}]", "viridis", 0.0, _robust_max(errors.absolute)),
+        (errors.relative_squared, "relative squared error", "[1]", "viridis", 0.0,
+         _robust_max(errors.relative_squared)),
+        (errors.delta_e2000, "ΔE2000", "[1]", "viridis", 0.0, _robust_max(errors.delta_e2000)),
+        (errors.flip, "HDR-FLIP", "[0..1]", "magma", 0.0, 1.0),
     ]
     pw, ph = _panel_size(errors.absolute.shape)
     fig = _figure(pw * len(panels) + 1.0, ph + 0.8)
     axes = fig.subplots(1, len(panels))
     fig.subplots_adjust(wspace=0.3)
-    for ax, (m, title, unit, cmap, vmax) in zip(axes, panels):
-        im = ax.imshow(m, cmap=cmap, vmin=0.0, vmax=vmax, interpolation="nearest")
+    import matplotlib
+
+    for ax, (m, title, unit, cmap, vmin, vmax) in zip(axes, panels):
+        cm = matplotlib.colormaps[cmap].with_extremes(bad="0.6")
+        im = ax.imshow(np.ma.masked_array(m, ~errors.valid), cmap=cm, vmin=vmin, vmax=vmax, interpolation="nearest")
         ax.set_title(f"{title} {unit}", fontsize=9)
         ax.set_axis_off()
         fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04).set_label(unit, fontsize=8)
-    fig.suptitle(f"{part}: per-pixel error of the model", fontsize=10)
+    excluded = int(np.count_nonzero(~errors.valid))
+    fig.suptitle(f"{part}: per-pixel error of the model"
+                 + (f" (grey: {excluded} excluded pixels)" if excluded else ""), fontsize=10)
     return save_figure_atomic(fig, path)
 
 
-def plot_side_by_side(reference, model, exposure: float, part: str, units: str, path) -> Path:
+def plot_side_by_side(reference, model, exposure: float, part: str, units: str, path, valid=None) -> Path:
     """Reference | model | |model − reference|, all through one tone map.
 
     Tone map: :func:`fogref.compare.tonemap.tone_map` with the shared ``exposure``
-    [1/``units``] (exposure, clip to [0, 1], sRGB OETF).
+    [1/``units``] (exposure, clip to [0, 1], sRGB OETF).  ``valid``: ``(H, W)`` bool;
+    pixels outside it (excluded from the metrics) are drawn magenta in the model and
+    error panels.
     """
     reference, model = np.asarray(reference, dtype=np.float64), np.asarray(model, dtype=np.float64)
-    images = [
-        (reference, "reference"),
-        (model, "model"),
-        (np.abs(np.nan_to_num(model - reference, nan=0.0, posinf=0.0, neginf=0.0)), "|model − reference|"),
-    ]
+    valid = np.ones(reference.shape[:2], dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
+    magenta = np.array([1.0, 0.0, 1.0])
+    model_img = tone_map(model, exposure)
+    error_img = tone_map(np.abs(model - reference), exposure)
+    model_img[~valid], error_img[~valid] = magenta, magenta
+    images = [(tone_map(reference, exposure), "reference"), (model_img, "model"),
+              (error_img, "|model − reference|")]
     pw, ph = _panel_size(reference.shape[:2])
     fig = _figure(pw * 3, ph + 0.8)
     axes = fig.subplots(1, 3)
     for ax, (img, title) in zip(axes, images):
-        ax.imshow(tone_map(img, exposure), interpolation="nearest")
+        ax.imshow(img, interpolation="nearest")
         ax.set_title(title, fontsize=9)
         ax.set_axis_off()
+    note = "" if valid.all() else "; magenta: excluded"
     fig.suptitle(
-        f"{part} — shared tone map: ×{exposure:.4g} [1/{units}], clip to [0, 1], sRGB OETF", fontsize=10
+        f"{part} — shared tone map: ×{exposure:.4g} [1/{units}], clip to [0, 1], sRGB OETF{note}", fontsize=10
     )
     return save_figure_atomic(fig, path)
+
+
+def _floats(values) -> np.ndarray:
+    """A binned list (None for a bin empty for that part) as floats with NaN gaps (plotting only)."""
+    return np.array([np.nan if v is None else v for v in values], dtype=np.float64)
 
 
 def plot_binned_errors(
@@ -99,7 +126,7 @@ def plot_binned_errors(
     """Errors per bin of a coordinate, one line per part, in a 2×2 grid.
 
     Panels: RMSE of the radiance parts [their units], RMSE of dimensionless parts
-    [1], mean ΔE2000 [1], mean HDR-FLIP [0..1].  ``binned``: the output of
+    [1] (each with its noise floor dashed), mean ΔE2000 [1], mean HDR-FLIP [0..1].  ``binned``: the output of
     :func:`fogref.compare.binning.binned_errors`; ``part_units``: part -> units
     ("1" marks a dimensionless part).  Markers sit at the bin centres.
     """
@@ -116,9 +143,13 @@ def plot_binned_errors(
     for i, (part, stats) in enumerate(binned.get("parts", {}).items()):
         style = {"marker": "o", "ms": 3, "label": part, "color": f"C{i}"}  # one colour per part
         dimensionless = part_units.get(part) == "1"
-        axes[1 if dimensionless else 0].plot(x, stats["rmse"], **style)
-        axes[2].plot(x, stats["delta_e2000_mean"], **style)
-        axes[3].plot(x, stats["flip_mean"], **style)
+        ax = axes[1 if dimensionless else 0]
+        ax.plot(x, _floats(stats["rmse"]), **style)
+        if "rmse_noise_floor" in stats:
+            ax.plot(x, _floats(stats["rmse_noise_floor"]), ls="--", lw=1, color=style["color"],
+                    label=f"{part} noise floor")
+        axes[2].plot(x, _floats(stats["delta_e2000_mean"]), **style)
+        axes[3].plot(x, _floats(stats["flip_mean"]), **style)
     for ax, label in zip(axes, labels):
         ax.set_ylabel(label, fontsize=9)
         ax.grid(True, which="both", alpha=0.3)

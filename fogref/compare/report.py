@@ -1,29 +1,36 @@
 """``compare``: measure one game fog model against one ground-truth EXR and write a report.
 
-What is compared (each a *part*, all ``(H, W, 3)`` linear RGB):
+What is compared (each a *part*, all ``(H, W, 3)`` linear RGB), read through the one
+ground-truth reader :func:`fogref.gbuffer.load_truth`:
 
-======================  ==============================  ===============================
-part                    reference (EXR)                 model
-======================  ==============================  ===============================
-``final``               ``R,G,B``                       ``surface * T_model + inscatter_model``
-``transmittance``       ``T.*``                         ``T_model``
-``inscatter``           ``inscatter.*``                 ``inscatter_model``
-``attenuated_surface``  ``surface * T``                 ``surface * T_model``
-======================  ==============================  ===============================
+======================  ==============================  ===============================  ==========
+part                    reference (truth)               model                            pixels
+======================  ==============================  ===============================  ==========
+``final``               ``R,G,B``                       ``surface * T_model + L_model``  valid
+``transmittance``       ``T.*``                         ``T_model``                      all
+``inscatter``           ``inscatter.*``                 ``L_model``                      all
+``attenuated_surface``  ``attenuated_surface.*``        ``surface * T_model``            valid
+======================  ==============================  ===============================  ==========
 
 ``final`` is the model *composited* as the engine does (``FogResult.composite``) on
-the EXR's unfogged ``surface.*`` radiance, so that only the fog differs.
-``final = attenuated_surface + inscatter`` on both sides.
+the truth's unattenuated ``surface.*`` radiance, so that only the fog differs.  That
+radiance is undefined where no sample reached the surface (``surface_coverage ==
+0``, e.g. opaque fog at the horizon): those pixels are *excluded* from ``final`` and
+``attenuated_surface`` and counted (``excluded_pixels``), never filled in.  Nothing
+is divided by a transmittance.  A model's non-finite values are excluded the same
+way and counted (``model_nonfinite_pixels``, and a warning at the top of the page).
 
 Sky pixels (``hit == 0``): the model shades the point ``camera + view * sky_distance``
 (engines fog the sky as a surface at a finite distance; the default 100 km stands in
-for infinity), and composites over the EXR's ``surface.*``, which for sky pixels is
-the sky radiance seen without fog.  The reference's ``T`` and ``inscatter`` there are
-those of the whole escaping ray.  We keep the EXR's ``surface.*`` rather than
-``fogref.params``' sky radiance because it is exactly what the reference's ``R,G,B``
-was composited from (``R,G,B = T * surface + inscatter``), so the difference is the
-fog model's alone.  Every metric is reported over all pixels and, separately, over
+for infinity).  Every metric is reported over all pixels and, separately, over
 ``surface`` (hit) and ``sky`` pixels, so the sky convention never hides the rest.
+
+Monte Carlo noise: each part's per-pixel standard error of ``model - truth`` comes
+from the truth's ``stderr.*`` channels (``final``: ``sqrt(se_final² + (T_model
+se_surface)²)``, likewise ``attenuated_surface``; covariances ignored) plus the
+float32 storage of the truth (one part in 2^23).  Each metric is reported with its
+noise floor (what a perfect model would score), its standard error and whether it is
+*below the noise* (:func:`fogref.compare.metrics.mse_noise`).
 
 Report folder (``out_dir``)::
 
@@ -31,7 +38,8 @@ Report folder (``out_dir``)::
     metrics.json               every metric per part and region, binned curves, conventions
     errors.exr                 per-pixel maps (see ERRORS_EXR_LAYOUT)
     side_by_side/<part>.png    reference | model | |error|, one shared tone map
-    heatmaps/<part>.png        |error|, relative squared error, ΔE2000, FLIP, with colour bars
+    heatmaps/<part>.png        signed error (diverging, centred at 0), |error|, relative squared
+                               error, ΔE2000, FLIP, with colour bars
     error_vs_distance.png      errors binned by log distance (surface pixels)
     error_vs_sun_angle.png     errors binned by view–sun angle (only if the scene has a sun)
 
@@ -50,12 +58,12 @@ import numpy as np
 from fogref.atomic import write_text_atomic
 from fogref.compare import metrics as M
 from fogref.compare.binning import angle_edges, binned_errors, log_distance_edges
-from fogref.compare.ground_truth import GroundTruth, load_ground_truth
 from fogref.compare.model_factory import current_parameters
 from fogref.compare.plots import plot_binned_errors, plot_error_heatmaps, plot_side_by_side
 from fogref.compare.tonemap import exposure_for
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
+from fogref.gbuffer import Truth, load_truth
 
 #: Distance [m] at which the model fogs sky pixels (a stand-in for infinity).
 DEFAULT_SKY_DISTANCE = 1.0e5
@@ -72,6 +80,9 @@ ERRORS_EXR_LAYOUT = """\
 <part>.reference.R,G,B   the reference part
 <part>.model.R,G,B       the model part
 <part>.error.R,G,B       model - reference (signed)
+<part>.signed_error      mean over RGB of model - reference (> 0: model too bright)
+<part>.noise             mean over RGB of the standard error of model - reference (truth noise)
+<part>.valid             1 where the part is compared, 0 where excluded (error channels 0 there)
 <part>.abs_error         mean over RGB of |model - reference|
 <part>.rel_sq_error      mean over RGB of (model - reference)^2 / (reference^2 + eps)
 <part>.deltaE2000        CIEDE2000 after exposure normalisation
@@ -92,7 +103,7 @@ def _model_description(model) -> dict | str:
     """JSON-ready parameters of ``model`` (see :func:`~fogref.compare.model_factory.current_parameters`)."""
     try:
         return _json_safe(current_parameters(model))
-    except (TypeError, AttributeError, ValueError):
+    except (TypeError, AttributeError, ValueError, FogrefError):
         return repr(model)
 
 
@@ -104,32 +115,67 @@ def _as_image(x, shape: tuple[int, int], what: str) -> np.ndarray:
         raise FogrefError(f"model returned {what} of shape {a.shape}, expected {(*shape, 3)}") from None
 
 
-def evaluate_parts(gt: GroundTruth, model, precision: str, sky_distance: float):
-    """Reference and model images of every part, and the model's non-finite counts.
+def check_sky_distance(value, option: str = "sky_distance") -> float:
+    """``value`` as a float if finite and > 0 [m]; FogrefError naming ``option`` otherwise."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if not (math.isfinite(v) and v > 0):
+        raise FogrefError(f"{option}: {value!r} is out of range: the distance at which sky pixels are fogged "
+                          "must be a finite number of metres > 0 (default 1e5)")
+    return v
 
-    Returns ``(reference_parts, model_parts, nonfinite)``: dicts part -> ``(H, W, 3)``
-    float64 (model values sanitised by :func:`fogref.compare.metrics.sanitize`) and
-    ``{"transmittance": n, "inscatter": n}`` non-finite values the model returned.
+
+def _quadrature(*terms) -> np.ndarray:
+    return np.sqrt(sum(np.square(t) for t in terms))
+
+
+def evaluate_parts(truth: Truth, model, precision: str, sky_distance: float) -> dict:
+    """Reference, model, noise and valid pixels of every part.
+
+    Returns ``part -> {"reference", "model", "sigma", "valid"}``: ``(H, W, 3)``
+    float64 reference and model (the model as returned, non-finite values kept),
+    the ``(H, W, 3)`` standard error of ``model - reference`` due to the truth's
+    noise and float32 storage, and the ``(H, W)`` bool pixels where the part is
+    defined (``surface_valid`` for the composited parts, every pixel otherwise).
     """
-    result = model.evaluate(gt.camera, gt.world_positions(sky_distance), precision=precision)
-    t_raw = _as_image(result.transmittance, gt.shape, "transmittance")
-    l_raw = _as_image(result.inscatter, gt.shape, "inscatter")
-    nonfinite = {"transmittance": M.count_nonfinite(t_raw), "inscatter": M.count_nonfinite(l_raw)}
-    t_model, l_model = M.sanitize(t_raw), M.sanitize(l_raw)
-    composite = gt.surface * t_model + l_model  # FogResult.composite: the engine's rule
-    model_parts = {
-        "final": M.sanitize(composite),
-        "transmittance": t_model,
-        "inscatter": l_model,
-        "attenuated_surface": M.sanitize(gt.surface * t_model),
+    shape = truth.shape
+    result = model.evaluate(truth.camera, truth.world_positions(sky_distance), precision=precision)
+    t_model = np.asarray(_as_image(result.transmittance, shape, "transmittance"), dtype=np.float64)
+    l_model = np.asarray(_as_image(result.inscatter, shape, "inscatter"), dtype=np.float64)
+    valid = truth.surface_valid
+    surface = truth.surface  # bounded, 0 where undefined: the products below are finite where it matters
+    t_abs = np.where(np.isfinite(t_model), np.abs(t_model), 0.0)  # only for the noise of excluded pixels
+    se = truth.stderr
+    q = M.FLOAT32_STORAGE
+
+    def part(ref, mod, sigma, where):
+        return {"reference": ref, "model": mod, "sigma": _quadrature(sigma, q * np.abs(ref)), "valid": where}
+
+    every = np.ones(shape, dtype=bool)
+    with np.errstate(invalid="ignore", over="ignore"):  # a model's inf/NaN stays non-finite: counted, excluded
+        return {
+            "final": part(truth.final, surface * t_model + l_model,
+                          _quadrature(se["final"], t_abs * se["surface"]), valid),
+            "transmittance": part(truth.transmittance, t_model, se["transmittance"], every),
+            "inscatter": part(truth.inscatter, l_model, se["inscatter"], every),
+            "attenuated_surface": part(truth.attenuated_surface, surface * t_model,
+                                       _quadrature(se["attenuated_surface"], t_abs * se["surface"]), valid),
+        }
+
+
+def truth_provenance(truth: Truth) -> dict:
+    """What a report records about the truth it measured against: path,
+    spp, seed, scene (path and SHA-256), overrides, pixel filter, variant, versions."""
+    a = truth.attrs
+    return {
+        "path": str(truth.path), "schema": a.get("fogref.schema"), "spp": truth.spp, "seed": a.get("fogref.seed"),
+        "scene": a.get("fogref.scene"), "scene_sha256": a.get("fogref.scene_sha256"),
+        "overrides": a.get("fogref.overrides") or {}, "pixel_filter": a.get("fogref.pixel_filter"),
+        "pixel_exact": truth.pixel_exact, "variant": a.get("fogref.variant"), "fogref_version": a.get("fogref.version"),
+        "mitsuba_version": a.get("fogref.mitsuba"),
     }
-    reference_parts = {
-        "final": M.sanitize(gt.final),
-        "transmittance": M.sanitize(gt.transmittance),
-        "inscatter": M.sanitize(gt.inscatter),
-        "attenuated_surface": M.sanitize(gt.surface * gt.transmittance),
-    }
-    return reference_parts, model_parts, nonfinite
 
 
 # ---------------------------------------------------------------- outputs
@@ -157,68 +203,134 @@ def _json_safe(obj):
     return str(obj)
 
 
-def _errors_exr_channels(gt, refs, models, errors, sun_angle) -> dict:
+def _errors_exr_channels(truth, parts, errors, sun_angle) -> dict:
     ch: dict[str, np.ndarray] = {}
     for part in PARTS:
         e = errors[part]
+        ref = parts[part]["reference"]
         for i, c in enumerate("RGB"):
-            ch[f"{part}.reference.{c}"] = refs[part][..., i]
-            ch[f"{part}.model.{c}"] = models[part][..., i]
+            ch[f"{part}.reference.{c}"] = ref[..., i]
+            ch[f"{part}.model.{c}"] = ref[..., i] + e.signed[..., i]  # = the model where valid
             ch[f"{part}.error.{c}"] = e.signed[..., i]
+        ch[f"{part}.signed_error"] = e.signed.mean(-1)
+        ch[f"{part}.noise"] = e.sigma.mean(-1)
+        ch[f"{part}.valid"] = e.valid.astype(np.float32)
         ch[f"{part}.abs_error"] = e.absolute
         ch[f"{part}.rel_sq_error"] = e.relative_squared
         ch[f"{part}.deltaE2000"] = e.delta_e2000
         ch[f"{part}.flip"] = e.flip
-    ch["distance"] = M.sanitize(gt.distance)
-    ch["hit"] = gt.hit.astype(np.float32)
+    ch["distance"] = truth.distance
+    ch["hit"] = truth.hit.astype(np.float32)
     if sun_angle is not None:
         ch["sun_angle"] = sun_angle
-    # float32 storage: clamp so nothing overflows to inf (write_exr also maps NaN to 0)
+    # float32 storage: every map is finite (excluded pixels hold 0 error); clamp the range
     big = float(np.finfo(np.float32).max)
-    return {k: np.clip(M.sanitize(v), -big, big).astype(np.float32) for k, v in ch.items()}
+    return {k: np.clip(np.asarray(v, dtype=np.float64), -big, big).astype(np.float32) for k, v in ch.items()}
 
 
 def _fmt(v) -> str:
     if v is None:
         return "—"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
     if isinstance(v, int):
         return str(v)
     return f"{v:.4g}"
 
 
+def _pm(s: dict, key: str) -> str:
+    v = s.get(key)
+    if v is None:
+        return "—"
+    e = s.get(f"{key}_stderr")
+    return _fmt(v) if e is None else f"{_fmt(v)} ± {e:.2g}"
+
+
+def _with_floor(s: dict, key: str) -> str:
+    v = s.get(key)
+    f = s.get(f"{key}_noise_floor")
+    return _fmt(v) if f is None else f"{_fmt(v)} ({f:.2g})"
+
+
+def _verdict(s: dict) -> str:
+    if s.get("rmse") is None:
+        return "—"
+    if s.get("rmse_below_noise"):
+        return "**below the noise**"
+    bias = "" if s.get("mean_error_below_noise") else (" (too bright)" if s["mean_error"] > 0 else " (too dark)")
+    return "above the noise" + bias
+
+
+def warnings_of(report: dict) -> list[str]:
+    """Loud one-line warnings of a report: model non-finite values, excluded pixels."""
+    out = []
+    for part in PARTS:
+        s = report["metrics"][part]["all"]
+        if s.get("model_nonfinite_pixels"):
+            out.append(f"{part}: the model returned non-finite values at {s['model_nonfinite_pixels']} pixel(s); "
+                       "they are excluded from every metric")
+    ex = report["metrics"]["final"]["all"].get("excluded_pixels", 0) - \
+        report["metrics"]["final"]["all"].get("model_nonfinite_pixels", 0)
+    if ex > 0:
+        out.append(f"final, attenuated_surface: {ex} pixel(s) excluded where the truth's unattenuated surface "
+                   "radiance is undefined (surface_coverage = 0: no sample reached the surface)")
+    return out
+
+
 def _index_markdown(report: dict, has_sun: bool, figures: bool) -> str:
     c = report["conventions"]
+    t = report["truth"]
+    overrides = " ".join(f"--set {k}={v}" for k, v in (t["overrides"] or {}).items())
     lines = [
         f"# fogref compare: `{report['model']['name']}` vs `{Path(report['exr']).name}`",
         "",
         (f"- ground truth: `{report['exr']}` ({report['image']['width']}×{report['image']['height']} px, "
-         f"{report['image']['surface_pixels']} surface, {report['image']['sky_pixels']} sky)"),
+         f"{report['image']['surface_pixels']} surface, {report['image']['sky_pixels']} sky), scene "
+         f"`{t['scene']}`{f' `{overrides}`' if overrides else ''}, {t['spp']} spp, seed {t['seed']}, "
+         f"pixel filter `{t['pixel_filter']}`"
+         + ("" if t["pixel_exact"] else " (anti-aliased: silhouette pixels mix depths, which exact models "
+            "cannot match)")),
         (f"- model: `{report['model']['name']}`, precision `{report['precision']}`, "
          f"parameters `{json.dumps(report['model']['parameters'])}`"),
-        f"- sky pixels fogged at {report['sky_distance_m']:.6g} m; composited over the EXR's `surface.*`",
-        (f"- model non-finite values (replaced: NaN→0, ±inf→±FLT_MAX): "
-         f"{report['diagnostics']['model_nonfinite_values']}"),
-        (f"- reference identity |R,G,B − (T·surface + inscatter)| max: "
+        f"- sky pixels fogged at {report['sky_distance_m']:.6g} m; composited over the truth's `surface.*`",
+        (f"- pixels excluded from final/attenuated_surface (surface undefined): "
+         f"{report['diagnostics']['surface_undefined_pixels']}"),
+        (f"- reference identity |R,G,B − (attenuated_surface + inscatter)| max: "
          f"{_fmt(report['diagnostics']['reference_identity_max_abs'])}"),
         "",
+    ]
+    for w in report["warnings"]:
+        lines.append(f"> **Warning:** {w}")
+    if report["warnings"]:
+        lines.append("")
+    lines += [
         "## Metrics",
         "",
         ("RMSE and |error| are in each part's units (radiance: the scene's radiance units; "
          "transmittance: 1). relMSE = mean((x−r)²/(r²+ε)), "
-         f"ε = {c['relmse_eps']}. ΔE2000: linear sRGB ÷ white → XYZ → CIELAB (D65); "
+         f"ε = {c['relmse_eps']}. Mean error = mean(model − truth): > 0 too bright, < 0 too dark. "
+         "ΔE2000: linear sRGB ÷ white → XYZ → CIELAB (D65); "
          "white = 99th percentile of the reference part's luminance (transmittance: 1). "
          f"FLIP: HDR-FLIP at {c['flip_ppd']} px/degree."),
         "",
-        "| part | region | pixels | RMSE | relMSE | mean \\|err\\| | ΔE2000 mean | ΔE2000 p95 | FLIP mean |",
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|",
+        (f"**Noise.** `± x`: one standard error of the estimate, from the truth's per-pixel `stderr.*` "
+         f"channels. *Noise floor*: what a perfect model would score against this truth (RMSE: "
+         f"√mean(σ²); ΔE/FLIP: a perfect model plus one draw of the noise). *Below the noise*: within "
+         f"{c['noise_z']:g} standard errors of the noise floor, so this truth cannot tell the model from "
+         "a perfect one; render more samples to see further."),
+        "",
+        "| part | region | pixels | excluded | RMSE | RMSE noise floor | relMSE (floor) | mean error | "
+        "mean \\|err\\| (floor) | ΔE2000 mean (floor) | ΔE2000 p95 | FLIP mean (floor) | noise verdict |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
     ]
     for part in PARTS:
         for region in REGIONS:
             s = report["metrics"][part][region]
             lines.append(
-                f"| {part} | {region} | {s['pixels']} | {_fmt(s.get('rmse'))} | {_fmt(s.get('relmse'))} | "
-                f"{_fmt(s.get('mean_abs_error'))} | {_fmt(s.get('delta_e2000_mean'))} | "
-                f"{_fmt(s.get('delta_e2000_p95'))} | {_fmt(s.get('flip_mean'))} |"
+                f"| {part} | {region} | {s['pixels']} | {s.get('excluded_pixels', 0)} | {_pm(s, 'rmse')} | "
+                f"{_fmt(s.get('rmse_noise_floor'))} | {_with_floor(s, 'relmse')} | {_pm(s, 'mean_error')} | "
+                f"{_with_floor(s, 'mean_abs_error')} | {_with_floor(s, 'delta_e2000_mean')} | "
+                f"{_fmt(s.get('delta_e2000_p95'))} | {_with_floor(s, 'flip_mean')} | {_verdict(s)} |"
             )
     lines += [
         "",
@@ -227,7 +339,10 @@ def _index_markdown(report: dict, has_sun: bool, figures: bool) -> str:
         "",
     ]
     if figures:
-        lines += ["## Reference | model | |error|", "", f"Shared tone map per part: {c['tone_map']}", ""]
+        lines += ["## Reference | model | |error|", "", f"Shared tone map per part: {c['tone_map']}", "",
+                  "Heatmaps: the signed error (model − truth, mean over RGB) on a diverging map centred at 0 "
+                  "with symmetric limits (red: model too bright, blue: too dark), then |error|, relative "
+                  "squared error, ΔE2000 and FLIP. Grey: excluded pixels.", ""]
         for part in PARTS:
             lines += [f"### {part}", "", f"![{part} side by side](side_by_side/{part}.png)", "",
                       f"![{part} error heatmaps](heatmaps/{part}.png)", ""]
@@ -246,7 +361,7 @@ def _index_markdown(report: dict, has_sun: bool, figures: bool) -> str:
 
 
 def compare(
-    exr_path,
+    truth,
     model,
     out_dir,
     precision: str = "float32",
@@ -258,80 +373,109 @@ def compare(
     angle_step_deg: float = 5.0,
     figures: bool = True,
 ) -> dict:
-    """Compare ``model`` with the ground-truth EXR at ``exr_path``; write a report to ``out_dir``.
+    """Compare ``model`` with a ground truth; write a report to ``out_dir``.
 
-    ``model``: any object with ``evaluate(camera (3,), world_pos (..., 3),
-    precision=...) -> FogResult`` (world frame y-up, metres).  ``precision``:
-    ``"float32"`` or ``"float64"``, passed to the model.  ``sky_distance`` [m]: where
-    sky pixels are fogged (see the module docstring).  ``relmse_eps``: relMSE's ε
-    [image units²]; ``flip_ppd``: FLIP pixels per degree; ``distance_bins``: number
-    of log-distance bins; ``angle_step_deg``: sun-angle bin width [deg];
-    ``figures``: False writes only ``metrics.json``, ``errors.exr`` and ``index.md``
-    (no PNGs: for CI, where matplotlib dominates the run time).
+    Parameters
+    ----------
+    truth : path or :class:`fogref.gbuffer.Truth`
+        A schema-2 ground-truth EXR (read with :func:`fogref.gbuffer.load_truth`,
+        which refuses a foreign, old or non-finite file) or an already-read truth.
+    model
+        Any object with ``evaluate(camera (3,), world_pos (..., 3), precision=...)
+        -> FogResult`` (world frame y-up, metres).
+    precision : {"float32", "float64"}
+        Passed to the model.
+    sky_distance : float
+        Where sky pixels are fogged [m], finite and > 0.
+    relmse_eps : float
+        relMSE's ε [image units²], > 0.
+    flip_ppd : float
+        FLIP pixels per degree, > 0.
+    distance_bins : int
+        Number of log-distance bins.
+    angle_step_deg : float
+        Sun-angle bin width [deg].
+    figures : bool
+        False writes only ``metrics.json``, ``errors.exr`` and ``index.md`` (no PNGs:
+        for CI, where matplotlib dominates the run time).
 
-    Returns the dict written to ``metrics.json``.  Raises :class:`FogrefError` naming
-    the file and the missing channel(s) if the EXR lacks any.
+    Returns
+    -------
+    dict
+        What ``metrics.json`` holds.  FogrefError for a bad option or truth.
     """
     if precision not in ("float32", "float64"):
         raise FogrefError(f"precision must be 'float32' or 'float64', got {precision!r}")
-    gt = load_ground_truth(exr_path)
+    sky_distance = check_sky_distance(sky_distance)
+    truth = truth if isinstance(truth, Truth) else load_truth(truth)
+    exr_path = truth.path
     out = Path(out_dir)
+    parts = evaluate_parts(truth, model, precision, sky_distance)
     out.mkdir(parents=True, exist_ok=True)
-    refs, models, nonfinite = evaluate_parts(gt, model, precision, sky_distance)
 
     errors = {
-        part: M.error_maps(refs[part], models[part], white=1.0 if PART_UNITS[part] == "1" else None,
-                           eps=relmse_eps, ppd=flip_ppd)
-        for part in PARTS
+        part: M.error_maps(p["reference"], p["model"], white=1.0 if PART_UNITS[part] == "1" else None,
+                           eps=relmse_eps, ppd=flip_ppd, sigma=p["sigma"], valid=p["valid"])
+        for part, p in parts.items()
     }
-    masks = {"all": None, "surface": gt.hit, "sky": gt.sky}
+    masks = {"all": None, "surface": truth.hit, "sky": truth.sky}
     table = {part: {r: errors[part].summary(masks[r]) for r in REGIONS} for part in PARTS}
 
-    sun_angle = gt.sun_angle_deg()
-    by_distance = binned_errors(gt.distance, errors, log_distance_edges(gt.distance[gt.hit], distance_bins),
-                                mask=gt.hit)
+    sun_angle = truth.sun_angle_deg()
+    by_distance = binned_errors(truth.distance, errors,
+                                log_distance_edges(truth.distance[truth.hit], distance_bins), mask=truth.hit)
     by_sun = binned_errors(sun_angle, errors, angle_edges(angle_step_deg)) if sun_angle is not None else None
+    refs = {p: parts[p]["reference"] for p in PARTS}
     exposures = {p: (1.0 if PART_UNITS[p] == "1" else exposure_for(refs[p])) for p in PARTS}
 
-    h, w = gt.shape
+    h, w = truth.shape
     report = _json_safe({
         "exr": str(exr_path),
+        "truth": truth_provenance(truth),
         "model": {"name": _model_name(model), "parameters": _model_description(model)},
         "precision": precision,
         "sky_distance_m": float(sky_distance),
-        "image": {"width": w, "height": h, "surface_pixels": int(gt.hit.sum()), "sky_pixels": int(gt.sky.sum())},
+        "image": {"width": w, "height": h, "surface_pixels": int(truth.hit.sum()),
+                  "sky_pixels": int(truth.sky.sum())},
         "units": PART_UNITS,
         "conventions": {
             "relmse_eps": relmse_eps,
             "relmse": "mean over pixels and RGB of (x - r)^2 / (r^2 + eps)",
             "rmse": "sqrt(mean over pixels and RGB of (x - r)^2), in the part's units",
+            "mean_error": "mean over pixels and RGB of (x - r): > 0 model too bright",
             "delta_e2000": "CIEDE2000; linear sRGB/Rec.709 / white -> XYZ -> CIELAB (D65), negatives clipped",
             "delta_e2000_white": {p: errors[p].white for p in PARTS},
             "flip_ppd": flip_ppd,
             "flip_params": {p: errors[p].flip_params for p in PARTS},
             "tone_map": "display = sRGB_OETF(clip(exposure * linear, 0, 1)); "
                         "exposure = 1 / (99th percentile of the reference part's luminance), transmittance 1",
-            "tone_map_exposure": exposures,
-            "sky": "model evaluated at camera + view * sky_distance, composited over the EXR's surface.*",
-            "nonfinite": "model NaN -> 0, +-inf -> +-FLT_MAX before any metric",
+            "sky": "model evaluated at camera + view * sky_distance, composited over the truth's surface.*",
+            "composite": "final = surface * T_model + inscatter_model, attenuated_surface = surface * T_model, "
+                         "only where surface_coverage > 0; other pixels excluded and counted",
+            "noise": "per-pixel standard error of model - truth from the truth's stderr.* channels (final and "
+                     "attenuated_surface add T_model * stderr.surface in quadrature) and float32 storage "
+                     "(2^-23 |truth|); *_noise_floor: a perfect model's score; *_stderr: standard error of the "
+                     "estimate; *_below_noise: within noise_z standard errors of the noise floor",
+            "noise_z": M.NOISE_Z,
+            "nonfinite": "model NaN/inf pixels are excluded from every metric and counted "
+                         "(model_nonfinite_pixels); the truth is refused if it holds any",
         },
         "metrics": table,
         "diagnostics": {
-            "model_nonfinite_values": nonfinite,
-            "reference_nonfinite_values": {
-                "final": M.count_nonfinite(gt.final), "transmittance": M.count_nonfinite(gt.transmittance),
-                "inscatter": M.count_nonfinite(gt.inscatter), "surface": M.count_nonfinite(gt.surface),
-            },
-            "reference_identity_max_abs": gt.identity_residual(),
+            "model_nonfinite_values": {"transmittance": M.count_nonfinite(parts["transmittance"]["model"]),
+                                       "inscatter": M.count_nonfinite(parts["inscatter"]["model"])},
+            "surface_undefined_pixels": int(np.count_nonzero(~truth.surface_valid)),
+            "reference_identity_max_abs": truth.identity_residual(),
         },
         "binned": {"distance_m": by_distance, "sun_angle_deg": by_sun},
     })
+    report["warnings"] = warnings_of(report)
 
-    write_exr(out / "errors.exr", _errors_exr_channels(gt, refs, models, errors, sun_angle),
+    write_exr(out / "errors.exr", _errors_exr_channels(truth, parts, errors, sun_angle),
               {"fogref.compare": {"exr": str(exr_path), "model": report["model"], "precision": precision}})
     _remove_stale_figures(out)
     if figures:
-        _write_figures(out, refs, models, errors, exposures, by_distance, by_sun, angle_step_deg)
+        _write_figures(out, parts, errors, exposures, by_distance, by_sun, angle_step_deg)
     write_text_atomic(out / "metrics.json", json.dumps(report, indent=2, allow_nan=False) + "\n")
     write_text_atomic(out / "index.md", _index_markdown(report, by_sun is not None, figures))
     return report
@@ -350,11 +494,13 @@ def _remove_stale_figures(out: Path) -> None:
         png.unlink(missing_ok=True)
 
 
-def _write_figures(out: Path, refs, models, errors, exposures, by_distance, by_sun, angle_step_deg) -> None:
+def _write_figures(out: Path, parts, errors, exposures, by_distance, by_sun, angle_step_deg) -> None:
     for part in PARTS:
-        plot_side_by_side(refs[part], models[part], exposures[part], part, PART_UNITS[part],
-                          out / "side_by_side" / f"{part}.png")
-        plot_error_heatmaps(errors[part], part, PART_UNITS[part], out / "heatmaps" / f"{part}.png")
+        e = errors[part]
+        ref = parts[part]["reference"]
+        plot_side_by_side(ref, ref + e.signed, exposures[part], part, PART_UNITS[part],
+                          out / "side_by_side" / f"{part}.png", valid=e.valid)
+        plot_error_heatmaps(e, part, PART_UNITS[part], out / "heatmaps" / f"{part}.png")
     plot_binned_errors(by_distance, PART_UNITS, "distance to the surface [m] (log scale)",
                        "error vs distance (surface pixels, log-spaced bins)", out / "error_vs_distance.png", True)
     if by_sun is not None:

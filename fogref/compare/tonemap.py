@@ -13,12 +13,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from fogref.compare.metrics import exposure_white, sanitize
+from fogref.compare.metrics import exposure_white
 
 
 def srgb_oetf(linear) -> np.ndarray:
-    """IEC 61966-2-1 sRGB encoding of linear values in [0, 1] (clipped first)."""
-    x = np.clip(sanitize(linear), 0.0, 1.0)
+    """IEC 61966-2-1 sRGB encoding of linear values in [0, 1] (clipped first).
+
+    Display only: a non-finite value (which no metric ever sees) is shown black.
+    """
+    x = np.asarray(linear, dtype=np.float64)
+    x = np.clip(np.where(np.isfinite(x), x, 0.0), 0.0, 1.0)
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055)
 
 
@@ -29,4 +33,4 @@ def exposure_for(reference) -> float:
 
 def tone_map(linear_rgb, exposure: float) -> np.ndarray:
     """Display-referred sRGB in [0, 1], ``(..., 3)``: exposure, clip, sRGB OETF."""
-    return srgb_oetf(sanitize(linear_rgb) * float(exposure))
+    return srgb_oetf(np.asarray(linear_rgb, dtype=np.float64) * float(exposure))
