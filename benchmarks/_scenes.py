@@ -16,8 +16,9 @@ Scenes (96x54 by default):
     ``scenes/two_layer_sun.xml`` (dense ground layer + thin high haze, g = 0.85,
     sun 12 degrees up, ahead), fog box y in [-1, 600].  Extinction is **grey**
     (0.0045 /m) here instead of the XML's RGB (0.004, 0.0045, 0.005): stock
-    ``heterogeneous`` with ``has_spectral_extinction = false`` (needed, see
-    DESIGN.md) takes one scalar extinction.
+    ``heterogeneous`` with ``has_spectral_extinction = false`` (needed: with
+    spectral extinction a ray that escapes gets weight 0, see docs/design.md)
+    takes one scalar extinction.
 ``zero_falloff``
     a homogeneous fog (falloff 0, sigma_t 0.03 /m, albedo 0.9, g 0.5) in a
     120 x 41 x 120 m box around the camera, ground 300 x 300 m, one occluder

@@ -1,4 +1,4 @@
-"""Seed 001 altitude fog: transcription, mpmath quadrature, linear blend."""
+"""Unity altitude fog ("积分解 Unity 高度雾", 2018): transcription, mpmath quadrature, linear blend."""
 
 import math
 
@@ -12,8 +12,9 @@ from fogref.models.altitude import AltitudeFog, AltitudeFogParams, altitude_to_m
 f32 = np.float32
 
 
-def seed001_get_altitude_fog(cam, wp, S, E, p):
-    """Seed 001 transcription (float32, scalar branches)."""
+def blog_get_altitude_fog(cam, wp, S, E, p):
+    """Transcription of ``GetAltitudeFog`` from the blog post "积分解 Unity 高度雾"
+    (2018-12-17) in float32, scalar branches."""
     _FogStart, _FogEnd, _FogPower = f32(S), f32(E), f32(p)
 
     def integral(x, k, b):
@@ -54,7 +55,7 @@ def test_float32_matches_seed():
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     wp = cam + d * rng.uniform(0.1, 300, (300, 1))
     I = AltitudeFog(P).path_integral(cam, wp, "float32")
-    ref = np.array([seed001_get_altitude_fog(cam, w, 2.0, 40.0, 1.7) for w in wp])
+    ref = np.array([blog_get_altitude_fog(cam, w, 2.0, 40.0, 1.7) for w in wp])
     np.testing.assert_allclose(I, ref, rtol=1e-5, atol=1e-4)
     r = AltitudeFog(P).evaluate(cam, wp, "float32")
     op = np.clip(ref * f32(0.02), 0, 1)

@@ -1,4 +1,4 @@
-"""Seed 004 box fog: slab transcription, homogeneous box medium."""
+"""Box fog (Jim's GameDev Blog, "体积雾", 2016): slab transcription, homogeneous box medium."""
 
 import math
 
@@ -11,8 +11,8 @@ from fogref.models.box import BoxFog, BoxFogParams, box_to_medium
 f32 = np.float32
 
 
-def seed004_box_fog(cam, wp, lo, hi, k):
-    """Seed 004 transcription (float32): e = camera, c = pixel, a/b = entry/exit of the
+def blog_box_fog(cam, wp, lo, hi, k):
+    """Transcription of the box fog of Jim's GameDev Blog, "体积雾" (2016) (float32): e = camera, c = pixel, a/b = entry/exit of the
     eye ray with the box (RaySlabIntersection); t = |ac|, d = |cb|; fog = k t/(t+d)."""
     e = np.asarray(cam, f32)
     c = np.asarray(wp, f32)
@@ -47,7 +47,7 @@ def test_float32_matches_seed_transcription():
         d /= np.linalg.norm(d, axis=1, keepdims=True)
         wp = cam + d * rng.uniform(0.1, 80, (200, 1))
         r = fog.evaluate(cam, wp, "float32")
-        ref = np.array([seed004_box_fog(cam, w, lo, hi, 0.8) for w in wp])
+        ref = np.array([blog_box_fog(cam, w, lo, hi, 0.8) for w in wp])
         np.testing.assert_allclose(1 - r.transmittance[:, 0], ref, rtol=1e-4, atol=2e-6)
         np.testing.assert_allclose(r.inscatter[:, 1], 0.5 * ref, rtol=1e-4, atol=2e-6)
 

@@ -1,6 +1,6 @@
 """Numerical stress tests of the game fog models (hypothesis + mpmath, 40 digits).
 
-Domain (issue 4): extinction sigma 1e-9..1e2 per metre (mapped to each model's own
+Domain: extinction sigma 1e-9..1e2 per metre (mapped to each model's own
 units through its physical mapping: Unreal editor units via ``sigma_to_unreal``,
 HDRP mean free path, ...); falloff b exactly 0 or 1e-6..10 per metre; heights
 -1e4..1e6 m for cameras and points (plus cameras at Unreal's observer-height
@@ -44,7 +44,7 @@ filament T                  16 eps kappa                2e-5 + 16 eps kappa for 
                                                         and camera density a normal float
 hdrp optical depth          16 eps kappa                2e-5 + 16 eps kappa for |cos z| >=
                                                         1e-3 and x = L|Z|/H >= 0.01
-altitude optical depth      16 eps kappa_p              recorded only (seed formula)
+altitude optical depth      16 eps kappa_p              recorded only (shader formula)
 ==========================  ==========================  ====================================
 
 For altitude (power law ``u^p``, ``u = (E - y)/(E - S)``) the condition number

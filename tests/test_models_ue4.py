@@ -18,17 +18,19 @@ from fogref.models.ue4 import (
 f32 = np.float32
 
 
-def seed000_fog(cam_m, wp_m, D, f, H, D2, f2, H2, color, max_opacity, start, cutoff,
+def unreal_shader_fog(cam_m, wp_m, D, f, H, D2, f2, H2, color, max_opacity, start, cutoff,
                 light=None, dir_color=(0, 0, 0), dir_exp=4.0, dir_start=0.0):
-    """Independent float32 transcription of seed 000 (UE 4.22 GetExponentialHeightFog,
-    y-up port) with the uniforms of seed 002, in centimetres.  One pixel."""
+    """Independent float32 transcription of UE 4.22's ``GetExponentialHeightFog``
+    (``Engine/Shaders/Private/HeightFogCommon.ush``, ported y-up) with the uniforms
+    that ``InitFogConstants`` (``Engine/Source/Runtime/Renderer/Private/FogRendering.cpp``)
+    sets, in centimetres.  One pixel."""
     cam = (np.asarray(cam_m, np.float64) * 100).astype(f32)
     rel = ((np.asarray(wp_m, np.float64) - np.asarray(cam_m, np.float64)) * 100).astype(f32)
     d0, fa0 = f32(D) / f32(1000), f32(f) / f32(1000)
     d1, fa1 = f32(D2) / f32(1000), f32(f2) / f32(1000)
     H, H2 = f32(H), f32(H2)
     max_obs = min(H + f32(65536) if d0 > 0 else f32(3e38), H2 + f32(65536) if d1 > 0 else f32(3e38))
-    # ExponentialFogParameters(.x .y .z .w), 2, 3 (seed 002 comments)
+    # ExponentialFogParameters(.x .y .z .w), 2, 3 as FogRendering.cpp fills them
     P = (d0 * f32(2) ** (-fa0 * (cam[1] - H)), fa0, max_obs, f32(start))
     P2 = (d1 * f32(2) ** (-fa1 * (cam[1] - H2)), fa1, d1, H2)
     P3 = (d0, H, f32(0), f32(cutoff))
@@ -82,9 +84,9 @@ def _rays(rng, n, cam):
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_float32_matches_seed_transcription(seed):
+def test_float32_matches_shader_transcription(seed):
     rng = np.random.default_rng(seed)
-    # sun given in the seed's y-up frame; the model takes Unreal's z-up frame
+    # sun given in the y-up port's frame; the model takes Unreal's z-up frame
     sun_y_up = np.array([0.4, 0.6, -0.2]); sun_y_up /= np.linalg.norm(sun_y_up)
     kw = dict(D=rng.uniform(0.005, 0.2), f=rng.uniform(0.0, 1.0), H=rng.uniform(-500, 500),
               D2=rng.uniform(0, 0.1), f2=rng.uniform(0, 2.0), H2=rng.uniform(-2000, 2000),
@@ -103,7 +105,7 @@ def test_float32_matches_seed_transcription(seed):
     res = UE4ExponentialHeightFog(params).evaluate(cam, wp, "float32")
     assert res.transmittance.dtype == np.float32
     for i in range(len(wp)):
-        col, fac = seed000_fog(cam, wp[i], **kw)
+        col, fac = unreal_shader_fog(cam, wp[i], **kw)
         np.testing.assert_allclose(res.transmittance[i], fac, rtol=2e-5, atol=1e-6)
         np.testing.assert_allclose(res.inscatter[i], col, rtol=2e-5, atol=1e-6)
 

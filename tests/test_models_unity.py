@@ -12,7 +12,7 @@ f32 = np.float32
 
 
 def unitycg_fog(mode, density, start, end, color, coord, scene):
-    """Seed 003 transcription (float32): unity_FogParams + UNITY_CALC_FOG_FACTOR_RAW +
+    """Transcription of Unity's built-in fog (float32): unity_FogParams + UNITY_CALC_FOG_FACTOR_RAW +
     lerp(unity_FogColor, color, saturate(unityFogFactor))."""
     x = f32(density) / f32(math.sqrt(math.log(2)))
     y = f32(density) / f32(math.log(2))

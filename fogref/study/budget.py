@@ -49,7 +49,7 @@ from fogref.media import NP, hg_phase, single_scatter_sun
 from fogref.media.single_scatter import single_scatter_sky
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
 
-#: Step keys, effect letters of issue 3 and labels, in chain order (step k = 1..9).
+#: Step keys, effect letters (docs/design.md, "Error budget") and labels, in chain order (step k = 1..9).
 STEPS: tuple[tuple[str, str, str], ...] = (
     ("multiple", "d", "multiple scattering"),
     ("shadows", "e", "geometric shadows (sun)"),
