@@ -80,9 +80,8 @@ import numpy as np
 
 from fogref.errors import FogrefError
 from fogref.gbuffer import Truth, nonfinite_report
+from fogref.models.base import SKY_DISTANCE as DEFAULT_SKY_DISTANCE
 
-#: Distance [m] at which a model fogs sky pixels (a stand-in for infinity; as ``compare``).
-DEFAULT_SKY_DISTANCE = 1.0e5
 METRICS = ("rel_rmse", "rel_bias", "rmse", "bias")
 SIGNED = ("rel_bias", "bias")
 #: Default tolerances per part: metric -> largest acceptable value (``|value|`` for signed metrics).

@@ -1,0 +1,212 @@
+"""Find a fog model class by name: built-in, ``module:Class``, or an installed package's entry point.
+
+The protocol every model follows (the built-in ones too; see ``docs/byo.md``)::
+
+    class MyFog:
+        name = "my_fog"                                  # optional, for reports
+        def evaluate(self, camera, positions, precision="float32"):
+            # camera: (3,) [m]; positions: (H, W, 3) [m], world frame y-up, the point
+            # each pixel shades (camera + view * sky_distance on sky pixels)
+            return FogResult(transmittance=T, inscatter=L)   # each (H, W, 3) or broadcastable
+        @classmethod
+        def from_physical(cls, physical):                # optional: used by --from-scene
+            return cls(...)                              # physical: fogref.mapping.PhysicalScene
+
+Any object with ``transmittance`` and ``inscatter`` attributes will do as the result
+(:class:`fogref.models.base.FogResult` is one).  The model is built with
+``cls()``; ``--param KEY=VALUE`` needs a parameter dataclass ``cls.Params`` and
+builds ``cls(cls.Params(**values))`` (see :mod:`fogref.compare.model_factory`).
+
+Where a name is looked up, in order:
+
+1. ``module.path:Attr``: imported with :mod:`importlib` (the module must be importable:
+   installed, or on ``sys.path``/``PYTHONPATH``);
+2. a built-in model, :func:`fogref.models.get` (``ue4``, ``unity``, ``hdrp``, ...);
+3. an installed package's entry point in the group ``fogref.models``, e.g. in its
+   ``pyproject.toml``::
+
+       [project.entry-points."fogref.models"]
+       my_fog = "my_pkg.fog:MyFog"
+
+Examples
+--------
+>>> resolve_model("ue4").__name__
+'UE4ExponentialHeightFog'
+>>> resolve_model("fogref.models.ue4:UE4ExponentialHeightFog").__name__
+'UE4ExponentialHeightFog'
+>>> resolve_model("eu4")
+Traceback (most recent call last):
+...
+fogref.errors.FogrefError: unknown fog model 'eu4'; did you mean 'ue4'? (built-in: altitude, box, filament, hdrp, ue4, unity; or give module.path:Class)
+"""
+
+from __future__ import annotations
+
+import difflib
+import importlib
+import inspect
+
+from fogref.errors import FogrefError
+
+ENTRY_POINT_GROUP = "fogref.models"
+
+
+def _builtin_names() -> list[str]:
+    import fogref.models  # noqa: F401  (registers the built-in models)
+    from fogref.models import base
+
+    return sorted(base._REGISTRY)
+
+
+def entry_point_models() -> dict:
+    """Name -> entry point of every model registered under the group ``fogref.models``."""
+    from importlib.metadata import entry_points
+
+    return {ep.name: ep for ep in entry_points(group=ENTRY_POINT_GROUP)}
+
+
+def available_models() -> list[str]:
+    """Every model name :func:`resolve_model` knows: the built-in ones and the entry points.
+
+    Examples
+    --------
+    >>> "ue4" in available_models()
+    True
+    """
+    return sorted(set(_builtin_names()) | set(entry_point_models()))
+
+
+def check_protocol(obj, source: str):
+    """Return ``obj`` if it is a fog model class (or instance) following the protocol, else FogrefError.
+
+    The protocol: a callable ``evaluate`` whose signature accepts
+    ``(camera, positions, precision=...)``; ``from_physical``, if present, callable.
+
+    Examples
+    --------
+    >>> class NoFog:
+    ...     pass
+    >>> check_protocol(NoFog, "my_mod:NoFog")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.FogrefError: my_mod:NoFog: NoFog is not a fog model: it has no evaluate(camera, positions, precision="float32") method (see docs/byo.md)
+    """
+    label = getattr(obj, "__name__", type(obj).__name__)
+    evaluate = getattr(obj, "evaluate", None)
+    if not callable(evaluate):
+        raise FogrefError(f"{source}: {label} is not a fog model: it has no evaluate(camera, positions, "
+                          f'precision="float32") method (see docs/byo.md)')
+    try:
+        sig = inspect.signature(evaluate)
+    except (TypeError, ValueError):
+        sig = None
+    if sig is not None:
+        params = list(sig.parameters.values())
+        if inspect.isclass(obj) and params and params[0].name == "self":
+            params = params[1:]
+        try:
+            inspect.Signature(params).bind(None, None, precision="float32")
+        except TypeError as e:
+            raise FogrefError(f"{source}: {label}.evaluate{sig} cannot be called as evaluate(camera, positions, "
+                              f'precision="float32") ({e}); see docs/byo.md') from None
+    fp = inspect.getattr_static(obj, "from_physical", None)
+    if fp is not None and not callable(getattr(obj, "from_physical", None)):
+        raise FogrefError(f"{source}: {label}.from_physical is not callable (a classmethod from_physical(params))")
+    return obj
+
+
+def _load_spec(spec: str):
+    module_name, _, attr = spec.partition(":")
+    if not module_name or not attr:
+        raise FogrefError(f"--model '{spec}': expected module.path:Class")
+    try:
+        module = importlib.import_module(module_name)
+    except ModuleNotFoundError as e:
+        if e.name and module_name.startswith(e.name):
+            raise FogrefError(f"--model '{spec}': no module named '{e.name}' (is it installed, or on "
+                              "PYTHONPATH?)") from None
+        raise FogrefError(f"--model '{spec}': importing '{module_name}' failed: {e}") from e
+    except Exception as e:  # the user's module raised while importing: say so, with its message
+        raise FogrefError(f"--model '{spec}': importing '{module_name}' failed: {type(e).__name__}: {e}") from e
+    obj = module
+    for part in attr.split("."):
+        if not hasattr(obj, part):
+            names = [n for n in dir(obj) if not n.startswith("_")]
+            close = difflib.get_close_matches(part, names, n=1)
+            hint = f"; did you mean '{close[0]}'?" if close else ""
+            raise FogrefError(f"--model '{spec}': module '{module_name}' has no attribute '{attr}'{hint}")
+        obj = getattr(obj, part)
+    return check_protocol(obj, spec)
+
+
+def resolve_model(spec: str):
+    """The fog model class (or instance) that ``spec`` names.
+
+    Parameters
+    ----------
+    spec : str
+        ``module.path:Class``, a built-in name (``ue4``), or an entry-point name of the
+        group ``fogref.models``.
+
+    Returns
+    -------
+    type or object
+        The class (or the object the spec names), checked against the protocol.
+
+    Raises
+    ------
+    FogrefError
+        Unknown name (with a "did you mean"), module or attribute missing, import
+        failure, or an object that does not follow the protocol.
+    """
+    spec = str(spec).strip()
+    if ":" in spec:
+        return _load_spec(spec)
+    if spec in _builtin_names():
+        from fogref.models import get
+
+        return get(spec)
+    eps = entry_point_models()
+    if spec in eps:
+        try:
+            obj = eps[spec].load()
+        except Exception as e:
+            raise FogrefError(f"--model '{spec}': entry point '{eps[spec].value}' (group {ENTRY_POINT_GROUP}) "
+                              f"failed to load: {type(e).__name__}: {e}") from e
+        return check_protocol(obj, f"entry point {spec} = {eps[spec].value}")
+    known = available_models()
+    close = difflib.get_close_matches(spec, known, n=1)
+    hint = f"; did you mean '{close[0]}'?" if close else ""
+    extra = sorted(eps)
+    listing = f"built-in: {', '.join(_builtin_names())}" + (f"; installed: {', '.join(extra)}" if extra else "")
+    raise FogrefError(f"unknown fog model '{spec}'{hint} ({listing}; or give module.path:Class)")
+
+
+def build(spec: str, params: dict | None = None, scene_params: dict | None = None):
+    """A model instance from ``spec`` (see :func:`resolve_model`), set up as ``compare`` does.
+
+    ``params``: parameters by name (needs ``cls.Params``); ``scene_params``: the truth's
+    ``fogref.params`` for ``from_physical`` (then ``params`` override).  Without either,
+    ``cls()``.  An object that is already an instance is returned as is (``params``
+    must then be empty).
+
+    Examples
+    --------
+    >>> build("ue4", {"FogDensity": 0.02}).params.FogDensity
+    0.02
+    """
+    obj = resolve_model(spec)
+    if not inspect.isclass(obj):
+        if params or scene_params is not None:
+            raise FogrefError(f"--model '{spec}' names an instance, not a class: it cannot take parameters "
+                              "or --from-scene")
+        return obj
+    if not params and scene_params is None:
+        try:
+            return obj()
+        except TypeError as e:
+            raise FogrefError(f"--model '{spec}': {obj.__name__}() needs arguments ({e}); give --param "
+                              "KEY=VALUE (with a Params dataclass) or --from-scene (with from_physical)") from e
+    from fogref.compare.model_factory import build_model
+
+    return build_model(obj, params, scene_params)
