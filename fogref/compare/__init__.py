@@ -15,6 +15,9 @@ Command line (added to fogref's CLI by :func:`add_cli`)::
     fogref compare EXR --model ue4 [--param KEY=VALUE ...] [--from-scene]
                        [--out reports/compare/NAME] [--precision float32] [--sky-distance M]
                        [--no-figures]
+    fogref compare EXR --model my_pkg.my_module:MyFog ...          (see docs/byo.md)
+    fogref compare EXR --image ENGINE.exr [--transmittance T.exr] [--inscatter L.exr | --fog-colour C.exr]
+                       [--encoding linear|srgb] [--exposure X] [--out DIR]
 """
 
 from __future__ import annotations
@@ -39,14 +42,22 @@ def run_compare_command(args: argparse.Namespace) -> int:
     Options are checked before anything is read (FogrefError naming the option);
     warnings (model non-finite values, excluded pixels) go to stderr.
     """
-    from fogref.compare.model_factory import build_model, model_class, parse_param_assignments
+    from fogref.compare.foreign import run_image_command, wants_images
+    from fogref.compare.model_factory import parse_param_assignments
+    from fogref.compare.model_loader import build
     from fogref.compare.report import check_sky_distance
+    from fogref.errors import FogrefError
     from fogref.gbuffer import load_truth
 
+    if wants_images(args):
+        if args.model:
+            raise FogrefError("give --model or the engine's images (--image/--transmittance/--inscatter), not both")
+        return run_image_command(args)
+    if not args.model:
+        raise FogrefError("give --model NAME (or module.path:Class) or an engine's image with --image FILE")
     sky_distance = check_sky_distance(args.sky_distance, "--sky-distance")
-    cls = model_class(args.model)
     truth = load_truth(args.exr)
-    model = build_model(cls, parse_param_assignments(args.param), truth.params if args.from_scene else None)
+    model = build(args.model, parse_param_assignments(args.param), truth.params if args.from_scene else None)
     out = Path(args.out) if args.out else default_out_dir(args.exr, args.model)
     report = compare(truth, model, out, precision=args.precision, sky_distance=sky_distance,
                      figures=not args.no_figures)
@@ -87,7 +98,8 @@ _DESCRIPTION = (
 def _configure(p: argparse.ArgumentParser) -> None:
     """The ``compare`` arguments, shared by :func:`add_cli` and :func:`main`."""
     p.add_argument("exr", help="ground-truth EXR written by the fogref renderer")
-    p.add_argument("--model", required=True, help="registered fog model name, e.g. ue4")
+    p.add_argument("--model", default=None,
+                   help="fog model: a built-in name (e.g. ue4), module.path:Class, or a 'fogref.models' entry point")
     p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
                    help="set a model parameter by name (VALUE parsed as JSON when possible); repeatable")
     p.add_argument("--from-scene", action="store_true",
@@ -101,6 +113,9 @@ def _configure(p: argparse.ArgumentParser) -> None:
                    f"(default {DEFAULT_SKY_DISTANCE:g})")
     p.add_argument("--no-figures", action="store_true",
                    help="write only metrics.json, errors.exr and index.md (no PNGs; faster, for CI)")
+    from fogref.compare.foreign import add_arguments
+
+    add_arguments(p)
     p.set_defaults(func=run_compare_command)
 
 
