@@ -72,6 +72,7 @@ import functools
 import hashlib
 import itertools
 import json
+import logging
 import math
 import os
 import socket
@@ -627,7 +628,9 @@ def _connect(scheduler: str | None, n_workers: int | None):
             raise FogrefError(f"--scheduler {scheduler}: cannot connect ({e})") from None
     cores = os.cpu_count() or 1
     n = n_workers or cores
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+    # the workers' own "Compute Failed" logs are silenced: failures are recorded in the table
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                           silence_logs=logging.CRITICAL)
     return Client(cluster), cluster, max(1, cores // n)
 
 

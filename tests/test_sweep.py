@@ -1,0 +1,151 @@
+"""``fogref sweep``: the TOML schema, the designs, and a tiny sweep on a real two-worker Dask cluster.
+
+The cluster test goes through the same code path as ``fogref sweep --scheduler ADDRESS``
+(``run_sweep(..., scheduler=cluster.scheduler_address)``): it checks the table, that
+one configuration with an invalid value is recorded with its error while the others
+finish, that a second run does no new work, and that a truth is reused from the cache.
+"""
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fogref.errors import FogrefError
+from fogref.study import sweep as S
+
+ROOT = Path(__file__).resolve().parents[1]
+VALLEY = (ROOT / "scenes" / "valley.xml").as_posix()
+
+
+def _toml(folder, body: str, cache=None) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    p = folder / "SWEEP.toml"
+    cache = (cache or folder / "cache").as_posix()
+    p.write_text(f'[sweep]\nname = "t"\nscenes = ["{VALLEY}"]\ncache = "{cache}"\n' + body)
+    return p
+
+
+MODELS = '[[models]]\nname = "ue4"\n'
+
+
+# ---------------------------------------------------------------- schema and designs (no Mitsuba)
+
+
+def test_grid_design_and_scaled_target(tmp_path):
+    p = _toml(tmp_path, MODELS + '[parameters.sun_elevation]\nvalues = [5, 30]\n'
+              '[parameters.FogHeightFalloff]\ntarget = "falloff"\nscale = 0.0693147\nvalues = [0.1, 0.2, 0.4]\n')
+    spec = S.load_sweep(p)
+    cfgs = S.build_configs(spec)
+    assert len(cfgs) == 6 and len({c["id"] for c in cfgs}) == 6
+    assert cfgs[1]["values"] == {"sun_elevation": 5, "FogHeightFalloff": 0.2}
+    assert float(cfgs[1]["overrides"]["falloff"]) == pytest.approx(0.0138629, rel=1e-5)
+    assert all(c["seed"] == 0 for c in cfgs)
+
+
+def test_lhs_design_is_seeded_stratified_and_in_range(tmp_path):
+    p = _toml(tmp_path, MODELS + '[design]\nkind = "lhs"\nn = 8\nseed = 3\n[render]\nseed_policy = "per_config"\n'
+              '[parameters.g]\nrange = [-0.5, 0.9]\n[parameters.sigma_t]\nrange = [1e-4, 1e-2]\nlog = true\n'
+              '[parameters."ue4.StartDistance"]\nvalues = [0, 10]\n')
+    spec = S.load_sweep(p)
+    pts = S.design_points(spec)
+    assert pts == S.design_points(S.load_sweep(p))  # seeded
+    g = np.array([q["g"] for q in pts])
+    assert g.min() >= -0.5 and g.max() <= 0.9
+    # Latin hypercube: one point in each of the 8 strata of every dimension
+    assert sorted(((g + 0.5) / 1.4 * 8).astype(int)) == list(range(8))
+    ls = np.log(np.array([q["sigma_t"] for q in pts]) / 1e-4) / np.log(100)
+    assert sorted((ls * 8).astype(int)) == list(range(8))
+    cfgs = S.build_configs(spec)
+    assert len({c["seed"] for c in cfgs}) == 8  # per-config seeds
+    assert {c["models"][0]["params"]["StartDistance"] for c in cfgs} == {0, 10}
+
+
+@pytest.mark.parametrize("body, needle", [
+    (MODELS + "[parameters.not_a_default]\nvalues = [1]\n", "not a $default of every scene; allowed: ["),
+    (MODELS + '[design]\nkind = "sobol"\n', "allowed: ['grid', 'list', 'random', 'lhs']"),
+    (MODELS + "[render]\nspp = 0\n", "spp must be an integer in [1, 1048576]"),
+    (MODELS + '[render]\nseed_policy = "random"\n', "allowed: ['fixed', 'per_config']"),
+    (MODELS + "[parameters.g]\nvalue = [1]\n", "unknown key(s) ['value']"),
+    (MODELS + '[parameters."hdrp.x"]\nvalues = [1]\n', "model label 'hdrp' is not a [[models]] label"),
+    ('[[models]]\nname = "no_such_model"\n', "no_such_model"),
+    (MODELS + '[design]\nkind = "list"\n[parameters.g]\nvalues = [0.1, 0.2]\n[parameters.albedo]\nvalues = [0.5]\n',
+     "lengths differ"),
+    (MODELS + "[parameters.g]\nrange = [0.1, 0.2]\n", "needs num = number of points"),
+])
+def test_invalid_sweep_files_name_file_key_and_allowed_values(tmp_path, body, needle):
+    p = _toml(tmp_path, body)
+    with pytest.raises(FogrefError) as e:
+        S.load_sweep(p)
+    assert str(p) in str(e.value) and needle in str(e.value)
+
+
+def test_truth_cache_key_depends_on_everything_that_sets_pixels():
+    k = S.truth_cache_key("abc", {"g": "0.5"}, 4, 0, "0.1.0")
+    assert k == S.truth_cache_key("abc", {"g": "0.5"}, 4, 0, "0.1.0")
+    for other in (S.truth_cache_key("abd", {"g": "0.5"}, 4, 0, "0.1.0"),
+                  S.truth_cache_key("abc", {"g": "0.6"}, 4, 0, "0.1.0"),
+                  S.truth_cache_key("abc", {"g": "0.5"}, 8, 0, "0.1.0"),
+                  S.truth_cache_key("abc", {"g": "0.5"}, 4, 1, "0.1.0"),
+                  S.truth_cache_key("abc", {"g": "0.5"}, 4, 0, "0.2.0")):
+        assert other != k
+
+
+# ---------------------------------------------------------------- a real two-worker cluster
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    distributed = pytest.importorskip("dask.distributed")
+    import logging
+
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                                  silence_logs=logging.CRITICAL) as c:
+        yield c
+
+
+TINY = ('[render]\nspp = 4\noverrides = { res = 16, resy = 9, max_depth = 3 }\n'
+        '[design]\nkind = "list"\n'
+        '[parameters.sun_elevation]\nvalues = [5, 20, 40, 60]\n'
+        '[parameters.g]\nvalues = [0.2, 0.6, 1.5, 0.8]\n'   # g = 1.5 is invalid: that configuration fails
+        '[execution]\nretries = 1\n[outputs]\nplot_metrics = ["final.all.rmse"]\n')
+
+
+@pytest.mark.render
+def test_sweep_on_two_worker_cluster_records_failure_resumes_and_reuses_truths(tmp_path, cluster):
+    addr = cluster.scheduler_address
+    p = _toml(tmp_path, MODELS + TINY)
+    info = S.run_sweep(p, scheduler=addr, progress=False, drjit_threads=1)
+    assert (info["configs"], info["ran"], info["failed"], info["rows"]) == (4, 4, 1, 4)
+
+    import pandas as pd
+
+    df = pd.read_parquet(info["parquet"])
+    assert len(pd.read_csv(info["table"])) == 4
+    bad = df[df["status"] == "error"]
+    assert len(bad) == 1 and bad["g"].iloc[0] == 1.5 and "'g'" in bad["error"].iloc[0]
+    ok = df[df["status"] == "ok"]
+    assert len(ok) == 3 and (ok["final.all.rmse"] > 0).all() and (ok["final.all.rmse_stderr"] >= 0).all()
+    for col in ("spp", "seed", "fogref_version", "mitsuba_version", "truth_path", "truth_sha256",
+                "render_seconds", "model", "model_parameters", "sun_elevation", "g"):
+        assert col in df.columns and ok[col].notna().all(), col
+    assert not ok["truth_cached"].any() and len(list((tmp_path / "cache").glob("*.exr"))) == 3
+    assert (tmp_path / "plots" / "final.all.rmse_vs_sun_elevation.png").is_file()
+    assert len(list((tmp_path / "configs").glob("*.json"))) == 4
+
+    # resume: nothing is run again, the table is the same
+    stamps = {f: f.stat().st_mtime_ns for f in (tmp_path / "configs").glob("*.json")}
+    t0 = time.perf_counter()
+    again = S.run_sweep(p, scheduler=addr, progress=False)
+    assert again["ran"] == 0 and again["rows"] == 4 and time.perf_counter() - t0 < 20
+    assert stamps == {f: f.stat().st_mtime_ns for f in (tmp_path / "configs").glob("*.json")}
+
+    # new model parameters, same truths: the truths come from the cache (no render)
+    q = _toml(tmp_path / "second", MODELS.replace('"ue4"\n', '"ue4"\nparams = { StartDistance = 500.0 }\n') + TINY,
+              cache=tmp_path / "cache")
+    third = S.run_sweep(q, scheduler=addr, progress=False, drjit_threads=1)
+    df3 = pd.read_parquet(third["parquet"])
+    assert third["ran"] == 4 and df3[df3["status"] == "ok"]["truth_cached"].all()
+    assert all(json.loads(m)["StartDistance"] == 500.0 for m in df3[df3["status"] == "ok"]["model_parameters"])
