@@ -20,13 +20,15 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def gbuffer(w=1920, h=1080, seed=0):
-    """Camera at 2 m; points on a ground plane and on the sky dome (1e5 m), y-up metres."""
+    """Camera at 2 m; points on a ground plane and on the sky dome (SKY_DISTANCE), y-up metres."""
+    from fogref.models.base import SKY_DISTANCE
+
     rng = np.random.default_rng(seed)
     cam = np.array([0.0, 2.0, 0.0])
     az = rng.uniform(-0.6, 0.6, (h, w))
     el = np.linspace(0.35, -0.3, h)[:, None] + rng.normal(0, 1e-3, (h, w))
     d = np.stack([np.sin(az) * np.cos(el), np.sin(el), np.cos(az) * np.cos(el)], -1)
-    t = np.where(d[..., 1] < -1e-3, -cam[1] / np.minimum(d[..., 1], -1e-3), 1e5)
+    t = np.where(d[..., 1] < -1e-3, -cam[1] / np.minimum(d[..., 1], -1e-3), SKY_DISTANCE)
     return cam, cam + d * t[..., None]
 
 

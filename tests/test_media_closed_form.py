@@ -253,3 +253,59 @@ def test_single_scatter_vs_quadrature(layers, view):
         ref = mp_single_scatter(layers, sigma, albedo, g, oy, d, D, w, E)
         for c in got:
             assert rel(c, ref) <= 1e-12, (float(c), ref)
+
+
+# -- the height-profile protocol and its registry ---------------------------------------
+
+PROTOCOL_LAYERS = [ExpLayer(2.0, 0.05, 3.0), ExpLayer(1.0, 0.0, 0.0), HDRPLayer(1.5, 10.0, 0.02),
+                   HDRPLayer(1.0, 0.0, 0.0), PowerLawLayer(1.0, 0.0, 80.0, 2.0), PowerLawLayer(0.5, -5.0, 5.0, 0.0)]
+
+
+@pytest.mark.parametrize("layer", PROTOCOL_LAYERS, ids=repr)
+def test_profiles_follow_the_protocol(layer):
+    from fogref.media import HeightProfile
+
+    assert isinstance(layer, HeightProfile)
+    layer.validate("<test>", 0)
+    y = np.linspace(-50.0, 150.0, 41)
+    rho = layer.rho(NP, y)
+    # max_density bounds the density on every height range [y_lo, y_hi]
+    for i in range(0, len(y), 5):
+        for j in range(i, len(y), 7):
+            assert layer.max_density(NP, y[i], y[j]) >= rho[i:j + 1].max() * (1 - 1e-12)
+    assert layer.is_constant == bool(np.all(rho == rho[0]))
+    assert not layer.is_empty
+    assert np.isfinite(layer.reference_height)
+
+
+@pytest.mark.parametrize("params, layers", [
+    ({"profile": "exponential", "falloff": 0.02, "height": 1.0, "density2": 0.5, "falloff2": 0.1},
+     (ExpLayer(1.0, 0.02, 1.0), ExpLayer(0.5, 0.1, 0.0))),
+    ({"profile": "homogeneous", "density": 2.0}, (ExpLayer(2.0, 0.0, 0.0),)),
+    ({"profile": "hdrp", "base_height": 4.0, "falloff": 0.03}, (HDRPLayer(1.0, 4.0, 0.03),)),
+    ({"profile": "powerlaw", "start": 1.0, "end": 9.0, "power": 3.0}, (PowerLawLayer(1.0, 1.0, 9.0, 3.0),)),
+])
+def test_profile_registry_parses_each_profile(params, layers):
+    from fogref.media import PROFILES, medium_from_params
+
+    assert set(PROFILES) >= {"exponential", "homogeneous", "box", "hdrp", "powerlaw"}
+    assert medium_from_params(params).layers == layers
+
+
+def test_profile_registry_errors_name_the_parameter():
+    from fogref.media import medium_from_params
+
+    for params, name in [({"profile": "fractal"}, "profile"), ({"profile": "box"}, "bounds_min"),
+                         ({"profile": "hdrp", "falloff": -1}, "falloff"), ({"sigma_t": [1, 2]}, "sigma_t"),
+                         ({"bounds_min": [0, 0, 0]}, "bounds_max")]:
+        with pytest.raises(ParameterError) as e:
+            medium_from_params(params, "<test>")
+        assert e.value.name == name
+
+
+def test_medium_asks_the_protocol():
+    m = FogMedium(sigma_t=0.01, layers=(HDRPLayer(1.0, 5.0, 0.0), PowerLawLayer(0.0, 0.0, 10.0, 1.0)))
+    assert m.layers == (HDRPLayer(1.0, 5.0, 0.0),) and m.is_homogeneous and not m.is_vacuum
+    assert float(m.max_density(NP, 0.0, 100.0)) == 1.0
+    with pytest.raises(ParameterError, match="sigma_t"):
+        FogMedium(sigma_t=(0.01, 0.02, 0.03)).grey_sigma_t("test")

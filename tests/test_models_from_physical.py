@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from fogref.compare.model_factory import build_model
-from fogref.errors import ParameterError
+from fogref.errors import FogrefError, ParameterError
 from fogref.mapping import (
     FIT_DIRECTIONS,
     FIT_DISTANCES,
@@ -267,3 +267,50 @@ def test_coloured_extinction_raises(name):
     with pytest.raises(ParameterError) as e:
         from_physical(name, scene(**{**EXP, "sigma_t": [0.01, 0.02, 0.03]}))
     assert e.value.name == "sigma_t"
+
+
+# -- the protocols and the registry's fallback ---------------------------------------
+
+@pytest.mark.parametrize("name", ["ue4", "unity", "altitude", "box", "hdrp", "filament"])
+def test_builtin_models_follow_the_protocol_and_have_a_mapping(name):
+    from fogref.mapping import MAPPINGS, has_mapping
+    from fogref.models import FogModel
+
+    model = get(name)()
+    assert isinstance(model, FogModel) and model.name == name
+    assert name in MAPPINGS and has_mapping(name) and not hasattr(get(name), "from_physical")
+
+
+def test_unregistered_class_falls_back_to_its_own_from_physical():
+    class Custom:
+        name = "custom_test"
+
+        def __init__(self, sigma):
+            self.sigma = sigma
+
+        @classmethod
+        def from_physical(cls, physical):
+            return cls(physical.medium.sigma_t)
+
+    ps = PhysicalScene.from_params(VALLEY)
+    assert from_physical(Custom, ps).sigma == ps.medium.sigma_t
+    assert from_physical(Custom, VALLEY).sigma == ps.medium.sigma_t  # a fogref.params dict is parsed
+    with pytest.raises(FogrefError, match="from_physical"):
+        from_physical(object, ps)
+    with pytest.raises(FogrefError, match="unknown fog model"):
+        from_physical("no_such_model", ps)
+
+
+def test_physical_scene_parser():
+    ps = PhysicalScene.from_params(VALLEY)
+    np.testing.assert_allclose(ps.sun_direction, SUN, rtol=1e-15)
+    assert ps.has_sun and ps.profile == "exponential" and ps.source == "valley.xml: medium"
+    assert ps.camera == (0.0, 2.0, 0.0) and ps.sky_radiance == (0.2, 0.3, 0.5)
+    p = copy.deepcopy(VALLEY)
+    p["sun"], p["sky"], p["camera"] = None, None, None
+    ps = PhysicalScene.from_params(p, camera=(1.0, 5.0, 0.0))
+    assert not ps.has_sun and ps.sky_radiance == (0.0, 0.0, 0.0) and ps.camera == (1.0, 5.0, 0.0)
+    p = copy.deepcopy(VALLEY)
+    p["sun"]["direction"] = [0.0, 0.0, 0.0]
+    with pytest.raises(ParameterError, match="direction"):
+        PhysicalScene.from_params(p)

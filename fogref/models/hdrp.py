@@ -3,7 +3,9 @@
 Source: HDRP ``Fog.cs`` (``UpdateShaderVariablesGlobalCB``),
 ``VolumeRendering.cs`` (``ScaleHeightFromLayerDepth``, ``ExtinctionFromMeanFreePath``)
 and ``AtmosphericScattering.hlsl`` (``OpticalDepthHeightFog``,
-``EvaluateAtmosphericScattering``); seed 003 (parameter list).
+``EvaluateAtmosphericScattering``) in the High Definition Render Pipeline package
+(``com.unity.render-pipelines.high-definition``); the Fog volume override's
+parameter list in Unity's HDRP manual.
 
 Units: HDRP is y-up **metres** (same as fogref), and uses **exp** (not exp2).
 CPU set-up: ``extinction = 1 / meanFreePath`` (the "Fog Attenuation Distance" is
@@ -38,9 +40,9 @@ from fogref.models.base import FogResult, register
 
 #: VolumeRendering.cs ScaleHeightFromLayerDepth: 1 / ln(1000).
 LAYER_DEPTH_TO_H = 0.144765
-#: from_physical: base height [m] that makes HDRP's fog homogeneous everywhere below it.
+#: fogref.mapping (hdrp_from_physical): base height [m] that makes HDRP's fog homogeneous everywhere below it.
 HOMOGENEOUS_BASE_HEIGHT = 1.0e7
-#: from_physical: maxFogDistance [m], beyond any sky distance (the physical ray is not cut).
+#: fogref.mapping (hdrp_from_physical): maxFogDistance [m], beyond any sky distance (the physical ray is not cut).
 FROM_PHYSICAL_MAX_FOG_DISTANCE = 1.0e7
 
 
