@@ -349,8 +349,8 @@ def write_report(result, out_dir, images: EngineImages | None = None) -> Path:
     out = Path(out_dir)
     result.write(out)
     lines = [f"# fogref check: {result.candidate} vs `{result.truth}`", "",
-             f"Verdict: **{result.verdict}** ({result.confidence:.0%} two-sided intervals, "
-             f"{result.settings['block']}×{result.settings['block']} px block bootstrap, truth noise removed).", ""]
+             f"Verdict: **{result.verdict}** ({result.confidence:.0%} two-sided intervals, {result.method_text}).",
+             ""]
     if images is not None and images.final is not None:
         lines += ["The engine's `final` image is compared with the truth's `R,G,B`: this means something only if "
                   "the engine's surface lighting matches the truth's `surface` part. "

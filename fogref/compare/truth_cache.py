@@ -1,0 +1,132 @@
+"""Render a ground truth once and reuse it: a cache keyed on everything that changes its pixels.
+
+The key holds the scene file's content (and the content of the files it names with
+``filename``, e.g. meshes), the overrides (``res``, ``resy`` and any ``--set``), the
+sample count, the seed, the pixel filter, fogref's version and a hash of the
+renderer's source (``fogref/render``, ``fogref/gbuffer.py``, the plugins), so an
+edited scene or a changed renderer never returns a stale truth.
+
+Cache folder: ``cache_dir``, else ``$FOGREF_CACHE``, else ``~/.cache/fogref/truths``.
+Each truth is one EXR named by its key; writes are atomic, so parallel test workers
+may race, and the last one wins with identical pixels.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import re
+from pathlib import Path
+
+from fogref.errors import FogrefError
+
+_FILENAME = re.compile(r'name\s*=\s*"filename"\s+value\s*=\s*"([^"]+)"')
+
+
+def default_cache_dir() -> Path:
+    """``$FOGREF_CACHE``, else ``~/.cache/fogref/truths``."""
+    env = os.environ.get("FOGREF_CACHE")
+    return Path(env) if env else Path.home() / ".cache" / "fogref" / "truths"
+
+
+def _renderer_hash() -> str:
+    import fogref
+
+    root = Path(fogref.__file__).resolve().parent
+    files = sorted((root / "render").glob("*.py")) + [root / "gbuffer.py"]
+    plugins = root.parent / "plugins"
+    if not plugins.is_dir():
+        try:
+            import fogref_plugins
+
+            plugins = Path(fogref_plugins.__file__).resolve().parent
+        except ImportError:
+            plugins = None
+    if plugins is not None:
+        files += sorted(plugins.glob("*.py"))
+    h = hashlib.sha256()
+    for f in files:
+        h.update(f.name.encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()
+
+
+def truth_key(scene, spp: int, seed: int, overrides: dict | None = None, pixel_filter: str = "centre") -> str:
+    """The cache key (hex, 24 characters) of a truth; FogrefError if the scene is missing.
+
+    Examples
+    --------
+    >>> k = truth_key("scenes/valley.xml", 16, 0, {"res": 32, "resy": 18})
+    >>> len(k), k == truth_key("scenes/valley.xml", 16, 1, {"res": 32, "resy": 18})
+    (24, False)
+    """
+    from fogref import __version__
+
+    scene = Path(scene)
+    if not scene.is_file():
+        raise FogrefError(f"{scene}: no such scene file")
+    text = scene.read_bytes()
+    h = hashlib.sha256(text)
+    for name in sorted(set(_FILENAME.findall(text.decode("utf-8", "replace")))):
+        ref = scene.parent / name
+        h.update(name.encode())
+        h.update(ref.read_bytes() if ref.is_file() else b"<missing>")
+    spec = {"scene": h.hexdigest(), "spp": int(spp), "seed": int(seed), "pixel_filter": pixel_filter,
+            "overrides": {str(k): str(v) for k, v in sorted((overrides or {}).items())},
+            "version": __version__, "renderer": _renderer_hash()}
+    return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:24]
+
+
+def cached_truth(scene, res=(32, 18), spp: int = 16, seed: int = 0, overrides: dict | None = None,
+                 cache_dir=None, variant: str | None = None, pixel_filter: str = "centre"):
+    """A ground truth of ``scene``, rendered on first use and read from the cache after.
+
+    Parameters
+    ----------
+    scene : path
+        A fogref XML scene.
+    res : (int, int) or None
+        ``(width, height)`` [px], set as the overrides ``res`` and ``resy``; None keeps the
+        scene's own.
+    spp : int
+        Samples per pixel, >= 1.
+    seed : int
+        Render seed, >= 0.
+    overrides : dict, optional
+        More XML ``$name`` defaults (as ``fogref render --set``).
+    cache_dir : path, optional
+        See the module docstring.
+    variant, pixel_filter :
+        Passed to :func:`fogref.render.render.render` (not part of the key: a variant
+        changes only float rounding).
+
+    Returns
+    -------
+    Truth
+        From :func:`fogref.gbuffer.load_truth`; ``truth.path`` is the cached EXR.
+    """
+    over = dict(overrides or {})
+    if res is not None:
+        w, h = (int(x) for x in res)
+        if w < 1 or h < 1:
+            raise FogrefError(f"res: {tuple(res)} must be (width, height) >= 1 px")
+        over.update({"res": w, "resy": h})
+    if int(spp) < 1 or int(seed) < 0:
+        raise FogrefError(f"spp {spp} must be >= 1 and seed {seed} >= 0")
+    key = truth_key(scene, spp, seed, over, pixel_filter)
+    folder = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    path = folder / f"{Path(scene).stem}-{key}.exr"
+    from fogref.gbuffer import load_truth
+
+    if path.is_file():
+        try:
+            return load_truth(path)
+        except FogrefError:
+            path.unlink(missing_ok=True)  # an older schema or a damaged file: render again
+    from fogref.render.render import render
+
+    folder.mkdir(parents=True, exist_ok=True)
+    render(scene, path, spp=int(spp), seed=int(seed), variant=variant, overrides=over, progress=False,
+           resume=False, png=False, pixel_filter=pixel_filter)
+    return load_truth(path)
