@@ -772,3 +772,79 @@ def synthetic_truth(model, shape=(18, 32), noise: float = 0.01, seed: int = 0, f
                  inscatter=L_hat, single=L_hat, multiple=zero, surface=s_hat, stderr=stderr,
                  surface_coverage=np.ones((H, W)), distance=t, position=pos, view=d,
                  hit_fraction=hit.astype(float), camera=camera, sun_direction=None, params=params, attrs=attrs)
+
+
+# ---------------------------------------------------------------- the assertion
+
+
+def _default_errors_dir(result: CheckResult) -> Path:
+    import os
+    import re
+    import tempfile
+
+    base = Path(os.environ.get("FOGREF_ERRORS_DIR") or Path(tempfile.gettempdir()) / "fogref-errors")
+    name = re.sub(r"[^A-Za-z0-9_.-]+", "_", f"{Path(result.truth).stem}-{result.candidate}")[:80]
+    return base / name
+
+
+def assert_fog_matches(truth: Truth, candidate, tolerances: dict | None = None, *, inconclusive: str = "fail",
+                       errors_dir=None, **check_options) -> CheckResult:
+    """Assert that ``candidate`` matches ``truth`` within ``tolerances``; return the :class:`CheckResult`.
+
+    Runs :func:`check` (same arguments).  On a failure it writes the error maps and
+    ``check.json`` (:meth:`CheckResult.write`) and raises ``AssertionError`` whose
+    message names each failing part and region, the metric's estimate and
+    confidence interval against its tolerance, the confidence, and the folder of
+    the error maps.
+
+    Parameters
+    ----------
+    inconclusive : str
+        What an inconclusive row does: ``"fail"`` (default: an unproven match is not
+        a match; raise the sample count, see ``reports/check_power/power.md``),
+        ``"pass"``, or ``"skip"`` (``pytest.skip``).
+    errors_dir : path, optional
+        Where the maps go; default ``$FOGREF_ERRORS_DIR/<truth>-<candidate>``, else a
+        folder under the system's temporary directory.
+
+    Examples
+    --------
+    >>> from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+    >>> model = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
+    >>> truth = synthetic_truth(model, noise=0.02)
+    >>> assert_fog_matches(truth, model).verdict
+    'pass'
+    """
+    if inconclusive not in ("fail", "pass", "skip"):
+        raise FogrefError(f"inconclusive: {inconclusive!r} must be 'fail', 'pass' or 'skip'")
+    result = check(truth, candidate, tolerances, **check_options)
+    failed = result.failures(include_inconclusive=False)
+    undecided = [r for r in result.rows if r.verdict == "inconclusive"]
+    if not failed and (not undecided or inconclusive == "pass"):
+        return result
+    if not failed and inconclusive == "skip":
+        import pytest
+
+        pytest.skip(f"fogref: {len(undecided)} inconclusive row(s), e.g. {undecided[0].describe()}")
+    out = Path(errors_dir) if errors_dir is not None else _default_errors_dir(result)
+    result.write(out)
+    rows = failed + (undecided if inconclusive == "fail" else [])
+    lines = [f"fog does not match the truth: {result.candidate} vs {result.truth}",
+             f"{len(failed)} row(s) fail, {len(undecided)} inconclusive, at {result.confidence:.0%} confidence "
+             f"({result.method_text}):"]
+    for r in rows[:12]:
+        lines.append("  " + r.describe() + _how_much(r))
+    if len(rows) > 12:
+        lines.append(f"  ... and {len(rows) - 12} more (check.json)")
+    if undecided and inconclusive == "fail":
+        lines.append("inconclusive: the interval straddles the tolerance; render the truth with more samples "
+                     "or pixels (reports/check_power/power.md), or pass inconclusive='pass'")
+    lines.append(f"error maps: {out / 'errors.exr'} (signed candidate - truth per part); rows: {out / 'check.json'}")
+    raise AssertionError("\n".join(lines))
+
+
+def _how_much(r: Row) -> str:
+    if r.tolerance is None or r.estimate is None or r.verdict != "fail":
+        return ""
+    bound = r.low if r.low > r.tolerance else -r.high
+    return f"; at least {bound - r.tolerance:.3g} over the tolerance"

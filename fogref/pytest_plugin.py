@@ -1,0 +1,48 @@
+"""fogref's pytest plugin: a cached tiny ground truth and an assertion for a fog model.
+
+Installed with fogref (entry point ``pytest11``), so any project that depends on
+fogref has it::
+
+    def test_my_fog(fogref_truth):
+        truth = fogref_truth("scenes/valley.xml", res=(32, 18), spp=64)
+        assert_fog_matches(truth, MyFog(...), tolerances={"inscatter": 0.05})
+
+* fixture ``fogref_truth``: a factory ``(scene, res=(32, 18), spp=16, seed=0,
+  overrides=None) -> Truth``.  The truth is rendered on first use and cached (see
+  :mod:`fogref.compare.truth_cache`) under ``$FOGREF_CACHE`` if set, else in
+  pytest's cache folder (``.pytest_cache/d/fogref_truths``).  A relative scene path
+  is looked up in the working directory, then under pytest's root directory.
+* :func:`assert_fog_matches` (re-exported from :mod:`fogref.compare.check`): runs
+  ``check`` and fails with the part, region, estimate, interval, tolerance,
+  confidence and the folder of the error maps.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+from fogref.compare.check import assert_fog_matches, check
+
+__all__ = ["assert_fog_matches", "check", "fogref_truth"]
+
+
+@pytest.fixture(scope="session")
+def fogref_truth(request):
+    """Factory ``(scene, res=(32, 18), spp=16, seed=0, overrides=None, **render_options) -> Truth`` (cached)."""
+    from fogref.compare.truth_cache import cached_truth
+
+    env = os.environ.get("FOGREF_CACHE")
+    cache = Path(env) if env else request.config.cache.mkdir("fogref_truths")
+    root = Path(request.config.rootpath)
+
+    def make(scene, res=(32, 18), spp: int = 16, seed: int = 0, overrides=None, **render_options):
+        path = Path(scene)
+        if not path.is_absolute() and not path.exists() and (root / path).exists():
+            path = root / path
+        return cached_truth(path, res=res, spp=spp, seed=seed, overrides=overrides, cache_dir=cache,
+                            **render_options)
+
+    return make
