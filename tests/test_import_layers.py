@@ -26,13 +26,15 @@ FLOORS: list[tuple[str, tuple[str, ...]]] = [
     # leaf utilities that import no other fogref module; every floor may use them
     ("base", ("fogref._version", "fogref.errors", "fogref.atomic", "fogref._llvm")),
     ("media", ("fogref.media",)),                          # physics: numpy, Dr.Jit only lazily
-    ("gbuffer", ("fogref.gbuffer", "fogref.exrio")),       # the ground-truth schema and its I/O
+    # the ground-truth schema, its I/O and the one display transform
+    ("gbuffer", ("fogref.gbuffer", "fogref.exrio", "fogref.display")),
     ("models", ("fogref.models",)),                        # ports of the engines' shaders
     ("mapping", ("fogref.mapping",)),                      # physical scene -> model parameters, fits
     ("render", ("fogref.render", "fogref_plugins")),       # Mitsuba glue and plugins
     ("compare", ("fogref.compare",)),
     ("study", ("fogref.study",)),
-    ("cli", ("fogref.cli", "fogref")),
+    # entry points: the command line, the pytest plugin and the facade (fogref.set_variant)
+    ("cli", ("fogref.cli", "fogref.pytest_plugin", "fogref")),
 ]
 #: floors that must not import Mitsuba or Dr.Jit at module level
 NO_MITSUBA_AT_IMPORT = {"base", "media", "gbuffer", "models", "mapping", "compare", "study", "cli"}
@@ -104,17 +106,40 @@ def imports_of(module: str):
                 yield (sub if sub in MODULES else src), node.lineno, top
 
 
+#: What the package facade ``fogref/__init__.py`` offers, and the module behind each name.
+#: ``import fogref`` alone is no arrow (every submodule import runs the facade anyway, and
+#: its module level imports only base modules, see test_the_package_facade_imports_lazily);
+#: each ``fogref.<name>`` or ``from fogref import <name>`` is an arrow to the module behind it.
+FACADE = {"set_variant": "fogref.render.variant", "ensure_llvm": "fogref._llvm",
+          "__version__": "fogref._version", "__file__": "fogref._version", "__name__": "fogref._version",
+          "__path__": "fogref._version"}
+
+
 def _resolve(name: str) -> str | None:
+    if name.startswith("fogref.") and name.split(".")[1] in FACADE:
+        return FACADE[name.split(".")[1]]
     while name and name not in MODULES:
         name = name.rpartition(".")[0]
     return name or None
+
+
+def _facade_uses(module: str):
+    """(``fogref.<name>``, line) for each attribute use of a bare ``import fogref``."""
+    path, _ = MODULES[module]
+    tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+    aliases = {a.asname or a.name for n in ast.walk(tree) if isinstance(n, ast.Import)
+               for a in n.names if a.name == "fogref"}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id in aliases:
+            yield f"fogref.{node.attr}", node.lineno
 
 
 def import_graph() -> dict[str, dict[str, int]]:
     """module -> {imported fogref module: line} (self-imports dropped)."""
     graph: dict[str, dict[str, int]] = {m: {} for m in MODULES}
     for m in MODULES:
-        for name, line, _ in imports_of(m):
+        uses = [(n, line) for n, line, _ in imports_of(m) if n != "fogref"] + list(_facade_uses(m))
+        for name, line in uses:
             if name.split(".")[0] not in PACKAGES:
                 continue
             target = _resolve(name)
@@ -173,6 +198,7 @@ def test_the_checks_see_what_they_look_for():
     assert FLOORS[floor_of("fogref_plugins.fogpath")][0] == "render"
     assert FLOORS[floor_of("fogref")][0] == "cli" and FLOORS[floor_of("fogref.errors")][0] == "base"
     assert "fogref.media" in import_graph()["fogref.models.ue4"]
+    assert _resolve("fogref.set_variant") == "fogref.render.variant" and _resolve("fogref") == "fogref"
 
 
 def test_no_import_cycle():
@@ -219,6 +245,10 @@ def test_the_package_facade_imports_lazily():
     """``fogref/__init__.py`` imports only base modules at module level; set-up is a call."""
     bad = [f"{_where('fogref', line)}: {name}" for name, line, top in imports_of("fogref")
            if top and name.startswith("fogref") and floor_of(_resolve(name)) != 0]
+    import fogref
+
+    offered = {n for n in vars(fogref) if not n.startswith("_") and f"fogref.{n}" not in MODULES}
+    assert offered - {"annotations"} <= set(FACADE), "add the facade's new names to FACADE"
     assert not bad, "\n".join(bad)
 
 
