@@ -25,17 +25,24 @@ def physical_from_scene(path, camera=None) -> PhysicalScene:
     desc = describe_scene(path)
     if desc["medium"] is None:
         raise FogrefError(f"{path}: no <medium type=\"heightfog\"> in the scene")
-    return PhysicalScene.from_params(desc, camera if camera is not None else _lookat_origin(path))
+    if camera is None:
+        camera = (desc.get("camera") or {}).get("origin") or _lookat_origin(path)
+    return PhysicalScene.from_params(desc, camera)
 
 
 def _lookat_origin(path):
+    """The first sensor's ``lookat`` origin [m], with the scene's ``$defaults`` substituted."""
     import xml.etree.ElementTree as ET
 
     root = ET.parse(path).getroot()
+    defaults = {d.get("name"): d.get("value") for d in root.iter("default")}
     for s in root.iter("sensor"):
         la = s.find(".//lookat")
         if la is not None and la.get("origin"):
-            return tuple(float(x) for x in la.get("origin").replace(",", " ").split())
+            origin = la.get("origin")
+            for k in sorted(defaults, key=len, reverse=True):
+                origin = origin.replace("$" + k, str(defaults[k]))
+            return tuple(float(x) for x in origin.replace(",", " ").split())
     return None
 
 
