@@ -3,13 +3,15 @@
 import numpy as np
 import pytest
 
+from fogref.gbuffer import Truth
 from fogref.mapping import PhysicalScene as PhysicalFog
 from fogref.mapping import base_params
 from fogref.media import ExpLayer, FogMedium
 from fogref.study import budget as B
 
 
-def _pixels(pf, h=12, w=20, seed=0):
+def _pixels(pf, h=12, w=20, seed=0, rel_stderr=0.0):
+    """A synthetic schema-2 Truth consistent with the closed forms of ``pf``, and a sun-less ``single``."""
     rng = np.random.default_rng(seed)
     cam = np.asarray(pf.camera)
     v = rng.normal(size=(h, w, 3))
@@ -17,14 +19,21 @@ def _pixels(pf, h=12, w=20, seed=0):
     v /= np.linalg.norm(v, axis=-1, keepdims=True)
     hit = v[..., 1] < 0.05
     D = np.where(hit, rng.uniform(5, 3000, (h, w)), 0.0)
-    px = B.Pixels(final=None, T=None, surface=rng.uniform(0, 0.5, (h, w, 3)), single=None, multiple=None,
-                  distance=D, position=cam + v * D[..., None], view=v, hit=hit, camera=cam)
+    z3 = np.zeros((h, w, 3))
+    px = Truth(path="<synthetic>", final=z3, transmittance=z3, attenuated_surface=z3, inscatter=z3, single=z3,
+               multiple=z3, surface=rng.uniform(0, 0.5, (h, w, 3)), stderr={}, surface_coverage=np.ones((h, w)),
+               distance=D, position=cam + v * D[..., None], view=v, hit_fraction=hit.astype(float), camera=cam,
+               sun_direction=np.asarray(pf.sun_direction), params={})
     cf = B.closed_forms(px, pf)
-    px.T = cf["T"]
+    px.transmittance = cf["T"]
+    px.attenuated_surface = px.transmittance * px.surface
     sky_single = cf["sky"] * rng.uniform(0.5, 1.0, (h, w, 1))
     px.single = cf["sun_att"] * rng.uniform(0.0, 1.0, (h, w, 1)) + sky_single
     px.multiple = rng.uniform(0, 0.05, (h, w, 3))
-    px.final = px.T * px.surface + px.single + px.multiple
+    px.inscatter = px.single + px.multiple
+    px.final = px.attenuated_surface + px.inscatter
+    px.stderr = {k: rel_stderr * np.abs(getattr(px, k)) for k in
+                 ("final", "transmittance", "attenuated_surface", "inscatter", "single", "multiple", "surface")}
     return px, sky_single
 
 
@@ -61,8 +70,8 @@ def test_steps_vanish_for_an_unshadowed_closed_form_truth():
     px, _ = _pixels(pf)
     cf = B.closed_forms(px, pf)
     px.single = cf["sun_att"] + cf["sky"]      # no shadows, unoccluded sky
-    px.multiple[:] = 0.0
-    px.final = px.T * px.surface + px.single
+    px.multiple = np.zeros_like(px.multiple)
+    px.final = px.attenuated_surface + px.single
     model = base_params(pf)
     S = B.chain(px, cf["sky"], pf, model, model)
     r = B.attribute(S, px.hit)
@@ -82,3 +91,48 @@ def test_markdown_and_plot(tmp_path):
     assert "| 9 | [h]" in md and "100.000000 %" in md
     B.plot(r, tmp_path / "b.png")
     assert (tmp_path / "b.png").stat().st_size > 1000
+
+
+def _opaque_horizon(px, rows=3):
+    """The top ``rows`` rows: T underflowed to 0, no sample reached the surface (undefined, written 0)."""
+    px.transmittance = px.transmittance.copy()
+    px.transmittance[:rows] = 0.0
+    px.surface_coverage = px.surface_coverage.copy()
+    px.surface_coverage[:rows] = 0.0
+    px.surface = px.surface.copy()
+    px.surface[:rows] = 1.0e20  # never used: a leftover where surface is undefined
+    px.attenuated_surface = px.transmittance * np.where(px.surface_valid[..., None], px.surface, 0.0)
+    px.final = px.attenuated_surface + px.single + px.multiple
+    return px
+
+
+def test_budget_and_what_if_exclude_undefined_surface_and_stay_finite():
+    pf = _pf()
+    px, sky = _pixels(pf, rel_stderr=0.01)
+    px = _opaque_horizon(px)
+    model = base_params(pf, FogMaxOpacity=0.9)
+    S = B.chain(px, sky, pf, model, model)
+    r = B.attribute(S, px.hit, px.surface_valid, B.chain_noise(px, 0.01 * sky, model, model))
+    assert r["excluded_pixels"] == 3 * px.shape[1] and r["pixels"] == px.hit.size - r["excluded_pixels"]
+    assert np.isfinite(r["total"]["rmse"]["all"]) and r["total"]["rmse"]["all"] < 1.0
+    assert r["share_sum"] == pytest.approx(1.0, abs=1e-12)
+    rows = B.what_if(px, model, {"opacity": {"FogMaxOpacity": 0.5}})
+    assert all(np.isfinite(x["rmse"]) and x["rmse"] < 1.0 for x in rows)
+    assert f"{r['excluded_pixels']} excluded" in B.markdown(r)
+
+
+def test_every_step_carries_its_noise_from_the_stderr_channels():
+    pf = _pf()
+    px, sky = _pixels(pf, rel_stderr=0.02)
+    model = base_params(pf)
+    S = B.chain(px, sky, pf, model, model)
+    noise = B.chain_noise(px, 0.02 * sky, model, model)
+    r = B.attribute(S, px.hit, px.surface_valid, noise)
+    by = {s["key"]: s for s in r["steps"]}
+    np.testing.assert_allclose(by["multiple"]["rmse_noise_floor"], np.sqrt(np.mean(px.stderr["multiple"] ** 2)))
+    assert by["sun_attenuation"]["rmse_noise_floor"] == 0.0  # closed forms only
+    for s in r["steps"]:
+        assert {"rmse_noise_floor", "rmse_stderr", "below_noise"} <= set(s), s["key"]
+    assert "rmse_noise_floor" in r["total"] and "noise floor" in B.markdown(r)
+    # the start-distance and opacity steps are exactly 0 here (settings off): below the noise
+    assert by["start_distance"]["below_noise"] and by["opacity_cutoff"]["below_noise"]

@@ -23,6 +23,68 @@ import sys
 __all__ = ["add_cli"]
 
 
+#: ``fogref fit --directions``: allowed range (the fit solves for six colour values, the
+#: exponent and the start distance over ``directions x 12`` views).
+DIRECTIONS_RANGE = (8, 100_000)
+
+
+def _check_number(option: str, value, lo=None, hi=None, lo_open=False, hi_open=False, what="") -> None:
+    """FogrefError naming ``option``, the value and the allowed range unless ``lo <= value <= hi``
+    (strict where ``*_open``) and finite."""
+    import math
+
+    from fogref.errors import FogrefError
+
+    ok = value is not None and isinstance(value, (int, float)) and math.isfinite(value)
+    ok = ok and (lo is None or (value > lo if lo_open else value >= lo))
+    ok = ok and (hi is None or (value < hi if hi_open else value <= hi))
+    if not ok:
+        lo_s = "-inf" if lo is None else f"{lo:g}"
+        hi_s = "inf" if hi is None else f"{hi:g}"
+        rng = f"{'(' if lo_open or lo is None else '['}{lo_s}, {hi_s}{')' if hi_open or hi is None else ']'}"
+        raise FogrefError(f"{option}: {value!r} is out of range: {what + ' ' if what else ''}must be a finite number "
+                          f"in {rng}")
+
+
+def check_fit_args(a) -> None:
+    """Refuse out-of-range ``fogref fit`` flags before any work (FogrefError naming the option)."""
+    from fogref.errors import FogrefError
+
+    if not (isinstance(a.directions, int) and DIRECTIONS_RANGE[0] <= a.directions <= DIRECTIONS_RANGE[1]):
+        raise FogrefError(f"--directions: {a.directions!r} is out of range: the number of view directions must be "
+                          f"an integer in [{DIRECTIONS_RANGE[0]}, {DIRECTIONS_RANGE[1]}]")
+    for opt, v, lo, hi, lo_open, hi_open, what in (
+            ("--sigma-t", a.sigma_t, 0.0, None, False, False, "extinction [1/m]"),
+            ("--falloff", a.falloff, 0.0, None, False, False, "falloff [1/m]"),
+            ("--height", a.height, None, None, False, False, "height [m]"),
+            ("--albedo", a.albedo, 0.0, 1.0, False, False, "albedo"),
+            ("--g", a.g, -1.0, 1.0, True, True, "Henyey–Greenstein g")):
+        if v is not None:
+            _check_number(opt, v, lo, hi, lo_open, hi_open, what)
+    for opt, vec, lo, what in (("--sun-irradiance", a.sun_irradiance, 0.0, "sun irradiance (each of R, G, B)"),
+                               ("--sky", a.sky, 0.0, "sky radiance (each of R, G, B)"),
+                               ("--camera", a.camera, None, "camera position [m]"),
+                               ("--sun-dir", a.sun_dir, None, "sun direction")):
+        for v in vec or ():
+            _check_number(opt, v, lo, None, False, False, what)
+    if a.sun_dir and not any(a.sun_dir):
+        raise FogrefError("--sun-dir: (0, 0, 0) is not a direction")
+
+
+def check_physical(pf, source: str) -> None:
+    """Refuse a physical scene whose sun irradiance or sky radiance is negative or not finite
+    (from a scene, an EXR header or flags)."""
+    import math
+
+    from fogref.errors import FogrefError
+
+    for name, vec in (("sun irradiance", pf.sun_irradiance), ("sky radiance", pf.sky_radiance)):
+        vals = [float(v) for v in (vec or ())]
+        if any(not math.isfinite(v) or v < 0 for v in vals):
+            raise FogrefError(f"{source}: {name} {tuple(vals)} is out of range: each of R, G, B must be a finite "
+                              "number >= 0")
+
+
 def _physical_from_args(a):
     from fogref.mapping import PhysicalScene
     from fogref.media import ExpLayer, FogMedium
@@ -35,10 +97,9 @@ def _physical_from_args(a):
     if a.scene:
         pf = physical_from_scene(a.scene, camera=a.camera)
     elif a.exr:
-        from fogref.exrio import read_exr
+        from fogref.gbuffer import load_truth
 
-        _, attrs = read_exr(a.exr)
-        pf = PhysicalScene.from_params(attrs["fogref.params"], camera=a.camera)
+        pf = PhysicalScene.from_params(load_truth(a.exr).params, camera=a.camera)  # refuses a foreign EXR
     else:
         med = FogMedium(sigma_t=a.sigma_t if a.sigma_t is not None else 0.000960906,
                         albedo=a.albedo if a.albedo is not None else 0.9,
@@ -73,7 +134,9 @@ def cmd_fit(a) -> int:
     from fogref.mapping import fit_unreal, lobe_table, sample_views
     from fogref.study.fit import write_lobe_table
 
+    check_fit_args(a)
     pf = _physical_from_args(a)
+    check_physical(pf, a.scene or a.exr or "fogref fit flags")
     views = sample_views(pf.camera, n_dirs=a.directions)
     r = fit_unreal(pf, views, sun_attenuation=not a.no_sun_attenuation, fit_start=not a.no_start_distance)
     doc = {"physical": {"sigma_t": list(pf.medium.sigma_t), "albedo": list(pf.medium.albedo), "g": pf.medium.g,
@@ -100,6 +163,10 @@ def cmd_fit(a) -> int:
 def cmd_study(a) -> int:
     from fogref.study.unreal import run_study
 
+    for opt, v, lo, hi in (("--start-distance", a.start_distance, 0.0, None), ("--max-opacity", a.max_opacity, 0.0, 1.0),
+                           ("--cutoff", a.cutoff, 0.0, None)):
+        if v is not None:
+            _check_number(opt, v, lo, hi, what="Unreal setting")
     settings = {k: v for k, v in (("StartDistance", a.start_distance), ("FogMaxOpacity", a.max_opacity),
                                   ("FogCutoffDistance", a.cutoff)) if v is not None}
     run_study(a.exr, a.out, a.renders, scene=a.scene, compare_report=not a.no_compare, settings=settings)
@@ -124,7 +191,8 @@ def add_cli(subparsers) -> None:
     f.add_argument("--sun-irradiance", type=float, nargs=3, metavar=("R", "G", "B"))
     f.add_argument("--sky", type=float, nargs=3, metavar=("R", "G", "B"), help="uniform sky radiance")
     f.add_argument("--camera", type=float, nargs=3, metavar=("X", "Y", "Z"), help="camera position [m]")
-    f.add_argument("--directions", type=int, default=400, help="view directions on the sphere (default 400)")
+    f.add_argument("--directions", type=int, default=400,
+                   help=f"view directions on the sphere, {DIRECTIONS_RANGE[0]}..{DIRECTIONS_RANGE[1]} (default 400)")
     f.add_argument("--no-sun-attenuation", action="store_true", help="fit to the unattenuated single scattering")
     f.add_argument("--no-start-distance", action="store_true", help="keep DirectionalInscatteringStartDistance 0")
     f.add_argument("--lobe-table", action="store_true", help="also tabulate the best lobe for g = -0.9..0.9")

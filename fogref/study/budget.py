@@ -2,14 +2,19 @@
 
 A chain of images ``S_0 .. S_K`` goes from the ground truth (``S_0``, the EXR's
 ``R,G,B``) to what Unreal computes (``S_K``), switching **one** effect at a time.
-Every image is final radiance composited on the EXR's unfogged ``surface``
-(``T * surface + inscatter``), so only the fog differs:
+Every image is final radiance over the truth's surface, so only the fog differs:
+steps 0-4 keep the truth's ``attenuated_surface`` (``T surface``, estimated
+directly), steps 5-9 composite the model's T over the truth's unattenuated
+``surface`` (``surface T_model + L_model``), which is defined only where
+``surface_coverage > 0``.  Every statistic is taken over those pixels
+(``truth.surface_valid``); the others are excluded and counted
+(``excluded_pixels``), never filled in, and nothing is divided by T:
 
 ==  ==========================  ====================================================================
 k   effect removed / switched   S_k
 ==  ==========================  ====================================================================
-0   (truth)                     R,G,B  = T surface + single + multiple
-1   multiple scattering [d]     T surface + single
+0   (truth)                     R,G,B  = attenuated_surface + single + multiple
+1   multiple scattering [d]     T surface + single   (T surface: the truth's attenuated_surface)
 2   geometric shadows [e]       T surface + SUN_cf + SKY_render   (SKY_render: ``single`` of a
                                 render with the sun removed; SUN_cf: closed-form sun single
                                 scattering at the pixel's distance, HG, with sun attenuation)
@@ -32,19 +37,24 @@ own size), its **share** ``<Δ_k, E> / <E, E>`` of the total squared error
 ``E = S_K - S_0`` (shares sum to 1 exactly; a negative share means the step
 cancels part of the others), and the RMSE of ``S_k`` against the truth.
 
-Monte Carlo noise: steps 1–3 use rendered terms.  With a second pair of renders
-(another seed), each statistic is recomputed and its noise is estimated as
-``|x(seed a) - x(seed b)| / sqrt(2)`` (RMSE of the difference image / sqrt 2 for
-the per-pixel noise of ``Δ_k``).  Steps 4–9 are closed forms (noise-free).
+Monte Carlo noise, two ways.  (1) From the truths' per-pixel ``stderr.*``
+channels (:func:`chain_noise`): each ``Δ_k`` is a sum of rendered parts and closed
+forms, so its per-pixel standard error follows (``Δ_1 = -multiple``: ``se_multiple``;
+``Δ_2``: ``se_single`` and the sun-less render's ``se_single``; ``Δ_5``:
+``T_model se_surface`` and ``se_attenuated_surface``; ``Δ_6..9``: ``|ΔT_model|
+se_surface``; covariances ignored); every RMSE gets its noise floor, standard error
+and a below-the-noise flag (:func:`fogref.compare.metrics.mse_noise`).  (2) With a
+second pair of renders (another seed), each statistic is recomputed and its noise
+is estimated as ``|x(seed a) - x(seed b)| / sqrt(2)`` (the shares' noise).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
+from fogref.gbuffer import Truth
 from fogref.media import NP, hg_phase, single_scatter_sun
 from fogref.media.single_scatter import single_scatter_sky
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
@@ -65,62 +75,12 @@ STEPS: tuple[tuple[str, str, str], ...] = (
 RENDERED = ("multiple", "shadows", "sky")
 
 
-@dataclass
-class Pixels:
-    """What the budget needs from a ground-truth EXR (arrays (H, W[, 3]) float64)."""
-
-    final: np.ndarray
-    T: np.ndarray
-    surface: np.ndarray
-    single: np.ndarray
-    multiple: np.ndarray
-    distance: np.ndarray
-    position: np.ndarray
-    view: np.ndarray
-    hit: np.ndarray
-    camera: np.ndarray
-
-    @classmethod
-    def from_channels(cls, c: dict, attrs: dict) -> Pixels:
-        def g(name):
-            return np.stack([c[f"{name}.{k}"] for k in "RGB"], -1).astype(np.float64)
-
-        final = np.stack([c[k] for k in "RGB"], -1).astype(np.float64)
-        view = np.stack([c[f"view.{k}"] for k in "XYZ"], -1).astype(np.float64)
-        view /= np.maximum(np.linalg.norm(view, axis=-1, keepdims=True), 1e-30)
-        cam = np.asarray(attrs["fogref.params"]["camera"]["origin"], dtype=np.float64)
-        return cls(final=final, T=g("T"), surface=g("surface"), single=g("single"), multiple=g("multiple"),
-                   distance=c["distance"].astype(np.float64),
-                   position=np.stack([c[f"P.{k}"] for k in "XYZ"], -1).astype(np.float64),
-                   view=view, hit=c["hit"] > 0.5, camera=cam)
-
-    @classmethod
-    def read(cls, path) -> Pixels:
-        from fogref.exrio import read_exr
-
-        c, a = read_exr(path)
-        return cls.from_channels(c, a)
-
-    def world_positions(self, sky_distance: float) -> np.ndarray:
-        far = self.camera + self.view * sky_distance
-        return np.where(self.hit[..., None], self.position, far)
-
-    def rays(self):
-        """Per-pixel (o, d, D) as 3-tuples of flat arrays for the closed forms (D = inf: sky)."""
-        n = self.hit.size
-        o = tuple(np.full(n, c) for c in self.camera)
-        v = self.view.reshape(-1, 3)
-        d = tuple(v[:, i] for i in range(3))
-        D = np.where(self.hit.reshape(-1), self.distance.reshape(-1), NP.largest)
-        return o, d, D
-
-
-def closed_forms(px: Pixels, pf) -> dict:
+def closed_forms(truth: Truth, pf) -> dict:
     """Closed-form single-scattering images (H, W, 3) of the physical fog ``pf``
-    (a :class:`fogref.study.fit.PhysicalFog`) at each pixel's distance."""
+    (a :class:`fogref.mapping.PhysicalScene`) at each pixel's distance."""
     m = pf.medium
-    o, d, D = px.rays()
-    shape = (*px.hit.shape, 3)
+    o, d, D = truth.rays()
+    shape = (*truth.shape, 3)
     w = pf.sun_direction
     E = np.asarray(pf.sun_irradiance)
     alb = np.asarray(m.albedo)
@@ -131,45 +91,66 @@ def closed_forms(px: Pixels, pf) -> dict:
         sun_noatt = alb * E * hg_phase(NP, cos, m.g)[:, None] * (1.0 - T)
     else:
         sun_noatt = np.zeros_like(T)
-    sky = np.stack(single_scatter_sky(NP, m, o, d, D, pf.sky_radiance), -1)
+    sky = np.stack(single_scatter_sky(NP, m, o, d, D, pf.sky_radiance or (0.0, 0.0, 0.0)), -1)
     return {"T": T.reshape(shape), "sun_att": sun_att.reshape(shape), "sun_noatt": sun_noatt.reshape(shape),
             "sky": sky.reshape(shape)}
 
 
-def _unreal(params: UE4FogParams, px: Pixels, precision: str, sky_distance: float):
-    r = UE4ExponentialHeightFog(params).evaluate(px.camera, px.world_positions(sky_distance), precision)
+def _unreal(params: UE4FogParams, truth: Truth, precision: str, sky_distance: float):
+    r = UE4ExponentialHeightFog(params).evaluate(truth.camera, truth.world_positions(sky_distance), precision)
     return np.asarray(r.transmittance, np.float64), np.asarray(r.inscatter, np.float64)
 
 
-def chain(px: Pixels, sky_single: np.ndarray, pf, lobe_params: UE4FogParams, model_params: UE4FogParams,
+def _model_configs(lobe_params: UE4FogParams, model_params: UE4FogParams) -> list:
+    """``(params, precision)`` of steps 5..9."""
+    from dataclasses import replace
+
+    plain = dict(DirectionalInscatteringStartDistance=0.0, StartDistance=0.0, FogMaxOpacity=1.0,
+                 FogCutoffDistance=0.0)
+    return [(replace(lobe_params, **plain), "float64"), (replace(model_params, **plain), "float64"),
+            (replace(model_params, FogMaxOpacity=1.0, FogCutoffDistance=0.0), "float64"),
+            (model_params, "float64"), (model_params, "float32")]
+
+
+def chain(truth: Truth, sky_single: np.ndarray, pf, lobe_params: UE4FogParams, model_params: UE4FogParams,
           sky_distance: float = 1.0e5) -> list[np.ndarray]:
-    """The images ``S_0 .. S_9`` (see the module doc).
+    """The images ``S_0 .. S_9`` (see the module doc), each ``(H, W, 3)``.
 
     ``sky_single``: (H, W, 3) ``single.*`` of a render of the same scene with the sun
     removed.  ``lobe_params``: Unreal fitted to the unattenuated single scattering
     (start distances 0).  ``model_params``: the Unreal parameters under study.
+    ``S_5 .. S_9`` hold ``surface * T_model + L_model``; they mean something only
+    where ``truth.surface_valid`` (``surface`` is 0 elsewhere).
     """
-    from dataclasses import replace
-
-    cf = closed_forms(px, pf)
-    surfT = px.T * px.surface
-    S = [px.final,
-         surfT + px.single,
-         surfT + cf["sun_att"] + sky_single,
-         surfT + cf["sun_att"] + cf["sky"],
-         surfT + cf["sun_noatt"] + cf["sky"]]
-    plain = dict(DirectionalInscatteringStartDistance=0.0, StartDistance=0.0, FogMaxOpacity=1.0,
-                 FogCutoffDistance=0.0)
-    configs = [replace(lobe_params, **plain),
-               replace(model_params, **plain),
-               replace(model_params, FogMaxOpacity=1.0, FogCutoffDistance=0.0),
-               model_params]
-    for p in configs:
-        Tm, Lm = _unreal(p, px, "float64", sky_distance)
-        S.append(px.surface * Tm + Lm)
-    Tm, Lm = _unreal(model_params, px, "float32", sky_distance)
-    S.append(px.surface * Tm + Lm)
+    cf = closed_forms(truth, pf)
+    att = truth.attenuated_surface
+    S = [truth.final,
+         att + truth.single,
+         att + cf["sun_att"] + sky_single,
+         att + cf["sun_att"] + cf["sky"],
+         att + cf["sun_noatt"] + cf["sky"]]
+    for p, precision in _model_configs(lobe_params, model_params):
+        Tm, Lm = _unreal(p, truth, precision, sky_distance)
+        S.append(truth.surface * Tm + Lm)
     return S
+
+
+def chain_noise(truth: Truth, sky_single_stderr: np.ndarray, lobe_params: UE4FogParams,
+                model_params: UE4FogParams, sky_distance: float = 1.0e5) -> dict:
+    """Per-pixel standard errors ``(H, W, 3)`` of each ``Δ_k`` and of the total ``E``.
+
+    From the truth's ``stderr.*`` channels and ``sky_single_stderr`` (the sun-less
+    render's ``stderr.single``); see the module doc.  Returns ``{"steps": [σ_1 ..
+    σ_9], "total": σ_E}`` [radiance].
+    """
+    se = truth.stderr
+    Tms = [_unreal(p, truth, precision, sky_distance)[0] for p, precision in _model_configs(lobe_params,
+                                                                                          model_params)]
+    zero = np.zeros(truth.final.shape)
+    steps = [se["multiple"], np.hypot(se["single"], sky_single_stderr), sky_single_stderr, zero,
+             np.hypot(Tms[0] * se["surface"], se["attenuated_surface"])]
+    steps += [np.abs(Tms[k] - Tms[k - 1]) * se["surface"] for k in range(1, len(Tms))]
+    return {"steps": steps, "total": np.hypot(se["final"], Tms[-1] * se["surface"])}
 
 
 def _rmse(x, mask=None):
@@ -178,41 +159,67 @@ def _rmse(x, mask=None):
     return float(np.sqrt(np.mean(x * x))) if x.size else 0.0
 
 
-def attribute(S: list[np.ndarray], hit: np.ndarray) -> dict:
-    """Per-step statistics of a chain; ``telescoping_residual`` is the largest
-    ``|Σ Δ_k - (S_K - S_0)|`` (0 up to float64 rounding)."""
+def _noise_fields(d: np.ndarray, sigma: np.ndarray, mask: np.ndarray) -> dict:
+    from fogref.compare.metrics import mse_noise
+
+    m = mse_noise(d, sigma, mask)
+    if m is None:
+        return {}
+    hi, lo = np.sqrt(m["mse"] + m["stderr"]), np.sqrt(max(m["mse"] - m["stderr"], 0.0))
+    return {"rmse_noise_floor": float(np.sqrt(m["noise_floor"])), "rmse_stderr": float(0.5 * (hi - lo)),
+            "rmse_debiased": float(np.sqrt(m["debiased"])), "below_noise": m["below_noise"]}
+
+
+def attribute(S: list[np.ndarray], hit: np.ndarray, valid: np.ndarray | None = None, noise: dict | None = None) -> dict:
+    """Per-step statistics of a chain over the ``valid`` pixels (default all).
+
+    ``noise``: :func:`chain_noise`'s per-pixel standard errors; with it every RMSE
+    (step and total) gets ``rmse_noise_floor``, ``rmse_stderr``, ``rmse_debiased``
+    and ``below_noise``.  ``telescoping_residual`` is the largest ``|Σ Δ_k - (S_K -
+    S_0)|`` (0 up to float64 rounding); ``excluded_pixels`` counts the pixels left
+    out (``surface`` undefined).
+    """
+    valid = np.ones(hit.shape, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
     E = S[-1] - S[0]
-    e2 = float(np.sum(E * E))
+    e2 = float(np.sum(E[valid] ** 2))
     deltas = [S[k] - S[k - 1] for k in range(1, len(S))]
-    resid = float(np.max(np.abs(sum(deltas) - E)))
-    masks = {"all": None, "surface": hit, "sky": ~hit}
+    resid = float(np.max(np.abs(sum(deltas) - E)[valid], initial=0.0))
+    masks = {"all": valid, "surface": hit & valid, "sky": ~hit & valid}
     steps = []
-    for (key, letter, label), dk, Sk in zip(STEPS, deltas, S[1:]):
-        steps.append({
+    for i, ((key, letter, label), dk, Sk) in enumerate(zip(STEPS, deltas, S[1:])):
+        step = {
             "key": key, "effect": letter, "label": label,
             "rmse": {r: _rmse(dk, m) for r, m in masks.items()},
-            "mean": float(np.mean(dk)),
-            "share": float(np.sum(dk * E) / e2) if e2 > 0 else 0.0,
-            "rmse_vs_truth_after": _rmse(Sk - S[0]),
-        })
-    return {"total": {"rmse": {r: _rmse(E, m) for r, m in masks.items()}, "mean": float(np.mean(E)),
-                      "truth_rms": _rmse(S[0])},
-            "steps": steps, "telescoping_residual": resid,
-            "share_sum": float(sum(s["share"] for s in steps))}
+            "mean": float(np.mean(dk[valid])) if valid.any() else 0.0,
+            "share": float(np.sum((dk * E)[valid]) / e2) if e2 > 0 else 0.0,
+            "rmse_vs_truth_after": _rmse(Sk - S[0], valid),
+        }
+        if noise is not None:
+            step.update(_noise_fields(dk, noise["steps"][i], valid))
+        steps.append(step)
+    total = {"rmse": {r: _rmse(E, m) for r, m in masks.items()},
+             "mean": float(np.mean(E[valid])) if valid.any() else 0.0, "truth_rms": _rmse(S[0], valid)}
+    if noise is not None:
+        total.update(_noise_fields(E, noise["total"], valid))
+    return {"total": total, "steps": steps, "telescoping_residual": resid,
+            "share_sum": float(sum(s["share"] for s in steps)),
+            "pixels": int(valid.sum()), "excluded_pixels": int((~valid).sum())}
 
 
-def add_noise(result: dict, S_a: list[np.ndarray], S_b: list[np.ndarray], hit: np.ndarray) -> dict:
+def add_noise(result: dict, S_a: list[np.ndarray], S_b: list[np.ndarray], hit: np.ndarray,
+              valid: np.ndarray | None = None) -> dict:
     """Add Monte Carlo noise estimates from a second chain ``S_b`` (other seeds) to ``result``
-    (computed from ``S_a``)."""
-    other = attribute(S_b, hit)
+    (computed from ``S_a``), over the pixels valid in both (default all)."""
+    valid = np.ones(hit.shape, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
+    other = attribute(S_b, hit, valid)
     da = [S_a[k] - S_a[k - 1] for k in range(1, len(S_a))]
     db = [S_b[k] - S_b[k - 1] for k in range(1, len(S_b))]
     r2 = math.sqrt(2.0)
     for s, so, a, b in zip(result["steps"], other["steps"], da, db):
         s["noise"] = {
-            "pixel_rms": _rmse(a - b) / r2,     # per-pixel noise of Δ_k
+            "pixel_rms": _rmse(a - b, valid) / r2,     # per-pixel noise of Δ_k
             # RMSE of Δ_k with the noise removed in quadrature (noise adds variance)
-            "rmse_denoised": math.sqrt(max(s["rmse"]["all"] ** 2 - (_rmse(a - b) / r2) ** 2, 0.0)),
+            "rmse_denoised": math.sqrt(max(s["rmse"]["all"] ** 2 - (_rmse(a - b, valid) / r2) ** 2, 0.0)),
             "rmse": abs(s["rmse"]["all"] - so["rmse"]["all"]) / r2,
             "share": abs(s["share"] - so["share"]) / r2,
         }
@@ -223,34 +230,50 @@ def add_noise(result: dict, S_a: list[np.ndarray], S_b: list[np.ndarray], hit: n
     return result
 
 
-def footprint_check(px: Pixels, pf, S: list[np.ndarray], step: str = "shadows", tol: float = 0.01) -> dict:
+def footprint_check(truth: Truth, pf, S: list[np.ndarray], step: str = "shadows", tol: float = 0.01) -> dict:
     """Pixels straddling an edge (rays of one pixel hitting different depths) are
     evaluated at their mean distance by the closed forms and by the model.  They
     show up as ``|T_closed_form - T_exr| > tol``; returns their fraction and their
     part of the squared norm of ``step``'s Δ."""
     k = [s[0] for s in STEPS].index(step) + 1
-    cf = closed_forms(px, pf)
-    mixed = np.abs(cf["T"] - px.T).max(-1) > tol
+    cf = closed_forms(truth, pf)
+    mixed = np.abs(cf["T"] - truth.transmittance).max(-1) > tol
     dk = S[k] - S[k - 1]
     tot = float(np.sum(dk * dk))
     return {"tolerance": tol, "pixel_fraction": float(mixed.mean()), "step": step,
             "share_of_step_sq": float(np.sum(dk[mixed] ** 2) / tot) if tot > 0 else 0.0,
-            "max_T_difference": float(np.abs(cf["T"] - px.T).max())}
+            "max_T_difference": float(np.abs(cf["T"] - truth.transmittance).max())}
 
 
-def what_if(px: Pixels, model_params: UE4FogParams, variants: dict, sky_distance: float = 1.0e5) -> list[dict]:
+def what_if(truth: Truth, model_params: UE4FogParams, variants: dict, sky_distance: float = 1.0e5) -> list[dict]:
     """RMSE against the truth of the model with some fields changed (``variants``:
-    name -> dict of UE4FogParams fields), float32; and the change vs the model."""
+    name -> dict of UE4FogParams fields), float32; and the change vs the model.
+
+    Over the pixels where ``surface`` is defined (the model is composited on it);
+    each row also carries ``rmse_noise_floor`` and ``below_noise``.
+    """
     from dataclasses import replace
 
-    Tm, Lm = _unreal(model_params, px, "float32", sky_distance)
-    base = _rmse(px.surface * Tm + Lm - px.final)
+    valid = truth.surface_valid
+    se = truth.stderr
+
+    def row(params):
+        Tm, Lm = _unreal(params, truth, "float32", sky_distance)
+        d = truth.surface * Tm + Lm - truth.final
+        return _rmse(d, valid), _noise_fields(d, np.hypot(se["final"], Tm * se["surface"]), valid)
+
+    base, _ = row(model_params)
     rows = []
     for name, kw in variants.items():
-        Tm, Lm = _unreal(replace(model_params, **kw), px, "float32", sky_distance)
-        r = _rmse(px.surface * Tm + Lm - px.final)
-        rows.append({"variant": name, "fields": kw, "rmse": r, "delta_rmse": r - base})
+        r, noise = row(replace(model_params, **kw))
+        rows.append({"variant": name, "fields": kw, "rmse": r, "delta_rmse": r - base, **noise})
     return rows
+
+
+def _floor(s: dict) -> str:
+    if "rmse_noise_floor" not in s:
+        return "—"
+    return f"{s['rmse_noise_floor']:.2g}" + (" (below the noise)" if s["below_noise"] else "")
 
 
 def markdown(result: dict, title: str = "Error budget of Unreal's exponential height fog") -> str:
@@ -259,7 +282,13 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
     lines = [f"# {title}", "",
              f"Total error of the Unreal model (float32, as compared) against the path-traced truth: "
              f"**RMSE {t['rmse']['all']:.4g}** (surface pixels {t['rmse']['surface']:.4g}, sky {t['rmse']['sky']:.4g}; "
-             f"truth RMS {t['truth_rms']:.4g}; Monte Carlo noise of the total ±{t.get('noise_rmse', float('nan')):.2g}).",
+             f"truth RMS {t['truth_rms']:.4g}; Monte Carlo noise of the total ±{t.get('noise_rmse', float('nan')):.2g}"
+             + (f"; noise floor {t['rmse_noise_floor']:.2g} from the truth's stderr, "
+                f"{'**below the noise**' if t['below_noise'] else 'above the noise'}" if "rmse_noise_floor" in t
+                else "") + ").",
+             "",
+             f"Pixels: {result.get('pixels', '?')} used, {result.get('excluded_pixels', 0)} excluded (the truth's "
+             "unattenuated surface is undefined there: no sample reached it, so no model can be composited on it).",
              "",
              "Each row switches one effect, going from the truth to Unreal; Δ_k = S_k − S_{k−1}. "
              "*Share* = ⟨Δ_k, E⟩/⟨E, E⟩ with E = model − truth: the shares add up to 100 % exactly "
@@ -268,16 +297,18 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
              "*Noise*: per-pixel Monte Carlo noise of Δ_k and the noise of its share, from a second render with "
              "another seed (closed-form steps are noise-free).", "",
              "*Denoised*: √(RMSE² − noise²), the step's size without the Monte Carlo noise.", "",
+             "*Noise floor*: the RMSE Δ_k would have from the truths' per-pixel standard errors alone "
+             "(`stderr.*` channels); *below the noise*: Δ_k cannot be told from 0 at this sample count.", "",
              "| k | effect | step | RMSE of Δ_k | denoised | (surface / sky) | share of E² | "
-             "noise: pixel RMS / share | RMSE vs truth after step |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "noise: pixel RMS / share | noise floor (stderr) | RMSE vs truth after step |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for k, s in enumerate(result["steps"], 1):
         n = s.get("noise")
         ns = f"{n['pixel_rms']:.2g} / ±{100 * n['share']:.2g} %" if n and s["key"] in RENDERED else "0 (closed form)"
         dn = f"{n['rmse_denoised']:.4g}" if n and s["key"] in RENDERED else f"{s['rmse']['all']:.4g}"
         lines.append(f"| {k} | [{s['effect']}] | {s['label']} | {s['rmse']['all']:.4g} | {dn} | "
                      f"{s['rmse']['surface']:.3g} / {s['rmse']['sky']:.3g} | {100 * s['share']:+.1f} % | {ns} | "
-                     f"{s['rmse_vs_truth_after']:.4g} |")
+                     f"{_floor(s)} | {s['rmse_vs_truth_after']:.4g} |")
     by = {s["key"]: s for s in result["steps"]}
     off = [k for k in ("start_distance", "opacity_cutoff") if by.get(k) and by[k]["rmse"]["all"] == 0]
     if off:
@@ -301,9 +332,10 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
     if result.get("what_if"):
         lines += ["", "## What if (engine settings the study leaves at their defaults)", "",
                   "RMSE of the float32 model against the truth with one setting changed:", "",
-                  "| variant | fields | RMSE | Δ RMSE |", "|---|---|---|---|"]
+                  "| variant | fields | RMSE | Δ RMSE | noise floor |", "|---|---|---|---|---|"]
         for r in result["what_if"]:
-            lines.append(f"| {r['variant']} | `{r['fields']}` | {r['rmse']:.4g} | {r['delta_rmse']:+.3g} |")
+            lines.append(f"| {r['variant']} | `{r['fields']}` | {r['rmse']:.4g} | {r['delta_rmse']:+.3g} | "
+                         f"{_floor(r)} |")
     lines += ["", "![budget](budget.png)", ""]
     return "\n".join(lines)
 

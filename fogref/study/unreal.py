@@ -1,18 +1,23 @@
 """``fogref study``: the Unreal study on one ground-truth EXR, end to end.
 
-1. The physical fog, sun, sky and camera come from the EXR's ``fogref.params``.
+1. The truth is read by :func:`fogref.gbuffer.load_truth` (the one reader); the
+   physical fog, sun, sky and camera come from its ``fogref.params``.
 2. Unreal's parameters: density/falloff/height by the exact mapping
    (:func:`fogref.models.ue4.medium_to_ue4`); FogInscatteringColor,
    DirectionalInscatteringColor, the exponent and the directional start distance
    fitted to the closed-form single scattering (:mod:`fogref.study.fit`); the
    other engine settings (StartDistance, FogMaxOpacity, FogCutoffDistance) at
    the editor defaults unless given.
-3. ``fogref.compare`` (if installed) writes its report to ``<out>/compare``.
+3. ``fogref.compare`` writes its report to ``<out>/compare``.
 4. The error budget (:mod:`fogref.study.budget`) needs three extra renders of
-   the EXR's scene at the EXR's resolution and sample count: the scene without
-   its sun (seed s), and scene and sun-less scene again with seed s + 1 (for the
-   Monte Carlo noise).  They are cached under ``renders_dir``.
-5. ``<out>/README.md`` summarises the headline numbers.
+   the truth's scene *as the truth recorded it*: the header's ``fogref.scene``
+   (path), ``fogref.scene_sha256`` (its bytes) and ``fogref.overrides``, the same
+   sample count and pixel filter.  A scene file whose content changed since is
+   refused (:func:`scene_of_truth`).  The renders: the scene without its sun (seed
+   s), and scene and sun-less scene again with seed s + 1 (for the Monte Carlo
+   noise); cached under ``renders_dir`` on the scene's content.
+5. ``<out>/README.md`` summarises the headline numbers; its text is generated from
+   the data (scene, overrides, spp, seed).
 """
 
 from __future__ import annotations
@@ -27,8 +32,9 @@ import numpy as np
 
 from fogref.atomic import write_text_atomic as write_text
 from fogref.errors import FogrefError
-from fogref.study import budget as B
+from fogref.gbuffer import Truth, load_truth
 from fogref.mapping import PhysicalScene, fit_unreal, sample_views
+from fogref.study import budget as B
 
 #: What-if variants of the engine settings (Unreal units, cm).
 WHAT_IF = {
@@ -39,15 +45,43 @@ WHAT_IF = {
 }
 
 
-def _scene_path(attrs: dict, exr: Path, scene: str | None) -> Path:
+def _sha256(path: Path) -> str:
+    import hashlib
+
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def scene_of_truth(truth: Truth, scene: str | None = None) -> Path:
+    """The scene file the truth was rendered from, checked against its recorded hash.
+
+    Candidates: ``scene`` (``--scene``) if given, else the header's ``fogref.scene``
+    as written, then relative to the EXR's folder and its parent.  Raises
+    FogrefError when none exists, when the header lacks ``fogref.scene_sha256``,
+    or when the file's SHA-256 differs from the recorded one (naming the file and
+    both hashes): the budget must re-render the scene as the truth recorded it.
+    """
+    exr = Path(truth.path)
+    recorded = truth.attrs.get("fogref.scene")
+    recorded = None if recorded is None else str(recorded)
+    sha = truth.attrs.get("fogref.scene_sha256")
+    if not sha:
+        raise FogrefError(f"{exr}: header attribute 'fogref.scene_sha256' is missing, so the scene it was rendered "
+                          "from cannot be checked; render the truth again with this fogref")
+    sha = str(sha)
     cands = [Path(scene)] if scene else []
-    s = attrs.get("fogref.scene")
-    if isinstance(s, str):
-        cands += [Path(s), exr.parent / s, exr.parent.parent / s]
-    for c in cands:
-        if c.is_file():
+    if recorded and not scene:
+        cands += [Path(recorded), exr.parent / recorded, exr.parent.parent / recorded]
+    found = [c for c in cands if c.is_file()]
+    if not found:
+        raise FogrefError(f"{exr}: cannot find the scene it was rendered from ({recorded!r}); pass --scene")
+    for c in found:
+        if _sha256(c) == sha:
             return c
-    raise FogrefError(f"{exr}: cannot find the scene it was rendered from ({s!r}); pass --scene")
+    c = found[0]
+    raise FogrefError(
+        f"{exr}: the scene file {c} has changed since this truth was rendered (its SHA-256 is now {_sha256(c)}, "
+        f"the truth recorded {sha}). The study re-renders budget steps from the scene as the truth recorded it: "
+        "restore that version (or pass it with --scene), or render the truth again.")
 
 
 def sunless_scene(scene: Path, out_dir: Path) -> Path:
@@ -77,23 +111,23 @@ def _renderer_hash() -> str:
     return h.hexdigest()[:16]
 
 
-def _render_cached(scene: Path, out: Path, spp: int, seed: int, overrides: dict, log) -> Path:
-    from fogref.exrio import read_exr
+def _render_cached(scene: Path, out: Path, spp: int, seed: int, overrides: dict, log,
+                  pixel_filter: str = "centre") -> Path:
     from fogref.render.render import render
 
-    key = {"scene": str(scene.resolve()), "mtime": scene.stat().st_mtime, "spp": spp, "seed": seed,
-           "overrides": overrides, "renderer": _renderer_hash()}
+    key = {"scene_sha256": _sha256(scene), "spp": spp, "seed": seed, "overrides": overrides,
+           "pixel_filter": pixel_filter, "renderer": _renderer_hash()}
     stamp = out.with_suffix(".key.json")
     if out.is_file() and stamp.is_file():
         try:
             if json.loads(stamp.read_text()) == key:
-                read_exr(out)
+                load_truth(out)
                 log(f"  cached {out}")
                 return out
-        except Exception:
+        except (OSError, ValueError, FogrefError):
             pass
     t = time.perf_counter()
-    render(scene, out, spp=spp, seed=seed, overrides=overrides, progress=False, png=False)
+    render(scene, out, spp=spp, seed=seed, overrides=overrides, progress=False, png=False, pixel_filter=pixel_filter)
     write_text(stamp, json.dumps(key))
     log(f"  rendered {out} ({time.perf_counter() - t:.1f} s)")
     return out
@@ -104,46 +138,59 @@ def open_plane_check(scene: Path, rdir: Path, log, spp: int = 64, res=(160, 90))
 
     Renders the scene (seeds 0 and 1) and its sun-less copy at low resolution;
     compares ``single - single_sky - closed-form sun`` with the noise expected of
-    ``single - single_sky`` (from the two seeds)."""
-    from fogref.exrio import read_exr
-
+    ``single - single_sky`` (from the two seeds, and from the stderr channels)."""
     ov = {"res": res[0], "resy": res[1]}
     nosun = sunless_scene(scene, rdir)
-    a = _render_cached(scene, rdir / f"{scene.stem}_s0.exr", spp, 0, ov, log)
-    b = _render_cached(scene, rdir / f"{scene.stem}_s1.exr", spp, 1, ov, log)
-    sa = _render_cached(nosun, rdir / f"{scene.stem}_nosun_s0.exr", spp, 0, ov, log)
-    sb = _render_cached(nosun, rdir / f"{scene.stem}_nosun_s1.exr", spp, 1, ov, log)
-    c, attrs = read_exr(a)
-    px = B.Pixels.from_channels(c, attrs)
-    pf = PhysicalScene.from_params(attrs["fogref.params"])
-    sun = B.closed_forms(px, pf)["sun_att"]
-    sh = px.single - B.Pixels.read(sa).single - sun
-    sh_b = B.Pixels.read(b).single - B.Pixels.read(sb).single - sun
+    a = load_truth(_render_cached(scene, rdir / f"{scene.stem}_s0.exr", spp, 0, ov, log))
+    b = load_truth(_render_cached(scene, rdir / f"{scene.stem}_s1.exr", spp, 1, ov, log))
+    sa = load_truth(_render_cached(nosun, rdir / f"{scene.stem}_nosun_s0.exr", spp, 0, ov, log))
+    sb = load_truth(_render_cached(nosun, rdir / f"{scene.stem}_nosun_s1.exr", spp, 1, ov, log))
+    pf = PhysicalScene.from_params(a.params)
+    sun = B.closed_forms(a, pf)["sun_att"]
+    sh = a.single - sa.single - sun
+    sh_b = b.single - sb.single - sun
     return {"scene": str(scene), "spp": spp, "resolution": list(res),
             "shadows_rmse": float(np.sqrt(np.mean(sh ** 2))), "shadows_mean": float(sh.mean()),
             "noise_rmse": float(np.sqrt(np.mean((sh - sh_b) ** 2)) / np.sqrt(2.0)),
-            "single_rms": float(np.sqrt(np.mean(px.single ** 2)))}
+            "noise_floor_stderr": float(np.sqrt(np.mean(a.stderr["single"] ** 2 + sa.stderr["single"] ** 2))),
+            "single_rms": float(np.sqrt(np.mean(a.single ** 2)))}
+
+
+def _overrides(truth: Truth) -> dict:
+    ov = truth.attrs.get("fogref.overrides") or {}
+    if not isinstance(ov, dict):
+        raise FogrefError(f"{truth.path}: header attribute 'fogref.overrides' is not a JSON object: {ov!r}")
+    return {str(k): v for k, v in ov.items()}
 
 
 def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scene: str | None = None,
               compare_report: bool = True, settings: dict | None = None, log=print,
               open_plane: str | None = "scenes/open_plane.xml") -> dict:
-    """Run the whole study; returns the summary dict (also written as ``summary.json``)."""
-    from fogref.exrio import read_exr
+    """Run the whole study; returns the summary dict (also written as ``summary.json``).
+
+    FogrefError (before any work) for a truth that :func:`fogref.gbuffer.load_truth`
+    refuses or whose scene changed since it was rendered (:func:`scene_of_truth`).
+    """
+    from fogref.compare import compare
 
     t0 = time.perf_counter()
     exr = Path(exr)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    chans, attrs = read_exr(exr)
-    params = attrs.get("fogref.params")
-    if not isinstance(params, dict) or not params.get("medium"):
+    truth = load_truth(exr)
+    params = truth.params
+    if not params.get("medium"):
         raise FogrefError(f"{exr}: header 'fogref.params' with the medium is missing")
     pf = PhysicalScene.from_params(params)
-    spp = int(attrs.get("fogref.spp", 64))
-    seed = int(attrs.get("fogref.seed", 0))
-    overrides = attrs.get("fogref.overrides") or {}
-    scene_path = _scene_path(attrs, exr, scene)
+    spp = truth.spp
+    if spp < 1:
+        raise FogrefError(f"{exr}: header attribute 'fogref.spp' is missing or < 1")
+    seed = int(truth.attrs.get("fogref.seed", 0))
+    overrides = _overrides(truth)
+    pixel_filter = str(truth.attrs.get("fogref.pixel_filter") or "centre")
+    scene_path = scene_of_truth(truth, scene)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    provenance = {"truth": str(exr), "scene": str(scene_path), "scene_sha256": str(truth.attrs["fogref.scene_sha256"]),
+                  "overrides": overrides, "spp": spp, "seed": seed, "pixel_filter": pixel_filter}
 
     # -- 1. fits ------------------------------------------------------------
     log("fitting Unreal's colours, exponent and start distance ...")
@@ -164,10 +211,8 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
     model = UE4ExponentialHeightFog(model_params)
     cmp_summary = None
     if compare_report:
-        from fogref.compare import compare
-
         log("comparing (fogref.compare) ...")
-        rep = compare(exr, model, out / "compare", precision="float32")
+        rep = compare(truth, model, out / "compare", precision="float32")
         m = rep["metrics"]
         cmp_summary = {part: m[part]["all"] for part in ("final", "inscatter", "transmittance")}
 
@@ -175,47 +220,64 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
     log("rendering the budget's extra images ...")
     rdir = Path(renders_dir)
     nosun = sunless_scene(scene_path, rdir)
-    sky_a = _render_cached(nosun, rdir / f"{exr.stem}_nosun_s{seed}.exr", spp, seed, overrides, log)
-    truth_b = _render_cached(scene_path, rdir / f"{exr.stem}_s{seed + 1}.exr", spp, seed + 1, overrides, log)
-    sky_b = _render_cached(nosun, rdir / f"{exr.stem}_nosun_s{seed + 1}.exr", spp, seed + 1, overrides, log)
+    sky_a = _render_cached(nosun, rdir / f"{exr.stem}_nosun_s{seed}.exr", spp, seed, overrides, log, pixel_filter)
+    truth_b = _render_cached(scene_path, rdir / f"{exr.stem}_s{seed + 1}.exr", spp, seed + 1, overrides, log,
+                             pixel_filter)
+    sky_b = _render_cached(nosun, rdir / f"{exr.stem}_nosun_s{seed + 1}.exr", spp, seed + 1, overrides, log,
+                           pixel_filter)
 
     # -- 4. budget -------------------------------------------------------------
     log("computing the error budget ...")
-    px_a = B.Pixels.from_channels(chans, attrs)
-    px_b = B.Pixels.read(truth_b)
-    if px_b.final.shape != px_a.final.shape:
-        raise FogrefError(f"{truth_b}: resolution differs from {exr}")
-    S_a = B.chain(px_a, B.Pixels.read(sky_a).single, pf, lobe.params, model_params)
-    S_b = B.chain(px_b, B.Pixels.read(sky_b).single, pf, lobe.params, model_params)
-    res = B.attribute(S_a, px_a.hit)
-    B.add_noise(res, S_a, S_b, px_a.hit)
-    res["what_if"] = B.what_if(px_a, model_params, WHAT_IF)
-    res["footprint"] = B.footprint_check(px_a, pf, S_a)
+    tb, sa, sb = load_truth(truth_b), load_truth(sky_a), load_truth(sky_b)
+    for other, path in ((tb, truth_b), (sa, sky_a), (sb, sky_b)):
+        if other.shape != truth.shape:
+            raise FogrefError(f"{path}: resolution {other.shape[::-1]} differs from {exr} {truth.shape[::-1]}")
+    S_a = B.chain(truth, sa.single, pf, lobe.params, model_params)
+    S_b = B.chain(tb, sb.single, pf, lobe.params, model_params)
+    valid = truth.surface_valid & tb.surface_valid
+    res = B.attribute(S_a, truth.hit, valid, B.chain_noise(truth, sa.stderr["single"], lobe.params, model_params))
+    B.add_noise(res, S_a, S_b, truth.hit, valid)
+    res["what_if"] = B.what_if(truth, model_params, WHAT_IF)
+    res["footprint"] = B.footprint_check(truth, pf, S_a)
     if open_plane:
         op = Path(open_plane)
         if op.is_file():
             log("closed-form check on the open plane ...")
             res["open_plane_check"] = open_plane_check(op, rdir, log)
-    res["inputs"] = {"truth": str(exr), "sky_only": str(sky_a), "truth_other_seed": str(truth_b),
-                     "sky_only_other_seed": str(sky_b), "spp": spp, "seed": seed,
-                     "resolution": list(px_a.hit.shape[::-1]), "scene": str(scene_path),
+    res["inputs"] = {**provenance, "sky_only": str(sky_a), "truth_other_seed": str(truth_b),
+                     "sky_only_other_seed": str(sky_b), "resolution": list(truth.shape[::-1]),
                      "unreal_params": fit_doc["unreal"] | {"StartDistance_cm": model_params.StartDistance,
                                                            "FogMaxOpacity": model_params.FogMaxOpacity,
                                                            "FogCutoffDistance_cm": model_params.FogCutoffDistance},
                      "lobe_fit_params": lobe.to_dict()["unreal"]}
     res["method"] = B.__doc__
     write_text(out / "budget.json", json.dumps(res, indent=2) + "\n")
-    write_text(out / "budget.md", B.markdown(res))
+    write_text(out / "budget.md", B.markdown(res, title=f"Error budget of Unreal's exponential height fog on "
+                                                        f"`{scene_path.stem}`"))
     B.plot(res, out / "budget.png")
 
-    summary = {"exr": str(exr), "scene": params.get("scene"), "fit": fit_doc, "lobe_fit": lobe.to_dict(),
-               "compare": cmp_summary, "budget_total": res["total"],
+    summary = {"exr": str(exr), "scene": str(scene_path), "provenance": provenance, "fit": fit_doc,
+               "lobe_fit": lobe.to_dict(), "compare": cmp_summary, "budget_total": res["total"],
                "largest_term": max(res["steps"], key=lambda s: s["share"]),
                "seconds": time.perf_counter() - t0}
     write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
     write_text(out / "README.md", readme(summary, res))
     log(f"study written to {out} ({summary['seconds']:.1f} s)")
     return summary
+
+
+def reproduce_command(provenance: dict) -> str:
+    """The shell commands that rebuild the truth and the study, from the truth's own header.
+
+    Examples
+    --------
+    >>> reproduce_command({"scene": "scenes/lake.xml", "spp": 32, "seed": 1, "overrides": {"res": 64},
+    ...                    "truth": "out/lake.exr", "pixel_filter": "centre"})
+    'fogref render scenes/lake.xml --spp 32 --seed 1 --set res=64 --out out/lake.exr && fogref study out/lake.exr'
+    """
+    sets = "".join(f" --set {k}={v}" for k, v in (provenance.get("overrides") or {}).items())
+    return (f"fogref render {provenance['scene']} --spp {provenance['spp']} --seed {provenance['seed']}{sets} "
+            f"--out {provenance['truth']} && fogref study {provenance['truth']}")
 
 
 def readme(summary: dict, res: dict) -> str:
@@ -227,11 +289,15 @@ def readme(summary: dict, res: dict) -> str:
     def col(c):
         return "(" + ", ".join(f"{x:.3g}" for x in c) + ")"
 
+    prov = summary.get("provenance") or res["inputs"]
+    name = Path(prov["scene"]).stem
+    ov = prov.get("overrides") or {}
     lines = ["# Unreal Exponential Height Fog vs path-traced truth", "",
-             f"Scene `{summary['scene']}`, ground truth `{summary['exr']}` "
-             f"({res['inputs']['resolution'][0]}×{res['inputs']['resolution'][1]}, {res['inputs']['spp']} spp). "
-             "Reproduce with `fogref render scenes/valley.xml --spp 64 --out out/valley.exr && "
-             "fogref study out/valley.exr`.", "",
+             f"Scene `{prov['scene']}`"
+             + (f" with {', '.join(f'`{k}={v}`' for k, v in ov.items())}" if ov else "")
+             + f", ground truth `{summary['exr']}` ({res['inputs']['resolution'][0]}×"
+             f"{res['inputs']['resolution'][1]}, {prov['spp']} spp, seed {prov['seed']}, pixel filter "
+             f"`{prov.get('pixel_filter')}`). Reproduce with `{reproduce_command(prov)}`.", "",
              "## Unreal settings used (derived from the physical fog)", "",
              "| property | value |", "|---|---|"]
     for k, v in ed.items():
@@ -246,7 +312,10 @@ def readme(summary: dict, res: dict) -> str:
     lines.append(f"- **Final image RMSE of Unreal (float32) vs truth: {t['rmse']['all']:.4g}** "
                  f"(surface pixels {t['rmse']['surface']:.4g}, sky {t['rmse']['sky']:.4g}; "
                  f"truth RMS {t['truth_rms']:.4g}, i.e. {100 * t['rmse']['all'] / t['truth_rms']:.1f} % relative; "
-                 f"Monte Carlo noise of this number ±{t.get('noise_rmse', 0):.1g}).")
+                 f"Monte Carlo noise of this number ±{t.get('noise_rmse', 0):.1g}"
+                 + (f"; noise floor {t['rmse_noise_floor']:.2g}, "
+                    f"{'below the noise' if t['below_noise'] else 'above the noise'}" if "rmse_noise_floor" in t
+                    else "") + ").")
     if c:
         f = c["final"]
         lines.append(f"- fogref.compare (final image): relMSE {f.get('relmse', float('nan')):.4g}, "
@@ -261,12 +330,23 @@ def readme(summary: dict, res: dict) -> str:
                  f"squared error (step RMSE {top['rmse']['all']:.4g}).")
     lines.append("- Budget, by share of the squared error: " + "; ".join(
         f"[{s['effect']}] {s['label']} {100 * s['share']:+.1f} %" for s in steps) + ".")
-    if oc:
+    shadows = next((s for s in res["steps"] if s["key"] == "shadows"), None)
+    if oc and shadows:
+        here = (f"on `{name}` the same step is below the noise (RMSE {shadows['rmse']['all']:.3g}, noise floor "
+                f"{shadows['rmse_noise_floor']:.3g}): nothing here casts a measurable shadow into the fog"
+                if shadows.get("below_noise") else
+                f"on `{name}` it is RMSE {shadows['rmse']['all']:.3g}"
+                + (f" against a noise floor of {shadows['rmse_noise_floor']:.3g}" if "rmse_noise_floor" in shadows
+                   else "") + ": geometric shadows (light shafts) that the engine does not model")
         lines.append(f"- Check: on `{oc['scene']}` (no occluders) the shadow step is pure noise (RMSE "
                      f"{oc['shadows_rmse']:.3g} vs noise {oc['noise_rmse']:.3g}), so the closed-form single "
-                     "scattering agrees with the path tracer; in the valley it is light shafts"
+                     f"scattering agrees with the path tracer; {here}"
                      + (f" (edge pixels: {100 * fc['pixel_fraction']:.1f} % of pixels, "
                         f"{100 * fc['share_of_step_sq']:.1f} % of that step)." if fc else "."))
+    if res.get("excluded_pixels"):
+        lines.append(f"- {res['excluded_pixels']} pixel(s) are excluded from the budget and the comparison's "
+                     "composited parts: the truth's unattenuated surface radiance is undefined there (no sample "
+                     "reached the surface through the fog).")
     lines += ["", "See [budget.md](budget.md) for the table (RMSE, share and noise of each step), "
               "[budget.png](budget.png), [budget.json](budget.json), [fit.json](fit.json).", "",
               "## Reading the budget", "",
