@@ -68,6 +68,7 @@ run again (``--retry-failed`` re-runs the recorded failures).
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import itertools
@@ -532,6 +533,17 @@ def _worker_setup(drjit_threads: int | None = None) -> dict:
             "pid": os.getpid(), "host": socket.gethostname()}
 
 
+def _truth_lock(name: str):
+    """A cluster-wide lock (``distributed.Lock``) inside a Dask worker; no lock elsewhere."""
+    try:
+        from distributed import Lock, get_worker
+
+        get_worker()
+        return Lock(name)
+    except (ImportError, ValueError):
+        return contextlib.nullcontext()
+
+
 def _flatten(prefix: str, obj, out: dict) -> None:
     if isinstance(obj, dict):
         for k, v in obj.items():
@@ -566,11 +578,12 @@ def run_config(cfg: dict, drjit_threads: int | None = None) -> dict:
     """
     env = _worker_setup(drjit_threads)
     truth = Path(cfg["truth"])
-    cached = truth.is_file()
     t0 = time.perf_counter()
-    if not cached:
-        _render(cfg["scene"], truth, spp=cfg["spp"], seed=cfg["seed"], overrides=cfg["overrides"],
-                pixel_filter=cfg["pixel_filter"])
+    with _truth_lock(f"fogref-truth-{truth.stem}"):  # configurations sharing a truth render it once
+        cached = truth.is_file()
+        if not cached:
+            _render(cfg["scene"], truth, spp=cfg["spp"], seed=cfg["seed"], overrides=cfg["overrides"],
+                    pixel_filter=cfg["pixel_filter"])
     wall_render = time.perf_counter() - t0
     header = _truth_header(truth)
     rs = header.get("fogref.render_seconds")
