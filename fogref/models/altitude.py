@@ -1,6 +1,8 @@
-"""Unity altitude fog with a power-law density (seed 001, "积分解 Unity 高度雾").
+"""Unity altitude fog with a power-law density ("积分解 Unity 高度雾", 2018).
 
-Source: seed 001 (``integral``, ``integralZeroK``, ``GetAltitudeFog`` and the
+Source: the blog post "积分解 Unity 高度雾" ("Integrating Unity height fog in
+closed form", 2018-12-17), a Unity image-effect shader (``integral``,
+``integralZeroK``, ``GetAltitudeFog`` and the
 final ``lerp(color, _FogColor, saturate(fog * _FogColor.a))``).
 
 Units: Unity, y-up **metres** (same as fogref; no conversion).  Density profile
@@ -19,7 +21,7 @@ whose optical depth is exactly ``_FogColor.a * I``; only the blend differs
 (``1 - saturate(tau)`` instead of Beer–Lambert ``exp(-tau)``).
 
 Robustness (deviation): a vertical ray (``hDist = 0``) gives ``k = inf`` and NaN
-in the shader; where the seed's formula is not finite the float32 mode falls back
+in the shader; where the post's formula is not finite the float32 mode falls back
 to the float64 integral below (rounded to float32).
 
 float64 mode (:func:`path_integral_exact`): the same integral, computed by the
@@ -50,7 +52,7 @@ from fogref.models.base import FogResult, register
 
 @dataclass(frozen=True)
 class AltitudeFogParams:
-    """Material properties of seed 001 (metres).  ``_FogColor``: RGB + a [1/m]."""
+    """Material properties of the altitude-fog shader (metres).  ``_FogColor``: RGB + a [1/m]."""
 
     _FogStart: float = 0.0
     _FogEnd: float = 50.0
@@ -70,7 +72,7 @@ class AltitudeFogParams:
 
 
 def _integral(x, k, b, s, e, p, dt):
-    """Seed 001 ``integral(x, k, b)`` (vectorised; branches as np.where)."""
+    """The shader's ``integral(x, k, b)`` (vectorised; branches as np.where)."""
     s_bk = (s - b) / k
     y = k * x + b
     below = x - s_bk
@@ -81,7 +83,7 @@ def _integral(x, k, b, s, e, p, dt):
 
 
 def _integral_zero_k(x, b, s, e, p, dt):
-    """Seed 001 ``integralZeroK(x, b)``."""
+    """The shader's ``integralZeroK(x, b)``."""
     mid = x * np.power(np.maximum((e - b) / (e - s), dt(0.0)), p)
     return np.where(b >= e, dt(0.0), np.where(b <= s, x, mid))
 
@@ -110,7 +112,7 @@ def path_integral_exact(cam, wp, s, e, p) -> np.ndarray:
 
 @register("altitude")
 class AltitudeFog:
-    """Seed 001 altitude fog (see module doc)."""
+    """The altitude fog of "积分解 Unity 高度雾" (see module doc)."""
 
     Params = AltitudeFogParams
 

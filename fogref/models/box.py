@@ -1,12 +1,13 @@
-"""Box volume fog (seed 004, Jim's GameDev blog "体积雾", Unity, 2016).
+"""Box volume fog (a Unity image effect from Jim's GameDev Blog, "体积雾", 2016).
 
-Source: seed 004.  Its formula is an image that the seed text does not keep;
-the text fixes it: the eye ray e→c (c: the G-buffer point) meets the box at
+Source: Jim's GameDev Blog, "体积雾" ("Volumetric fog", 2016-04-12), a Unity
+image-effect shader.  Its formula is printed as an image; the text fixes it:
+the eye ray e→c (c: the G-buffer point) meets the box at
 a (entry) and b (exit); ``t = |ac|`` is the fog in front of c and ``d = |cb|``
 the fog behind it; the fog amount is 0 at ``t = 0``, grows *linearly* in t, and
 is total when ``d = 0``; ``k`` is the fog density.  We read it as
 
-    fog = saturate(k * t / (t + d))          (mode "ratio", the seed's reading)
+    fog = saturate(k * t / (t + d))          (mode "ratio", the blog's reading)
 
 (``k = 1``: fully opaque at the far wall).  Because ``t + d`` is the chord of the
 ray in the box, this is *not* a medium: the same t gives less fog in a longer
@@ -14,11 +15,11 @@ box.  Mode "thickness" is the other common reading, ``fog = saturate(k t)`` with
 ``k`` [1/m]: linear in the optical depth of the homogeneous box medium
 ``sigma_t = k``.  Points outside the box: ``c`` is clamped to the chord
 (``t = 0`` before a, ``d = 0`` behind b); a ray that misses the box gets no fog.
-The ray–box intersection is the slab test (RaySlabIntersection) of the seed.
+The ray–box intersection is the slab test (RaySlabIntersection) of the blog post.
 
 Units: Unity, y-up metres (same as fogref).  Compositing:
 ``final = lerp(scene, _FogColor, fog)``: ``transmittance = 1 - fog`` (grey),
-``inscatter = _FogColor * fog``.  Mode "beer" (not in the seed) replaces the
+``inscatter = _FogColor * fog``.  Mode "beer" (not in the blog post) replaces the
 blend by ``1 - exp(-k t)``: exactly the homogeneous box medium.
 """
 
@@ -90,7 +91,7 @@ def slab_chord(cam, v, lo, hi, dt):
 
 @register("box")
 class BoxFog:
-    """Seed 004 box volume fog (see module doc)."""
+    """The blog's box volume fog (see module doc)."""
 
     Params = BoxFogParams
 

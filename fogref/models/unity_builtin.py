@@ -2,7 +2,8 @@
 
 Source: ``UnityCG.cginc`` (``UNITY_CALC_FOG_FACTOR_RAW``,
 ``UNITY_Z_0_FAR_FROM_CLIPSPACE``) and ``UnityShaderVariables.cginc``
-(``unity_FogParams``); seed 003 (catlikecoding "Rendering 14: Fog", in Chinese).
+(``unity_FogParams``); J. Flick, Catlike Coding, "Rendering 14: Fog"
+(https://catlikecoding.com/unity/tutorials/rendering/part-14/).
 
 Units: Unity is y-up, **metres** (left-handed; irrelevant to fog), the same
 lengths as fogref, so no conversion.  ``unity_FogParams`` (CPU, float32):
