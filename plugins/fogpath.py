@@ -4,8 +4,8 @@
 
  * - max_depth
    - int
-   - Longest path (1 = single scattering and direct surface light only; -1 = no
-     limit). Default: 64.
+   - Longest path (Mitsuba's convention: 1 = direct surface light only,
+     2 = single scattering; -1 = no limit). Default: 64.
  * - rr_depth
    - int
    - Depth where Russian roulette starts. Default: 5.
@@ -14,62 +14,66 @@
    - Camera rays that escape see black instead of the sky. Default: false.
  * - aovs
    - bool
-   - Write the AOVs below (needed by ``fogref render``). Off, the integrator
-     returns radiance only and skips the G-buffer and the split. Default: true.
+   - Write the per-sample parts and G-buffer of :mod:`fogref.gbuffer` after
+     R,G,B (needed by ``fogref render``). Default: true.
+ * - pixel_exact
+   - bool
+   - Every sample of a pixel goes through the pixel's centre: the G-buffer and
+     the camera transmittance ``T`` are then exact (no silhouette mixing). Off,
+     samples are spread uniformly over the pixel (a box filter), for pictures.
+     Default: false (``fogref render`` sets it for truths).
  * - sun_sampling
    - bool
-   - Estimate the sun's single scattering along camera rays by sampling the
-     exact single-scattering integrand (zero variance without shadows); the
-     first medium vertex then skips sun NEE. Used when the fog is one unbounded
-     exponential layer (see ``sun_sampling_layers``) and the sun is above the
-     horizon. Default: true.
+   - Estimate the sun's single scattering along camera rays by sampling its
+     exact integrand (zero variance without shadows); the first medium vertex
+     then skips sun NEE. Used when the fog is unbounded exponential layers (see
+     ``sun_sampling_layers``) and the sun is above the horizon. Default: true.
  * - sun_sampling_layers
    - int
-   - Most layers for which ``sun_sampling`` is used (several layers need a
-     Newton inversion, which did not pay off in the benchmark). Default: 1.
+   - Most layers for which ``sun_sampling`` is used. Default: 1.
 
 What it does:
 
-* **analytic free flight** in the fog attached to the sensor (``heightfog``):
-  each exponential layer's collision distance is inverted in closed form and the
-  nearest wins; RGB extinction uses one-sample spectral MIS (a channel is chosen
-  per path, weights use the mean pdf over channels).  No majorant, no null
-  collisions;
-* **closed-form transmittance** on shadow rays, times geometric visibility
-  (``ray_test``), to infinity for the sun and the sky;
+* **camera rays from the camera itself, to any distance**: the perspective
+  sensor's near and far clip planes are ignored, so ``T`` and ``distance`` cover
+  the first centimetre and surfaces beyond 10 km are seen;
+* **analytic free flight** in the sensor's ``heightfog`` (each layer inverted in
+  closed form, the nearest collision wins; RGB extinction by one-sample spectral
+  MIS, Veach & Guibas 1995 one-sample model); no majorant, no null collisions;
+* **closed-form transmittance** on shadow rays times geometric visibility;
 * **next-event estimation** with MIS (power heuristic) for the sun
-  (``directional``, delta: NEE only), the sky (``constant``/``envmap``) and area
-  lights; Henyey–Greenstein phase (Mitsuba's ``hg``); any Mitsuba BSDF on surfaces;
-* ``max_depth`` and Russian roulette; a camera anywhere (inside or above the fog).
+  (``directional``), the sky (``constant``/``envmap``) and area lights;
+  Henyey–Greenstein phase; any Mitsuba BSDF; ``max_depth`` and Russian roulette;
+* **per-pixel moments** (:meth:`render_moments`): sums and sums of squares of
+  every per-sample part, so the driver writes means *and* standard errors.
 
-It writes AOVs that split the estimate so that exactly
-``L = Tsurface + single + multiple`` per sample (see ``fogref.render.render``):
-``T.*`` (closed-form camera-ray transmittance, noise-free), ``Tsurface.*``
-(paths whose first vertex is the first surface or the sky), ``single.*`` (direct
-light at the first medium vertex), ``multiple.*`` (the rest), and the G-buffer
-``distance``, ``P.*``, ``view.*``, ``hit``.
+The split of ``L`` (one accumulator, :class:`_Split`): a path whose camera ray
+reached the surface or the sky unscattered feeds ``surface`` (without the camera
+segment's weight) and ``attenuated_surface`` (with it); a path that scattered
+first feeds ``single`` (direct light at the first medium vertex) or
+``multiple``. Per sample ``L = attenuated_surface + single + multiple`` exactly.
 
-Only what the scene uses is traced: these are Python-level (trace-time)
-decisions: no sun/sky -> no emitter sampling code; one layer -> one inversion;
-albedo 0 -> no medium vertices (transmittance only); vacuum -> plain path tracing.
+Not supported: sensors other than ``perspective``; media attached to shapes
+(the fog fills all space outside surfaces); reconstruction filters other than
+box (a warning says so); differentiation.
 
-Not supported: media attached to shapes (interfaces); the fog fills all space
-outside surfaces.  Differentiation.
+References: Novák et al., "Monte Carlo methods for volumetric light transport
+simulation", Computer Graphics Forum 37(2), 2018 (free-flight sampling, spectral
+MIS); Mitsuba 3, ``src/python/python/ad/integrators/prb.py`` (loop structure).
 """
 
 from __future__ import annotations
 
 import drjit as dr
 import mitsuba as mi
+from mitsuba.ad.integrators.common import mis_weight
 
+from fogref import gbuffer
 from fogref.media import drjit_ops
 from fogref.media.single_scatter import sample_sun_single_scatter, sun_sampling_applies
 
-AOV_NAMES = (
-    ["T.R", "T.G", "T.B"]
-    + [f"{g}.{c}" for g in ("Tsurface", "single", "multiple") for c in "RGB"]
-    + ["distance", "P.X", "P.Y", "P.Z", "view.X", "view.Y", "view.Z", "hit"]
-)
+#: The integrator's AOVs (after R,G,B): the per-sample groups of the schema.
+AOV_NAMES = gbuffer.sample_channel_names()
 
 
 class _Opaque:
@@ -84,11 +88,22 @@ class _Opaque:
         return getattr(self._obj, name)
 
 
-def mis_weight(pdf_a, pdf_b):
-    """Power heuristic (beta = 2); 0 where undefined."""
-    a2, b2 = dr.square(pdf_a), dr.square(pdf_b)
-    w = a2 / (a2 + b2)
-    return dr.select(dr.isfinite(w), w, 0.0)
+class _Split:
+    """Where a contribution goes: ``surface`` (camera ray reached the surface or sky
+    unscattered; the camera segment's weight is applied at the end), ``single``
+    (direct light at the first medium vertex) or ``multiple``."""
+
+    DRJIT_STRUCT = {"surface": mi.Spectrum, "single": mi.Spectrum, "multiple": mi.Spectrum}
+
+    def __init__(self, surface=None, single=None, multiple=None):
+        self.surface = mi.Spectrum(0.0) if surface is None else surface
+        self.single = mi.Spectrum(0.0) if single is None else single
+        self.multiple = mi.Spectrum(0.0) if multiple is None else multiple
+
+    def add(self, c, medium_first, direct):
+        return _Split(self.surface + dr.select(medium_first, 0.0, c),
+                      self.single + dr.select(medium_first & direct, c, 0.0),
+                      self.multiple + dr.select(medium_first & ~direct, c, 0.0))
 
 
 def _spectrum(values):
@@ -101,17 +116,22 @@ class FogPathIntegrator(mi.SamplingIntegrator):
     def __init__(self, props):
         super().__init__(props)
         md = props.get("max_depth", 64)
+        if md < -1 or md == 0:
+            raise ValueError(f"fogpath: parameter 'max_depth': value {md} outside {{-1}} U [1, 2^31)")
         self.max_depth = 2**31 - 1 if md < 0 else int(md)
         self.rr_depth = int(props.get("rr_depth", 5))
+        if self.rr_depth < 1:
+            raise ValueError(f"fogpath: parameter 'rr_depth': value {self.rr_depth} outside [1, 2^31)")
         self.hide_emitters = bool(props.get("hide_emitters", False))
         self.sun_sampling = bool(props.get("sun_sampling", True))
         self.sun_sampling_layers = int(props.get("sun_sampling_layers", 1))
         self.aovs = bool(props.get("aovs", True))
+        self.pixel_exact = bool(props.get("pixel_exact", False))
 
     def aov_names(self):
         return list(AOV_NAMES) if self.aovs else []
 
-    # ---------------------------------------------------------------- helpers
+    # ------------------------------------------------------------ scene facts
     @staticmethod
     def _scene_fog(scene):
         """The physics object of the sensor's heightfog medium (None: vacuum)."""
@@ -124,18 +144,13 @@ class FogPathIntegrator(mi.SamplingIntegrator):
 
     @staticmethod
     def _scene_lights(scene):
-        has_delta = has_smooth = False
-        for e in scene.emitters():
-            if mi.has_flag(e.flags(), mi.EmitterFlags.Delta):
-                has_delta = True
-            else:
-                has_smooth = True
-        return has_delta, has_smooth
+        delta = [mi.has_flag(e.flags(), mi.EmitterFlags.Delta) for e in scene.emitters()]
+        return any(delta), not all(delta)
 
     @staticmethod
     def _scene_sun(scene):
-        """(emitter, direction toward the sun, RGB irradiance) of the only delta
-        directional emitter, or None (trace-time, Python floats)."""
+        """(direction toward the sun, RGB irradiance) of the only delta directional
+        emitter, or None (trace-time, Python floats)."""
         delta = [e for e in scene.emitters() if mi.has_flag(e.flags(), mi.EmitterFlags.Delta)]
         if len(delta) != 1:
             return None
@@ -147,12 +162,15 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         n = sum(x * x for x in w) ** 0.5
         E = p["irradiance.value"]
         E = [float(E[i][0]) for i in range(3)] if len(E) == 3 else [float(E[0][0])] * 3
-        weight = float(p["sampling_weight"]) if "sampling_weight" in p else 1.0
-        return delta[0], [x / n for x in w], E, weight
+        return [x / n for x in w], E
 
+    # --------------------------------------------------------------- pieces
     def _transmittance(self, fog, ops, o, d, t):
         tau = fog.optical_depth(ops, o, d, t)
         return _spectrum([dr.exp(-s * tau) for s in fog.sigma_t])
+
+    def _draw_channel(self, sampler, active=True):
+        return mi.UInt32(dr.minimum(mi.UInt32(sampler.next_1d(active) * 3.0), 2))
 
     def _free_flight(self, fog, ops, sampler, ray, t_surf, channel, active):
         """Sample the next medium event before ``t_surf``.
@@ -160,6 +178,8 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         Returns (is_medium, t, weight): weight multiplies the throughput, i.e.
         sigma_s T / pdf at a medium vertex and T / P(pass) otherwise.
         """
+        if fog is None:
+            return mi.Bool(False), dr.minimum(t_surf, drjit_ops().largest), mi.Spectrum(1.0)
         if not fog.scatters:  # absorption only: deterministic, exact
             t_end = dr.minimum(t_surf, ops.largest)
             return mi.Bool(False), t_end, self._transmittance(fog, ops, ray.o, ray.d, t_end)
@@ -176,201 +196,244 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         st = sigma_t * Tr
         pdf = dr.select(is_medium, (st[0] + st[1] + st[2]) / 3.0, (Tr[0] + Tr[1] + Tr[2]) / 3.0)
         num = dr.select(is_medium, sigma_t * _spectrum(fog.albedo) * Tr, Tr)
-        w = dr.select(pdf > 0, num / pdf, 0.0)
-        return is_medium, t_end, w
+        return is_medium, t_end, dr.select(pdf > 0, num / pdf, 0.0)
 
-    def _shadow_T(self, fog, ops, p, ds, is_infinite):
-        """Closed-form fog transmittance from p toward an emitter sample."""
-        if fog is None:
-            return mi.Spectrum(1.0)
-        dist = dr.select(is_infinite, ops.largest, ds.dist)
-        return self._transmittance(fog, ops, p, ds.d, dist)
+    def _direct(self, scene, fog, ops, sampler, it, ctx, scatter, active, has_smooth):
+        """Next-event estimation at ``it`` (a medium interaction when ``scatter`` is a
+        phase function, else a surface interaction and ``scatter`` its BSDF): emitter
+        sample times the closed-form fog transmittance and visibility, times the phase
+        function or BSDF, MIS-weighted against it for non-delta emitters.
+        Returns (contribution without the path throughput, is the sample delta)."""
+        in_medium = isinstance(scatter, mi.PhaseFunction)
+        ds, em_w = scene.sample_emitter_direction(it, sampler.next_2d(active), False, active)
+        infinite = mi.has_flag(ds.emitter.flags(), mi.EmitterFlags.Infinite)
+        shadow = mi.Ray3f(it.p, ds.d) if in_medium else it.spawn_ray(ds.d)
+        shadow.maxt = dr.select(infinite, dr.inf, ds.dist * (1.0 - 1e-4))
+        visible = active & (ds.pdf != 0) & ~scene.ray_test(shadow, active)
+        if in_medium:
+            f, f_pdf = scatter.eval_pdf(ctx, it, ds.d, active)
+        else:
+            f, f_pdf = scatter.eval_pdf(ctx, it, it.to_local(ds.d), active)
+        Tr = mi.Spectrum(1.0)
+        if fog is not None:
+            Tr = self._transmittance(fog, ops, it.p, ds.d, dr.select(infinite, ops.largest, ds.dist))
+        c = em_w * Tr * f
+        if has_smooth:  # MIS only matters for emitters a sampled direction can hit
+            c *= dr.select(ds.delta, 1.0, mis_weight(ds.pdf, f_pdf))
+        return dr.select(visible, c, 0.0), ds.delta
+
+    def _sun_single_scatter(self, scene, fog, ops, sampler, ray, D, channel, active):
+        """The sun's single scattering along the camera ray, sampled from its exact
+        integrand (None when it does not apply; then NEE covers it)."""
+        sun = self._scene_sun(scene) if (fog is not None and self.sun_sampling) else None
+        if sun is None or self.max_depth < 2 or not sun_sampling_applies(fog._obj, sun[0], self.sun_sampling_layers):
+            return None
+        w_sun, E_sun = sun
+        t_ss, w_ss = sample_sun_single_scatter(ops, fog._obj, ray.o, ray.d, D, w_sun, E_sun,
+                                               sampler.next_1d(active), channel)
+        vis = active & ~scene.ray_test(mi.Ray3f(ray.o + ray.d * t_ss, mi.Vector3f(*w_sun)), active)
+        return dr.select(vis, mi.Spectrum(*w_ss), 0.0)
 
     # ----------------------------------------------------------------- sample
     @dr.syntax
     def sample(self, scene, sampler, ray, medium=None, active=True):
-        fog = self._scene_fog(scene)
-        ops = drjit_ops()
+        fog, ops = self._scene_fog(scene), drjit_ops()
         has_delta, has_smooth = self._scene_lights(scene)
+        phase = scene.sensors()[0].get_medium().phase_function() if (fog is not None and fog.scatters) else None
+        phase_ctx, bsdf_ctx = mi.PhaseFunctionContext(sampler), mi.BSDFContext()
+        grey = fog is None or fog.sigma_t[0] == fog.sigma_t[1] == fog.sigma_t[2]
+
+        ray, active = mi.Ray3f(ray), mi.Bool(active)
+        split = _Split()
+        β, β_cam = mi.Spectrum(1.0), mi.Spectrum(1.0)  # β_cam: the camera segment of unscattered paths
+        depth, medium_first = mi.UInt32(0), mi.Bool(False)
+        prev_it, prev_pdf, prev_delta = dr.zeros(mi.Interaction3f), mi.Float(1.0), mi.Bool(True)
+        channel = self._draw_channel(sampler)
+
+        # ---------------- camera ray: G-buffer, T, the sun's single scattering ----------------
+        si = scene.ray_intersect(ray, active)
+        D0 = dr.select(si.is_valid(), si.t, ops.largest)
+        gbuf = self._gbuffer(fog, ops, ray, si) if self.aovs else None
+        sun_ss = self._sun_single_scatter(scene, fog, ops, sampler, ray, D0, channel, active)
+
         has_lights = has_delta or has_smooth
-        phase = None
-        if dr.hint(fog is not None and fog.scatters, mode="scalar"):
-            phase = scene.sensors()[0].get_medium().phase_function()
-        phase_ctx = mi.PhaseFunctionContext(sampler)
-        bsdf_ctx = mi.BSDFContext()
-
-        ray = mi.Ray3f(ray)
-        active = mi.Bool(active)
-        L = mi.Spectrum(0.0)
-        L_single = mi.Spectrum(0.0)
-        L_multi = mi.Spectrum(0.0)
-        β = mi.Spectrum(1.0)
-        depth = mi.UInt32(0)
-        medium_first = mi.Bool(False)
-        prev_it = dr.zeros(mi.Interaction3f)
-        prev_pdf = mi.Float(1.0)
-        prev_delta = mi.Bool(True)
-        channel = mi.UInt32(dr.minimum(mi.UInt32(sampler.next_1d() * 3.0), 2))
-
-        # G-buffer and noise-free camera transmittance
-        si0 = scene.ray_intersect(ray, active)
-        hit0 = si0.is_valid()
-        T_cam = mi.Spectrum(1.0)
-        track = self.aovs  # trace-time: split L into parts and write the G-buffer
-        if dr.hint(track and fog is not None, mode="scalar"):
-            T_cam = self._transmittance(fog, ops, ray.o, ray.d, dr.select(hit0, si0.t, ops.largest))
-        L_sun_ss = mi.Spectrum(0.0)
-        sun = self._scene_sun(scene) if (fog is not None and self.sun_sampling) else None
-        use_sun_ss = sun is not None and sun_sampling_applies(fog._obj, sun[1], self.sun_sampling_layers) and self.max_depth >= 2
-        if dr.hint(use_sun_ss, mode="scalar"):
-            _, w_sun, E_sun, _ = sun
-            D0 = dr.select(hit0, si0.t, ops.largest)
-            t_ss, w_ss = sample_sun_single_scatter(ops, fog._obj, ray.o, ray.d, D0, w_sun, E_sun,
-                                                   sampler.next_1d(active), channel)
-            p_ss = ray.o + ray.d * t_ss
-            vis_ss = active & ~scene.ray_test(mi.Ray3f(p_ss, mi.Vector3f(*w_sun)), active)
-            L_sun_ss = dr.select(vis_ss, mi.Spectrum(*w_ss), 0.0)
-        aov_g = []
-        if dr.hint(track, mode="scalar"):
-            aov_g = [dr.select(hit0, si0.t, 0.0)] + [dr.select(hit0, si0.p[i], 0.0) for i in range(3)] \
-                + [ray.d[i] for i in range(3)] + [dr.select(hit0, 1.0, 0.0)]
-
         active &= has_lights  # no emitter: nothing to trace beyond the G-buffer
-        si = si0  # the camera ray's intersection is reused by the first bounce
         while dr.hint(active, max_iterations=-1, label="fogpath"):
-            t_surf = dr.select(si.is_valid(), si.t, dr.inf)
-
-            # ---------------- free flight through the fog ----------------
-            is_medium = mi.Bool(False)
-            t_end = mi.Float(0.0)
-            if dr.hint(fog is not None, mode="scalar"):
-                is_medium, t_end, w_ff = self._free_flight(fog, ops, sampler, ray, t_surf, channel, active)
-                β[active] *= w_ff
+            # ---------------- free flight to a medium vertex or the surface ----------------
+            is_medium, t_end, w_ff = self._free_flight(fog, ops, sampler, ray, dr.select(si.is_valid(), si.t, dr.inf),
+                                                       channel, active)
+            passed = active & (depth == 0) & ~is_medium
             medium_first |= active & (depth == 0) & is_medium
-            is_surface = active & ~is_medium & si.is_valid()
-            escaped = active & ~is_medium & ~si.is_valid()
-            bucket_single = medium_first & (depth == 1)
+            β_cam[passed] = w_ff
+            β[active & ~passed] *= w_ff
+            if dr.hint(not grey, mode="scalar"):  # unbiased spectral MIS for the rest of an unscattered path
+                channel[passed] = self._draw_channel(sampler, passed)
+            is_surface, escaped = active & ~is_medium & si.is_valid(), active & ~is_medium & ~si.is_valid()
 
-            # ---------------- emission reached by the last sample ----------------
-            # (only non-delta emitters can be hit: skipped for a sun-only scene)
+            # ---------------- emission found by the last sampled direction ----------------
             if dr.hint(has_smooth, mode="scalar"):
-                em_active = (is_surface | escaped)
+                em = is_surface | escaped
                 if dr.hint(self.hide_emitters, mode="scalar"):
-                    em_active &= ~((depth == 0) & escaped)
+                    em &= ~((depth == 0) & escaped)
                 ds = mi.DirectionSample3f(scene, si=si, ref=prev_it)
-                em_pdf = scene.pdf_emitter_direction(prev_it, ds, em_active & ~prev_delta)
-                Le = β * mis_weight(prev_pdf, dr.select(prev_delta, 0.0, em_pdf)) * ds.emitter.eval(si, em_active)
-                Le = dr.select(em_active, Le, 0.0)
-                L += Le
-                if dr.hint(track, mode="scalar"):
-                    L_single += dr.select(bucket_single, Le, 0.0)
-                    L_multi += dr.select(medium_first & ~bucket_single, Le, 0.0)
+                em_pdf = scene.pdf_emitter_direction(prev_it, ds, em & ~prev_delta)
+                Le = β * mis_weight(prev_pdf, dr.select(prev_delta, 0.0, em_pdf)) * ds.emitter.eval(si, em)
+                split = split.add(dr.select(em, Le, 0.0), medium_first, depth == 1)
+            active &= ~escaped & (depth + 1 < self.max_depth)  # max_depth = 2: single scattering
 
-            # NEE and a new direction only where a longer path is allowed
-            # (Mitsuba's convention: max_depth = 2 is single scattering)
-            active &= ~escaped & (depth + 1 < self.max_depth)
-
-            # ---------------- medium vertex ----------------
+            # ---------------- medium vertex: light sample, phase sample ----------------
             p_med = ray.o + ray.d * dr.select(is_medium, t_end, 0.0)
-            med_active = active & is_medium
-            mei = dr.zeros(mi.MediumInteraction3f)
-            mei.p = p_med
-            mei.t = t_end
-            mei.wi = -ray.d
-            mei.sh_frame = mi.Frame3f(mei.wi)
-            mei.time = ray.time
-            mei.wavelengths = ray.wavelengths
+            med = active & is_medium
+            wo, pdf_next, delta_next, w_next, origin = mi.Vector3f(ray.d), mi.Float(1.0), mi.Bool(False), \
+                mi.Spectrum(1.0), mi.Point3f(p_med)
+            if dr.hint(phase is not None and has_lights, mode="scalar"):
+                mei = self._medium_interaction(ray, p_med, t_end)
+                Ld, delta = self._direct(scene, fog, ops, sampler, mei, phase_ctx, phase, med, has_smooth)
+                if dr.hint(sun_ss is not None, mode="scalar"):  # the sun at depth 0 is sampled above
+                    Ld = dr.select(delta & (depth == 0), 0.0, Ld)
+                split = split.add(β * Ld, medium_first, depth == 0)
+                wo_m, w_m, pdf_m = phase.sample(phase_ctx, mei, sampler.next_1d(med), sampler.next_2d(med), med)
+                wo[med], pdf_next[med], w_next[med] = wo_m, pdf_m, w_m
 
-            wo_next = mi.Vector3f(ray.d)
-            pdf_next = mi.Float(1.0)
-            delta_next = mi.Bool(False)
-            w_next = mi.Spectrum(1.0)
-            new_origin = mi.Point3f(p_med)
-
-            if dr.hint(phase is not None, mode="scalar"):
-                if dr.hint(has_lights, mode="scalar"):
-                    it_m = dr.zeros(mi.Interaction3f)
-                    it_m.p = p_med
-                    it_m.time = ray.time
-                    it_m.wavelengths = ray.wavelengths
-                    ds_m, em_w = scene.sample_emitter_direction(it_m, sampler.next_2d(med_active), False, med_active)
-                    inf_m = mi.has_flag(ds_m.emitter.flags(), mi.EmitterFlags.Infinite)
-                    sray = mi.Ray3f(p_med, ds_m.d)
-                    sray.maxt = dr.select(inf_m, dr.inf, ds_m.dist * (1.0 - 1e-4))
-                    vis = med_active & (ds_m.pdf != 0) & ~scene.ray_test(sray, med_active)
-                    ph_val, ph_pdf = phase.eval_pdf(phase_ctx, mei, ds_m.d, med_active)
-                    Ld = β * em_w * self._shadow_T(fog, ops, p_med, ds_m, inf_m) * ph_val
-                    if dr.hint(has_smooth, mode="scalar"):  # MIS only matters for hittable emitters
-                        Ld *= dr.select(ds_m.delta, 1.0, mis_weight(ds_m.pdf, ph_pdf))
-                    Ld = dr.select(vis, Ld, 0.0)
-                    if dr.hint(use_sun_ss, mode="scalar"):  # the sun's share at depth 0 is estimated above
-                        Ld = dr.select(ds_m.delta & (depth == 0), 0.0, Ld)
-                    L += Ld
-                    if dr.hint(track, mode="scalar"):
-                        L_single += dr.select(depth == 0, Ld, 0.0)
-                        L_multi += dr.select(depth > 0, Ld, 0.0)
-                wo_m, ph_w, ph_pdf_s = phase.sample(phase_ctx, mei, sampler.next_1d(med_active),
-                                                    sampler.next_2d(med_active), med_active)
-                wo_next[med_active] = wo_m
-                pdf_next[med_active] = ph_pdf_s
-                delta_next[med_active] = False
-                w_next[med_active] = ph_w
-            # ---------------- surface vertex ----------------
-            surf_active = active & is_surface
+            # ---------------- surface vertex: light sample, BSDF sample ----------------
+            surf = active & is_surface
             bsdf = si.bsdf(ray)
             if dr.hint(has_lights, mode="scalar"):
-                em_ok = surf_active & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-                ds_s, em_ws = scene.sample_emitter_direction(si, sampler.next_2d(em_ok), False, em_ok)
-                inf_s = mi.has_flag(ds_s.emitter.flags(), mi.EmitterFlags.Infinite)
-                sray_s = si.spawn_ray(ds_s.d)
-                sray_s.maxt = dr.select(inf_s, dr.inf, ds_s.dist * (1.0 - 1e-4))
-                vis_s = em_ok & (ds_s.pdf != 0) & ~scene.ray_test(sray_s, em_ok)
-                wo_l = si.to_local(ds_s.d)
-                b_val, b_pdf = bsdf.eval_pdf(bsdf_ctx, si, wo_l, em_ok)
-                Ls = β * em_ws * self._shadow_T(fog, ops, si.p, ds_s, inf_s) * b_val
-                if dr.hint(has_smooth, mode="scalar"):
-                    Ls *= dr.select(ds_s.delta, 1.0, mis_weight(ds_s.pdf, b_pdf))
-                Ls = dr.select(vis_s, Ls, 0.0)
-                L += Ls
-                if dr.hint(track, mode="scalar"):
-                    L_multi += dr.select(medium_first, Ls, 0.0)
-            bs, b_w = bsdf.sample(bsdf_ctx, si, sampler.next_1d(surf_active), sampler.next_2d(surf_active),
-                                  surf_active)
-            wo_next[surf_active] = si.to_world(bs.wo)
-            pdf_next[surf_active] = bs.pdf
-            delta_next[surf_active] = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
-            w_next[surf_active] = b_w
-            new_origin[surf_active] = si.p
+                smooth = surf & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
+                Ls, _ = self._direct(scene, fog, ops, sampler, si, bsdf_ctx, bsdf, smooth, has_smooth)
+                split = split.add(β * Ls, medium_first, mi.Bool(False))
+            bs, w_b = bsdf.sample(bsdf_ctx, si, sampler.next_1d(surf), sampler.next_2d(surf), surf)
+            wo[surf], pdf_next[surf], w_next[surf], origin[surf] = si.to_world(bs.wo), bs.pdf, w_b, si.p
+            delta_next[surf] = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
 
-            # ---------------- continue the path ----------------
-            prev_it = dr.zeros(mi.Interaction3f)
-            prev_it.p = dr.select(surf_active, si.p, p_med)
-            prev_it.n = dr.select(surf_active, si.n, 0.0)
-            prev_it.t = dr.select(surf_active, si.t, 0.0)
-            prev_it.time = ray.time
-            prev_it.wavelengths = ray.wavelengths
-            prev_pdf = pdf_next
-            prev_delta = delta_next
+            # ---------------- next segment, Russian roulette ----------------
+            prev_it = self._vertex(ray, si, surf, p_med)
+            prev_pdf, prev_delta = pdf_next, delta_next
             β *= w_next
-            ray_s = si.spawn_ray(wo_next)
-            ray = dr.select(surf_active, ray_s, mi.Ray3f(new_origin, wo_next, ray.time, ray.wavelengths))
+            ray = dr.select(surf, si.spawn_ray(wo), mi.Ray3f(origin, wo, ray.time, ray.wavelengths))
             depth[active] += 1
-
-            β_max = dr.max(β)
-            active &= β_max > 0
+            active &= dr.max(β) > 0
             rr = active & (depth >= self.rr_depth)
-            q = dr.minimum(β_max, 0.95)
+            q = dr.minimum(dr.max(β), 0.95)
             β[rr] *= dr.rcp(q)
             active &= ~rr | (sampler.next_1d(rr) < q)
             si = scene.ray_intersect(ray, active)
 
-        L += L_sun_ss
-        L_single += L_sun_ss
-        aovs = []
-        if dr.hint(track, mode="scalar"):
-            L_tsurf = L - L_single - L_multi
-            aovs = [T_cam[0], T_cam[1], T_cam[2]]
-            for part in (L_tsurf, L_single, L_multi):
-                aovs += [part[0], part[1], part[2]]
-            aovs += aov_g
-        return L, mi.Bool(True), aovs
+        if dr.hint(sun_ss is not None, mode="scalar"):
+            split = _Split(split.surface, split.single + sun_ss, split.multiple)
+        return self._outputs(split, β_cam, medium_first, gbuf)
+
+    # ------------------------------------------------------------- outputs
+    @staticmethod
+    def _medium_interaction(ray, p, t):
+        mei = dr.zeros(mi.MediumInteraction3f)
+        mei.p, mei.t, mei.wi = p, t, -ray.d
+        mei.sh_frame = mi.Frame3f(mei.wi)
+        mei.time, mei.wavelengths = ray.time, ray.wavelengths
+        return mei
+
+    @staticmethod
+    def _vertex(ray, si, surf, p_med):
+        """The interaction a sampled direction leaves from (for MIS on emitters it hits)."""
+        it = dr.zeros(mi.Interaction3f)
+        it.p = dr.select(surf, si.p, p_med)
+        it.n = dr.select(surf, si.n, 0.0)
+        it.t = dr.select(surf, si.t, 0.0)
+        it.time, it.wavelengths = ray.time, ray.wavelengths
+        return it
+
+    def _gbuffer(self, fog, ops, ray, si):
+        """T, coverage-independent G-buffer of the camera ray (closed form, per sample)."""
+        hit = si.is_valid()
+        T = mi.Spectrum(1.0)
+        if fog is not None:
+            T = self._transmittance(fog, ops, ray.o, ray.d, dr.select(hit, si.t, ops.largest))
+        return {"T": [T[0], T[1], T[2]], "distance": [dr.select(hit, si.t, 0.0)],
+                "P": [dr.select(hit, si.p[i], 0.0) for i in range(3)], "view": [ray.d[i] for i in range(3)],
+                "hit": [dr.select(hit, 1.0, 0.0)]}
+
+    def _outputs(self, split, β_cam, medium_first, gbuf):
+        """(L, valid, AOVs) in the order of :data:`AOV_NAMES`."""
+        att = β_cam * split.surface
+        L = att + split.single + split.multiple
+        if gbuf is None:
+            return L, mi.Bool(True), []
+        rgb = lambda s: [s[0], s[1], s[2]]  # noqa: E731
+        parts = {"attenuated_surface": rgb(att), "inscatter": rgb(split.single + split.multiple),
+                 "single": rgb(split.single), "multiple": rgb(split.multiple), "surface": rgb(split.surface),
+                 "surface_coverage": [dr.select(medium_first, 0.0, 1.0)], **gbuf}
+        return L, mi.Bool(True), [c for g in gbuffer.SAMPLE_GROUPS for c in parts[g]]
+
+    # ------------------------------------------------------------- render
+    def render_moments(self, scene, sensor=0, seed=0, spp=1, pixel_exact=None):
+        """Per-pixel sums of every per-sample output and of the squares of the parts.
+
+        Returns ``(sums, squares)``: ``TensorXf`` of shape ``(H, W, 3 + len(AOV_NAMES))``
+        (R,G,B then :data:`AOV_NAMES`) and ``(H, W, 3 * len(gbuffer.SQUARED_GROUPS))``,
+        summed over the ``spp`` samples of each pixel.  With ``aovs`` off: R,G,B and
+        their squares only.
+        ``pixel_exact`` (default: the plugin's property) puts every sample at the
+        pixel centre; otherwise samples are uniform in the pixel (box filter).
+        Camera rays start at the camera and have no far limit.
+        """
+        pixel_exact = self.pixel_exact if pixel_exact is None else bool(pixel_exact)
+        sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
+        if not str(sensor).startswith("PerspectiveCamera"):
+            raise ValueError(f"fogpath renders from a 'perspective' sensor only, not {str(sensor).split('[')[0]}")
+        film = sensor.film()
+        if not film.rfilter().is_box_filter():
+            mi.Log(mi.LogLevel.Warn, "fogpath: the film's reconstruction filter is replaced by a box filter "
+                   "(each sample counts in its own pixel)")
+        size = film.crop_size()
+        n_pix, spp = int(dr.prod(size)), int(spp)
+        sampler = sensor.sampler().clone()
+        sampler.set_sample_count(spp)
+        sampler.set_samples_per_wavefront(spp)
+        sampler.seed(int(seed), n_pix * spp)
+
+        idx = dr.arange(mi.UInt32, n_pix * spp) // dr.opaque(mi.UInt32, spp)
+        pos = mi.Vector2u(0)
+        pos.y = idx // size[0]
+        pos.x = idx - pos.y * size[0]
+        pos_f = mi.Vector2f(pos) + (mi.Vector2f(0.5) if pixel_exact else sampler.next_2d())
+        ray, weight = sensor.sample_ray(sensor.shutter_open(), 0.5, pos_f / mi.ScalarVector2f(size),
+                                        mi.Point2f(0.5))
+        ray = mi.Ray3f(sensor.world_transform().translation(), ray.d, ray.time, ray.wavelengths)  # no clip planes
+        L, _, aovs = self.sample(scene, sampler, ray, None, True)
+        L = L * weight
+        values = [L[0], L[1], L[2]] + list(aovs)
+        squared = values[:3]
+        if self.aovs:
+            by_name = dict(zip(["R", "G", "B"] + AOV_NAMES, values))
+            squared = [by_name[c] for g in gbuffer.SQUARED_GROUPS for c in gbuffer.channel_names(g)]
+        lanes = dr.zeros(mi.Float, n_pix * spp)
+
+        def per_pixel(vals):
+            k = len(vals)
+            out = dr.zeros(mi.Float, n_pix * k)
+            pix = dr.arange(mi.UInt32, n_pix)
+            for i, v in enumerate(vals):
+                dr.scatter(out, dr.block_sum(lanes + v, spp), pix * k + i)  # lanes +: broadcast literals
+            return mi.TensorXf(out, shape=(size[1], size[0], k))
+
+        sums = per_pixel(values)
+        squares = per_pixel([v * v for v in squared])
+        dr.eval(sums, squares)
+        return sums, squares
+
+    def render(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
+        """``mi.render``: the per-pixel mean of R,G,B and the AOVs (box filter, or
+        pixel-exact with ``pixel_exact``), a ``TensorXf`` ``(H, W, 3 + len(aov_names()))``.
+        The ``surface.*`` AOVs are per-sample means here;
+        :func:`fogref.gbuffer.moments_to_channels` turns them into the EXR's ratio estimator."""
+        sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
+        spp = int(spp) if int(spp) > 0 else sensor.sampler().sample_count()
+        sums, _ = self.render_moments(scene, sensor, seed, spp)
+        return sums / spp
+
+
+def register() -> None:
+    mi.register_integrator("fogpath", lambda props: FogPathIntegrator(props))
+
+
+__all__ = ["AOV_NAMES", "FogPathIntegrator", "register"]

@@ -17,6 +17,9 @@ def base_scene(mi, integrator, medium, res=(24, 16), sun=True, sky=True, occlude
         "integrator": integrator,
         "sensor": {
             "type": "perspective", "fov": fov, "fov_axis": "x",
+            # fogpath's camera rays start at the camera and have no far limit; give
+            # stock Mitsuba clip planes that make the same difference negligible
+            "near_clip": 1e-5, "far_clip": 1e7,
             "to_world": T.look_at(origin=[0, 4, -20], target=[0, 6, 30], up=[0, 1, 0]),
             "film": {"type": "hdrfilm", "width": res[0], "height": res[1], "rfilter": {"type": "box"}},
             "medium": medium,

@@ -1,152 +1,271 @@
-"""Render a fogref scene to a ground-truth EXR (see :mod:`fogref.exrio` for channels).
+"""Render a fogref scene to a ground-truth EXR (the layout of :mod:`fogref.gbuffer`).
 
-Rendering runs in passes of at most ``pass_spp`` samples per pixel; each pass has
-its own seed derived from ``seed``, so the same ``(seed, spp, pass_spp)`` gives
-identical pixels.  After every pass the running sum is checkpointed atomically
-next to the output (``<out>.partial.npz``); an interrupted run started again with
-the same arguments resumes from it.
+The driver asks ``fogpath`` for per-pixel sums and sums of squares of every
+per-sample part (:meth:`FogPathIntegrator.render_moments`), in as few passes as
+the back end's memory allows, and turns them into means and standard errors.
+
+* **Pixel-exact by default**: every sample of a pixel goes through its centre, so
+  the G-buffer and ``T`` are exact and a model with exact extinction matches ``T``
+  at every pixel, silhouettes included.  ``pixel_filter="box"`` spreads samples
+  over the pixel (anti-aliased pictures).
+* **Deterministic**: pass ``k`` has its own seed derived from ``seed``; the same
+  ``(scene, overrides, spp, seed, pixel_filter, variant)`` gives identical pixels.
+* **Resumable**: the running sums are checkpointed atomically next to the output
+  (``<out>.partial.npz``) every ``checkpoint_seconds`` and on Ctrl-C; a rerun resumes
+  only from a checkpoint whose key (the scene file's content hash, overrides,
+  resolution, spp, seed, filter, variant, fogref version) matches.
+* **Nothing lost**: the output must be a ``.exr`` that is neither the scene nor an
+  existing non-EXR file; its folder is checked writable before rendering; a truth
+  with a non-finite value is refused, with the pixels named.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
+import os
+import signal
 import time
 from pathlib import Path
 
 import numpy as np
 
+from fogref import gbuffer
 from fogref._version import __version__
 from fogref.atomic import atomic_write, savez_atomic
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 
-PASS_SPP = 16
+#: Lanes (pixels x samples) per pass: bounded so one pass fits the back end's memory.
+MAX_LANES = {"llvm": 1 << 21, "cuda": 1 << 25}
+PIXEL_FILTERS = ("centre", "box")
+#: Bytes per pixel the driver holds: float64 sums of 30 + 21 channels, twice
+#: (running sum and the pass being added), plus the EXR's float32 channels.
+_HOST_BYTES_PER_PIXEL = (30 + 21) * 8 * 2 + 51 * 4
 
 
 def pass_seed(seed: int, k: int) -> int:
-    """Seed of pass k: a 32-bit mix of the user's seed and the pass index."""
+    """Seed of pass k: a 32-bit mix of the user's seed and the pass index.
+
+    >>> pass_seed(0, 0) != pass_seed(0, 1)
+    True
+    """
     h = hashlib.blake2b(f"{seed}:{k}".encode(), digest_size=4).digest()
     return int.from_bytes(h, "little")
 
 
-def _atomic_savez(path: Path, **arrays):
-    """The checkpoint writer (a seam: the resume test interrupts the run here)."""
-    savez_atomic(path, **arrays)
+def pass_sizes(n_pixels: int, spp: int, max_lanes: int) -> list[int]:
+    """Samples per pixel of each pass: as few passes as ``max_lanes`` allows.
 
-
-def split_channels(img: np.ndarray, names: list[str]) -> dict:
-    """Turn the integrator's mean tensor into the EXR's channel dict.
-
-    ``surface = Tsurface / T`` (transmittance-weighted mean surface radiance per
-    pixel; 0 where T = 0), so that ``R,G,B = T * surface + inscatter`` holds per
-    pixel to float precision, and ``inscatter = single + multiple``.
+    >>> pass_sizes(100, 64, 10_000)
+    [64]
+    >>> pass_sizes(1000, 64, 10_000)
+    [10, 10, 10, 10, 10, 10, 4]
     """
-    c = {n: img[..., i] for i, n in enumerate(names)}
-    out = {}
-    for ch in "RGB":
-        T = c[f"T.{ch}"]
-        ts = c[f"Tsurface.{ch}"]
-        single, multiple = c[f"single.{ch}"], c[f"multiple.{ch}"]
-        out[ch] = c[ch]
-        out[f"T.{ch}"] = T
-        out[f"surface.{ch}"] = np.where(T > 0, ts / np.where(T > 0, T, 1.0), 0.0)
-        out[f"single.{ch}"] = single
-        out[f"multiple.{ch}"] = multiple
-        out[f"inscatter.{ch}"] = single + multiple
-    for n in ("distance", "P.X", "P.Y", "P.Z", "view.X", "view.Y", "view.Z", "hit"):
-        out[n] = c[n]
-    return {k: np.nan_to_num(v.astype(np.float32), nan=0.0, posinf=0.0, neginf=0.0) for k, v in out.items()}
+    per = max(1, min(spp, max_lanes // max(n_pixels, 1)))
+    return [min(per, spp - s) for s in range(0, spp, per)]
 
 
-def tonemap_png(rgb: np.ndarray, path: Path, exposure: float | None = None) -> float:
-    """Write an 8-bit sRGB preview: exposure (default: mean luminance -> 0.18),
-    then the sRGB encoding (colour-science), clipped.  Returns the exposure used."""
-    import colour
-    import matplotlib
+def file_sha256(path) -> str:
+    """SHA-256 of a file's bytes (hex)."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    lum = rgb @ np.array([0.2126, 0.7152, 0.0722])
-    if exposure is None:
-        m = float(np.mean(lum))
-        exposure = 0.18 / m if m > 0 else 1.0
-    img = np.clip(colour.cctf_encoding(np.clip(rgb * exposure, 0, None), function="sRGB"), 0, 1)
-    atomic_write(path, lambda tmp: plt.imsave(tmp, img, format="png"))
-    return exposure
+def _physical_memory() -> int:
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return 1 << 40
+
+
+def check_output(out: Path, scene_path: Path, png: bool) -> None:
+    """Refuse outputs that would overwrite an input or cannot be written, before rendering."""
+    if out.suffix.lower() != ".exr":
+        raise FogrefError(f"--out {out}: the ground truth is an EXR; give a path ending in .exr "
+                          f"(the PNG preview is written beside it)")
+    outputs = [out] + ([out.with_suffix(".png")] if png else [])
+    for o in outputs:
+        if o.exists() and o.resolve() == scene_path.resolve():
+            raise FogrefError(f"--out {out}: would overwrite the scene file {scene_path}")
+        if o.is_dir():
+            raise FogrefError(f"--out {out}: {o} is a directory")
+    if out.exists() and not _is_exr(out):
+        raise FogrefError(f"--out {out}: exists and is not an EXR; refusing to overwrite it")
+    folder = out.parent
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise FogrefError(f"--out {out}: cannot create the folder {folder} ({e.strerror})") from None
+    try:
+        atomic_write(folder / f".{out.name}.writable", lambda tmp: Path(tmp).write_bytes(b"x"))
+        (folder / f".{out.name}.writable").unlink()
+    except OSError as e:
+        raise FogrefError(f"--out {out}: the folder {folder} is not writable ({e.strerror})") from None
+
+
+def _is_exr(path: Path) -> bool:
+    with open(path, "rb") as f:
+        return f.read(4) == b"\x76\x2f\x31\x01"
+
+
+class _Interrupt:
+    """First Ctrl-C: stop after the current pass (checkpointed); second: stop now."""
+
+    def __init__(self):
+        self.requested = False
+        self._previous = None
+
+    def __enter__(self):
+        try:
+            self._previous = signal.signal(signal.SIGINT, self._handle)
+        except ValueError:  # not the main thread: leave Ctrl-C alone
+            self._previous = None
+        return self
+
+    def _handle(self, signum, frame):
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+
+    def __exit__(self, *exc):
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)
+        return False
 
 
 def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = None,
-           overrides: dict | None = None, pass_spp: int = PASS_SPP, progress: bool = True,
-           resume: bool = True, png: bool = True) -> Path:
+           overrides: dict | None = None, progress: bool = True, resume: bool = True, png: bool = True,
+           pixel_filter: str = "centre", checkpoint_seconds: float = 60.0) -> Path:
     """Render ``scene_path`` with ``spp`` samples per pixel into the EXR ``out``.
 
-    ``overrides``: XML ``$name`` defaults to replace (e.g. ``{"res": 64}``).
-    Returns the EXR path.  Raises FogrefError/ParameterError for bad input.
-    """
-    from fogref.render.variant import set_variant
+    Parameters
+    ----------
+    scene_path:   a fogref XML scene (``fogpath`` integrator, ``heightfog`` medium).
+    out:          the output ``.exr``; a PNG preview goes beside it when ``png``.
+    spp:          samples per pixel, [1, 2^20].  seed: [0, 2^31).
+    variant:      Mitsuba variant (default ``llvm_ad_rgb``; ``cuda_ad_rgb`` on a GPU).
+    overrides:    XML ``$name`` defaults to replace, e.g. ``{"res": 64}``.
+    pixel_filter: ``"centre"`` (pixel-exact, the default for truths) or ``"box"``.
+    checkpoint_seconds: time between checkpoints (and one on Ctrl-C).
 
+    Returns the EXR path.  Raises :class:`FogrefError` (or its ParameterError) for bad input.
+    """
     if not isinstance(spp, int) or not 1 <= spp <= 1 << 20:
         raise FogrefError(f"--spp: {spp} outside [1, 1048576]")
     if not isinstance(seed, int) or not 0 <= seed < 1 << 31:
         raise FogrefError(f"--seed: {seed} outside [0, 2^31)")
+    if pixel_filter not in PIXEL_FILTERS:
+        raise FogrefError(f"--pixel-filter: '{pixel_filter}' is not one of {PIXEL_FILTERS}")
+    scene_path, out = Path(scene_path), Path(out)
+    check_output(out, scene_path, png)
+
+    from fogref.render.scene import load_scene
+    from fogref.render.variant import set_variant
+
     variant = set_variant(variant)
     import drjit as dr
     import mitsuba as mi
 
-    from fogref.render.scene import load_scene
-
     scene, desc = load_scene(scene_path, overrides)
     integrator = scene.integrator()
-    names = ["R", "G", "B"] + list(integrator.aov_names())
-    if "T.R" not in names:
-        raise FogrefError(f"{scene_path}: the scene's integrator must be 'fogpath' to write a ground-truth EXR")
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    if not hasattr(integrator, "render_moments"):
+        raise FogrefError(f"{scene_path}: the scene's integrator must be 'fogpath' to write a ground truth")
+    integrator.aovs = True
+    W, H = (int(x) for x in scene.sensors()[0].film().crop_size())
+    need = W * H * _HOST_BYTES_PER_PIXEL
+    if need > 0.5 * _physical_memory():
+        raise FogrefError(f"{scene_path}: {W}x{H} pixels need about {need / 2**30:.1f} GiB of memory for the "
+                          f"ground truth; this machine has {_physical_memory() / 2**30:.1f} GiB (limit: half)")
+    passes = pass_sizes(W * H, spp, MAX_LANES["cuda" if variant.startswith("cuda") else "llvm"])
+    scene_sha = file_sha256(scene_path)
+    key = json.dumps({"scene_sha256": scene_sha, "overrides": {k: str(v) for k, v in (overrides or {}).items()},
+                      "size": [W, H], "spp": spp, "seed": seed, "variant": variant, "passes": passes,
+                      "pixel_filter": pixel_filter, "version": __version__}, sort_keys=True)
     ckpt = out.with_name(out.name + ".partial.npz")
-    key = json.dumps({"scene": str(Path(scene_path).resolve()), "spp": spp, "seed": seed, "variant": variant,
-                      "overrides": overrides or {}, "pass_spp": pass_spp}, sort_keys=True)
-    passes = [min(pass_spp, spp - s) for s in range(0, spp, pass_spp)]
-    acc, done = None, 0
-    if resume and ckpt.exists():
-        try:
-            z = np.load(ckpt, allow_pickle=False)
-            if str(z["key"]) == key:
-                acc, done = z["acc"], int(z["done"])
-        except Exception:
-            acc, done = None, 0
+    for stale in out.parent.glob(ckpt.name + ".*.tmp*"):  # a writer killed mid-write
+        stale.unlink(missing_ok=True)
+    sums, squares, done = _resume(ckpt, key) if resume else (None, None, 0)
+
     from tqdm import tqdm
 
-    t0 = time.perf_counter()
-    timings = []
-    with tqdm(total=spp, initial=sum(passes[:done]), unit="spp", disable=not progress,
-              desc=Path(scene_path).name) as bar:
-        for k in range(done, len(passes)):
-            ts = time.perf_counter()
-            img = mi.render(scene, spp=passes[k], seed=pass_seed(seed, k))
-            part = np.array(img, dtype=np.float64) * passes[k]
-            dr.sync_thread()
-            timings.append(time.perf_counter() - ts)
-            acc = part if acc is None else acc + part
-            _atomic_savez(ckpt, acc=acc, done=np.array(k + 1), key=np.array(key))
-            bar.update(passes[k])
-    mean = acc / spp
-    channels = split_channels(mean, names)
+    t0, last_ckpt, timings = time.perf_counter(), time.perf_counter(), []
+    with _Interrupt() as stop, tqdm(total=spp, initial=sum(passes[:done]), unit="spp", disable=not progress,
+                                    desc=scene_path.name) as bar:
+        try:
+            for k in range(done, len(passes)):
+                ts = time.perf_counter()
+                s, q = integrator.render_moments(scene, 0, pass_seed(seed, k), passes[k],
+                                                 pixel_exact=pixel_filter == "centre")
+                s, q = np.asarray(s, dtype=np.float64), np.asarray(q, dtype=np.float64)
+                dr.sync_thread()
+                timings.append(time.perf_counter() - ts)
+                sums, squares = (s, q) if sums is None else (sums + s, squares + q)
+                done = k + 1
+                bar.update(passes[k])
+                if stop.requested:
+                    raise KeyboardInterrupt
+                if done < len(passes) and time.perf_counter() - last_ckpt > checkpoint_seconds:
+                    savez_atomic(ckpt, sums=sums, squares=squares, done=np.array(done), key=np.array(key))
+                    last_ckpt = time.perf_counter()
+        except (KeyboardInterrupt, RuntimeError) as e:
+            if isinstance(e, RuntimeError) and "KeyboardInterrupt" not in str(e):
+                raise
+            if sums is not None and done < len(passes):
+                savez_atomic(ckpt, sums=sums, squares=squares, done=np.array(done), key=np.array(key))
+            raise KeyboardInterrupt from None
+
+    channels = _channels(sums, squares, spp)
+    bad = gbuffer.nonfinite_report(channels)
+    if bad:
+        raise FogrefError(f"{scene_path}: the render produced {bad}; no ground truth written "
+                          f"(please report this with the scene and the command)")
     attrs = {
+        "fogref.schema": str(gbuffer.SCHEMA_VERSION),
         "fogref.params": desc,
         "fogref.spp": str(spp),
         "fogref.seed": str(seed),
+        "fogref.pixel_filter": pixel_filter,
+        "fogref.passes": passes,
         "fogref.variant": variant,
         "fogref.version": __version__,
         "fogref.mitsuba": mi.__version__,
         "fogref.scene": str(scene_path),
-        "fogref.overrides": overrides or {},
+        "fogref.scene_sha256": scene_sha,
+        "fogref.overrides": {k: str(v) for k, v in (overrides or {}).items()},
         "fogref.render_seconds": {"total": time.perf_counter() - t0, "passes": timings},
     }
     write_exr(out, channels, attrs)
     if png:
-        rgb = np.stack([channels[c] for c in "RGB"], axis=-1)
-        tonemap_png(rgb, out.with_suffix(".png"))
+        from fogref.display import write_preview
+
+        write_preview(np.stack([channels[c] for c in "RGB"], axis=-1), out.with_suffix(".png"))
     ckpt.unlink(missing_ok=True)
     return out
+
+
+def _channels(sums: np.ndarray, squares: np.ndarray, spp: int) -> dict:
+    """EXR channels from the integrator's per-pixel sums (see :func:`gbuffer.moments_to_channels`)."""
+    names = ["final"] + list(gbuffer.SAMPLE_GROUPS)
+    by_group, i = {}, 0
+    for g in names:
+        k = len(gbuffer.channel_names(g))
+        by_group[g] = sums[..., i:i + k]
+        i += k
+    sq, i = {}, 0
+    for g in gbuffer.SQUARED_GROUPS:
+        sq[g] = squares[..., i:i + 3]
+        i += 3
+    return gbuffer.moments_to_channels(by_group, sq, spp)
+
+
+def _resume(ckpt: Path, key: str):
+    """(sums, squares, passes done) from a checkpoint whose key matches, else nothing."""
+    if not ckpt.exists():
+        return None, None, 0
+    try:
+        with np.load(ckpt, allow_pickle=False) as z:
+            if str(z["key"]) == key:
+                return z["sums"], z["squares"], int(z["done"])
+    except (OSError, ValueError, KeyError):
+        pass
+    return None, None, 0

@@ -72,7 +72,9 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
     except ET.ParseError as e:
         raise FogrefError(f"{path}: malformed XML ({e})") from None
     defaults = {d.get("name"): d.get("value") for d in root.iter("default")}
+    check_overrides(path, defaults, overrides)
     defaults.update({k: str(v) for k, v in (overrides or {}).items()})
+    check_supported(path, root)
     desc: dict = {"scene": path.name, "medium": None, "sun": None, "sky": None, "camera": None,
                   "integrator": None}
     integ = root.find("integrator")
@@ -86,15 +88,93 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
     for em in root.iter("emitter"):
         t, p = em.get("type"), _params(em, defaults)
         if t == "directional":
-            d = p.get("direction", [0, 0, 1])
+            d = p.get("direction")
+            if d is None:  # oriented by to_world (the shipped scenes: $sun_elevation, $sun_azimuth)
+                from fogref.render.sun import sun_direction_from_to_world
+
+                tw = em.find("transform[@name='to_world']")
+                d = [0.0, 0.0, 1.0] if tw is None else [
+                    -x for x in sun_direction_from_to_world(tw, lambda s: _subst(s, defaults), str(path))]
             n = math.sqrt(sum(x * x for x in d)) or 1.0
             E = p.get("irradiance", [1.0, 1.0, 1.0])
             if any((not math.isfinite(x)) or x < 0 for x in E):
                 raise ParameterError(str(path), "sun.irradiance", f"values {E} must be finite and >= 0")
             desc["sun"] = {"direction": [-x / n for x in d], "irradiance": E}
         elif t in ("constant", "envmap"):
+            radiance = p.get("radiance")
+            if isinstance(radiance, list) and any((not math.isfinite(x)) or x < 0 for x in radiance):
+                raise ParameterError(str(path), "sky.radiance", f"values {radiance} must be finite and >= 0")
             desc["sky"] = {"type": t, **{k: v for k, v in p.items() if not isinstance(v, dict)}}
     return desc
+
+
+#: Emitters the renderer and the physical description (sun + sky) both handle.
+SUPPORTED_EMITTERS = {"directional": "the sun", "constant": "a uniform sky", "envmap": "an environment-map sky"}
+#: Integer $defaults that size the image.
+_RESOLUTION = ("res", "resy")
+
+
+def check_overrides(path: Path, defaults: dict, overrides: dict | None) -> None:
+    """Refuse ``--set`` names the scene does not declare and values that don't fit them.
+
+    A name must be one of the scene's ``<default>``s (with a "did you mean");
+    a value replacing a numeric default must be numeric (as many numbers as the
+    default has); ``res``/``resy`` must be integers in [1, 65536].
+    """
+    import difflib
+
+    for name, value in (overrides or {}).items():
+        if name not in defaults:
+            close = difflib.get_close_matches(name, defaults, n=1)
+            hint = f" (did you mean '{close[0]}'?)" if close else ""
+            raise ParameterError(str(path), name, f"--set {name}={value}: the scene has no $default '{name}'"
+                                 f"{hint}; it has: {', '.join(sorted(defaults))}")
+        old, new = _numbers(defaults[name]), _numbers(str(value))
+        if old is not None and (new is None or len(new) != len(old)):
+            raise ParameterError(str(path), name, f"--set {name}={value}: expected {len(old)} number(s) like the "
+                                 f"scene's default '{defaults[name]}'")
+        if new is not None and not all(math.isfinite(x) for x in new):
+            raise ParameterError(str(path), name, f"--set {name}={value}: values must be finite")
+        if name in _RESOLUTION and not (new and float(new[0]).is_integer() and 1 <= new[0] <= 65536):
+            raise ParameterError(str(path), name, f"--set {name}={value}: an integer in [1, 65536] pixels")
+
+
+def _numbers(text: str):
+    try:
+        return [float(x) for x in text.replace(",", " ").split()] or None
+    except ValueError:
+        return None
+
+
+def check_supported(path: Path, root) -> None:
+    """Refuse scene features that fogpath or the physical description would ignore.
+
+    Emitters other than one ``directional`` sun and one ``constant``/``envmap`` sky
+    (e.g. ``sunsky``, point or area lights: the models' physical description has no
+    place for them), media other than the sensor's ``heightfog``, and shapes with
+    interior/exterior media.
+    """
+    counts: dict = {}
+    for em in root.iter("emitter"):
+        t = em.get("type")
+        if t not in SUPPORTED_EMITTERS:
+            what = ", ".join(f"'{k}' ({v})" for k, v in SUPPORTED_EMITTERS.items())
+            raise FogrefError(f"{path}: emitter '{t}' is not supported: fogref's ground truth and its physical "
+                              f"description take {what}. Express a sun and sky with those "
+                              f"(e.g. 'sunsky' -> a directional sun + a constant or envmap sky)")
+        kind = "sun" if t == "directional" else "sky"
+        counts[kind] = counts.get(kind, 0) + 1
+        if counts[kind] > 1:
+            raise FogrefError(f"{path}: more than one {kind} emitter; fogref takes at most one sun and one sky")
+    sensors = root.findall("sensor")
+    for med in root.iter("medium"):
+        if med.get("type") != "heightfog" or not any(med in list(s) for s in sensors):
+            raise FogrefError(f"{path}: medium '{med.get('type')}' ({med.get('name') or med.get('id') or 'unnamed'}):"
+                              f" fogref supports one 'heightfog' medium inside the <sensor> only")
+    for shape in root.iter("shape"):
+        if any(c.tag == "medium" or (c.tag == "ref" and c.get("name") in ("interior", "exterior")) for c in shape):
+            raise FogrefError(f"{path}: shape '{shape.get('id') or shape.get('type')}' has a medium attached; "
+                              f"fogpath's fog fills all space outside surfaces (no interfaces)")
 
 
 def load_scene(path, overrides: dict | None = None):
@@ -111,9 +191,8 @@ def load_scene(path, overrides: dict | None = None):
     desc = describe_scene(path, overrides)
     try:
         scene = mi.load_file(str(path), **{k: v for k, v in (overrides or {}).items()})
-    except Exception as e:  # Mitsuba's message already names the file and line
-        msg = str(e).strip().splitlines()
-        raise FogrefError(f"{path}: Mitsuba could not load the scene: {msg[-1] if msg else e}") from None
+    except Exception as e:  # Mitsuba's message names the file and line: keep all of it
+        raise FogrefError(f"{path}: Mitsuba could not load the scene:\n{str(e).strip()}") from None
     sensor = scene.sensors()[0]
     m = sensor.world_transform().matrix
     origin = [float(m[i][3][0]) if hasattr(m[i][3], "__len__") else float(m[i][3]) for i in range(3)]
