@@ -30,7 +30,36 @@ from __future__ import annotations
 
 from fogref._version import __version__
 
-__all__ = ["__version__", "ensure_llvm", "set_variant"]
+#: The public API for checking a fog model or an engine's images against a truth
+#: (docs/byo.md): name -> module.  Imported on first use (:func:`__getattr__`), so
+#: ``import fogref`` stays free of work.
+_LAZY = {
+    "load_truth": "fogref.gbuffer", "Truth": "fogref.gbuffer",
+    "cached_truth": "fogref.compare.truth_cache",
+    "check": "fogref.compare.check", "assert_fog_matches": "fogref.compare.check",
+    "evaluate_model": "fogref.compare.check", "synthetic_truth": "fogref.compare.check",
+    "CheckResult": "fogref.compare.check",
+    "EngineImages": "fogref.compare.foreign", "load_engine_images": "fogref.compare.foreign",
+    "read_image": "fogref.compare.foreign",
+    "resolve_model": "fogref.compare.model_loader", "build_model": "fogref.compare.model_loader",
+}
+_RENAMED = {"build_model": "build"}
+
+__all__ = ["__version__", "ensure_llvm", "set_variant", *_LAZY]
+
+
+def __getattr__(name: str):
+    """``fogref.check``, ``fogref.load_truth``, ...: the public API of :data:`_LAZY`, imported on first use."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'fogref' has no attribute '{name}'")
+    import importlib
+
+    return getattr(importlib.import_module(module), _RENAMED.get(name, name))
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))
 
 
 def set_variant(name: str | None = None) -> str:
