@@ -137,6 +137,7 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
+        render_truth((8, 8), 1, a.seed, Path(tmp))  # warm-up: kernel compilation is not part of the times
         for res_s in a.res:
             res = tuple(int(x) for x in res_s.split("x"))
             for spp in a.spp:
@@ -158,7 +159,7 @@ def main(argv=None) -> int:
              "Smallest uniform relative error (δ: candidate = truth × (1 + δ) for one part) that `check` detects "
              "with 95 % power at a 1 % false-alarm rate, region `all`, `method=\"noise\"`; by `rel_bias` (a shift "
              "of the mean) and by `rel_rmse`. Measured power and false-alarm rate over the replicates in brackets. "
-             "Render time: this machine, one render (includes Mitsuba's kernel compilation).", "",
+             "Render time: this machine (2 cores shared with other jobs), one render after a warm-up render.", "",
              "| resolution | spp | render [s] | T: rel_bias | T: rel_rmse | inscatter: rel_bias | inscatter: rel_rmse "
              "| final: rel_bias | final: rel_rmse |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for e in rows:
