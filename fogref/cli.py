@@ -63,12 +63,14 @@ def build_parser() -> argparse.ArgumentParser:
     r.set_defaults(func=cmd_render)
     # each subcommand package adds its own parser; an import error here is a bug and is raised
     from fogref.compare import add_cli as add_compare_cli
+    from fogref.info import add_cli as add_info_cli
     from fogref.study import add_cli as add_study_cli
     from fogref.study.sweep import add_cli as add_sweep_cli
 
     add_compare_cli(sub)
     add_study_cli(sub)
     add_sweep_cli(sub)
+    add_info_cli(sub)
     return p
 
 

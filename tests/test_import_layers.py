@@ -34,7 +34,7 @@ FLOORS: list[tuple[str, tuple[str, ...]]] = [
     ("compare", ("fogref.compare",)),
     ("study", ("fogref.study",)),
     # entry points: the command line, the pytest plugin and the facade (fogref.set_variant)
-    ("cli", ("fogref.cli", "fogref.pytest_plugin", "fogref")),
+    ("cli", ("fogref.cli", "fogref.pytest_plugin", "fogref.info", "fogref")),
 ]
 #: floors that must not import Mitsuba or Dr.Jit at module level
 NO_MITSUBA_AT_IMPORT = {"base", "media", "gbuffer", "models", "mapping", "compare", "study", "cli"}
