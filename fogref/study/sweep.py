@@ -769,7 +769,7 @@ def plot_table(df, spec: SweepSpec, plot_dir: Path) -> list[Path]:
     ok = df[df["status"] == "ok"] if "status" in df.columns else df
     if ok.empty:
         return []
-    default = ("final.all.rmse", "final.all.relmse", "final.all.delta_e2000_mean", "final.all.flip_mean",
+    default = ("final.all.rmse", "final.all.rmse_debiased", "final.all.relmse", "final.all.delta_e2000_mean", "final.all.flip_mean",
                "inscatter.all.rmse", "transmittance.all.rmse")
     metrics = [m for m in (spec.plot_metrics or default) if m in ok.columns]
     paths = []
