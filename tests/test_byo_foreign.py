@@ -136,3 +136,27 @@ def test_fog_colour_becomes_inscatter(scene, tmp_path):
     C = write_rgb(tmp_path / "C.exr", p["inscatter"] / np.maximum(1 - p["T"], 1e-6))
     eng = load_engine_images(transmittance=T, fog_colour=C, shape=truth.shape)
     assert check(truth, eng).row("inscatter", "all", "rel_bias").verdict == "pass"
+
+
+@pytest.mark.render
+def test_rendered_truth_engine_image_five_percent_caught_exact_not(fogref_truth, tmp_path, capsys):
+    """Real renders (32x18, 64 spp): an independent render is the 'exact engine'; its inscatter
+    x 1.05, written as EXR outside fogref, fails through ``fogref compare --image``; the exact
+    one is not rejected (both truths' noise removed); Unreal's exact extinction passes T."""
+    from fogref.compare.model_loader import build
+
+    truth = fogref_truth("scenes/valley.xml", res=(32, 18), spp=64, seed=0)
+    other = fogref_truth("scenes/valley.xml", res=(32, 18), spp=64, seed=1)
+    exact = check(truth, other, distance_bands=())
+    for part in ("T", "inscatter", "final"):
+        assert exact.row(part, "all", "rel_bias").verdict != "fail", exact.summary()
+    T = write_rgb(tmp_path / "T.exr", other.transmittance)
+    L = write_rgb(tmp_path / "L.exr", 1.05 * other.inscatter)
+    out = tmp_path / "report"
+    assert main(["compare", str(truth.path), "--transmittance", str(T), "--inscatter", str(L),
+                 "--out", str(out)]) == 0
+    rows = {(r["part"], r["region"], r["metric"]): r for r in json.loads((out / "check.json").read_text())["rows"]}
+    bias = rows[("inscatter", "all", "rel_bias")]
+    assert bias["verdict"] == "fail" and 0.03 < bias["estimate"] < 0.08, bias
+    ue4 = build("ue4", scene_params=truth.params)
+    assert check(truth, ue4, distance_bands=()).row("T", "all").verdict == "pass"
