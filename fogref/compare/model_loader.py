@@ -207,6 +207,31 @@ def build(spec: str, params: dict | None = None, scene_params: dict | None = Non
         except TypeError as e:
             raise FogrefError(f"--model '{spec}': {obj.__name__}() needs arguments ({e}); give --param "
                               "KEY=VALUE (with a Params dataclass) or --from-scene (with from_physical)") from e
+    _check_param_names(spec, obj, params or {})
     from fogref.compare.model_factory import build_model
 
     return build_model(obj, params, scene_params)
+
+
+def _check_param_names(spec: str, cls, params: dict) -> None:
+    """FogrefError with a "did you mean" for a parameter name the model's ``Params`` lacks.
+
+    Examples
+    --------
+    >>> build("ue4", {"FogDensty": 0.02})
+    Traceback (most recent call last):
+    ...
+    fogref.errors.FogrefError: model 'ue4': no parameter 'FogDensty'; did you mean 'FogDensity'? ...
+    """
+    import dataclasses
+
+    params_class = getattr(cls, "Params", None)
+    if not (params and isinstance(params_class, type) and dataclasses.is_dataclass(params_class)):
+        return
+    names = [f.name for f in dataclasses.fields(params_class) if f.init]
+    for key in params:
+        if key not in names:
+            close = difflib.get_close_matches(key, names, n=1)
+            hint = f"; did you mean '{close[0]}'?" if close else ""
+            raise FogrefError(f"model '{getattr(cls, 'name', spec)}': no parameter '{key}'{hint} "
+                              f"(parameters: {', '.join(names)})")
