@@ -50,6 +50,9 @@ def cmd_render(a) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="fogref", description=__doc__)
+    from fogref._version import __version__
+
+    p.add_argument("--version", action="version", version=f"fogref {__version__}")
     sub = p.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("render", help="path-trace a scene to a ground-truth EXR (+ PNG preview)")
     r.add_argument("scene", help="Mitsuba XML scene using heightfog + fogpath")
@@ -81,6 +84,11 @@ def main(argv=None) -> int:
     except FogrefError as e:
         print(f"fogref: error: {e}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # `fogref ... | head`: the reader left; not an error
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except KeyboardInterrupt:
         print("fogref: interrupted; run the same command again to resume", file=sys.stderr)
         return 130
