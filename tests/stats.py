@@ -62,3 +62,41 @@ def one_sample_blocks(runs, reference, block=4, alpha=1e-3, floor=0.0, what=""):
     assert p[i] >= per, (f"{what}: block {i} differs from the reference (p={p[i]:.2e} < {per:.2e}, "
                          f"family-wise alpha={alpha}): {m[i]:.6g} vs {ref[i]:.6g} (se {se[i]:.3g})")
     return float(p[i])
+
+
+#: z for a two-sided test at alpha = 1e-3 and for 95 % power (one-sided 5 %).
+Z_ALPHA, Z_POWER = 3.29, 1.645
+
+
+def image_means(mi, scene, n_runs, spp, seed0):
+    """Mean over pixels and RGB of ``n_runs`` independent renders (seeds seed0, seed0+1, ...)."""
+    return np.array([float(np.mean(np.array(mi.render(scene, spp=spp, seed=seed0 + k), dtype=np.float64)[..., :3]))
+                     for k in range(n_runs)])
+
+
+def assert_mean_equals(means, expected, max_detectable=1e-3, what=""):
+    """One-sample test of the relative image-mean bias against an exact ``expected``.
+
+    The standard error is the spread of the independent renders' means over sqrt(n).
+    Asserts the test's own power first: the smallest relative bias it detects with
+    95 % power at alpha = 1e-3, ``(Z_ALPHA + Z_POWER) * se / expected``, must be at
+    most ``max_detectable``.  Returns ``(bias, se, smallest detectable bias)``, relative.
+    """
+    bias = means.mean() / expected - 1.0
+    se = means.std(ddof=1) / np.sqrt(len(means)) / expected
+    mde = (Z_ALPHA + Z_POWER) * se
+    assert mde <= max_detectable, f"{what}: underpowered, detects only {mde:.2%} (wanted {max_detectable:.2%})"
+    assert abs(bias) <= Z_ALPHA * se, (f"{what}: image mean biased by {bias:+.4%} +- {se:.4%} "
+                                       f"(z = {bias / se:+.1f}; detects {mde:.3%})")
+    return bias, se, mde
+
+
+def assert_means_agree(means_a, means_b, max_detectable=1e-3, what=""):
+    """Welch test on the relative difference of two estimators' image means (independent seeds)."""
+    ma, mb = means_a.mean(), means_b.mean()
+    se = np.sqrt(means_a.var(ddof=1) / len(means_a) + means_b.var(ddof=1) / len(means_b)) / mb
+    diff = ma / mb - 1.0
+    mde = (Z_ALPHA + Z_POWER) * se
+    assert mde <= max_detectable, f"{what}: underpowered, detects only {mde:.2%} (wanted {max_detectable:.2%})"
+    assert abs(diff) <= Z_ALPHA * se, f"{what}: image means differ by {diff:+.4%} +- {se:.4%} (z = {diff / se:+.1f})"
+    return diff, se, mde
