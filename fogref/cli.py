@@ -43,7 +43,8 @@ def cmd_render(a) -> int:
     from fogref.render.render import render
 
     path = render(a.scene, a.out, spp=a.spp, seed=a.seed, variant=a.variant, overrides=_kv(a.set),
-                  progress=not a.quiet, resume=not a.no_resume)
+                  progress=not a.quiet, resume=not a.no_resume, png=not a.no_png, pixel_filter=a.pixel_filter,
+                  checkpoint_seconds=a.checkpoint_seconds)
     print(path)
     return 0
 
@@ -63,6 +64,12 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--set", action="append", metavar="NAME=VALUE", help="override an XML $default")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.add_argument("--no-resume", action="store_true", help="ignore a checkpoint of an interrupted run")
+    r.add_argument("--no-png", action="store_true", help="no PNG preview beside the EXR")
+    r.add_argument("--pixel-filter", choices=("centre", "box"), default="centre",
+                   help="centre: every sample through the pixel centre, exact G-buffer and T (default, for "
+                   "truths); box: samples spread over the pixel (anti-aliased pictures)")
+    r.add_argument("--checkpoint-seconds", type=float, default=60.0, metavar="S",
+                   help="seconds between checkpoints of an interruptible render (default 60; also on Ctrl-C)")
     r.set_defaults(func=cmd_render)
     # each subcommand package adds its own parser; an import error here is a bug and is raised
     from fogref.compare import add_cli as add_compare_cli
