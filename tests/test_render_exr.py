@@ -1,13 +1,17 @@
-"""Ground-truth EXR: channels add up, same seed -> same pixels, header, atomic
-writes, resume after interruption, and clear errors for bad input."""
+"""Ground-truth EXR: the schema's parts add up, same seed -> same pixels, header,
+atomic writes, resume only from matching state, and clear errors for bad input."""
 
+import os
+import signal
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
 from conftest import ROOT, SCENES
 
+from fogref import gbuffer
 from fogref.errors import FogrefError, ParameterError
 from fogref.exrio import read_exr
 
@@ -20,20 +24,24 @@ def rendered(tmp_path_factory, mitsuba):
     from fogref.render.render import render
 
     d = tmp_path_factory.mktemp("exr")
-    a = render(SCENES / "valley.xml", d / "a.exr", spp=8, seed=3, overrides=SMALL, progress=False, pass_spp=4)
-    b = render(SCENES / "valley.xml", d / "b.exr", spp=8, seed=3, overrides=SMALL, progress=False, pass_spp=4)
+    a = render(SCENES / "valley.xml", d / "a.exr", spp=8, seed=3, overrides=SMALL, progress=False)
+    b = render(SCENES / "valley.xml", d / "b.exr", spp=8, seed=3, overrides=SMALL, progress=False)
     return d, read_exr(a), read_exr(b)
 
 
-def test_parts_add_up(rendered):
+def test_every_schema_channel_and_the_parts_add_up(rendered):
     _, (c, _), _ = rendered
+    assert sorted(c) == sorted(gbuffer.exr_channel_names())
     for ch in "RGB":
-        total = c[f"T.{ch}"] * c[f"surface.{ch}"] + c[f"inscatter.{ch}"]
-        assert np.allclose(c[ch], total, rtol=1e-5, atol=1e-6)
+        assert np.allclose(c[ch], c[f"attenuated_surface.{ch}"] + c[f"inscatter.{ch}"], rtol=1e-6, atol=1e-7)
         assert np.allclose(c[f"inscatter.{ch}"], c[f"single.{ch}"] + c[f"multiple.{ch}"], rtol=1e-6, atol=1e-7)
+        valid = c["surface_coverage"] > 0
+        # T * surface estimates attenuated_surface (both consistent; equal in expectation)
+        assert np.all(c[f"surface.{ch}"][~valid] == 0)
+        assert np.all(c[f"stderr.{ch}"] >= 0)
     assert all(np.isfinite(v).all() for v in c.values())
     assert ((c["T.R"] > 0) & (c["T.R"] <= 1)).all()
-    assert c["hit"].max() == 1 and c["hit"].min() == 0  # ground and sky both in view
+    assert set(np.unique(c["hit"])) == {0.0, 1.0}  # pixel-exact: a pixel hits or misses, never a mix
 
 
 def test_same_seed_same_pixels(rendered):
@@ -44,55 +52,228 @@ def test_same_seed_same_pixels(rendered):
 
 def test_header_records_everything(rendered):
     _, (_, attrs), _ = rendered
-    for k in ("fogref.params", "fogref.spp", "fogref.seed", "fogref.variant", "fogref.version", "fogref.mitsuba"):
+    for k in ("fogref.params", "fogref.spp", "fogref.seed", "fogref.variant", "fogref.version", "fogref.mitsuba",
+              "fogref.schema", "fogref.pixel_filter", "fogref.scene_sha256", "fogref.overrides"):
         assert k in attrs, k
     p = attrs["fogref.params"]
     assert p["medium"]["falloff"] == pytest.approx(0.0138629)
     assert p["sun"]["direction"][1] > 0 and p["sky"]["radiance"] == [0.2, 0.3, 0.5]
     assert attrs["fogref.spp"] == 8 and attrs["fogref.seed"] == 3  # JSON-decoded by read_exr
+    assert attrs["fogref.pixel_filter"] == "centre" and str(attrs["fogref.schema"]) == "2"
 
 
-def test_no_temporary_files_left(rendered):
+def test_no_temporary_files_left_and_plain_file_mode(rendered):
     d, _, _ = rendered
     assert sorted(p.name for p in d.iterdir()) == ["a.exr", "a.png", "b.exr", "b.png"]
+    umask = os.umask(0)
+    os.umask(umask)
+    assert (d / "a.exr").stat().st_mode & 0o777 == 0o666 & ~umask  # not mkstemp's 0600
 
 
-def test_resume_after_interruption(tmp_path, mitsuba, monkeypatch):
-    """Kill the render after its first pass; the rerun resumes and gives the same pixels."""
-    import fogref.render.render as R
+def test_stderr_matches_the_spread_of_independent_renders(tmp_path, mitsuba):
+    """Per-pixel standard errors from second moments vs the spread of 12 renders.
 
-    ref = R.render(SCENES / "valley.xml", tmp_path / "ref.exr", spp=8, seed=1, overrides=SMALL,
-                   progress=False, pass_spp=4)
-    calls = {"n": 0}
-    real = R._atomic_savez
+    The ratio of the mean stderr^2 to the variance across renders is 1 within
+    ~0.15 (12 runs x 96 pixels); a factor-of-1.5 mistake in the stderr fails."""
+    from fogref.render.render import render
 
-    def dying_savez(path, **kw):
+    runs = [read_exr(render(SCENES / "valley.xml", tmp_path / f"r{s}.exr", spp=16, seed=s, overrides=SMALL,
+                            progress=False, png=False))[0] for s in range(12)]
+    for part in ("", "inscatter.", "single."):
+        vals = np.stack([r[f"{part}G"] for r in runs])
+        se2 = np.stack([r[f"stderr.{part}G"] for r in runs]) ** 2
+        spread = vals.var(axis=0, ddof=1)
+        ok = spread > 0
+        ratio = se2.mean(axis=0)[ok].mean() / spread[ok].mean()
+        assert 0.7 < ratio < 1.4, f"{part or 'final'}: mean stderr^2 / spread = {ratio:.3f}"
+
+
+def _interrupting_savez(R, monkeypatch):
+    real = R.savez_atomic
+
+    def savez_then_interrupt(path, **kw):
         real(path, **kw)
-        calls["n"] += 1
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(R, "_atomic_savez", dying_savez)
+    monkeypatch.setattr(R, "savez_atomic", savez_then_interrupt)
+    return real
+
+
+def test_resume_after_interruption_gives_identical_pixels(tmp_path, mitsuba, monkeypatch):
+    """Interrupt after the first checkpoint; the rerun resumes and gives the same pixels."""
+    import fogref.render.render as R
+
+    monkeypatch.setattr(R, "MAX_LANES", {"llvm": 96 * 4, "cuda": 96 * 4})  # 4 spp per pass at 12x8
+    ref = R.render(SCENES / "valley.xml", tmp_path / "ref.exr", spp=8, seed=1, overrides=SMALL, progress=False)
+    real = _interrupting_savez(R, monkeypatch)
     out = tmp_path / "x.exr"
     with pytest.raises(KeyboardInterrupt):
-        R.render(SCENES / "valley.xml", out, spp=8, seed=1, overrides=SMALL, progress=False, pass_spp=4)
+        R.render(SCENES / "valley.xml", out, spp=8, seed=1, overrides=SMALL, progress=False, checkpoint_seconds=0)
     assert not out.exists() and (tmp_path / "x.exr.partial.npz").exists()
-    monkeypatch.setattr(R, "_atomic_savez", real)
-    R.render(SCENES / "valley.xml", out, spp=8, seed=1, overrides=SMALL, progress=False, pass_spp=4)
+    monkeypatch.setattr(R, "savez_atomic", real)
+    R.render(SCENES / "valley.xml", out, spp=8, seed=1, overrides=SMALL, progress=False)
     a, b = read_exr(ref)[0], read_exr(out)[0]
-    assert np.array_equal(a["R"], b["R"]) and not (tmp_path / "x.exr.partial.npz").exists()
+    assert all(np.array_equal(a[k], b[k]) for k in a) and not (tmp_path / "x.exr.partial.npz").exists()
+
+
+def test_checkpoint_of_an_edited_scene_is_not_resumed(tmp_path, mitsuba, monkeypatch):
+    """The checkpoint key is the scene's content: edit the scene between the
+    interruption and the rerun, and the rerun starts over (no mixed image)."""
+    import fogref.render.render as R
+
+    monkeypatch.setattr(R, "MAX_LANES", {"llvm": 96 * 4, "cuda": 96 * 4})
+    scene = tmp_path / "s.xml"
+    scene.write_text((SCENES / "valley.xml").read_text())
+    real = _interrupting_savez(R, monkeypatch)
+    out = tmp_path / "x.exr"
+    with pytest.raises(KeyboardInterrupt):
+        R.render(scene, out, spp=8, seed=1, overrides=SMALL, progress=False, checkpoint_seconds=0)
+    monkeypatch.setattr(R, "savez_atomic", real)
+    scene.write_text(scene.read_text().replace('name="albedo" value="0.9"', 'name="albedo" value="0.5"'))
+    R.render(scene, out, spp=8, seed=1, overrides=SMALL, progress=False)
+    fresh = R.render(scene, tmp_path / "fresh.exr", spp=8, seed=1, overrides=SMALL, progress=False)
+    a, b = read_exr(out)[0], read_exr(fresh)[0]
+    assert all(np.array_equal(a[k], b[k]) for k in a)
+
+
+def test_leftover_temporary_checkpoint_is_removed(tmp_path, mitsuba):
+    """A writer killed mid-write (SIGKILL) leaves '<out>.partial.npz.XXXX.tmp.npz'; the next run removes it."""
+    from fogref.render.render import render
+
+    stale = tmp_path / "x.exr.partial.npz.abc123.tmp.npz"
+    stale.write_bytes(b"partial")
+    render(SCENES / "valley.xml", tmp_path / "x.exr", spp=1, overrides=SMALL, progress=False, png=False)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.exr"]
+
+
+def test_ctrl_c_stops_cleanly_and_the_rerun_resumes(tmp_path, mitsuba):
+    """SIGINT to `fogref render`: exit 130, a one-line message (no traceback), a
+    checkpoint; the same command then finishes from it."""
+    out = tmp_path / "x.exr"
+    cmd = [sys.executable, "-m", "fogref.cli", "render", str(SCENES / "valley.xml"), "--spp", "4096",
+           "--quiet", "--no-png", "--out", str(out)]  # 320x180: ~36 spp per pass, a second or two each
+    p = subprocess.Popen(cmd, cwd=ROOT, stderr=subprocess.PIPE, text=True)
+    time.sleep(12)
+    p.send_signal(signal.SIGINT)
+    err = p.communicate(timeout=120)[1]
+    assert p.returncode == 130, err
+    assert "Traceback" not in err and "interrupted" in err
+    assert (tmp_path / "x.exr.partial.npz").exists() and not out.exists()
+
+
+def test_outputs_never_overwrite_inputs(tmp_path, mitsuba):
+    from fogref.render.render import render
+
+    scene = tmp_path / "s.xml"
+    scene.write_text((SCENES / "valley.xml").read_text())
+    with pytest.raises(FogrefError, match=r"ending in \.exr"):
+        render(scene, tmp_path / "x.png", spp=1, overrides=SMALL, progress=False)
+    with pytest.raises(FogrefError, match="ending in .exr"):
+        render(scene, scene, spp=1, overrides=SMALL, progress=False)
+    (tmp_path / "dir.exr").mkdir()
+    with pytest.raises(FogrefError, match="is a directory"):
+        render(scene, tmp_path / "dir.exr", spp=1, overrides=SMALL, progress=False)
+    notexr = tmp_path / "notes.exr"
+    notexr.write_text("my notes")
+    with pytest.raises(FogrefError, match="not an EXR"):
+        render(scene, notexr, spp=1, overrides=SMALL, progress=False)
+    assert notexr.read_text() == "my notes" and "fogpath" in scene.read_text()
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
+def test_read_only_folder_is_refused_before_rendering(tmp_path, mitsuba):
+    from fogref.render.render import render
+
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    with pytest.raises(FogrefError, match="not writable"):
+        render(SCENES / "valley.xml", ro / "x.exr", spp=1, overrides=SMALL, progress=False)
+
+
+def test_folder_check_happens_before_rendering(tmp_path, mitsuba, monkeypatch):
+    """The folder is checked before any pass runs (the old driver failed after rendering)."""
+    import fogref.render.render as R
+
+    def no_write(path, write):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(R, "atomic_write", no_write)
+    t = time.perf_counter()
+    with pytest.raises(FogrefError, match="not writable"):
+        R.render(SCENES / "valley.xml", tmp_path / "x.exr", spp=64, overrides={"res": 320, "resy": 180},
+                 progress=False)
+    assert time.perf_counter() - t < 5
 
 
 def test_out_of_range_parameter_is_named(tmp_path, mitsuba):
     from fogref.render.render import render
 
     bad = tmp_path / "bad.xml"
-    bad.write_text((SCENES / "valley.xml").read_text().replace('<float name="g" value="$g"/>',
-                                                               '<float name="g" value="1.5"/>'))
+    bad.write_text((SCENES / "valley.xml").read_text().replace('<default name="g" value="0.6"/>',
+                                                               '<default name="g" value="1.5"/>'))
     with pytest.raises(ParameterError, match=r"bad.xml.*'g'.*1.5.*outside \[-0.999, 0.999\]"):
         render(bad, tmp_path / "o.exr", spp=1, overrides=SMALL, progress=False)
     with pytest.raises(ParameterError, match=r"'falloff'.*outside"):
         render(SCENES / "valley.xml", tmp_path / "o.exr", spp=1, overrides={**SMALL, "falloff": -1},
                progress=False)
+
+
+@pytest.mark.parametrize("override, message", [
+    ({"sigma_t": "abc"}, r"sigma_t=abc: expected 1 number"),
+    ({"res": "0"}, r"res=0: an integer in \[1, 65536\]"),
+    ({"res": "12.5"}, r"res=12.5: an integer"),
+    ({"sigmat": "0.01"}, r"no \$default 'sigmat' \(did you mean 'sigma_t'\?\)"),
+    ({"sky_radiance": "-0.18, 0.3, 0.5"}, r"sky.radiance.*must be finite and >= 0"),
+    ({"max_depth": "-5"}, r"max_depth.*-5"),
+])
+def test_bad_overrides_get_clear_errors(tmp_path, mitsuba, override, message):
+    from fogref.render.render import render
+
+    with pytest.raises(FogrefError, match=message):
+        render(SCENES / "valley.xml", tmp_path / "o.exr", spp=1, overrides={**SMALL, **override}, progress=False)
+
+
+def test_huge_resolution_is_refused_with_the_memory_figure(tmp_path, mitsuba):
+    from fogref.render.render import render
+
+    with pytest.raises(FogrefError, match=r"20000x20000 pixels need about .* GiB"):
+        render(SCENES / "valley.xml", tmp_path / "o.exr", spp=1, overrides={"res": 20000, "resy": 20000},
+               progress=False)
+
+
+def test_non_finite_render_is_refused_and_located(tmp_path, mitsuba, monkeypatch):
+    from fogref_plugins.fogpath import FogPathIntegrator as cls
+
+    real = cls.render_moments
+
+    def poisoned(self, *a, **kw):
+        s, q = real(self, *a, **kw)
+        s = np.array(s)
+        s[2, 5, 0] = np.nan
+        return s, q
+
+    monkeypatch.setattr(cls, "render_moments", poisoned)
+    from fogref.render.render import render
+
+    with pytest.raises(FogrefError, match=r"non-finite values in 'R': 1 pixel\(s\), first at \(x=5, y=2\)"):
+        render(SCENES / "valley.xml", tmp_path / "o.exr", spp=1, overrides=SMALL, progress=False)
+    assert not (tmp_path / "o.exr").exists()
+
+
+def test_unsupported_emitters_and_media_are_refused(tmp_path, mitsuba):
+    from fogref.render.render import render
+
+    text = (SCENES / "valley.xml").read_text()
+    sunsky = tmp_path / "sunsky.xml"
+    sunsky.write_text(text.replace("</scene>", '<emitter type="sunsky"/></scene>'))
+    with pytest.raises(FogrefError, match="emitter 'sunsky' is not supported"):
+        render(sunsky, tmp_path / "o.exr", spp=1, overrides=SMALL, progress=False)
+    point = tmp_path / "point.xml"
+    point.write_text(text.replace("</scene>", '<emitter type="point"><point name="position" value="0,5,0"/>'
+                                              '</emitter></scene>'))
+    with pytest.raises(FogrefError, match="emitter 'point' is not supported"):
+        render(point, tmp_path / "o.exr", spp=1, overrides=SMALL, progress=False)
 
 
 def test_malformed_xml_and_cli_message(tmp_path, mitsuba):
