@@ -74,6 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
     # each subcommand package adds its own parser; an import error here is a bug and is raised
     from fogref.compare import add_cli as add_compare_cli
     from fogref.info import add_cli as add_info_cli
+    from fogref.render.scene_writer import add_cli as add_scene_cli
     from fogref.study import add_cli as add_study_cli
     from fogref.study.sweep import add_cli as add_sweep_cli
 
@@ -81,6 +82,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_study_cli(sub)
     add_sweep_cli(sub)
     add_info_cli(sub)
+    add_scene_cli(sub)
     return p
 
 

@@ -30,7 +30,8 @@ FLOORS: list[tuple[str, tuple[str, ...]]] = [
     ("gbuffer", ("fogref.gbuffer", "fogref.exrio", "fogref.display")),
     ("models", ("fogref.models",)),                        # ports of the engines' shaders
     ("mapping", ("fogref.mapping",)),                      # physical scene -> model parameters, fits
-    ("render", ("fogref.render", "fogref_plugins")),       # Mitsuba glue and plugins
+    ("render", ("fogref.render", "fogref_plugins",         # Mitsuba glue and plugins;
+                "fogref.render.scene_writer")),            # scene XML writer (no Mitsuba)
     ("compare", ("fogref.compare",)),
     ("study", ("fogref.study",)),
     # entry points: the command line, the pytest plugin and the facade (fogref.set_variant)
