@@ -372,7 +372,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
     def render_moments(self, scene, sensor=0, seed=0, spp=1, pixel_exact=None):
         """Per-pixel sums of every per-sample output and of the squares of the parts.
 
-        Returns ``(sums, squares)``: ``TensorXf`` of shape ``(H, W, 3 + len(AOV_NAMES))``
+        Returns ``(sums, squares)``: float64 ``TensorXd`` of shape ``(H, W, 3 + len(AOV_NAMES))``
         (R,G,B then :data:`AOV_NAMES`) and ``(H, W, 3 * len(gbuffer.SQUARED_GROUPS))``,
         summed over the ``spp`` samples of each pixel.  With ``aovs`` off: R,G,B and
         their squares only.
@@ -410,18 +410,20 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         if self.aovs:
             by_name = dict(zip(["R", "G", "B"] + AOV_NAMES, values))
             squared = [by_name[c] for g in gbuffer.SQUARED_GROUPS for c in gbuffer.channel_names(g)]
-        lanes = dr.zeros(mi.Float, n_pix * spp)
+        lanes = dr.zeros(mi.Float64, n_pix * spp)
 
         def per_pixel(vals):
+            """Sum each lane value over its pixel's samples, in float64: a float32
+            square and sum would leave a spurious stderr of ~3e-4 x the value."""
             k = len(vals)
-            out = dr.zeros(mi.Float, n_pix * k)
+            out = dr.zeros(mi.Float64, n_pix * k)
             pix = dr.arange(mi.UInt32, n_pix)
             for i, v in enumerate(vals):
                 dr.scatter(out, dr.block_sum(lanes + v, spp), pix * k + i)  # lanes +: broadcast literals
-            return mi.TensorXf(out, shape=(size[1], size[0], k))
+            return mi.TensorXd(out, shape=(size[1], size[0], k))
 
         sums = per_pixel(values)
-        squares = per_pixel([v * v for v in squared])
+        squares = per_pixel([dr.square(mi.Float64(v)) for v in squared])
         dr.eval(sums, squares)
         return sums, squares
 
@@ -433,7 +435,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
         spp = int(spp) if int(spp) > 0 else sensor.sampler().sample_count()
         sums, _ = self.render_moments(scene, sensor, seed, spp)
-        return sums / spp
+        return mi.TensorXf(sums / spp)
 
 
 def register() -> None:

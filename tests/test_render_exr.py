@@ -220,7 +220,7 @@ def test_out_of_range_parameter_is_named(tmp_path, mitsuba):
 
 
 @pytest.mark.parametrize("override, message", [
-    ({"sigma_t": "abc"}, r"sigma_t=abc: expected 1 number"),
+    ({"sigma_t": "abc"}, r"sigma_t=abc: expected 1 number like"),
     ({"res": "0"}, r"res=0: an integer in \[1, 65536\]"),
     ({"res": "12.5"}, r"res=12.5: an integer"),
     ({"sigmat": "0.01"}, r"no \$default 'sigmat' \(did you mean 'sigma_t'\?\)"),

@@ -130,8 +130,9 @@ def check_overrides(path: Path, defaults: dict, overrides: dict | None) -> None:
             raise ParameterError(str(path), name, f"--set {name}={value}: the scene has no $default '{name}'"
                                  f"{hint}; it has: {', '.join(sorted(defaults))}")
         old, new = _numbers(defaults[name]), _numbers(str(value))
-        if old is not None and (new is None or len(new) != len(old)):
-            raise ParameterError(str(path), name, f"--set {name}={value}: expected {len(old)} number(s) like the "
+        if old is not None and (new is None or len(new) not in (1, len(old))):
+            count = f"1 or {len(old)} numbers" if len(old) > 1 else "1 number"
+            raise ParameterError(str(path), name, f"--set {name}={value}: expected {count} like the "
                                  f"scene's default '{defaults[name]}'")
         if new is not None and not all(math.isfinite(x) for x in new):
             raise ParameterError(str(path), name, f"--set {name}={value}: values must be finite")
