@@ -182,6 +182,10 @@ def test_obj_mesh_template(tmp_path):
     assert ops == [("scale", {"value": "2.0"}), ("rotate", {"x": "1", "angle": "-90"}),
                    ("translate", {"x": "1.0", "y": "0.0", "z": "0.0"})]
     assert root.find("shape[@type='rectangle']") is not None  # --ground
+    write_scene(tmp_path / "ue_mesh.xml", geometry=mesh, mesh_up="unreal", mesh_scale=0.01)
+    tw = ET.parse(tmp_path / "ue_mesh.xml").getroot().find("shape[@type='obj']/transform")
+    M = np.array([float(x) for x in tw.find("matrix").get("value").split()]).reshape(4, 4)
+    np.testing.assert_array_equal(M[:3, :3] @ [100.0, 200.0, 300.0], [100.0, 300.0, 200.0])  # Unreal (X,Y,Z) -> (X,Z,Y)
     # a mesh alone: no ground unless asked
     write_scene(tmp_path / "alone.xml", geometry=mesh)
     assert ET.parse(tmp_path / "alone.xml").getroot().find("shape[@type='rectangle']") is None
@@ -209,6 +213,9 @@ def test_written_mesh_scene_loads_with_the_mesh_in_place(tmp_path, mitsuba):
     bb = objs[0].bbox()
     # z-up file scaled by 2 and rotated into y-up: (x, y, z) -> 2 (x, z, -y)
     np.testing.assert_allclose([list(bb.min), list(bb.max)], [[0, 0, -10], [20, 20, 0]], atol=1e-5)
+    write_scene(out, geometry=mesh, mesh_up="unreal", mesh_scale=2.0, overwrite=True)  # swap: 2 (x, z, y)
+    bb = [s for s in load_scene(out, {"res": 16, "resy": 9})[0].shapes() if s.is_mesh()][0].bbox()
+    np.testing.assert_allclose([list(bb.min), list(bb.max)], [[0, 0, 0], [20, 20, 10]], atol=1e-5)
     assert isinstance(scene, mi.Scene) and desc["camera"]["origin"] == pytest.approx([0, 3, -20])
 
 
@@ -232,6 +239,7 @@ def test_written_mesh_scene_loads_with_the_mesh_in_place(tmp_path, mitsuba):
     (["--fov", "180"], ["fov (--fov)", "(0, 180) deg"]),
     (["--res", "0"], ["res (--res)", "[1, 65536] pixels"]),
     (["--mesh-scale", "2"], ["--mesh-scale", "applies to a mesh file"]),
+    (["--mesh-up", "z"], ["--mesh-up", "applies to a mesh file"]),
     (["--bounds-min", "0,0,0"], ["bounds_max (--bounds-max)", "both bounds or none"]),
     (["--sigma-t", "0.01", "--ue-fog-density", "0.02"], ["not both", "--sigma-t", "--ue-fog-density"]),
     (["--bounds-min", "0,0,0", "--bounds-max", "1,1,1", "--ue-fog-density", "0.02"], ["not both"]),

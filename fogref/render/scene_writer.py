@@ -29,7 +29,9 @@ shipped default scene's ground, ridges and boulders) or a mesh file (``.obj`` or
 ``.ply``, loaded by Mitsuba's ``obj``/``ply`` shape plugins) with its scale
 (``mesh_scale``: metres per file unit) and up axis (``mesh_up="z"`` turns a z-up
 file into fogref's y-up frame by a -90 deg rotation about +x, which keeps the
-handedness).
+handedness; ``mesh_up="unreal"`` swaps y and z like fogref's Unreal position mapping,
+``(x, y, z)_fogref = (X, Z, Y)_Unreal / 100`` with ``mesh_scale=0.01``, so a level exported
+in Unreal's world coordinates lines up with cameras converted the same way).
 
 Writing needs no Mitsuba; the XML is built with :mod:`xml.etree.ElementTree`.
 """
@@ -55,8 +57,10 @@ SOURCE = "fogref scene"
 TEMPLATES = ("plane", "valley")
 #: Mesh file extensions and the Mitsuba shape plugin that loads each.
 MESH_PLUGINS = {".obj": "obj", ".ply": "ply"}
-#: Up axes a mesh file may have; "z" is rotated into fogref's y-up frame.
-MESH_UP = ("y", "z")
+#: Frames a mesh file may have: "y" (fogref's, y-up), "z" (z-up, rotated -90 deg about +x into
+#: y-up) or "unreal" (Unreal's z-up left-handed frame, swapped (x, y, z) -> (x, z, y) as
+#: :func:`fogref.models.ue4.world_to_unreal` maps positions: a mirror).
+MESH_UP = ("y", "z", "unreal")
 #: Half-size [m] of the ground plane of each template (the valley's is the shipped scene's).
 GROUND_SIZE = {"plane": 1.0e5, "valley": 3000.0, "mesh": 1.0e5}
 
@@ -468,6 +472,8 @@ def _mesh(root, geo: _Geometry, out_dir: Path, scale: float, up: str, translate)
     _sub(tw, "scale", value=_fmt(scale))
     if up == "z":  # (x, y, z) -> (x, z, -y): the file's +z becomes +y, a proper rotation
         _sub(tw, "rotate", x="1", angle="-90")
+    elif up == "unreal":  # (x, y, z) -> (x, z, y): the inverse of world_to_unreal's swap (a mirror)
+        _sub(tw, "matrix", value="1 0 0 0 0 0 1 0 0 1 0 0 0 0 0 1")
     if any(translate):
         _sub(tw, "translate", x=_fmt(translate[0]), y=_fmt(translate[1]), z=_fmt(translate[2]))
     _sub(s, "ref", id="surface")
@@ -554,8 +560,9 @@ def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, alb
         ``"plane"``, ``"valley"`` or a mesh file (``.obj``/``.ply``).
     mesh_scale : float
         Metres per mesh file unit, > 0 (0.01 for a file in centimetres).
-    mesh_up : {"y", "z"}
-        The mesh file's up axis; ``"z"`` rotates it by -90 deg about +x into y-up.
+    mesh_up : {"y", "z", "unreal"}
+        The mesh file's frame: y-up; z-up (rotated by -90 deg about +x into y-up); or
+        Unreal's z-up left-handed frame (y and z swapped, a mirror).
     mesh_translate : 3 floats
         Offset [m] added after scaling and rotating the mesh.
     ground : bool, optional
@@ -816,7 +823,8 @@ def add_cli(subparsers) -> None:
     g.add_argument("--mesh-scale", type=float, default=1.0,
                    help="metres per mesh file unit (default 1: the file is in metres; 0.01 for centimetres)")
     g.add_argument("--mesh-up", choices=MESH_UP, default="y",
-                   help="the mesh file's up axis (default y; z is rotated -90 deg about +x into fogref's y-up)")
+                   help="the mesh file's frame (default y: y-up; z: z-up, rotated -90 deg about +x; unreal: "
+                        "Unreal's z-up left-handed frame, y and z swapped like fogref's Unreal position mapping)")
     g.add_argument("--mesh-translate", default="0, 0, 0", metavar="X,Y,Z",
                    help="offset [m] applied after scale and rotation (default 0,0,0)")
     g.add_argument("--ground", action=argparse.BooleanOptionalAction, default=None,
