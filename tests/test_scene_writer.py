@@ -304,3 +304,27 @@ def test_render_round_trip_reproduces_the_input(tmp_path, mitsuba):
     assert p["sun"]["irradiance"] == [3.0, 2.5, 2.0] and p["sky"]["radiance"] == [0.2, 0.3, 0.5]
     assert p["camera"]["origin"] == pytest.approx([0.0, 2.0, 0.0], abs=1e-6)
     assert math.isclose(float(structure(scene)[1]["fov"]), 80.0)
+
+
+# --------------------------------------------------------------------------- the docs
+
+def test_docs_examples_run(tmp_path, capsys):
+    """docs/byo.md's "Your own scene" commands and Python example work as printed."""
+    import shlex
+
+    from conftest import ROOT
+
+    text = (ROOT / "docs" / "byo.md").read_text().split("## 7. Your own scene", 1)[1]
+    tiny_obj(tmp_path / "level.obj")
+
+    def local(s: str) -> str:
+        return s.replace("scenes/", f"{tmp_path}/").replace("level.obj", str(tmp_path / "level.obj"))
+
+    commands = [c for c in text.replace("\\\n", " ").splitlines() if c.startswith(".venv/bin/fogref scene")]
+    assert len(commands) == 2
+    for c in commands:
+        assert main(shlex.split(local(c))[1:]) == 0, capsys.readouterr().err
+    assert "Unreal has no albedo" in capsys.readouterr().err
+    code = text.split("```python\n", 1)[1].split("```", 1)[0]
+    exec(local(code.replace('"scenes/mine.xml"', '"scenes/mine2.xml"')), {})
+    assert describe_scene(tmp_path / "mine2.xml")["medium"] == describe_scene(tmp_path / "mine.xml")["medium"]
