@@ -101,6 +101,10 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("fogref: interrupted; run the same command again to resume", file=sys.stderr)
         return 130
+    except OSError as e:  # a full disk, a vanished folder, permissions: the file and the reason
+        where = f"{e.filename}: " if e.filename else ""
+        print(f"fogref: error: {where}{e.strerror or e}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

@@ -44,6 +44,7 @@ import mitsuba as mi
 
 from fogref.media import drjit_ops
 from fogref.media.params import medium_from_params
+from fogref.media.protocol import check_range
 
 
 def _props_to_dict(props) -> dict:
@@ -76,7 +77,7 @@ class HeightFogMedium(mi.Medium):
         super().__init__(props)
         default_floor = (self.fog.bounds.lo[1] if self.fog.bounds is not None
                          else min(L.reference_height for L in self.fog.layers))
-        self.floor = float(params.get("floor", default_floor))
+        self.floor = check_range(src, "floor", params.get("floor", default_floor), -1e7, 1e7)
         self.m_is_homogeneous = False
         # Stock volpath's spectral mode gives every ray that escapes to infinity
         # weight 0 (its transmittance pdf uses t = inf), so stock comparisons need

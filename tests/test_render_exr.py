@@ -289,3 +289,31 @@ def test_malformed_xml_and_cli_message(tmp_path, mitsuba):
     r = subprocess.run([sys.executable, "-m", "fogref.cli", "render", str(SCENES / "valley.xml"), "--spp", "0",
                         "--out", str(tmp_path / "o.exr")], capture_output=True, text=True, cwd=ROOT)
     assert r.returncode == 2 and "--spp" in r.stderr
+
+
+def test_heightfog_floor_nan_is_refused(tmp_path, mitsuba):
+    from fogref.render.render import render
+
+    bad = tmp_path / "floor.xml"
+    bad.write_text((SCENES / "valley.xml").read_text().replace(
+        '<float name="height" value="$fog_height"/>', '<float name="height" value="$fog_height"/>'
+        '<float name="floor" value="nan"/>'))
+    with pytest.raises(FogrefError, match=r"'floor'.*nan"):
+        render(bad, tmp_path / "o.exr", spp=1, overrides=SMALL, progress=False)
+
+
+def test_full_disk_is_an_error_not_a_traceback(tmp_path, mitsuba, monkeypatch, capsys):
+    """ENOSPC while writing the EXR: exit 2, the file and the reason, no partial output."""
+    import errno
+
+    import fogref.render.render as R
+    from fogref.cli import main
+
+    def full(path, channels, attrs=None):
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    monkeypatch.setattr(R, "write_exr", full)
+    rc = main(["render", str(SCENES / "valley.xml"), "--set", "res=12", "--set", "resy=8", "--spp", "1",
+               "--quiet", "--out", str(tmp_path / "o.exr")])
+    err = capsys.readouterr().err
+    assert rc == 2 and "o.exr: No space left on device" in err and not (tmp_path / "o.exr").exists()
