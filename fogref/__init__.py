@@ -21,7 +21,7 @@ Examples
 --------
 >>> import fogref
 >>> fogref.__version__
-'0.1.0'
+'0.2.0'
 >>> callable(fogref.set_variant) and callable(fogref.ensure_llvm)
 True
 """

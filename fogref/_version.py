@@ -1,3 +1,3 @@
 """fogref's version (one place: the package, the EXR header's ``fogref.version``)."""
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
