@@ -10,6 +10,10 @@ the back end's memory allows, and turns them into means and standard errors.
   over the pixel (anti-aliased pictures).
 * **Deterministic**: pass ``k`` has its own seed derived from ``seed``; the same
   ``(scene, overrides, spp, seed, pixel_filter, variant)`` gives identical pixels.
+* **Cheap**: the running sums stay on the device (Dr.Jit float64, added there after
+  every pass; copied to the host only for a checkpoint and once at the end), and the
+  passes are as few and as equal as ``MAX_LANES`` allows (``benchmarks/render_driver.py``
+  measures the driver against one ``mi.render`` call).
 * **Resumable**: the running sums are checkpointed atomically next to the output
   (``<out>.partial.npz``) every ``checkpoint_seconds`` and on Ctrl-C; a rerun resumes
   only from a checkpoint whose key (the scene file's content hash, overrides,
@@ -37,7 +41,7 @@ from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 
 #: Lanes (pixels x samples) per pass: bounded so one pass fits the back end's memory.
-MAX_LANES = {"llvm": 1 << 21, "cuda": 1 << 25}
+MAX_LANES = {"llvm": 1 << 22, "cuda": 1 << 25}
 PIXEL_FILTERS = ("centre", "box")
 #: Bytes per pixel the driver holds: float64 sums of 30 + 21 channels, twice
 #: (running sum and the pass being added), plus the EXR's float32 channels.
@@ -55,15 +59,19 @@ def pass_seed(seed: int, k: int) -> int:
 
 
 def pass_sizes(n_pixels: int, spp: int, max_lanes: int) -> list[int]:
-    """Samples per pixel of each pass: as few passes as ``max_lanes`` allows.
+    """Samples per pixel of each pass: as few passes as ``max_lanes`` allows, as equal
+    as possible (the larger ones first; no small last pass).
 
     >>> pass_sizes(100, 64, 10_000)
     [64]
     >>> pass_sizes(1000, 64, 10_000)
-    [10, 10, 10, 10, 10, 10, 4]
+    [10, 9, 9, 9, 9, 9, 9]
+    >>> pass_sizes(10, 3, 1)
+    [1, 1, 1]
     """
     per = max(1, min(spp, max_lanes // max(n_pixels, 1)))
-    return [min(per, spp - s) for s in range(0, spp, per)]
+    n = -(-spp // per)
+    return [spp // n + (1 if k < spp % n else 0) for k in range(n)]
 
 
 def file_sha256(path) -> str:
@@ -185,6 +193,8 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
     for stale in out.parent.glob(ckpt.name + ".*.tmp*"):  # a writer killed mid-write
         stale.unlink(missing_ok=True)
     sums, squares, done = _resume(ckpt, key) if resume else (None, None, 0)
+    if sums is not None:  # the running sums live on the device
+        sums, squares = mi.TensorXd(sums), mi.TensorXd(squares)
 
     from tqdm import tqdm
 
@@ -196,25 +206,26 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
                 ts = time.perf_counter()
                 s, q = integrator.render_moments(scene, 0, pass_seed(seed, k), passes[k],
                                                  pixel_exact=pixel_filter == "centre")
-                s, q = np.asarray(s, dtype=np.float64), np.asarray(q, dtype=np.float64)
+                s, q = _device_f64(s), _device_f64(q)
+                sums, squares = (s, q) if sums is None else (sums + s, squares + q)
+                dr.eval(sums, squares)
                 dr.sync_thread()
                 timings.append(time.perf_counter() - ts)
-                sums, squares = (s, q) if sums is None else (sums + s, squares + q)
                 done = k + 1
                 bar.update(passes[k])
                 if stop.requested:
                     raise KeyboardInterrupt
                 if done < len(passes) and time.perf_counter() - last_ckpt > checkpoint_seconds:
-                    savez_atomic(ckpt, sums=sums, squares=squares, done=np.array(done), key=np.array(key))
+                    _checkpoint(ckpt, sums, squares, done, key)
                     last_ckpt = time.perf_counter()
         except (KeyboardInterrupt, RuntimeError) as e:
             if isinstance(e, RuntimeError) and "KeyboardInterrupt" not in str(e):
                 raise
             if sums is not None and done < len(passes):
-                savez_atomic(ckpt, sums=sums, squares=squares, done=np.array(done), key=np.array(key))
+                _checkpoint(ckpt, sums, squares, done, key)
             raise KeyboardInterrupt from None
 
-    channels = _channels(sums, squares, spp)
+    channels = _channels(np.asarray(sums, dtype=np.float64), np.asarray(squares, dtype=np.float64), spp)
     bad = gbuffer.nonfinite_report(channels)
     if bad:
         raise FogrefError(f"{scene_path}: the render produced {bad}; no ground truth written "
@@ -241,6 +252,22 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
         write_preview(np.stack([channels[c] for c in "RGB"], axis=-1), out.with_suffix(".png"))
     ckpt.unlink(missing_ok=True)
     return out
+
+
+def _device_f64(x):
+    """A pass's sums as a Dr.Jit float64 tensor (what ``render_moments`` returns; anything
+    array-like is converted)."""
+    import mitsuba as mi
+
+    if isinstance(x, mi.TensorXd):
+        return x
+    return mi.TensorXd(np.ascontiguousarray(np.asarray(x, dtype=np.float64)))
+
+
+def _checkpoint(ckpt: Path, sums, squares, done: int, key: str) -> None:
+    """Write the running sums (copied from the device) atomically to ``ckpt``."""
+    savez_atomic(ckpt, sums=np.asarray(sums, dtype=np.float64), squares=np.asarray(squares, dtype=np.float64),
+                 done=np.array(done), key=np.array(key))
 
 
 def _channels(sums: np.ndarray, squares: np.ndarray, spp: int) -> dict:

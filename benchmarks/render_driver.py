@@ -1,0 +1,327 @@
+"""The render driver's cost: ``fogref render`` against one ``mi.render`` call of the same image.
+
+For each case (the default scene at a resolution and spp) four ways of making the
+same pixel-exact image are timed:
+
+* ``mi.render``   — one ``mi.render(scene, spp=N)`` call on a loaded scene (fogpath's
+  ``render``: all N samples in one wavefront, ``pixel_exact`` on), result copied to numpy;
+* ``render()``    — :func:`fogref.render.render.render` in this process (scene load,
+  passes, float64 moments, EXR written, ``png=False``, no resume);
+* ``CLI``         — ``fogref render ... --no-png --quiet --no-resume`` in a subprocess
+  (Python start-up, imports, variant, scene load, render, EXR);
+* ``mi.render script`` — a subprocess that imports fogref, loads the scene and makes the
+  one ``mi.render`` call (the CLI's fixed costs without the driver).
+
+Every method is called once per case first (tracing + LLVM compile or a kernel-cache
+load: the *first call*), then the cases x methods are timed round-robin ``--repeats``
+times (steady time: median and range).  Compile time = first call - median steady.
+The target of issue 10 is CLI / mi.render <= 1.1 at equal spp.
+
+fogpath's ``render_moments`` is checked first: if evaluating the per-pixel sums runs
+the path-tracing kernel more than once (each ``block_sum`` evaluating one loop output
+separately), that is reported, and ``--eval-fix on`` measures every method with the
+one-line fix applied at run time (``dr.eval(values)`` before the sums; pixels are
+bitwise identical), so the driver's own overhead can be seen.  ``auto`` (default):
+measure as is, and also with the fix when the kernel runs more than once.
+
+    .venv/bin/python benchmarks/render_driver.py [--quick] [--repeats 3]
+        [--cases 320x180x64,320x180x256,640x360x64] [--eval-fix auto|on|off]
+
+Writes reports/benchmarks/render_driver.{json,md}.  No GPU is needed (or used):
+``cuda_ad_rgb`` is measured only with ``--variant cuda_ad_rgb`` on a machine that has one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENE = ROOT / "scenes" / "valley.xml"
+PY = sys.executable
+
+
+# ------------------------------------------------------------------ the one-line fix (experiment)
+
+
+def apply_eval_fix() -> bool:
+    """Patch ``FogPathIntegrator.render_moments`` (this process only) to evaluate every
+    per-sample value in one kernel before the per-pixel sums.  Returns False when the
+    source already does it or has changed so that the patch does not apply."""
+    import fogref_plugins.fogpath as fp
+
+    src = textwrap.dedent(inspect.getsource(fp.FogPathIntegrator.render_moments))
+    if "dr.eval(values" in src or "dr.schedule(values" in src:
+        return False
+    anchors = [a for a in ("    lanes = dr.zeros(mi.Float64, n_pix * spp)\n",
+                           "    lanes = dr.zeros(mi.Float, n_pix * spp)\n") if a in src]
+    if not anchors:
+        return False
+    src = src.replace(anchors[0], "    dr.eval(values)  # benchmark patch: one path-tracing kernel\n" + anchors[0])
+    ns = dict(vars(fp))
+    exec(compile(src, fp.__file__, "exec"), ns)  # noqa: S102 - the plugin's own source, one line added
+    fp.FogPathIntegrator.render_moments = ns["render_moments"]
+    return True
+
+
+def path_kernels_per_call(scene_path=SCENE) -> dict:
+    """How many kernels over all lanes with the path tracer in them one render_moments makes."""
+    import drjit as dr
+
+    from fogref.render.scene import load_scene
+
+    scene, _ = load_scene(scene_path, {"res": 16, "resy": 9})
+    integ = scene.integrator()
+    integ.aovs = True
+    integ.render_moments(scene, 0, 0, 4, pixel_exact=True)
+    dr.sync_thread()
+    dr.kernel_history()
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        s, q = integ.render_moments(scene, 0, 1, 4, pixel_exact=True)
+        dr.eval(s, q)
+        dr.sync_thread()
+        hist = dr.kernel_history()
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    lanes = 16 * 9 * 4
+    big = [k for k in hist if k.get("size") == lanes and (k.get("operation_count") or 0) > 1000]
+    return {"kernels": len(hist), "path_tracing_kernels": len(big),
+            "ops_per_path_kernel": sorted({int(k.get("operation_count") or 0) for k in big})}
+
+
+# ------------------------------------------------------------------ methods
+
+
+def _cli_cmd(w, h, spp, seed, out, fix):
+    args = ["render", str(SCENE), "--set", f"res={w}", "--set", f"resy={h}", "--spp", str(spp), "--seed", str(seed),
+            "--out", str(out), "--no-png", "--quiet", "--no-resume"]
+    if fix:
+        return [PY, __file__, "--_cli-with-fix", "--", *args]
+    return [str(Path(PY).parent / "fogref"), *args]
+
+
+_SCRIPT = """
+import sys, time
+import numpy as np
+fix = sys.argv[5] == "1"
+import fogref
+fogref.set_variant()
+import drjit as dr, mitsuba as mi
+if fix:
+    sys.path.insert(0, {bench!r}); import render_driver; render_driver.apply_eval_fix()
+from fogref.render.scene import load_scene
+w, h, spp, seed = (int(x) for x in sys.argv[1:5])
+scene, _ = load_scene({scene!r}, {{"res": w, "resy": h}})
+integ = scene.integrator(); integ.pixel_exact = True; integ.aovs = True
+img = np.asarray(mi.render(scene, spp=spp, seed=seed)); dr.sync_thread()
+"""
+
+
+def _run(cmd, env=None):
+    t0 = time.perf_counter()
+    r = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    if r.returncode != 0:
+        raise RuntimeError(f"{' '.join(map(str, cmd))} failed ({r.returncode}):\n{r.stderr[-3000:]}")
+    return time.perf_counter() - t0
+
+
+class Case:
+    def __init__(self, w, h, spp, tmp: Path, fix: bool):
+        import fogref.render.render as R
+        from fogref.render.scene import load_scene
+
+        self.w, self.h, self.spp, self.tmp, self.fix = w, h, spp, tmp, fix
+        self.name = f"{w}x{h} {spp} spp"
+        self.scene, _ = load_scene(SCENE, {"res": w, "resy": h})
+        integ = self.scene.integrator()
+        integ.pixel_exact, integ.aovs = True, True
+        self.R = R
+        self.script = tmp / "mi_render_script.py"
+        self.script.write_text(_SCRIPT.format(bench=str(Path(__file__).parent), scene=str(SCENE)))
+        self.passes = R.pass_sizes(w * h, spp, R.MAX_LANES["llvm"])
+
+    def mi_render(self, seed):
+        import drjit as dr
+        import mitsuba as mi
+        import numpy as np
+
+        t0 = time.perf_counter()
+        img = np.asarray(mi.render(self.scene, spp=self.spp, seed=seed))
+        dr.sync_thread()
+        assert img.shape[:2] == (self.h, self.w)
+        return time.perf_counter() - t0
+
+    def render_fn(self, seed):
+        t0 = time.perf_counter()
+        self.R.render(SCENE, self.tmp / "fn.exr", spp=self.spp, seed=seed, overrides={"res": self.w, "resy": self.h},
+                      progress=False, resume=False, png=False)
+        return time.perf_counter() - t0
+
+    def cli(self, seed):
+        return _run(_cli_cmd(self.w, self.h, self.spp, seed, self.tmp / "cli.exr", self.fix))
+
+    def mi_script(self, seed):
+        return _run([PY, str(self.script), str(self.w), str(self.h), str(self.spp), str(seed),
+                     "1" if self.fix else "0"])
+
+
+METHODS = {"mi.render": "mi_render", "render()": "render_fn", "CLI": "cli", "mi.render script": "mi_script"}
+
+
+def measure(cases: list, repeats: int, log) -> dict:
+    res = {c.name: {m: {"first_s": None, "steady_s": []} for m in METHODS} for c in cases}
+    for c in cases:  # first calls: tracing + compile (or kernel-cache load)
+        for m, fn in METHODS.items():
+            t = getattr(c, fn)(0)
+            res[c.name][m]["first_s"] = t
+            log(f"  first call  {c.name:18s} {m:17s} {t:7.2f} s")
+    for r in range(repeats):  # interleaved: background load falls on every method alike
+        for c in cases:
+            for m, fn in METHODS.items():
+                t = getattr(c, fn)(r + 1)
+                res[c.name][m]["steady_s"].append(t)
+                log(f"  repeat {r + 1}    {c.name:18s} {m:17s} {t:7.2f} s")
+    for c in cases:
+        d = res[c.name]
+        for m in METHODS:
+            s = d[m]["steady_s"]
+            d[m]["median_s"] = statistics.median(s)
+            d[m]["min_s"], d[m]["max_s"] = min(s), max(s)
+            d[m]["compile_s"] = max(d[m]["first_s"] - d[m]["median_s"], 0.0)
+        base = d["mi.render"]["median_s"]
+        d["ratio"] = {m: d[m]["median_s"] / base for m in METHODS}
+        # spread of the ratio: each repeat's own ratio (the methods of one repeat ran back to back)
+        d["ratio_per_repeat"] = {m: [a / b for a, b in zip(d[m]["steady_s"], d["mi.render"]["steady_s"])]
+                                 for m in METHODS}
+        d["passes"] = c.passes
+    return res
+
+
+# ------------------------------------------------------------------ report
+
+
+def _md(doc: dict) -> str:
+    L = ["# Render driver vs one `mi.render` call (CPU, llvm_ad_rgb)", "",
+         f"Command: `{doc['command']}`.  Machine: {doc['machine']['cpu']}, {doc['machine']['cores']} cores, "
+         f"shared with other jobs while measured (load average {doc['load_before']} before, "
+         f"{doc['load_after']} after); Mitsuba {doc['machine']['mitsuba']}, Dr.Jit {doc['machine']['drjit']}.", "",
+         "Scene: `scenes/valley.xml` (pixel-exact, all AOVs, max_depth 16).  Methods: `mi.render` = one call on a "
+         "loaded scene; `render()` = `fogref.render.render.render` in the same process (scene load, passes, "
+         "float64 moments, EXR, no PNG); `CLI` = `fogref render ... --no-png --quiet --no-resume` in a subprocess; "
+         "`mi.render script` = a subprocess that imports fogref, loads the scene and calls `mi.render` once.  "
+         "First call = tracing + LLVM compile or kernel-cache load; steady = median of the interleaved repeats "
+         "[min, max]; compile = first - steady.  Ratios are of medians; in brackets the range of the "
+         "per-repeat ratios.", "",
+         f"fogpath `render_moments` as committed: {doc['kernels']['as_is']['path_tracing_kernels']} kernels over "
+         f"all lanes that each contain the path tracer ({doc['kernels']['as_is']['kernels']} kernels in all) "
+         "per call."]
+    if "fixed" in doc["kernels"]:
+        L += [f"With the one-line fix (`dr.eval(values)` before the per-pixel sums, applied at run time by the "
+              f"benchmark): {doc['kernels']['fixed']['path_tracing_kernels']} "
+              f"({doc['kernels']['fixed']['kernels']} in all); the pixels are bitwise identical."]
+    L.append("")
+    for label, runs in doc["runs"].items():
+        L += [f"## {label}", "", "| case | passes (spp each) | method | first call [s] | steady [s] median [min, max] | "
+              "compile [s] | / mi.render |", "|---|---|---|---|---|---|---|"]
+        for case, d in runs.items():
+            for m in METHODS:
+                x = d[m]
+                rr = d["ratio_per_repeat"][m]
+                L.append(f"| {case} | {len(d['passes'])} ({', '.join(map(str, sorted(set(d['passes']))))}) | {m} | "
+                         f"{x['first_s']:.2f} | {x['median_s']:.2f} [{x['min_s']:.2f}, {x['max_s']:.2f}] | "
+                         f"{x['compile_s']:.2f} | {d['ratio'][m]:.2f}x [{min(rr):.2f}, {max(rr):.2f}] |")
+        L.append("")
+    L += ["cuda_ad_rgb: not measured (no GPU was lent to this session); run "
+          "`benchmarks/render_driver.py --variant cuda_ad_rgb` on one.", ""]
+    if doc.get("reading"):
+        L += ["## Reading", "", doc["reading"], ""]
+    return "\n".join(L)
+
+
+def _load():
+    return ", ".join(f"{x:.1f}" for x in os.getloadavg())
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--cases", default="320x180x64,320x180x256,640x360x64", help="WxHxSPP,...")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--eval-fix", choices=("auto", "on", "off"), default="auto")
+    ap.add_argument("--variant", default=None, help="Mitsuba variant (default llvm_ad_rgb)")
+    ap.add_argument("--quick", action="store_true", help="64x36x16 only, 1 repeat (smoke test)")
+    ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks" / "render_driver"))
+    ap.add_argument("--reading", default=None, help="a file whose text goes under 'Reading' in the .md")
+    a = ap.parse_args(argv)
+    if a.quick:
+        a.cases, a.repeats = "64x36x16", 1
+    if a.variant:
+        os.environ["FOGREF_VARIANT"] = a.variant
+    sys.path.insert(0, str(ROOT))
+    import fogref
+
+    fogref.set_variant(a.variant)
+    cases = [tuple(int(x) for x in c.split("x")) for c in a.cases.split(",")]
+    log = lambda s: print(s, flush=True)  # noqa: E731
+    doc = {"command": "python benchmarks/render_driver.py " + " ".join(argv if argv is not None else sys.argv[1:]),
+           "load_before": _load(), "cases": a.cases, "repeats": a.repeats, "kernels": {}, "runs": {}}
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from _common import machine_info
+
+    doc["machine"] = machine_info()
+    doc["kernels"]["as_is"] = path_kernels_per_call()
+    log(f"render_moments as is: {doc['kernels']['as_is']}")
+    import fogref.render.render as R
+
+    doc["max_lanes"] = R.MAX_LANES
+    runs = []
+    if a.eval_fix in ("auto", "off"):
+        runs.append(False)
+    if a.eval_fix == "on" or (a.eval_fix == "auto" and doc["kernels"]["as_is"]["path_tracing_kernels"] > 1):
+        runs.append(True)
+    with tempfile.TemporaryDirectory(prefix="fogref-bench-") as tmp:
+        for fix in runs:
+            if fix:
+                if not apply_eval_fix():
+                    log("fix not applicable (already in the source?)")
+                    continue
+                doc["kernels"]["fixed"] = path_kernels_per_call()
+                log(f"render_moments with the fix: {doc['kernels']['fixed']}")
+            label = "with the one-line render_moments fix (run time patch)" if fix else "fogpath as committed"
+            # the as-is run is slow (the path tracer runs once per output group): its first case only
+            cs = cases if (fix or len(runs) == 1) else cases[:1]
+            log(f"== {label}: {[f'{w}x{h}x{s}' for w, h, s in cs]}")
+            d = Path(tmp) / ("fix" if fix else "asis")
+            d.mkdir()
+            doc["runs"][label] = measure([Case(w, h, s, d, fix) for w, h, s in cs], a.repeats, log)
+    doc["load_after"] = _load()
+    if a.reading:
+        doc["reading"] = Path(a.reading).read_text().strip()
+    out = Path(a.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.with_suffix(".json").write_text(json.dumps(doc, indent=2) + "\n")
+    out.with_suffix(".md").write_text(_md(doc))
+    log(f"wrote {out.with_suffix('.md')} and .json")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) > 1 and sys.argv[1] == "--_cli-with-fix":  # the CLI with the fix applied
+        sys.path.insert(0, str(ROOT))
+        import fogref
+
+        fogref.set_variant()
+        apply_eval_fix()
+        from fogref.cli import main as cli_main
+
+        sys.exit(cli_main(sys.argv[3:]))
+    main()
