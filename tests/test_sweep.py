@@ -149,3 +149,90 @@ def test_sweep_on_two_worker_cluster_records_failure_resumes_and_reuses_truths(t
     df3 = pd.read_parquet(third["parquet"])
     assert third["ran"] == 4 and df3[df3["status"] == "ok"]["truth_cached"].all()
     assert all(json.loads(m)["StartDistance"] == 500.0 for m in df3[df3["status"] == "ok"]["model_parameters"])
+
+
+KILL = ('[render]\nspp = 4\noverrides = { res = 16, resy = 9, max_depth = 3 }\n'
+        '[design]\nkind = "list"\n'
+        '[parameters.sun_elevation]\nvalues = [5, 12, 20, 30, 40, 60]\n'
+        '[parameters.g]\nvalues = [0.21, 0.31, 0.41, 0.51, 0.61, 0.71]\n'
+        '[execution]\nretries = 1\n[outputs]\nplots = false\n')
+
+
+@pytest.mark.render
+def test_worker_killed_mid_sweep_is_recorded_and_nothing_else_is_lost(tmp_path):
+    """SIGKILL one of two worker processes while it runs a configuration.
+
+    The scheduler is told not to reschedule a task whose worker died
+    (``allowed-failures = 0``), so that configuration is recorded as failed with
+    Dask's KilledWorker error; every other configuration finishes (on the
+    surviving worker or the one the nanny restarts), and ``retry_failed`` then
+    completes the sweep without running the finished ones again.  (With Dask's
+    default ``allowed-failures = 3`` the task is simply run again elsewhere.)
+    """
+    import logging
+    import os
+    import signal
+    import threading
+
+    dask = pytest.importorskip("dask")
+    distributed = pytest.importorskip("dask.distributed")
+    cfg = {"distributed.scheduler.allowed-failures": 0,
+           # a lock held by the killed worker is freed after 3 s instead of 30 s
+           "distributed.scheduler.locks.lease-timeout": "3s",
+           "distributed.scheduler.locks.lease-validation-interval": "1s"}
+    p = _toml(tmp_path, MODELS + KILL)
+    with dask.config.set(cfg), distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+            silence_logs=logging.CRITICAL) as cluster, distributed.Client(cluster) as client:
+        addr = cluster.scheduler_address
+        result = {}
+
+        def sweep():
+            try:
+                result["info"] = S.run_sweep(p, scheduler=addr, progress=False, drjit_threads=1)
+            except BaseException as e:  # noqa: BLE001 - reported by the assertion below
+                result["error"] = e
+
+        th = threading.Thread(target=sweep, daemon=True)
+        th.start()
+        # wait until one configuration is finished and another is running, then kill its worker
+        victim, deadline = None, time.time() + 300
+        while victim is None and time.time() < deadline and th.is_alive():
+            done = len(list((tmp_path / "configs").glob("*.json")))
+            busy = {w: [k for k in keys if str(k).startswith("fogref-sweep-")]
+                    for w, keys in client.processing().items()}
+            busy = {w: ks for w, ks in busy.items() if ks}
+            if done >= 1 and busy:
+                victim = sorted(busy)[0]
+            else:
+                time.sleep(0.05)
+        assert victim is not None, "no configuration was running on a worker"
+        pids = client.run(os.getpid)
+        killed_pid, in_flight = pids[victim], busy[victim]
+        done_before = len(list((tmp_path / "configs").glob("*.json")))
+        os.kill(killed_pid, signal.SIGKILL)
+        th.join(timeout=600)
+        assert not th.is_alive(), "the sweep did not finish after a worker was killed"
+        assert "error" not in result, repr(result.get("error"))
+        info = result["info"]
+        assert done_before < 6  # killed mid-sweep
+
+        import pandas as pd
+
+        df = pd.read_parquet(info["parquet"])
+        assert info["configs"] == 6 and len(df) == 6 and len(list((tmp_path / "configs").glob("*.json"))) == 6
+        bad, ok = df[df["status"] == "error"], df[df["status"] == "ok"]
+        assert 1 <= len(bad) == info["failed"] <= len(in_flight)
+        assert set("fogref-sweep-" + bad["config_id"]) <= set(in_flight)
+        assert bad["error"].str.contains("KilledWorker|died|lost", case=False).all(), list(bad["error"])
+        assert len(ok) == 6 - len(bad) and (ok["final.all.rmse"] > 0).all()
+        assert not set(in_flight) & set("fogref-sweep-" + ok["config_id"][ok["worker_pid"] == killed_pid])
+
+        # the recorded failures run again; the finished configurations are not touched
+        stamps = {f: f.stat().st_mtime_ns for f in (tmp_path / "configs").glob("*.json")
+                  if json.loads(f.read_text())["status"] == "ok"}
+        again = S.run_sweep(p, scheduler=addr, progress=False, drjit_threads=1, retry_failed=True)
+        assert again["ran"] == len(bad) and again["failed"] == 0
+        assert stamps == {f: f.stat().st_mtime_ns for f in stamps}
+        df2 = pd.read_parquet(again["parquet"])
+        assert len(df2) == 6 and (df2["status"] == "ok").all()
