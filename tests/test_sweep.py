@@ -236,3 +236,22 @@ def test_worker_killed_mid_sweep_is_recorded_and_nothing_else_is_lost(tmp_path):
         assert stamps == {f: f.stat().st_mtime_ns for f in stamps}
         df2 = pd.read_parquet(again["parquet"])
         assert len(df2) == 6 and (df2["status"] == "ok").all()
+
+
+@pytest.mark.render
+def test_budget_steps_per_configuration(tmp_path):
+    """``[outputs] budget = true``: one sun-less render per configuration, Unreal's budget
+    steps as columns; their shares of the squared error sum to 1."""
+    from fogref.study.budget import STEPS
+
+    body = MODELS + ('[render]\nspp = 4\noverrides = { res = 16, resy = 9, max_depth = 3 }\n'
+                     '[outputs]\nbudget = true\nplots = false\n')
+    spec = S.load_sweep(_toml(tmp_path, body))
+    (cfg,) = S.build_configs(spec)
+    (plain,) = S.build_configs(S.load_sweep(_toml(tmp_path / "plain", body.split("[outputs]")[0])))
+    assert cfg["budget"] and not plain["budget"] and cfg["id"] != plain["id"]  # a budget sweep is not resumed
+    row = S.run_config(cfg)["rows"][0]
+    shares = [row[f"budget.{k}.share"] for k, _, _ in STEPS]
+    assert sum(shares) == pytest.approx(1.0, abs=1e-9)
+    assert row["budget.total.rmse"] > 0 and row["budget.multiple.rmse_stderr"] >= 0
+    assert Path(row["budget.sky_only_truth"]).is_file() and len(list((tmp_path / "cache").glob("*.exr"))) == 2

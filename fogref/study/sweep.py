@@ -48,6 +48,8 @@ Example ``SWEEP.toml``::
     table = "results"                  # results.csv, results.parquet
     plots = true                       # plots/<metric>_vs_<parameter>.png
     plot_metrics = ["final.all.rmse", "final.all.relmse"]   # default: every final.all.* metric
+    budget = false                     # true: Unreal's error budget for every "ue4" model (one extra
+                                       # render per configuration: the scene without its sun)
 
 Output folder::
 
@@ -378,12 +380,12 @@ def load_sweep(path) -> SweepSpec:
     retries = ex.get("retries", 1)
     if not isinstance(retries, int) or retries < 0:
         raise _err(path, "execution", f"retries must be an integer >= 0, got {retries!r}")
-    ou = table("outputs", ("table", "plots", "plot_metrics"))
+    ou = table("outputs", ("table", "plots", "plot_metrics", "budget"))
     return SweepSpec(path=path, name=str(sw.get("name", path.stem)), scenes=scene_paths, out=out, cache=cache,
                      spp=spp, seed=seed, seed_policy=policy, pixel_filter=str(rd.get("pixel_filter", "centre")),
                      overrides=overrides, parameters=pspecs, design=design, models=mspecs, retries=retries,
                      table=str(ou.get("table", "results")), plots=bool(ou.get("plots", True)),
-                     plot_metrics=ou.get("plot_metrics"))
+                     plot_metrics=ou.get("plot_metrics"), budget=bool(ou.get("budget", False)))
 
 
 def _spaced(lo, hi, num, log):
@@ -504,9 +506,10 @@ def build_configs(spec: SweepSpec) -> list[dict]:
             models = [{**m, "params": model_params[m["label"]]} for m in spec.models]
             cfg = {"scene": str(scene), "scene_sha256": scene_sha, "values": pt, "overrides": overrides,
                    "models": models, "spp": spec.spp, "seed": seed, "pixel_filter": spec.pixel_filter,
-                   "truth": str(spec.cache / f"{key}.exr")}
+                   "truth": str(spec.cache / f"{key}.exr"), "budget": bool(getattr(spec, "budget", False))}
             cfg["id"] = _hash({k: cfg[k] for k in ("scene_sha256", "overrides", "models", "spp", "seed",
-                                                   "pixel_filter")} | {"fogref": fogref.__version__})
+                                                   "pixel_filter")} | {"fogref": fogref.__version__}
+                            | ({"budget": True} if cfg["budget"] else {}))
             out.append(cfg)
     return out
 
@@ -606,8 +609,52 @@ def run_config(cfg: dict, drjit_threads: int | None = None) -> dict:
             metrics: dict = {}
             _flatten("", report.get("metrics", {}), metrics)
             row.update(metrics)
+            if cfg.get("budget") and m["name"] == "ue4":
+                row.update(_budget_columns(cfg, truth, model))
             rows.append(row)
     return {"id": cfg["id"], "provenance": prov, "rows": rows}
+
+
+def _budget_columns(cfg: dict, truth_path: Path, model) -> dict:
+    """Unreal's error budget (:mod:`fogref.study.budget`) of one configuration as table columns.
+
+    Renders (or takes from the cache) the scene without its sun at the truth's spp,
+    seed and overrides, fits the cosine lobe like ``fogref study``, builds the chain
+    ``S_0 .. S_9`` against ``model``'s parameters and returns, per step,
+    ``budget.<step>.share`` (of the total squared error; they sum to 1),
+    ``budget.<step>.rmse`` and its ``rmse_stderr`` (from the truths' stderr channels),
+    plus ``budget.total.rmse``.  The second-seed noise of ``fogref study`` is not
+    computed (it would double the renders).
+    """
+    from fogref.gbuffer import load_truth
+    from fogref.mapping import PhysicalScene, fit_unreal, sample_views
+    from fogref.study import budget as B
+    from fogref.study.unreal import sunless_scene
+
+    import fogref
+
+    nosun = sunless_scene(Path(cfg["scene"]), truth_path.parent / "scenes" / cfg["scene_sha256"][:16])
+    key = truth_cache_key(_file_sha256(nosun), cfg["overrides"], cfg["spp"], cfg["seed"], fogref.__version__,
+                          cfg["pixel_filter"])
+    sky_path = truth_path.parent / f"{key}.exr"
+    with _truth_lock(f"fogref-truth-{key}"):
+        if not sky_path.is_file():
+            _render(nosun, sky_path, spp=cfg["spp"], seed=cfg["seed"], overrides=cfg["overrides"],
+                    pixel_filter=cfg["pixel_filter"])
+    truth, sky = load_truth(truth_path), load_truth(sky_path)
+    pf = PhysicalScene.from_params(truth.params)
+    lobe = fit_unreal(pf, sample_views(pf.camera), sun_attenuation=False, fit_start=False)
+    S = B.chain(truth, sky.single, pf, lobe.params, model.params)
+    res = B.attribute(S, truth.hit, truth.surface_valid,
+                      B.chain_noise(truth, sky.stderr["single"], lobe.params, model.params))
+    cols = {"budget.total.rmse": res["total"]["rmse"]["all"], "budget.sky_only_truth": str(sky_path)}
+    for st in res["steps"]:
+        cols[f"budget.{st['key']}.share"] = st["share"]
+        cols[f"budget.{st['key']}.rmse"] = st["rmse"]["all"]
+        for k in ("rmse_stderr", "rmse_debiased"):
+            if k in st:
+                cols[f"budget.{st['key']}.{k}"] = st[k]
+    return cols
 
 
 # ---------------------------------------------------------------- the client
