@@ -410,6 +410,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         if self.aovs:
             by_name = dict(zip(["R", "G", "B"] + AOV_NAMES, values))
             squared = [by_name[c] for g in gbuffer.SQUARED_GROUPS for c in gbuffer.channel_names(g)]
+        dr.eval(values)  # one kernel for every output; otherwise each block sum re-runs the path loop (17x)
         lanes = dr.zeros(mi.Float64, n_pix * spp)
 
         def per_pixel(vals):
