@@ -35,7 +35,7 @@ from fogref._version import __version__
 #: ``import fogref`` stays free of work.
 _LAZY = {
     "load_truth": "fogref.gbuffer", "Truth": "fogref.gbuffer",
-    "cached_truth": "fogref.compare.truth_cache",
+    "cached_truth": "fogref.render.cache",
     "check": "fogref.compare.check", "assert_fog_matches": "fogref.compare.check",
     "evaluate_model": "fogref.compare.check", "synthetic_truth": "fogref.compare.check",
     "CheckResult": "fogref.compare.check",

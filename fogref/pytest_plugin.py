@@ -9,7 +9,7 @@ fogref has it::
 
 * fixture ``fogref_truth``: a factory ``(scene, res=(32, 18), spp=16, seed=0,
   overrides=None) -> Truth``.  The truth is rendered on first use and cached (see
-  :mod:`fogref.compare.truth_cache`) under ``$FOGREF_CACHE`` if set, else in
+  :mod:`fogref.render.cache`) under ``$FOGREF_CACHE`` if set, else in
   pytest's cache folder (``.pytest_cache/d/fogref_truths``).  A relative scene path
   is looked up in the working directory, then under pytest's root directory.
 * :func:`assert_fog_matches` (re-exported from :mod:`fogref.compare.check`): runs
@@ -32,7 +32,7 @@ __all__ = ["assert_fog_matches", "check", "fogref_truth"]
 @pytest.fixture(scope="session")
 def fogref_truth(request):
     """Factory ``(scene, res=(32, 18), spp=16, seed=0, overrides=None, **render_options) -> Truth`` (cached)."""
-    from fogref.compare.truth_cache import cached_truth
+    from fogref.render.cache import cached_truth
 
     env = os.environ.get("FOGREF_CACHE")
     cache = Path(env) if env else request.config.cache.mkdir("fogref_truths")

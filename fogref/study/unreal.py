@@ -100,37 +100,15 @@ def sunless_scene(scene: Path, out_dir: Path) -> Path:
     return out
 
 
-def _renderer_hash() -> str:
-    """Hash of the renderer's source, so cached renders are redone when it changes."""
-    import hashlib
-
-    root = Path(__file__).resolve().parents[2]
-    h = hashlib.sha1()
-    for p in sorted([*root.glob("plugins/*.py"), *root.glob("fogref/media/*.py"), *root.glob("fogref/render/*.py")]):
-        h.update(p.read_bytes())
-    return h.hexdigest()[:16]
-
-
 def _render_cached(scene: Path, out: Path, spp: int, seed: int, overrides: dict, log,
-                  pixel_filter: str = "centre") -> Path:
-    from fogref.render.render import render
+                   pixel_filter: str = "centre") -> Path:
+    """A truth of ``scene`` from fogref's render cache (:mod:`fogref.render.cache`) in ``out``'s folder."""
+    from fogref.render.cache import render_cached
 
-    key = {"scene_sha256": _sha256(scene), "spp": spp, "seed": seed, "overrides": overrides,
-           "pixel_filter": pixel_filter, "renderer": _renderer_hash()}
-    stamp = out.with_suffix(".key.json")
-    if out.is_file() and stamp.is_file():
-        try:
-            if json.loads(stamp.read_text()) == key:
-                load_truth(out)
-                log(f"  cached {out}")
-                return out
-        except (OSError, ValueError, FogrefError):
-            pass
     t = time.perf_counter()
-    render(scene, out, spp=spp, seed=seed, overrides=overrides, progress=False, png=False, pixel_filter=pixel_filter)
-    write_text(stamp, json.dumps(key))
-    log(f"  rendered {out} ({time.perf_counter() - t:.1f} s)")
-    return out
+    path, cached = render_cached(scene, spp, seed, overrides, cache_dir=out.parent, pixel_filter=pixel_filter)
+    log(f"  {'cached' if cached else 'rendered'} {path} ({time.perf_counter() - t:.1f} s)")
+    return path
 
 
 def open_plane_check(scene: Path, rdir: Path, log, spp: int = 64, res=(160, 90)) -> dict:

@@ -3,8 +3,10 @@
 The key holds the scene file's content (and the content of the files it names with
 ``filename``, e.g. meshes), the overrides (``res``, ``resy`` and any ``--set``), the
 sample count, the seed, the pixel filter, fogref's version and a hash of the
-renderer's source (``fogref/render``, ``fogref/gbuffer.py``, the plugins), so an
-edited scene or a changed renderer never returns a stale truth.
+renderer's source (``fogref/media``, ``fogref/render``, ``fogref/gbuffer.py``, the
+plugins), so an edited scene or a changed renderer never returns a stale truth.
+This is fogref's one render cache: the pytest plugin, ``fogref study`` and
+``fogref sweep`` all go through it.
 
 Cache folder: ``cache_dir``, else ``$FOGREF_CACHE``, else ``~/.cache/fogref/truths``.
 Each truth is one EXR named by its key; writes are atomic, so parallel test workers
@@ -34,7 +36,7 @@ def _renderer_hash() -> str:
     import fogref
 
     root = Path(fogref.__file__).resolve().parent
-    files = sorted((root / "render").glob("*.py")) + [root / "gbuffer.py"]
+    files = sorted((root / "media").glob("*.py")) + sorted((root / "render").glob("*.py")) + [root / "gbuffer.py"]
     plugins = root.parent / "plugins"
     if not plugins.is_dir():
         try:
@@ -78,6 +80,35 @@ def truth_key(scene, spp: int, seed: int, overrides: dict | None = None, pixel_f
     return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:24]
 
 
+def render_cached(scene, spp: int = 16, seed: int = 0, overrides: dict | None = None, cache_dir=None,
+                  variant: str | None = None, pixel_filter: str = "centre") -> tuple[Path, bool]:
+    """The cached EXR of a truth, rendered first if needed: ``(path, was_cached)``.
+
+    Parameters as :func:`cached_truth` (``overrides`` holds ``res``/``resy`` if wanted).
+    A cached file that no longer reads as a truth (older schema, damaged) is rendered again.
+    """
+    if int(spp) < 1 or int(seed) < 0:
+        raise FogrefError(f"spp {spp} must be >= 1 and seed {seed} >= 0")
+    over = dict(overrides or {})
+    key = truth_key(scene, spp, seed, over, pixel_filter)
+    folder = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    path = folder / f"{Path(scene).stem}-{key}.exr"
+    from fogref.gbuffer import load_truth
+
+    if path.is_file():
+        try:
+            load_truth(path)
+            return path, True
+        except FogrefError:
+            path.unlink(missing_ok=True)
+    from fogref.render.render import render
+
+    folder.mkdir(parents=True, exist_ok=True)
+    render(scene, path, spp=int(spp), seed=int(seed), variant=variant, overrides=over, progress=False,
+           resume=False, png=False, pixel_filter=pixel_filter)
+    return path, False
+
+
 def cached_truth(scene, res=(32, 18), spp: int = 16, seed: int = 0, overrides: dict | None = None,
                  cache_dir=None, variant: str | None = None, pixel_filter: str = "centre"):
     """A ground truth of ``scene``, rendered on first use and read from the cache after.
@@ -98,35 +129,21 @@ def cached_truth(scene, res=(32, 18), spp: int = 16, seed: int = 0, overrides: d
     cache_dir : path, optional
         See the module docstring.
     variant, pixel_filter :
-        Passed to :func:`fogref.render.render.render` (not part of the key: a variant
-        changes only float rounding).
+        Passed to :func:`fogref.render.render.render` (the variant is not part of the
+        key: it changes only float rounding).
 
     Returns
     -------
     Truth
         From :func:`fogref.gbuffer.load_truth`; ``truth.path`` is the cached EXR.
     """
+    from fogref.gbuffer import load_truth
+
     over = dict(overrides or {})
     if res is not None:
         w, h = (int(x) for x in res)
         if w < 1 or h < 1:
             raise FogrefError(f"res: {tuple(res)} must be (width, height) >= 1 px")
         over.update({"res": w, "resy": h})
-    if int(spp) < 1 or int(seed) < 0:
-        raise FogrefError(f"spp {spp} must be >= 1 and seed {seed} >= 0")
-    key = truth_key(scene, spp, seed, over, pixel_filter)
-    folder = Path(cache_dir) if cache_dir is not None else default_cache_dir()
-    path = folder / f"{Path(scene).stem}-{key}.exr"
-    from fogref.gbuffer import load_truth
-
-    if path.is_file():
-        try:
-            return load_truth(path)
-        except FogrefError:
-            path.unlink(missing_ok=True)  # an older schema or a damaged file: render again
-    from fogref.render.render import render
-
-    folder.mkdir(parents=True, exist_ok=True)
-    render(scene, path, spp=int(spp), seed=int(seed), variant=variant, overrides=over, progress=False,
-           resume=False, png=False, pixel_filter=pixel_filter)
+    path, _ = render_cached(scene, spp, seed, over, cache_dir, variant, pixel_filter)
     return load_truth(path)
