@@ -22,7 +22,7 @@ import fogref  # noqa: E402
 fogref.set_variant()  # LLVM, the variant ($FOGREF_VARIANT or llvm_ad_rgb), the plugins
 
 
-def timed_render(scene, spp: int, seed: int):
+def timed_render(scene, spp: int, seed: int, channels=slice(0, 3)):
     """(rgb float64 image, wall seconds): ``mi.render`` then ``dr.sync_thread()``
     inside the timed region; the copy to numpy is outside it."""
     t0 = time.perf_counter()
@@ -30,7 +30,7 @@ def timed_render(scene, spp: int, seed: int):
     dr.eval(img)
     dr.sync_thread()
     t = time.perf_counter() - t0
-    return np.array(img, dtype=np.float64)[..., :3], t
+    return np.array(img, dtype=np.float64)[..., channels], t
 
 
 def kernel_profile(scene, spp: int, seed: int) -> dict:

@@ -50,7 +50,10 @@ import math
 import numpy as np
 
 SCENES = ("valley", "valley_open", "two_layer", "zero_falloff")
-METHODS = ("fogpath", "volpath_hf", "grid64", "grid256", "homogeneous")
+METHODS = ("fogpath", "fogpath_before", "volpath_hf", "grid64", "grid256", "homogeneous")
+#: fogpath as it was before issue 11 (one sun sample, sun sampling only in unbounded
+#: one-layer fog, no sky control variate), measured beside today's defaults
+BEFORE_ISSUE_11 = {"sun_samples": 1, "sun_sampling_mixture": False, "sky_cv": "off"}
 
 
 def _rgb(v):
@@ -112,7 +115,7 @@ def methods_for(name: str) -> list[str]:
     spec = scene_spec(name)
     homog = all(L[1] == 0 for L in spec["fog"]["layers"])
     if spec["bounds"] is None:  # grids and stock homogeneous need a box
-        return ["fogpath", "volpath_hf"]
+        return ["fogpath", "fogpath_before", "volpath_hf"]
     return [m for m in METHODS if m != "homogeneous" or homog]
 
 
@@ -162,10 +165,12 @@ def build(mi, name: str, method: str, res=(96, 54), max_depth: int = 8, sun: boo
     spec = scene_spec(name)
     T = mi.ScalarTransform4f()
     f = spec["fog"]
-    integ = {"type": "fogpath" if method == "fogpath" else "volpath", "max_depth": max_depth}
+    integ = {"type": "fogpath" if method.startswith("fogpath") else "volpath", "max_depth": max_depth}
+    if method == "fogpath_before":
+        integ.update(BEFORE_ISSUE_11)
     integ.update(integrator_over or {})
     extra = {}
-    if method in ("fogpath", "volpath_hf"):
+    if method in ("fogpath", "fogpath_before", "volpath_hf"):
         medium = mi.load_dict(heightfog_dict(mi, spec, **(fog_over or {})))
     elif method.startswith("grid"):
         medium = grid_medium(mi, spec, int(method[4:]))

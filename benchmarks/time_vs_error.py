@@ -44,21 +44,53 @@ from _common import ROOT, dr, kernel_profile, machine_info, median, mi, np, time
 
 LADDER = (1, 4, 16, 64, 256, 1024)
 REPEATS = {1: 5, 4: 5, 16: 5, 64: 3, 256: 2, 1024: 1}
-LABEL = {"fogpath": "fogpath (analytic)", "volpath_hf": "volpath + heightfog (delta tracking)",
+LABEL = {"fogpath": "fogpath (analytic)", "fogpath_before": "fogpath before issue 11", "volpath_hf": "volpath + heightfog (delta tracking)",
          "grid64": "volpath + heterogeneous 1x64x1", "grid256": "volpath + heterogeneous 1x256x1",
          "homogeneous": "volpath + homogeneous (null cube)"}
+
+
+#: R,G,B then inscatter.R,G,B in a fogpath render (mi.render: R,G,B + AOVs)
+def _insc_channels():
+    from fogref import gbuffer
+
+    names = gbuffer.sample_channel_names()
+    return [0, 1, 2] + [3 + names.index(f"inscatter.{c}") for c in "RGB"]
+
+
+def variance_shares(scene, spp=64, seeds=(31, 32)):
+    """Per-pixel variance of one sample of each part, summed over pixels and RGB, as a
+    share of the final image's (the parts are correlated: shares need not add to 1)."""
+    from fogref import gbuffer
+
+    integ = scene.integrator()
+    names = ["R", "G", "B"] + integ.aov_names()
+    acc = {}
+    for s in seeds:
+        sums, sq = integ.render_moments(scene, 0, s, spp)
+        sums, sq = np.array(sums, np.float64), np.array(sq, np.float64)
+        k = 0
+        for g in gbuffer.SQUARED_GROUPS:
+            idx = [names.index(c) for c in (["R", "G", "B"] if g == "final" else gbuffer.channel_names(g))]
+            m = sums[..., idx] / spp
+            acc.setdefault(g, []).append(float((sq[..., k:k + 3] / spp - m * m).sum()))
+            k += 3
+    tot = float(np.mean(acc["final"]))
+    out = {g: float(np.mean(v)) / tot for g, v in acc.items() if g in ("attenuated_surface", "inscatter", "single",
+                                                                          "multiple")}
+    out["final_variance_per_sample"] = tot
+    return out
 
 
 def rel(x, ref_mean):
     return x / ref_mean if ref_mean > 0 else float("nan")
 
 
-def render_reference(scene, spp, chunks=8, seed0=900_000):
+def render_reference(scene, spp, chunks=8, seed0=900_000, channels=slice(0, 3)):
     """Mean and per-pixel variance of the mean from ``chunks`` independent renders."""
     per = max(spp // chunks, 1)
     imgs, ts = [], []
     for k in range(chunks):
-        img, t = timed_render(scene, per, seed0 + k)
+        img, t = timed_render(scene, per, seed0 + k, channels)
         imgs.append(img)
         ts.append(t)
     a = np.stack(imgs)
@@ -131,7 +163,8 @@ def run_scene(name, args, rng):
         _, t = timed_render(scenes[m], 1, 12345)
         first[m] = t
     # reference
-    ref, var_ref, t_ref, ref_spp = render_reference(scenes["fogpath"], args.ref_spp)
+    refx, var_refx, t_ref, ref_spp = render_reference(scenes["fogpath"], args.ref_spp, channels=_insc_channels())
+    ref, var_ref, ref_i, var_ref_i = refx[..., :3], var_refx[..., :3], refx[..., 3:], var_refx[..., 3:]
     ref_mean = float(ref.mean())
     out["reference"] = {"method": "fogpath", "spp": ref_spp, "chunks": 8, "time_s": t_ref, "mean": ref_mean,
                         "rms_sd_of_mean": float(math.sqrt(var_ref.mean())),
@@ -150,11 +183,14 @@ def run_scene(name, args, rng):
             order = methods[r % len(methods):] + methods[:r % len(methods)]
             for m in order:
                 seed += 1
-                img, t = timed_render(scenes[m], spp, seed)
-                mse = float(((img - ref) ** 2).mean())
-                d = rec[m].setdefault(spp, {"times": [], "mse_raw": []})
+                img, t = timed_render(scenes[m], spp, seed, _insc_channels() if m.startswith("fogpath") else slice(0, 3))
+                mse = float(((img[..., :3] - ref) ** 2).mean())
+                d = rec[m].setdefault(spp, {"times": [], "mse_raw": [], "mse_insc_raw": []})
                 d["times"].append(t)
                 d["mse_raw"].append(mse)
+                if m.startswith("fogpath"):
+                    d["mse_insc_raw"].append(float(((img[..., 3:] - ref_i) ** 2).mean()))
+                img = img[..., :3]
                 pool[m].append((img, spp))
         print(f"[{name}] spp {spp}: " + ", ".join(
             f"{m} {median(rec[m][spp]['times']):.3f}s" for m in methods), flush=True)
@@ -169,7 +205,12 @@ def run_scene(name, args, rng):
             mse = float(np.mean(d["mse_raw"])) - vref
             rmse = math.sqrt(max(mse, 1e-30))
             noise = math.sqrt(max(mse - max(b["bias2"], 0.0), 1e-30))
+            if d["mse_insc_raw"]:
+                ladder_insc = math.sqrt(max(float(np.mean(d["mse_insc_raw"])) - float(var_ref_i.mean()), 1e-30))
+            else:
+                ladder_insc = None
             ladder.append({"spp": spp, "repeats": len(d["times"]), "time_median_s": median(d["times"]),
+                           "rmse_inscatter": ladder_insc,
                            "time_min_s": float(min(d["times"])), "times_s": d["times"],
                            "mse_raw": float(np.mean(d["mse_raw"])), "mse": mse, "rmse": rmse,
                            "rel_rmse": rel(rmse, ref_mean), "noise_rmse": noise, "rel_noise_rmse": rel(noise, ref_mean)})
@@ -188,11 +229,25 @@ def run_scene(name, args, rng):
             tfn, hown = fogpath_time_at(p["noise_rmse"], f_pts_noise)
             p["equal_noise_ratio"] = p["time_median_s"] / tfn
             p["equal_noise_how"] = hown
+        if "fogpath_before" in out["methods"]:  # the same ratio against fogpath as it was
+            b_pts = [(p["time_median_s"], p["rmse"]) for p in out["methods"]["fogpath_before"]["ladder"]]
+            for p in out["methods"][m]["ladder"]:
+                tb, _ = fogpath_time_at(p["rmse"], b_pts)
+                p["equal_error_ratio_vs_before"] = p["time_median_s"] / tb
         top = out["methods"][m]["ladder"][-1]
         out["methods"][m]["equal_error_ratio_top"] = top["equal_error_ratio"]
         out["methods"][m]["equal_noise_ratio_top"] = top["equal_noise_ratio"]
         # time per sample per pixel at the top spp (steady)
+        if m == "fogpath_before":  # inscatter.* alone: only fogpath writes it
+            f_pts_i = [(p["time_median_s"], p["rmse_inscatter"]) for p in out["methods"]["fogpath"]["ladder"]]
+            for p in out["methods"][m]["ladder"]:
+                tfi, _ = fogpath_time_at(p["rmse_inscatter"], f_pts_i)
+                p["equal_error_ratio_inscatter"] = p["time_median_s"] / tfi
+            out["methods"][m]["equal_error_ratio_inscatter_top"] = out["methods"][m]["ladder"][-1][
+                "equal_error_ratio_inscatter"]
         out["methods"][m]["ns_per_sample_top"] = top["time_median_s"] / (top["spp"] * args.res[0] * args.res[1]) * 1e9
+    # where the variance lives, before and after issue 11 (one sample, per part)
+    out["variance_shares"] = {m: variance_shares(scenes[m]) for m in methods if m.startswith("fogpath")}
     # where the time goes (kernel history), fogpath and the slowest stock method
     prof_spp = args.ladder[-2] if len(args.ladder) > 1 else args.ladder[-1]
     out["profile"] = {}
@@ -225,7 +280,7 @@ def write_reports(res, args, outdir: Path):
 
     names = list(res["scenes"])
     fig, axes = plt.subplots(1, len(names), figsize=(5.2 * len(names), 4.4), squeeze=False)
-    colors = {"fogpath": "C3", "volpath_hf": "C0", "grid64": "C2", "grid256": "C1", "homogeneous": "C4"}
+    colors = {"fogpath": "C3", "fogpath_before": "C5", "volpath_hf": "C0", "grid64": "C2", "grid256": "C1", "homogeneous": "C4"}
     for ax, sname in zip(axes[0], names):
         sc = res["scenes"][sname]
         for m, d in sc["methods"].items():
@@ -277,6 +332,28 @@ def summary_md(res, args) -> str:
             L.append(f"| {sname} | {m} | " + " | ".join(cells) + f" | {d['equal_noise_ratio_top']:.2f} |")
     L.append("\n`*`: outside fogpath's measured range (extrapolated with t ~ RMSE^-2, or clamped at fogpath's "
              "1-spp time).  Noise-only: the same ratio with the method's bias removed from its error.\n")
+    L += ["## Issue 11: before and after, side by side in this run\n",
+          "`fogpath_before` = fogpath with one sun sample, sun sampling only in unbounded one-layer fog and no "
+          "sky control variate (`benchmarks/_scenes.py: BEFORE_ISSUE_11`); `fogpath` = today's defaults. "
+          "Ratios at the top of the ladder (equal-error time ratio; > 1: the second is faster).\n",
+          "| scene | method | ratio vs fogpath (after) | ratio vs fogpath_before | inscatter.* only: before vs after |",
+          "|---|---|---|---|---|"]
+    for sname, sc in res["scenes"].items():
+        for m, d in sc["methods"].items():
+            if m == "fogpath":
+                continue
+            top = d["ladder"][-1]
+            ins = f"{d['equal_error_ratio_inscatter_top']:.2f}" if "equal_error_ratio_inscatter_top" in d else "n/a (no split)"
+            L.append(f"| {sname} | {m} | {top['equal_error_ratio']:.2f} | {top.get('equal_error_ratio_vs_before', float('nan')):.2f} | {ins} |")
+    L += ["\nStock volpath has no `inscatter.*` output (it does not split the fog's light from the surface's), so the "
+          "inscatter-only ratio is fogpath against itself before the change.\n",
+          "### Where the variance lives (per-sample variance of each part / that of the final image, 64 spp, 2 seeds)\n",
+          "| scene | method | final var/sample | attenuated surface | single | multiple | inscatter |", "|---|---|---|---|---|---|---|"]
+    for sname, sc in res["scenes"].items():
+        for m, v in sc.get("variance_shares", {}).items():
+            L.append(f"| {sname} | {m} | {v['final_variance_per_sample']:.4g} | {v['attenuated_surface']:.2f} | "
+                     f"{v['single']:.2f} | {v['multiple']:.2f} | {v['inscatter']:.2f} |")
+    L.append("\nThe parts are correlated (a camera ray either scatters or reaches the surface), so the shares need not add to 1.\n")
     L += ["## Bias against the fogpath reference (pooled ladder images vs reference)\n",
           "| scene | method | pooled spp | rel. RMS bias [95% CI] | rel. mean diff [95% CI] | chi2/pixel |",
           "|---|---|---|---|---|---|"]
@@ -313,17 +390,20 @@ def main(argv=None):
     ap.add_argument("--scenes", nargs="*", default=list(S.SCENES))
     ap.add_argument("--max-depth", type=int, default=8)
     ap.add_argument("--ref-spp", type=int, default=None)
+    ap.add_argument("--max-spp", type=int, default=1024, help="top of the spp ladder")
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
     args = ap.parse_args(argv)
     if args.quick:
         args.res, args.ladder = (32, 18), [s for s in LADDER if s <= 64]
         args.ref_spp = args.ref_spp or 512
     else:
-        args.res, args.ladder = (96, 54), list(LADDER)
+        args.res, args.ladder = (96, 54), [s for s in LADDER if s <= args.max_spp]
         args.ref_spp = args.ref_spp or 4096
     rng = np.random.default_rng(0)
     t0 = time.perf_counter()
-    res = {"config": {"command": "python benchmarks/time_vs_error.py" + (" --quick" if args.quick else ""),
+    res = {"config": {"command": "python benchmarks/time_vs_error.py" + (" --quick" if args.quick else "")
+                      + (f" --max-spp {args.max_spp}" if args.max_spp != 1024 else "")
+                      + (f" --ref-spp {args.ref_spp}" if args.ref_spp not in (None, 4096, 512) else ""),
                       "res": list(args.res), "ladder": args.ladder, "repeats": {s: REPEATS[s] for s in args.ladder},
                       "ref_spp": args.ref_spp, "max_depth": args.max_depth, "machine": machine_info()},
            "scenes": {}}

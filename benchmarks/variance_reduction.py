@@ -33,11 +33,72 @@ def build(name, sun_sampling, res):
     return scene, integ
 
 
+#: issue 11, cumulative: each variant adds one change to the one before
+CHANGES = {"before": {"sun_samples": 1, "sun_sampling_mixture": False, "sky_cv": "off"},
+           "+mixture": {"sun_samples": 1, "sun_sampling_mixture": True, "sky_cv": "off"},
+           "+2 sun samples": {"sun_samples": 2, "sun_sampling_mixture": True, "sky_cv": "off"},
+           "+sky cv (surface)": {"sun_samples": 2, "sun_sampling_mixture": True, "sky_cv": "surface"},
+           "+sky cv (all)": {"sun_samples": 2, "sun_sampling_mixture": True, "sky_cv": "all"}}
+
+
+def changes(out_dir, res=(48, 27), spp=128, reps=2):
+    """Issue 11's changes one at a time, side by side (interleaved) in one run, on the
+    benchmark scenes: per-sample variance of the final image and of inscatter.*, the
+    share of each part, the time per render, and the efficiency 1 / (variance x time)."""
+    import _scenes as S
+    from time_vs_error import variance_shares
+
+    out = {"resolution": list(res), "spp": spp, "repeats": reps, "scenes": {}}
+    for name in ("valley_open", "valley", "two_layer", "zero_falloff"):
+        scenes = {k: S.build(mi, name, "fogpath", res=res, integrator_over=v) for k, v in CHANGES.items()}
+        for sc in scenes.values():
+            sc.integrator().render_moments(sc, 0, 0, 2)  # compile outside the timings
+        rows = {k: [] for k in scenes}
+        for rep in range(reps):
+            for k, sc in scenes.items():  # interleaved
+                t0 = time.perf_counter()
+                sc.integrator().render_moments(sc, 0, 500 + rep, spp)
+                dr.sync_thread()
+                t = time.perf_counter() - t0
+                v = variance_shares(sc, spp=spp, seeds=(600 + rep,))
+                v["time_s"] = t
+                rows[k].append(v)
+        agg = {k: {f: float(np.mean([r[f] for r in rs])) for f in rs[0]} for k, rs in rows.items()}
+        for k, a in agg.items():
+            a["inscatter_variance_per_sample"] = a["inscatter"] * a["final_variance_per_sample"]
+            a["efficiency"] = 1.0 / (a["final_variance_per_sample"] * a["time_s"])
+            a["efficiency_inscatter"] = 1.0 / (a["inscatter_variance_per_sample"] * a["time_s"])
+        out["scenes"][name] = agg
+        print(name, {k: round(a["efficiency"] / agg["before"]["efficiency"], 3) for k, a in agg.items()}, flush=True)
+    lines = ["# Issue 11: each change's gain (fogpath against itself, side by side in one run)", "",
+             f"Command: `python benchmarks/variance_reduction.py --changes`; {res[0]}x{res[1]}, {spp} spp, "
+             f"{reps} interleaved repeats, per-sample variance from fogpath's own second moments (box filter). "
+             "Cumulative variants: each adds one change to the row above. Gain = efficiency "
+             "1/(variance x time) relative to `before`; the machine is shared (2 cores, other jobs), so times are "
+             "noisy and only the side-by-side ratios mean anything.", "",
+             "| scene | variant | final var/sample | inscatter var/sample | time [s] | gain (final) | gain (inscatter) "
+             "| att. surface | single | multiple |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for name, agg in out["scenes"].items():
+        b = agg["before"]
+        for k, a in agg.items():
+            lines.append(f"| {name} | {k} | {a['final_variance_per_sample']:.4g} | {a['inscatter_variance_per_sample']:.4g} "
+                         f"| {a['time_s']:.3f} | {a['efficiency'] / b['efficiency']:.2f} | "
+                         f"{a['efficiency_inscatter'] / b['efficiency_inscatter']:.2f} | {a['attenuated_surface']:.2f} | "
+                         f"{a['single']:.2f} | {a['multiple']:.2f} |")
+    d = __import__("pathlib").Path(out_dir)
+    d.mkdir(parents=True, exist_ok=True)
+    (d / "variance_reduction_issue11.json").write_text(json.dumps(out, indent=1))
+    (d / "variance_reduction_issue11.md").write_text("\n".join(lines) + "\n")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--changes", action="store_true", help="issue 11's changes, one at a time")
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
     a = ap.parse_args()
+    if a.changes:
+        return changes(a.out, spp=32 if a.quick else 128, reps=1 if a.quick else 2)
     res = (48, 27) if a.quick else (96, 54)
     ladder = [4, 16] if a.quick else [4, 16, 64, 256]
     ref_spp = 256 if a.quick else 2048

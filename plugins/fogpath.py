@@ -30,7 +30,25 @@
      ``sun_sampling_layers``) and the sun is above the horizon. Default: true.
  * - sun_sampling_layers
    - int
-   - Most layers for which ``sun_sampling`` is used. Default: 1.
+   - Most layers for which the exact sampler is used (more layers: the mixture
+     below). Default: 1.
+ * - sun_sampling_mixture
+   - bool
+   - Where the exact sampler does not apply (fog bounded by a box, more layers,
+     constant layers in a box), sample the sun's single scattering along camera
+     rays from a closed-form mixture of per-layer integrands, weighted by the exact
+     integrand (sun optical depth to the box's exit). Default: true (4.7x less
+     variance at equal time on the bounded valley).
+ * - sun_samples
+   - int
+   - Stratified sun samples per camera ray (each one shadow ray). Default: 2.
+ * - sky_cv
+   - string
+   - The uniform (``constant``) sky's single scattering as closed form plus the
+     Monte Carlo difference occluders make: ``off``, ``surface`` (camera rays
+     that end on a surface) or ``all``. Default: ``off`` (it lowers the variance
+     of ``inscatter.*`` but not of the final image, see
+     ``reports/benchmarks/variance_reduction.md``).
 
 What it does:
 
@@ -71,7 +89,8 @@ from mitsuba.ad.integrators.common import mis_weight
 
 from fogref import gbuffer
 from fogref.media import drjit_ops
-from fogref.media.single_scatter import sample_sun_single_scatter, sun_sampling_applies
+from fogref.media.single_scatter import (sample_sun_single_scatter, sample_sun_single_scatter_mixture,
+                                         sun_sampling_mode, hg_upper_fraction_table)
 
 #: The integrator's AOVs (after R,G,B): the per-sample groups of the schema.
 AOV_NAMES = gbuffer.sample_channel_names()
@@ -126,6 +145,13 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         self.hide_emitters = bool(props.get("hide_emitters", False))
         self.sun_sampling = bool(props.get("sun_sampling", True))
         self.sun_sampling_layers = int(props.get("sun_sampling_layers", 1))
+        self.sun_sampling_mixture = bool(props.get("sun_sampling_mixture", True))
+        self.sun_samples = int(props.get("sun_samples", 2))
+        self.sky_cv = str(props.get("sky_cv", "off"))
+        if self.sky_cv not in ("off", "surface", "all"):
+            raise ValueError(f"fogpath: parameter 'sky_cv': {self.sky_cv!r} is not one of off, surface, all")
+        if self.sun_samples < 1:
+            raise ValueError(f"fogpath: parameter 'sun_samples': value {self.sun_samples} outside [1, 64]")
         self.aovs = bool(props.get("aovs", True))
         self.pixel_exact = bool(props.get("pixel_exact", False))
 
@@ -210,7 +236,9 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         phase function, else a surface interaction and ``scatter`` its BSDF): emitter
         sample times the closed-form fog transmittance and visibility, times the phase
         function or BSDF, MIS-weighted against it for non-delta emitters.
-        Returns (contribution without the path throughput, is the sample delta)."""
+        Returns (contribution without the path throughput, is the sample delta, the
+        same sample's value for the sky control variate: a non-delta infinite emitter
+        above the horizon, without transmittance and visibility)."""
         in_medium = isinstance(scatter, mi.PhaseFunction)
         ds, em_w = scene.sample_emitter_direction(it, sampler.next_2d(active), False, active)
         infinite = mi.has_flag(ds.emitter.flags(), mi.EmitterFlags.Infinite)
@@ -224,23 +252,87 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         Tr = mi.Spectrum(1.0)
         if fog is not None:
             Tr = self._transmittance(fog, ops, it.p, ds.d, dr.select(infinite, ops.largest, ds.dist))
-        c = em_w * Tr * f
+        c = em_w * f
         if has_smooth:  # MIS only matters for emitters a sampled direction can hit
             c *= dr.select(ds.delta, 1.0, mis_weight(ds.pdf, f_pdf))
-        return dr.select(visible, c, 0.0), ds.delta
+        cv = dr.select(active & (ds.pdf != 0) & infinite & ~ds.delta & (ds.d.y > 0), c, 0.0)
+        return dr.select(visible, c * Tr, 0.0), ds.delta, cv
 
     def _sun_single_scatter(self, scene, fog, ops, sampler, ray, D, active):
         """The sun's single scattering along the camera ray, sampled from its exact
-        integrand (None when it does not apply; then NEE covers it)."""
+        integrand (``exact``) or a closed-form mixture proposal with the exact
+        weight (``mixture``: bounded fog, several layers), ``sun_samples``
+        stratified samples averaged (None when it does not apply; then NEE covers it)."""
         sun = self._scene_sun(scene) if (fog is not None and self.sun_sampling) else None
-        if sun is None or self.max_depth < 2 or not sun_sampling_applies(fog._obj, sun[0], self.sun_sampling_layers):
+        mode = None if (sun is None or self.max_depth < 2) else sun_sampling_mode(
+            fog._obj, sun[0], self.sun_sampling_layers, self.sun_sampling_mixture)
+        if mode is None:
             return None
         w_sun, E_sun = sun
-        channel = self._draw_channel(sampler, active)  # one-sample spectral MIS inside the sampler
-        t_ss, w_ss = sample_sun_single_scatter(ops, fog._obj, ray.o, ray.d, D, w_sun, E_sun,
-                                               sampler.next_1d(active), channel)
-        vis = active & ~scene.ray_test(mi.Ray3f(ray.o + ray.d * t_ss, mi.Vector3f(*w_sun)), active)
-        return dr.select(vis, mi.Spectrum(*w_ss), 0.0)
+        K, total = self.sun_samples, mi.Spectrum(0.0)
+        for k in range(K):
+            channel = self._draw_channel(sampler, active)  # one-sample spectral MIS inside the sampler
+            u = (k + sampler.next_1d(active)) / K  # stratified along the integrand's CDF
+            if mode == "exact":
+                t_ss, w_ss = sample_sun_single_scatter(ops, fog._obj, ray.o, ray.d, D, w_sun, E_sun, u, channel)
+            else:
+                t_ss, w_ss = sample_sun_single_scatter_mixture(ops, fog._obj, ray.o, ray.d, D, w_sun, E_sun, u,
+                                                               sampler.next_1d(active), channel)
+            vis = active & ~scene.ray_test(mi.Ray3f(ray.o + ray.d * t_ss, mi.Vector3f(*w_sun)), active)
+            total += dr.select(vis, mi.Spectrum(*w_ss), 0.0)
+        return total / K
+
+    def _medium_vertex(self, scene, fog, ops, sampler, ray, p, t, phase, ctx, med, first, has_smooth, sun_ss,
+                       sky_cv):
+        """Light sample and phase sample at a medium vertex.  At the first vertex of the
+        camera ray the sun is left out when it is sampled along the camera ray, and the
+        sky control variate's Monte Carlo part (the same light and phase samples,
+        unoccluded and unattenuated, upper hemisphere) is subtracted.
+        Returns (contribution without the throughput, direction, phase weight, its pdf)."""
+        mei = self._medium_interaction(ray, p, t)
+        Ld, delta, cv = self._direct(scene, fog, ops, sampler, mei, ctx, phase, med, has_smooth)
+        if sun_ss is not None:  # the sun at depth 0 is sampled above
+            Ld = dr.select(delta & first, 0.0, Ld)
+        wo, w, pdf = phase.sample(ctx, mei, sampler.next_1d(med), sampler.next_2d(med), med)
+        if sky_cv is not None:
+            cv_phase = sky_cv["L"] * w * mis_weight(pdf, mi.Float(sky_cv["pdf"]))
+            cv += dr.select(med & (pdf > 0) & (wo.y > 0), cv_phase, 0.0)
+            Ld = dr.select(first & sky_cv["on"], Ld - cv, Ld)
+        return Ld, wo, w, pdf
+
+    def _sky_control_variate(self, scene, fog, ops, ray, D, hit):
+        """The uniform sky's single scattering as a control variate (None when it does
+        not apply): ``closed = H(d_y) alpha L_sky (1 - T(D))`` per channel, the exact
+        expectation of the unoccluded, unattenuated upper-hemisphere integrand
+        ``p(w) L_sky [w_y > 0]`` at the first medium vertex (``H``: the share of the
+        phase lobe above the horizon, :func:`hg_upper_fraction_table`); the first
+        vertex subtracts that integrand's estimate from the same samples.
+        ``sky_cv = "surface"`` uses it only on camera rays that end on a surface: on
+        rays that escape, the sky seen through the fog is anti-correlated with the
+        fog's light (a path either scatters or reaches the sky) and the control
+        variate made the final image noisier (``reports/benchmarks/variance_reduction.md``)."""
+        if self.sky_cv == "off" or fog is None or not fog.scatters or self.max_depth < 2:
+            return None
+        smooth_inf = [e for e in scene.emitters() if mi.has_flag(e.flags(), mi.EmitterFlags.Infinite)
+                      and not mi.has_flag(e.flags(), mi.EmitterFlags.Delta)]
+        if len(smooth_inf) != 1 or not str(smooth_inf[0]).startswith("ConstantBackgroundEmitter"):
+            return None
+        if abs(fog.g) > 0.95:  # the lobe's table would need more nodes
+            return None
+        sky = smooth_inf[0]
+        idx = [i for i, e in enumerate(scene.emitters()) if e is sky]
+        pdf_sel = float(scene.pdf_emitter(idx[0])[0]) if idx else 1.0 / len(scene.emitters())
+        Lv = mi.traverse(sky)["radiance.value"]
+        L = _spectrum([float(Lv[i][0]) for i in range(3)] if len(Lv) == 3 else [float(Lv[0][0])])
+        table = hg_upper_fraction_table(float(fog.g))
+        x = (dr.clip(ray.d.y, -1.0, 1.0) + 1.0) * (0.5 * (len(table) - 1))
+        i = mi.UInt32(dr.clip(dr.floor(x), 0, len(table) - 2))
+        tab = mi.Float(table)
+        H = dr.lerp(dr.gather(mi.Float, tab, i), dr.gather(mi.Float, tab, i + 1), x - mi.Float(i))
+        T = self._transmittance(fog, ops, ray.o, ray.d, D)
+        on = mi.Bool(True) if self.sky_cv == "all" else mi.Bool(hit)
+        closed = dr.select(on, H * L * _spectrum(fog.albedo) * (1.0 - T), 0.0)
+        return {"closed": closed, "L": L, "pdf": pdf_sel / (4.0 * dr.pi), "on": on}
 
     # ----------------------------------------------------------------- sample
     @dr.syntax
@@ -251,6 +343,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         phase_ctx, bsdf_ctx = mi.PhaseFunctionContext(sampler), mi.BSDFContext()
 
         ray, active = mi.Ray3f(ray), mi.Bool(active)
+        active0 = mi.Bool(active)
         split = _Split()
         β, β_cam = mi.Spectrum(1.0), mi.Spectrum(1.0)  # β_cam: the camera segment of unscattered paths
         depth, medium_first = mi.UInt32(0), mi.Bool(False)
@@ -261,6 +354,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         D0 = dr.select(si.is_valid(), si.t, ops.largest)
         gbuf = self._gbuffer(fog, ops, ray, si) if self.aovs else None
         sun_ss = self._sun_single_scatter(scene, fog, ops, sampler, ray, D0, active)
+        sky_cv = self._sky_control_variate(scene, fog, ops, ray, D0, si.is_valid())
 
         has_lights = has_delta or has_smooth
         active &= has_lights  # no emitter: nothing to trace beyond the G-buffer
@@ -291,12 +385,9 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             wo, pdf_next, delta_next, w_next, origin = mi.Vector3f(ray.d), mi.Float(1.0), mi.Bool(False), \
                 mi.Spectrum(1.0), mi.Point3f(p_med)
             if dr.hint(phase is not None and has_lights, mode="scalar"):
-                mei = self._medium_interaction(ray, p_med, t_end)
-                Ld, delta = self._direct(scene, fog, ops, sampler, mei, phase_ctx, phase, med, has_smooth)
-                if dr.hint(sun_ss is not None, mode="scalar"):  # the sun at depth 0 is sampled above
-                    Ld = dr.select(delta & (depth == 0), 0.0, Ld)
+                Ld, wo_m, w_m, pdf_m = self._medium_vertex(scene, fog, ops, sampler, ray, p_med, t_end, phase,
+                                                           phase_ctx, med, depth == 0, has_smooth, sun_ss, sky_cv)
                 split = split.add(β * Ld, medium_first, depth == 0)
-                wo_m, w_m, pdf_m = phase.sample(phase_ctx, mei, sampler.next_1d(med), sampler.next_2d(med), med)
                 wo[med], pdf_next[med], w_next[med] = wo_m, pdf_m, w_m
 
             # ---------------- surface vertex: light sample, BSDF sample ----------------
@@ -304,7 +395,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             bsdf = si.bsdf(ray)
             if dr.hint(has_lights, mode="scalar"):
                 smooth = surf & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-                Ls, _ = self._direct(scene, fog, ops, sampler, si, bsdf_ctx, bsdf, smooth, has_smooth)
+                Ls, _, _ = self._direct(scene, fog, ops, sampler, si, bsdf_ctx, bsdf, smooth, has_smooth)
                 split = split.add(β * Ls, medium_first, mi.Bool(False))
             bs, w_b = bsdf.sample(bsdf_ctx, si, sampler.next_1d(surf), sampler.next_2d(surf), surf)
             wo[surf], pdf_next[surf], w_next[surf], origin[surf] = si.to_world(bs.wo), bs.pdf, w_b, si.p
@@ -323,8 +414,9 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             active &= ~rr | (sampler.next_1d(rr) < q)
             si = scene.ray_intersect(ray, active)
 
-        if dr.hint(sun_ss is not None, mode="scalar"):
-            split = _Split(split.surface, split.single + sun_ss, split.multiple)
+        for closed in (sun_ss, None if sky_cv is None else sky_cv["closed"]):  # camera-ray estimates
+            if dr.hint(closed is not None, mode="scalar"):
+                split = _Split(split.surface, split.single + dr.select(active0, closed, 0.0), split.multiple)
         return self._outputs(split, β_cam, medium_first, gbuf)
 
     # ------------------------------------------------------------- outputs

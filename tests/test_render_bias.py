@@ -25,10 +25,19 @@ CASES = {
     "box, camera inside": ([0, 3, -10], dict(falloff=0.0, **BOX), 40),
     "box, camera outside": ([0, 12, -60], dict(falloff=0.0, **BOX), 40),
     "box, exponential, RGB extinction": ([0, 3, -10], dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], **BOX), 56),
+    # the sky control variate (closed form + Monte Carlo difference) with occluders
+    # above the horizon: a white cube in the fog and a white roof over part of it
+    "sky control variate, occluders, exponential, RGB": ([0, 3, -10],
+                                                          dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], **BOX), 80),
+    "sky control variate, occluders, homogeneous": ([0, 3, -10], dict(falloff=0.0, **BOX), 88),
 }
+#: cases with white occluders above the horizon (cube, roof)
+#: the occluder cases run the sky control variate on every camera ray (fogpath's
+#: ``sky_cv = "all"``; off by default)
+OCCLUDED_ON = {k: dict(occluders=True, sky_cv="all") for k in CASES if "occluders" in k}
 
 
-def furnace(mi, origin, fog):
+def furnace(mi, origin, fog, occluders=False, **integrator):
     """The white-furnace scene: camera at ``origin`` looking at the fog, heightfog parameters ``fog``."""
     T = mi.ScalarTransform4f()
     medium = {"type": "heightfog", "sigma_t": 0.05, "albedo": 1.0, "g": 0.5, **fog}
@@ -39,7 +48,7 @@ def furnace(mi, origin, fog):
         medium["sigma_t"] = mi.ScalarColor3f(*medium["sigma_t"])
     return mi.load_dict({
         "type": "scene",
-        "integrator": {"type": "fogpath", "max_depth": -1, "rr_depth": 1000, "aovs": False},
+        "integrator": {"type": "fogpath", "max_depth": -1, "rr_depth": 1000, "aovs": False, **integrator},
         "sensor": {"type": "perspective", "fov": 60,
                    "to_world": T.look_at(origin=origin, target=[0, 4, 20], up=[0, 1, 0]),
                    "film": {"type": "hdrfilm", "width": 16, "height": 12, "rfilter": {"type": "box"}},
@@ -47,12 +56,24 @@ def furnace(mi, origin, fog):
         "ground": {"type": "rectangle", "to_world": T.rotate([1, 0, 0], -90).scale(200),
                    "bsdf": {"type": "diffuse", "reflectance": 1.0}},
         "sky": {"type": "constant", "radiance": 1.0},
+        **(OCCLUDERS(mi) if occluders else {}),
     })
+
+
+def OCCLUDERS(mi):
+    """A white cube in front of the camera and a white roof above the fog (both diffuse,
+    reflectance 1): they hide part of the upper hemisphere from the fog."""
+    T = mi.ScalarTransform4f()
+    white = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": 1.0}}
+    return {"cube": {"type": "cube", "to_world": T.translate([2, 4, 8]).scale([3, 4, 3]), "bsdf": white},
+            "roof": {"type": "rectangle", "to_world": T.translate([-10, 14, 10]).rotate([1, 0, 0], 90).scale(12),
+                     "bsdf": white}}
 
 
 @pytest.mark.parametrize("case", list(CASES), ids=list(CASES))
 def test_white_furnace_image_mean_is_exact(mitsuba, case):
     """Smallest detectable bias (95 % power, alpha 1e-3): asserted <= 0.1 %; measured 0.08-0.09 %."""
     origin, fog, n_runs = CASES[case]
-    means = image_means(mitsuba, furnace(mitsuba, origin, fog), n_runs=n_runs, spp=512, seed0=7000)
+    means = image_means(mitsuba, furnace(mitsuba, origin, fog, **OCCLUDED_ON.get(case, {})), n_runs=n_runs, spp=512,
+                        seed0=7000)
     assert_mean_equals(means, 1.0, max_detectable=1e-3, what=f"furnace ({case})")
