@@ -187,7 +187,13 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
     t0 = ops.where(ok, t0, 0.0)
     seg = ops.where(ok, seg, 0.0)
     oy, dy = o[1] + t0 * d[1], d[1]
-    ms = [(1.0 - dy / wy) if (wy > 0 and L.falloff > 0) else 1.0 + 0.0 * dy for L in layers]
+    from fogref.media.medium import ExpLayer
+
+    # m_l: the exact exponent for exponential layers (sun above the horizon); any other
+    # profile (or a constant layer) gets m = 1, a truncated free flight: the proposal
+    # stays a normalised closed form for any profile that inverts its optical depth.
+    ms = [(1.0 - dy / wy) if (wy > 0 and isinstance(L, ExpLayer) and L.falloff > 0) else 1.0 + 0.0 * dy
+          for L in layers]
     taus = [L.depth(ops, oy, dy, seg) for L in layers]
     s_mean = sum(sig) / 3.0
     mass = [s_mean * tl * phi(ops, m * s_mean * tl) for tl, m in zip(taus, ms)]
