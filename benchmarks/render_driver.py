@@ -257,6 +257,9 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--cases", default="320x180x64,320x180x256,640x360x64", help="WxHxSPP,...")
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--as-is-case", default="160x90x64",
+                    help="WxHxSPP measured with fogpath as committed when it runs the path tracer more than once "
+                         "(slow); the --cases then run with the fix")
     ap.add_argument("--eval-fix", choices=("auto", "on", "off"), default="auto")
     ap.add_argument("--variant", default=None, help="Mitsuba variant (default llvm_ad_rgb)")
     ap.add_argument("--quick", action="store_true", help="64x36x16 only, 1 repeat (smoke test)")
@@ -298,8 +301,8 @@ def main(argv=None):
                 doc["kernels"]["fixed"] = path_kernels_per_call()
                 log(f"render_moments with the fix: {doc['kernels']['fixed']}")
             label = "with the one-line render_moments fix (run time patch)" if fix else "fogpath as committed"
-            # the as-is run is slow (the path tracer runs once per output group): its first case only
-            cs = cases if (fix or len(runs) == 1) else cases[:1]
+            # the as-is run is slow (the path tracer runs once per output group): one small case only
+            cs = cases if (fix or len(runs) == 1) else [tuple(int(x) for x in a.as_is_case.split("x"))]
             log(f"== {label}: {[f'{w}x{h}x{s}' for w, h, s in cs]}")
             d = Path(tmp) / ("fix" if fix else "asis")
             d.mkdir()
