@@ -82,17 +82,6 @@ def test_invalid_sweep_files_name_file_key_and_allowed_values(tmp_path, body, ne
     assert str(p) in str(e.value) and needle in str(e.value)
 
 
-def test_truth_cache_key_depends_on_everything_that_sets_pixels():
-    k = S.truth_cache_key("abc", {"g": "0.5"}, 4, 0, "0.1.0")
-    assert k == S.truth_cache_key("abc", {"g": "0.5"}, 4, 0, "0.1.0")
-    for other in (S.truth_cache_key("abd", {"g": "0.5"}, 4, 0, "0.1.0"),
-                  S.truth_cache_key("abc", {"g": "0.6"}, 4, 0, "0.1.0"),
-                  S.truth_cache_key("abc", {"g": "0.5"}, 8, 0, "0.1.0"),
-                  S.truth_cache_key("abc", {"g": "0.5"}, 4, 1, "0.1.0"),
-                  S.truth_cache_key("abc", {"g": "0.5"}, 4, 0, "0.2.0")):
-        assert other != k
-
-
 # ---------------------------------------------------------------- a real two-worker cluster
 
 

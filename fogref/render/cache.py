@@ -80,6 +80,13 @@ def truth_key(scene, spp: int, seed: int, overrides: dict | None = None, pixel_f
     return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:24]
 
 
+def truth_path(scene, spp: int, seed: int, overrides: dict | None = None, cache_dir=None,
+               pixel_filter: str = "centre") -> Path:
+    """Where the cache keeps the truth of these inputs: ``<cache>/<scene stem>-<key>.exr``."""
+    folder = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    return folder / f"{Path(scene).stem}-{truth_key(scene, spp, seed, overrides, pixel_filter)}.exr"
+
+
 def render_cached(scene, spp: int = 16, seed: int = 0, overrides: dict | None = None, cache_dir=None,
                   variant: str | None = None, pixel_filter: str = "centre") -> tuple[Path, bool]:
     """The cached EXR of a truth, rendered first if needed: ``(path, was_cached)``.
@@ -90,9 +97,8 @@ def render_cached(scene, spp: int = 16, seed: int = 0, overrides: dict | None = 
     if int(spp) < 1 or int(seed) < 0:
         raise FogrefError(f"spp {spp} must be >= 1 and seed {seed} >= 0")
     over = dict(overrides or {})
-    key = truth_key(scene, spp, seed, over, pixel_filter)
-    folder = Path(cache_dir) if cache_dir is not None else default_cache_dir()
-    path = folder / f"{Path(scene).stem}-{key}.exr"
+    path = truth_path(scene, spp, seed, over, cache_dir, pixel_filter)
+    folder = path.parent
     from fogref.gbuffer import load_truth
 
     if path.is_file():

@@ -93,7 +93,7 @@ try:
 except ImportError:  # pragma: no cover
     import tomli as tomllib  # type: ignore[no-redef]
 
-__all__ = ["SweepSpec", "add_cli", "design_points", "load_sweep", "run_config", "run_sweep", "truth_cache_key"]
+__all__ = ["SweepSpec", "add_cli", "design_points", "load_sweep", "run_config", "run_sweep"]
 
 DESIGN_KINDS = ("grid", "list", "random", "lhs")
 SEED_POLICIES = ("fixed", "per_config")
@@ -103,14 +103,18 @@ _TOP_KEYS = {"sweep", "render", "design", "parameters", "models", "execution", "
 # ---------------------------------------------------------------- adapters (one line to fix on a rename)
 
 
-def _render(scene, out, *, spp, seed, overrides, pixel_filter):
-    """The render driver: ``fogref.render.render.render`` (pixel_filter passed when it takes one)."""
-    import inspect
+def _render_cached(scene, cache: Path, *, spp, seed, overrides, pixel_filter) -> tuple[Path, bool]:
+    """fogref's one render cache (:func:`fogref.render.cache.render_cached`): ``(path, was_cached)``."""
+    from fogref.render.cache import render_cached
 
-    from fogref.render.render import render
+    return render_cached(scene, spp, seed, overrides, cache_dir=cache, pixel_filter=pixel_filter)
 
-    kw = {"pixel_filter": pixel_filter} if "pixel_filter" in inspect.signature(render).parameters else {}
-    return render(scene, out, spp=spp, seed=seed, overrides=overrides, progress=False, png=False, **kw)
+
+def _truth_path(scene, cache: Path, *, spp, seed, overrides, pixel_filter) -> Path:
+    """Where the render cache keeps (or will keep) this truth."""
+    from fogref.render.cache import truth_path
+
+    return truth_path(scene, spp, seed, overrides, cache_dir=cache, pixel_filter=pixel_filter)
 
 
 def _build_model(name: str, params: dict, scene_params: dict | None):
@@ -452,32 +456,6 @@ def _file_sha256(path) -> str:
     return h.hexdigest()
 
 
-def truth_cache_key(scene_sha256: str, overrides: dict, spp: int, seed: int, version: str,
-                    pixel_filter: str = "centre") -> str:
-    """Content address of a ground truth: a hash of everything that determines its pixels.
-
-    Parameters
-    ----------
-    scene_sha256 : str
-        SHA-256 of the scene file's bytes.
-    overrides : dict
-        The ``$default`` overrides, as strings.
-    spp, seed : int
-        Samples per pixel and seed.
-    version : str
-        fogref's version.
-    pixel_filter : str
-        The render driver's pixel filter.
-
-    Returns
-    -------
-    str
-        24 hex digits; the cached truth is ``<cache>/<key>.exr``.
-    """
-    return _hash({"scene": scene_sha256, "overrides": {k: str(v) for k, v in overrides.items()}, "spp": spp,
-                  "seed": seed, "fogref": version, "pixel_filter": pixel_filter}, 24)
-
-
 def build_configs(spec: SweepSpec) -> list[dict]:
     """Every configuration as a self-contained, JSON-ready task description.
 
@@ -502,11 +480,12 @@ def build_configs(spec: SweepSpec) -> list[dict]:
                     model_params[p["model"]][p["target"]] = value
             seed = spec.seed if spec.seed_policy == "fixed" else int(
                 _hash({"seed": spec.seed, "scene": scene_sha, "overrides": overrides}, 8), 16) & 0x7FFFFFFF
-            key = truth_cache_key(scene_sha, overrides, spec.spp, seed, fogref.__version__, spec.pixel_filter)
+            truth = _truth_path(scene, spec.cache, spp=spec.spp, seed=seed, overrides=overrides,
+                                pixel_filter=spec.pixel_filter)
             models = [{**m, "params": model_params[m["label"]]} for m in spec.models]
             cfg = {"scene": str(scene), "scene_sha256": scene_sha, "values": pt, "overrides": overrides,
                    "models": models, "spp": spec.spp, "seed": seed, "pixel_filter": spec.pixel_filter,
-                   "truth": str(spec.cache / f"{key}.exr"), "budget": bool(getattr(spec, "budget", False))}
+                   "truth": str(truth), "budget": bool(getattr(spec, "budget", False))}
             cfg["id"] = _hash({k: cfg[k] for k in ("scene_sha256", "overrides", "models", "spp", "seed",
                                                    "pixel_filter")} | {"fogref": fogref.__version__}
                             | ({"budget": True} if cfg["budget"] else {}))
@@ -583,10 +562,8 @@ def run_config(cfg: dict, drjit_threads: int | None = None) -> dict:
     truth = Path(cfg["truth"])
     t0 = time.perf_counter()
     with _truth_lock(f"fogref-truth-{truth.stem}"):  # configurations sharing a truth render it once
-        cached = truth.is_file()
-        if not cached:
-            _render(cfg["scene"], truth, spp=cfg["spp"], seed=cfg["seed"], overrides=cfg["overrides"],
-                    pixel_filter=cfg["pixel_filter"])
+        truth, cached = _render_cached(cfg["scene"], truth.parent, spp=cfg["spp"], seed=cfg["seed"],
+                                       overrides=cfg["overrides"], pixel_filter=cfg["pixel_filter"])
     wall_render = time.perf_counter() - t0
     header = _truth_header(truth)
     rs = header.get("fogref.render_seconds")
@@ -631,16 +608,11 @@ def _budget_columns(cfg: dict, truth_path: Path, model) -> dict:
     from fogref.study import budget as B
     from fogref.study.unreal import sunless_scene
 
-    import fogref
-
     nosun = sunless_scene(Path(cfg["scene"]), truth_path.parent / "scenes" / cfg["scene_sha256"][:16])
-    key = truth_cache_key(_file_sha256(nosun), cfg["overrides"], cfg["spp"], cfg["seed"], fogref.__version__,
-                          cfg["pixel_filter"])
-    sky_path = truth_path.parent / f"{key}.exr"
-    with _truth_lock(f"fogref-truth-{key}"):
-        if not sky_path.is_file():
-            _render(nosun, sky_path, spp=cfg["spp"], seed=cfg["seed"], overrides=cfg["overrides"],
-                    pixel_filter=cfg["pixel_filter"])
+    sky_key = _file_sha256(nosun)[:24]
+    with _truth_lock(f"fogref-truth-{sky_key}"):
+        sky_path, _ = _render_cached(nosun, truth_path.parent, spp=cfg["spp"], seed=cfg["seed"],
+                                     overrides=cfg["overrides"], pixel_filter=cfg["pixel_filter"])
     truth, sky = load_truth(truth_path), load_truth(sky_path)
     pf = PhysicalScene.from_params(truth.params)
     lobe = fit_unreal(pf, sample_views(pf.camera), sun_attenuation=False, fit_start=False)
