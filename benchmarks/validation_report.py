@@ -40,11 +40,12 @@ def ci95(x):
 def bias_section(mi, runs: int) -> dict:
     from render_scenes import base_scene, heightfog
     from stats import image_means
-    from test_render_bias import CASES, furnace
+    from test_render_bias import CASES, OCCLUDED_ON, furnace
 
     out = {"furnace": {}, "stock": {}}
-    for case, (origin, fog, _) in CASES.items():
-        m = image_means(mi, furnace(mi, origin, fog), n_runs=runs, spp=512, seed0=9000)
+    for i, (case, (origin, fog, _)) in enumerate(CASES.items()):
+        scene = furnace(mi, origin, fog, **OCCLUDED_ON.get(case, {}))
+        m = image_means(mi, scene, n_runs=runs, spp=512, seed0=9000 + 1000 * i)
         mean, half = ci95(m - 1.0)
         out["furnace"][case] = {"bias": mean, "ci95": half, "runs": runs, "spp": 512, "pixels": "16x12"}
     for label, sun in (("sun + sky", True), ("sky only", False)):
@@ -146,7 +147,7 @@ def main(argv=None) -> int:
 def markdown(r: dict) -> str:
     b, o, g = r["bias"], r["opaque_horizon"], r["geometry"]
     lines = ["# Validation: the numbers behind the ground truth", "",
-             f"Made by `{r['command']}` ({r['seconds'] / 60:.0f} min on a shared 2-core CPU).", "",
+             f"Made by `{r['command']}` ({r['seconds'] / 60:.1f} min on a 2-core CPU).", "",
              "## Image-mean bias (95 % confidence intervals from the spread of independent renders)", "",
              "| oracle | case | relative bias | renders x spp |", "|---|---|---|---|"]
     for case, v in b["furnace"].items():
