@@ -230,10 +230,11 @@ def test_worker_killed_mid_sweep_is_recorded_and_nothing_else_is_lost(tmp_path):
 @pytest.mark.render
 def test_budget_steps_per_configuration(tmp_path):
     """``[outputs] budget = true``: one sun-less render per configuration, Unreal's budget
-    steps as columns; their shares of the squared error sum to 1."""
+    steps as columns; their shares of the squared error sum to 1.  A sun override is
+    kept out of the sun-less render (Mitsuba refuses an unused ``$sun_elevation``)."""
     from fogref.study.budget import STEPS
 
-    body = MODELS + ('[render]\nspp = 4\noverrides = { res = 16, resy = 9, max_depth = 3 }\n'
+    body = MODELS + ('[render]\nspp = 4\noverrides = { res = 16, resy = 9, max_depth = 3, sun_elevation = 20 }\n'
                      '[outputs]\nbudget = true\nplots = false\n')
     spec = S.load_sweep(_toml(tmp_path, body))
     (cfg,) = S.build_configs(spec)

@@ -606,13 +606,14 @@ def _budget_columns(cfg: dict, truth_path: Path, model) -> dict:
     from fogref.gbuffer import load_truth
     from fogref.mapping import PhysicalScene, fit_unreal, sample_views
     from fogref.study import budget as B
-    from fogref.study.unreal import sunless_scene
+    from fogref.study.unreal import overrides_used_by, sunless_scene
 
     nosun = sunless_scene(Path(cfg["scene"]), truth_path.parent / "scenes" / cfg["scene_sha256"][:16])
     sky_key = _file_sha256(nosun)[:24]
     with _truth_lock(f"fogref-truth-{sky_key}"):
         sky_path, _ = _render_cached(nosun, truth_path.parent, spp=cfg["spp"], seed=cfg["seed"],
-                                     overrides=cfg["overrides"], pixel_filter=cfg["pixel_filter"])
+                                     overrides=overrides_used_by(nosun, cfg["overrides"]),
+                                     pixel_filter=cfg["pixel_filter"])
     truth, sky = load_truth(truth_path), load_truth(sky_path)
     pf = PhysicalScene.from_params(truth.params)
     lobe = fit_unreal(pf, sample_views(pf.camera), sun_attenuation=False, fit_start=False)

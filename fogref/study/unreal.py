@@ -100,6 +100,25 @@ def sunless_scene(scene: Path, out_dir: Path) -> Path:
     return out
 
 
+def overrides_used_by(scene: Path, overrides: dict | None) -> dict:
+    """The overrides whose ``$name`` the scene file uses.
+
+    A sun-less copy (:func:`sunless_scene`) no longer uses the sun's ``$defaults``
+    (``sun_elevation``, ...); Mitsuba refuses overrides a scene does not use, so the
+    budget's sun-less renders get only the others.
+
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "s.xml"
+    >>> _ = p.write_text('<scene><float name="g" value="$g"/><float name="x" value="$sun"/></scene>')
+    >>> overrides_used_by(p, {"g": 0.5, "sun_elevation": 4, "sun": 1})
+    {'g': 0.5, 'sun': 1}
+    """
+    import re
+
+    text = Path(scene).read_text()
+    return {k: v for k, v in (overrides or {}).items() if re.search(r"\$" + re.escape(k) + r"(?!\w)", text)}
+
+
 def _render_cached(scene: Path, out: Path, spp: int, seed: int, overrides: dict, log,
                    pixel_filter: str = "centre") -> Path:
     """A truth of ``scene`` from fogref's render cache (:mod:`fogref.render.cache`) in ``out``'s folder."""
@@ -121,8 +140,9 @@ def open_plane_check(scene: Path, rdir: Path, log, spp: int = 64, res=(160, 90))
     nosun = sunless_scene(scene, rdir)
     a = load_truth(_render_cached(scene, rdir / f"{scene.stem}_s0.exr", spp, 0, ov, log))
     b = load_truth(_render_cached(scene, rdir / f"{scene.stem}_s1.exr", spp, 1, ov, log))
-    sa = load_truth(_render_cached(nosun, rdir / f"{scene.stem}_nosun_s0.exr", spp, 0, ov, log))
-    sb = load_truth(_render_cached(nosun, rdir / f"{scene.stem}_nosun_s1.exr", spp, 1, ov, log))
+    ov_nosun = overrides_used_by(nosun, ov)
+    sa = load_truth(_render_cached(nosun, rdir / f"{scene.stem}_nosun_s0.exr", spp, 0, ov_nosun, log))
+    sb = load_truth(_render_cached(nosun, rdir / f"{scene.stem}_nosun_s1.exr", spp, 1, ov_nosun, log))
     pf = PhysicalScene.from_params(a.params)
     sun = B.closed_forms(a, pf)["sun_att"]
     sh = a.single - sa.single - sun
@@ -198,10 +218,11 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
     log("rendering the budget's extra images ...")
     rdir = Path(renders_dir)
     nosun = sunless_scene(scene_path, rdir)
-    sky_a = _render_cached(nosun, rdir / f"{exr.stem}_nosun_s{seed}.exr", spp, seed, overrides, log, pixel_filter)
+    ov_nosun = overrides_used_by(nosun, overrides)
+    sky_a = _render_cached(nosun, rdir / f"{exr.stem}_nosun_s{seed}.exr", spp, seed, ov_nosun, log, pixel_filter)
     truth_b = _render_cached(scene_path, rdir / f"{exr.stem}_s{seed + 1}.exr", spp, seed + 1, overrides, log,
                              pixel_filter)
-    sky_b = _render_cached(nosun, rdir / f"{exr.stem}_nosun_s{seed + 1}.exr", spp, seed + 1, overrides, log,
+    sky_b = _render_cached(nosun, rdir / f"{exr.stem}_nosun_s{seed + 1}.exr", spp, seed + 1, ov_nosun, log,
                            pixel_filter)
 
     # -- 4. budget -------------------------------------------------------------
