@@ -34,6 +34,7 @@ from fogref._version import __version__
 #: (docs/byo.md): name -> module.  Imported on first use (:func:`__getattr__`), so
 #: ``import fogref`` stays free of work.
 _LAZY = {
+    "set_variant": "fogref.render.variant",  # Mitsuba set-up: LLVM, the variant, the plugins
     "load_truth": "fogref.gbuffer", "Truth": "fogref.gbuffer",
     "cached_truth": "fogref.render.cache",
     "check": "fogref.compare.check", "assert_fog_matches": "fogref.compare.check",
@@ -45,11 +46,11 @@ _LAZY = {
 }
 _RENAMED = {"build_model": "build"}
 
-__all__ = ["__version__", "ensure_llvm", "set_variant", *_LAZY]
+__all__ = ["__version__", "ensure_llvm", *_LAZY]
 
 
 def __getattr__(name: str):
-    """``fogref.check``, ``fogref.load_truth``, ...: the public API of :data:`_LAZY`, imported on first use."""
+    """``fogref.set_variant``, ``fogref.check``, ...: the public API of :data:`_LAZY`, imported on first use."""
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'fogref' has no attribute '{name}'")
@@ -60,38 +61,6 @@ def __getattr__(name: str):
 
 def __dir__():
     return sorted(set(globals()) | set(_LAZY))
-
-
-def set_variant(name: str | None = None) -> str:
-    """Set up Mitsuba for fogref: LLVM, the variant, the plugins.
-
-    Parameters
-    ----------
-    name
-        A Mitsuba variant, e.g. ``"llvm_ad_rgb"`` or ``"cuda_ad_rgb"``. None keeps
-        the variant already set, else takes ``$FOGREF_VARIANT``, else
-        ``"llvm_ad_rgb"``.
-
-    Returns
-    -------
-    str
-        The variant now set.
-
-    Raises
-    ------
-    fogref.errors.FogrefError
-        The variant is unknown or cannot start (no GPU for ``cuda_*``), or an
-        ``llvm_*`` variant was asked for and no LLVM >= 16 is installed (the
-        message says what to install).
-
-    Notes
-    -----
-    Calling it again is cheap: the plugins are registered once per variant. See
-    :func:`fogref.render.variant.set_variant`.
-    """
-    from fogref.render.variant import set_variant as _set_variant
-
-    return _set_variant(name)
 
 
 def ensure_llvm() -> str:
