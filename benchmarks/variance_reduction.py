@@ -38,7 +38,12 @@ CHANGES = {"before": {"sun_samples": 1, "sun_sampling_mixture": False, "sky_cv":
            "+mixture": {"sun_samples": 1, "sun_sampling_mixture": True, "sky_cv": "off"},
            "+2 sun samples": {"sun_samples": 2, "sun_sampling_mixture": True, "sky_cv": "off"},
            "+sky cv (surface)": {"sun_samples": 2, "sun_sampling_mixture": True, "sky_cv": "surface"},
-           "+sky cv (all)": {"sun_samples": 2, "sun_sampling_mixture": True, "sky_cv": "all"}}
+           "+sky cv (all)": {"sun_samples": 2, "sun_sampling_mixture": True, "sky_cv": "all"},
+           # forced splitting on the camera ray (both branches at depth 0), on today's defaults (sky cv off)
+           "+forced split": {"sun_samples": 2, "sun_sampling_mixture": True, "sky_cv": "off", "forced_split": True}}
+#: every variant but the last runs with forced splitting off
+for _v in CHANGES.values():
+    _v.setdefault("forced_split", False)
 
 
 def changes(out_dir, res=(48, 27), spp=128, reps=2):
@@ -52,7 +57,7 @@ def changes(out_dir, res=(48, 27), spp=128, reps=2):
     for name in ("valley_open", "valley", "two_layer", "zero_falloff"):
         scenes = {k: S.build(mi, name, "fogpath", res=res, integrator_over=v) for k, v in CHANGES.items()}
         for sc in scenes.values():
-            sc.integrator().render_moments(sc, 0, 0, 2)  # compile outside the timings
+            sc.integrator().render_moments(sc, 0, 0, spp)  # compile outside the timings (the kernel depends on spp)
         rows = {k: [] for k in scenes}
         for rep in range(reps):
             for k, sc in scenes.items():  # interleaved

@@ -49,6 +49,17 @@
      that end on a surface) or ``all``. Default: ``off`` (it lowers the variance
      of ``inscatter.*`` but not of the final image, see
      ``reports/benchmarks/variance_reduction.md``).
+ * - forced_split
+   - bool
+   - Forced splitting on the camera ray: every sample traces both branches at
+     depth 0, the surface (or sky) weighted by the closed-form transmittance
+     ``T`` and a forced medium collision on ``[0, D]`` (pdf ``sigma_t T / (1 - T)``,
+     per layer, weight ``albedo (1 - T)`` for one grey layer) with its light
+     sample; the path then continues one branch, chosen in proportion to the
+     branches' throughputs (weight divided by the choice's probability).  Every
+     sample then estimates ``surface`` wherever ``T > 0`` (``surface_coverage`` is
+     1 there).  Used when the fog scatters and ``max_depth >= 2``.  Default: see
+     ``FORCED_SPLIT_DEFAULT`` (chosen by ``benchmarks/variance_reduction.py --changes``).
 
 What it does:
 
@@ -71,6 +82,10 @@ reached the surface or the sky unscattered feeds ``surface`` (without the camera
 segment's weight) and ``attenuated_surface`` (with it); a path that scattered
 first feeds ``single`` (direct light at the first medium vertex) or
 ``multiple``. Per sample ``L = attenuated_surface + single + multiple`` exactly.
+With ``forced_split`` both branches of the camera ray are in every sample: the
+surface branch's light (weight ``T`` on ``attenuated_surface``) and the forced
+medium vertex's (``single``), then the continued branch's (``surface`` or
+``multiple``, divided by the probability of continuing it).
 
 Not supported: sensors other than ``perspective``; media attached to shapes
 (the fog fills all space outside surfaces); reconstruction filters other than
@@ -88,12 +103,15 @@ import mitsuba as mi
 from mitsuba.ad.integrators.common import mis_weight
 
 from fogref import gbuffer
+from fogref.media import closed_form as cf
 from fogref.media import drjit_ops
 from fogref.media.single_scatter import (sample_sun_single_scatter, sample_sun_single_scatter_mixture,
                                          sun_sampling_mode, hg_upper_fraction_table)
 
 #: The integrator's AOVs (after R,G,B): the per-sample groups of the schema.
 AOV_NAMES = gbuffer.sample_channel_names()
+#: ``forced_split``'s default (see ``reports/benchmarks/variance_reduction_issue11.md``)
+FORCED_SPLIT_DEFAULT = True
 
 
 class _Opaque:
@@ -152,6 +170,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             raise ValueError(f"fogpath: parameter 'sky_cv': {self.sky_cv!r} is not one of off, surface, all")
         if self.sun_samples < 1:
             raise ValueError(f"fogpath: parameter 'sun_samples': value {self.sun_samples} outside [1, 64]")
+        self.forced_split = bool(props.get("forced_split", FORCED_SPLIT_DEFAULT))
         self.aovs = bool(props.get("aovs", True))
         self.pixel_exact = bool(props.get("pixel_exact", False))
 
@@ -334,6 +353,89 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         closed = dr.select(on, H * L * _spectrum(fog.albedo) * (1.0 - T), 0.0)
         return {"closed": closed, "L": L, "pdf": pdf_sel / (4.0 * dr.pi), "on": on}
 
+    def _forced_collision(self, fog, ops, sampler, ray, D, active):
+        """A medium collision on the camera ray's ``[0, D]`` forced to happen.
+
+        Layer ``i`` is chosen with probability ``(1 - T_i) / sum_j (1 - T_j)``
+        (``T_i``: its transmittance over ``[0, D]`` in the sampled channel) and
+        inverted in closed form conditioned on a collision before ``D``; the pdf is
+        the mixture ``sigma sum_i rho_i T_i(t) / sum_j (1 - T_j(D))`` (one layer:
+        ``sigma_t T / (1 - T)``), averaged over the channels (one-sample spectral
+        MIS for this segment).  Returns (t, weight ``sigma_s T(t) / pdf``, valid).
+        """
+        t0, t1 = (mi.Float(0.0), ops.largest) if fog.bounds is None else fog.clip(ops, ray.o, ray.d)
+        t_end = dr.minimum(D, t1)
+        length = dr.maximum(t_end - t0, 0.0)
+        t0 = dr.select(length > 0, t0, 0.0)
+        oy, dy = ray.o.y + t0 * ray.d.y, ray.d.y
+        om = lambda x: dr.select(x < 1e-4, x * (1.0 - 0.5 * x), 1.0 - dr.exp(-x))  # noqa: E731  1 - e^-x
+        tau_D = [dr.minimum(L.depth(ops, oy, dy, length), cf.TAU_MAX) for L in fog.layers]
+        sig = mi.Float(fog.sigma_t[0])
+        grey = fog.sigma_t[1] == fog.sigma_t[0] and fog.sigma_t[2] == fog.sigma_t[0]
+        if not grey:
+            channel = self._draw_channel(sampler, active)
+            sig = dr.select(channel == 1, fog.sigma_t[1], dr.select(channel == 2, fog.sigma_t[2], sig))
+        u = sampler.next_1d(active)
+        oms = [om(sig * tau) for tau in tau_D]
+        t_rel = fog.layers[0].sample(ops, oy, dy, -dr.log(1.0 - u * oms[0]) / sig)
+        if len(fog.layers) > 1:
+            pick, acc = sampler.next_1d(active) * sum(oms), mi.Float(0.0)
+            for L, o_i in zip(fog.layers, oms):
+                t_i = L.sample(ops, oy, dy, -dr.log(1.0 - u * o_i) / sig)
+                t_rel = dr.select((pick >= acc) & (o_i > 0), t_i, t_rel)
+                acc += o_i
+        valid = active & (length > 0) & (t_rel < ops.largest) & (sum(oms) > 0)
+        t_rel = dr.minimum(dr.select(valid, t_rel, 0.0), length)
+        tau_t = [dr.minimum(L.depth(ops, oy, dy, t_rel), cf.TAU_MAX) for L in fog.layers]
+        rho_t = [L.rho(ops, oy + t_rel * dy) for L in fog.layers]
+        pdfs, fs = [], []
+        for s, a in zip(fog.sigma_t, fog.albedo):
+            norm = sum(om(s * tau) for tau in tau_D)
+            pdfs.append(s * sum(r * dr.exp(-s * tau) for r, tau in zip(rho_t, tau_t)) / dr.maximum(norm, 1e-30))
+            fs.append(a * s * sum(rho_t) * dr.exp(-s * sum(tau_t)))
+        pdf = pdfs[0] if grey else (pdfs[0] + pdfs[1] + pdfs[2]) / 3.0
+        w = dr.select(valid & (pdf > 0), _spectrum(fs) / pdf, 0.0)
+        return t0 + t_rel, w, valid & (pdf > 0)
+
+    def _camera_split(self, scene, fog, ops, sampler, ray, si, D, phase, phase_ctx, bsdf_ctx, has_smooth, sun_ss,
+                      sky_cv, active):
+        """Depth 0 with ``forced_split``: the surface branch (light found by the camera
+        ray, light sample at the surface; weight ``T`` applied at the end) and a forced
+        medium vertex (its light sample feeds ``single``), then one branch continues,
+        chosen with probability in proportion to ``T w_bsdf`` against ``w_medium w_phase``.
+        Returns (split, β_cam, coverage, ray, si, β, medium_first, prev_it, prev_pdf,
+        prev_delta, active) for the path loop from depth 1."""
+        hit, split = si.is_valid(), _Split()
+        T = self._transmittance(fog, ops, ray.o, ray.d, D)
+        cover = ~hit | (dr.max(T) > 0)  # the surface branch is estimated (continued with q > 0)
+        if has_smooth:
+            em = active & (hit if self.hide_emitters else mi.Bool(True))
+            ds = mi.DirectionSample3f(scene, si=si, ref=dr.zeros(mi.Interaction3f))
+            split = split.add(dr.select(em, ds.emitter.eval(si, em), 0.0), mi.Bool(False), mi.Bool(False))
+        surf, bsdf = active & hit, si.bsdf(ray)
+        smooth = surf & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
+        Ls, _, _ = self._direct(scene, fog, ops, sampler, si, bsdf_ctx, bsdf, smooth, has_smooth)
+        split = split.add(Ls, mi.Bool(False), mi.Bool(False))
+        bs, w_b = bsdf.sample(bsdf_ctx, si, sampler.next_1d(surf), sampler.next_2d(surf), surf)
+        t_m, w_m, med = self._forced_collision(fog, ops, sampler, ray, D, active)
+        p_med = ray.o + ray.d * t_m
+        Ld, wo_m, w_ph, pdf_m = self._medium_vertex(scene, fog, ops, sampler, ray, p_med, t_m, phase, phase_ctx,
+                                                    med, mi.Bool(True), has_smooth, sun_ss, sky_cv)
+        split = split.add(dr.select(med, w_m * Ld, 0.0), mi.Bool(True), mi.Bool(True))
+        ms = dr.select(surf, dr.mean(T * w_b), 0.0)
+        mm = dr.select(med, dr.mean(w_m * w_ph), 0.0)
+        q = dr.select(ms + mm > 0, ms / (ms + mm), 0.0)  # probability of continuing the surface branch
+        go_s = surf & (sampler.next_1d(active) < q)
+        go_m = med & ~go_s & (q < 1)
+        β = dr.select(go_s, w_b / q, dr.select(go_m, w_m * w_ph / (1.0 - q), 0.0))
+        prev_it = self._vertex(ray, si, go_s, p_med)
+        prev_pdf = dr.select(go_s, bs.pdf, pdf_m)
+        prev_delta = go_s & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+        ray = dr.select(go_s, si.spawn_ray(si.to_world(bs.wo)), mi.Ray3f(p_med, wo_m, ray.time, ray.wavelengths))
+        active = (go_s | go_m) & (dr.max(β) > 0) & (self.max_depth > 1)
+        si = scene.ray_intersect(ray, active)
+        return split, T, cover, ray, si, β, go_m, prev_it, prev_pdf, prev_delta, active
+
     # ----------------------------------------------------------------- sample
     @dr.syntax
     def sample(self, scene, sampler, ray, medium=None, active=True):
@@ -358,6 +460,12 @@ class FogPathIntegrator(mi.SamplingIntegrator):
 
         has_lights = has_delta or has_smooth
         active &= has_lights  # no emitter: nothing to trace beyond the G-buffer
+        cover = None  # surface_coverage: the camera ray reached the surface unscattered (~medium_first)
+        if dr.hint(self.forced_split and phase is not None and has_lights and self.max_depth >= 2, mode="scalar"):
+            split, β_cam, cover, ray, si, β, medium_first, prev_it, prev_pdf, prev_delta, active = \
+                self._camera_split(scene, fog, ops, sampler, ray, si, D0, phase, phase_ctx, bsdf_ctx, has_smooth,
+                                   sun_ss, sky_cv, active)
+            depth = mi.UInt32(1)
         while dr.hint(active, max_iterations=-1, label="fogpath"):
             # ---------------- free flight to a medium vertex or the surface ----------------
             is_medium, t_end, w_ff = self._free_flight(fog, ops, sampler, ray, dr.select(si.is_valid(), si.t, dr.inf),
@@ -417,7 +525,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         for closed in (sun_ss, None if sky_cv is None else sky_cv["closed"]):  # camera-ray estimates
             if dr.hint(closed is not None, mode="scalar"):
                 split = _Split(split.surface, split.single + dr.select(active0, closed, 0.0), split.multiple)
-        return self._outputs(split, β_cam, medium_first, gbuf)
+        return self._outputs(split, β_cam, ~medium_first if cover is None else cover, gbuf)
 
     # ------------------------------------------------------------- outputs
     @staticmethod
@@ -448,16 +556,18 @@ class FogPathIntegrator(mi.SamplingIntegrator):
                 "P": [dr.select(hit, si.p[i], 0.0) for i in range(3)], "view": [ray.d[i] for i in range(3)],
                 "hit": [dr.select(hit, 1.0, 0.0)]}
 
-    def _outputs(self, split, β_cam, medium_first, gbuf):
-        """(L, valid, AOVs) in the order of :data:`AOV_NAMES`."""
+    def _outputs(self, split, β_cam, cover, gbuf):
+        """(L, valid, AOVs) in the order of :data:`AOV_NAMES`; ``cover``: this sample
+        estimates the surface branch (``surface`` is 0 where it does not)."""
         att = β_cam * split.surface
         L = att + split.single + split.multiple
         if gbuf is None:
             return L, mi.Bool(True), []
         rgb = lambda s: [s[0], s[1], s[2]]  # noqa: E731
         parts = {"attenuated_surface": rgb(att), "inscatter": rgb(split.single + split.multiple),
-                 "single": rgb(split.single), "multiple": rgb(split.multiple), "surface": rgb(split.surface),
-                 "surface_coverage": [dr.select(medium_first, 0.0, 1.0)], **gbuf}
+                 "single": rgb(split.single), "multiple": rgb(split.multiple),
+                 "surface": rgb(dr.select(cover, split.surface, 0.0)), "surface_coverage": [dr.select(cover, 1.0, 0.0)],
+                 **gbuf}
         return L, mi.Bool(True), [c for g in gbuffer.SAMPLE_GROUPS for c in parts[g]]
 
     # ------------------------------------------------------------- render
