@@ -49,7 +49,14 @@ def cmd_render(a) -> int:
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """fogref's argument parser.  ``only="render"``: the ``render`` subcommand alone (what
+    :func:`main` builds for ``fogref render ...``, so that it imports none of the other
+    subcommands' modules: they are imported only to build their own parsers).
+
+    >>> sorted(build_parser(only="render")._subparsers._group_actions[0].choices)
+    ['render']
+    """
     p = argparse.ArgumentParser(prog="fogref", description=__doc__)
     from fogref._version import __version__
 
@@ -71,6 +78,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--checkpoint-seconds", type=float, default=60.0, metavar="S",
                    help="seconds between checkpoints of an interruptible render (default 60; also on Ctrl-C)")
     r.set_defaults(func=cmd_render)
+    if only == "render":
+        return p
     # each subcommand package adds its own parser; an import error here is a bug and is raised
     from fogref.compare import add_cli as add_compare_cli
     from fogref.info import add_cli as add_info_cli
@@ -86,8 +95,18 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _command(argv) -> str | None:
+    """The subcommand named by ``argv`` (its first word that is not an option), or None.
+
+    >>> _command(["render", "s.xml"]), _command(["--version"]), _command([])
+    ('render', None, None)
+    """
+    return next((a for a in argv if not a.startswith("-")), None)
+
+
 def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = build_parser(only="render" if _command(argv) == "render" else None).parse_args(argv)
     try:
         return args.func(args)
     except FogrefError as e:

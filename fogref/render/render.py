@@ -225,7 +225,7 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
                 _checkpoint(ckpt, sums, squares, done, key)
             raise KeyboardInterrupt from None
 
-    channels = _channels(np.asarray(sums, dtype=np.float64), np.asarray(squares, dtype=np.float64), spp)
+    channels = _channels(_host_channel_major(sums), _host_channel_major(squares), spp)
     bad = gbuffer.nonfinite_report(channels)
     if bad:
         raise FogrefError(f"{scene_path}: the render produced {bad}; no ground truth written "
@@ -245,6 +245,7 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
         "fogref.overrides": {k: str(v) for k, v in (overrides or {}).items()},
         "fogref.render_seconds": {"total": time.perf_counter() - t0, "passes": timings},
     }
+    _exr_threads()
     write_exr(out, channels, attrs)
     if png:
         from fogref.display import write_preview
@@ -262,6 +263,37 @@ def _device_f64(x):
     if isinstance(x, mi.TensorXd):
         return x
     return mi.TensorXd(np.ascontiguousarray(np.asarray(x, dtype=np.float64)))
+
+
+def _host_channel_major(t) -> np.ndarray:
+    """A ``(H, W, K)`` float64 tensor as a host array of shape ``(H, W, K)`` whose storage is
+    channel-major (each channel one contiguous ``(H, W)`` plane).
+
+    The transpose runs on the device (one gather) and the copy to the host is contiguous;
+    the EXR's per-channel arithmetic (:func:`fogref.gbuffer.moments_to_channels`) and the
+    float32 conversion then read contiguous planes instead of strided ones.  Values are
+    copied, not computed: bitwise the same as ``np.asarray(t)``.
+    """
+    import drjit as dr
+    import mitsuba as mi
+
+    if not isinstance(t, mi.TensorXd):  # a checkpoint's numpy array, or anything array-like
+        return np.moveaxis(np.ascontiguousarray(np.moveaxis(np.asarray(t, dtype=np.float64), -1, 0)), 0, -1)
+    h, w, k = (int(x) for x in t.shape)
+    n = h * w
+    i = dr.arange(mi.UInt32, n * k)
+    c = i // dr.opaque(mi.UInt32, n)
+    planes = dr.gather(mi.Float64, t.array, (i - c * dr.opaque(mi.UInt32, n)) * dr.opaque(mi.UInt32, k) + c)
+    return np.moveaxis(np.asarray(mi.TensorXd(planes, shape=(k, h, w)), dtype=np.float64), 0, -1)
+
+
+def _exr_threads() -> None:
+    """Let OpenEXR compress with every core (its default is 0 threads: the caller's thread
+    only).  ZIP output does not depend on the thread count."""
+    import OpenEXR
+
+    if hasattr(OpenEXR, "set_global_thread_count") and OpenEXR.global_thread_count() < (os.cpu_count() or 1):
+        OpenEXR.set_global_thread_count(os.cpu_count() or 1)
 
 
 def _checkpoint(ckpt: Path, sums, squares, done: int, key: str) -> None:
