@@ -242,6 +242,13 @@ def _md(doc: dict) -> str:
                          f"{x['first_s']:.2f} | {x['median_s']:.2f} [{x['min_s']:.2f}, {x['max_s']:.2f}] | "
                          f"{x['compile_s']:.2f} | {d['ratio'][m]:.2f}x [{min(rr):.2f}, {max(rr):.2f}] |")
         L.append("")
+        L += ["Fair comparison (both fresh processes with the same start-up): `CLI` / `mi.render script`, "
+              "ratio of medians [range of the per-repeat ratios]:", ""]
+        for case, d in runs.items():
+            rr = [a / b for a, b in zip(d["CLI"]["steady_s"], d["mi.render script"]["steady_s"])]
+            L.append(f"* {case}: {d['CLI']['median_s'] / d['mi.render script']['median_s']:.2f}x "
+                     f"[{min(rr):.2f}, {max(rr):.2f}]")
+        L.append("")
     L += ["cuda_ad_rgb: not measured (no GPU was lent to this session); run "
           "`benchmarks/render_driver.py --variant cuda_ad_rgb` on one.", ""]
     if doc.get("reading"):
