@@ -15,7 +15,13 @@ Parts (``(H, W, 3)`` linear RGB unless noted) and their identities::
 attenuates it) is a ratio estimator over the samples whose camera ray reached the
 surface without scattering: it is bounded by the surface radiance itself and is
 *undefined* where ``surface_coverage == 0`` (no such sample; it is written as 0
-there).  No part is ever divided by ``T``.
+there).  No part is ever divided by ``T``.  With fogpath's ``forced_split`` (on by
+default) every sample traces the surface branch at depth 0 (``attenuated_surface``
+then has no scatter-or-reach noise) and continues it with a probability ``q``
+that does not depend on the surface branch's own samples; ``surface_coverage``
+counts the samples that continued it (for the sky: drew it with the same ``q``, about
+``T`` against the fog's albedo-weighted ``1 - T``) and ``surface`` is the
+same ratio estimator over them, so the delta-method stderr below still holds.
 
 Each Monte Carlo part carries its per-pixel standard error in
 ``stderr.<part>.R,G,B`` (``stderr.R,G,B`` for the total), computed from the

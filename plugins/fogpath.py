@@ -56,9 +56,12 @@
      ``T`` and a forced medium collision on ``[0, D]`` (pdf ``sigma_t T / (1 - T)``,
      per layer, weight ``albedo (1 - T)`` for one grey layer) with its light
      sample; the path then continues one branch, chosen in proportion to the
-     branches' throughputs (weight divided by the choice's probability).  Every
-     sample then estimates ``surface`` wherever ``T > 0`` (``surface_coverage`` is
-     1 there).  Used when the fog scatters and ``max_depth >= 2``.  Default: see
+     branches' depth-0 throughputs (``T`` against the medium vertex's weight; the
+     path's weight is divided by the choice's probability).  ``surface_coverage`` then counts the samples that continued
+     the surface branch (sky: drew it), where ``surface`` is their light
+     without the 1/probability weight: still a ratio estimator, bounded by the
+     radiance it estimates, undefined where the fog is opaque.  Used when the fog
+     scatters and ``max_depth >= 2``.  Default: see
      ``FORCED_SPLIT_DEFAULT`` (chosen by ``benchmarks/variance_reduction.py --changes``).
 
 What it does:
@@ -402,12 +405,14 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         """Depth 0 with ``forced_split``: the surface branch (light found by the camera
         ray, light sample at the surface; weight ``T`` applied at the end) and a forced
         medium vertex (its light sample feeds ``single``), then one branch continues,
-        chosen with probability in proportion to ``T w_bsdf`` against ``w_medium w_phase``.
-        Returns (split, β_cam, coverage, ray, si, β, medium_first, prev_it, prev_pdf,
-        prev_delta, active) for the path loop from depth 1."""
+        chosen with probability ``q = T / (T + w_medium w_phase)`` (means over RGB).
+        Returns (split, β_cam, (coverage, the surface branch's depth-0 light, q), ray, si,
+        β, medium_first, prev_it, prev_pdf, prev_delta, active) for the path loop from
+        depth 1.  ``surface_coverage`` is 1 on samples that continued the surface branch
+        (for the sky: drew it with the same q) and ``surface`` their unweighted light, so that
+        ``surface`` stays a ratio estimator bounded by the radiance it estimates."""
         hit, split = si.is_valid(), _Split()
         T = self._transmittance(fog, ops, ray.o, ray.d, D)
-        cover = ~hit | (dr.max(T) > 0)  # the surface branch is estimated (continued with q > 0)
         if has_smooth:
             em = active & (hit if self.hide_emitters else mi.Bool(True))
             ds = mi.DirectionSample3f(scene, si=si, ref=dr.zeros(mi.Interaction3f))
@@ -416,25 +421,33 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         smooth = surf & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
         Ls, _, _ = self._direct(scene, fog, ops, sampler, si, bsdf_ctx, bsdf, smooth, has_smooth)
         split = split.add(Ls, mi.Bool(False), mi.Bool(False))
+        direct = mi.Spectrum(split.surface)
         bs, w_b = bsdf.sample(bsdf_ctx, si, sampler.next_1d(surf), sampler.next_2d(surf), surf)
         t_m, w_m, med = self._forced_collision(fog, ops, sampler, ray, D, active)
         p_med = ray.o + ray.d * t_m
         Ld, wo_m, w_ph, pdf_m = self._medium_vertex(scene, fog, ops, sampler, ray, p_med, t_m, phase, phase_ctx,
                                                     med, mi.Bool(True), has_smooth, sun_ss, sky_cv)
         split = split.add(dr.select(med, w_m * Ld, 0.0), mi.Bool(True), mi.Bool(True))
-        ms = dr.select(surf, dr.mean(T * w_b), 0.0)
+        # q = T / (T + w_medium) >= T: it must not depend on the surface branch's own samples
+        # (the ratio estimator `surface` keeps the samples that continued it), and q >= T
+        # keeps `surface` defined wherever the old scatter-or-reach choice defined it.
+        # A ray to the sky has no surface to continue: it always continues the medium and
+        # its q only draws surface_coverage, so that `surface` is undefined where T ~ 0.
+        ms = dr.mean(T)
         mm = dr.select(med, dr.mean(w_m * w_ph), 0.0)
         q = dr.select(ms + mm > 0, ms / (ms + mm), 0.0)  # probability of continuing the surface branch
-        go_s = surf & (sampler.next_1d(active) < q)
-        go_m = med & ~go_s & (q < 1)
-        β = dr.select(go_s, w_b / q, dr.select(go_m, w_m * w_ph / (1.0 - q), 0.0))
+        chose_s = sampler.next_1d(active) < q
+        go_s = surf & chose_s
+        go_m = med & dr.select(hit, ~chose_s & (q < 1), True)
+        β = dr.select(go_s, w_b / q, dr.select(go_m, w_m * w_ph / dr.select(hit, 1.0 - q, 1.0), 0.0))
         prev_it = self._vertex(ray, si, go_s, p_med)
         prev_pdf = dr.select(go_s, bs.pdf, pdf_m)
         prev_delta = go_s & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
         ray = dr.select(go_s, si.spawn_ray(si.to_world(bs.wo)), mi.Ray3f(p_med, wo_m, ray.time, ray.wavelengths))
         active = (go_s | go_m) & (dr.max(β) > 0) & (self.max_depth > 1)
         si = scene.ray_intersect(ray, active)
-        return split, T, cover, ray, si, β, go_m, prev_it, prev_pdf, prev_delta, active
+        cam = (chose_s, direct, dr.select(hit, q, 1.0))  # surface_coverage, the sample of `surface`
+        return split, T, cam, ray, si, β, go_m, prev_it, prev_pdf, prev_delta, active
 
     # ----------------------------------------------------------------- sample
     @dr.syntax
@@ -460,9 +473,9 @@ class FogPathIntegrator(mi.SamplingIntegrator):
 
         has_lights = has_delta or has_smooth
         active &= has_lights  # no emitter: nothing to trace beyond the G-buffer
-        cover = None  # surface_coverage: the camera ray reached the surface unscattered (~medium_first)
+        cam = None  # with forced splitting: (surface_coverage, depth-0 surface light, q)
         if dr.hint(self.forced_split and phase is not None and has_lights and self.max_depth >= 2, mode="scalar"):
-            split, β_cam, cover, ray, si, β, medium_first, prev_it, prev_pdf, prev_delta, active = \
+            split, β_cam, cam, ray, si, β, medium_first, prev_it, prev_pdf, prev_delta, active = \
                 self._camera_split(scene, fog, ops, sampler, ray, si, D0, phase, phase_ctx, bsdf_ctx, has_smooth,
                                    sun_ss, sky_cv, active)
             depth = mi.UInt32(1)
@@ -525,7 +538,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         for closed in (sun_ss, None if sky_cv is None else sky_cv["closed"]):  # camera-ray estimates
             if dr.hint(closed is not None, mode="scalar"):
                 split = _Split(split.surface, split.single + dr.select(active0, closed, 0.0), split.multiple)
-        return self._outputs(split, β_cam, ~medium_first if cover is None else cover, gbuf)
+        return self._outputs(split, β_cam, medium_first, cam, gbuf)
 
     # ------------------------------------------------------------- outputs
     @staticmethod
@@ -556,17 +569,23 @@ class FogPathIntegrator(mi.SamplingIntegrator):
                 "P": [dr.select(hit, si.p[i], 0.0) for i in range(3)], "view": [ray.d[i] for i in range(3)],
                 "hit": [dr.select(hit, 1.0, 0.0)]}
 
-    def _outputs(self, split, β_cam, cover, gbuf):
-        """(L, valid, AOVs) in the order of :data:`AOV_NAMES`; ``cover``: this sample
-        estimates the surface branch (``surface`` is 0 where it does not)."""
+    def _outputs(self, split, β_cam, medium_first, cam, gbuf):
+        """(L, valid, AOVs) in the order of :data:`AOV_NAMES`.  ``surface`` and
+        ``surface_coverage``: the camera ray reached the surface unscattered, or with
+        forced splitting (``cam``) the sample continued the surface branch; its light is
+        then the depth-0 part plus the continuation without the 1/q weight."""
         att = β_cam * split.surface
+        cover, s_out = ~medium_first, split.surface
+        if cam is not None:
+            cover, direct, q = cam
+            s_out = direct + q * (split.surface - direct)
         L = att + split.single + split.multiple
         if gbuf is None:
             return L, mi.Bool(True), []
         rgb = lambda s: [s[0], s[1], s[2]]  # noqa: E731
         parts = {"attenuated_surface": rgb(att), "inscatter": rgb(split.single + split.multiple),
                  "single": rgb(split.single), "multiple": rgb(split.multiple),
-                 "surface": rgb(dr.select(cover, split.surface, 0.0)), "surface_coverage": [dr.select(cover, 1.0, 0.0)],
+                 "surface": rgb(dr.select(cover, s_out, 0.0)), "surface_coverage": [dr.select(cover, 1.0, 0.0)],
                  **gbuf}
         return L, mi.Bool(True), [c for g in gbuffer.SAMPLE_GROUPS for c in parts[g]]
 
