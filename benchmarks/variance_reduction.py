@@ -75,12 +75,24 @@ def changes(out_dir, res=(48, 27), spp=128, reps=2):
             a["efficiency_inscatter"] = 1.0 / (a["inscatter_variance_per_sample"] * a["time_s"])
         out["scenes"][name] = agg
         print(name, {k: round(a["efficiency"] / agg["before"]["efficiency"], 3) for k, a in agg.items()}, flush=True)
+    d = __import__("pathlib").Path(out_dir)
+    d.mkdir(parents=True, exist_ok=True)
+    (d / "variance_reduction_issue11.json").write_text(json.dumps(out, indent=1))
+    changes_md(out_dir)
+
+
+def changes_md(out_dir):
+    """variance_reduction_issue11.md from its .json (``--changes-md``: without rerunning)."""
+    d = __import__("pathlib").Path(out_dir)
+    out = json.loads((d / "variance_reduction_issue11.json").read_text())
+    res, spp, reps = out["resolution"], out["spp"], out["repeats"]
     lines = ["# Issue 11: each change's gain (fogpath against itself, side by side in one run)", "",
              f"Command: `python benchmarks/variance_reduction.py --changes`; {res[0]}x{res[1]}, {spp} spp, "
              f"{reps} interleaved repeats, per-sample variance from fogpath's own second moments (box filter). "
              "Cumulative variants: each adds one change to the row above. Gain = efficiency "
              "1/(variance x time) relative to `before`; the machine is shared (2 cores, other jobs), so times are "
-             "noisy and only the side-by-side ratios mean anything.", "",
+             "noisy and only the side-by-side ratios mean anything. `+forced split` is built on `+2 sun samples` "
+             "(sky cv off, today's other defaults): its own gain is its row over that row (last table).", "",
              "| scene | variant | final var/sample | inscatter var/sample | time [s] | gain (final) | gain (inscatter) "
              "| att. surface | single | multiple |", "|---|---|---|---|---|---|---|---|---|---|"]
     for name, agg in out["scenes"].items():
@@ -90,9 +102,14 @@ def changes(out_dir, res=(48, 27), spp=128, reps=2):
                          f"| {a['time_s']:.3f} | {a['efficiency'] / b['efficiency']:.2f} | "
                          f"{a['efficiency_inscatter'] / b['efficiency_inscatter']:.2f} | {a['attenuated_surface']:.2f} | "
                          f"{a['single']:.2f} | {a['multiple']:.2f} |")
-    d = __import__("pathlib").Path(out_dir)
-    d.mkdir(parents=True, exist_ok=True)
-    (d / "variance_reduction_issue11.json").write_text(json.dumps(out, indent=1))
+    lines += ["", "## Forced splitting on the camera ray against today's other defaults (`+2 sun samples`)", "",
+              "| scene | variance ratio | time ratio | gain (final) | gain (inscatter) |", "|---|---|---|---|---|"]
+    for name, agg in out["scenes"].items():
+        a, b = agg.get("+forced split"), agg.get("+2 sun samples")
+        if a and b:
+            lines.append(f"| {name} | {a['final_variance_per_sample'] / b['final_variance_per_sample']:.3f} | "
+                         f"{a['time_s'] / b['time_s']:.2f} | {a['efficiency'] / b['efficiency']:.2f} | "
+                         f"{a['efficiency_inscatter'] / b['efficiency_inscatter']:.2f} |")
     (d / "variance_reduction_issue11.md").write_text("\n".join(lines) + "\n")
 
 
@@ -100,8 +117,11 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--changes", action="store_true", help="issue 11's changes, one at a time")
+    ap.add_argument("--changes-md", action="store_true", help="rewrite variance_reduction_issue11.md from its .json")
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
     a = ap.parse_args()
+    if a.changes_md:
+        return changes_md(a.out)
     if a.changes:
         return changes(a.out, spp=32 if a.quick else 128, reps=1 if a.quick else 2)
     res = (48, 27) if a.quick else (96, 54)
