@@ -69,7 +69,7 @@ def changes(out_dir, res=(48, 27), spp=128, reps=2):
                 v["time_s"] = t
                 rows[k].append(v)
         agg = {k: {f: float(np.mean([r[f] for r in rs])) for f in rs[0]} for k, rs in rows.items()}
-        for k, a in agg.items():
+        for a in agg.values():
             a["inscatter_variance_per_sample"] = a["inscatter"] * a["final_variance_per_sample"]
             a["efficiency"] = 1.0 / (a["final_variance_per_sample"] * a["time_s"])
             a["efficiency_inscatter"] = 1.0 / (a["inscatter_variance_per_sample"] * a["time_s"])

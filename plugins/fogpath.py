@@ -108,8 +108,12 @@ from mitsuba.ad.integrators.common import mis_weight
 from fogref import gbuffer
 from fogref.media import closed_form as cf
 from fogref.media import drjit_ops
-from fogref.media.single_scatter import (sample_sun_single_scatter, sample_sun_single_scatter_mixture,
-                                         sun_sampling_mode, hg_upper_fraction_table)
+from fogref.media.single_scatter import (
+    hg_upper_fraction_table,
+    sample_sun_single_scatter,
+    sample_sun_single_scatter_mixture,
+    sun_sampling_mode,
+)
 
 #: The integrator's AOVs (after R,G,B): the per-sample groups of the schema.
 AOV_NAMES = gbuffer.sample_channel_names()
