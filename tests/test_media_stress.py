@@ -32,7 +32,7 @@ fogref.ensure_llvm()  # Dr.Jit's LLVM back end needs LLVM >= 16; before the firs
 D32 = drjit_ops(Float)
 EPS = {"f64": 2.0 ** -53, "f32": 2.0 ** -24}
 mp.mp.dps = 50
-SET = settings(max_examples=150, deadline=None, suppress_health_check=list(HealthCheck))
+SET = settings(max_examples=150, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
 
 sigmas = st.floats(-9, 2).map(lambda e: 10.0 ** e)
 falloffs = st.one_of(st.just(0.0), st.floats(-6, 1).map(lambda e: 10.0 ** e))
@@ -142,7 +142,7 @@ def test_stress_free_flight(prec, sigma, b, h, oy, dy, u):
     if e == 0:
         return
     s = rnd(prec, e / sigma)
-    if prec == "f32" and s < np.finfo(np.float32).tiny:
+    if s == 0 or (prec == "f32" and s < np.finfo(np.float32).tiny):  # e / sigma underflowed: no target depth
         return
     layer = ExpLayer(1.0, b, h)
     ops, aoy = as_ops(prec, oy)
