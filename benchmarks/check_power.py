@@ -171,8 +171,8 @@ def main(argv=None) -> int:
         lines.append(f"| {e['res'][0]}×{e['res'][1]} | {e['spp']} | {e['render_s']:.1f} | " + " | ".join(cells) + " |")
     lines += ["", "How it is measured: see the docstring of `benchmarks/check_power.py` (replicate truths with the "
               "rendered truth's per-pixel noise, Gaussian; stderr re-estimated as from `spp` samples). T is "
-              "closed form in a pixel-exact truth: its stderr channels hold only float32 accumulation noise "
-              "(~1e-5 relative), so its detectable error is far below any sample-count effect. Render times "
+              "closed form in a pixel-exact truth: every sample traces the same camera ray, its stderr is exactly 0 "
+              "and any T error above float32 storage is detected (the column shows the smallest error tried). Render times "
               "vary by 2-5x between runs on a machine shared with other jobs.", ""]
     (out / "power.md").write_text("\n".join(lines))
     print(f"wrote {out / 'power.md'}")
