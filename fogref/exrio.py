@@ -26,8 +26,9 @@ def write_exr(path, channels: dict, attrs: dict | None = None) -> None:
         Destination; its folder is created. The file appears only when complete
         (:func:`fogref.atomic.atomic_write`).
     channels
-        Channel name -> ``(H, W)`` array, stored as float32; NaN becomes 0 and
-        +-inf the largest float32 (``numpy.nan_to_num``).
+        Channel name -> ``(H, W)`` array, stored as float32. A channel with NaN or
+        infinity (also after the cast: values beyond float32's range) is refused
+        with :class:`~fogref.errors.FogrefError`; nothing is silently replaced.
     attrs
         Header attributes; values that are not strings are stored as JSON strings.
     """

@@ -317,3 +317,12 @@ def test_full_disk_is_an_error_not_a_traceback(tmp_path, mitsuba, monkeypatch, c
                "--quiet", "--out", str(tmp_path / "o.exr")])
     err = capsys.readouterr().err
     assert rc == 2 and "o.exr: No space left on device" in err and not (tmp_path / "o.exr").exists()
+
+
+def test_write_exr_refuses_non_finite_channels(tmp_path):
+    from fogref.exrio import write_exr
+
+    with pytest.raises(FogrefError, match=r"non-finite values in channel\(s\) b, c"):
+        write_exr(tmp_path / "x.exr", {"a": np.zeros((2, 2)), "b": np.full((2, 2), np.nan),
+                                       "c": np.full((2, 2), 1e39)})
+    assert not (tmp_path / "x.exr").exists()
