@@ -116,14 +116,7 @@ def sample_sun_single_scatter(ops, medium, o, d, D, w, E, u, channel):
     sig = medium.sigma_t
     s_ch = ops.where(channel == 1, sig[1], ops.where(channel == 2, sig[2], sig[0]))
     X = s_ch * tau_D
-    mX = m * X
-    # m >= -eps: Y psi(mY); strongly rising (m X < -20): log form, no overflow.
-    Y = u * X * phi(ops, ops.maximum(mX, -20.0))
-    x_pos = Y * psi(ops, ops.minimum(m * Y, 0.999999))
-    abs_m = ops.where(m < 0, -m, 1.0)
-    x_neg = X + ops.log(ops.maximum(u + (1.0 - u) * ops.exp(-abs_m * X), 1e-37)) / abs_m
-    x = ops.where(mX < -20.0, x_neg, x_pos)
-    x = ops.minimum(ops.maximum(x, 0.0), X)
+    x = _invert_exp_integrand(ops, X, m, u)
     t = medium.invert_optical_depth(ops, o, d, x / ops.maximum(s_ch, 1e-30), D)
     t = ops.minimum(t, D)
     tau_t = medium.optical_depth(ops, o, d, t)
@@ -141,7 +134,11 @@ def sample_sun_single_scatter(ops, medium, o, d, D, w, E, u, channel):
 
 
 def _invert_exp_integrand(ops, X, m, u):
-    """``x`` in ``[0, X]`` with ``int_0^x e^{-m y} dy = u int_0^X e^{-m y} dy`` (any sign of m)."""
+    """``x`` in ``[0, X]`` with ``int_0^x e^{-m y} dy = u int_0^X e^{-m y} dy`` (any sign of m).
+
+    ``m X >= -20``: ``Y psi(m Y)`` with ``Y = u X phi(m X)``; strongly rising rays
+    (``m X < -20``): the log form, which cannot overflow.
+    """
     mX = m * X
     Y = u * X * phi(ops, ops.maximum(mX, -20.0))
     x_pos = Y * psi(ops, ops.minimum(m * Y, 0.999999))
@@ -217,7 +214,7 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
     tau_l = [L.depth(ops, oy, dy, t_rel) for L in layers]
     # log of pdf_mix / rho (per unit length), log-sum-exp over layers x channels
     logs = []
-    for L, rl, tl, tseg, m, c in zip(layers, rho_l, tau_l, taus, ms, c_l):
+    for rl, tl, tseg, m, c in zip(rho_l, tau_l, taus, ms, c_l):
         for s in sig:
             Xc = s * tseg
             logs.append(ops.log(ops.maximum(c * rl, 1e-37)) + math.log(max(s, 1e-37)) - m * s * tl
