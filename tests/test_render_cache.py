@@ -1,8 +1,8 @@
 """fogref's one render cache: its key changes with everything that sets a truth's pixels."""
 
 import pytest
-from conftest import SCENES
 
+from conftest import SCENES
 from fogref.render.cache import truth_key, truth_path
 
 

@@ -14,8 +14,8 @@ written here independently of fogref's closed forms and of Mitsuba's camera.
 
 import numpy as np
 import pytest
-from conftest import SCENES
 
+from conftest import SCENES
 from fogref.gbuffer import load_truth
 
 pytestmark = pytest.mark.render

@@ -9,8 +9,8 @@ import time
 
 import numpy as np
 import pytest
-from conftest import ROOT, SCENES
 
+from conftest import ROOT, SCENES
 from fogref import gbuffer
 from fogref.errors import FogrefError, ParameterError
 from fogref.exrio import read_exr

@@ -11,10 +11,10 @@ mpmath quadrature on rays of the same camera.
 import mpmath as mp
 import numpy as np
 import pytest
-from conftest import SCENES
 from render_scenes import render_runs
 from stats import one_sample_blocks
 
+from conftest import SCENES
 from fogref.media import NP, hg_phase, single_scatter_sun
 from fogref.media.params import medium_from_params
 
