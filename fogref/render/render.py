@@ -76,7 +76,11 @@ def pass_sizes(n_pixels: int, spp: int, max_lanes: int) -> list[int]:
 
 def file_sha256(path) -> str:
     """SHA-256 of a file's bytes (hex)."""
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
 
 
 def _physical_memory() -> int:

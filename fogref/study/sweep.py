@@ -449,11 +449,10 @@ def _hash(obj, n=16) -> str:
 
 
 def _file_sha256(path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
+    """The SHA-256 the render driver records for scene files (one definition)."""
+    from fogref.render.render import file_sha256
+
+    return file_sha256(path)
 
 
 def build_configs(spec: SweepSpec) -> list[dict]:

@@ -46,9 +46,10 @@ WHAT_IF = {
 
 
 def _sha256(path: Path) -> str:
-    import hashlib
+    """The scene hash as the render driver recorded it (``fogref.scene_sha256``)."""
+    from fogref.render.render import file_sha256
 
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    return file_sha256(path)
 
 
 def scene_of_truth(truth: Truth, scene: str | None = None) -> Path:
