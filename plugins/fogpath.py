@@ -155,6 +155,34 @@ def _spectrum(values):
     return mi.Spectrum(*values) if len(values) == 3 else mi.Spectrum(values[0])
 
 
+def _param_spectrum(ops, values):
+    """RGB scene parameters (Python numbers) as an opaque Spectrum (see ``ops.param``)."""
+    return _spectrum([ops.param(v) for v in values])
+
+
+def make_scene_values_opaque(scene) -> int:
+    """Make the scene's one-value Dr.Jit parameters (emitter radiance and irradiance,
+    transforms, BSDF colours, the phase function's ``g``, ...) opaque, in place.
+
+    Mitsuba traces such values into kernels as literals, so a scene that differs
+    only in the sun's colour or the fog's ``g`` would compile new kernels;
+    opaque, the kernels are reused (a sweep's configurations share them).  Values
+    are unchanged.  Returns how many parameters were changed.
+    """
+    params = mi.traverse(scene)
+    changed = 0
+    for key in params.keys():
+        value = params[key]
+        if not (dr.is_jit_v(value) and dr.width(value) == 1):
+            continue
+        dr.make_opaque(value)
+        params[key] = value
+        changed += 1
+    if changed:
+        params.update()
+    return changed
+
+
 class FogPathIntegrator(mi.SamplingIntegrator):
     """Path tracer with analytic free flight in fogref's exact fog (see module)."""
 
@@ -220,7 +248,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
     # --------------------------------------------------------------- pieces
     def _transmittance(self, fog, ops, o, d, t):
         tau = fog.optical_depth(ops, o, d, t)
-        return _spectrum([dr.exp(-s * tau) for s in fog.sigma_t])
+        return _spectrum([dr.exp(-ops.param(s) * tau) for s in fog.sigma_t])
 
     def _draw_channel(self, sampler, active=True):
         return mi.UInt32(dr.minimum(mi.UInt32(sampler.next_1d(active) * 3.0), 2))
@@ -241,20 +269,21 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         if not fog.scatters:  # absorption only: deterministic, exact
             t_end = dr.minimum(t_surf, ops.largest)
             return mi.Bool(False), t_end, self._transmittance(fog, ops, ray.o, ray.d, t_end)
-        sig = mi.Float(fog.sigma_t[0])
+        sig_rgb = [ops.param(s) for s in fog.sigma_t]
+        sig = sig_rgb[0]
         if fog.sigma_t[1] != fog.sigma_t[0] or fog.sigma_t[2] != fog.sigma_t[0]:
             channel = self._draw_channel(sampler, active)
-            sig = dr.select(channel == 1, fog.sigma_t[1], dr.select(channel == 2, fog.sigma_t[2], sig))
+            sig = dr.select(channel == 1, sig_rgb[1], dr.select(channel == 2, sig_rgb[2], sig))
         variates = [-dr.log(1.0 - sampler.next_1d(active)) for _ in fog.layers]
         t_med = fog.sample_distance(ops, ray.o, ray.d, variates, sig)
         is_medium = active & (t_med < t_surf) & (t_med < ops.largest)
         t_end = dr.select(is_medium, t_med, dr.minimum(t_surf, ops.largest))
         Tr = self._transmittance(fog, ops, ray.o, ray.d, t_end)
         rho = fog.density(ops, ray.o + ray.d * dr.select(is_medium, t_med, 0.0))
-        sigma_t = _spectrum([s * rho for s in fog.sigma_t])
+        sigma_t = _spectrum([s * rho for s in sig_rgb])
         st = sigma_t * Tr
         pdf = dr.select(is_medium, (st[0] + st[1] + st[2]) / 3.0, (Tr[0] + Tr[1] + Tr[2]) / 3.0)
-        num = dr.select(is_medium, sigma_t * _spectrum(fog.albedo) * Tr, Tr)
+        num = dr.select(is_medium, sigma_t * _param_spectrum(ops, fog.albedo) * Tr, Tr)
         return is_medium, t_end, dr.select(pdf > 0, num / pdf, 0.0)
 
     def _direct(self, scene, fog, ops, sampler, it, ctx, scatter, active, has_smooth):
@@ -304,7 +333,8 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             else:
                 t_ss, w_ss = sample_sun_single_scatter_mixture(ops, fog._obj, ray.o, ray.d, D, w_sun, E_sun, u,
                                                                sampler.next_1d(active), channel)
-            vis = active & ~scene.ray_test(mi.Ray3f(ray.o + ray.d * t_ss, mi.Vector3f(*w_sun)), active)
+            to_sun = mi.Vector3f(*(ops.param(x) for x in w_sun))
+            vis = active & ~scene.ray_test(mi.Ray3f(ray.o + ray.d * t_ss, to_sun), active)
             total += dr.select(vis, mi.Spectrum(*w_ss), 0.0)
         return total / K
 
@@ -349,7 +379,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         idx = [i for i, e in enumerate(scene.emitters()) if e is sky]
         pdf_sel = float(scene.pdf_emitter(idx[0])[0]) if idx else 1.0 / len(scene.emitters())
         Lv = mi.traverse(sky)["radiance.value"]
-        L = _spectrum([float(Lv[i][0]) for i in range(3)] if len(Lv) == 3 else [float(Lv[0][0])])
+        L = _param_spectrum(ops, [float(Lv[i][0]) for i in range(3)] if len(Lv) == 3 else [float(Lv[0][0])])
         table = hg_upper_fraction_table(float(fog.g))
         x = (dr.clip(ray.d.y, -1.0, 1.0) + 1.0) * (0.5 * (len(table) - 1))
         i = mi.UInt32(dr.clip(dr.floor(x), 0, len(table) - 2))
@@ -357,7 +387,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         H = dr.lerp(dr.gather(mi.Float, tab, i), dr.gather(mi.Float, tab, i + 1), x - mi.Float(i))
         T = self._transmittance(fog, ops, ray.o, ray.d, D)
         on = mi.Bool(True) if self.sky_cv == "all" else mi.Bool(hit)
-        closed = dr.select(on, H * L * _spectrum(fog.albedo) * (1.0 - T), 0.0)
+        closed = dr.select(on, H * L * _param_spectrum(ops, fog.albedo) * (1.0 - T), 0.0)
         return {"closed": closed, "L": L, "pdf": pdf_sel / (4.0 * dr.pi), "on": on}
 
     def _forced_collision(self, fog, ops, sampler, ray, D, active):
@@ -377,11 +407,12 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         oy, dy = ray.o.y + t0 * ray.d.y, ray.d.y
         om = lambda x: dr.select(x < 1e-4, x * (1.0 - 0.5 * x), 1.0 - dr.exp(-x))  # noqa: E731  1 - e^-x
         tau_D = [dr.minimum(L.depth(ops, oy, dy, length), cf.TAU_MAX) for L in fog.layers]
-        sig = mi.Float(fog.sigma_t[0])
+        sig_rgb, alb_rgb = [ops.param(s) for s in fog.sigma_t], [ops.param(a) for a in fog.albedo]
+        sig = sig_rgb[0]
         grey = fog.sigma_t[1] == fog.sigma_t[0] and fog.sigma_t[2] == fog.sigma_t[0]
         if not grey:
             channel = self._draw_channel(sampler, active)
-            sig = dr.select(channel == 1, fog.sigma_t[1], dr.select(channel == 2, fog.sigma_t[2], sig))
+            sig = dr.select(channel == 1, sig_rgb[1], dr.select(channel == 2, sig_rgb[2], sig))
         u = sampler.next_1d(active)
         oms = [om(sig * tau) for tau in tau_D]
         t_rel = fog.layers[0].sample(ops, oy, dy, -dr.log(1.0 - u * oms[0]) / sig)
@@ -396,7 +427,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         tau_t = [dr.minimum(L.depth(ops, oy, dy, t_rel), cf.TAU_MAX) for L in fog.layers]
         rho_t = [L.rho(ops, oy + t_rel * dy) for L in fog.layers]
         pdfs, fs = [], []
-        for s, a in zip(fog.sigma_t, fog.albedo):
+        for s, a in zip(sig_rgb, alb_rgb):
             norm = sum(om(s * tau) for tau in tau_D)
             pdfs.append(s * sum(r * dr.exp(-s * tau) for r, tau in zip(rho_t, tau_t)) / dr.maximum(norm, 1e-30))
             fs.append(a * s * sum(rho_t) * dr.exp(-s * sum(tau_t)))
@@ -606,6 +637,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         Camera rays start at the camera and have no far limit.
         """
         pixel_exact = self.pixel_exact if pixel_exact is None else bool(pixel_exact)
+        make_scene_values_opaque(scene)  # one kernel for every value of the scene's parameters
         sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
         if not str(sensor).startswith("PerspectiveCamera"):
             raise ValueError(f"fogpath renders from a 'perspective' sensor only, not {str(sensor).split('[')[0]}")

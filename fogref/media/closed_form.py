@@ -167,5 +167,9 @@ def hg_phase(ops, cos_theta, g):
     scattering) peaks when looking into the sun.  Same convention as Mitsuba's
     ``hg`` plugin evaluated with ``wi = -d``, ``wo = w``.
     """
-    denom = 1.0 + g * g - 2.0 * g * cos_theta
-    return (1.0 - g * g) / (4.0 * 3.141592653589793 * denom * ops.sqrt(denom))
+    # ``g`` (a Python number) enters as three opaque constants formed in float64:
+    # ``1 - g^2`` in float32 would cancel for |g| near 1.
+    one_p_g2, two_g = ops.param(1.0 + g * g), ops.param(2.0 * g)
+    numerator = ops.param((1.0 - g * g) / (4.0 * 3.141592653589793))
+    denom = one_p_g2 - two_g * cos_theta
+    return numerator / (denom * ops.sqrt(denom))

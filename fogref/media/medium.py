@@ -131,8 +131,10 @@ class ExpLayer:
         check_layer_param(src, i, "height", self.height, -1e7, 1e7)
 
     def log_c(self, ops, oy):
+        """log of the density at height ``oy``; the parameters enter as ``ops.param``
+        (opaque in Dr.Jit kernels: a new value needs no new kernel)."""
         log_density = math.log(self.density) if self.density > 0 else -1.0e4
-        return log_density - self.falloff * (oy - self.height)
+        return ops.param(log_density) - ops.param(self.falloff) * (oy - ops.param(self.height))
 
     @quiet_numpy
     def rho(self, ops, y):
@@ -142,12 +144,12 @@ class ExpLayer:
     @quiet_numpy
     def depth(self, ops, oy, dy, t):
         """Shape optical depth [m] over ``[0, t]`` along a ray (t = ops.largest: infinity)."""
-        return cf.exp_layer_optical_depth(ops, self.log_c(ops, oy), self.falloff * dy, t)
+        return cf.exp_layer_optical_depth(ops, self.log_c(ops, oy), ops.param(self.falloff) * dy, t)
 
     @quiet_numpy
     def sample(self, ops, oy, dy, s):
         """Distance [m] where the shape optical depth reaches ``s``; ops.largest if never."""
-        return cf.exp_layer_sample(ops, self.log_c(ops, oy), self.falloff * dy, s)
+        return cf.exp_layer_sample(ops, self.log_c(ops, oy), ops.param(self.falloff) * dy, s)
 
     def max_density(self, ops, y_lo, y_hi):
         """Largest relative density on heights ``[y_lo, y_hi]``: at ``y_lo`` (non-increasing)."""
@@ -265,7 +267,7 @@ class FogMedium:
         lo, hi = self.bounds.lo, self.bounds.hi
         m = True
         for a in range(3):
-            m = m & (p[a] >= lo[a]) & (p[a] <= hi[a])
+            m = m & (p[a] >= ops.param(lo[a])) & (p[a] <= ops.param(hi[a]))
         return m
 
     # -- clipping to the box -------------------------------------------------
@@ -276,7 +278,7 @@ class FogMedium:
             return 0.0, ops.largest
         t0, t1 = 0.0, ops.largest
         for a in range(3):
-            lo, hi = self.bounds.lo[a], self.bounds.hi[a]
+            lo, hi = ops.param(self.bounds.lo[a]), ops.param(self.bounds.hi[a])
             da = d[a]
             par = ops.abs(da) < 1e-30
             inv = 1.0 / ops.where(par, 1.0, da)
@@ -314,7 +316,7 @@ class FogMedium:
     def transmittance(self, ops, o, d, t):
         """RGB transmittance over ``[0, t]`` as a 3-tuple of arrays."""
         tau = self.optical_depth(ops, o, d, t)
-        return tuple(ops.exp(-s * tau) for s in self.sigma_t)
+        return tuple(ops.exp(-ops.param(s) * tau) for s in self.sigma_t)
 
     def sun_optical_depth(self, ops, p, w):
         """Shape optical depth from ``p`` to infinity toward ``w`` (unit, to the sun)."""

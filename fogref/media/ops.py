@@ -34,6 +34,11 @@ class NumpyOps:
     def asarray(x):
         return np.asarray(x, dtype=np.float64)
 
+    @staticmethod
+    def param(x):
+        """A scene parameter (a Python number) as it enters array arithmetic: unchanged."""
+        return x
+
     exp = staticmethod(np.exp)
     log = staticmethod(np.log)
     expm1 = staticmethod(np.expm1)
@@ -86,6 +91,18 @@ class DrJitOps:
 
     def asarray(self, x):
         return x if isinstance(x, self.Float) else self.Float(x)
+
+    def param(self, x):
+        """A scene parameter (a Python number: density, falloff, ``sigma_t``, ``g``, the
+        sun's direction) as it enters array arithmetic: an *opaque* ``Float``, i.e. an
+        evaluated one-element array that the kernel reads from memory.  A Python float
+        would be traced into the kernel as a literal, so every new value of the
+        parameter would compile a new kernel (about 0.8 s on the CPU); opaque, one
+        kernel serves every value (``dr.opaque``, Dr.Jit's documented way to do this).
+        Trace-time branches (is the layer constant? is the sun up?) keep reading the
+        Python value.  Arrays pass through unchanged.
+        """
+        return x if self.dr.is_array_v(x) else self.dr.opaque(self.Float, x)
 
     def _f(self, x):
         # Python scalars become Float so that Kahan's tricks run in the variant's

@@ -66,10 +66,10 @@ def _crossing(ops, oy, dy, y):
 
 
 def _pow(ops, u, p):
-    """u**p for u >= 0, p >= 0 (0**0 = 1)."""
+    """u**p for u >= 0, p >= 0 (0**0 = 1); ``p`` a Python number (``p == 0`` is a branch)."""
     if p == 0:
         return ops.where(u >= 0, 1.0, 1.0) if not isinstance(u, float) else 1.0
-    return ops.where(u > 0, ops.exp(p * ops.log(ops.maximum(u, ops.tiny))), 0.0)
+    return ops.where(u > 0, ops.exp(ops.param(p) * ops.log(ops.maximum(u, ops.tiny))), 0.0)
 
 
 @dataclass(frozen=True)
@@ -137,26 +137,27 @@ class HDRPLayer:
 
     def _log_c(self, ops, y):
         """log of the exponential piece's density at ``y`` (valid for y >= base)."""
-        return self._log_density - self.falloff * (y - self.base_height)
+        return ops.param(self._log_density) - ops.param(self.falloff) * (y - ops.param(self.base_height))
 
     @quiet_numpy
     def rho(self, ops, y):
         """Relative density at height y."""
-        h = ops.maximum(y - self.base_height, 0.0)
-        return cf.exp_times(ops, self._log_density - self.falloff * h, 1.0)
+        h = ops.maximum(y - ops.param(self.base_height), 0.0)
+        return cf.exp_times(ops, ops.param(self._log_density) - ops.param(self.falloff) * h, 1.0)
 
     def _pieces(self, ops, oy, dy):
         """(t_b, below0, up, down): base crossing and the ray's configuration."""
-        t_b = _crossing(ops, oy, dy, self.base_height)
-        below0 = oy <= self.base_height
+        hb = ops.param(self.base_height)
+        t_b = _crossing(ops, oy, dy, hb)
+        below0 = oy <= hb
         return t_b, below0, dy > 0, dy < 0
 
     @quiet_numpy
     def depth(self, ops, oy, dy, t):
         """Shape optical depth [m] over ``[0, t]`` (``t = ops.largest``: infinity)."""
         L = ops.largest
-        hb = self.base_height
-        k = self.falloff * dy
+        hb, density = ops.param(self.base_height), ops.param(self.density)
+        k = ops.param(self.falloff) * dy
         t = ops.maximum(t, 0.0)
         t_b, below0, up, down = self._pieces(ops, oy, dy)
         t_bp = ops.maximum(t_b, 0.0)
@@ -170,7 +171,7 @@ class HDRPLayer:
         len_e = ops.where(up, ops.where(below0, rest, t),
                           ops.where(down, ops.where(below0, 0.0, ops.minimum(t, t_bp)),
                                     ops.where(below0, 0.0, t)))
-        tau_c = ops.minimum(self.density * ops.minimum(len_c, ops.largest), ops.largest)
+        tau_c = ops.minimum(density * ops.minimum(len_c, ops.largest), ops.largest)
         tau_c = ops.where((len_c >= L) & (self.density > 0), cf.TAU_MAX, tau_c)
         tau_e = cf.exp_layer_optical_depth(ops, self._log_c(ops, y0), k, len_e)
         tau_e = ops.where(len_e > 0, tau_e, 0.0)
@@ -180,15 +181,15 @@ class HDRPLayer:
     def sample(self, ops, oy, dy, s):
         """Distance [m] where the shape optical depth reaches ``s``; ops.largest if never."""
         L = ops.largest
-        hb = self.base_height
-        k = self.falloff * dy
+        hb, density = ops.param(self.base_height), ops.param(self.density)
+        k = ops.param(self.falloff) * dy
         t_b, below0, up, down = self._pieces(ops, oy, dy)
         t_bp = ops.maximum(t_b, 0.0)
-        inv_d = 1.0 / self.density if self.density > 0 else L
+        inv_d = ops.param(1.0 / self.density if self.density > 0 else L)
         # constant: s / density
         t_const = ops.minimum(s * inv_d, L)
         # going up from below: constant up to the base, then exponential from hb
-        tau_c1 = ops.minimum(self.density * t_bp, L)
+        tau_c1 = ops.minimum(density * t_bp, L)
         s_rem_up = ops.maximum(s - tau_c1, 0.0)
         t_up_exp = cf.exp_layer_sample(ops, self._log_c(ops, hb + 0.0 * oy), k, s_rem_up)
         t_up_below = ops.where(s <= tau_c1, t_const,
@@ -276,35 +277,36 @@ class PowerLawLayer:
         return float(self.end) - float(self.start)
 
     def _u(self, ops, y):
-        return ops.minimum(ops.maximum((self.end - y) / self._H, 0.0), 1.0)
+        return ops.minimum(ops.maximum((ops.param(self.end) - y) / ops.param(self._H), 0.0), 1.0)
 
     @quiet_numpy
     def rho(self, ops, y):
         """Relative density at height y."""
         u = self._u(ops, y)
-        return ops.where(y >= self.end, 0.0, self.density * _pow(ops, u, self.power))
+        return ops.where(y >= ops.param(self.end), 0.0, ops.param(self.density) * _pow(ops, u, self.power))
 
     def _geometry(self, ops, oy, dy):
-        s_S = _crossing(ops, oy, dy, self.start)
-        s_E = _crossing(ops, oy, dy, self.end)
+        s_S = _crossing(ops, oy, dy, ops.param(self.start))
+        s_E = _crossing(ops, oy, dy, ops.param(self.end))
         return s_S, s_E, dy > 0, dy < 0
 
     def _power_piece(self, ops, gap, abs_dy, length, reaches_end):
         """int of u^p over a piece of length ``length`` whose lower end lies ``gap`` below E."""
         L = ops.largest
         p, q = float(self.power), float(self.power) + 1.0
-        gap = ops.minimum(ops.maximum(gap, 0.0), self._H)  # = H u_hi
-        u_hi = ops.minimum(gap / self._H, 1.0)
+        H, qp = ops.param(self._H), ops.param(q)
+        gap = ops.minimum(ops.maximum(gap, 0.0), H)  # = H u_hi
+        u_hi = ops.minimum(gap / H, 1.0)
         dl = ops.minimum(abs_dy * length, L)
         delta = ops.minimum(ops.safe_div(dl, gap), 1.0)
         delta = ops.where(reaches_end, 1.0, delta)
         dmid = ops.minimum(delta, 0.5)
-        g_small = ops.safe_div(-ops.expm1(q * ops.log1p(-dmid)), q * dmid)
+        g_small = ops.safe_div(-ops.expm1(qp * ops.log1p(-dmid)), qp * dmid)
         g_small = ops.where(dmid == 0, 1.0, g_small)
         dbig = ops.maximum(delta, 0.5)
         # 1 - (1-d)^q with 1 - d exact for d >= 0.5
         one_m = ops.maximum(1.0 - dbig, 0.0)
-        g_big = (1.0 - _pow(ops, one_m, q)) / (q * dbig)
+        g_big = (1.0 - _pow(ops, one_m, q)) / (qp * dbig)
         g = ops.where(delta > 0.5, g_big, g_small)
         val = ops.minimum(length, L) * _pow(ops, u_hi, p) * g
         return ops.where((length > 0) & (gap > 0), ops.minimum(val, L), 0.0)
@@ -313,7 +315,7 @@ class PowerLawLayer:
     def depth(self, ops, oy, dy, t):
         """Shape optical depth [m] over ``[0, t]`` (``t = ops.largest``: infinity)."""
         L = ops.largest
-        S, E = self.start, self.end
+        S, E, density = ops.param(self.start), ops.param(self.end), ops.param(self.density)
         t = ops.maximum(t, 0.0)
         s_S, s_E, up, down = self._geometry(ops, oy, dy)
         abs_dy = ops.abs(dy)
@@ -332,42 +334,43 @@ class PowerLawLayer:
                         ops.where(down, ops.where((t >= L) | (t >= s_S), E - S, gap_dn), E - oy))
         reaches_end = (up & (t >= s_E)) | (down & (oy >= E))
         tau_p = self._power_piece(ops, gap, abs_dy, length, reaches_end)
-        tau = self.density * ops.minimum(len_c, L) + self.density * tau_p
+        tau = density * ops.minimum(len_c, L) + density * tau_p
         tau = ops.where(((len_c >= L) | (length >= L)) & (self.density > 0), cf.TAU_MAX, tau)
         return ops.minimum(tau, cf.TAU_MAX)
 
     def _invert_power(self, ops, y_a, dy, sig):
         """Length along the ray, from height y_a in [S, E], where int u^p = sig."""
         L = ops.largest
-        p, q, H = float(self.power), float(self.power) + 1.0, self._H
-        u_a = ops.minimum(ops.maximum((self.end - y_a) / H, 0.0), 1.0)
+        p, q = float(self.power), float(self.power) + 1.0
+        pp, qp, H, log_H = ops.param(p), ops.param(q), ops.param(self._H), ops.param(math.log(self._H))
+        u_a = ops.minimum(ops.maximum((ops.param(self.end) - y_a) / H, 0.0), 1.0)
         log_u = ops.log(ops.maximum(u_a, ops.tiny))
         log_sig = ops.log(ops.maximum(sig, ops.tiny))
         abs_dy = ops.abs(dy)
         # log|w| = log(q |dy| sig) - log H - q log u_a
-        lw = ops.log(ops.maximum(q * abs_dy, ops.tiny)) + log_sig - math.log(H) - q * log_u
+        lw = ops.log(ops.maximum(qp * abs_dy, ops.tiny)) + log_sig - log_H - qp * log_u
         lw = ops.where(u_a > 0, lw, ops.largest)
         small = (dy == 0) | (lw <= 0.0)
         # |w| <= 1: L = sigma h(w, q), sigma = sig / u_a^p
-        sigma = cf.exp_times(ops, -p * log_u, sig)
+        sigma = cf.exp_times(ops, -pp * log_u, sig)
         w = ops.where(dy > 0, 1.0, -1.0) * ops.exp(ops.minimum(lw, 0.0))
         w = ops.where(dy == 0, 0.0, w)
         wm = ops.minimum(w, 0.5)
-        h_small = ops.safe_div(-q * ops.expm1(ops.log1p(-wm) / q), wm)
+        h_small = ops.safe_div(-qp * ops.expm1(ops.log1p(-wm) / qp), wm)
         h_small = ops.where(wm == 0, 1.0, h_small)
         wb = ops.minimum(ops.maximum(w, 0.5), 1.0)
-        h_big = q * (1.0 - ops.exp(ops.log(ops.maximum(1.0 - wb, ops.tiny)) / q)) / wb
+        h_big = qp * (1.0 - ops.exp(ops.log(ops.maximum(1.0 - wb, ops.tiny)) / qp)) / wb
         h = ops.where(w > 0.5, h_big, h_small)
         t_small = ops.minimum(sigma * h, L)
         # w < -1 (descending, from near the top): u_b = (u_a^q + A)^(1/q),
         # A = q |dy| sig / H; length = H (u_b - u_a) / |dy|
         lw_p = ops.minimum(ops.maximum(lw, 0.0), ops.largest)
-        log_A = ops.log(ops.maximum(q * abs_dy, ops.tiny)) + log_sig - math.log(H)
-        X = (lw_p + ops.log1p(ops.exp(-lw_p))) / q  # log((1+|w|)^(1/q))
-        u_b = ops.exp(ops.minimum((log_A + ops.log1p(ops.exp(-lw_p))) / q, ops.log_largest))
+        log_A = ops.log(ops.maximum(qp * abs_dy, ops.tiny)) + log_sig - log_H
+        X = (lw_p + ops.log1p(ops.exp(-lw_p))) / qp  # log((1+|w|)^(1/q))
+        u_b = ops.exp(ops.minimum((log_A + ops.log1p(ops.exp(-lw_p))) / qp, ops.log_largest))
         diff = ops.where(X < 1.0, u_a * ops.expm1(ops.minimum(X, 1.0)), u_b - u_a)
         inv_dy = 1.0 / ops.where(abs_dy > 0, abs_dy, 1.0)
-        t_big = ops.minimum(H * ops.minimum(diff, L / H) * inv_dy, L)
+        t_big = ops.minimum(H * ops.minimum(diff, ops.param(L / self._H)) * inv_dy, L)
         t = ops.where(small, t_small, t_big)
         # going up with w >= 1: leaves the top first
         t = ops.where((dy > 0) & (lw >= 0.0), L, t)
@@ -377,9 +380,9 @@ class PowerLawLayer:
     def sample(self, ops, oy, dy, s):
         """Distance [m] where the shape optical depth reaches ``s``; ops.largest if never."""
         L = ops.largest
-        S, E = self.start, self.end
+        S, E = ops.param(self.start), ops.param(self.end)
         s_S, s_E, up, down = self._geometry(ops, oy, dy)
-        inv_d = 1.0 / self.density if self.density > 0 else L
+        inv_d = ops.param(1.0 / self.density if self.density > 0 else L)
         sig = ops.minimum(s * inv_d, L)  # shape depth in units of density
         s_Sp = ops.maximum(s_S, 0.0)
         s_Ep = ops.maximum(s_E, 0.0)
@@ -401,7 +404,7 @@ class PowerLawLayer:
         # --- horizontal
         u0 = self._u(ops, oy)
         t_h = ops.where(oy <= S, sig,
-                        ops.where(oy >= E, L, cf.exp_times(ops, -self.power * ops.log(ops.maximum(u0, ops.tiny)), sig)))
+                        ops.where(oy >= E, L, cf.exp_times(ops, -ops.param(self.power) * ops.log(ops.maximum(u0, ops.tiny)), sig)))
         t = ops.where(up, t_up, ops.where(down, t_dn, t_h))
         t = ops.where(t >= L, L, t)
         return ops.where(s > 0, t, 0.0)

@@ -55,15 +55,17 @@ def single_scatter_sun(ops, medium, o, d, D, w, E, tau=None):
     if wy <= 0 or any(L.is_constant for L in medium.layers):
         zero = 0.0 * d[0]
         return (zero, zero, zero)
-    cos_theta = d[0] * w[0] + d[1] * w[1] + d[2] * w[2]
+    w_ = _params(ops, w)
+    cos_theta = d[0] * w_[0] + d[1] * w_[1] + d[2] * w_[2]
     phase = cf.hg_phase(ops, cos_theta, medium.g)
     if tau is None:
         tau = medium.optical_depth(ops, o, d, D)
-    tau_sun_o = medium.sun_optical_depth(ops, o, w)
-    m = 1.0 - d[1] / wy
-    tau_sun_end = medium.sun_optical_depth(ops, tuple(o[i] + D * d[i] for i in range(3)), w)
+    tau_sun_o = medium.sun_optical_depth(ops, o, w_)
+    m = 1.0 - d[1] / w_[1]
+    tau_sun_end = medium.sun_optical_depth(ops, tuple(o[i] + D * d[i] for i in range(3)), w_)
     out = []
     for sig, alb, e in zip(medium.sigma_t, medium.albedo, E):
+        sig, alb_e = ops.param(sig), ops.param(alb * e)
         tc = sig * tau
         # m >= 0: T_sun(o) * tc * phi(m tc), all factors bounded.
         pos = ops.exp(-sig * tau_sun_o) * ops.minimum(tc * cf.phi(ops, ops.maximum(m, 0.0) * tc), ops.largest)
@@ -72,14 +74,20 @@ def single_scatter_sun(ops, medium, o, d, D, w, E, tau=None):
         neg_m = ops.where(m < 0, -m, 1.0)
         neg = ops.exp(-sig * (tau_sun_end + tau)) * (-ops.expm1(-neg_m * tc)) / neg_m
         integral = ops.where(m < 0, neg, pos)
-        out.append(alb * e * phase * integral)
+        out.append(alb_e * phase * integral)
     return tuple(out)
 
 
 def single_scatter_sky(ops, medium, o, d, D, L_sky):
     """Single-scattered uniform sky, unoccluded and unattenuated: alpha L (1 - T(D))."""
     tau = medium.optical_depth(ops, o, d, D)
-    return tuple(alb * L * -ops.expm1(-sig * tau) for sig, alb, L in zip(medium.sigma_t, medium.albedo, L_sky))
+    return tuple(ops.param(alb * L) * -ops.expm1(-ops.param(sig) * tau)
+                 for sig, alb, L in zip(medium.sigma_t, medium.albedo, L_sky))
+
+
+def _params(ops, values):
+    """``values`` (Python numbers) as ``ops.param``: opaque in Dr.Jit kernels."""
+    return tuple(ops.param(v) for v in values)
 
 
 def _log_x_phi(ops, X, mX):
@@ -110,10 +118,9 @@ def sample_sun_single_scatter(ops, medium, o, d, D, w, E, u, channel):
     The channel used for sampling (``channel`` in {0,1,2}, uniform) is combined
     by one-sample MIS: ``weights_c = CF_c pdf_c(t) / mean_k pdf_k(t)``.
     """
-    wy = float(w[1])
-    m = 1.0 - d[1] / wy
+    m = 1.0 - d[1] / ops.param(w[1])
     tau_D = medium.optical_depth(ops, o, d, D)
-    sig = medium.sigma_t
+    sig = _params(ops, medium.sigma_t)
     s_ch = ops.where(channel == 1, sig[1], ops.where(channel == 2, sig[2], sig[0]))
     X = s_ch * tau_D
     x = _invert_exp_integrand(ops, X, m, u)
@@ -176,7 +183,7 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
     :func:`sample_sun_single_scatter` (zero variance without shadows).
     ``u``, ``u_layer``: uniform variates; ``channel`` in {0, 1, 2}, uniform.
     """
-    wy = float(w[1])
+    wy, w_ = float(w[1]), _params(ops, w)
     sig, layers = medium.sigma_t, medium.layers
     t0, t1 = medium.clip(ops, o, d)
     seg = ops.maximum(ops.minimum(t1, D) - t0, 0.0)
@@ -189,10 +196,10 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
     # m_l: the exact exponent for exponential layers (sun above the horizon); any other
     # profile (or a constant layer) gets m = 1, a truncated free flight: the proposal
     # stays a normalised closed form for any profile that inverts its optical depth.
-    ms = [(1.0 - dy / wy) if (wy > 0 and isinstance(L, ExpLayer) and L.falloff > 0) else 1.0 + 0.0 * dy
+    ms = [(1.0 - dy / w_[1]) if (wy > 0 and isinstance(L, ExpLayer) and L.falloff > 0) else 1.0 + 0.0 * dy
           for L in layers]
     taus = [L.depth(ops, oy, dy, seg) for L in layers]
-    s_mean = sum(sig) / 3.0
+    s_mean = ops.param(sum(sig) / 3.0)
     mass = [s_mean * tl * phi(ops, m * s_mean * tl) for tl, m in zip(taus, ms)]
     total = sum(mass)
     # layer pick: cumulative masses
@@ -202,7 +209,7 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
         acc = acc + mass[i]
         pick = ops.where(u_layer * total > acc, pick + 1, pick)
     c_l = [mi_ / ops.maximum(total, 1e-37) for mi_ in mass]
-    s_ch = _pick(ops, channel, list(sig))
+    s_ch = _pick(ops, channel, list(_params(ops, sig)))
     m_sel, tau_sel = _pick(ops, pick, ms), _pick(ops, pick, taus)
     x = _invert_exp_integrand(ops, s_ch * tau_sel, m_sel, u)
     s_shape = x / ops.maximum(s_ch, 1e-30)
@@ -215,9 +222,10 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
     # log of pdf_mix / rho (per unit length), log-sum-exp over layers x channels
     logs = []
     for rl, tl, tseg, m, c in zip(rho_l, tau_l, taus, ms, c_l):
-        for s in sig:
+        for s_host in sig:
+            s = ops.param(s_host)
             Xc = s * tseg
-            logs.append(ops.log(ops.maximum(c * rl, 1e-37)) + math.log(max(s, 1e-37)) - m * s * tl
+            logs.append(ops.log(ops.maximum(c * rl, 1e-37)) + ops.param(math.log(max(s_host, 1e-37))) - m * s * tl
                         - _log_x_phi(ops, Xc, m * Xc))
     lmax = logs[0]
     for lg in logs[1:]:
@@ -229,15 +237,15 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
     rho = sum(rho_l)
     tau = medium._layers_depth(ops, oy, dy, t_rel)
     p = tuple(o[i] + t * d[i] for i in range(3))
-    tau_sun = medium.sun_optical_depth(ops, p, w)
-    phase = cf.hg_phase(ops, d[0] * w[0] + d[1] * w[1] + d[2] * w[2], medium.g)
+    tau_sun = medium.sun_optical_depth(ops, p, w_)
+    phase = cf.hg_phase(ops, d[0] * w_[0] + d[1] * w_[1] + d[2] * w_[2], medium.g)
     weights = []
     for s, alb, e in zip(sig, medium.albedo, E):
         if s <= 0 or alb * e == 0:
             weights.append(0.0 * t)
             continue
-        lw = math.log(s) + ops.log(ops.maximum(rho, 1e-37)) - s * (tau + tau_sun) - log_pdf
-        wc = alb * e * phase * ops.exp(ops.minimum(lw, ops.exp_limit))
+        lw = ops.param(math.log(s)) + ops.log(ops.maximum(rho, 1e-37)) - ops.param(s) * (tau + tau_sun) - log_pdf
+        wc = ops.param(alb * e) * phase * ops.exp(ops.minimum(lw, ops.exp_limit))
         weights.append(ops.where(ok & (rho > 0) & (total > 0), wc, 0.0))
     return t, tuple(weights)
 

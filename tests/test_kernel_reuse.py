@@ -1,0 +1,83 @@
+"""Scene values are opaque to fogpath's kernels, so a sweep compiles once.
+
+Dr.Jit traces a Python number into a kernel as a literal: a scene that differs only
+in its fog's ``g`` or the sun's elevation would then compile new kernels (about
+0.8 s each on the CPU, more than the render of a small sweep configuration).
+fogpath reads every scene value through ``ops.param`` (``dr.opaque``) and makes
+Mitsuba's own one-value parameters opaque (``make_scene_values_opaque``).
+
+Each case renders a tiny image twice, the second time with one value changed, and
+asserts that (1) the two renders launched kernels with the *same hashes* (Dr.Jit's
+kernel history; the hash covers the kernel's IR and so every literal, whether the
+kernel came from the in-memory cache, the disk cache or a compile) and (2) the
+pixels changed, so the value was used.  Smallest error detected: any one of these
+values traced as a literal anywhere in the path-tracing kernel.  Structural changes
+(a layer becoming constant, grey extinction becoming RGB) may compile other kernels
+on purpose and are not tested here.
+"""
+
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pytest
+from render_scenes import base_scene, heightfog
+
+VALLEY = str(Path(__file__).resolve().parents[1] / "scenes" / "valley.xml")
+TINY = {"res": "8", "resy": "6"}
+
+VALLEY_CHANGES = [
+    {"g": "0.35"}, {"sigma_t": "0.0021"}, {"albedo": "0.61"}, {"falloff": "0.021"}, {"density": "1.7"},
+    {"fog_height": "3.5"}, {"sun_elevation": "21.5"}, {"sun_azimuth": "61"}, {"sun_irradiance": "1.1, 2.2, 3.3"},
+    {"sky_radiance": "0.11, 0.12, 0.13"}, {"camera_origin": "1, 3, 0"},
+]
+
+
+def _hashes_and_image(mi, scene):
+    import drjit as dr
+
+    dr.kernel_history()  # clear
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        sums, _ = scene.integrator().render_moments(scene, seed=5, spp=2)
+        image = np.array(sums)
+        history = dr.kernel_history()
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    hashes = Counter(k["hash"] for k in history if str(k.get("type")).endswith("JIT"))
+    assert hashes, "no kernel was launched"
+    return hashes, image
+
+
+@pytest.mark.parametrize("change", VALLEY_CHANGES, ids=lambda c: next(iter(c)))
+def test_valley_value_reuses_kernels(mitsuba, change):
+    mi = mitsuba
+    base_h, base_img = _hashes_and_image(mi, mi.load_file(VALLEY, **TINY))
+    h, img = _hashes_and_image(mi, mi.load_file(VALLEY, **TINY, **change))
+    assert not np.array_equal(img, base_img), f"{change} did not change the render"
+    assert h == base_h, f"{change}: new kernels {sorted(set(h) - set(base_h))} (a value traced as a literal)"
+
+
+PROFILE_CASES = [
+    ("rgb extinction", dict(sigma_t=[0.03, 0.02, 0.01]), dict(sigma_t=[0.02, 0.025, 0.012])),
+    ("box bounds", dict(), dict(bounds_max=[50.0, 30.0, 55.0])),
+    ("hdrp", dict(profile="hdrp", density=1.0, base_height=2.0, falloff=0.05),
+     dict(profile="hdrp", density=0.7, base_height=4.0, falloff=0.08)),
+    ("powerlaw", dict(profile="powerlaw", density=1.0, start=0.0, end=30.0, power=1.5),
+     dict(profile="powerlaw", density=0.6, start=2.0, end=25.0, power=2.5)),
+    ("two layers", dict(density2=0.5, falloff2=0.2, height2=1.0), dict(density2=0.8, falloff2=0.3, height2=2.0)),
+]
+
+
+@pytest.mark.parametrize("name,before,after", PROFILE_CASES, ids=[c[0] for c in PROFILE_CASES])
+def test_profile_values_reuse_kernels(mitsuba, name, before, after):
+    mi = mitsuba
+    integrator = {"type": "fogpath", "max_depth": 3}
+
+    def scene(kw):
+        return mi.load_dict(base_scene(mi, integrator, heightfog(mi, **kw), res=(8, 6)))
+
+    base_h, base_img = _hashes_and_image(mi, scene(before))
+    h, img = _hashes_and_image(mi, scene(after))
+    assert not np.array_equal(img, base_img), f"{name}: the change did not change the render"
+    assert h == base_h, f"{name}: new kernels {sorted(set(h) - set(base_h))} (a value traced as a literal)"
