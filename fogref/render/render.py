@@ -120,6 +120,19 @@ def _is_exr(path: Path) -> bool:
         return f.read(4) == b"\x76\x2f\x31\x01"
 
 
+class _NoBar:
+    """The progress bar of a quiet render: counts nothing, shows nothing."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    def update(self, n):
+        pass
+
+
 class _Interrupt:
     """First Ctrl-C: stop after the current pass (checkpointed); second: stop now."""
 
@@ -200,11 +213,14 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
     if sums is not None:  # the running sums live on the device
         sums, squares = mi.TensorXd(sums), mi.TensorXd(squares)
 
-    from tqdm import tqdm
+    if progress:
+        from tqdm import tqdm
 
+        bar = tqdm(total=spp, initial=sum(passes[:done]), unit="spp", desc=scene_path.name)
+    else:  # no bar, no tqdm import (20 ms of a quiet CLI run's start-up)
+        bar = _NoBar()
     t0, last_ckpt, timings = time.perf_counter(), time.perf_counter(), []
-    with _Interrupt() as stop, tqdm(total=spp, initial=sum(passes[:done]), unit="spp", disable=not progress,
-                                    desc=scene_path.name) as bar:
+    with _Interrupt() as stop, bar:
         try:
             for k in range(done, len(passes)):
                 ts = time.perf_counter()

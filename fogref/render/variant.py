@@ -2,10 +2,19 @@
 
 :func:`set_variant` is the one place where fogref imports Mitsuba for the
 renderer's sake; ``import fogref`` does not call it (see :mod:`fogref`).
+
+Start-up (``benchmarks/render_driver.py --startup``): importing Mitsuba, setting a
+variant and registering fogpath run ``@dr.syntax`` on 11 functions (Mitsuba's
+Python integrators and projective helpers, fogpath's ``sample``), each a parse, an
+AST rewrite and a compile of its source: ~90 ms of every process's start (~170 ms
+while fogpath's ``import mitsuba.ad...`` loads Mitsuba's integrators a second time).
+While :func:`set_variant` runs, ``dr.syntax`` is wrapped by :func:`_cached_syntax`,
+which keeps the rewritten code objects on disk, keyed on the source file's bytes.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 
 from fogref._llvm import HELP, ensure_llvm
@@ -13,6 +22,98 @@ from fogref.errors import FogrefError
 
 DEFAULT_VARIANT = "llvm_ad_rgb"
 _registered: set[str] = set()
+
+
+def syntax_cache_dir():
+    """The folder of :func:`_cached_syntax`'s code objects (``$FOGREF_SYNTAX_CACHE``, see
+    :func:`_cache_dir_from`), or None when it is off."""
+    return _cache_dir_from(os.environ.get("FOGREF_SYNTAX_CACHE"))
+
+
+def _cache_dir_from(setting):
+    """The syntax cache's folder for a ``$FOGREF_SYNTAX_CACHE`` value: unset, the default
+    ``~/.cache/fogref/drjit-syntax``; ``0``, ``off`` or empty, None (no cache); else that folder.
+
+    >>> _cache_dir_from(None).parts[-3:], _cache_dir_from("off"), str(_cache_dir_from("/tmp/s"))
+    (('.cache', 'fogref', 'drjit-syntax'), None, '/tmp/s')
+    """
+    from pathlib import Path
+
+    if setting is None:
+        return Path.home() / ".cache" / "fogref" / "drjit-syntax"
+    return None if setting.strip().lower() in ("", "0", "off", "false", "no") else Path(setting)
+
+
+@contextlib.contextmanager
+def _cached_syntax():
+    """Within the block, ``drjit.syntax`` keeps its rewritten code objects on disk.
+
+    ``@dr.syntax`` turns a function's source into another function (Dr.Jit's
+    ``while``/``if`` rewrite) when the decorated module is imported: a parse, an
+    AST rewrite and a compile, 1-16 ms per function, in every process.  Here a
+    cache hit returns the same function built the same way from the stored code
+    object (``marshal``, as Python's ``__pycache__``); a miss, or any failure to
+    read or write the cache, calls Dr.Jit's own ``syntax`` (and stores its result).
+    The key holds everything the rewrite depends on: the bytes of the source file,
+    its path, the function's qualified name and first line, the ``recursive`` flag,
+    Dr.Jit's version and Python's bytecode magic number, so an edited file or an
+    upgraded Dr.Jit or Python never gets stale code.  Calls with ``print_ast``/``print_code``
+    are passed through.  ``drjit.syntax`` is restored when the block ends.
+    """
+    folder = syntax_cache_dir()
+    if folder is None:
+        yield
+        return
+    import hashlib
+    import importlib.util
+    import marshal
+    import types
+    from pathlib import Path
+
+    import drjit as dr
+
+    from fogref.atomic import atomic_write
+
+    original = dr.syntax
+    digests: dict[str, str] = {}
+
+    def file_digest(filename: str) -> str:
+        if filename not in digests:
+            with open(filename, "rb") as fh:
+                digests[filename] = hashlib.sha256(fh.read()).hexdigest()
+        return digests[filename]
+
+    def syntax(f=None, *, recursive=False, print_ast=False, print_code=False):
+        if f is None:
+            return lambda g: syntax(g, recursive=recursive, print_ast=print_ast, print_code=print_code)
+        if (print_ast or print_code or not isinstance(f, types.FunctionType)
+                or f.__module__.startswith(("drjit", "pytest"))):  # Dr.Jit's own output or error
+            return original(f, recursive=recursive, print_ast=print_ast, print_code=print_code)
+        code = f.__code__
+        try:
+            key = repr((dr.__version__, importlib.util.MAGIC_NUMBER.hex(), f.__qualname__, code.co_filename,
+                        code.co_firstlineno, bool(recursive), file_digest(code.co_filename)))
+        except OSError:  # no source file: Dr.Jit's own error or result
+            return original(f, recursive=recursive)
+        path = folder / (hashlib.sha256(key.encode()).hexdigest()[:32] + ".code")
+        try:
+            new_code = marshal.loads(path.read_bytes())
+            if not isinstance(new_code, types.CodeType) or new_code.co_name != f.__name__:
+                raise ValueError("not the code object of this function")
+        except (OSError, ValueError, EOFError, TypeError):
+            new = original(f, recursive=recursive)
+            with contextlib.suppress(OSError, ValueError):
+                atomic_write(path, lambda tmp: Path(tmp).write_bytes(marshal.dumps(new.__code__)))
+            return new
+        new = types.FunctionType(new_code, f.__globals__)  # as drjit.ast.syntax builds it
+        new.__defaults__ = f.__defaults__
+        return new
+
+    dr.syntax = syntax
+    try:
+        yield
+    finally:
+        dr.syntax = original
 
 
 def set_variant(name: str | None = None) -> str:
@@ -45,22 +146,23 @@ def set_variant(name: str | None = None) -> str:
     keeps plugin registrations per variant.
     """
     llvm = ensure_llvm()  # before Dr.Jit starts its LLVM back end
-    import mitsuba as mi
+    with _cached_syntax():  # Mitsuba's import and set_variant, fogpath's import: @dr.syntax
+        import mitsuba as mi
 
-    if name is None:
-        name = mi.variant() or os.environ.get("FOGREF_VARIANT") or DEFAULT_VARIANT
-    if name.startswith("llvm") and not llvm:
-        raise FogrefError(HELP)
-    if name not in mi.variants():
-        raise FogrefError(f"Mitsuba variant '{name}' is not available; choose one of {mi.variants()}")
-    if mi.variant() != name:
-        try:
-            mi.set_variant(name)
-        except Exception as e:  # CUDA without a GPU, a broken LLVM, ...
-            raise FogrefError(f"cannot use Mitsuba variant '{name}': {e}") from e
-    if name not in _registered:
-        import fogref_plugins
+        if name is None:
+            name = mi.variant() or os.environ.get("FOGREF_VARIANT") or DEFAULT_VARIANT
+        if name.startswith("llvm") and not llvm:
+            raise FogrefError(HELP)
+        if name not in mi.variants():
+            raise FogrefError(f"Mitsuba variant '{name}' is not available; choose one of {mi.variants()}")
+        if mi.variant() != name:
+            try:
+                mi.set_variant(name)
+            except Exception as e:  # CUDA without a GPU, a broken LLVM, ...
+                raise FogrefError(f"cannot use Mitsuba variant '{name}': {e}") from e
+        if name not in _registered:
+            import fogref_plugins
 
-        fogref_plugins.register()
-        _registered.add(name)
+            fogref_plugins.register()
+            _registered.add(name)
     return name
