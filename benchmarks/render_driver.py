@@ -29,6 +29,12 @@ measure as is, and also with the fix when the kernel runs more than once.
 
 Writes reports/benchmarks/render_driver.{json,md}.  No GPU is needed (or used):
 ``cuda_ad_rgb`` is measured only with ``--variant cuda_ad_rgb`` on a machine that has one.
+
+``--startup [N]`` measures only the CLI's fixed start-up instead (seconds, no full run):
+``fogref render`` of a tiny image (16x9, 1 spp; ``--startup-case WxHxSPP``) in N fresh
+processes, each phase timed from process launch to exit (the minimum over the N runs, per
+phase), and the plain console script's wall time; writes
+reports/benchmarks/render_driver_startup.{json,md}.
 """
 
 from __future__ import annotations
@@ -46,6 +52,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+#: the environment's names before this process set any (fogref.set_variant sets DRJIT_LIBLLVM_PATH)
+_USER_ENV = frozenset(os.environ)
 SCENE = ROOT / "scenes" / "valley.xml"
 PY = sys.executable
 
@@ -207,6 +215,190 @@ def measure(cases: list, repeats: int, log) -> dict:
     return res
 
 
+# ------------------------------------------------------------------ start-up breakdown (--startup)
+
+#: The child of :func:`startup_breakdown`: runs ``fogref.cli.main`` with timers put on
+#: fogref's functions as their modules are imported (an import hook; the import order is
+#: the CLI's own), so no phase is moved by the measuring.  argv: launch time
+#: (``time.perf_counter``, CLOCK_MONOTONIC: the same clock in parent and child), JSON path, CLI args.
+_STARTUP_CHILD = r"""
+import sys, time
+first = time.perf_counter()
+import importlib.abc, json
+launch, out, argv = float(sys.argv[1]), sys.argv[2], sys.argv[3:]
+ev = {"first_line": first - launch}
+def clock(key, f, once=True):
+    def w(*a, **k):
+        t0 = time.perf_counter()
+        try:
+            return f(*a, **k)
+        finally:
+            if not (once and key in ev):
+                ev[key] = (t0 - launch, time.perf_counter() - launch)
+    return w
+def first_moments(f):
+    def w(*a, **k):
+        if "render_moments" in ev:
+            return f(*a, **k)
+        import drjit as dr
+        dr.kernel_history()
+        dr.set_flag(dr.JitFlag.KernelHistory, True)
+        t0 = time.perf_counter()
+        try:
+            return f(*a, **k)
+        finally:
+            dr.sync_thread()  # LLVM kernels run asynchronously: wait here, not in the copy to the host
+            t1 = time.perf_counter()
+            h = dr.kernel_history()
+            dr.set_flag(dr.JitFlag.KernelHistory, False)
+            ev["render_moments"] = (t0 - launch, t1 - launch)
+            ev["kernels"] = len(h)
+            ev["kernel_compile_s"] = sum(k.get("codegen_time", 0) + k.get("backend_time", 0) for k in h) / 1e3
+            ev["kernel_run_s"] = sum(k.get("execution_time", 0) for k in h) / 1e3
+    return w
+def patch(name, m):
+    if name == "fogref.render.render":
+        m.render, m.write_exr = clock("render", m.render), clock("write_exr", m.write_exr)
+    elif name == "fogref.render.variant":
+        m.set_variant, m.ensure_llvm = clock("set_variant", m.set_variant), clock("ensure_llvm", m.ensure_llvm)
+    elif name == "fogref_plugins":
+        m.register = clock("register", m.register)
+    elif name == "fogref.render.scene":
+        m.load_scene, m.describe_scene = clock("load_scene", m.load_scene), clock("describe_scene", m.describe_scene)
+    elif name == "fogref_plugins.fogpath":
+        m.FogPathIntegrator.render_moments = first_moments(m.FogPathIntegrator.render_moments)
+WATCH = {"fogref.render.render", "fogref.render.variant", "fogref_plugins", "fogref.render.scene",
+         "fogref_plugins.fogpath", "fogref_plugins.fog_medium", "mitsuba", "drjit", "numpy", "fogref.cli"}
+class Hook(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path, target=None):
+        if name not in WATCH or name in ev:
+            return None
+        for finder in sys.meta_path:  # the others (fogref_plugins comes from the editable install's finder)
+            spec = None if finder is self else finder.find_spec(name, path, target)
+            if spec is not None:
+                break
+        if spec is None or spec.loader is None or not hasattr(spec.loader, "exec_module"):
+            return spec
+        run = spec.loader.exec_module
+        def exec_module(module):
+            t0 = time.perf_counter()
+            run(module)
+            ev["import " + name] = (t0 - launch, time.perf_counter() - launch)
+            patch(name, module)
+        spec.loader.exec_module = exec_module
+        return spec
+sys.meta_path.insert(0, Hook())
+from fogref.cli import main
+sys.argv = ["fogref", *argv]
+rc = main()  # as the console script calls it
+ev["main_end"] = time.perf_counter() - launch
+with open(out, "w") as f:
+    json.dump(ev, f)
+sys.exit(rc)
+"""
+
+
+def _startup_phases(ev: dict, exit_at: float) -> dict:
+    """Seconds per phase of one instrumented CLI run (events: launch-relative (start, end))."""
+    s = lambda k: ev[k][0]  # noqa: E731
+    e = lambda k: ev[k][1]  # noqa: E731
+    d = lambda k: e(k) - s(k)  # noqa: E731
+    imp_dr, imp_mi = d("import drjit"), d("import mitsuba")
+    if s("import mitsuba") <= s("import drjit") <= e("import mitsuba"):  # `import mitsuba` imported Dr.Jit
+        imp_mi -= imp_dr
+    imp_med, imp_fp = d("import fogref_plugins.fog_medium"), d("import fogref_plugins.fogpath")
+    rm = d("render_moments")
+    ph = {
+        "interpreter start (python, site)": ev["first_line"],
+        "import fogref.cli, parse arguments": s("render") - ev["first_line"] - d("import fogref.render.render"),
+        "import fogref.render.render (numpy, OpenEXR glue)": d("import fogref.render.render"),
+        "render(): checks before set_variant": s("set_variant") - s("render"),
+        "set_variant: find LLVM": d("ensure_llvm"),
+        "set_variant: import drjit": imp_dr,
+        "set_variant: import mitsuba (without drjit)": imp_mi,
+        "set_variant: mi.set_variant (and the rest)": d("set_variant") - d("ensure_llvm") - imp_dr - imp_mi
+        - d("register"),
+        "register: import fog_medium (+fogref.media)": imp_med,
+        "register: import fogpath (+dr.syntax)": imp_fp,
+        "register: the rest": d("register") - imp_med - imp_fp,
+        "load_scene: describe_scene (XML, validation)": d("describe_scene"),
+        "load_scene: mi.load_file": d("load_scene") - d("describe_scene"),
+        "render(): between load_scene and the first pass": s("render_moments") - e("load_scene"),
+        "first pass: tracing (Python)": rm - ev["kernel_compile_s"] - ev["kernel_run_s"],
+        "first pass: kernel compile / cache load": ev["kernel_compile_s"],
+        "first pass: kernels run": ev["kernel_run_s"],
+        "after the pass: sums to host, channels": s("write_exr") - e("render_moments"),
+        "write_exr": d("write_exr"),
+        "after write_exr, until main returns": ev["main_end"] - e("write_exr"),
+        "process exit": exit_at - ev["main_end"],
+    }
+    ph["= launch to first kernel launch"] = s("render_moments") + rm - ev["kernel_run_s"]
+    ph["= launch to exit"] = exit_at
+    return ph
+
+
+def startup_breakdown(repeats: int, log, w: int = 16, h: int = 9, spp: int = 1) -> dict:
+    """``fogref render`` of a w x h, spp image in fresh processes: per-phase times (instrumented
+    child) and the plain console script's wall time, each the minimum over ``repeats`` runs."""
+    runs, plain = [], []
+    with tempfile.TemporaryDirectory(prefix="fogref-startup-") as tmp:
+        out = Path(tmp) / "x.exr"
+        args = ["render", str(SCENE), "--set", f"res={w}", "--set", f"resy={h}", "--spp", str(spp),
+                "--out", str(out), "--no-png", "--quiet", "--no-resume"]
+        # the child finds LLVM itself, as a user's shell does (this process's set_variant set the variable)
+        env = {k: v for k, v in os.environ.items() if k != "DRJIT_LIBLLVM_PATH" or k in _USER_ENV}
+
+        def instrumented(r):
+            js = Path(tmp) / f"ev{r}.json"
+            t0 = time.perf_counter()
+            p = subprocess.run([PY, "-c", _STARTUP_CHILD, repr(t0), str(js), *args], capture_output=True, text=True,
+                               env=env, cwd=tmp)  # not ROOT: `python -c` puts the folder first on sys.path
+            t1 = time.perf_counter()
+            if p.returncode != 0:
+                raise RuntimeError(f"instrumented fogref render failed:\n{p.stderr[-3000:]}")
+            return _startup_phases(json.loads(js.read_text()), t1 - t0)
+
+        # warm the kernel cache and the file cache (the kernel history flag is part of a kernel's key)
+        _run([str(Path(PY).parent / "fogref"), *args], env=env)
+        instrumented(-1)
+        for r in range(repeats):  # interleaved: instrumented, plain, `python -c pass`
+            runs.append(instrumented(r))
+            plain.append({"fogref render (console script)": _run([str(Path(PY).parent / "fogref"), *args], env=env),
+                          "python -c pass": _run([PY, "-c", "pass"], env=env)})
+            log(f"  run {r + 1}: launch to first kernel {runs[-1]['= launch to first kernel launch']:.3f} s, "
+                f"to exit {runs[-1]['= launch to exit']:.3f} s; console script {plain[-1]['fogref render (console script)']:.3f} s")
+    return {"case": f"{w}x{h} {spp} spp", "repeats": repeats,
+            "phases_min_s": {k: min(r[k] for r in runs) for k in runs[0]},
+            "phases_median_s": {k: statistics.median(r[k] for r in runs) for k in runs[0]},
+            "plain_min_s": {k: min(p[k] for p in plain) for k in plain[0]},
+            "plain_median_s": {k: statistics.median(p[k] for p in plain) for k in plain[0]},
+            "runs": runs, "plain": plain}
+
+
+def _startup_md(doc: dict) -> str:
+    b = doc["startup"]
+    L = ["# `fogref render` start-up: process launch to the first kernel (CPU, llvm_ad_rgb)", "",
+         f"Command: `{doc['command']}`.  Machine: {doc['machine']['cpu']}, {doc['machine']['cores']} cores, "
+         f"shared with other jobs (load average {doc['load_before']} before, {doc['load_after']} after); "
+         f"Mitsuba {doc['machine']['mitsuba']}, Dr.Jit {doc['machine']['drjit']}.", "",
+         f"`fogref render scenes/valley.xml` at {b['case']} (`--no-png --quiet --no-resume`), kernel cache warm, "
+         f"{b['repeats']} fresh processes per method, interleaved.  Phases come from an instrumented child "
+         "(timers put on fogref's functions by an import hook, as their modules are imported; the launch time "
+         "is the parent's `perf_counter`, the same monotonic clock).  Each phase: the minimum over the runs "
+         "(and the median); the totals' minimum is over whole runs, so the phases' minima need not add up to it.",
+         "", "| phase | min [s] | median [s] |", "|---|---|---|"]
+    for k, v in b["phases_min_s"].items():
+        bold = "**" if k.startswith("=") else ""
+        L.append(f"| {bold}{k}{bold} | {bold}{v:.3f}{bold} | {b['phases_median_s'][k]:.3f} |")
+    L += ["", "Uninstrumented wall time (min [median]):", ""]
+    for k, v in b["plain_min_s"].items():
+        L.append(f"* {k}: {v:.3f} s [{b['plain_median_s'][k]:.3f}]")
+    L.append("")
+    if doc.get("reading"):
+        L += ["## Reading", "", doc["reading"], ""]
+    return "\n".join(L)
+
+
 # ------------------------------------------------------------------ report
 
 
@@ -271,7 +463,13 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="64x36x16 only, 1 repeat (smoke test)")
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks" / "render_driver"))
     ap.add_argument("--reading", default=None, help="a file whose text goes under 'Reading' in the .md")
+    ap.add_argument("--startup", type=int, nargs="?", const=7, default=None, metavar="N",
+                    help="only the CLI's start-up breakdown (16x9, 1 spp) in N fresh processes (default 7); "
+                         "writes <out>_startup.{json,md}")
+    ap.add_argument("--startup-case", default="16x9x1", metavar="WxHxSPP", help="the image of --startup")
     a = ap.parse_args(argv)
+    if a.startup is not None:
+        return main_startup(a, argv)
     if a.quick:
         a.cases, a.repeats = "64x36x16", 1
     if a.variant:
@@ -320,6 +518,28 @@ def main(argv=None):
     out.parent.mkdir(parents=True, exist_ok=True)
     out.with_suffix(".json").write_text(json.dumps(doc, indent=2) + "\n")
     out.with_suffix(".md").write_text(_md(doc))
+    log(f"wrote {out.with_suffix('.md')} and .json")
+
+
+def main_startup(a, argv) -> None:
+    """``--startup N``: :func:`startup_breakdown`, written to ``<out>_startup.{json,md}``."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from _common import machine_info
+
+    log = lambda s: print(s, flush=True)  # noqa: E731
+    doc = {"command": "python benchmarks/render_driver.py " + " ".join(argv if argv is not None else sys.argv[1:]),
+           "load_before": _load(), "machine": machine_info()}
+    w, h, spp = (int(x) for x in a.startup_case.split("x"))
+    doc["startup"] = startup_breakdown(a.startup, log, w, h, spp)
+    doc["load_after"] = _load()
+    if a.reading:
+        doc["reading"] = Path(a.reading).read_text().strip()
+    out = Path(a.out + "_startup")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.with_suffix(".json").write_text(json.dumps(doc, indent=2) + "\n")
+    out.with_suffix(".md").write_text(_startup_md(doc))
+    for k, v in doc["startup"]["phases_min_s"].items():
+        log(f"  {k:55s} {v:7.3f} s")
     log(f"wrote {out.with_suffix('.md')} and .json")
 
 
