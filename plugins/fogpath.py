@@ -103,7 +103,7 @@ from __future__ import annotations
 
 import drjit as dr
 import mitsuba as mi
-from mitsuba.ad.integrators.common import mis_weight
+from mitsuba.python.ad.integrators.common import mis_weight  # the module set_variant loaded (not a 2nd copy)
 
 from fogref import gbuffer
 from fogref.media import closed_form as cf
@@ -153,11 +153,6 @@ class _Split:
 
 def _spectrum(values):
     return mi.Spectrum(*values) if len(values) == 3 else mi.Spectrum(values[0])
-
-
-def _param_spectrum(ops, values):
-    """RGB scene parameters (Python numbers) as an opaque Spectrum (see ``ops.param``)."""
-    return _spectrum([ops.param(v) for v in values])
 
 
 def make_scene_values_opaque(scene) -> int:
@@ -248,7 +243,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
     # --------------------------------------------------------------- pieces
     def _transmittance(self, fog, ops, o, d, t):
         tau = fog.optical_depth(ops, o, d, t)
-        return _spectrum([dr.exp(-ops.param(s) * tau) for s in fog.sigma_t])
+        return _spectrum([dr.exp(-s * tau) for s in ops.params(fog.sigma_t)])
 
     def _draw_channel(self, sampler, active=True):
         return mi.UInt32(dr.minimum(mi.UInt32(sampler.next_1d(active) * 3.0), 2))
@@ -269,7 +264,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         if not fog.scatters:  # absorption only: deterministic, exact
             t_end = dr.minimum(t_surf, ops.largest)
             return mi.Bool(False), t_end, self._transmittance(fog, ops, ray.o, ray.d, t_end)
-        sig_rgb = [ops.param(s) for s in fog.sigma_t]
+        sig_rgb = ops.params(fog.sigma_t)
         sig = sig_rgb[0]
         if fog.sigma_t[1] != fog.sigma_t[0] or fog.sigma_t[2] != fog.sigma_t[0]:
             channel = self._draw_channel(sampler, active)
@@ -283,7 +278,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         sigma_t = _spectrum([s * rho for s in sig_rgb])
         st = sigma_t * Tr
         pdf = dr.select(is_medium, (st[0] + st[1] + st[2]) / 3.0, (Tr[0] + Tr[1] + Tr[2]) / 3.0)
-        num = dr.select(is_medium, sigma_t * _param_spectrum(ops, fog.albedo) * Tr, Tr)
+        num = dr.select(is_medium, sigma_t * _spectrum(ops.params(fog.albedo)) * Tr, Tr)
         return is_medium, t_end, dr.select(pdf > 0, num / pdf, 0.0)
 
     def _direct(self, scene, fog, ops, sampler, it, ctx, scatter, active, has_smooth):
@@ -333,7 +328,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             else:
                 t_ss, w_ss = sample_sun_single_scatter_mixture(ops, fog._obj, ray.o, ray.d, D, w_sun, E_sun, u,
                                                                sampler.next_1d(active), channel)
-            to_sun = mi.Vector3f(*(ops.param(x) for x in w_sun))
+            to_sun = mi.Vector3f(*ops.params(w_sun))
             vis = active & ~scene.ray_test(mi.Ray3f(ray.o + ray.d * t_ss, to_sun), active)
             total += dr.select(vis, mi.Spectrum(*w_ss), 0.0)
         return total / K
@@ -379,7 +374,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         idx = [i for i, e in enumerate(scene.emitters()) if e is sky]
         pdf_sel = float(scene.pdf_emitter(idx[0])[0]) if idx else 1.0 / len(scene.emitters())
         Lv = mi.traverse(sky)["radiance.value"]
-        L = _param_spectrum(ops, [float(Lv[i][0]) for i in range(3)] if len(Lv) == 3 else [float(Lv[0][0])])
+        L = _spectrum(ops.params([float(Lv[i][0]) for i in range(3)] if len(Lv) == 3 else [float(Lv[0][0])]))
         table = hg_upper_fraction_table(float(fog.g))
         x = (dr.clip(ray.d.y, -1.0, 1.0) + 1.0) * (0.5 * (len(table) - 1))
         i = mi.UInt32(dr.clip(dr.floor(x), 0, len(table) - 2))
@@ -387,7 +382,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         H = dr.lerp(dr.gather(mi.Float, tab, i), dr.gather(mi.Float, tab, i + 1), x - mi.Float(i))
         T = self._transmittance(fog, ops, ray.o, ray.d, D)
         on = mi.Bool(True) if self.sky_cv == "all" else mi.Bool(hit)
-        closed = dr.select(on, H * L * _param_spectrum(ops, fog.albedo) * (1.0 - T), 0.0)
+        closed = dr.select(on, H * L * _spectrum(ops.params(fog.albedo)) * (1.0 - T), 0.0)
         return {"closed": closed, "L": L, "pdf": pdf_sel / (4.0 * dr.pi), "on": on}
 
     def _forced_collision(self, fog, ops, sampler, ray, D, active):
@@ -407,7 +402,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         oy, dy = ray.o.y + t0 * ray.d.y, ray.d.y
         om = lambda x: dr.select(x < 1e-4, x * (1.0 - 0.5 * x), 1.0 - dr.exp(-x))  # noqa: E731  1 - e^-x
         tau_D = [dr.minimum(L.depth(ops, oy, dy, length), cf.TAU_MAX) for L in fog.layers]
-        sig_rgb, alb_rgb = [ops.param(s) for s in fog.sigma_t], [ops.param(a) for a in fog.albedo]
+        sig_rgb, alb_rgb = ops.params(fog.sigma_t), ops.params(fog.albedo)
         sig = sig_rgb[0]
         grey = fog.sigma_t[1] == fog.sigma_t[0] and fog.sigma_t[2] == fog.sigma_t[0]
         if not grey:

@@ -267,7 +267,7 @@ class FogMedium:
         lo, hi = self.bounds.lo, self.bounds.hi
         m = True
         for a in range(3):
-            m = m & (p[a] >= ops.param(lo[a])) & (p[a] <= ops.param(hi[a]))
+            m = m & (p[a] >= ops.param(lo[a], a)) & (p[a] <= ops.param(hi[a], a))
         return m
 
     # -- clipping to the box -------------------------------------------------
@@ -278,7 +278,7 @@ class FogMedium:
             return 0.0, ops.largest
         t0, t1 = 0.0, ops.largest
         for a in range(3):
-            lo, hi = ops.param(self.bounds.lo[a]), ops.param(self.bounds.hi[a])
+            lo, hi = ops.param(self.bounds.lo[a], a), ops.param(self.bounds.hi[a], a)
             da = d[a]
             par = ops.abs(da) < 1e-30
             inv = 1.0 / ops.where(par, 1.0, da)
@@ -316,7 +316,7 @@ class FogMedium:
     def transmittance(self, ops, o, d, t):
         """RGB transmittance over ``[0, t]`` as a 3-tuple of arrays."""
         tau = self.optical_depth(ops, o, d, t)
-        return tuple(ops.exp(-ops.param(s) * tau) for s in self.sigma_t)
+        return tuple(ops.exp(-s * tau) for s in ops.params(self.sigma_t))
 
     def sun_optical_depth(self, ops, p, w):
         """Shape optical depth from ``p`` to infinity toward ``w`` (unit, to the sun)."""

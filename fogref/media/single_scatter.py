@@ -55,7 +55,7 @@ def single_scatter_sun(ops, medium, o, d, D, w, E, tau=None):
     if wy <= 0 or any(L.is_constant for L in medium.layers):
         zero = 0.0 * d[0]
         return (zero, zero, zero)
-    w_ = _params(ops, w)
+    w_ = ops.params(w)
     cos_theta = d[0] * w_[0] + d[1] * w_[1] + d[2] * w_[2]
     phase = cf.hg_phase(ops, cos_theta, medium.g)
     if tau is None:
@@ -64,8 +64,7 @@ def single_scatter_sun(ops, medium, o, d, D, w, E, tau=None):
     m = 1.0 - d[1] / w_[1]
     tau_sun_end = medium.sun_optical_depth(ops, tuple(o[i] + D * d[i] for i in range(3)), w_)
     out = []
-    for sig, alb, e in zip(medium.sigma_t, medium.albedo, E):
-        sig, alb_e = ops.param(sig), ops.param(alb * e)
+    for sig, alb_e in zip(ops.params(medium.sigma_t), ops.params([alb * e for alb, e in zip(medium.albedo, E)])):
         tc = sig * tau
         # m >= 0: T_sun(o) * tc * phi(m tc), all factors bounded.
         pos = ops.exp(-sig * tau_sun_o) * ops.minimum(tc * cf.phi(ops, ops.maximum(m, 0.0) * tc), ops.largest)
@@ -81,13 +80,8 @@ def single_scatter_sun(ops, medium, o, d, D, w, E, tau=None):
 def single_scatter_sky(ops, medium, o, d, D, L_sky):
     """Single-scattered uniform sky, unoccluded and unattenuated: alpha L (1 - T(D))."""
     tau = medium.optical_depth(ops, o, d, D)
-    return tuple(ops.param(alb * L) * -ops.expm1(-ops.param(sig) * tau)
-                 for sig, alb, L in zip(medium.sigma_t, medium.albedo, L_sky))
-
-
-def _params(ops, values):
-    """``values`` (Python numbers) as ``ops.param``: opaque in Dr.Jit kernels."""
-    return tuple(ops.param(v) for v in values)
+    alb_L = ops.params([alb * L for alb, L in zip(medium.albedo, L_sky)])
+    return tuple(aL * -ops.expm1(-sig * tau) for sig, aL in zip(ops.params(medium.sigma_t), alb_L))
 
 
 def _log_x_phi(ops, X, mX):
@@ -120,7 +114,7 @@ def sample_sun_single_scatter(ops, medium, o, d, D, w, E, u, channel):
     """
     m = 1.0 - d[1] / ops.param(w[1])
     tau_D = medium.optical_depth(ops, o, d, D)
-    sig = _params(ops, medium.sigma_t)
+    sig = ops.params(medium.sigma_t)
     s_ch = ops.where(channel == 1, sig[1], ops.where(channel == 2, sig[2], sig[0]))
     X = s_ch * tau_D
     x = _invert_exp_integrand(ops, X, m, u)
@@ -183,7 +177,7 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
     :func:`sample_sun_single_scatter` (zero variance without shadows).
     ``u``, ``u_layer``: uniform variates; ``channel`` in {0, 1, 2}, uniform.
     """
-    wy, w_ = float(w[1]), _params(ops, w)
+    wy, w_ = float(w[1]), ops.params(w)
     sig, layers = medium.sigma_t, medium.layers
     t0, t1 = medium.clip(ops, o, d)
     seg = ops.maximum(ops.minimum(t1, D) - t0, 0.0)
@@ -209,7 +203,7 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
         acc = acc + mass[i]
         pick = ops.where(u_layer * total > acc, pick + 1, pick)
     c_l = [mi_ / ops.maximum(total, 1e-37) for mi_ in mass]
-    s_ch = _pick(ops, channel, list(_params(ops, sig)))
+    s_ch = _pick(ops, channel, list(ops.params(sig)))
     m_sel, tau_sel = _pick(ops, pick, ms), _pick(ops, pick, taus)
     x = _invert_exp_integrand(ops, s_ch * tau_sel, m_sel, u)
     s_shape = x / ops.maximum(s_ch, 1e-30)
@@ -221,11 +215,11 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
     tau_l = [L.depth(ops, oy, dy, t_rel) for L in layers]
     # log of pdf_mix / rho (per unit length), log-sum-exp over layers x channels
     logs = []
+    sig_p, log_sig = ops.params(sig), ops.params([math.log(max(s, 1e-37)) for s in sig])
     for rl, tl, tseg, m, c in zip(rho_l, tau_l, taus, ms, c_l):
-        for s_host in sig:
-            s = ops.param(s_host)
+        for s, log_s in zip(sig_p, log_sig):
             Xc = s * tseg
-            logs.append(ops.log(ops.maximum(c * rl, 1e-37)) + ops.param(math.log(max(s_host, 1e-37))) - m * s * tl
+            logs.append(ops.log(ops.maximum(c * rl, 1e-37)) + log_s - m * s * tl
                         - _log_x_phi(ops, Xc, m * Xc))
     lmax = logs[0]
     for lg in logs[1:]:
@@ -240,12 +234,13 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
     tau_sun = medium.sun_optical_depth(ops, p, w_)
     phase = cf.hg_phase(ops, d[0] * w_[0] + d[1] * w_[1] + d[2] * w_[2], medium.g)
     weights = []
-    for s, alb, e in zip(sig, medium.albedo, E):
-        if s <= 0 or alb * e == 0:
+    alb_e = [alb * e for alb, e in zip(medium.albedo, E)]
+    for s, ae, s_p, log_s, ae_p in zip(sig, alb_e, sig_p, log_sig, ops.params(alb_e)):
+        if s <= 0 or ae == 0:
             weights.append(0.0 * t)
             continue
-        lw = ops.param(math.log(s)) + ops.log(ops.maximum(rho, 1e-37)) - ops.param(s) * (tau + tau_sun) - log_pdf
-        wc = ops.param(alb * e) * phase * ops.exp(ops.minimum(lw, ops.exp_limit))
+        lw = log_s + ops.log(ops.maximum(rho, 1e-37)) - s_p * (tau + tau_sun) - log_pdf
+        wc = ae_p * phase * ops.exp(ops.minimum(lw, ops.exp_limit))
         weights.append(ops.where(ok & (rho > 0) & (total > 0), wc, 0.0))
     return t, tuple(weights)
 
