@@ -114,6 +114,7 @@ from fogref.media.single_scatter import (
     sample_sun_single_scatter_mixture,
     sun_sampling_mode,
 )
+from fogref.render.passes import max_lanes, pass_seed, pass_sizes
 
 #: The integrator's AOVs (after R,G,B): the per-sample groups of the schema.
 AOV_NAMES = gbuffer.sample_channel_names()
@@ -620,13 +621,13 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         return L, mi.Bool(True), [c for g in gbuffer.SAMPLE_GROUPS for c in parts[g]]
 
     # ------------------------------------------------------------- render
-    def render_moments(self, scene, sensor=0, seed=0, spp=1, pixel_exact=None):
+    def render_moments(self, scene, sensor=0, seed=0, spp=1, pixel_exact=None, squares=True):
         """Per-pixel sums of every per-sample output and of the squares of the parts.
 
         Returns ``(sums, squares)``: float64 ``TensorXd`` of shape ``(H, W, 3 + len(AOV_NAMES))``
         (R,G,B then :data:`AOV_NAMES`) and ``(H, W, 3 * len(gbuffer.SQUARED_GROUPS))``,
         summed over the ``spp`` samples of each pixel.  With ``aovs`` off: R,G,B and
-        their squares only.
+        their squares only.  ``squares=False``: the second is None (not computed).
         ``pixel_exact`` (default: the plugin's property) puts every sample at the
         pixel centre; otherwise samples are uniform in the pixel (box filter).
         Camera rays start at the camera and have no far limit.
@@ -676,19 +677,30 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             return mi.TensorXd(out, shape=(size[1], size[0], k))
 
         sums = per_pixel(values)
-        squares = per_pixel([dr.square(mi.Float64(v)) for v in squared])
-        dr.eval(sums, squares)
-        return sums, squares
+        sq = per_pixel([dr.square(mi.Float64(v)) for v in squared]) if squares else None
+        dr.eval(sums, sq)
+        return sums, sq
 
     def render(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
         """``mi.render``: the per-pixel mean of R,G,B and the AOVs (box filter, or
         pixel-exact with ``pixel_exact``), a ``TensorXf`` ``(H, W, 3 + len(aov_names()))``.
         The ``surface.*`` AOVs are per-sample means here;
-        :func:`fogref.gbuffer.moments_to_channels` turns them into the EXR's ratio estimator."""
+        :func:`fogref.gbuffer.moments_to_channels` turns them into the EXR's ratio estimator.
+
+        In passes of at most :data:`fogref.render.passes.MAX_LANES` lanes, as the render
+        driver does (one pass keeps ``seed``; several are seeded with ``pass_seed``):
+        each pass holds every sample's outputs in memory, so one call at 1920x1080 and
+        1024 spp would otherwise need ~425 GB."""
         sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
         spp = int(spp) if int(spp) > 0 else sensor.sampler().sample_count()
-        sums, _ = self.render_moments(scene, sensor, seed, spp)
-        return mi.TensorXf(sums / spp)
+        passes = pass_sizes(int(dr.prod(sensor.film().crop_size())), spp, max_lanes(mi.variant()))
+        total = None
+        for k, n in enumerate(passes):
+            sums, _ = self.render_moments(scene, sensor, seed if len(passes) == 1 else pass_seed(seed, k), n,
+                                          squares=False)
+            total = sums if total is None else total + sums
+            dr.eval(total)
+        return mi.TensorXf(total / spp)
 
 
 def register() -> None:

@@ -39,39 +39,12 @@ from fogref._version import __version__
 from fogref.atomic import atomic_write, savez_atomic
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
+from fogref.render.passes import MAX_LANES, pass_seed, pass_sizes
 
-#: Lanes (pixels x samples) per pass: bounded so one pass fits the back end's memory.
-MAX_LANES = {"llvm": 1 << 22, "cuda": 1 << 25}
 PIXEL_FILTERS = ("centre", "box")
 #: Bytes per pixel the driver holds: float64 sums of 30 + 21 channels, twice
 #: (running sum and the pass being added), plus the EXR's float32 channels.
 _HOST_BYTES_PER_PIXEL = (30 + 21) * 8 * 2 + 51 * 4
-
-
-def pass_seed(seed: int, k: int) -> int:
-    """Seed of pass k: a 32-bit mix of the user's seed and the pass index.
-
-    >>> pass_seed(0, 0) != pass_seed(0, 1)
-    True
-    """
-    h = hashlib.blake2b(f"{seed}:{k}".encode(), digest_size=4).digest()
-    return int.from_bytes(h, "little")
-
-
-def pass_sizes(n_pixels: int, spp: int, max_lanes: int) -> list[int]:
-    """Samples per pixel of each pass: as few passes as ``max_lanes`` allows, as equal
-    as possible (the larger ones first; no small last pass).
-
-    >>> pass_sizes(100, 64, 10_000)
-    [64]
-    >>> pass_sizes(1000, 64, 10_000)
-    [10, 9, 9, 9, 9, 9, 9]
-    >>> pass_sizes(10, 3, 1)
-    [1, 1, 1]
-    """
-    per = max(1, min(spp, max_lanes // max(n_pixels, 1)))
-    n = -(-spp // per)
-    return [spp // n + (1 if k < spp % n else 0) for k in range(n)]
 
 
 def file_sha256(path) -> str:
