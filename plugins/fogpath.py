@@ -646,7 +646,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         sampler = sensor.sampler().clone()
         sampler.set_sample_count(spp)
         sampler.set_samples_per_wavefront(spp)
-        sampler.seed(int(seed), n_pix * spp)
+        sampler.seed(dr.opaque(mi.UInt32, int(seed)), n_pix * spp)  # opaque: a new seed needs no new kernel
 
         idx = dr.arange(mi.UInt32, n_pix * spp) // dr.opaque(mi.UInt32, spp)
         pos = mi.Vector2u(0)
@@ -663,23 +663,48 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         if self.aovs:
             by_name = dict(zip(["R", "G", "B"] + AOV_NAMES, values))
             squared = [by_name[c] for g in gbuffer.SQUARED_GROUPS for c in gbuffer.channel_names(g)]
-        dr.eval(values)  # one kernel for every output; otherwise each block sum re-runs the path loop (17x)
-        lanes = dr.zeros(mi.Float64, n_pix * spp)
-
-        def per_pixel(vals):
-            """Sum each lane value over its pixel's samples, in float64: a float32
-            square and sum would leave a spurious stderr of ~3e-4 x the value."""
-            k = len(vals)
-            out = dr.zeros(mi.Float64, n_pix * k)
-            pix = dr.arange(mi.UInt32, n_pix)
-            for i, v in enumerate(vals):
-                dr.scatter(out, dr.block_sum(lanes + v, spp), pix * k + i)  # lanes +: broadcast literals
-            return mi.TensorXd(out, shape=(size[1], size[0], k))
-
-        sums = per_pixel(values)
-        sq = per_pixel([dr.square(mi.Float64(v)) for v in squared]) if squares else None
+        dr.eval(values)  # one kernel for every output; otherwise each per-pixel sum re-runs the path loop (17x)
+        sums, sq = self._per_pixel_sums(values, [next(i for i, v in enumerate(values) if v is q) for q in squared]
+                                        if squares else [], n_pix, spp)
+        shape = (size[1], size[0])
+        sums = mi.TensorXd(sums, shape=(*shape, len(values)))
+        sq = mi.TensorXd(sq, shape=(*shape, len(squared))) if squares else None
         dr.eval(sums, sq)
         return sums, sq
+
+    @staticmethod
+    def _per_pixel_sums(values, squared_index, n_pix, spp):
+        """Per-pixel float64 sums of ``values`` (evaluated per-sample arrays, lane
+        ``p * spp + s``) and of the squares of ``values[j]`` for ``j`` in
+        ``squared_index``, pixel-major ``(n_pix * k)`` arrays.
+
+        One kernel: a loop over the ``spp`` samples of every pixel, each iteration
+        gathering the sample from every output, in a fixed order (deterministic,
+        unlike atomic scatter-adds).  Float64 throughout: a float32 square and sum
+        would leave a spurious stderr of ~3e-4 x the value.  (``dr.block_sum`` per
+        output launched ~170 kernels per pass and materialised a float64 array per
+        squared output.)
+        """
+        spp_o = dr.opaque(mi.UInt32, spp)  # opaque: one kernel for every spp
+        first = dr.arange(mi.UInt32, n_pix) * spp_o
+        zeros = lambda k: tuple(dr.zeros(mi.Float64, n_pix) for _ in range(k))  # noqa: E731
+
+        def body(s, sums, squares):
+            x = [mi.Float64(v if dr.width(v) == 1 else dr.gather(type(v), v, first + s)) for v in values]
+            return (s + 1, tuple(a + b for a, b in zip(sums, x)),
+                    tuple(a + dr.square(x[j]) for a, j in zip(squares, squared_index)))
+
+        _, sums, squares = dr.while_loop((mi.UInt32(0), zeros(len(values)), zeros(len(squared_index))),
+                                         lambda s, sums, squares: s < spp_o, body, label="fogpath_pixel_sums")
+        pix = dr.arange(mi.UInt32, n_pix)
+
+        def interleave(arrays):
+            out = dr.zeros(mi.Float64, n_pix * max(len(arrays), 1))
+            for i, a in enumerate(arrays):
+                dr.scatter(out, a, pix * len(arrays) + i)
+            return out
+
+        return interleave(sums), interleave(squares)
 
     def render(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
         """``mi.render``: the per-pixel mean of R,G,B and the AOVs (box filter, or

@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import hashlib
 
-#: Lanes (pixels x samples) per pass, by back end: ~0.8 GB of outputs per pass on the
+#: Lanes (pixels x samples) per pass, by back end: ~0.4 GB of outputs per pass on the
 #: CPU, ~6.6 GB on a GPU.
-MAX_LANES = {"llvm": 1 << 22, "cuda": 1 << 25}
+MAX_LANES = {"llvm": 1 << 21, "cuda": 1 << 25}
 
 
 def max_lanes(variant: str) -> int:
