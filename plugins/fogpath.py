@@ -666,9 +666,9 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         dr.eval(values)  # one kernel for every output; otherwise each per-pixel sum re-runs the path loop (17x)
         sums, sq = self._per_pixel_sums(values, [next(i for i, v in enumerate(values) if v is q) for q in squared]
                                         if squares else [], n_pix, spp)
-        shape = (size[1], size[0])
-        sums = mi.TensorXd(sums, shape=(*shape, len(values)))
-        sq = mi.TensorXd(sq, shape=(*shape, len(squared))) if squares else None
+        shape = (size[1], size[0], 1)
+        sums = dr.concat([mi.TensorXd(a, shape=shape) for a in sums], axis=2)
+        sq = dr.concat([mi.TensorXd(a, shape=shape) for a in sq], axis=2) if squares else None
         dr.eval(sums, sq)
         return sums, sq
 
@@ -676,7 +676,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
     def _per_pixel_sums(values, squared_index, n_pix, spp):
         """Per-pixel float64 sums of ``values`` (evaluated per-sample arrays, lane
         ``p * spp + s``) and of the squares of ``values[j]`` for ``j`` in
-        ``squared_index``, pixel-major ``(n_pix * k)`` arrays.
+        ``squared_index``: two lists of ``n_pix`` arrays.
 
         One kernel: a loop over the ``spp`` samples of every pixel, each iteration
         gathering the sample from every output, in a fixed order (deterministic,
@@ -696,15 +696,8 @@ class FogPathIntegrator(mi.SamplingIntegrator):
 
         _, sums, squares = dr.while_loop((mi.UInt32(0), zeros(len(values)), zeros(len(squared_index))),
                                          lambda s, sums, squares: s < spp_o, body, label="fogpath_pixel_sums")
-        pix = dr.arange(mi.UInt32, n_pix)
-
-        def interleave(arrays):
-            out = dr.zeros(mi.Float64, n_pix * max(len(arrays), 1))
-            for i, a in enumerate(arrays):
-                dr.scatter(out, a, pix * len(arrays) + i)
-            return out
-
-        return interleave(sums), interleave(squares)
+        dr.eval(sums, squares)  # all at once: one loop kernel (read separately, each would re-run the loop)
+        return list(sums), list(squares)
 
     def render(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
         """``mi.render``: the per-pixel mean of R,G,B and the AOVs (box filter, or
