@@ -193,10 +193,17 @@ def measure(cases: list, repeats: int, log) -> dict:
             t = getattr(c, fn)(0)
             res[c.name][m]["first_s"] = t
             log(f"  first call  {c.name:18s} {m:17s} {t:7.2f} s")
+    import drjit as dr
+
+    names = list(METHODS)
     for r in range(repeats):  # interleaved: background load falls on every method alike
         for c in cases:
-            for m, fn in METHODS.items():
-                t = getattr(c, fn)(r + 1)
+            # the order rotates per repeat: a fresh process started right after another one
+            # exited reuses its freed pages, one started after a pause or beside this process's
+            # memory faults them in from the VM (up to ~1 s at 640x360 on the measuring machine)
+            for m in names[r % len(names):] + names[:r % len(names)]:
+                dr.flush_malloc_cache()  # in-process methods give their memory back first
+                t = getattr(c, METHODS[m])(r + 1)
                 res[c.name][m]["steady_s"].append(t)
                 log(f"  repeat {r + 1}    {c.name:18s} {m:17s} {t:7.2f} s")
     for c in cases:
