@@ -171,9 +171,11 @@ def make_scene_values_opaque(scene) -> int:
         value = params[key]
         if not (dr.is_jit_v(value) and dr.width(value) == 1):
             continue
+        before = dr.detail.collect_indices(value)
         dr.make_opaque(value)
-        params[key] = value
-        changed += 1
+        if dr.detail.collect_indices(value) != before:  # was a literal: tell the object
+            params[key] = value
+            changed += 1
     if changed:
         params.update()
     return changed
