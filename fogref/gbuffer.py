@@ -150,13 +150,42 @@ def readme_table() -> str:
 # ---------------------------------------------------------------- derivation
 
 
+class _NumpyArrays:
+    """The array operations :func:`moments_to_channels` needs, for numpy arrays."""
+
+    asarray = staticmethod(lambda x: np.asarray(x, dtype=np.float64))
+    where = staticmethod(np.where)
+    sqrt = staticmethod(np.sqrt)
+    maximum = staticmethod(np.maximum)
+    zeros_like = staticmethod(np.zeros_like)
+    stack_last = staticmethod(lambda xs: np.stack(xs, -1))
+
+
+class _DrJitArrays:
+    """The same for Dr.Jit float64 tensors (the render driver's sums stay on the device)."""
+
+    def __init__(self):
+        import drjit as dr
+
+        self.asarray = lambda x: x
+        self.where, self.sqrt, self.maximum = dr.select, dr.sqrt, dr.maximum
+        self.zeros_like = lambda x: dr.zeros(type(x), x.shape)
+        self.stack_last = lambda xs: dr.concat([x[..., None] for x in xs], axis=len(xs[0].shape))
+
+
+def _arrays_for(x):
+    return _DrJitArrays() if type(x).__module__.startswith("drjit") else _NumpyArrays
+
+
 def moments_to_channels(sums: dict, squares: dict, n: int) -> dict:
     """EXR channels from per-pixel sums of the per-sample outputs.
 
     Parameters
     ----------
     sums:    group name -> ``(H, W, k)`` float64 sum over the ``n`` samples of a pixel,
-             for every name in ``("final",) + SAMPLE_GROUPS``.
+             for every name in ``("final",) + SAMPLE_GROUPS``: numpy arrays, or Dr.Jit
+             float64 tensors (then so is the result: the driver computes the channels on
+             the device and copies float32 to the host once).
     squares: group name -> ``(H, W, k)`` float64 sum of squares, for :data:`SQUARED_GROUPS`.
     n:       samples per pixel (>= 1).
 
@@ -179,8 +208,9 @@ def moments_to_channels(sums: dict, squares: dict, n: int) -> dict:
     >>> float(c["surface.R"][0, 0]), float(c["surface_coverage"][0, 0]), float(c["stderr.surface.R"][0, 0])
     (2.0, 0.5, 0.0)
     """
+    xp = _arrays_for(next(iter(sums.values())))
     out = {}
-    mean = {g: np.asarray(s, dtype=np.float64) / n for g, s in sums.items()}
+    mean = {g: xp.asarray(s) / n for g, s in sums.items()}
     for g in ("final",) + SAMPLE_GROUPS:
         if g == "surface":
             continue
@@ -188,22 +218,22 @@ def moments_to_channels(sums: dict, squares: dict, n: int) -> dict:
             out[c] = mean[g][..., i]
     cover = mean["surface_coverage"][..., 0]
     valid = cover > 0
-    safe = np.where(valid, cover, 1.0)
+    safe = xp.where(valid, cover, 1.0)
     for i, c in enumerate(channel_names("surface")):
         ratio = mean["surface"][..., i] / safe
-        out[c] = np.where(valid, ratio, 0.0)
+        out[c] = xp.where(valid, ratio, 0.0)
     for g in SQUARED_GROUPS:
-        m2 = np.asarray(squares[g], dtype=np.float64) / n
+        m2 = xp.asarray(squares[g]) / n
         if g == "surface":
             # delta method for the ratio r = E[s]/E[c] with c in {0, 1}, s = 0 where c = 0:
             # Var(r_hat) ~ (E[s^2] - 2 r E[s] + r^2 E[c]) / (n E[c]^2)
-            r = np.stack([out[c] for c in channel_names("surface")], -1)
-            var = (m2 - 2 * r * mean["surface"] + r * r * cover[..., None]) / np.where(valid, cover, 1.0)[..., None] ** 2
+            r = xp.stack_last([out[c] for c in channel_names("surface")])
+            var = (m2 - 2 * r * mean["surface"] + r * r * cover[..., None]) / safe[..., None] ** 2
         else:
             var = m2 - mean[g] ** 2
-        se = np.sqrt(np.maximum(var, 0.0) / max(n - 1, 1)) if n > 1 else np.zeros_like(var)
+        se = xp.sqrt(xp.maximum(var, 0.0) / max(n - 1, 1)) if n > 1 else xp.zeros_like(var)
         for i, c in enumerate(stderr_names(g)):
-            out[c] = np.where(valid, se[..., i], 0.0) if g == "surface" else se[..., i]
+            out[c] = xp.where(valid, se[..., i], 0.0) if g == "surface" else se[..., i]
     return out
 
 
