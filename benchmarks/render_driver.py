@@ -4,7 +4,8 @@ For each case (the default scene at a resolution and spp) four ways of making th
 same pixel-exact image are timed:
 
 * ``mi.render``   — one ``mi.render(scene, spp=N)`` call on a loaded scene (fogpath's
-  ``render``: all N samples in one wavefront, ``pixel_exact`` on), result copied to numpy;
+  ``render``: the driver's passes, ``pixel_exact`` on, no sums of squares), result copied
+  to numpy;
 * ``render()``    — :func:`fogref.render.render.render` in this process (scene load,
   passes, float64 moments, EXR written, ``png=False``, no resume);
 * ``CLI``         — ``fogref render ... --no-png --quiet --no-resume`` in a subprocess
@@ -15,17 +16,14 @@ same pixel-exact image are timed:
 Every method is called once per case first (tracing + LLVM compile or a kernel-cache
 load: the *first call*), then the cases x methods are timed round-robin ``--repeats``
 times (steady time: median and range).  Compile time = first call - median steady.
-The target of issue 10 is CLI / mi.render <= 1.1 at equal spp.
+The order of the methods rotates per repeat (a fresh process's page faults depend on
+what ran just before it), and Dr.Jit's memory cache is flushed before each call.  The
+target is CLI / mi.render <= 1.1 at equal spp.  How many kernels over all lanes run the
+path tracer per ``render_moments`` call is reported too (1: every output evaluated in
+one kernel).
 
-fogpath's ``render_moments`` is checked first: if evaluating the per-pixel sums runs
-the path-tracing kernel more than once (each ``block_sum`` evaluating one loop output
-separately), that is reported, and ``--eval-fix on`` measures every method with the
-one-line fix applied at run time (``dr.eval(values)`` before the sums; pixels are
-bitwise identical), so the driver's own overhead can be seen.  ``auto`` (default):
-measure as is, and also with the fix when the kernel runs more than once.
-
-    .venv/bin/python benchmarks/render_driver.py [--quick] [--repeats 3]
-        [--cases 320x180x64,320x180x256,640x360x64] [--eval-fix auto|on|off]
+    .venv/bin/python benchmarks/render_driver.py [--quick] [--repeats 4]
+        [--cases 320x180x64,320x180x256,640x360x64] [--variant cuda_ad_rgb]
 
 Writes reports/benchmarks/render_driver.{json,md}.  No GPU is needed (or used):
 ``cuda_ad_rgb`` is measured only with ``--variant cuda_ad_rgb`` on a machine that has one.
@@ -40,14 +38,12 @@ reports/benchmarks/render_driver_startup.{json,md}.
 from __future__ import annotations
 
 import argparse
-import inspect
 import json
 import os
 import statistics
 import subprocess
 import sys
 import tempfile
-import textwrap
 import time
 from pathlib import Path
 
@@ -56,29 +52,6 @@ ROOT = Path(__file__).resolve().parents[1]
 _USER_ENV = frozenset(os.environ)
 SCENE = ROOT / "scenes" / "valley.xml"
 PY = sys.executable
-
-
-# ------------------------------------------------------------------ the one-line fix (experiment)
-
-
-def apply_eval_fix() -> bool:
-    """Patch ``FogPathIntegrator.render_moments`` (this process only) to evaluate every
-    per-sample value in one kernel before the per-pixel sums.  Returns False when the
-    source already does it or has changed so that the patch does not apply."""
-    import fogref_plugins.fogpath as fp
-
-    src = textwrap.dedent(inspect.getsource(fp.FogPathIntegrator.render_moments))
-    if "dr.eval(values" in src or "dr.schedule(values" in src:
-        return False
-    anchors = [a for a in ("    lanes = dr.zeros(mi.Float64, n_pix * spp)\n",
-                           "    lanes = dr.zeros(mi.Float, n_pix * spp)\n") if a in src]
-    if not anchors:
-        return False
-    src = src.replace(anchors[0], "    dr.eval(values)  # benchmark patch: one path-tracing kernel\n" + anchors[0])
-    ns = dict(vars(fp))
-    exec(compile(src, fp.__file__, "exec"), ns)  # noqa: S102 - the plugin's own source, one line added
-    fp.FogPathIntegrator.render_moments = ns["render_moments"]
-    return True
 
 
 def path_kernels_per_call(scene_path=SCENE) -> dict:
@@ -110,23 +83,17 @@ def path_kernels_per_call(scene_path=SCENE) -> dict:
 # ------------------------------------------------------------------ methods
 
 
-def _cli_cmd(w, h, spp, seed, out, fix):
-    args = ["render", str(SCENE), "--set", f"res={w}", "--set", f"resy={h}", "--spp", str(spp), "--seed", str(seed),
-            "--out", str(out), "--no-png", "--quiet", "--no-resume"]
-    if fix:
-        return [PY, __file__, "--_cli-with-fix", "--", *args]
-    return [str(Path(PY).parent / "fogref"), *args]
+def _cli_cmd(w, h, spp, seed, out):
+    return [str(Path(PY).parent / "fogref"), "render", str(SCENE), "--set", f"res={w}", "--set", f"resy={h}",
+            "--spp", str(spp), "--seed", str(seed), "--out", str(out), "--no-png", "--quiet", "--no-resume"]
 
 
 _SCRIPT = """
 import sys, time
 import numpy as np
-fix = sys.argv[5] == "1"
 import fogref
 fogref.set_variant()
 import drjit as dr, mitsuba as mi
-if fix:
-    sys.path.insert(0, {bench!r}); import render_driver; render_driver.apply_eval_fix()
 from fogref.render.scene import load_scene
 w, h, spp, seed = (int(x) for x in sys.argv[1:5])
 scene, _ = load_scene({scene!r}, {{"res": w, "resy": h}})
@@ -144,19 +111,22 @@ def _run(cmd, env=None):
 
 
 class Case:
-    def __init__(self, w, h, spp, tmp: Path, fix: bool):
+    def __init__(self, w, h, spp, tmp: Path):
+        import mitsuba as mi
+
         import fogref.render.render as R
+        from fogref.render.passes import max_lanes, pass_sizes
         from fogref.render.scene import load_scene
 
-        self.w, self.h, self.spp, self.tmp, self.fix = w, h, spp, tmp, fix
+        self.w, self.h, self.spp, self.tmp = w, h, spp, tmp
         self.name = f"{w}x{h} {spp} spp"
         self.scene, _ = load_scene(SCENE, {"res": w, "resy": h})
         integ = self.scene.integrator()
         integ.pixel_exact, integ.aovs = True, True
         self.R = R
         self.script = tmp / "mi_render_script.py"
-        self.script.write_text(_SCRIPT.format(bench=str(Path(__file__).parent), scene=str(SCENE)))
-        self.passes = R.pass_sizes(w * h, spp, R.MAX_LANES["llvm"])
+        self.script.write_text(_SCRIPT.format(scene=str(SCENE)))
+        self.passes = pass_sizes(w * h, spp, max_lanes(mi.variant()))
 
     def mi_render(self, seed):
         import drjit as dr
@@ -176,11 +146,10 @@ class Case:
         return time.perf_counter() - t0
 
     def cli(self, seed):
-        return _run(_cli_cmd(self.w, self.h, self.spp, seed, self.tmp / "cli.exr", self.fix))
+        return _run(_cli_cmd(self.w, self.h, self.spp, seed, self.tmp / "cli.exr"))
 
     def mi_script(self, seed):
-        return _run([PY, str(self.script), str(self.w), str(self.h), str(self.spp), str(seed),
-                     "1" if self.fix else "0"])
+        return _run([PY, str(self.script), str(self.w), str(self.h), str(self.spp), str(seed)])
 
 
 METHODS = {"mi.render": "mi_render", "render()": "render_fn", "CLI": "cli", "mi.render script": "mi_script"}
@@ -410,7 +379,8 @@ def _startup_md(doc: dict) -> str:
 
 
 def _md(doc: dict) -> str:
-    L = ["# Render driver vs one `mi.render` call (CPU, llvm_ad_rgb)", "",
+    variant = doc.get("variant", "llvm_ad_rgb")
+    L = [f"# Render driver vs one `mi.render` call ({variant})", "",
          f"Command: `{doc['command']}`.  Machine: {doc['machine']['cpu']}, {doc['machine']['cores']} cores, "
          f"shared with other jobs while measured (load average {doc['load_before']} before, "
          f"{doc['load_after']} after); Mitsuba {doc['machine']['mitsuba']}, Dr.Jit {doc['machine']['drjit']}.", "",
@@ -421,14 +391,8 @@ def _md(doc: dict) -> str:
          "First call = tracing + LLVM compile or kernel-cache load; steady = median of the interleaved repeats "
          "[min, max]; compile = first - steady.  Ratios are of medians; in brackets the range of the "
          "per-repeat ratios.", "",
-         f"fogpath `render_moments` as committed: {doc['kernels']['as_is']['path_tracing_kernels']} kernels over "
-         f"all lanes that each contain the path tracer ({doc['kernels']['as_is']['kernels']} kernels in all) "
-         "per call."]
-    if "fixed" in doc["kernels"]:
-        L += [f"With the one-line fix (`dr.eval(values)` before the per-pixel sums, applied at run time by the "
-              f"benchmark): {doc['kernels']['fixed']['path_tracing_kernels']} "
-              f"({doc['kernels']['fixed']['kernels']} in all); the pixels are bitwise identical."]
-    L.append("")
+         f"fogpath `render_moments`: {doc['kernels']['path_tracing_kernels']} kernel(s) over all lanes "
+         f"that contain the path tracer ({doc['kernels']['kernels']} kernels in all) per call.", ""]
     for label, runs in doc["runs"].items():
         L += [f"## {label}", "", "| case | passes (spp each) | method | first call [s] | steady [s] median [min, max] | "
               "compile [s] | / mi.render |", "|---|---|---|---|---|---|---|"]
@@ -447,8 +411,8 @@ def _md(doc: dict) -> str:
             L.append(f"* {case}: {d['CLI']['median_s'] / d['mi.render script']['median_s']:.2f}x "
                      f"[{min(rr):.2f}, {max(rr):.2f}]")
         L.append("")
-    L += ["cuda_ad_rgb: not measured (no GPU was lent to this session); run "
-          "`benchmarks/render_driver.py --variant cuda_ad_rgb` on one.", ""]
+    if not variant.startswith("cuda"):
+        L += ["cuda_ad_rgb: not measured here; run `benchmarks/render_driver.py --variant cuda_ad_rgb` on a GPU.", ""]
     if doc.get("reading"):
         L += ["## Reading", "", doc["reading"], ""]
     return "\n".join(L)
@@ -461,11 +425,7 @@ def _load():
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--cases", default="320x180x64,320x180x256,640x360x64", help="WxHxSPP,...")
-    ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--as-is-case", default="160x90x64",
-                    help="WxHxSPP measured with fogpath as committed when it runs the path tracer more than once "
-                         "(slow); the --cases then run with the fix")
-    ap.add_argument("--eval-fix", choices=("auto", "on", "off"), default="auto")
+    ap.add_argument("--repeats", type=int, default=4, help="timed rounds (4: each method once in each position)")
     ap.add_argument("--variant", default=None, help="Mitsuba variant (default llvm_ad_rgb)")
     ap.add_argument("--quick", action="store_true", help="64x36x16 only, 1 repeat (smoke test)")
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks" / "render_driver"))
@@ -484,40 +444,22 @@ def main(argv=None):
     sys.path.insert(0, str(ROOT))
     import fogref
 
-    fogref.set_variant(a.variant)
+    variant = fogref.set_variant(a.variant)
     cases = [tuple(int(x) for x in c.split("x")) for c in a.cases.split(",")]
     log = lambda s: print(s, flush=True)  # noqa: E731
     doc = {"command": "python benchmarks/render_driver.py " + " ".join(argv if argv is not None else sys.argv[1:]),
-           "load_before": _load(), "cases": a.cases, "repeats": a.repeats, "kernels": {}, "runs": {}}
+           "load_before": _load(), "cases": a.cases, "repeats": a.repeats, "variant": variant}
     sys.path.insert(0, str(ROOT / "benchmarks"))
     from _common import machine_info
 
     doc["machine"] = machine_info()
-    doc["kernels"]["as_is"] = path_kernels_per_call()
-    log(f"render_moments as is: {doc['kernels']['as_is']}")
-    import fogref.render.render as R
+    doc["kernels"] = path_kernels_per_call()
+    log(f"render_moments: {doc['kernels']}")
+    from fogref.render.passes import MAX_LANES
 
-    doc["max_lanes"] = R.MAX_LANES
-    runs = []
-    if a.eval_fix in ("auto", "off"):
-        runs.append(False)
-    if a.eval_fix == "on" or (a.eval_fix == "auto" and doc["kernels"]["as_is"]["path_tracing_kernels"] > 1):
-        runs.append(True)
+    doc["max_lanes"] = MAX_LANES
     with tempfile.TemporaryDirectory(prefix="fogref-bench-") as tmp:
-        for fix in runs:
-            if fix:
-                if not apply_eval_fix():
-                    log("fix not applicable (already in the source?)")
-                    continue
-                doc["kernels"]["fixed"] = path_kernels_per_call()
-                log(f"render_moments with the fix: {doc['kernels']['fixed']}")
-            label = "with the one-line render_moments fix (run time patch)" if fix else "fogpath as committed"
-            # the as-is run is slow (the path tracer runs once per output group): one small case only
-            cs = cases if (fix or len(runs) == 1) else [tuple(int(x) for x in a.as_is_case.split("x"))]
-            log(f"== {label}: {[f'{w}x{h}x{s}' for w, h, s in cs]}")
-            d = Path(tmp) / ("fix" if fix else "asis")
-            d.mkdir()
-            doc["runs"][label] = measure([Case(w, h, s, d, fix) for w, h, s in cs], a.repeats, log)
+        doc["runs"] = {"fogpath": measure([Case(w, h, s, Path(tmp)) for w, h, s in cases], a.repeats, log)}
     doc["load_after"] = _load()
     if a.reading:
         doc["reading"] = Path(a.reading).read_text().strip()
@@ -551,13 +493,4 @@ def main_startup(a, argv) -> None:
 
 
 if __name__ == "__main__":
-    if len(sys.argv) > 1 and sys.argv[1] == "--_cli-with-fix":  # the CLI with the fix applied
-        sys.path.insert(0, str(ROOT))
-        import fogref
-
-        fogref.set_variant()
-        apply_eval_fix()
-        from fogref.cli import main as cli_main
-
-        sys.exit(cli_main(sys.argv[3:]))
     main()
