@@ -661,13 +661,11 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         L, _, aovs = self.sample(scene, sampler, ray, None, True)
         L = L * weight
         values = [L[0], L[1], L[2]] + list(aovs)
-        squared = values[:3]
-        if self.aovs:
-            by_name = dict(zip(["R", "G", "B"] + AOV_NAMES, values))
-            squared = [by_name[c] for g in gbuffer.SQUARED_GROUPS for c in gbuffer.channel_names(g)]
+        names = ["R", "G", "B"] + (AOV_NAMES if self.aovs else [])
+        squared = ([c for g in gbuffer.SQUARED_GROUPS for c in gbuffer.channel_names(g)] if self.aovs
+                   else ["R", "G", "B"]) if squares else []
         dr.eval(values)  # one kernel for every output; otherwise each per-pixel sum re-runs the path loop (17x)
-        sums, sq = self._per_pixel_sums(values, [next(i for i, v in enumerate(values) if v is q) for q in squared]
-                                        if squares else [], n_pix, spp)
+        sums, sq = self._per_pixel_sums(values, [names.index(c) for c in squared], n_pix, spp)
         shape = (size[1], size[0], 1)
         sums = dr.concat([mi.TensorXd(a, shape=shape) for a in sums], axis=2)
         sq = dr.concat([mi.TensorXd(a, shape=shape) for a in sq], axis=2) if squares else None

@@ -101,9 +101,10 @@ def _interrupting_savez(R, monkeypatch):
 
 def test_resume_after_interruption_gives_identical_pixels(tmp_path, mitsuba, monkeypatch):
     """Interrupt after the first checkpoint; the rerun resumes and gives the same pixels."""
+    import fogref.render.passes as passes
     import fogref.render.render as R
 
-    monkeypatch.setattr(R, "MAX_LANES", {"llvm": 96 * 4, "cuda": 96 * 4})  # 4 spp per pass at 12x8
+    monkeypatch.setattr(passes, "MAX_LANES", {"llvm": 96 * 4, "cuda": 96 * 4})  # 4 spp per pass at 12x8
     ref = R.render(SCENES / "valley.xml", tmp_path / "ref.exr", spp=8, seed=1, overrides=SMALL, progress=False)
     real = _interrupting_savez(R, monkeypatch)
     out = tmp_path / "x.exr"
@@ -119,9 +120,10 @@ def test_resume_after_interruption_gives_identical_pixels(tmp_path, mitsuba, mon
 def test_checkpoint_of_an_edited_scene_is_not_resumed(tmp_path, mitsuba, monkeypatch):
     """The checkpoint key is the scene's content: edit the scene between the
     interruption and the rerun, and the rerun starts over (no mixed image)."""
+    import fogref.render.passes as passes
     import fogref.render.render as R
 
-    monkeypatch.setattr(R, "MAX_LANES", {"llvm": 96 * 4, "cuda": 96 * 4})
+    monkeypatch.setattr(passes, "MAX_LANES", {"llvm": 96 * 4, "cuda": 96 * 4})
     scene = tmp_path / "s.xml"
     scene.write_text((SCENES / "valley.xml").read_text())
     real = _interrupting_savez(R, monkeypatch)

@@ -12,7 +12,7 @@ the back end's memory allows, and turns them into means and standard errors.
   ``(scene, overrides, spp, seed, pixel_filter, variant)`` gives identical pixels.
 * **Cheap**: the running sums stay on the device (Dr.Jit float64, added there after
   every pass; copied to the host only for a checkpoint and once at the end), and the
-  passes are as few and as equal as ``MAX_LANES`` allows (``benchmarks/render_driver.py``
+  passes are as few and as equal as :data:`fogref.render.passes.MAX_LANES` allows (``benchmarks/render_driver.py``
   measures the driver against one ``mi.render`` call).
 * **Resumable**: the running sums are checkpointed atomically next to the output
   (``<out>.partial.npz``) every ``checkpoint_seconds`` and on Ctrl-C; a rerun resumes
@@ -39,7 +39,7 @@ from fogref._version import __version__
 from fogref.atomic import atomic_write, savez_atomic
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
-from fogref.render.passes import MAX_LANES, pass_seed, pass_sizes
+from fogref.render.passes import max_lanes, pass_seed, pass_sizes
 
 PIXEL_FILTERS = ("centre", "box")
 #: Bytes per pixel the driver holds: float64 sums of 30 + 21 channels, twice
@@ -174,7 +174,7 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
     if need > 0.5 * _physical_memory():
         raise FogrefError(f"{scene_path}: {W}x{H} pixels need about {need / 2**30:.1f} GiB of memory for the "
                           f"ground truth; this machine has {_physical_memory() / 2**30:.1f} GiB (limit: half)")
-    passes = pass_sizes(W * H, spp, MAX_LANES["cuda" if variant.startswith("cuda") else "llvm"])
+    passes = pass_sizes(W * H, spp, max_lanes(variant))
     scene_sha = file_sha256(scene_path)
     key = json.dumps({"scene_sha256": scene_sha, "overrides": {k: str(v) for k, v in (overrides or {}).items()},
                       "size": [W, H], "spp": spp, "seed": seed, "variant": variant, "passes": passes,
@@ -264,17 +264,13 @@ def _host_float32(channels: dict) -> dict:
     All channels are cast and stacked on the device and copied to the host in one
     contiguous block (each channel a contiguous plane).  At 1920x1080 the channel
     arithmetic in numpy on the host and the per-channel copies took 4.2 s of a 10.3 s
-    render (4 spp, CPU); on the device they are part of one kernel.  Numpy arrays (tests)
-    are cast as they are.
+    render (4 spp, CPU); on the device they are part of one kernel.
     """
     import drjit as dr
     import mitsuba as mi
 
     names = list(channels)
-    first = channels[names[0]]
-    if not isinstance(first, mi.TensorXd):
-        return {k: np.asarray(v, dtype=np.float32) for k, v in channels.items()}
-    h, w = (int(x) for x in first.shape)
+    h, w = (int(x) for x in channels[names[0]].shape)
     flat = dr.concat([mi.Float(channels[k].array) for k in names])
     planes = np.asarray(flat).reshape(len(names), h, w)
     return dict(zip(names, planes))
