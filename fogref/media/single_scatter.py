@@ -179,6 +179,7 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
     """
     wy, w_ = float(w[1]), ops.params(w)
     sig, layers = medium.sigma_t, medium.layers
+    sig_p, log_sig = ops.params(sig), ops.params([math.log(max(s, 1e-37)) for s in sig])
     t0, t1 = medium.clip(ops, o, d)
     seg = ops.maximum(ops.minimum(t1, D) - t0, 0.0)
     ok = seg > 0
@@ -203,7 +204,7 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
         acc = acc + mass[i]
         pick = ops.where(u_layer * total > acc, pick + 1, pick)
     c_l = [mi_ / ops.maximum(total, 1e-37) for mi_ in mass]
-    s_ch = _pick(ops, channel, list(ops.params(sig)))
+    s_ch = _pick(ops, channel, list(sig_p))
     m_sel, tau_sel = _pick(ops, pick, ms), _pick(ops, pick, taus)
     x = _invert_exp_integrand(ops, s_ch * tau_sel, m_sel, u)
     s_shape = x / ops.maximum(s_ch, 1e-30)
@@ -215,7 +216,6 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
     tau_l = [L.depth(ops, oy, dy, t_rel) for L in layers]
     # log of pdf_mix / rho (per unit length), log-sum-exp over layers x channels
     logs = []
-    sig_p, log_sig = ops.params(sig), ops.params([math.log(max(s, 1e-37)) for s in sig])
     for rl, tl, tseg, m, c in zip(rho_l, tau_l, taus, ms, c_l):
         for s, log_s in zip(sig_p, log_sig):
             Xc = s * tseg
