@@ -25,7 +25,12 @@ same ratio estimator over them, so the delta-method stderr below still holds.
 
 Each Monte Carlo part carries its per-pixel standard error in
 ``stderr.<part>.R,G,B`` (``stderr.R,G,B`` for the total), computed from the
-per-sample second moments (the delta method for the ratio ``surface``).
+per-sample second moments (the delta method for the ratio ``surface``), and the
+correlation between its channels' errors in ``corr.<part>.RG,RB,GB`` (``corr.RG``
+... for the total), from the per-sample cross moments: the channels of a pixel
+share every path, so their noise is strongly correlated (about 0.9 in fog) and a
+statistic summed over R, G and B has a variance that neither independence nor
+full correlation gives.  :meth:`Truth.noise_cov` assembles the 3x3 covariance.
 
 Examples
 --------
@@ -37,6 +42,8 @@ Examples
 (['R', 'G', 'B'], ['hit'])
 >>> stderr_names("final")
 ['stderr.R', 'stderr.G', 'stderr.B']
+>>> correlation_names("inscatter")
+['corr.inscatter.RG', 'corr.inscatter.RB', 'corr.inscatter.GB']
 """
 
 from __future__ import annotations
@@ -49,7 +56,10 @@ import numpy as np
 from fogref.errors import FogrefError
 
 #: Version of the channel layout below; stored in the header as ``fogref.schema``.
-SCHEMA_VERSION = 2
+#: 3 added the ``corr.*`` channels; 2 (no correlations) is still read, see :func:`truth_from_channels`.
+SCHEMA_VERSION = 3
+#: Channel index pairs of the ``corr.*`` channels and of the renderer's cross moments, in order.
+CHANNEL_PAIRS: tuple[tuple[int, int], ...] = ((0, 1), (0, 2), (1, 2))
 RGB = ("R", "G", "B")
 XYZ = ("X", "Y", "Z")
 
@@ -125,6 +135,15 @@ def stderr_names(name: str) -> list[str]:
     return ["stderr." + c for c in channel_names(name)]
 
 
+def correlation_names(name: str) -> list[str]:
+    """EXR channel names of the noise correlations between the channels of group ``name``
+    (pairs :data:`CHANNEL_PAIRS`: RG, RB, GB)."""
+    g = group(name)
+    if not g.noisy:
+        raise FogrefError(f"channel group '{name}' is not a Monte Carlo part: it has no noise correlation")
+    return ["corr." + g.prefix + g.components[i] + g.components[j] for i, j in CHANNEL_PAIRS]
+
+
 def sample_channel_names() -> list[str]:
     """Per-sample AOV names of the integrator (after its R,G,B), from :data:`SAMPLE_GROUPS`."""
     return [c for g in SAMPLE_GROUPS for c in channel_names(g)]
@@ -133,7 +152,8 @@ def sample_channel_names() -> list[str]:
 def exr_channel_names() -> list[str]:
     """Every channel of a schema-2 ground-truth EXR."""
     names = [c for g in GROUPS for c in channel_names(g.name)]
-    return names + [s for g in GROUPS if g.noisy for s in stderr_names(g.name)]
+    names += [s for g in GROUPS if g.noisy for s in stderr_names(g.name)]
+    return names + [s for g in GROUPS if g.noisy for s in correlation_names(g.name)]
 
 
 def readme_table() -> str:
@@ -144,6 +164,7 @@ def readme_table() -> str:
         label = ",".join(names) if len(names) == 1 or g.name == "final" else f"{g.prefix}*"
         rows.append(f"| `{label}` | {g.meaning} |")
     rows.append("| `stderr.<part>.*` | per-pixel standard error of each Monte Carlo part |")
+    rows.append("| `corr.<part>.RG,RB,GB` | correlation of the noise of the part's channels, in [-1, 1] |")
     return "\n".join(rows)
 
 
@@ -157,6 +178,7 @@ class _NumpyArrays:
     where = staticmethod(np.where)
     sqrt = staticmethod(np.sqrt)
     maximum = staticmethod(np.maximum)
+    minimum = staticmethod(np.minimum)
     zeros_like = staticmethod(np.zeros_like)
     stack_last = staticmethod(lambda xs: np.stack(xs, -1))
 
@@ -168,7 +190,7 @@ class _DrJitArrays:
         import drjit as dr
 
         self.asarray = lambda x: x
-        self.where, self.sqrt, self.maximum = dr.select, dr.sqrt, dr.maximum
+        self.where, self.sqrt, self.maximum, self.minimum = dr.select, dr.sqrt, dr.maximum, dr.minimum
         self.zeros_like = lambda x: dr.zeros(type(x), x.shape)
         self.stack_last = lambda xs: dr.concat([x[..., None] for x in xs], axis=len(xs[0].shape))
 
@@ -177,7 +199,7 @@ def _arrays_for(x):
     return _DrJitArrays() if type(x).__module__.startswith("drjit") else _NumpyArrays
 
 
-def moments_to_channels(sums: dict, squares: dict, n: int) -> dict:
+def moments_to_channels(sums: dict, squares: dict, n: int, cross: dict) -> dict:
     """EXR channels from per-pixel sums of the per-sample outputs.
 
     Parameters
@@ -186,13 +208,16 @@ def moments_to_channels(sums: dict, squares: dict, n: int) -> dict:
              for every name in ``("final",) + SAMPLE_GROUPS``: numpy arrays, or Dr.Jit
              float64 tensors (then so is the result: the driver computes the channels on
              the device and copies float32 to the host once).
-    squares: group name -> ``(H, W, k)`` float64 sum of squares, for :data:`SQUARED_GROUPS`.
+    squares: group name -> ``(H, W, 3)`` float64 sum of squares, for :data:`SQUARED_GROUPS`.
     n:       samples per pixel (>= 1).
+    cross:   group name -> ``(H, W, 3)`` float64 sum of the products of the channel pairs
+             :data:`CHANNEL_PAIRS` (R*G, R*B, G*B), for :data:`SQUARED_GROUPS`.
 
     Returns
     -------
     dict channel name -> ``(H, W)`` float64: means, the ratio estimator ``surface``
-    (0 where no sample reached the surface), and ``stderr.*`` (0 when ``n == 1``).
+    (0 where no sample reached the surface), ``stderr.*`` (0 when ``n == 1``) and
+    ``corr.*`` in [-1, 1] (0 where a channel has no noise, or ``n == 1``).
 
     Examples
     --------
@@ -204,9 +229,17 @@ def moments_to_channels(sums: dict, squares: dict, n: int) -> dict:
     >>> sums["surface"], sums["surface_coverage"] = one(2), np.ones((1, 1, 1))
     >>> squares = {g: one(0) for g in SQUARED_GROUPS}
     >>> squares["surface"] = one(4)
-    >>> c = moments_to_channels(sums, squares, 2)
+    >>> cross = {g: one(0) for g in SQUARED_GROUPS}
+    >>> c = moments_to_channels(sums, squares, 2, cross)
     >>> float(c["surface.R"][0, 0]), float(c["surface_coverage"][0, 0]), float(c["stderr.surface.R"][0, 0])
     (2.0, 0.5, 0.0)
+
+    Two samples of grey light, (1, 1, 1) and (3, 3, 3): the channels' noise is one noise.
+
+    >>> sums["final"], squares["final"], cross["final"] = one(4), one(10), one(10)
+    >>> c = moments_to_channels(sums, squares, 2, cross)
+    >>> float(c["stderr.R"][0, 0]), float(c["corr.RG"][0, 0])
+    (1.0, 1.0)
     """
     xp = _arrays_for(next(iter(sums.values())))
     out = {}
@@ -224,16 +257,33 @@ def moments_to_channels(sums: dict, squares: dict, n: int) -> dict:
         out[c] = xp.where(valid, ratio, 0.0)
     for g in SQUARED_GROUPS:
         m2 = xp.asarray(squares[g]) / n
+        mx = xp.asarray(cross[g]) / n
         if g == "surface":
             # delta method for the ratio r = E[s]/E[c] with c in {0, 1}, s = 0 where c = 0:
-            # Var(r_hat) ~ (E[s^2] - 2 r E[s] + r^2 E[c]) / (n E[c]^2)
+            # a sample's influence on r_i is u_i = (s_i - r_i c) / E[c], so
+            # Cov(r_i, r_j) ~ (E[s_i s_j] - r_j E[s_i] - r_i E[s_j] + r_i r_j E[c]) / (n E[c]^2)
             r = xp.stack_last([out[c] for c in channel_names("surface")])
             var = (m2 - 2 * r * mean["surface"] + r * r * cover[..., None]) / safe[..., None] ** 2
+
+            def cov(i, j, mij, r=r):
+                m = mean["surface"]
+                return (mij - r[..., j] * m[..., i] - r[..., i] * m[..., j]
+                        + r[..., i] * r[..., j] * cover) / safe**2
         else:
             var = m2 - mean[g] ** 2
-        se = xp.sqrt(xp.maximum(var, 0.0) / max(n - 1, 1)) if n > 1 else xp.zeros_like(var)
+
+            def cov(i, j, mij, m=mean[g]):
+                return mij - m[..., i] * m[..., j]
+        var = xp.maximum(var, 0.0)
+        se = xp.sqrt(var / max(n - 1, 1)) if n > 1 else xp.zeros_like(var)
         for i, c in enumerate(stderr_names(g)):
             out[c] = xp.where(valid, se[..., i], 0.0) if g == "surface" else se[..., i]
+        for k, ((i, j), c) in enumerate(zip(CHANNEL_PAIRS, correlation_names(g))):
+            vv = var[..., i] * var[..., j]
+            has = (vv > 0) & valid if g == "surface" else vv > 0
+            rho = cov(i, j, mx[..., k]) / xp.sqrt(xp.where(has, vv, 1.0))
+            rho = xp.maximum(xp.minimum(rho, 1.0), -1.0)
+            out[c] = xp.where(has, rho, 0.0) if n > 1 else xp.zeros_like(rho)
     return out
 
 
@@ -249,6 +299,8 @@ class Truth:
     final, transmittance, attenuated_surface, inscatter, single, multiple, surface:
         the parts (see the module docstring); ``transmittance`` is the ``T`` group.
     stderr:       part name -> its per-pixel standard error, same shape.
+    corr:         part name -> ``(H, W, 3)`` correlation of its channels' noise, pairs
+                  :data:`CHANNEL_PAIRS` (RG, RB, GB), in [-1, 1]; see :meth:`noise_cov`.
     surface_coverage: fraction of samples that reached the surface unscattered, [0, 1].
     distance:     [m], 0 for sky pixels.  position: [m].  view: unit, world, y-up.
     hit:          ``(H, W)`` bool, the camera ray hits a surface (most samples do).
@@ -276,6 +328,26 @@ class Truth:
     sun_direction: np.ndarray | None
     params: dict
     attrs: dict = field(default_factory=dict)
+    corr: dict | None = None
+
+    def __post_init__(self):
+        if self.corr is None:  # a truth built in memory without correlations: its channels' noise is one
+            self.corr = {k: np.ones(v.shape) for k, v in self.stderr.items()}
+
+    def noise_cov(self, part: str) -> np.ndarray:
+        """``(H, W, 3, 3)`` covariance of the noise of part ``part``'s R, G, B at each pixel
+        [part units²], from ``stderr`` and ``corr``.
+
+        >>> import numpy as np
+        >>> t = Truth.__new__(Truth)
+        >>> t.stderr, t.corr = {"inscatter": np.full((1, 1, 3), 2.0)}, {"inscatter": np.full((1, 1, 3), 0.5)}
+        >>> t.noise_cov("inscatter")[0, 0].tolist()
+        [[4.0, 2.0, 2.0], [2.0, 4.0, 2.0], [2.0, 2.0, 4.0]]
+        """
+        name = "transmittance" if part == "T" else part
+        if name not in self.stderr:
+            raise FogrefError(f"{self.path}: no noisy part '{part}' (parts: {', '.join(self.stderr)})")
+        return covariance(self.stderr[name], self.corr[name])
 
     # -- derived ---------------------------------------------------------------
     @property
@@ -341,6 +413,23 @@ class Truth:
         return o, tuple(v[:, i] for i in range(3)), D
 
 
+def covariance(stderr: np.ndarray, corr: np.ndarray) -> np.ndarray:
+    """``(..., 3, 3)`` covariance matrices from standard errors ``(..., 3)`` and the
+    correlations ``(..., 3)`` of the pairs :data:`CHANNEL_PAIRS` (RG, RB, GB).
+
+    >>> covariance(np.array([1.0, 2.0, 3.0]), np.array([0.5, 0.0, -1.0])).tolist()
+    [[1.0, 1.0, 0.0], [1.0, 4.0, -6.0], [0.0, -6.0, 9.0]]
+    """
+    se = np.asarray(stderr, dtype=np.float64)
+    rho = np.broadcast_to(np.asarray(corr, dtype=np.float64), se.shape)
+    c = np.zeros(se.shape + (3,))
+    for i in range(3):
+        c[..., i, i] = se[..., i] ** 2
+    for k, (i, j) in enumerate(CHANNEL_PAIRS):
+        c[..., i, j] = c[..., j, i] = rho[..., k] * se[..., i] * se[..., j]
+    return c
+
+
 def _vector(source: str, params: dict, keys: tuple[str, ...]) -> np.ndarray:
     node = params
     for k in keys:
@@ -372,15 +461,18 @@ def truth_from_channels(channels: dict, attrs: dict, source: str = "<memory>") -
     layout, a non-finite value, or a missing/malformed ``fogref.params``.
     """
     version = str(attrs.get("fogref.schema", "1"))
-    if version != str(SCHEMA_VERSION):
+    if version not in (str(SCHEMA_VERSION), "2"):
         hint = ("it was written by an older fogref (schema 1: no per-pixel noise, surface = Tsurface/T); "
                 "render it again" if "fogref.version" in attrs else "it is not a fogref ground truth")
         raise FogrefError(f"{source}: ground-truth schema {version}, expected {SCHEMA_VERSION}: {hint}")
-    missing = [c for c in exr_channel_names() if c not in channels]
+    # schema 2 has no corr.* channels: its channels' noise is taken as fully correlated (the
+    # bound compare used then), and the truth says so (attrs["fogref.noise_correlation"])
+    required = [c for c in exr_channel_names() if version != "2" or not c.startswith("corr.")]
+    missing = [c for c in required if c not in channels]
     if missing:
         raise FogrefError(f"{source}: missing channel(s) {', '.join(repr(c) for c in missing[:8])}"
                           f"{' ...' if len(missing) > 8 else ''}")
-    bad = nonfinite_report({k: channels[k] for k in exr_channel_names()})
+    bad = nonfinite_report({k: channels[k] for k in required})
     if bad:
         raise FogrefError(f"{source}: refusing a truth with {bad}")
     params = attrs.get("fogref.params")
@@ -399,9 +491,16 @@ def truth_from_channels(channels: dict, attrs: dict, source: str = "<memory>") -
     def se(name):
         return np.stack([channels[c] for c in stderr_names(name)], -1).astype(np.float64)
 
+    def corr(name):
+        if version == "2":
+            return np.ones(np.shape(channels[stderr_names(name)[0]]) + (3,))
+        return np.stack([channels[c] for c in correlation_names(name)], -1).astype(np.float64)
+
     view = get("view")
     view = view / np.maximum(np.linalg.norm(view, axis=-1, keepdims=True), 1e-30)
     noisy = [g.name for g in GROUPS if g.noisy]
+    attrs = {**attrs, "fogref.noise_correlation": "assumed 1 (schema 2 has no corr.* channels)"
+             if version == "2" else "measured (corr.* channels)"}
     return Truth(
         path=Path(source), final=get("final"), transmittance=get("T"),
         attenuated_surface=get("attenuated_surface"), inscatter=get("inscatter"), single=get("single"),
@@ -409,6 +508,7 @@ def truth_from_channels(channels: dict, attrs: dict, source: str = "<memory>") -
         stderr={("transmittance" if g == "T" else g): se(g) for g in noisy},
         surface_coverage=get("surface_coverage"), distance=get("distance"), position=get("P"), view=view,
         hit_fraction=get("hit"), camera=camera, sun_direction=sun, params=params, attrs=attrs,
+        corr={("transmittance" if g == "T" else g): corr(g) for g in noisy},
     )
 
 

@@ -627,9 +627,11 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         """Per-pixel sums of every per-sample output and of the squares of the parts.
 
         Returns ``(sums, squares)``: float64 ``TensorXd`` of shape ``(H, W, 3 + len(AOV_NAMES))``
-        (R,G,B then :data:`AOV_NAMES`) and ``(H, W, 3 * len(gbuffer.SQUARED_GROUPS))``,
-        summed over the ``spp`` samples of each pixel.  With ``aovs`` off: R,G,B and
-        their squares only.  ``squares=False``: the second is None (not computed).
+        (R,G,B then :data:`AOV_NAMES`) and ``(H, W, 6 * len(gbuffer.SQUARED_GROUPS))``,
+        summed over the ``spp`` samples of each pixel: the squares of every channel of
+        :data:`~fogref.gbuffer.SQUARED_GROUPS`, then the products of their channel pairs
+        :data:`~fogref.gbuffer.CHANNEL_PAIRS` (R*G, R*B, G*B; the noise correlations).
+        With ``aovs`` off: R,G,B, their squares and products only.  ``squares=False``: the second is None (not computed).
         ``pixel_exact`` (default: the plugin's property) puts every sample at the
         pixel centre; otherwise samples are uniform in the pixel (box filter).
         Camera rays start at the camera and have no far limit.
@@ -662,10 +664,12 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         L = L * weight
         values = [L[0], L[1], L[2]] + list(aovs)
         names = ["R", "G", "B"] + (AOV_NAMES if self.aovs else [])
-        squared = ([c for g in gbuffer.SQUARED_GROUPS for c in gbuffer.channel_names(g)] if self.aovs
-                   else ["R", "G", "B"]) if squares else []
-        dr.eval(values)  # one kernel for every output; otherwise each per-pixel sum re-runs the path loop (17x)
-        sums, sq = self._per_pixel_sums(values, [names.index(c) for c in squared], n_pix, spp)
+        groups = (gbuffer.SQUARED_GROUPS if self.aovs else ("final",)) if squares else ()
+        products = [(names.index(c), names.index(c)) for g in groups for c in gbuffer.channel_names(g)]
+        products += [(names.index(gbuffer.channel_names(g)[i]), names.index(gbuffer.channel_names(g)[j]))
+                     for g in groups for i, j in gbuffer.CHANNEL_PAIRS]
+        dr.eval(values)  # one kernel for every output; otherwise each per-pixel sum re-runs the path loop
+        sums, sq = self._per_pixel_sums(values, products, n_pix, spp)
         shape = (size[1], size[0], 1)
         sums = dr.concat([mi.TensorXd(a, shape=shape) for a in sums], axis=2)
         sq = dr.concat([mi.TensorXd(a, shape=shape) for a in sq], axis=2) if squares else None
@@ -673,10 +677,10 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         return sums, sq
 
     @staticmethod
-    def _per_pixel_sums(values, squared_index, n_pix, spp):
+    def _per_pixel_sums(values, products, n_pix, spp):
         """Per-pixel float64 sums of ``values`` (evaluated per-sample arrays, lane
-        ``p * spp + s``) and of the squares of ``values[j]`` for ``j`` in
-        ``squared_index``: two lists of ``n_pix`` arrays.
+        ``p * spp + s``) and of the products ``values[j] * values[k]`` for ``(j, k)`` in
+        ``products`` (squares where ``j == k``): two lists of ``n_pix`` arrays.
 
         One kernel: a loop over the ``spp`` samples of every pixel, each iteration
         gathering the sample from every output, in a fixed order (deterministic,
@@ -692,9 +696,9 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         def body(s, sums, squares):
             x = [mi.Float64(v if dr.width(v) == 1 else dr.gather(type(v), v, first + s)) for v in values]
             return (s + 1, tuple(a + b for a, b in zip(sums, x)),
-                    tuple(a + dr.square(x[j]) for a, j in zip(squares, squared_index)))
+                    tuple(a + (dr.square(x[j]) if j == k else x[j] * x[k]) for a, (j, k) in zip(squares, products)))
 
-        _, sums, squares = dr.while_loop((mi.UInt32(0), zeros(len(values)), zeros(len(squared_index))),
+        _, sums, squares = dr.while_loop((mi.UInt32(0), zeros(len(values)), zeros(len(products))),
                                          lambda s, sums, squares: s < spp_o, body, label="fogpath_pixel_sums")
         dr.eval(sums, squares)  # all at once: one loop kernel (read separately, each would re-run the loop)
         return list(sums), list(squares)

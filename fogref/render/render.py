@@ -42,9 +42,10 @@ from fogref.exrio import write_exr
 from fogref.render.passes import max_lanes, pass_seed, pass_sizes
 
 PIXEL_FILTERS = ("centre", "box")
-#: Bytes per pixel the driver holds: float64 sums of 30 + 21 channels, twice
-#: (running sum and the pass being added), plus the EXR's float32 channels.
-_HOST_BYTES_PER_PIXEL = (30 + 21) * 8 * 2 + 51 * 4
+#: Bytes per pixel the driver holds: float64 sums of 30 channels and 42 squares and
+#: channel-pair products, twice (running sum and the pass being added), plus the EXR's
+#: float32 channels.
+_HOST_BYTES_PER_PIXEL = (30 + 42) * 8 * 2 + len(gbuffer.exr_channel_names()) * 4
 
 
 def file_sha256(path) -> str:
@@ -178,7 +179,8 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
     scene_sha = file_sha256(scene_path)
     key = json.dumps({"scene_sha256": scene_sha, "overrides": {k: str(v) for k, v in (overrides or {}).items()},
                       "size": [W, H], "spp": spp, "seed": seed, "variant": variant, "passes": passes,
-                      "pixel_filter": pixel_filter, "version": __version__}, sort_keys=True)
+                      "pixel_filter": pixel_filter, "version": __version__,
+                      "schema": gbuffer.SCHEMA_VERSION}, sort_keys=True)
     ckpt = out.with_name(out.name + ".partial.npz")
     for stale in out.parent.glob(ckpt.name + ".*.tmp*"):  # a writer killed mid-write
         stale.unlink(missing_ok=True)
@@ -300,11 +302,10 @@ def _channels(sums, squares, spp: int) -> dict:
         k = len(gbuffer.channel_names(g))
         by_group[g] = sums[..., i:i + k]
         i += k
-    sq, i = {}, 0
-    for g in gbuffer.SQUARED_GROUPS:
-        sq[g] = squares[..., i:i + 3]
-        i += 3
-    return gbuffer.moments_to_channels(by_group, sq, spp)
+    k = 3 * len(gbuffer.SQUARED_GROUPS)  # squares first, then the channel-pair products
+    sq = {g: squares[..., 3 * i:3 * i + 3] for i, g in enumerate(gbuffer.SQUARED_GROUPS)}
+    cross = {g: squares[..., k + 3 * i:k + 3 * i + 3] for i, g in enumerate(gbuffer.SQUARED_GROUPS)}
+    return gbuffer.moments_to_channels(by_group, sq, spp, cross)
 
 
 def _resume(ckpt: Path, key: str):
