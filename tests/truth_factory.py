@@ -1,4 +1,4 @@
-"""Synthetic schema-2 ground truths for compare/study tests (no renders).
+"""Synthetic ground truths (the current schema) for compare/study tests (no renders).
 
 ``truth_channels`` builds every channel of :func:`fogref.gbuffer.exr_channel_names`
 from a few parts, so the file or :class:`~fogref.gbuffer.Truth` is exactly what
@@ -9,18 +9,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from fogref.gbuffer import SCHEMA_VERSION, channel_names, stderr_names, truth_from_channels
+from fogref.gbuffer import SCHEMA_VERSION, channel_names, correlation_names, stderr_names, truth_from_channels
 
 
 def truth_channels(*, T, surface, inscatter, distance, position, view, hit, coverage=None, single=None,
-                   multiple=None, rel_stderr: float = 0.0, stderr=None) -> dict:
-    """Every channel of a schema-2 truth, ``(H, W)`` float64 each.
+                   multiple=None, rel_stderr: float = 0.0, stderr=None, corr: float = 1.0) -> dict:
+    """Every channel of a truth, ``(H, W)`` float64 each.
 
     ``T, surface, inscatter``: ``(H, W, 3)``; ``attenuated_surface = T * surface``
     and ``final = attenuated_surface + inscatter`` exactly.  ``coverage``: ``(H, W)``
     (default 1 where ``T > 0``, else 0; ``surface`` is written as 0 where it is 0).
     ``single``/``multiple``: default 0.7/0.3 of ``inscatter``.  ``stderr``: part ->
     array; the others default to ``rel_stderr * |part|`` (``T``: 0, pixel-exact).
+    ``corr``: the correlation of every part's channels' noise (``corr.*``), in [-1, 1].
     """
     T, surface, inscatter = (np.asarray(a, dtype=np.float64) for a in (T, surface, inscatter))
     if coverage is None:
@@ -40,6 +41,8 @@ def truth_channels(*, T, surface, inscatter, distance, position, view, hit, cove
         se = np.broadcast_to(np.asarray(se, dtype=np.float64), a.shape)
         for i, c in enumerate(stderr_names(name)):
             ch[c] = se[..., i]
+        for c in correlation_names(name):
+            ch[c] = np.full(a.shape[:-1], float(corr))
     ch["surface_coverage"] = np.asarray(coverage, dtype=np.float64)
     ch["distance"] = np.asarray(distance, dtype=np.float64)
     ch["hit"] = np.asarray(hit, dtype=np.float64)
@@ -52,7 +55,7 @@ def truth_channels(*, T, surface, inscatter, distance, position, view, hit, cove
 
 def truth_attrs(params: dict, *, spp: int = 16, seed: int = 0, scene: str = "scenes/synthetic.xml",
                 scene_sha256: str = "0" * 64, overrides: dict | None = None, pixel_filter: str = "centre") -> dict:
-    """Header attributes of a schema-2 truth (non-string values are JSON in the file)."""
+    """Header attributes of a truth (non-string values are JSON in the file)."""
     return {"fogref.schema": str(SCHEMA_VERSION), "fogref.params": params, "fogref.spp": str(spp),
             "fogref.seed": str(seed), "fogref.scene": scene, "fogref.scene_sha256": scene_sha256,
             "fogref.overrides": overrides or {}, "fogref.pixel_filter": pixel_filter,

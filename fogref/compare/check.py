@@ -77,6 +77,7 @@ Examples
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 from dataclasses import dataclass, field
@@ -84,6 +85,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fogref.compare import noise
 from fogref.errors import FogrefError
 from fogref.gbuffer import Truth, nonfinite_report
 from fogref.models.base import SKY_DISTANCE as DEFAULT_SKY_DISTANCE
@@ -106,31 +108,34 @@ VERDICTS = ("pass", "fail", "inconclusive")
 
 @dataclass
 class CandidateParts:
-    """A candidate's images and the noise variance of its error, as :func:`check` compares them.
+    """A candidate's images and the noise of its error, as :func:`check` compares them.
 
     parts:     part name -> ``(H, W, 3)`` candidate image.
     reference: part name -> ``(H, W, 3)`` the truth's matching image.
-    noise_var: part name -> ``(H, W, 3)`` variance of ``candidate - reference`` due to
-               Monte Carlo noise (the truth's, plus the candidate's own if it has any).
-    ref_var:   part name -> ``(H, W, 3)`` noise variance of ``reference``.
+    noise_cov: part name -> ``(H, W, 3, 3)`` covariance of ``candidate - reference`` due to
+               Monte Carlo noise (the truth's, plus the candidate's own if it has any) and
+               rounding (:func:`fogref.compare.noise.rounding_var`) [units²].
+    ref_cov:   part name -> ``(H, W, 3, 3)`` noise covariance of ``reference``.
     valid:     part name -> ``(H, W)`` bool, pixels where the part is defined.
     name:      what the candidate is, for messages.
     """
 
     parts: dict
     reference: dict
-    noise_var: dict
-    ref_var: dict
+    noise_cov: dict
+    ref_cov: dict
     valid: dict
     name: str = "candidate"
 
 
-def _as_image(x, shape, what: str) -> np.ndarray:
+def _as_image(x, shape, what: str, nonfinite: str = "refuse") -> np.ndarray:
     a = np.asarray(x, dtype=np.float64)
     try:
         a = np.broadcast_to(a, (*shape, 3))
     except ValueError:
         raise FogrefError(f"{what}: shape {a.shape}, expected {(*shape, 3)} (the truth's H, W, RGB)") from None
+    if nonfinite == "keep":
+        return a
     bad = nonfinite_report({what: a[..., 0]}) or nonfinite_report({what: a[..., 1]}) or nonfinite_report(
         {what: a[..., 2]})
     if bad:
@@ -139,7 +144,7 @@ def _as_image(x, shape, what: str) -> np.ndarray:
 
 
 def evaluate_model(truth: Truth, model, precision: str = "float32",
-                   sky_distance: float = DEFAULT_SKY_DISTANCE) -> dict:
+                   sky_distance: float = DEFAULT_SKY_DISTANCE, nonfinite: str = "refuse") -> dict:
     """A fog model evaluated on a truth's G-buffer: ``{"T", "inscatter"}`` -> ``(H, W, 3)``.
 
     The model shades the point each pixel sees, ``truth.world_positions(sky_distance)``
@@ -158,16 +163,19 @@ def evaluate_model(truth: Truth, model, precision: str = "float32",
         ``"float32"`` or ``"float64"``.
     sky_distance : float
         Distance [m] at which sky pixels are fogged, > 0.
+    nonfinite : str
+        ``"refuse"`` (default): a non-finite model value is a FogrefError; ``"keep"``:
+        returned as it is (``compare`` excludes and counts such pixels).
 
     Returns
     -------
     dict
-        ``{"T": (H, W, 3), "inscatter": (H, W, 3)}`` float64, finite.
+        ``{"T": (H, W, 3), "inscatter": (H, W, 3)}`` float64, finite unless ``"keep"``.
 
     Raises
     ------
     FogrefError
-        The model returns the wrong shape or a non-finite value.
+        The model returns the wrong shape or (``"refuse"``) a non-finite value.
 
     Examples
     --------
@@ -187,26 +195,42 @@ def evaluate_model(truth: Truth, model, precision: str = "float32",
         if not hasattr(result, attr):
             raise FogrefError(f"model '{name}': evaluate() returned {type(result).__name__} without "
                               f"'{attr}' (expected an object with transmittance and inscatter)")
-    return {"T": _as_image(result.transmittance, truth.shape, f"model '{name}' transmittance"),
-            "inscatter": _as_image(result.inscatter, truth.shape, f"model '{name}' inscatter")}
+    return {"T": _as_image(result.transmittance, truth.shape, f"model '{name}' transmittance", nonfinite),
+            "inscatter": _as_image(result.inscatter, truth.shape, f"model '{name}' inscatter", nonfinite)}
 
 
-def _composite_parts(truth: Truth, T, L, cand_var_T=None, cand_var_L=None):
+def _composite_parts(truth: Truth, T, L, cand_cov_T=None, cand_cov_L=None):
     """The fog ``(T, L)`` over the truth's surface vs the truth's own fog over it.
 
-    Returns ``(candidate, reference, noise_var, ref_var)``; the noise of the difference
-    is ``var(L_truth) + surface² var(T_truth) + (T - T_truth)² var(surface)`` (plus the
-    candidate's own where given).
+    Returns ``(candidate, reference, noise_cov, ref_cov)``; the noise of the difference
+    is ``Cov(L_truth) + s Cov(T_truth) s + (T - T_truth) Cov(surface) (T - T_truth)``
+    (channel-wise scaled covariances; plus the candidate's own where given).  The
+    covariance between the truth's parts (one path feeds all) is left out: it enters
+    only through ``T - T_truth``, and ``T`` of a pixel-exact truth has no noise.
     """
     s = truth.surface
-    se = truth.stderr
     cand = s * T + L
     ref = s * truth.transmittance + truth.inscatter
-    var = (se["inscatter"] ** 2 + (s * se["transmittance"]) ** 2
-           + ((T - truth.transmittance) * se["surface"]) ** 2)
-    if cand_var_T is not None:
-        var = var + cand_var_L + (s**2) * cand_var_T
-    return cand, ref, var, se["final"] ** 2
+    cov = (truth.noise_cov("inscatter") + noise.scaled(truth.noise_cov("T"), s)
+           + noise.scaled(truth.noise_cov("surface"), T - truth.transmittance))
+    if cand_cov_T is not None:
+        cov = cov + cand_cov_L + noise.scaled(cand_cov_T, s)
+    return cand, ref, cov, truth.noise_cov("final")
+
+
+def fog_parts(truth: Truth, T, L, name: str = "fog") -> CandidateParts:
+    """A noise-free fog ``(T, L)`` (a model's, ``(H, W, 3)`` each) as :func:`check` compares it:
+    parts ``T``, ``inscatter`` and ``final`` (the fog over the truth's surface, where that is
+    defined), each with its reference and noise covariance.  Non-finite values stay."""
+    every = np.ones(truth.shape, bool)
+    with np.errstate(invalid="ignore", over="ignore"):
+        final = _composite_parts(truth, T, L)
+        parts = {"T": (T, truth.transmittance, truth.noise_cov("T"), truth.noise_cov("T"), every),
+                 "inscatter": (L, truth.inscatter, truth.noise_cov("inscatter"), truth.noise_cov("inscatter"), every),
+                 "final": (*final, truth.surface_valid)}
+        cov = {k: noise.add_diagonal(v[2], noise.rounding_var(v[1], v[0])) for k, v in parts.items()}
+    return CandidateParts({k: v[0] for k, v in parts.items()}, {k: v[1] for k, v in parts.items()}, cov,
+                          {k: v[3] for k, v in parts.items()}, {k: v[4] for k, v in parts.items()}, name=name)
 
 
 def candidate_parts(truth: Truth, candidate, precision: str = "float32",
@@ -224,6 +248,9 @@ def candidate_parts(truth: Truth, candidate, precision: str = "float32",
     * a dict with any of ``"T"``, ``"inscatter"``, ``"final"`` -> ``(H, W, 3)`` images
       (taken as noise-free engine images).
 
+    Every part's noise covariance includes the rounding floor of
+    :func:`fogref.compare.noise.rounding_var`.
+
     Examples
     --------
     >>> from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
@@ -231,35 +258,29 @@ def candidate_parts(truth: Truth, candidate, precision: str = "float32",
     >>> sorted(candidate_parts(synthetic_truth(model), model).parts)
     ['T', 'final', 'inscatter']
     """
-    se = truth.stderr
     valid_all = np.ones(truth.shape, bool)
     T_ref, L_ref = truth.transmittance, truth.inscatter
-    parts, ref, var, rvar, valid = {}, {}, {}, {}, {}
+    parts, ref, cov, rcov, valid = {}, {}, {}, {}, {}
 
     def put(name, c, r, v, rv, m):
-        parts[name], ref[name], var[name], rvar[name], valid[name] = c, r, v, rv, m
+        parts[name], ref[name], rcov[name], valid[name] = c, r, rv, m
+        cov[name] = noise.add_diagonal(v, noise.rounding_var(r, c))
 
     if isinstance(candidate, Truth):
         if candidate.shape != truth.shape:
             raise FogrefError(f"{candidate.path}: {candidate.shape[1]}x{candidate.shape[0]} px, but the truth "
                               f"{truth.path} is {truth.shape[1]}x{truth.shape[0]}")
-        cs = candidate.stderr
-        put("T", candidate.transmittance, T_ref, se["transmittance"] ** 2 + cs["transmittance"] ** 2,
-            se["transmittance"] ** 2, valid_all)
-        put("inscatter", candidate.inscatter, L_ref, se["inscatter"] ** 2 + cs["inscatter"] ** 2,
-            se["inscatter"] ** 2, valid_all)
+        for part, c, r in (("T", candidate.transmittance, T_ref), ("inscatter", candidate.inscatter, L_ref)):
+            put(part, c, r, truth.noise_cov(part) + candidate.noise_cov(part), truth.noise_cov(part), valid_all)
         put("final", *_composite_parts(truth, candidate.transmittance, candidate.inscatter,
-                                       cs["transmittance"] ** 2, cs["inscatter"] ** 2),
+                                       candidate.noise_cov("T"), candidate.noise_cov("inscatter")),
             truth.surface_valid)
-        return CandidateParts(parts, ref, var, rvar, valid, name=str(candidate.path))
+        return CandidateParts(parts, ref, cov, rcov, valid, name=str(candidate.path))
 
     if callable(getattr(candidate, "evaluate", None)):
         m = evaluate_model(truth, candidate, precision, sky_distance)
-        put("T", m["T"], T_ref, se["transmittance"] ** 2, se["transmittance"] ** 2, valid_all)
-        put("inscatter", m["inscatter"], L_ref, se["inscatter"] ** 2, se["inscatter"] ** 2, valid_all)
-        put("final", *_composite_parts(truth, m["T"], m["inscatter"]), truth.surface_valid)
         name = str(getattr(candidate, "name", None) or type(candidate).__name__)
-        return CandidateParts(parts, ref, var, rvar, valid, name=f"model '{name}'")
+        return fog_parts(truth, m["T"], m["inscatter"], name=f"model '{name}'")
 
     if isinstance(candidate, dict):
         images, name = candidate, "images"
@@ -274,15 +295,12 @@ def candidate_parts(truth: Truth, candidate, precision: str = "float32",
     img = {k: _as_image(v, truth.shape, f"{name} {k}") for k, v in images.items() if v is not None}
     if not img:
         raise FogrefError(f"{name}: no image given (need at least one of final, T, inscatter)")
-    if "T" in img:
-        put("T", img["T"], T_ref, se["transmittance"] ** 2, se["transmittance"] ** 2, valid_all)
-    if "inscatter" in img:
-        put("inscatter", img["inscatter"], L_ref, se["inscatter"] ** 2, se["inscatter"] ** 2, valid_all)
-    if "final" in img:
-        put("final", img["final"], truth.final, se["final"] ** 2, se["final"] ** 2, valid_all)
+    for part, r in (("T", T_ref), ("inscatter", L_ref), ("final", truth.final)):
+        if part in img:
+            put(part, img[part], r, truth.noise_cov(part), truth.noise_cov(part), valid_all)
     if "T" in img and "inscatter" in img:
         put("composite", *_composite_parts(truth, img["T"], img["inscatter"]), truth.surface_valid)
-    return CandidateParts(parts, ref, var, rvar, valid, name=name)
+    return CandidateParts(parts, ref, cov, rcov, valid, name=name)
 
 
 # ---------------------------------------------------------------- regions
@@ -325,9 +343,10 @@ def region_masks(truth: Truth, distance_bands=(100.0, 1000.0)) -> dict:
 _Q = ("sq", "power", "err", "ref", "n")  # per-block sums
 
 
-def _block_sums(cand, ref, var, rvar, mask, block: int) -> np.ndarray:
+def _block_sums(cand, ref, cov, rcov, mask, block: int) -> np.ndarray:
     """``(n_blocks, 5)`` per-block sums of ``e² - s²``, ``r² - s_r²``, ``e``, ``r`` and the count."""
     e = cand - ref
+    var, rvar = noise.diagonal(cov), noise.diagonal(rcov)
     q = np.stack([(e * e - var).sum(-1), (ref * ref - rvar).sum(-1), e.sum(-1), ref.sum(-1),
                   np.full(mask.shape, 3.0)], -1) * mask[..., None]
     H, W = mask.shape
@@ -385,33 +404,25 @@ def _interval(est: float, reps: np.ndarray, k: int, alpha: float) -> tuple[float
     return est - q * sd, est + q * sd
 
 
-def _noise_sd(cand, ref, var, rvar, mask, spp: int, point: dict) -> dict:
+def _noise_sd(cand, ref, cov, rcov, mask, spp: int, point: dict) -> dict:
     """Standard deviation of each statistic (squared scale for the RMSEs) due to the truth's noise.
 
     Conditional on the view: the candidate's error pattern is fixed, only the Monte
-    Carlo noise is random, and pixels' noise is independent (fogref's truths: each
-    pixel's samples are its own).  Delta method, per pixel and channel, with
-    ``δ² ≈ max(e² - s², 0)``: ``Var(e² - s²) ≈ 4 δ² s² + 2 s⁴ (1 + 1/(spp - 1))`` (the
-    last term: the noise of the estimated ``s²``), ``Var(e) = s²``; the reference power
-    in the denominator of ``rel_rmse`` is taken as exact (its relative noise is
-    that of a sum over the whole region).
+    Carlo noise is random.  Pixels are independent (each has its own samples); the
+    channels of a pixel are not, and their covariance ``cov`` is used whole (see
+    :mod:`fogref.compare.noise`, the one delta method).  The reference power in the
+    denominator of ``rel_rmse`` is taken as exact (its relative noise is that of a sum
+    over the whole region).
     """
-    m = mask[..., None]
-    e = cand - ref
-    d2 = np.maximum(e * e - var, 0.0)
-    extra = 1.0 + (1.0 / (spp - 1) if spp > 1 else 0.0)
-    var_sq = float((m * (4 * d2 * var + 2 * var * var * extra)).sum())
-    var_err = float((m * var).sum())
-    var_ref = float((m * rvar).sum())
+    e, C, R = (cand - ref)[mask], cov[mask], rcov[mask]
+    _, var_sq = noise.squared_stat(e, C, spp)
+    var_err, var_ref = noise.sum_var(C), noise.sum_var(R)
     n = 3.0 * float(mask.sum())
-    sq, power, err, refsum = (float(x) for x in (point["_sq"], point["_power"], point["_err"], point["_ref"]))
-    out = {"rmse": math.sqrt(var_sq) / n, "bias": math.sqrt(var_err) / n}
-    out["rel_rmse"] = math.sqrt(var_sq) / power if power > 0 else math.nan
-    if refsum != 0:
-        R = err / refsum
-        out["rel_bias"] = math.sqrt(max(var_err + R * R * var_ref + 2 * R * var_ref, 0.0)) / abs(refsum)
-    else:
-        out["rel_bias"] = math.nan
+    power, err, refsum = (float(point[k]) for k in ("_power", "_err", "_ref"))
+    out = {"rmse": math.sqrt(var_sq) / n, "bias": math.sqrt(var_err) / n,
+           "rel_rmse": math.sqrt(var_sq) / power if power > 0 else math.nan,
+           "_ref_sd": math.sqrt(var_ref)}
+    out["rel_bias"] = math.sqrt(noise.ratio_var(err, refsum, var_err, var_ref)) if refsum != 0 else math.nan
     return out
 
 
@@ -426,7 +437,15 @@ class Row:
     None when the region has no pixels or the metric is undefined there (e.g.
     ``rel_bias`` of a zero reference); ``tolerance`` is None when the metric is only
     reported; ``verdict`` is ``pass``, ``fail``, ``inconclusive``, ``reported`` (no
-    tolerance) or ``empty`` (no pixels).
+    tolerance) or ``empty`` (no pixels, and no tolerance set for this region by name).
+    A relative metric whose reference is zero, or indistinguishable from zero by its
+    noise, cannot meet a relative tolerance: with one set it is ``fail`` and ``note``
+    says why (give an absolute ``rmse``/``bias`` tolerance instead).  So does a
+    ``part/region`` tolerance over a region with no pixels.
+
+    ``z``: the statistic in standard errors from a perfect candidate's 0 (the squared
+    scale for the RMSEs), for coverage and power studies; ``note``: why a verdict is
+    what it is, when that is not the interval against the tolerance.
     """
 
     part: str
@@ -438,15 +457,18 @@ class Row:
     tolerance: float | None
     verdict: str
     pixels: int
+    z: float | None = None
+    note: str = ""
 
     def describe(self) -> str:
         """One line: ``inscatter/sky rel_bias = 0.0498 [0.0471, 0.0524] > tolerance 0.02: fail``."""
+        note = f"; {self.note}" if self.note else ""
         if self.estimate is None:
-            return f"{self.part}/{self.region} {self.metric}: {self.verdict} ({self.pixels} px)"
+            return f"{self.part}/{self.region} {self.metric}: {self.verdict} ({self.pixels} px{note})"
         tol = "" if self.tolerance is None else f", tolerance {'|x| ' if self.metric in SIGNED else ''}" \
                                                 f"<= {self.tolerance:g}"
         return (f"{self.part}/{self.region} {self.metric} = {self.estimate:.4g} "
-                f"[{self.low:.4g}, {self.high:.4g}]{tol}: {self.verdict} ({self.pixels} px)")
+                f"[{self.low:.4g}, {self.high:.4g}]{tol}: {self.verdict} ({self.pixels} px{note})")
 
 
 @dataclass
@@ -529,21 +551,43 @@ class CheckResult:
         return out / "errors.exr"
 
 
-def _tolerance_table(tolerances) -> dict:
-    """Normalise ``tolerances`` to ``{(part, region|None): {metric: tol}}``."""
+def _did_you_mean(word: str, options) -> str:
+    close = difflib.get_close_matches(word, list(options), n=1, cutoff=0.6)
+    return f"; did you mean '{close[0]}'?" if close else ""
+
+
+def _tolerance_table(tolerances, regions=None) -> dict:
+    """Normalise ``tolerances`` to ``{(part, region|None): {metric: tol}}``.
+
+    ``regions``: the region names that exist (default: any region is accepted).
+    Unknown parts, regions and metrics are FogrefErrors with a did-you-mean.
+
+    >>> _tolerance_table({"T/skyy": 0.1}, regions=("all", "surface", "sky"))
+    Traceback (most recent call last):
+    ...
+    fogref.errors.FogrefError: tolerances: unknown region 'skyy' in 'T/skyy'; did you mean 'sky'? (regions: all, surface, sky)
+    """
     table = {(p, None): dict(v) for p, v in DEFAULT_TOLERANCES.items()}
     for key, value in (tolerances or {}).items():
         part, _, region = str(key).partition("/")
         if part not in PART_NAMES:
-            raise FogrefError(f"tolerances: unknown part '{part}' in '{key}' (parts: {', '.join(PART_NAMES)}; "
-                              "write 'part' or 'part/region')")
+            raise FogrefError(f"tolerances: unknown part '{part}' in '{key}'{_did_you_mean(part, PART_NAMES)} "
+                              f"(parts: {', '.join(PART_NAMES)}; write 'part' or 'part/region')")
+        if region and regions is not None and region not in regions:
+            raise FogrefError(f"tolerances: unknown region '{region}' in '{key}'{_did_you_mean(region, regions)} "
+                              f"(regions: {', '.join(regions)})")
         spec = value if isinstance(value, dict) else {"rel_rmse": value}
         clean = {}
         for metric, tol in spec.items():
             if metric not in METRICS:
-                raise FogrefError(f"tolerances['{key}']: unknown metric '{metric}' (metrics: {', '.join(METRICS)})")
+                raise FogrefError(f"tolerances['{key}']: unknown metric '{metric}'{_did_you_mean(metric, METRICS)} "
+                                  f"(metrics: {', '.join(METRICS)})")
             if tol is not None:
-                tol = float(tol)
+                try:
+                    tol = float(tol)
+                except (TypeError, ValueError):
+                    raise FogrefError(f"tolerances['{key}']['{metric}']: {tol!r} is not a number "
+                                      "(finite, >= 0; None only reports the metric)") from None
                 if not (math.isfinite(tol) and tol >= 0):
                     raise FogrefError(f"tolerances['{key}']['{metric}']: {tol} must be finite and >= 0")
             clean[metric] = tol
@@ -637,40 +681,55 @@ def check(truth: Truth, candidate, tolerances: dict | None = None, *, parts=None
         raise FogrefError(f"block: {block!r} must be an integer >= 1 [px]")
     if not (isinstance(n_boot, int) and n_boot >= 100):
         raise FogrefError(f"n_boot: {n_boot!r} must be an integer >= 100")
-    table = _tolerance_table(tolerances)
+    regions = region_masks(truth, distance_bands)
+    table = _tolerance_table(tolerances, tuple(regions))
     cp = candidate_parts(truth, candidate, precision, sky_distance)
     wanted = list(cp.parts) if parts is None else list(parts)
     for p in wanted:
         if p not in cp.parts:
             raise FogrefError(f"part '{p}': {cp.name} has only {', '.join(cp.parts)}")
-    regions = region_masks(truth, distance_bands)
     alpha = (1.0 - confidence) / 2.0
     from scipy.stats import norm
 
     z = float(norm.ppf(1.0 - alpha))
+    z_one = float(norm.ppf(confidence))  # the one-sided upper bound where an RMSE's estimate is 0
     spp = int(truth.attrs.get("fogref.spp", 0) or 0)
     rows, errors = [], {}
     for k, part in enumerate(wanted):
-        c, r, v, rv, ok = cp.parts[part], cp.reference[part], cp.noise_var[part], cp.ref_var[part], cp.valid[part]
+        c, r, v, rv, ok = cp.parts[part], cp.reference[part], cp.noise_cov[part], cp.ref_cov[part], cp.valid[part]
         errors[part] = np.where(ok[..., None], c - r, 0.0)
         for j, (region, mask) in enumerate(regions.items()):
             m = mask & ok
             tols = {**table.get((part, None), {}), **table.get((part, region), {})}
+            named = table.get((part, region), {})
             n_px = int(m.sum())
             if n_px == 0:
-                rows += [Row(part, region, met, None, None, None, tols.get(met), "empty", 0) for met in METRICS]
+                for met in METRICS:
+                    t = tols.get(met)
+                    if named.get(met) is not None:
+                        rows.append(Row(part, region, met, None, None, None, t, "fail", 0,
+                                        note=f"no pixels in region '{region}' for a tolerance set on it"))
+                    else:
+                        rows.append(Row(part, region, met, None, None, None, t, "empty", 0))
                 continue
             sums = _block_sums(c, r, v, rv, m, block)
             total = sums.sum(0)
             point = _linear_from_sums(total)
+            sd = _noise_sd(c, r, v, rv, m, spp, {"_sq": total[0], "_power": total[1], "_err": total[2],
+                                                 "_ref": total[3]})
+            # a reference indistinguishable from zero by its own noise has no relative error
+            zero_ref = abs(float(total[3])) <= z * sd["_ref_sd"] or float(total[1]) <= 0
             if method == "block":
                 reps = block_bootstrap(sums, n_boot, seed + 7919 * k + 104729 * j)
-            else:
-                sd = _noise_sd(c, r, v, rv, m, spp, {"_sq": total[0], "_power": total[1], "_err": total[2],
-                                                     "_ref": total[3]})
             for met in METRICS:
-                est = _finite(point[met])
                 tol = tols.get(met)
+                if met.startswith("rel_") and zero_ref:
+                    why = (f"the reference {part} is zero over these pixels (or within its noise of zero): "
+                           "no relative error exists; set an absolute tolerance (rmse, bias) instead")
+                    rows.append(Row(part, region, met, None, None, None, tol,
+                                    "reported" if tol is None else "fail", n_px, note=why))
+                    continue
+                est = _finite(point[met])
                 if method == "block":
                     rep = reps[met][np.isfinite(reps[met])]
                     ok_ci = est is not None and rep.size >= n_boot // 2 and len(sums) >= 2
@@ -679,15 +738,20 @@ def check(truth: Truth, candidate, tolerances: dict | None = None, *, parts=None
                 if not ok_ci:
                     rows.append(Row(part, region, met, None, None, None, tol, "empty", n_px))
                     continue
+                zval = est / sd[met] if sd[met] > 0 else None
                 if method == "block":
                     lo, hi = _interval(est, rep, len(sums), alpha)
                 else:
                     lo, hi = est - z * sd[met], est + z * sd[met]
                 if met in SIGNED:
                     est, lo, hi = (_finite(x) for x in (est, lo, hi))
-                else:  # squared scale -> root scale (monotone), clamped at 0
+                else:  # squared scale -> root scale (monotone); where the low end is 0 the interval
+                    # is one-sided, [0, upper], never of zero width
+                    if lo <= 0 and method == "noise":
+                        hi = max(hi, z_one * sd[met])
                     est, lo, hi = (math.sqrt(max(x, 0.0)) for x in (est, lo, hi))
-                rows.append(Row(part, region, met, est, lo, hi, tol, _verdict(met, lo, hi, tol), n_px))
+                rows.append(Row(part, region, met, est, lo, hi, tol, _verdict(met, lo, hi, tol), n_px,
+                                z=_finite(zval) if zval is not None else None))
     settings = {"method": method, "block": block, "n_boot": n_boot, "spp": spp, "seed": seed, "distance_bands_m": list(distance_bands or ()),
                 "precision": precision, "sky_distance_m": sky_distance,
                 "tolerances": {f"{p}{'/' + r if r else ''}": t for (p, r), t in table.items()}}

@@ -18,8 +18,8 @@ Conventions shared by every function here:
   multiple of the reference's largest value (see :func:`flip_map`).
 * A mean over an empty mask is reported as ``None``, never NaN.
 
-Monte Carlo noise of the reference: given the per-pixel standard error ``sigma`` of
-``test - reference`` (from the truth's ``stderr.*`` channels), :func:`mse_noise`
+Monte Carlo noise of the reference: given the per-pixel noise covariance of
+``test - reference`` (from the truth's ``stderr.*`` and ``corr.*`` channels), :func:`mse_noise`
 splits an MSE into the part the truth's noise adds (the *noise floor*, the MSE a
 perfect model would get) and the rest, with the standard error of the estimate;
 :func:`mean_noise` does the same for the mean signed error.  A metric is *below the
@@ -48,6 +48,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fogref.compare import noise
+
 #: relMSE's stabiliser, in image units squared: ``(x - r)² / (r² + eps)``.
 RELMSE_EPS = 1e-2
 #: Percentile of the reference luminance that the ΔE exposure maps to white (Y = 1).
@@ -64,8 +66,6 @@ REC709_LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 _FLT_MAX = float(np.finfo(np.float32).max)
 #: A metric is "below the noise" within this many standard errors of a perfect model's.
 NOISE_Z = 3.0
-#: Relative rounding of the truth's float32 storage, counted as noise (2**-23).
-FLOAT32_STORAGE = float(np.finfo(np.float32).eps)
 
 
 def count_nonfinite(image) -> int:
@@ -214,30 +214,32 @@ def relmse(reference, test, eps: float = RELMSE_EPS, mask=None) -> float | None:
     return _masked_mean(relative_squared_error_map(reference, test, eps), mask, "relmse")
 
 
-def _noise_inputs(diff, sigma, mask, weight):
+def _noise_inputs(diff, sigma, mask, weight, cov):
     d = np.asarray(diff, dtype=np.float64)
     s = np.broadcast_to(np.asarray(sigma, dtype=np.float64), d.shape)
     w = np.ones_like(d) if weight is None else np.broadcast_to(np.asarray(weight, dtype=np.float64), d.shape)
-    if mask is not None:
-        m = np.asarray(mask, dtype=bool)
-        d, s, w = d[m], s[m], w[m]
-    d, s, w = d.reshape(-1, d.shape[-1]), s.reshape(-1, d.shape[-1]), w.reshape(-1, d.shape[-1])
-    _require_finite_test(d, "noise")
     if count_nonfinite(s) or np.any(s < 0):
         raise ValueError("standard errors must be finite and >= 0")
-    return d, s, w
+    # no covariance given: the channels' noise is taken as fully correlated (an upper bound
+    # for sums of positive weights: they come from the same samples)
+    C = s[..., :, None] * s[..., None, :] if cov is None else np.broadcast_to(
+        np.asarray(cov, dtype=np.float64), d.shape + (3,))
+    if mask is not None:
+        m = np.asarray(mask, dtype=bool)
+        d, w, C = d[m], w[m], C[m]
+    d, w, C = d.reshape(-1, 3), w.reshape(-1, 3), C.reshape(-1, 3, 3)
+    _require_finite_test(d, "noise")
+    return d, w, C
 
 
-def mse_noise(diff, sigma, mask=None, weight=None, z: float = NOISE_Z) -> dict | None:
+def mse_noise(diff, sigma, mask=None, weight=None, z: float = NOISE_Z, cov=None, spp: int = 0) -> dict | None:
     """A (weighted) MSE and the part of it that the reference's Monte Carlo noise explains.
 
-    With ``d = test - reference`` per channel and ``sigma`` the standard error of
-    ``d`` due to the reference's noise (independent between pixels), the estimate
-    ``mean(w d²)`` has expectation ``mean(w bias²) + mean(w sigma²)``.  The second
-    term is the *noise floor*: what a perfect model would score.  The standard error
-    of the estimate uses ``Var(d²) = 4 bias² sigma² + 2 sigma⁴`` (normal noise, the
-    bias² estimated by ``max(d² - sigma², 0)``); channels of a pixel are taken as
-    fully correlated (an upper bound: they come from the same samples).
+    With ``d = test - reference`` per channel and ``C`` the per-pixel covariance of the
+    noise of ``d`` (pixels independent), the estimate ``mean(w d²)`` has expectation
+    ``mean(w bias²) + mean(w C_cc)``.  The second term is the *noise floor*: what a
+    perfect model would score.  The standard error of the estimate is the one delta
+    method of :func:`fogref.compare.noise.squared_stat` (channels' covariance used whole).
 
     Parameters
     ----------
@@ -251,6 +253,11 @@ def mse_noise(diff, sigma, mask=None, weight=None, z: float = NOISE_Z) -> dict |
         Per-value weight (e.g. ``1 / (r² + eps)`` for relMSE); default 1.
     z : float
         Standard errors within which a value counts as *below the noise*.
+    cov : array_like, ``(..., 3, 3)``, optional
+        Covariance of ``diff``'s noise [image units²] (its diagonal is ``sigma²``);
+        default: the channels fully correlated, an upper bound.
+    spp : int
+        Samples per pixel behind ``cov`` (the noise of the estimated variance), 0: exact.
 
     Returns
     -------
@@ -270,21 +277,20 @@ def mse_noise(diff, sigma, mask=None, weight=None, z: float = NOISE_Z) -> dict |
     >>> mse_noise(np.full((10, 10, 3), 0.5), 0.1)["below_noise"]
     False
     """
-    d, s, w = _noise_inputs(diff, sigma, mask, weight)
-    n = d.shape[0]
+    d, w, C = _noise_inputs(diff, sigma, mask, weight, cov)
+    n = d.size
     if n == 0:
         return None
-    d2, s2 = d * d, s * s
-    mse = float(np.mean(w * d2))
-    floor = float(np.mean(w * s2))
-    var = w * w * (4.0 * np.maximum(d2 - s2, 0.0) * s2 + 2.0 * s2 * s2)
-    stderr = float(np.sqrt(np.sum(np.mean(np.sqrt(var), axis=-1) ** 2)) / n)
-    null = float(np.sqrt(np.sum(np.mean(np.sqrt(2.0) * w * s2, axis=-1) ** 2)) / n)
+    mse = float(np.mean(w * d * d))
+    floor = float(np.mean(w * noise.diagonal(C)))
+    _, var = noise.squared_stat(d, C, spp, w)
+    _, null_var = noise.squared_stat(np.zeros_like(d), C, spp, w)
+    stderr, null = math.sqrt(var) / n, math.sqrt(null_var) / n
     return {"mse": mse, "noise_floor": floor, "stderr": stderr, "debiased": max(mse - floor, 0.0),
             "null_stderr": null, "below_noise": bool(mse - floor <= z * null)}
 
 
-def mean_noise(diff, sigma, mask=None, z: float = NOISE_Z) -> dict | None:
+def mean_noise(diff, sigma, mask=None, z: float = NOISE_Z, cov=None) -> dict | None:
     """Mean signed error over pixels and channels, with its standard error from the noise.
 
     Parameters
@@ -296,12 +302,14 @@ def mean_noise(diff, sigma, mask=None, z: float = NOISE_Z) -> dict | None:
     mask : array_like of bool, ``(...)``, optional
     z : float
         Standard errors within which the mean counts as *below the noise*.
+    cov : array_like, ``(..., 3, 3)``, optional
+        As in :func:`mse_noise` (default: channels fully correlated).
 
     Returns
     -------
     dict or None
-        ``mean`` [image units; > 0: the model is too bright], ``stderr`` (channels of
-        a pixel fully correlated, pixels independent) and ``below_noise``:
+        ``mean`` [image units; > 0: the model is too bright], ``stderr`` (pixels
+        independent, :func:`fogref.compare.noise.sum_var`) and ``below_noise``:
         ``|mean| <= z * stderr``.  None for an empty selection.
 
     Examples
@@ -310,12 +318,12 @@ def mean_noise(diff, sigma, mask=None, z: float = NOISE_Z) -> dict | None:
     >>> round(m["mean"], 6), round(m["stderr"], 6), m["below_noise"]
     (0.01, 0.025, True)
     """
-    d, s, _ = _noise_inputs(diff, sigma, mask, None)
-    n = d.shape[0]
+    d, _, C = _noise_inputs(diff, sigma, mask, None, cov)
+    n = d.size
     if n == 0:
         return None
     mean = float(np.mean(d))
-    stderr = float(np.sqrt(np.sum(np.mean(s, axis=-1) ** 2)) / n)
+    stderr = math.sqrt(noise.sum_var(C)) / n
     return {"mean": mean, "stderr": stderr, "below_noise": bool(abs(mean) <= z * stderr)}
 
 
@@ -490,6 +498,9 @@ class ErrorMaps:
     (0: noise-free).  ``relative_weight``: ``1 / (r² + eps)``, relMSE's weight.
     ``delta_e2000_noise`` / ``flip_noise``: the maps of a perfect model plus one
     seeded draw of that noise (the colour metrics' noise floors), or None.
+    ``noise_cov``: ``(H, W, 3, 3)`` covariance of ``signed``'s noise (its diagonal is
+    ``sigma²``), or None (channels then taken as fully correlated); ``spp``: the truth's
+    samples per pixel behind it.
     """
 
     signed: np.ndarray
@@ -506,6 +517,8 @@ class ErrorMaps:
     relative_weight: np.ndarray | None = None
     delta_e2000_noise: np.ndarray | None = None
     flip_noise: np.ndarray | None = None
+    noise_cov: np.ndarray | None = None
+    spp: int = 0
 
     def __post_init__(self):
         shape = self.absolute.shape
@@ -543,7 +556,7 @@ class ErrorMaps:
         if n == 0:
             return out
         for name, weight in (("rmse", None), ("relmse", self.relative_weight)):
-            m = mse_noise(self.signed, self.sigma, sel, weight, z)
+            m = mse_noise(self.signed, self.sigma, sel, weight, z, cov=self.noise_cov, spp=self.spp)
             value = m["mse"] if name == "relmse" else float(np.sqrt(m["mse"]))
             if name == "rmse":
                 hi, lo = math.sqrt(m["mse"] + m["stderr"]), math.sqrt(max(m["mse"] - m["stderr"], 0.0))
@@ -555,7 +568,7 @@ class ErrorMaps:
             out.update({name: value, **extra, f"{name}_below_noise": m["below_noise"]})
         if self.relative_weight is None:  # relMSE without its weight: the map's mean, no noise split
             out["relmse"] = float(np.mean(self.relative_squared[sel]))
-        me = mean_noise(self.signed, self.sigma, sel, z)
+        me = mean_noise(self.signed, self.sigma, sel, z, cov=self.noise_cov)
         out.update({
             "mean_error": me["mean"], "mean_error_stderr": me["stderr"], "mean_error_below_noise": me["below_noise"],
             "mean_abs_error": float(np.mean(self.absolute[sel])),
@@ -574,7 +587,7 @@ class ErrorMaps:
 
 def error_maps(
     reference, test, *, white: float | None = None, eps: float = RELMSE_EPS, ppd: float = FLIP_PPD,
-    sigma=None, valid=None, noise_seed: int | None = 0,
+    sigma=None, valid=None, noise_seed: int | None = 0, noise_cov=None, spp: int = 0,
 ) -> ErrorMaps:
     """All per-pixel errors of ``test`` against ``reference`` (both ``(H, W, 3)``).
 
@@ -599,6 +612,11 @@ def error_maps(
     noise_seed : int or None
         Seed of the noise draw for the ΔE2000/FLIP noise floors (None: skip them;
         they are also skipped when ``sigma`` is 0 everywhere, where they are 0).
+    noise_cov : array_like, ``(H, W, 3, 3)``, optional
+        The noise's covariance [image units²]; when given, ``sigma`` is its diagonal's
+        root and the noise draw is correlated as it says.
+    spp : int
+        The truth's samples per pixel (the noise of its estimated variance), 0: exact.
 
     Returns
     -------
@@ -621,6 +639,10 @@ def error_maps(
     nonfinite = ~finite_pixels(x)
     ok = ~nonfinite if valid is None else (np.asarray(valid, dtype=bool) & ~nonfinite)
     x = np.where(ok[..., None], x, r)  # excluded pixels: error 0 in the maps, left out of every summary
+    C = None if noise_cov is None else np.asarray(noise_cov, dtype=np.float64)
+    if C is not None:
+        C = np.where(ok[..., None, None], C, 0.0)
+        sigma = np.sqrt(np.maximum(noise.diagonal(C), 0.0))
     s = np.zeros(r.shape) if sigma is None else np.broadcast_to(np.asarray(sigma, dtype=np.float64), r.shape)
     if count_nonfinite(s) or np.any(s < 0):
         raise ValueError("sigma must be finite and >= 0")
@@ -630,7 +652,11 @@ def error_maps(
     flip, flip_params = flip_map(r, x, ppd)
     de_noise = flip_noise = None
     if noise_seed is not None and np.any(s > 0):
-        noisy = r + s * np.random.default_rng(noise_seed).standard_normal(r.shape)
+        draw = np.random.default_rng(noise_seed).standard_normal(r.shape)
+        if C is None:
+            noisy = r + s * draw
+        else:  # correlated as the noise is
+            noisy = r + np.einsum("...ij,...j->...i", noise.sqrt_psd(C), draw)
         de_noise = delta_e2000_map(r, noisy, white)
         flip_noise, _ = flip_map(r, noisy, ppd)
     return ErrorMaps(
@@ -648,4 +674,6 @@ def error_maps(
         relative_weight=1.0 / (r * r + eps),
         delta_e2000_noise=de_noise,
         flip_noise=flip_noise,
+        noise_cov=C,
+        spp=int(spp),
     )

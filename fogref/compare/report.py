@@ -57,7 +57,9 @@ import numpy as np
 
 from fogref.atomic import write_text_atomic
 from fogref.compare import metrics as M
+from fogref.compare import noise
 from fogref.compare.binning import angle_edges, binned_errors, log_distance_edges
+from fogref.compare.check import evaluate_model, fog_parts
 from fogref.compare.model_factory import current_parameters
 from fogref.compare.plots import plot_binned_errors, plot_error_heatmaps, plot_side_by_side
 from fogref.compare.tonemap import exposure_for
@@ -107,14 +109,6 @@ def _model_description(model) -> dict | str:
         return repr(model)
 
 
-def _as_image(x, shape: tuple[int, int], what: str) -> np.ndarray:
-    a = np.asarray(x)
-    try:
-        return np.broadcast_to(a, (*shape, 3))
-    except ValueError:
-        raise FogrefError(f"model returned {what} of shape {a.shape}, expected {(*shape, 3)}") from None
-
-
 def check_sky_distance(value, option: str = "sky_distance") -> float:
     """``value`` as a float if finite and > 0 [m]; FogrefError naming ``option`` otherwise."""
     try:
@@ -127,42 +121,28 @@ def check_sky_distance(value, option: str = "sky_distance") -> float:
     return v
 
 
-def _quadrature(*terms) -> np.ndarray:
-    return np.sqrt(sum(np.square(t) for t in terms))
-
-
 def evaluate_parts(truth: Truth, model, precision: str, sky_distance: float) -> dict:
-    """Reference, model, noise and valid pixels of every part.
+    """Reference, model, noise and valid pixels of every part, from the one comparison core
+    (:func:`fogref.compare.check.fog_parts`, which ``check`` uses too).
 
-    Returns ``part -> {"reference", "model", "sigma", "valid"}``: ``(H, W, 3)``
-    float64 reference and model (the model as returned, non-finite values kept),
-    the ``(H, W, 3)`` standard error of ``model - reference`` due to the truth's
-    noise and float32 storage, and the ``(H, W)`` bool pixels where the part is
-    defined (``surface_valid`` for the composited parts, every pixel otherwise).
+    Returns ``part -> {"reference", "model", "cov", "valid"}``: ``(H, W, 3)`` float64
+    reference and model (the model as returned, non-finite values kept), the ``(H, W,
+    3, 3)`` noise covariance of ``model - reference`` (the truth's noise, its channels'
+    correlation, and the rounding floor), and the ``(H, W)`` bool pixels where the
+    part is defined (``surface_valid`` for the composited parts, every pixel otherwise).
     """
-    shape = truth.shape
-    result = model.evaluate(truth.camera, truth.world_positions(sky_distance), precision=precision)
-    t_model = np.asarray(_as_image(result.transmittance, shape, "transmittance"), dtype=np.float64)
-    l_model = np.asarray(_as_image(result.inscatter, shape, "inscatter"), dtype=np.float64)
-    valid = truth.surface_valid
-    surface = truth.surface  # bounded, 0 where undefined: the products below are finite where it matters
-    t_abs = np.where(np.isfinite(t_model), np.abs(t_model), 0.0)  # only for the noise of excluded pixels
-    se = truth.stderr
-    q = M.FLOAT32_STORAGE
-
-    def part(ref, mod, sigma, where):
-        return {"reference": ref, "model": mod, "sigma": _quadrature(sigma, q * np.abs(ref)), "valid": where}
-
-    every = np.ones(shape, dtype=bool)
+    m = evaluate_model(truth, model, precision, sky_distance, nonfinite="keep")
+    cp = fog_parts(truth, m["T"], m["inscatter"])
+    out = {("transmittance" if k == "T" else k): {"reference": cp.reference[k], "model": cp.parts[k],
+                                                   "cov": cp.noise_cov[k], "valid": cp.valid[k]}
+           for k in ("final", "T", "inscatter")}
     with np.errstate(invalid="ignore", over="ignore"):  # a model's inf/NaN stays non-finite: counted, excluded
-        return {
-            "final": part(truth.final, surface * t_model + l_model,
-                          _quadrature(se["final"], t_abs * se["surface"]), valid),
-            "transmittance": part(truth.transmittance, t_model, se["transmittance"], every),
-            "inscatter": part(truth.inscatter, l_model, se["inscatter"], every),
-            "attenuated_surface": part(truth.attenuated_surface, surface * t_model,
-                                       _quadrature(se["attenuated_surface"], t_abs * se["surface"]), valid),
-        }
+        att = truth.surface * m["T"]
+        cov = truth.noise_cov("attenuated_surface") + noise.scaled(truth.noise_cov("surface"), m["T"])
+        out["attenuated_surface"] = {"reference": truth.attenuated_surface, "model": att,
+                                     "cov": noise.add_diagonal(cov, noise.rounding_var(truth.attenuated_surface, att)),
+                                     "valid": truth.surface_valid}
+    return {p: out[p] for p in PARTS}
 
 
 def truth_provenance(truth: Truth) -> dict:
@@ -415,7 +395,7 @@ def compare(
 
     errors = {
         part: M.error_maps(p["reference"], p["model"], white=1.0 if PART_UNITS[part] == "1" else None,
-                           eps=relmse_eps, ppd=flip_ppd, sigma=p["sigma"], valid=p["valid"])
+                           eps=relmse_eps, ppd=flip_ppd, noise_cov=p["cov"], valid=p["valid"], spp=truth.spp)
         for part, p in parts.items()
     }
     masks = {"all": None, "surface": truth.hit, "sky": truth.sky}
@@ -452,10 +432,12 @@ def compare(
             "sky": "model evaluated at camera + view * sky_distance, composited over the truth's surface.*",
             "composite": "final = surface * T_model + inscatter_model, attenuated_surface = surface * T_model, "
                          "only where surface_coverage > 0; other pixels excluded and counted",
-            "noise": "per-pixel standard error of model - truth from the truth's stderr.* channels (final and "
-                     "attenuated_surface add T_model * stderr.surface in quadrature) and float32 storage "
-                     "(2^-23 |truth|); *_noise_floor: a perfect model's score; *_stderr: standard error of the "
+            "noise": "per-pixel covariance of model - truth from the truth's stderr.* and corr.* channels "
+                     "(fogref.compare.noise; final = surface * T_model + L_model against surface * T + L, "
+                     "the one comparison core of check) plus the rounding floor (4 ulp of float32 of |truth|); "
+                     "*_noise_floor: a perfect model's score; *_stderr: standard error of the "
                      "estimate; *_below_noise: within noise_z standard errors of the noise floor",
+            "noise_correlation": truth.attrs.get("fogref.noise_correlation", "measured"),
             "noise_z": M.NOISE_Z,
             "nonfinite": "model NaN/inf pixels are excluded from every metric and counted "
                          "(model_nonfinite_pixels); the truth is refused if it holds any",
