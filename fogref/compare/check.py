@@ -158,7 +158,9 @@ def evaluate_model(truth: Truth, model, precision: str = "float32",
     model : object
         Anything with ``evaluate(camera (3,), positions (H, W, 3), precision)``
         returning an object with ``transmittance`` and ``inscatter`` (broadcastable to
-        ``(H, W, 3)``); world frame y-up, metres.
+        ``(H, W, 3)``); world frame y-up, metres.  A model whose ``evaluate`` also takes
+        ``hit`` (``(H, W)`` bool, the pixel sees a surface; False: sky) or ``distance``
+        (``(H, W)`` [m] to the surface, 0 for sky), or ``**kwargs``, is given them.
     precision : str
         ``"float32"`` or ``"float64"``.
     sky_distance : float
@@ -189,7 +191,8 @@ def evaluate_model(truth: Truth, model, precision: str = "float32",
         raise FogrefError(f"precision must be 'float32' or 'float64', got {precision!r}")
     if not callable(getattr(model, "evaluate", None)):
         raise FogrefError(f"{model!r} is not a fog model: it has no evaluate(camera, positions, precision)")
-    result = model.evaluate(truth.camera, truth.world_positions(sky_distance), precision=precision)
+    extra = {k: v for k, v in (("hit", truth.hit), ("distance", truth.distance)) if _accepts(model.evaluate, k)}
+    result = model.evaluate(truth.camera, truth.world_positions(sky_distance), precision=precision, **extra)
     name = str(getattr(model, "name", None) or type(model).__name__)
     for attr in ("transmittance", "inscatter"):
         if not hasattr(result, attr):
@@ -197,6 +200,16 @@ def evaluate_model(truth: Truth, model, precision: str = "float32",
                               f"'{attr}' (expected an object with transmittance and inscatter)")
     return {"T": _as_image(result.transmittance, truth.shape, f"model '{name}' transmittance", nonfinite),
             "inscatter": _as_image(result.inscatter, truth.shape, f"model '{name}' inscatter", nonfinite)}
+
+
+def _accepts(fn, name: str) -> bool:
+    import inspect
+
+    try:
+        params = inspect.signature(fn).parameters
+    except (TypeError, ValueError):
+        return False
+    return name in params or any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values())
 
 
 def _composite_parts(truth: Truth, T, L, cand_cov_T=None, cand_cov_L=None):
@@ -763,7 +776,8 @@ def check(truth: Truth, candidate, tolerances: dict | None = None, *, parts=None
 
 def synthetic_truth(model, shape=(18, 32), noise: float = 0.01, seed: int = 0, fov_deg: float = 70.0,
                     surface_radiance=(0.3, 0.25, 0.2), sky_radiance=(0.2, 0.3, 0.5),
-                    sky_distance: float = DEFAULT_SKY_DISTANCE, correlated: bool = False) -> Truth:
+                    sky_distance: float = DEFAULT_SKY_DISTANCE, correlated: bool = False,
+                    channel_correlation: float = 0.0) -> Truth:
     """A pixel-exact :class:`~fogref.gbuffer.Truth` on which ``model`` is exact, plus known noise.
 
     The camera (at 2 m) looks over a ground plane (y = 0) below the horizon and a
@@ -785,6 +799,9 @@ def synthetic_truth(model, shape=(18, 32), noise: float = 0.01, seed: int = 0, f
     correlated : bool
         Make the noise of 2×2 pixel groups identical (to test the block bootstrap
         against spatial correlation); ``stderr`` stays per pixel.
+    channel_correlation : float
+        Correlation of the noise of a pixel's R, G and B, in [0, 1] (a real render's is
+        ~0.9); the truth's ``corr`` says so.
 
     Examples
     --------
@@ -814,11 +831,17 @@ def synthetic_truth(model, shape=(18, 32), noise: float = 0.01, seed: int = 0, f
     surface = np.where(hit[..., None], np.asarray(surface_radiance, float), np.asarray(sky_radiance, float))
     rng = np.random.default_rng(seed)
 
+    if not 0.0 <= channel_correlation <= 1.0:
+        raise FogrefError(f"channel_correlation: {channel_correlation} must be in [0, 1]")
+    rho = float(channel_correlation)
+
     def gauss():
         if not correlated:
-            return rng.standard_normal((H, W, 3))
-        z = rng.standard_normal((-(-H // 2), -(-W // 2), 3))
-        return np.repeat(np.repeat(z, 2, 0), 2, 1)[:H, :W]
+            z = rng.standard_normal((H, W, 4))
+        else:
+            z = rng.standard_normal((-(-H // 2), -(-W // 2), 4))
+            z = np.repeat(np.repeat(z, 2, 0), 2, 1)[:H, :W]
+        return math.sqrt(rho) * z[..., :1] + math.sqrt(1.0 - rho) * z[..., 1:]
 
     se_L, se_s = noise * np.abs(L), noise * surface
     L_hat = L + se_L * gauss()
@@ -835,7 +858,8 @@ def synthetic_truth(model, shape=(18, 32), noise: float = 0.01, seed: int = 0, f
     return Truth(path=Path(f"<synthetic truth, seed {seed}>"), final=final, transmittance=T, attenuated_surface=att,
                  inscatter=L_hat, single=L_hat, multiple=zero, surface=s_hat, stderr=stderr,
                  surface_coverage=np.ones((H, W)), distance=t, position=pos, view=d,
-                 hit_fraction=hit.astype(float), camera=camera, sun_direction=None, params=params, attrs=attrs)
+                 hit_fraction=hit.astype(float), camera=camera, sun_direction=None, params=params, attrs=attrs,
+                 corr={k: np.full((H, W, 3), rho) for k in stderr})
 
 
 # ---------------------------------------------------------------- the assertion
