@@ -835,13 +835,15 @@ def synthetic_truth(model, shape=(18, 32), noise: float = 0.01, seed: int = 0, f
         raise FogrefError(f"channel_correlation: {channel_correlation} must be in [0, 1]")
     rho = float(channel_correlation)
 
+    k = 3 if rho == 0 else 4  # a shared fourth draw makes the channels correlated
+
     def gauss():
         if not correlated:
-            z = rng.standard_normal((H, W, 4))
+            z = rng.standard_normal((H, W, k))
         else:
-            z = rng.standard_normal((-(-H // 2), -(-W // 2), 4))
+            z = rng.standard_normal((-(-H // 2), -(-W // 2), k))
             z = np.repeat(np.repeat(z, 2, 0), 2, 1)[:H, :W]
-        return math.sqrt(rho) * z[..., :1] + math.sqrt(1.0 - rho) * z[..., 1:]
+        return z if rho == 0 else math.sqrt(rho) * z[..., 3:] + math.sqrt(1.0 - rho) * z[..., :3]
 
     se_L, se_s = noise * np.abs(L), noise * surface
     L_hat = L + se_L * gauss()
