@@ -11,7 +11,6 @@ import math
 import numpy as np
 import pytest
 
-from fogref.compare.model_factory import build_model
 from fogref.errors import FogrefError, ParameterError
 from fogref.mapping import (
     FIT_DIRECTIONS,
@@ -22,6 +21,7 @@ from fogref.mapping import (
     lobe_fit,
     sample_views,
 )
+from fogref.mapping.build import build_model
 from fogref.media import NP, medium_from_params
 from fogref.models import get
 from fogref.models.ue4 import direction_to_unreal

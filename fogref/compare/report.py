@@ -58,12 +58,12 @@ import numpy as np
 from fogref.atomic import write_text_atomic
 from fogref.compare import metrics as M
 from fogref.compare.binning import angle_edges, binned_errors, log_distance_edges
-from fogref.compare.model_factory import current_parameters
 from fogref.compare.plots import plot_binned_errors, plot_error_heatmaps, plot_side_by_side
 from fogref.compare.tonemap import exposure_for
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 from fogref.gbuffer import Truth, load_truth
+from fogref.mapping.build import current_parameters
 
 #: Distance [m] at which the model fogs sky pixels (a stand-in for infinity).
 DEFAULT_SKY_DISTANCE = 1.0e5
@@ -100,7 +100,7 @@ def _model_name(model) -> str:
 
 
 def _model_description(model) -> dict | str:
-    """JSON-ready parameters of ``model`` (see :func:`~fogref.compare.model_factory.current_parameters`)."""
+    """JSON-ready parameters of ``model`` (see :func:`~fogref.mapping.build.current_parameters`)."""
     try:
         return _json_safe(current_parameters(model))
     except (TypeError, AttributeError, ValueError, FogrefError):
