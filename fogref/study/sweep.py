@@ -607,7 +607,7 @@ def _budget_columns(cfg: dict, truth_path: Path, model) -> dict:
     computed (it would double the renders).
     """
     from fogref.gbuffer import load_truth
-    from fogref.mapping import PhysicalScene, fit_unreal, sample_views
+    from fogref.mapping import PhysicalScene, fit_unreal
     from fogref.study import budget as B
     from fogref.study.unreal import overrides_used_by, sunless_scene
 
@@ -619,7 +619,7 @@ def _budget_columns(cfg: dict, truth_path: Path, model) -> dict:
                                      pixel_filter=cfg["pixel_filter"])
     truth, sky = load_truth(truth_path), load_truth(sky_path)
     pf = PhysicalScene.from_params(truth.params)
-    lobe = fit_unreal(pf, sample_views(pf.camera), sun_attenuation=False, fit_start=False)
+    lobe = fit_unreal(pf, sun_attenuation=False, fit_start=False)
     S = B.chain(truth, sky.single, pf, lobe.params, model.params)
     res = B.attribute(S, truth.hit, truth.surface_valid,
                       B.chain_noise(truth, sky.stderr["single"], lobe.params, model.params))
