@@ -13,6 +13,7 @@ import os
 import sys
 import textwrap
 
+import numpy as np
 import pytest
 from test_byo_models import MODULE
 
@@ -98,11 +99,12 @@ def test_unknown_names_get_did_you_mean_everywhere(site, tmp_path):
         S.load_sweep(_toml(tmp_path, f'[[models]]\nname = "{USER_MODULE}:MyFgo"\n'))
 
 
-def _unreal(params: dict) -> dict:
-    """The fitted fields of Unreal's parameters (JSON from any of the paths), as floats."""
+def _unreal(params: dict) -> list:
+    """The fitted fields of Unreal's parameters (JSON from any of the paths), as a flat list of floats."""
     key = {"DirectionalInscatteringStartDistance_cm": "DirectionalInscatteringStartDistance"}
     out = {key.get(k, k): v for k, v in params.items() if key.get(k, k) in UNREAL_FIT}
-    return {k: [float(x) for x in v] if isinstance(v, list) else float(v) for k, v in out.items()}
+    assert set(out) == set(UNREAL_FIT), sorted(out)
+    return [float(x) for k in UNREAL_FIT for x in np.ravel(out[k])]
 
 
 def test_fit_from_scene_study_and_sweep_give_the_same_unreal(swept, tmp_path, capsys):
@@ -125,7 +127,6 @@ def test_fit_from_scene_study_and_sweep_give_the_same_unreal(swept, tmp_path, ca
     paths = {"compare --from-scene": _unreal(rep["model"]["parameters"]), "fit": _unreal(fit_doc["unreal"]),
              "study fit.json": _unreal(study_fit["unreal"]),
              "study compare": _unreal(study_rep["model"]["parameters"])}
-    assert set(sweep_params) == set(UNREAL_FIT)
     for where, p in paths.items():
         assert p == pytest.approx(sweep_params, rel=1e-12, abs=1e-12), where
     assert fit_doc["fit"]["directions_converged"] and fit_doc["fit"]["n_dirs"] >= 256
