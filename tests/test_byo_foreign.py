@@ -143,7 +143,7 @@ def test_rendered_truth_engine_image_five_percent_caught_exact_not(fogref_truth,
     """Real renders (32x18, 64 spp): an independent render is the 'exact engine'; its inscatter
     x 1.05, written as EXR outside fogref, fails through ``fogref compare --image``; the exact
     one is not rejected (both truths' noise removed); Unreal's exact extinction passes T."""
-    from fogref.compare.model_loader import build
+    from fogref.mapping.build import build_model as build
 
     truth = fogref_truth("scenes/valley.xml", res=(32, 18), spp=64, seed=0)
     other = fogref_truth("scenes/valley.xml", res=(32, 18), spp=64, seed=1)

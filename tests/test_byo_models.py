@@ -9,10 +9,11 @@ import pytest
 from test_byo_foreign import write_truth_exr
 
 from fogref.cli import main
-from fogref.compare import model_loader
 from fogref.compare.check import check, synthetic_truth
-from fogref.compare.model_loader import build, resolve_model
 from fogref.errors import FogrefError
+from fogref.mapping.build import build_model as build
+from fogref.models import resolve
+from fogref.models.resolve import resolve_model
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
 
 MODULE = '''
@@ -81,6 +82,6 @@ def test_module_class_errors(user_module):
 
 def test_entry_point_group(user_module, monkeypatch):
     ep = EntryPoint(name="my_fog", value=f"{user_module}:MyFog", group="fogref.models")
-    monkeypatch.setattr(model_loader, "entry_point_models", lambda: {"my_fog": ep})
+    monkeypatch.setattr(resolve, "entry_point_models", lambda: {"my_fog": ep})
     assert resolve_model("my_fog").__name__ == "MyFog"
-    assert "my_fog" in model_loader.available_models()
+    assert "my_fog" in resolve.available_models()

@@ -8,7 +8,8 @@ Modules (one concept each):
 * :mod:`~fogref.compare.binning`       errors binned by distance or sun angle
 * :mod:`~fogref.compare.plots`         heatmaps, side-by-side pictures, binned plots
 * :mod:`~fogref.compare.tonemap`       the shared display tone map
-* :mod:`~fogref.compare.model_factory` build a model from ``--param`` / ``--from-scene``
+* (the model is built by :func:`fogref.mapping.build.build_model` from ``--model``, ``--param``,
+  ``--from-scene``; names resolved by :func:`fogref.models.resolve.resolve_model`)
 
 Command line (added to fogref's CLI by :func:`add_cli`)::
 
@@ -43,11 +44,10 @@ def run_compare_command(args: argparse.Namespace) -> int:
     warnings (model non-finite values, excluded pixels) go to stderr.
     """
     from fogref.compare.foreign import run_image_command, wants_images
-    from fogref.compare.model_factory import parse_param_assignments
-    from fogref.compare.model_loader import build
     from fogref.compare.report import check_sky_distance
     from fogref.errors import FogrefError
     from fogref.gbuffer import load_truth
+    from fogref.mapping.build import build_model, parse_param_assignments
 
     if wants_images(args):
         if args.model:
@@ -57,7 +57,7 @@ def run_compare_command(args: argparse.Namespace) -> int:
         raise FogrefError("give --model NAME (or module.path:Class) or an engine's image with --image FILE")
     sky_distance = check_sky_distance(args.sky_distance, "--sky-distance")
     truth = load_truth(args.exr)
-    model = build(args.model, parse_param_assignments(args.param), truth.params if args.from_scene else None)
+    model = build_model(args.model, parse_param_assignments(args.param), truth.params if args.from_scene else None)
     out = Path(args.out) if args.out else default_out_dir(args.exr, args.model)
     report = compare(truth, model, out, precision=args.precision, sky_distance=sky_distance,
                      figures=not args.no_figures)

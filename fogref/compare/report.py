@@ -6,7 +6,7 @@ ground-truth reader :func:`fogref.gbuffer.load_truth`:
 ======================  ==============================  ===============================  ==========
 part                    reference (truth)               model                            pixels
 ======================  ==============================  ===============================  ==========
-``final``               ``R,G,B``                       ``surface * T_model + L_model``  valid
+``final``               ``surface * T + inscatter``     ``surface * T_model + L_model``  valid
 ``transmittance``       ``T.*``                         ``T_model``                      all
 ``inscatter``           ``inscatter.*``                 ``L_model``                      all
 ``attenuated_surface``  ``attenuated_surface.*``        ``surface * T_model``            valid
@@ -25,10 +25,11 @@ Sky pixels (``hit == 0``): the model shades the point ``camera + view * sky_dist
 for infinity).  Every metric is reported over all pixels and, separately, over
 ``surface`` (hit) and ``sky`` pixels, so the sky convention never hides the rest.
 
-Monte Carlo noise: each part's per-pixel standard error of ``model - truth`` comes
-from the truth's ``stderr.*`` channels (``final``: ``sqrt(se_final² + (T_model
-se_surface)²)``, likewise ``attenuated_surface``; covariances ignored) plus the
-float32 storage of the truth (one part in 2^23).  Each metric is reported with its
+Monte Carlo noise: each part's per-pixel noise covariance of ``model - truth`` comes
+from the one comparison core, :func:`fogref.compare.check.fog_parts` (the truth's
+``stderr.*`` and ``corr.*`` channels, the channels' covariance used whole; ``final``
+is ``surface * T_model + L_model`` against ``surface * T + L``, as ``check`` has it),
+plus a rounding floor of 4 float32 ulp.  Each metric is reported with its
 noise floor (what a perfect model would score), its standard error and whether it is
 *below the noise* (:func:`fogref.compare.metrics.mse_noise`).
 
@@ -60,12 +61,12 @@ from fogref.compare import metrics as M
 from fogref.compare import noise
 from fogref.compare.binning import angle_edges, binned_errors, log_distance_edges
 from fogref.compare.check import evaluate_model, fog_parts
-from fogref.compare.model_factory import current_parameters
 from fogref.compare.plots import plot_binned_errors, plot_error_heatmaps, plot_side_by_side
 from fogref.compare.tonemap import exposure_for
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 from fogref.gbuffer import Truth, load_truth
+from fogref.mapping.build import current_parameters
 
 #: Distance [m] at which the model fogs sky pixels (a stand-in for infinity).
 DEFAULT_SKY_DISTANCE = 1.0e5
@@ -102,7 +103,7 @@ def _model_name(model) -> str:
 
 
 def _model_description(model) -> dict | str:
-    """JSON-ready parameters of ``model`` (see :func:`~fogref.compare.model_factory.current_parameters`)."""
+    """JSON-ready parameters of ``model`` (see :func:`~fogref.mapping.build.current_parameters`)."""
     try:
         return _json_safe(current_parameters(model))
     except (TypeError, AttributeError, ValueError, FogrefError):
