@@ -80,12 +80,12 @@ def test_truth_roundtrip(scene):
 def test_cli_image_detects_five_percent_inscatter_and_passes_exact(scene, capsys):
     d, truth, p = scene
     T = write_rgb(d / "T.exr", p["T"])
-    for name, k, verdict in (("exact", 1.0, "pass"), ("bright", 1.05, "fail")):
+    for name, k, verdict, code in (("exact", 1.0, "pass", 0), ("bright", 1.05, "fail", 1)):
         L = write_rgb(d / f"L_{name}.exr", k * p["inscatter"])
         final = write_rgb(d / f"final_{name}.exr", truth.surface * p["T"] + k * p["inscatter"])
         out = d / f"report_{name}"
         assert main(["compare", str(d / "truth.exr"), "--image", str(final), "--transmittance", str(T),
-                     "--inscatter", str(L), "--out", str(out)]) == 0
+                     "--inscatter", str(L), "--out", str(out), "--no-figures"]) == code
         report = json.loads((out / "check.json").read_text())
         rows = {(r["part"], r["region"], r["metric"]): r for r in report["rows"]}
         assert rows[("inscatter", "all", "rel_bias")]["verdict"] == verdict, name
@@ -154,7 +154,7 @@ def test_rendered_truth_engine_image_five_percent_caught_exact_not(fogref_truth,
     L = write_rgb(tmp_path / "L.exr", 1.05 * other.inscatter)
     out = tmp_path / "report"
     assert main(["compare", str(truth.path), "--transmittance", str(T), "--inscatter", str(L),
-                 "--out", str(out)]) == 0
+                 "--out", str(out), "--no-figures"]) == 1
     rows = {(r["part"], r["region"], r["metric"]): r for r in json.loads((out / "check.json").read_text())["rows"]}
     bias = rows[("inscatter", "all", "rel_bias")]
     assert bias["verdict"] == "fail" and 0.03 < bias["estimate"] < 0.08, bias
