@@ -10,28 +10,11 @@ from fogref.compare.check import check, evaluate_model, synthetic_truth
 from fogref.compare.foreign import load_engine_images, read_image
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
-from fogref.gbuffer import GROUPS, channel_names, load_truth, stderr_names
+from fogref.gbuffer import load_truth
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+from truth_factory import write_truth_exr
 
 MODEL = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
-_FIELDS = {"T": "transmittance", "P": "position", "hit": "hit_fraction"}
-
-
-def write_truth_exr(truth, path):
-    """A Truth as a schema-2 ground-truth EXR (every channel, stderr and header attribute)."""
-    ch = {}
-    for g in GROUPS:
-        a = getattr(truth, _FIELDS.get(g.name, g.name))
-        for i, c in enumerate(channel_names(g.name)):
-            ch[c] = a[..., i] if a.ndim == 3 else a
-        if g.noisy:
-            se = truth.stderr["transmittance" if g.name == "T" else g.name]
-            for i, c in enumerate(stderr_names(g.name)):
-                ch[c] = se[..., i]
-    write_exr(path, ch, truth.attrs)
-    return path
-
-
 def write_rgb(path, img):
     write_exr(path, {c: img[..., i] for i, c in enumerate("RGB")})
     return path

@@ -6,7 +6,7 @@ import textwrap
 from importlib.metadata import EntryPoint
 
 import pytest
-from test_byo_foreign import write_truth_exr
+from truth_factory import write_truth_exr
 
 from fogref.cli import main
 from fogref.compare import model_loader
