@@ -39,7 +39,9 @@ def camera_from_views(view: np.ndarray, origin) -> dict:
     Solves ``view(i, j) ∝ [right', up', forward] (u, v, 1)`` (``u = 2 (i + 0.5)/W - 1``,
     ``v = 1 - 2 (j + 0.5)/H``) by linear least squares (the cross product of both sides
     is 0; at most 4096 pixels), then ``fov = 2 atan |right'|`` [deg] (horizontal).  Same
-    keys as :func:`fogref.render.scene.sensor_camera` except the clip distances (None).
+    keys as :func:`fogref.render.scene.sensor_camera` except the clip distances (None),
+    plus ``mirrored``: True when image x grows along ``up x forward`` (not Mitsuba's
+    ``forward x up``: then ``right``, not target/up/fov alone, gives the pixels' directions).
 
     >>> import numpy as np
     >>> H, W, t = 9, 16, np.tan(np.radians(35))
@@ -48,6 +50,8 @@ def camera_from_views(view: np.ndarray, origin) -> dict:
     >>> c = camera_from_views(d / np.linalg.norm(d, axis=-1, keepdims=True), [0, 2, 0])
     >>> round(c["fov_deg"], 6), np.round(c["forward"], 6).tolist(), np.round(c["up"], 6).tolist()
     (70.0, [0.0, 0.0, 1.0], [0.0, 1.0, 0.0])
+    >>> c["mirrored"]  # here x = u tan(fov/2) grows along up x forward
+    True
     """
     H, W, _ = view.shape
     u = (np.arange(W) + 0.5) / W * 2 - 1
@@ -74,7 +78,8 @@ def camera_from_views(view: np.ndarray, origin) -> dict:
     return {"origin": origin.tolist(), "target": (origin + forward).tolist(), "up": up.tolist(),
             "forward": forward.tolist(), "right": (right / np.linalg.norm(right)).tolist(), "fov_deg": fov,
             "fov_axis": "x", "fov_y_deg": math.degrees(2 * math.atan(np.linalg.norm(M[:, 1]))),
-            "to_world": to_world.tolist(), "near_clip": None, "far_clip": None, "resolution": [W, H]}
+            "to_world": to_world.tolist(), "near_clip": None, "far_clip": None, "resolution": [W, H],
+            "mirrored": bool(right @ np.cross(forward, up) < 0)}
 
 
 def unreal_camera(camera: dict) -> dict:

@@ -4,6 +4,7 @@ import json
 
 import numpy as np
 import pytest
+from truth_factory import write_truth_exr
 
 from fogref.cli import main
 from fogref.compare.check import check, evaluate_model, synthetic_truth
@@ -12,7 +13,6 @@ from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 from fogref.gbuffer import load_truth
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
-from truth_factory import write_truth_exr
 
 MODEL = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
 def write_rgb(path, img):
