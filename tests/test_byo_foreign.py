@@ -4,22 +4,16 @@ import json
 
 import numpy as np
 import pytest
-from truth_factory import write_truth_exr
+from truth_factory import synthetic_truth_exr, write_rgb
 
 from fogref.cli import main
-from fogref.compare.check import check, evaluate_model, synthetic_truth
+from fogref.compare.check import check
 from fogref.compare.foreign import load_engine_images, read_image
 from fogref.errors import FogrefError
-from fogref.exrio import write_exr
 from fogref.gbuffer import load_truth
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
 
 MODEL = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
-def write_rgb(path, img):
-    write_exr(path, {c: img[..., i] for i, c in enumerate("RGB")})
-    return path
-
-
 def write_hdr(path, img, rle=False):
     """Radiance RGBE written with numpy (flat, or run-length encoded scanlines)."""
     H, W, _ = img.shape
@@ -49,9 +43,7 @@ def write_hdr(path, img, rle=False):
 @pytest.fixture(scope="module")
 def scene(tmp_path_factory):
     d = tmp_path_factory.mktemp("byo")
-    truth = synthetic_truth(MODEL, shape=(36, 64), noise=0.02, seed=7)
-    exr = write_truth_exr(truth, d / "truth.exr")
-    parts = evaluate_model(truth, MODEL)
+    exr, parts = synthetic_truth_exr(d / "truth.exr", MODEL)
     return d, load_truth(exr), parts
 
 

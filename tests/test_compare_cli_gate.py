@@ -10,22 +10,15 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-from truth_factory import write_truth_exr
+from truth_factory import synthetic_truth_exr, write_rgb
 
 from fogref.cli import main
-from fogref.compare.check import evaluate_model, synthetic_truth
-from fogref.exrio import write_exr
 from fogref.gbuffer import load_truth
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
 
 MODEL = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
 #: the inscatter PNG holds exposure * inscatter (<= 0.53 for the 5 % case: no clipping at 1)
 EXPOSURE = 0.5
-
-
-def write_rgb(path, img):
-    write_exr(path, {c: img[..., i] for i, c in enumerate("RGB")})
-    return path
 
 
 def write_srgb_png(path, img):
@@ -41,9 +34,7 @@ def write_srgb_png(path, img):
 @pytest.fixture(scope="module")
 def scene(tmp_path_factory):
     d = tmp_path_factory.mktemp("gate")
-    truth = synthetic_truth(MODEL, shape=(36, 64), noise=0.02, seed=7)
-    exr = write_truth_exr(truth, d / "truth.exr")
-    p = evaluate_model(truth, MODEL)
+    exr, p = synthetic_truth_exr(d / "truth.exr", MODEL)
     write_rgb(d / "T.exr", p["T"])
     for name, k in (("exact", 1.0), ("bright", 1.05), ("two", 1.02)):
         write_rgb(d / f"L_{name}.exr", k * p["inscatter"])

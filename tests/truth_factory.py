@@ -82,3 +82,18 @@ def write_truth_exr(truth, path):
                 ch[c] = se[..., i]
     write_exr(path, ch, truth.attrs)
     return path
+
+
+def write_rgb(path, img):
+    """An ``(H, W, 3)`` image as an RGB EXR (an engine's image written outside fogref)."""
+    write_exr(path, {c: img[..., i] for i, c in enumerate("RGB")})
+    return path
+
+
+def synthetic_truth_exr(path, model, shape=(36, 64), noise: float = 0.02, seed: int = 7):
+    """:func:`fogref.compare.check.synthetic_truth` of ``model`` written to ``path``; returns the
+    path and the model's exact ``{"T", "inscatter"}`` on it (:func:`~fogref.compare.check.evaluate_model`)."""
+    from fogref.compare.check import evaluate_model, synthetic_truth
+
+    truth = synthetic_truth(model, shape=shape, noise=noise, seed=seed)
+    return write_truth_exr(truth, path), evaluate_model(truth, model)
