@@ -6,7 +6,7 @@ import textwrap
 from importlib.metadata import EntryPoint
 
 import pytest
-from test_byo_foreign import write_truth_exr
+from truth_factory import write_truth_exr
 
 from fogref.cli import main
 from fogref.compare.check import check, synthetic_truth
@@ -60,9 +60,10 @@ def test_module_class_runs_through_compare_and_check(user_module, tmp_path):
     truth = synthetic_truth(UE4ExponentialHeightFog(UE4FogParams()), shape=(18, 32))
     exr = write_truth_exr(truth, tmp_path / "truth.exr")
     out = tmp_path / "report"
-    assert main(["compare", str(exr), "--model", f"{user_module}:MyFog", "--out", str(out), "--no-figures"]) == 0
+    # MyFog is not the truth's fog: the run completes and the verdict (exit 1) is fail
+    assert main(["compare", str(exr), "--model", f"{user_module}:MyFog", "--out", str(out), "--no-figures"]) == 1
     metrics = json.loads((out / "metrics.json").read_text())
-    assert "final" in metrics["metrics"]
+    assert "final" in metrics["metrics"] and metrics["check"]["verdict"] == "fail"
     model = build(f"{user_module}:MyFog")
     assert check(truth, model).row("T", "all").estimate > 0
 
