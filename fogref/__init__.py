@@ -42,9 +42,8 @@ _LAZY = {
     "CheckResult": "fogref.compare.check",
     "EngineImages": "fogref.compare.foreign", "load_engine_images": "fogref.compare.foreign",
     "read_image": "fogref.compare.foreign",
-    "resolve_model": "fogref.compare.model_loader", "build_model": "fogref.compare.model_loader",
+    "resolve_model": "fogref.models.resolve", "build_model": "fogref.mapping.build",
 }
-_RENAMED = {"build_model": "build"}
 
 __all__ = ["__version__", "ensure_llvm", *_LAZY]
 
@@ -56,7 +55,7 @@ def __getattr__(name: str):
         raise AttributeError(f"module 'fogref' has no attribute '{name}'")
     import importlib
 
-    return getattr(importlib.import_module(module), _RENAMED.get(name, name))
+    return getattr(importlib.import_module(module), name)
 
 
 def __dir__():

@@ -4,39 +4,16 @@ import json
 
 import numpy as np
 import pytest
+from truth_factory import synthetic_truth_exr, write_rgb
 
 from fogref.cli import main
-from fogref.compare.check import check, evaluate_model, synthetic_truth
+from fogref.compare.check import check
 from fogref.compare.foreign import load_engine_images, read_image
 from fogref.errors import FogrefError
-from fogref.exrio import write_exr
-from fogref.gbuffer import GROUPS, channel_names, load_truth, stderr_names
+from fogref.gbuffer import load_truth
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
 
 MODEL = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
-_FIELDS = {"T": "transmittance", "P": "position", "hit": "hit_fraction"}
-
-
-def write_truth_exr(truth, path):
-    """A Truth as a schema-2 ground-truth EXR (every channel, stderr and header attribute)."""
-    ch = {}
-    for g in GROUPS:
-        a = getattr(truth, _FIELDS.get(g.name, g.name))
-        for i, c in enumerate(channel_names(g.name)):
-            ch[c] = a[..., i] if a.ndim == 3 else a
-        if g.noisy:
-            se = truth.stderr["transmittance" if g.name == "T" else g.name]
-            for i, c in enumerate(stderr_names(g.name)):
-                ch[c] = se[..., i]
-    write_exr(path, ch, truth.attrs)
-    return path
-
-
-def write_rgb(path, img):
-    write_exr(path, {c: img[..., i] for i, c in enumerate("RGB")})
-    return path
-
-
 def write_hdr(path, img, rle=False):
     """Radiance RGBE written with numpy (flat, or run-length encoded scanlines)."""
     H, W, _ = img.shape
@@ -66,9 +43,7 @@ def write_hdr(path, img, rle=False):
 @pytest.fixture(scope="module")
 def scene(tmp_path_factory):
     d = tmp_path_factory.mktemp("byo")
-    truth = synthetic_truth(MODEL, shape=(36, 64), noise=0.02, seed=7)
-    exr = write_truth_exr(truth, d / "truth.exr")
-    parts = evaluate_model(truth, MODEL)
+    exr, parts = synthetic_truth_exr(d / "truth.exr", MODEL)
     return d, load_truth(exr), parts
 
 
@@ -80,12 +55,12 @@ def test_truth_roundtrip(scene):
 def test_cli_image_detects_five_percent_inscatter_and_passes_exact(scene, capsys):
     d, truth, p = scene
     T = write_rgb(d / "T.exr", p["T"])
-    for name, k, verdict in (("exact", 1.0, "pass"), ("bright", 1.05, "fail")):
+    for name, k, verdict, code in (("exact", 1.0, "pass", 0), ("bright", 1.05, "fail", 1)):
         L = write_rgb(d / f"L_{name}.exr", k * p["inscatter"])
         final = write_rgb(d / f"final_{name}.exr", truth.surface * p["T"] + k * p["inscatter"])
         out = d / f"report_{name}"
         assert main(["compare", str(d / "truth.exr"), "--image", str(final), "--transmittance", str(T),
-                     "--inscatter", str(L), "--out", str(out)]) == 0
+                     "--inscatter", str(L), "--out", str(out), "--no-figures"]) == code
         report = json.loads((out / "check.json").read_text())
         rows = {(r["part"], r["region"], r["metric"]): r for r in report["rows"]}
         assert rows[("inscatter", "all", "rel_bias")]["verdict"] == verdict, name
@@ -143,7 +118,7 @@ def test_rendered_truth_engine_image_five_percent_caught_exact_not(fogref_truth,
     """Real renders (32x18, 64 spp): an independent render is the 'exact engine'; its inscatter
     x 1.05, written as EXR outside fogref, fails through ``fogref compare --image``; the exact
     one is not rejected (both truths' noise removed); Unreal's exact extinction passes T."""
-    from fogref.compare.model_loader import build
+    from fogref.mapping.build import build_model as build
 
     truth = fogref_truth("scenes/valley.xml", res=(32, 18), spp=64, seed=0)
     other = fogref_truth("scenes/valley.xml", res=(32, 18), spp=64, seed=1)
@@ -154,7 +129,7 @@ def test_rendered_truth_engine_image_five_percent_caught_exact_not(fogref_truth,
     L = write_rgb(tmp_path / "L.exr", 1.05 * other.inscatter)
     out = tmp_path / "report"
     assert main(["compare", str(truth.path), "--transmittance", str(T), "--inscatter", str(L),
-                 "--out", str(out)]) == 0
+                 "--out", str(out), "--no-figures"]) == 1
     rows = {(r["part"], r["region"], r["metric"]): r for r in json.loads((out / "check.json").read_text())["rows"]}
     bias = rows[("inscatter", "all", "rel_bias")]
     assert bias["verdict"] == "fail" and 0.03 < bias["estimate"] < 0.08, bias

@@ -6,13 +6,14 @@ import textwrap
 from importlib.metadata import EntryPoint
 
 import pytest
-from test_byo_foreign import write_truth_exr
+from truth_factory import write_truth_exr
 
 from fogref.cli import main
-from fogref.compare import model_loader
 from fogref.compare.check import check, synthetic_truth
-from fogref.compare.model_loader import build, resolve_model
 from fogref.errors import FogrefError
+from fogref.mapping.build import build_model as build
+from fogref.models import resolve
+from fogref.models.resolve import resolve_model
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
 
 MODULE = '''
@@ -59,9 +60,10 @@ def test_module_class_runs_through_compare_and_check(user_module, tmp_path):
     truth = synthetic_truth(UE4ExponentialHeightFog(UE4FogParams()), shape=(18, 32))
     exr = write_truth_exr(truth, tmp_path / "truth.exr")
     out = tmp_path / "report"
-    assert main(["compare", str(exr), "--model", f"{user_module}:MyFog", "--out", str(out), "--no-figures"]) == 0
+    # MyFog is not the truth's fog: the run completes and the verdict (exit 1) is fail
+    assert main(["compare", str(exr), "--model", f"{user_module}:MyFog", "--out", str(out), "--no-figures"]) == 1
     metrics = json.loads((out / "metrics.json").read_text())
-    assert "final" in metrics["metrics"]
+    assert "final" in metrics["metrics"] and metrics["check"]["verdict"] == "fail"
     model = build(f"{user_module}:MyFog")
     assert check(truth, model).row("T", "all").estimate > 0
 
@@ -81,6 +83,6 @@ def test_module_class_errors(user_module):
 
 def test_entry_point_group(user_module, monkeypatch):
     ep = EntryPoint(name="my_fog", value=f"{user_module}:MyFog", group="fogref.models")
-    monkeypatch.setattr(model_loader, "entry_point_models", lambda: {"my_fog": ep})
+    monkeypatch.setattr(resolve, "entry_point_models", lambda: {"my_fog": ep})
     assert resolve_model("my_fog").__name__ == "MyFog"
-    assert "my_fog" in model_loader.available_models()
+    assert "my_fog" in resolve.available_models()

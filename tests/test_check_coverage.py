@@ -23,10 +23,9 @@ is too.
 
 from pathlib import Path
 
+import coverage_harness as H
 import numpy as np
 import pytest
-
-import coverage_harness as H
 
 pytestmark = pytest.mark.render
 

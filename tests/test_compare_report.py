@@ -16,11 +16,11 @@ import pytest
 from truth_factory import truth_attrs, truth_channels
 
 from fogref.compare import add_cli, compare, main
-from fogref.compare.model_factory import build_model, parse_param_assignments
 from fogref.compare.report import PARTS, REGIONS
 from fogref.errors import FogrefError
 from fogref.exrio import read_exr, write_exr
 from fogref.gbuffer import load_truth
+from fogref.mapping.build import build_model, parse_param_assignments
 
 W, H = 32, 24
 CAMERA = np.array([0.0, 2.0, 0.0])
@@ -261,7 +261,7 @@ def test_param_parsing_and_model_building():
     assert m.sigma.tolist() == SIGMA.tolist() and m.ambient.tolist() == [1, 1, 1]
     with pytest.raises(FogrefError, match="from_physical"):
         build_model(NoPhysical, {}, scene)
-    with pytest.raises(FogrefError, match="cannot set parameters"):
+    with pytest.raises(FogrefError, match="no parameter .bogus."):
         build_model(NoPhysical, {"bogus": 1})
 
 

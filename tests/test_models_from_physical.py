@@ -11,17 +11,14 @@ import math
 import numpy as np
 import pytest
 
-from fogref.compare.model_factory import build_model
 from fogref.errors import FogrefError, ParameterError
 from fogref.mapping import (
-    FIT_DIRECTIONS,
-    FIT_DISTANCES,
     PhysicalScene,
     fit_unreal,
     from_physical,
     lobe_fit,
-    sample_views,
 )
+from fogref.mapping.build import build_model
 from fogref.media import NP, medium_from_params
 from fogref.models import get
 from fogref.models.ue4 import direction_to_unreal
@@ -168,7 +165,7 @@ def test_ue4_colours_from_fit():
     assert q.InscatteringLightDirection == pytest.approx(direction_to_unreal(SUN))
     assert q.SunLuminance == 1.0 and q.StartDistance == 0.0 and q.FogMaxOpacity == 1.0
     pf = PhysicalScene.from_params(VALLEY)
-    fit = fit_unreal(pf, sample_views(pf.camera, n_dirs=FIT_DIRECTIONS, distances=FIT_DISTANCES)).params
+    fit = fit_unreal(pf).params
     for k in ("FogInscatteringColor", "DirectionalInscatteringColor", "DirectionalInscatteringExponent",
               "DirectionalInscatteringStartDistance"):
         assert getattr(q, k) == pytest.approx(getattr(fit, k), rel=1e-9, abs=1e-12), k

@@ -9,7 +9,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from fogref.gbuffer import SCHEMA_VERSION, channel_names, correlation_names, stderr_names, truth_from_channels
+from fogref.exrio import write_exr
+from fogref.gbuffer import (
+    GROUPS,
+    SCHEMA_VERSION,
+    channel_names,
+    correlation_names,
+    stderr_names,
+    truth_from_channels,
+)
 
 
 def truth_channels(*, T, surface, inscatter, distance, position, view, hit, coverage=None, single=None,
@@ -66,3 +74,36 @@ def as_truth(channels: dict, attrs: dict, source: str = "<synthetic>"):
     """The :class:`~fogref.gbuffer.Truth` that ``load_truth`` would return (float32 storage)."""
     f32 = {k: np.asarray(v, dtype=np.float32) for k, v in channels.items()}
     return truth_from_channels(f32, attrs, source)
+
+
+_FIELDS = {"T": "transmittance", "P": "position", "hit": "hit_fraction"}
+
+
+def write_truth_exr(truth, path):
+    """A Truth as a schema-2 ground-truth EXR (every channel, stderr and header attribute)."""
+    ch = {}
+    for g in GROUPS:
+        a = getattr(truth, _FIELDS.get(g.name, g.name))
+        for i, c in enumerate(channel_names(g.name)):
+            ch[c] = a[..., i] if a.ndim == 3 else a
+        if g.noisy:
+            se = truth.stderr["transmittance" if g.name == "T" else g.name]
+            for i, c in enumerate(stderr_names(g.name)):
+                ch[c] = se[..., i]
+    write_exr(path, ch, truth.attrs)
+    return path
+
+
+def write_rgb(path, img):
+    """An ``(H, W, 3)`` image as an RGB EXR (an engine's image written outside fogref)."""
+    write_exr(path, {c: img[..., i] for i, c in enumerate("RGB")})
+    return path
+
+
+def synthetic_truth_exr(path, model, shape=(36, 64), noise: float = 0.02, seed: int = 7):
+    """:func:`fogref.compare.check.synthetic_truth` of ``model`` written to ``path``; returns the
+    path and the model's exact ``{"T", "inscatter"}`` on it (:func:`~fogref.compare.check.evaluate_model`)."""
+    from fogref.compare.check import evaluate_model, synthetic_truth
+
+    truth = synthetic_truth(model, shape=shape, noise=noise, seed=seed)
+    return write_truth_exr(truth, path), evaluate_model(truth, model)

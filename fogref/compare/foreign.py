@@ -26,8 +26,9 @@ that only the fog differs.
 
 Formats: OpenEXR (channels ``R,G,B``, or one channel ``Y`` for a grey image;
 alpha is ignored), PNG (8-bit, or 16-bit grey), Radiance RGBE ``.hdr``/``.pic``.
-``encoding``: ``"linear"`` (EXR and HDR are usually linear) or ``"srgb"`` (the
-IEC 61966-2-1 decoding, for display-referred PNGs).  ``exposure``: the engine's
+``encoding``: ``"auto"`` (the default: an 8-bit PNG is display-referred sRGB, EXR and
+HDR are linear), ``"linear"`` or ``"srgb"`` (the IEC 61966-2-1 decoding); the encoding
+each image was read with is recorded (``EngineImages.encodings``) and reported.  ``exposure``: the engine's
 exposure scale; values are divided by it (radiance images only, not the
 transmittance).  Each image's resolution must be the truth's.
 
@@ -52,7 +53,7 @@ import numpy as np
 
 from fogref.errors import FogrefError
 
-ENCODINGS = ("linear", "srgb")
+ENCODINGS = ("auto", "linear", "srgb")
 IMAGE_SUFFIXES = (".exr", ".png", ".hdr", ".pic")
 
 
@@ -146,7 +147,21 @@ def _read_hdr(path: Path) -> np.ndarray:
     return (rgbe[..., :3].astype(np.float64) + 0.5) * f[..., None] * (e[..., None] > 0) / scale
 
 
-def read_image(path, encoding: str = "linear", exposure: float = 1.0, radiance: bool = True) -> np.ndarray:
+def resolve_encoding(path, encoding: str = "auto") -> str:
+    """The encoding an image is read with: ``encoding`` itself, or for ``"auto"`` ``"srgb"``
+    for a PNG and ``"linear"`` for EXR/HDR.
+
+    >>> resolve_encoding("engine.png"), resolve_encoding("engine.exr"), resolve_encoding("e.png", "linear")
+    ('srgb', 'linear', 'linear')
+    """
+    if encoding not in ENCODINGS:
+        raise FogrefError(f"{path}: encoding '{encoding}' (allowed: {', '.join(ENCODINGS)})")
+    if encoding != "auto":
+        return encoding
+    return "srgb" if Path(path).suffix.lower() == ".png" else "linear"
+
+
+def read_image(path, encoding: str = "auto", exposure: float = 1.0, radiance: bool = True) -> np.ndarray:
     """Read an engine's image as linear RGB.
 
     Parameters
@@ -154,7 +169,8 @@ def read_image(path, encoding: str = "linear", exposure: float = 1.0, radiance: 
     path : str or Path
         ``.exr``, ``.png``, ``.hdr`` or ``.pic``.
     encoding : str
-        ``"linear"`` or ``"srgb"`` (decoded with colour-science's IEC 61966-2-1 sRGB EOTF inverse,
+        ``"auto"`` (PNG: sRGB, else linear; see :func:`resolve_encoding`), ``"linear"`` or
+        ``"srgb"`` (decoded with colour-science's IEC 61966-2-1 sRGB EOTF inverse,
         ``colour.cctf_decoding(x, function="sRGB")``).
     exposure : float
         The engine's exposure scale, finite and > 0: values are divided by it when
@@ -177,8 +193,7 @@ def read_image(path, encoding: str = "linear", exposure: float = 1.0, radiance: 
     0.503
     """
     path = Path(path)
-    if encoding not in ENCODINGS:
-        raise FogrefError(f"{path}: encoding '{encoding}' (allowed: {', '.join(ENCODINGS)})")
+    encoding = resolve_encoding(path, encoding)
     if not (isinstance(exposure, int | float) and math.isfinite(exposure) and exposure > 0):
         raise FogrefError(f"{path}: exposure {exposure!r} must be finite and > 0")
     if not path.is_file():
@@ -213,13 +228,18 @@ class EngineImages:
     """An engine's images of one view, linear RGB ``(H, W, 3)``; any of them may be None.
 
     final: the engine's picture; transmittance: its fog transmittance; inscatter: the
-    radiance its fog adds.  sources: part -> file it came from.
+    radiance its fog adds.  sources: part -> file it came from; encodings: part -> the
+    encoding it was read with (``linear``/``srgb``); encoding_option: what was asked
+    (``auto``, ``linear``, ``srgb``); exposure: the engine's exposure scale (> 0).
     """
 
     final: np.ndarray | None = None
     transmittance: np.ndarray | None = None
     inscatter: np.ndarray | None = None
     sources: dict = field(default_factory=dict)
+    encodings: dict = field(default_factory=dict)
+    encoding_option: str = "auto"
+    exposure: float = 1.0
 
     @property
     def shape(self) -> tuple[int, int] | None:
@@ -239,7 +259,7 @@ class EngineImages:
 
 
 def load_engine_images(image=None, transmittance=None, inscatter=None, fog_colour=None, *,
-                       encoding: str = "linear", exposure: float = 1.0, shape=None,
+                       encoding: str = "auto", exposure: float = 1.0, shape=None,
                        truth_name: str = "the truth") -> EngineImages:
     """Read an engine's images (any subset) and check their resolution.
 
@@ -276,8 +296,12 @@ def load_engine_images(image=None, transmittance=None, inscatter=None, fog_colou
     paths = {k: Path(v) for k, v in paths.items() if v is not None}
     if not paths:
         raise FogrefError("no engine image given (need at least one of the final image, transmittance, inscatter)")
-    imgs = {k: read_image(p, encoding=encoding if k != "transmittance" else "linear", exposure=exposure,
-                          radiance=k != "transmittance") for k, p in paths.items()}
+    if encoding not in ENCODINGS:
+        raise FogrefError(f"encoding '{encoding}' (allowed: {', '.join(ENCODINGS)})")
+    # a transmittance is data in [0, 1], not a colour: always read linear
+    used = {k: resolve_encoding(p, encoding if k != "transmittance" else "linear") for k, p in paths.items()}
+    imgs = {k: read_image(p, encoding=used[k], exposure=exposure, radiance=k != "transmittance")
+            for k, p in paths.items()}
     want = tuple(shape) if shape is not None else None
     for k, a in imgs.items():
         h, w = a.shape[:2]
@@ -288,12 +312,15 @@ def load_engine_images(image=None, transmittance=None, inscatter=None, fog_colou
             want = (h, w)
     if fog_colour is not None:
         imgs["inscatter"] = imgs["inscatter"] * (1.0 - imgs["transmittance"])
-    sources = {k if k != "inscatter" or fog_colour is None else "fog_colour": str(p) for k, p in paths.items()}
+    label = {k: k if k != "inscatter" or fog_colour is None else "fog_colour" for k in paths}
     return EngineImages(final=imgs.get("final"), transmittance=imgs.get("transmittance"),
-                        inscatter=imgs.get("inscatter"), sources=sources)
+                        inscatter=imgs.get("inscatter"), sources={label[k]: str(p) for k, p in paths.items()},
+                        encodings={label[k]: e for k, e in used.items()}, encoding_option=encoding,
+                        exposure=float(exposure))
 
 
-def compare_images(truth, images: EngineImages, out_dir=None, tolerances=None, **check_options):
+def compare_images(truth, images: EngineImages, out_dir=None, tolerances=None, *, figures: bool = True,
+                   **check_options):
     """Check an engine's images against a truth; optionally write the report.
 
     Every part the engine gave is compared with the truth's matching part, with
@@ -308,8 +335,9 @@ def compare_images(truth, images: EngineImages, out_dir=None, tolerances=None, *
     images : EngineImages
         From :func:`load_engine_images`.
     out_dir : path, optional
-        Where to write ``check.json``, ``errors.exr`` (signed error per part) and
-        ``index.md``.
+        Where to write the report of :func:`fogref.compare.report.compare_images` (the
+        model report's layout: ``metrics.json`` with a ``check`` section, ``check.json``,
+        ``errors.exr``, ``index.md`` and, unless ``figures`` is False, the figures).
     tolerances, check_options :
         Passed to :func:`~fogref.compare.check.check`.
 
@@ -338,37 +366,10 @@ def compare_images(truth, images: EngineImages, out_dir=None, tolerances=None, *
                           f"{truth.shape[1]}x{truth.shape[0]} px")
     result = check(truth, images, tolerances, **check_options)
     if out_dir is not None:
-        write_report(result, out_dir, images)
+        from fogref.compare import report
+
+        report.compare_images(truth, images, out_dir, figures=figures, check=result)
     return result
-
-
-def write_report(result, out_dir, images: EngineImages | None = None) -> Path:
-    """Write ``check.json``, ``errors.exr`` and ``index.md`` for a :class:`CheckResult`; return ``index.md``."""
-    from fogref.atomic import write_text_atomic
-
-    out = Path(out_dir)
-    result.write(out)
-    lines = [f"# fogref check: {result.candidate} vs `{result.truth}`", "",
-             f"Verdict: **{result.verdict}** ({result.confidence:.0%} two-sided intervals, {result.method_text}).",
-             ""]
-    if images is not None and images.final is not None:
-        lines += ["The engine's `final` image is compared with the truth's `R,G,B`: this means something only if "
-                  "the engine's surface lighting matches the truth's `surface` part. "
-                  + ("`composite` (the engine's fog over the truth's surface) is the fair comparison." if
-                     images.transmittance is not None and images.inscatter is not None else
-                     "Give the engine's transmittance and inscatter for the fair comparison (`composite`)."), ""]
-    lines += ["| part | region | metric | estimate | interval | tolerance | verdict | pixels |",
-              "|---|---|---|---:|---|---:|---|---:|"]
-    for r in result.rows:
-        if r.estimate is None:
-            lines.append(f"| {r.part} | {r.region} | {r.metric} | — | — | "
-                         f"{'' if r.tolerance is None else f'{r.tolerance:g}'} | {r.verdict} | {r.pixels} |")
-            continue
-        lines.append(f"| {r.part} | {r.region} | {r.metric} | {r.estimate:.4g} | [{r.low:.4g}, {r.high:.4g}] | "
-                     f"{'' if r.tolerance is None else f'{r.tolerance:g}'} | {r.verdict} | {r.pixels} |")
-    lines += ["", "`errors.exr`: `<part>.error.R,G,B` = candidate − truth (signed), `<part>.abs_error`.", ""]
-    write_text_atomic(out / "index.md", "\n".join(lines))
-    return out / "index.md"
 
 
 # ---------------------------------------------------------------- command line
@@ -383,8 +384,9 @@ def add_arguments(p) -> None:
     g.add_argument("--inscatter", default=None, metavar="FILE", help="the engine's fog inscatter image")
     g.add_argument("--fog-colour", default=None, metavar="FILE",
                    help="the engine's fog colour C (final = lerp(scene, C, 1 - T)); needs --transmittance")
-    g.add_argument("--encoding", choices=ENCODINGS, default="linear",
-                   help="how the radiance images are encoded (default linear; srgb for display PNGs)")
+    g.add_argument("--encoding", choices=ENCODINGS, default="auto",
+                   help="how the radiance images are encoded (default auto: an 8-bit PNG is sRGB, EXR/HDR "
+                   "linear; the transmittance is always linear); the encoding used is in the report")
     g.add_argument("--exposure", type=float, default=1.0,
                    help="the engine's exposure scale; radiance images are divided by it (default 1)")
 
@@ -392,22 +394,3 @@ def add_arguments(p) -> None:
 def wants_images(args) -> bool:
     """True when ``fogref compare`` was given any engine image."""
     return any(getattr(args, k, None) for k in ("image", "transmittance", "inscatter", "fog_colour"))
-
-
-def run_image_command(args) -> int:
-    """``fogref compare TRUTH --image ...``: check the images, write the report, print the verdict.
-
-    Returns 0 (the comparison ran; the verdict is in the report), as ``compare --model`` does.
-    """
-    from fogref.gbuffer import load_truth
-
-    truth = load_truth(args.exr)
-    images = load_engine_images(args.image, args.transmittance, args.inscatter, args.fog_colour,
-                                encoding=args.encoding, exposure=args.exposure, shape=truth.shape,
-                                truth_name=str(args.exr))
-    stem = Path(args.image or args.inscatter or args.transmittance or args.fog_colour).stem
-    out = Path(args.out) if getattr(args, "out", None) else Path("reports") / "compare" / f"{Path(args.exr).stem}-{stem}"
-    result = compare_images(truth, images, out)
-    print(result.summary())
-    print(f"report: {out / 'index.md'}")
-    return 0

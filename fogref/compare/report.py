@@ -6,7 +6,7 @@ ground-truth reader :func:`fogref.gbuffer.load_truth`:
 ======================  ==============================  ===============================  ==========
 part                    reference (truth)               model                            pixels
 ======================  ==============================  ===============================  ==========
-``final``               ``R,G,B``                       ``surface * T_model + L_model``  valid
+``final``               ``surface * T + inscatter``     ``surface * T_model + L_model``  valid
 ``transmittance``       ``T.*``                         ``T_model``                      all
 ``inscatter``           ``inscatter.*``                 ``L_model``                      all
 ``attenuated_surface``  ``attenuated_surface.*``        ``surface * T_model``            valid
@@ -25,10 +25,11 @@ Sky pixels (``hit == 0``): the model shades the point ``camera + view * sky_dist
 for infinity).  Every metric is reported over all pixels and, separately, over
 ``surface`` (hit) and ``sky`` pixels, so the sky convention never hides the rest.
 
-Monte Carlo noise: each part's per-pixel standard error of ``model - truth`` comes
-from the truth's ``stderr.*`` channels (``final``: ``sqrt(se_final² + (T_model
-se_surface)²)``, likewise ``attenuated_surface``; covariances ignored) plus the
-float32 storage of the truth (one part in 2^23).  Each metric is reported with its
+Monte Carlo noise: each part's per-pixel noise covariance of ``model - truth`` comes
+from the one comparison core, :func:`fogref.compare.check.fog_parts` (the truth's
+``stderr.*`` and ``corr.*`` channels, the channels' covariance used whole; ``final``
+is ``surface * T_model + L_model`` against ``surface * T + L``, as ``check`` has it),
+plus a rounding floor of 4 float32 ulp.  Each metric is reported with its
 noise floor (what a perfect model would score), its standard error and whether it is
 *below the noise* (:func:`fogref.compare.metrics.mse_noise`).
 
@@ -59,13 +60,13 @@ from fogref.atomic import write_text_atomic
 from fogref.compare import metrics as M
 from fogref.compare import noise
 from fogref.compare.binning import angle_edges, binned_errors, log_distance_edges
-from fogref.compare.check import evaluate_model, fog_parts
-from fogref.compare.model_factory import current_parameters
+from fogref.compare.check import candidate_parts, evaluate_model, fog_parts
 from fogref.compare.plots import plot_binned_errors, plot_error_heatmaps, plot_side_by_side
 from fogref.compare.tonemap import exposure_for
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 from fogref.gbuffer import Truth, load_truth
+from fogref.mapping.build import current_parameters
 
 #: Distance [m] at which the model fogs sky pixels (a stand-in for infinity).
 DEFAULT_SKY_DISTANCE = 1.0e5
@@ -76,6 +77,7 @@ PART_UNITS: dict[str, str] = {
     "transmittance": "1",
     "inscatter": "radiance",
     "attenuated_surface": "radiance",
+    "composite": "radiance",
 }
 REGIONS: tuple[str, ...] = ("all", "surface", "sky")
 ERRORS_EXR_LAYOUT = """\
@@ -102,7 +104,7 @@ def _model_name(model) -> str:
 
 
 def _model_description(model) -> dict | str:
-    """JSON-ready parameters of ``model`` (see :func:`~fogref.compare.model_factory.current_parameters`)."""
+    """JSON-ready parameters of ``model`` (see :func:`~fogref.mapping.build.current_parameters`)."""
     try:
         return _json_safe(current_parameters(model))
     except (TypeError, AttributeError, ValueError, FogrefError):
@@ -132,17 +134,46 @@ def evaluate_parts(truth: Truth, model, precision: str, sky_distance: float) -> 
     part is defined (``surface_valid`` for the composited parts, every pixel otherwise).
     """
     m = evaluate_model(truth, model, precision, sky_distance, nonfinite="keep")
-    cp = fog_parts(truth, m["T"], m["inscatter"])
-    out = {("transmittance" if k == "T" else k): {"reference": cp.reference[k], "model": cp.parts[k],
-                                                   "cov": cp.noise_cov[k], "valid": cp.valid[k]}
-           for k in ("final", "T", "inscatter")}
-    with np.errstate(invalid="ignore", over="ignore"):  # a model's inf/NaN stays non-finite: counted, excluded
-        att = truth.surface * m["T"]
-        cov = truth.noise_cov("attenuated_surface") + noise.scaled(truth.noise_cov("surface"), m["T"])
-        out["attenuated_surface"] = {"reference": truth.attenuated_surface, "model": att,
-                                     "cov": noise.add_diagonal(cov, noise.rounding_var(truth.attenuated_surface, att)),
-                                     "valid": truth.surface_valid}
+    out = _from_core(fog_parts(truth, m["T"], m["inscatter"]))
+    out["attenuated_surface"] = _attenuated_surface(truth, m["T"])
     return {p: out[p] for p in PARTS}
+
+
+def image_parts(truth: Truth, images) -> dict:
+    """Reference, engine image, noise and valid pixels of every part an engine's images give.
+
+    ``images``: :class:`fogref.compare.foreign.EngineImages` (``final``, ``transmittance``,
+    ``inscatter``, any of them None).  Parts, as :func:`evaluate_parts` returns them:
+    ``final`` (the engine's own picture against ``R,G,B``: meaningful only if its
+    surface lighting matches the truth's), ``transmittance``, ``inscatter``,
+    ``attenuated_surface`` (``surface * T_engine``, with a transmittance) and
+    ``composite`` (``surface * T_engine + inscatter_engine`` against ``R,G,B``, with both:
+    the engine's fog over the truth's own surface, the fair comparison).  The engine's
+    images carry no noise; the covariance is the truth's (and the rounding floor).
+    """
+    out = _from_core(candidate_parts(truth, images))
+    if images.transmittance is not None:
+        out["attenuated_surface"] = _attenuated_surface(truth, np.asarray(images.transmittance, dtype=np.float64))
+    order = ("final", "transmittance", "inscatter", "attenuated_surface", "composite")
+    return {p: out[p] for p in order if p in out}
+
+
+def _from_core(cp) -> dict:
+    """The comparison core's parts (:class:`fogref.compare.check.CandidateParts`) as a report's,
+    ``T`` named ``transmittance``."""
+    return {("transmittance" if k == "T" else k): {"reference": cp.reference[k], "model": cp.parts[k],
+                                                   "cov": cp.noise_cov[k], "valid": cp.valid[k]}
+            for k in cp.parts}
+
+
+def _attenuated_surface(truth: Truth, T) -> dict:
+    """``surface * T`` against the truth's ``attenuated_surface``, where ``surface`` is defined."""
+    with np.errstate(invalid="ignore", over="ignore"):  # a model's inf/NaN stays non-finite: counted, excluded
+        att = truth.surface * T
+        cov = truth.noise_cov("attenuated_surface") + noise.scaled(truth.noise_cov("surface"), T)
+    return {"reference": truth.attenuated_surface, "model": att,
+            "cov": noise.add_diagonal(cov, noise.rounding_var(truth.attenuated_surface, att)),
+            "valid": truth.surface_valid}
 
 
 def truth_provenance(truth: Truth) -> dict:
@@ -185,7 +216,7 @@ def _json_safe(obj):
 
 def _errors_exr_channels(truth, parts, errors, sun_angle) -> dict:
     ch: dict[str, np.ndarray] = {}
-    for part in PARTS:
+    for part in parts:
         e = errors[part]
         ref = parts[part]["reference"]
         for i, c in enumerate("RGB"):
@@ -244,25 +275,59 @@ def _verdict(s: dict) -> str:
 def warnings_of(report: dict) -> list[str]:
     """Loud one-line warnings of a report: model non-finite values, excluded pixels."""
     out = []
-    for part in PARTS:
-        s = report["metrics"][part]["all"]
+    for part, m in report["metrics"].items():
+        s = m["all"]
         if s.get("model_nonfinite_pixels"):
             out.append(f"{part}: the model returned non-finite values at {s['model_nonfinite_pixels']} pixel(s); "
                        "they are excluded from every metric")
-    ex = report["metrics"]["final"]["all"].get("excluded_pixels", 0) - \
-        report["metrics"]["final"]["all"].get("model_nonfinite_pixels", 0)
-    if ex > 0:
-        out.append(f"final, attenuated_surface: {ex} pixel(s) excluded where the truth's unattenuated surface "
-                   "radiance is undefined (surface_coverage = 0: no sample reached the surface)")
+    composited = [p for p in ("final", "composite", "attenuated_surface") if p in report["metrics"]
+                  and report["composited"].get(p)]
+    if composited:
+        s = report["metrics"][composited[0]]["all"]
+        ex = s.get("excluded_pixels", 0) - s.get("model_nonfinite_pixels", 0)
+        if ex > 0:
+            out.append(f"{', '.join(composited)}: {ex} pixel(s) excluded where the truth's unattenuated surface "
+                       "radiance is undefined (surface_coverage = 0: no sample reached the surface)")
     return out
 
 
-def _index_markdown(report: dict, has_sun: bool, figures: bool) -> str:
+def check_table_markdown(result) -> list[str]:
+    """The rows of a :class:`~fogref.compare.check.CheckResult` as a markdown table (lines)."""
+    lines = ["| part | region | metric | estimate | interval | tolerance | verdict | pixels |",
+             "|---|---|---|---:|---|---:|---|---:|"]
+    for r in result.rows:
+        tol = "" if r.tolerance is None else f"{r.tolerance:g}"
+        est, ci = ("—", "—") if r.estimate is None else (f"{r.estimate:.4g}", f"[{r.low:.4g}, {r.high:.4g}]")
+        lines.append(f"| {r.part} | {r.region} | {r.metric} | {est} | {ci} | {tol} | {r.verdict} | {r.pixels} |")
+    return lines
+
+
+def _candidate_lines(report: dict) -> list[str]:
+    if "model" in report:
+        return [(f"- model: `{report['model']['name']}`, precision `{report['precision']}`, "
+                 f"parameters `{json.dumps(report['model']['parameters'])}`"),
+                f"- sky pixels fogged at {report['sky_distance_m']:.6g} m; composited over the truth's `surface.*`"]
+    im = report["images"]
+    lines = ["- engine images: " + ", ".join(f"{k} `{v}` ({im['encodings'].get(k, '?')})"
+                                              for k, v in im["sources"].items()),
+             f"- exposure {im['exposure']:g} (radiance images divided by it); encoding option "
+             f"`{im['encoding_option']}` (auto: PNG is sRGB, EXR/HDR linear; transmittance always linear)"]
+    if "final" in report["metrics"]:
+        lines.append("- `final` is the engine's own picture against the truth's `R,G,B`: it means something only "
+                     "if the engine's surface lighting matches the truth's `surface` part; "
+                     + ("`composite` (the engine's fog over the truth's surface) is the fair comparison"
+                        if "composite" in report["metrics"] else
+                        "give the engine's transmittance and inscatter for the fair comparison (`composite`)"))
+    return lines
+
+
+def _index_markdown(report: dict, has_sun: bool, figures: bool, check=None) -> str:
     c = report["conventions"]
     t = report["truth"]
+    names = list(report["metrics"])
     overrides = " ".join(f"--set {k}={v}" for k, v in (t["overrides"] or {}).items())
     lines = [
-        f"# fogref compare: `{report['model']['name']}` vs `{Path(report['exr']).name}`",
+        f"# fogref compare: `{report['candidate']['name']}` vs `{Path(report['exr']).name}`",
         "",
         (f"- ground truth: `{report['exr']}` ({report['image']['width']}×{report['image']['height']} px, "
          f"{report['image']['surface_pixels']} surface, {report['image']['sky_pixels']} sky), scene "
@@ -270,10 +335,8 @@ def _index_markdown(report: dict, has_sun: bool, figures: bool) -> str:
          f"pixel filter `{t['pixel_filter']}`"
          + ("" if t["pixel_exact"] else " (anti-aliased: silhouette pixels mix depths, which exact models "
             "cannot match)")),
-        (f"- model: `{report['model']['name']}`, precision `{report['precision']}`, "
-         f"parameters `{json.dumps(report['model']['parameters'])}`"),
-        f"- sky pixels fogged at {report['sky_distance_m']:.6g} m; composited over the truth's `surface.*`",
-        (f"- pixels excluded from final/attenuated_surface (surface undefined): "
+        *_candidate_lines(report),
+        (f"- pixels excluded from the composited parts (surface undefined): "
          f"{report['diagnostics']['surface_undefined_pixels']}"),
         (f"- reference identity |R,G,B − (attenuated_surface + inscatter)| max: "
          f"{_fmt(report['diagnostics']['reference_identity_max_abs'])}"),
@@ -283,27 +346,34 @@ def _index_markdown(report: dict, has_sun: bool, figures: bool) -> str:
         lines.append(f"> **Warning:** {w}")
     if report["warnings"]:
         lines.append("")
+    if check is not None:
+        lines += ["## Verdict", "",
+                  f"**{check.verdict}** ({check.confidence:.0%} two-sided intervals, {check.method_text}; "
+                  "`fogref.compare.check.check`, the checker of `assert_fog_matches`). A row passes when its "
+                  "whole interval lies within the tolerance (|x| for the signed metrics), fails when it lies "
+                  "wholly outside, else is inconclusive.", "", *check_table_markdown(check), ""]
     lines += [
         "## Metrics",
         "",
         ("RMSE and |error| are in each part's units (radiance: the scene's radiance units; "
          "transmittance: 1). relMSE = mean((x−r)²/(r²+ε)), "
-         f"ε = {c['relmse_eps']}. Mean error = mean(model − truth): > 0 too bright, < 0 too dark. "
+         f"ε = {c['relmse_eps']}. Mean error = mean(candidate − truth): > 0 too bright, < 0 too dark. "
          "ΔE2000: linear sRGB ÷ white → XYZ → CIELAB (D65); "
          "white = 99th percentile of the reference part's luminance (transmittance: 1). "
          f"FLIP: HDR-FLIP at {c['flip_ppd']} px/degree."),
         "",
         (f"**Noise.** `± x`: one standard error of the estimate, from the truth's per-pixel `stderr.*` "
-         f"channels. *Noise floor*: what a perfect model would score against this truth (RMSE: "
-         f"√mean(σ²); ΔE/FLIP: a perfect model plus one draw of the noise). *Below the noise*: within "
-         f"{c['noise_z']:g} standard errors of the noise floor, so this truth cannot tell the model from "
-         "a perfect one; render more samples to see further."),
+         f"channels. *Noise floor*: what a perfect candidate would score against this truth (RMSE: "
+         f"√mean(σ²); ΔE/FLIP: a perfect candidate plus one draw of the noise). *Below the noise*: within "
+         f"{c['noise_z']:g} standard errors of the noise floor, so this truth cannot tell the candidate from "
+         "a perfect one; render more samples to see further. These columns describe; the verdict is the "
+         "check's (above)."),
         "",
         "| part | region | pixels | excluded | RMSE | RMSE noise floor | relMSE (floor) | mean error | "
         "mean \\|err\\| (floor) | ΔE2000 mean (floor) | ΔE2000 p95 | FLIP mean (floor) | noise verdict |",
         "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
     ]
-    for part in PARTS:
+    for part in names:
         for region in REGIONS:
             s = report["metrics"][part][region]
             lines.append(
@@ -319,11 +389,11 @@ def _index_markdown(report: dict, has_sun: bool, figures: bool) -> str:
         "",
     ]
     if figures:
-        lines += ["## Reference | model | |error|", "", f"Shared tone map per part: {c['tone_map']}", "",
-                  "Heatmaps: the signed error (model − truth, mean over RGB) on a diverging map centred at 0 "
-                  "with symmetric limits (red: model too bright, blue: too dark), then |error|, relative "
+        lines += ["## Truth | candidate | |error|", "", f"Shared tone map per part: {c['tone_map']}", "",
+                  "Heatmaps: the signed error (candidate − truth, mean over RGB) on a diverging map centred at 0 "
+                  "with symmetric limits (red: too bright, blue: too dark), then |error|, relative "
                   "squared error, ΔE2000 and FLIP. Grey: excluded pixels.", ""]
-        for part in PARTS:
+        for part in names:
             lines += [f"### {part}", "", f"![{part} side by side](side_by_side/{part}.png)", "",
                       f"![{part} error heatmaps](heatmaps/{part}.png)", ""]
         lines += ["## Error vs distance", "", "![error vs distance](error_vs_distance.png)", ""]
@@ -332,8 +402,10 @@ def _index_markdown(report: dict, has_sun: bool, figures: bool) -> str:
     else:
         lines += ["Figures were not written (`figures=False`); the binned curves are in `metrics.json`.",
                   "" if has_sun else "The scene has no sun.", ""]
-    lines += ["## Files", "", "- `metrics.json`: everything above, plus the binned curves", "- `errors.exr`:", "",
-              "```", ERRORS_EXR_LAYOUT, "```", ""]
+    lines += ["## Files", "", "- `metrics.json`: everything above, plus the binned curves"
+              + (" and the check's rows (`check`)" if check is not None else ""),
+              *(["- `check.json`: the check's rows, intervals and verdict"] if check is not None else []),
+              "- `errors.exr`:", "", "```", ERRORS_EXR_LAYOUT, "```", ""]
     return "\n".join(lines)
 
 
@@ -352,6 +424,7 @@ def compare(
     distance_bins: int = 24,
     angle_step_deg: float = 5.0,
     figures: bool = True,
+    check=None,
 ) -> dict:
     """Compare ``model`` with a ground truth; write a report to ``out_dir``.
 
@@ -378,6 +451,9 @@ def compare(
     figures : bool
         False writes only ``metrics.json``, ``errors.exr`` and ``index.md`` (no PNGs:
         for CI, where matplotlib dominates the run time).
+    check : CheckResult, optional
+        The verdict of :func:`fogref.compare.check.check` on the same truth and model:
+        its rows go into ``metrics.json`` (``check``), ``check.json`` and a table in ``index.md``.
 
     Returns
     -------
@@ -388,9 +464,47 @@ def compare(
         raise FogrefError(f"precision must be 'float32' or 'float64', got {precision!r}")
     sky_distance = check_sky_distance(sky_distance)
     truth = truth if isinstance(truth, Truth) else load_truth(truth)
-    exr_path = truth.path
-    out = Path(out_dir)
     parts = evaluate_parts(truth, model, precision, sky_distance)
+    header = {"candidate": {"kind": "model", "name": _model_name(model)},
+              "model": {"name": _model_name(model), "parameters": _model_description(model)},
+              "precision": precision, "sky_distance_m": float(sky_distance)}
+    return write_report(truth, parts, out_dir, header, {"final": True, "attenuated_surface": True},
+                        relmse_eps=relmse_eps, flip_ppd=flip_ppd, distance_bins=distance_bins,
+                        angle_step_deg=angle_step_deg, figures=figures, check=check)
+
+
+def compare_images(truth, images, out_dir, *, figures: bool = True, check=None, **options) -> dict:
+    """The report of :func:`compare` for an engine's images (:func:`image_parts`) instead of a model.
+
+    ``images``: :class:`fogref.compare.foreign.EngineImages`; ``check``: the
+    :class:`~fogref.compare.check.CheckResult` of the same images; ``options``:
+    ``relmse_eps``, ``flip_ppd``, ``distance_bins``, ``angle_step_deg`` as :func:`compare`.
+    Returns what ``metrics.json`` holds.
+    """
+    truth = truth if isinstance(truth, Truth) else load_truth(truth)
+    parts = image_parts(truth, images)
+    name = getattr(images, "description", "engine images")
+    header = {"candidate": {"kind": "images", "name": name},
+              "images": {"sources": dict(images.sources), "encodings": dict(getattr(images, "encodings", {})),
+                         "encoding_option": getattr(images, "encoding_option", None),
+                         "exposure": float(getattr(images, "exposure", 1.0))}}
+    return write_report(truth, parts, out_dir, header, {"attenuated_surface": True, "composite": True},
+                        figures=figures, check=check, **options)
+
+
+def write_report(truth: Truth, parts: dict, out_dir, header: dict, composited: dict, *,
+                 relmse_eps: float = M.RELMSE_EPS, flip_ppd: float = M.FLIP_PPD, distance_bins: int = 24,
+                 angle_step_deg: float = 5.0, figures: bool = True, check=None) -> dict:
+    """Metrics, maps, figures and pages of ``parts`` (from :func:`evaluate_parts` or :func:`image_parts`).
+
+    ``header``: what the report says about the candidate (``candidate``: ``{"kind", "name"}``, and
+    ``model``/``precision``/``sky_distance_m`` or ``images``); ``composited``: part -> True for the
+    parts composited over the truth's surface (their excluded pixels are warned about).  Writes
+    ``metrics.json``, ``errors.exr``, ``index.md``, the figures unless ``figures`` is False, and with
+    ``check`` (a CheckResult) ``check.json``.  Returns what ``metrics.json`` holds.
+    """
+    out = Path(out_dir)
+    names = list(parts)
     out.mkdir(parents=True, exist_ok=True)
 
     errors = {
@@ -399,44 +513,44 @@ def compare(
         for part, p in parts.items()
     }
     masks = {"all": None, "surface": truth.hit, "sky": truth.sky}
-    table = {part: {r: errors[part].summary(masks[r]) for r in REGIONS} for part in PARTS}
+    table = {part: {r: errors[part].summary(masks[r]) for r in REGIONS} for part in names}
 
     sun_angle = truth.sun_angle_deg()
     by_distance = binned_errors(truth.distance, errors,
                                 log_distance_edges(truth.distance[truth.hit], distance_bins), mask=truth.hit)
     by_sun = binned_errors(sun_angle, errors, angle_edges(angle_step_deg)) if sun_angle is not None else None
-    refs = {p: parts[p]["reference"] for p in PARTS}
-    exposures = {p: (1.0 if PART_UNITS[p] == "1" else exposure_for(refs[p])) for p in PARTS}
+    exposures = {p: (1.0 if PART_UNITS[p] == "1" else exposure_for(parts[p]["reference"])) for p in names}
 
     h, w = truth.shape
     report = _json_safe({
-        "exr": str(exr_path),
+        "exr": str(truth.path),
         "truth": truth_provenance(truth),
-        "model": {"name": _model_name(model), "parameters": _model_description(model)},
-        "precision": precision,
-        "sky_distance_m": float(sky_distance),
+        **header,
         "image": {"width": w, "height": h, "surface_pixels": int(truth.hit.sum()),
                   "sky_pixels": int(truth.sky.sum())},
-        "units": PART_UNITS,
+        "units": {p: PART_UNITS[p] for p in names},
+        "composited": {p: bool(composited.get(p)) for p in names},
         "conventions": {
             "relmse_eps": relmse_eps,
             "relmse": "mean over pixels and RGB of (x - r)^2 / (r^2 + eps)",
             "rmse": "sqrt(mean over pixels and RGB of (x - r)^2), in the part's units",
-            "mean_error": "mean over pixels and RGB of (x - r): > 0 model too bright",
+            "mean_error": "mean over pixels and RGB of (x - r): > 0 candidate too bright",
             "delta_e2000": "CIEDE2000; linear sRGB/Rec.709 / white -> XYZ -> CIELAB (D65), negatives clipped",
-            "delta_e2000_white": {p: errors[p].white for p in PARTS},
+            "delta_e2000_white": {p: errors[p].white for p in names},
             "flip_ppd": flip_ppd,
-            "flip_params": {p: errors[p].flip_params for p in PARTS},
+            "flip_params": {p: errors[p].flip_params for p in names},
             "tone_map": "display = sRGB_OETF(clip(exposure * linear, 0, 1)); "
                         "exposure = 1 / (99th percentile of the reference part's luminance), transmittance 1",
-            "sky": "model evaluated at camera + view * sky_distance, composited over the truth's surface.*",
-            "composite": "final = surface * T_model + inscatter_model, attenuated_surface = surface * T_model, "
-                         "only where surface_coverage > 0; other pixels excluded and counted",
-            "noise": "per-pixel covariance of model - truth from the truth's stderr.* and corr.* channels "
-                     "(fogref.compare.noise; final = surface * T_model + L_model against surface * T + L, "
-                     "the one comparison core of check) plus the rounding floor (4 ulp of float32 of |truth|); "
-                     "*_noise_floor: a perfect model's score; *_stderr: standard error of the "
-                     "estimate; *_below_noise: within noise_z standard errors of the noise floor",
+            "sky": "a model is evaluated at camera + view * sky_distance, composited over the truth's surface.*",
+            "composite": "model: final = surface * T_model + inscatter_model; images: composite = surface * "
+                         "T_engine + inscatter_engine; attenuated_surface = surface * T; only where "
+                         "surface_coverage > 0; other pixels excluded and counted",
+            "noise": "per-pixel covariance of candidate - truth from the truth's stderr.* and corr.* channels "
+                     "(fogref.compare.noise, through check's comparison core: final/composite = surface * T' + "
+                     "L' against surface * T + L) plus a rounding floor (4 ulp of float32 of |truth|); "
+                     "*_noise_floor: a perfect candidate's score; *_stderr: standard error of the estimate; "
+                     "*_below_noise: within noise_z standard errors of the noise floor (descriptive; the "
+                     "verdict is the check's)",
             "noise_correlation": truth.attrs.get("fogref.noise_correlation", "measured"),
             "noise_z": M.NOISE_Z,
             "nonfinite": "model NaN/inf pixels are excluded from every metric and counted "
@@ -444,30 +558,40 @@ def compare(
         },
         "metrics": table,
         "diagnostics": {
-            "model_nonfinite_values": {"transmittance": M.count_nonfinite(parts["transmittance"]["model"]),
-                                       "inscatter": M.count_nonfinite(parts["inscatter"]["model"])},
+            "model_nonfinite_values": {p: M.count_nonfinite(parts[p]["model"])
+                                       for p in ("transmittance", "inscatter") if p in parts},
             "surface_undefined_pixels": int(np.count_nonzero(~truth.surface_valid)),
             "reference_identity_max_abs": truth.identity_residual(),
         },
         "binned": {"distance_m": by_distance, "sun_angle_deg": by_sun},
+        **({"check": check.to_dict()} if check is not None else {}),
     })
     report["warnings"] = warnings_of(report)
 
     write_exr(out / "errors.exr", _errors_exr_channels(truth, parts, errors, sun_angle),
-              {"fogref.compare": {"exr": str(exr_path), "model": report["model"], "precision": precision}})
+              {"fogref.compare": {"exr": str(truth.path), "candidate": report["candidate"],
+                                  **({"model": report["model"], "precision": report["precision"]}
+                                     if "model" in report else {})}})
     _remove_stale_figures(out)
     if figures:
         _write_figures(out, parts, errors, exposures, by_distance, by_sun, angle_step_deg)
+    if check is not None:
+        write_text_atomic(out / "check.json", json.dumps(report["check"], indent=2, allow_nan=False) + "\n")
     write_text_atomic(out / "metrics.json", json.dumps(report, indent=2, allow_nan=False) + "\n")
-    write_text_atomic(out / "index.md", _index_markdown(report, by_sun is not None, figures))
+    write_text_atomic(out / "index.md", _index_markdown(report, by_sun is not None, figures, check))
     return report
+
+
+#: Every part a report may hold (model runs: PARTS; engine images add ``composite``).
+ALL_PARTS: tuple[str, ...] = (*PARTS, "composite")
 
 
 def figure_paths(out_dir) -> list[Path]:
     """Every PNG ``compare`` may write into ``out_dir``."""
     out = Path(out_dir)
     return [out / "error_vs_distance.png", out / "error_vs_sun_angle.png",
-            *(out / "side_by_side" / f"{p}.png" for p in PARTS), *(out / "heatmaps" / f"{p}.png" for p in PARTS)]
+            *(out / "side_by_side" / f"{p}.png" for p in ALL_PARTS),
+            *(out / "heatmaps" / f"{p}.png" for p in ALL_PARTS)]
 
 
 def _remove_stale_figures(out: Path) -> None:
@@ -477,15 +601,16 @@ def _remove_stale_figures(out: Path) -> None:
 
 
 def _write_figures(out: Path, parts, errors, exposures, by_distance, by_sun, angle_step_deg) -> None:
-    for part in PARTS:
+    for part in parts:
         e = errors[part]
         ref = parts[part]["reference"]
         plot_side_by_side(ref, ref + e.signed, exposures[part], part, PART_UNITS[part],
                           out / "side_by_side" / f"{part}.png", valid=e.valid)
         plot_error_heatmaps(e, part, PART_UNITS[part], out / "heatmaps" / f"{part}.png")
-    plot_binned_errors(by_distance, PART_UNITS, "distance to the surface [m] (log scale)",
+    units = {p: PART_UNITS[p] for p in parts}
+    plot_binned_errors(by_distance, units, "distance to the surface [m] (log scale)",
                        "error vs distance (surface pixels, log-spaced bins)", out / "error_vs_distance.png", True)
     if by_sun is not None:
-        plot_binned_errors(by_sun, PART_UNITS, "angle between view ray and sun [degrees]",
+        plot_binned_errors(by_sun, units, "angle between view ray and sun [degrees]",
                            f"error vs angle to the sun ({angle_step_deg:g}° bins, all pixels)",
                            out / "error_vs_sun_angle.png", False)

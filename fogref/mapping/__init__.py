@@ -23,8 +23,9 @@ from fogref.mapping.lobe import lobe_fit, lobe_table
 from fogref.mapping.physical import PhysicalScene
 from fogref.mapping.registry import MAPPINGS, from_physical, has_mapping, register_mapping
 from fogref.mapping.unreal import (
-    FIT_DIRECTIONS,
-    FIT_DISTANCES,
+    FIT_DIRECTIONS_MAX,
+    FIT_DIRECTIONS_START,
+    FIT_RTOL,
     FitResult,
     Views,
     base_params,
@@ -36,7 +37,8 @@ from fogref.mapping.unreal import (
 )
 from fogref.models.base import SKY_DISTANCE
 
-__all__ = ["FIT_DIRECTIONS", "FIT_DISTANCES", "MAPPINGS", "SKY_DISTANCE", "FitResult", "PhysicalScene", "Views",
+__all__ = ["FIT_DIRECTIONS_MAX", "FIT_DIRECTIONS_START", "FIT_RTOL", "MAPPINGS", "SKY_DISTANCE", "FitResult",
+           "PhysicalScene", "Views",
            "base_params", "fit_unreal", "from_physical", "has_mapping", "lobe_fit", "lobe_table",
            "physical_single_scattering", "register_mapping", "sample_views", "ue4_from_physical",
            "unreal_inscatter"]

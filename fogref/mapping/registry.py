@@ -41,12 +41,10 @@ def register_mapping(name: str):
 
 def _name_and_class(model) -> tuple[str | None, type | None]:
     if isinstance(model, str):
-        from fogref.models import get
+        from fogref.models.resolve import resolve_model
 
-        try:
-            return model, get(model)
-        except KeyError as e:
-            raise FogrefError(str(e.args[0])) from None
+        cls = resolve_model(model)
+        return getattr(cls, "name", None), cls
     return getattr(model, "name", None), model
 
 
@@ -68,8 +66,9 @@ def from_physical(model, physical) -> object:
     Parameters
     ----------
     model : str or type
-        A ``fogref.models`` registry name ("ue4", "unity", "altitude", "box",
-        "hdrp", "filament") or a model class.  A class whose name has no
+        A name for :func:`fogref.models.resolve.resolve_model` (the built-in "ue4",
+        "unity", "altitude", "box", "hdrp", "filament", ``module.path:Class``, an
+        entry point) or a model class.  A class whose name has no
         registered mapping must have a ``from_physical(physical)`` classmethod.
     physical : PhysicalScene or dict
         The scene; a dict is an EXR's ``fogref.params`` and is parsed with

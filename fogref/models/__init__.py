@@ -16,14 +16,19 @@ Every model follows :class:`~fogref.models.base.FogModel`:
 "float64") -> FogResult`` in fogref's y-up metre frame.  Models depend on numpy
 and :mod:`fogref.media` only; :mod:`fogref.mapping` builds them from a physical
 scene (``fogref.mapping.from_physical("ue4", scene)``).
+
+Names are resolved by one function, :func:`~fogref.models.resolve.resolve_model`
+(also ``get``): a registry name, ``module.path:Class`` or an entry point of the
+group ``fogref.models``; an unknown name gets a FogrefError with a "did you mean".
 """
 
 from fogref.models import altitude, box, filament, hdrp, ue4, unity_builtin  # noqa: F401  (registration)
 from fogref.models.altitude import AltitudeFog, AltitudeFogParams
-from fogref.models.base import SKY_DISTANCE, FogModel, FogResult, as_points, get, register
+from fogref.models.base import SKY_DISTANCE, FogModel, FogResult, as_points, register
 from fogref.models.box import BoxFog, BoxFogParams
 from fogref.models.filament import FilamentFog, FilamentFogParams
 from fogref.models.hdrp import HDRPFog, HDRPFogParams
+from fogref.models.resolve import available_models, get, resolve_model
 from fogref.models.ue4 import (
            SecondFogData,
            UE4ExponentialHeightFog,
@@ -33,7 +38,8 @@ from fogref.models.ue4 import (
 )
 from fogref.models.unity_builtin import UnityBuiltinFog, UnityFogParams
 
-__all__ = ["SKY_DISTANCE", "FogModel", "FogResult", "as_points", "get", "register",
+__all__ = ["SKY_DISTANCE", "FogModel", "FogResult", "as_points", "available_models", "get", "register",
+           "resolve_model",
            "AltitudeFog", "AltitudeFogParams", "BoxFog", "BoxFogParams",
            "FilamentFog", "FilamentFogParams", "HDRPFog", "HDRPFogParams",
            "SecondFogData", "UE4ExponentialHeightFog", "UE4FogParams", "medium_to_ue4", "ue4_to_medium",

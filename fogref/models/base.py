@@ -19,7 +19,7 @@ from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
-__all__ = ["SKY_DISTANCE", "FogModel", "FogResult", "as_points", "get", "register"]
+__all__ = ["SKY_DISTANCE", "FogModel", "FogResult", "as_points", "register"]
 
 #: Where a model fogs the pixels that see the sky [m] (compare, the fits and the
 #: study all use it): far enough that every fog of the scenes is saturated.
@@ -59,7 +59,7 @@ class FogModel(Protocol):
     Attributes
     ----------
     name : str
-        The registry name (``fogref.models.get(name)``).
+        The registry name (``fogref.models.get(name)`` finds the class).
     params : dataclass
         The model's parameters in the engine's own names and units; the model is
         built as ``Model(params)`` (``Model.Params`` is the dataclass).
@@ -89,14 +89,14 @@ _REGISTRY: dict[str, type] = {}
 
 
 def register(name: str):
-    """Class decorator: make a model available as ``fogref.models.get(name)``.
+    """Class decorator: make a model a built-in one, found by name by :func:`fogref.models.resolve.resolve_model`.
 
     Examples
     --------
     >>> @register("doc_fog")
     ... class DocFog:
     ...     def evaluate(self, camera, positions, precision="float32"): ...
-    >>> get("doc_fog").name
+    >>> _REGISTRY["doc_fog"].name
     'doc_fog'
     >>> del _REGISTRY["doc_fog"]
     """
@@ -107,21 +107,6 @@ def register(name: str):
         return cls
 
     return deco
-
-
-def get(name: str):
-    """The model class registered under ``name`` (e.g. ``"ue4"``); KeyError naming the known ones.
-
-    Examples
-    --------
-    >>> import fogref.models
-    >>> get("ue4").__name__
-    'UE4ExponentialHeightFog'
-    """
-    try:
-        return _REGISTRY[name]
-    except KeyError:
-        raise KeyError(f"unknown fog model '{name}'; known: {sorted(_REGISTRY)}") from None
 
 
 def as_points(x) -> np.ndarray:

@@ -194,8 +194,37 @@ def load_scene(path, overrides: dict | None = None):
         scene = mi.load_file(str(path), **{k: v for k, v in (overrides or {}).items()})
     except Exception as e:  # Mitsuba's message names the file and line: keep all of it
         raise FogrefError(f"{path}: Mitsuba could not load the scene:\n{str(e).strip()}") from None
-    sensor = scene.sensors()[0]
-    m = sensor.world_transform().matrix
-    origin = [float(m[i][3][0]) if hasattr(m[i][3], "__len__") else float(m[i][3]) for i in range(3)]
-    desc["camera"] = {"origin": origin}
+    desc["camera"] = sensor_camera(scene.sensors()[0])
     return scene, desc
+
+
+def sensor_camera(sensor) -> dict:
+    """The full camera of a Mitsuba perspective sensor, as plain data (what a truth's header stores).
+
+    World frame y-up, right-handed, metres.  ``origin`` [m]; ``forward``, ``up`` (the
+    camera's orthonormal up) and ``right`` (``forward x up``: pixel x grows along it)
+    unit vectors; ``target = origin + forward`` (a point 1 m along the view axis);
+    ``fov_deg`` the horizontal field of view [deg] (``fov_axis`` ``"x"``: Mitsuba stores
+    the x field of view, whatever axis the scene gave), ``fov_y_deg`` the vertical one;
+    ``to_world`` the 4x4 camera-to-world matrix (rows; columns: Mitsuba's camera +x =
+    left, +y = up, +z = forward, origin); ``near_clip``/``far_clip`` [m]; ``resolution``
+    ``[W, H]`` px.  A pixel ``(i, j)`` (column, row from the top) looks along
+    ``forward + u tan(fov/2) right + v tan(fov/2) (H/W) up``, ``u = 2 (i + 0.5)/W - 1``,
+    ``v = 1 - 2 (j + 0.5)/H``.
+    """
+    import math
+
+    import mitsuba as mi
+    import numpy as np
+
+    m = np.asarray(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
+    params = mi.traverse(sensor)
+    fov = params["x_fov"] if "x_fov" in params else 0.0
+    fov = float(fov[0] if hasattr(fov, "__len__") else fov)
+    W, H = (int(x) for x in sensor.film().crop_size())
+    origin, up, forward = m[:3, 3], m[:3, 1], m[:3, 2]
+    fov_y = math.degrees(2 * math.atan(math.tan(math.radians(fov) / 2) * H / W))
+    return {"origin": origin.tolist(), "target": (origin + forward).tolist(), "up": up.tolist(),
+            "forward": forward.tolist(), "right": np.cross(forward, up).tolist(), "fov_deg": fov, "fov_axis": "x",
+            "fov_y_deg": fov_y, "to_world": m.tolist(), "near_clip": float(sensor.near_clip()),
+            "far_clip": float(sensor.far_clip()), "resolution": [W, H]}

@@ -50,7 +50,8 @@ def check_fit_args(a) -> None:
     """Refuse out-of-range ``fogref fit`` flags before any work (FogrefError naming the option)."""
     from fogref.errors import FogrefError
 
-    if not (isinstance(a.directions, int) and DIRECTIONS_RANGE[0] <= a.directions <= DIRECTIONS_RANGE[1]):
+    if a.directions is not None and not (isinstance(a.directions, int)
+                                         and DIRECTIONS_RANGE[0] <= a.directions <= DIRECTIONS_RANGE[1]):
         raise FogrefError(f"--directions: {a.directions!r} is out of range: the number of view directions must be "
                           f"an integer in [{DIRECTIONS_RANGE[0]}, {DIRECTIONS_RANGE[1]}]")
     for opt, v, lo, hi, lo_open, hi_open, what in (
@@ -137,8 +138,11 @@ def cmd_fit(a) -> int:
     check_fit_args(a)
     pf = _physical_from_args(a)
     check_physical(pf, a.scene or a.exr or "fogref fit flags")
-    views = sample_views(pf.camera, n_dirs=a.directions)
+    # the one fit: its direction count by the convergence criterion, unless --directions fixes it
+    views = None if a.directions is None else sample_views(pf.camera, n_dirs=a.directions)
     r = fit_unreal(pf, views, sun_attenuation=not a.no_sun_attenuation, fit_start=not a.no_start_distance)
+    if views is None:
+        views = sample_views(pf.camera, n_dirs=r.history["n_dirs"])
     doc = {"physical": {"sigma_t": list(pf.medium.sigma_t), "albedo": list(pf.medium.albedo), "g": pf.medium.g,
                         "layers": [vars(L) if hasattr(L, "__dict__") else repr(L) for L in pf.medium.layers],
                         "sun_direction": list(pf.sun_direction), "sun_irradiance": list(pf.sun_irradiance),
@@ -191,8 +195,10 @@ def add_cli(subparsers) -> None:
     f.add_argument("--sun-irradiance", type=float, nargs=3, metavar=("R", "G", "B"))
     f.add_argument("--sky", type=float, nargs=3, metavar=("R", "G", "B"), help="uniform sky radiance")
     f.add_argument("--camera", type=float, nargs=3, metavar=("X", "Y", "Z"), help="camera position [m]")
-    f.add_argument("--directions", type=int, default=400,
-                   help=f"view directions on the sphere, {DIRECTIONS_RANGE[0]}..{DIRECTIONS_RANGE[1]} (default 400)")
+    f.add_argument("--directions", type=int, default=None,
+                   help=f"fix the number of view directions on the sphere, {DIRECTIONS_RANGE[0]}.."
+                   f"{DIRECTIONS_RANGE[1]} (default: doubled from 128 until the fit converges, as "
+                   "--from-scene, study and sweep do)")
     f.add_argument("--no-sun-attenuation", action="store_true", help="fit to the unattenuated single scattering")
     f.add_argument("--no-start-distance", action="store_true", help="keep DirectionalInscatteringStartDistance 0")
     f.add_argument("--lobe-table", action="store_true", help="also tabulate the best lobe for g = -0.9..0.9")

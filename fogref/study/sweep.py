@@ -37,7 +37,9 @@ Example ``SWEEP.toml``::
     range = [0, 100]                   # random / lhs: uniform in range (log = true: log-uniform)
 
     [[models]]
-    name = "ue4"                       # a registered model; label defaults to the name
+    name = "ue4"                       # a model name (built-in, "my_pkg.fog:MyFog" or an entry
+                                       # point of group fogref.models); label defaults to the name
+                                       # (its Class part for "module:Class")
     from_scene = true                  # parameters from the truth's physical fog, like --from-scene
     params = {}                        # then these override them
 
@@ -118,16 +120,17 @@ def _truth_path(scene, cache: Path, *, spp, seed, overrides, pixel_filter) -> Pa
 
 
 def _build_model(name: str, params: dict, scene_params: dict | None):
-    """A model by registry name, from the truth's physical parameters (``scene_params``) + ``params``."""
-    from fogref.compare.model_factory import build_model, model_class
+    """A model by name (built-in, ``module:Class`` or entry point), from the truth's physical
+    parameters (``scene_params``) + ``params`` (:func:`fogref.mapping.build.build_model`)."""
+    from fogref.mapping.build import build_model
 
-    return build_model(model_class(name), params, scene_params)
+    return build_model(name, params, scene_params)
 
 
 def _check_model_name(name: str) -> None:
-    from fogref.compare.model_factory import model_class
+    from fogref.models.resolve import resolve_model
 
-    model_class(name)
+    resolve_model(name)
 
 
 def _compare(exr, model, out_dir) -> dict:
@@ -239,7 +242,7 @@ def load_sweep(path) -> SweepSpec:
         Naming the file, the key and the allowed values for anything malformed: an
         unknown table or key, a scene that does not exist, a parameter that is not a
         ``$default`` of every scene (the message lists them) or not ``<model>.<name>``
-        of a listed model, an unknown design kind or seed policy, an unregistered model.
+        of a listed model, an unknown design kind or seed policy, an unknown model name.
     """
     path = Path(path)
     if not path.is_file():
@@ -298,7 +301,7 @@ def load_sweep(path) -> SweepSpec:
     for i, m in enumerate(models):
         key = f"models][{i}"
         if not isinstance(m, dict) or "name" not in m:
-            raise _err(path, key, "each [[models]] entry needs a 'name' (a registered model, e.g. \"ue4\")")
+            raise _err(path, key, "each [[models]] entry needs a 'name' (a model: \"ue4\", \"my_pkg.fog:MyFog\", ...)")
         bad = set(m) - {"name", "label", "from_scene", "params"}
         if bad:
             raise _err(path, key, f"unknown key(s) {sorted(bad)}; allowed: ['from_scene', 'label', 'name', 'params']")
@@ -306,7 +309,8 @@ def load_sweep(path) -> SweepSpec:
             _check_model_name(m["name"])
         except FogrefError as e:
             raise _err(path, key, str(e)) from None
-        label = str(m.get("label", m["name"]))
+        # "my_pkg.fog:MyFog" is labelled "MyFog" (a label has no '.')
+        label = str(m.get("label", str(m["name"]).rpartition(":")[2]))
         if label in labels or "." in label:
             raise _err(path, key, f"model label '{label}' must be unique and contain no '.'")
         labels.add(label)
@@ -603,7 +607,7 @@ def _budget_columns(cfg: dict, truth_path: Path, model) -> dict:
     computed (it would double the renders).
     """
     from fogref.gbuffer import load_truth
-    from fogref.mapping import PhysicalScene, fit_unreal, sample_views
+    from fogref.mapping import PhysicalScene, fit_unreal
     from fogref.study import budget as B
     from fogref.study.unreal import overrides_used_by, sunless_scene
 
@@ -615,7 +619,7 @@ def _budget_columns(cfg: dict, truth_path: Path, model) -> dict:
                                      pixel_filter=cfg["pixel_filter"])
     truth, sky = load_truth(truth_path), load_truth(sky_path)
     pf = PhysicalScene.from_params(truth.params)
-    lobe = fit_unreal(pf, sample_views(pf.camera), sun_attenuation=False, fit_start=False)
+    lobe = fit_unreal(pf, sun_attenuation=False, fit_start=False)
     S = B.chain(truth, sky.single, pf, lobe.params, model.params)
     res = B.attribute(S, truth.hit, truth.surface_valid,
                       B.chain_noise(truth, sky.stderr["single"], lobe.params, model.params))

@@ -25,7 +25,6 @@ from __future__ import annotations
 import json
 import time
 import xml.etree.ElementTree as ET
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -33,7 +32,8 @@ import numpy as np
 from fogref.atomic import write_text_atomic as write_text
 from fogref.errors import FogrefError
 from fogref.gbuffer import Truth, load_truth
-from fogref.mapping import PhysicalScene, fit_unreal, sample_views
+from fogref.mapping import PhysicalScene, fit_unreal
+from fogref.mapping.build import build_model
 from fogref.study import budget as B
 
 #: What-if variants of the engine settings (Unreal units, cm).
@@ -193,10 +193,10 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
 
     # -- 1. fits ------------------------------------------------------------
     log("fitting Unreal's colours, exponent and start distance ...")
-    views = sample_views(pf.camera)
-    fit = fit_unreal(pf, views)
-    lobe = fit_unreal(pf, views, sun_attenuation=False, fit_start=False)
-    model_params = replace(fit.params, **(settings or {}))
+    fit = fit_unreal(pf)  # the one fit (as --from-scene and the sweeps; cached, so the model below reuses it)
+    lobe = fit_unreal(pf, sun_attenuation=False, fit_start=False)
+    model = build_model("ue4", settings, params)
+    model_params = model.params
     fit_doc = fit.to_dict()
     fit_doc["unreal_editor"].update({k: v for k, v in {
         "Start Distance": model_params.StartDistance, "Fog Max Opacity": model_params.FogMaxOpacity,
@@ -205,9 +205,6 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
                                              "lobe_only_fit": lobe.to_dict()}, indent=2) + "\n")
 
     # -- 2. comparison --------------------------------------------------------
-    from fogref.models.ue4 import UE4ExponentialHeightFog
-
-    model = UE4ExponentialHeightFog(model_params)
     cmp_summary = None
     if compare_report:
         log("comparing (fogref.compare) ...")

@@ -1,4 +1,10 @@
-"""Find a fog model class by name: built-in, ``module:Class``, or an installed package's entry point.
+"""The one model resolver: a name -> a fog model class (built-in, ``module:Class`` or an entry point).
+
+Every place that takes a model by name calls :func:`resolve_model` (alias
+``fogref.models.get``): ``fogref compare --model``, the sweep TOML's ``[[models]] name``,
+:func:`fogref.build_model` and :func:`fogref.mapping.from_physical`.  Building an
+instance from ``--param`` values and the truth's physical scene is
+:func:`fogref.mapping.build.build_model` (it needs :mod:`fogref.mapping`, a floor above).
 
 The protocol every model follows (the built-in ones too; see ``docs/byo.md``)::
 
@@ -15,13 +21,13 @@ The protocol every model follows (the built-in ones too; see ``docs/byo.md``)::
 Any object with ``transmittance`` and ``inscatter`` attributes will do as the result
 (:class:`fogref.models.base.FogResult` is one).  The model is built with
 ``cls()``; ``--param KEY=VALUE`` needs a parameter dataclass ``cls.Params`` and
-builds ``cls(cls.Params(**values))`` (see :mod:`fogref.compare.model_factory`).
+builds ``cls(cls.Params(**values))`` (see :func:`fogref.mapping.build.build_model`).
 
 Where a name is looked up, in order:
 
 1. ``module.path:Attr``: imported with :mod:`importlib` (the module must be importable:
    installed, or on ``sys.path``/``PYTHONPATH``);
-2. a built-in model, :func:`fogref.models.get` (``ue4``, ``unity``, ``hdrp``, ...);
+2. a built-in model, registered with :func:`fogref.models.register` (``ue4``, ``unity``, ``hdrp``, ...);
 3. an installed package's entry point in the group ``fogref.models``, e.g. in its
    ``pyproject.toml``::
 
@@ -47,13 +53,16 @@ import importlib
 import inspect
 
 from fogref.errors import FogrefError
+from fogref.models import base
+
+__all__ = ["ENTRY_POINT_GROUP", "available_models", "check_protocol", "entry_point_models", "get", "resolve_model"]
 
 ENTRY_POINT_GROUP = "fogref.models"
 
 
 def _builtin_names() -> list[str]:
-    import fogref.models  # noqa: F401  (registers the built-in models)
-    from fogref.models import base
+    # the built-in models register themselves on import (the same modules fogref.models imports)
+    from fogref.models import altitude, box, filament, hdrp, ue4, unity_builtin  # noqa: F401
 
     return sorted(base._REGISTRY)
 
@@ -118,23 +127,23 @@ def check_protocol(obj, source: str):
 def _load_spec(spec: str):
     module_name, _, attr = spec.partition(":")
     if not module_name or not attr:
-        raise FogrefError(f"--model '{spec}': expected module.path:Class")
+        raise FogrefError(f"model '{spec}': expected module.path:Class")
     try:
         module = importlib.import_module(module_name)
     except ModuleNotFoundError as e:
         if e.name and module_name.startswith(e.name):
-            raise FogrefError(f"--model '{spec}': no module named '{e.name}' (is it installed, or on "
+            raise FogrefError(f"model '{spec}': no module named '{e.name}' (is it installed, or on "
                               "PYTHONPATH?)") from None
-        raise FogrefError(f"--model '{spec}': importing '{module_name}' failed: {e}") from e
+        raise FogrefError(f"model '{spec}': importing '{module_name}' failed: {e}") from e
     except Exception as e:  # the user's module raised while importing: say so, with its message
-        raise FogrefError(f"--model '{spec}': importing '{module_name}' failed: {type(e).__name__}: {e}") from e
+        raise FogrefError(f"model '{spec}': importing '{module_name}' failed: {type(e).__name__}: {e}") from e
     obj = module
     for part in attr.split("."):
         if not hasattr(obj, part):
             names = [n for n in dir(obj) if not n.startswith("_")]
             close = difflib.get_close_matches(part, names, n=1)
             hint = f"; did you mean '{close[0]}'?" if close else ""
-            raise FogrefError(f"--model '{spec}': module '{module_name}' has no attribute '{attr}'{hint}")
+            raise FogrefError(f"model '{spec}': module '{module_name}' has no attribute '{attr}'{hint}")
         obj = getattr(obj, part)
     return check_protocol(obj, spec)
 
@@ -163,15 +172,13 @@ def resolve_model(spec: str):
     if ":" in spec:
         return _load_spec(spec)
     if spec in _builtin_names():
-        from fogref.models import get
-
-        return get(spec)
+        return base._REGISTRY[spec]
     eps = entry_point_models()
     if spec in eps:
         try:
             obj = eps[spec].load()
         except Exception as e:
-            raise FogrefError(f"--model '{spec}': entry point '{eps[spec].value}' (group {ENTRY_POINT_GROUP}) "
+            raise FogrefError(f"model '{spec}': entry point '{eps[spec].value}' (group {ENTRY_POINT_GROUP}) "
                               f"failed to load: {type(e).__name__}: {e}") from e
         return check_protocol(obj, f"entry point {spec} = {eps[spec].value}")
     known = available_models()
@@ -182,56 +189,5 @@ def resolve_model(spec: str):
     raise FogrefError(f"unknown fog model '{spec}'{hint} ({listing}; or give module.path:Class)")
 
 
-def build(spec: str, params: dict | None = None, scene_params: dict | None = None):
-    """A model instance from ``spec`` (see :func:`resolve_model`), set up as ``compare`` does.
-
-    ``params``: parameters by name (needs ``cls.Params``); ``scene_params``: the truth's
-    ``fogref.params`` for ``from_physical`` (then ``params`` override).  Without either,
-    ``cls()``.  An object that is already an instance is returned as is (``params``
-    must then be empty).
-
-    Examples
-    --------
-    >>> build("ue4", {"FogDensity": 0.02}).params.FogDensity
-    0.02
-    """
-    obj = resolve_model(spec)
-    if not inspect.isclass(obj):
-        if params or scene_params is not None:
-            raise FogrefError(f"--model '{spec}' names an instance, not a class: it cannot take parameters "
-                              "or --from-scene")
-        return obj
-    if not params and scene_params is None:
-        try:
-            return obj()
-        except TypeError as e:
-            raise FogrefError(f"--model '{spec}': {obj.__name__}() needs arguments ({e}); give --param "
-                              "KEY=VALUE (with a Params dataclass) or --from-scene (with from_physical)") from e
-    _check_param_names(spec, obj, params or {})
-    from fogref.compare.model_factory import build_model
-
-    return build_model(obj, params, scene_params)
-
-
-def _check_param_names(spec: str, cls, params: dict) -> None:
-    """FogrefError with a "did you mean" for a parameter name the model's ``Params`` lacks.
-
-    Examples
-    --------
-    >>> build("ue4", {"FogDensty": 0.02})
-    Traceback (most recent call last):
-    ...
-    fogref.errors.FogrefError: model 'ue4': no parameter 'FogDensty'; did you mean 'FogDensity'? ...
-    """
-    import dataclasses
-
-    params_class = getattr(cls, "Params", None)
-    if not (params and isinstance(params_class, type) and dataclasses.is_dataclass(params_class)):
-        return
-    names = [f.name for f in dataclasses.fields(params_class) if f.init]
-    for key in params:
-        if key not in names:
-            close = difflib.get_close_matches(key, names, n=1)
-            hint = f"; did you mean '{close[0]}'?" if close else ""
-            raise FogrefError(f"model '{getattr(cls, 'name', spec)}': no parameter '{key}'{hint} "
-                              f"(parameters: {', '.join(names)})")
+#: ``fogref.models.get``: the same resolver under the registry's old name.
+get = resolve_model

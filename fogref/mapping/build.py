@@ -1,0 +1,148 @@
+"""The one model builder: a model instance from a name (or class), ``--param`` values and the truth's scene.
+
+``fogref compare --model/--param/--from-scene``, the sweep's ``[[models]]`` tables,
+``fogref.build_model`` and the Python API all call :func:`build_model`.  The class
+comes from the one resolver, :func:`fogref.models.resolve.resolve_model`; with a
+scene, the starting parameters come from :func:`fogref.mapping.from_physical` (the
+mapping registry, or the class's own ``from_physical(physical)`` classmethod) and
+``params`` override them by name.  A model's parameters are a dataclass
+``cls.Params``; it is built as ``cls(cls.Params(**values))`` and keeps them as
+``model.params``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import inspect
+import json
+
+from fogref.errors import FogrefError
+
+__all__ = ["build_model", "current_parameters", "parse_param_assignments"]
+
+
+def parse_param_assignments(assignments) -> dict:
+    """``["density=0.02", "color=[1, 0.9, 0.8]", "mode=exp2"]`` -> dict.
+
+    A value is read as JSON when it parses (numbers, lists, booleans, null), else kept
+    as a string.  Raises FogrefError for an item without ``=`` or with an empty name.
+
+    Examples
+    --------
+    >>> parse_param_assignments(["FogDensity=0.02", "mode=exp2"])
+    {'FogDensity': 0.02, 'mode': 'exp2'}
+    """
+    out: dict = {}
+    for item in assignments or ():
+        key, sep, value = str(item).partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise FogrefError(f"--param expects KEY=VALUE, got '{item}'")
+        try:
+            out[key] = json.loads(value)
+        except ValueError:
+            out[key] = value
+    return out
+
+
+def _label(cls) -> str:
+    return getattr(cls, "name", None) or getattr(cls, "__name__", type(cls).__name__)
+
+
+def current_parameters(model) -> dict:
+    """The parameters of a model instance as a dict: the fields of its ``params`` dataclass."""
+    params = getattr(model, "params", None)
+    if params is None or not dataclasses.is_dataclass(params) or isinstance(params, type):
+        raise FogrefError(f"model '{_label(type(model))}' keeps no parameter dataclass in 'params'")
+    return {f.name: getattr(params, f.name) for f in dataclasses.fields(params) if f.init}
+
+
+def _params_class(cls: type, params: dict) -> type:
+    params_class = getattr(cls, "Params", None)
+    if not (isinstance(params_class, type) and dataclasses.is_dataclass(params_class)):
+        raise FogrefError(f"model '{_label(cls)}': cannot set parameters {sorted(params)}: "
+                          f"it has no parameter dataclass 'Params'")
+    names = [f.name for f in dataclasses.fields(params_class) if f.init]
+    for key in params:
+        if key not in names:
+            close = difflib.get_close_matches(key, names, n=1)
+            hint = f"; did you mean '{close[0]}'?" if close else ""
+            raise FogrefError(f"model '{_label(cls)}': no parameter '{key}'{hint} (parameters: {', '.join(names)})")
+    return params_class
+
+
+def _construct(cls: type, params: dict):
+    params_class = _params_class(cls, params)
+    try:
+        return cls(params_class(**params))
+    except (TypeError, ValueError, KeyError) as e:
+        raise FogrefError(f"model '{_label(cls)}': cannot set parameters {sorted(params)}: {e}") from e
+
+
+def build_model(model, params: dict | None = None, scene_params: dict | None = None):
+    """A model instance, set up as ``compare`` does.
+
+    Parameters
+    ----------
+    model : str, type or object
+        A name for :func:`~fogref.models.resolve.resolve_model` (``"ue4"``,
+        ``"my_pkg.fog:MyFog"``, an entry point), a model class, or an instance
+        (returned as is; ``params`` and ``scene_params`` must then be empty).
+    params : dict, optional
+        Parameters by name, in the model's own names and units (needs ``cls.Params``;
+        an unknown name gets a "did you mean").
+    scene_params : dict, optional
+        The truth's ``fogref.params``: the model starts from
+        :func:`fogref.mapping.from_physical` of that scene, then ``params`` override.
+
+    Without ``params`` and ``scene_params``: ``cls()``.
+
+    Raises
+    ------
+    FogrefError
+        Unknown model, unknown or invalid parameter, no physical mapping for
+        ``scene_params``, a class that cannot be built without arguments.
+
+    Examples
+    --------
+    >>> build_model("ue4", {"FogDensity": 0.02}).params.FogDensity
+    0.02
+    >>> build_model("ue4", {"FogDensty": 0.02})
+    Traceback (most recent call last):
+    ...
+    fogref.errors.FogrefError: model 'ue4': no parameter 'FogDensty'; did you mean 'FogDensity'? ...
+    """
+    from fogref.models.resolve import resolve_model
+
+    cls = resolve_model(model) if isinstance(model, str) else model
+    params = dict(params or {})
+    if not inspect.isclass(cls):
+        if params or scene_params is not None:
+            raise FogrefError(f"model '{model}' names an instance, not a class: it cannot take parameters "
+                              "or --from-scene")
+        return cls
+    if scene_params is None:
+        if params:
+            return _construct(cls, params)
+        try:
+            return cls()
+        except TypeError as e:
+            raise FogrefError(f"model '{_label(cls)}': {cls.__name__}() needs arguments ({e}); give --param "
+                              "KEY=VALUE (with a Params dataclass) or --from-scene (with from_physical)") from e
+    from fogref.mapping.physical import PhysicalScene
+    from fogref.mapping.registry import from_physical, has_mapping
+
+    if not has_mapping(cls):
+        raise FogrefError(
+            f"model '{_label(cls)}' has no physical mapping (fogref.mapping) and no "
+            f"from_physical(physical) classmethod, so --from-scene cannot derive its parameters; "
+            f"set them with --param KEY=VALUE instead")
+    built = from_physical(cls, PhysicalScene.from_params(scene_params))
+    if not params:
+        return built
+    if dataclasses.is_dataclass(getattr(cls, "Params", None)):
+        _params_class(cls, params)  # an unknown name: "did you mean" before the merge
+    merged = current_parameters(built)
+    merged.update(params)
+    return _construct(cls, merged)
