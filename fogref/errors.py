@@ -14,6 +14,21 @@ Examples
 """
 
 
+import difflib
+
+
+def did_you_mean(word: str, options) -> str:
+    """``"; did you mean 'x'?"`` for the closest of ``options`` to ``word``, else ``""``.
+
+    >>> did_you_mean("skyy", ["all", "surface", "sky"])
+    "; did you mean 'sky'?"
+    >>> did_you_mean("zzz", ["sky"])
+    ''
+    """
+    close = difflib.get_close_matches(str(word), list(options), n=1)
+    return f"; did you mean '{close[0]}'?" if close else ""
+
+
 class FogrefError(Exception):
     """Base class of fogref's user-facing errors."""
 

@@ -77,7 +77,6 @@ Examples
 
 from __future__ import annotations
 
-import difflib
 import json
 import math
 from dataclasses import dataclass, field
@@ -86,7 +85,7 @@ from pathlib import Path
 import numpy as np
 
 from fogref.compare import noise
-from fogref.errors import FogrefError
+from fogref.errors import FogrefError, did_you_mean
 from fogref.gbuffer import Truth, nonfinite_report
 from fogref.models.base import SKY_DISTANCE as DEFAULT_SKY_DISTANCE
 
@@ -564,11 +563,6 @@ class CheckResult:
         return out / "errors.exr"
 
 
-def _did_you_mean(word: str, options) -> str:
-    close = difflib.get_close_matches(word, list(options), n=1, cutoff=0.6)
-    return f"; did you mean '{close[0]}'?" if close else ""
-
-
 def _tolerance_table(tolerances, regions=None) -> dict:
     """Normalise ``tolerances`` to ``{(part, region|None): {metric: tol}}``.
 
@@ -584,16 +578,16 @@ def _tolerance_table(tolerances, regions=None) -> dict:
     for key, value in (tolerances or {}).items():
         part, _, region = str(key).partition("/")
         if part not in PART_NAMES:
-            raise FogrefError(f"tolerances: unknown part '{part}' in '{key}'{_did_you_mean(part, PART_NAMES)} "
+            raise FogrefError(f"tolerances: unknown part '{part}' in '{key}'{did_you_mean(part, PART_NAMES)} "
                               f"(parts: {', '.join(PART_NAMES)}; write 'part' or 'part/region')")
         if region and regions is not None and region not in regions:
-            raise FogrefError(f"tolerances: unknown region '{region}' in '{key}'{_did_you_mean(region, regions)} "
+            raise FogrefError(f"tolerances: unknown region '{region}' in '{key}'{did_you_mean(region, regions)} "
                               f"(regions: {', '.join(regions)})")
         spec = value if isinstance(value, dict) else {"rel_rmse": value}
         clean = {}
         for metric, tol in spec.items():
             if metric not in METRICS:
-                raise FogrefError(f"tolerances['{key}']: unknown metric '{metric}'{_did_you_mean(metric, METRICS)} "
+                raise FogrefError(f"tolerances['{key}']: unknown metric '{metric}'{did_you_mean(metric, METRICS)} "
                                   f"(metrics: {', '.join(METRICS)})")
             if tol is not None:
                 try:

@@ -13,11 +13,10 @@ mapping registry, or the class's own ``from_physical(physical)`` classmethod) an
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import inspect
 import json
 
-from fogref.errors import FogrefError
+from fogref.errors import FogrefError, did_you_mean
 
 __all__ = ["build_model", "current_parameters", "parse_param_assignments"]
 
@@ -66,9 +65,7 @@ def _params_class(cls: type, params: dict) -> type:
     names = [f.name for f in dataclasses.fields(params_class) if f.init]
     for key in params:
         if key not in names:
-            close = difflib.get_close_matches(key, names, n=1)
-            hint = f"; did you mean '{close[0]}'?" if close else ""
-            raise FogrefError(f"model '{_label(cls)}': no parameter '{key}'{hint} (parameters: {', '.join(names)})")
+            raise FogrefError(f"model '{_label(cls)}': no parameter '{key}'{did_you_mean(key, names)} (parameters: {', '.join(names)})")
     return params_class
 
 

@@ -48,11 +48,10 @@ fogref.errors.FogrefError: unknown fog model 'eu4'; did you mean 'ue4'? (built-i
 
 from __future__ import annotations
 
-import difflib
 import importlib
 import inspect
 
-from fogref.errors import FogrefError
+from fogref.errors import FogrefError, did_you_mean
 from fogref.models import base
 
 __all__ = ["ENTRY_POINT_GROUP", "available_models", "check_protocol", "entry_point_models", "get", "resolve_model"]
@@ -141,8 +140,7 @@ def _load_spec(spec: str):
     for part in attr.split("."):
         if not hasattr(obj, part):
             names = [n for n in dir(obj) if not n.startswith("_")]
-            close = difflib.get_close_matches(part, names, n=1)
-            hint = f"; did you mean '{close[0]}'?" if close else ""
+            hint = did_you_mean(part, names)
             raise FogrefError(f"model '{spec}': module '{module_name}' has no attribute '{attr}'{hint}")
         obj = getattr(obj, part)
     return check_protocol(obj, spec)
@@ -182,8 +180,7 @@ def resolve_model(spec: str):
                               f"failed to load: {type(e).__name__}: {e}") from e
         return check_protocol(obj, f"entry point {spec} = {eps[spec].value}")
     known = available_models()
-    close = difflib.get_close_matches(spec, known, n=1)
-    hint = f"; did you mean '{close[0]}'?" if close else ""
+    hint = did_you_mean(spec, known)
     extra = sorted(eps)
     listing = f"built-in: {', '.join(_builtin_names())}" + (f"; installed: {', '.join(extra)}" if extra else "")
     raise FogrefError(f"unknown fog model '{spec}'{hint} ({listing}; or give module.path:Class)")
