@@ -10,23 +10,18 @@ is a ``constant`` (or ``envmap``) emitter.
 from __future__ import annotations
 
 import math
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from fogref.errors import FogrefError, ParameterError
 from fogref.media.params import medium_from_params
-
-
-def _subst(value: str, defaults: dict) -> str:
-    if value and "$" in value:
-        for k in sorted(defaults, key=len, reverse=True):
-            value = value.replace("$" + k, str(defaults[k]))
-    return value
+from fogref.render.scene_defaults import parse_scene, resolve, substitute
+from fogref.render.sun import sun_direction_from_to_world
+from fogref.render.variant import set_variant
 
 
 def _value(el, defaults):
     tag = el.tag
-    v = _subst(el.get("value", ""), defaults)
+    v = substitute(el.get("value", ""), defaults)
     if tag in ("float", "integer"):
         try:
             return float(v)
@@ -36,7 +31,7 @@ def _value(el, defaults):
         return v.lower() == "true"
     if tag in ("rgb", "point", "vector", "spectrum"):
         if v == "" and tag in ("point", "vector"):
-            return [float(_subst(el.get(c, "0"), defaults)) for c in "xyz"]
+            return [float(substitute(el.get(c, "0"), defaults)) for c in "xyz"]
         parts = [float(x) for x in v.replace(",", " ").split()]
         return parts * 3 if len(parts) == 1 else parts
     return v
@@ -65,15 +60,8 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
     that can't be parsed.
     """
     path = Path(path)
-    if not path.is_file():
-        raise FogrefError(f"{path}: no such scene file")
-    try:
-        root = ET.parse(path).getroot()
-    except ET.ParseError as e:
-        raise FogrefError(f"{path}: malformed XML ({e})") from None
-    defaults = {d.get("name"): d.get("value") for d in root.iter("default")}
-    check_overrides(path, defaults, overrides)
-    defaults.update({k: str(v) for k, v in (overrides or {}).items()})
+    root = parse_scene(path)
+    defaults = resolve(root, overrides, source=path)
     check_supported(path, root)
     desc: dict = {"scene": path.name, "medium": None, "sun": None, "sky": None, "camera": None,
                   "integrator": None}
@@ -90,11 +78,9 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
         if t == "directional":
             d = p.get("direction")
             if d is None:  # oriented by to_world (the shipped scenes: $sun_elevation, $sun_azimuth)
-                from fogref.render.sun import sun_direction_from_to_world
-
                 tw = em.find("transform[@name='to_world']")
                 d = [0.0, 0.0, 1.0] if tw is None else [
-                    -x for x in sun_direction_from_to_world(tw, lambda s: _subst(s, defaults), str(path))]
+                    -x for x in sun_direction_from_to_world(tw, lambda s: substitute(s, defaults), str(path))]
             n = math.sqrt(sum(x * x for x in d)) or 1.0
             E = p.get("irradiance", [1.0, 1.0, 1.0])
             if any((not math.isfinite(x)) or x < 0 for x in E):
@@ -110,43 +96,6 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
 
 #: Emitters the renderer and the physical description (sun + sky) both handle.
 SUPPORTED_EMITTERS = {"directional": "the sun", "constant": "a uniform sky", "envmap": "an environment-map sky"}
-#: Integer $defaults that size the image.
-_RESOLUTION = ("res", "resy")
-
-
-def check_overrides(path: Path, defaults: dict, overrides: dict | None) -> None:
-    """Refuse ``--set`` names the scene does not declare and values that don't fit them.
-
-    A name must be one of the scene's ``<default>``s (with a "did you mean");
-    a value replacing a numeric default must be numeric (as many numbers as the
-    default has); ``res``/``resy`` must be integers in [1, 65536].
-    """
-    import difflib
-
-    for name, value in (overrides or {}).items():
-        if name not in defaults:
-            close = difflib.get_close_matches(name, defaults, n=1)
-            hint = f" (did you mean '{close[0]}'?)" if close else ""
-            raise ParameterError(str(path), name, f"--set {name}={value}: the scene has no $default '{name}'"
-                                 f"{hint}; it has: {', '.join(sorted(defaults))}")
-        old, new = _numbers(defaults[name]), _numbers(str(value))
-        if old is not None and (new is None or len(new) not in (1, len(old))):
-            count = f"1 or {len(old)} numbers" if len(old) > 1 else "1 number"
-            raise ParameterError(str(path), name, f"--set {name}={value}: expected {count} like the "
-                                 f"scene's default '{defaults[name]}'")
-        if new is not None and not all(math.isfinite(x) for x in new):
-            raise ParameterError(str(path), name, f"--set {name}={value}: values must be finite")
-        if name in _RESOLUTION and not (new and float(new[0]).is_integer() and 1 <= new[0] <= 65536):
-            raise ParameterError(str(path), name, f"--set {name}={value}: an integer in [1, 65536] pixels")
-
-
-def _numbers(text: str):
-    try:
-        return [float(x) for x in text.replace(",", " ").split()] or None
-    except ValueError:
-        return None
-
-
 def check_supported(path: Path, root) -> None:
     """Refuse scene features that fogpath or the physical description would ignore.
 
@@ -184,8 +133,6 @@ def load_scene(path, overrides: dict | None = None):
     Sets Mitsuba up first (:func:`fogref.render.variant.set_variant`: the variant
     already set, else ``$FOGREF_VARIANT``, else ``llvm_ad_rgb``).
     """
-    from fogref.render.variant import set_variant
-
     set_variant()
     import mitsuba as mi
 
@@ -212,8 +159,6 @@ def sensor_camera(sensor) -> dict:
     ``forward + u tan(fov/2) right + v tan(fov/2) (H/W) up``, ``u = 2 (i + 0.5)/W - 1``,
     ``v = 1 - 2 (j + 0.5)/H``.
     """
-    import math
-
     import mitsuba as mi
     import numpy as np
 

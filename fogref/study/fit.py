@@ -8,20 +8,24 @@ reports.
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 
+from fogref.atomic import save_figure_atomic as save_figure
+from fogref.atomic import write_text_atomic as write_text
 from fogref.errors import FogrefError
 from fogref.mapping import PhysicalScene, lobe_fit
 from fogref.media import NP, hg_phase
+from fogref.render.scene import describe_scene
+from fogref.render.scene_defaults import parse_scene, resolve, substitute
 
 
 def physical_from_scene(path, camera=None) -> PhysicalScene:
     """The physical scene of a fogref XML file (no Mitsuba needed): fog, sun, sky and
     the sensor's ``lookat`` origin (``camera`` [m] overrides it)."""
-    from fogref.render.scene import describe_scene
-
     desc = describe_scene(path)
     if desc["medium"] is None:
         raise FogrefError(f"{path}: no <medium type=\"heightfog\"> in the scene")
@@ -32,28 +36,18 @@ def physical_from_scene(path, camera=None) -> PhysicalScene:
 
 def _lookat_origin(path):
     """The first sensor's ``lookat`` origin [m], with the scene's ``$defaults`` substituted."""
-    import xml.etree.ElementTree as ET
-
-    root = ET.parse(path).getroot()
-    defaults = {d.get("name"): d.get("value") for d in root.iter("default")}
+    root = parse_scene(path)
+    defaults = resolve(root, source=path)
     for s in root.iter("sensor"):
         la = s.find(".//lookat")
         if la is not None and la.get("origin"):
-            origin = la.get("origin")
-            for k in sorted(defaults, key=len, reverse=True):
-                origin = origin.replace("$" + k, str(defaults[k]))
+            origin = substitute(la.get("origin"), defaults)
             return tuple(float(x) for x in origin.replace(",", " ").split())
     return None
 
 
 def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -> dict:
     """``lobe_table.json``, ``lobe_table.md`` and ``lobe_table.png`` in ``out_dir``."""
-    import json
-    from pathlib import Path
-
-    from fogref.atomic import save_figure_atomic as save_figure
-    from fogref.atomic import write_text_atomic as write_text
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     doc = {"description": "Best Unreal cosine lobe a + c max(mu,0)^n for Henyey-Greenstein p_g(mu); "

@@ -114,10 +114,9 @@ def overrides_used_by(scene: Path, overrides: dict | None) -> dict:
     >>> overrides_used_by(p, {"g": 0.5, "sun_elevation": 4, "sun": 1})
     {'g': 0.5, 'sun': 1}
     """
-    import re
+    from fogref.render.scene_defaults import overrides_used_by as used  # the one reader of $defaults
 
-    text = Path(scene).read_text()
-    return {k: v for k, v in (overrides or {}).items() if re.search(r"\$" + re.escape(k) + r"(?!\w)", text)}
+    return used(scene, overrides)
 
 
 def _render_cached(scene: Path, out: Path, spp: int, seed: int, overrides: dict, log,
