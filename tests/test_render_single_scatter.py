@@ -50,7 +50,7 @@ def test_single_channel_matches_closed_form(mitsuba, layers):
     mi = mitsuba
     from fogref.render.scene import load_scene
 
-    overrides = {"res": W, "resy": H, "sky": "0, 0, 0", "max_depth": 2, **layers}
+    overrides = {"res": W, "resy": H, "sky_radiance": "0, 0, 0", "max_depth": 2, **layers}
     scene, desc = load_scene(SCENES / "open_plane.xml", overrides)
     names = ["R", "G", "B"] + list(scene.integrator().aov_names())
     i0 = names.index("single.R")
