@@ -20,7 +20,9 @@ from fogref.cli import main
 from fogref.errors import FogrefError, ParameterError
 from fogref.media.params import medium_from_params
 from fogref.models.ue4 import SecondFogData, UE4FogParams, ue4_to_medium, unreal_to_sigma
+from fogref.render import scene_templates
 from fogref.render.scene import describe_scene
+from fogref.render.scene_defaults import OPTIONAL_GROUPS, VOCABULARY, declared, used_names, vocabulary_groups
 from fogref.render.scene_writer import UNREAL_IGNORED, fog_from_unreal, write_scene
 from fogref.render.sun import sun_direction_from_angles
 
@@ -145,27 +147,57 @@ def test_unreal_without_physical_counterpart_is_noted(tmp_path, capsys):
 
 # --------------------------------------------------------------------------- geometry
 
-def _shapes(root):
-    out = []
-    for s in root.findall("shape"):
-        ops = []
-        for op in s.findall("transform/*"):
-            ops.append((op.tag, {k: float(v) for k, v in op.attrib.items()}))
-        pts = [(p.tag, {k: float(v) for k, v in p.attrib.items() if k != "name"}) for p in s.findall("point")]
-        radius = [float(f.get("value")) for f in s.findall("float[@name='radius']")]
-        out.append((s.get("type"), ops, pts, radius, s.find("ref").get("id")))
-    return out
+def _geometry_text(root):
+    """The BSDFs and shapes of a scene as canonical XML text."""
+    return [ET.canonicalize(ET.tostring(el), strip_text=True) for el in root if el.tag in ("bsdf", "shape")]
 
 
-def test_valley_template_is_the_shipped_valley(tmp_path):
+def test_valley_template_reads_the_shipped_valley(tmp_path, monkeypatch):
+    """The template copies scenes/valley.xml's geometry (no second copy to keep in sync);
+    ``ground_size`` changes only the ground's scale."""
     out = tmp_path / "v.xml"
     write_scene(out, geometry="valley")
     assert_fogref_scene(out)
-    mine, shipped = ET.parse(out).getroot(), ET.parse(SCENES / "valley.xml").getroot()
-    assert _shapes(mine) == _shapes(shipped)
-    refl = {b.get("id"): [float(x) for x in b.find("rgb").get("value").split(",")] for b in shipped.findall("bsdf")}
-    assert {b.get("id"): [float(x) for x in b.find("rgb").get("value").split(",")]
-            for b in mine.findall("bsdf")} == refl
+    assert _geometry_text(ET.parse(out).getroot()) == _geometry_text(ET.parse(SCENES / "valley.xml").getroot())
+    write_scene(out, geometry="valley", ground_size=500, overwrite=True)
+    assert ET.parse(out).getroot().find("shape[@id='ground']/transform/scale").get("value") == "500.0"
+    # a changed valley.xml changes the template
+    other = tmp_path / "valley.xml"
+    other.write_text((SCENES / "valley.xml").read_text().replace('x="15" y="0" z="90"', 'x="16" y="0" z="90"'))
+    monkeypatch.setattr(scene_templates, "VALLEY_SCENE", other)
+    write_scene(out, geometry="valley", overwrite=True)
+    assert ET.parse(out).getroot().find("shape[@type='sphere']/point").get("x") == "16"
+
+
+# --------------------------------------------------------------------------- one vocabulary
+
+def _written_scenes(tmp_path):
+    mesh = tiny_obj(tmp_path / "m.obj")
+    kinds = {"plane": {}, "valley": {"geometry": "valley"}, "no_sky": {"sky_radiance": None},
+             "bounds": {"fog": {"bounds_min": [-1, 0, -1], "bounds_max": [1, 1, 1]}},
+             "unreal": {"unreal": UE}, "mesh": {"geometry": str(mesh)}}
+    for name, kw in kinds.items():
+        out = tmp_path / f"{name}.xml"
+        write_scene(out, on_note=lambda n: None, **kw)
+        yield out
+
+
+def test_every_scene_speaks_one_vocabulary(tmp_path):
+    """Every shipped scene and every written scene declares the same $default names:
+    :data:`VOCABULARY` exactly, plus only whole optional groups (a second fog layer,
+    fog bounds, a sky, a settable surface reflectance) where the concept applies.
+    Every declared name is used and every used name declared."""
+    scenes = sorted(SCENES.glob("*.xml")) + list(_written_scenes(tmp_path))
+    assert len(scenes) >= 10
+    for path in scenes:
+        names = set(declared(path))
+        wrong, groups = vocabulary_groups(names)
+        assert wrong == [], f"{path.name}: {wrong}"
+        assert names == set(VOCABULARY).union(*(OPTIONAL_GROUPS[g] for g in groups)), path.name
+        assert names == used_names(path), f"{path.name}: {names ^ used_names(path)}"
+    shipped = {p.name: vocabulary_groups(declared(p))[1] for p in SCENES.glob("*.xml")}
+    assert all("sky" in g for g in shipped.values()), shipped
+    assert "second_layer" in shipped["two_layer_sun.xml"]
 
 
 def test_obj_mesh_template(tmp_path):

@@ -50,8 +50,8 @@ OPTIONAL_GROUPS = {
 _RESOLUTION = ("res", "resy")
 
 
-def parse_scene(path) -> ET.Element:
-    """The root element of a scene file.
+def parse_scene(path, comments: bool = False) -> ET.Element:
+    """The root element of a scene file (with its ``<!-- -->`` comments as elements if ``comments``).
 
     Raises :class:`~fogref.errors.FogrefError` naming the file when it does not exist
     or is not well-formed XML.
@@ -59,8 +59,9 @@ def parse_scene(path) -> ET.Element:
     path = Path(path)
     if not path.is_file():
         raise FogrefError(f"{path}: no such scene file")
+    parser = ET.XMLParser(target=ET.TreeBuilder(insert_comments=True)) if comments else None
     try:
-        return ET.parse(path).getroot()
+        return ET.parse(path, parser).getroot()
     except ET.ParseError as e:
         raise FogrefError(f"{path}: malformed XML ({e})") from None
 

@@ -1,0 +1,171 @@
+"""Unreal's Exponential Height Fog editor values -> the physical ``heightfog`` of a fogref scene.
+
+:func:`fog_from_unreal` maps FogDensity, FogHeightFalloff, FogHeight and
+SecondFogData exactly (:func:`fogref.models.ue4.ue4_to_medium`: Unreal is z-up,
+centimetres; ``sigma_t = 100 (ln 2)^2 FogDensity/1000`` per metre at
+``FogHeight/100`` m, ``falloff = 100 ln 2 FogHeightFalloff/1000`` per metre; see
+``docs/design.md`` section 3.1).  The editor values with no physical counterpart
+(:data:`UNREAL_IGNORED`: FogInscatteringColor, DirectionalInscattering*,
+StartDistance, FogMaxOpacity, FogCutoffDistance, EndDistance) are checked and
+reported as notes, never silently dropped.
+"""
+
+from __future__ import annotations
+
+import difflib
+
+from fogref.errors import ParameterError
+from fogref.mapping.fog_input import PHYSICAL, SOURCE, _check, _fmt, _vec, fog_from_physical
+from fogref.models.ue4 import CM_PER_M, SecondFogData, UE4FogParams, sigma_to_unreal, ue4_to_medium, unreal_to_sigma
+
+__all__ = ["UNREAL_IGNORED", "UNREAL_MAPPED", "flat_unreal", "fog_from_unreal"]
+
+#: Unreal editor values that map exactly onto the physical fog: name -> command-line option.
+UNREAL_MAPPED = {
+    "FogDensity": "--ue-fog-density",
+    "FogHeightFalloff": "--ue-fog-height-falloff",
+    "FogHeight": "--ue-fog-height",
+    "SecondFogData.FogDensity": "--ue-second-fog-density",
+    "SecondFogData.FogHeightFalloff": "--ue-second-fog-height-falloff",
+    "SecondFogData.FogHeightOffset": "--ue-second-fog-height-offset",
+}
+#: Unreal editor values with no physical counterpart: name -> (option, kind, why it is ignored).
+UNREAL_IGNORED = {
+    "FogInscatteringColor": ("--ue-fog-inscattering-color", "rgb",
+                             "it stands for albedo x sky radiance (a fit output, fogref fit); the truth's sky is "
+                             "sky_radiance and its albedo is albedo"),
+    "DirectionalInscatteringExponent": ("--ue-directional-inscattering-exponent", "number",
+                                        "a cosine lobe is not a phase function; the truth scatters with "
+                                        "Henyey-Greenstein g"),
+    "DirectionalInscatteringColor": ("--ue-directional-inscattering-color", "rgb",
+                                     "it stands for albedo x sun irradiance x phase; the truth's sun is "
+                                     "sun_irradiance"),
+    "DirectionalInscatteringStartDistance": ("--ue-directional-inscattering-start-distance", "number",
+                                             "physical fog scatters sunlight from the camera on"),
+    "StartDistance": ("--ue-start-distance", "number", "physical fog starts at the camera"),
+    "FogMaxOpacity": ("--ue-fog-max-opacity", "number", "physical transmittance has no clamp"),
+    "FogCutoffDistance": ("--ue-fog-cutoff-distance", "number", "physical fog has no cutoff distance"),
+    "EndDistance": ("--ue-end-distance", "number", "physical fog does not end at a distance"),
+}
+
+
+def _unreal_value(unreal: dict, key: str):
+    if key.startswith("SecondFogData."):
+        sfd = unreal.get("SecondFogData") or {}
+        if not isinstance(sfd, dict):
+            raise ParameterError(SOURCE, "SecondFogData", "expected a dict of FogDensity, FogHeightFalloff, "
+                                                          "FogHeightOffset")
+        return sfd.get(key.split(".", 1)[1])
+    return unreal.get(key)
+
+
+def fog_from_unreal(unreal: dict, *, albedo=0.9, g: float = 0.6) -> tuple[dict, list[str]]:
+    """The ``heightfog`` parameters of Unreal editor values, through the exact mapping.
+
+    Parameters
+    ----------
+    unreal : dict
+        Unreal's Exponential Height Fog component, in the editor's names and units:
+        ``FogDensity`` (default 0.02), ``FogHeightFalloff`` (default 0.2),
+        ``FogHeight`` [cm, Unreal z-up world Z; default 0] and ``SecondFogData``, a
+        dict of ``FogDensity`` (default 0: no second layer), ``FogHeightFalloff``
+        (default 0.2) and ``FogHeightOffset`` [cm, relative to FogHeight]. These map
+        exactly (:func:`fogref.models.ue4.ue4_to_medium`). The values of
+        :data:`UNREAL_IGNORED` (FogInscatteringColor, DirectionalInscatteringExponent,
+        ...) have no physical counterpart: they are checked, kept out of the fog
+        and reported in the notes.
+    albedo : float or 3 floats
+        Single-scattering albedo in [0, 1] (Unreal has none).
+    g : float
+        Henyey-Greenstein asymmetry in [-0.999, 0.999] (Unreal has none).
+
+    Returns
+    -------
+    (dict, list of str)
+        The fog as :func:`fog_from_physical` returns it, and one note per ignored
+        Unreal value (what it was and why it is ignored).
+
+    Raises
+    ------
+    fogref.errors.ParameterError
+        Naming the Unreal value, its command-line option and the allowed range.
+
+    Examples
+    --------
+    >>> from fogref.models.ue4 import unreal_to_sigma
+    >>> fog, notes = fog_from_unreal({"FogDensity": 0.02, "FogHeightFalloff": 0.2, "FogHeight": 150.0,
+    ...                               "DirectionalInscatteringExponent": 4.0})
+    >>> (fog["sigma_t"], fog["falloff"]) == unreal_to_sigma(0.02, 0.2), fog["fog_height"]
+    (True, 1.5)
+    >>> print(notes[0])
+    Unreal DirectionalInscatteringExponent = 4.0 is ignored: a cosine lobe is not a phase function; the truth scatters with Henyey-Greenstein g
+    """
+    if not isinstance(unreal, dict):
+        raise ParameterError(SOURCE, "unreal", f"expected a dict of Unreal editor values, got {unreal!r}")
+    known = {k.split(".")[0] for k in UNREAL_MAPPED} | set(UNREAL_IGNORED)
+    unknown = sorted(set(unreal) - known)
+    if unknown:
+        close = difflib.get_close_matches(unknown[0], sorted(known), n=1)
+        hint = f" (did you mean '{close[0]}'?)" if close else ""
+        raise ParameterError(SOURCE, unknown[0], f"not an Unreal Exponential Height Fog value{hint}; "
+                                                 f"known: {', '.join(sorted(known))}")
+    # the editor ranges that keep the physical fog inside what fogref renders (sigma_t <= 1e2, falloff <= 1e3)
+    d_max, f_max = sigma_to_unreal(PHYSICAL["sigma_t"][3], PHYSICAL["falloff"][3])
+    h_max = PHYSICAL["height"][3] * CM_PER_M
+    limits = {"FogDensity": (0.0, d_max, "", 0.02), "FogHeightFalloff": (0.0, f_max, "", 0.2),
+              "FogHeight": (-h_max, h_max, "cm", 0.0),
+              "SecondFogData.FogDensity": (0.0, d_max, "", 0.0),
+              "SecondFogData.FogHeightFalloff": (0.0, f_max, "", 0.2),
+              "SecondFogData.FogHeightOffset": (-h_max, h_max, "cm", 0.0)}
+    v = {}
+    for key, opt in UNREAL_MAPPED.items():
+        lo, hi, unit, default = limits[key]
+        raw = _unreal_value(unreal, key)
+        v[key] = _check(default if raw is None else raw, key, opt, "number", lo, hi, unit)
+    sfd = unreal.get("SecondFogData") or {}
+    extra = sorted(set(sfd) - {"FogDensity", "FogHeightFalloff", "FogHeightOffset"})
+    if extra:
+        raise ParameterError(SOURCE, f"SecondFogData.{extra[0]}", "SecondFogData has FogDensity, "
+                                                                  "FogHeightFalloff and FogHeightOffset")
+    notes = []
+    for key, (opt, kind, why) in UNREAL_IGNORED.items():
+        if unreal.get(key) is None:
+            continue
+        val = _check(unreal[key], key, opt, "rgb" if kind == "rgb" else "number")
+        shown = _vec(val) if isinstance(val, list) else _fmt(val)
+        notes.append(f"Unreal {key} = {shown} is ignored: {why}")
+    params = UE4FogParams(FogDensity=v["FogDensity"], FogHeightFalloff=v["FogHeightFalloff"],
+                          FogHeight=v["FogHeight"],
+                          SecondFogData=SecondFogData(v["SecondFogData.FogDensity"],
+                                                      v["SecondFogData.FogHeightFalloff"],
+                                                      v["SecondFogData.FogHeightOffset"]))
+    medium = ue4_to_medium(params)
+    layers = medium.layers
+    if params.FogDensity == 0 and params.SecondFogData.FogDensity == 0:  # no fog: keep layer 1's shape
+        _, b = unreal_to_sigma(0.0, params.FogHeightFalloff)
+        fog = {"sigma_t": 0.0, "density": 1.0, "falloff": b, "height": params.FogHeight / CM_PER_M}
+    else:
+        fog = {"sigma_t": medium.sigma_t[0], "density": layers[0].density, "falloff": layers[0].falloff,
+               "height": layers[0].height}
+    if len(layers) > 1:
+        fog.update(density2=layers[1].density, falloff2=layers[1].falloff, height2=layers[1].height)
+    else:  # no second layer (density2 = 0), but its shape stays settable with --set
+        _, b2 = unreal_to_sigma(0.0, params.SecondFogData.FogHeightFalloff)
+        fog.update(density2=0.0, falloff2=b2,
+                   height2=(params.FogHeight + params.SecondFogData.FogHeightOffset) / CM_PER_M)
+    return fog_from_physical(fog, albedo=albedo, g=g), notes
+
+
+def flat_unreal(unreal: dict) -> dict:
+    """Unreal values with ``SecondFogData`` flattened to ``SecondFogData.FogDensity`` etc.
+
+    >>> flat_unreal({"FogDensity": 0.02, "SecondFogData": {"FogDensity": 0.01}})
+    {'FogDensity': 0.02, 'SecondFogData.FogDensity': 0.01}
+    """
+    flat = {}
+    for k, v in unreal.items():
+        if isinstance(v, dict):
+            flat.update({f"{k}.{kk}": vv for kk, vv in v.items()})
+        else:
+            flat[k] = v
+    return flat

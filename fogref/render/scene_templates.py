@@ -1,0 +1,157 @@
+"""Geometry templates of ``fogref scene``: a ground plane, the shipped valley, or a mesh file.
+
+``"plane"`` is a ground plane at y = 0; ``"valley"`` is the geometry of the
+shipped default scene, read from ``scenes/valley.xml`` (its BSDFs, ground and
+ridges are copied from the file, so the template and the scene cannot drift); a
+mesh file (``.obj`` or ``.ply``) is loaded by Mitsuba's ``obj``/``ply`` shape
+plugins with its scale (metres per file unit) and up axis: ``"z"`` turns a z-up
+file into fogref's y-up frame by a -90 deg rotation about +x (keeping the
+handedness); ``"unreal"`` swaps y and z like fogref's Unreal position mapping,
+``(x, y, z)_fogref = (X, Z, Y)_Unreal / 100`` with scale 0.01, so a level exported
+in Unreal's world coordinates lines up with cameras converted the same way.
+
+Each function adds elements to an :class:`xml.etree.ElementTree.Element`; nothing
+here needs Mitsuba.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+from fogref.errors import ParameterError
+from fogref.mapping.fog_input import SOURCE, _fmt
+from fogref.render.scene_defaults import parse_scene
+
+__all__ = ["GROUND_SIZE", "MESH_PLUGINS", "MESH_UP", "TEMPLATES", "VALLEY_SCENE", "Geometry", "add_mesh",
+           "add_valley", "diffuse", "geometry", "ground", "sub", "valley_ground_size"]
+
+#: Built-in geometry templates (anything else must be a mesh file).
+TEMPLATES = ("plane", "valley")
+#: Mesh file extensions and the Mitsuba shape plugin that loads each.
+MESH_PLUGINS = {".obj": "obj", ".ply": "ply"}
+#: Frames a mesh file may have: "y" (fogref's, y-up), "z" (z-up, rotated -90 deg about +x into
+#: y-up) or "unreal" (Unreal's z-up left-handed frame, swapped (x, y, z) -> (x, z, y) as
+#: :func:`fogref.models.ue4.world_to_unreal` maps positions: a mirror).
+MESH_UP = ("y", "z", "unreal")
+#: Default half-size [m] of the ground plane of the plane and mesh templates (the valley keeps its file's).
+GROUND_SIZE = {"plane": 1.0e5, "mesh": 1.0e5}
+#: The shipped scene whose geometry the "valley" template copies.
+VALLEY_SCENE = Path(__file__).resolve().parents[2] / "scenes" / "valley.xml"
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """A resolved ``geometry`` argument: ``kind`` "plane", "valley" or "mesh", and the mesh's file and plugin."""
+
+    kind: str
+    mesh: Path | None = None
+    plugin: str | None = None
+
+
+def geometry(template) -> Geometry:
+    """The template named ``template`` ("plane", "valley") or a mesh file path, checked.
+
+    >>> geometry("valley")
+    Geometry(kind='valley', mesh=None, plugin=None)
+    >>> geometry("hills")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: fogref scene: parameter 'geometry (--geometry)': unknown template 'hills': choose plane, valley or a mesh file (.obj, .ply)
+    """
+    t = str(template)
+    if t in TEMPLATES:
+        return Geometry(t)
+    path = Path(t)
+    ext = path.suffix.lower()
+    choices = f"choose {', '.join(TEMPLATES)} or a mesh file ({', '.join(MESH_PLUGINS)})"
+    if ext not in MESH_PLUGINS:
+        if path.is_file():
+            raise ParameterError(SOURCE, "geometry (--geometry)",
+                                 f"'{t}': Mitsuba loads meshes from {', '.join(MESH_PLUGINS)} files only, not "
+                                 f"'{ext or 'no extension'}'; convert it, or {choices}")
+        raise ParameterError(SOURCE, "geometry (--geometry)", f"unknown template '{t}': {choices}")
+    if not path.is_file():
+        raise ParameterError(SOURCE, "geometry (--geometry)", f"mesh file '{t}' not found")
+    return Geometry("mesh", path, MESH_PLUGINS[ext])
+
+
+def sub(parent, tag: str, **attrs):
+    """A child element of ``parent`` with the attributes as text."""
+    return ET.SubElement(parent, tag, {k: str(v) for k, v in attrs.items()})
+
+
+def diffuse(parent, bsdf_id: str, reflectance: str, twosided: bool = False):
+    """A diffuse BSDF ``bsdf_id`` (wrapped in ``twosided`` for meshes of unknown orientation)."""
+    if twosided:
+        outer = sub(parent, "bsdf", type="twosided", id=bsdf_id)
+        inner = sub(outer, "bsdf", type="diffuse")
+    else:
+        inner = sub(parent, "bsdf", type="diffuse", id=bsdf_id)
+    sub(inner, "rgb", name="reflectance", value=reflectance)
+
+
+def ground(parent, size: float, bsdf_id: str, shape_id: str = "ground"):
+    """A ground rectangle at y = 0 of half-size ``size`` [m]."""
+    s = sub(parent, "shape", type="rectangle", id=shape_id)
+    tw = sub(s, "transform", name="to_world")
+    sub(tw, "rotate", x="1", angle="-90")
+    sub(tw, "scale", value=_fmt(size))
+    sub(s, "ref", id=bsdf_id)
+
+
+def _valley_root() -> ET.Element:
+    """``scenes/valley.xml`` with its comments (they label the ridges)."""
+    if not VALLEY_SCENE.is_file():
+        raise ParameterError(SOURCE, "geometry (--geometry)", f"the valley template reads {VALLEY_SCENE}, which is "
+                                                               "missing (a source checkout of fogref ships it)")
+    return parse_scene(VALLEY_SCENE, comments=True)
+
+
+def _valley_ground(root: ET.Element) -> ET.Element:
+    return root.find("shape[@id='ground']/transform[@name='to_world']/scale")
+
+
+def valley_ground_size() -> float:
+    """The half-size [m] of the shipped valley's ground (its ``scale``)."""
+    return float(_valley_ground(_valley_root()).get("value"))
+
+
+def add_valley(root, ground_size: float | None = None):
+    """The valley's BSDFs and shapes (with the comments among them), copied from ``scenes/valley.xml``.
+
+    ``ground_size`` [m] replaces the ground's half-size (None: the file's).
+    """
+    valley = _valley_root()
+    started = False
+    for el in valley:
+        started = started or el.tag == "bsdf"
+        if started and el.tag in ("bsdf", "shape", ET.Comment):
+            root.append(copy.deepcopy(el))
+    if ground_size is not None:
+        _valley_ground(root).set("value", _fmt(ground_size))
+
+
+def add_mesh(root, geo: Geometry, out_dir: Path, scale: float, up: str, translate):
+    """The mesh shape of ``geo``, its file named relative to ``out_dir`` (where the scene is written)."""
+    # Mitsuba resolves a relative filename against the scene file's folder
+    try:
+        filename = os.path.relpath(geo.mesh.resolve(), out_dir.resolve())
+    except ValueError:  # another drive (Windows)
+        filename = str(geo.mesh.resolve())
+    root.append(ET.Comment(f" mesh: {geo.mesh.name}, {_fmt(scale)} m per file unit, {up}-up in the file "
+                           f"(fogref is y-up) "))
+    s = sub(root, "shape", type=geo.plugin, id="mesh")
+    sub(s, "string", name="filename", value=filename.replace(os.sep, "/"))
+    tw = sub(s, "transform", name="to_world")
+    sub(tw, "scale", value=_fmt(scale))
+    if up == "z":  # (x, y, z) -> (x, z, -y): the file's +z becomes +y, a proper rotation
+        sub(tw, "rotate", x="1", angle="-90")
+    elif up == "unreal":  # (x, y, z) -> (x, z, y): the inverse of world_to_unreal's swap (a mirror)
+        sub(tw, "matrix", value="1 0 0 0 0 0 1 0 0 1 0 0 0 0 0 1")
+    if any(translate):
+        sub(tw, "translate", x=_fmt(translate[0]), y=_fmt(translate[1]), z=_fmt(translate[2]))
+    sub(s, "ref", id="surface")
