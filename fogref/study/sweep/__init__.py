@@ -1,0 +1,108 @@
+"""``fogref sweep SWEEP.toml``: a declarative error study over many configurations, on Dask.
+
+A sweep is a TOML file: the scenes, the parameters to vary (any ``$default`` of
+the scene, or a model parameter), the design (grid, zipped lists, seeded random or
+Latin hypercube), the models to compare, the sample count and seed policy, and the
+outputs.  Each *configuration* (one scene + one set of parameter values) is one
+Dask task: it renders the ground truth, or reuses it from a content-addressed
+cache, then runs every model against it (``compare`` with figures off) and returns
+one row per model.  The rows are gathered into one tidy table (CSV + Parquet) with
+plots of each metric against each swept parameter beside it.
+
+Example ``SWEEP.toml``::
+
+    [sweep]
+    name = "unreal_sun_falloff_g"
+    scenes = ["scenes/valley.xml"]     # relative to the TOML file, else to the working directory
+    out = "."                          # output folder (relative to the TOML file; default: its folder)
+    cache = "out/sweep_cache"          # ground-truth cache (relative to the working directory)
+
+    [render]
+    spp = 16
+    seed = 0
+    seed_policy = "fixed"              # or "per_config": seed derived from the config's values
+    overrides = { res = 64, resy = 36 } # fixed $defaults for every configuration
+
+    [design]
+    kind = "grid"                      # "grid" | "list" | "random" | "lhs"
+    # n = 48; seed = 0                 # random / lhs only
+
+    [parameters.sun_elevation]         # a scene $default ...
+    values = [2, 8, 20, 45]
+    [parameters.FogHeightFalloff]      # ... under a label: falloff = 0.0693147 * value
+    target = "falloff"
+    scale = 0.0693147
+    values = [0.1, 0.2, 0.4, 0.8]
+    [parameters."ue4.start_distance"]  # a model parameter: "<model label>.<parameter>"
+    range = [0, 100]                   # random / lhs: uniform in range (log = true: log-uniform)
+
+    [[models]]
+    name = "ue4"                       # a model name (built-in, "my_pkg.fog:MyFog" or an entry
+                                       # point of group fogref.models); label defaults to the name
+                                       # (its Class part for "module:Class")
+    from_scene = true                  # parameters from the truth's physical fog, like --from-scene
+    params = {}                        # then these override them
+
+    [execution]
+    retries = 1                        # Dask retries of a failing configuration
+
+    [outputs]
+    table = "results"                  # results.csv, results.parquet
+    plots = true                       # plots/<metric>_vs_<parameter>.png
+    plot_metrics = ["final.all.rmse", "final.all.relmse"]   # default: every final.all.* metric
+    budget = false                     # true: Unreal's error budget for every "ue4" model (one extra
+                                       # render per configuration: the scene without its sun)
+
+Output folder::
+
+    results.csv, results.parquet   one row per configuration x model
+    configs/<config id>.json       one result per configuration (written atomically; resume reads them)
+    plots/*.png                    each plotted metric against each swept parameter
+    sweep.json                     the resolved design and the command
+
+Modules: :mod:`~fogref.study.sweep.spec` (the TOML schema, :func:`load_sweep`),
+:mod:`~fogref.study.sweep.design` (the designs, :func:`build_configs`),
+:mod:`~fogref.study.sweep.task` (one configuration on a worker, :func:`run_config`),
+:mod:`~fogref.study.sweep.run` (Dask, resume, :func:`run_sweep`) and
+:mod:`~fogref.study.sweep.table` (the table and plots).
+"""
+
+from __future__ import annotations
+
+from fogref.study.sweep.design import build_configs, design_points
+from fogref.study.sweep.run import run_sweep
+from fogref.study.sweep.spec import SweepSpec, load_sweep
+from fogref.study.sweep.table import plot_table, write_table
+from fogref.study.sweep.task import run_config
+
+__all__ = ["SweepSpec", "add_cli", "build_configs", "design_points", "load_sweep", "plot_table", "run_config",
+           "run_sweep", "write_table"]
+
+
+# ---------------------------------------------------------------- command line
+
+
+def cmd_sweep(a) -> int:
+    """Handler of ``fogref sweep``."""
+    info = run_sweep(a.sweep, scheduler=a.scheduler, n_workers=a.workers, progress=not a.quiet,
+                     retry_failed=a.retry_failed, drjit_threads=a.drjit_threads)
+    print(f"{info['configs']} configurations ({info['ran']} run now, {info['failed']} failed) in "
+          f"{info['wall_seconds']:.1f} s; table: {info['table']} ({info['rows']} rows), {info['parquet']}; "
+          f"{len(info['plots'])} plots")
+    return 0
+
+
+def add_cli(subparsers):
+    """Add the ``sweep`` subcommand to an argparse ``subparsers`` object; returns it."""
+    p = subparsers.add_parser("sweep", help="run a declarative error study (SWEEP.toml) on Dask",
+                              description=__doc__.split("\n\n")[0])
+    p.add_argument("sweep", help="the sweep file (TOML)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="a running Dask scheduler (tcp://HOST:8786); default: a LocalCluster on this machine")
+    p.add_argument("--workers", type=int, default=None, help="LocalCluster workers (default: one per core)")
+    p.add_argument("--drjit-threads", type=int, default=None,
+                   help="Dr.Jit threads per worker (default: cores / workers on a LocalCluster)")
+    p.add_argument("--retry-failed", action="store_true", help="re-run configurations recorded as failed")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_sweep)
+    return p

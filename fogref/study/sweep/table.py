@@ -1,0 +1,101 @@
+"""The sweep's table and plots: per-configuration result files gathered into CSV + Parquet, metric plots.
+
+One row per configuration x model (a failed configuration: one row per model
+with ``status = "error"`` and its error); ``plots/<metric>_vs_<parameter>.png``
+shows each plotted metric against each swept parameter.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from fogref.atomic import atomic_write, save_figure_atomic, write_text_atomic
+from fogref.study.sweep.spec import SweepSpec
+
+__all__ = ["DEFAULT_PLOT_METRICS", "plot_table", "write_table"]
+
+#: Metrics plotted when the sweep's ``[outputs] plot_metrics`` is not given.
+DEFAULT_PLOT_METRICS = ("final.all.rmse", "final.all.rmse_debiased", "final.all.relmse",
+                        "final.all.delta_e2000_mean", "final.all.flip_mean", "inscatter.all.rmse",
+                        "transmittance.all.rmse")
+
+
+def _rows_of(cfg: dict, result: dict) -> list[dict]:
+    """Table rows of one configuration's result file."""
+    base = {"config_id": cfg["id"], "scene": Path(cfg["scene"]).name, "scene_path": cfg["scene"],
+            "scene_sha256": cfg["scene_sha256"], **{k: v for k, v in cfg["values"].items()},
+            "overrides": json.dumps(cfg["overrides"], sort_keys=True), "spp": cfg["spp"], "seed": cfg["seed"]}
+    for k, v in list(base.items()):
+        if isinstance(v, (list, dict)):
+            base[k] = json.dumps(v)
+    if result.get("status") == "error":
+        return [{**base, "model": m["label"], "model_name": m["name"], "status": "error",
+                 "error": result["error"], "truth_path": cfg["truth"]} for m in cfg["models"]]
+    return [{**base, **result["provenance"], "status": "ok", "error": "", **row} for row in result["rows"]]
+
+
+def write_table(spec: SweepSpec, configs: list[dict]) -> dict:
+    """Gather the per-configuration result files into the CSV + Parquet table and the plots."""
+    import pandas as pd
+
+    out = Path(spec.out)
+    rows = []
+    for cfg in configs:
+        f = out / "configs" / f"{cfg['id']}.json"
+        if f.is_file():
+            rows.extend(_rows_of(cfg, json.loads(f.read_text())))
+    df = pd.DataFrame(rows)
+    csv, pq = out / f"{spec.table}.csv", out / f"{spec.table}.parquet"
+    write_text_atomic(csv, df.to_csv(index=False))
+    atomic_write(pq, lambda tmp: df.to_parquet(tmp, index=False))
+    plots = plot_table(df, spec, out / "plots") if spec.plots and len(df) else []
+    return {"table": csv, "parquet": pq, "rows": len(df), "plots": plots}
+
+
+def _noise_column(df, metric: str) -> str | None:
+    for suffix in ("_noise", "_stderr", ".noise", ".stderr", "_mc_noise"):
+        if metric + suffix in df.columns:
+            return metric + suffix
+    return None
+
+
+def plot_table(df, spec: SweepSpec, plot_dir: Path) -> list[Path]:
+    """One figure per (metric, swept parameter): every configuration as a point, the
+    mean over the other parameters as a line, one colour per model; error bars from
+    the metric's Monte Carlo noise column when the table has one.  Returns the paths."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ok = df[df["status"] == "ok"] if "status" in df.columns else df
+    if ok.empty:
+        return []
+    metrics = [m for m in (spec.plot_metrics or DEFAULT_PLOT_METRICS) if m in ok.columns]
+    paths = []
+    for param in spec.parameters:
+        if param not in ok.columns:
+            continue
+        numeric = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in ok[param])
+        for metric in metrics:
+            fig, ax = plt.subplots(figsize=(5.2, 3.6))
+            for model, g in ok.groupby("model"):
+                x = g[param] if numeric else g[param].astype(str)
+                noise = _noise_column(ok, metric)
+                if noise:
+                    ax.errorbar(x, g[metric], yerr=2 * g[noise], fmt="o", ms=3, alpha=0.4, capsize=2)
+                else:
+                    ax.plot(x, g[metric], "o", ms=3, alpha=0.4)
+                mean = g.groupby(param)[metric].mean()
+                ax.plot(mean.index if numeric else mean.index.astype(str), mean.values, "-", lw=1.8,
+                        label=f"{model} (mean over other parameters)")
+            ax.set_xlabel(param)
+            ax.set_ylabel(metric)
+            if (ok[metric] > 0).all() and ok[metric].max() > 20 * ok[metric].min():
+                ax.set_yscale("log")
+            ax.legend(fontsize=7)
+            ax.set_title(f"{spec.name}: {metric} vs {param}", fontsize=9)
+            paths.append(save_figure_atomic(fig, plot_dir / f"{metric}_vs_{param}.png"))
+            plt.close(fig)
+    return paths
