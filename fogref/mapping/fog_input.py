@@ -60,7 +60,8 @@ def _numbers(value, name: str, option: str | None, counts: tuple) -> list[float]
         try:
             parts = list(value)
         except TypeError:
-            raise ParameterError(SOURCE, label, f"expected a number or {counts[-1]} numbers, got {value!r}") from None
+            raise ParameterError(SOURCE, label,
+                                 f"expected a number or {counts[-1]} numbers, got {value!r}") from None
     try:
         nums = [float(x) for x in parts]
     except (TypeError, ValueError):
@@ -82,7 +83,8 @@ def _check(value, name: str, option: str | None, kind: str, lo: float = -math.in
     for x in nums:
         if not lo <= x <= hi:
             shown = nums[0] if kind == "number" else nums
-            raise ParameterError(SOURCE, _label(name, option), f"value {shown} outside {_range(lo, hi, unit)}")
+            raise ParameterError(SOURCE, _label(name, option),
+                                 f"value {shown} outside {_range(lo, hi, unit)}")
     return nums[0] if kind == "number" or (kind == "rgb" and len(nums) == 1) else nums
 
 
@@ -133,15 +135,16 @@ def fog_from_physical(fog: dict | None = None, *, albedo=0.9, g: float = 0.6) ->
     >>> p = fog_from_physical({"sigma_t": [0.001, 0.002, 0.003], "falloff": 0.05, "height": 10})
     >>> p["sigma_t"], p["falloff"], p["fog_height"], p["density2"]
     ([0.001, 0.002, 0.003], 0.05, 10.0, 0.0)
-    >>> fog_from_physical({"falloff": -1})
+    >>> fog_from_physical({"falloff": -1})  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    fogref.errors.ParameterError: fogref scene: parameter 'falloff (--falloff)': value -1.0 outside [0, 1000] 1/m
+    fogref.errors.ParameterError: fogref scene: parameter 'falloff (--falloff)': value -1.0 outside ...
     """
     fog = dict(fog or {})
     unknown = sorted(set(fog) - set(PHYSICAL) - set(SCATTERING))
     if unknown:
-        raise ParameterError(SOURCE, unknown[0], f"not a physical fog parameter; known: {', '.join(PHYSICAL)}")
+        raise ParameterError(SOURCE, unknown[0],
+                             f"not a physical fog parameter; known: {', '.join(PHYSICAL)}")
     albedo = fog.pop("albedo", albedo)
     g = fog.pop("g", g)
     sigma0, falloff0 = unreal_to_sigma(0.02, 0.2)  # the shipped valley's fog

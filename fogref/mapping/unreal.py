@@ -145,7 +145,8 @@ def base_params(pf: PhysicalScene, **kw) -> UE4FogParams:
 
 def unreal_inscatter(params: UE4FogParams, camera, world_pos, precision: str = "float64") -> np.ndarray:
     """Unreal's inscatter (N, 3) for the given parameters."""
-    return np.asarray(UE4ExponentialHeightFog(params).evaluate(camera, world_pos, precision).inscatter, dtype=float)
+    fog = UE4ExponentialHeightFog(params)
+    return np.asarray(fog.evaluate(camera, world_pos, precision).inscatter, dtype=float)
 
 
 @dataclass
@@ -160,7 +161,8 @@ def unreal_basis(pf: PhysicalScene, views: Views, exponent: float, start_cm: flo
                  sky_distance: float = SKY_DISTANCE) -> Basis:
     """Unreal (float64) evaluated with unit colours: the isotropic and lobe images."""
     wp = views.world_positions(sky_distance)
-    p = base_params(pf, DirectionalInscatteringExponent=exponent, DirectionalInscatteringStartDistance=start_cm,
+    p = base_params(pf, DirectionalInscatteringExponent=exponent,
+                    DirectionalInscatteringStartDistance=start_cm,
                     FogInscatteringColor=(1.0, 0.0, 0.0), DirectionalInscatteringColor=(0.0, 1.0, 0.0))
     ins = unreal_inscatter(p, np.asarray(pf.camera), wp)
     return Basis(iso=ins[:, 0], lobe=ins[:, 1])
@@ -233,7 +235,8 @@ class FitResult:
             "unreal_editor": self.editor_properties(),
             "error": {"rmse": self.rmse, "rel_rmse": self.rel_rmse, "target_rms": self.target_rms,
                       "n_views": self.n_views},
-            "fit": {"sun_attenuation_in_target": self.sun_attenuation, "start_distance_fitted": self.fit_start,
+            "fit": {"sun_attenuation_in_target": self.sun_attenuation,
+                    "start_distance_fitted": self.fit_start,
                     "loss": "mean squared inscatter error over views (all RGB channels), model float64",
                     **self.history},
         }

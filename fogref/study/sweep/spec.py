@@ -166,14 +166,16 @@ def _read_render(path: Path, doc: dict) -> dict:
     overrides = rd.get("overrides", {})
     if not isinstance(overrides, dict):
         raise _err(path, "render", "overrides must be a table of $default = value")
-    return {"spp": spp, "seed": seed, "seed_policy": policy, "pixel_filter": str(rd.get("pixel_filter", "centre")),
+    return {"spp": spp, "seed": seed, "seed_policy": policy,
+            "pixel_filter": str(rd.get("pixel_filter", "centre")),
             "overrides": {k: as_str(v) for k, v in overrides.items()}}
 
 
 def _read_model(path: Path, i: int, m, labels: set) -> dict:
     key = f"models][{i}"
     if not isinstance(m, dict) or "name" not in m:
-        raise _err(path, key, "each [[models]] entry needs a 'name' (a model: \"ue4\", \"my_pkg.fog:MyFog\", ...)")
+        raise _err(path, key, "each [[models]] entry needs a 'name' "
+                              "(a model: \"ue4\", \"my_pkg.fog:MyFog\", ...)")
     bad = set(m) - set(_MODEL_KEYS)
     if bad:
         raise _err(path, key, f"unknown key(s) {sorted(bad)}; allowed: {list(_MODEL_KEYS)}")
@@ -188,7 +190,8 @@ def _read_model(path: Path, i: int, m, labels: set) -> dict:
     params = m.get("params", {})
     if not isinstance(params, dict):
         raise _err(path, key, "params must be a table")
-    return {"name": m["name"], "label": label, "from_scene": bool(m.get("from_scene", True)), "params": params}
+    return {"name": m["name"], "label": label, "from_scene": bool(m.get("from_scene", True)),
+            "params": params}
 
 
 def _read_models(path: Path, doc: dict) -> list[dict]:
@@ -279,7 +282,8 @@ def _read_parameters(path: Path, doc: dict, scenes: list[Path], labels: set, des
     if design_kind == "list":
         lens = {len(p["values"]) for p in out.values()}
         if len(lens) > 1:
-            raise _err(path, "design", f"kind 'list' zips the parameters' values: their lengths differ ({sorted(lens)})")
+            raise _err(path, "design",
+                       f"kind 'list' zips the parameters' values: their lengths differ ({sorted(lens)})")
     return out
 
 

@@ -98,8 +98,8 @@ def run_config(cfg: dict, drjit_threads: int | None = None) -> dict:
     truth = Path(cfg["truth"])
     t0 = time.perf_counter()
     with _truth_lock(f"fogref-truth-{truth.stem}"):  # configurations sharing a truth render it once
-        truth, cached = render_cached(cfg["scene"], cfg["spp"], cfg["seed"], cfg["overrides"], cache_dir=truth.parent,
-                                      pixel_filter=cfg["pixel_filter"])
+        truth, cached = render_cached(cfg["scene"], cfg["spp"], cfg["seed"], cfg["overrides"],
+                                      cache_dir=truth.parent, pixel_filter=cfg["pixel_filter"])
     wall_render = time.perf_counter() - t0
     header = read_exr(truth)[1]
     rs = header.get("fogref.render_seconds")
@@ -142,7 +142,8 @@ def _budget_columns(cfg: dict, truth_path: Path, model) -> dict:
     nosun = sunless_scene(Path(cfg["scene"]), truth_path.parent / "scenes" / cfg["scene_sha256"][:16])
     sky_key = file_sha256(nosun)[:24]
     with _truth_lock(f"fogref-truth-{sky_key}"):
-        sky_path, _ = render_cached(nosun, cfg["spp"], cfg["seed"], overrides_used_by(nosun, cfg["overrides"]),
+        sky_overrides = overrides_used_by(nosun, cfg["overrides"])
+        sky_path, _ = render_cached(nosun, cfg["spp"], cfg["seed"], sky_overrides,
                                     cache_dir=truth_path.parent, pixel_filter=cfg["pixel_filter"])
     truth, sky = load_truth(truth_path), load_truth(sky_path)
     pf = PhysicalScene.from_params(truth.params)
