@@ -158,12 +158,14 @@ def test_valley_template_reads_the_shipped_valley(tmp_path, monkeypatch):
     out = tmp_path / "v.xml"
     write_scene(out, geometry="valley")
     assert_fogref_scene(out)
-    assert _geometry_text(ET.parse(out).getroot()) == _geometry_text(ET.parse(SCENES / "valley.xml").getroot())
+    shipped = ET.parse(SCENES / "valley.xml").getroot()
+    assert _geometry_text(ET.parse(out).getroot()) == _geometry_text(shipped)
     write_scene(out, geometry="valley", ground_size=500, overwrite=True)
     assert ET.parse(out).getroot().find("shape[@id='ground']/transform/scale").get("value") == "500.0"
     # a changed valley.xml changes the template
     other = tmp_path / "valley.xml"
-    other.write_text((SCENES / "valley.xml").read_text().replace('x="15" y="0" z="90"', 'x="16" y="0" z="90"'))
+    text = (SCENES / "valley.xml").read_text()
+    other.write_text(text.replace('x="15" y="0" z="90"', 'x="16" y="0" z="90"'))
     monkeypatch.setattr(scene_templates, "VALLEY_SCENE", other)
     write_scene(out, geometry="valley", overwrite=True)
     assert ET.parse(out).getroot().find("shape[@type='sphere']/point").get("x") == "16"
