@@ -63,6 +63,7 @@ from fogref.compare.binning import angle_edges, binned_errors, log_distance_edge
 from fogref.compare.check import candidate_parts, evaluate_model, fog_parts
 from fogref.compare.plots import plot_binned_errors, plot_error_heatmaps, plot_side_by_side
 from fogref.compare.tonemap import exposure_for
+from fogref.params import number as valid_number
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 from fogref.gbuffer import Truth, load_truth
@@ -112,15 +113,15 @@ def _model_description(model) -> dict | str:
 
 
 def check_sky_distance(value, option: str = "sky_distance") -> float:
-    """``value`` as a float if finite and > 0 [m]; FogrefError naming ``option`` otherwise."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        v = float("nan")
-    if not (math.isfinite(v) and v > 0):
-        raise FogrefError(f"{option}: {value!r} is out of range: the distance at which sky pixels are fogged "
-                          "must be a finite number of metres > 0 (default 1e5)")
-    return v
+    """``value`` as a float if finite and > 0 [m]; ParameterError naming ``option`` otherwise
+    (:func:`fogref.params.number`).
+
+    >>> check_sky_distance(0, "sky_distance")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: compare: parameter 'sky_distance': 0 is outside (0, inf) m
+    """
+    return valid_number(value, option, source="compare", lo=0.0, lo_open=True, unit="m")
 
 
 def evaluate_parts(truth: Truth, model, precision: str, sky_distance: float) -> dict:
