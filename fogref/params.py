@@ -80,7 +80,7 @@ def _show(value) -> str:
 
 
 def _is_bool(value) -> bool:
-    return isinstance(value, bool) or type(value).__name__ == "bool_"  # numpy.bool_ too
+    return isinstance(value, bool) or type(value).__name__ in ("bool", "bool_")  # numpy.bool_ too
 
 
 def _to_float(value, name: str, source: str, what: str = "a number") -> float:
