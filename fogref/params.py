@@ -104,8 +104,17 @@ def _in_range(x: float, lo, hi, lo_open, hi_open) -> bool:
     return (x > lo if lo_open else x >= lo) and (x < hi if hi_open else x <= hi)
 
 
-def number(value, name: str, *, source: str, lo: float = -INF, hi: float = INF, lo_open: bool = False,
-           hi_open: bool = False, unit: str = "") -> float:
+def number(
+    value,
+    name: str,
+    *,
+    source: str,
+    lo: float = -INF,
+    hi: float = INF,
+    lo_open: bool = False,
+    hi_open: bool = False,
+    unit: str = "",
+) -> float:
     """``value`` as a finite float in the interval from ``lo`` to ``hi`` (open ends where ``*_open``).
 
     Parameters
@@ -125,7 +134,7 @@ def number(value, name: str, *, source: str, lo: float = -INF, hi: float = INF, 
     >>> number("nan", "falloff", source="s.xml", lo=0, unit="1/m")
     Traceback (most recent call last):
     ...
-    fogref.errors.ParameterError: s.xml: parameter 'falloff': nan is not finite: must be a finite number in [0, inf) 1/m
+    fogref.errors.ParameterError: s.xml: parameter 'falloff': nan is not finite: ... in [0, inf) 1/m
     >>> number(True, "g", source="api")
     Traceback (most recent call last):
     ...
@@ -144,12 +153,23 @@ def number(value, name: str, *, source: str, lo: float = -INF, hi: float = INF, 
     if not math.isfinite(x):
         raise ParameterError(source, name, f"{_show(x)} is not finite: must be a finite number in {rng}")
     if not _in_range(x, lo, hi, lo_open, hi_open):
-        raise ParameterError(source, name, f"{_show(value if not isinstance(value, str) else x)} is outside {rng}")
+        raise ParameterError(
+            source, name, f"{_show(value if not isinstance(value, str) else x)} is outside {rng}"
+        )
     return x
 
 
-def angle(value, name: str, *, source: str, lo: float = -INF, hi: float = INF, lo_open: bool = False,
-          hi_open: bool = False, unit: str = "deg") -> float:
+def angle(
+    value,
+    name: str,
+    *,
+    source: str,
+    lo: float = -INF,
+    hi: float = INF,
+    lo_open: bool = False,
+    hi_open: bool = False,
+    unit: str = "deg",
+) -> float:
     """An angle (default unit degrees): :func:`number` with ``unit="deg"``.
 
     >>> angle("8", "sun_elevation", source="--set", lo=-90, hi=90)
@@ -172,7 +192,7 @@ def integer(value, name: str, *, source: str, lo: float = -INF, hi: float = INF,
     >>> integer(16.7, "res", source="api", lo=1, unit="pixels")
     Traceback (most recent call last):
     ...
-    fogref.errors.ParameterError: api: parameter 'res': 16.7 is not an integer: must be an integer in [1, inf) pixels
+    fogref.errors.ParameterError: api: parameter 'res': 16.7 is not an integer: ... [1, inf) pixels
     >>> integer(0, "--workers", source="fogref sweep", lo=1)
     Traceback (most recent call last):
     ...
@@ -196,7 +216,9 @@ def integer(value, name: str, *, source: str, lo: float = -INF, hi: float = INF,
             n = None
         if n is None:
             if not (math.isfinite(x) and x.is_integer()):
-                raise ParameterError(source, name, f"{_show(x)} is not an integer: must be an integer in {rng}")
+                raise ParameterError(
+                    source, name, f"{_show(x)} is not an integer: must be an integer in {rng}"
+                )
             n = int(x)
     if not lo <= n <= hi:
         raise ParameterError(source, name, f"{n} is outside {rng} (an integer)")
@@ -215,8 +237,9 @@ def _parts(value, name: str, source: str, what: str) -> list:
         raise ParameterError(source, name, f"expected {what}, got {value!r}") from None
 
 
-def vector(value, name: str, *, source: str, n: int = 3, lo: float = -INF, hi: float = INF,
-           unit: str = "") -> tuple[float, ...]:
+def vector(
+    value, name: str, *, source: str, n: int = 3, lo: float = -INF, hi: float = INF, unit: str = ""
+) -> tuple[float, ...]:
     """``n`` finite numbers (a sequence or ``"x, y, z"``), each in ``[lo, hi]``.
 
     >>> vector("0, 2, 0", "camera_origin", source="api", unit="m")
@@ -250,7 +273,7 @@ def rgb(value, name: str, *, source: str, lo: float = -INF, hi: float = INF, uni
     >>> rgb([-0.18, 0.3, 0.5], "--sky", source="fogref fit", lo=0)
     Traceback (most recent call last):
     ...
-    fogref.errors.ParameterError: fogref fit: parameter '--sky': (-0.18, 0.3, 0.5) is outside: each of R, G, B must be a finite number in [0, inf)
+    fogref.errors.ParameterError: fogref fit: parameter '--sky': (-0.18, 0.3, 0.5) is outside: ... [0, inf)
     >>> rgb("1 2", "albedo", source="api")
     Traceback (most recent call last):
     ...
@@ -272,13 +295,17 @@ def choice(value, name: str, options, source: str) -> str:
     >>> choice("scalar_rgb", "--variant", ("llvm_ad_rgb", "cuda_ad_rgb"), "fogref render")
     Traceback (most recent call last):
     ...
-    fogref.errors.ParameterError: fogref render: parameter '--variant': 'scalar_rgb' is not one of llvm_ad_rgb, cuda_ad_rgb; did you mean 'cuda_ad_rgb'?
+    fogref.errors.ParameterError: fogref render: parameter '--variant': 'scalar_rgb' is not one of ...
     """
     options = tuple(options)
     if isinstance(value, str) and value in options:
         return value
-    raise ParameterError(source, name, f"{value!r} is not one of {', '.join(map(str, options))}"
-                         f"{did_you_mean(str(value), [str(o) for o in options])}")
+    raise ParameterError(
+        source,
+        name,
+        f"{value!r} is not one of {', '.join(map(str, options))}"
+        f"{did_you_mean(str(value), [str(o) for o in options])}",
+    )
 
 
 def path(value, name: str, *, source: str, must_exist: bool = False, kind: str = "file") -> Path:

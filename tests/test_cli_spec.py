@@ -34,8 +34,14 @@ def _norm(v):
 def _api_defaults(cmd: str) -> dict[str, dict[str, object]]:
     """API function -> {parameter: default} of the functions a command's options name."""
     refs = {meta(f)["api"] for f in dataclasses.fields(MODULES[cmd].Options) if meta(f)["api"]}
-    return {ref: {p.name: p.default for p in inspect.signature(_api(ref)).parameters.values()
-                  if p.default is not inspect.Parameter.empty} for ref in refs}
+    return {
+        ref: {
+            p.name: p.default
+            for p in inspect.signature(_api(ref)).parameters.values()
+            if p.default is not inspect.Parameter.empty
+        }
+        for ref in refs
+    }
 
 
 @pytest.mark.parametrize("cmd", list(COMMANDS))
@@ -55,7 +61,12 @@ def test_every_default_equals_the_python_apis(cmd):
             if m["negates"]:
                 assert f.default is False and want is True, (cmd, f.name, ref)
             else:
-                assert f.default is not MISSING and _norm(f.default) == _norm(want), (cmd, f.name, f.default, want)
+                assert f.default is not MISSING and _norm(f.default) == _norm(want), (
+                    cmd,
+                    f.name,
+                    f.default,
+                    want,
+                )
             checked += 1
     assert checked or cmd == "info", f"{cmd}: no option is tied to a Python API parameter"
 
@@ -93,10 +104,12 @@ def test_each_command_has_help_with_defaults_and_exit_codes(cmd, capsys):
 
 
 def test_render_builds_only_its_own_parser():
-    code = ("import sys; from fogref.cli import parse; parse(['render', 's.xml', '-o', 'x.exr']); "
-            "bad = [m for m in ('fogref.compare', 'fogref.study', 'fogref.render.scene_writer', "
-            "'fogref.render.render', 'fogref.cli.compare', 'fogref.cli.scene', 'dask', 'pandas', 'matplotlib', "
-            "'mitsuba') if m in sys.modules]; assert not bad, bad")
+    code = (
+        "import sys; from fogref.cli import parse; parse(['render', 's.xml', '-o', 'x.exr']); "
+        "bad = [m for m in ('fogref.compare', 'fogref.study', 'fogref.render.scene_writer', "
+        "'fogref.render.render', 'fogref.cli.compare', 'fogref.cli.scene', 'dask', 'pandas', 'matplotlib', "
+        "'mitsuba') if m in sys.modules]; assert not bad, bad"
+    )
     r = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True)
     assert r.returncode == 0, r.stderr[-2000:]
 
@@ -114,49 +127,72 @@ OUT = ["-o", "x.exr"]
 VALLEY = "scenes/valley.xml"
 
 
-@pytest.mark.parametrize("argv, words", [
-    # an option given twice, a NAME given twice
-    (["render", VALLEY, *OUT, "--spp", "4", "--spp", "8"], ["--spp", "given twice"]),
-    (["render", VALLEY, *OUT, "--set", "res=4", "--set", "res=8"], ["--set", "'res' is given twice"]),
-    (["render", VALLEY, "-o", "a.exr", "--out", "b.exr"], ["--out", "given twice"]),
-    (["compare", "t.exr", "--model", "ue4", "--param", "FogDensity=1", "--param", "FogDensity=2"],
-     ["--param", "'FogDensity' is given twice"]),
-    (["scene", "--out", "s.xml", "--ground", "--no-ground"], ["--ground", "given twice"]),
-    # options that do not apply to the chosen mode
-    (["compare", "t.exr", "--image", "e.exr", "--from-scene"], ["--from-scene", "does not apply", "--image"]),
-    (["compare", "t.exr", "--image", "e.exr", "--param", "FogDensity=1"], ["--param", "does not apply"]),
-    (["compare", "t.exr", "--image", "e.exr", "--precision", "float64"], ["--precision", "does not apply"]),
-    (["compare", "t.exr", "--inscatter", "e.exr", "--sky-distance", "10"], ["--sky-distance", "does not apply"]),
-    (["compare", "t.exr", "--model", "ue4", "--exposure", "2"], ["--exposure", "does not apply", "--model"]),
-    (["compare", "t.exr", "--model", "ue4", "--encoding", "srgb"], ["--encoding", "does not apply"]),
-    (["compare", "t.exr", "--model", "ue4", "--image", "e.exr"], ["--model", "not both"]),
-    (["sweep", "s.toml", "--scheduler", "tcp://h:8786", "--workers", "2"], ["--workers", "does not apply"]),
-    # values out of range, not finite, not numbers, not one of the options
-    (["render", VALLEY, *OUT, "--checkpoint-seconds", "-1"], ["--checkpoint-seconds", "-1", "[0, "]),
-    (["render", VALLEY, *OUT, "--checkpoint-seconds", "nan"], ["--checkpoint-seconds", "not finite"]),
-    (["render", VALLEY, *OUT, "--spp", "0"], ["--spp", "[1, 1048576]"]),
-    (["render", VALLEY, *OUT, "--spp", "1.5"], ["--spp", "not an integer"]),
-    (["render", VALLEY, *OUT, "--seed", "-1"], ["--seed", "[0, 2147483647]"]),
-    (["render", VALLEY, *OUT, "--variant", "scalar_rgb"], ["--variant", "llvm_ad_rgb, cuda_ad_rgb"]),
-    (["render", VALLEY, *OUT, "--pixel-filter", "gauss"], ["--pixel-filter", "centre, box"]),
-    (["render", VALLEY, *OUT, "--set", "res"], ["--set", "NAME=VALUE"]),
-    (["sweep", "s.toml", "--workers", "0"], ["--workers", "[1, 4096]"]),
-    (["sweep", "s.toml", "--workers", "-1"], ["--workers", "[1, 4096]"]),
-    (["sweep", "s.toml", "--drjit-threads", "-1"], ["--drjit-threads", "[1, 4096]"]),
-    (["compare", "t.exr", "--model", "ue4", "--sky-distance", "0"], ["--sky-distance", "(0, inf) m"]),
-    (["compare", "t.exr", "--model", "ue4", "--precision", "float16"], ["--precision", "float32, float64"]),
-    (["compare", "t.exr", "--image", "e.png", "--exposure", "0"], ["--exposure", "(0, inf)"]),
-    (["compare", "t.exr", "--image", "e.png", "--confidence", "1"], ["--confidence", "(0, 1)"]),
-    (["fit", "--g", "1"], ["--g", "(-1, 1)"]),
-    (["fit", "--sun-dir", "0", "0", "0"], ["--sun-dir", "not a direction"]),
-    (["fit", "--sky", "1", "nan", "1"], ["--sky", "finite"]),
-    (["study", "t.exr", "--max-opacity", "2"], ["--max-opacity", "[0, 1]"]),
-    (["scene", "--out", "s.xml", "--fov", "abc"], ["--fov", "does not parse"]),
-    # commands and arguments
-    (["rendr"], ["unknown command 'rendr'", "did you mean 'render'"]),
-    (["render", VALLEY], ["--out"]),
-    (["render", VALLEY, *OUT, "--bogus"], ["--bogus"]),
-])
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        # an option given twice, a NAME given twice
+        (["render", VALLEY, *OUT, "--spp", "4", "--spp", "8"], ["--spp", "given twice"]),
+        (["render", VALLEY, *OUT, "--set", "res=4", "--set", "res=8"], ["--set", "'res' is given twice"]),
+        (["render", VALLEY, "-o", "a.exr", "--out", "b.exr"], ["--out", "given twice"]),
+        (
+            ["compare", "t.exr", "--model", "ue4", "--param", "FogDensity=1", "--param", "FogDensity=2"],
+            ["--param", "'FogDensity' is given twice"],
+        ),
+        (["scene", "--out", "s.xml", "--ground", "--no-ground"], ["--ground", "given twice"]),
+        # options that do not apply to the chosen mode
+        (
+            ["compare", "t.exr", "--image", "e.exr", "--from-scene"],
+            ["--from-scene", "does not apply", "--image"],
+        ),
+        (["compare", "t.exr", "--image", "e.exr", "--param", "FogDensity=1"], ["--param", "does not apply"]),
+        (
+            ["compare", "t.exr", "--image", "e.exr", "--precision", "float64"],
+            ["--precision", "does not apply"],
+        ),
+        (
+            ["compare", "t.exr", "--inscatter", "e.exr", "--sky-distance", "10"],
+            ["--sky-distance", "does not apply"],
+        ),
+        (
+            ["compare", "t.exr", "--model", "ue4", "--exposure", "2"],
+            ["--exposure", "does not apply", "--model"],
+        ),
+        (["compare", "t.exr", "--model", "ue4", "--encoding", "srgb"], ["--encoding", "does not apply"]),
+        (["compare", "t.exr", "--model", "ue4", "--image", "e.exr"], ["--model", "not both"]),
+        (
+            ["sweep", "s.toml", "--scheduler", "tcp://h:8786", "--workers", "2"],
+            ["--workers", "does not apply"],
+        ),
+        # values out of range, not finite, not numbers, not one of the options
+        (["render", VALLEY, *OUT, "--checkpoint-seconds", "-1"], ["--checkpoint-seconds", "-1", "[0, "]),
+        (["render", VALLEY, *OUT, "--checkpoint-seconds", "nan"], ["--checkpoint-seconds", "not finite"]),
+        (["render", VALLEY, *OUT, "--spp", "0"], ["--spp", "[1, 1048576]"]),
+        (["render", VALLEY, *OUT, "--spp", "1.5"], ["--spp", "not an integer"]),
+        (["render", VALLEY, *OUT, "--seed", "-1"], ["--seed", "[0, 2147483647]"]),
+        (["render", VALLEY, *OUT, "--variant", "scalar_rgb"], ["--variant", "llvm_ad_rgb, cuda_ad_rgb"]),
+        (["render", VALLEY, *OUT, "--pixel-filter", "gauss"], ["--pixel-filter", "centre, box"]),
+        (["render", VALLEY, *OUT, "--set", "res"], ["--set", "NAME=VALUE"]),
+        (["sweep", "s.toml", "--workers", "0"], ["--workers", "[1, 4096]"]),
+        (["sweep", "s.toml", "--workers", "-1"], ["--workers", "[1, 4096]"]),
+        (["sweep", "s.toml", "--drjit-threads", "-1"], ["--drjit-threads", "[1, 4096]"]),
+        (["compare", "t.exr", "--model", "ue4", "--sky-distance", "0"], ["--sky-distance", "(0, inf) m"]),
+        (
+            ["compare", "t.exr", "--model", "ue4", "--precision", "float16"],
+            ["--precision", "float32, float64"],
+        ),
+        (["compare", "t.exr", "--image", "e.png", "--exposure", "0"], ["--exposure", "(0, inf)"]),
+        (["compare", "t.exr", "--image", "e.png", "--confidence", "1"], ["--confidence", "(0, 1)"]),
+        (["fit", "--g", "1"], ["--g", "(-1, 1)"]),
+        (["fit", "--sun-dir", "0", "0", "0"], ["--sun-dir", "not a direction"]),
+        (["fit", "--sky", "1", "nan", "1"], ["--sky", "finite"]),
+        (["study", "t.exr", "--max-opacity", "2"], ["--max-opacity", "[0, 1]"]),
+        (["scene", "--out", "s.xml", "--fov", "abc"], ["--fov", "does not parse"]),
+        # commands and arguments
+        (["rendr"], ["unknown command 'rendr'", "did you mean 'render'"]),
+        (["render", VALLEY], ["--out"]),
+        (["render", VALLEY, *OUT, "--bogus"], ["--bogus"]),
+    ],
+)
 def test_refusals_are_one_line_exit_2(argv, words, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(ROOT)
     rc = main(argv)
@@ -168,8 +204,20 @@ def test_refusals_are_one_line_exit_2(argv, words, capsys, tmp_path, monkeypatch
 
 
 def test_parse_gives_values_and_what_was_given():
-    module, o, given = parse(["compare", "t.exr", "--model", "ue4", "--param", "FogDensity=0.05",
-                              "--tolerance", "T:rel_bias=0.001", "--distance-bands", "50,500"])
+    module, o, given = parse(
+        [
+            "compare",
+            "t.exr",
+            "--model",
+            "ue4",
+            "--param",
+            "FogDensity=0.05",
+            "--tolerance",
+            "T:rel_bias=0.001",
+            "--distance-bands",
+            "50,500",
+        ]
+    )
     assert module.NAME == "compare" and o.param == {"FogDensity": "0.05"} and o.precision == "float32"
     assert o.tolerance == {"T": {"rel_bias": 0.001}} and o.distance_bands == (50.0, 500.0)
     assert given == {"exr", "model", "param", "tolerance", "distance_bands"}

@@ -13,25 +13,44 @@ from fogref.errors import ParameterError
 S = "src"
 
 
-@pytest.mark.parametrize("value, kw, want", [
-    (0.5, {}, 0.5), ("0.5", {}, 0.5), (" 2 ", {}, 2.0), (np.float32(0.25), {}, 0.25), (np.int64(3), {}, 3.0),
-    (np.array(1.5), {}, 1.5), (0, {"lo": 0}, 0.0), (1, {"hi": 1}, 1.0), ("1e-300", {"lo": 0, "lo_open": True}, 1e-300),
-])
+@pytest.mark.parametrize(
+    "value, kw, want",
+    [
+        (0.5, {}, 0.5),
+        ("0.5", {}, 0.5),
+        (" 2 ", {}, 2.0),
+        (np.float32(0.25), {}, 0.25),
+        (np.int64(3), {}, 3.0),
+        (np.array(1.5), {}, 1.5),
+        (0, {"lo": 0}, 0.0),
+        (1, {"hi": 1}, 1.0),
+        ("1e-300", {"lo": 0, "lo_open": True}, 1e-300),
+    ],
+)
 def test_number_accepts(value, kw, want):
     assert P.number(value, "x", source=S, **kw) == want
 
 
-@pytest.mark.parametrize("value, kw, words", [
-    (True, {}, ["True", "bool"]), (np.bool_(False), {}, ["bool"]),
-    (math.nan, {}, ["nan", "not finite"]), ("nan", {}, ["not finite"]), (math.inf, {}, ["inf", "not finite"]),
-    ("1e400", {}, ["not finite"]), ("-inf", {"lo": 0}, ["not finite", "[0, inf)"]),
-    ("abc", {}, ["'abc'", "does not parse"]), ("", {}, ["does not parse"]), (None, {}, ["expected a number"]),
-    ([1.0], {}, ["expected a number"]),
-    (0, {"lo": 0, "lo_open": True, "unit": "m"}, ["0 is outside (0, inf) m"]),
-    (1, {"lo": -1, "hi": 1, "lo_open": True, "hi_open": True}, ["1 is outside (-1, 1)"]),
-    (-0.5, {"lo": 0, "hi": 1, "unit": "1/m"}, ["-0.5 is outside [0, 1] 1/m"]),
-    (1001, {"lo": 0, "hi": 1e3}, ["[0, 1000]"]),
-])
+@pytest.mark.parametrize(
+    "value, kw, words",
+    [
+        (True, {}, ["True", "bool"]),
+        (np.bool_(False), {}, ["bool"]),
+        (math.nan, {}, ["nan", "not finite"]),
+        ("nan", {}, ["not finite"]),
+        (math.inf, {}, ["inf", "not finite"]),
+        ("1e400", {}, ["not finite"]),
+        ("-inf", {"lo": 0}, ["not finite", "[0, inf)"]),
+        ("abc", {}, ["'abc'", "does not parse"]),
+        ("", {}, ["does not parse"]),
+        (None, {}, ["expected a number"]),
+        ([1.0], {}, ["expected a number"]),
+        (0, {"lo": 0, "lo_open": True, "unit": "m"}, ["0 is outside (0, inf) m"]),
+        (1, {"lo": -1, "hi": 1, "lo_open": True, "hi_open": True}, ["1 is outside (-1, 1)"]),
+        (-0.5, {"lo": 0, "hi": 1, "unit": "1/m"}, ["-0.5 is outside [0, 1] 1/m"]),
+        (1001, {"lo": 0, "hi": 1e3}, ["[0, 1000]"]),
+    ],
+)
 def test_number_refuses_with_value_and_range(value, kw, words):
     with pytest.raises(ParameterError) as e:
         P.number(value, "falloff", source=S, **kw)
@@ -44,8 +63,15 @@ def test_number_refuses_with_value_and_range(value, kw, words):
 def test_integer():
     assert P.integer("64", "n", source=S, lo=1) == 64 and P.integer(36.0, "n", source=S) == 36
     assert P.integer("1e3", "n", source=S) == 1000 and P.integer(np.int32(5), "n", source=S) == 5
-    for bad, word in ((True, "bool"), (16.7, "not an integer"), ("2.5", "not an integer"), ("x", "does not parse"),
-                      (math.nan, "not an integer"), (0, "0 is outside [1, 8]"), (9, "[1, 8]")):
+    for bad, word in (
+        (True, "bool"),
+        (16.7, "not an integer"),
+        ("2.5", "not an integer"),
+        ("x", "does not parse"),
+        (math.nan, "not an integer"),
+        (0, "0 is outside [1, 8]"),
+        (9, "[1, 8]"),
+    ):
         with pytest.raises(ParameterError, match=None) as e:
             P.integer(bad, "n", source=S, lo=1, hi=8)
         assert word in str(e.value), (bad, str(e.value))
@@ -61,9 +87,15 @@ def test_rgb_and_vector():
     assert P.rgb(0.5, "a", source=S) == (0.5, 0.5, 0.5) == P.rgb([0.5], "a", source=S)
     assert P.rgb("1, 2 3", "a", source=S) == (1.0, 2.0, 3.0) == P.rgb(np.array([1, 2, 3]), "a", source=S)
     assert P.vector((0, 2, 0), "c", source=S) == (0.0, 2.0, 0.0)
-    for bad, word in (([1, 2], "expected 1 or 3 numbers, got 2"), ([1, 2, 3, 4], "got 4"),
-                      ([0.1, math.nan, 0.1], "not finite"), ([0.1, -1, 0.1], "(0.1, -1, 0.1) is outside"),
-                      ([True, 1, 1], "bool"), ("a b c", "does not parse"), (None, "expected 1 or 3 numbers")):
+    for bad, word in (
+        ([1, 2], "expected 1 or 3 numbers, got 2"),
+        ([1, 2, 3, 4], "got 4"),
+        ([0.1, math.nan, 0.1], "not finite"),
+        ([0.1, -1, 0.1], "(0.1, -1, 0.1) is outside"),
+        ([True, 1, 1], "bool"),
+        ("a b c", "does not parse"),
+        (None, "expected 1 or 3 numbers"),
+    ):
         with pytest.raises(ParameterError) as e:
             P.rgb(bad, "albedo", source=S, lo=0, hi=1)
         assert word in str(e.value), (bad, str(e.value))
@@ -83,9 +115,12 @@ def test_path(tmp_path):
     (tmp_path / "a.xml").write_text("<scene/>")
     assert P.path(tmp_path / "a.xml", "scene", source=S, must_exist=True) == tmp_path / "a.xml"
     assert P.path(tmp_path, "d", source=S, must_exist=True, kind="dir") == tmp_path
-    for bad, kw, word in (("", {}, "empty path"), (3, {}, "expected a path"),
-                          (tmp_path / "b.xml", {"must_exist": True}, "no such file"),
-                          (tmp_path, {"must_exist": True}, "it is a folder")):
+    for bad, kw, word in (
+        ("", {}, "empty path"),
+        (3, {}, "expected a path"),
+        (tmp_path / "b.xml", {"must_exist": True}, "no such file"),
+        (tmp_path, {"must_exist": True}, "it is a folder"),
+    ):
         with pytest.raises(ParameterError) as e:
             P.path(bad, "scene", source=S, **kw)
         assert word in str(e.value)

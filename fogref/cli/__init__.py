@@ -39,14 +39,19 @@ from fogref.errors import FogrefError, did_you_mean
 __all__ = ["COMMANDS", "build_parser", "main", "parse"]
 
 #: The commands, in the order ``fogref --help`` lists them, and the module of each.
-COMMANDS = {name: f"fogref.cli.{name}" for name in ("render", "info", "compare", "study", "fit", "scene",
-                                                     "sweep")}
+COMMANDS = {
+    name: f"fogref.cli.{name}" for name in ("render", "info", "compare", "study", "fit", "scene", "sweep")
+}
 
-DESCRIPTION = ("fogref: path-traced ground truth for game-engine fog (Mitsuba 3), and the tools that check "
-               "an engine's fog against it.  `fogref COMMAND --help` gives each command's options, "
-               "their units, ranges and defaults.")
-EPILOG = ("exit codes: 0 success (compare: pass), 1 compare: fail, 2 usage or input error (one line "
-          "'fogref: error: ...'), 3 compare: inconclusive, 130 interrupted (a render resumes when run again)")
+DESCRIPTION = (
+    "fogref: path-traced ground truth for game-engine fog (Mitsuba 3), and the tools that check "
+    "an engine's fog against it.  `fogref COMMAND --help` gives each command's options, "
+    "their units, ranges and defaults."
+)
+EPILOG = (
+    "exit codes: 0 success (compare: pass), 1 compare: fail, 2 usage or input error (one line "
+    "'fogref: error: ...'), 3 compare: inconclusive, 130 interrupted (a render resumes when run again)"
+)
 
 
 def _module(name: str):
@@ -90,8 +95,10 @@ def parse(argv):
     argv = list(argv)
     cmd = _command(argv)
     if cmd is not None and cmd not in COMMANDS:
-        raise UsageError(f"fogref: unknown command '{cmd}'{did_you_mean(cmd, COMMANDS)} "
-                         f"(one of {', '.join(COMMANDS)}; see fogref --help)")
+        raise UsageError(
+            f"fogref: unknown command '{cmd}'{did_you_mean(cmd, COMMANDS)} "
+            f"(one of {', '.join(COMMANDS)}; see fogref --help)"
+        )
     ns = build_parser(only=cmd).parse_args(argv)
     module = _module(ns.cmd)
     opts, given = parse_options(ns, module.Options, f"fogref {ns.cmd}")

@@ -2,14 +2,20 @@
 
 from __future__ import annotations
 
+import json
+import os
+import sys
 from dataclasses import dataclass
+from pathlib import Path
 
 from fogref.cli.spec import PathArg, option, switch
 
 NAME = "info"
 HELP = "channels, parameters, spp, seed and noise level of an EXR"
-DESCRIPTION = ("Describe an EXR: its channels, and for a fogref ground truth the scene, parameters, spp, seed, "
-               "noise level and camera.")
+DESCRIPTION = (
+    "Describe an EXR: its channels, and for a fogref ground truth the scene, parameters, spp, seed, "
+    "noise level and camera."
+)
 EPILOG = "exit codes: 0 described, 2 usage or input error"
 
 
@@ -20,6 +26,14 @@ class Options:
 
 
 def run(o: Options, given=frozenset()) -> int:
-    from fogref.info import run_info_command
+    """Print :func:`fogref.info.describe`, or with ``--json`` :func:`fogref.info.info` as JSON
+    (quietly stops when the reader closes the pipe)."""
+    from fogref.info import describe, info
 
-    return run_info_command(o)
+    text = json.dumps(info(Path(o.exr)), indent=2, default=float) if o.json else describe(Path(o.exr))
+    try:
+        print(text)
+        sys.stdout.flush()
+    except BrokenPipeError:  # `fogref info x.exr | head`: not an error
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    return 0

@@ -41,8 +41,25 @@ from dataclasses import MISSING, field
 from fogref import params
 from fogref.errors import FogrefError, ParameterError
 
-__all__ = ["Assignments", "Check", "Choice", "Integer", "Number", "Parser", "PathArg", "RGB", "Text",
-           "UsageError", "Vector", "add_options", "option", "parse_options", "refuse", "switch", "toggle"]
+__all__ = [
+    "Assignments",
+    "Check",
+    "Choice",
+    "Integer",
+    "Number",
+    "Parser",
+    "PathArg",
+    "RGB",
+    "Text",
+    "UsageError",
+    "Vector",
+    "add_options",
+    "option",
+    "parse_options",
+    "refuse",
+    "switch",
+    "toggle",
+]
 
 INF = math.inf
 
@@ -96,8 +113,16 @@ class Number(Check):
     unit: str = ""
 
     def parse(self, raw, name, source):
-        return params.number(raw, name, source=source, lo=self.lo, hi=self.hi, lo_open=self.lo_open,
-                             hi_open=self.hi_open, unit=self.unit)
+        return params.number(
+            raw,
+            name,
+            source=source,
+            lo=self.lo,
+            hi=self.hi,
+            lo_open=self.lo_open,
+            hi_open=self.hi_open,
+            unit=self.unit,
+        )
 
     def describe(self):
         if self.lo == -INF and self.hi == INF:
@@ -190,7 +215,7 @@ class Assignments(Check):
     >>> Assignments().parse(["spp=4", "spp=8"], "--set", "fogref render")
     Traceback (most recent call last):
     ...
-    fogref.errors.ParameterError: fogref render: parameter '--set': 'spp' is given twice ('spp=4', 'spp=8'); give each NAME once
+    fogref.errors.ParameterError: fogref render: parameter '--set': 'spp' is given twice ...
     """
 
     metavar = "NAME=VALUE"
@@ -204,8 +229,11 @@ class Assignments(Check):
             if not eq or not key:
                 raise ParameterError(source, name, f"expected NAME=VALUE, got {item!r}")
             if key in out:
-                raise ParameterError(source, name, f"{key!r} is given twice ({key + '=' + out[key]!r}, "
-                                     f"{item!r}); give each NAME once")
+                raise ParameterError(
+                    source,
+                    name,
+                    f"{key!r} is given twice ({key + '=' + out[key]!r}, {item!r}); give each NAME once",
+                )
             out[key] = value
         return out
 
@@ -213,10 +241,22 @@ class Assignments(Check):
 # --------------------------------------------------------------------------- fields
 
 
-def option(default=MISSING, help: str = "", *, check: Check | None = None, flag: str | None = None,
-           short: str | None = None, metavar: str | None = None, positional: bool = False,
-           repeat: bool = False, nargs: int | str | None = None, group: str | None = None,
-           api: str | None = None, api_name: str | None = None, default_text: str | None = None):
+def option(
+    default=MISSING,
+    help: str = "",
+    *,
+    check: Check | None = None,
+    flag: str | None = None,
+    short: str | None = None,
+    metavar: str | None = None,
+    positional: bool = False,
+    repeat: bool = False,
+    nargs: int | str | None = None,
+    group: str | None = None,
+    api: str | None = None,
+    api_name: str | None = None,
+    default_text: str | None = None,
+):
     """A dataclass field that is a command-line option.
 
     Parameters
@@ -233,30 +273,84 @@ def option(default=MISSING, help: str = "", *, check: Check | None = None, flag:
         has the same default (checked by tests/test_cli_spec.py).
     default_text : how the default is shown in the help (default: the value; None: not shown).
     """
-    meta = {"help": help, "check": check or Text(), "flag": flag, "short": short, "metavar": metavar,
-            "positional": positional, "repeat": repeat, "nargs": nargs, "group": group, "api": api,
-            "api_name": api_name, "default_text": default_text, "switch": False, "negates": False}
+    meta = {
+        "help": help,
+        "check": check or Text(),
+        "flag": flag,
+        "short": short,
+        "metavar": metavar,
+        "positional": positional,
+        "repeat": repeat,
+        "nargs": nargs,
+        "group": group,
+        "api": api,
+        "api_name": api_name,
+        "default_text": default_text,
+        "switch": False,
+        "negates": False,
+    }
     if default is MISSING:
         return field(metadata={"fogref": meta})
     return field(default=default, metadata={"fogref": meta})
 
 
-def switch(help: str = "", *, flag: str | None = None, group: str | None = None, api: str | None = None,
-           api_name: str | None = None, negates: bool = False):
+def switch(
+    help: str = "",
+    *,
+    flag: str | None = None,
+    group: str | None = None,
+    api: str | None = None,
+    api_name: str | None = None,
+    negates: bool = False,
+):
     """A boolean flag, False unless given.  ``negates``: the API parameter ``api_name`` is its
     opposite (``--no-png`` is ``png=False``)."""
-    meta = {"help": help, "check": None, "flag": flag, "short": None, "metavar": None, "positional": False,
-            "repeat": False, "nargs": None, "group": group, "api": api, "api_name": api_name,
-            "default_text": None, "switch": True, "negates": negates}
+    meta = {
+        "help": help,
+        "check": None,
+        "flag": flag,
+        "short": None,
+        "metavar": None,
+        "positional": False,
+        "repeat": False,
+        "nargs": None,
+        "group": group,
+        "api": api,
+        "api_name": api_name,
+        "default_text": None,
+        "switch": True,
+        "negates": negates,
+    }
     return field(default=False, metadata={"fogref": meta})
 
 
-def toggle(help: str = "", *, flag: str | None = None, group: str | None = None, api: str | None = None,
-           api_name: str | None = None, default_text: str | None = None):
+def toggle(
+    help: str = "",
+    *,
+    flag: str | None = None,
+    group: str | None = None,
+    api: str | None = None,
+    api_name: str | None = None,
+    default_text: str | None = None,
+):
     """A ``--x``/``--no-x`` pair: True, False, or None when neither is given (given once at most)."""
-    meta = {"help": help, "check": None, "flag": flag, "short": None, "metavar": None, "positional": False,
-            "repeat": False, "nargs": None, "group": group, "api": api, "api_name": api_name,
-            "default_text": default_text, "switch": False, "negates": False, "toggle": True}
+    meta = {
+        "help": help,
+        "check": None,
+        "flag": flag,
+        "short": None,
+        "metavar": None,
+        "positional": False,
+        "repeat": False,
+        "nargs": None,
+        "group": group,
+        "api": api,
+        "api_name": api_name,
+        "default_text": default_text,
+        "switch": False,
+        "negates": False,
+        "toggle": True,
+    }
     return field(default=None, metadata={"fogref": meta})
 
 
@@ -306,8 +400,9 @@ class _Once(argparse.Action):
 
     def __call__(self, parser, namespace, values, option_string=None):
         if hasattr(namespace, self.dest):
-            raise argparse.ArgumentError(self, f"given twice ({getattr(namespace, self.dest)!r} and "
-                                         f"{values!r}); give it once")
+            raise argparse.ArgumentError(
+                self, f"given twice ({getattr(namespace, self.dest)!r} and {values!r}); give it once"
+            )
         setattr(namespace, self.dest, values)
 
 
@@ -316,8 +411,9 @@ class _OnceToggle(argparse.BooleanOptionalAction):
 
     def __call__(self, parser, namespace, values, option_string=None):
         if hasattr(namespace, self.dest):
-            raise argparse.ArgumentError(self, "given twice; give --x or --no-x once".replace(
-                "x", self.option_strings[0][2:]))
+            raise argparse.ArgumentError(
+                self, "given twice; give --x or --no-x once".replace("x", self.option_strings[0][2:])
+            )
         super().__call__(parser, namespace, values, option_string)
 
 
@@ -337,10 +433,14 @@ def add_options(parser: argparse.ArgumentParser, spec) -> None:
         m = meta(f)
         where = parser
         if m["group"]:
-            where = groups.get(m["group"]) or groups.setdefault(m["group"], parser.add_argument_group(m["group"]))
+            where = groups.get(m["group"]) or groups.setdefault(
+                m["group"], parser.add_argument_group(m["group"])
+            )
         kw = {"help": help_text(f), "default": argparse.SUPPRESS}
         if m["switch"] or m.get("toggle"):
-            where.add_argument(flag_of(f), dest=f.name, action=_OnceToggle if m.get("toggle") else _OnceTrue, **kw)
+            where.add_argument(
+                flag_of(f), dest=f.name, action=_OnceToggle if m.get("toggle") else _OnceTrue, **kw
+            )
             continue
         metavar = m["metavar"] or m["check"].metavar
         if m["nargs"] is not None:
@@ -399,5 +499,6 @@ def refuse(spec, given: set, these, those, source: str, why: str = "") -> None:
     a = [flag_of(fields[n]) for n in these if n in given]
     b = [flag_of(fields[n]) for n in those if n in given]
     if a and b:
-        raise UsageError(f"{source}: {', '.join(b)} does not apply with {', '.join(a)}"
-                         + (f" ({why})" if why else ""))
+        raise UsageError(
+            f"{source}: {', '.join(b)} does not apply with {', '.join(a)}" + (f" ({why})" if why else "")
+        )

@@ -13,24 +13,45 @@ from fogref.cli.spec import Integer, PathArg, Text, option, refuse, switch
 NAME = "sweep"
 SOURCE = "fogref sweep"
 HELP = "run a declarative error study (SWEEP.toml) on Dask"
-DESCRIPTION = ("Run a declarative error study: the scenes, the parameters to vary, the design, the models and "
-               "the outputs are in a TOML file (see fogref.study.sweep).  Each configuration renders its truth "
-               "(or reuses it from the cache) and compares every model; one table of rows, plots beside it.  "
-               "An interrupted sweep resumes.")
-EPILOG = "exit codes: 0 finished (failed configurations are rows with status 'error'), 2 usage or input error, " \
-         "130 interrupted (run again to resume)"
+DESCRIPTION = (
+    "Run a declarative error study: the scenes, the parameters to vary, the design, the models and "
+    "the outputs are in a TOML file (see fogref.study.sweep).  Each configuration renders its truth "
+    "(or reuses it from the cache) and compares every model; one table of rows, plots beside it.  "
+    "An interrupted sweep resumes."
+)
+EPILOG = (
+    "exit codes: 0 finished (failed configurations are rows with status 'error'), 2 usage or input error, "
+    "130 interrupted (run again to resume)"
+)
 RUN = "fogref.study.sweep:run_sweep"
 
 
 @dataclass
 class Options:
     sweep: str = option(help="the sweep file (TOML)", positional=True, check=PathArg(), metavar="SWEEP.toml")
-    scheduler: str | None = option(None, "a running Dask scheduler (tcp://HOST:8786)", check=Text(),
-                                   metavar="ADDRESS", api=RUN, default_text="a LocalCluster on this machine")
-    workers: int | None = option(None, "LocalCluster worker processes", check=Integer(1, 4096), api=RUN,
-                                 api_name="n_workers", default_text="one per core")
-    drjit_threads: int | None = option(None, "Dr.Jit threads per worker", check=Integer(1, 4096), api=RUN,
-                                       default_text="cores / workers on a LocalCluster")
+    scheduler: str | None = option(
+        None,
+        "a running Dask scheduler (tcp://HOST:8786)",
+        check=Text(),
+        metavar="ADDRESS",
+        api=RUN,
+        default_text="a LocalCluster on this machine",
+    )
+    workers: int | None = option(
+        None,
+        "LocalCluster worker processes",
+        check=Integer(1, 4096),
+        api=RUN,
+        api_name="n_workers",
+        default_text="one per core",
+    )
+    drjit_threads: int | None = option(
+        None,
+        "Dr.Jit threads per worker",
+        check=Integer(1, 4096),
+        api=RUN,
+        default_text="cores / workers on a LocalCluster",
+    )
     retry_failed: bool = switch("re-run configurations recorded as failed", api=RUN)
     quiet: bool = switch("no progress bar", api=RUN, api_name="progress", negates=True)
 
@@ -39,10 +60,20 @@ def run(a: Options, given=frozenset()) -> int:
     """Run the sweep; print a one-line summary."""
     from fogref.study.sweep import run_sweep
 
-    refuse(Options, given, ("scheduler",), ("workers",), SOURCE, "the workers of a running scheduler are its own")
-    info = run_sweep(a.sweep, scheduler=a.scheduler, n_workers=a.workers, progress=not a.quiet,
-                     retry_failed=a.retry_failed, drjit_threads=a.drjit_threads)
-    print(f"{info['configs']} configurations ({info['ran']} run now, {info['failed']} failed) in "
-          f"{info['wall_seconds']:.1f} s; table: {info['table']} ({info['rows']} rows), {info['parquet']}; "
-          f"{len(info['plots'])} plots")
+    refuse(
+        Options, given, ("scheduler",), ("workers",), SOURCE, "the workers of a running scheduler are its own"
+    )
+    info = run_sweep(
+        a.sweep,
+        scheduler=a.scheduler,
+        n_workers=a.workers,
+        progress=not a.quiet,
+        retry_failed=a.retry_failed,
+        drjit_threads=a.drjit_threads,
+    )
+    print(
+        f"{info['configs']} configurations ({info['ran']} run now, {info['failed']} failed) in "
+        f"{info['wall_seconds']:.1f} s; table: {info['table']} ({info['rows']} rows), {info['parquet']}; "
+        f"{len(info['plots'])} plots"
+    )
     return 0

@@ -51,7 +51,7 @@ def parse_tolerances(items) -> dict:
     >>> parse_tolerances(["foo"])
     Traceback (most recent call last):
     ...
-    fogref.errors.FogrefError: --tolerance foo: expected PART[/REGION][:METRIC]=VALUE, e.g. inscatter/sky=0.05 or T:rel_bias=0.001
+    fogref.errors.FogrefError: --tolerance foo: expected PART[/REGION][:METRIC]=VALUE, ...
     """
     out: dict = {}
     for item in items or []:
@@ -88,8 +88,8 @@ def parse_distance_bands(text: str) -> tuple[float, ...]:
     except ValueError:
         edges = (math.nan,)
     if not all(math.isfinite(e) and e > 0 for e in edges) or any(b <= a for a, b in zip(edges, edges[1:])):
-        raise FogrefError(f"--distance-bands {text}: expected increasing distances [m] > 0 separated by commas "
-                          "(e.g. 100,1000) or 'none'")
+        raise FogrefError(f"--distance-bands {text}: expected increasing distances [m] > 0 separated by "
+                          "commas (e.g. 100,1000) or 'none'")
     return edges
 
 
@@ -113,7 +113,8 @@ def write_json(path, result, code: int, **extra) -> Path:
     """Write :func:`gate_dict` to ``path`` atomically (no NaN)."""
     from fogref.atomic import write_text_atomic
 
-    return write_text_atomic(path, json.dumps(gate_dict(result, code, **extra), indent=2, allow_nan=False) + "\n")
+    text = json.dumps(gate_dict(result, code, **extra), indent=2, allow_nan=False)
+    return write_text_atomic(path, text + "\n")
 
 
 def junit_xml(result, inconclusive: str | None = None) -> str:

@@ -63,11 +63,11 @@ from fogref.compare.binning import angle_edges, binned_errors, log_distance_edge
 from fogref.compare.check import candidate_parts, evaluate_model, fog_parts
 from fogref.compare.plots import plot_binned_errors, plot_error_heatmaps, plot_side_by_side
 from fogref.compare.tonemap import exposure_for
-from fogref.params import number as valid_number
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 from fogref.gbuffer import Truth, load_truth
 from fogref.mapping.build import current_parameters
+from fogref.params import number as valid_number
 
 #: Distance [m] at which the model fogs sky pixels (a stand-in for infinity).
 DEFAULT_SKY_DISTANCE = 1.0e5

@@ -26,8 +26,8 @@ from dataclasses import dataclass, field
 
 from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
-from fogref.params import number as valid_number
 from fogref.media.protocol import number, register_profile, rgb
+from fogref.params import number as valid_number
 
 
 def quiet_numpy(fn):
