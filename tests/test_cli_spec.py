@@ -139,6 +139,11 @@ VALLEY = "scenes/valley.xml"
             ["--param", "'FogDensity' is given twice"],
         ),
         (["scene", "--out", "s.xml", "--ground", "--no-ground"], ["--ground", "given twice"]),
+        (
+            ["compare", "t.exr", "--image", "e.exr", "--tolerance", "T=0.1", "--tolerance", "T:rel_rmse=0.2"],
+            ["--tolerance", "T:rel_rmse is given twice"],
+        ),
+        (["sweep", "s.toml", "--scheduler", "tcp://a b"], ["--scheduler", "[PROTOCOL://]HOST[:PORT]"]),
         # options that do not apply to the chosen mode
         (
             ["compare", "t.exr", "--image", "e.exr", "--from-scene"],

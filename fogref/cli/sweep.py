@@ -6,9 +6,11 @@ its defaults are the options' defaults.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
-from fogref.cli.spec import Integer, PathArg, Text, option, refuse, switch
+from fogref.cli.spec import Check, Integer, PathArg, option, refuse, switch
+from fogref.errors import ParameterError
 
 NAME = "sweep"
 SOURCE = "fogref sweep"
@@ -26,13 +28,36 @@ EPILOG = (
 RUN = "fogref.study.sweep:run_sweep"
 
 
+class Address(Check):
+    """A Dask scheduler address: ``[PROTOCOL://]HOST[:PORT]`` (``tcp://10.0.0.5:8786``).
+
+    >>> Address().parse("tcp://10.0.0.5:8786", "--scheduler", "fogref sweep")
+    'tcp://10.0.0.5:8786'
+    >>> Address().parse("not an address", "--scheduler", "fogref sweep")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: fogref sweep: parameter '--scheduler': 'not an address' is not ...
+    """
+
+    PATTERN = re.compile(r"^([a-z][a-z0-9+.-]*://)?[A-Za-z0-9_.\-\[\]:]+$")
+
+    def parse(self, raw, name, source):
+        if not self.PATTERN.match(str(raw)):
+            raise ParameterError(source, name, f"{raw!r} is not a scheduler address "
+                                 "[PROTOCOL://]HOST[:PORT], e.g. tcp://10.0.0.5:8786")
+        return str(raw)
+
+    def describe(self):
+        return "[PROTOCOL://]HOST[:PORT]"
+
+
 @dataclass
 class Options:
     sweep: str = option(help="the sweep file (TOML)", positional=True, check=PathArg(), metavar="SWEEP.toml")
     scheduler: str | None = option(
         None,
         "a running Dask scheduler (tcp://HOST:8786)",
-        check=Text(),
+        check=Address(),
         metavar="ADDRESS",
         api=RUN,
         default_text="a LocalCluster on this machine",

@@ -43,8 +43,9 @@ def parse_tolerances(items) -> dict:
     """``--tolerance PART[/REGION][:METRIC]=VALUE`` options as check()'s ``tolerances`` dict.
 
     METRIC defaults to ``rel_rmse``; VALUE is a number (finite, >= 0) or ``none`` (only
-    report the metric).  Later options override earlier ones.  Names are not checked
-    here: :func:`fogref.compare.check.check` rejects unknown parts, regions and metrics.
+    report the metric).  A row given twice is refused (FogrefError), as every repeated
+    option is.  Names are not checked here: :func:`fogref.compare.check.check` rejects
+    unknown parts, regions and metrics.
 
     >>> parse_tolerances(["inscatter/sky=0.05", "T:rel_bias=0.001", "T:rmse=none"])
     {'inscatter/sky': {'rel_rmse': 0.05}, 'T': {'rel_bias': 0.001, 'rmse': None}}
@@ -71,7 +72,10 @@ def parse_tolerances(items) -> dict:
             if not (math.isfinite(tol) and tol >= 0):
                 raise FogrefError(f"--tolerance {item}: value '{value}' must be a finite number >= 0 "
                                   "(relative metrics: 0.05 is 5 %) or 'none'")
-        out.setdefault(where, {})[metric.strip() or "rel_rmse"] = tol
+        row, metric = out.setdefault(where.strip(), {}), metric.strip() or "rel_rmse"
+        if metric in row:
+            raise FogrefError(f"--tolerance {item}: {where.strip()}:{metric} is given twice; give each once")
+        row[metric] = tol
     return out
 
 
