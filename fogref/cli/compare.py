@@ -14,7 +14,8 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from fogref.cli.spec import Assignments, Check, Choice, Number, PathArg, UsageError, option, refuse, switch
+from fogref.cli.checks import Assignments, Check, Choice, Number, PathArg
+from fogref.cli.spec import UsageError, option, refuse, switch
 
 NAME = "compare"
 SOURCE = "fogref compare"

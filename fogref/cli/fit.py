@@ -12,7 +12,8 @@ import sys
 from dataclasses import dataclass
 
 from fogref import params
-from fogref.cli.spec import RGB, Integer, Number, PathArg, UsageError, Vector, option, switch
+from fogref.cli.checks import RGB, Integer, Number, PathArg, Vector
+from fogref.cli.spec import UsageError, option, switch
 
 NAME = "fit"
 SOURCE = "fogref fit"

@@ -8,7 +8,8 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from fogref.cli.spec import PathArg, option, switch
+from fogref.cli.checks import PathArg
+from fogref.cli.spec import option, switch
 
 NAME = "info"
 HELP = "channels, parameters, spp, seed and noise level of an EXR"

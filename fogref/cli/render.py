@@ -8,7 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from fogref.cli.spec import Assignments, Choice, Integer, Number, PathArg, option, switch
+from fogref.cli.checks import Assignments, Choice, Integer, Number, PathArg
+from fogref.cli.spec import option, switch
 
 NAME = "render"
 HELP = "path-trace a scene to a ground-truth EXR (+ PNG preview)"

@@ -10,7 +10,8 @@ from __future__ import annotations
 import sys
 from dataclasses import dataclass, make_dataclass
 
-from fogref.cli.spec import Choice, Integer, Number, PathArg, Text, UsageError, option, switch, toggle
+from fogref.cli.checks import Choice, Integer, Number, PathArg, Text
+from fogref.cli.spec import UsageError, option, switch, toggle
 from fogref.render.scene_writer import (
     MESH_UP,
     PHYSICAL,

@@ -2,14 +2,14 @@
 
 Each subcommand module (:mod:`fogref.cli.render`, ...) declares ``Options``, a dataclass
 whose fields are made by :func:`option` or :func:`switch`: the default, the check (one
-of the classes below, which call :mod:`fogref.params`, fogref's one validator), the
+of :mod:`fogref.cli.checks`, which call :mod:`fogref.params`, fogref's one validator), the
 unit and range, the help text and, where a Python API function has the same parameter,
 that function's name (``api="fogref.render.render:render"``), so that
 ``tests/test_cli_spec.py`` can assert that both defaults are equal.  The help line of an
 option is its help text, then the allowed range with its unit (from the check), then the
 default (from the field): each written once.
 
-Parsing (:func:`parse`) gives the option values as converted by their checks, and the set
+Parsing (:func:`parse_options`) gives the option values as converted by their checks, and the set
 of options the user gave, so that a subcommand can refuse options that do not apply to
 its mode.  Refused as usage errors (exit 2, one line ``fogref: error: ...``): an option
 given twice (``--spp 4 --spp 8``), a ``NAME=VALUE`` option naming one NAME twice, and
@@ -18,6 +18,7 @@ every value its check refuses.
 Examples
 --------
 >>> from dataclasses import dataclass
+>>> from fogref.cli.checks import Integer
 >>> @dataclass
 ... class Demo:
 ...     spp: int = option(64, "samples per pixel", check=Integer(1, 1 << 20))
@@ -35,33 +36,13 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import math
 from dataclasses import MISSING, field
 
 from fogref import params
-from fogref.errors import FogrefError, ParameterError
+from fogref.cli.checks import Check, Text
+from fogref.errors import FogrefError
 
-__all__ = [
-    "Assignments",
-    "Check",
-    "Choice",
-    "Integer",
-    "Number",
-    "Parser",
-    "PathArg",
-    "RGB",
-    "Text",
-    "UsageError",
-    "Vector",
-    "add_options",
-    "option",
-    "parse_options",
-    "refuse",
-    "switch",
-    "toggle",
-]
-
-INF = math.inf
+__all__ = ["Parser", "UsageError", "add_options", "option", "parse_options", "refuse", "switch", "toggle"]
 
 
 class UsageError(FogrefError):
@@ -76,169 +57,27 @@ class Parser(argparse.ArgumentParser):
         raise UsageError(f"{self.prog}: {message} (see {self.prog} --help)")
 
 
-# --------------------------------------------------------------------------- checks
-
-
-class Check:
-    """Converts an option's text to its value through :mod:`fogref.params`; describes its range."""
-
-    metavar: str | None = None
-    #: True: a repeated option's check gets the whole list (to refuse a NAME given twice)
-    takes_list: bool = False
-
-    def parse(self, raw, name: str, source: str):
-        return raw
-
-    def describe(self) -> str:
-        return ""
-
-
-class Text(Check):
-    """Any non-empty text."""
-
-    def parse(self, raw, name, source):
-        if not str(raw).strip():
-            raise ParameterError(source, name, "an empty value")
-        return raw
-
-
-@dataclasses.dataclass(frozen=True)
-class Number(Check):
-    """A finite number in a range (:func:`fogref.params.number`)."""
-
-    lo: float = -INF
-    hi: float = INF
-    lo_open: bool = False
-    hi_open: bool = False
-    unit: str = ""
-
-    def parse(self, raw, name, source):
-        return params.number(
-            raw,
-            name,
-            source=source,
-            lo=self.lo,
-            hi=self.hi,
-            lo_open=self.lo_open,
-            hi_open=self.hi_open,
-            unit=self.unit,
-        )
-
-    def describe(self):
-        if self.lo == -INF and self.hi == INF:
-            return f"a finite number [{self.unit}]" if self.unit else "a finite number"
-        return f"in {params.format_range(self.lo, self.hi, self.lo_open, self.hi_open, self.unit)}"
-
-
-@dataclasses.dataclass(frozen=True)
-class Integer(Check):
-    """An integer in ``[lo, hi]`` (:func:`fogref.params.integer`)."""
-
-    lo: float = -INF
-    hi: float = INF
-    unit: str = ""
-
-    def parse(self, raw, name, source):
-        return params.integer(raw, name, source=source, lo=self.lo, hi=self.hi, unit=self.unit)
-
-    def describe(self):
-        return f"an integer in {params.format_range(self.lo, self.hi, unit=self.unit)}"
-
-
-@dataclasses.dataclass(frozen=True)
-class RGB(Check):
-    """1 (grey) or 3 numbers ``R,G,B``, each in ``[lo, hi]`` (:func:`fogref.params.rgb`)."""
-
-    lo: float = -INF
-    hi: float = INF
-    unit: str = ""
-    metavar = "R,G,B"
-
-    def parse(self, raw, name, source):
-        return params.rgb(raw, name, source=source, lo=self.lo, hi=self.hi, unit=self.unit)
-
-    def describe(self):
-        return f"each of R, G, B in {params.format_range(self.lo, self.hi, unit=self.unit)}"
-
-
-@dataclasses.dataclass(frozen=True)
-class Vector(Check):
-    """``n`` numbers, each in ``[lo, hi]`` (:func:`fogref.params.vector`)."""
-
-    n: int = 3
-    lo: float = -INF
-    hi: float = INF
-    unit: str = ""
-
-    def parse(self, raw, name, source):
-        return params.vector(raw, name, source=source, n=self.n, lo=self.lo, hi=self.hi, unit=self.unit)
-
-    def describe(self):
-        if self.lo == -INF and self.hi == INF:
-            return f"[{self.unit}]" if self.unit else ""
-        return f"each in {params.format_range(self.lo, self.hi, unit=self.unit)}"
-
-
-@dataclasses.dataclass(frozen=True)
-class Choice(Check):
-    """One of ``options`` (:func:`fogref.params.choice`, with a did-you-mean)."""
-
-    options: tuple = ()
-
-    @property
-    def metavar(self):
-        return "{" + ",".join(self.options) + "}"
-
-    def parse(self, raw, name, source):
-        return params.choice(raw, name, self.options, source)
-
-    def describe(self):
-        return "one of " + ", ".join(self.options)
-
-
-@dataclasses.dataclass(frozen=True)
-class PathArg(Check):
-    """A path (:func:`fogref.params.path`); with ``must_exist`` an existing file or folder."""
-
-    must_exist: bool = False
-    kind: str = "file"
-
-    def parse(self, raw, name, source):
-        return str(params.path(raw, name, source=source, must_exist=self.must_exist, kind=self.kind))
-
-
-class Assignments(Check):
-    """Repeated ``NAME=VALUE`` options as a dict of strings; a NAME given twice is refused.
-
-    >>> Assignments().parse(["res=64", "title=a=b"], "--set", "fogref render")
-    {'res': '64', 'title': 'a=b'}
-    >>> Assignments().parse(["spp=4", "spp=8"], "--set", "fogref render")
-    Traceback (most recent call last):
-    ...
-    fogref.errors.ParameterError: fogref render: parameter '--set': 'spp' is given twice ...
-    """
-
-    metavar = "NAME=VALUE"
-    takes_list = True
-
-    def parse(self, raw, name, source):
-        out: dict[str, str] = {}
-        for item in raw:
-            key, eq, value = str(item).partition("=")
-            key = key.strip()
-            if not eq or not key:
-                raise ParameterError(source, name, f"expected NAME=VALUE, got {item!r}")
-            if key in out:
-                raise ParameterError(
-                    source,
-                    name,
-                    f"{key!r} is given twice ({key + '=' + out[key]!r}, {item!r}); give each NAME once",
-                )
-            out[key] = value
-        return out
-
-
 # --------------------------------------------------------------------------- fields
+
+
+#: An option's metadata, each key's value when not given (see :func:`option`).
+_BLANK = {
+    "help": "",
+    "check": None,
+    "flag": None,
+    "short": None,
+    "metavar": None,
+    "positional": False,
+    "repeat": False,
+    "nargs": None,
+    "group": None,
+    "api": None,
+    "api_name": None,
+    "default_text": None,
+    "switch": False,
+    "negates": False,
+    "toggle": False,
+}
 
 
 def option(
@@ -273,22 +112,21 @@ def option(
         has the same default (checked by tests/test_cli_spec.py).
     default_text : how the default is shown in the help (default: the value; None: not shown).
     """
-    meta = {
-        "help": help,
-        "check": check or Text(),
-        "flag": flag,
-        "short": short,
-        "metavar": metavar,
-        "positional": positional,
-        "repeat": repeat,
-        "nargs": nargs,
-        "group": group,
-        "api": api,
-        "api_name": api_name,
-        "default_text": default_text,
-        "switch": False,
-        "negates": False,
-    }
+    meta = dict(
+        _BLANK,
+        help=help,
+        check=check or Text(),
+        flag=flag,
+        short=short,
+        metavar=metavar,
+        positional=positional,
+        repeat=repeat,
+        nargs=nargs,
+        group=group,
+        api=api,
+        api_name=api_name,
+        default_text=default_text,
+    )
     if default is MISSING:
         return field(metadata={"fogref": meta})
     return field(default=default, metadata={"fogref": meta})
@@ -305,22 +143,9 @@ def switch(
 ):
     """A boolean flag, False unless given.  ``negates``: the API parameter ``api_name`` is its
     opposite (``--no-png`` is ``png=False``)."""
-    meta = {
-        "help": help,
-        "check": None,
-        "flag": flag,
-        "short": None,
-        "metavar": None,
-        "positional": False,
-        "repeat": False,
-        "nargs": None,
-        "group": group,
-        "api": api,
-        "api_name": api_name,
-        "default_text": None,
-        "switch": True,
-        "negates": negates,
-    }
+    meta = dict(
+        _BLANK, help=help, flag=flag, group=group, api=api, api_name=api_name, switch=True, negates=negates
+    )
     return field(default=False, metadata={"fogref": meta})
 
 
@@ -334,23 +159,16 @@ def toggle(
     default_text: str | None = None,
 ):
     """A ``--x``/``--no-x`` pair: True, False, or None when neither is given (given once at most)."""
-    meta = {
-        "help": help,
-        "check": None,
-        "flag": flag,
-        "short": None,
-        "metavar": None,
-        "positional": False,
-        "repeat": False,
-        "nargs": None,
-        "group": group,
-        "api": api,
-        "api_name": api_name,
-        "default_text": default_text,
-        "switch": False,
-        "negates": False,
-        "toggle": True,
-    }
+    meta = dict(
+        _BLANK,
+        help=help,
+        flag=flag,
+        group=group,
+        api=api,
+        api_name=api_name,
+        default_text=default_text,
+        toggle=True,
+    )
     return field(default=None, metadata={"fogref": meta})
 
 
@@ -379,7 +197,7 @@ def help_text(f: dataclasses.Field) -> str:
     m = meta(f)
     parts = [m["help"]]
     rng = m["check"].describe() if m["check"] is not None else ""
-    if m.get("toggle") and m["default_text"]:
+    if m["toggle"] and m["default_text"]:
         return (m["help"] + f" (default: {m['default_text']})").replace("%", "%%")
     if rng:
         parts.append(rng)
@@ -437,9 +255,9 @@ def add_options(parser: argparse.ArgumentParser, spec) -> None:
                 m["group"], parser.add_argument_group(m["group"])
             )
         kw = {"help": help_text(f), "default": argparse.SUPPRESS}
-        if m["switch"] or m.get("toggle"):
+        if m["switch"] or m["toggle"]:
             where.add_argument(
-                flag_of(f), dest=f.name, action=_OnceToggle if m.get("toggle") else _OnceTrue, **kw
+                flag_of(f), dest=f.name, action=_OnceToggle if m["toggle"] else _OnceTrue, **kw
             )
             continue
         metavar = m["metavar"] or m["check"].metavar
@@ -470,7 +288,7 @@ def parse_options(ns: argparse.Namespace, spec, source: str):
         m, raw = meta(f), getattr(ns, f.name)
         if m["switch"]:
             values[f.name] = True
-        elif m.get("toggle"):
+        elif m["toggle"]:
             values[f.name] = bool(raw)
         elif m["repeat"] and not m["check"].takes_list:
             values[f.name] = tuple(m["check"].parse(r, flag_of(f), source) for r in raw)

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from fogref.cli.spec import Number, PathArg, option, switch
+from fogref.cli.checks import Number, PathArg
+from fogref.cli.spec import option, switch
 
 NAME = "study"
 HELP = "the Unreal study of a truth: fit, compare, error budget, README"

@@ -9,7 +9,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from fogref.cli.spec import Check, Integer, PathArg, option, refuse, switch
+from fogref.cli.checks import Check, Integer, PathArg
+from fogref.cli.spec import option, refuse, switch
 from fogref.errors import ParameterError
 
 NAME = "sweep"
@@ -43,8 +44,11 @@ class Address(Check):
 
     def parse(self, raw, name, source):
         if not self.PATTERN.match(str(raw)):
-            raise ParameterError(source, name, f"{raw!r} is not a scheduler address "
-                                 "[PROTOCOL://]HOST[:PORT], e.g. tcp://10.0.0.5:8786")
+            raise ParameterError(
+                source,
+                name,
+                f"{raw!r} is not a scheduler address [PROTOCOL://]HOST[:PORT], e.g. tcp://10.0.0.5:8786",
+            )
         return str(raw)
 
     def describe(self):
