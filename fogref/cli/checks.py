@@ -72,7 +72,7 @@ class Number(Check):
 
     def describe(self):
         if self.lo == -INF and self.hi == INF:
-            return f"a finite number [{self.unit}]" if self.unit else "a finite number"
+            return f"[{self.unit}]" if self.unit else ""
         return f"in {params.format_range(self.lo, self.hi, self.lo_open, self.hi_open, self.unit)}"
 
 

@@ -123,23 +123,39 @@ class _Options:
         default_text="0.0138629",
     )
     height: float | None = option(
-        None, "reference height of --sigma-t [m]", check=Number(), group=PHYS, default_text="0"
+        None,
+        f"reference height of --sigma-t, {_range(PHYSICAL, 'height')}",
+        check=Number(),
+        group=PHYS,
+        default_text="0",
     )
     density: float | None = option(
-        None, "relative density of layer 1", check=Number(), group=PHYS, default_text="1"
+        None,
+        f"relative density of layer 1, {_range(PHYSICAL, 'density')}",
+        check=Number(),
+        group=PHYS,
+        default_text="1",
     )
     density2: float | None = option(
         None,
-        "second layer: density relative to --sigma-t",
+        f"second layer: density relative to --sigma-t, {_range(PHYSICAL, 'density2')}",
         check=Number(),
         group=PHYS,
         default_text="0: none",
     )
     falloff2: float | None = option(
-        None, "second layer: falloff [1/m]", check=Number(), group=PHYS, default_text="0.002"
+        None,
+        f"second layer: falloff, {_range(PHYSICAL, 'falloff2')}",
+        check=Number(),
+        group=PHYS,
+        default_text="0.002",
     )
     height2: float | None = option(
-        None, "second layer: reference height [m]", check=Number(), group=PHYS, default_text="100"
+        None,
+        f"second layer: reference height, {_range(PHYSICAL, 'height2')}",
+        check=Number(),
+        group=PHYS,
+        default_text="100",
     )
     bounds_min: str | None = option(
         None, "fog box: lower corner [m]", check=Text(), metavar="X,Y,Z", group=PHYS
