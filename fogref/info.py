@@ -17,8 +17,6 @@ from __future__ import annotations
 
 import json
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 
@@ -74,7 +72,8 @@ def camera_from_views(view: np.ndarray, origin) -> dict:
     up = up / np.linalg.norm(up)
     origin = np.asarray(origin, dtype=np.float64)
     to_world = np.eye(4)
-    to_world[:3, 0], to_world[:3, 1], to_world[:3, 2], to_world[:3, 3] = np.cross(up, forward), up, forward, origin
+    to_world[:3, 0], to_world[:3, 1] = np.cross(up, forward), up
+    to_world[:3, 2], to_world[:3, 3] = forward, origin
     return {"origin": origin.tolist(), "target": (origin + forward).tolist(), "up": up.tolist(),
             "forward": forward.tolist(), "right": (right / np.linalg.norm(right)).tolist(), "fov_deg": fov,
             "fov_axis": "x", "fov_y_deg": math.degrees(2 * math.atan(np.linalg.norm(M[:, 1]))),
@@ -108,13 +107,15 @@ def unreal_camera(camera: dict) -> dict:
             "forward": fwd.tolist(), "right": right.tolist(), "up": up.tolist(),
             "rotation": {"pitch": pitch, "yaw": yaw, "roll": roll}, "fov_deg": camera["fov_deg"],
             "fov_axis": camera["fov_axis"], "to_world": to_world.tolist(),
-            "near_clip_cm": clip["near_clip"], "far_clip_cm": clip["far_clip"], "resolution": camera["resolution"]}
+            "near_clip_cm": clip["near_clip"], "far_clip_cm": clip["far_clip"],
+            "resolution": camera["resolution"]}
 
 
 def truth_camera(channels: dict, attrs: dict) -> dict | None:
     """The camera of a truth: its header's (``fogref.params`` ``camera``) if complete, else fitted to
     the ``view.*`` channel (:func:`camera_from_views`); ``source`` says which.  None without either."""
-    cam = (attrs.get("fogref.params") or {}).get("camera") if isinstance(attrs.get("fogref.params"), dict) else None
+    header = attrs.get("fogref.params")
+    cam = header.get("camera") if isinstance(header, dict) else None
     if isinstance(cam, dict) and "to_world" in cam:
         return {**cam, "source": "header"}
     names = [f"view.{c}" for c in "XYZ"]
@@ -161,7 +162,8 @@ def info(path) -> dict:
 
 
 HEADER_KEYS = ("fogref.schema", "fogref.spp", "fogref.seed", "fogref.pixel_filter", "fogref.scene",
-               "fogref.scene_sha256", "fogref.overrides", "fogref.variant", "fogref.version", "fogref.mitsuba")
+               "fogref.scene_sha256", "fogref.overrides", "fogref.variant", "fogref.version",
+               "fogref.mitsuba")
 
 
 def _vec(v, unit: str = "") -> str:
@@ -216,30 +218,3 @@ def describe(path) -> str:
     for part, n in d["noise"].items():
         lines.append(f"  {part:20s} {n['median']:.3g} / {n['p95']:.3g}; {n['of_mean']:.3g}")
     return "\n".join(lines)
-
-
-def run_info_command(args) -> int:
-    """Handler of ``fogref info``: print :func:`describe`, or with ``--json`` :func:`info` as JSON
-    (quietly stops when the reader closes the pipe)."""
-    if args.json:
-        text = json.dumps(info(Path(args.exr)), indent=2, default=float)
-    else:
-        text = describe(Path(args.exr))
-    try:
-        print(text)
-        sys.stdout.flush()
-    except BrokenPipeError:  # `fogref info x.exr | head`: not an error
-        import os
-
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-    return 0
-
-
-def add_cli(subparsers):
-    """Add ``fogref info EXR`` to an argparse ``subparsers`` object; returns the parser."""
-    p = subparsers.add_parser("info", help="channels, parameters, spp, seed and noise level of an EXR",
-                              description=__doc__.splitlines()[0])
-    p.add_argument("exr", help="a ground-truth EXR (or any EXR)")
-    p.add_argument("--json", action="store_true", help="print everything as one JSON object (camera included)")
-    p.set_defaults(func=run_info_command)
-    return p

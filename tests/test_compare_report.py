@@ -15,12 +15,20 @@ import numpy as np
 import pytest
 from truth_factory import truth_attrs, truth_channels
 
-from fogref.compare import add_cli, compare, main
+from fogref.cli import parse as parse_command_line
+from fogref.compare import compare
 from fogref.compare.report import PARTS, REGIONS
 from fogref.errors import FogrefError
 from fogref.exrio import read_exr, write_exr
 from fogref.gbuffer import load_truth
 from fogref.mapping.build import build_model, parse_param_assignments
+
+
+def main(argv):
+    """``fogref compare ARGV``, a FogrefError raised (not printed) so that its message can be matched."""
+    module, opts, given = parse_command_line(["compare", *argv])
+    return module.run(opts, given)
+
 
 W, H = 32, 24
 CAMERA = np.array([0.0, 2.0, 0.0])
@@ -299,12 +307,8 @@ def test_cli_from_scene_end_to_end(exr_path, tmp_path, registered_models, capsys
 
 
 def test_add_cli_registers_subcommand():
-    import argparse
-
-    parser = argparse.ArgumentParser(prog="fogref")
-    add_cli(parser.add_subparsers(dest="command"))
-    args = parser.parse_args(["compare", "a.exr", "--model", "ue4", "--param", "FogDensity=0.05",
-                              "--param", "FogHeightFalloff=0.2", "--from-scene"])
+    module, args, _ = parse_command_line(["compare", "a.exr", "--model", "ue4", "--param", "FogDensity=0.05",
+                                          "--param", "FogHeightFalloff=0.2", "--from-scene"])
     assert args.exr == "a.exr" and args.model == "ue4" and args.from_scene
-    assert args.param == ["FogDensity=0.05", "FogHeightFalloff=0.2"]
-    assert args.precision == "float32" and args.out is None and callable(args.func)
+    assert args.param == {"FogDensity": "0.05", "FogHeightFalloff": "0.2"}
+    assert args.precision == "float32" and args.out is None and callable(module.run)

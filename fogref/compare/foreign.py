@@ -370,27 +370,3 @@ def compare_images(truth, images: EngineImages, out_dir=None, tolerances=None, *
 
         report.compare_images(truth, images, out_dir, figures=figures, check=result)
     return result
-
-
-# ---------------------------------------------------------------- command line
-
-
-def add_arguments(p) -> None:
-    """The ``--image`` options of ``fogref compare``."""
-    g = p.add_argument_group("an engine's images (instead of --model)")
-    g.add_argument("--image", default=None, metavar="FILE",
-                   help="the engine's final image (.exr, .png, .hdr) of the truth's view and resolution")
-    g.add_argument("--transmittance", default=None, metavar="FILE", help="the engine's fog transmittance image")
-    g.add_argument("--inscatter", default=None, metavar="FILE", help="the engine's fog inscatter image")
-    g.add_argument("--fog-colour", default=None, metavar="FILE",
-                   help="the engine's fog colour C (final = lerp(scene, C, 1 - T)); needs --transmittance")
-    g.add_argument("--encoding", choices=ENCODINGS, default="auto",
-                   help="how the radiance images are encoded (default auto: an 8-bit PNG is sRGB, EXR/HDR "
-                   "linear; the transmittance is always linear); the encoding used is in the report")
-    g.add_argument("--exposure", type=float, default=1.0,
-                   help="the engine's exposure scale; radiance images are divided by it (default 1)")
-
-
-def wants_images(args) -> bool:
-    """True when ``fogref compare`` was given any engine image."""
-    return any(getattr(args, k, None) for k in ("image", "transmittance", "inscatter", "fog_colour"))

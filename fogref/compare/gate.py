@@ -1,4 +1,4 @@
-"""``fogref compare`` as a CI gate: options, exit codes, ``--json`` and ``--junit`` files.
+"""``fogref compare`` as a CI gate: tolerance parsing, exit codes, ``--json`` and ``--junit`` files.
 
 The verdict is :func:`fogref.compare.check.check`'s (the checker of the pytest
 plugin's ``assert_fog_matches``): ``CheckResult.verdict``.  Exit codes:
@@ -13,6 +13,7 @@ code  meaning
       its tolerance (the truth is too noisy or too small to decide)
 ====  ==============================================================
 
+The options themselves are declared in :mod:`fogref.cli.compare`.
 ``--inconclusive fail`` / ``pass`` turn an inconclusive verdict into exit 1 / 0.
 
 JUnit XML (``--junit``): one ``testcase`` per row that has a tolerance
@@ -42,15 +43,16 @@ def parse_tolerances(items) -> dict:
     """``--tolerance PART[/REGION][:METRIC]=VALUE`` options as check()'s ``tolerances`` dict.
 
     METRIC defaults to ``rel_rmse``; VALUE is a number (finite, >= 0) or ``none`` (only
-    report the metric).  Later options override earlier ones.  Names are not checked
-    here: :func:`fogref.compare.check.check` rejects unknown parts, regions and metrics.
+    report the metric).  A row given twice is refused (FogrefError), as every repeated
+    option is.  Names are not checked here: :func:`fogref.compare.check.check` rejects
+    unknown parts, regions and metrics.
 
     >>> parse_tolerances(["inscatter/sky=0.05", "T:rel_bias=0.001", "T:rmse=none"])
     {'inscatter/sky': {'rel_rmse': 0.05}, 'T': {'rel_bias': 0.001, 'rmse': None}}
     >>> parse_tolerances(["foo"])
     Traceback (most recent call last):
     ...
-    fogref.errors.FogrefError: --tolerance foo: expected PART[/REGION][:METRIC]=VALUE, e.g. inscatter/sky=0.05 or T:rel_bias=0.001
+    fogref.errors.FogrefError: --tolerance foo: expected PART[/REGION][:METRIC]=VALUE, ...
     """
     out: dict = {}
     for item in items or []:
@@ -70,7 +72,10 @@ def parse_tolerances(items) -> dict:
             if not (math.isfinite(tol) and tol >= 0):
                 raise FogrefError(f"--tolerance {item}: value '{value}' must be a finite number >= 0 "
                                   "(relative metrics: 0.05 is 5 %) or 'none'")
-        out.setdefault(where, {})[metric.strip() or "rel_rmse"] = tol
+        row, metric = out.setdefault(where.strip(), {}), metric.strip() or "rel_rmse"
+        if metric in row:
+            raise FogrefError(f"--tolerance {item}: {where.strip()}:{metric} is given twice; give each once")
+        row[metric] = tol
     return out
 
 
@@ -87,21 +92,9 @@ def parse_distance_bands(text: str) -> tuple[float, ...]:
     except ValueError:
         edges = (math.nan,)
     if not all(math.isfinite(e) and e > 0 for e in edges) or any(b <= a for a, b in zip(edges, edges[1:])):
-        raise FogrefError(f"--distance-bands {text}: expected increasing distances [m] > 0 separated by commas "
-                          "(e.g. 100,1000) or 'none'")
+        raise FogrefError(f"--distance-bands {text}: expected increasing distances [m] > 0 separated by "
+                          "commas (e.g. 100,1000) or 'none'")
     return edges
-
-
-def parse_confidence(value: str) -> float:
-    """``--confidence 0.99`` as a float in (0, 1)."""
-    try:
-        c = float(value)
-    except ValueError:
-        c = math.nan
-    if not 0 < c < 1:
-        raise FogrefError(f"--confidence {value}: the two-sided level of the intervals must be in (0, 1), "
-                          "e.g. 0.99")
-    return c
 
 
 def exit_code(verdict: str, inconclusive: str | None = None) -> int:
@@ -124,7 +117,8 @@ def write_json(path, result, code: int, **extra) -> Path:
     """Write :func:`gate_dict` to ``path`` atomically (no NaN)."""
     from fogref.atomic import write_text_atomic
 
-    return write_text_atomic(path, json.dumps(gate_dict(result, code, **extra), indent=2, allow_nan=False) + "\n")
+    text = json.dumps(gate_dict(result, code, **extra), indent=2, allow_nan=False)
+    return write_text_atomic(path, text + "\n")
 
 
 def junit_xml(result, inconclusive: str | None = None) -> str:
@@ -155,37 +149,11 @@ def write_junit(path, result, inconclusive: str | None = None) -> Path:
     return write_text_atomic(path, junit_xml(result, inconclusive))
 
 
-def add_arguments(p) -> None:
-    """The gate's options of ``fogref compare``."""
-    g = p.add_argument_group("verdict (fogref.compare.check.check, as assert_fog_matches)")
-    g.add_argument("--tolerance", action="append", default=[], metavar="PART[/REGION][:METRIC]=VALUE",
-                   help="tolerance of a row (repeatable); METRIC default rel_rmse (rel_bias, rmse, bias); VALUE a "
-                   "number >= 0 or 'none' to only report; e.g. inscatter/sky=0.05, T:rel_bias=0.001")
-    g.add_argument("--distance-bands", default="100,1000", metavar="M,M",
-                   help="edges [m] of the distance-band regions (default 100,1000; 'none' for none)")
-    g.add_argument("--confidence", default="0.99", metavar="C",
-                   help="two-sided level of the intervals, in (0, 1) (default 0.99)")
-    g.add_argument("--inconclusive", choices=("fail", "pass"), default=None,
-                   help="exit 1 (fail) or 0 (pass) on an inconclusive verdict instead of 3")
-    g.add_argument("--json", default=None, metavar="FILE",
-                   help="write every row (estimate, interval, tolerance, verdict), the verdict and the exit code")
-    g.add_argument("--junit", default=None, metavar="FILE",
-                   help="write JUnit XML: a testcase per row with a tolerance (failure: fail and inconclusive; "
-                   "skipped: no pixels, or inconclusive with --inconclusive pass)")
-
-
-def check_options(args) -> dict:
-    """``tolerances``, ``distance_bands`` and ``confidence`` for check(), from the parsed options.
-
-    Parsed before any file is read, so a malformed option fails at once (FogrefError naming it).
-    """
-    return {"tolerances": parse_tolerances(args.tolerance),
-            "distance_bands": parse_distance_bands(args.distance_bands),
-            "confidence": parse_confidence(args.confidence)}
-
-
 def finish(args, result, **extra) -> int:
-    """Write ``--json``/``--junit``, print the verdict and return the exit code."""
+    """Write ``--json``/``--junit``, print the verdict and return the exit code.
+
+    ``args``: anything with ``inconclusive``, ``json`` and ``junit`` (``fogref compare``'s options,
+    :class:`fogref.cli.compare.Options`)."""
     code = exit_code(result.verdict, args.inconclusive)
     if args.json:
         write_json(args.json, result, code, **extra)

@@ -67,6 +67,7 @@ from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 from fogref.gbuffer import Truth, load_truth
 from fogref.mapping.build import current_parameters
+from fogref.params import number as valid_number
 
 #: Distance [m] at which the model fogs sky pixels (a stand-in for infinity).
 DEFAULT_SKY_DISTANCE = 1.0e5
@@ -112,15 +113,15 @@ def _model_description(model) -> dict | str:
 
 
 def check_sky_distance(value, option: str = "sky_distance") -> float:
-    """``value`` as a float if finite and > 0 [m]; FogrefError naming ``option`` otherwise."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        v = float("nan")
-    if not (math.isfinite(v) and v > 0):
-        raise FogrefError(f"{option}: {value!r} is out of range: the distance at which sky pixels are fogged "
-                          "must be a finite number of metres > 0 (default 1e5)")
-    return v
+    """``value`` as a float if finite and > 0 [m]; ParameterError naming ``option`` otherwise
+    (:func:`fogref.params.number`).
+
+    >>> check_sky_distance(0, "sky_distance")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: compare: parameter 'sky_distance': 0 is outside (0, inf) m
+    """
+    return valid_number(value, option, source="compare", lo=0.0, lo_open=True, unit="m")
 
 
 def evaluate_parts(truth: Truth, model, precision: str, sky_distance: float) -> dict:

@@ -26,7 +26,8 @@ from dataclasses import dataclass, field
 
 from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
-from fogref.media.protocol import check_range, number, register_profile, rgb
+from fogref.media.protocol import number, register_profile, rgb
+from fogref.params import number as valid_number
 
 
 def quiet_numpy(fn):
@@ -42,13 +43,18 @@ def quiet_numpy(fn):
 
 
 def check_layer_param(src, i, name, v, lo, hi):
-    """Raise ParameterError naming ``layer{i}.{name}`` unless ``lo <= v <= hi`` (finite).
+    """Raise ParameterError naming ``layer{i}.{name}`` unless ``lo <= v <= hi`` (finite;
+    :func:`fogref.params.number`).
 
     Examples
     --------
     >>> check_layer_param("<doc>", 0, "density", 2.0, 0.0, 1e6)
+    >>> check_layer_param("<doc>", 1, "falloff", -1.0, 0.0, 1e3)
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: <doc>: parameter 'layer1.falloff': -1 is outside [0, 1000]
     """
-    check_range(src, f"layer{i}.{name}", v, lo, hi)
+    valid_number(v, f"layer{i}.{name}", source=src, lo=lo, hi=hi)
 
 
 @dataclass(frozen=True)

@@ -31,7 +31,7 @@ import math
 from dataclasses import dataclass
 from typing import Callable, ClassVar, Protocol, runtime_checkable
 
-from fogref.errors import ParameterError
+from fogref import params
 
 __all__ = ["HeightProfile", "ProfileEntry", "PROFILES", "register_profile", "profile_entry", "check_range",
            "number", "rgb"]
@@ -120,14 +120,12 @@ def profile_entry(name: str, src: str = "<params>") -> ProfileEntry:
     >>> profile_entry("box").needs_bounds
     True
     """
-    try:
-        return PROFILES[name]
-    except KeyError:
-        raise ParameterError(src, "profile", f"'{name}' is not one of {tuple(PROFILES)}") from None
+    return PROFILES[params.choice(name, "profile", PROFILES, src)]
 
 
 def check_range(src: str, name: str, v, lo: float, hi: float) -> float:
-    """``float(v)``, or ParameterError naming ``name`` unless finite and in ``[lo, hi]``.
+    """``float(v)``, or ParameterError naming ``name`` unless finite and in ``[lo, hi]``
+    (:func:`fogref.params.number`).
 
     Examples
     --------
@@ -136,16 +134,14 @@ def check_range(src: str, name: str, v, lo: float, hi: float) -> float:
     >>> check_range("<doc>", "layer0.falloff", -1, 0.0, 1e3)
     Traceback (most recent call last):
     ...
-    fogref.errors.ParameterError: <doc>: parameter 'layer0.falloff': value -1.0 outside [0.0, 1000.0]
+    fogref.errors.ParameterError: <doc>: parameter 'layer0.falloff': -1 is outside [0, 1000]
     """
-    v = float(v)
-    if not math.isfinite(v) or not (lo <= v <= hi):
-        raise ParameterError(src, name, f"value {v} outside [{lo}, {hi}]")
-    return v
+    return params.number(v, name, source=src, lo=lo, hi=hi)
 
 
-def number(params: dict, key: str, default: float, src: str, lo: float = -math.inf, hi: float = math.inf) -> float:
-    """``params[key]`` (or ``default``) as a float in ``[lo, hi]``; ParameterError naming ``key``.
+def number(values: dict, key: str, default: float, src: str, lo: float = -math.inf,
+           hi: float = math.inf) -> float:
+    """``values[key]`` (or ``default``) as a finite float in ``[lo, hi]`` (:func:`fogref.params.number`).
 
     Examples
     --------
@@ -153,20 +149,18 @@ def number(params: dict, key: str, default: float, src: str, lo: float = -math.i
     0.5
     >>> number({}, "g", 0.0, "<doc>")
     0.0
+    >>> number({"g": "x"}, "g", 0.0, "<doc>")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: <doc>: parameter 'g': 'x' does not parse as a number
     """
-    v = params.get(key, default)
-    try:
-        v = float(v)
-    except (TypeError, ValueError):
-        raise ParameterError(src, key, f"expected a number, got {v!r}") from None
-    if not (lo <= v <= hi) or math.isnan(v):
-        raise ParameterError(src, key, f"value {v} outside [{lo}, {hi}]")
-    return v
+    return params.number(values.get(key, default), key, source=src, lo=lo, hi=hi)
 
 
 def rgb(v, name: str = "colour", source: str = "<params>", lo: float = -math.inf,
         hi: float = math.inf) -> tuple[float, float, float]:
-    """An RGB triple (or a 3-vector) from 1 or 3 numbers, a sequence or a string.
+    """An RGB triple (or a 3-vector) from 1 or 3 numbers, a sequence or a string
+    (:func:`fogref.params.rgb`).
 
     Parameters
     ----------
@@ -190,20 +184,6 @@ def rgb(v, name: str = "colour", source: str = "<params>", lo: float = -math.inf
     >>> rgb([1, 2], "albedo", "<doc>")
     Traceback (most recent call last):
     ...
-    fogref.errors.ParameterError: <doc>: parameter 'albedo': expected 1 or 3 values, got 2
+    fogref.errors.ParameterError: <doc>: parameter 'albedo': expected 1 or 3 numbers, got 2 ([1, 2])
     """
-    if isinstance(v, str):
-        v = v.replace(",", " ").split()
-    try:
-        t = (float(v),) if isinstance(v, (int, float)) or getattr(v, "ndim", 1) == 0 else tuple(
-            float(x) for x in v)
-    except (TypeError, ValueError):
-        raise ParameterError(source, name, f"expected 1 or 3 numbers, got {v!r}") from None
-    if len(t) == 1:
-        t = t * 3
-    if len(t) != 3:
-        raise ParameterError(source, name, f"expected 1 or 3 values, got {len(t)}")
-    for x in t:
-        if not (lo <= x <= hi) or not math.isfinite(x):
-            raise ParameterError(source, name, f"value {x} outside [{lo}, {hi}]")
-    return t
+    return params.rgb(v, name, source=source, lo=lo, hi=hi)

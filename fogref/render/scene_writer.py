@@ -18,7 +18,6 @@ Units: fogref is **y-up, metres**; Unreal is z-up, centimetres.  Writing needs n
 
 from __future__ import annotations
 
-import argparse
 import math
 import warnings
 from collections.abc import Callable
@@ -35,7 +34,7 @@ from fogref.render.scene_xml import scene_defaults, scene_element, write_xml
 from fogref.render.sun import sun_direction_from_angles
 
 __all__ = ["MESH_PLUGINS", "MESH_UP", "PHYSICAL", "SCATTERING", "TEMPLATES", "UNREAL_IGNORED",
-           "UNREAL_MAPPED", "SceneWriteResult", "add_cli", "fog_from_physical", "fog_from_unreal",
+           "UNREAL_MAPPED", "SceneWriteResult", "fog_from_physical", "fog_from_unreal",
            "write_scene"]
 
 _SCALAR_LIMIT = 1e7  # [m] coordinates of cameras and mesh offsets
@@ -235,121 +234,3 @@ def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, alb
         for n in ignored:
             warnings.warn(n, UserWarning, stacklevel=2)
     return SceneWriteResult(out, defaults, notes)
-
-
-# --------------------------------------------------------------------------- command line
-
-def _cmd_scene(a) -> int:
-    import sys
-
-    phys = {k: getattr(a, k) for k in PHYSICAL if getattr(a, k) is not None}
-    ue = {}
-    for key, opt in UNREAL_MAPPED.items():
-        v = getattr(a, _dest(opt))
-        if v is not None:
-            if key.startswith("SecondFogData."):
-                ue.setdefault("SecondFogData", {})[key.split(".", 1)[1]] = v
-            else:
-                ue[key] = v
-    for key, (opt, _, _) in UNREAL_IGNORED.items():
-        v = getattr(a, _dest(opt))
-        if v is not None:
-            ue[key] = v
-    if phys and ue:
-        p_opts = ", ".join(PHYSICAL[k][0] for k in phys)
-        u_opts = ", ".join(sorted(_ue_option(k) for k in _flat_unreal(ue)))
-        raise FogrefError(f"{SOURCE}: give the fog either in physical units or as Unreal editor values, not both "
-                          f"(got {p_opts} and {u_opts})")
-    sky = None if a.sky_radiance.strip().lower() == "none" else a.sky_radiance
-
-    def note(n: str) -> None:
-        print(f"fogref scene: note: {n}", file=sys.stderr)
-
-    r = write_scene(a.out, fog=phys if not ue else None, unreal=ue or None, albedo=a.albedo, g=a.g,
-                    sun_elevation=a.sun_elevation, sun_azimuth=a.sun_azimuth, sun_irradiance=a.sun_irradiance,
-                    sky_radiance=sky, camera_origin=a.camera_origin, camera_target=a.camera_target, fov=a.fov,
-                    res=a.res, resy=a.resy, geometry=a.geometry, mesh_scale=a.mesh_scale, mesh_up=a.mesh_up,
-                    mesh_translate=a.mesh_translate, ground=a.ground, ground_size=a.ground_size,
-                    max_depth=a.max_depth, overwrite=a.force, on_note=note)
-    print(r.path)
-    return 0
-
-
-def _dest(option: str) -> str:
-    return option.lstrip("-").replace("-", "_")
-
-
-def _ue_option(key: str) -> str:
-    return UNREAL_MAPPED.get(key) or UNREAL_IGNORED[key][0]
-
-
-def add_cli(subparsers) -> None:
-    """Add ``fogref scene`` to the ``fogref`` command line's subparsers."""
-    p = subparsers.add_parser(
-        "scene", help="write a scene XML from fog (physical or Unreal values), sun, sky, camera and geometry",
-        description=__doc__.split("\n\n")[0] + " All values are checked; every fog, sun, sky and camera value "
-        "becomes an XML $default that `fogref render --set` can change.")
-    p.add_argument("--out", required=True, help="scene file to write (.xml)")
-    p.add_argument("--force", action="store_true", help="replace an existing --out")
-    g = p.add_argument_group("geometry")
-    g.add_argument("--geometry", default="plane",
-                   help="plane (ground plane, default), valley (the shipped valley's ridges) or a mesh file "
-                        "(.obj/.ply, loaded by Mitsuba)")
-    g.add_argument("--mesh-scale", type=float, default=1.0,
-                   help="metres per mesh file unit (default 1: the file is in metres; 0.01 for centimetres)")
-    g.add_argument("--mesh-up", choices=MESH_UP, default="y",
-                   help="the mesh file's frame (default y: y-up; z: z-up, rotated -90 deg about +x; unreal: "
-                        "Unreal's z-up left-handed frame, y and z swapped like fogref's Unreal position mapping)")
-    g.add_argument("--mesh-translate", default="0, 0, 0", metavar="X,Y,Z",
-                   help="offset [m] applied after scale and rotation (default 0,0,0)")
-    g.add_argument("--ground", action=argparse.BooleanOptionalAction, default=None,
-                   help="a ground plane at y = 0 (default: on for plane/valley, off for a mesh)")
-    g.add_argument("--ground-size", type=float, default=None,
-                   help="half-size of the ground plane [m] (default 1e5; valley 3000)")
-    f = p.add_argument_group("fog in physical units (y-up, metres)")
-    f.add_argument("--sigma-t", dest="sigma_t", metavar="S|R,G,B",
-                   help="extinction at --height [1/m], grey or RGB, in [0, 100] (default: the valley's, "
-                        "Unreal FogDensity 0.02)")
-    f.add_argument("--falloff", type=float, help="height falloff [1/m], in [0, 1000] (default 0.0138629)")
-    f.add_argument("--height", type=float, help="reference height of --sigma-t [m] (default 0)")
-    f.add_argument("--density", type=float, help="relative density of layer 1 (default 1)")
-    f.add_argument("--density2", type=float, help="second layer: density relative to --sigma-t (default 0: none)")
-    f.add_argument("--falloff2", type=float, help="second layer: falloff [1/m] (default 0.002)")
-    f.add_argument("--height2", type=float, help="second layer: reference height [m] (default 100)")
-    f.add_argument("--bounds-min", dest="bounds_min", metavar="X,Y,Z", help="fog box: lower corner [m]")
-    f.add_argument("--bounds-max", dest="bounds_max", metavar="X,Y,Z", help="fog box: upper corner [m]")
-    u = p.add_argument_group(
-        "fog as Unreal editor values (Exponential Height Fog; z-up, centimetres), mapped exactly: "
-        "sigma_t = 100 (ln 2)^2 FogDensity/1000 /m, falloff = 100 ln 2 FogHeightFalloff/1000 /m")
-    u.add_argument("--ue-fog-density", type=float, help="Fog Density (default 0.02)")
-    u.add_argument("--ue-fog-height-falloff", type=float, help="Fog Height Falloff (default 0.2)")
-    u.add_argument("--ue-fog-height", type=float, help="the fog's world Z [cm] (default 0): y = Z/100 m")
-    u.add_argument("--ue-second-fog-density", type=float, help="Second Fog Data: Fog Density (default 0)")
-    u.add_argument("--ue-second-fog-height-falloff", type=float,
-                   help="Second Fog Data: Fog Height Falloff (default 0.2)")
-    u.add_argument("--ue-second-fog-height-offset", type=float,
-                   help="Second Fog Data: Fog Height Offset [cm] (default 0)")
-    for key, (opt, kind, why) in UNREAL_IGNORED.items():
-        u.add_argument(opt, metavar="R,G,B" if kind == "rgb" else None,
-                       help=f"{key}: no physical counterpart, ignored with a note ({why})")
-    s = p.add_argument_group("scattering (both fog inputs; Unreal has none)")
-    s.add_argument("--albedo", default="0.9", metavar="A|R,G,B", help="single-scattering albedo in [0, 1] "
-                                                                      "(default 0.9)")
-    s.add_argument("--g", type=float, default=0.6, help="Henyey-Greenstein g in [-0.999, 0.999] (default 0.6)")
-    s.add_argument("--max-depth", type=int, default=16, help="path depth (2 = single scattering; default 16)")
-    ls = p.add_argument_group("sun and sky")
-    ls.add_argument("--sun-elevation", type=float, default=8.0, help="above the horizon [deg], [-90, 90] "
-                                                                     "(default 8)")
-    ls.add_argument("--sun-azimuth", type=float, default=24.0, help="from +z toward +x [deg] (default 24)")
-    ls.add_argument("--sun-irradiance", default="3.2, 2.9, 2.4", metavar="E|R,G,B",
-                    help="sun irradiance, RGB >= 0 (default 3.2,2.9,2.4)")
-    ls.add_argument("--sky-radiance", default="0.2, 0.3, 0.5", metavar="L|R,G,B|none",
-                    help="uniform sky radiance, RGB >= 0, or none (default 0.2,0.3,0.5)")
-    c = p.add_argument_group("camera (y-up, metres)")
-    c.add_argument("--camera-origin", default="0, 2, 0", metavar="X,Y,Z", help="(default 0,2,0)")
-    c.add_argument("--camera-target", default="0.15, 2.35, 1", metavar="X,Y,Z", help="(default 0.15,2.35,1)")
-    c.add_argument("--fov", type=float, default=70.0, help="horizontal field of view [deg], (0, 180) (default 70)")
-    c.add_argument("--res", type=int, default=320, help="image width [pixels] (default 320)")
-    c.add_argument("--resy", type=int, default=180, help="image height [pixels] (default 180)")
-    p.set_defaults(func=_cmd_scene)
-

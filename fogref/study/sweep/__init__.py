@@ -75,34 +75,5 @@ from fogref.study.sweep.spec import SweepSpec, load_sweep
 from fogref.study.sweep.table import plot_table, write_table
 from fogref.study.sweep.task import run_config
 
-__all__ = ["SweepSpec", "add_cli", "build_configs", "design_points", "load_sweep", "plot_table", "run_config",
+__all__ = ["SweepSpec", "build_configs", "design_points", "load_sweep", "plot_table", "run_config",
            "run_sweep", "write_table"]
-
-
-# ---------------------------------------------------------------- command line
-
-
-def cmd_sweep(a) -> int:
-    """Handler of ``fogref sweep``."""
-    info = run_sweep(a.sweep, scheduler=a.scheduler, n_workers=a.workers, progress=not a.quiet,
-                     retry_failed=a.retry_failed, drjit_threads=a.drjit_threads)
-    print(f"{info['configs']} configurations ({info['ran']} run now, {info['failed']} failed) in "
-          f"{info['wall_seconds']:.1f} s; table: {info['table']} ({info['rows']} rows), {info['parquet']}; "
-          f"{len(info['plots'])} plots")
-    return 0
-
-
-def add_cli(subparsers):
-    """Add the ``sweep`` subcommand to an argparse ``subparsers`` object; returns it."""
-    p = subparsers.add_parser("sweep", help="run a declarative error study (SWEEP.toml) on Dask",
-                              description=__doc__.split("\n\n")[0])
-    p.add_argument("sweep", help="the sweep file (TOML)")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="a running Dask scheduler (tcp://HOST:8786); default: a LocalCluster on this machine")
-    p.add_argument("--workers", type=int, default=None, help="LocalCluster workers (default: one per core)")
-    p.add_argument("--drjit-threads", type=int, default=None,
-                   help="Dr.Jit threads per worker (default: cores / workers on a LocalCluster)")
-    p.add_argument("--retry-failed", action="store_true", help="re-run configurations recorded as failed")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.set_defaults(func=cmd_sweep)
-    return p

@@ -1,0 +1,317 @@
+"""``fogref compare EXR (--model NAME | --image FILE ...)``: check a fog against a truth, gate CI.
+
+Two modes: a fog model (``--model``, with ``--param``, ``--from-scene``, ``--precision``,
+``--sky-distance``) or an engine's images (``--image``/``--transmittance``/``--inscatter``/
+``--fog-colour``, with ``--encoding`` and ``--exposure``).  An option of the other mode is
+refused, not ignored.  The verdict is :func:`fogref.compare.check.check`'s (the checker of
+``assert_fog_matches``); exit codes: 0 pass, 1 fail, 2 usage or input error, 3 inconclusive
+(:mod:`fogref.compare.gate`).
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+from fogref.cli.checks import Assignments, Check, Choice, Number, PathArg
+from fogref.cli.spec import UsageError, option, refuse, switch
+
+NAME = "compare"
+SOURCE = "fogref compare"
+HELP = (
+    "check a game fog model or an engine's images against a ground-truth EXR; report; "
+    "exit 0 pass, 1 fail, 2 error, 3 inconclusive"
+)
+DESCRIPTION = (
+    "Check a game fog model (--model) or an engine's images (--image/--transmittance/--inscatter) against "
+    "a ground-truth EXR with fogref.compare.check.check (the checker of assert_fog_matches: confidence "
+    "intervals with the truth's noise removed, a verdict per part, region and metric) and write "
+    "metrics.json, check.json, errors.exr, PNG heatmaps, error-vs-distance/sun-angle plots and index.md."
+)
+EPILOG = (
+    "exit codes: 0 pass, 1 fail, 2 usage or input error, 3 inconclusive (no row fails but an "
+    "interval straddles its tolerance; --inconclusive fail|pass maps it to 1|0)"
+)
+COMPARE = "fogref.compare.report:compare"
+CHECK = "fogref.compare.check:check"
+IMAGES = "fogref.compare.foreign:load_engine_images"
+#: ``--encoding`` values (fogref.compare.foreign.ENCODINGS, checked equal by tests/test_cli_spec.py)
+ENCODINGS = ("auto", "linear", "srgb")
+MODEL_GROUP = "a fog model"
+IMAGE_GROUP = "an engine's images (instead of --model)"
+GATE_GROUP = "verdict (fogref.compare.check.check, as assert_fog_matches)"
+#: the options of each mode (field names)
+MODEL_ONLY = ("model", "param", "from_scene", "precision", "sky_distance")
+IMAGE_ONLY = ("image", "transmittance", "inscatter", "fog_colour", "encoding", "exposure")
+
+
+class Tolerances(Check):
+    """``--tolerance PART[/REGION][:METRIC]=VALUE`` options (:func:`fogref.compare.gate.parse_tolerances`)."""
+
+    metavar = "PART[/REGION][:METRIC]=VALUE"
+    takes_list = True
+
+    def parse(self, raw, name, source):
+        from fogref.compare.gate import parse_tolerances
+
+        return parse_tolerances(raw)
+
+
+class DistanceBands(Check):
+    """``--distance-bands 100,1000`` [m] (:func:`fogref.compare.gate.parse_distance_bands`)."""
+
+    metavar = "M,M"
+
+    def parse(self, raw, name, source):
+        from fogref.compare.gate import parse_distance_bands
+
+        return parse_distance_bands(raw)
+
+    def describe(self):
+        return "increasing distances [m] > 0, or 'none'"
+
+
+@dataclass
+class Options:
+    exr: str = option(
+        help="ground-truth EXR written by fogref render", positional=True, check=PathArg(), metavar="EXR"
+    )
+    out: str | None = option(
+        None, "report folder", check=PathArg(), default_text="out/compare/<EXR stem>-<model or image stem>"
+    )
+    no_figures: bool = switch(
+        "write only metrics.json, check.json, errors.exr and index.md (no PNGs; faster, for CI)",
+        api=COMPARE,
+        api_name="figures",
+        negates=True,
+    )
+    model: str | None = option(
+        None,
+        "fog model: a built-in name (e.g. ue4), module.path:Class, or a 'fogref.models' entry point",
+        group=MODEL_GROUP,
+        metavar="NAME",
+    )
+    param: dict | None = option(
+        None,
+        "set a model parameter (VALUE parsed as JSON when possible; each KEY once)",
+        repeat=True,
+        check=Assignments(),
+        metavar="KEY=VALUE",
+        group=MODEL_GROUP,
+    )
+    from_scene: bool = switch(
+        "derive the model parameters from the EXR's physical fog (model.from_physical); "
+        "--param values then override",
+        group=MODEL_GROUP,
+    )
+    precision: str = option(
+        "float32",
+        "arithmetic precision of the model evaluation",
+        check=Choice(("float32", "float64")),
+        group=MODEL_GROUP,
+        api=COMPARE,
+    )
+    sky_distance: float = option(
+        1.0e5,
+        "distance at which sky pixels are fogged",
+        check=Number(0.0, lo_open=True, unit="m"),
+        metavar="M",
+        group=MODEL_GROUP,
+        api=COMPARE,
+    )
+    image: str | None = option(
+        None,
+        "the engine's final image (.exr, .png, .hdr) of the truth's view and resolution",
+        check=PathArg(),
+        metavar="FILE",
+        group=IMAGE_GROUP,
+        api=IMAGES,
+    )
+    transmittance: str | None = option(
+        None,
+        "the engine's fog transmittance image",
+        check=PathArg(),
+        metavar="FILE",
+        group=IMAGE_GROUP,
+        api=IMAGES,
+    )
+    inscatter: str | None = option(
+        None,
+        "the engine's fog inscatter image",
+        check=PathArg(),
+        metavar="FILE",
+        group=IMAGE_GROUP,
+        api=IMAGES,
+    )
+    fog_colour: str | None = option(
+        None,
+        "the engine's fog colour C (final = lerp(scene, C, 1 - T)); needs --transmittance",
+        check=PathArg(),
+        metavar="FILE",
+        group=IMAGE_GROUP,
+        api=IMAGES,
+    )
+    encoding: str = option(
+        "auto",
+        "how the radiance images are encoded (auto: an 8-bit PNG is sRGB, EXR/HDR "
+        "linear; the transmittance is always linear); the encoding used is in the report",
+        check=Choice(ENCODINGS),
+        group=IMAGE_GROUP,
+        api=IMAGES,
+    )
+    exposure: float = option(
+        1.0,
+        "the engine's exposure scale; radiance images are divided by it",
+        check=Number(0.0, lo_open=True),
+        metavar="X",
+        group=IMAGE_GROUP,
+        api=IMAGES,
+    )
+    tolerance: dict | None = option(
+        None,
+        "tolerance of a row: METRIC rel_rmse (default), rel_bias, rmse or bias; "
+        "VALUE a number >= 0 or 'none' to only report; e.g. inscatter/sky=0.05, "
+        "T:rel_bias=0.001",
+        repeat=True,
+        check=Tolerances(),
+        group=GATE_GROUP,
+        api=CHECK,
+        api_name="tolerances",
+    )
+    distance_bands: tuple = option(
+        (100.0, 1000.0),
+        "edges of the distance-band regions",
+        check=DistanceBands(),
+        group=GATE_GROUP,
+        api=CHECK,
+    )
+    confidence: float = option(
+        0.99,
+        "two-sided level of the intervals",
+        check=Number(0.0, 1.0, lo_open=True, hi_open=True),
+        metavar="C",
+        group=GATE_GROUP,
+        api=CHECK,
+    )
+    inconclusive: str | None = option(
+        None,
+        "exit 1 (fail) or 0 (pass) on an inconclusive verdict instead of 3",
+        check=Choice(("fail", "pass")),
+        group=GATE_GROUP,
+    )
+    json: str | None = option(
+        None,
+        "write every row (estimate, interval, tolerance, verdict), the verdict and the exit code",
+        check=PathArg(),
+        metavar="FILE",
+        group=GATE_GROUP,
+    )
+    junit: str | None = option(
+        None,
+        "write JUnit XML: a testcase per row with a tolerance (failure: fail and "
+        "inconclusive; skipped: no pixels, or inconclusive with --inconclusive pass)",
+        check=PathArg(),
+        metavar="FILE",
+        group=GATE_GROUP,
+    )
+
+
+def default_out_dir(exr_path, name: str) -> Path:
+    """``out/compare/<EXR stem>-<name>`` (relative to the working directory; ``out/`` is git-ignored).
+
+    ``name``: the model, or the stem of the engine's first image.
+
+    >>> default_out_dir("renders/valley.exr", "ue4").as_posix()
+    'out/compare/valley-ue4'
+    """
+    safe = "".join(c if c.isalnum() or c in "._-" else "_" for c in str(name))
+    return Path("out") / "compare" / f"{Path(exr_path).stem}-{safe}"
+
+
+def _print_metrics(name, exr, final: dict) -> None:
+    """The descriptive one-line summary of a model's ``final`` part (RMSE with its noise floor, ...)."""
+
+    def pm(key):
+        v = final.get(key)
+        return "—" if v is None else f"{v:.4g} ± {final.get(key + '_stderr', 0):.2g}"
+
+    print(
+        f"{name} vs {exr}: final RMSE {pm('rmse')} (noise floor {final.get('rmse_noise_floor', 0):.2g}"
+        f"{', below the noise' if final.get('rmse_below_noise') else ''}), relMSE {pm('relmse')}, "
+        f"mean error {pm('mean_error')}, ΔE2000 mean {final.get('delta_e2000_mean', 0):.3g}, "
+        f"FLIP mean {final.get('flip_mean', 0):.3g}"
+    )
+
+
+def check_modes(o: Options, given) -> bool:
+    """True for the images mode, False for a model; UsageError for both, neither, or an option of
+    the other mode (refused, not ignored)."""
+    images = any(n in given for n in IMAGE_ONLY[:4])
+    if images and o.model:
+        raise UsageError(
+            "give --model or the engine's images (--image/--transmittance/--inscatter), not both"
+        )
+    if not images and not o.model:
+        raise UsageError("give --model NAME (or module.path:Class) or an engine's image with --image FILE")
+    if images:
+        refuse(Options, given, IMAGE_ONLY[:4], MODEL_ONLY, SOURCE, "options of a --model comparison")
+    else:
+        refuse(Options, given, ("model",), IMAGE_ONLY, SOURCE, "options of an engine's images")
+    return images
+
+
+def run(o: Options, given=frozenset()) -> int:
+    """Check the candidate, write the report, return the exit code (see :data:`EPILOG`).
+
+    Options are checked before anything is read; warnings (model non-finite values,
+    excluded pixels) go to stderr.
+    """
+    from fogref.compare import gate
+    from fogref.compare.check import check
+    from fogref.compare.foreign import load_engine_images
+    from fogref.compare.report import compare, compare_images
+    from fogref.gbuffer import load_truth
+    from fogref.mapping.build import build_model, parse_param_assignments
+
+    images = check_modes(o, given)
+    options = {"tolerances": o.tolerance, "distance_bands": o.distance_bands, "confidence": o.confidence}
+    truth = load_truth(o.exr)
+    extra = {}
+    if images:
+        imgs = load_engine_images(
+            o.image,
+            o.transmittance,
+            o.inscatter,
+            o.fog_colour,
+            encoding=o.encoding,
+            exposure=o.exposure,
+            shape=truth.shape,
+            truth_name=str(o.exr),
+        )
+        stem = Path(o.image or o.inscatter or o.transmittance or o.fog_colour).stem
+        out = Path(o.out) if o.out else default_out_dir(o.exr, stem)
+        result = check(truth, imgs, **options)
+        report = compare_images(truth, imgs, out, figures=not o.no_figures, check=result)
+        extra["encodings"] = report["images"]["encodings"]
+    else:
+        assignments = [f"{k}={v}" for k, v in (o.param or {}).items()]
+        model = build_model(
+            o.model, parse_param_assignments(assignments), truth.params if o.from_scene else None
+        )
+        out = Path(o.out) if o.out else default_out_dir(o.exr, o.model)
+        result = check(truth, model, **options, precision=o.precision, sky_distance=o.sky_distance)
+        report = compare(
+            truth,
+            model,
+            out,
+            precision=o.precision,
+            sky_distance=o.sky_distance,
+            figures=not o.no_figures,
+            check=result,
+        )
+        _print_metrics(o.model, o.exr, report["metrics"]["final"]["all"])
+    for w in report["warnings"]:
+        print(f"fogref compare: warning: {w}", file=sys.stderr)
+    print(f"report: {out / 'index.md'}")
+    return gate.finish(o, result, report=str(out), **extra)

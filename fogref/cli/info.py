@@ -1,0 +1,40 @@
+"""``fogref info EXR``: channels, parameters, spp, seed and noise level of an EXR (:mod:`fogref.info`)."""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+from fogref.cli.checks import PathArg
+from fogref.cli.spec import option, switch
+
+NAME = "info"
+HELP = "channels, parameters, spp, seed and noise level of an EXR"
+DESCRIPTION = (
+    "Describe an EXR: its channels, and for a fogref ground truth the scene, parameters, spp, seed, "
+    "noise level and camera."
+)
+EPILOG = "exit codes: 0 described, 2 usage or input error"
+
+
+@dataclass
+class Options:
+    exr: str = option(help="a ground-truth EXR (or any EXR)", positional=True, check=PathArg(), metavar="EXR")
+    json: bool = switch("print everything as one JSON object (camera included)")
+
+
+def run(o: Options, given=frozenset()) -> int:
+    """Print :func:`fogref.info.describe`, or with ``--json`` :func:`fogref.info.info` as JSON
+    (quietly stops when the reader closes the pipe)."""
+    from fogref.info import describe, info
+
+    text = json.dumps(info(Path(o.exr)), indent=2, default=float) if o.json else describe(Path(o.exr))
+    try:
+        print(text)
+        sys.stdout.flush()
+    except BrokenPipeError:  # `fogref info x.exr | head`: not an error
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    return 0

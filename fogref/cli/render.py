@@ -1,0 +1,102 @@
+"""``fogref render SCENE --out X.exr``: path-trace a scene to a ground-truth EXR.
+
+The options are those of :func:`fogref.render.render.render`, with its defaults.  This
+module imports nothing heavy: the renderer (Mitsuba, Dr.Jit) is imported when it runs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from fogref.cli.checks import Assignments, Choice, Integer, Number, PathArg
+from fogref.cli.spec import option, switch
+
+NAME = "render"
+HELP = "path-trace a scene to a ground-truth EXR (+ PNG preview)"
+DESCRIPTION = (
+    "Path-trace a Mitsuba 3 scene (fogpath integrator, heightfog medium) into a ground-truth EXR "
+    "of every G-buffer and fog channel, with a PNG preview beside it.  An interrupted render "
+    "(Ctrl-C) keeps a checkpoint and resumes when the same command is run again."
+)
+EPILOG = "exit codes: 0 written, 2 usage or input error, 130 interrupted (run again to resume)"
+API = "fogref.render.render:render"
+#: Mitsuba variants fogref renders with (its plugins need an RGB autodiff variant).
+VARIANTS = ("llvm_ad_rgb", "cuda_ad_rgb")
+#: ``--pixel-filter`` values (fogref.render.render.PIXEL_FILTERS, checked equal by tests/test_cli_spec.py)
+PIXEL_FILTERS = ("centre", "box")
+
+
+@dataclass
+class Options:
+    scene: str = option(
+        help="Mitsuba XML scene with the fogpath integrator and a heightfog medium",
+        positional=True,
+        check=PathArg(),
+        metavar="SCENE",
+    )
+    out: str = option(
+        help="output EXR path (a PNG preview goes beside it unless --no-png)",
+        short="-o",
+        check=PathArg(),
+        metavar="X.exr",
+    )
+    spp: int = option(64, "samples per pixel", check=Integer(1, 1 << 20), api=API)
+    seed: int = option(
+        0, "random seed: the same seed gives the same pixels", check=Integer(0, (1 << 31) - 1), api=API
+    )
+    variant: str | None = option(
+        None,
+        "Mitsuba variant",
+        check=Choice(VARIANTS),
+        api=API,
+        default_text="$FOGREF_VARIANT, else llvm_ad_rgb",
+    )
+    overrides: dict | None = option(
+        None,
+        "set a scene XML $default, e.g. --set res=64 (each NAME once)",
+        flag="--set",
+        repeat=True,
+        check=Assignments(),
+        api=API,
+    )
+    quiet: bool = switch("no progress bar", api=API, api_name="progress", negates=True)
+    no_resume: bool = switch(
+        "start afresh: ignore the checkpoint of an interrupted run", api=API, api_name="resume", negates=True
+    )
+    no_png: bool = switch("no PNG preview beside the EXR", api=API, api_name="png", negates=True)
+    pixel_filter: str = option(
+        "centre",
+        "centre: every sample through the pixel centre, exact G-buffer and T "
+        "(for truths); box: samples spread over the pixel (anti-aliased pictures)",
+        check=Choice(PIXEL_FILTERS),
+        api=API,
+    )
+    checkpoint_seconds: float = option(
+        60.0,
+        "seconds between checkpoints of an interruptible render (one is "
+        "also written on Ctrl-C); 0: after every pass",
+        check=Number(0.0, 1e9, unit="s"),
+        metavar="S",
+        api=API,
+    )
+
+
+def run(o: Options, given=frozenset()) -> int:
+    """Render; print the EXR's path."""
+    from fogref.render.render import render
+
+    path = render(
+        o.scene,
+        o.out,
+        spp=o.spp,
+        seed=o.seed,
+        variant=o.variant,
+        overrides=o.overrides or {},
+        progress=not o.quiet,
+        resume=not o.no_resume,
+        png=not o.no_png,
+        pixel_filter=o.pixel_filter,
+        checkpoint_seconds=o.checkpoint_seconds,
+    )
+    print(path)
+    return 0

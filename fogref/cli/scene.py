@@ -1,0 +1,316 @@
+"""``fogref scene --out S.xml``: write a scene XML from fog, sun, sky, camera and geometry.
+
+The work, and the checks of every value with its range, is
+:func:`fogref.render.scene_writer.write_scene`; its defaults are the options' defaults.
+Fog is given either in physical units or as Unreal editor values, not both.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, make_dataclass
+
+from fogref.cli.checks import Choice, Integer, Number, PathArg, Text
+from fogref.cli.spec import UsageError, option, switch, toggle
+from fogref.render.scene_writer import (
+    MESH_UP,
+    PHYSICAL,
+    SCATTERING,
+    SOURCE,
+    UNREAL_IGNORED,
+    UNREAL_MAPPED,
+    _flat_unreal,
+    write_scene,
+)
+
+NAME = "scene"
+HELP = "write a scene XML from fog (physical or Unreal values), sun, sky, camera and geometry"
+DESCRIPTION = (
+    "Write a fogref scene XML (fogpath integrator, heightfog medium) that fogref render takes as is. "
+    "All values are checked; every fog, sun, sky and camera value becomes an XML $default that "
+    "`fogref render --set` can change.  fogref is y-up, metres; Unreal values are z-up, centimetres."
+)
+EPILOG = "exit codes: 0 written, 2 usage or input error"
+WRITE = "fogref.render.scene_writer:write_scene"
+GEOMETRY = "geometry"
+PHYS = "fog in physical units (y-up, metres)"
+UE = (
+    "fog as Unreal editor values (Exponential Height Fog; z-up, centimetres), mapped exactly: "
+    "sigma_t = 100 (ln 2)^2 FogDensity/1000 /m, falloff = 100 ln 2 FogHeightFalloff/1000 /m"
+)
+SCAT = "scattering (both fog inputs; Unreal has none)"
+LIGHT = "sun and sky"
+CAMERA = "camera (y-up, metres)"
+
+
+def _range(table: dict, name: str) -> str:
+    """``in [lo, hi] unit`` of a value of scene_writer's PHYSICAL or SCATTERING table."""
+    from fogref.params import format_range
+
+    _, _, lo, hi, unit = table[name]
+    return f"in {format_range(lo, hi, unit=unit)}"
+
+
+def _dest(option_name: str) -> str:
+    return option_name.lstrip("-").replace("-", "_")
+
+
+def _ue_option(key: str) -> str:
+    return UNREAL_MAPPED.get(key) or UNREAL_IGNORED[key][0]
+
+
+@dataclass
+class _Options:
+    out: str = option(help="scene file to write (.xml)", check=PathArg(), metavar="S.xml")
+    force: bool = switch("replace an existing --out", api=WRITE, api_name="overwrite")
+    geometry: str = option(
+        "plane",
+        "plane (ground plane), valley (the shipped valley's ridges) or a mesh file "
+        "(.obj/.ply, loaded by Mitsuba)",
+        group=GEOMETRY,
+        api=WRITE,
+    )
+    mesh_scale: float = option(
+        1.0,
+        "metres per mesh file unit (1: the file is in metres; 0.01 for centimetres)",
+        check=Number(),
+        group=GEOMETRY,
+        api=WRITE,
+    )
+    mesh_up: str = option(
+        "y",
+        "the mesh file's frame (y: y-up; z: z-up, rotated -90 deg about +x; unreal: "
+        "Unreal's z-up left-handed frame, y and z swapped like fogref's Unreal position mapping)",
+        check=Choice(MESH_UP),
+        group=GEOMETRY,
+        api=WRITE,
+    )
+    mesh_translate: tuple = option(
+        (0.0, 0.0, 0.0),
+        "offset [m] applied after scale and rotation",
+        check=Text(),
+        metavar="X,Y,Z",
+        group=GEOMETRY,
+        api=WRITE,
+    )
+    ground: bool | None = toggle(
+        "a ground plane at y = 0",
+        group=GEOMETRY,
+        api=WRITE,
+        default_text="on for plane/valley, off for a mesh",
+    )
+    ground_size: float | None = option(
+        None,
+        "half-size of the ground plane [m]",
+        check=Number(),
+        group=GEOMETRY,
+        api=WRITE,
+        default_text="1e5; valley 3000",
+    )
+    sigma_t: str | None = option(
+        None,
+        f"extinction at --height, grey or RGB, {_range(PHYSICAL, 'sigma_t')}",
+        check=Text(),
+        metavar="S|R,G,B",
+        group=PHYS,
+        default_text="the valley's, Unreal FogDensity 0.02",
+    )
+    falloff: float | None = option(
+        None,
+        f"height falloff, {_range(PHYSICAL, 'falloff')}",
+        check=Number(),
+        group=PHYS,
+        default_text="0.0138629",
+    )
+    height: float | None = option(
+        None,
+        f"reference height of --sigma-t, {_range(PHYSICAL, 'height')}",
+        check=Number(),
+        group=PHYS,
+        default_text="0",
+    )
+    density: float | None = option(
+        None,
+        f"relative density of layer 1, {_range(PHYSICAL, 'density')}",
+        check=Number(),
+        group=PHYS,
+        default_text="1",
+    )
+    density2: float | None = option(
+        None,
+        f"second layer: density relative to --sigma-t, {_range(PHYSICAL, 'density2')}",
+        check=Number(),
+        group=PHYS,
+        default_text="0: none",
+    )
+    falloff2: float | None = option(
+        None,
+        f"second layer: falloff, {_range(PHYSICAL, 'falloff2')}",
+        check=Number(),
+        group=PHYS,
+        default_text="0.002",
+    )
+    height2: float | None = option(
+        None,
+        f"second layer: reference height, {_range(PHYSICAL, 'height2')}",
+        check=Number(),
+        group=PHYS,
+        default_text="100",
+    )
+    bounds_min: str | None = option(
+        None, "fog box: lower corner [m]", check=Text(), metavar="X,Y,Z", group=PHYS
+    )
+    bounds_max: str | None = option(
+        None, "fog box: upper corner [m]", check=Text(), metavar="X,Y,Z", group=PHYS
+    )
+    ue_fog_density: float | None = option(None, "Fog Density", check=Number(), group=UE, default_text="0.02")
+    ue_fog_height_falloff: float | None = option(
+        None, "Fog Height Falloff", check=Number(), group=UE, default_text="0.2"
+    )
+    ue_fog_height: float | None = option(
+        None, "the fog's world Z [cm]: y = Z/100 m", check=Number(), group=UE, default_text="0"
+    )
+    ue_second_fog_density: float | None = option(
+        None, "Second Fog Data: Fog Density", check=Number(), group=UE, default_text="0"
+    )
+    ue_second_fog_height_falloff: float | None = option(
+        None, "Second Fog Data: Fog Height Falloff", check=Number(), group=UE, default_text="0.2"
+    )
+    ue_second_fog_height_offset: float | None = option(
+        None, "Second Fog Data: Fog Height Offset [cm]", check=Number(), group=UE, default_text="0"
+    )
+    albedo: str | None = option(
+        None,
+        f"single-scattering albedo, grey or RGB, {_range(SCATTERING, 'albedo')}",
+        check=Text(),
+        metavar="A|R,G,B",
+        group=SCAT,
+        api=WRITE,
+        default_text="0.9",
+    )
+    g: float | None = option(
+        None,
+        f"Henyey-Greenstein g, {_range(SCATTERING, 'g')}",
+        check=Number(),
+        group=SCAT,
+        api=WRITE,
+        default_text="0.6",
+    )
+    max_depth: int = option(16, "path depth (2 = single scattering)", check=Integer(), group=SCAT, api=WRITE)
+    sun_elevation: float = option(
+        8.0, "sun above the horizon [deg], in [-90, 90]", check=Number(), group=LIGHT, api=WRITE
+    )
+    sun_azimuth: float = option(
+        24.0, "sun azimuth from +z toward +x [deg]", check=Number(), group=LIGHT, api=WRITE
+    )
+    sun_irradiance: tuple = option(
+        (3.2, 2.9, 2.4),
+        "sun irradiance, grey or RGB >= 0",
+        check=Text(),
+        metavar="E|R,G,B",
+        group=LIGHT,
+        api=WRITE,
+    )
+    sky_radiance: tuple | None = option(
+        (0.2, 0.3, 0.5),
+        "uniform sky radiance, grey or RGB >= 0, or none (black)",
+        check=Text(),
+        metavar="L|R,G,B|none",
+        group=LIGHT,
+        api=WRITE,
+    )
+    camera_origin: tuple = option(
+        (0.0, 2.0, 0.0), "camera position [m]", check=Text(), metavar="X,Y,Z", group=CAMERA, api=WRITE
+    )
+    camera_target: tuple = option(
+        (0.15, 2.35, 1.0),
+        "a point the camera looks at [m]",
+        check=Text(),
+        metavar="X,Y,Z",
+        group=CAMERA,
+        api=WRITE,
+    )
+    fov: float = option(
+        70.0, "horizontal field of view [deg], in (0, 180)", check=Number(), group=CAMERA, api=WRITE
+    )
+    res: int = option(320, "image width [pixels], in [1, 65536]", check=Integer(), group=CAMERA, api=WRITE)
+    resy: int = option(180, "image height [pixels], in [1, 65536]", check=Integer(), group=CAMERA, api=WRITE)
+
+
+#: the Unreal editor values with no physical counterpart: accepted, written as a note
+_IGNORED_FIELDS = [
+    (
+        _dest(opt),
+        float | None if kind == "number" else str | None,
+        option(
+            None,
+            f"{key}: no physical counterpart, ignored with a note ({why})",
+            flag=opt,
+            check=Number() if kind == "number" else Text(),
+            metavar="R,G,B" if kind == "rgb" else None,
+            group=UE,
+        ),
+    )
+    for key, (opt, kind, why) in UNREAL_IGNORED.items()
+]
+Options = make_dataclass("Options", _IGNORED_FIELDS, bases=(_Options,))
+Options.__doc__ = "The options of ``fogref scene`` (those of :func:`fogref.render.scene_writer.write_scene`)."
+Options.__module__ = __name__
+
+
+def run(a, given=frozenset()) -> int:
+    """Write the scene; print its path (notes on stderr)."""
+    phys = {k: getattr(a, k) for k in PHYSICAL if getattr(a, k) is not None}
+    ue = {}
+    for key, opt in UNREAL_MAPPED.items():
+        v = getattr(a, _dest(opt))
+        if v is not None:
+            if key.startswith("SecondFogData."):
+                ue.setdefault("SecondFogData", {})[key.split(".", 1)[1]] = v
+            else:
+                ue[key] = v
+    for key, (opt, _, _) in UNREAL_IGNORED.items():
+        v = getattr(a, _dest(opt))
+        if v is not None:
+            ue[key] = v
+    if phys and ue:
+        p_opts = ", ".join(PHYSICAL[k][0] for k in phys)
+        u_opts = ", ".join(sorted(_ue_option(k) for k in _flat_unreal(ue)))
+        raise UsageError(
+            f"{SOURCE}: give the fog either in physical units or as Unreal editor values, not both "
+            f"(got {p_opts} and {u_opts})"
+        )
+    sky = a.sky_radiance
+    if isinstance(sky, str) and sky.strip().lower() == "none":
+        sky = None
+
+    def note(n: str) -> None:
+        print(f"fogref scene: note: {n}", file=sys.stderr)
+
+    r = write_scene(
+        a.out,
+        fog=phys if not ue else None,
+        unreal=ue or None,
+        albedo=a.albedo,
+        g=a.g,
+        sun_elevation=a.sun_elevation,
+        sun_azimuth=a.sun_azimuth,
+        sun_irradiance=a.sun_irradiance,
+        sky_radiance=sky,
+        camera_origin=a.camera_origin,
+        camera_target=a.camera_target,
+        fov=a.fov,
+        res=a.res,
+        resy=a.resy,
+        geometry=a.geometry,
+        mesh_scale=a.mesh_scale,
+        mesh_up=a.mesh_up,
+        mesh_translate=a.mesh_translate,
+        ground=a.ground,
+        ground_size=a.ground_size,
+        max_depth=a.max_depth,
+        overwrite=a.force,
+        on_note=note,
+    )
+    print(r.path)
+    return 0

@@ -1,0 +1,322 @@
+"""Options declared once: a dataclass per subcommand, from which its argparse parser is built.
+
+Each subcommand module (:mod:`fogref.cli.render`, ...) declares ``Options``, a dataclass
+whose fields are made by :func:`option` or :func:`switch`: the default, the check (one
+of :mod:`fogref.cli.checks`, which call :mod:`fogref.params`, fogref's one validator), the
+unit and range, the help text and, where a Python API function has the same parameter,
+that function's name (``api="fogref.render.render:render"``), so that
+``tests/test_cli_spec.py`` can assert that both defaults are equal.  The help line of an
+option is its help text, then the allowed range with its unit (from the check), then the
+default (from the field): each written once.
+
+Parsing (:func:`parse_options`) gives the option values as converted by their checks, and the set
+of options the user gave, so that a subcommand can refuse options that do not apply to
+its mode.  Refused as usage errors (exit 2, one line ``fogref: error: ...``): an option
+given twice (``--spp 4 --spp 8``), a ``NAME=VALUE`` option naming one NAME twice, and
+every value its check refuses.
+
+Examples
+--------
+>>> from dataclasses import dataclass
+>>> from fogref.cli.checks import Integer
+>>> @dataclass
+... class Demo:
+...     spp: int = option(64, "samples per pixel", check=Integer(1, 1 << 20))
+...     quiet: bool = switch("no progress bar")
+>>> p = Parser(prog="demo")
+>>> add_options(p, Demo)
+>>> opts, given = parse_options(p.parse_args(["--spp", "8"]), Demo, "demo")
+>>> opts, sorted(given)
+(Demo(spp=8, quiet=False), ['spp'])
+>>> " ".join(p.format_help().split()).count("samples per pixel; an integer in [1, 1048576] (default 64)")
+1
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+from dataclasses import MISSING, field
+
+from fogref import params
+from fogref.cli.checks import Check, Text
+from fogref.errors import FogrefError
+
+__all__ = ["Parser", "UsageError", "add_options", "option", "parse_options", "refuse", "switch", "toggle"]
+
+
+class UsageError(FogrefError):
+    """A command line that argparse or an option check refused (exit 2, one line)."""
+
+
+class Parser(argparse.ArgumentParser):
+    """An ArgumentParser whose usage errors raise :class:`UsageError` instead of printing
+    the usage and exiting, so that fogref's ``main`` prints them as one line."""
+
+    def error(self, message):
+        raise UsageError(f"{self.prog}: {message} (see {self.prog} --help)")
+
+
+# --------------------------------------------------------------------------- fields
+
+
+#: An option's metadata, each key's value when not given (see :func:`option`).
+_BLANK = {
+    "help": "",
+    "check": None,
+    "flag": None,
+    "short": None,
+    "metavar": None,
+    "positional": False,
+    "repeat": False,
+    "nargs": None,
+    "group": None,
+    "api": None,
+    "api_name": None,
+    "default_text": None,
+    "switch": False,
+    "negates": False,
+    "toggle": False,
+}
+
+
+def option(
+    default=MISSING,
+    help: str = "",
+    *,
+    check: Check | None = None,
+    flag: str | None = None,
+    short: str | None = None,
+    metavar: str | None = None,
+    positional: bool = False,
+    repeat: bool = False,
+    nargs: int | str | None = None,
+    group: str | None = None,
+    api: str | None = None,
+    api_name: str | None = None,
+    default_text: str | None = None,
+):
+    """A dataclass field that is a command-line option.
+
+    Parameters
+    ----------
+    default : the value when the option is not given; omitted: the option is required.
+    help : what the option is, for users; the range (from ``check``) and the default are appended.
+    check : converts and validates the text (default: :class:`Text`).
+    flag, short : the option's name (default ``--<field-name>``) and a short alias.
+    positional : an argument without a flag (``nargs="?"`` when it has a default).
+    repeat : may be given several times; the check gets the list (default: each item checked).
+    nargs : a fixed count of words (``--sun-dir X Y Z``).
+    group : the help section.
+    api, api_name : ``"module:function"`` whose parameter ``api_name`` (default: the field's name)
+        has the same default (checked by tests/test_cli_spec.py).
+    default_text : how the default is shown in the help (default: the value; None: not shown).
+    """
+    meta = dict(
+        _BLANK,
+        help=help,
+        check=check or Text(),
+        flag=flag,
+        short=short,
+        metavar=metavar,
+        positional=positional,
+        repeat=repeat,
+        nargs=nargs,
+        group=group,
+        api=api,
+        api_name=api_name,
+        default_text=default_text,
+    )
+    if default is MISSING:
+        return field(metadata={"fogref": meta})
+    return field(default=default, metadata={"fogref": meta})
+
+
+def switch(
+    help: str = "",
+    *,
+    flag: str | None = None,
+    group: str | None = None,
+    api: str | None = None,
+    api_name: str | None = None,
+    negates: bool = False,
+):
+    """A boolean flag, False unless given.  ``negates``: the API parameter ``api_name`` is its
+    opposite (``--no-png`` is ``png=False``)."""
+    meta = dict(
+        _BLANK, help=help, flag=flag, group=group, api=api, api_name=api_name, switch=True, negates=negates
+    )
+    return field(default=False, metadata={"fogref": meta})
+
+
+def toggle(
+    help: str = "",
+    *,
+    flag: str | None = None,
+    group: str | None = None,
+    api: str | None = None,
+    api_name: str | None = None,
+    default_text: str | None = None,
+):
+    """A ``--x``/``--no-x`` pair: True, False, or None when neither is given (given once at most)."""
+    meta = dict(
+        _BLANK,
+        help=help,
+        flag=flag,
+        group=group,
+        api=api,
+        api_name=api_name,
+        default_text=default_text,
+        toggle=True,
+    )
+    return field(default=None, metadata={"fogref": meta})
+
+
+def meta(f: dataclasses.Field) -> dict:
+    return f.metadata["fogref"]
+
+
+def flag_of(f: dataclasses.Field) -> str:
+    """The option's name on the command line (``--spp``), or the positional's name."""
+    m = meta(f)
+    if m["positional"]:
+        return m["metavar"] or f.name.upper()
+    return m["flag"] or "--" + f.name.replace("_", "-")
+
+
+def _shown(value) -> str:
+    if isinstance(value, (tuple, list)):
+        return ",".join(_shown(v) for v in value)
+    if isinstance(value, float):
+        return params._fmt(value)
+    return str(value)
+
+
+def help_text(f: dataclasses.Field) -> str:
+    """The option's help line: its text, its range and unit, its default."""
+    m = meta(f)
+    parts = [m["help"]]
+    rng = m["check"].describe() if m["check"] is not None else ""
+    if m["toggle"] and m["default_text"]:
+        return (m["help"] + f" (default: {m['default_text']})").replace("%", "%%")
+    if rng:
+        parts.append(rng)
+    text = "; ".join(p for p in parts if p)
+    shown = m["default_text"]
+    if shown is None and f.default is not MISSING and f.default is not None and not m["switch"]:
+        shown = _shown(f.default)
+    if shown:
+        text += f" (default {shown})"
+    if m["repeat"]:
+        text += "; repeatable"
+    return text.replace("%", "%%")
+
+
+class _Once(argparse.Action):
+    """Store an option's value; refuse it given a second time (the parser's defaults are
+    suppressed, so an option already in the namespace was given before)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if hasattr(namespace, self.dest):
+            raise argparse.ArgumentError(
+                self, f"given twice ({getattr(namespace, self.dest)!r} and {values!r}); give it once"
+            )
+        setattr(namespace, self.dest, values)
+
+
+class _OnceToggle(argparse.BooleanOptionalAction):
+    """``--x``/``--no-x``, refused when given twice (either spelling)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if hasattr(namespace, self.dest):
+            raise argparse.ArgumentError(
+                self, "given twice; give --x or --no-x once".replace("x", self.option_strings[0][2:])
+            )
+        super().__call__(parser, namespace, values, option_string)
+
+
+class _OnceTrue(_Once):
+    def __init__(self, option_strings, dest, **kw):
+        super().__init__(option_strings, dest, nargs=0, **kw)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        super().__call__(parser, namespace, True, option_string)
+
+
+def add_options(parser: argparse.ArgumentParser, spec) -> None:
+    """Add every field of the dataclass ``spec`` to ``parser`` (its defaults suppressed:
+    :func:`parse_options` fills them from the dataclass)."""
+    groups: dict[str, argparse._ArgumentGroup] = {}
+    for f in dataclasses.fields(spec):
+        m = meta(f)
+        where = parser
+        if m["group"]:
+            where = groups.get(m["group"]) or groups.setdefault(
+                m["group"], parser.add_argument_group(m["group"])
+            )
+        kw = {"help": help_text(f), "default": argparse.SUPPRESS}
+        if m["switch"] or m["toggle"]:
+            where.add_argument(
+                flag_of(f), dest=f.name, action=_OnceToggle if m["toggle"] else _OnceTrue, **kw
+            )
+            continue
+        metavar = m["metavar"] or m["check"].metavar
+        if m["nargs"] is not None:
+            kw["nargs"] = m["nargs"]
+        if m["positional"]:
+            if f.default is not MISSING:
+                kw["nargs"] = "?"
+            where.add_argument(f.name, metavar=metavar or f.name.upper(), **kw)
+            continue
+        names = [flag_of(f)] + ([m["short"]] if m["short"] else [])
+        if metavar:
+            kw["metavar"] = metavar
+        if f.default is MISSING:
+            kw["required"] = True
+        where.add_argument(*names, dest=f.name, action="append" if m["repeat"] else _Once, **kw)
+
+
+def parse_options(ns: argparse.Namespace, spec, source: str):
+    """The ``spec`` dataclass of a parsed namespace, each given value converted by its check,
+    and the set of field names the user gave.  ParameterError (naming the option) for a
+    value its check refuses."""
+    values, given = {}, set()
+    for f in dataclasses.fields(spec):
+        if not hasattr(ns, f.name):
+            continue
+        given.add(f.name)
+        m, raw = meta(f), getattr(ns, f.name)
+        if m["switch"]:
+            values[f.name] = True
+        elif m["toggle"]:
+            values[f.name] = bool(raw)
+        elif m["repeat"] and not m["check"].takes_list:
+            values[f.name] = tuple(m["check"].parse(r, flag_of(f), source) for r in raw)
+        elif raw is None and m["positional"]:
+            continue
+        else:
+            values[f.name] = m["check"].parse(raw, flag_of(f), source)
+    return spec(**values), given
+
+
+def refuse(spec, given: set, these, those, source: str, why: str = "") -> None:
+    """UsageError if an option of ``these`` is given together with one of ``those`` (field names
+    of the dataclass ``spec``): options that do not apply to the chosen mode are refused.
+
+    >>> from dataclasses import dataclass
+    >>> @dataclass
+    ... class Demo:
+    ...     image: str = option(None, "an image")
+    ...     precision: str = option("float32", "precision")
+    >>> refuse(Demo, {"image", "precision"}, ["image"], ["precision"], "demo", "a model's option")
+    Traceback (most recent call last):
+    ...
+    fogref.cli.spec.UsageError: demo: --precision does not apply with --image (a model's option)
+    """
+    fields = {f.name: f for f in dataclasses.fields(spec)}
+    a = [flag_of(fields[n]) for n in these if n in given]
+    b = [flag_of(fields[n]) for n in those if n in given]
+    if a and b:
+        raise UsageError(
+            f"{source}: {', '.join(b)} does not apply with {', '.join(a)}" + (f" ({why})" if why else "")
+        )

@@ -1,0 +1,69 @@
+"""``fogref study [EXR]``: the Unreal study (fit, comparison, error budget, README) of a truth.
+
+The work is :func:`fogref.study.unreal.run_study`; its defaults are the options' defaults.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from fogref.cli.checks import Number, PathArg
+from fogref.cli.spec import option, switch
+
+NAME = "study"
+HELP = "the Unreal study of a truth: fit, compare, error budget, README"
+DESCRIPTION = (
+    "Derive Unreal parameters from the EXR's physical fog, compare, compute the error budget (a "
+    "telescoping chain from the truth to Unreal, one effect per step) and write the report folder."
+)
+EPILOG = "exit codes: 0 written, 2 usage or input error"
+STUDY = "fogref.study.unreal:run_study"
+UNREAL = "Unreal settings of the study's model"
+
+
+@dataclass
+class Options:
+    exr: str = option("out/valley.exr", "ground-truth EXR", positional=True, check=PathArg(), metavar="EXR")
+    out: str = option("reports/unreal_study", "report folder", check=PathArg(), api=STUDY, api_name="out_dir")
+    renders: str = option(
+        "out/study",
+        "cache folder of the budget's extra renders",
+        check=PathArg(),
+        api=STUDY,
+        api_name="renders_dir",
+    )
+    scene: str | None = option(
+        None, "the EXR's scene, if its recorded path is not found", check=PathArg(), api=STUDY
+    )
+    no_compare: bool = switch(
+        "skip the fogref.compare report", api=STUDY, api_name="compare_report", negates=True
+    )
+    start_distance: float | None = option(
+        None, "Unreal StartDistance", check=Number(0.0, unit="cm"), group=UNREAL, default_text="0"
+    )
+    max_opacity: float | None = option(
+        None, "Unreal FogMaxOpacity", check=Number(0.0, 1.0), group=UNREAL, default_text="1"
+    )
+    cutoff: float | None = option(
+        None,
+        "Unreal FogCutoffDistance (0: off)",
+        check=Number(0.0, unit="cm"),
+        group=UNREAL,
+        default_text="0",
+    )
+
+
+def run(o: Options, given=frozenset()) -> int:
+    from fogref.study.unreal import run_study
+
+    settings = {
+        k: v
+        for k, v in (
+            ("StartDistance", o.start_distance),
+            ("FogMaxOpacity", o.max_opacity),
+            ("FogCutoffDistance", o.cutoff),
+        )
+        if v is not None
+    }
+    run_study(o.exr, o.out, o.renders, scene=o.scene, compare_report=not o.no_compare, settings=settings)
+    return 0
