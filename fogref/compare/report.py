@@ -60,7 +60,7 @@ from fogref.atomic import write_text_atomic
 from fogref.compare import metrics as M
 from fogref.compare import noise
 from fogref.compare.binning import angle_edges, binned_errors, log_distance_edges
-from fogref.compare.check import candidate_parts, evaluate_model, fog_parts
+from fogref.compare.candidate import candidate_parts, evaluate_model, fog_parts
 from fogref.compare.plots import plot_binned_errors, plot_error_heatmaps, plot_side_by_side
 from fogref.compare.tonemap import exposure_for
 from fogref.errors import FogrefError
