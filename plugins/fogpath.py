@@ -1,69 +1,8 @@
 """``fogpath``: a path tracer for exact height fog, in Python with Dr.Jit loops.
 
-.. pluginparameters::
-
- * - max_depth
-   - int
-   - Longest path (Mitsuba's convention: 1 = direct surface light only,
-     2 = single scattering; -1 = no limit). Default: 64.
- * - rr_depth
-   - int
-   - Depth where Russian roulette starts. Default: 5.
- * - hide_emitters
-   - bool
-   - Camera rays that escape see black instead of the sky. Default: false.
- * - aovs
-   - bool
-   - Write the per-sample parts and G-buffer of :mod:`fogref.gbuffer` after
-     R,G,B (needed by ``fogref render``). Default: true.
- * - pixel_exact
-   - bool
-   - Every sample of a pixel goes through the pixel's centre: the G-buffer and
-     the camera transmittance ``T`` are then exact (no silhouette mixing). Off,
-     samples are spread uniformly over the pixel (a box filter), for pictures.
-     Default: false (``fogref render`` sets it for truths).
- * - sun_sampling
-   - bool
-   - Estimate the sun's single scattering along camera rays by sampling its
-     exact integrand (zero variance without shadows); the first medium vertex
-     then skips sun NEE. Used when the fog is unbounded exponential layers (see
-     ``sun_sampling_layers``) and the sun is above the horizon. Default: true.
- * - sun_sampling_layers
-   - int
-   - Most layers for which the exact sampler is used (more layers: the mixture
-     below). Default: 1.
- * - sun_sampling_mixture
-   - bool
-   - Where the exact sampler does not apply (fog bounded by a box, more layers,
-     constant layers in a box), sample the sun's single scattering along camera
-     rays from a closed-form mixture of per-layer integrands, weighted by the exact
-     integrand (sun optical depth to the box's exit). Default: true (4.7x less
-     variance at equal time on the bounded valley).
- * - sun_samples
-   - int
-   - Stratified sun samples per camera ray (each one shadow ray). Default: 2.
- * - sky_cv
-   - string
-   - The uniform (``constant``) sky's single scattering as closed form plus the
-     Monte Carlo difference occluders make: ``off``, ``surface`` (camera rays
-     that end on a surface) or ``all``. Default: ``off`` (it lowers the variance
-     of ``inscatter.*`` but not of the final image, see
-     ``reports/benchmarks/variance_reduction.md``).
- * - forced_split
-   - bool
-   - Forced splitting on the camera ray: every sample traces both branches at
-     depth 0, the surface (or sky) weighted by the closed-form transmittance
-     ``T`` and a forced medium collision on ``[0, D]`` (pdf ``sigma_t T / (1 - T)``,
-     per layer, weight ``albedo (1 - T)`` for one grey layer) with its light
-     sample; the path then continues one branch, chosen in proportion to the
-     branches' depth-0 throughputs (``T`` against the medium vertex's weight; the
-     path's weight is divided by the choice's probability).  ``surface_coverage`` then counts the samples that continued
-     the surface branch (sky: drew it), where ``surface`` is their light
-     without the 1/probability weight: still a ratio estimator, bounded by the
-     radiance it estimates, undefined where the fog is opaque.  Used when the fog
-     scatters and ``max_depth >= 2``.  Default: see
-     ``FORCED_SPLIT_DEFAULT`` (chosen by ``benchmarks/variance_reduction.py --changes``).
-
+The estimator, :class:`FogPathIntegrator` (parameters in its docstring); the plumbing
+under it (scene facts, opaque values, per-pixel moments, passes) is
+:mod:`fogref_plugins.fogpath_common`, as Mitsuba's ``common.py`` is under ``prb.py``.
 What it does:
 
 * **camera rays from the camera itself, to any distance**: the perspective
@@ -77,18 +16,9 @@ What it does:
 * **next-event estimation** with MIS (power heuristic) for the sun
   (``directional``), the sky (``constant``/``envmap``) and area lights;
   Henyey–Greenstein phase; any Mitsuba BSDF; ``max_depth`` and Russian roulette;
-* **per-pixel moments** (:meth:`render_moments`): sums and sums of squares of
-  every per-sample part, so the driver writes means *and* standard errors.
-
-The split of ``L`` (one accumulator, :class:`_Split`): a path whose camera ray
-reached the surface or the sky unscattered feeds ``surface`` (without the camera
-segment's weight) and ``attenuated_surface`` (with it); a path that scattered
-first feeds ``single`` (direct light at the first medium vertex) or
-``multiple``. Per sample ``L = attenuated_surface + single + multiple`` exactly.
-With ``forced_split`` both branches of the camera ray are in every sample: the
-surface branch's light (weight ``T`` on ``attenuated_surface``) and the forced
-medium vertex's (``single``), then the continued branch's (``surface`` or
-``multiple``, divided by the probability of continuing it).
+* **the parts of the schema** per sample (:class:`_Split`):
+  ``L = attenuated_surface + single + multiple`` exactly.  How the parts, forced
+  splitting and the control variates fit together: ``docs/design.md``, "fogpath".
 
 Not supported: sensors other than ``perspective``; media attached to shapes
 (the fog fills all space outside surfaces); reconstruction filters other than
@@ -105,7 +35,6 @@ import drjit as dr
 import mitsuba as mi
 from mitsuba.python.ad.integrators.common import mis_weight  # the module set_variant loaded (not a 2nd copy)
 
-from fogref import gbuffer
 from fogref.media import closed_form as cf
 from fogref.media import drjit_ops
 from fogref.media.single_scatter import (
@@ -114,24 +43,11 @@ from fogref.media.single_scatter import (
     sample_sun_single_scatter_mixture,
     sun_sampling_mode,
 )
-from fogref.render.passes import max_lanes, pass_seed, pass_sizes
 
-#: The integrator's AOVs (after R,G,B): the per-sample groups of the schema.
-AOV_NAMES = gbuffer.sample_channel_names()
+from .fogpath_common import AOV_NAMES, FogPathBase
+
 #: ``forced_split``'s default (see ``reports/benchmarks/variance_reduction_issue11.md``)
 FORCED_SPLIT_DEFAULT = True
-
-
-class _Opaque:
-    """Hides a Python object (e.g. a dataclass) from Dr.Jit's loop-state traversal."""
-
-    __slots__ = ("_obj",)
-
-    def __init__(self, obj):
-        object.__setattr__(self, "_obj", obj)
-
-    def __getattr__(self, name):
-        return getattr(self._obj, name)
 
 
 class _Split:
@@ -156,33 +72,62 @@ def _spectrum(values):
     return mi.Spectrum(*values) if len(values) == 3 else mi.Spectrum(values[0])
 
 
-def make_scene_values_opaque(scene) -> int:
-    """Make the scene's one-value Dr.Jit parameters (emitter radiance and irradiance,
-    transforms, BSDF colours, the phase function's ``g``, ...) opaque, in place.
+class FogPathIntegrator(FogPathBase):
+    """Path tracer with analytic free flight in fogref's exact fog (see module).
 
-    Mitsuba traces such values into kernels as literals, so a scene that differs
-    only in the sun's colour or the fog's ``g`` would compile new kernels;
-    opaque, the kernels are reused (a sweep's configurations share them).  Values
-    are unchanged.  Returns how many parameters were changed.
+    .. pluginparameters::
+
+     * - max_depth
+       - int
+       - Longest path (Mitsuba's convention: 1 = direct surface light only,
+         2 = single scattering; -1 = no limit). Default: 64.
+     * - rr_depth
+       - int
+       - Depth where Russian roulette starts. Default: 5.
+     * - hide_emitters
+       - bool
+       - Camera rays that escape see black instead of the sky. Default: false.
+     * - aovs
+       - bool
+       - Write the per-sample parts and G-buffer of :mod:`fogref.gbuffer` after
+         R,G,B (needed by ``fogref render``). Default: true.
+     * - pixel_exact
+       - bool
+       - Every sample goes through the pixel's centre: the G-buffer and ``T`` are exact
+         (no silhouette mixing); off, samples are uniform over the pixel (a box filter),
+         for pictures. Default: false (``fogref render`` sets it for truths).
+     * - sun_sampling
+       - bool
+       - Sample the sun's single scattering along camera rays from its exact integrand
+         (zero variance without shadows; the first medium vertex then skips sun NEE), for
+         unbounded exponential layers and a sun above the horizon. Default: true.
+     * - sun_sampling_layers
+       - int
+       - Most layers for which the exact sampler is used (more layers: the mixture
+         below). Default: 1.
+     * - sun_sampling_mixture
+       - bool
+       - Where the exact sampler does not apply (fog in a box, more layers), sample
+         the sun's single scattering along camera rays from a closed-form mixture of
+         per-layer integrands, weighted by the exact integrand. Default: true.
+     * - sun_samples
+       - int
+       - Stratified sun samples per camera ray (each one shadow ray). Default: 2.
+     * - sky_cv
+       - string
+       - The uniform (``constant``) sky's single scattering as closed form plus the
+         Monte Carlo difference occluders make: ``off``, ``surface`` (camera rays
+         that end on a surface) or ``all``. Default: ``off`` (see
+         :meth:`_sky_control_variate`).
+     * - forced_split
+       - bool
+       - Forced splitting on the camera ray: every sample traces both branches at
+         depth 0, the surface (or sky) weighted by the closed-form transmittance
+         ``T`` and a forced medium collision on ``[0, D]`` with its light sample;
+         the path then continues one branch, chosen in proportion to the branches'
+         depth-0 throughputs (see :meth:`_camera_split`).  Used when the fog
+         scatters and ``max_depth >= 2``.  Default: ``FORCED_SPLIT_DEFAULT``.
     """
-    params = mi.traverse(scene)
-    changed = 0
-    for key in params.keys():
-        value = params[key]
-        if not (dr.is_jit_v(value) and dr.width(value) == 1):
-            continue
-        before = dr.detail.collect_indices(value)
-        dr.make_opaque(value)
-        if dr.detail.collect_indices(value) != before:  # was a literal: tell the object
-            params[key] = value
-            changed += 1
-    if changed:
-        params.update()
-    return changed
-
-
-class FogPathIntegrator(mi.SamplingIntegrator):
-    """Path tracer with analytic free flight in fogref's exact fog (see module)."""
 
     def __init__(self, props):
         super().__init__(props)
@@ -206,42 +151,6 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         self.forced_split = bool(props.get("forced_split", FORCED_SPLIT_DEFAULT))
         self.aovs = bool(props.get("aovs", True))
         self.pixel_exact = bool(props.get("pixel_exact", False))
-
-    def aov_names(self):
-        return list(AOV_NAMES) if self.aovs else []
-
-    # ------------------------------------------------------------ scene facts
-    @staticmethod
-    def _scene_fog(scene):
-        """The physics object of the sensor's heightfog medium (None: vacuum)."""
-        sensors = scene.sensors()
-        med = sensors[0].get_medium() if sensors else None
-        fog = getattr(med, "fog", None)
-        if fog is None or fog.is_vacuum:
-            return None
-        return _Opaque(fog)
-
-    @staticmethod
-    def _scene_lights(scene):
-        delta = [mi.has_flag(e.flags(), mi.EmitterFlags.Delta) for e in scene.emitters()]
-        return any(delta), not all(delta)
-
-    @staticmethod
-    def _scene_sun(scene):
-        """(direction toward the sun, RGB irradiance) of the only delta directional
-        emitter, or None (trace-time, Python floats)."""
-        delta = [e for e in scene.emitters() if mi.has_flag(e.flags(), mi.EmitterFlags.Delta)]
-        if len(delta) != 1:
-            return None
-        p = mi.traverse(delta[0])
-        if "irradiance.value" not in p or "to_world" not in p:
-            return None
-        m = p["to_world"].matrix
-        w = [-float(m[i][2][0]) for i in range(3)]
-        n = sum(x * x for x in w) ** 0.5
-        E = p["irradiance.value"]
-        E = [float(E[i][0]) for i in range(3)] if len(E) == 3 else [float(E[0][0])] * 3
-        return [x / n for x in w], E
 
     # --------------------------------------------------------------- pieces
     def _transmittance(self, fog, ops, o, d, t):
@@ -573,25 +482,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
                 split = _Split(split.surface, split.single + dr.select(active0, closed, 0.0), split.multiple)
         return self._outputs(split, β_cam, medium_first, cam, gbuf)
 
-    # ------------------------------------------------------------- outputs
-    @staticmethod
-    def _medium_interaction(ray, p, t):
-        mei = dr.zeros(mi.MediumInteraction3f)
-        mei.p, mei.t, mei.wi = p, t, -ray.d
-        mei.sh_frame = mi.Frame3f(mei.wi)
-        mei.time, mei.wavelengths = ray.time, ray.wavelengths
-        return mei
-
-    @staticmethod
-    def _vertex(ray, si, surf, p_med):
-        """The interaction a sampled direction leaves from (for MIS on emitters it hits)."""
-        it = dr.zeros(mi.Interaction3f)
-        it.p = dr.select(surf, si.p, p_med)
-        it.n = dr.select(surf, si.n, 0.0)
-        it.t = dr.select(surf, si.t, 0.0)
-        it.time, it.wavelengths = ray.time, ray.wavelengths
-        return it
-
+    # ------------------------------------------------------------- G-buffer
     def _gbuffer(self, fog, ops, ray, si):
         """T, coverage-independent G-buffer of the camera ray (closed form, per sample)."""
         hit = si.is_valid()
@@ -601,128 +492,6 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         return {"T": [T[0], T[1], T[2]], "distance": [dr.select(hit, si.t, 0.0)],
                 "P": [dr.select(hit, si.p[i], 0.0) for i in range(3)], "view": [ray.d[i] for i in range(3)],
                 "hit": [dr.select(hit, 1.0, 0.0)]}
-
-    def _outputs(self, split, β_cam, medium_first, cam, gbuf):
-        """(L, valid, AOVs) in the order of :data:`AOV_NAMES`.  ``surface`` and
-        ``surface_coverage``: the camera ray reached the surface unscattered, or with
-        forced splitting (``cam``) the sample continued the surface branch; its light is
-        then the depth-0 part plus the continuation without the 1/q weight."""
-        att = β_cam * split.surface
-        cover, s_out = ~medium_first, split.surface
-        if cam is not None:
-            cover, direct, q = cam
-            s_out = direct + q * (split.surface - direct)
-        L = att + split.single + split.multiple
-        if gbuf is None:
-            return L, mi.Bool(True), []
-        rgb = lambda s: [s[0], s[1], s[2]]  # noqa: E731
-        parts = {"attenuated_surface": rgb(att), "inscatter": rgb(split.single + split.multiple),
-                 "single": rgb(split.single), "multiple": rgb(split.multiple),
-                 "surface": rgb(dr.select(cover, s_out, 0.0)), "surface_coverage": [dr.select(cover, 1.0, 0.0)],
-                 **gbuf}
-        return L, mi.Bool(True), [c for g in gbuffer.SAMPLE_GROUPS for c in parts[g]]
-
-    # ------------------------------------------------------------- render
-    def render_moments(self, scene, sensor=0, seed=0, spp=1, pixel_exact=None, squares=True):
-        """Per-pixel sums of every per-sample output and of the squares of the parts.
-
-        Returns ``(sums, squares)``: float64 ``TensorXd`` of shape ``(H, W, 3 + len(AOV_NAMES))``
-        (R,G,B then :data:`AOV_NAMES`) and ``(H, W, 6 * len(gbuffer.SQUARED_GROUPS))``,
-        summed over the ``spp`` samples of each pixel: the squares of every channel of
-        :data:`~fogref.gbuffer.SQUARED_GROUPS`, then the products of their channel pairs
-        :data:`~fogref.gbuffer.CHANNEL_PAIRS` (R*G, R*B, G*B; the noise correlations).
-        With ``aovs`` off: R,G,B, their squares and products only.  ``squares=False``: the second is None (not computed).
-        ``pixel_exact`` (default: the plugin's property) puts every sample at the
-        pixel centre; otherwise samples are uniform in the pixel (box filter).
-        Camera rays start at the camera and have no far limit.
-        """
-        pixel_exact = self.pixel_exact if pixel_exact is None else bool(pixel_exact)
-        make_scene_values_opaque(scene)  # one kernel for every value of the scene's parameters
-        sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
-        if not str(sensor).startswith("PerspectiveCamera"):
-            raise ValueError(f"fogpath renders from a 'perspective' sensor only, not {str(sensor).split('[')[0]}")
-        film = sensor.film()
-        if not film.rfilter().is_box_filter():
-            mi.Log(mi.LogLevel.Warn, "fogpath: the film's reconstruction filter is replaced by a box filter "
-                   "(each sample counts in its own pixel)")
-        size = film.crop_size()
-        n_pix, spp = int(dr.prod(size)), int(spp)
-        sampler = sensor.sampler().clone()
-        sampler.set_sample_count(spp)
-        sampler.set_samples_per_wavefront(spp)
-        sampler.seed(dr.opaque(mi.UInt32, int(seed)), n_pix * spp)  # opaque: a new seed needs no new kernel
-
-        idx = dr.arange(mi.UInt32, n_pix * spp) // dr.opaque(mi.UInt32, spp)
-        pos = mi.Vector2u(0)
-        pos.y = idx // size[0]
-        pos.x = idx - pos.y * size[0]
-        pos_f = mi.Vector2f(pos) + (mi.Vector2f(0.5) if pixel_exact else sampler.next_2d())
-        ray, weight = sensor.sample_ray(sensor.shutter_open(), 0.5, pos_f / mi.ScalarVector2f(size),
-                                        mi.Point2f(0.5))
-        ray = mi.Ray3f(sensor.world_transform().translation(), ray.d, ray.time, ray.wavelengths)  # no clip planes
-        L, _, aovs = self.sample(scene, sampler, ray, None, True)
-        L = L * weight
-        values = [L[0], L[1], L[2]] + list(aovs)
-        names = ["R", "G", "B"] + (AOV_NAMES if self.aovs else [])
-        groups = (gbuffer.SQUARED_GROUPS if self.aovs else ("final",)) if squares else ()
-        products = [(names.index(c), names.index(c)) for g in groups for c in gbuffer.channel_names(g)]
-        products += [(names.index(gbuffer.channel_names(g)[i]), names.index(gbuffer.channel_names(g)[j]))
-                     for g in groups for i, j in gbuffer.CHANNEL_PAIRS]
-        dr.eval(values)  # one kernel for every output; otherwise each per-pixel sum re-runs the path loop
-        sums, sq = self._per_pixel_sums(values, products, n_pix, spp)
-        shape = (size[1], size[0], 1)
-        sums = dr.concat([mi.TensorXd(a, shape=shape) for a in sums], axis=2)
-        sq = dr.concat([mi.TensorXd(a, shape=shape) for a in sq], axis=2) if squares else None
-        dr.eval(sums, sq)
-        return sums, sq
-
-    @staticmethod
-    def _per_pixel_sums(values, products, n_pix, spp):
-        """Per-pixel float64 sums of ``values`` (evaluated per-sample arrays, lane
-        ``p * spp + s``) and of the products ``values[j] * values[k]`` for ``(j, k)`` in
-        ``products`` (squares where ``j == k``): two lists of ``n_pix`` arrays.
-
-        One kernel: a loop over the ``spp`` samples of every pixel, each iteration
-        gathering the sample from every output, in a fixed order (deterministic,
-        unlike atomic scatter-adds).  Float64 throughout: a float32 square and sum
-        would leave a spurious stderr of ~3e-4 x the value.  (``dr.block_sum`` per
-        output launched ~170 kernels per pass and materialised a float64 array per
-        squared output.)
-        """
-        spp_o = dr.opaque(mi.UInt32, spp)  # opaque: one kernel for every spp
-        first = dr.arange(mi.UInt32, n_pix) * spp_o
-        zeros = lambda k: tuple(dr.zeros(mi.Float64, n_pix) for _ in range(k))  # noqa: E731
-
-        def body(s, sums, squares):
-            x = [mi.Float64(v if dr.width(v) == 1 else dr.gather(type(v), v, first + s)) for v in values]
-            return (s + 1, tuple(a + b for a, b in zip(sums, x)),
-                    tuple(a + (dr.square(x[j]) if j == k else x[j] * x[k]) for a, (j, k) in zip(squares, products)))
-
-        _, sums, squares = dr.while_loop((mi.UInt32(0), zeros(len(values)), zeros(len(products))),
-                                         lambda s, sums, squares: s < spp_o, body, label="fogpath_pixel_sums")
-        dr.eval(sums, squares)  # all at once: one loop kernel (read separately, each would re-run the loop)
-        return list(sums), list(squares)
-
-    def render(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
-        """``mi.render``: the per-pixel mean of R,G,B and the AOVs (box filter, or
-        pixel-exact with ``pixel_exact``), a ``TensorXf`` ``(H, W, 3 + len(aov_names()))``.
-        The ``surface.*`` AOVs are per-sample means here;
-        :func:`fogref.gbuffer.moments_to_channels` turns them into the EXR's ratio estimator.
-
-        In passes of at most :data:`fogref.render.passes.MAX_LANES` lanes, as the render
-        driver does (one pass keeps ``seed``; several are seeded with ``pass_seed``):
-        each pass holds every sample's outputs in memory, so one call at 1920x1080 and
-        1024 spp would otherwise need ~425 GB."""
-        sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
-        spp = int(spp) if int(spp) > 0 else sensor.sampler().sample_count()
-        passes = pass_sizes(int(dr.prod(sensor.film().crop_size())), spp, max_lanes(mi.variant()))
-        total = None
-        for k, n in enumerate(passes):
-            sums, _ = self.render_moments(scene, sensor, seed if len(passes) == 1 else pass_seed(seed, k), n,
-                                          squares=False)
-            total = sums if total is None else total + sums
-            dr.eval(total)
-        return mi.TensorXf(total / spp)
 
 
 def register() -> None:
