@@ -7,6 +7,8 @@ subclass (:class:`fogref_plugins.fogpath.FogPathIntegrator`) and gives it:
   light, the sun (:meth:`FogPathBase._scene_fog`, ``_scene_lights``, ``_scene_sun``);
 * opaque scene values (:func:`make_scene_values_opaque`), so that kernels are reused
   across scenes that differ only in a value;
+* the parts of the schema a contribution feeds (:class:`Split`) and the per-sample
+  outputs in the order of :data:`AOV_NAMES` (``FogPathBase._outputs``);
 * per-pixel moments of every per-sample output (:meth:`FogPathBase.render_moments`),
   what the render driver writes as means and standard errors, and ``mi.render`` in
   passes of at most :data:`fogref.render.passes.MAX_LANES` lanes.
@@ -37,6 +39,29 @@ class _Opaque:
 
     def __getattr__(self, name):
         return getattr(self._obj, name)
+
+
+class Split:
+    """Where a contribution goes: ``surface`` (camera ray reached the surface or sky
+    unscattered; the camera segment's weight is applied at the end), ``single``
+    (direct light at the first medium vertex) or ``multiple``."""
+
+    DRJIT_STRUCT = {"surface": mi.Spectrum, "single": mi.Spectrum, "multiple": mi.Spectrum}
+
+    def __init__(self, surface=None, single=None, multiple=None):
+        self.surface = mi.Spectrum(0.0) if surface is None else surface
+        self.single = mi.Spectrum(0.0) if single is None else single
+        self.multiple = mi.Spectrum(0.0) if multiple is None else multiple
+
+    def add(self, c, medium_first, direct):
+        return Split(self.surface + dr.select(medium_first, 0.0, c),
+                      self.single + dr.select(medium_first & direct, c, 0.0),
+                      self.multiple + dr.select(medium_first & ~direct, c, 0.0))
+
+
+def spectrum(values):
+    """``mi.Spectrum`` of three channel values, or of one value for every channel."""
+    return mi.Spectrum(*values) if len(values) == 3 else mi.Spectrum(values[0])
 
 
 def make_scene_values_opaque(scene) -> int:
