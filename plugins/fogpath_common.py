@@ -178,7 +178,8 @@ class FogPathBase(mi.SamplingIntegrator):
         summed over the ``spp`` samples of each pixel: the squares of every channel of
         :data:`~fogref.gbuffer.SQUARED_GROUPS`, then the products of their channel pairs
         :data:`~fogref.gbuffer.CHANNEL_PAIRS` (R*G, R*B, G*B; the noise correlations).
-        With ``aovs`` off: R,G,B, their squares and products only.  ``squares=False``: the second is None (not computed).
+        With ``aovs`` off: R,G,B, their squares and products only.  ``squares=False``: the
+        second is None (not computed).
         ``pixel_exact`` (default: the plugin's property) puts every sample at the
         pixel centre; otherwise samples are uniform in the pixel (box filter).
         Camera rays start at the camera and have no far limit.

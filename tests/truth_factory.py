@@ -101,8 +101,9 @@ def write_rgb(path, img):
 
 
 def synthetic_truth_exr(path, model, shape=(36, 64), noise: float = 0.02, seed: int = 7):
-    """:func:`fogref.compare.check.synthetic_truth` of ``model`` written to ``path``; returns the
-    path and the model's exact ``{"T", "inscatter"}`` on it (:func:`~fogref.compare.check.evaluate_model`)."""
+    """:func:`fogref.compare.synthetic.synthetic_truth` of ``model`` written to ``path``; returns the
+    path and the model's exact ``{"T", "inscatter"}`` on it
+    (:func:`~fogref.compare.candidate.evaluate_model`)."""
     from fogref.compare.candidate import evaluate_model
     from fogref.compare.synthetic import synthetic_truth
 

@@ -100,7 +100,7 @@ def require_finite(x: np.ndarray, what: str) -> None:
     >>> require_finite(np.array([1.0, np.inf]), "rmse")
     Traceback (most recent call last):
     ...
-    ValueError: rmse: the test image holds 1 non-finite value(s); mask those pixels out (error_maps does, and counts them)
+    ValueError: rmse: the test image holds 1 non-finite value(s); mask those pixels out ...
     """
     n = count_nonfinite(x)
     if n:

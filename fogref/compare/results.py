@@ -119,7 +119,8 @@ class CheckResult:
                 "rows": [dict(vars(r)) for r in self.rows]}
 
     def write(self, out_dir) -> Path:
-        """Write ``check.json`` and ``errors.exr`` (signed error per part) to ``out_dir``; return the EXR path."""
+        """Write ``check.json`` and ``errors.exr`` (signed error per part) to ``out_dir``;
+        return the EXR path."""
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
         ch = {}

@@ -38,7 +38,7 @@ def tolerance_table(tolerances, regions=None) -> dict:
     >>> tolerance_table({"T/skyy": 0.1}, regions=("all", "surface", "sky"))
     Traceback (most recent call last):
     ...
-    fogref.errors.FogrefError: tolerances: unknown region 'skyy' in 'T/skyy'; did you mean 'sky'? (regions: all, surface, sky)
+    fogref.errors.FogrefError: tolerances: unknown region 'skyy' in 'T/skyy'; did you mean 'sky'? ...
     """
     table = {(p, None): dict(v) for p, v in DEFAULT_TOLERANCES.items()}
     for key, value in (tolerances or {}).items():
