@@ -96,7 +96,8 @@ def check(truth: Truth, candidate, tolerances: dict | None = None, *, parts=None
         uncertainty (the view as a sample of views) and covers noise that is
         correlated between pixels.
     block : int
-        Side [px] of the bootstrap blocks (``method="block"``), >= 1.
+        Side [px] of the bootstrap blocks (``method="block"``), >= 1; a region needs at
+        least 2 blocks for ``method="block"`` (else its rows are ``empty``).
     n_boot : int
         Bootstrap replicates (``method="block"``), >= 100.
     seed : int
