@@ -1,70 +1,9 @@
 """``fogpath``: a path tracer for exact height fog, in Python with Dr.Jit loops.
 
-.. pluginparameters::
-
- * - max_depth
-   - int
-   - Longest path (Mitsuba's convention: 1 = direct surface light only,
-     2 = single scattering; -1 = no limit). Default: 64.
- * - rr_depth
-   - int
-   - Depth where Russian roulette starts. Default: 5.
- * - hide_emitters
-   - bool
-   - Camera rays that escape see black instead of the sky. Default: false.
- * - aovs
-   - bool
-   - Write the per-sample parts and G-buffer of :mod:`fogref.gbuffer` after
-     R,G,B (needed by ``fogref render``). Default: true.
- * - pixel_exact
-   - bool
-   - Every sample of a pixel goes through the pixel's centre: the G-buffer and
-     the camera transmittance ``T`` are then exact (no silhouette mixing). Off,
-     samples are spread uniformly over the pixel (a box filter), for pictures.
-     Default: false (``fogref render`` sets it for truths).
- * - sun_sampling
-   - bool
-   - Estimate the sun's single scattering along camera rays by sampling its
-     exact integrand (zero variance without shadows); the first medium vertex
-     then skips sun NEE. Used when the fog is unbounded exponential layers (see
-     ``sun_sampling_layers``) and the sun is above the horizon. Default: true.
- * - sun_sampling_layers
-   - int
-   - Most layers for which the exact sampler is used (more layers: the mixture
-     below). Default: 1.
- * - sun_sampling_mixture
-   - bool
-   - Where the exact sampler does not apply (fog bounded by a box, more layers,
-     constant layers in a box), sample the sun's single scattering along camera
-     rays from a closed-form mixture of per-layer integrands, weighted by the exact
-     integrand (sun optical depth to the box's exit). Default: true (4.7x less
-     variance at equal time on the bounded valley).
- * - sun_samples
-   - int
-   - Stratified sun samples per camera ray (each one shadow ray). Default: 2.
- * - sky_cv
-   - string
-   - The uniform (``constant``) sky's single scattering as closed form plus the
-     Monte Carlo difference occluders make: ``off``, ``surface`` (camera rays
-     that end on a surface) or ``all``. Default: ``off`` (it lowers the variance
-     of ``inscatter.*`` but not of the final image, see
-     ``reports/benchmarks/variance_reduction.md``).
- * - forced_split
-   - bool
-   - Forced splitting on the camera ray: every sample traces both branches at
-     depth 0, the surface (or sky) weighted by the closed-form transmittance
-     ``T`` and a forced medium collision on ``[0, D]`` (pdf ``sigma_t T / (1 - T)``,
-     per layer, weight ``albedo (1 - T)`` for one grey layer) with its light
-     sample; the path then continues one branch, chosen in proportion to the
-     branches' depth-0 throughputs (``T`` against the medium vertex's weight; the
-     path's weight is divided by the choice's probability).  ``surface_coverage`` then counts the samples that continued
-     the surface branch (sky: drew it), where ``surface`` is their light
-     without the 1/probability weight: still a ratio estimator, bounded by the
-     radiance it estimates, undefined where the fog is opaque.  Used when the fog
-     scatters and ``max_depth >= 2``.  Default: see
-     ``FORCED_SPLIT_DEFAULT`` (chosen by ``benchmarks/variance_reduction.py --changes``).
-
-What it does:
+The estimator, :class:`FogPathIntegrator` (parameters in its docstring).  Beside it, as
+Mitsuba's ``common.py`` beside ``prb.py``: the plumbing (scene facts, opaque values, the
+parts and AOVs, per-pixel moments, passes) in :mod:`fogref_plugins.fogpath_common`, and
+the camera ray's variance reduction in :mod:`fogref_plugins.fogpath_camera`.  It has:
 
 * **camera rays from the camera itself, to any distance**: the perspective
   sensor's near and far clip planes are ignored, so ``T`` and ``distance`` cover
@@ -77,18 +16,9 @@ What it does:
 * **next-event estimation** with MIS (power heuristic) for the sun
   (``directional``), the sky (``constant``/``envmap``) and area lights;
   Henyey–Greenstein phase; any Mitsuba BSDF; ``max_depth`` and Russian roulette;
-* **per-pixel moments** (:meth:`render_moments`): sums and sums of squares of
-  every per-sample part, so the driver writes means *and* standard errors.
-
-The split of ``L`` (one accumulator, :class:`_Split`): a path whose camera ray
-reached the surface or the sky unscattered feeds ``surface`` (without the camera
-segment's weight) and ``attenuated_surface`` (with it); a path that scattered
-first feeds ``single`` (direct light at the first medium vertex) or
-``multiple``. Per sample ``L = attenuated_surface + single + multiple`` exactly.
-With ``forced_split`` both branches of the camera ray are in every sample: the
-surface branch's light (weight ``T`` on ``attenuated_surface``) and the forced
-medium vertex's (``single``), then the continued branch's (``surface`` or
-``multiple``, divided by the probability of continuing it).
+* **the parts of the schema** per sample (:class:`~fogref_plugins.fogpath_common.Split`):
+  ``L = attenuated_surface + single + multiple`` exactly.  How the parts, forced
+  splitting and the control variates fit together: ``docs/design.md``, "fogpath".
 
 Not supported: sensors other than ``perspective``; media attached to shapes
 (the fog fills all space outside surfaces); reconstruction filters other than
@@ -105,84 +35,71 @@ import drjit as dr
 import mitsuba as mi
 from mitsuba.python.ad.integrators.common import mis_weight  # the module set_variant loaded (not a 2nd copy)
 
-from fogref import gbuffer
-from fogref.media import closed_form as cf
 from fogref.media import drjit_ops
-from fogref.media.single_scatter import (
-    hg_upper_fraction_table,
-    sample_sun_single_scatter,
-    sample_sun_single_scatter_mixture,
-    sun_sampling_mode,
-)
-from fogref.render.passes import max_lanes, pass_seed, pass_sizes
 
-#: The integrator's AOVs (after R,G,B): the per-sample groups of the schema.
-AOV_NAMES = gbuffer.sample_channel_names()
+from .fogpath_camera import FogPathCameraRay
+from .fogpath_common import AOV_NAMES, Split, spectrum
+
 #: ``forced_split``'s default (see ``reports/benchmarks/variance_reduction_issue11.md``)
 FORCED_SPLIT_DEFAULT = True
 
 
-class _Opaque:
-    """Hides a Python object (e.g. a dataclass) from Dr.Jit's loop-state traversal."""
+class FogPathIntegrator(FogPathCameraRay):
+    """Path tracer with analytic free flight in fogref's exact fog (see module).
 
-    __slots__ = ("_obj",)
+    .. pluginparameters::
 
-    def __init__(self, obj):
-        object.__setattr__(self, "_obj", obj)
-
-    def __getattr__(self, name):
-        return getattr(self._obj, name)
-
-
-class _Split:
-    """Where a contribution goes: ``surface`` (camera ray reached the surface or sky
-    unscattered; the camera segment's weight is applied at the end), ``single``
-    (direct light at the first medium vertex) or ``multiple``."""
-
-    DRJIT_STRUCT = {"surface": mi.Spectrum, "single": mi.Spectrum, "multiple": mi.Spectrum}
-
-    def __init__(self, surface=None, single=None, multiple=None):
-        self.surface = mi.Spectrum(0.0) if surface is None else surface
-        self.single = mi.Spectrum(0.0) if single is None else single
-        self.multiple = mi.Spectrum(0.0) if multiple is None else multiple
-
-    def add(self, c, medium_first, direct):
-        return _Split(self.surface + dr.select(medium_first, 0.0, c),
-                      self.single + dr.select(medium_first & direct, c, 0.0),
-                      self.multiple + dr.select(medium_first & ~direct, c, 0.0))
-
-
-def _spectrum(values):
-    return mi.Spectrum(*values) if len(values) == 3 else mi.Spectrum(values[0])
-
-
-def make_scene_values_opaque(scene) -> int:
-    """Make the scene's one-value Dr.Jit parameters (emitter radiance and irradiance,
-    transforms, BSDF colours, the phase function's ``g``, ...) opaque, in place.
-
-    Mitsuba traces such values into kernels as literals, so a scene that differs
-    only in the sun's colour or the fog's ``g`` would compile new kernels;
-    opaque, the kernels are reused (a sweep's configurations share them).  Values
-    are unchanged.  Returns how many parameters were changed.
+     * - max_depth
+       - int
+       - Longest path (Mitsuba's convention: 1 = direct surface light only,
+         2 = single scattering; -1 = no limit). Default: 64.
+     * - rr_depth
+       - int
+       - Depth where Russian roulette starts. Default: 5.
+     * - hide_emitters
+       - bool
+       - Camera rays that escape see black instead of the sky. Default: false.
+     * - aovs
+       - bool
+       - Write the per-sample parts and G-buffer of :mod:`fogref.gbuffer` after
+         R,G,B (needed by ``fogref render``). Default: true.
+     * - pixel_exact
+       - bool
+       - Every sample goes through the pixel's centre: the G-buffer and ``T`` are exact
+         (no silhouette mixing); off, samples are uniform over the pixel (a box filter),
+         for pictures. Default: false (``fogref render`` sets it for truths).
+     * - sun_sampling
+       - bool
+       - Sample the sun's single scattering along camera rays from its exact integrand
+         (zero variance without shadows; the first medium vertex then skips sun NEE), for
+         unbounded exponential layers and a sun above the horizon. Default: true.
+     * - sun_sampling_layers
+       - int
+       - Most layers for which the exact sampler is used (more layers: the mixture
+         below). Default: 1.
+     * - sun_sampling_mixture
+       - bool
+       - Where the exact sampler does not apply (fog in a box, more layers), sample
+         the sun's single scattering along camera rays from a closed-form mixture of
+         per-layer integrands, weighted by the exact integrand. Default: true.
+     * - sun_samples
+       - int
+       - Stratified sun samples per camera ray (each one shadow ray). Default: 2.
+     * - sky_cv
+       - string
+       - The uniform (``constant``) sky's single scattering as closed form plus the
+         Monte Carlo difference occluders make: ``off``, ``surface`` (camera rays
+         that end on a surface) or ``all``. Default: ``off`` (see
+         :meth:`_sky_control_variate`).
+     * - forced_split
+       - bool
+       - Forced splitting on the camera ray: every sample traces both branches at
+         depth 0, the surface (or sky) weighted by the closed-form transmittance
+         ``T`` and a forced medium collision on ``[0, D]`` with its light sample;
+         the path then continues one branch, chosen in proportion to the branches'
+         depth-0 throughputs (see :meth:`_camera_split`).  Used when the fog
+         scatters and ``max_depth >= 2``.  Default: ``FORCED_SPLIT_DEFAULT``.
     """
-    params = mi.traverse(scene)
-    changed = 0
-    for key in params.keys():
-        value = params[key]
-        if not (dr.is_jit_v(value) and dr.width(value) == 1):
-            continue
-        before = dr.detail.collect_indices(value)
-        dr.make_opaque(value)
-        if dr.detail.collect_indices(value) != before:  # was a literal: tell the object
-            params[key] = value
-            changed += 1
-    if changed:
-        params.update()
-    return changed
-
-
-class FogPathIntegrator(mi.SamplingIntegrator):
-    """Path tracer with analytic free flight in fogref's exact fog (see module)."""
 
     def __init__(self, props):
         super().__init__(props)
@@ -207,46 +124,10 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         self.aovs = bool(props.get("aovs", True))
         self.pixel_exact = bool(props.get("pixel_exact", False))
 
-    def aov_names(self):
-        return list(AOV_NAMES) if self.aovs else []
-
-    # ------------------------------------------------------------ scene facts
-    @staticmethod
-    def _scene_fog(scene):
-        """The physics object of the sensor's heightfog medium (None: vacuum)."""
-        sensors = scene.sensors()
-        med = sensors[0].get_medium() if sensors else None
-        fog = getattr(med, "fog", None)
-        if fog is None or fog.is_vacuum:
-            return None
-        return _Opaque(fog)
-
-    @staticmethod
-    def _scene_lights(scene):
-        delta = [mi.has_flag(e.flags(), mi.EmitterFlags.Delta) for e in scene.emitters()]
-        return any(delta), not all(delta)
-
-    @staticmethod
-    def _scene_sun(scene):
-        """(direction toward the sun, RGB irradiance) of the only delta directional
-        emitter, or None (trace-time, Python floats)."""
-        delta = [e for e in scene.emitters() if mi.has_flag(e.flags(), mi.EmitterFlags.Delta)]
-        if len(delta) != 1:
-            return None
-        p = mi.traverse(delta[0])
-        if "irradiance.value" not in p or "to_world" not in p:
-            return None
-        m = p["to_world"].matrix
-        w = [-float(m[i][2][0]) for i in range(3)]
-        n = sum(x * x for x in w) ** 0.5
-        E = p["irradiance.value"]
-        E = [float(E[i][0]) for i in range(3)] if len(E) == 3 else [float(E[0][0])] * 3
-        return [x / n for x in w], E
-
     # --------------------------------------------------------------- pieces
     def _transmittance(self, fog, ops, o, d, t):
         tau = fog.optical_depth(ops, o, d, t)
-        return _spectrum([dr.exp(-s * tau) for s in ops.params(fog.sigma_t)])
+        return spectrum([dr.exp(-s * tau) for s in ops.params(fog.sigma_t)])
 
     def _draw_channel(self, sampler, active=True):
         return mi.UInt32(dr.minimum(mi.UInt32(sampler.next_1d(active) * 3.0), 2))
@@ -278,10 +159,10 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         t_end = dr.select(is_medium, t_med, dr.minimum(t_surf, ops.largest))
         Tr = self._transmittance(fog, ops, ray.o, ray.d, t_end)
         rho = fog.density(ops, ray.o + ray.d * dr.select(is_medium, t_med, 0.0))
-        sigma_t = _spectrum([s * rho for s in sig_rgb])
+        sigma_t = spectrum([s * rho for s in sig_rgb])
         st = sigma_t * Tr
         pdf = dr.select(is_medium, (st[0] + st[1] + st[2]) / 3.0, (Tr[0] + Tr[1] + Tr[2]) / 3.0)
-        num = dr.select(is_medium, sigma_t * _spectrum(ops.params(fog.albedo)) * Tr, Tr)
+        num = dr.select(is_medium, sigma_t * spectrum(ops.params(fog.albedo)) * Tr, Tr)
         return is_medium, t_end, dr.select(pdf > 0, num / pdf, 0.0)
 
     def _direct(self, scene, fog, ops, sampler, it, ctx, scatter, active, has_smooth):
@@ -311,31 +192,6 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         cv = dr.select(active & (ds.pdf != 0) & infinite & ~ds.delta & (ds.d.y > 0), c, 0.0)
         return dr.select(visible, c * Tr, 0.0), ds.delta, cv
 
-    def _sun_single_scatter(self, scene, fog, ops, sampler, ray, D, active):
-        """The sun's single scattering along the camera ray, sampled from its exact
-        integrand (``exact``) or a closed-form mixture proposal with the exact
-        weight (``mixture``: bounded fog, several layers), ``sun_samples``
-        stratified samples averaged (None when it does not apply; then NEE covers it)."""
-        sun = self._scene_sun(scene) if (fog is not None and self.sun_sampling) else None
-        mode = None if (sun is None or self.max_depth < 2) else sun_sampling_mode(
-            fog._obj, sun[0], self.sun_sampling_layers, self.sun_sampling_mixture)
-        if mode is None:
-            return None
-        w_sun, E_sun = sun
-        K, total = self.sun_samples, mi.Spectrum(0.0)
-        for k in range(K):
-            channel = self._draw_channel(sampler, active)  # one-sample spectral MIS inside the sampler
-            u = (k + sampler.next_1d(active)) / K  # stratified along the integrand's CDF
-            if mode == "exact":
-                t_ss, w_ss = sample_sun_single_scatter(ops, fog._obj, ray.o, ray.d, D, w_sun, E_sun, u, channel)
-            else:
-                t_ss, w_ss = sample_sun_single_scatter_mixture(ops, fog._obj, ray.o, ray.d, D, w_sun, E_sun, u,
-                                                               sampler.next_1d(active), channel)
-            to_sun = mi.Vector3f(*ops.params(w_sun))
-            vis = active & ~scene.ray_test(mi.Ray3f(ray.o + ray.d * t_ss, to_sun), active)
-            total += dr.select(vis, mi.Spectrum(*w_ss), 0.0)
-        return total / K
-
     def _medium_vertex(self, scene, fog, ops, sampler, ray, p, t, phase, ctx, med, first, has_smooth, sun_ss,
                        sky_cv):
         """Light sample and phase sample at a medium vertex.  At the first vertex of the
@@ -354,134 +210,6 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             Ld = dr.select(first & sky_cv["on"], Ld - cv, Ld)
         return Ld, wo, w, pdf
 
-    def _sky_control_variate(self, scene, fog, ops, ray, D, hit):
-        """The uniform sky's single scattering as a control variate (None when it does
-        not apply): ``closed = H(d_y) alpha L_sky (1 - T(D))`` per channel, the exact
-        expectation of the unoccluded, unattenuated upper-hemisphere integrand
-        ``p(w) L_sky [w_y > 0]`` at the first medium vertex (``H``: the share of the
-        phase lobe above the horizon, :func:`hg_upper_fraction_table`); the first
-        vertex subtracts that integrand's estimate from the same samples.
-        ``sky_cv = "surface"`` uses it only on camera rays that end on a surface: on
-        rays that escape, the sky seen through the fog is anti-correlated with the
-        fog's light (a path either scatters or reaches the sky) and the control
-        variate made the final image noisier (``reports/benchmarks/variance_reduction.md``)."""
-        if self.sky_cv == "off" or fog is None or not fog.scatters or self.max_depth < 2:
-            return None
-        smooth_inf = [e for e in scene.emitters() if mi.has_flag(e.flags(), mi.EmitterFlags.Infinite)
-                      and not mi.has_flag(e.flags(), mi.EmitterFlags.Delta)]
-        if len(smooth_inf) != 1 or not str(smooth_inf[0]).startswith("ConstantBackgroundEmitter"):
-            return None
-        if abs(fog.g) > 0.95:  # the lobe's table would need more nodes
-            return None
-        sky = smooth_inf[0]
-        idx = [i for i, e in enumerate(scene.emitters()) if e is sky]
-        pdf_sel = float(scene.pdf_emitter(idx[0])[0]) if idx else 1.0 / len(scene.emitters())
-        Lv = mi.traverse(sky)["radiance.value"]
-        L = _spectrum(ops.params([float(Lv[i][0]) for i in range(3)] if len(Lv) == 3 else [float(Lv[0][0])]))
-        table = hg_upper_fraction_table(float(fog.g))
-        x = (dr.clip(ray.d.y, -1.0, 1.0) + 1.0) * (0.5 * (len(table) - 1))
-        i = mi.UInt32(dr.clip(dr.floor(x), 0, len(table) - 2))
-        tab = mi.Float(table)
-        H = dr.lerp(dr.gather(mi.Float, tab, i), dr.gather(mi.Float, tab, i + 1), x - mi.Float(i))
-        T = self._transmittance(fog, ops, ray.o, ray.d, D)
-        on = mi.Bool(True) if self.sky_cv == "all" else mi.Bool(hit)
-        closed = dr.select(on, H * L * _spectrum(ops.params(fog.albedo)) * (1.0 - T), 0.0)
-        return {"closed": closed, "L": L, "pdf": pdf_sel / (4.0 * dr.pi), "on": on}
-
-    def _forced_collision(self, fog, ops, sampler, ray, D, active):
-        """A medium collision on the camera ray's ``[0, D]`` forced to happen.
-
-        Layer ``i`` is chosen with probability ``(1 - T_i) / sum_j (1 - T_j)``
-        (``T_i``: its transmittance over ``[0, D]`` in the sampled channel) and
-        inverted in closed form conditioned on a collision before ``D``; the pdf is
-        the mixture ``sigma sum_i rho_i T_i(t) / sum_j (1 - T_j(D))`` (one layer:
-        ``sigma_t T / (1 - T)``), averaged over the channels (one-sample spectral
-        MIS for this segment).  Returns (t, weight ``sigma_s T(t) / pdf``, valid).
-        """
-        t0, t1 = (mi.Float(0.0), ops.largest) if fog.bounds is None else fog.clip(ops, ray.o, ray.d)
-        t_end = dr.minimum(D, t1)
-        length = dr.maximum(t_end - t0, 0.0)
-        t0 = dr.select(length > 0, t0, 0.0)
-        oy, dy = ray.o.y + t0 * ray.d.y, ray.d.y
-        om = lambda x: dr.select(x < 1e-4, x * (1.0 - 0.5 * x), 1.0 - dr.exp(-x))  # noqa: E731  1 - e^-x
-        tau_D = [dr.minimum(L.depth(ops, oy, dy, length), cf.TAU_MAX) for L in fog.layers]
-        sig_rgb, alb_rgb = ops.params(fog.sigma_t), ops.params(fog.albedo)
-        sig = sig_rgb[0]
-        grey = fog.sigma_t[1] == fog.sigma_t[0] and fog.sigma_t[2] == fog.sigma_t[0]
-        if not grey:
-            channel = self._draw_channel(sampler, active)
-            sig = dr.select(channel == 1, sig_rgb[1], dr.select(channel == 2, sig_rgb[2], sig))
-        u = sampler.next_1d(active)
-        oms = [om(sig * tau) for tau in tau_D]
-        t_rel = fog.layers[0].sample(ops, oy, dy, -dr.log(1.0 - u * oms[0]) / sig)
-        if len(fog.layers) > 1:
-            pick, acc = sampler.next_1d(active) * sum(oms), mi.Float(0.0)
-            for L, o_i in zip(fog.layers, oms):
-                t_i = L.sample(ops, oy, dy, -dr.log(1.0 - u * o_i) / sig)
-                t_rel = dr.select((pick >= acc) & (o_i > 0), t_i, t_rel)
-                acc += o_i
-        valid = active & (length > 0) & (t_rel < ops.largest) & (sum(oms) > 0)
-        t_rel = dr.minimum(dr.select(valid, t_rel, 0.0), length)
-        tau_t = [dr.minimum(L.depth(ops, oy, dy, t_rel), cf.TAU_MAX) for L in fog.layers]
-        rho_t = [L.rho(ops, oy + t_rel * dy) for L in fog.layers]
-        pdfs, fs = [], []
-        for s, a in zip(sig_rgb, alb_rgb):
-            norm = sum(om(s * tau) for tau in tau_D)
-            pdfs.append(s * sum(r * dr.exp(-s * tau) for r, tau in zip(rho_t, tau_t)) / dr.maximum(norm, 1e-30))
-            fs.append(a * s * sum(rho_t) * dr.exp(-s * sum(tau_t)))
-        pdf = pdfs[0] if grey else (pdfs[0] + pdfs[1] + pdfs[2]) / 3.0
-        w = dr.select(valid & (pdf > 0), _spectrum(fs) / pdf, 0.0)
-        return t0 + t_rel, w, valid & (pdf > 0)
-
-    def _camera_split(self, scene, fog, ops, sampler, ray, si, D, phase, phase_ctx, bsdf_ctx, has_smooth, sun_ss,
-                      sky_cv, active):
-        """Depth 0 with ``forced_split``: the surface branch (light found by the camera
-        ray, light sample at the surface; weight ``T`` applied at the end) and a forced
-        medium vertex (its light sample feeds ``single``), then one branch continues,
-        chosen with probability ``q = T / (T + w_medium w_phase)`` (means over RGB).
-        Returns (split, β_cam, (coverage, the surface branch's depth-0 light, q), ray, si,
-        β, medium_first, prev_it, prev_pdf, prev_delta, active) for the path loop from
-        depth 1.  ``surface_coverage`` is 1 on samples that continued the surface branch
-        (for the sky: drew it with the same q) and ``surface`` their unweighted light, so that
-        ``surface`` stays a ratio estimator bounded by the radiance it estimates."""
-        hit, split = si.is_valid(), _Split()
-        T = self._transmittance(fog, ops, ray.o, ray.d, D)
-        if has_smooth:
-            em = active & (hit if self.hide_emitters else mi.Bool(True))
-            ds = mi.DirectionSample3f(scene, si=si, ref=dr.zeros(mi.Interaction3f))
-            split = split.add(dr.select(em, ds.emitter.eval(si, em), 0.0), mi.Bool(False), mi.Bool(False))
-        surf, bsdf = active & hit, si.bsdf(ray)
-        smooth = surf & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-        Ls, _, _ = self._direct(scene, fog, ops, sampler, si, bsdf_ctx, bsdf, smooth, has_smooth)
-        split = split.add(Ls, mi.Bool(False), mi.Bool(False))
-        direct = mi.Spectrum(split.surface)
-        bs, w_b = bsdf.sample(bsdf_ctx, si, sampler.next_1d(surf), sampler.next_2d(surf), surf)
-        t_m, w_m, med = self._forced_collision(fog, ops, sampler, ray, D, active)
-        p_med = ray.o + ray.d * t_m
-        Ld, wo_m, w_ph, pdf_m = self._medium_vertex(scene, fog, ops, sampler, ray, p_med, t_m, phase, phase_ctx,
-                                                    med, mi.Bool(True), has_smooth, sun_ss, sky_cv)
-        split = split.add(dr.select(med, w_m * Ld, 0.0), mi.Bool(True), mi.Bool(True))
-        # q = T / (T + w_medium) >= T: it must not depend on the surface branch's own samples
-        # (the ratio estimator `surface` keeps the samples that continued it), and q >= T
-        # keeps `surface` defined wherever the old scatter-or-reach choice defined it.
-        # A ray to the sky has no surface to continue: it always continues the medium and
-        # its q only draws surface_coverage, so that `surface` is undefined where T ~ 0.
-        ms = dr.mean(T)
-        mm = dr.select(med, dr.mean(w_m * w_ph), 0.0)
-        q = dr.select(ms + mm > 0, ms / (ms + mm), 0.0)  # probability of continuing the surface branch
-        chose_s = sampler.next_1d(active) < q
-        go_s = surf & chose_s
-        go_m = med & dr.select(hit, ~chose_s & (q < 1), True)
-        β = dr.select(go_s, w_b / q, dr.select(go_m, w_m * w_ph / dr.select(hit, 1.0 - q, 1.0), 0.0))
-        prev_it = self._vertex(ray, si, go_s, p_med)
-        prev_pdf = dr.select(go_s, bs.pdf, pdf_m)
-        prev_delta = go_s & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
-        ray = dr.select(go_s, si.spawn_ray(si.to_world(bs.wo)), mi.Ray3f(p_med, wo_m, ray.time, ray.wavelengths))
-        active = (go_s | go_m) & (dr.max(β) > 0) & (self.max_depth > 1)
-        si = scene.ray_intersect(ray, active)
-        cam = (chose_s, direct, dr.select(hit, q, 1.0))  # surface_coverage, the sample of `surface`
-        return split, T, cam, ray, si, β, go_m, prev_it, prev_pdf, prev_delta, active
-
     # ----------------------------------------------------------------- sample
     @dr.syntax
     def sample(self, scene, sampler, ray, medium=None, active=True):
@@ -492,7 +220,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
 
         ray, active = mi.Ray3f(ray), mi.Bool(active)
         active0 = mi.Bool(active)
-        split = _Split()
+        split = Split()
         β, β_cam = mi.Spectrum(1.0), mi.Spectrum(1.0)  # β_cam: the camera segment of unscattered paths
         depth, medium_first = mi.UInt32(0), mi.Bool(False)
         prev_it, prev_pdf, prev_delta = dr.zeros(mi.Interaction3f), mi.Float(1.0), mi.Bool(True)
@@ -570,28 +298,10 @@ class FogPathIntegrator(mi.SamplingIntegrator):
 
         for closed in (sun_ss, None if sky_cv is None else sky_cv["closed"]):  # camera-ray estimates
             if dr.hint(closed is not None, mode="scalar"):
-                split = _Split(split.surface, split.single + dr.select(active0, closed, 0.0), split.multiple)
+                split = Split(split.surface, split.single + dr.select(active0, closed, 0.0), split.multiple)
         return self._outputs(split, β_cam, medium_first, cam, gbuf)
 
-    # ------------------------------------------------------------- outputs
-    @staticmethod
-    def _medium_interaction(ray, p, t):
-        mei = dr.zeros(mi.MediumInteraction3f)
-        mei.p, mei.t, mei.wi = p, t, -ray.d
-        mei.sh_frame = mi.Frame3f(mei.wi)
-        mei.time, mei.wavelengths = ray.time, ray.wavelengths
-        return mei
-
-    @staticmethod
-    def _vertex(ray, si, surf, p_med):
-        """The interaction a sampled direction leaves from (for MIS on emitters it hits)."""
-        it = dr.zeros(mi.Interaction3f)
-        it.p = dr.select(surf, si.p, p_med)
-        it.n = dr.select(surf, si.n, 0.0)
-        it.t = dr.select(surf, si.t, 0.0)
-        it.time, it.wavelengths = ray.time, ray.wavelengths
-        return it
-
+    # ------------------------------------------------------------- G-buffer
     def _gbuffer(self, fog, ops, ray, si):
         """T, coverage-independent G-buffer of the camera ray (closed form, per sample)."""
         hit = si.is_valid()
@@ -601,128 +311,6 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         return {"T": [T[0], T[1], T[2]], "distance": [dr.select(hit, si.t, 0.0)],
                 "P": [dr.select(hit, si.p[i], 0.0) for i in range(3)], "view": [ray.d[i] for i in range(3)],
                 "hit": [dr.select(hit, 1.0, 0.0)]}
-
-    def _outputs(self, split, β_cam, medium_first, cam, gbuf):
-        """(L, valid, AOVs) in the order of :data:`AOV_NAMES`.  ``surface`` and
-        ``surface_coverage``: the camera ray reached the surface unscattered, or with
-        forced splitting (``cam``) the sample continued the surface branch; its light is
-        then the depth-0 part plus the continuation without the 1/q weight."""
-        att = β_cam * split.surface
-        cover, s_out = ~medium_first, split.surface
-        if cam is not None:
-            cover, direct, q = cam
-            s_out = direct + q * (split.surface - direct)
-        L = att + split.single + split.multiple
-        if gbuf is None:
-            return L, mi.Bool(True), []
-        rgb = lambda s: [s[0], s[1], s[2]]  # noqa: E731
-        parts = {"attenuated_surface": rgb(att), "inscatter": rgb(split.single + split.multiple),
-                 "single": rgb(split.single), "multiple": rgb(split.multiple),
-                 "surface": rgb(dr.select(cover, s_out, 0.0)), "surface_coverage": [dr.select(cover, 1.0, 0.0)],
-                 **gbuf}
-        return L, mi.Bool(True), [c for g in gbuffer.SAMPLE_GROUPS for c in parts[g]]
-
-    # ------------------------------------------------------------- render
-    def render_moments(self, scene, sensor=0, seed=0, spp=1, pixel_exact=None, squares=True):
-        """Per-pixel sums of every per-sample output and of the squares of the parts.
-
-        Returns ``(sums, squares)``: float64 ``TensorXd`` of shape ``(H, W, 3 + len(AOV_NAMES))``
-        (R,G,B then :data:`AOV_NAMES`) and ``(H, W, 6 * len(gbuffer.SQUARED_GROUPS))``,
-        summed over the ``spp`` samples of each pixel: the squares of every channel of
-        :data:`~fogref.gbuffer.SQUARED_GROUPS`, then the products of their channel pairs
-        :data:`~fogref.gbuffer.CHANNEL_PAIRS` (R*G, R*B, G*B; the noise correlations).
-        With ``aovs`` off: R,G,B, their squares and products only.  ``squares=False``: the second is None (not computed).
-        ``pixel_exact`` (default: the plugin's property) puts every sample at the
-        pixel centre; otherwise samples are uniform in the pixel (box filter).
-        Camera rays start at the camera and have no far limit.
-        """
-        pixel_exact = self.pixel_exact if pixel_exact is None else bool(pixel_exact)
-        make_scene_values_opaque(scene)  # one kernel for every value of the scene's parameters
-        sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
-        if not str(sensor).startswith("PerspectiveCamera"):
-            raise ValueError(f"fogpath renders from a 'perspective' sensor only, not {str(sensor).split('[')[0]}")
-        film = sensor.film()
-        if not film.rfilter().is_box_filter():
-            mi.Log(mi.LogLevel.Warn, "fogpath: the film's reconstruction filter is replaced by a box filter "
-                   "(each sample counts in its own pixel)")
-        size = film.crop_size()
-        n_pix, spp = int(dr.prod(size)), int(spp)
-        sampler = sensor.sampler().clone()
-        sampler.set_sample_count(spp)
-        sampler.set_samples_per_wavefront(spp)
-        sampler.seed(dr.opaque(mi.UInt32, int(seed)), n_pix * spp)  # opaque: a new seed needs no new kernel
-
-        idx = dr.arange(mi.UInt32, n_pix * spp) // dr.opaque(mi.UInt32, spp)
-        pos = mi.Vector2u(0)
-        pos.y = idx // size[0]
-        pos.x = idx - pos.y * size[0]
-        pos_f = mi.Vector2f(pos) + (mi.Vector2f(0.5) if pixel_exact else sampler.next_2d())
-        ray, weight = sensor.sample_ray(sensor.shutter_open(), 0.5, pos_f / mi.ScalarVector2f(size),
-                                        mi.Point2f(0.5))
-        ray = mi.Ray3f(sensor.world_transform().translation(), ray.d, ray.time, ray.wavelengths)  # no clip planes
-        L, _, aovs = self.sample(scene, sampler, ray, None, True)
-        L = L * weight
-        values = [L[0], L[1], L[2]] + list(aovs)
-        names = ["R", "G", "B"] + (AOV_NAMES if self.aovs else [])
-        groups = (gbuffer.SQUARED_GROUPS if self.aovs else ("final",)) if squares else ()
-        products = [(names.index(c), names.index(c)) for g in groups for c in gbuffer.channel_names(g)]
-        products += [(names.index(gbuffer.channel_names(g)[i]), names.index(gbuffer.channel_names(g)[j]))
-                     for g in groups for i, j in gbuffer.CHANNEL_PAIRS]
-        dr.eval(values)  # one kernel for every output; otherwise each per-pixel sum re-runs the path loop
-        sums, sq = self._per_pixel_sums(values, products, n_pix, spp)
-        shape = (size[1], size[0], 1)
-        sums = dr.concat([mi.TensorXd(a, shape=shape) for a in sums], axis=2)
-        sq = dr.concat([mi.TensorXd(a, shape=shape) for a in sq], axis=2) if squares else None
-        dr.eval(sums, sq)
-        return sums, sq
-
-    @staticmethod
-    def _per_pixel_sums(values, products, n_pix, spp):
-        """Per-pixel float64 sums of ``values`` (evaluated per-sample arrays, lane
-        ``p * spp + s``) and of the products ``values[j] * values[k]`` for ``(j, k)`` in
-        ``products`` (squares where ``j == k``): two lists of ``n_pix`` arrays.
-
-        One kernel: a loop over the ``spp`` samples of every pixel, each iteration
-        gathering the sample from every output, in a fixed order (deterministic,
-        unlike atomic scatter-adds).  Float64 throughout: a float32 square and sum
-        would leave a spurious stderr of ~3e-4 x the value.  (``dr.block_sum`` per
-        output launched ~170 kernels per pass and materialised a float64 array per
-        squared output.)
-        """
-        spp_o = dr.opaque(mi.UInt32, spp)  # opaque: one kernel for every spp
-        first = dr.arange(mi.UInt32, n_pix) * spp_o
-        zeros = lambda k: tuple(dr.zeros(mi.Float64, n_pix) for _ in range(k))  # noqa: E731
-
-        def body(s, sums, squares):
-            x = [mi.Float64(v if dr.width(v) == 1 else dr.gather(type(v), v, first + s)) for v in values]
-            return (s + 1, tuple(a + b for a, b in zip(sums, x)),
-                    tuple(a + (dr.square(x[j]) if j == k else x[j] * x[k]) for a, (j, k) in zip(squares, products)))
-
-        _, sums, squares = dr.while_loop((mi.UInt32(0), zeros(len(values)), zeros(len(products))),
-                                         lambda s, sums, squares: s < spp_o, body, label="fogpath_pixel_sums")
-        dr.eval(sums, squares)  # all at once: one loop kernel (read separately, each would re-run the loop)
-        return list(sums), list(squares)
-
-    def render(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
-        """``mi.render``: the per-pixel mean of R,G,B and the AOVs (box filter, or
-        pixel-exact with ``pixel_exact``), a ``TensorXf`` ``(H, W, 3 + len(aov_names()))``.
-        The ``surface.*`` AOVs are per-sample means here;
-        :func:`fogref.gbuffer.moments_to_channels` turns them into the EXR's ratio estimator.
-
-        In passes of at most :data:`fogref.render.passes.MAX_LANES` lanes, as the render
-        driver does (one pass keeps ``seed``; several are seeded with ``pass_seed``):
-        each pass holds every sample's outputs in memory, so one call at 1920x1080 and
-        1024 spp would otherwise need ~425 GB."""
-        sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
-        spp = int(spp) if int(spp) > 0 else sensor.sampler().sample_count()
-        passes = pass_sizes(int(dr.prod(sensor.film().crop_size())), spp, max_lanes(mi.variant()))
-        total = None
-        for k, n in enumerate(passes):
-            sums, _ = self.render_moments(scene, sensor, seed if len(passes) == 1 else pass_seed(seed, k), n,
-                                          squares=False)
-            total = sums if total is None else total + sums
-            dr.eval(total)
-        return mi.TensorXf(total / spp)
 
 
 def register() -> None:

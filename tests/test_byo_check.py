@@ -3,7 +3,10 @@
 import numpy as np
 import pytest
 
-from fogref.compare.check import assert_fog_matches, check, evaluate_model, region_masks, synthetic_truth
+from fogref.compare.candidate import evaluate_model
+from fogref.compare.check import assert_fog_matches, check
+from fogref.compare.regions import region_masks
+from fogref.compare.synthetic import synthetic_truth
 from fogref.errors import FogrefError
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
 

@@ -9,7 +9,8 @@ import pytest
 from truth_factory import write_truth_exr
 
 from fogref.cli import main
-from fogref.compare.check import check, synthetic_truth
+from fogref.compare.check import check
+from fogref.compare.synthetic import synthetic_truth
 from fogref.errors import FogrefError
 from fogref.mapping.build import build_model as build
 from fogref.models import resolve

@@ -7,7 +7,9 @@ its channel correlation are known exactly.
 import numpy as np
 import pytest
 
-from fogref.compare.check import check, evaluate_model, synthetic_truth
+from fogref.compare.candidate import evaluate_model
+from fogref.compare.check import check
+from fogref.compare.synthetic import synthetic_truth
 from fogref.errors import FogrefError
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
 

@@ -4,7 +4,9 @@ import colour
 import numpy as np
 import pytest
 
+from fogref.compare import error_maps as E
 from fogref.compare import metrics as M
+from fogref.compare import perceptual as P
 from fogref.compare.binning import angle_edges, binned_errors, log_distance_edges
 from fogref.compare.tonemap import srgb_oetf, tone_map
 
@@ -43,10 +45,10 @@ def test_identical_images_give_exactly_zero():
     r = _rand(scale=5.0)
     assert M.rmse(r, r) == 0.0
     assert M.relmse(r, r) == 0.0
-    assert np.all(M.delta_e2000_map(r, r) == 0.0)
-    flip, _ = M.flip_map(r, r)
+    assert np.all(P.delta_e2000_map(r, r) == 0.0)
+    flip, _ = P.flip_map(r, r)
     assert flip.shape == r.shape[:2] and np.all(flip == 0.0)
-    s = M.error_maps(r, r).summary()
+    s = E.error_maps(r, r).summary()
     for k in ("rmse", "relmse", "mean_abs_error", "max_abs_error", "delta_e2000_mean", "flip_mean"):
         assert s[k] == 0.0, k
 
@@ -61,42 +63,42 @@ def test_delta_e2000_matches_colour_science_directly():
         return colour.XYZ_to_Lab(colour.RGB_to_XYZ(rgb / white, "sRGB", apply_cctf_decoding=False), d65)
 
     expected = colour.delta_E(lab(ref), lab(test), method="CIE 2000")
-    np.testing.assert_allclose(M.delta_e2000_map(ref, test, white=white), expected, rtol=1e-12)
+    np.testing.assert_allclose(P.delta_e2000_map(ref, test, white=white), expected, rtol=1e-12)
     # white = 1 maps linear (1, 1, 1) to L* = 100
-    assert M.linear_rgb_to_lab(np.ones(3), 1.0)[0] == pytest.approx(100.0, abs=1e-3)
+    assert P.linear_rgb_to_lab(np.ones(3), 1.0)[0] == pytest.approx(100.0, abs=1e-3)
 
 
 def test_delta_e2000_default_white_is_the_reference_p99_luminance():
     r = _rand(seed=1, scale=3.0)
     x = r * 1.2
-    w = M.exposure_white(r)
+    w = P.exposure_white(r)
     y = M.luminance(r).ravel()
     assert w == pytest.approx(np.percentile(y[y > 0], 99))
-    np.testing.assert_allclose(M.delta_e2000_map(r, x), M.delta_e2000_map(r, x, white=w))
+    np.testing.assert_allclose(P.delta_e2000_map(r, x), P.delta_e2000_map(r, x, white=w))
     # exposure-normalised: scaling both images leaves ΔE unchanged
-    np.testing.assert_allclose(M.delta_e2000_map(10 * r, 10 * x), M.delta_e2000_map(r, x), rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(P.delta_e2000_map(10 * r, 10 * x), P.delta_e2000_map(r, x), rtol=1e-9, atol=1e-9)
 
 
 def test_exposure_white_of_black_image_is_one():
-    assert M.exposure_white(np.zeros((4, 4, 3))) == 1.0
-    assert M.exposure_white(-np.ones((4, 4, 3))) == 1.0
+    assert P.exposure_white(np.zeros((4, 4, 3))) == 1.0
+    assert P.exposure_white(-np.ones((4, 4, 3))) == 1.0
 
 
 def test_flip_detects_a_difference_and_stays_in_range():
     r = _rand(seed=2)
-    flip, params = M.flip_map(r, r * 1.5)
+    flip, params = P.flip_map(r, r * 1.5)
     assert 0 < flip.mean() <= 1 and np.all(np.isfinite(flip))
-    assert params["ppd"] == pytest.approx(M.FLIP_PPD, rel=1e-3)
+    assert params["ppd"] == pytest.approx(P.FLIP_PPD, rel=1e-3)
 
 
 def test_flip_black_reference_does_not_abort():
     # flip_evaluator exits the process when the reference has no positive luminance
     z = np.zeros((8, 8, 3))
-    flip, _ = M.flip_map(z, z)
+    flip, _ = P.flip_map(z, z)
     assert np.all(flip == 0)
     t = z.copy()
     t[2:5, 2:5] = 1.0
-    flip, params = M.flip_map(z, t)
+    flip, params = P.flip_map(z, t)
     assert flip.max() > 0 and np.all(np.isfinite(flip))
     assert params["startExposure"] == params["stopExposure"]
 
@@ -106,7 +108,7 @@ def test_bad_model_pixels_are_excluded_and_counted_never_zeroed(bad):
     r = _rand(seed=3)
     x = r.copy()
     x[3, 4, 1] = bad
-    e = M.error_maps(r, x)
+    e = E.error_maps(r, x)
     for name in ("signed", "absolute", "squared", "relative_squared", "delta_e2000", "flip"):
         assert np.all(np.isfinite(getattr(e, name))), (bad, name)
     s = e.summary()
@@ -116,7 +118,7 @@ def test_bad_model_pixels_are_excluded_and_counted_never_zeroed(bad):
     assert s["pixels"] == r.shape[0] * r.shape[1] - (0 if finite else 1)
     assert M.count_nonfinite(x) == (0 if finite else 1)
     if not finite:  # the old code turned NaN into 0 and inf into FLT_MAX and averaged them in
-        clean = M.error_maps(r, np.where(np.isfinite(x), x, r)).summary(e.valid)
+        clean = E.error_maps(r, np.where(np.isfinite(x), x, r)).summary(e.valid)
         assert s["rmse"] == clean["rmse"] == 0.0
 
 
@@ -125,7 +127,7 @@ def test_nonfinite_reference_is_refused(bad):
     r = _rand(seed=3)
     r[5, 6, :] = bad
     with pytest.raises(ValueError, match="non-finite"):
-        M.error_maps(r, _rand(seed=4))
+        E.error_maps(r, _rand(seed=4))
     with pytest.raises(ValueError, match="non-finite"):
         M.rmse(r, _rand(seed=4))
 
@@ -144,7 +146,7 @@ def test_inf_in_model_is_an_error_for_scalar_metrics():
 def test_vectorised_over_leading_axes():
     r, x = _rand((5, 3), seed=4), _rand((5, 3), seed=5)
     assert M.squared_error_map(r, x).shape == (5,)
-    assert M.delta_e2000_map(r, x).shape == (5,)
+    assert P.delta_e2000_map(r, x).shape == (5,)
     r4, x4 = _rand((2, 3, 4, 3), seed=6), _rand((2, 3, 4, 3), seed=7)
     assert M.relative_squared_error_map(r4, x4).shape == (2, 3, 4)
 
@@ -152,7 +154,7 @@ def test_vectorised_over_leading_axes():
 def test_binned_errors_hand_computed():
     r = np.zeros((1, 4, 3))
     x = np.array([[[1.0] * 3, [2.0] * 3, [3.0] * 3, [4.0] * 3]])
-    e = M.error_maps(r, x, white=1.0)
+    e = E.error_maps(r, x, white=1.0)
     d = np.array([[1.0, 2.0, 10.0, 15.0]])
     edges = np.array([1.0, 5.0, 20.0, 100.0])
     b = binned_errors(d, {"p": e}, edges)

@@ -14,6 +14,7 @@ from truth_factory import as_truth, truth_attrs, truth_channels
 
 from fogref.compare import compare
 from fogref.compare import metrics as M
+from fogref.compare.error_maps import error_maps
 from fogref.compare.plots import plot_error_heatmaps
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
@@ -182,7 +183,7 @@ def test_signed_error_map_is_diverging(tmp_path):
     x = r.copy()
     x[:, : W // 2] += 0.2
     x[:, W // 2:] -= 0.2
-    e = M.error_maps(r, x, white=1.0)
+    e = error_maps(r, x, white=1.0)
     assert e.signed.mean(-1)[0, 0] > 0 > e.signed.mean(-1)[0, -1]
     png = plot_error_heatmaps(e, "final", "radiance", tmp_path / "h.png")
     img = mpimg.imread(png)[..., :3]

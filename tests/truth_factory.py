@@ -101,9 +101,11 @@ def write_rgb(path, img):
 
 
 def synthetic_truth_exr(path, model, shape=(36, 64), noise: float = 0.02, seed: int = 7):
-    """:func:`fogref.compare.check.synthetic_truth` of ``model`` written to ``path``; returns the
-    path and the model's exact ``{"T", "inscatter"}`` on it (:func:`~fogref.compare.check.evaluate_model`)."""
-    from fogref.compare.check import evaluate_model, synthetic_truth
+    """:func:`fogref.compare.synthetic.synthetic_truth` of ``model`` written to ``path``; returns the
+    path and the model's exact ``{"T", "inscatter"}`` on it
+    (:func:`~fogref.compare.candidate.evaluate_model`)."""
+    from fogref.compare.candidate import evaluate_model
+    from fogref.compare.synthetic import synthetic_truth
 
     truth = synthetic_truth(model, shape=shape, noise=noise, seed=seed)
     return write_truth_exr(truth, path), evaluate_model(truth, model)

@@ -4,7 +4,7 @@ Each bin reports, over its pixels: ``rmse`` (image units), ``rmse_noise_floor``
 (the RMSE a perfect model would get from the truth's noise, image units),
 ``mean_error`` (signed, image units), ``relmse`` (1), ``delta_e2000_mean`` (1) and
 ``flip_mean`` (0..1), and ``pixels``: how many of its pixels each part used (a
-part's excluded pixels, see :class:`~fogref.compare.metrics.ErrorMaps`, are left
+part's excluded pixels, see :class:`~fogref.compare.error_maps.ErrorMaps`, are left
 out).  Bins empty for every part are dropped; a bin empty for one part holds None
 for it, so no value is ever NaN.
 """
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fogref.compare.metrics import ErrorMaps
+from fogref.compare.error_maps import ErrorMaps
 
 
 def log_distance_edges(distance, n_bins: int = 24) -> np.ndarray:

@@ -347,7 +347,8 @@ def compare_images(truth, images: EngineImages, out_dir=None, tolerances=None, *
 
     Examples
     --------
-    >>> from fogref.compare.check import synthetic_truth, evaluate_model
+    >>> from fogref.compare.candidate import evaluate_model
+    >>> from fogref.compare.synthetic import synthetic_truth
     >>> from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
     >>> model = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
     >>> truth = synthetic_truth(model)

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from fogref.atomic import save_figure_atomic
-from fogref.compare.metrics import ErrorMaps
+from fogref.compare.error_maps import ErrorMaps
 from fogref.compare.tonemap import tone_map
 
 

@@ -60,7 +60,9 @@ from fogref.atomic import write_text_atomic
 from fogref.compare import metrics as M
 from fogref.compare import noise
 from fogref.compare.binning import angle_edges, binned_errors, log_distance_edges
-from fogref.compare.check import candidate_parts, evaluate_model, fog_parts
+from fogref.compare.candidate import candidate_parts, evaluate_model, fog_parts
+from fogref.compare.error_maps import error_maps
+from fogref.compare.perceptual import FLIP_PPD
 from fogref.compare.plots import plot_binned_errors, plot_error_heatmaps, plot_side_by_side
 from fogref.compare.tonemap import exposure_for
 from fogref.errors import FogrefError
@@ -421,7 +423,7 @@ def compare(
     sky_distance: float = DEFAULT_SKY_DISTANCE,
     *,
     relmse_eps: float = M.RELMSE_EPS,
-    flip_ppd: float = M.FLIP_PPD,
+    flip_ppd: float = FLIP_PPD,
     distance_bins: int = 24,
     angle_step_deg: float = 5.0,
     figures: bool = True,
@@ -494,7 +496,7 @@ def compare_images(truth, images, out_dir, *, figures: bool = True, check=None, 
 
 
 def write_report(truth: Truth, parts: dict, out_dir, header: dict, composited: dict, *,
-                 relmse_eps: float = M.RELMSE_EPS, flip_ppd: float = M.FLIP_PPD, distance_bins: int = 24,
+                 relmse_eps: float = M.RELMSE_EPS, flip_ppd: float = FLIP_PPD, distance_bins: int = 24,
                  angle_step_deg: float = 5.0, figures: bool = True, check=None) -> dict:
     """Metrics, maps, figures and pages of ``parts`` (from :func:`evaluate_parts` or :func:`image_parts`).
 
@@ -509,7 +511,7 @@ def write_report(truth: Truth, parts: dict, out_dir, header: dict, composited: d
     out.mkdir(parents=True, exist_ok=True)
 
     errors = {
-        part: M.error_maps(p["reference"], p["model"], white=1.0 if PART_UNITS[part] == "1" else None,
+        part: error_maps(p["reference"], p["model"], white=1.0 if PART_UNITS[part] == "1" else None,
                            eps=relmse_eps, ppd=flip_ppd, noise_cov=p["cov"], valid=p["valid"], spp=truth.spp)
         for part, p in parts.items()
     }

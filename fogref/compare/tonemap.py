@@ -5,14 +5,14 @@ a hard clip to [0, 1] (no highlight roll-off, so that what is shown is linear up
 white and differences are not hidden by a curve), then the IEC 61966-2-1 sRGB
 transfer function.  Reference, model and |error| of one part share one exposure,
 ``1 / white`` where ``white`` is the 99th percentile of the reference's Rec.709
-luminance (:func:`fogref.compare.metrics.exposure_white`); transmittance uses
+luminance (:func:`fogref.compare.perceptual.exposure_white`); transmittance uses
 exposure 1 (T = 1 is white).  The transform itself is :func:`fogref.display.tone_map`,
 the one fogref uses for every picture.
 """
 
 from __future__ import annotations
 
-from fogref.compare.metrics import exposure_white
+from fogref.compare.perceptual import exposure_white
 from fogref.display import srgb_encode as srgb_oetf  # noqa: F401  (the one sRGB transform)
 from fogref.display import tone_map  # noqa: F401  (exposure, clip, sRGB: shared with the render preview)
 

@@ -1,0 +1,228 @@
+"""Every per-pixel error of a part at once (:func:`error_maps`) and its summaries (:class:`ErrorMaps`).
+
+The maps of :mod:`fogref.compare.metrics` and :mod:`fogref.compare.perceptual` for one
+part (e.g. the final image), with the pixels where the comparison is undefined or the
+model is not finite marked invalid, counted and left out of every summary, and the
+noise floors of the truth's Monte Carlo noise.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fogref.compare import noise
+from fogref.compare.metrics import (
+    NOISE_Z,
+    RELMSE_EPS,
+    abs_error_map,
+    check_pair,
+    count_nonfinite,
+    finite_pixels,
+    mean_noise,
+    mse_noise,
+    relative_squared_error_map,
+    squared_error_map,
+)
+from fogref.compare.perceptual import FLIP_PPD, delta_e2000_map, exposure_white, flip_map
+
+
+@dataclass
+class ErrorMaps:
+    """Every per-pixel error of one part (e.g. the final image), shape ``(H, W)`` each.
+
+    ``signed``: ``test - reference`` per channel ``(H, W, 3)`` [image units];
+    ``absolute``: ``mean_c |x - r|`` [image units]; ``squared``: ``mean_c (x - r)²``
+    [units²]; ``relative_squared``: relMSE's per-pixel term [1]; ``delta_e2000`` [1];
+    ``flip`` [0..1].  ``white``: the ΔE exposure white [image units];
+    ``flip_params``: what FLIP used.
+
+    ``valid``: ``(H, W)`` bool, the pixels that count.  An invalid pixel (its
+    reference undefined, e.g. ``surface`` with zero coverage, or a non-finite model
+    value) holds error 0 in every map and is excluded from every summary, which
+    counts it.  ``nonfinite``: ``(H, W)`` bool, the model was not finite there.
+    ``sigma``: ``(H, W, 3)`` standard error of ``signed`` from the reference's noise
+    (0: noise-free).  ``relative_weight``: ``1 / (r² + eps)``, relMSE's weight.
+    ``delta_e2000_noise`` / ``flip_noise``: the maps of a perfect model plus one
+    seeded draw of that noise (the colour metrics' noise floors), or None.
+    ``noise_cov``: ``(H, W, 3, 3)`` covariance of ``signed``'s noise (its diagonal is
+    ``sigma²``), or None (channels then taken as fully correlated); ``spp``: the truth's
+    samples per pixel behind it.
+    """
+
+    signed: np.ndarray
+    absolute: np.ndarray
+    squared: np.ndarray
+    relative_squared: np.ndarray
+    delta_e2000: np.ndarray
+    flip: np.ndarray
+    white: float
+    flip_params: dict
+    valid: np.ndarray | None = None
+    nonfinite: np.ndarray | None = None
+    sigma: np.ndarray | None = None
+    relative_weight: np.ndarray | None = None
+    delta_e2000_noise: np.ndarray | None = None
+    flip_noise: np.ndarray | None = None
+    noise_cov: np.ndarray | None = None
+    spp: int = 0
+
+    def __post_init__(self):
+        shape = self.absolute.shape
+        if self.valid is None:
+            self.valid = np.ones(shape, dtype=bool)
+        if self.nonfinite is None:
+            self.nonfinite = np.zeros(shape, dtype=bool)
+        if self.sigma is None:
+            self.sigma = np.zeros(self.signed.shape)
+
+    def selection(self, mask=None) -> np.ndarray:
+        """``(H, W)`` bool: the valid pixels of ``mask`` (None: all)."""
+        sel = np.ones(self.absolute.shape, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+        return sel & self.valid
+
+    def summary(self, mask=None, z: float = NOISE_Z) -> dict:
+        """Scalar metrics over the valid pixels of ``mask`` (pixel-shaped bool, None = all).
+
+        Keys: ``pixels`` (used), ``excluded_pixels`` (in ``mask`` but invalid),
+        ``model_nonfinite_pixels``; then, when a pixel is used: ``rmse``,
+        ``rmse_stderr`` (half-width of the MSE's ±1 standard error mapped through
+        the square root), ``rmse_noise_floor`` (the RMSE of a perfect model),
+        ``rmse_debiased``, ``rmse_below_noise``; ``relmse`` with the same suffixes;
+        ``mean_error`` (signed, > 0: too bright), ``mean_error_stderr``,
+        ``mean_error_below_noise``; ``mean_abs_error`` and its
+        ``mean_abs_error_noise_floor`` (``sqrt(2/pi) mean sigma``);
+        ``max_abs_error``; ``delta_e2000_mean``, ``delta_e2000_p95``, ``flip_mean``
+        and their ``*_noise_floor`` where noise maps exist.
+        """
+        region = np.ones(self.absolute.shape, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+        sel = region & self.valid
+        n = int(np.count_nonzero(sel))
+        out = {"pixels": n, "excluded_pixels": int(np.count_nonzero(region & ~self.valid)),
+               "model_nonfinite_pixels": int(np.count_nonzero(region & self.nonfinite))}
+        if n == 0:
+            return out
+        for name, weight in (("rmse", None), ("relmse", self.relative_weight)):
+            m = mse_noise(self.signed, self.sigma, sel, weight, z, cov=self.noise_cov, spp=self.spp)
+            value = m["mse"] if name == "relmse" else float(np.sqrt(m["mse"]))
+            if name == "rmse":
+                hi, lo = math.sqrt(m["mse"] + m["stderr"]), math.sqrt(max(m["mse"] - m["stderr"], 0.0))
+                extra = {"rmse_stderr": 0.5 * (hi - lo), "rmse_noise_floor": math.sqrt(m["noise_floor"]),
+                         "rmse_debiased": math.sqrt(m["debiased"])}
+            else:
+                extra = {"relmse_stderr": m["stderr"], "relmse_noise_floor": m["noise_floor"],
+                         "relmse_debiased": m["debiased"]}
+            out.update({name: value, **extra, f"{name}_below_noise": m["below_noise"]})
+        if self.relative_weight is None:  # relMSE without its weight: the map's mean, no noise split
+            out["relmse"] = float(np.mean(self.relative_squared[sel]))
+        me = mean_noise(self.signed, self.sigma, sel, z, cov=self.noise_cov)
+        out.update({
+            "mean_error": me["mean"], "mean_error_stderr": me["stderr"], "mean_error_below_noise": me["below_noise"],
+            "mean_abs_error": float(np.mean(self.absolute[sel])),
+            "mean_abs_error_noise_floor": float(math.sqrt(2.0 / math.pi) * np.mean(self.sigma[sel])),
+            "max_abs_error": float(np.max(self.absolute[sel])),
+            "delta_e2000_mean": float(np.mean(self.delta_e2000[sel])),
+            "delta_e2000_p95": float(np.percentile(self.delta_e2000[sel], 95)),
+            "flip_mean": float(np.mean(self.flip[sel])),
+        })
+        if self.delta_e2000_noise is not None:
+            out["delta_e2000_mean_noise_floor"] = float(np.mean(self.delta_e2000_noise[sel]))
+        if self.flip_noise is not None:
+            out["flip_mean_noise_floor"] = float(np.mean(self.flip_noise[sel]))
+        return out
+
+
+def error_maps(
+    reference, test, *, white: float | None = None, eps: float = RELMSE_EPS, ppd: float = FLIP_PPD,
+    sigma=None, valid=None, noise_seed: int | None = 0, noise_cov=None, spp: int = 0,
+) -> ErrorMaps:
+    """All per-pixel errors of ``test`` against ``reference`` (both ``(H, W, 3)``).
+
+    Parameters
+    ----------
+    reference : array_like, ``(H, W, 3)``
+        Finite linear RGB (ValueError otherwise).
+    test : array_like, ``(H, W, 3)``
+        The model; non-finite pixels are marked invalid and counted, never averaged.
+    white : float, optional
+        ΔE exposure white (default :func:`exposure_white` of the reference; pass 1
+        for transmittance, whose white is T = 1).
+    eps : float
+        relMSE stabiliser (> 0) [image units²].
+    ppd : float
+        FLIP pixels per degree (> 0).
+    sigma : array_like, broadcastable to ``(H, W, 3)``, optional
+        Standard error of ``test - reference`` from the reference's Monte Carlo
+        noise [image units]; default 0 (noise-free).
+    valid : array_like of bool, ``(H, W)``, optional
+        Pixels where the comparison is defined (default all).
+    noise_seed : int or None
+        Seed of the noise draw for the ΔE2000/FLIP noise floors (None: skip them;
+        they are also skipped when ``sigma`` is 0 everywhere, where they are 0).
+    noise_cov : array_like, ``(H, W, 3, 3)``, optional
+        The noise's covariance [image units²]; when given, ``sigma`` is its diagonal's
+        root and the noise draw is correlated as it says.
+    spp : int
+        The truth's samples per pixel (the noise of its estimated variance), 0: exact.
+
+    Returns
+    -------
+    ErrorMaps
+
+    Examples
+    --------
+    >>> r = np.full((2, 2, 3), 0.5)
+    >>> x = r.copy(); x[0, 0] = np.nan
+    >>> e = error_maps(r, x, white=1.0)
+    >>> s = e.summary()
+    >>> s["pixels"], s["excluded_pixels"], s["model_nonfinite_pixels"], s["rmse"]
+    (3, 1, 1, 0.0)
+    """
+    r, x = check_pair(reference, test)
+    if r.ndim != 3:
+        raise ValueError(f"error_maps needs (H, W, 3) images, got shape {r.shape}")
+    if not eps > 0:
+        raise ValueError(f"relMSE eps must be > 0, got {eps}")
+    nonfinite = ~finite_pixels(x)
+    ok = ~nonfinite if valid is None else (np.asarray(valid, dtype=bool) & ~nonfinite)
+    x = np.where(ok[..., None], x, r)  # excluded pixels: error 0 in the maps, left out of every summary
+    C = None if noise_cov is None else np.asarray(noise_cov, dtype=np.float64)
+    if C is not None:
+        C = np.where(ok[..., None, None], C, 0.0)
+        sigma = np.sqrt(np.maximum(noise.diagonal(C), 0.0))
+    s = np.zeros(r.shape) if sigma is None else np.broadcast_to(np.asarray(sigma, dtype=np.float64), r.shape)
+    if count_nonfinite(s) or np.any(s < 0):
+        raise ValueError("sigma must be finite and >= 0")
+    s = np.where(ok[..., None], s, 0.0)
+    if white is None:
+        white = exposure_white(r)
+    flip, flip_params = flip_map(r, x, ppd)
+    de_noise = flip_noise = None
+    if noise_seed is not None and np.any(s > 0):
+        draw = np.random.default_rng(noise_seed).standard_normal(r.shape)
+        if C is None:
+            noisy = r + s * draw
+        else:  # correlated as the noise is
+            noisy = r + np.einsum("...ij,...j->...i", noise.sqrt_psd(C), draw)
+        de_noise = delta_e2000_map(r, noisy, white)
+        flip_noise, _ = flip_map(r, noisy, ppd)
+    return ErrorMaps(
+        signed=x - r,
+        absolute=abs_error_map(r, x),
+        squared=squared_error_map(r, x),
+        relative_squared=relative_squared_error_map(r, x, eps),
+        delta_e2000=delta_e2000_map(r, x, white),
+        flip=flip,
+        white=float(white),
+        flip_params=flip_params,
+        valid=ok,
+        nonfinite=nonfinite,
+        sigma=s,
+        relative_weight=1.0 / (r * r + eps),
+        delta_e2000_noise=de_noise,
+        flip_noise=flip_noise,
+        noise_cov=C,
+        spp=int(spp),
+    )

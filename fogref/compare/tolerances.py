@@ -1,0 +1,87 @@
+"""Tolerances of :func:`fogref.compare.check.check` and the verdict of an interval against one.
+
+**Verdict** for a metric with tolerance ``tol`` (for the signed metrics the
+tolerance bounds ``|bias|``): *pass* when the whole interval lies within the
+tolerance, *fail* when it lies wholly outside, else *inconclusive*: the truth is
+too noisy, or the image too small, to decide at this confidence.  Each of the
+two wrong verdicts happens with probability at most ``(1 - confidence) / 2`` per
+row.  :func:`fogref.compare.check.assert_fog_matches` treats inconclusive as a
+failure unless told otherwise.
+"""
+
+from __future__ import annotations
+
+import math
+
+from fogref.compare.intervals import METRICS, SIGNED
+from fogref.errors import FogrefError, did_you_mean
+
+#: Default tolerances per part: metric -> largest acceptable value (``|value|`` for signed metrics).
+DEFAULT_TOLERANCES: dict = {
+    "T": {"rel_rmse": 0.01, "rel_bias": 0.005},
+    "inscatter": {"rel_rmse": 0.05, "rel_bias": 0.02},
+    "final": {"rel_rmse": 0.05, "rel_bias": 0.02},
+    "composite": {"rel_rmse": 0.05, "rel_bias": 0.02},
+}
+#: The parts a tolerance may name.
+PART_NAMES = ("T", "inscatter", "final", "composite")
+#: The verdicts of a row with a tolerance.
+VERDICTS = ("pass", "fail", "inconclusive")
+
+
+def tolerance_table(tolerances, regions=None) -> dict:
+    """Normalise ``tolerances`` to ``{(part, region|None): {metric: tol}}``.
+
+    ``regions``: the region names that exist (default: any region is accepted).
+    Unknown parts, regions and metrics are FogrefErrors with a did-you-mean.
+
+    >>> tolerance_table({"T/skyy": 0.1}, regions=("all", "surface", "sky"))
+    Traceback (most recent call last):
+    ...
+    fogref.errors.FogrefError: tolerances: unknown region 'skyy' in 'T/skyy'; did you mean 'sky'? ...
+    """
+    table = {(p, None): dict(v) for p, v in DEFAULT_TOLERANCES.items()}
+    for key, value in (tolerances or {}).items():
+        part, _, region = str(key).partition("/")
+        if part not in PART_NAMES:
+            raise FogrefError(f"tolerances: unknown part '{part}' in '{key}'{did_you_mean(part, PART_NAMES)} "
+                              f"(parts: {', '.join(PART_NAMES)}; write 'part' or 'part/region')")
+        if region and regions is not None and region not in regions:
+            raise FogrefError(f"tolerances: unknown region '{region}' in '{key}'{did_you_mean(region, regions)} "
+                              f"(regions: {', '.join(regions)})")
+        spec = value if isinstance(value, dict) else {"rel_rmse": value}
+        clean = {}
+        for metric, tol in spec.items():
+            if metric not in METRICS:
+                raise FogrefError(f"tolerances['{key}']: unknown metric '{metric}'{did_you_mean(metric, METRICS)} "
+                                  f"(metrics: {', '.join(METRICS)})")
+            if tol is not None:
+                try:
+                    tol = float(tol)
+                except (TypeError, ValueError):
+                    raise FogrefError(f"tolerances['{key}']['{metric}']: {tol!r} is not a number "
+                                      "(finite, >= 0; None only reports the metric)") from None
+                if not (math.isfinite(tol) and tol >= 0):
+                    raise FogrefError(f"tolerances['{key}']['{metric}']: {tol} must be finite and >= 0")
+            clean[metric] = tol
+        k = (part, region or None)
+        table[k] = {**table.get(k, {}), **clean} if region else {**table[(part, None)], **clean}
+    return table
+
+
+def metric_verdict(metric: str, low: float, high: float, tol: float | None) -> str:
+    """``pass``, ``fail`` or ``inconclusive`` for the interval ``[low, high]`` of ``metric``
+    against ``tol`` (``|value|`` for the signed metrics); ``reported`` when ``tol`` is None.
+
+    >>> metric_verdict("rel_rmse", 0.01, 0.03, 0.05), metric_verdict("bias", -0.2, 0.1, 0.15)
+    ('pass', 'inconclusive')
+    """
+    if tol is None:
+        return "reported"
+    if metric in SIGNED:
+        if -tol <= low and high <= tol:
+            return "pass"
+        return "fail" if (low > tol or high < -tol) else "inconclusive"
+    if high <= tol:
+        return "pass"
+    return "fail" if low > tol else "inconclusive"
