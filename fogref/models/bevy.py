@@ -35,7 +35,8 @@ is exactly a homogeneous medium, ``sigma_t = density`` [1/m]; Atmospheric with a
 ``extinction`` is exactly a homogeneous medium with coloured extinction.  Bevy's fog
 has no height term: an exponential height profile has no exact counterpart.  Linear
 and ExponentialSquared have none either (:func:`bevy_sigma` gives the nearest medium).
-Robustness (deviations): ``d`` is floored at 1e-30 where the shader divides by it (the
+float64 forms the transmittance as ``(1 - a) + a exp(-x)`` (the same value without the
+cancellation of ``1 - (1 - 1/exp(x))``).  Robustness (deviations): ``d`` is floored at 1e-30 where the shader divides by it (the
 pixel at the camera); ``end == start`` is refused for Linear (the shader divides by 0).
 """
 
@@ -163,22 +164,25 @@ class BevyDistanceFog:
                 scattering = lobe[..., None] * np.asarray(p.light_color, dtype=dt)
                 dl = p.directional_light_color
                 color = color + scattering * np.asarray(dl[:3], dtype=dt) * dt(dl[3])
+            exact = dt is np.float64      # same values, without the cancellation of 1 - (1 - 1/exp(x))
             if p.falloff == "Atmospheric":
-                E = _one_minus_inv_exp(d[..., None] * np.asarray(p.extinction, dtype=dt), dt)
+                xe = d[..., None] * np.asarray(p.extinction, dtype=dt)
                 I = _one_minus_inv_exp(d[..., None] * np.asarray(p.inscattering, dtype=dt), dt)
-                trans = dt(1.0) - E * a
+                trans = (dt(1.0) - a) + a * np.exp(-xe) if exact else dt(1.0) - _one_minus_inv_exp(xe, dt) * a
                 insc = color * I * a
             else:
                 if p.falloff == "Linear":
                     s, e = dt(p.start), dt(p.end)
                     f = dt(1.0) - np.minimum(np.maximum((e - d) / (e - s), dt(0.0)), dt(1.0))
-                elif p.falloff == "Exponential":
-                    f = _one_minus_inv_exp(d * dt(p.density), dt)
+                    t = dt(1.0) - a * f
                 else:
                     x = d * dt(p.density)
-                    f = _one_minus_inv_exp(x * x, dt)
+                    if p.falloff == "ExponentialSquared":
+                        x = x * x
+                    f = _one_minus_inv_exp(x, dt)
+                    t = (dt(1.0) - a) + a * np.exp(-x) if exact else dt(1.0) - a * f
                 f = a * f
-                trans = grey(dt(1.0) - f, dt)
+                trans = grey(t, dt)
                 insc = color * f[..., None]
         return FogResult(inscatter=insc.astype(dt), transmittance=trans.astype(dt))
 
