@@ -34,7 +34,8 @@ def bevy_fog(o, cam, wp, frag):
     if mode == "Atmospheric":
         extinction_factor = f32(1.0) - f32(1.0) / np.exp(distance * np.asarray(o["be"], f32))
         inscattering_factor = f32(1.0) - f32(1.0) / np.exp(distance * np.asarray(o["bi"], f32))
-        return frag * (f32(1.0) - extinction_factor * fog_color[3]) + fog_color[:3] * inscattering_factor * fog_color[3]
+        return (frag * (f32(1.0) - extinction_factor * fog_color[3])
+                + fog_color[:3] * inscattering_factor * fog_color[3])
     be_x = f32(o["be"][0])
     if mode == "Linear":
         start, end = f32(o["be"][0]), f32(o["be"][1])
@@ -78,7 +79,8 @@ def test_exponential_and_atmospheric_are_homogeneous_media():
     L = 10 ** rng.uniform(-3, 3.5, 200)
     o, dd = tuple(np.full(200, c) for c in cam), tuple(d.T)
     for p in (BevyFogParams(falloff="Exponential", density=0.013),
-              BevyFogParams(falloff="Atmospheric", extinction=(0.01, 0.02, 0.03), inscattering=(0.01, 0.02, 0.03))):
+              BevyFogParams(falloff="Atmospheric", extinction=(0.01, 0.02, 0.03),
+                            inscattering=(0.01, 0.02, 0.03))):
         m = bevy_to_medium(p)
         T = BevyDistanceFog(p).evaluate(cam, cam + d * L[:, None], "float64").transmittance
         np.testing.assert_allclose(T, np.stack(m.transmittance(NP, o, dd, L), -1), rtol=1e-12, atol=1e-300)
@@ -88,7 +90,8 @@ def test_exponential_and_atmospheric_are_homogeneous_media():
 def test_mapping_exact_for_coloured_homogeneous_fog_and_lobe():
     sun = np.array([0.3, 0.5, 0.8]); sun /= np.linalg.norm(sun)
     med = FogMedium(sigma_t=(0.002, 0.003, 0.005), albedo=0.8, g=0.6, layers=(ExpLayer(1.0, 0.0, 0.0),))
-    ps = PhysicalScene(med, sun_direction=tuple(sun), sun_irradiance=(3.0, 2.8, 2.5), sky_radiance=(0.2, 0.3, 0.5),
+    ps = PhysicalScene(med, sun_direction=tuple(sun), sun_irradiance=(3.0, 2.8, 2.5),
+                       sky_radiance=(0.2, 0.3, 0.5),
                        camera=(0.0, 2.0, 0.0))
     fog = from_physical("bevy", ps)
     q = fog.params

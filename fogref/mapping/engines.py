@@ -275,7 +275,7 @@ def godot_from_physical(ps: PhysicalScene):
     >>> godot_from_physical(ps).params.fog_density
     0.01
     """
-    from fogref.models.base import SKY_DISTANCE
+    from fogref.models.godot import SUN_SCATTER_EXPONENT, GodotFog, GodotFogParams
     from fogref.models.godot import GodotFog, GodotFogParams, SUN_SCATTER_EXPONENT
 
     ps.require_profile("Godot", ("homogeneous", "exponential", "hdrp", "powerlaw"),
@@ -336,7 +336,8 @@ def bevy_from_physical(ps: PhysicalScene):
         if lobe["exponent"] is not None:
             c = lobe["lobe"] / (4.0 * math.pi)
             dl = ps.albedo * ps.sun_transmittance_at_camera() * c
-            kw.update(directional_light_exponent=float(lobe["exponent"]), light_direction=tuple(float(x) for x in w),
+            kw.update(directional_light_exponent=float(lobe["exponent"]),
+                      light_direction=tuple(float(x) for x in w),
                       light_color=tuple(float(x) for x in ps.sun_irradiance),
                       directional_light_color=(*(float(x) for x in dl), 1.0))
     return BevyDistanceFog(medium_to_bevy(m, **kw))

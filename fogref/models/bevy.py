@@ -36,7 +36,8 @@ is exactly a homogeneous medium, ``sigma_t = density`` [1/m]; Atmospheric with a
 has no height term: an exponential height profile has no exact counterpart.  Linear
 and ExponentialSquared have none either (:func:`bevy_sigma` gives the nearest medium).
 float64 forms the transmittance as ``(1 - a) + a exp(-x)`` (the same value without the
-cancellation of ``1 - (1 - 1/exp(x))``).  Robustness (deviations): ``d`` is floored at 1e-30 where the shader divides by it (the
+cancellation of ``1 - (1 - 1/exp(x))``).  Robustness (deviations): ``d`` is floored at 1e-30
+where the shader divides by it (the
 pixel at the camera); ``end == start`` is refused for Linear (the shader divides by 0).
 """
 

@@ -9,12 +9,13 @@ Source (verified against the repository ``godotengine/godot``):
       fog_color = fog_light_color;
       if (aerial perspective) fog_color = mix(fog_color, sky_fog_color, fog_aerial_perspective);
       if (sun scatter) for each directional light:
-          fog_color += light.color * light.energy * pow(max(dot(normalize(vertex), light.direction), 0.0), 8.0)
-                       * fog_sun_scatter;
+          fog_color += light.color * light.energy
+                       * pow(max(dot(normalize(vertex), light.direction), 0.0), 8.0) * fog_sun_scatter;
       if (depth fog) fog_amount = pow(smoothstep(fog_depth_begin, fog_depth_end, length(vertex)),
                                       fog_depth_curve) * fog_density;
       else           fog_amount = 1 - exp(min(0.0, -length(vertex) * fog_density));
-      if (height fog) fog_amount = max(1.0 - exp(min(0.0, (y - fog_height) * fog_height_density)), fog_amount);
+      if (height fog) fog_amount = max(1.0 - exp(min(0.0, (y - fog_height) * fog_height_density)),
+                                       fog_amount);
 
   (``y``: the world height of the shaded point);
 * ``servers/rendering/renderer_rd/storage_rd/render_scene_data_rd.cpp`` (CPU):
