@@ -275,8 +275,8 @@ def godot_from_physical(ps: PhysicalScene):
     >>> godot_from_physical(ps).params.fog_density
     0.01
     """
+    from fogref.models.base import SKY_DISTANCE
     from fogref.models.godot import SUN_SCATTER_EXPONENT, GodotFog, GodotFogParams
-    from fogref.models.godot import GodotFog, GodotFogParams, SUN_SCATTER_EXPONENT
 
     ps.require_profile("Godot", ("homogeneous", "exponential", "hdrp", "powerlaw"),
                        "Godot's environment fog fills all space (no bounds)")
