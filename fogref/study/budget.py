@@ -286,8 +286,10 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
              + (f"; noise floor {t['rmse_noise_floor']:.2g} from the truth's stderr, "
                 f"{'**below the noise**' if t['below_noise'] else 'above the noise'}" if "rmse_noise_floor" in t
                 else "") + ").",
-             "",
-             f"Pixels: {result.get('pixels', '?')} used, {result.get('excluded_pixels', 0)} excluded (the truth's "
+             ""]
+    if result.get("shapley"):
+        lines += [shapley_markdown(result["shapley"]), "", "## Telescoping chain (second view)", ""]
+    lines += [f"Pixels: {result.get('pixels', '?')} used, {result.get('excluded_pixels', 0)} excluded (the truth's "
              "unattenuated surface is undefined there: no sample reached it, so no model can be composited on it).",
              "",
              "Each row switches one effect, going from the truth to Unreal; Δ_k = S_k − S_{k−1}. "
@@ -341,7 +343,8 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
 
 
 def plot(result: dict, path) -> None:
-    """Bar chart: each step's RMSE (with noise bars) and its share of the total."""
+    """Bar charts: the Shapley shares first (with their noise, when ``result["shapley"]``), then
+    each chain step's RMSE (with noise bars) and its chain share of the total."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -355,7 +358,22 @@ def plot(result: dict, path) -> None:
     err = [s["noise"]["pixel_rms"] if s.get("noise") and s["key"] in RENDERED else 0.0 for s in steps]
     share = [100 * s["share"] for s in steps]
     y = np.arange(len(steps))[::-1]
-    fig, ax = plt.subplots(1, 2, figsize=(14, 4.6), sharey=True)
+    sh = result.get("shapley")
+    if sh:
+        by = {r["key"]: r for r in sh["effects"]}
+        fig, ax3 = plt.subplots(1, 3, figsize=(20, 4.6), sharey=True)
+        a0, ax = ax3[0], ax3[1:]
+        sv = [100 * by[s["key"]]["share"] if s["key"] in by else 0.0 for s in steps]
+        se = [100 * by[s["key"]]["share_noise"] if s["key"] in by else 0.0 for s in steps]
+        a0.barh(y, sv, xerr=se, capsize=3, color=["#c0504d" if v > 0 else "#9bbb59" for v in sv])
+        a0.axvline(0, color="k", lw=0.8)
+        a0.set_yticks(y, labels)
+        a0.set_xlabel("Shapley share of the squared error [%]\nall coalitions, order-free; bars: bootstrap noise")
+        for yy, v in zip(y, sv):
+            a0.text(v, yy, f" {v:+.1f}%", va="center", ha="left" if v >= 0 else "right", fontsize=8)
+        a0.grid(axis="x", alpha=0.3)
+    else:
+        fig, ax = plt.subplots(1, 2, figsize=(14, 4.6), sharey=True)
     ax[0].barh(y, rm, xerr=err, color="#4a78b0", capsize=3)
     ax[0].axvline(result["total"]["rmse"]["all"], color="k", ls="--", lw=1, label="total model − truth")
     ax[0].set_yticks(y, labels)
@@ -363,7 +381,7 @@ def plot(result: dict, path) -> None:
     ax[0].legend(loc="lower right", fontsize=8)
     ax[1].barh(y, share, color=["#c0504d" if v > 0 else "#9bbb59" for v in share])
     ax[1].axvline(0, color="k", lw=0.8)
-    ax[1].set_xlabel("share of the total squared error [%]\n⟨Δ_k, E⟩/⟨E, E⟩, sums to 100")
+    ax[1].set_xlabel("chain share of the total squared error [%]\n⟨Δ_k, E⟩/⟨E, E⟩, sums to 100")
     for yy, v in zip(y, share):
         ax[1].text(v, yy, f" {v:+.1f}%", va="center", ha="left" if v >= 0 else "right", fontsize=8)
     for a in ax:
@@ -372,3 +390,270 @@ def plot(result: dict, path) -> None:
     fig.tight_layout()
     save_figure(fig, path)
     plt.close(fig)
+
+
+# ------------------------------------------------------------------------------------------
+# Shapley budget: order-independent shares over the same effects
+# ------------------------------------------------------------------------------------------
+
+#: The Shapley budget's players: the chain's effects (:data:`STEPS` keys, same order).
+EFFECTS: tuple[str, ...] = tuple(s[0] for s in STEPS)
+#: Effects that select the engine's configuration (refit, start distances, opacity/cutoff, float32).
+_CONFIG = ("refit", "start_distance", "opacity_cutoff", "float32")
+#: Side of the square pixel blocks of the bootstrap [pixels].
+BOOTSTRAP_BLOCK = 16
+#: Bootstrap resamples of the Shapley shares' noise.
+BOOTSTRAP_RESAMPLES = 400
+
+
+def shapley_weights(n: int) -> np.ndarray:
+    """The ``(n, 2^n)`` matrix ``W`` with ``phi = W @ v`` for a game ``v`` over bitmask coalitions.
+
+    ``v[mask]`` is the value of the coalition whose players are the set bits of ``mask``
+    (player ``i`` = bit ``i``); ``phi_i = sum_{S not containing i} |S|! (n - |S| - 1)! / n!
+    (v(S + i) - v(S))`` (Shapley 1953).  Rows sum to 0; columns of the full and empty
+    coalitions make ``sum_i phi_i = v(all) - v(empty)`` (efficiency).
+
+    Examples
+    --------
+    >>> shapley_weights(2)
+    array([[-0.5,  0.5, -0.5,  0.5],
+           [-0.5, -0.5,  0.5,  0.5]])
+    """
+    if not 1 <= n <= 16:
+        raise ValueError(f"shapley_weights: n = {n} players outside [1, 16]")
+    size = np.array([bin(m).count("1") for m in range(1 << n)])
+    wt = np.array([math.factorial(s) * math.factorial(n - s - 1) / math.factorial(n) for s in range(n)])
+    W = np.zeros((n, 1 << n))
+    for i in range(n):
+        bit = 1 << i
+        for m in range(1 << n):
+            if m & bit:
+                continue
+            w = wt[size[m]]
+            W[i, m | bit] += w
+            W[i, m] -= w
+    return W
+
+
+def shapley_values(value, players) -> dict:
+    """Exact Shapley values of the game ``value`` over all ``2^k`` coalitions of ``players``.
+
+    Parameters
+    ----------
+    value : callable
+        ``value(frozenset of players) -> float or ndarray`` (arrays: one game per element,
+        e.g. per pixel block); called once per coalition.
+    players : sequence of hashable
+        The k players (k <= 16).
+
+    Returns
+    -------
+    dict
+        player -> Shapley value (float or ndarray); the values sum to ``value(all) -
+        value(empty)`` and do not depend on the order of ``players``.
+
+    Examples
+    --------
+    >>> v = lambda c: float(len(c) ** 2)            # symmetric players share equally
+    >>> shapley_values(v, ["a", "b", "c"])
+    {'a': 3.0, 'b': 3.0, 'c': 3.0}
+    """
+    players = list(players)
+    n = len(players)
+    V = np.stack([np.asarray(value(frozenset(p for i, p in enumerate(players) if m >> i & 1)), dtype=np.float64)
+                  for m in range(1 << n)])
+    phi = np.tensordot(shapley_weights(n), V, axes=1)
+    return {p: (float(phi[i]) if phi[i].ndim == 0 else phi[i]) for i, p in enumerate(players)}
+
+
+def _config_params(lobe_params: UE4FogParams, model_params: UE4FogParams, refit: bool, start: bool,
+                   opacity: bool) -> UE4FogParams:
+    from dataclasses import replace
+
+    p = model_params if refit else lobe_params
+    return replace(p,
+                   DirectionalInscatteringStartDistance=model_params.DirectionalInscatteringStartDistance if start
+                   else 0.0,
+                   StartDistance=model_params.StartDistance if start else 0.0,
+                   FogMaxOpacity=model_params.FogMaxOpacity if opacity else 1.0,
+                   FogCutoffDistance=model_params.FogCutoffDistance if opacity else 0.0)
+
+
+def unreal_engine(lobe_params: UE4FogParams, model_params: UE4FogParams):
+    """The engine side of the Shapley game for Unreal: ``engine(truth, config, sky_distance)``.
+
+    ``config``: a dict of the :data:`_CONFIG` effects (True = the engine's setting):
+    ``refit`` (the study's colours/exponent instead of the lobe-only fit), ``start_distance``
+    (its StartDistance and DirectionalInscatteringStartDistance, else 0), ``opacity_cutoff``
+    (its FogMaxOpacity and FogCutoffDistance, else 1 and 0), ``float32`` (the shader's
+    arithmetic, else float64).  Returns ``(T, L_sun, L_sky)``, each (H, W, 3): the
+    transmittance, the directional (sun) inscatter and the rest (``L_sky``: the model with
+    DirectionalInscatteringColor 0).  Another engine plugs in with the same signature.
+    """
+    from dataclasses import replace
+
+    def engine(truth: Truth, config: dict, sky_distance: float):
+        p = _config_params(lobe_params, model_params, config["refit"], config["start_distance"],
+                           config["opacity_cutoff"])
+        prec = "float32" if config["float32"] else "float64"
+        T, L = _unreal(p, truth, prec, sky_distance)
+        _, L_sky = _unreal(replace(p, DirectionalInscatteringColor=(0.0, 0.0, 0.0)), truth, prec, sky_distance)
+        return T, L - L_sky, L_sky
+
+    return engine
+
+
+def shapley_parts(truth: Truth, sky_single: np.ndarray, pf, engine, sky_distance: float = 1.0e5) -> dict:
+    """Everything :func:`coalition_image` needs, computed once (the cache of the 2^k coalitions).
+
+    The renders (the truth and ``sky_single``, the sun-less render's ``single``), the closed
+    forms of :func:`closed_forms`, and the engine's ``(T, L_sun, L_sky)`` for each of the
+    2^4 configurations of :data:`_CONFIG` (``engine``: e.g. :func:`unreal_engine`).
+    """
+    import itertools
+
+    cf = closed_forms(truth, pf)
+    eng = {}
+    for bits in itertools.product((False, True), repeat=len(_CONFIG)):
+        eng[bits] = engine(truth, dict(zip(_CONFIG, bits)), sky_distance)
+    return {"final": truth.final, "att": truth.attenuated_surface, "surface": truth.surface,
+            "multiple": truth.final - truth.attenuated_surface - truth.single,
+            "sun_render": truth.single - sky_single, "sky_render": sky_single,
+            "sun_att": cf["sun_att"], "sun_noatt": cf["sun_noatt"], "sky_cf": cf["sky"], "engine": eng}
+
+
+def coalition_image(parts: dict, coalition) -> np.ndarray:
+    """The image (H, W, 3) with the effects in ``coalition`` switched to the engine's side.
+
+    ``final = surface part + sun inscatter + sky inscatter + multiple`` where
+
+    * multiple [d]: the truth's ``final - attenuated_surface - single`` unless "multiple" is
+      in the coalition (then 0);
+    * sun: if "lobe" [a] is in: the engine's directional inscatter; else the rendered sun
+      single scattering (``single - sky_single``), or with "shadows" [e] the closed form,
+      attenuated unless "sun_attenuation" [b] is in;
+    * sky: if "lobe": the engine's other inscatter; else the rendered ``sky_single``, or with
+      "sky" [c] the closed form ``alpha L_sky (1 - T)``;
+    * surface: the truth's ``attenuated_surface`` (with "lobe": ``surface T_engine`` of the
+      plain configuration), plus ``surface (T_engine(config) - T_engine(plain))`` for the
+      configuration effects (start distances, opacity/cutoff, float32);
+    * the configuration (refit, start distances, opacity/cutoff, float32) selects the
+      engine's images.
+
+    The empty coalition is the truth and the full one the engine's image
+    ``surface T + L``, exactly, so the Shapley values of the squared error sum to it.
+    Effects act where the physics lets them: shadows/sun attenuation matter only while the
+    sun is physical (the lobe is out), the refit only once it is in; Shapley splits such
+    interactions equally between the effects involved.
+    """
+    C = set(coalition)
+    cfg = tuple(k in C for k in _CONFIG)
+    T, L_sun, L_sky = parts["engine"][cfg]
+    T0 = parts["engine"][(False,) * len(_CONFIG)][0]
+    surf = parts["surface"] * T0 if "lobe" in C else parts["att"]
+    if any(cfg[1:]):
+        surf = surf + parts["surface"] * (T - T0)
+    if "lobe" in C:
+        sun, sky = L_sun, L_sky
+    else:
+        if "shadows" in C:
+            sun = parts["sun_noatt"] if "sun_attenuation" in C else parts["sun_att"]
+        else:
+            sun = parts["sun_render"]
+        sky = parts["sky_cf"] if "sky" in C else parts["sky_render"]
+    img = surf + sun + sky
+    return img if "multiple" in C else img + parts["multiple"]
+
+
+def _block_ids(shape: tuple, block: int) -> np.ndarray:
+    h, w = shape
+    by, bx = np.arange(h)[:, None] // block, np.arange(w)[None, :] // block
+    return by * ((w + block - 1) // block) + bx
+
+
+def shapley_budget(parts: dict, valid: np.ndarray, effects=EFFECTS, block: int = BOOTSTRAP_BLOCK,
+                   resamples: int = BOOTSTRAP_RESAMPLES, seed: int = 0) -> dict:
+    """Shapley shares of the squared error ``sum |S(all) - S(empty)|^2`` over ``valid`` pixels.
+
+    The game: ``e(C) = sum over valid pixels and channels of |coalition_image(C) - truth|^2``
+    (0 for the empty coalition, the model's squared error for the full one).  Each effect's
+    Shapley value ``phi_k`` is its share of the squared error, ``share_k = phi_k / e(all)``
+    (the shares sum to 1 exactly; no effect's place in an order matters).
+
+    Noise: ``e(C)`` is a sum over pixel blocks (``block`` x ``block``), so the shares are
+    re-computed on ``resamples`` bootstrap resamples of the blocks (seeded ``seed``) and
+    each share gets their standard deviation, ``share_noise`` (Monte Carlo noise and the
+    spread over the image together; Efron & Tibshirani 1993, the block bootstrap).
+
+    Returns ``{"effects": [{key, effect, label, phi, share, share_noise}, ...] (in
+    :data:`STEPS` order), "total_sq": e(all), "share_sum", "largest": key, "block",
+    "resamples", "coalitions": 2^k}``.
+    """
+    effects = list(effects)
+    valid = np.asarray(valid, dtype=bool)
+    ids = _block_ids(valid.shape, block)[valid]
+    nb = int(ids.max()) + 1 if ids.size else 1
+    truth = parts["final"]
+
+    def per_block(C):
+        d = coalition_image(parts, C) - truth
+        e = np.sum(d[valid] ** 2, axis=-1)
+        return np.bincount(ids, weights=e, minlength=nb)
+
+    phi_blocks = shapley_values(per_block, effects)                    # key -> (nb,)
+    P = np.stack([phi_blocks[k] for k in effects])                     # (k, nb)
+    phi = P.sum(1)
+    total = float(phi.sum())
+    rng = np.random.default_rng(seed)
+    shares_b = []
+    for _ in range(resamples):
+        idx = rng.integers(0, nb, nb)
+        pb = P[:, idx].sum(1)
+        tb = pb.sum()
+        if tb > 0:
+            shares_b.append(pb / tb)
+    noise = np.std(np.array(shares_b), axis=0) if shares_b else np.zeros(len(effects))
+    meta = {s[0]: s for s in STEPS}
+    rows = []
+    for i, k in enumerate(effects):
+        _, letter, label = meta.get(k, (k, "?", k))
+        rows.append({"key": k, "effect": letter, "label": label, "phi": float(phi[i]),
+                     "share": float(phi[i] / total) if total > 0 else 0.0, "share_noise": float(noise[i])})
+    largest = max(rows, key=lambda r: r["share"])["key"] if rows else None
+    return {"effects": rows, "total_sq": total, "share_sum": float(sum(r["share"] for r in rows)),
+            "largest": largest, "block": block, "resamples": resamples, "coalitions": 1 << len(effects),
+            "pixels": int(valid.sum())}
+
+
+def add_shapley_seed_noise(result: dict, other: dict) -> dict:
+    """Add ``share_noise_seeds = |share(seed a) - share(seed b)| / sqrt(2)`` from a second
+    Shapley budget (other renders), and keep the other seed's share."""
+    by = {r["key"]: r for r in other["effects"]}
+    for r in result["effects"]:
+        o = by[r["key"]]
+        r["share_other_seed"] = o["share"]
+        r["share_noise_seeds"] = abs(r["share"] - o["share"]) / math.sqrt(2.0)
+    return result
+
+
+def shapley_markdown(sh: dict) -> str:
+    """The Shapley table as Markdown (largest share first)."""
+    rows = sorted(sh["effects"], key=lambda r: -r["share"])
+    top = next(r for r in rows if r["key"] == sh["largest"])
+    lines = ["## Shapley budget (order-independent)", "",
+             f"Largest term: **[{top['effect']}] {top['label']}**, {100 * top['share']:.1f} % "
+             f"± {100 * top['share_noise']:.1f} % of the squared error.", "",
+             f"Each effect's share is its Shapley value in the game 'squared error of the image with these "
+             f"effects switched to the engine's side', over all {sh['coalitions']} coalitions of the "
+             f"{len(rows)} effects, divided by the total: the shares sum to 100 % "
+             f"({100 * sh['share_sum']:.6f} %) and no order of the effects is privileged. "
+             f"*Noise*: block bootstrap ({sh['block']}×{sh['block']}-pixel blocks, {sh['resamples']} resamples)"
+             + ("; *seeds*: |share(seed a) − share(seed b)|/√2 from a second render." if "share_noise_seeds"
+                in rows[0] else "."), "",
+             "| effect | Shapley share of E² | noise (bootstrap) | noise (seeds) |", "|---|---|---|---|"]
+    for r in rows:
+        ns = f"±{100 * r['share_noise_seeds']:.2g} %" if "share_noise_seeds" in r else "—"
+        lines.append(f"| [{r['effect']}] {r['label']} | {100 * r['share']:+.1f} % | "
+                     f"±{100 * r['share_noise']:.2g} % | {ns} |")
+    return "\n".join(lines)
