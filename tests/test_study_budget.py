@@ -184,7 +184,8 @@ def _shapley_setup(rel_stderr=0.0):
     px, sky = _pixels(pf, rel_stderr=rel_stderr)
     lobe = base_params(pf, DirectionalInscatteringColor=(1, 1, 1), DirectionalInscatteringExponent=5.0)
     model = base_params(pf, DirectionalInscatteringColor=(1.4, 1.3, 1.1), DirectionalInscatteringExponent=14.0,
-                        DirectionalInscatteringStartDistance=3000.0, FogMaxOpacity=0.95, FogCutoffDistance=150000.0)
+                        DirectionalInscatteringStartDistance=3000.0, FogMaxOpacity=0.95,
+                        FogCutoffDistance=150000.0)
     parts = B.shapley_parts(px, sky, pf, B.unreal_engine(lobe, model))
     return pf, px, sky, lobe, model, parts
 
@@ -222,8 +223,8 @@ def test_shapley_budget_two_independent_effects_known_answer():
     T0 = np.full((h, w, 3), 0.6)
     engine = {k: (T0 + dT * k[B._CONFIG.index("float32")], parts["sun_render"], parts["sky_render"])
               for k in parts["engine"]}
-    p = dict(parts, att=px.surface * T0, multiple=mult, sun_att=parts["sun_render"], sun_noatt=parts["sun_render"],
-             sky_cf=parts["sky_render"], engine=engine)
+    p = dict(parts, att=px.surface * T0, multiple=mult, sun_att=parts["sun_render"],
+             sun_noatt=parts["sun_render"], sky_cf=parts["sky_render"], engine=engine)
     p["final"] = p["att"] + parts["sun_render"] + parts["sky_render"] + mult
     valid = np.ones((h, w), bool)
     sh = B.shapley_budget(p, valid, resamples=20)

@@ -289,7 +289,8 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
              ""]
     if result.get("shapley"):
         lines += [shapley_markdown(result["shapley"]), "", "## Telescoping chain (second view)", ""]
-    lines += [f"Pixels: {result.get('pixels', '?')} used, {result.get('excluded_pixels', 0)} excluded (the truth's "
+    lines += [f"Pixels: {result.get('pixels', '?')} used, {result.get('excluded_pixels', 0)} excluded "
+              "(the truth's "
              "unattenuated surface is undefined there: no sample reached it, so no model can be composited on it).",
              "",
              "Each row switches one effect, going from the truth to Unreal; Δ_k = S_k − S_{k−1}. "
@@ -368,7 +369,8 @@ def plot(result: dict, path) -> None:
         a0.barh(y, sv, xerr=se, capsize=3, color=["#c0504d" if v > 0 else "#9bbb59" for v in sv])
         a0.axvline(0, color="k", lw=0.8)
         a0.set_yticks(y, labels)
-        a0.set_xlabel("Shapley share of the squared error [%]\nall coalitions, order-free; bars: bootstrap noise")
+        a0.set_xlabel("Shapley share of the squared error [%]\n"
+                      "all coalitions, order-free; bars: bootstrap noise")
         for yy, v in zip(y, sv):
             a0.text(v, yy, f" {v:+.1f}%", va="center", ha="left" if v >= 0 else "right", fontsize=8)
         a0.grid(axis="x", alpha=0.3)
@@ -461,8 +463,8 @@ def shapley_values(value, players) -> dict:
     """
     players = list(players)
     n = len(players)
-    V = np.stack([np.asarray(value(frozenset(p for i, p in enumerate(players) if m >> i & 1)), dtype=np.float64)
-                  for m in range(1 << n)])
+    coalitions = (frozenset(p for i, p in enumerate(players) if m >> i & 1) for m in range(1 << n))
+    V = np.stack([np.asarray(value(c), dtype=np.float64) for c in coalitions])
     phi = np.tensordot(shapley_weights(n), V, axes=1)
     return {p: (float(phi[i]) if phi[i].ndim == 0 else phi[i]) for i, p in enumerate(players)}
 
@@ -472,10 +474,10 @@ def _config_params(lobe_params: UE4FogParams, model_params: UE4FogParams, refit:
     from dataclasses import replace
 
     p = model_params if refit else lobe_params
+    m = model_params
     return replace(p,
-                   DirectionalInscatteringStartDistance=model_params.DirectionalInscatteringStartDistance if start
-                   else 0.0,
-                   StartDistance=model_params.StartDistance if start else 0.0,
+                   DirectionalInscatteringStartDistance=m.DirectionalInscatteringStartDistance if start else 0.0,
+                   StartDistance=m.StartDistance if start else 0.0,
                    FogMaxOpacity=model_params.FogMaxOpacity if opacity else 1.0,
                    FogCutoffDistance=model_params.FogCutoffDistance if opacity else 0.0)
 
@@ -498,7 +500,8 @@ def unreal_engine(lobe_params: UE4FogParams, model_params: UE4FogParams):
                            config["opacity_cutoff"])
         prec = "float32" if config["float32"] else "float64"
         T, L = _unreal(p, truth, prec, sky_distance)
-        _, L_sky = _unreal(replace(p, DirectionalInscatteringColor=(0.0, 0.0, 0.0)), truth, prec, sky_distance)
+        no_sun = replace(p, DirectionalInscatteringColor=(0.0, 0.0, 0.0))
+        _, L_sky = _unreal(no_sun, truth, prec, sky_distance)
         return T, L - L_sky, L_sky
 
     return engine
@@ -648,7 +651,8 @@ def shapley_markdown(sh: dict) -> str:
              f"effects switched to the engine's side', over all {sh['coalitions']} coalitions of the "
              f"{len(rows)} effects, divided by the total: the shares sum to 100 % "
              f"({100 * sh['share_sum']:.6f} %) and no order of the effects is privileged. "
-             f"*Noise*: block bootstrap ({sh['block']}×{sh['block']}-pixel blocks, {sh['resamples']} resamples)"
+             f"*Noise*: block bootstrap ({sh['block']}×{sh['block']}-pixel blocks, "
+             f"{sh['resamples']} resamples)"
              + ("; *seeds*: |share(seed a) − share(seed b)|/√2 from a second render." if "share_noise_seeds"
                 in rows[0] else "."), "",
              "| effect | Shapley share of E² | noise (bootstrap) | noise (seeds) |", "|---|---|---|---|"]

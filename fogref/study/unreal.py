@@ -334,8 +334,8 @@ def readme(summary: dict, res: dict) -> str:
         rows = sorted(sh["effects"], key=lambda r: -r["share"])
         st = rows[0]
         lines.append(f"- Largest Shapley term: **[{st['effect']}] {st['label']}**, {100 * st['share']:.1f} % "
-                     f"± {100 * st['share_noise']:.1f} % of the squared error (order-independent: its Shapley "
-                     f"value over all {sh['coalitions']} coalitions of the effects).")
+                     f"± {100 * st['share_noise']:.1f} % of the squared error (order-independent: "
+                     f"its Shapley value over all {sh['coalitions']} coalitions of the effects).")
         lines.append("- Shapley budget, by share of the squared error: " + "; ".join(
             f"[{r['effect']}] {r['label']} {100 * r['share']:+.1f} %" for r in rows) + ".")
     lines.append(f"- Largest term of the telescoping chain (second view, depends on the chain's order): "
@@ -365,8 +365,8 @@ def readme(summary: dict, res: dict) -> str:
               "## Reading the budget", "",
               "The Shapley shares do not depend on any order: each effect's share is its average "
               "contribution to the squared error over every order in which the effects could be switched "
-              "from the truth to the engine (all coalitions, closed forms and renders cached).  The chain below "
-              "is the second view.  ",
+              "from the truth to the engine (all coalitions, closed forms and renders cached).  "
+              "The chain below is the second view.  ",
               "The steps telescope exactly: truth → no multiple scattering → closed-form sun without shadows → "
               "closed-form sky without ground occlusion/attenuation → no sun attenuation → Unreal's cosine lobe "
               "(colours fitted without attenuation) → colours re-fitted with attenuation → start distances → "
