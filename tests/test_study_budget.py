@@ -21,8 +21,9 @@ def _pixels(pf, h=12, w=20, seed=0, rel_stderr=0.0):
     D = np.where(hit, rng.uniform(5, 3000, (h, w)), 0.0)
     z3 = np.zeros((h, w, 3))
     px = Truth(path="<synthetic>", final=z3, transmittance=z3, attenuated_surface=z3, inscatter=z3, single=z3,
-               multiple=z3, surface=rng.uniform(0, 0.5, (h, w, 3)), stderr={}, surface_coverage=np.ones((h, w)),
-               distance=D, position=cam + v * D[..., None], view=v, hit_fraction=hit.astype(float), camera=cam,
+               multiple=z3, surface=rng.uniform(0, 0.5, (h, w, 3)), stderr={},
+               surface_coverage=np.ones((h, w)), distance=D, position=cam + v * D[..., None], view=v,
+               hit_fraction=hit.astype(float), camera=cam,
                sun_direction=np.asarray(pf.sun_direction), params={})
     cf = B.closed_forms(px, pf)
     px.transmittance = cf["T"]
@@ -33,7 +34,8 @@ def _pixels(pf, h=12, w=20, seed=0, rel_stderr=0.0):
     px.inscatter = px.single + px.multiple
     px.final = px.attenuated_surface + px.inscatter
     px.stderr = {k: rel_stderr * np.abs(getattr(px, k)) for k in
-                 ("final", "transmittance", "attenuated_surface", "inscatter", "single", "multiple", "surface")}
+                 ("final", "transmittance", "attenuated_surface", "inscatter", "single", "multiple",
+                  "surface")}
     return px, sky_single
 
 
@@ -46,8 +48,9 @@ def test_budget_telescopes_exactly():
     pf = _pf()
     px, sky = _pixels(pf)
     lobe = base_params(pf, DirectionalInscatteringColor=(1, 1, 1), DirectionalInscatteringExponent=5.0)
-    model = base_params(pf, DirectionalInscatteringColor=(1.4, 1.3, 1.1), DirectionalInscatteringExponent=14.0,
-                        DirectionalInscatteringStartDistance=3000.0, FogMaxOpacity=0.95, FogCutoffDistance=150000.0)
+    model = base_params(pf, DirectionalInscatteringColor=(1.4, 1.3, 1.1),
+                        DirectionalInscatteringExponent=14.0, DirectionalInscatteringStartDistance=3000.0,
+                        FogMaxOpacity=0.95, FogCutoffDistance=150000.0)
     S = B.chain(px, sky, pf, lobe, model)
     assert len(S) == len(B.STEPS) + 1
     r = B.attribute(S, px.hit)
@@ -129,7 +132,8 @@ def test_every_step_carries_its_noise_from_the_stderr_channels():
     noise = B.chain_noise(px, 0.02 * sky, model, model)
     r = B.attribute(S, px.hit, px.surface_valid, noise)
     by = {s["key"]: s for s in r["steps"]}
-    np.testing.assert_allclose(by["multiple"]["rmse_noise_floor"], np.sqrt(np.mean(px.stderr["multiple"] ** 2)))
+    np.testing.assert_allclose(by["multiple"]["rmse_noise_floor"],
+                               np.sqrt(np.mean(px.stderr["multiple"] ** 2)))
     assert by["sun_attenuation"]["rmse_noise_floor"] == 0.0  # closed forms only
     for s in r["steps"]:
         assert {"rmse_noise_floor", "rmse_stderr", "below_noise"} <= set(s), s["key"]
@@ -183,9 +187,9 @@ def _shapley_setup(rel_stderr=0.0):
     pf = _pf()
     px, sky = _pixels(pf, rel_stderr=rel_stderr)
     lobe = base_params(pf, DirectionalInscatteringColor=(1, 1, 1), DirectionalInscatteringExponent=5.0)
-    model = base_params(pf, DirectionalInscatteringColor=(1.4, 1.3, 1.1), DirectionalInscatteringExponent=14.0,
-                        DirectionalInscatteringStartDistance=3000.0, FogMaxOpacity=0.95,
-                        FogCutoffDistance=150000.0)
+    model = base_params(pf, DirectionalInscatteringColor=(1.4, 1.3, 1.1),
+                        DirectionalInscatteringExponent=14.0, DirectionalInscatteringStartDistance=3000.0,
+                        FogMaxOpacity=0.95, FogCutoffDistance=150000.0)
     parts = B.shapley_parts(px, sky, pf, B.unreal_engine(lobe, model))
     return pf, px, sky, lobe, model, parts
 

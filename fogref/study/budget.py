@@ -170,7 +170,8 @@ def _noise_fields(d: np.ndarray, sigma: np.ndarray, mask: np.ndarray) -> dict:
             "rmse_debiased": float(np.sqrt(m["debiased"])), "below_noise": m["below_noise"]}
 
 
-def attribute(S: list[np.ndarray], hit: np.ndarray, valid: np.ndarray | None = None, noise: dict | None = None) -> dict:
+def attribute(S: list[np.ndarray], hit: np.ndarray, valid: np.ndarray | None = None,
+              noise: dict | None = None) -> dict:
     """Per-step statistics of a chain over the ``valid`` pixels (default all).
 
     ``noise``: :func:`chain_noise`'s per-pixel standard errors; with it every RMSE
@@ -245,7 +246,8 @@ def footprint_check(truth: Truth, pf, S: list[np.ndarray], step: str = "shadows"
             "max_T_difference": float(np.abs(cf["T"] - truth.transmittance).max())}
 
 
-def what_if(truth: Truth, model_params: UE4FogParams, variants: dict, sky_distance: float = 1.0e5) -> list[dict]:
+def what_if(truth: Truth, model_params: UE4FogParams, variants: dict,
+            sky_distance: float = 1.0e5) -> list[dict]:
     """RMSE against the truth of the model with some fields changed (``variants``:
     name -> dict of UE4FogParams fields), float32; and the change vs the model.
 
@@ -281,24 +283,27 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
     t = result["total"]
     lines = [f"# {title}", "",
              f"Total error of the Unreal model (float32, as compared) against the path-traced truth: "
-             f"**RMSE {t['rmse']['all']:.4g}** (surface pixels {t['rmse']['surface']:.4g}, sky {t['rmse']['sky']:.4g}; "
-             f"truth RMS {t['truth_rms']:.4g}; Monte Carlo noise of the total ±{t.get('noise_rmse', float('nan')):.2g}"
+             f"**RMSE {t['rmse']['all']:.4g}** (surface pixels {t['rmse']['surface']:.4g}, "
+             f"sky {t['rmse']['sky']:.4g}; truth RMS {t['truth_rms']:.4g}; Monte Carlo noise of the total "
+             f"±{t.get('noise_rmse', float('nan')):.2g}"
              + (f"; noise floor {t['rmse_noise_floor']:.2g} from the truth's stderr, "
-                f"{'**below the noise**' if t['below_noise'] else 'above the noise'}" if "rmse_noise_floor" in t
-                else "") + ").",
+                f"{'**below the noise**' if t['below_noise'] else 'above the noise'}"
+                if "rmse_noise_floor" in t else "") + ").",
              ""]
     if result.get("shapley"):
         lines += [shapley_markdown(result["shapley"]), "", "## Telescoping chain (second view)", ""]
     lines += [f"Pixels: {result.get('pixels', '?')} used, {result.get('excluded_pixels', 0)} excluded "
               "(the truth's "
-             "unattenuated surface is undefined there: no sample reached it, so no model can be composited on it).",
+             "unattenuated surface is undefined there: no sample reached it, so no model can be composited "
+             "on it).",
              "",
              "Each row switches one effect, going from the truth to Unreal; Δ_k = S_k − S_{k−1}. "
              "*Share* = ⟨Δ_k, E⟩/⟨E, E⟩ with E = model − truth: the shares add up to 100 % exactly "
-             f"(sum {100 * result['share_sum']:.6f} %, largest |ΣΔ_k − E| = {result['telescoping_residual']:.2g}); "
+             f"(sum {100 * result['share_sum']:.6f} %, "
+             f"largest |ΣΔ_k − E| = {result['telescoping_residual']:.2g}); "
              "a negative share means the step cancels part of the other errors. "
-             "*Noise*: per-pixel Monte Carlo noise of Δ_k and the noise of its share, from a second render with "
-             "another seed (closed-form steps are noise-free).", "",
+             "*Noise*: per-pixel Monte Carlo noise of Δ_k and the noise of its share, from a second render "
+             "with another seed (closed-form steps are noise-free).", "",
              "*Denoised*: √(RMSE² − noise²), the step's size without the Monte Carlo noise.", "",
              "*Noise floor*: the RMSE Δ_k would have from the truths' per-pixel standard errors alone "
              "(`stderr.*` channels); *below the noise*: Δ_k cannot be told from 0 at this sample count.", "",
@@ -307,21 +312,25 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
              "|---|---|---|---|---|---|---|---|---|---|"]
     for k, s in enumerate(result["steps"], 1):
         n = s.get("noise")
-        ns = f"{n['pixel_rms']:.2g} / ±{100 * n['share']:.2g} %" if n and s["key"] in RENDERED else "0 (closed form)"
+        rendered = n and s["key"] in RENDERED
+        ns = f"{n['pixel_rms']:.2g} / ±{100 * n['share']:.2g} %" if rendered else "0 (closed form)"
         dn = f"{n['rmse_denoised']:.4g}" if n and s["key"] in RENDERED else f"{s['rmse']['all']:.4g}"
         lines.append(f"| {k} | [{s['effect']}] | {s['label']} | {s['rmse']['all']:.4g} | {dn} | "
-                     f"{s['rmse']['surface']:.3g} / {s['rmse']['sky']:.3g} | {100 * s['share']:+.1f} % | {ns} | "
+                     f"{s['rmse']['surface']:.3g} / {s['rmse']['sky']:.3g} | {100 * s['share']:+.1f} % | "
+                     f"{ns} | "
                      f"{_floor(s)} | {s['rmse_vs_truth_after']:.4g} |")
     by = {s["key"]: s for s in result["steps"]}
     off = [k for k in ("start_distance", "opacity_cutoff") if by.get(k) and by[k]["rmse"]["all"] == 0]
     if off:
-        lines += ["", "Steps " + " and ".join(f"[{by[k]['effect']}]" for k in off) + " are exactly 0 because the "
-                  "model under study has those settings off (the fitted DirectionalInscatteringStartDistance is "
+        lines += ["", "Steps " + " and ".join(f"[{by[k]['effect']}]" for k in off) + " are exactly 0 "
+                  "because the model under study has those settings off (the fitted "
+                  "DirectionalInscatteringStartDistance is "
                   "0; StartDistance 0, FogMaxOpacity 1 and FogCutoffDistance 0 are the editor defaults); the "
                   "*What if* table below measures them switched on."]
     fc = result.get("footprint")
     if fc:
-        lines += ["", f"Pixel footprint: {100 * fc['pixel_fraction']:.2g} % of the pixels straddle an edge (their "
+        lines += ["", f"Pixel footprint: {100 * fc['pixel_fraction']:.2g} % of the pixels straddle an edge "
+                  "(their "
                   f"closed-form T differs from the EXR's by more than {fc['tolerance']}); they hold "
                   f"{100 * fc['share_of_step_sq']:.2g} % of the squared '{fc['step']}' step, so that step is "
                   "not an artefact of per-pixel (G-buffer) evaluation."]
@@ -330,7 +339,8 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
         lines += ["", f"Closed-form check on `{oc['scene']}` (no occluders, {oc['resolution'][0]}×"
                   f"{oc['resolution'][1]}, {oc['spp']} spp): the 'shadows' step there is RMSE "
                   f"{oc['shadows_rmse']:.3g} against an expected pure-noise level of {oc['noise_rmse']:.3g} "
-                  f"(mean {oc['shadows_mean']:+.2g} vs single-scattering RMS {oc['single_rms']:.3g}): the closed-form sun "
+                  f"(mean {oc['shadows_mean']:+.2g} vs single-scattering RMS {oc['single_rms']:.3g}): "
+                  "the closed-form sun "
                   "single scattering matches the path tracer where nothing casts shadows."]
     if result.get("what_if"):
         lines += ["", "## What if (engine settings the study leaves at their defaults)", "",
@@ -388,7 +398,8 @@ def plot(result: dict, path) -> None:
         ax[1].text(v, yy, f" {v:+.1f}%", va="center", ha="left" if v >= 0 else "right", fontsize=8)
     for a in ax:
         a.grid(axis="x", alpha=0.3)
-    fig.suptitle(f"Unreal exponential height fog: error budget (total RMSE {result['total']['rmse']['all']:.4g})")
+    fig.suptitle("Unreal exponential height fog: error budget "
+                 f"(total RMSE {result['total']['rmse']['all']:.4g})")
     fig.tight_layout()
     save_figure(fig, path)
     plt.close(fig)
@@ -475,8 +486,8 @@ def _config_params(lobe_params: UE4FogParams, model_params: UE4FogParams, refit:
 
     p = model_params if refit else lobe_params
     m = model_params
-    return replace(p,
-                   DirectionalInscatteringStartDistance=m.DirectionalInscatteringStartDistance if start else 0.0,
+    dist = m.DirectionalInscatteringStartDistance if start else 0.0
+    return replace(p, DirectionalInscatteringStartDistance=dist,
                    StartDistance=m.StartDistance if start else 0.0,
                    FogMaxOpacity=model_params.FogMaxOpacity if opacity else 1.0,
                    FogCutoffDistance=model_params.FogCutoffDistance if opacity else 0.0)
