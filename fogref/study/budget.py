@@ -1,5 +1,17 @@
 """Error budget of Unreal's Exponential Height Fog against the path-traced truth.
 
+Two views of the same attribution.  **First, the Shapley budget** (order-independent;
+:func:`shapley_budget`): the image :func:`coalition_image` is defined for *every* subset
+(coalition) of the nine effects below switched to the engine's side, so the squared error
+``e(C) = |S(C) - truth|^2`` is a cooperative game; each effect's share is its Shapley value
+(its mean marginal contribution over all orders, computed exactly from all ``2^9 = 512``
+coalitions) over ``e(all)``.  The shares sum to 100 % and do not depend on any ordering;
+interactions (e.g. shadows only matter while the sun is physical) are split equally between
+the effects involved.  Only the truth and the sun-less render are path traced; the closed
+forms and the engine's 16 configurations are computed once (:func:`shapley_parts`) and
+reused by all coalitions.  Noise: a block bootstrap over the image and, with a second pair
+of renders, the seed-to-seed difference.  **Second, the telescoping chain** below.
+
 A chain of images ``S_0 .. S_K`` goes from the ground truth (``S_0``, the EXR's
 ``R,G,B``) to what Unreal computes (``S_K``), switching **one** effect at a time.
 Every image is final radiance over the truth's surface, so only the fog differs:
