@@ -272,3 +272,15 @@ def test_study_text_names_the_largest_shapley_term():
     top = max(r["shapley"]["effects"], key=lambda e: e["share"])
     assert f"Largest Shapley term: **[{top['effect']}] {top['label']}**" in text
     assert text.index("Largest Shapley term") < text.index("Largest term of the telescoping chain")
+
+
+def test_shapley_with_the_colour_refit_folded_into_the_lobe():
+    pf, px, sky, lobe, model, parts = _shapley_setup()
+    S = B.chain(px, sky, pf, lobe, model)
+    np.testing.assert_allclose(B.coalition_image(parts, (), fixed=("refit",)), S[0], rtol=0, atol=1e-12)
+    sh = B.shapley_budget(parts, px.surface_valid, effects=B.EFFECTS_COLOURS_IN_LOBE, resamples=10)
+    assert [r["key"] for r in sh["effects"]] == list(B.EFFECTS_COLOURS_IN_LOBE) and sh["fixed"] == ["refit"]
+    assert sh["share_sum"] == pytest.approx(1.0, abs=1e-12)
+    assert sh["total_sq"] == pytest.approx(float(np.sum((S[-1] - S[0]) ** 2)), rel=1e-10)
+    md = B.shapley_markdown(sh, "### variant")
+    assert md.startswith("### variant") and "Held on the engine's side in every coalition: refit." in md

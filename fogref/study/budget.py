@@ -303,7 +303,11 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
                 if "rmse_noise_floor" in t else "") + ").",
              ""]
     if result.get("shapley"):
-        lines += [shapley_markdown(result["shapley"]), "", "## Telescoping chain (second view)", ""]
+        lines += [shapley_markdown(result["shapley"]), ""]
+        if result.get("shapley_colours_in_lobe"):
+            lines += [shapley_markdown(result["shapley_colours_in_lobe"],
+                                       "### Variant: the colour re-fit folded into the lobe"), ""]
+        lines += ["## Telescoping chain (second view)", ""]
     lines += [f"Pixels: {result.get('pixels', '?')} used, {result.get('excluded_pixels', 0)} excluded "
               "(the truth's "
              "unattenuated surface is undefined there: no sample reached it, so no model can be composited "
@@ -423,6 +427,9 @@ def plot(result: dict, path) -> None:
 
 #: The Shapley budget's players: the chain's effects (:data:`STEPS` keys, same order).
 EFFECTS: tuple[str, ...] = tuple(s[0] for s in STEPS)
+#: The same players with the colour re-fit folded into the lobe (the engine always uses the
+#: study's colours): the compensation between "lobe" and "refit" disappears from the table.
+EFFECTS_COLOURS_IN_LOBE: tuple[str, ...] = tuple(k for k in EFFECTS if k != "refit")
 #: Effects that select the engine's configuration (refit, start distances, opacity/cutoff, float32).
 _CONFIG = ("refit", "start_distance", "opacity_cutoff", "float32")
 #: Side of the square pixel blocks of the bootstrap [pixels].
@@ -549,7 +556,7 @@ def shapley_parts(truth: Truth, sky_single: np.ndarray, pf, engine, sky_distance
             "sun_att": cf["sun_att"], "sun_noatt": cf["sun_noatt"], "sky_cf": cf["sky"], "engine": eng}
 
 
-def coalition_image(parts: dict, coalition) -> np.ndarray:
+def coalition_image(parts: dict, coalition, fixed=()) -> np.ndarray:
     """The image (H, W, 3) with the effects in ``coalition`` switched to the engine's side.
 
     ``final = surface part + sun inscatter + sky inscatter + multiple`` where
@@ -567,13 +574,15 @@ def coalition_image(parts: dict, coalition) -> np.ndarray:
     * the configuration (refit, start distances, opacity/cutoff, float32) selects the
       engine's images.
 
-    The empty coalition is the truth and the full one the engine's image
+    ``fixed``: configuration effects held on the engine's side in every coalition (e.g.
+    ``("refit",)``: the engine always uses the study's colours, so the colour choice is part
+    of the lobe effect).  The empty coalition is the truth and the full one the engine's image
     ``surface T + L``, exactly, so the Shapley values of the squared error sum to it.
     Effects act where the physics lets them: shadows/sun attenuation matter only while the
     sun is physical (the lobe is out), the refit only once it is in; Shapley splits such
     interactions equally between the effects involved.
     """
-    C = set(coalition)
+    C = set(coalition) | set(fixed)
     cfg = tuple(k in C for k in _CONFIG)
     T, L_sun, L_sky = parts["engine"][cfg]
     T0 = parts["engine"][(False,) * len(_CONFIG)][0]
@@ -605,7 +614,10 @@ def shapley_budget(parts: dict, valid: np.ndarray, effects=EFFECTS, block: int =
     The game: ``e(C) = sum over valid pixels and channels of |coalition_image(C) - truth|^2``
     (0 for the empty coalition, the model's squared error for the full one).  Each effect's
     Shapley value ``phi_k`` is its share of the squared error, ``share_k = phi_k / e(all)``
-    (the shares sum to 1 exactly; no effect's place in an order matters).
+    (the shares sum to 1 exactly; no effect's place in an order matters).  A configuration
+    effect left out of ``effects`` (e.g. "refit": :data:`EFFECTS_COLOURS_IN_LOBE`) is held on
+    the engine's side (see :func:`coalition_image`'s ``fixed``), so the ends stay the truth
+    and the model.
 
     Noise: ``e(C)`` is a sum over pixel blocks (``block`` x ``block``), so the shares are
     re-computed on ``resamples`` bootstrap resamples of the blocks (seeded ``seed``) and
@@ -617,13 +629,14 @@ def shapley_budget(parts: dict, valid: np.ndarray, effects=EFFECTS, block: int =
     "resamples", "coalitions": 2^k}``.
     """
     effects = list(effects)
+    fixed = tuple(k for k in _CONFIG if k not in effects)
     valid = np.asarray(valid, dtype=bool)
     ids = _block_ids(valid.shape, block)[valid]
     nb = int(ids.max()) + 1 if ids.size else 1
     truth = parts["final"]
 
     def per_block(C):
-        d = coalition_image(parts, C) - truth
+        d = coalition_image(parts, C, fixed) - truth
         e = np.sum(d[valid] ** 2, axis=-1)
         return np.bincount(ids, weights=e, minlength=nb)
 
@@ -648,7 +661,8 @@ def shapley_budget(parts: dict, valid: np.ndarray, effects=EFFECTS, block: int =
                      "share": float(phi[i] / total) if total > 0 else 0.0, "share_noise": float(noise[i])})
     largest = max(rows, key=lambda r: r["share"])["key"] if rows else None
     return {"effects": rows, "total_sq": total, "share_sum": float(sum(r["share"] for r in rows)),
-            "largest": largest, "block": block, "resamples": resamples, "coalitions": 1 << len(effects),
+            "largest": largest, "fixed": list(fixed), "block": block, "resamples": resamples,
+            "coalitions": 1 << len(effects),
             "pixels": int(valid.sum())}
 
 
@@ -663,11 +677,13 @@ def add_shapley_seed_noise(result: dict, other: dict) -> dict:
     return result
 
 
-def shapley_markdown(sh: dict) -> str:
+def shapley_markdown(sh: dict, title: str = "## Shapley budget (order-independent)") -> str:
     """The Shapley table as Markdown (largest share first)."""
     rows = sorted(sh["effects"], key=lambda r: -r["share"])
     top = next(r for r in rows if r["key"] == sh["largest"])
-    lines = ["## Shapley budget (order-independent)", "",
+    fixed = ("  Held on the engine's side in every coalition: " + ", ".join(sh["fixed"]) + "."
+             if sh.get("fixed") else "")
+    lines = [title, "",
              f"Largest term: **[{top['effect']}] {top['label']}**, {100 * top['share']:.1f} % "
              f"± {100 * top['share_noise']:.1f} % of the squared error.", "",
              f"Each effect's share is its Shapley value in the game 'squared error of the image with these "
@@ -677,7 +693,7 @@ def shapley_markdown(sh: dict) -> str:
              f"*Noise*: block bootstrap ({sh['block']}×{sh['block']}-pixel blocks, "
              f"{sh['resamples']} resamples)"
              + ("; *seeds*: |share(seed a) − share(seed b)|/√2 from a second render." if "share_noise_seeds"
-                in rows[0] else "."), "",
+                in rows[0] else ".") + fixed, "",
              "| effect | Shapley share of E² | noise (bootstrap) | noise (seeds) |", "|---|---|---|---|"]
     for r in rows:
         ns = f"±{100 * r['share_noise_seeds']:.2g} %" if "share_noise_seeds" in r else "—"

@@ -241,9 +241,12 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
     B.add_noise(res, S_a, S_b, truth.hit, valid)
     log("computing the Shapley budget (all coalitions of the effects) ...")
     engine = B.unreal_engine(lobe.params, model_params)
-    res["shapley"] = B.add_shapley_seed_noise(
-        B.shapley_budget(B.shapley_parts(truth, sa.single, pf, engine), valid),
-        B.shapley_budget(B.shapley_parts(tb, sb.single, pf, engine), valid, resamples=0))
+    parts_a = B.shapley_parts(truth, sa.single, pf, engine)
+    parts_b = B.shapley_parts(tb, sb.single, pf, engine)
+    for key, effects in (("shapley", B.EFFECTS), ("shapley_colours_in_lobe", B.EFFECTS_COLOURS_IN_LOBE)):
+        res[key] = B.add_shapley_seed_noise(B.shapley_budget(parts_a, valid, effects),
+                                            B.shapley_budget(parts_b, valid, effects, resamples=0))
+    del parts_a, parts_b
     res["what_if"] = B.what_if(truth, model_params, WHAT_IF)
     res["footprint"] = B.footprint_check(truth, pf, S_a)
     if open_plane:
