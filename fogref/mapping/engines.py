@@ -30,7 +30,8 @@ from fogref.models.hdrp import (
 )
 from fogref.models.unity_builtin import UnityBuiltinFog, medium_to_unity
 
-__all__ = ["altitude_from_physical", "box_from_physical", "filament_from_physical", "hdrp_from_physical",
+__all__ = ["altitude_from_physical", "bevy_from_physical", "box_from_physical", "filament_from_physical",
+           "fixed_lobe_amplitude", "godot_from_physical", "hdrp_from_physical", "threejs_from_physical",
            "unity_from_physical"]
 
 
@@ -219,3 +220,153 @@ def filament_from_physical(ps: PhysicalScene) -> FilamentFog:
             kw.update(inScatteringSize=float(lobe["exponent"]), lightDirection=tuple(float(x) for x in w),
                       lightColorIntensity=(*(float(x) for x in sun), 1.0))
     return FilamentFog(medium_to_filament(ps.medium, **kw))
+
+
+# -- Godot, Bevy, three.js (issue 19) ------------------------------------------------
+
+def _density_at_camera(ps: PhysicalScene) -> float:
+    """``rho(camera)``: the medium's relative density at the camera (1 for a homogeneous fog)."""
+    m = ps.medium
+    if m.is_homogeneous:
+        return float(sum(L.density for L in m.layers))
+    return float(np.asarray(m.density(NP, tuple(np.asarray([c]) for c in ps.camera))).reshape(-1)[0])
+
+
+def fixed_lobe_amplitude(g: float, exponent: float, n_quad: int = 256) -> float:
+    """Least-squares ``c`` [1/sr] of ``c max(mu, 0)^n`` against the HG phase ``p_g(mu)`` over the sphere.
+
+    For engines whose lobe exponent is fixed (Godot: ``n = 8``): ``c = int_0^1 p mu^n dmu /
+    int_0^1 mu^(2n) dmu = (2n + 1) int_0^1 p_g(mu) mu^n dmu`` (Gauss–Legendre on [0, 1]).
+
+    Examples
+    --------
+    >>> round(fixed_lobe_amplitude(0.0, 8.0) * 4 * math.pi, 6)    # isotropic: (2n + 1)/(n + 1)
+    1.888889
+    """
+    x, w = np.polynomial.legendre.leggauss(n_quad)
+    mu, w = 0.5 * (x + 1.0), 0.5 * w
+    p = (1.0 - g * g) / (4.0 * math.pi * (1.0 + g * g - 2.0 * g * mu) ** 1.5)
+    return float((2.0 * exponent + 1.0) * np.sum(w * p * mu ** exponent))
+
+
+@register_mapping("godot")
+def godot_from_physical(ps: PhysicalScene):
+    """The Godot 4 environment fog that best represents a physical scene.
+
+    Exponential mode (``fog_density`` [1/m] on distance), no height fog.  Profile
+    "homogeneous": exact, ``fog_density = sigma_t`` and ``fog_sky_affect = 1 -
+    exp(-sigma_t SKY_DISTANCE)`` (the sky pixels' transmittance).  Height profiles
+    ("exponential", "hdrp", "powerlaw") have **no exact counterpart**: Godot's height fog
+    (``1 - exp((y - fog_height) fog_height_density)`` of the end point, combined with ``max``)
+    is not an optical depth; the nearest choice is the extinction at the camera (exact for
+    horizontal rays), as for Unity, with the height fog off.  ``fog_light_color = albedo *
+    sky radiance`` (energy 1), no aerial perspective.
+
+    Sun: Godot's lobe has the fixed exponent 8; its best amplitude against the HG phase is
+    :func:`fixed_lobe_amplitude`, and ``sun_color = albedo E T_sun(camera) c`` with
+    ``fog_sun_scatter = 1`` (no sun, or the sun at or below the horizon: no lobe).
+    Raises ParameterError naming 'profile' for "box" or bounded fog, 'sigma_t' for a
+    coloured extinction.
+
+    Examples
+    --------
+    >>> from fogref.media import ExpLayer, FogMedium
+    >>> ps = PhysicalScene(FogMedium(sigma_t=0.01, layers=(ExpLayer(1.0, 0.0, 0.0),)))
+    >>> godot_from_physical(ps).params.fog_density
+    0.01
+    """
+    from fogref.models.base import SKY_DISTANCE
+    from fogref.models.godot import SUN_SCATTER_EXPONENT, GodotFog, GodotFogParams
+
+    ps.require_profile("Godot", ("homogeneous", "exponential", "hdrp", "powerlaw"),
+                       "Godot's environment fog fills all space (no bounds)")
+    ps.require_unbounded("Godot")
+    sigma = ps.grey_sigma_t("Godot") * _density_at_camera(ps)
+    kw = {"fog_mode": "exponential", "fog_density": sigma, "fog_height_density": 0.0,
+          "fog_light_color": ps.sky_colour(), "fog_light_energy": 1.0, "fog_aerial_perspective": 0.0,
+          "fog_sky_affect": float(-math.expm1(-sigma * SKY_DISTANCE)), "sky_distance": SKY_DISTANCE,
+          "sky_color": tuple(float(x) for x in np.asarray(ps.sky_radiance)), "fog_sun_scatter": 0.0}
+    w = ps.sun_direction
+    if ps.has_sun and w[1] > 0:
+        c = fixed_lobe_amplitude(ps.medium.g, SUN_SCATTER_EXPONENT)
+        sun = ps.albedo * np.asarray(ps.sun_irradiance) * ps.sun_transmittance_at_camera() * c
+        kw.update(fog_sun_scatter=1.0, sun_direction=tuple(float(x) for x in w),
+                  sun_color=tuple(float(x) for x in sun))
+    return GodotFog(GodotFogParams(**kw))
+
+
+@register_mapping("bevy")
+def bevy_from_physical(ps: PhysicalScene):
+    """The Bevy ``DistanceFog`` that best represents a physical scene.
+
+    ``FogFalloff::Atmospheric`` with ``extinction = inscattering = sigma_t`` [1/m] (RGB: a
+    coloured extinction is represented exactly).  Profile "homogeneous": exact
+    (:func:`~fogref.models.bevy.medium_to_bevy`).  Height profiles ("exponential", "hdrp",
+    "powerlaw") have **no exact counterpart** (Bevy's fog has no height term): the
+    extinction at the camera, exact for horizontal rays.  ``color = (albedo * sky radiance,
+    1)``.
+
+    Sun (the directional lobe), as for Filament: the best pure cosine lobe ``c max(cos,
+    0)^n`` for the HG phase (:func:`~fogref.mapping.lobe.lobe_fit`, ``isotropic=False``):
+    ``directional_light_exponent = n``, ``light_color = E`` (the sun irradiance),
+    ``directional_light_color = (albedo T_sun(camera) c, 1)``.  No sun, the sun at or
+    below the horizon, or no lobe (g <= 0): alpha 0 (no lobe).  Raises ParameterError
+    naming 'profile' for "box" or bounded fog.
+
+    Examples
+    --------
+    >>> from fogref.media import ExpLayer, FogMedium
+    >>> ps = PhysicalScene(FogMedium(sigma_t=(0.01, 0.02, 0.03), layers=(ExpLayer(1.0, 0.0, 0.0),)))
+    >>> bevy_from_physical(ps).params.extinction
+    (0.01, 0.02, 0.03)
+    """
+    from fogref.models.bevy import BevyDistanceFog, medium_to_bevy
+
+    ps.require_profile("Bevy", ("homogeneous", "exponential", "hdrp", "powerlaw"),
+                       "Bevy's DistanceFog fills all space (no bounds)")
+    ps.require_unbounded("Bevy")
+    m = ps.medium
+    rho = _density_at_camera(ps)
+    m = FogMedium(sigma_t=tuple(float(x) * rho for x in np.asarray(m.sigma_t, dtype=np.float64)),
+                  albedo=m.albedo, g=m.g, layers=(ExpLayer(1.0, 0.0, 0.0),), source=ps.source)
+    kw = {"color": (*ps.sky_colour(), 1.0), "directional_light_color": (0.0, 0.0, 0.0, 0.0)}
+    w = ps.sun_direction
+    if ps.has_sun and w[1] > 0:
+        lobe = lobe_fit(ps.medium.g, isotropic=False)
+        if lobe["exponent"] is not None:
+            c = lobe["lobe"] / (4.0 * math.pi)
+            dl = ps.albedo * ps.sun_transmittance_at_camera() * c
+            kw.update(directional_light_exponent=float(lobe["exponent"]),
+                      light_direction=tuple(float(x) for x in w),
+                      light_color=tuple(float(x) for x in ps.sun_irradiance),
+                      directional_light_color=(*(float(x) for x in dl), 1.0))
+    return BevyDistanceFog(medium_to_bevy(m, **kw))
+
+
+@register_mapping("threejs")
+def threejs_from_physical(ps: PhysicalScene):
+    """The three.js fog nearest to a physical scene: ``FogExp2``, **never exact**.
+
+    three.js has no Beer–Lambert mode, no height term and no sun.  ``FogExp2`` with
+    ``density = sigma_t rho(camera)`` [1/m] has the physical transmittance ``exp(-1)`` at the
+    depth ``1/density`` on the camera axis (:func:`~fogref.models.threejs.threejs_sigma`),
+    too little fog nearer and too much farther (exp² against exp), and it fogs the eye
+    depth, not the distance; the physical scene has no view direction, so
+    ``camera_forward`` keeps its default (-z).  ``color = albedo * sky radiance``.  Raises
+    ParameterError naming 'profile' for "box" or bounded fog, 'sigma_t' for a coloured
+    extinction.
+
+    Examples
+    --------
+    >>> from fogref.media import ExpLayer, FogMedium
+    >>> ps = PhysicalScene(FogMedium(sigma_t=0.01, layers=(ExpLayer(1.0, 0.0, 0.0),)))
+    >>> threejs_from_physical(ps).params.density
+    0.01
+    """
+    from fogref.models.threejs import ThreeFogParams, ThreeJSFog
+
+    ps.require_profile("three.js", ("homogeneous", "exponential", "hdrp", "powerlaw"),
+                       "three.js fog fills all space (no bounds)")
+    ps.require_unbounded("three.js")
+    sigma = ps.grey_sigma_t("three.js") * _density_at_camera(ps)
+    return ThreeJSFog(ThreeFogParams(mode="FogExp2", density=sigma, color=ps.sky_colour()))

@@ -43,7 +43,7 @@ Examples
 >>> resolve_model("eu4")
 Traceback (most recent call last):
 ...
-fogref.errors.FogrefError: unknown fog model 'eu4'; did you mean 'ue4'? (built-in: altitude, box, filament, hdrp, ue4, unity; or give module.path:Class)
+fogref.errors.FogrefError: unknown fog model 'eu4'; did you mean 'ue4'? (built-in: altitude, bevy, box, filament, godot, ...)
 """
 
 from __future__ import annotations
@@ -62,6 +62,7 @@ ENTRY_POINT_GROUP = "fogref.models"
 def _builtin_names() -> list[str]:
     # the built-in models register themselves on import (the same modules fogref.models imports)
     from fogref.models import altitude, box, filament, hdrp, ue4, unity_builtin  # noqa: F401
+    from fogref.models import bevy, godot, threejs  # noqa: F401
 
     return sorted(base._REGISTRY)
 

@@ -1,5 +1,17 @@
 """Error budget of Unreal's Exponential Height Fog against the path-traced truth.
 
+Two views of the same attribution.  **First, the Shapley budget** (order-independent;
+:func:`shapley_budget`): the image :func:`coalition_image` is defined for *every* subset
+(coalition) of the nine effects below switched to the engine's side, so the squared error
+``e(C) = |S(C) - truth|^2`` is a cooperative game; each effect's share is its Shapley value
+(its mean marginal contribution over all orders, computed exactly from all ``2^9 = 512``
+coalitions) over ``e(all)``.  The shares sum to 100 % and do not depend on any ordering;
+interactions (e.g. shadows only matter while the sun is physical) are split equally between
+the effects involved.  Only the truth and the sun-less render are path traced; the closed
+forms and the engine's 16 configurations are computed once (:func:`shapley_parts`) and
+reused by all coalitions.  Noise: a block bootstrap over the image and, with a second pair
+of renders, the seed-to-seed difference.  **Second, the telescoping chain** below.
+
 A chain of images ``S_0 .. S_K`` goes from the ground truth (``S_0``, the EXR's
 ``R,G,B``) to what Unreal computes (``S_K``), switching **one** effect at a time.
 Every image is final radiance over the truth's surface, so only the fog differs:
@@ -170,7 +182,8 @@ def _noise_fields(d: np.ndarray, sigma: np.ndarray, mask: np.ndarray) -> dict:
             "rmse_debiased": float(np.sqrt(m["debiased"])), "below_noise": m["below_noise"]}
 
 
-def attribute(S: list[np.ndarray], hit: np.ndarray, valid: np.ndarray | None = None, noise: dict | None = None) -> dict:
+def attribute(S: list[np.ndarray], hit: np.ndarray, valid: np.ndarray | None = None,
+              noise: dict | None = None) -> dict:
     """Per-step statistics of a chain over the ``valid`` pixels (default all).
 
     ``noise``: :func:`chain_noise`'s per-pixel standard errors; with it every RMSE
@@ -245,7 +258,8 @@ def footprint_check(truth: Truth, pf, S: list[np.ndarray], step: str = "shadows"
             "max_T_difference": float(np.abs(cf["T"] - truth.transmittance).max())}
 
 
-def what_if(truth: Truth, model_params: UE4FogParams, variants: dict, sky_distance: float = 1.0e5) -> list[dict]:
+def what_if(truth: Truth, model_params: UE4FogParams, variants: dict,
+            sky_distance: float = 1.0e5) -> list[dict]:
     """RMSE against the truth of the model with some fields changed (``variants``:
     name -> dict of UE4FogParams fields), float32; and the change vs the model.
 
@@ -281,21 +295,31 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
     t = result["total"]
     lines = [f"# {title}", "",
              f"Total error of the Unreal model (float32, as compared) against the path-traced truth: "
-             f"**RMSE {t['rmse']['all']:.4g}** (surface pixels {t['rmse']['surface']:.4g}, sky {t['rmse']['sky']:.4g}; "
-             f"truth RMS {t['truth_rms']:.4g}; Monte Carlo noise of the total ±{t.get('noise_rmse', float('nan')):.2g}"
+             f"**RMSE {t['rmse']['all']:.4g}** (surface pixels {t['rmse']['surface']:.4g}, "
+             f"sky {t['rmse']['sky']:.4g}; truth RMS {t['truth_rms']:.4g}; Monte Carlo noise of the total "
+             f"±{t.get('noise_rmse', float('nan')):.2g}"
              + (f"; noise floor {t['rmse_noise_floor']:.2g} from the truth's stderr, "
-                f"{'**below the noise**' if t['below_noise'] else 'above the noise'}" if "rmse_noise_floor" in t
-                else "") + ").",
-             "",
-             f"Pixels: {result.get('pixels', '?')} used, {result.get('excluded_pixels', 0)} excluded (the truth's "
-             "unattenuated surface is undefined there: no sample reached it, so no model can be composited on it).",
+                f"{'**below the noise**' if t['below_noise'] else 'above the noise'}"
+                if "rmse_noise_floor" in t else "") + ").",
+             ""]
+    if result.get("shapley"):
+        lines += [shapley_markdown(result["shapley"]), ""]
+        if result.get("shapley_colours_in_lobe"):
+            lines += [shapley_markdown(result["shapley_colours_in_lobe"],
+                                       "### Variant: the colour re-fit folded into the lobe"), ""]
+        lines += ["## Telescoping chain (second view)", ""]
+    lines += [f"Pixels: {result.get('pixels', '?')} used, {result.get('excluded_pixels', 0)} excluded "
+              "(the truth's "
+             "unattenuated surface is undefined there: no sample reached it, so no model can be composited "
+             "on it).",
              "",
              "Each row switches one effect, going from the truth to Unreal; Δ_k = S_k − S_{k−1}. "
              "*Share* = ⟨Δ_k, E⟩/⟨E, E⟩ with E = model − truth: the shares add up to 100 % exactly "
-             f"(sum {100 * result['share_sum']:.6f} %, largest |ΣΔ_k − E| = {result['telescoping_residual']:.2g}); "
+             f"(sum {100 * result['share_sum']:.6f} %, "
+             f"largest |ΣΔ_k − E| = {result['telescoping_residual']:.2g}); "
              "a negative share means the step cancels part of the other errors. "
-             "*Noise*: per-pixel Monte Carlo noise of Δ_k and the noise of its share, from a second render with "
-             "another seed (closed-form steps are noise-free).", "",
+             "*Noise*: per-pixel Monte Carlo noise of Δ_k and the noise of its share, from a second render "
+             "with another seed (closed-form steps are noise-free).", "",
              "*Denoised*: √(RMSE² − noise²), the step's size without the Monte Carlo noise.", "",
              "*Noise floor*: the RMSE Δ_k would have from the truths' per-pixel standard errors alone "
              "(`stderr.*` channels); *below the noise*: Δ_k cannot be told from 0 at this sample count.", "",
@@ -304,21 +328,25 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
              "|---|---|---|---|---|---|---|---|---|---|"]
     for k, s in enumerate(result["steps"], 1):
         n = s.get("noise")
-        ns = f"{n['pixel_rms']:.2g} / ±{100 * n['share']:.2g} %" if n and s["key"] in RENDERED else "0 (closed form)"
+        rendered = n and s["key"] in RENDERED
+        ns = f"{n['pixel_rms']:.2g} / ±{100 * n['share']:.2g} %" if rendered else "0 (closed form)"
         dn = f"{n['rmse_denoised']:.4g}" if n and s["key"] in RENDERED else f"{s['rmse']['all']:.4g}"
         lines.append(f"| {k} | [{s['effect']}] | {s['label']} | {s['rmse']['all']:.4g} | {dn} | "
-                     f"{s['rmse']['surface']:.3g} / {s['rmse']['sky']:.3g} | {100 * s['share']:+.1f} % | {ns} | "
+                     f"{s['rmse']['surface']:.3g} / {s['rmse']['sky']:.3g} | {100 * s['share']:+.1f} % | "
+                     f"{ns} | "
                      f"{_floor(s)} | {s['rmse_vs_truth_after']:.4g} |")
     by = {s["key"]: s for s in result["steps"]}
     off = [k for k in ("start_distance", "opacity_cutoff") if by.get(k) and by[k]["rmse"]["all"] == 0]
     if off:
-        lines += ["", "Steps " + " and ".join(f"[{by[k]['effect']}]" for k in off) + " are exactly 0 because the "
-                  "model under study has those settings off (the fitted DirectionalInscatteringStartDistance is "
+        lines += ["", "Steps " + " and ".join(f"[{by[k]['effect']}]" for k in off) + " are exactly 0 "
+                  "because the model under study has those settings off (the fitted "
+                  "DirectionalInscatteringStartDistance is "
                   "0; StartDistance 0, FogMaxOpacity 1 and FogCutoffDistance 0 are the editor defaults); the "
                   "*What if* table below measures them switched on."]
     fc = result.get("footprint")
     if fc:
-        lines += ["", f"Pixel footprint: {100 * fc['pixel_fraction']:.2g} % of the pixels straddle an edge (their "
+        lines += ["", f"Pixel footprint: {100 * fc['pixel_fraction']:.2g} % of the pixels straddle an edge "
+                  "(their "
                   f"closed-form T differs from the EXR's by more than {fc['tolerance']}); they hold "
                   f"{100 * fc['share_of_step_sq']:.2g} % of the squared '{fc['step']}' step, so that step is "
                   "not an artefact of per-pixel (G-buffer) evaluation."]
@@ -327,7 +355,8 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
         lines += ["", f"Closed-form check on `{oc['scene']}` (no occluders, {oc['resolution'][0]}×"
                   f"{oc['resolution'][1]}, {oc['spp']} spp): the 'shadows' step there is RMSE "
                   f"{oc['shadows_rmse']:.3g} against an expected pure-noise level of {oc['noise_rmse']:.3g} "
-                  f"(mean {oc['shadows_mean']:+.2g} vs single-scattering RMS {oc['single_rms']:.3g}): the closed-form sun "
+                  f"(mean {oc['shadows_mean']:+.2g} vs single-scattering RMS {oc['single_rms']:.3g}): "
+                  "the closed-form sun "
                   "single scattering matches the path tracer where nothing casts shadows."]
     if result.get("what_if"):
         lines += ["", "## What if (engine settings the study leaves at their defaults)", "",
@@ -341,7 +370,8 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
 
 
 def plot(result: dict, path) -> None:
-    """Bar chart: each step's RMSE (with noise bars) and its share of the total."""
+    """Bar charts: the Shapley shares first (with their noise, when ``result["shapley"]``), then
+    each chain step's RMSE (with noise bars) and its chain share of the total."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -355,7 +385,23 @@ def plot(result: dict, path) -> None:
     err = [s["noise"]["pixel_rms"] if s.get("noise") and s["key"] in RENDERED else 0.0 for s in steps]
     share = [100 * s["share"] for s in steps]
     y = np.arange(len(steps))[::-1]
-    fig, ax = plt.subplots(1, 2, figsize=(14, 4.6), sharey=True)
+    sh = result.get("shapley")
+    if sh:
+        by = {r["key"]: r for r in sh["effects"]}
+        fig, ax3 = plt.subplots(1, 3, figsize=(20, 4.6), sharey=True)
+        a0, ax = ax3[0], ax3[1:]
+        sv = [100 * by[s["key"]]["share"] if s["key"] in by else 0.0 for s in steps]
+        se = [100 * by[s["key"]]["share_noise"] if s["key"] in by else 0.0 for s in steps]
+        a0.barh(y, sv, xerr=se, capsize=3, color=["#c0504d" if v > 0 else "#9bbb59" for v in sv])
+        a0.axvline(0, color="k", lw=0.8)
+        a0.set_yticks(y, labels)
+        a0.set_xlabel("Shapley share of the squared error [%]\n"
+                      "all coalitions, order-free; bars: bootstrap noise")
+        for yy, v in zip(y, sv):
+            a0.text(v, yy, f" {v:+.1f}%", va="center", ha="left" if v >= 0 else "right", fontsize=8)
+        a0.grid(axis="x", alpha=0.3)
+    else:
+        fig, ax = plt.subplots(1, 2, figsize=(14, 4.6), sharey=True)
     ax[0].barh(y, rm, xerr=err, color="#4a78b0", capsize=3)
     ax[0].axvline(result["total"]["rmse"]["all"], color="k", ls="--", lw=1, label="total model − truth")
     ax[0].set_yticks(y, labels)
@@ -363,12 +409,294 @@ def plot(result: dict, path) -> None:
     ax[0].legend(loc="lower right", fontsize=8)
     ax[1].barh(y, share, color=["#c0504d" if v > 0 else "#9bbb59" for v in share])
     ax[1].axvline(0, color="k", lw=0.8)
-    ax[1].set_xlabel("share of the total squared error [%]\n⟨Δ_k, E⟩/⟨E, E⟩, sums to 100")
+    ax[1].set_xlabel("chain share of the total squared error [%]\n⟨Δ_k, E⟩/⟨E, E⟩, sums to 100")
     for yy, v in zip(y, share):
         ax[1].text(v, yy, f" {v:+.1f}%", va="center", ha="left" if v >= 0 else "right", fontsize=8)
     for a in ax:
         a.grid(axis="x", alpha=0.3)
-    fig.suptitle(f"Unreal exponential height fog: error budget (total RMSE {result['total']['rmse']['all']:.4g})")
+    fig.suptitle("Unreal exponential height fog: error budget "
+                 f"(total RMSE {result['total']['rmse']['all']:.4g})")
     fig.tight_layout()
     save_figure(fig, path)
     plt.close(fig)
+
+
+# ------------------------------------------------------------------------------------------
+# Shapley budget: order-independent shares over the same effects
+# ------------------------------------------------------------------------------------------
+
+#: The Shapley budget's players: the chain's effects (:data:`STEPS` keys, same order).
+EFFECTS: tuple[str, ...] = tuple(s[0] for s in STEPS)
+#: The same players with the colour re-fit folded into the lobe (the engine always uses the
+#: study's colours): the compensation between "lobe" and "refit" disappears from the table.
+EFFECTS_COLOURS_IN_LOBE: tuple[str, ...] = tuple(k for k in EFFECTS if k != "refit")
+#: Effects that select the engine's configuration (refit, start distances, opacity/cutoff, float32).
+_CONFIG = ("refit", "start_distance", "opacity_cutoff", "float32")
+#: Side of the square pixel blocks of the bootstrap [pixels].
+BOOTSTRAP_BLOCK = 16
+#: Bootstrap resamples of the Shapley shares' noise.
+BOOTSTRAP_RESAMPLES = 400
+
+
+def shapley_weights(n: int) -> np.ndarray:
+    """The ``(n, 2^n)`` matrix ``W`` with ``phi = W @ v`` for a game ``v`` over bitmask coalitions.
+
+    ``v[mask]`` is the value of the coalition whose players are the set bits of ``mask``
+    (player ``i`` = bit ``i``); ``phi_i = sum_{S not containing i} |S|! (n - |S| - 1)! / n!
+    (v(S + i) - v(S))`` (Shapley 1953).  Rows sum to 0; columns of the full and empty
+    coalitions make ``sum_i phi_i = v(all) - v(empty)`` (efficiency).
+
+    Examples
+    --------
+    >>> shapley_weights(2)
+    array([[-0.5,  0.5, -0.5,  0.5],
+           [-0.5, -0.5,  0.5,  0.5]])
+    """
+    if not 1 <= n <= 16:
+        raise ValueError(f"shapley_weights: n = {n} players outside [1, 16]")
+    size = np.array([bin(m).count("1") for m in range(1 << n)])
+    wt = np.array([math.factorial(s) * math.factorial(n - s - 1) / math.factorial(n) for s in range(n)])
+    W = np.zeros((n, 1 << n))
+    for i in range(n):
+        bit = 1 << i
+        for m in range(1 << n):
+            if m & bit:
+                continue
+            w = wt[size[m]]
+            W[i, m | bit] += w
+            W[i, m] -= w
+    return W
+
+
+def shapley_values(value, players) -> dict:
+    """Exact Shapley values of the game ``value`` over all ``2^k`` coalitions of ``players``.
+
+    Parameters
+    ----------
+    value : callable
+        ``value(frozenset of players) -> float or ndarray`` (arrays: one game per element,
+        e.g. per pixel block); called once per coalition.
+    players : sequence of hashable
+        The k players (k <= 16).
+
+    Returns
+    -------
+    dict
+        player -> Shapley value (float or ndarray); the values sum to ``value(all) -
+        value(empty)`` and do not depend on the order of ``players``.
+
+    Examples
+    --------
+    >>> v = lambda c: float(len(c) ** 2)            # symmetric players share equally
+    >>> shapley_values(v, ["a", "b", "c"])
+    {'a': 3.0, 'b': 3.0, 'c': 3.0}
+    """
+    players = list(players)
+    n = len(players)
+    coalitions = (frozenset(p for i, p in enumerate(players) if m >> i & 1) for m in range(1 << n))
+    V = np.stack([np.asarray(value(c), dtype=np.float64) for c in coalitions])
+    phi = np.tensordot(shapley_weights(n), V, axes=1)
+    return {p: (float(phi[i]) if phi[i].ndim == 0 else phi[i]) for i, p in enumerate(players)}
+
+
+def _config_params(lobe_params: UE4FogParams, model_params: UE4FogParams, refit: bool, start: bool,
+                   opacity: bool) -> UE4FogParams:
+    from dataclasses import replace
+
+    p = model_params if refit else lobe_params
+    m = model_params
+    dist = m.DirectionalInscatteringStartDistance if start else 0.0
+    return replace(p, DirectionalInscatteringStartDistance=dist,
+                   StartDistance=m.StartDistance if start else 0.0,
+                   FogMaxOpacity=model_params.FogMaxOpacity if opacity else 1.0,
+                   FogCutoffDistance=model_params.FogCutoffDistance if opacity else 0.0)
+
+
+def unreal_engine(lobe_params: UE4FogParams, model_params: UE4FogParams):
+    """The engine side of the Shapley game for Unreal: ``engine(truth, config, sky_distance)``.
+
+    ``config``: a dict of the :data:`_CONFIG` effects (True = the engine's setting):
+    ``refit`` (the study's colours/exponent instead of the lobe-only fit), ``start_distance``
+    (its StartDistance and DirectionalInscatteringStartDistance, else 0), ``opacity_cutoff``
+    (its FogMaxOpacity and FogCutoffDistance, else 1 and 0), ``float32`` (the shader's
+    arithmetic, else float64).  Returns ``(T, L_sun, L_sky)``, each (H, W, 3): the
+    transmittance, the directional (sun) inscatter and the rest (``L_sky``: the model with
+    DirectionalInscatteringColor 0).  Another engine plugs in with the same signature.
+    """
+    from dataclasses import replace
+
+    def engine(truth: Truth, config: dict, sky_distance: float):
+        p = _config_params(lobe_params, model_params, config["refit"], config["start_distance"],
+                           config["opacity_cutoff"])
+        prec = "float32" if config["float32"] else "float64"
+        T, L = _unreal(p, truth, prec, sky_distance)
+        no_sun = replace(p, DirectionalInscatteringColor=(0.0, 0.0, 0.0))
+        _, L_sky = _unreal(no_sun, truth, prec, sky_distance)
+        return T, L - L_sky, L_sky
+
+    return engine
+
+
+def shapley_parts(truth: Truth, sky_single: np.ndarray, pf, engine, sky_distance: float = 1.0e5) -> dict:
+    """Everything :func:`coalition_image` needs, computed once (the cache of the 2^k coalitions).
+
+    The renders (the truth and ``sky_single``, the sun-less render's ``single``), the closed
+    forms of :func:`closed_forms`, and the engine's ``(T, L_sun, L_sky)`` for each of the
+    2^4 configurations of :data:`_CONFIG` (``engine``: e.g. :func:`unreal_engine`).
+    """
+    import itertools
+
+    cf = closed_forms(truth, pf)
+    eng = {}
+    for bits in itertools.product((False, True), repeat=len(_CONFIG)):
+        eng[bits] = engine(truth, dict(zip(_CONFIG, bits)), sky_distance)
+    return {"final": truth.final, "att": truth.attenuated_surface, "surface": truth.surface,
+            "multiple": truth.final - truth.attenuated_surface - truth.single,
+            "sun_render": truth.single - sky_single, "sky_render": sky_single,
+            "sun_att": cf["sun_att"], "sun_noatt": cf["sun_noatt"], "sky_cf": cf["sky"], "engine": eng}
+
+
+def coalition_image(parts: dict, coalition, fixed=()) -> np.ndarray:
+    """The image (H, W, 3) with the effects in ``coalition`` switched to the engine's side.
+
+    ``final = surface part + sun inscatter + sky inscatter + multiple`` where
+
+    * multiple [d]: the truth's ``final - attenuated_surface - single`` unless "multiple" is
+      in the coalition (then 0);
+    * sun: if "lobe" [a] is in: the engine's directional inscatter; else the rendered sun
+      single scattering (``single - sky_single``), or with "shadows" [e] the closed form,
+      attenuated unless "sun_attenuation" [b] is in;
+    * sky: if "lobe": the engine's other inscatter; else the rendered ``sky_single``, or with
+      "sky" [c] the closed form ``alpha L_sky (1 - T)``;
+    * surface: the truth's ``attenuated_surface`` (with "lobe": ``surface T_engine`` of the
+      plain configuration), plus ``surface (T_engine(config) - T_engine(plain))`` for the
+      configuration effects (start distances, opacity/cutoff, float32);
+    * the configuration (refit, start distances, opacity/cutoff, float32) selects the
+      engine's images.
+
+    ``fixed``: configuration effects held on the engine's side in every coalition (e.g.
+    ``("refit",)``: the engine always uses the study's colours, so the colour choice is part
+    of the lobe effect).  The empty coalition is the truth and the full one the engine's image
+    ``surface T + L``, exactly, so the Shapley values of the squared error sum to it.
+    Effects act where the physics lets them: shadows/sun attenuation matter only while the
+    sun is physical (the lobe is out), the refit only once it is in; Shapley splits such
+    interactions equally between the effects involved.
+    """
+    C = set(coalition) | set(fixed)
+    cfg = tuple(k in C for k in _CONFIG)
+    T, L_sun, L_sky = parts["engine"][cfg]
+    T0 = parts["engine"][(False,) * len(_CONFIG)][0]
+    surf = parts["surface"] * T0 if "lobe" in C else parts["att"]
+    if any(cfg[1:]):
+        surf = surf + parts["surface"] * (T - T0)
+    if "lobe" in C:
+        sun, sky = L_sun, L_sky
+    else:
+        if "shadows" in C:
+            sun = parts["sun_noatt"] if "sun_attenuation" in C else parts["sun_att"]
+        else:
+            sun = parts["sun_render"]
+        sky = parts["sky_cf"] if "sky" in C else parts["sky_render"]
+    img = surf + sun + sky
+    return img if "multiple" in C else img + parts["multiple"]
+
+
+def _block_ids(shape: tuple, block: int) -> np.ndarray:
+    h, w = shape
+    by, bx = np.arange(h)[:, None] // block, np.arange(w)[None, :] // block
+    return by * ((w + block - 1) // block) + bx
+
+
+def shapley_budget(parts: dict, valid: np.ndarray, effects=EFFECTS, block: int = BOOTSTRAP_BLOCK,
+                   resamples: int = BOOTSTRAP_RESAMPLES, seed: int = 0) -> dict:
+    """Shapley shares of the squared error ``sum |S(all) - S(empty)|^2`` over ``valid`` pixels.
+
+    The game: ``e(C) = sum over valid pixels and channels of |coalition_image(C) - truth|^2``
+    (0 for the empty coalition, the model's squared error for the full one).  Each effect's
+    Shapley value ``phi_k`` is its share of the squared error, ``share_k = phi_k / e(all)``
+    (the shares sum to 1 exactly; no effect's place in an order matters).  A configuration
+    effect left out of ``effects`` (e.g. "refit": :data:`EFFECTS_COLOURS_IN_LOBE`) is held on
+    the engine's side (see :func:`coalition_image`'s ``fixed``), so the ends stay the truth
+    and the model.
+
+    Noise: ``e(C)`` is a sum over pixel blocks (``block`` x ``block``), so the shares are
+    re-computed on ``resamples`` bootstrap resamples of the blocks (seeded ``seed``) and
+    each share gets their standard deviation, ``share_noise`` (Monte Carlo noise and the
+    spread over the image together; Efron & Tibshirani 1993, the block bootstrap).
+
+    Returns ``{"effects": [{key, effect, label, phi, share, share_noise}, ...] (in
+    :data:`STEPS` order), "total_sq": e(all), "share_sum", "largest": key, "block",
+    "resamples", "coalitions": 2^k}``.
+    """
+    effects = list(effects)
+    fixed = tuple(k for k in _CONFIG if k not in effects)
+    valid = np.asarray(valid, dtype=bool)
+    ids = _block_ids(valid.shape, block)[valid]
+    nb = int(ids.max()) + 1 if ids.size else 1
+    truth = parts["final"]
+
+    def per_block(C):
+        d = coalition_image(parts, C, fixed) - truth
+        e = np.sum(d[valid] ** 2, axis=-1)
+        return np.bincount(ids, weights=e, minlength=nb)
+
+    phi_blocks = shapley_values(per_block, effects)                    # key -> (nb,)
+    P = np.stack([phi_blocks[k] for k in effects])                     # (k, nb)
+    phi = P.sum(1)
+    total = float(phi.sum())
+    rng = np.random.default_rng(seed)
+    shares_b = []
+    for _ in range(resamples):
+        idx = rng.integers(0, nb, nb)
+        pb = P[:, idx].sum(1)
+        tb = pb.sum()
+        if tb > 0:
+            shares_b.append(pb / tb)
+    noise = np.std(np.array(shares_b), axis=0) if shares_b else np.zeros(len(effects))
+    meta = {s[0]: s for s in STEPS}
+    rows = []
+    for i, k in enumerate(effects):
+        _, letter, label = meta.get(k, (k, "?", k))
+        rows.append({"key": k, "effect": letter, "label": label, "phi": float(phi[i]),
+                     "share": float(phi[i] / total) if total > 0 else 0.0, "share_noise": float(noise[i])})
+    largest = max(rows, key=lambda r: r["share"])["key"] if rows else None
+    return {"effects": rows, "total_sq": total, "share_sum": float(sum(r["share"] for r in rows)),
+            "largest": largest, "fixed": list(fixed), "block": block, "resamples": resamples,
+            "coalitions": 1 << len(effects),
+            "pixels": int(valid.sum())}
+
+
+def add_shapley_seed_noise(result: dict, other: dict) -> dict:
+    """Add ``share_noise_seeds = |share(seed a) - share(seed b)| / sqrt(2)`` from a second
+    Shapley budget (other renders), and keep the other seed's share."""
+    by = {r["key"]: r for r in other["effects"]}
+    for r in result["effects"]:
+        o = by[r["key"]]
+        r["share_other_seed"] = o["share"]
+        r["share_noise_seeds"] = abs(r["share"] - o["share"]) / math.sqrt(2.0)
+    return result
+
+
+def shapley_markdown(sh: dict, title: str = "## Shapley budget (order-independent)") -> str:
+    """The Shapley table as Markdown (largest share first)."""
+    rows = sorted(sh["effects"], key=lambda r: -r["share"])
+    top = next(r for r in rows if r["key"] == sh["largest"])
+    fixed = ("  Held on the engine's side in every coalition: " + ", ".join(sh["fixed"]) + "."
+             if sh.get("fixed") else "")
+    lines = [title, "",
+             f"Largest term: **[{top['effect']}] {top['label']}**, {100 * top['share']:.1f} % "
+             f"± {100 * top['share_noise']:.1f} % of the squared error.", "",
+             f"Each effect's share is its Shapley value in the game 'squared error of the image with these "
+             f"effects switched to the engine's side', over all {sh['coalitions']} coalitions of the "
+             f"{len(rows)} effects, divided by the total: the shares sum to 100 % "
+             f"({100 * sh['share_sum']:.6f} %) and no order of the effects is privileged. "
+             f"*Noise*: block bootstrap ({sh['block']}×{sh['block']}-pixel blocks, "
+             f"{sh['resamples']} resamples)"
+             + ("; *seeds*: |share(seed a) − share(seed b)|/√2 from a second render." if "share_noise_seeds"
+                in rows[0] else ".") + fixed, "",
+             "| effect | Shapley share of E² | noise (bootstrap) | noise (seeds) |", "|---|---|---|---|"]
+    for r in rows:
+        ns = f"±{100 * r['share_noise_seeds']:.2g} %" if "share_noise_seeds" in r else "—"
+        lines.append(f"| [{r['effect']}] {r['label']} | {100 * r['share']:+.1f} % | "
+                     f"±{100 * r['share_noise']:.2g} % | {ns} |")
+    return "\n".join(lines)

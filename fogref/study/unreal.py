@@ -38,7 +38,8 @@ from fogref.study import budget as B
 
 #: What-if variants of the engine settings (Unreal units, cm).
 WHAT_IF = {
-    "Unreal default DirectionalInscatteringStartDistance (100 m)": {"DirectionalInscatteringStartDistance": 10000.0},
+    "Unreal default DirectionalInscatteringStartDistance (100 m)":
+        {"DirectionalInscatteringStartDistance": 10000.0},
     "StartDistance 20 m": {"StartDistance": 2000.0},
     "FogMaxOpacity 0.9": {"FogMaxOpacity": 0.9},
     "FogCutoffDistance 2 km": {"FogCutoffDistance": 200000.0},
@@ -66,8 +67,8 @@ def scene_of_truth(truth: Truth, scene: str | None = None) -> Path:
     recorded = None if recorded is None else str(recorded)
     sha = truth.attrs.get("fogref.scene_sha256")
     if not sha:
-        raise FogrefError(f"{exr}: header attribute 'fogref.scene_sha256' is missing, so the scene it was rendered "
-                          "from cannot be checked; render the truth again with this fogref")
+        raise FogrefError(f"{exr}: header attribute 'fogref.scene_sha256' is missing, so the scene it was "
+                          "rendered from cannot be checked; render the truth again with this fogref")
     sha = str(sha)
     cands = [Path(scene)] if scene else []
     if recorded and not scene:
@@ -80,9 +81,9 @@ def scene_of_truth(truth: Truth, scene: str | None = None) -> Path:
             return c
     c = found[0]
     raise FogrefError(
-        f"{exr}: the scene file {c} has changed since this truth was rendered (its SHA-256 is now {_sha256(c)}, "
-        f"the truth recorded {sha}). The study re-renders budget steps from the scene as the truth recorded it: "
-        "restore that version (or pass it with --scene), or render the truth again.")
+        f"{exr}: the scene file {c} has changed since this truth was rendered (its SHA-256 is now "
+        f"{_sha256(c)}, the truth recorded {sha}). The study re-renders budget steps from the scene as the "
+        "truth recorded it: restore that version (or pass it with --scene), or render the truth again.")
 
 
 def sunless_scene(scene: Path, out_dir: Path) -> Path:
@@ -187,8 +188,9 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
     scene_path = scene_of_truth(truth, scene)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    provenance = {"truth": str(exr), "scene": str(scene_path), "scene_sha256": str(truth.attrs["fogref.scene_sha256"]),
-                  "overrides": overrides, "spp": spp, "seed": seed, "pixel_filter": pixel_filter}
+    provenance = {"truth": str(exr), "scene": str(scene_path),
+                  "scene_sha256": str(truth.attrs["fogref.scene_sha256"]), "overrides": overrides, "spp": spp,
+                  "seed": seed, "pixel_filter": pixel_filter}
 
     # -- 1. fits ------------------------------------------------------------
     log("fitting Unreal's colours, exponent and start distance ...")
@@ -216,7 +218,8 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
     rdir = Path(renders_dir)
     nosun = sunless_scene(scene_path, rdir)
     ov_nosun = overrides_used_by(nosun, overrides)
-    sky_a = _render_cached(nosun, rdir / f"{exr.stem}_nosun_s{seed}.exr", spp, seed, ov_nosun, log, pixel_filter)
+    sky_a = _render_cached(nosun, rdir / f"{exr.stem}_nosun_s{seed}.exr", spp, seed, ov_nosun, log,
+                           pixel_filter)
     truth_b = _render_cached(scene_path, rdir / f"{exr.stem}_s{seed + 1}.exr", spp, seed + 1, overrides, log,
                              pixel_filter)
     sky_b = _render_cached(nosun, rdir / f"{exr.stem}_nosun_s{seed + 1}.exr", spp, seed + 1, ov_nosun, log,
@@ -227,12 +230,22 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
     tb, sa, sb = load_truth(truth_b), load_truth(sky_a), load_truth(sky_b)
     for other, path in ((tb, truth_b), (sa, sky_a), (sb, sky_b)):
         if other.shape != truth.shape:
-            raise FogrefError(f"{path}: resolution {other.shape[::-1]} differs from {exr} {truth.shape[::-1]}")
+            raise FogrefError(f"{path}: resolution {other.shape[::-1]} differs from {exr} "
+                              f"{truth.shape[::-1]}")
     S_a = B.chain(truth, sa.single, pf, lobe.params, model_params)
     S_b = B.chain(tb, sb.single, pf, lobe.params, model_params)
     valid = truth.surface_valid & tb.surface_valid
-    res = B.attribute(S_a, truth.hit, valid, B.chain_noise(truth, sa.stderr["single"], lobe.params, model_params))
+    noise = B.chain_noise(truth, sa.stderr["single"], lobe.params, model_params)
+    res = B.attribute(S_a, truth.hit, valid, noise)
     B.add_noise(res, S_a, S_b, truth.hit, valid)
+    log("computing the Shapley budget (all coalitions of the effects) ...")
+    engine = B.unreal_engine(lobe.params, model_params)
+    parts_a = B.shapley_parts(truth, sa.single, pf, engine)
+    parts_b = B.shapley_parts(tb, sb.single, pf, engine)
+    for key, effects in (("shapley", B.EFFECTS), ("shapley_colours_in_lobe", B.EFFECTS_COLOURS_IN_LOBE)):
+        res[key] = B.add_shapley_seed_noise(B.shapley_budget(parts_a, valid, effects),
+                                            B.shapley_budget(parts_b, valid, effects, resamples=0))
+    del parts_a, parts_b
     res["what_if"] = B.what_if(truth, model_params, WHAT_IF)
     res["footprint"] = B.footprint_check(truth, pf, S_a)
     if open_plane:
@@ -242,9 +255,10 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
             res["open_plane_check"] = open_plane_check(op, rdir, log)
     res["inputs"] = {**provenance, "sky_only": str(sky_a), "truth_other_seed": str(truth_b),
                      "sky_only_other_seed": str(sky_b), "resolution": list(truth.shape[::-1]),
-                     "unreal_params": fit_doc["unreal"] | {"StartDistance_cm": model_params.StartDistance,
-                                                           "FogMaxOpacity": model_params.FogMaxOpacity,
-                                                           "FogCutoffDistance_cm": model_params.FogCutoffDistance},
+                     "unreal_params": fit_doc["unreal"] | {
+                         "StartDistance_cm": model_params.StartDistance,
+                         "FogMaxOpacity": model_params.FogMaxOpacity,
+                         "FogCutoffDistance_cm": model_params.FogCutoffDistance},
                      "lobe_fit_params": lobe.to_dict()["unreal"]}
     res["method"] = B.__doc__
     write_text(out / "budget.json", json.dumps(res, indent=2) + "\n")
@@ -255,6 +269,7 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
     summary = {"exr": str(exr), "scene": str(scene_path), "provenance": provenance, "fit": fit_doc,
                "lobe_fit": lobe.to_dict(), "compare": cmp_summary, "budget_total": res["total"],
                "largest_term": max(res["steps"], key=lambda s: s["share"]),
+               "largest_shapley_term": max(res["shapley"]["effects"], key=lambda s: s["share"]),
                "seconds": time.perf_counter() - t0}
     write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
     write_text(out / "README.md", readme(summary, res))
@@ -269,10 +284,11 @@ def reproduce_command(provenance: dict) -> str:
     --------
     >>> reproduce_command({"scene": "scenes/lake.xml", "spp": 32, "seed": 1, "overrides": {"res": 64},
     ...                    "truth": "out/lake.exr", "pixel_filter": "centre"})
-    'fogref render scenes/lake.xml --spp 32 --seed 1 --set res=64 --out out/lake.exr && fogref study out/lake.exr'
+    'fogref render scenes/lake.xml --spp 32 --seed 1 --set res=64 --out out/lake.exr && fogref study ...'
     """
     sets = "".join(f" --set {k}={v}" for k, v in (provenance.get("overrides") or {}).items())
-    return (f"fogref render {provenance['scene']} --spp {provenance['spp']} --seed {provenance['seed']}{sets} "
+    return (f"fogref render {provenance['scene']} --spp {provenance['spp']} "
+            f"--seed {provenance['seed']}{sets} "
             f"--out {provenance['truth']} && fogref study {provenance['truth']}")
 
 
@@ -299,41 +315,56 @@ def readme(summary: dict, res: dict) -> str:
     for k, v in ed.items():
         lines.append(f"| {k} | {col(v) if isinstance(v, list) else f'{v:.6g}'} |")
     lines += ["",
-              "Density, falloff and height: exact mapping (`medium_to_ue4`).  Colours, exponent and directional "
-              "start distance: `fogref fit` (least squares against the closed-form sun + sky single scattering "
-              f"with sun attenuation over {fit['error']['n_views']} views from the camera; relative RMSE of the "
-              f"fit on those views {fit['error']['rel_rmse']:.3f}).  Sun luminance 1 (the colour carries it).", "",
+              "Density, falloff and height: exact mapping (`medium_to_ue4`).  Colours, exponent and "
+              "directional start distance: `fogref fit` (least squares against the closed-form sun + sky "
+              f"single scattering with sun attenuation over {fit['error']['n_views']} views from the camera; "
+              f"relative RMSE of the fit on those views {fit['error']['rel_rmse']:.3f}).  Sun luminance 1 "
+              "(the colour carries it).", "",
               "## Headline", ""]
     c = summary.get("compare")
     lines.append(f"- **Final image RMSE of Unreal (float32) vs truth: {t['rmse']['all']:.4g}** "
                  f"(surface pixels {t['rmse']['surface']:.4g}, sky {t['rmse']['sky']:.4g}; "
-                 f"truth RMS {t['truth_rms']:.4g}, i.e. {100 * t['rmse']['all'] / t['truth_rms']:.1f} % relative; "
+                 f"truth RMS {t['truth_rms']:.4g}, i.e. {100 * t['rmse']['all'] / t['truth_rms']:.1f} % "
+                 "relative; "
                  f"Monte Carlo noise of this number ±{t.get('noise_rmse', 0):.1g}"
                  + (f"; noise floor {t['rmse_noise_floor']:.2g}, "
-                    f"{'below the noise' if t['below_noise'] else 'above the noise'}" if "rmse_noise_floor" in t
-                    else "") + ").")
+                    f"{'below the noise' if t['below_noise'] else 'above the noise'}"
+                    if "rmse_noise_floor" in t else "") + ").")
     if c:
         f = c["final"]
         lines.append(f"- fogref.compare (final image): relMSE {f.get('relmse', float('nan')):.4g}, "
                      f"mean ΔE2000 {f.get('delta_e2000_mean', float('nan')):.3g}, "
                      f"mean FLIP {f.get('flip_mean', float('nan')):.3g}; inscatter RMSE "
                      f"{c['inscatter'].get('rmse', float('nan')):.4g}; transmittance RMSE "
-                     f"{c['transmittance'].get('rmse', float('nan')):.3g}.  Full report: [compare/index.md](compare/index.md).")
+                     f"{c['transmittance'].get('rmse', float('nan')):.3g}.  "
+                     "Full report: [compare/index.md](compare/index.md).")
     fc = res.get("footprint")
     oc = res.get("open_plane_check")
     top = steps[0]
-    lines.append(f"- Largest budget term: **[{top['effect']}] {top['label']}**, {100 * top['share']:.1f} % of the "
+    sh = res.get("shapley")
+    if sh:
+        rows = sorted(sh["effects"], key=lambda r: -r["share"])
+        st = rows[0]
+        lines.append(f"- Largest Shapley term: **[{st['effect']}] {st['label']}**, {100 * st['share']:.1f} % "
+                     f"± {100 * st['share_noise']:.1f} % of the squared error (order-independent: "
+                     f"its Shapley value over all {sh['coalitions']} coalitions of the effects).")
+        lines.append("- Shapley budget, by share of the squared error: " + "; ".join(
+            f"[{r['effect']}] {r['label']} {100 * r['share']:+.1f} %" for r in rows) + ".")
+    lines.append(f"- Largest term of the telescoping chain (second view, depends on the chain's order): "
+                 f"**[{top['effect']}] {top['label']}**, {100 * top['share']:.1f} % of the "
                  f"squared error (step RMSE {top['rmse']['all']:.4g}).")
-    lines.append("- Budget, by share of the squared error: " + "; ".join(
+    lines.append("- Chain, by share of the squared error: " + "; ".join(
         f"[{s['effect']}] {s['label']} {100 * s['share']:+.1f} %" for s in steps) + ".")
     shadows = next((s for s in res["steps"] if s["key"] == "shadows"), None)
     if oc and shadows:
-        here = (f"on `{name}` the same step is below the noise (RMSE {shadows['rmse']['all']:.3g}, noise floor "
-                f"{shadows['rmse_noise_floor']:.3g}): nothing here casts a measurable shadow into the fog"
+        here = (f"on `{name}` the same step is below the noise (RMSE {shadows['rmse']['all']:.3g}, "
+                f"noise floor {shadows['rmse_noise_floor']:.3g}): nothing here casts a measurable shadow "
+                "into the fog"
                 if shadows.get("below_noise") else
                 f"on `{name}` it is RMSE {shadows['rmse']['all']:.3g}"
-                + (f" against a noise floor of {shadows['rmse_noise_floor']:.3g}" if "rmse_noise_floor" in shadows
-                   else "") + ": geometric shadows (light shafts) that the engine does not model")
+                + (f" against a noise floor of {shadows['rmse_noise_floor']:.3g}"
+                   if "rmse_noise_floor" in shadows else "")
+                + ": geometric shadows (light shafts) that the engine does not model")
         lines.append(f"- Check: on `{oc['scene']}` (no occluders) the shadow step is pure noise (RMSE "
                      f"{oc['shadows_rmse']:.3g} vs noise {oc['noise_rmse']:.3g}), so the closed-form single "
                      f"scattering agrees with the path tracer; {here}"
@@ -341,16 +372,21 @@ def readme(summary: dict, res: dict) -> str:
                         f"{100 * fc['share_of_step_sq']:.1f} % of that step)." if fc else "."))
     if res.get("excluded_pixels"):
         lines.append(f"- {res['excluded_pixels']} pixel(s) are excluded from the budget and the comparison's "
-                     "composited parts: the truth's unattenuated surface radiance is undefined there (no sample "
-                     "reached the surface through the fog).")
+                     "composited parts: the truth's unattenuated surface radiance is undefined there "
+                     "(no sample reached the surface through the fog).")
     lines += ["", "See [budget.md](budget.md) for the table (RMSE, share and noise of each step), "
               "[budget.png](budget.png), [budget.json](budget.json), [fit.json](fit.json).", "",
               "## Reading the budget", "",
-              "The steps telescope exactly: truth → no multiple scattering → closed-form sun without shadows → "
-              "closed-form sky without ground occlusion/attenuation → no sun attenuation → Unreal's cosine lobe "
-              "(colours fitted without attenuation) → colours re-fitted with attenuation → start distances → "
-              "max opacity/cutoff → float32.  The shares sum to 100 %; negative shares are compensations (the "
-              "re-fit absorbs part of the sun attenuation on average; removing multiple scattering removes light "
-              "Unreal also lacks, etc.).  The RMSE column gives each step's own size; steps 1–3 use renders "
-              "and carry Monte Carlo noise (given per row) — compare a term with its noise before reading it.", ""]
+              "The Shapley shares do not depend on any order: each effect's share is its average "
+              "contribution to the squared error over every order in which the effects could be switched "
+              "from the truth to the engine (all coalitions, closed forms and renders cached).  "
+              "The chain below is the second view.  "
+              "The steps telescope exactly: truth → no multiple scattering → closed-form sun without "
+              "shadows → closed-form sky without ground occlusion/attenuation → no sun attenuation → "
+              "Unreal's cosine lobe (colours fitted without attenuation) → colours re-fitted with "
+              "attenuation → start distances → max opacity/cutoff → float32.  The shares sum to 100 %; "
+              "negative shares are compensations (the re-fit absorbs part of the sun attenuation on average; "
+              "removing multiple scattering removes light Unreal also lacks, etc.).  The RMSE column gives "
+              "each step's own size; steps 1–3 use renders and carry Monte Carlo noise (given per row) — "
+              "compare a term with its noise before reading it.", ""]
     return "\n".join(lines)

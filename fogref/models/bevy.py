@@ -1,0 +1,242 @@
+"""Bevy ``DistanceFog``: ``FogFalloff::{Linear, Exponential, ExponentialSquared, Atmospheric}``.
+
+Source (verified against the repository ``bevyengine/bevy``):
+
+* ``crates/bevy_pbr/src/render/fog.wgsl`` (``scattering_adjusted_fog_color``, ``linear_fog``,
+  ``exponential_fog``, ``exponential_squared_fog``, ``atmospheric_fog``);
+* ``crates/bevy_pbr/src/render/pbr_functions.wgsl`` (``apply_fog``: ``distance =
+  length(world - camera)``; the directional lobe ``scattering += pow(max(dot(v, l), 0),
+  directional_light_exponent) * light.color.rgb * view.exposure`` over the directional
+  lights, ``v`` the unit view vector, ``l`` = ``direction_to_light``, only when
+  ``directional_light_color.a > 0``);
+* ``crates/bevy_pbr/src/render/fog.rs`` (``prepare_fog``: ``be = (start, end, 0)`` for
+  Linear, ``(density, 0, 0)`` for Exponential and ExponentialSquared, ``be = extinction``
+  and ``bi = inscattering`` for Atmospheric; colours as ``LinearRgba``).
+
+The fog colour (``scattering_adjusted_fog_color``): ``c = base_color.rgb + scattering *
+directional_light_color.rgb * directional_light_color.a`` (alpha ``a = base_color.a``).
+Then, with ``d`` the distance [m]:
+
+* Linear: ``f = a (1 - clamp((end - d)/(end - start), 0, 1))``, ``mix(input, c, f)``;
+* Exponential: ``f = a (1 - 1/exp(d density))``;
+* ExponentialSquared: ``f = a (1 - 1/exp((d density)^2))``;
+* Atmospheric (per RGB channel): ``E = 1 - 1/exp(d extinction)``, ``I = 1 - 1/exp(d
+  inscattering)``, ``out = input (1 - E a) + c I a``.
+
+So ``transmittance = 1 - f`` (grey) or ``1 - E a`` (RGB), ``inscatter = c f`` or ``c I a``.
+
+Units: Bevy is y-up, right-handed, **metres** by convention, the same frame as fogref.
+``density``, ``extinction``, ``inscattering`` [1/m]; ``start``/``end`` [m].  The light's
+``color * exposure`` is one parameter here, ``light_color`` (linear RGB), and
+``light_direction`` points **toward** the sun (Bevy's ``direction_to_light``).
+
+Physical counterpart: Exponential (and Atmospheric with ``extinction = inscattering``)
+is exactly a homogeneous medium, ``sigma_t = density`` [1/m]; Atmospheric with an RGB
+``extinction`` is exactly a homogeneous medium with coloured extinction.  Bevy's fog
+has no height term: an exponential height profile has no exact counterpart.  Linear
+and ExponentialSquared have none either (:func:`bevy_sigma` gives the nearest medium).
+float64 forms the transmittance as ``(1 - a) + a exp(-x)`` (the same value without the
+cancellation of ``1 - (1 - 1/exp(x))``).  Robustness (deviations): ``d`` is floored at 1e-30
+where the shader divides by it (the
+pixel at the camera); ``end == start`` is refused for Linear (the shader divides by 0).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fogref.errors import ParameterError
+from fogref.media import rgb
+from fogref.models._num import dtype_of, grey, split
+from fogref.models.base import FogResult, register
+
+FALLOFFS = ("Linear", "Exponential", "ExponentialSquared", "Atmospheric")
+
+
+@dataclass(frozen=True)
+class BevyFogParams:
+    """``DistanceFog`` (Bevy), plus the one directional light it scatters.
+
+    falloff: "Linear", "Exponential", "ExponentialSquared" or "Atmospheric".
+    start, end [m] (Linear); density [1/m] (Exponential, ExponentialSquared);
+    extinction, inscattering: RGB [1/m] (Atmospheric).  color: linear RGBA (the alpha
+    scales the whole fog).  directional_light_color: linear RGBA (alpha 0: no lobe),
+    directional_light_exponent: the lobe's power.  light_direction: unit vector toward
+    the sun (fogref frame); light_color: the light's linear RGB colour times the view's
+    exposure.  Defaults are Bevy's ``DistanceFog::default()`` (Linear 0..100 m, white,
+    no lobe; exponent 8).
+
+    Examples
+    --------
+    >>> BevyFogParams(falloff="Exponential", density=0.02).density
+    0.02
+    >>> BevyFogParams(falloff="Fog")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: <BevyFogParams>: parameter 'falloff': expected one of ('Linear', \
+'Exponential', 'ExponentialSquared', 'Atmospheric'), got 'Fog'
+    """
+
+    falloff: str = "Linear"
+    start: float = 0.0
+    end: float = 100.0
+    density: float = 0.0
+    extinction: tuple = (0.0, 0.0, 0.0)
+    inscattering: tuple = (0.0, 0.0, 0.0)
+    color: tuple = (1.0, 1.0, 1.0, 1.0)
+    directional_light_color: tuple = (0.0, 0.0, 0.0, 0.0)
+    directional_light_exponent: float = 8.0
+    light_direction: tuple = (0.0, 1.0, 0.0)
+    light_color: tuple = (1.0, 1.0, 1.0)
+
+    def __post_init__(self):
+        src = "<BevyFogParams>"
+        if self.falloff not in FALLOFFS:
+            raise ParameterError(src, "falloff", f"expected one of {FALLOFFS}, got {self.falloff!r}")
+        if not (math.isfinite(self.density) and self.density >= 0):
+            raise ParameterError(src, "density", f"value {self.density} must be finite and >= 0")
+        for name in ("start", "end", "directional_light_exponent"):
+            if not math.isfinite(getattr(self, name)):
+                raise ParameterError(src, name, "must be finite")
+        if self.directional_light_exponent < 0:
+            raise ParameterError(src, "directional_light_exponent", "must be >= 0")
+        if self.falloff == "Linear" and not self.end > self.start:
+            raise ParameterError(src, "end", f"must be greater than start ({self.end} <= {self.start})")
+        for name in ("extinction", "inscattering"):
+            object.__setattr__(self, name, rgb(getattr(self, name), name, src, lo=0.0))
+        object.__setattr__(self, "light_color", rgb(self.light_color, "light_color", src, lo=0.0))
+        for name in ("color", "directional_light_color"):
+            v = tuple(float(x) for x in getattr(self, name))
+            if len(v) == 3:
+                v = (*v, 1.0)
+            if len(v) != 4 or not all(math.isfinite(x) for x in v):
+                raise ParameterError(src, name, "expected finite (r, g, b, a)")
+            if not 0.0 <= v[3] <= 1.0:
+                raise ParameterError(src, name, f"alpha {v[3]} outside [0, 1]")
+            object.__setattr__(self, name, v)
+        w = np.asarray(self.light_direction, dtype=np.float64)
+        n = float(np.linalg.norm(w))
+        if w.shape != (3,) or not (math.isfinite(n) and n > 0):
+            raise ParameterError(src, "light_direction", "expected a non-zero finite 3-vector")
+        object.__setattr__(self, "light_direction", tuple(float(x) for x in w / n))
+
+
+def _one_minus_inv_exp(x, dt):
+    """``1 - 1/exp(x)`` as the WGSL writes it (exp overflows to inf: 1 - 0 = 1)."""
+    return dt(1.0) - dt(1.0) / np.exp(x)
+
+
+@register("bevy")
+class BevyDistanceFog:
+    """Bevy DistanceFog (see module doc).
+
+    Examples
+    --------
+    >>> fog = BevyDistanceFog(BevyFogParams(falloff="Exponential", density=0.01))
+    >>> r = fog.evaluate([0.0, 0.0, 0.0], [[100.0, 0.0, 0.0]], "float64")
+    >>> round(float(r.transmittance[0, 0]), 6)     # exp(-0.01 * 100)
+    0.367879
+    """
+
+    Params = BevyFogParams
+
+    def __init__(self, params: BevyFogParams | None = None):
+        self.params = params or BevyFogParams()
+
+    def evaluate(self, camera, world_pos, precision: str = "float32") -> FogResult:
+        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
+        dt = dtype_of(precision)
+        p = self.params
+        cam, wp = split(camera, world_pos)
+        with np.errstate(all="ignore"):
+            v = (wp - cam).astype(dt)
+            d = np.sqrt(np.sum(v * v, axis=-1))
+            base = np.asarray(p.color[:3], dtype=dt)
+            a = dt(p.color[3])
+            color = np.broadcast_to(base, d.shape + (3,)).astype(dt)
+            if p.directional_light_color[3] > 0:
+                l = np.asarray(p.light_direction, dtype=dt)
+                vn = v / np.maximum(d, dt(1e-30))[..., None]
+                cos = vn[..., 0] * l[0] + vn[..., 1] * l[1] + vn[..., 2] * l[2]
+                lobe = np.power(np.maximum(cos, dt(0.0)), dt(p.directional_light_exponent))
+                scattering = lobe[..., None] * np.asarray(p.light_color, dtype=dt)
+                dl = p.directional_light_color
+                color = color + scattering * np.asarray(dl[:3], dtype=dt) * dt(dl[3])
+            exact = dt is np.float64      # same values, without the cancellation of 1 - (1 - 1/exp(x))
+            if p.falloff == "Atmospheric":
+                xe = d[..., None] * np.asarray(p.extinction, dtype=dt)
+                I = _one_minus_inv_exp(d[..., None] * np.asarray(p.inscattering, dtype=dt), dt)
+                trans = (dt(1.0) - a) + a * np.exp(-xe) if exact else dt(1.0) - _one_minus_inv_exp(xe, dt) * a
+                insc = color * I * a
+            else:
+                if p.falloff == "Linear":
+                    s, e = dt(p.start), dt(p.end)
+                    f = dt(1.0) - np.minimum(np.maximum((e - d) / (e - s), dt(0.0)), dt(1.0))
+                    t = dt(1.0) - a * f
+                else:
+                    x = d * dt(p.density)
+                    if p.falloff == "ExponentialSquared":
+                        x = x * x
+                    f = _one_minus_inv_exp(x, dt)
+                    t = (dt(1.0) - a) + a * np.exp(-x) if exact else dt(1.0) - a * f
+                f = a * f
+                trans = grey(t, dt)
+                insc = color * f[..., None]
+        return FogResult(inscatter=insc.astype(dt), transmittance=trans.astype(dt))
+
+    def to_medium(self, **kw):
+        return bevy_to_medium(self.params, **kw)
+
+
+def bevy_sigma(params: BevyFogParams, reference_distance: float | None = None) -> tuple:
+    """RGB extinction [1/m] of the homogeneous medium nearest to ``params``.
+
+    Exponential: ``density`` (exact); Atmospheric: ``extinction`` (exact for the
+    transmittance); ExponentialSquared: ``density^2 r`` (equal transmittance at ``r``,
+    default ``1/density``); Linear: ``-ln(T(r))/r`` at ``r`` (default ``(start + end)/2``).
+    All for a fog alpha of 1.
+
+    Examples
+    --------
+    >>> bevy_sigma(BevyFogParams(falloff="Atmospheric", extinction=(0.1, 0.2, 0.3)))
+    (0.1, 0.2, 0.3)
+    """
+    if params.falloff == "Atmospheric":
+        return tuple(params.extinction)
+    if params.falloff == "Exponential":
+        return (params.density,) * 3
+    if params.falloff == "ExponentialSquared":
+        if params.density <= 0:
+            return (0.0,) * 3
+        r = reference_distance or 1.0 / params.density
+        return (params.density ** 2 * r,) * 3
+    s, e = params.start, params.end
+    r = reference_distance if reference_distance is not None else 0.5 * (s + e)
+    T = min(max((e - r) / (e - s), 1e-300), 1.0)
+    return (-math.log(T) / r if r > 0 else 0.0,) * 3
+
+
+def bevy_to_medium(params: BevyFogParams, reference_distance: float | None = None, albedo=(1.0, 1.0, 1.0),
+                   g: float = 0.0):
+    """Homogeneous :class:`~fogref.media.FogMedium` for ``params`` (see :func:`bevy_sigma`)."""
+    from fogref.media import ExpLayer, FogMedium
+
+    return FogMedium(sigma_t=bevy_sigma(params, reference_distance), albedo=albedo, g=g,
+                     layers=(ExpLayer(1.0, 0.0, 0.0),), source="<bevy_to_medium>")
+
+
+def medium_to_bevy(medium, **kw) -> BevyFogParams:
+    """Atmospheric fog equal to a homogeneous, unbounded medium (RGB extinction allowed).
+
+    ``extinction = inscattering = sigma_t * density`` [1/m]; ``kw``: the other options
+    (colours, lobe).  ParameterError naming 'layers' for a bounded or height-varying medium.
+    """
+    src = getattr(medium, "source", "<medium>")
+    if medium.bounds is not None or not medium.is_homogeneous:
+        raise ParameterError(src, "layers", "Bevy's DistanceFog needs an unbounded homogeneous medium")
+    k = sum(L.density for L in medium.layers)
+    s = tuple(float(x) * k for x in np.asarray(medium.sigma_t, dtype=np.float64))
+    return BevyFogParams(falloff="Atmospheric", extinction=s, inscattering=s, **kw)

@@ -1,0 +1,253 @@
+"""Godot 4 environment fog (``Environment.fog_*``, the non-volumetric "fixed" fog).
+
+Source (verified against the repository ``godotengine/godot``):
+
+* ``servers/rendering/renderer_rd/shaders/forward_clustered/scene_forward_clustered.glsl``,
+  ``fog_process(vertex)`` (``vertex``: the view-space position) and its use
+  ``frag_color.rgb = mix(frag_color.rgb, fog.rgb, fog.a)``::
+
+      fog_color = fog_light_color;
+      if (aerial perspective) fog_color = mix(fog_color, sky_fog_color, fog_aerial_perspective);
+      if (sun scatter) for each directional light:
+          fog_color += light.color * light.energy
+                       * pow(max(dot(normalize(vertex), light.direction), 0.0), 8.0) * fog_sun_scatter;
+      if (depth fog) fog_amount = pow(smoothstep(fog_depth_begin, fog_depth_end, length(vertex)),
+                                      fog_depth_curve) * fog_density;
+      else           fog_amount = 1 - exp(min(0.0, -length(vertex) * fog_density));
+      if (height fog) fog_amount = max(1.0 - exp(min(0.0, (y - fog_height) * fog_height_density)),
+                                       fog_amount);
+
+  (``y``: the world height of the shaded point);
+* ``servers/rendering/renderer_rd/storage_rd/render_scene_data_rd.cpp`` (CPU):
+  ``fog_light_color = srgb_to_linear(color) * fog_light_energy``; ``fog_depth_end = end > 0 ?
+  end : z_far``; ``fog_depth_begin = min(begin, fog_depth_end - 0.001)``;
+* ``servers/rendering/renderer_rd/shaders/environment/sky.glsl``: sky pixels are fogged by
+  the sky shader instead, ``fog_process(view, sky_color)`` returns ``(mix(fog_light_color,
+  sky_color, fog_aerial_perspective) + sun scatter, 1.0)`` and ``frag_color.rgb =
+  mix(frag_color.rgb, fog.rgb, fog.a * fog_sky_affect)`` (some 4.x releases also multiply
+  the sky's sun scatter by pi; not modelled).
+
+Units: Godot is y-up, **metres**, the same frame as fogref.  ``fog_density`` [1/m]
+(exponential mode; in depth mode it is the maximum opacity, in [0, 1]),
+``fog_height`` [m], ``fog_height_density`` [1/m] (> 0: fog below ``fog_height``; < 0:
+above).  Colours: ``fog_light_color`` is *linear* RGB here (Godot converts the
+editor's sRGB colour on the CPU: pass ``srgb_to_linear(c)``; the default is Godot's
+default colour converted); ``sun_color`` = the light's linear colour times its energy;
+``sun_direction`` points **toward** the sun; ``sky_color`` is the sky radiance the
+aerial perspective samples (fogref's skies are constant, so the blurred radiance map is
+that constant).
+
+Result: scene pixels ``transmittance = 1 - fog_amount`` (grey), ``inscatter = fog_color *
+fog_amount``.  Sky pixels (distance >= ``sky_distance``; fogref's compare puts them at
+:data:`~fogref.models.base.SKY_DISTANCE`): ``s = fog_sky_affect``,
+``transmittance = 1 - s (1 - fog_aerial_perspective)`` and ``inscatter = s ((1 -
+fog_aerial_perspective) fog_light_color + sun scatter)``: the sky's own colour stands in
+for ``sky_color``.
+
+Physical counterpart: the exponential mode without height fog is exactly a homogeneous
+medium, ``sigma_t = fog_density`` [1/m].  Godot's height fog is **not** an optical
+depth: it depends only on the end point's height and is combined with ``max``, so an
+exponential height profile has no exact counterpart (see
+:func:`fogref.mapping.engines.godot_from_physical`).  The depth mode has none either.
+Robustness (deviations): the lobe normalises ``vertex`` with ``length`` floored at 1e-30
+(the shader's ``normalize(0)`` is NaN at the camera).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fogref.errors import ParameterError
+from fogref.media import rgb
+from fogref.models._num import dtype_of, grey, split
+from fogref.models.base import SKY_DISTANCE, FogResult, register
+
+MODES = ("exponential", "depth")
+#: Godot's default ``fog_light_color`` Color(0.518, 0.553, 0.608) (sRGB) as linear RGB.
+DEFAULT_FOG_LIGHT_COLOR = (0.231082, 0.266417, 0.327964)
+#: The lobe exponent Godot hard-codes in ``fog_process`` (``pow(..., 8.0)``).
+SUN_SCATTER_EXPONENT = 8.0
+#: ``fog_sun_scatter`` at or below this adds nothing (Godot's test ``fog_sun_scatter > 0.001``).
+SUN_SCATTER_MIN = 0.001
+
+
+def srgb_to_linear(c) -> tuple:
+    """Godot's ``Color.srgb_to_linear`` of an RGB triple (each component in [0, 1]).
+
+    Examples
+    --------
+    >>> [round(x, 6) for x in srgb_to_linear((0.518, 0.553, 0.608))]
+    [0.231082, 0.266417, 0.327964]
+    """
+    return tuple(float(x / 12.92 if x < 0.04045 else ((x + 0.055) / 1.055) ** 2.4) for x in c)
+
+
+@dataclass(frozen=True)
+class GodotFogParams:
+    """``Environment`` fog properties (Godot 4), the sun, the sky colour and the far plane.
+
+    Defaults are Godot's (``fog_mode`` exponential, density 0.01, sky affect 1, depth curve 1,
+    begin 10 m, end 100 m; ``z_far`` = Camera3D's default 4000 m).
+
+    Examples
+    --------
+    >>> GodotFogParams().fog_density
+    0.01
+    >>> GodotFogParams(fog_mode="depth", fog_density=2.0)
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: <GodotFogParams>: parameter 'fog_density': depth mode: 2.0 outside [0, 1]
+    """
+
+    fog_mode: str = "exponential"
+    fog_light_color: tuple = DEFAULT_FOG_LIGHT_COLOR
+    fog_light_energy: float = 1.0
+    fog_sun_scatter: float = 0.0
+    fog_density: float = 0.01
+    fog_aerial_perspective: float = 0.0
+    fog_sky_affect: float = 1.0
+    fog_height: float = 0.0
+    fog_height_density: float = 0.0
+    fog_depth_curve: float = 1.0
+    fog_depth_begin: float = 10.0
+    fog_depth_end: float = 100.0
+    z_far: float = 4000.0
+    sun_direction: tuple = (0.0, 1.0, 0.0)
+    sun_color: tuple = (0.0, 0.0, 0.0)
+    sky_color: tuple = (0.0, 0.0, 0.0)
+    sky_distance: float = SKY_DISTANCE
+
+    def __post_init__(self):
+        src = "<GodotFogParams>"
+        if self.fog_mode not in MODES:
+            raise ParameterError(src, "fog_mode", f"expected one of {MODES}, got {self.fog_mode!r}")
+        for name in ("fog_light_energy", "fog_sun_scatter", "fog_density", "fog_depth_curve", "z_far",
+                     "sky_distance"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ParameterError(src, name, f"value {v} must be finite and >= 0")
+        for name in ("fog_aerial_perspective", "fog_sky_affect"):
+            v = getattr(self, name)
+            if not 0.0 <= v <= 1.0:
+                raise ParameterError(src, name, f"value {v} outside [0, 1]")
+        for name in ("fog_height", "fog_height_density", "fog_depth_begin", "fog_depth_end"):
+            if not math.isfinite(getattr(self, name)):
+                raise ParameterError(src, name, "must be finite")
+        if self.fog_mode == "depth" and self.fog_density > 1.0:
+            raise ParameterError(src, "fog_density", f"depth mode: {self.fog_density} outside [0, 1]")
+        for name in ("fog_light_color", "sun_color", "sky_color"):
+            object.__setattr__(self, name, rgb(getattr(self, name), name, src, lo=0.0))
+        w = np.asarray(self.sun_direction, dtype=np.float64)
+        n = float(np.linalg.norm(w))
+        if w.shape != (3,) or not (math.isfinite(n) and n > 0):
+            raise ParameterError(src, "sun_direction", "expected a non-zero finite 3-vector")
+        object.__setattr__(self, "sun_direction", tuple(float(x) for x in w / n))
+
+    def depth_range(self, dt=np.float32) -> tuple:
+        """(begin, end) [m] as the CPU passes them (end <= 0 means z_far; begin < end)."""
+        end = dt(self.fog_depth_end) if self.fog_depth_end > 0 else dt(self.z_far)
+        begin = min(dt(self.fog_depth_begin), dt(end - dt(0.001)))
+        return dt(begin), dt(end)
+
+
+def glsl_smoothstep(e0, e1, x, dt):
+    """GLSL ``smoothstep(e0, e1, x)`` in ``dt`` (e1 > e0)."""
+    t = np.minimum(np.maximum((x - e0) / (e1 - e0), dt(0.0)), dt(1.0))
+    return t * t * (dt(3.0) - dt(2.0) * t)
+
+
+@register("godot")
+class GodotFog:
+    """Godot 4 environment fog (see module doc).
+
+    Examples
+    --------
+    >>> fog = GodotFog(GodotFogParams(fog_density=0.01))
+    >>> r = fog.evaluate([0.0, 0.0, 0.0], [[100.0, 0.0, 0.0]], "float64")
+    >>> round(float(r.transmittance[0, 0]), 6)     # exp(-0.01 * 100)
+    0.367879
+    """
+
+    Params = GodotFogParams
+
+    def __init__(self, params: GodotFogParams | None = None):
+        self.params = params or GodotFogParams()
+
+    def evaluate(self, camera, world_pos, precision: str = "float32") -> FogResult:
+        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
+        dt = dtype_of(precision)
+        p = self.params
+        cam, wp = split(camera, world_pos)
+        with np.errstate(all="ignore"):
+            v = (wp - cam).astype(dt)
+            d = np.sqrt(np.sum(v * v, axis=-1))
+            light = np.asarray(p.fog_light_color, dtype=dt) * dt(p.fog_light_energy)
+            ap = dt(p.fog_aerial_perspective)
+            fog_color = np.broadcast_to(light + (np.asarray(p.sky_color, dtype=dt) - light) * ap,
+                                        d.shape + (3,)).astype(dt)
+            scatter = np.zeros(d.shape + (3,), dtype=dt)
+            if p.fog_sun_scatter > SUN_SCATTER_MIN:
+                l = np.asarray(p.sun_direction, dtype=dt)
+                vn = v / np.maximum(d, dt(1e-30))[..., None]
+                cos = vn[..., 0] * l[0] + vn[..., 1] * l[1] + vn[..., 2] * l[2]
+                amount = np.power(np.maximum(cos, dt(0.0)), dt(SUN_SCATTER_EXPONENT))
+                scatter = np.asarray(p.sun_color, dtype=dt) * amount[..., None] * dt(p.fog_sun_scatter)
+            fog_color = fog_color + scatter
+            if p.fog_mode == "depth":
+                begin, end = p.depth_range(dt)
+                fog_z = glsl_smoothstep(begin, end, d, dt)
+                amount = np.power(fog_z, dt(p.fog_depth_curve)) * dt(p.fog_density)
+            else:
+                amount = dt(1.0) - np.exp(np.minimum(dt(0.0), -d * dt(p.fog_density)))
+            if p.fog_height_density != 0.0:
+                y = dt(cam[1]) + v[..., 1]
+                y_dist = y - dt(p.fog_height)
+                vfog = dt(1.0) - np.exp(np.minimum(dt(0.0), y_dist * dt(p.fog_height_density)))
+                amount = np.maximum(vfog, amount)
+            amount = np.where(np.isfinite(amount), amount, dt(1.0)).astype(dt)
+            trans = dt(1.0) - amount
+            insc = fog_color * amount[..., None]
+            sky = d >= dt(p.sky_distance)
+            if np.any(sky):
+                s = dt(p.fog_sky_affect)
+                t_sky = dt(1.0) - s * (dt(1.0) - ap)
+                i_sky = s * (light * (dt(1.0) - ap) + scatter)
+                trans = np.where(sky, t_sky, trans)
+                insc = np.where(sky[..., None], i_sky, insc)
+        return FogResult(inscatter=insc.astype(dt), transmittance=grey(trans, dt))
+
+    def to_medium(self, **kw):
+        return godot_to_medium(self.params, **kw)
+
+
+def godot_to_medium(params: GodotFogParams, albedo=(1.0, 1.0, 1.0), g: float = 0.0):
+    """The homogeneous medium ``sigma_t = fog_density`` [1/m] (exact for the exponential
+    mode without height fog; ParameterError naming 'fog_mode' or 'fog_height_density' otherwise).
+
+    Examples
+    --------
+    >>> float(godot_to_medium(GodotFogParams(fog_density=0.02)).sigma_t[0])
+    0.02
+    """
+    from fogref.media import ExpLayer, FogMedium
+
+    src = "<godot_to_medium>"
+    if params.fog_mode != "exponential":
+        raise ParameterError(src, "fog_mode", "only the exponential mode has a physical counterpart")
+    if params.fog_height_density != 0.0:
+        raise ParameterError(src, "fog_height_density", "Godot's height fog is not an optical depth")
+    return FogMedium(sigma_t=params.fog_density, albedo=albedo, g=g, layers=(ExpLayer(1.0, 0.0, 0.0),),
+                     source=src)
+
+
+def medium_to_godot(medium, **kw) -> GodotFogParams:
+    """Exponential Godot fog equal to a homogeneous, unbounded, grey medium (``kw``: other options)."""
+    src = getattr(medium, "source", "<medium>")
+    if medium.bounds is not None or not medium.is_homogeneous:
+        raise ParameterError(src, "layers", "Godot's fog needs an unbounded homogeneous medium")
+    s = medium.grey_sigma_t("Godot")
+    return GodotFogParams(fog_mode="exponential", fog_density=s * sum(L.density for L in medium.layers),
+                          fog_height_density=0.0, **kw)
