@@ -114,7 +114,8 @@ class DrJitOps:
         sun's direction) as it enters array arithmetic: an *opaque* ``Float``, i.e. an
         evaluated one-element array that the kernel reads from memory.  A Python float
         would be traced into the kernel as a literal, so every new value of the
-        parameter would compile a new kernel; opaque, one kernel serves every value (``dr.opaque``, Dr.Jit's documented way to do this).
+        parameter would compile a new kernel; opaque, one kernel serves every value
+        (``dr.opaque``, Dr.Jit's documented way to do this).
         Trace-time branches (is the layer constant? is the sun up?) keep reading the
         Python value.  Arrays pass through unchanged.
 
@@ -133,7 +134,8 @@ class DrJitOps:
         """Several scene parameters (RGB, a direction): :meth:`param` with ``slot`` the
         index of the value's first occurrence, so that a grey colour's three channels
         are one input (and Dr.Jit computes their identical arithmetic once, as it does
-        for equal literals; one input per channel makes a longer kernel).  A colour that turns from grey to RGB compiles again."""
+        for equal literals; one input per channel makes a longer kernel).  A colour that
+        turns from grey to RGB compiles again."""
         caller, values = sys._getframe(1), list(values)
         return tuple(self._param(v, caller, values.index(v)) for v in values)
 
