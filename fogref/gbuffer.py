@@ -1,36 +1,12 @@
 """The ground-truth schema: its channel groups, declared once, and its one reader.
 
-A fogref ground truth is one multi-channel float32 EXR.  Every part of it, the
-integrator's per-sample outputs, the EXR writer, ``compare``, ``study`` and the
-README table derive from :data:`GROUPS` below; :func:`load_truth` is the one
-reader and :class:`Truth` the one object the rest of fogref sees.
-
-Parts (``(H, W, 3)`` linear RGB unless noted) and their identities::
-
-    final              = attenuated_surface + inscatter          (per pixel, exactly)
-    inscatter          = single + multiple                       (per pixel, exactly)
-    attenuated_surface ~ T * surface                             (each estimated directly)
-
-``surface`` (the radiance of the first surface or of the sky, before the fog
-attenuates it) is a ratio estimator over the samples whose camera ray reached the
-surface without scattering: it is bounded by the surface radiance itself and is
-*undefined* where ``surface_coverage == 0`` (no such sample; it is written as 0
-there).  No part is ever divided by ``T``.  With fogpath's ``forced_split`` (on by
-default) every sample traces the surface branch at depth 0 (``attenuated_surface``
-then has no scatter-or-reach noise) and continues it with a probability ``q``
-that does not depend on the surface branch's own samples; ``surface_coverage``
-counts the samples that continued it (for the sky: drew it with the same ``q``, about
-``T`` against the fog's albedo-weighted ``1 - T``) and ``surface`` is the
-same ratio estimator over them, so the delta-method stderr below still holds.
-
-Each Monte Carlo part carries its per-pixel standard error in
-``stderr.<part>.R,G,B`` (``stderr.R,G,B`` for the total), computed from the
-per-sample second moments (the delta method for the ratio ``surface``), and the
-correlation between its channels' errors in ``corr.<part>.RG,RB,GB`` (``corr.RG``
-... for the total), from the per-sample cross moments: the channels of a pixel
-share every path, so their noise is strongly correlated (about 0.9 in fog) and a
-statistic summed over R, G and B has a variance that neither independence nor
-full correlation gives.  :meth:`Truth.noise_cov` assembles the 3x3 covariance.
+A ground truth is one multi-channel float32 EXR.  The integrator's per-sample outputs, the
+EXR writer, ``compare``, ``study`` and the table of ``docs/schema.md`` derive from
+:data:`GROUPS`; :func:`load_truth` is the one reader, :class:`Truth` what the rest of fogref
+sees.  ``final = attenuated_surface + inscatter`` and ``inscatter = single + multiple`` hold per
+pixel exactly; ``surface`` is a ratio estimator, 0 where ``surface_coverage == 0``; no part is
+divided by ``T``.  Each Monte Carlo part carries ``stderr.<part>.*`` and ``corr.<part>.*``
+(:meth:`Truth.noise_cov`); ``docs/schema.md`` says how each is estimated.
 
 Examples
 --------
@@ -50,6 +26,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -75,7 +52,7 @@ class Group:
     """
 
     name: str
-    components: tuple
+    components: tuple[str, ...]
     meaning: str
     noisy: bool = False
 
@@ -84,16 +61,22 @@ class Group:
         return "" if self.name == "final" else self.name + "."
 
 
-#: Every group of the ground-truth EXR, in the order the README lists them.
+#: Every group of the ground-truth EXR, in the order ``docs/schema.md`` lists them.
 GROUPS: tuple[Group, ...] = (
     Group("final", RGB, "total radiance = attenuated_surface + inscatter", True),
     Group("T", RGB, "camera-ray transmittance to the first surface (or to infinity), closed form", True),
-    Group("attenuated_surface", RGB, "surface (or sky) radiance as it reaches the camera through the fog", True),
+    Group(
+        "attenuated_surface", RGB, "surface (or sky) radiance as it reaches the camera through the fog", True
+    ),
     Group("inscatter", RGB, "radiance the medium adds = single + multiple", True),
     Group("single", RGB, "direct sun and sky light scattered once, at the first medium vertex", True),
     Group("multiple", RGB, "everything else the medium adds", True),
-    Group("surface", RGB, "surface (or sky) radiance before the fog; defined where surface_coverage > 0", True),
-    Group("surface_coverage", (), "fraction of samples whose camera ray reached the surface or sky unscattered"),
+    Group(
+        "surface", RGB, "surface (or sky) radiance before the fog; defined where surface_coverage > 0", True
+    ),
+    Group(
+        "surface_coverage", (), "fraction of samples whose camera ray reached the surface or sky unscattered"
+    ),
     Group("distance", (), "distance from the camera to the first surface [m]; 0 for sky"),
     Group("P", XYZ, "world position of the first surface [m]; 0 for sky"),
     Group("view", XYZ, "unit camera-ray direction (world, y-up)"),
@@ -105,11 +88,11 @@ PARTS: tuple[str, ...] = tuple(g.name for g in GROUPS if g.components == RGB)
 #: What the integrator writes per sample (besides R,G,B), in this order:
 #: the parts above with ``surface`` as the unattenuated sample (0 where it did
 #: not reach the surface), then the coverage indicator and the G-buffer.
-SAMPLE_GROUPS: tuple[str, ...] = ("T", "attenuated_surface", "inscatter", "single", "multiple", "surface",
-                                  "surface_coverage", "distance", "P", "view", "hit")
+SAMPLE_GROUPS: tuple[str, ...] = tuple(
+    "T attenuated_surface inscatter single multiple surface surface_coverage distance P view hit".split()
+)
 #: Per-sample groups whose second moments the renderer accumulates.
-SQUARED_GROUPS: tuple[str, ...] = ("final", "T", "attenuated_surface", "inscatter", "single", "multiple",
-                                   "surface")
+SQUARED_GROUPS: tuple[str, ...] = PARTS
 
 
 def group(name: str) -> Group:
@@ -156,8 +139,8 @@ def exr_channel_names() -> list[str]:
     return names + [s for g in GROUPS if g.noisy for s in correlation_names(g.name)]
 
 
-def readme_table() -> str:
-    """The README's channel table, generated from :data:`GROUPS`."""
+def schema_table() -> str:
+    """The channel table of ``docs/schema.md`` (Markdown), generated from :data:`GROUPS`."""
     rows = ["| channels | meaning |", "|---|---|"]
     for g in GROUPS:
         names = channel_names(g.name)
@@ -166,9 +149,6 @@ def readme_table() -> str:
     rows.append("| `stderr.<part>.*` | per-pixel standard error of each Monte Carlo part |")
     rows.append("| `corr.<part>.RG,RB,GB` | correlation of the noise of the part's channels, in [-1, 1] |")
     return "\n".join(rows)
-
-
-# ---------------------------------------------------------------- derivation
 
 
 class _NumpyArrays:
@@ -186,7 +166,7 @@ class _NumpyArrays:
 class _DrJitArrays:
     """The same for Dr.Jit float64 tensors (the render driver's sums stay on the device)."""
 
-    def __init__(self):
+    def __init__(self) -> None:
         import drjit as dr
 
         self.asarray = lambda x: x
@@ -195,29 +175,22 @@ class _DrJitArrays:
         self.stack_last = lambda xs: dr.concat([x[..., None] for x in xs], axis=len(xs[0].shape))
 
 
-def _arrays_for(x):
+def _arrays_for(x: Any) -> Any:
     return _DrJitArrays() if type(x).__module__.startswith("drjit") else _NumpyArrays
 
 
-def moments_to_channels(sums: dict, squares: dict, n: int, cross: dict) -> dict:
+def moments_to_channels(
+    sums: dict[str, Any], squares: dict[str, Any], n: int, cross: dict[str, Any]
+) -> dict[str, Any]:
     """EXR channels from per-pixel sums of the per-sample outputs.
 
-    Parameters
-    ----------
-    sums:    group name -> ``(H, W, k)`` float64 sum over the ``n`` samples of a pixel,
-             for every name in ``("final",) + SAMPLE_GROUPS``: numpy arrays, or Dr.Jit
-             float64 tensors (then so is the result: the driver computes the channels on
-             the device and copies float32 to the host once).
-    squares: group name -> ``(H, W, 3)`` float64 sum of squares, for :data:`SQUARED_GROUPS`.
-    n:       samples per pixel (>= 1).
-    cross:   group name -> ``(H, W, 3)`` float64 sum of the products of the channel pairs
-             :data:`CHANNEL_PAIRS` (R*G, R*B, G*B), for :data:`SQUARED_GROUPS`.
-
-    Returns
-    -------
-    dict channel name -> ``(H, W)`` float64: means, the ratio estimator ``surface``
-    (0 where no sample reached the surface), ``stderr.*`` (0 when ``n == 1``) and
-    ``corr.*`` in [-1, 1] (0 where a channel has no noise, or ``n == 1``).
+    ``sums``: group -> ``(H, W, k)`` float64 sum over a pixel's ``n >= 1`` samples, for each of
+    ``("final",) + SAMPLE_GROUPS``, as numpy arrays or Dr.Jit float64 tensors (then so is the
+    result).  ``squares`` and ``cross``: group -> ``(H, W, 3)`` sums of squares and of the
+    pair products :data:`CHANNEL_PAIRS` (R*G, R*B, G*B), for :data:`SQUARED_GROUPS`.
+    Returns channel -> ``(H, W)`` float64: means, the ratio estimator ``surface`` (0 where no
+    sample reached the surface), ``stderr.*`` (0 if ``n == 1``) and ``corr.*`` in [-1, 1] (0
+    where a channel has no noise, or ``n == 1``).
 
     Examples
     --------
@@ -259,21 +232,21 @@ def moments_to_channels(sums: dict, squares: dict, n: int, cross: dict) -> dict:
         m2 = xp.asarray(squares[g]) / n
         mx = xp.asarray(cross[g]) / n
         if g == "surface":
-            # delta method for the ratio r = E[s]/E[c] with c in {0, 1}, s = 0 where c = 0:
-            # a sample's influence on r_i is u_i = (s_i - r_i c) / E[c], so
-            # Cov(r_i, r_j) ~ (E[s_i s_j] - r_j E[s_i] - r_i E[s_j] + r_i r_j E[c]) / (n E[c]^2)
+            # the delta method for the ratio r = E[s]/E[c] (docs/schema.md, "surface")
             r = xp.stack_last([out[c] for c in channel_names("surface")])
             var = (m2 - 2 * r * mean["surface"] + r * r * cover[..., None]) / safe[..., None] ** 2
 
-            def cov(i, j, mij, r=r):
+            def cov(i: int, j: int, mij: Any, r: Any = r) -> Any:
                 m = mean["surface"]
-                return (mij - r[..., j] * m[..., i] - r[..., i] * m[..., j]
-                        + r[..., i] * r[..., j] * cover) / safe**2
+                return (
+                    mij - r[..., j] * m[..., i] - r[..., i] * m[..., j] + r[..., i] * r[..., j] * cover
+                ) / safe**2
         else:
             var = m2 - mean[g] ** 2
 
-            def cov(i, j, mij, m=mean[g]):
-                return mij - m[..., i] * m[..., j]
+            def cov(i: int, j: int, mij: Any, r: Any = mean[g]) -> Any:
+                return mij - r[..., i] * r[..., j]
+
         var = xp.maximum(var, 0.0)
         se = xp.sqrt(var / max(n - 1, 1)) if n > 1 else xp.zeros_like(var)
         for i, c in enumerate(stderr_names(g)):
@@ -287,27 +260,17 @@ def moments_to_channels(sums: dict, squares: dict, n: int, cross: dict) -> dict:
     return out
 
 
-# ---------------------------------------------------------------- the reader
-
-
 @dataclass
 class Truth:
-    """One ground truth, as every part of fogref reads it.
+    """One ground truth, as every part of fogref reads it.  Arrays are float64, ``(H, W, 3)``
+    for the parts (``transmittance`` is the ``T`` group), ``(H, W)`` for scalars.
 
-    Arrays are float64; ``(H, W, 3)`` for the parts, ``(H, W)`` for scalars.
-
-    final, transmittance, attenuated_surface, inscatter, single, multiple, surface:
-        the parts (see the module docstring); ``transmittance`` is the ``T`` group.
-    stderr:       part name -> its per-pixel standard error, same shape.
-    corr:         part name -> ``(H, W, 3)`` correlation of its channels' noise, pairs
-                  :data:`CHANNEL_PAIRS` (RG, RB, GB), in [-1, 1]; see :meth:`noise_cov`.
-    surface_coverage: fraction of samples that reached the surface unscattered, [0, 1].
-    distance:     [m], 0 for sky pixels.  position: [m].  view: unit, world, y-up.
-    hit:          ``(H, W)`` bool, the camera ray hits a surface (most samples do).
-    hit_fraction: ``(H, W)`` in [0, 1]; strictly between 0 and 1 only on silhouettes
-                  of an anti-aliased render.
-    camera:       ``(3,)`` [m].  sun_direction: ``(3,)`` unit toward the sun, or None.
-    params:       the decoded ``fogref.params`` header; attrs: every header attribute.
+    stderr, corr: part -> its per-pixel standard error (same shape) and the ``(H, W, 3)``
+    correlation of its channels' noise (pairs :data:`CHANNEL_PAIRS`, in [-1, 1]).
+    surface_coverage: [0, 1].  distance [m] (0 for sky), position [m], view (unit, y-up).
+    hit_fraction: [0, 1], strictly inside only on an anti-aliased render's silhouettes.
+    camera: ``(3,)`` [m].  sun_direction: ``(3,)`` unit toward the sun, or None.
+    params: the decoded ``fogref.params`` header; attrs: every header attribute.
     """
 
     path: Path
@@ -318,7 +281,7 @@ class Truth:
     single: np.ndarray
     multiple: np.ndarray
     surface: np.ndarray
-    stderr: dict
+    stderr: dict[str, np.ndarray]
     surface_coverage: np.ndarray
     distance: np.ndarray
     position: np.ndarray
@@ -326,11 +289,11 @@ class Truth:
     hit_fraction: np.ndarray
     camera: np.ndarray
     sun_direction: np.ndarray | None
-    params: dict
-    attrs: dict = field(default_factory=dict)
-    corr: dict | None = None
+    params: dict[str, Any]
+    attrs: dict[str, Any] = field(default_factory=dict)
+    corr: dict[str, np.ndarray] | None = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.corr is None:  # a truth built in memory without correlations: its channels' noise is one
             self.corr = {k: np.ones(v.shape) for k, v in self.stderr.items()}
 
@@ -347,9 +310,9 @@ class Truth:
         name = "transmittance" if part == "T" else part
         if name not in self.stderr:
             raise FogrefError(f"{self.path}: no noisy part '{part}' (parts: {', '.join(self.stderr)})")
-        return covariance(self.stderr[name], self.corr[name])
+        corr = self.corr if self.corr is not None else {}
+        return covariance(self.stderr[name], corr[name])
 
-    # -- derived ---------------------------------------------------------------
     @property
     def hit(self) -> np.ndarray:
         return self.hit_fraction > 0.5
@@ -379,10 +342,8 @@ class Truth:
 
     def part(self, name: str) -> np.ndarray:
         """A part by its schema name (``T`` and ``transmittance`` are the same)."""
-        if name == "T":
-            name = "transmittance"
-        if name not in ("final", "transmittance", "attenuated_surface", "inscatter", "single", "multiple",
-                        "surface"):
+        name = "transmittance" if name == "T" else name
+        if name != "transmittance" and name not in PARTS:
             raise FogrefError(f"{self.path}: no part '{name}' (parts: {', '.join(PARTS)})")
         return getattr(self, name)
 
@@ -404,7 +365,7 @@ class Truth:
         """Largest ``|final - (attenuated_surface + inscatter)|``: the file's own consistency."""
         return float(np.abs(self.final - (self.attenuated_surface + self.inscatter)).max(initial=0.0))
 
-    def rays(self):
+    def rays(self) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...], np.ndarray]:
         """Per-pixel ``(o, d, D)`` as 3-tuples of flat arrays (``D`` = 1.8e308 for sky)."""
         n = self.hit.size
         o = tuple(np.full(n, c) for c in self.camera)
@@ -430,15 +391,15 @@ def covariance(stderr: np.ndarray, corr: np.ndarray) -> np.ndarray:
     return c
 
 
-def _vector(source: str, params: dict, keys: tuple[str, ...]) -> np.ndarray:
-    node = params
+def _vector(source: str, params: dict[str, Any], keys: tuple[str, ...]) -> np.ndarray:
+    node: Any = params
     for k in keys:
         if not isinstance(node, dict) or k not in node:
             raise FogrefError(f"{source}: header attribute 'fogref.params' lacks '{'.'.join(keys)}'")
         node = node[k]
-    v = np.asarray(node, dtype=np.float64)
+    v, name = np.asarray(node, dtype=np.float64), ".".join(keys)
     if v.shape != (3,) or not np.all(np.isfinite(v)):
-        raise FogrefError(f"{source}: 'fogref.params' {'.'.join(keys)} must be 3 finite numbers, got {node!r}")
+        raise FogrefError(f"{source}: 'fogref.params' {name} must be 3 finite numbers, got {node!r}")
     return v
 
 
@@ -462,16 +423,22 @@ def truth_from_channels(channels: dict, attrs: dict, source: str = "<memory>") -
     """
     version = str(attrs.get("fogref.schema", "1"))
     if version not in (str(SCHEMA_VERSION), "2"):
-        hint = ("it was written by an older fogref (schema 1: no per-pixel noise, surface = Tsurface/T); "
-                "render it again" if "fogref.version" in attrs else "it is not a fogref ground truth")
+        hint = (
+            "it was written by an older fogref (schema 1: no per-pixel noise, surface = Tsurface/T); "
+            "render it again"
+            if "fogref.version" in attrs
+            else "it is not a fogref ground truth"
+        )
         raise FogrefError(f"{source}: ground-truth schema {version}, expected {SCHEMA_VERSION}: {hint}")
     # schema 2 has no corr.* channels: its channels' noise is taken as fully correlated (the
     # bound compare used then), and the truth says so (attrs["fogref.noise_correlation"])
     required = [c for c in exr_channel_names() if version != "2" or not c.startswith("corr.")]
     missing = [c for c in required if c not in channels]
     if missing:
-        raise FogrefError(f"{source}: missing channel(s) {', '.join(repr(c) for c in missing[:8])}"
-                          f"{' ...' if len(missing) > 8 else ''}")
+        raise FogrefError(
+            f"{source}: missing channel(s) {', '.join(repr(c) for c in missing[:8])}"
+            f"{' ...' if len(missing) > 8 else ''}"
+        )
     bad = nonfinite_report({k: channels[k] for k in required})
     if bad:
         raise FogrefError(f"{source}: refusing a truth with {bad}")
@@ -484,14 +451,14 @@ def truth_from_channels(channels: dict, attrs: dict, source: str = "<memory>") -
         sun = _vector(source, params, ("sun", "direction"))
         sun = sun / np.linalg.norm(sun)
 
-    def get(name):
+    def get(name: str) -> np.ndarray:
         a = np.stack([channels[c] for c in channel_names(name)], -1).astype(np.float64)
         return a[..., 0] if not group(name).components else a
 
-    def se(name):
+    def se(name: str) -> np.ndarray:
         return np.stack([channels[c] for c in stderr_names(name)], -1).astype(np.float64)
 
-    def corr(name):
+    def corr(name: str) -> np.ndarray:
         if version == "2":
             return np.ones(np.shape(channels[stderr_names(name)[0]]) + (3,))
         return np.stack([channels[c] for c in correlation_names(name)], -1).astype(np.float64)
@@ -499,20 +466,31 @@ def truth_from_channels(channels: dict, attrs: dict, source: str = "<memory>") -
     view = get("view")
     view = view / np.maximum(np.linalg.norm(view, axis=-1, keepdims=True), 1e-30)
     noisy = [g.name for g in GROUPS if g.noisy]
-    attrs = {**attrs, "fogref.noise_correlation": "assumed 1 (schema 2 has no corr.* channels)"
-             if version == "2" else "measured (corr.* channels)"}
+    attrs = {
+        **attrs,
+        "fogref.noise_correlation": "assumed 1 (schema 2 has no corr.* channels)"
+        if version == "2"
+        else "measured (corr.* channels)",
+    }
+    names = {"final": "final", "transmittance": "T", "attenuated_surface": "attenuated_surface"}
+    names.update(
+        {g: g for g in ("inscatter", "single", "multiple", "surface", "surface_coverage", "distance")}
+    )
+    names.update(position="P", hit_fraction="hit")
     return Truth(
-        path=Path(source), final=get("final"), transmittance=get("T"),
-        attenuated_surface=get("attenuated_surface"), inscatter=get("inscatter"), single=get("single"),
-        multiple=get("multiple"), surface=get("surface"),
+        path=Path(source),
+        **{f: get(name) for f, name in names.items()},
+        view=view,
+        camera=camera,
+        sun_direction=sun,
+        params=params,
+        attrs=attrs,
         stderr={("transmittance" if g == "T" else g): se(g) for g in noisy},
-        surface_coverage=get("surface_coverage"), distance=get("distance"), position=get("P"), view=view,
-        hit_fraction=get("hit"), camera=camera, sun_direction=sun, params=params, attrs=attrs,
         corr={("transmittance" if g == "T" else g): corr(g) for g in noisy},
     )
 
 
-def load_truth(path) -> Truth:
+def load_truth(path: str | Path) -> Truth:
     """Read and check a ground-truth EXR written by ``fogref render``."""
     from fogref.exrio import read_exr
 

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Create .venv and install fogref with everything it needs, on a fresh machine.
+# Create .venv and install fogref with everything it needs, on a fresh machine: the exact
+# versions of requirements.lock, then fogref itself (editable, no further dependencies).
 # Installs Debian's libllvm19 when no LLVM >= 16 is present (Dr.Jit's LLVM back end
 # aborts with LLVM 15 on AVX-512 CPUs and refuses LLVM 14).
 set -euo pipefail
@@ -7,7 +8,7 @@ cd "$(dirname "$0")/.."
 
 have_llvm() {
   ls /usr/lib/*/libLLVM*.so* /usr/lib/llvm-*/lib/libLLVM*.so* 2>/dev/null \
-    | grep -Eq 'LLVM(-|\.so\.)?(1[6-9]|[2-9][0-9])' 
+    | grep -Eq 'LLVM(-|\.so\.)?(1[6-9]|[2-9][0-9])'
 }
 if ! have_llvm && [ -z "${DRJIT_LIBLLVM_PATH:-}" ]; then
   if command -v apt-get >/dev/null && [ "$(id -u)" = 0 ]; then
@@ -23,5 +24,12 @@ fi
 PY=${PYTHON:-python3}
 [ -x .venv/bin/python ] || "$PY" -m venv .venv
 .venv/bin/python -m pip install -q --upgrade pip
-.venv/bin/python -m pip install -q -e ".[test,dev]"
+# the locked versions (ruff, mypy, pytest included), then fogref on top of them
+.venv/bin/python -m pip install -q -r requirements.lock
+.venv/bin/python -m pip install -q --no-deps -e .
+.venv/bin/python -m pip check >/dev/null || {
+  echo "setup: requirements.lock lacks a dependency of pyproject.toml; regenerate it (CONTRIBUTING.md)" >&2
+  .venv/bin/python -m pip check >&2
+  exit 1
+}
 echo "setup: ok ($(.venv/bin/python -c 'import mitsuba; print("mitsuba", mitsuba.__version__)'))"

@@ -15,13 +15,14 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import json
+from typing import Any
 
 from fogref.errors import FogrefError, did_you_mean
 
 __all__ = ["build_model", "current_parameters", "parse_param_assignments"]
 
 
-def parse_param_assignments(assignments) -> dict:
+def parse_param_assignments(assignments: Any) -> dict:
     """``["density=0.02", "color=[1, 0.9, 0.8]", "mode=exp2"]`` -> dict.
 
     A value is read as JSON when it parses (numbers, lists, booleans, null), else kept
@@ -45,11 +46,11 @@ def parse_param_assignments(assignments) -> dict:
     return out
 
 
-def _label(cls) -> str:
-    return getattr(cls, "name", None) or getattr(cls, "__name__", type(cls).__name__)
+def _label(cls: Any) -> str:
+    return str(getattr(cls, "name", None) or getattr(cls, "__name__", type(cls).__name__))
 
 
-def current_parameters(model) -> dict:
+def current_parameters(model: Any) -> dict:
     """The parameters of a model instance as a dict: the fields of its ``params`` dataclass."""
     params = getattr(model, "params", None)
     if params is None or not dataclasses.is_dataclass(params) or isinstance(params, type):
@@ -60,16 +61,19 @@ def current_parameters(model) -> dict:
 def _params_class(cls: type, params: dict) -> type:
     params_class = getattr(cls, "Params", None)
     if not (isinstance(params_class, type) and dataclasses.is_dataclass(params_class)):
-        raise FogrefError(f"model '{_label(cls)}': cannot set parameters {sorted(params)}: "
-                          f"it has no parameter dataclass 'Params'")
+        raise FogrefError(
+            f"model '{_label(cls)}': cannot set parameters {sorted(params)}: "
+            f"it has no parameter dataclass 'Params'"
+        )
     names = [f.name for f in dataclasses.fields(params_class) if f.init]
     for key in params:
         if key not in names:
-            raise FogrefError(f"model '{_label(cls)}': no parameter '{key}'{did_you_mean(key, names)} (parameters: {', '.join(names)})")
+            hint, listing = did_you_mean(key, names), ", ".join(names)
+            raise FogrefError(f"model '{_label(cls)}': no parameter '{key}'{hint} (parameters: {listing})")
     return params_class
 
 
-def _construct(cls: type, params: dict):
+def _construct(cls: type, params: dict) -> Any:
     params_class = _params_class(cls, params)
     try:
         return cls(params_class(**params))
@@ -77,7 +81,7 @@ def _construct(cls: type, params: dict):
         raise FogrefError(f"model '{_label(cls)}': cannot set parameters {sorted(params)}: {e}") from e
 
 
-def build_model(model, params: dict | None = None, scene_params: dict | None = None):
+def build_model(model: Any, params: dict | None = None, scene_params: dict | None = None) -> Any:
     """A model instance, set up as ``compare`` does.
 
     Parameters
@@ -116,8 +120,9 @@ def build_model(model, params: dict | None = None, scene_params: dict | None = N
     params = dict(params or {})
     if not inspect.isclass(cls):
         if params or scene_params is not None:
-            raise FogrefError(f"model '{model}' names an instance, not a class: it cannot take parameters "
-                              "or --from-scene")
+            raise FogrefError(
+                f"model '{model}' names an instance, not a class: it cannot take parameters or --from-scene"
+            )
         return cls
     if scene_params is None:
         if params:
@@ -125,8 +130,10 @@ def build_model(model, params: dict | None = None, scene_params: dict | None = N
         try:
             return cls()
         except TypeError as e:
-            raise FogrefError(f"model '{_label(cls)}': {cls.__name__}() needs arguments ({e}); give --param "
-                              "KEY=VALUE (with a Params dataclass) or --from-scene (with from_physical)") from e
+            raise FogrefError(
+                f"model '{_label(cls)}': {cls.__name__}() needs arguments ({e}); give --param "
+                "KEY=VALUE (with a Params dataclass) or --from-scene (with from_physical)"
+            ) from e
     from fogref.mapping.physical import PhysicalScene
     from fogref.mapping.registry import from_physical, has_mapping
 
@@ -134,7 +141,8 @@ def build_model(model, params: dict | None = None, scene_params: dict | None = N
         raise FogrefError(
             f"model '{_label(cls)}' has no physical mapping (fogref.mapping) and no "
             f"from_physical(physical) classmethod, so --from-scene cannot derive its parameters; "
-            f"set them with --param KEY=VALUE instead")
+            f"set them with --param KEY=VALUE instead"
+        )
     built = from_physical(cls, PhysicalScene.from_params(scene_params))
     if not params:
         return built

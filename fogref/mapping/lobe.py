@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
@@ -21,7 +22,7 @@ from fogref.media import NP, hg_phase
 __all__ = ["lobe_fit", "lobe_table"]
 
 
-def _mu_quadrature(n: int = 256):
+def _mu_quadrature(n: int = 256) -> Any:
     """Gauss–Legendre nodes/weights on [-1, 0] and [0, 1] (the lobe has a kink at 0)."""
     x, w = np.polynomial.legendre.leggauss(n)
     mu = np.concatenate([0.5 * (x - 1.0), 0.5 * (x + 1.0)])
@@ -45,8 +46,8 @@ def lobe_fit(g: float, isotropic: bool = True, n_quad: int = 256) -> dict:
     sw = np.sqrt(w)
     norm = math.sqrt(float(np.sum(w * p * p)))
 
-    def solve(log_n):
-        lobe = np.maximum(mu, 0.0) ** (10.0 ** log_n)
+    def solve(log_n: Any) -> Any:
+        lobe = np.maximum(mu, 0.0) ** (10.0**log_n)
         A = np.stack([np.ones_like(mu), lobe], -1) if isotropic else lobe[:, None]
         x, r = nnls(A * sw[:, None], p * sw)
         return x, r
@@ -60,11 +61,16 @@ def lobe_fit(g: float, isotropic: bool = True, n_quad: int = 256) -> dict:
     x, r = solve(ln)
     a, c = (x[0], x[1]) if isotropic else (0.0, x[0])
     flat = c * 4 * math.pi < 1e-9
-    return {"g": float(g), "exponent": None if flat else 10.0 ** ln, "lobe": float(c * 4 * math.pi),
-            "iso": float(a * 4 * math.pi), "rel_error": float(r / norm) if norm > 0 else 0.0}
+    return {
+        "g": float(g),
+        "exponent": None if flat else 10.0**ln,
+        "lobe": float(c * 4 * math.pi),
+        "iso": float(a * 4 * math.pi),
+        "rel_error": float(r / norm) if norm > 0 else 0.0,
+    }
 
 
-def lobe_table(gs=None, pf: PhysicalScene | None = None, views: Views | None = None) -> list[dict]:
+def lobe_table(gs: Any = None, pf: PhysicalScene | None = None, views: Views | None = None) -> list[dict]:
     """:func:`lobe_fit` for each g (default -0.9 to 0.9 step 0.1), with and without
     the isotropic term; with ``pf`` also the full scene fit (sun attenuation on,
     start distance fitted) for that g: its exponent and relative RMSE."""

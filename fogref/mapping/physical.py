@@ -22,6 +22,7 @@ ignored, ``albedo * L_sky * (1 - T)``, i.e. colour = ``albedo * L_sky``
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -83,15 +84,15 @@ class PhysicalScene:
     medium: FogMedium
     sun_direction: tuple = (0.0, 1.0, 0.0)
     sun_irradiance: tuple = (0.0, 0.0, 0.0)
-    sky_radiance: tuple | None = (0.0, 0.0, 0.0)
+    sky_radiance: Any = (0.0, 0.0, 0.0)  # None: no sky; stored as a 3-tuple
     camera: tuple = DEFAULT_CAMERA
     profile: str | None = None
-    source: str | None = field(default=None, compare=False)
+    source: str = field(default=None, compare=False)  # type: ignore[assignment]  # None: the medium's
 
-    def __post_init__(self):
-        src = self.source or getattr(self.medium, "source", "<PhysicalScene>")
+    def __post_init__(self) -> None:
+        src: str = self.source or getattr(self.medium, "source", "<PhysicalScene>")
         object.__setattr__(self, "source", src)
-        w = np.asarray(rgb(self.sun_direction, "direction", src), dtype=float)
+        w = np.asarray(rgb(self.sun_direction, "direction", src), dtype=np.float64)
         n = float(np.linalg.norm(w))
         if not np.isfinite(n) or n == 0:
             raise ParameterError(src, "direction", f"sun direction {tuple(self.sun_direction)} is not a direction")
@@ -105,7 +106,7 @@ class PhysicalScene:
 
     # -- the one parser ---------------------------------------------------------
     @classmethod
-    def from_params(cls, params: dict, camera=None) -> "PhysicalScene":
+    def from_params(cls, params: dict, camera: Any = None) -> "PhysicalScene":
         """Decode ``fogref.params`` (or ``describe_scene``'s dict; see the module doc).
 
         Parameters

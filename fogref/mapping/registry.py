@@ -9,7 +9,7 @@ fallback.
 
 from __future__ import annotations
 
-from typing import Callable
+from typing import Any, Callable
 
 from fogref.errors import FogrefError
 from fogref.mapping.physical import PhysicalScene
@@ -20,7 +20,7 @@ __all__ = ["MAPPINGS", "from_physical", "has_mapping", "register_mapping"]
 MAPPINGS: dict[str, Callable] = {}
 
 
-def register_mapping(name: str):
+def register_mapping(name: str) -> Any:
     """Decorator: ``f(physical)`` builds the model registered as ``name`` from a scene.
 
     Examples
@@ -32,14 +32,14 @@ def register_mapping(name: str):
     True
     """
 
-    def deco(fn):
+    def deco(fn: Any) -> Any:
         MAPPINGS[name] = fn
         return fn
 
     return deco
 
 
-def _name_and_class(model) -> tuple[str | None, type | None]:
+def _name_and_class(model: Any) -> tuple[str | None, type | None]:
     if isinstance(model, str):
         from fogref.models.resolve import resolve_model
 
@@ -48,7 +48,7 @@ def _name_and_class(model) -> tuple[str | None, type | None]:
     return getattr(model, "name", None), model
 
 
-def has_mapping(model) -> bool:
+def has_mapping(model: Any) -> bool:
     """Whether :func:`from_physical` can build ``model`` (a registry name or class).
 
     Examples
@@ -60,7 +60,7 @@ def has_mapping(model) -> bool:
     return name in MAPPINGS or callable(getattr(cls, "from_physical", None))
 
 
-def from_physical(model, physical) -> object:
+def from_physical(model: Any, physical: Any) -> object:
     """The model instance that best represents a physical scene.
 
     Parameters
@@ -104,5 +104,7 @@ def from_physical(model, physical) -> object:
     own = getattr(cls, "from_physical", None)
     if callable(own):
         return own(physical)
-    raise FogrefError(f"model '{name or cls}' has no physical mapping (fogref.mapping) and no "
-                      f"from_physical(physical) classmethod")
+    raise FogrefError(
+        f"model '{name or cls}' has no physical mapping (fogref.mapping) and no "
+        f"from_physical(physical) classmethod"
+    )

@@ -15,11 +15,13 @@ in any float format) so that no Inf leaves; "infinite distance" is written as
 
 from __future__ import annotations
 
+from fogref.media.ops import Ops, Real
+
 #: optical depths are clamped here; exp(-TAU_MAX) == 0 in float32 and float64.
 TAU_MAX = 1.0e30
 
 
-def exp_times(ops, log_a, m):
+def exp_times(ops: Ops, log_a: Real, m: Real) -> Real:
     """``exp(log_a) * m`` for ``m >= 0`` without spurious underflow or overflow.
 
     When ``|log_a| <= ops.exp_limit`` this is the plain product; otherwise it is
@@ -36,7 +38,7 @@ def exp_times(ops, log_a, m):
     return ops.where(m > 0, out, 0.0)
 
 
-def phi(ops, x):
+def phi(ops: Ops, x: Real) -> Real:
     """``phi(x) = (1 - exp(-x)) / x`` with ``phi(0) = 1``; stable for all finite x.
 
     For ``x -> +inf`` it tends to ``1/x``; for very negative x (where the true
@@ -56,7 +58,7 @@ def phi(ops, x):
     return ops.minimum(r, ops.largest)
 
 
-def psi(ops, z):
+def psi(ops: Ops, z: Real) -> Real:
     """``psi(z) = -log(1 - z) / z`` for ``z < 1`` with ``psi(0) = 1``.
 
     ``z >= 1`` (no finite answer) gives ``ops.largest``.
@@ -74,7 +76,7 @@ def psi(ops, z):
     return ops.minimum(r, ops.largest)
 
 
-def exp_layer_optical_depth(ops, log_c, k, t):
+def exp_layer_optical_depth(ops: Ops, log_c: Real, k: Real, t: Real) -> Real:
     """Shape optical depth ``int_0^t exp(log_c - k s) ds`` of one layer [m].
 
     ``t`` may be ``ops.largest`` (to infinity).  Saturates at TAU_MAX; ``t <= 0``
@@ -115,7 +117,7 @@ def exp_layer_optical_depth(ops, log_c, k, t):
     return ops.minimum(tau, TAU_MAX)
 
 
-def exp_layer_sample(ops, log_c, k, s):
+def exp_layer_sample(ops: Ops, log_c: Real, k: Real, s: Real) -> Real:
     """Distance ``t`` at which the layer's shape optical depth reaches ``s`` >= 0.
 
     Exact inversion of :func:`exp_layer_optical_depth`.  Returns ``ops.largest``
@@ -149,8 +151,7 @@ def exp_layer_sample(ops, log_c, k, s):
     inv_abs_k = 1.0 / ops.where(kz, abs_k, 1.0)
     abs_z = ops.minimum(ops.abs(z), ops.largest)
     lz_pos = ops.maximum(lz, 0.0)
-    log1p_z = ops.where(r_ok & (abs_z < ops.largest),
-                        ops.log1p(abs_z), lz_pos + ops.log1p(ops.exp(-lz_pos)))
+    log1p_z = ops.where(r_ok & (abs_z < ops.largest), ops.log1p(abs_z), lz_pos + ops.log1p(ops.exp(-lz_pos)))
     t_big = ops.minimum(log1p_z * inv_abs_k, ops.largest)
     t = ops.where(small, t_small, t_big)
     escape_up = (k > 0) & ops.where(r_ok, z >= 1.0, lz >= 0.0)
@@ -159,7 +160,7 @@ def exp_layer_sample(ops, log_c, k, s):
     return ops.where(s > 0, t, 0.0)
 
 
-def hg_phase(ops, cos_theta, g):
+def hg_phase(ops: Ops, cos_theta: Real, g: Real) -> Real:
     """Henyey–Greenstein phase function [1/sr].
 
     ``cos_theta = dot(d, w)``, where ``d`` is the camera ray's direction (away

@@ -23,6 +23,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
@@ -30,12 +31,12 @@ from fogref.media.protocol import number, register_profile, rgb
 from fogref.params import number as valid_number
 
 
-def quiet_numpy(fn):
+def quiet_numpy(fn: Any) -> Any:
     """Method decorator: silence numpy's overflow warnings (the closed forms
     saturate on purpose).  Shared by every height profile."""
 
     @functools.wraps(fn)
-    def wrapper(self, ops, *args, **kw):
+    def wrapper(self: Any, ops: Any, *args: Any, **kw: Any) -> Any:
         with ops.errstate():
             return fn(self, ops, *args, **kw)
 
@@ -131,33 +132,33 @@ class ExpLayer:
         """``height`` [m]: where the relative density equals ``density``."""
         return float(self.height)
 
-    def validate(self, src, i):
+    def validate(self, src: str, i: int) -> None:
         check_layer_param(src, i, "density", self.density, 0.0, 1e6)
         check_layer_param(src, i, "falloff", self.falloff, 0.0, 1e3)
         check_layer_param(src, i, "height", self.height, -1e7, 1e7)
 
-    def log_c(self, ops, oy):
+    def log_c(self, ops: Any, oy: Any) -> Any:
         """log of the density at height ``oy``; the parameters enter as ``ops.param``
         (opaque in Dr.Jit kernels: a new value needs no new kernel)."""
         log_density = math.log(self.density) if self.density > 0 else -1.0e4
         return ops.param(log_density) - ops.param(self.falloff) * (oy - ops.param(self.height))
 
     @quiet_numpy
-    def rho(self, ops, y):
+    def rho(self, ops: Any, y: Any) -> Any:
         """Relative density at height y (dimensionless)."""
         return ops.exp(ops.minimum(self.log_c(ops, y), ops.exp_limit))
 
     @quiet_numpy
-    def depth(self, ops, oy, dy, t):
+    def depth(self, ops: Any, oy: Any, dy: Any, t: Any) -> Any:
         """Shape optical depth [m] over ``[0, t]`` along a ray (t = ops.largest: infinity)."""
         return cf.exp_layer_optical_depth(ops, self.log_c(ops, oy), ops.param(self.falloff) * dy, t)
 
     @quiet_numpy
-    def sample(self, ops, oy, dy, s):
+    def sample(self, ops: Any, oy: Any, dy: Any, s: Any) -> Any:
         """Distance [m] where the shape optical depth reaches ``s``; ops.largest if never."""
         return cf.exp_layer_sample(ops, self.log_c(ops, oy), ops.param(self.falloff) * dy, s)
 
-    def max_density(self, ops, y_lo, y_hi):
+    def max_density(self, ops: Any, y_lo: Any, y_hi: Any) -> Any:
         """Largest relative density on heights ``[y_lo, y_hi]``: at ``y_lo`` (non-increasing)."""
         return self.rho(ops, y_lo)
 
@@ -195,14 +196,14 @@ class FogMedium:
     [0.367879, 0.367879, 0.367879]
     """
 
-    sigma_t: tuple = (0.01, 0.01, 0.01)
-    albedo: tuple = (0.9, 0.9, 0.9)
+    sigma_t: Any = (0.01, 0.01, 0.01)  # one number or three; stored as a 3-tuple
+    albedo: Any = (0.9, 0.9, 0.9)  # likewise
     g: float = 0.0
     layers: tuple = (ExpLayer(),)
     bounds: Box | None = None
     source: str = field(default="<FogMedium>", compare=False, repr=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         src = self.source
         object.__setattr__(self, "sigma_t", rgb(self.sigma_t, "sigma_t", src, 0.0, 1e2))
         object.__setattr__(self, "albedo", rgb(self.albedo, "albedo", src, 0.0, 1.0))
@@ -250,7 +251,7 @@ class FogMedium:
             raise ParameterError(self.source, "sigma_t", f"{who}'s fog is grey; got {tuple(s)}")
         return float(s[0])
 
-    def max_density(self, ops, y_lo, y_hi):
+    def max_density(self, ops: Any, y_lo: Any, y_hi: Any) -> Any:
         """Largest relative density on heights ``[y_lo, y_hi]`` (sum over the layers)."""
         rho = 0.0
         for L in self.layers:
@@ -259,7 +260,7 @@ class FogMedium:
 
     # -- relative density ----------------------------------------------------
     @quiet_numpy
-    def density(self, ops, p):
+    def density(self, ops: Any, p: Any) -> Any:
         """Relative density rho(p) (dimensionless); ``sigma_t * rho`` is 1/m."""
         y = p[1]
         rho = 0.0
@@ -269,7 +270,8 @@ class FogMedium:
             rho = ops.where(self._inside(ops, p), rho, 0.0)
         return rho
 
-    def _inside(self, ops, p):
+    def _inside(self, ops: Any, p: Any) -> Any:
+        assert self.bounds is not None  # only called on bounded fog
         lo, hi = self.bounds.lo, self.bounds.hi
         m = True
         for a in range(3):
@@ -278,7 +280,7 @@ class FogMedium:
 
     # -- clipping to the box -------------------------------------------------
     @quiet_numpy
-    def clip(self, ops, o, d):
+    def clip(self, ops: Any, o: Any, d: Any) -> Any:
         """Ray interval ``[t0, t1]`` (t0 >= 0) inside the bounds; ``t1 < t0`` if none."""
         if self.bounds is None:
             return 0.0, ops.largest
@@ -300,14 +302,14 @@ class FogMedium:
         return t0, t1
 
     # -- optical depth -------------------------------------------------------
-    def _layers_depth(self, ops, oy, dy, t):
+    def _layers_depth(self, ops: Any, oy: Any, dy: Any, t: Any) -> Any:
         tau = 0.0
         for L in self.layers:
             tau = tau + L.depth(ops, oy, dy, t)
         return ops.minimum(tau, cf.TAU_MAX)
 
     @quiet_numpy
-    def optical_depth(self, ops, o, d, t):
+    def optical_depth(self, ops: Any, o: Any, d: Any, t: Any) -> Any:
         """Shape optical depth [m] over ``[0, t]`` (``t = ops.largest``: to infinity)."""
         if self.bounds is None:
             return self._layers_depth(ops, o[1], d[1], t)
@@ -319,18 +321,18 @@ class FogMedium:
         return ops.where(length > 0, tau, 0.0)
 
     @quiet_numpy
-    def transmittance(self, ops, o, d, t):
+    def transmittance(self, ops: Any, o: Any, d: Any, t: Any) -> Any:
         """RGB transmittance over ``[0, t]`` as a 3-tuple of arrays."""
         tau = self.optical_depth(ops, o, d, t)
         return tuple(ops.exp(-s * tau) for s in ops.params(self.sigma_t))
 
-    def sun_optical_depth(self, ops, p, w):
+    def sun_optical_depth(self, ops: Any, p: Any, w: Any) -> Any:
         """Shape optical depth from ``p`` to infinity toward ``w`` (unit, to the sun)."""
         return self.optical_depth(ops, p, w, ops.largest)
 
     # -- free-flight sampling ------------------------------------------------
     @quiet_numpy
-    def sample_distance(self, ops, o, d, exp_variates, sigma):
+    def sample_distance(self, ops: Any, o: Any, d: Any, exp_variates: Any, sigma: Any) -> Any:
         """Exact free-flight distance for extinction ``sigma * rho`` [1/m].
 
         ``exp_variates``: one Exp(1) variate (``-log1p(-u)``) per layer.  Each layer
@@ -356,7 +358,7 @@ class FogMedium:
         return t
 
     @quiet_numpy
-    def invert_optical_depth(self, ops, o, d, s, t_max, iterations: int = 16):
+    def invert_optical_depth(self, ops: Any, o: Any, d: Any, s: Any, t_max: Any, iterations: int = 16) -> Any:
         """Distance ``t`` in ``[0, t_max]`` where the shape optical depth reaches ``s``.
 
         Unbounded media only.  One layer: the exact closed form.  Several layers:

@@ -15,8 +15,14 @@ arithmetic options in the proposed IEEE floating point arithmetic standard",
 from __future__ import annotations
 
 import sys
+from typing import Any, Literal, TypeAlias
 
 import numpy as np
+
+#: A value of the array back ends: a Python float, a numpy float64 array or a Dr.Jit ``Float``
+#: (or its ``Bool``/``Mask``).  Dr.Jit ships no type stubs, so to the type checker it is ``Any``;
+#: the name says what the physics means.
+Real: TypeAlias = Any
 
 
 class NumpyOps:
@@ -33,16 +39,16 @@ class NumpyOps:
     tiny = float(np.finfo(np.float64).tiny)
 
     @staticmethod
-    def asarray(x):
+    def asarray(x: Real) -> Real:
         return np.asarray(x, dtype=np.float64)
 
     @staticmethod
-    def param(x, slot=0):
+    def param(x: Real, slot: int = 0) -> Real:
         """A scene parameter (a Python number) as it enters array arithmetic: unchanged."""
         return x
 
     @staticmethod
-    def params(values):
+    def params(values: Real) -> Real:
         """Several scene parameters: a tuple of them, unchanged."""
         return tuple(values)
 
@@ -57,25 +63,25 @@ class NumpyOps:
     isfinite = staticmethod(np.isfinite)
 
     @staticmethod
-    def where(cond, a, b):
+    def where(cond: Real, a: Real, b: Real) -> Real:
         return np.where(cond, a, b)
 
     @staticmethod
-    def safe_div(a, b):
+    def safe_div(a: Real, b: Real) -> Real:
         """a / b, with b == 0 giving 0 (callers select the limit themselves)."""
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(b != 0, a / np.where(b != 0, b, 1.0), 0.0)
 
     @staticmethod
-    def errstate():
+    def errstate() -> np.errstate:
         return np.errstate(all="ignore")
 
 
 class _NullContext:
-    def __enter__(self):
+    def __enter__(self) -> _NullContext:
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: Any) -> Literal[False]:
         return False
 
 
@@ -84,7 +90,7 @@ class DrJitOps:
 
     name = "drjit"
 
-    def __init__(self, Float):
+    def __init__(self, Float: Any) -> None:
         import drjit as dr
 
         self.dr = dr
@@ -95,27 +101,27 @@ class DrJitOps:
         fi = np.finfo(np.float32 if single else np.float64)
         self.log_largest = float(np.log(fi.max))
         self.tiny = float(fi.tiny)
-        self._params = {}
+        self._params: dict[tuple[Any, ...], Any] = {}
 
     #: opaque parameters kept (see :meth:`param`); about 100 bytes each
     MAX_PARAMS = 4096
 
-    def asarray(self, x):
+    def asarray(self, x: Real) -> Real:
         return x if isinstance(x, self.Float) else self.Float(x)
 
-    def param(self, x, slot=0):
+    def param(self, x: Real, slot: int = 0) -> Real:
         """A scene parameter (a Python number: density, falloff, ``sigma_t``, ``g``, the
         sun's direction) as it enters array arithmetic: an *opaque* ``Float``, i.e. an
         evaluated one-element array that the kernel reads from memory.  A Python float
         would be traced into the kernel as a literal, so every new value of the
-        parameter would compile a new kernel (about 0.8 s on the CPU); opaque, one
-        kernel serves every value (``dr.opaque``, Dr.Jit's documented way to do this).
+        parameter would compile a new kernel; opaque, one kernel serves every value
+        (``dr.opaque``, Dr.Jit's documented way to do this).
         Trace-time branches (is the layer constant? is the sun up?) keep reading the
         Python value.  Arrays pass through unchanged.
 
-        The arrays are memoised per *parameter*: a fresh array per call made fogpath's
-        kernel 67 % longer (162 more inputs, each loaded where it is used; a layer's
-        ``log_c`` runs dozens of times per trace) and its compile 0.7 s slower.  A
+        The arrays are memoised per *parameter*: a fresh array per call would give the
+        kernel an input per use (a layer's ``log_c`` runs dozens of times per trace), a
+        longer kernel and a slower compile (measured in ``CHANGELOG.md``, 0.2.0).  A
         parameter is the calling bytecode, the calling method's ``self`` and ``slot``
         (the channel or axis, where one call site runs in a loop), so that two
         different parameters never share an input because their values happen to be
@@ -124,16 +130,16 @@ class DrJitOps:
         """
         return self._param(x, sys._getframe(1), slot)
 
-    def params(self, values):
+    def params(self, values: Real) -> Real:
         """Several scene parameters (RGB, a direction): :meth:`param` with ``slot`` the
         index of the value's first occurrence, so that a grey colour's three channels
         are one input (and Dr.Jit computes their identical arithmetic once, as it does
-        for equal literals: giving each channel its own input made the kernel 14 %
-        longer).  A colour that turns from grey to RGB compiles again."""
+        for equal literals; one input per channel makes a longer kernel).  A colour that
+        turns from grey to RGB compiles again."""
         caller, values = sys._getframe(1), list(values)
         return tuple(self._param(v, caller, values.index(v)) for v in values)
 
-    def _param(self, x, caller, slot):
+    def _param(self, x: Real, caller: Real, slot: Real) -> Real:
         if self.dr.is_array_v(x):
             return x
         owner = caller.f_locals.get("self")
@@ -145,18 +151,18 @@ class DrJitOps:
             value = self._params[key] = self.dr.opaque(self.Float, x)
         return value
 
-    def _f(self, x):
+    def _f(self, x: Real) -> Real:
         # Python scalars become Float so that Kahan's tricks run in the variant's
         # precision (and never raise ZeroDivisionError in Python arithmetic).
         return x if isinstance(x, self.Float) else self.Float(x)
 
-    def exp(self, x):
+    def exp(self, x: Real) -> Real:
         return self.dr.exp(self._f(x))
 
-    def log(self, x):
+    def log(self, x: Real) -> Real:
         return self.dr.log(self._f(x))
 
-    def expm1(self, x):
+    def expm1(self, x: Real) -> Real:
         dr = self.dr
         x = self._f(x)
         u = dr.exp(x)
@@ -166,46 +172,49 @@ class DrJitOps:
         r = dr.select(um1 == -1, -1.0, r)
         return dr.select(big, um1, r)
 
-    def log1p(self, x):
+    def log1p(self, x: Real) -> Real:
         dr = self.dr
         x = self._f(x)
         u = 1 + x
         r = dr.select(u == 1, x, dr.log(u) * x / (u - 1))
         return dr.select(dr.abs(x) > 0.5, dr.log(u), r)
 
-    def sqrt(self, x):
+    def sqrt(self, x: Real) -> Real:
         return self.dr.sqrt(x)
 
-    def abs(self, x):
+    def abs(self, x: Real) -> Real:
         return self.dr.abs(x)
 
-    def minimum(self, a, b):
+    def minimum(self, a: Real, b: Real) -> Real:
         return self.dr.minimum(a, b)
 
-    def maximum(self, a, b):
+    def maximum(self, a: Real, b: Real) -> Real:
         return self.dr.maximum(a, b)
 
-    def isfinite(self, x):
+    def isfinite(self, x: Real) -> Real:
         return self.dr.isfinite(x)
 
-    def where(self, cond, a, b):
+    def where(self, cond: Real, a: Real, b: Real) -> Real:
         return self.dr.select(cond, a, b)
 
-    def safe_div(self, a, b):
+    def safe_div(self, a: Real, b: Real) -> Real:
         dr = self.dr
         nz = b != 0
         return dr.select(nz, a / dr.select(nz, b, 1.0), 0.0)
 
-    def errstate(self):
+    def errstate(self) -> _NullContext:
         return _NullContext()
 
+
+#: Either back end, as the physics receives it (``ops`` arguments).
+Ops: TypeAlias = "NumpyOps | DrJitOps"
 
 NP = NumpyOps()
 
 _cache: dict = {}
 
 
-def drjit_ops(Float=None) -> DrJitOps:
+def drjit_ops(Float: Any = None) -> DrJitOps:
     """The Dr.Jit back end for ``Float`` (default: ``mitsuba.Float`` of the variant)."""
     if Float is None:
         import mitsuba as mi

@@ -62,5 +62,5 @@ def medium_from_params(params: dict, src: str = "<params>") -> FogMedium:
         raise ParameterError(src, "bounds_min", f"profile '{name}' needs bounds_min and bounds_max")
     if (lo is None) != (hi is None):
         raise ParameterError(src, "bounds_max" if hi is None else "bounds_min", "give both bounds or none")
-    bounds = Box(lo, hi) if lo is not None else None
+    bounds = Box(lo, hi) if lo is not None and hi is not None else None
     return FogMedium(sigma_t=sigma_t, albedo=albedo, g=g, layers=tuple(layers), bounds=bounds, source=src)

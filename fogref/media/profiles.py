@@ -50,12 +50,13 @@ from dataclasses import dataclass
 from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
 from fogref.media.medium import check_layer_param, quiet_numpy
+from fogref.media.ops import Ops, Real
 from fogref.media.protocol import number, register_profile
 
 __all__ = ["HDRPLayer", "PowerLawLayer"]
 
 
-def _crossing(ops, oy, dy, y):
+def _crossing(ops: Ops, oy: Real, dy: Real, y: Real) -> Real:
     """Ray parameter where height ``y`` is crossed, clamped to [-largest, largest]."""
     L = ops.largest
     diff = y - oy
@@ -65,7 +66,7 @@ def _crossing(ops, oy, dy, y):
     return ops.minimum(ops.maximum(r, -L), L)
 
 
-def _pow(ops, u, p):
+def _pow(ops: Ops, u: Real, p: Real) -> Real:
     """u**p for u >= 0, p >= 0 (0**0 = 1); ``p`` a Python number (``p == 0`` is a branch)."""
     if p == 0:
         return ops.where(u >= 0, 1.0, 1.0) if not isinstance(u, float) else 1.0
@@ -122,30 +123,30 @@ class HDRPLayer:
         """``base_height`` [m]: the top of the constant part."""
         return float(self.base_height)
 
-    def max_density(self, ops, y_lo, y_hi):
+    def max_density(self, ops: Ops, y_lo: Real, y_hi: Real) -> Real:
         """Largest relative density on heights ``[y_lo, y_hi]``: at ``y_lo`` (non-increasing)."""
         return self.rho(ops, y_lo)
 
-    def validate(self, src, i):
+    def validate(self, src: str, i: int) -> None:
         check_layer_param(src, i, "density", self.density, 0.0, 1e6)
         check_layer_param(src, i, "base_height", self.base_height, -1e7, 1e7)
         check_layer_param(src, i, "falloff", self.falloff, 0.0, 1e3)
 
     @property
-    def _log_density(self):
+    def _log_density(self) -> Real:
         return math.log(self.density) if self.density > 0 else -1.0e4
 
-    def _log_c(self, ops, y):
+    def _log_c(self, ops: Ops, y: Real) -> Real:
         """log of the exponential piece's density at ``y`` (valid for y >= base)."""
         return ops.param(self._log_density) - ops.param(self.falloff) * (y - ops.param(self.base_height))
 
     @quiet_numpy
-    def rho(self, ops, y):
+    def rho(self, ops: Ops, y: Real) -> Real:
         """Relative density at height y."""
         h = ops.maximum(y - ops.param(self.base_height), 0.0)
         return cf.exp_times(ops, ops.param(self._log_density) - ops.param(self.falloff) * h, 1.0)
 
-    def _pieces(self, ops, oy, dy):
+    def _pieces(self, ops: Ops, oy: Real, dy: Real) -> Real:
         """(t_b, below0, up, down): base crossing and the ray's configuration."""
         hb = ops.param(self.base_height)
         t_b = _crossing(ops, oy, dy, hb)
@@ -153,7 +154,7 @@ class HDRPLayer:
         return t_b, below0, dy > 0, dy < 0
 
     @quiet_numpy
-    def depth(self, ops, oy, dy, t):
+    def depth(self, ops: Ops, oy: Real, dy: Real, t: Real) -> Real:
         """Shape optical depth [m] over ``[0, t]`` (``t = ops.largest``: infinity)."""
         L = ops.largest
         hb, density = ops.param(self.base_height), ops.param(self.density)
@@ -178,7 +179,7 @@ class HDRPLayer:
         return ops.minimum(tau_c + tau_e, cf.TAU_MAX)
 
     @quiet_numpy
-    def sample(self, ops, oy, dy, s):
+    def sample(self, ops: Ops, oy: Real, dy: Real, s: Real) -> Real:
         """Distance [m] where the shape optical depth reaches ``s``; ops.largest if never."""
         L = ops.largest
         hb, density = ops.param(self.base_height), ops.param(self.density)
@@ -258,11 +259,11 @@ class PowerLawLayer:
         """``start`` [m]: full density at and below it."""
         return float(self.start)
 
-    def max_density(self, ops, y_lo, y_hi):
+    def max_density(self, ops: Ops, y_lo: Real, y_hi: Real) -> Real:
         """Largest relative density on heights ``[y_lo, y_hi]``: at ``y_lo`` (non-increasing)."""
         return self.rho(ops, y_lo)
 
-    def validate(self, src, i):
+    def validate(self, src: str, i: int) -> None:
         check_layer_param(src, i, "density", self.density, 0.0, 1e6)
         check_layer_param(src, i, "start", self.start, -1e7, 1e7)
         check_layer_param(src, i, "end", self.end, -1e7, 1e7)
@@ -273,24 +274,24 @@ class PowerLawLayer:
                                  " (end must be greater than start)")
 
     @property
-    def _H(self):
+    def _H(self) -> Real:
         return float(self.end) - float(self.start)
 
-    def _u(self, ops, y):
+    def _u(self, ops: Ops, y: Real) -> Real:
         return ops.minimum(ops.maximum((ops.param(self.end) - y) / ops.param(self._H), 0.0), 1.0)
 
     @quiet_numpy
-    def rho(self, ops, y):
+    def rho(self, ops: Ops, y: Real) -> Real:
         """Relative density at height y."""
         u = self._u(ops, y)
         return ops.where(y >= ops.param(self.end), 0.0, ops.param(self.density) * _pow(ops, u, self.power))
 
-    def _geometry(self, ops, oy, dy):
+    def _geometry(self, ops: Ops, oy: Real, dy: Real) -> Real:
         s_S = _crossing(ops, oy, dy, ops.param(self.start))
         s_E = _crossing(ops, oy, dy, ops.param(self.end))
         return s_S, s_E, dy > 0, dy < 0
 
-    def _power_piece(self, ops, gap, abs_dy, length, reaches_end):
+    def _power_piece(self, ops: Ops, gap: Real, abs_dy: Real, length: Real, reaches_end: Real) -> Real:
         """int of u^p over a piece of length ``length`` whose lower end lies ``gap`` below E."""
         L = ops.largest
         p, q = float(self.power), float(self.power) + 1.0
@@ -312,7 +313,7 @@ class PowerLawLayer:
         return ops.where((length > 0) & (gap > 0), ops.minimum(val, L), 0.0)
 
     @quiet_numpy
-    def depth(self, ops, oy, dy, t):
+    def depth(self, ops: Ops, oy: Real, dy: Real, t: Real) -> Real:
         """Shape optical depth [m] over ``[0, t]`` (``t = ops.largest``: infinity)."""
         L = ops.largest
         S, E, density = ops.param(self.start), ops.param(self.end), ops.param(self.density)
@@ -338,7 +339,7 @@ class PowerLawLayer:
         tau = ops.where(((len_c >= L) | (length >= L)) & (self.density > 0), cf.TAU_MAX, tau)
         return ops.minimum(tau, cf.TAU_MAX)
 
-    def _invert_power(self, ops, y_a, dy, sig):
+    def _invert_power(self, ops: Ops, y_a: Real, dy: Real, sig: Real) -> Real:
         """Length along the ray, from height y_a in [S, E], where int u^p = sig."""
         L = ops.largest
         p, q = float(self.power), float(self.power) + 1.0
@@ -377,7 +378,7 @@ class PowerLawLayer:
         return ops.where(sig > 0, t, 0.0)
 
     @quiet_numpy
-    def sample(self, ops, oy, dy, s):
+    def sample(self, ops: Ops, oy: Real, dy: Real, s: Real) -> Real:
         """Distance [m] where the shape optical depth reaches ``s``; ops.largest if never."""
         L = ops.largest
         S, E = ops.param(self.start), ops.param(self.end)

@@ -24,9 +24,12 @@ import math
 from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
 from fogref.media.closed_form import phi, psi
+from fogref.media.ops import Ops, Real
 
 
-def single_scatter_sun(ops, medium, o, d, D, w, E, tau=None):
+def single_scatter_sun(
+    ops: Ops, medium: Real, o: Real, d: Real, D: Real, w: Real, E: Real, tau: Real = None
+) -> Real:
     """Single-scattered sun radiance along ``[0, D]`` of ``o + t d`` (RGB tuple).
 
     medium: :class:`~fogref.media.FogMedium` without bounds.
@@ -45,12 +48,15 @@ def single_scatter_sun(ops, medium, o, d, D, w, E, tau=None):
     --------
     >>> from fogref.media import NP, ExpLayer, FogMedium
     >>> fog = FogMedium(sigma_t=0.01, albedo=1.0, layers=(ExpLayer(1.0, 0.05, 0.0),))
-    >>> L = single_scatter_sun(NP, fog, (0.0, 1.0, 0.0), (1.0, 0.0, 0.0), 100.0, (0.0, 1.0, 0.0), (1.0, 1.0, 1.0))
+    >>> o, d, w, E = (0.0, 1.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (1.0, 1.0, 1.0)
+    >>> L = single_scatter_sun(NP, fog, o, d, 100.0, w, E)
     >>> round(float(L[0]), 4)   # (1 - T) p T_sun = 0.61 * 1/(4 pi) * 0.83
     0.0404
     """
     if medium.bounds is not None:
-        raise ParameterError(medium.source, "bounds", "closed-form single scattering needs an unbounded medium")
+        raise ParameterError(
+            medium.source, "bounds", "closed-form single scattering needs an unbounded medium"
+        )
     wy = float(w[1])
     if wy <= 0 or any(L.is_constant for L in medium.layers):
         zero = 0.0 * d[0]
@@ -64,7 +70,9 @@ def single_scatter_sun(ops, medium, o, d, D, w, E, tau=None):
     m = 1.0 - d[1] / w_[1]
     tau_sun_end = medium.sun_optical_depth(ops, tuple(o[i] + D * d[i] for i in range(3)), w_)
     out = []
-    for sig, alb_e in zip(ops.params(medium.sigma_t), ops.params([alb * e for alb, e in zip(medium.albedo, E)])):
+    for sig, alb_e in zip(
+        ops.params(medium.sigma_t), ops.params([alb * e for alb, e in zip(medium.albedo, E)])
+    ):
         tc = sig * tau
         # m >= 0: T_sun(o) * tc * phi(m tc), all factors bounded.
         pos = ops.exp(-sig * tau_sun_o) * ops.minimum(tc * cf.phi(ops, ops.maximum(m, 0.0) * tc), ops.largest)
@@ -77,14 +85,14 @@ def single_scatter_sun(ops, medium, o, d, D, w, E, tau=None):
     return tuple(out)
 
 
-def single_scatter_sky(ops, medium, o, d, D, L_sky):
+def single_scatter_sky(ops: Ops, medium: Real, o: Real, d: Real, D: Real, L_sky: Real) -> Real:
     """Single-scattered uniform sky, unoccluded and unattenuated: alpha L (1 - T(D))."""
     tau = medium.optical_depth(ops, o, d, D)
     alb_L = ops.params([alb * L for alb, L in zip(medium.albedo, L_sky)])
     return tuple(aL * -ops.expm1(-sig * tau) for sig, aL in zip(ops.params(medium.sigma_t), alb_L))
 
 
-def _log_x_phi(ops, X, mX):
+def _log_x_phi(ops: Ops, X: Real, mX: Real) -> Real:
     """log(X * phi(m X)) for X > 0, stable for any sign and size of m X."""
     big_neg = mX < -20.0
     z = ops.where(big_neg, -1.0, mX)
@@ -94,7 +102,9 @@ def _log_x_phi(ops, X, mX):
     return ops.where(big_neg, via, direct)
 
 
-def sample_sun_single_scatter(ops, medium, o, d, D, w, E, u, channel):
+def sample_sun_single_scatter(
+    ops: Ops, medium: Real, o: Real, d: Real, D: Real, w: Real, E: Real, u: Real, channel: Real
+) -> Real:
     """Sample a point on ``[0, D]`` in proportion to the sun's single-scattering
     integrand and return ``(t, weights)`` with ``weights[c] = f_c(t) / pdf(t)``.
 
@@ -130,11 +140,13 @@ def sample_sun_single_scatter(ops, medium, o, d, D, w, E, u, channel):
     r = [ops.exp(lc - lmax) for lc in logs]
     mean_r = (r[0] + r[1] + r[2]) / 3.0
     closed = single_scatter_sun(ops, medium, o, d, D, w, E, tau=tau_D)
-    weights = tuple(ops.where((mean_r > 0) & (tau_D > 0), cf_c * rc / mean_r, 0.0) for cf_c, rc in zip(closed, r))
+    weights = tuple(
+        ops.where((mean_r > 0) & (tau_D > 0), cf_c * rc / mean_r, 0.0) for cf_c, rc in zip(closed, r)
+    )
     return t, weights
 
 
-def _invert_exp_integrand(ops, X, m, u):
+def _invert_exp_integrand(ops: Ops, X: Real, m: Real, u: Real) -> Real:
     """``x`` in ``[0, X]`` with ``int_0^x e^{-m y} dy = u int_0^X e^{-m y} dy`` (any sign of m).
 
     ``m X >= -20``: ``Y psi(m Y)`` with ``Y = u X phi(m X)``; strongly rising rays
@@ -149,14 +161,16 @@ def _invert_exp_integrand(ops, X, m, u):
     return ops.minimum(ops.maximum(x, 0.0), X)
 
 
-def _pick(ops, index, values):
+def _pick(ops: Ops, index: Real, values: Real) -> Real:
     out = values[0]
     for i, v in enumerate(values[1:], start=1):
         out = ops.where(index == i, v, out)
     return out
 
 
-def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, channel):
+def sample_sun_single_scatter_mixture(
+    ops: Ops, medium: Real, o: Real, d: Real, D: Real, w: Real, E: Real, u: Real, u_layer: Real, channel: Real
+) -> Real:
     """Sample a point on the fogged part of ``[0, D]`` for the sun's single scattering
     in *any* layered medium (bounded by a box or not, several layers, constant
     layers) and return ``(t, weights)``, ``weights[c] = f_c(t) / pdf(t)``.
@@ -191,8 +205,10 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
     # m_l: the exact exponent for exponential layers (sun above the horizon); any other
     # profile (or a constant layer) gets m = 1, a truncated free flight: the proposal
     # stays a normalised closed form for any profile that inverts its optical depth.
-    ms = [(1.0 - dy / w_[1]) if (wy > 0 and isinstance(L, ExpLayer) and L.falloff > 0) else 1.0 + 0.0 * dy
-          for L in layers]
+    ms = [
+        (1.0 - dy / w_[1]) if (wy > 0 and isinstance(L, ExpLayer) and L.falloff > 0) else 1.0 + 0.0 * dy
+        for L in layers
+    ]
     taus = [L.depth(ops, oy, dy, seg) for L in layers]
     s_mean = ops.param(sum(sig) / 3.0)
     mass = [s_mean * tl * phi(ops, m * s_mean * tl) for tl, m in zip(taus, ms)]
@@ -219,8 +235,9 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
     for rl, tl, tseg, m, c in zip(rho_l, tau_l, taus, ms, c_l):
         for s, log_s in zip(sig_p, log_sig):
             Xc = s * tseg
-            logs.append(ops.log(ops.maximum(c * rl, 1e-37)) + log_s - m * s * tl
-                        - _log_x_phi(ops, Xc, m * Xc))
+            logs.append(
+                ops.log(ops.maximum(c * rl, 1e-37)) + log_s - m * s * tl - _log_x_phi(ops, Xc, m * Xc)
+            )
     lmax = logs[0]
     for lg in logs[1:]:
         lmax = ops.maximum(lmax, lg)
@@ -245,7 +262,7 @@ def sample_sun_single_scatter_mixture(ops, medium, o, d, D, w, E, u, u_layer, ch
     return t, tuple(weights)
 
 
-def sun_sampling_mode(medium, w, max_layers: int = 1, mixture: bool = True):
+def sun_sampling_mode(medium: Real, w: Real, max_layers: int = 1, mixture: bool = True) -> Real:
     """How fogpath samples the sun's single scattering along camera rays (trace-time):
     ``"exact"`` (:func:`sample_sun_single_scatter`: unbounded exponential layers,
     at most ``max_layers``), ``"mixture"`` (:func:`sample_sun_single_scatter_mixture`:
@@ -261,7 +278,7 @@ def sun_sampling_mode(medium, w, max_layers: int = 1, mixture: bool = True):
     return "mixture"
 
 
-def sun_sampling_applies(medium, w, max_layers: int = 1) -> bool:
+def sun_sampling_applies(medium: Real, w: Real, max_layers: int = 1) -> bool:
     """Whether :func:`sample_sun_single_scatter` handles this medium and sun (trace-time).
 
     ``max_layers``: fogpath uses it for one layer only by default: with two
@@ -271,12 +288,16 @@ def sun_sampling_applies(medium, w, max_layers: int = 1) -> bool:
     """
     from fogref.media.medium import ExpLayer
 
-    return (medium.bounds is None and len(medium.layers) <= max_layers
-            and all(isinstance(L, ExpLayer) and L.falloff > 0 for L in medium.layers)
-            and float(w[1]) > 0 and medium.scatters)
+    return (
+        medium.bounds is None
+        and len(medium.layers) <= max_layers
+        and all(isinstance(L, ExpLayer) and L.falloff > 0 for L in medium.layers)
+        and float(w[1]) > 0
+        and medium.scatters
+    )
 
 
-def hg_upper_fraction(g: float, mu0):
+def hg_upper_fraction(g: float, mu0: Real) -> Real:
     """``H(mu0) = int_{w_y > 0} p_HG(w . d) dw`` with ``d_y = mu0``: the share of a
     Henyey–Greenstein lobe around ``d`` that lies above the horizon (numpy float64,
     adaptive quadrature over the lobe's polar angle; the azimuthal share is exact,
@@ -289,10 +310,10 @@ def hg_upper_fraction(g: float, mu0):
 
     g = float(g)
 
-    def one(m0):
+    def one(m0: Real) -> Real:
         s0 = math.sqrt(max(1.0 - m0 * m0, 0.0))
 
-        def f(mu):
+        def f(mu: Real) -> Real:
             pdf = (1 - g * g) / (2.0 * (1 + g * g - 2 * g * mu) ** 1.5)
             a, b = mu * m0, math.sqrt(max(1 - mu * mu, 0.0)) * s0
             if b <= abs(a):
@@ -300,14 +321,17 @@ def hg_upper_fraction(g: float, mu0):
             return pdf * math.acos(-a / b) / math.pi
 
         pts = sorted({-1.0, -s0, s0, 1.0})
-        return sum(integrate.quad(f, lo, hi, epsabs=1e-13, epsrel=1e-12, limit=200)[0]
-                   for lo, hi in zip(pts[:-1], pts[1:]) if hi > lo)
+        return sum(
+            integrate.quad(f, lo, hi, epsabs=1e-13, epsrel=1e-12, limit=200)[0]
+            for lo, hi in zip(pts[:-1], pts[1:])
+            if hi > lo
+        )
 
     mu0 = np.atleast_1d(np.asarray(mu0, dtype=np.float64))
     return np.array([one(float(m)) for m in mu0])
 
 
-def hg_upper_fraction_fast(g: float, mu0, panels: int = 256, nodes: int = 8):
+def hg_upper_fraction_fast(g: float, mu0: Real, panels: int = 256, nodes: int = 8) -> Real:
     """:func:`hg_upper_fraction` by another route (vectorised): the azimuthal integral of
     the HG lobe in closed form, ``int_0^2pi (A - B cos phi)^-3/2 dphi = 4 E(m) / ((A-B) sqrt(A+B))``,
     ``m = 2B / (A+B)`` (complete elliptic integral of the second kind), then composite
@@ -330,7 +354,7 @@ def hg_upper_fraction_fast(g: float, mu0, panels: int = 256, nodes: int = 8):
 
 
 @functools.lru_cache(maxsize=16)
-def hg_upper_fraction_table(g: float, n: int = 0):
+def hg_upper_fraction_table(g: float, n: int = 0) -> Real:
     """:func:`hg_upper_fraction_fast` on ``n`` equally spaced ``mu0`` in [-1, 1] (tuple),
     once per ``g`` (``n`` = 0: 2049 nodes for |g| <= 0.9, 8193 above).  Linear
     interpolation between the nodes is within 1e-6 of the exact value for
@@ -340,5 +364,5 @@ def hg_upper_fraction_table(g: float, n: int = 0):
     n = int(n) or (2049 if abs(g) <= 0.9 else 8193)
     n += 1 - n % 2  # odd: mu0 = 0 is a node
     mu = np.linspace(-1.0, 1.0, n)
-    half = np.clip(hg_upper_fraction_fast(g, mu[n // 2:]), 0.0, 1.0)
+    half = np.clip(hg_upper_fraction_fast(g, mu[n // 2 :]), 0.0, 1.0)
     return tuple(float(x) for x in np.concatenate([1.0 - half[1:][::-1], half]))

@@ -8,6 +8,8 @@ the shader uses a numerical shortcut (a Taylor branch), its exact closed form.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from fogref.errors import ParameterError
@@ -15,7 +17,7 @@ from fogref.errors import ParameterError
 LN2 = 0.6931471805599453
 
 
-def dtype_of(precision: str):
+def dtype_of(precision: str) -> Any:
     """numpy dtype for ``precision`` ("float32" or "float64")."""
     if precision == "float32":
         return np.float32
@@ -24,12 +26,12 @@ def dtype_of(precision: str):
     raise ParameterError("<model>", "precision", f"expected 'float32' or 'float64', got {precision!r}")
 
 
-def saturate(x):
+def saturate(x: Any) -> Any:
     """HLSL ``saturate``: clamp to [0, 1] (NaN-free for finite or inf input)."""
     return np.minimum(np.maximum(x, 0), 1)
 
 
-def split(camera, world_pos):
+def split(camera: Any, world_pos: Any) -> Any:
     """camera (3,) and world positions (..., 3) as float64 arrays, checked."""
     from fogref.models.base import as_points
 
@@ -39,7 +41,7 @@ def split(camera, world_pos):
     return cam, as_points(world_pos)
 
 
-def grey(x, dt):
+def grey(x: Any, dt: Any) -> Any:
     """Broadcast a (...,) scalar field to (..., 3) RGB."""
     x = np.asarray(x, dtype=dt)
     return np.repeat(x[..., None], 3, axis=-1)

@@ -42,12 +42,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from fogref.errors import ParameterError
 from fogref.models._num import dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
+
+if TYPE_CHECKING:
+    from fogref.media.medium import FogMedium
 
 
 @dataclass(frozen=True)
@@ -59,7 +63,7 @@ class AltitudeFogParams:
     _FogPower: float = 2.0
     _FogColor: tuple = (0.6, 0.65, 0.7, 0.01)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         src = "<AltitudeFogParams>"
         if not self._FogEnd > self._FogStart:
             raise ParameterError(src, "_FogEnd", "must be greater than _FogStart")
@@ -71,30 +75,31 @@ class AltitudeFogParams:
         object.__setattr__(self, "_FogColor", c)
 
 
-def _integral(x, k, b, s, e, p, dt):
+def _integral(x: Any, k: Any, b: Any, s: Any, e: Any, p: Any, dt: Any) -> Any:
     """The shader's ``integral(x, k, b)`` (vectorised; branches as np.where)."""
     s_bk = (s - b) / k
     y = k * x + b
     below = x - s_bk
     above = (e - s) / ((p + dt(1.0)) * k)
     mid = (np.power(e - s, p + dt(1.0)) - np.power(np.maximum(e - y, dt(0.0)), p + dt(1.0))) / (
-        k * (p + dt(1.0)) * np.power(e - s, p))
+        k * (p + dt(1.0)) * np.power(e - s, p)
+    )
     return np.where(y <= s, below, np.where(y >= e, above, mid))
 
 
-def _integral_zero_k(x, b, s, e, p, dt):
+def _integral_zero_k(x: Any, b: Any, s: Any, e: Any, p: Any, dt: Any) -> Any:
     """The shader's ``integralZeroK(x, b)``."""
     mid = x * np.power(np.maximum((e - b) / (e - s), dt(0.0)), p)
     return np.where(b >= e, dt(0.0), np.where(b <= s, x, mid))
 
 
-def density(y, s, e, p):
+def density(y: Any, s: Any, e: Any, p: Any) -> Any:
     """Relative density ``T(y)`` (dimensionless)."""
     u = np.clip((e - y) / (e - s), 0.0, 1.0)
     return np.power(u, p)
 
 
-def path_integral_exact(cam, wp, s, e, p) -> np.ndarray:
+def path_integral_exact(cam: Any, wp: Any, s: Any, e: Any, p: Any) -> np.ndarray:
     """``I = int T ds`` [m] in float64: :meth:`PowerLawLayer.depth` from the ray's lower end.
 
     Stable at all slopes (horizontal rays included) and near ``_FogEnd``; see the module doc.
@@ -116,10 +121,10 @@ class AltitudeFog:
 
     Params = AltitudeFogParams
 
-    def __init__(self, params: AltitudeFogParams | None = None):
+    def __init__(self, params: AltitudeFogParams | None = None) -> None:
         self.params = params or AltitudeFogParams()
 
-    def path_integral(self, camera, world_pos, precision: str = "float32") -> np.ndarray:
+    def path_integral(self, camera: Any, world_pos: Any, precision: str = "float32") -> np.ndarray:
         """``GetAltitudeFog``: the density path integral I [m] of each pixel."""
         dt = dtype_of(precision)
         q = self.params
@@ -136,7 +141,9 @@ class AltitudeFog:
             stretch = np.sqrt(dt(1.0) + k * k)
             nz = k != 0
             k_safe = np.where(nz, k, dt(1.0))
-            i_k = stretch * (_integral(h, k_safe, b, s, e, p, dt) - _integral(dt(0.0), k_safe, b, s, e, p, dt))
+            i_k = stretch * (
+                _integral(h, k_safe, b, s, e, p, dt) - _integral(dt(0.0), k_safe, b, s, e, p, dt)
+            )
             i_0 = stretch * _integral_zero_k(h, b, s, e, p, dt)
             out = np.where(nz, i_k, i_0)
             bad = ~np.isfinite(out)
@@ -146,7 +153,7 @@ class AltitudeFog:
                 out[bad] = exact.astype(dt)
         return out.astype(dt, copy=False)
 
-    def evaluate(self, camera, world_pos, precision: str = "float32") -> FogResult:
+    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
         """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
         dt = dtype_of(precision)
         I = self.path_integral(camera, world_pos, precision)
@@ -154,16 +161,21 @@ class AltitudeFog:
         color = np.asarray(self.params._FogColor[:3], dtype=dt)
         return FogResult(inscatter=color * opacity[..., None], transmittance=grey(dt(1.0) - opacity, dt))
 
-    def to_medium(self, **kw):
+    def to_medium(self, **kw: Any) -> FogMedium:
         return altitude_to_medium(self.params, **kw)
 
 
 # -- physical counterpart ---------------------------------------------------------
-def altitude_to_medium(params: AltitudeFogParams, albedo=(1.0, 1.0, 1.0), g: float = 0.0):
+def altitude_to_medium(params: AltitudeFogParams, albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
     """The medium ``sigma_t = _FogColor.a * T(y)`` [1/m]: its optical depth is ``a * I``."""
     from fogref.media import FogMedium, PowerLawLayer
 
-    return FogMedium(sigma_t=params._FogColor[3], albedo=albedo, g=g,
-                     layers=(PowerLawLayer(density=1.0, start=params._FogStart, end=params._FogEnd,
-                                           power=params._FogPower),),
-                     source="<altitude_to_medium>")
+    return FogMedium(
+        sigma_t=params._FogColor[3],
+        albedo=albedo,
+        g=g,
+        layers=(
+            PowerLawLayer(density=1.0, start=params._FogStart, end=params._FogEnd, power=params._FogPower),
+        ),
+        source="<altitude_to_medium>",
+    )

@@ -15,7 +15,7 @@ the business of :mod:`fogref.mapping`.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar, Protocol, runtime_checkable
+from typing import Any, Callable, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -82,14 +82,15 @@ class FogModel(Protocol):
 
     name: ClassVar[str]
 
-    def evaluate(self, camera, positions, precision: str = "float32") -> FogResult: ...
+    def evaluate(self, camera: Any, positions: Any, precision: str = "float32") -> FogResult: ...
 
 
 _REGISTRY: dict[str, type] = {}
 
 
-def register(name: str):
-    """Class decorator: make a model a built-in one, found by name by :func:`fogref.models.resolve.resolve_model`.
+def register(name: str) -> Callable[[type], type]:
+    """Class decorator: make a model a built-in one, found by name by
+    :func:`fogref.models.resolve.resolve_model`.
 
     Examples
     --------
@@ -101,7 +102,7 @@ def register(name: str):
     >>> del _REGISTRY["doc_fog"]
     """
 
-    def deco(cls):
+    def deco(cls: Any) -> Any:
         cls.name = name
         _REGISTRY[name] = cls
         return cls
@@ -109,7 +110,7 @@ def register(name: str):
     return deco
 
 
-def as_points(x) -> np.ndarray:
+def as_points(x: Any) -> np.ndarray:
     """``x`` as a float64 array of points, shape (..., 3); ValueError otherwise.
 
     Examples

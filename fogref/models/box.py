@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -34,6 +35,9 @@ from fogref.errors import ParameterError
 from fogref.media import rgb
 from fogref.models._num import dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
+
+if TYPE_CHECKING:
+    from fogref.media.medium import FogMedium
 
 BOX_MODES = ("ratio", "thickness", "beer")
 
@@ -51,7 +55,7 @@ class BoxFogParams:
     fog_color: tuple = (0.7, 0.7, 0.75)
     mode: str = "ratio"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         src = "<BoxFogParams>"
         lo = tuple(float(x) for x in self.box_min)
         hi = tuple(float(x) for x in self.box_max)
@@ -66,7 +70,7 @@ class BoxFogParams:
         object.__setattr__(self, "fog_color", rgb(self.fog_color, "fog_color", src))
 
 
-def slab_chord(cam, v, lo, hi, dt):
+def slab_chord(cam: Any, v: Any, lo: Any, hi: Any, dt: Any) -> Any:
     """Ray ``cam + s v`` (s = 1 at the pixel) against the box: ``(s_near, s_far)``.
 
     ``s_near`` is clamped to >= 0 (camera inside: the chord starts at the camera).
@@ -74,8 +78,8 @@ def slab_chord(cam, v, lo, hi, dt):
     slab test stays NaN-free; no intersection gives ``s_far < s_near``.
     """
     tiny = dt(1e-30)
-    s0 = None
-    s1 = None
+    s0: Any = None
+    s1: Any = None
     for a in range(3):
         va = v[..., a]
         va = np.where(va == 0, tiny, va)
@@ -95,10 +99,10 @@ class BoxFog:
 
     Params = BoxFogParams
 
-    def __init__(self, params: BoxFogParams | None = None):
+    def __init__(self, params: BoxFogParams | None = None) -> None:
         self.params = params or BoxFogParams()
 
-    def fog_lengths(self, camera, world_pos, precision: str = "float32"):
+    def fog_lengths(self, camera: Any, world_pos: Any, precision: str = "float32") -> Any:
         """``(t, d)`` [m]: fog length in front of and behind each pixel along its ray."""
         dt = dtype_of(precision)
         q = self.params
@@ -115,7 +119,7 @@ class BoxFog:
             d = np.where(np.isfinite(d), d, dt(np.finfo(dt).max))
         return t.astype(dt), d.astype(dt)
 
-    def evaluate(self, camera, world_pos, precision: str = "float32") -> FogResult:
+    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
         """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
         dt = dtype_of(precision)
         q = self.params
@@ -133,12 +137,12 @@ class BoxFog:
         color = np.asarray(q.fog_color, dtype=dt)
         return FogResult(inscatter=color * fog[..., None], transmittance=grey(dt(1.0) - fog, dt))
 
-    def to_medium(self, **kw):
+    def to_medium(self, **kw: Any) -> FogMedium:
         return box_to_medium(self.params, **kw)
 
 
 def box_to_medium(params: BoxFogParams, reference_chord: float | None = None,
-                  albedo=(1.0, 1.0, 1.0), g: float = 0.0):
+                  albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
     """The homogeneous medium ``sigma_t`` [1/m] inside :class:`~fogref.media.Box`.
 
     "thickness"/"beer": ``sigma_t = k`` (optical depth ``k t`` exactly; "beer" is

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -37,6 +38,9 @@ from fogref.media import NP, rgb
 from fogref.media.closed_form import phi
 from fogref.models._num import dtype_of, grey, split
 from fogref.models.base import FogResult, register
+
+if TYPE_CHECKING:
+    from fogref.media.medium import FogMedium
 
 
 @dataclass(frozen=True)
@@ -55,7 +59,7 @@ class FilamentFogParams:
     lightDirection: tuple = (0.0, 1.0, 0.0)
     lightColorIntensity: tuple = (1.0, 1.0, 1.0, 1.0)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         src = "<FilamentFogParams>"
         for name in ("distance", "density", "heightFalloff"):
             v = getattr(self, name)
@@ -76,10 +80,10 @@ class FilamentFog:
 
     Params = FilamentFogParams
 
-    def __init__(self, params: FilamentFogParams | None = None):
+    def __init__(self, params: FilamentFogParams | None = None) -> None:
         self.params = params or FilamentFogParams()
 
-    def evaluate(self, camera, world_pos, precision: str = "float32") -> FogResult:
+    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
         """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
         dt = dtype_of(precision)
         q = self.params
@@ -93,7 +97,7 @@ class FilamentFog:
             view = (wp - cam).astype(dt)
             h = falloff * view[..., 1]
             # robust line integral in log form (no 0 * inf when the camera is far above)
-            def robust(hh):
+            def robust(hh: Any) -> Any:
                 log_a = (math.log(q.density) if q.density > 0 else -1e4) - q.heightFalloff * (cam[1] - q.height)
                 h64 = hh.astype(np.float64)
                 return np.where(h64 > -1.0, np.exp(min(log_a, 700.0)) * phi(NP, np.maximum(h64, -1.0)),
@@ -132,15 +136,15 @@ class FilamentFog:
                 fog_color = np.where(cut[..., None], dt(0.0), fog_color)
         return FogResult(inscatter=fog_color.astype(dt), transmittance=grey(trans, dt))
 
-    def to_medium(self, **kw):
+    def to_medium(self, **kw: Any) -> FogMedium:
         return filament_to_medium(self.params, **kw)
 
     @classmethod
-    def from_medium(cls, medium, **kw) -> "FilamentFog":
+    def from_medium(cls, medium: FogMedium, **kw: Any) -> "FilamentFog":
         return cls(medium_to_filament(medium, **kw))
 
 
-def filament_to_medium(params: FilamentFogParams, albedo=(1.0, 1.0, 1.0), g: float = 0.0):
+def filament_to_medium(params: FilamentFogParams, albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
     """Exact medium ``sigma_t = density`` [1/m], ``ExpLayer(1, heightFalloff, height)``."""
     from fogref.media import ExpLayer, FogMedium
 
@@ -148,7 +152,7 @@ def filament_to_medium(params: FilamentFogParams, albedo=(1.0, 1.0, 1.0), g: flo
                      layers=(ExpLayer(1.0, params.heightFalloff, params.height),), source="<filament_to_medium>")
 
 
-def medium_to_filament(medium, **kw) -> FilamentFogParams:
+def medium_to_filament(medium: FogMedium, **kw: Any) -> FilamentFogParams:
     """Filament options for an unbounded grey medium with one ExpLayer (``kw``: other options)."""
     from fogref.media import ExpLayer
 

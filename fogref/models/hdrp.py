@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -38,11 +39,15 @@ from fogref.media.closed_form import phi
 from fogref.models._num import dtype_of, grey, split
 from fogref.models.base import FogResult, register
 
+if TYPE_CHECKING:
+    from fogref.media.medium import FogMedium
+
 #: VolumeRendering.cs ScaleHeightFromLayerDepth: 1 / ln(1000).
 LAYER_DEPTH_TO_H = 0.144765
 #: fogref.mapping (hdrp_from_physical): base height [m] that makes HDRP's fog homogeneous everywhere below it.
 HOMOGENEOUS_BASE_HEIGHT = 1.0e7
-#: fogref.mapping (hdrp_from_physical): maxFogDistance [m], beyond any sky distance (the physical ray is not cut).
+#: fogref.mapping (hdrp_from_physical): maxFogDistance [m], beyond any sky distance (the physical
+#: ray is not cut).
 FROM_PHYSICAL_MAX_FOG_DISTANCE = 1.0e7
 
 
@@ -57,7 +62,7 @@ class HDRPFogParams:
     color: tuple = (0.5, 0.6, 0.7)
     maxFogDistance: float = 5000.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         src = "<HDRPFogParams>"
         if not (math.isfinite(self.meanFreePath) and self.meanFreePath > 0):
             raise ParameterError(src, "meanFreePath", f"value {self.meanFreePath} must be > 0")
@@ -66,14 +71,14 @@ class HDRPFogParams:
         object.__setattr__(self, "albedo", rgb(self.albedo, "albedo", src))
         object.__setattr__(self, "color", rgb(self.color, "color", src))
 
-    def scale_height(self, dt=np.float64) -> float:
+    def scale_height(self, dt: Any = np.float64) -> float:
         """H [m] as the CPU computes it."""
         depth = max(dt(0.01), dt(self.maximumHeight) - dt(self.baseHeight))
         return dt(depth * dt(LAYER_DEPTH_TO_H))
 
 
-def optical_depth_height_fog(base_extinction, base_height, exps, cos_zenith, start_height, interval, dt,
-                             exact: bool = False):
+def optical_depth_height_fog(base_extinction: Any, base_height: Any, exps: Any, cos_zenith: Any, start_height: Any, interval: Any, dt: Any,
+                             exact: bool = False) -> Any:
     """AtmosphericScattering.hlsl ``OpticalDepthHeightFog`` (vectorised)."""
     rcpH, H = exps
     Z = cos_zenith
@@ -101,10 +106,10 @@ class HDRPFog:
 
     Params = HDRPFogParams
 
-    def __init__(self, params: HDRPFogParams | None = None):
+    def __init__(self, params: HDRPFogParams | None = None) -> None:
         self.params = params or HDRPFogParams()
 
-    def optical_depth(self, camera, world_pos, precision: str = "float32") -> np.ndarray:
+    def optical_depth(self, camera: Any, world_pos: Any, precision: str = "float32") -> np.ndarray:
         """Optical depth (dimensionless) of each pixel's ray."""
         dt = dtype_of(precision)
         q = self.params
@@ -120,7 +125,7 @@ class HDRPFog:
                                           interval, dt, exact=(dt is np.float64))
         return od.astype(dt, copy=False)
 
-    def evaluate(self, camera, world_pos, precision: str = "float32") -> FogResult:
+    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
         """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
         dt = dtype_of(precision)
         q = self.params
@@ -128,16 +133,16 @@ class HDRPFog:
         col = np.asarray(q.color, dtype=dt) * np.asarray(q.albedo, dtype=dt)
         return FogResult(inscatter=col * (dt(1.0) - T)[..., None], transmittance=grey(T, dt))
 
-    def to_medium(self, **kw):
+    def to_medium(self, **kw: Any) -> FogMedium:
         return hdrp_to_medium(self.params, **kw)
 
     @classmethod
-    def from_medium(cls, medium, **kw) -> "HDRPFog":
+    def from_medium(cls, medium: FogMedium, **kw: Any) -> "HDRPFog":
         return cls(medium_to_hdrp(medium, **kw))
 
 
 # -- physical counterpart ---------------------------------------------------------
-def hdrp_to_medium(params: HDRPFogParams, g: float = 0.0):
+def hdrp_to_medium(params: HDRPFogParams, g: float = 0.0) -> FogMedium:
     """Exact medium: ``sigma_t = 1/meanFreePath`` [1/m] with a :class:`~fogref.media.HDRPLayer`."""
     from fogref.media import FogMedium, HDRPLayer
 
@@ -146,7 +151,7 @@ def hdrp_to_medium(params: HDRPFogParams, g: float = 0.0):
                      layers=(HDRPLayer(density=1.0, base_height=params.baseHeight, falloff=1.0 / H),), source="<hdrp_to_medium>")
 
 
-def medium_to_hdrp(medium, color=(0.5, 0.6, 0.7), maxFogDistance: float = 5000.0) -> HDRPFogParams:
+def medium_to_hdrp(medium: FogMedium, color: Any = (0.5, 0.6, 0.7), maxFogDistance: float = 5000.0) -> HDRPFogParams:
     """HDRP parameters for a grey medium with one :class:`~fogref.media.HDRPLayer` (or a
     homogeneous layer); ``maximumHeight = baseHeight + H ln(1000)``."""
     from fogref.media import ExpLayer, HDRPLayer

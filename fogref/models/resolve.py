@@ -43,13 +43,14 @@ Examples
 >>> resolve_model("eu4")
 Traceback (most recent call last):
 ...
-fogref.errors.FogrefError: unknown fog model 'eu4'; did you mean 'ue4'? (built-in: altitude, bevy, box, filament, godot, ...)
+fogref.errors.FogrefError: unknown fog model 'eu4'; did you mean 'ue4'? (built-in: altitude, box, ...)
 """
 
 from __future__ import annotations
 
 import importlib
 import inspect
+from typing import Any
 
 from fogref.errors import FogrefError, did_you_mean
 from fogref.models import base
@@ -62,7 +63,6 @@ ENTRY_POINT_GROUP = "fogref.models"
 def _builtin_names() -> list[str]:
     # the built-in models register themselves on import (the same modules fogref.models imports)
     from fogref.models import altitude, box, filament, hdrp, ue4, unity_builtin  # noqa: F401
-    from fogref.models import bevy, godot, threejs  # noqa: F401
 
     return sorted(base._REGISTRY)
 
@@ -85,7 +85,7 @@ def available_models() -> list[str]:
     return sorted(set(_builtin_names()) | set(entry_point_models()))
 
 
-def check_protocol(obj, source: str):
+def check_protocol(obj: Any, source: str) -> Any:
     """Return ``obj`` if it is a fog model class (or instance) following the protocol, else FogrefError.
 
     The protocol: a callable ``evaluate`` whose signature accepts
@@ -98,7 +98,7 @@ def check_protocol(obj, source: str):
     >>> check_protocol(NoFog, "my_mod:NoFog")
     Traceback (most recent call last):
     ...
-    fogref.errors.FogrefError: my_mod:NoFog: NoFog is not a fog model: it has no evaluate(camera, positions, precision="float32") method (see docs/byo.md)
+    fogref.errors.FogrefError: my_mod:NoFog: NoFog is not a fog model: it has no evaluate(...) method (see docs/byo.md)
     """
     label = getattr(obj, "__name__", type(obj).__name__)
     evaluate = getattr(obj, "evaluate", None)
@@ -124,7 +124,7 @@ def check_protocol(obj, source: str):
     return obj
 
 
-def _load_spec(spec: str):
+def _load_spec(spec: str) -> Any:
     module_name, _, attr = spec.partition(":")
     if not module_name or not attr:
         raise FogrefError(f"model '{spec}': expected module.path:Class")
@@ -147,7 +147,7 @@ def _load_spec(spec: str):
     return check_protocol(obj, spec)
 
 
-def resolve_model(spec: str):
+def resolve_model(spec: str) -> Any:
     """The fog model class (or instance) that ``spec`` names.
 
     Parameters

@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -55,6 +56,9 @@ from fogref.media.closed_form import phi
 from fogref.models._num import LN2, dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
 
+if TYPE_CHECKING:
+    from fogref.media.medium import FogMedium
+
 CM_PER_M = 100.0
 #: HeightFogCommon.ush: threshold of the Taylor branch of the line integral.
 FLT_EPSILON2 = 0.01
@@ -62,13 +66,13 @@ FLT_EPSILON2 = 0.01
 MAX_OBSERVER_HEIGHT_DIFFERENCE = 65536.0
 
 
-def world_to_unreal(p) -> np.ndarray:
+def world_to_unreal(p: Any) -> np.ndarray:
     """fogref (..., 3) y-up metres -> Unreal (..., 3) z-up centimetres."""
     p = np.asarray(p, dtype=np.float64)
     return np.stack([p[..., 0], p[..., 2], p[..., 1]], axis=-1) * CM_PER_M
 
 
-def direction_to_unreal(w) -> tuple:
+def direction_to_unreal(w: Any) -> tuple:
     """A fogref direction (y-up) -> unit Unreal direction (z-up)."""
     w = np.asarray(w, dtype=np.float64)
     v = np.array([w[0], w[2], w[1]])
@@ -115,7 +119,7 @@ class UE4FogParams:
     InscatteringLightDirection: tuple | None = None
     SunLuminance: float = 1.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name in ("FogDensity", "FogHeightFalloff", "FogMaxOpacity", "StartDistance",
                      "FogCutoffDistance", "EndDistance", "DirectionalInscatteringStartDistance"):
             v = float(getattr(self, name))
@@ -130,13 +134,13 @@ class UE4FogParams:
             w = np.asarray(self.InscatteringLightDirection, dtype=np.float64)
             object.__setattr__(self, "InscatteringLightDirection", tuple(float(x) for x in w / np.linalg.norm(w)))
 
-    def with_sun(self, direction_world, luminance: float = 1.0) -> "UE4FogParams":
+    def with_sun(self, direction_world: Any, luminance: float = 1.0) -> "UE4FogParams":
         """Copy with the sun given in **fogref's** frame (y-up, toward the sun)."""
         return replace(self, InscatteringLightDirection=direction_to_unreal(direction_world),
                        SunLuminance=float(luminance))
 
 
-def fog_constants(p: UE4FogParams, camera_z_cm: float, dt=np.float32) -> dict:
+def fog_constants(p: UE4FogParams, camera_z_cm: float, dt: Any = np.float32) -> dict:
     """The uniforms of FogRendering.cpp for an observer at ``camera_z_cm``.
 
     Returns ExponentialFogParameters{,2,3}, the colour parameter and the
@@ -171,7 +175,7 @@ def fog_constants(p: UE4FogParams, camera_z_cm: float, dt=np.float32) -> dict:
     )
 
 
-def _line_integral_shared(falloff, ray_dir_z, origin_terms, dt, exact: bool):
+def _line_integral_shared(falloff: Any, ray_dir_z: Any, origin_terms: Any, dt: Any, exact: bool) -> Any:
     """CalculateLineIntegralShared (HeightFogCommon.ush).  ``exact``: no Taylor branch."""
     F = np.maximum(dt(-127.0), falloff * ray_dir_z)
     if exact:
@@ -183,7 +187,7 @@ def _line_integral_shared(falloff, ray_dir_z, origin_terms, dt, exact: bool):
     return origin_terms * np.where(np.abs(F) > dt(FLT_EPSILON2), li, taylor)
 
 
-def shade(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt, exact: bool):
+def shade(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt: Any, exact: bool) -> Any:
     """GetExponentialHeightFog on camera-relative receiver positions (Unreal cm).
 
     Returns ``(FogColor (..., 3), ExpFogFactor (...))``.
@@ -256,10 +260,10 @@ class UE4ExponentialHeightFog:
 
     Params = UE4FogParams
 
-    def __init__(self, params: UE4FogParams | None = None):
+    def __init__(self, params: UE4FogParams | None = None) -> None:
         self.params = params or UE4FogParams()
 
-    def evaluate(self, camera, world_pos, precision: str = "float32") -> FogResult:
+    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
         """Fog of each pixel: camera (3,) and world_pos (..., 3) in fogref metres."""
         dt = dtype_of(precision)
         cam, wp = split(camera, world_pos)
@@ -271,11 +275,11 @@ class UE4ExponentialHeightFog:
         return FogResult(inscatter=fog_color, transmittance=grey(factor, dt))
 
     @classmethod
-    def from_medium(cls, medium, **kw) -> "UE4ExponentialHeightFog":
+    def from_medium(cls, medium: FogMedium, **kw: Any) -> "UE4ExponentialHeightFog":
         """The Unreal fog whose extinction equals ``medium``'s (see :func:`medium_to_ue4`)."""
         return cls(medium_to_ue4(medium, **kw))
 
-    def to_medium(self, **kw):
+    def to_medium(self, **kw: Any) -> FogMedium:
         """The physical medium of this fog's extinction (see :func:`ue4_to_medium`)."""
         return ue4_to_medium(self.params, **kw)
 
@@ -291,7 +295,7 @@ def sigma_to_unreal(a: float, b: float) -> tuple[float, float]:
     return a * 1000.0 / (CM_PER_M * LN2 * LN2), b * 1000.0 / (CM_PER_M * LN2)
 
 
-def ue4_to_medium(params: UE4FogParams, albedo=(1.0, 1.0, 1.0), g: float = 0.0):
+def ue4_to_medium(params: UE4FogParams, albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
     """The physical medium with the same extinction as the Unreal fog.
 
     ``sigma_t(y) = a_i exp(-b_i (y - h_i))`` per metre for each layer i with
@@ -314,7 +318,7 @@ def ue4_to_medium(params: UE4FogParams, albedo=(1.0, 1.0, 1.0), g: float = 0.0):
     return FogMedium(sigma_t=a0, albedo=albedo, g=g, layers=tuple(layers), source="<ue4_to_medium>")
 
 
-def medium_to_ue4(medium, base: UE4FogParams | None = None) -> UE4FogParams:
+def medium_to_ue4(medium: FogMedium, base: UE4FogParams | None = None) -> UE4FogParams:
     """Unreal parameters (density, falloff, height parts) for a 1–2 layer medium.
 
     The medium must be unbounded, grey (equal sigma_t per channel) and made of

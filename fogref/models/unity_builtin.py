@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -38,6 +39,9 @@ from fogref.errors import ParameterError
 from fogref.media import rgb
 from fogref.models._num import LN2, dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
+
+if TYPE_CHECKING:
+    from fogref.media.medium import FogMedium
 
 MODES = ("linear", "exp", "exp2")
 
@@ -63,7 +67,7 @@ class UnityFogParams:
     clip_near: float | None = None
     clip_far: float | None = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         src = "<UnityFogParams>"
         if self.fogMode not in MODES:
             raise ParameterError(src, "fogMode", f"expected one of {MODES}, got {self.fogMode!r}")
@@ -77,7 +81,7 @@ class UnityFogParams:
         f = np.asarray(self.camera_forward, dtype=np.float64)
         object.__setattr__(self, "camera_forward", tuple(float(x) for x in f / np.linalg.norm(f)))
 
-    def fog_params(self, dt=np.float32) -> tuple:
+    def fog_params(self, dt: Any = np.float32) -> tuple:
         """unity_FogParams (x, y, z, w) as the CPU computes them (in ``dt``)."""
         d = dt(self.fogDensity)
         rng = dt(self.fogEndDistance) - dt(self.fogStartDistance)
@@ -85,7 +89,7 @@ class UnityFogParams:
         return (d / dt(math.sqrt(LN2)), d / dt(LN2), dt(-1.0) / rng, dt(self.fogEndDistance) / rng)
 
 
-def unity_fog_factor(mode: str, fog_params, coord, dt):
+def unity_fog_factor(mode: str, fog_params: Any, coord: Any, dt: Any) -> Any:
     """UNITY_CALC_FOG_FACTOR_RAW: the un-saturated fog factor for coordinate ``coord``."""
     x, y, z, w = fog_params
     if mode == "linear":
@@ -103,10 +107,10 @@ class UnityBuiltinFog:
 
     Params = UnityFogParams
 
-    def __init__(self, params: UnityFogParams | None = None):
+    def __init__(self, params: UnityFogParams | None = None) -> None:
         self.params = params or UnityFogParams()
 
-    def fog_coordinate(self, camera, world_pos, dt=np.float64) -> np.ndarray:
+    def fog_coordinate(self, camera: Any, world_pos: Any, dt: Any = np.float64) -> np.ndarray:
         """The fog coordinate c [m] of each pixel (eye depth or distance)."""
         p = self.params
         cam, wp = split(camera, world_pos)
@@ -121,7 +125,7 @@ class UnityBuiltinFog:
         zc = n * (f - z) / (f - n)                      # reversed-Z clip-space z
         return np.maximum((dt(1.0) - zc / n) * f, dt(0.0))
 
-    def evaluate(self, camera, world_pos, precision: str = "float32") -> FogResult:
+    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
         """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
         dt = dtype_of(precision)
         p = self.params
@@ -132,11 +136,11 @@ class UnityBuiltinFog:
         return FogResult(inscatter=color * (dt(1.0) - factor)[..., None], transmittance=grey(factor, dt))
 
     @classmethod
-    def from_medium(cls, medium, **kw) -> "UnityBuiltinFog":
+    def from_medium(cls, medium: FogMedium, **kw: Any) -> "UnityBuiltinFog":
         """Exp fog on distance with the homogeneous medium's extinction."""
         return cls(medium_to_unity(medium, **kw))
 
-    def to_medium(self, **kw):
+    def to_medium(self, **kw: Any) -> FogMedium:
         return unity_to_medium(self.params, **kw)
 
 
@@ -160,7 +164,7 @@ def unity_sigma(params: UnityFogParams, reference_distance: float | None = None)
 
 
 def unity_to_medium(params: UnityFogParams, reference_distance: float | None = None,
-                    albedo=(1.0, 1.0, 1.0), g: float = 0.0):
+                    albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
     """Homogeneous :class:`~fogref.media.FogMedium` for ``params`` (see :func:`unity_sigma`)."""
     from fogref.media import ExpLayer, FogMedium
 
@@ -168,7 +172,7 @@ def unity_to_medium(params: UnityFogParams, reference_distance: float | None = N
                      layers=(ExpLayer(1.0, 0.0, 0.0),), source="<unity_to_medium>")
 
 
-def medium_to_unity(medium, fogColor=(0.5, 0.5, 0.5)) -> UnityFogParams:
+def medium_to_unity(medium: FogMedium, fogColor: Any = (0.5, 0.5, 0.5)) -> UnityFogParams:
     """Exp fog on distance equal to a homogeneous, unbounded, grey medium."""
     src = getattr(medium, "source", "<medium>")
     if medium.bounds is not None or not medium.is_homogeneous:
