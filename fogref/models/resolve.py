@@ -63,6 +63,7 @@ ENTRY_POINT_GROUP = "fogref.models"
 def _builtin_names() -> list[str]:
     # the built-in models register themselves on import (the same modules fogref.models imports)
     from fogref.models import altitude, box, filament, hdrp, ue4, unity_builtin  # noqa: F401
+    from fogref.models import bevy, godot, threejs  # noqa: F401
 
     return sorted(base._REGISTRY)
 
