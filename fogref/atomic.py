@@ -1,10 +1,11 @@
-"""Atomic file writes: a file appears only when complete.
+"""Safe outputs: a file appears only when complete, and no output replaces an input.
 
 Each writer writes a temporary file in the destination folder, then renames it
 over the destination (``os.replace``, atomic on POSIX within one file system).
 Every fogref output goes through :func:`atomic_write`: EXRs
 (:func:`fogref.exrio.write_exr`), render checkpoints and previews, report text
-and figures.
+and figures.  Before any work, a command compares its outputs with its inputs
+(:func:`refuse_overwriting_inputs`).
 
 Examples
 --------
@@ -29,6 +30,8 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+
+from fogref.errors import FogrefError
 
 
 def _file_mode(path: Path) -> int:
@@ -94,3 +97,60 @@ def savez_atomic(path, **arrays) -> Path:
     import numpy as np
 
     return atomic_write(path, lambda tmp: np.savez(tmp, **arrays))
+
+
+def _entries(items):
+    """``(path, label)`` pairs from paths, ``(path, label)`` pairs or objects with ``.path`` and ``.kind``."""
+    for it in items:
+        if isinstance(it, tuple):
+            yield Path(it[0]), str(it[1])
+        elif hasattr(it, "path"):
+            yield Path(it.path), str(getattr(it, "kind", "input"))
+        else:
+            yield Path(it), "input"
+
+
+def _same(a: Path, b: Path) -> bool:
+    """Same file: equal resolved paths (symlinks followed, also for paths not yet created), or
+    ``os.path.samefile`` for two existing paths (hard links, case-insensitive file systems)."""
+    if os.path.realpath(a) == os.path.realpath(b):
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def refuse_overwriting_inputs(outputs, inputs, what: str = "output") -> None:
+    """Raise a one-line :class:`~fogref.errors.FogrefError` if an output is one of the inputs.
+
+    Call it before any work, with every file the command will write (derived ones too:
+    previews, checkpoints, reports) and every file it reads.
+
+    Parameters
+    ----------
+    outputs, inputs
+        Paths, ``(path, label)`` pairs, or objects with ``.path`` and ``.kind`` (e.g.
+        :class:`fogref.render.inputs.SceneInput`); labels name them in the message.
+    what
+        How the user named the outputs, e.g. ``"--out x.exr"``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> d = Path(tempfile.mkdtemp())
+    >>> _ = (d / "sky.exr").write_bytes(b"v/1")
+    >>> os.symlink(d / "sky.exr", d / "link.exr")
+    >>> refuse_overwriting_inputs([d / "out.exr"], [(d / "sky.exr", "envmap")], "--out")
+    >>> try:
+    ...     refuse_overwriting_inputs([(d / "link.exr", "EXR")], [(d / "sky.exr", "envmap")], "--out link.exr")
+    ... except FogrefError as e:
+    ...     print(str(e).replace(str(d), "D"))
+    --out link.exr: the EXR D/link.exr would overwrite the envmap D/sky.exr, which is an input; choose another output
+    """
+    ins = list(_entries(inputs))
+    for out, olabel in _entries(outputs):
+        for inp, ilabel in ins:
+            if _same(out, inp):
+                raise FogrefError(f"{what}: the {olabel} {out} would overwrite the {ilabel} {inp}, which is "
+                                  f"an input; choose another output")
