@@ -68,17 +68,39 @@ def atomic_write(path, write) -> Path:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp" + path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
+    fd = tmp = None
+    try:  # an interruption anywhere from here on leaves no temporary file
+        fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp" + path.suffix, dir=path.parent)
+        os.close(fd)
+        fd = None
         write(tmp)
         os.chmod(tmp, _file_mode(path))  # mkstemp makes 0600; give the mode a plain open() would
         os.replace(tmp, path)
     except BaseException:
-        if os.path.exists(tmp):
+        if fd is not None:
+            try:
+                os.close(fd)
+            except OSError:  # closed already, just before the interruption
+                pass
+        if tmp is not None and os.path.exists(tmp):
             os.unlink(tmp)
         raise
     return path
+
+
+def temporary_names(path) -> str:
+    """A regular expression matching the names of :func:`atomic_write`'s temporary files for ``path``
+    (what a writer killed mid-write leaves): ``<name>.<random letters, digits, _>.tmp<suffix>``.
+
+    >>> import re
+    >>> bool(re.fullmatch(temporary_names("a.exr"), "a.exr.k3_x9zq1.tmp.exr")), bool(re.fullmatch(
+    ...     temporary_names("a.exr"), "a.exr.my notes.tmp.exr"))
+    (True, False)
+    """
+    import re
+
+    path = Path(path)
+    return re.escape(path.name) + r"\.[a-z0-9_]+\.tmp" + re.escape(path.suffix)
 
 
 def write_text_atomic(path, text: str) -> Path:

@@ -37,6 +37,7 @@ import contextlib
 import hashlib
 import json
 import os
+import re
 import signal
 import sys
 import time
@@ -46,7 +47,7 @@ import numpy as np
 
 from fogref import gbuffer
 from fogref._version import __version__
-from fogref.atomic import atomic_write, refuse_overwriting_inputs, savez_atomic
+from fogref.atomic import atomic_write, refuse_overwriting_inputs, savez_atomic, temporary_names
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 from fogref.render.inputs import file_sha256, inputs_digest, scene_inputs
@@ -233,8 +234,10 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
                       "pixel_filter": pixel_filter, "version": __version__,
                       "schema": gbuffer.SCHEMA_VERSION}, sort_keys=True)
     ckpt = checkpoint_path(out)
-    for stale in out.parent.glob(ckpt.name + ".*.tmp*"):  # a writer killed mid-write
-        stale.unlink(missing_ok=True)
+    leftovers = re.compile(f"{temporary_names(ckpt)}|{temporary_names(out)}")
+    for stale in out.parent.glob(f"{out.name}.*.tmp*"):  # a writer killed mid-write (SIGKILL)
+        if leftovers.fullmatch(stale.name):
+            stale.unlink(missing_ok=True)
     # the running state, one tuple (sums, squares, passes they hold): replaced in one assignment, so
     # an interruption anywhere sees the sums with their own count; the sums live on the device
     state = _resume(ckpt, key, (H, W), passes) if resume else None
