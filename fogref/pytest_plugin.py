@@ -10,8 +10,11 @@ fogref has it::
 * fixture ``fogref_truth``: a factory ``(scene, res=(32, 18), spp=16, seed=0,
   overrides=None) -> Truth``.  The truth is rendered on first use and cached (see
   :mod:`fogref.render.cache`) under ``$FOGREF_CACHE`` if set, else in
-  pytest's cache folder (``.pytest_cache/d/fogref_truths``).  A relative scene path
-  is looked up in the working directory, then under pytest's root directory.
+  pytest's cache folder (``.pytest_cache/d/fogref_truths``).  The cache key covers the
+  scene and every file it loads (meshes, envmaps, textures, included XML:
+  :func:`fogref.render.inputs.inputs_digest`), so an edited mesh means a fresh render.
+  A relative scene path is looked up in the working directory, then under pytest's
+  root directory.
 * :func:`assert_fog_matches` (re-exported from :mod:`fogref.compare.check`): runs
   ``check`` and fails with the part, region, estimate, interval, tolerance,
   confidence and the folder of the error maps.

@@ -411,7 +411,8 @@ def _checkpoint_problem(z, key: str, shape: tuple, passes: list):
     belongs to other inputs or settings."""
     names = set(z.files)
     if not {"sums", "squares", "done", "key", "sha256"} <= names:
-        return f"fields {sorted({'sums', 'squares', 'done', 'key', 'sha256'} - names)} missing"
+        missing = sorted({"sums", "squares", "done", "key", "sha256"} - names)
+        return f"not a checkpoint of this fogref (no {', '.join(missing)})"
     if str(z["key"]) != key:
         return "stale"
     sums, squares, done = z["sums"], z["squares"], z["done"]
@@ -464,7 +465,8 @@ def _resume(ckpt: Path, key: str, shape: tuple, passes: list):
             if problem is None:
                 return z["sums"], z["squares"], int(z["done"])
     except Exception as e:  # any way a damaged file fails to read: zip, npy header, CRC, pickle refused
-        problem = f"unreadable ({type(e).__name__}: {str(e).splitlines()[0] if str(e) else 'no detail'})"
+        detail = (str(e).splitlines() or ["no detail"])[0]
+        problem = f"unreadable ({type(e).__name__}: {detail[:80]}{'...' if len(detail) > 80 else ''})"
     if problem != "stale":
         _set_aside(ckpt, problem)
     return None
