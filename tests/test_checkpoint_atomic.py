@@ -280,3 +280,37 @@ def test_the_good_checkpoint_resumes_and_a_second_damaged_one_gets_its_own_name(
     assert (tmp_path / "x.exr.partial.npz.damaged").read_text() == "an earlier one"
     assert (tmp_path / "x.exr.partial.npz.damaged1").read_bytes() == b""
     assert "damaged1" in capsys.readouterr().err
+
+
+def test_sigterm_stops_after_the_pass_with_a_checkpoint_like_ctrl_c(tmp_path, mitsuba, monkeypatch):
+    """SIGTERM (a job scheduler, `kill`) is handled as Ctrl-C: the pass ends, the checkpoint is
+    written, the rerun resumes to the uninterrupted truth."""
+    import fogref.render.render as R
+    from fogref_plugins.fogpath import FogPathIntegrator as cls
+
+    tiny.one_spp_passes(monkeypatch)
+    scene = tiny.make(mitsuba, tmp_path / "scene")
+    kw = dict(spp=SPP, seed=5, progress=False, png=False)
+    ref = _pixels(R.render(scene, tmp_path / "ref.exr", **kw))
+    real = cls.render_moments
+
+    def terminated_during_a_pass(self, *a, **k):
+        os.kill(os.getpid(), signal.SIGTERM)
+        return real(self, *a, **k)
+
+    def unhandled(signum, frame):
+        raise SystemExit("SIGTERM reached the test: the render did not handle it (no checkpoint)")
+
+    previous = signal.signal(signal.SIGTERM, unhandled)
+    try:
+        monkeypatch.setattr(cls, "render_moments", terminated_during_a_pass)
+        with pytest.raises(KeyboardInterrupt):
+            R.render(scene, tmp_path / "x.exr", **kw)
+        monkeypatch.setattr(cls, "render_moments", real)
+        assert signal.getsignal(signal.SIGTERM) is unhandled  # restored
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    with np.load(tmp_path / "x.exr.partial.npz") as z:
+        assert int(z["done"]) == 1
+    R.render(scene, tmp_path / "x.exr", **kw)
+    assert _equal(_pixels(tmp_path / "x.exr"), ref)
