@@ -165,10 +165,11 @@ def refuse_overwriting_inputs(outputs, inputs, what: str = "output") -> None:
     >>> os.symlink(d / "sky.exr", d / "link.exr")
     >>> refuse_overwriting_inputs([d / "out.exr"], [(d / "sky.exr", "envmap")], "--out")
     >>> try:
-    ...     refuse_overwriting_inputs([(d / "link.exr", "EXR")], [(d / "sky.exr", "envmap")], "--out link.exr")
+    ...     refuse_overwriting_inputs([(d / "link.exr", "EXR")], [(d / "sky.exr", "envmap")], "--out")
     ... except FogrefError as e:
-    ...     print(str(e).replace(str(d), "D"))
-    --out link.exr: the EXR D/link.exr would overwrite the envmap D/sky.exr, which is an input; choose another output
+    ...     print(str(e).replace(str(d), "D").replace("; ", ";\n"))
+    --out: the EXR D/link.exr would overwrite the envmap D/sky.exr, which is an input;
+    choose another output
     """
     ins = list(_entries(inputs))
     for out, olabel in _entries(outputs):

@@ -35,7 +35,8 @@ __all__ = ["assert_fog_matches", "check", "fogref_truth"]
 
 @pytest.fixture(scope="session")
 def fogref_truth(request):
-    """Factory ``(scene, res=(32, 18), spp=16, seed=0, overrides=None, **render_options) -> Truth`` (cached)."""
+    """Factory ``(scene, res=(32, 18), spp=16, seed=0, overrides=None, **render_options) -> Truth``
+    (cached)."""
     from fogref.render.cache import cached_truth
 
     env = os.environ.get("FOGREF_CACHE")

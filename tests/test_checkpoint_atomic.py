@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 import tiny_inputs_scene as tiny
+
 from fogref.exrio import read_exr
 
 pytestmark = pytest.mark.render
@@ -35,6 +35,11 @@ def _equal(a: dict, b: dict) -> bool:
     return sorted(a) == sorted(b) and all(np.array_equal(a[k], b[k]) for k in a)
 
 
+def _is_interrupt(frame) -> bool:
+    """The frame is a method of the driver's signal handling (``fogref.render.render._Interrupt``)."""
+    return type(frame.f_locals.get("self")).__name__ == "_Interrupt"
+
+
 class _InjectAt:
     """A trace function that interrupts the n-th line executed in TRACED files while the pass loop
     runs: from the driver's installing its signal handlers (``_Interrupt.__enter__``) to its
@@ -46,17 +51,18 @@ class _InjectAt:
     def __call__(self, frame, event, arg):
         if frame.f_code.co_filename not in TRACED:
             return None
-        if "_Interrupt" in frame.f_code.co_qualname and frame.f_code.co_name in ("__enter__", "__exit__"):
+        if frame.f_code.co_name in ("__enter__", "__exit__") and _is_interrupt(frame):
             self.armed = self.armed is None if frame.f_code.co_name == "__enter__" else self.armed
         return self._line
 
     def _line(self, frame, event, arg):
-        if event == "return" and frame.f_code.co_name == "__exit__" and "_Interrupt" in frame.f_code.co_qualname:
+        if event == "return" and frame.f_code.co_name == "__exit__" and _is_interrupt(frame):
             self.armed = False
         if event == "line" and self.armed and self.fired is None:
             self.count += 1
             if self.count == self.n:
-                self.fired = f"{Path(frame.f_code.co_filename).name}:{frame.f_lineno} ({frame.f_code.co_name})"
+                code = frame.f_code
+                self.fired = f"{Path(code.co_filename).name}:{frame.f_lineno} ({code.co_name})"
                 if self.how == "exception":
                     raise KeyboardInterrupt
                 os.kill(os.getpid(), signal.SIGINT)  # two Ctrl-C, delivered at this line
@@ -285,8 +291,9 @@ def test_the_good_checkpoint_resumes_and_a_second_damaged_one_gets_its_own_name(
 def test_sigterm_stops_after_the_pass_with_a_checkpoint_like_ctrl_c(tmp_path, mitsuba, monkeypatch):
     """SIGTERM (a job scheduler, `kill`) is handled as Ctrl-C: the pass ends, the checkpoint is
     written, the rerun resumes to the uninterrupted truth."""
-    import fogref.render.render as R
     from fogref_plugins.fogpath import FogPathIntegrator as cls
+
+    import fogref.render.render as R
 
     tiny.one_spp_passes(monkeypatch)
     scene = tiny.make(mitsuba, tmp_path / "scene")

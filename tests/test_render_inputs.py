@@ -10,8 +10,8 @@ import shutil
 
 import numpy as np
 import pytest
-
 import tiny_inputs_scene as tiny
+
 from fogref.errors import FogrefError
 from fogref.exrio import read_exr
 
@@ -118,7 +118,7 @@ def test_an_edited_input_between_interruption_and_rerun_means_a_fresh_render(tmp
     EDITS[edit](mitsuba, tmp_path / "scene")
     R.render(scene, out, spp=4, seed=2, progress=False, png=False)
     fresh = R.render(scene, tmp_path / "fresh.exr", spp=4, seed=2, progress=False, png=False)
-    assert not _same_pixels(before, fresh), f"{edit}: the edit must change the pixels for this test to mean much"
+    assert not _same_pixels(before, fresh), f"{edit}: the edit must change the pixels (else the test is void)"
     assert _same_pixels(out, fresh), f"{edit}: the rerun resumed from sums of the old {edit.split()[0]}"
     if edit.startswith("mesh"):
         assert set(np.unique(read_exr(out)[0]["hit"])) <= {0.0, 1.0}  # no fractional hit: one geometry
@@ -188,9 +188,11 @@ def test_out_over_a_mesh_selected_by_an_override_and_over_an_include_is_refused(
     shutil.copy(tmp_path / "sky.exr", tmp_path / "night.exr")
     with pytest.raises(FogrefError, match="night.exr"):
         render(scene, tmp_path / "night.exr", spp=1, overrides={"sky": "night.exr"}, progress=False)
-    (tmp_path / "inc.exr.partial.npz").write_text('<scene version="3.0.0"/>')  # an include named like a checkpoint
-    scene.write_text(scene.read_text().replace("</scene>", '<include filename="inc.exr.partial.npz"/></scene>'))
-    with pytest.raises(FogrefError, match=r"the checkpoint .*inc\.exr\.partial\.npz would overwrite the include"):
+    # an include named like a checkpoint
+    (tmp_path / "inc.exr.partial.npz").write_text('<scene version="3.0.0"/>')
+    include = '<include filename="inc.exr.partial.npz"/></scene>'
+    scene.write_text(scene.read_text().replace("</scene>", include))
+    with pytest.raises(FogrefError, match=r"checkpoint .*inc\.exr\.partial\.npz would overwrite the include"):
         render(scene, tmp_path / "inc.exr", spp=1, progress=False)
 
 

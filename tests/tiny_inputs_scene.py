@@ -23,7 +23,8 @@ SCENE = """<scene version="3.0.0">
         </film>
         <medium type="heightfog" name="medium">
             <string name="profile" value="exponential"/>
-            <float name="sigma_t" value="0.02"/><float name="albedo" value="0.9"/><float name="g" value="0.6"/>
+            <float name="sigma_t" value="0.02"/><float name="albedo" value="0.9"/>
+            <float name="g" value="0.6"/>
             <float name="falloff" value="0.0138629"/><float name="density" value="1"/>
             <float name="height" value="0"/>
         </medium>

@@ -36,7 +36,8 @@ def _renderer_hash() -> str:
     import fogref
 
     root = Path(fogref.__file__).resolve().parent
-    files = sorted((root / "media").glob("*.py")) + sorted((root / "render").glob("*.py")) + [root / "gbuffer.py"]
+    files = sorted((root / "media").glob("*.py")) + sorted((root / "render").glob("*.py"))
+    files.append(root / "gbuffer.py")
     plugins = root.parent / "plugins"
     if not plugins.is_dir():
         try:
@@ -67,7 +68,8 @@ def truth_key(scene, spp: int, seed: int, overrides: dict | None = None, pixel_f
     from fogref.render.inputs import inputs_digest
 
     spec = {"inputs": inputs_digest(scene, overrides), "spp": int(spp), "seed": int(seed),
-            "pixel_filter": pixel_filter, "overrides": {str(k): str(v) for k, v in sorted((overrides or {}).items())},
+            "pixel_filter": pixel_filter,
+            "overrides": {str(k): str(v) for k, v in sorted((overrides or {}).items())},
             "version": __version__, "renderer": _renderer_hash()}
     return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:24]
 

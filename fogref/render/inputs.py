@@ -248,7 +248,8 @@ def file_sha256(path) -> str:
 
 
 def _label(path: Path, folder: Path) -> str:
-    """``path`` relative to the scene's folder when inside it (a moved project keeps its keys), else absolute."""
+    """``path`` relative to the scene's folder when inside it (a moved project keeps its keys),
+    else absolute."""
     try:
         return path.relative_to(folder).as_posix()
     except ValueError:

@@ -12,7 +12,8 @@ the back end's memory allows, and turns them into means and standard errors.
   ``(scene, overrides, spp, seed, pixel_filter, variant)`` gives identical pixels.
 * **Cheap**: the running sums stay on the device (Dr.Jit float64, added there after
   every pass; copied to the host only for a checkpoint and once at the end), and the
-  passes are as few and as equal as :data:`fogref.render.passes.MAX_LANES` allows (``benchmarks/render_driver.py``
+  passes are as few and as equal as :data:`fogref.render.passes.MAX_LANES` allows
+  (``benchmarks/render_driver.py``
   measures the driver against one ``mi.render`` call).
 * **Resumable**: the running sums are checkpointed atomically next to the output
   (``<out>.partial.npz``) every ``checkpoint_seconds`` and on Ctrl-C or SIGTERM; a rerun
@@ -226,7 +227,8 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
     need = W * H * _HOST_BYTES_PER_PIXEL
     if need > 0.5 * _physical_memory():
         raise FogrefError(f"{scene_path}: {W}x{H} pixels need about {need / 2**30:.1f} GiB of memory for the "
-                          f"ground truth; this machine has {_physical_memory() / 2**30:.1f} GiB (limit: half)")
+                          f"ground truth; this machine has {_physical_memory() / 2**30:.1f} GiB "
+                          f"(limit: half)")
     passes = pass_sizes(W * H, spp, max_lanes(variant))
     scene_sha = file_sha256(scene_path)
     key = json.dumps({"inputs_sha256": digest, "overrides": {k: str(v) for k, v in (overrides or {}).items()},
@@ -437,7 +439,8 @@ def _checkpoint_problem(z, key: str, shape: tuple, passes: list):
 
 
 def _set_aside(ckpt: Path, reason: str) -> None:
-    """Rename a checkpoint that can't be resumed to an unused ``<ckpt>.damaged[N]``, with a one-line warning."""
+    """Rename a checkpoint that can't be resumed to an unused ``<ckpt>.damaged[N]``, with a one-line
+    warning."""
     aside = ckpt.with_name(ckpt.name + ".damaged")
     n = 1
     while aside.exists() or aside.is_symlink():
