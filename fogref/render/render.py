@@ -101,14 +101,12 @@ def check_output(out: Path, scene_path: Path, png: bool, inputs: list | None = N
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise FogrefError(f"--out {out}: cannot create the folder {folder} ({e.strerror})") from None
-    probe = folder / f".{out.name}.writable"
-    for n in range(1, 100):
-        if not probe.exists():
-            break
-        probe = folder / f".{out.name}.writable{n}"
+    names = (folder / f".{out.name}.writable{n or ''}" for n in range(100))
+    probe = next((p for p in names if not (p.exists() or p.is_symlink())), None)  # never a file of the user's
     try:
-        atomic_write(probe, lambda tmp: Path(tmp).write_bytes(b"x"))
-        probe.unlink()
+        if probe is not None:
+            atomic_write(probe, lambda tmp: Path(tmp).write_bytes(b"x"))
+            probe.unlink()
     except OSError as e:
         raise FogrefError(f"--out {out}: the folder {folder} is not writable ({e.strerror})") from None
 
@@ -195,9 +193,11 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
     variant:      Mitsuba variant (default ``llvm_ad_rgb``; ``cuda_ad_rgb`` on a GPU).
     overrides:    XML ``$name`` defaults to replace, e.g. ``{"res": 64}``.
     pixel_filter: ``"centre"`` (pixel-exact, the default for truths) or ``"box"``.
-    checkpoint_seconds: time between checkpoints (and one on Ctrl-C).
+    checkpoint_seconds: time between checkpoints (and one on Ctrl-C or SIGTERM).
 
-    Returns the EXR path.  Raises :class:`FogrefError` (or its ParameterError) for bad input.
+    Returns the EXR path.  Raises :class:`FogrefError` (or its ParameterError) for bad input,
+    and before any work when an output (the EXR, the PNG, the checkpoint) is the scene or a
+    file it loads.  Raises KeyboardInterrupt after a Ctrl-C or SIGTERM (checkpoint written).
     """
     if not isinstance(spp, int) or not 1 <= spp <= 1 << 20:
         raise FogrefError(f"--spp: {spp} outside [1, 1048576]")
