@@ -167,7 +167,7 @@ def refuse_overwriting_inputs(outputs, inputs, what: str = "output") -> None:
     >>> try:
     ...     refuse_overwriting_inputs([(d / "link.exr", "EXR")], [(d / "sky.exr", "envmap")], "--out")
     ... except FogrefError as e:
-    ...     print(str(e).replace(str(d), "D").replace("; ", ";\n"))
+    ...     print(str(e).replace(str(d), "D").replace("; ", ";\\n"))
     --out: the EXR D/link.exr would overwrite the envmap D/sky.exr, which is an input;
     choose another output
     """
