@@ -122,12 +122,13 @@ def savez_atomic(path, **arrays) -> Path:
 
 
 def _entries(items):
-    """``(path, label)`` pairs from paths, ``(path, label)`` pairs or objects with ``.path`` and ``.kind``."""
+    """``(path, label)`` pairs from paths, ``(path, label)`` pairs or objects with ``.path`` and
+    ``.label`` (or ``.kind``)."""
     for it in items:
         if isinstance(it, tuple):
             yield Path(it[0]), str(it[1])
         elif hasattr(it, "path"):
-            yield Path(it.path), str(getattr(it, "kind", "input"))
+            yield Path(it.path), str(getattr(it, "label", None) or getattr(it, "kind", "input"))
         else:
             yield Path(it), "input"
 
@@ -152,7 +153,7 @@ def refuse_overwriting_inputs(outputs, inputs, what: str = "output") -> None:
     Parameters
     ----------
     outputs, inputs
-        Paths, ``(path, label)`` pairs, or objects with ``.path`` and ``.kind`` (e.g.
+        Paths, ``(path, label)`` pairs, or objects with ``.path`` and ``.label`` (e.g.
         :class:`fogref.render.inputs.SceneInput`); labels name them in the message.
     what
         How the user named the outputs, e.g. ``"--out x.exr"``.

@@ -155,15 +155,15 @@ def test_out_equal_to_the_scenes_envmap_is_refused(tmp_path, mitsuba):
 
     scene = tiny.make(mitsuba, tmp_path)
     sky = (tmp_path / "sky.exr").read_bytes()
-    with pytest.raises(FogrefError, match=r"sky\.exr would overwrite the emitter .*sky\.exr") as e:
+    with pytest.raises(FogrefError, match=r"sky\.exr would overwrite the envmap .*sky\.exr") as e:
         render(scene, tmp_path / "sky.exr", spp=1, progress=False)
     assert "\n" not in str(e.value)
     os.symlink(tmp_path / "sky.exr", tmp_path / "link.exr")  # a symlink to it: the same file
-    with pytest.raises(FogrefError, match=r"link\.exr would overwrite the emitter .*sky\.exr"):
+    with pytest.raises(FogrefError, match=r"link\.exr would overwrite the envmap .*sky\.exr"):
         render(scene, tmp_path / "link.exr", spp=1, progress=False)
     (tmp_path / "sub").mkdir()
     os.symlink(tmp_path, tmp_path / "sub" / "up")  # through a symlinked folder
-    with pytest.raises(FogrefError, match="would overwrite the emitter"):
+    with pytest.raises(FogrefError, match="would overwrite the envmap"):
         render(scene, tmp_path / "sub" / "up" / "sky.exr", spp=1, progress=False)
     assert (tmp_path / "sky.exr").read_bytes() == sky
 
@@ -192,7 +192,7 @@ def test_out_over_a_mesh_selected_by_an_override_and_over_an_include_is_refused(
     (tmp_path / "inc.exr.partial.npz").write_text('<scene version="3.0.0"/>')
     include = '<include filename="inc.exr.partial.npz"/></scene>'
     scene.write_text(scene.read_text().replace("</scene>", include))
-    with pytest.raises(FogrefError, match=r"checkpoint .*inc\.exr\.partial\.npz would overwrite the include"):
+    with pytest.raises(FogrefError, match=r"checkpoint .*inc\.exr\.partial\.npz would overwrite the included"):
         render(scene, tmp_path / "inc.exr", spp=1, progress=False)
 
 

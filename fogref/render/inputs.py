@@ -75,13 +75,28 @@ class SceneInput:
     ``path``: where Mitsuba opens it (absolute, symlinks kept); ``kind``: the element
     that names it (``scene``, ``include``, ``shape``, ``emitter``, ``texture``,
     ``spectrum``, ...); ``source``: the XML file and element that name it;
-    ``exists``: whether it is a regular file now.
+    ``exists``: whether it is a regular file now; ``plugin``: the naming element's ``type``.
     """
 
     path: Path
     kind: str
     source: str
     exists: bool
+    plugin: str = ""
+
+    @property
+    def label(self) -> str:
+        """What the file is, for messages: ``"mesh"``, ``"envmap"``, ``"texture"``, ``"scene file"``...
+
+        >>> SceneInput(Path("sky.exr"), "emitter", "s.xml", True, "envmap").label
+        'envmap'
+        """
+        named = {"scene": "scene file", "include": "included XML", "spectrum": "spectrum file",
+                 "shape": "mesh", "texture": "texture", "volume": "volume grid"}
+        if self.kind == "emitter" and self.plugin == "envmap":
+            return "envmap"
+        other = f"{self.kind} '{self.plugin}' file" if self.plugin else f"{self.kind} file"
+        return named.get(self.kind, other)
 
 
 def substitute(value: str, params: list) -> str:
@@ -137,11 +152,11 @@ class _Walker:
         self.scene = scene
         self.params = [(str(k), str(v)) for k, v in (overrides or {}).items()]
         self.found: list[SceneInput] = []
-        self.strings: list[tuple[str, str, str, bool]] = []  # (value, kind, source, named 'filename')
+        self.strings: list[tuple] = []  # (value, kind, plugin, source, named 'filename')
         self.top_resolver: list[Path] = []
 
-    def add(self, path: Path, kind: str, source: str) -> None:
-        self.found.append(SceneInput(path, kind, source, path.is_file()))
+    def add(self, path: Path, kind: str, source: str, plugin: str = "") -> None:
+        self.found.append(SceneInput(path, kind, source, path.is_file(), plugin))
 
     def file(self, path: Path, resolver: list[Path], depth: int, top: bool = False) -> None:
         if depth >= MAX_INCLUDE_DEPTH:
@@ -178,7 +193,8 @@ class _Walker:
         elif tag == "spectrum" and el.get("filename"):
             self.add(_resolve(el.get("filename"), resolver), "spectrum", where)
         elif tag == "string" and parent is not None and el.get("value"):
-            self.strings.append((el.get("value"), parent.tag, where, el.get("name") == "filename"))
+            self.strings.append((el.get("value"), parent.tag, parent.get("type", ""), where,
+                                 el.get("name") == "filename"))
         if tag == "transform":
             for c in el:
                 for k, v in c.attrib.items():
@@ -209,10 +225,10 @@ def scene_inputs(scene, overrides: dict | None = None) -> list[SceneInput]:
     w = _Walker(scene, overrides)
     w.add(Path(os.path.abspath(scene)), "scene", str(scene))
     w.file(scene, _global_resolver(), 0, top=True)
-    for value, kind, where, is_filename in w.strings:
+    for value, kind, plugin, where, is_filename in w.strings:
         p = _resolve(value, w.top_resolver)
         if is_filename or p.is_file():
-            w.add(p, kind, where)
+            w.add(p, kind, where, plugin)
     seen, out = set(), []
     for i in w.found:
         if i.path not in seen:
