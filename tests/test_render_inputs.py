@@ -192,7 +192,8 @@ def test_out_over_a_mesh_selected_by_an_override_and_over_an_include_is_refused(
     (tmp_path / "inc.exr.partial.npz").write_text('<scene version="3.0.0"/>')
     include = '<include filename="inc.exr.partial.npz"/></scene>'
     scene.write_text(scene.read_text().replace("</scene>", include))
-    with pytest.raises(FogrefError, match=r"checkpoint .*inc\.exr\.partial\.npz would overwrite the incl"):
+    with pytest.raises(FogrefError, match=r"checkpoint .*inc\.exr\.partial\.npz "
+                                          r"would overwrite the included XML"):
         render(scene, tmp_path / "inc.exr", spp=1, progress=False)
 
 
