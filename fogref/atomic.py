@@ -1,10 +1,11 @@
-"""Atomic file writes: a file appears only when complete.
+"""Safe outputs: a file appears only when complete, and no output replaces an input.
 
 Each writer writes a temporary file in the destination folder, then renames it
 over the destination (``os.replace``, atomic on POSIX within one file system).
 Every fogref output goes through :func:`atomic_write`: EXRs
 (:func:`fogref.exrio.write_exr`), render checkpoints and previews, report text
-and figures.
+and figures.  Before any work, a command compares its outputs with its inputs
+(:func:`refuse_overwriting_inputs`).
 
 Examples
 --------
@@ -29,6 +30,8 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+
+from fogref.errors import FogrefError
 
 
 def _file_mode(path: Path) -> int:
@@ -65,17 +68,39 @@ def atomic_write(path, write) -> Path:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp" + path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
+    fd = tmp = None
+    try:  # an interruption anywhere from here on leaves no temporary file
+        fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp" + path.suffix, dir=path.parent)
+        os.close(fd)
+        fd = None
         write(tmp)
         os.chmod(tmp, _file_mode(path))  # mkstemp makes 0600; give the mode a plain open() would
         os.replace(tmp, path)
     except BaseException:
-        if os.path.exists(tmp):
+        if fd is not None:
+            try:
+                os.close(fd)
+            except OSError:  # closed already, just before the interruption
+                pass
+        if tmp is not None and os.path.exists(tmp):
             os.unlink(tmp)
         raise
     return path
+
+
+def temporary_names(path) -> str:
+    """A regular expression matching the names of :func:`atomic_write`'s temporary files for ``path``
+    (what a writer killed mid-write leaves): ``<name>.<random letters, digits, _>.tmp<suffix>``.
+
+    >>> import re
+    >>> bool(re.fullmatch(temporary_names("a.exr"), "a.exr.k3_x9zq1.tmp.exr")), bool(re.fullmatch(
+    ...     temporary_names("a.exr"), "a.exr.my notes.tmp.exr"))
+    (True, False)
+    """
+    import re
+
+    path = Path(path)
+    return re.escape(path.name) + r"\.[a-z0-9_]+\.tmp" + re.escape(path.suffix)
 
 
 def write_text_atomic(path, text: str) -> Path:
@@ -94,3 +119,62 @@ def savez_atomic(path, **arrays) -> Path:
     import numpy as np
 
     return atomic_write(path, lambda tmp: np.savez(tmp, **arrays))
+
+
+def _entries(items):
+    """``(path, label)`` pairs from paths, ``(path, label)`` pairs or objects with ``.path`` and
+    ``.label`` (or ``.kind``)."""
+    for it in items:
+        if isinstance(it, tuple):
+            yield Path(it[0]), str(it[1])
+        elif hasattr(it, "path"):
+            yield Path(it.path), str(getattr(it, "label", None) or getattr(it, "kind", "input"))
+        else:
+            yield Path(it), "input"
+
+
+def _same(a: Path, b: Path) -> bool:
+    """Same file: equal resolved paths (symlinks followed, also for paths not yet created), or
+    ``os.path.samefile`` for two existing paths (hard links, case-insensitive file systems)."""
+    if os.path.realpath(a) == os.path.realpath(b):
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def refuse_overwriting_inputs(outputs, inputs, what: str = "output") -> None:
+    """Raise a one-line :class:`~fogref.errors.FogrefError` if an output is one of the inputs.
+
+    Call it before any work, with every file the command will write (derived ones too:
+    previews, checkpoints, reports) and every file it reads.
+
+    Parameters
+    ----------
+    outputs, inputs
+        Paths, ``(path, label)`` pairs, or objects with ``.path`` and ``.label`` (e.g.
+        :class:`fogref.render.inputs.SceneInput`); labels name them in the message.
+    what
+        How the user named the outputs, e.g. ``"--out x.exr"``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> d = Path(tempfile.mkdtemp())
+    >>> _ = (d / "sky.exr").write_bytes(b"v/1")
+    >>> os.symlink(d / "sky.exr", d / "link.exr")
+    >>> refuse_overwriting_inputs([d / "out.exr"], [(d / "sky.exr", "envmap")], "--out")
+    >>> try:
+    ...     refuse_overwriting_inputs([(d / "link.exr", "EXR")], [(d / "sky.exr", "envmap")], "--out")
+    ... except FogrefError as e:
+    ...     print(str(e).replace(str(d), "D").replace("; ", ";\\n"))
+    --out: the EXR D/link.exr would overwrite the envmap D/sky.exr, which is an input;
+    choose another output
+    """
+    ins = list(_entries(inputs))
+    for out, olabel in _entries(outputs):
+        for inp, ilabel in ins:
+            if _same(out, inp):
+                raise FogrefError(f"{what}: the {olabel} {out} would overwrite the {ilabel} {inp}, which is "
+                                  f"an input; choose another output")

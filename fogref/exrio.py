@@ -39,7 +39,8 @@ def write_exr(path, channels: dict, attrs: dict | None = None) -> None:
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     for k, v in (attrs or {}).items():
         header[k] = v if isinstance(v, str) else json.dumps(v)
-    chans = {k: np.ascontiguousarray(np.asarray(v, dtype=np.float32)) for k, v in channels.items()}
+    with np.errstate(over="ignore", invalid="ignore"):  # beyond float32: inf, refused just below
+        chans = {k: np.ascontiguousarray(np.asarray(v, dtype=np.float32)) for k, v in channels.items()}
     bad = [k for k, v in chans.items() if not np.all(np.isfinite(v))]
     if bad:
         raise FogrefError(f"{path}: refusing to write non-finite values in channel(s) {', '.join(bad)}")

@@ -10,8 +10,12 @@ fogref has it::
 * fixture ``fogref_truth``: a factory ``(scene, res=(32, 18), spp=16, seed=0,
   overrides=None) -> Truth``.  The truth is rendered on first use and cached (see
   :mod:`fogref.render.cache`) under ``$FOGREF_CACHE`` if set, else in
-  pytest's cache folder (``.pytest_cache/d/fogref_truths``).  A relative scene path
-  is looked up in the working directory, then under pytest's root directory.
+  pytest's cache folder (``.pytest_cache/d/fogref_truths``), else (pytest's cache
+  provider off) in ``~/.cache/fogref/truths``.  The cache key covers the
+  scene and every file it loads (meshes, envmaps, textures, included XML:
+  :func:`fogref.render.inputs.inputs_digest`), so an edited mesh means a fresh render.
+  A relative scene path is looked up in the working directory, then under pytest's
+  root directory.
 * :func:`assert_fog_matches` (re-exported from :mod:`fogref.compare.check`): runs
   ``check`` and fails with the part, region, estimate, interval, tolerance,
   confidence and the folder of the error maps.
@@ -31,11 +35,19 @@ __all__ = ["assert_fog_matches", "check", "fogref_truth"]
 
 @pytest.fixture(scope="session")
 def fogref_truth(request):
-    """Factory ``(scene, res=(32, 18), spp=16, seed=0, overrides=None, **render_options) -> Truth`` (cached)."""
+    """Factory ``(scene, res=(32, 18), spp=16, seed=0, overrides=None, **render_options) -> Truth``
+    (cached)."""
     from fogref.render.cache import cached_truth
 
     env = os.environ.get("FOGREF_CACHE")
-    cache = Path(env) if env else request.config.cache.mkdir("fogref_truths")
+    if env:
+        cache = Path(env)
+    elif getattr(request.config, "cache", None) is not None:
+        cache = request.config.cache.mkdir("fogref_truths")
+    else:  # pytest's cache provider is off (-p no:cacheprovider): fogref's own cache folder
+        from fogref.render.cache import default_cache_dir
+
+        cache = default_cache_dir()
     root = Path(request.config.rootpath)
 
     def make(scene, res=(32, 18), spp: int = 16, seed: int = 0, overrides=None, **render_options):

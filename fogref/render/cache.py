@@ -1,10 +1,13 @@
 """Render a ground truth once and reuse it: a cache keyed on everything that changes its pixels.
 
-The key holds the scene file's content (and the content of the files it names with
-``filename``, e.g. meshes), the overrides (``res``, ``resy`` and any ``--set``), the
+The key holds the digest of the scene file and of every file it loads (meshes,
+environment maps, textures, included XML, and the files that ``$default``s and
+overrides select: :func:`fogref.render.inputs.inputs_digest`), the overrides
+(``res``, ``resy`` and any ``--set``), the
 sample count, the seed, the pixel filter, fogref's version and a hash of the
 renderer's source (``fogref/media``, ``fogref/render``, ``fogref/gbuffer.py``, the
-plugins), so an edited scene or a changed renderer never returns a stale truth.
+plugins), so an edited scene, mesh, envmap or texture, or a changed renderer, never returns a
+stale truth.
 This is fogref's one render cache: the pytest plugin, ``fogref study`` and
 ``fogref sweep`` all go through it.
 
@@ -18,12 +21,9 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import re
 from pathlib import Path
 
 from fogref.errors import FogrefError
-
-_FILENAME = re.compile(r'name\s*=\s*"filename"\s+value\s*=\s*"([^"]+)"')
 
 
 def default_cache_dir() -> Path:
@@ -36,7 +36,8 @@ def _renderer_hash() -> str:
     import fogref
 
     root = Path(fogref.__file__).resolve().parent
-    files = sorted((root / "media").glob("*.py")) + sorted((root / "render").glob("*.py")) + [root / "gbuffer.py"]
+    files = sorted((root / "media").glob("*.py")) + sorted((root / "render").glob("*.py"))
+    files.append(root / "gbuffer.py")
     plugins = root.parent / "plugins"
     if not plugins.is_dir():
         try:
@@ -64,17 +65,10 @@ def truth_key(scene, spp: int, seed: int, overrides: dict | None = None, pixel_f
     (24, False)
     """
     from fogref import __version__
+    from fogref.render.inputs import inputs_digest
 
-    scene = Path(scene)
-    if not scene.is_file():
-        raise FogrefError(f"{scene}: no such scene file")
-    text = scene.read_bytes()
-    h = hashlib.sha256(text)
-    for name in sorted(set(_FILENAME.findall(text.decode("utf-8", "replace")))):
-        ref = scene.parent / name
-        h.update(name.encode())
-        h.update(ref.read_bytes() if ref.is_file() else b"<missing>")
-    spec = {"scene": h.hexdigest(), "spp": int(spp), "seed": int(seed), "pixel_filter": pixel_filter,
+    spec = {"inputs": inputs_digest(scene, overrides), "spp": int(spp), "seed": int(seed),
+            "pixel_filter": pixel_filter,
             "overrides": {str(k): str(v) for k, v in sorted((overrides or {}).items())},
             "version": __version__, "renderer": _renderer_hash()}
     return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:24]

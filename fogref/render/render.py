@@ -12,23 +12,35 @@ the back end's memory allows, and turns them into means and standard errors.
   ``(scene, overrides, spp, seed, pixel_filter, variant)`` gives identical pixels.
 * **Cheap**: the running sums stay on the device (Dr.Jit float64, added there after
   every pass; copied to the host only for a checkpoint and once at the end), and the
-  passes are as few and as equal as :data:`fogref.render.passes.MAX_LANES` allows (``benchmarks/render_driver.py``
+  passes are as few and as equal as :data:`fogref.render.passes.MAX_LANES` allows
+  (``benchmarks/render_driver.py``
   measures the driver against one ``mi.render`` call).
 * **Resumable**: the running sums are checkpointed atomically next to the output
-  (``<out>.partial.npz``) every ``checkpoint_seconds`` and on Ctrl-C; a rerun resumes
-  only from a checkpoint whose key (the scene file's content hash, overrides,
-  resolution, spp, seed, filter, variant, fogref version) matches.
-* **Nothing lost**: the output must be a ``.exr`` that is neither the scene nor an
-  existing non-EXR file; its folder is checked writable before rendering; a truth
-  with a non-finite value is refused, with the pixels named.
+  (``<out>.partial.npz``) every ``checkpoint_seconds`` and on Ctrl-C or SIGTERM; a rerun
+  resumes only from a checkpoint whose key (the digest of the scene and of every file it
+  loads, :func:`fogref.render.inputs.inputs_digest`; overrides, resolution, spp, seed,
+  filter, variant, fogref version) matches.  A checkpoint is one record: the sums, their
+  squares and the count of passes they hold change together in memory (one assignment)
+  and on disk (one file, with a SHA-256 of its content); signals are deferred while it is
+  written.  A checkpoint that is damaged or inconsistent (unreadable, wrong checksum,
+  shape, count, non-finite values, a bounded channel summing past its sample count) is
+  renamed aside with a one-line warning, and the render starts over.
+* **Nothing lost**: the output must be a ``.exr`` that is not an existing non-EXR file,
+  and no output (the EXR, its PNG preview, the checkpoint) may be the scene or a file
+  it loads (:func:`fogref.atomic.refuse_overwriting_inputs`); the folder is checked
+  writable before rendering; a truth with a non-finite value is refused, with the pixels
+  named.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
+import re
 import signal
+import sys
 import time
 from pathlib import Path
 
@@ -36,9 +48,10 @@ import numpy as np
 
 from fogref import gbuffer
 from fogref._version import __version__
-from fogref.atomic import atomic_write, savez_atomic
+from fogref.atomic import atomic_write, refuse_overwriting_inputs, savez_atomic, temporary_names
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
+from fogref.render.inputs import file_sha256, inputs_digest, scene_inputs
 from fogref.render.passes import max_lanes, pass_seed, pass_sizes
 
 PIXEL_FILTERS = ("centre", "box")
@@ -48,13 +61,7 @@ PIXEL_FILTERS = ("centre", "box")
 _HOST_BYTES_PER_PIXEL = (30 + 42) * 8 * 2 + len(gbuffer.exr_channel_names()) * 4
 
 
-def file_sha256(path) -> str:
-    """SHA-256 of a file's bytes (hex)."""
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
+__all__ = ["render", "check_output", "file_sha256", "checkpoint_path", "PIXEL_FILTERS"]
 
 
 def _physical_memory() -> int:
@@ -64,15 +71,27 @@ def _physical_memory() -> int:
         return 1 << 40
 
 
-def check_output(out: Path, scene_path: Path, png: bool) -> None:
-    """Refuse outputs that would overwrite an input or cannot be written, before rendering."""
+def checkpoint_path(out) -> Path:
+    """Where :func:`render` keeps the running sums of ``out``: ``<out>.partial.npz``."""
+    out = Path(out)
+    return out.with_name(out.name + ".partial.npz")
+
+
+def check_output(out: Path, scene_path: Path, png: bool, inputs: list | None = None) -> None:
+    """Refuse outputs that would overwrite an input or cannot be written, before rendering.
+
+    The outputs are ``out``, its PNG preview (when ``png``) and its checkpoint; the inputs
+    are the scene and every file it loads (``inputs``, from
+    :func:`fogref.render.inputs.scene_inputs`; only the scene when None).
+    """
     if out.suffix.lower() != ".exr":
         raise FogrefError(f"--out {out}: the ground truth is an EXR; give a path ending in .exr "
                           f"(the PNG preview is written beside it)")
-    outputs = [out] + ([out.with_suffix(".png")] if png else [])
-    for o in outputs:
-        if o.exists() and o.resolve() == scene_path.resolve():
-            raise FogrefError(f"--out {out}: would overwrite the scene file {scene_path}")
+    outputs = [(out, "EXR")] + ([(out.with_suffix(".png"), "PNG preview")] if png else [])
+    outputs.append((checkpoint_path(out), "checkpoint"))
+    refuse_overwriting_inputs(outputs, inputs if inputs is not None else [(scene_path, "scene file")],
+                              f"--out {out}")
+    for o, _ in outputs:
         if o.is_dir():
             raise FogrefError(f"--out {out}: {o} is a directory")
     if out.exists() and not _is_exr(out):
@@ -82,9 +101,12 @@ def check_output(out: Path, scene_path: Path, png: bool) -> None:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise FogrefError(f"--out {out}: cannot create the folder {folder} ({e.strerror})") from None
+    names = (folder / f".{out.name}.writable{n or ''}" for n in range(100))
+    probe = next((p for p in names if not (p.exists() or p.is_symlink())), None)  # never a file of the user's
     try:
-        atomic_write(folder / f".{out.name}.writable", lambda tmp: Path(tmp).write_bytes(b"x"))
-        (folder / f".{out.name}.writable").unlink()
+        if probe is not None:
+            atomic_write(probe, lambda tmp: Path(tmp).write_bytes(b"x"))
+            probe.unlink()
     except OSError as e:
         raise FogrefError(f"--out {out}: the folder {folder} is not writable ({e.strerror})") from None
 
@@ -108,27 +130,53 @@ class _NoBar:
 
 
 class _Interrupt:
-    """First Ctrl-C: stop after the current pass (checkpointed); second: stop now."""
+    """Ctrl-C and SIGTERM while rendering.
+
+    The first one stops the render after the current pass (checkpointed); a second one
+    stops it now, except inside :meth:`deferred` (the checkpoint write), where it waits
+    until the block ends.  Outside the main thread signals are left alone.
+    """
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
     def __init__(self):
         self.requested = False
-        self._previous = None
+        self._pending = False
+        self._deferring = 0
+        self._previous = {}
 
     def __enter__(self):
-        try:
-            self._previous = signal.signal(signal.SIGINT, self._handle)
-        except ValueError:  # not the main thread: leave Ctrl-C alone
-            self._previous = None
+        for s in self.SIGNALS:
+            try:
+                self._previous[s] = signal.signal(s, self._handle)
+            except ValueError:  # not the main thread: leave signals alone
+                break
         return self
 
     def _handle(self, signum, frame):
-        if self.requested:
+        if not self.requested:
+            self.requested = True
+        elif self._deferring:
+            self._pending = True
+        else:
             raise KeyboardInterrupt
-        self.requested = True
+
+    @contextlib.contextmanager
+    def deferred(self):
+        """A block that a second signal does not cut: it is raised when the block ends."""
+        self._deferring += 1
+        try:
+            yield
+        finally:
+            self._deferring -= 1
+        if self._pending and not self._deferring:
+            self._pending = False
+            raise KeyboardInterrupt
 
     def __exit__(self, *exc):
-        if self._previous is not None:
-            signal.signal(signal.SIGINT, self._previous)
+        for s, previous in self._previous.items():
+            if previous is not None:  # None: a handler installed outside Python, which cannot be restored
+                signal.signal(s, previous)
         return False
 
 
@@ -145,9 +193,11 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
     variant:      Mitsuba variant (default ``llvm_ad_rgb``; ``cuda_ad_rgb`` on a GPU).
     overrides:    XML ``$name`` defaults to replace, e.g. ``{"res": 64}``.
     pixel_filter: ``"centre"`` (pixel-exact, the default for truths) or ``"box"``.
-    checkpoint_seconds: time between checkpoints (and one on Ctrl-C).
+    checkpoint_seconds: time between checkpoints (and one on Ctrl-C or SIGTERM).
 
-    Returns the EXR path.  Raises :class:`FogrefError` (or its ParameterError) for bad input.
+    Returns the EXR path.  Raises :class:`FogrefError` (or its ParameterError) for bad input,
+    and before any work when an output (the EXR, the PNG, the checkpoint) is the scene or a
+    file it loads.  Raises KeyboardInterrupt after a Ctrl-C or SIGTERM (checkpoint written).
     """
     if not isinstance(spp, int) or not 1 <= spp <= 1 << 20:
         raise FogrefError(f"--spp: {spp} outside [1, 1048576]")
@@ -156,7 +206,10 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
     if pixel_filter not in PIXEL_FILTERS:
         raise FogrefError(f"--pixel-filter: '{pixel_filter}' is not one of {PIXEL_FILTERS}")
     scene_path, out = Path(scene_path), Path(out)
-    check_output(out, scene_path, png)
+    inputs = scene_inputs(scene_path, overrides)
+    check_output(out, scene_path, png, inputs)
+    hashes: dict = {}  # before the scene is loaded: what its pixels will see
+    digest = inputs_digest(scene_path, overrides, inputs, record=hashes)
 
     from fogref.render.scene import load_scene
     from fogref.render.variant import set_variant
@@ -174,52 +227,64 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
     need = W * H * _HOST_BYTES_PER_PIXEL
     if need > 0.5 * _physical_memory():
         raise FogrefError(f"{scene_path}: {W}x{H} pixels need about {need / 2**30:.1f} GiB of memory for the "
-                          f"ground truth; this machine has {_physical_memory() / 2**30:.1f} GiB (limit: half)")
+                          f"ground truth; this machine has {_physical_memory() / 2**30:.1f} GiB "
+                          f"(limit: half)")
     passes = pass_sizes(W * H, spp, max_lanes(variant))
     scene_sha = file_sha256(scene_path)
-    key = json.dumps({"scene_sha256": scene_sha, "overrides": {k: str(v) for k, v in (overrides or {}).items()},
+    key = json.dumps({"inputs_sha256": digest, "overrides": {k: str(v) for k, v in (overrides or {}).items()},
                       "size": [W, H], "spp": spp, "seed": seed, "variant": variant, "passes": passes,
                       "pixel_filter": pixel_filter, "version": __version__,
                       "schema": gbuffer.SCHEMA_VERSION}, sort_keys=True)
-    ckpt = out.with_name(out.name + ".partial.npz")
-    for stale in out.parent.glob(ckpt.name + ".*.tmp*"):  # a writer killed mid-write
-        stale.unlink(missing_ok=True)
-    sums, squares, done = _resume(ckpt, key) if resume else (None, None, 0)
-    if sums is not None:  # the running sums live on the device
-        sums, squares = mi.TensorXd(sums), mi.TensorXd(squares)
+    ckpt = checkpoint_path(out)
+    leftovers = re.compile(f"{temporary_names(ckpt)}|{temporary_names(out)}")
+    for stale in out.parent.glob(f"{out.name}.*.tmp*"):  # a writer killed mid-write (SIGKILL)
+        if leftovers.fullmatch(stale.name):
+            stale.unlink(missing_ok=True)
+    # the running state, one tuple (sums, squares, passes they hold): replaced in one assignment, so
+    # an interruption anywhere sees the sums with their own count; the sums live on the device
+    state = _resume(ckpt, key, (H, W), passes) if resume else None
+    if state is not None:
+        state = (mi.TensorXd(state[0]), mi.TensorXd(state[1]), state[2])
+    saved = state[2] if state is not None else 0  # passes in the checkpoint on disk
 
     if progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=spp, initial=sum(passes[:done]), unit="spp", desc=scene_path.name)
+        bar = tqdm(total=spp, initial=sum(passes[:saved]), unit="spp", desc=scene_path.name)
     else:  # no bar, no tqdm import (20 ms of a quiet CLI run's start-up)
         bar = _NoBar()
     t0, last_ckpt, timings = time.perf_counter(), time.perf_counter(), []
     with _Interrupt() as stop, bar:
         try:
-            for k in range(done, len(passes)):
+            for k in range(saved, len(passes)):
                 ts = time.perf_counter()
                 s, q = integrator.render_moments(scene, 0, pass_seed(seed, k), passes[k],
                                                  pixel_exact=pixel_filter == "centre")
                 s, q = _device_f64(s), _device_f64(q)
-                sums, squares = (s, q) if sums is None else (sums + s, squares + q)
-                dr.eval(sums, squares)
+                if state is not None:
+                    s, q = state[0] + s, state[1] + q
+                dr.eval(s, q)
                 dr.sync_thread()
+                state = (s, q, k + 1)
                 timings.append(time.perf_counter() - ts)
-                done = k + 1
                 bar.update(passes[k])
                 if stop.requested:
                     raise KeyboardInterrupt
-                if done < len(passes) and time.perf_counter() - last_ckpt > checkpoint_seconds:
-                    _checkpoint(ckpt, sums, squares, done, key)
+                if state[2] < len(passes) and time.perf_counter() - last_ckpt > checkpoint_seconds:
+                    with stop.deferred():
+                        _checkpoint(ckpt, state, key)
+                        saved = state[2]
                     last_ckpt = time.perf_counter()
         except (KeyboardInterrupt, RuntimeError) as e:
             if isinstance(e, RuntimeError) and "KeyboardInterrupt" not in str(e):
                 raise
-            if sums is not None and done < len(passes):
-                _checkpoint(ckpt, sums, squares, done, key)
+            done = state  # one read: the sums and their count
+            if done is not None and saved < done[2] < len(passes):
+                with stop.deferred():
+                    _checkpoint(ckpt, done, key)
             raise KeyboardInterrupt from None
 
+    sums, squares = state[0], state[1]
     channels = _host_float32(_channels(sums, squares, spp))  # arithmetic on the device, one copy
     bad = gbuffer.nonfinite_report(channels)
     if bad:
@@ -237,6 +302,8 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
         "fogref.mitsuba": mi.__version__,
         "fogref.scene": str(scene_path),
         "fogref.scene_sha256": scene_sha,
+        "fogref.inputs_sha256": digest,
+        "fogref.inputs": hashes,
         "fogref.overrides": {k: str(v) for k, v in (overrides or {}).items()},
         "fogref.render_seconds": {"total": time.perf_counter() - t0, "passes": timings},
     }
@@ -287,10 +354,21 @@ def _exr_threads() -> None:
         OpenEXR.set_global_thread_count(os.cpu_count() or 1)
 
 
-def _checkpoint(ckpt: Path, sums, squares, done: int, key: str) -> None:
-    """Write the running sums (copied from the device) atomically to ``ckpt``."""
-    savez_atomic(ckpt, sums=np.asarray(sums, dtype=np.float64), squares=np.asarray(squares, dtype=np.float64),
-                 done=np.array(done), key=np.array(key))
+def _record_sha256(key: str, done: int, sums: np.ndarray, squares: np.ndarray) -> str:
+    """SHA-256 binding a checkpoint's parts: its key, its pass count and its sums' bytes and shapes."""
+    h = hashlib.sha256(f"{key}\0{done}\0{sums.shape}\0{squares.shape}\0".encode())
+    h.update(np.ascontiguousarray(sums, dtype="<f8").tobytes())
+    h.update(np.ascontiguousarray(squares, dtype="<f8").tobytes())
+    return h.hexdigest()
+
+
+def _checkpoint(ckpt: Path, state, key: str) -> None:
+    """Write the running state ``(sums, squares, passes done)`` (copied from the device) atomically
+    to ``ckpt`` as one record: the three together with a SHA-256 over them."""
+    sums, squares, done = state
+    sums, squares = np.asarray(sums, dtype=np.float64), np.asarray(squares, dtype=np.float64)
+    savez_atomic(ckpt, sums=sums, squares=squares, done=np.array(done), key=np.array(key),
+                 sha256=np.array(_record_sha256(key, done, sums, squares)))
 
 
 def _channels(sums, squares, spp: int) -> dict:
@@ -308,14 +386,90 @@ def _channels(sums, squares, spp: int) -> dict:
     return gbuffer.moments_to_channels(by_group, sq, spp, cross)
 
 
-def _resume(ckpt: Path, key: str):
-    """(sums, squares, passes done) from a checkpoint whose key matches, else nothing."""
+#: Per-sample channels bounded by [0, 1]: per pixel, their sums can't exceed the sample count.
+_BOUNDED = ("T", "surface_coverage", "hit")
+
+
+def _sum_channels(group: str) -> slice:
+    """Where ``group``'s channels sit in the last axis of the sums (``final`` first, then
+    :data:`fogref.gbuffer.SAMPLE_GROUPS`)."""
+    i = 0
+    for g in ("final",) + tuple(gbuffer.SAMPLE_GROUPS):
+        k = len(gbuffer.channel_names(g))
+        if g == group:
+            return slice(i, i + k)
+        i += k
+    raise KeyError(group)
+
+
+def _sum_widths() -> tuple[int, int]:
+    """Channels of the sums and of the squares (each squared group: 3 squares, 3 channel-pair products)."""
+    n = sum(len(gbuffer.channel_names(g)) for g in ("final",) + tuple(gbuffer.SAMPLE_GROUPS))
+    return n, 6 * len(gbuffer.SQUARED_GROUPS)
+
+
+def _checkpoint_problem(z, key: str, shape: tuple, passes: list):
+    """Why the loaded checkpoint ``z`` can't be resumed (a phrase), else None.  'stale' when it
+    belongs to other inputs or settings."""
+    names = set(z.files)
+    if not {"sums", "squares", "done", "key", "sha256"} <= names:
+        missing = sorted({"sums", "squares", "done", "key", "sha256"} - names)
+        return f"not a checkpoint of this fogref (no {', '.join(missing)})"
+    if str(z["key"]) != key:
+        return "stale"
+    sums, squares, done = z["sums"], z["squares"], z["done"]
+    if done.shape != () or done.dtype.kind not in "iu" or not 1 <= int(done) <= len(passes):
+        return f"pass count {done.tolist()!r} outside [1, {len(passes)}]"
+    done = int(done)
+    ns, nq = _sum_widths()
+    if sums.dtype != np.float64 or squares.dtype != np.float64:
+        return f"sums of type {sums.dtype}/{squares.dtype}, not float64"
+    if sums.shape != (*shape, ns) or squares.shape != (*shape, nq):
+        return f"sums of shape {sums.shape}/{squares.shape}, expected {(*shape, ns)}/{(*shape, nq)}"
+    if str(z["sha256"]) != _record_sha256(key, done, sums, squares):
+        return "its SHA-256 does not match its content"
+    if not (np.isfinite(sums).all() and np.isfinite(squares).all()):
+        return "non-finite sums"
+    n = sum(passes[:done])
+    for g in _BOUNDED:
+        part = sums[..., _sum_channels(g)]
+        if part.min() < 0 or part.max() > n * (1 + 1e-9):
+            return f"the sums of '{g}' leave [0, {n}] (the samples of {done} pass(es))"
+    return None
+
+
+def _set_aside(ckpt: Path, reason: str) -> None:
+    """Rename a checkpoint that can't be resumed to an unused ``<ckpt>.damaged[N]``, with a one-line
+    warning."""
+    aside = ckpt.with_name(ckpt.name + ".damaged")
+    n = 1
+    while aside.exists() or aside.is_symlink():
+        aside, n = ckpt.with_name(f"{ckpt.name}.damaged{n}"), n + 1
+    try:
+        os.replace(ckpt, aside)
+        where = f"set aside as {aside}"
+    except OSError as e:
+        where = f"could not be set aside ({e.strerror}); it will be replaced"
+    print(f"fogref render: warning: checkpoint {ckpt}: {reason}; {where}; rendering from the start",
+          file=sys.stderr)
+
+
+def _resume(ckpt: Path, key: str, shape: tuple, passes: list):
+    """``(sums, squares, passes done)`` from a checkpoint of this render, else None.
+
+    A checkpoint of other inputs or settings is left to be replaced; one that can't be
+    read or fails a check (:func:`_checkpoint_problem`) is set aside (:func:`_set_aside`).
+    """
     if not ckpt.exists():
-        return None, None, 0
+        return None
     try:
         with np.load(ckpt, allow_pickle=False) as z:
-            if str(z["key"]) == key:
+            problem = _checkpoint_problem(z, key, shape, passes)
+            if problem is None:
                 return z["sums"], z["squares"], int(z["done"])
-    except (OSError, ValueError, KeyError):
-        pass
-    return None, None, 0
+    except Exception as e:  # any way a damaged file fails to read: zip, npy header, CRC, pickle refused
+        detail = (str(e).splitlines() or ["no detail"])[0]
+        problem = f"unreadable ({type(e).__name__}: {detail[:80]}{'...' if len(detail) > 80 else ''})"
+    if problem != "stale":
+        _set_aside(ckpt, problem)
+    return None
