@@ -64,6 +64,9 @@ class CheckResult:
     ``verdict``: ``fail`` if any row fails, else ``inconclusive`` if any row is,
     else ``pass``.  ``confidence``: two-sided level of every interval.  ``errors``:
     part -> ``(H, W, 3)`` signed error ``candidate - truth`` (0 where undefined).
+    ``parts``: the :class:`~fogref.compare.candidate.CandidateParts` that were compared (the
+    model's evaluated images among them), so a report on the same run does not evaluate the
+    model again (:func:`fogref.compare.report.compare` with ``check=``).
     """
 
     rows: list
@@ -72,6 +75,7 @@ class CheckResult:
     truth: str
     settings: dict
     errors: dict = field(default_factory=dict, repr=False)
+    parts: object = field(default=None, repr=False, compare=False)
 
     @property
     def verdict(self) -> str:

@@ -138,12 +138,25 @@ def _load_spec(spec: str):
         raise FogrefError(f"model '{spec}': importing '{module_name}' failed: {type(e).__name__}: {e}") from e
     obj = module
     for part in attr.split("."):
-        if not hasattr(obj, part):
-            names = [n for n in dir(obj) if not n.startswith("_")]
+        try:
+            obj = getattr(obj, part)
+        except AttributeError:
+            try:
+                names = [n for n in dir(obj) if not n.startswith("_")]
+            except Exception:  # a module whose __dir__ raises: no hint
+                names = []
             hint = did_you_mean(part, names)
-            raise FogrefError(f"model '{spec}': module '{module_name}' has no attribute '{attr}'{hint}")
-        obj = getattr(obj, part)
+            raise FogrefError(f"model '{spec}': module '{module_name}' has no attribute '{attr}'{hint}") from None
+        except Exception as e:  # a module-level __getattr__ (lazy import) that raised
+            raise FogrefError(f"model '{spec}': looking up '{attr}' in module '{module_name}' failed: "
+                              f"{type(e).__name__}: {_one_line(e)}") from e
     return check_protocol(obj, spec)
+
+
+def _one_line(e: BaseException) -> str:
+    """The first line of an exception's message (an error is one line on the command line)."""
+    text = str(e).strip()
+    return text.splitlines()[0] if text else "(no message)"
 
 
 def resolve_model(spec: str):
