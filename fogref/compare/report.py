@@ -52,6 +52,7 @@ Every file is written atomically; no output holds NaN or infinity.
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -79,13 +80,13 @@ from fogref.compare.report_parts import (
     truth_provenance,
 )
 from fogref.compare.tonemap import exposure_for
-from fogref.errors import FogrefError
+from fogref.errors import FogrefError, ParameterError
 from fogref.exrio import write_exr
 from fogref.gbuffer import Truth, load_truth
 
 __all__ = ["ALL_PARTS", "DEFAULT_SKY_DISTANCE", "ERRORS_EXR_LAYOUT", "PARTS", "PART_UNITS", "REGIONS",
            "check_sky_distance", "check_table_markdown", "compare", "compare_images", "evaluate_parts",
-           "figure_paths", "image_parts", "truth_provenance", "warnings_of", "write_report"]
+           "figure_paths", "image_parts", "refuse_output_over_input", "report_paths", "truth_provenance", "warnings_of", "write_report"]
 
 
 def _errors_exr_channels(truth, parts, errors, sun_angle) -> dict:
@@ -169,6 +170,7 @@ def compare(
     if precision not in ("float32", "float64"):
         raise FogrefError(f"precision must be 'float32' or 'float64', got {precision!r}")
     sky_distance = check_sky_distance(sky_distance)
+    refuse_output_over_input([("out_dir", p) for p in report_paths(out_dir)], [("truth", _path_of(truth))])
     truth = truth if isinstance(truth, Truth) else load_truth(truth)
     parts = parts_from_check(truth, check, model, precision, sky_distance)
     if parts is None:
@@ -189,6 +191,8 @@ def compare_images(truth, images, out_dir, *, figures: bool = True, check=None, 
     ``relmse_eps``, ``flip_ppd``, ``distance_bins``, ``angle_step_deg`` as :func:`compare`.
     Returns what ``metrics.json`` holds.
     """
+    inputs = [("truth", _path_of(truth))] + [(k, v) for k, v in getattr(images, "sources", {}).items()]
+    refuse_output_over_input([("out_dir", p) for p in report_paths(out_dir)], inputs)
     truth = truth if isinstance(truth, Truth) else load_truth(truth)
     parts = image_parts(truth, images)
     name = getattr(images, "description", "engine images")
@@ -198,6 +202,12 @@ def compare_images(truth, images, out_dir, *, figures: bool = True, check=None, 
                          "exposure": float(getattr(images, "exposure", 1.0))}}
     return write_report(truth, parts, out_dir, header, {"attenuated_surface": True, "composite": True},
                         figures=figures, check=check, **options)
+
+
+def _path_of(truth):
+    """The file of a truth given as a path or a Truth read from one (None for a synthetic one)."""
+    p = truth.path if isinstance(truth, Truth) else truth
+    return p if isinstance(p, (str, os.PathLike)) and not str(p).startswith("<") else None
 
 
 def write_report(truth: Truth, parts: dict, out_dir, header: dict, composited: dict, *,
@@ -291,6 +301,37 @@ def write_report(truth: Truth, parts: dict, out_dir, header: dict, composited: d
 
 
 
+
+
+#: The files a report writes into its folder, besides the figures.
+REPORT_FILES = ("index.md", "metrics.json", "check.json", "errors.exr")
+
+
+def report_paths(out_dir) -> list[Path]:
+    """Every file ``compare`` may write into ``out_dir``: :data:`REPORT_FILES` and :func:`figure_paths`."""
+    return [Path(out_dir) / f for f in REPORT_FILES] + figure_paths(out_dir)
+
+
+def refuse_output_over_input(outputs, inputs, source: str = "compare", what: str = "input") -> None:
+    """ParameterError if an output would replace an input: paths compared resolved
+    (:func:`os.path.realpath`: symlinks, ``..`` and relative paths included).
+
+    ``outputs``: ``(option, path)`` pairs; ``inputs``: ``(option, path)`` pairs (None skipped).
+
+    >>> refuse_output_over_input([("--out", "r/errors.exr")], [("EXR", "r/../r/errors.exr")])
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: compare: parameter '--out': it would write r/errors.exr over the input EXR ...
+    """
+    given = {}
+    for name, p in inputs:
+        if p is not None:
+            given.setdefault(os.path.realpath(os.fspath(p)), (name, p))
+    for name, p in outputs:
+        hit = given.get(os.path.realpath(os.fspath(p)))
+        if hit is not None:
+            raise ParameterError(source, name, f"it would write {p} over the {what} {hit[0]} ({hit[1]}); "
+                                 f"choose another output path or rename the {what}")
 
 
 def figure_paths(out_dir) -> list[Path]:
