@@ -57,6 +57,14 @@ class Row:
                 f"[{self.low:.4g}, {self.high:.4g}]{tol}: {self.verdict} ({self.pixels} px{note})")
 
 
+def _excess(r: Row) -> float:
+    """How far a row is over its tolerance (estimate / tolerance); a row without an estimate
+    (no pixels, a zero reference) counts as infinitely far, so it is listed first."""
+    if r.estimate is None:
+        return float("inf")
+    return abs(r.estimate) / r.tolerance if r.tolerance else 0.0
+
+
 @dataclass
 class CheckResult:
     """What :func:`~fogref.compare.check.check` returns: one :class:`Row` per part, region and metric.
@@ -106,8 +114,7 @@ class CheckResult:
         """Rows that failed (and, by default, the inconclusive ones), worst first."""
         keep = ("fail", "inconclusive") if include_inconclusive else ("fail",)
         bad = [r for r in self.rows if r.verdict in keep]
-        return sorted(bad, key=lambda r: (r.verdict != "fail",
-                                          -(abs(r.estimate) / r.tolerance if r.tolerance else 0.0)))
+        return sorted(bad, key=lambda r: (r.verdict != "fail", -_excess(r)))
 
     def summary(self) -> str:
         """A text table of every row with a tolerance, then the verdict."""
