@@ -152,6 +152,30 @@ def test_ue4_param_ranges(truth_exr, tmp_path, capsys, param, needle):
         UE4FogParams(**{key: json.loads(value)})
 
 
+@pytest.mark.parametrize("model, param, needle", [
+    ("hdrp", "meanFreePath=0", "'meanFreePath': 0 is outside (0, inf) m"),
+    ("hdrp", "baseHeight=1e400", "'baseHeight': inf is not finite"),
+    ("unity", "fogDensity=-0.1", "'fogDensity': -0.1 is outside [0, inf)"),
+    ("unity", "fogMode=\"exp3\"", "did you mean"),
+    ("filament", "maximumOpacity=2", "'maximumOpacity': 2 is outside [0, 1]"),
+    ("box", "fog_color=[-1,0,0]", "'fog_color': (-1, 0, 0) is outside"),
+    ("altitude", "_FogPower=true", "'_FogPower': True is not a number"),
+    ("ue4", "SunLuminanse=1", "did you mean 'SunLuminance'"),
+])
+def test_other_models_param_ranges(truth_exr, tmp_path, capsys, model, param, needle):
+    _, exr = truth_exr
+    _cli_error(capsys, _compare(exr, tmp_path / "r", "--model", model, "--param", param), needle)
+    key, _, value = param.partition("=")
+    with pytest.raises(FogrefError, match="did you mean|parameter"):
+        build_model(model, {key: json.loads(value)})
+
+
+def test_empty_row_reads_no_pixels():
+    res = check(synthetic_truth(MODEL, shape=SHAPE), MODEL, distance_bands=(1e6,))
+    row = res.row("T", "d>1e+06m")
+    assert row.verdict == "empty" and "no pixels" in row.describe() and "pass" not in row.describe()
+
+
 # ---------------------------------------------------------------- 3. Radiance headers
 
 

@@ -47,10 +47,12 @@ class Row:
     note: str = ""
 
     def describe(self) -> str:
-        """One line: ``inscatter/sky rel_bias = 0.0498 [0.0471, 0.0524] > tolerance 0.02: fail``."""
+        """One line: ``inscatter/sky rel_bias = 0.0498 [0.0471, 0.0524] > tolerance 0.02: fail``;
+        a region without pixels says ``no pixels``."""
         note = f"; {self.note}" if self.note else ""
         if self.estimate is None:
-            return f"{self.part}/{self.region} {self.metric}: {self.verdict} ({self.pixels} px{note})"
+            verdict = "no pixels" if self.verdict == "empty" else self.verdict
+            return f"{self.part}/{self.region} {self.metric}: {verdict} ({self.pixels} px{note})"
         tol = "" if self.tolerance is None else f", tolerance {'|x| ' if self.metric in SIGNED else ''}" \
                                                 f"<= {self.tolerance:g}"
         return (f"{self.part}/{self.region} {self.metric} = {self.estimate:.4g} "
