@@ -26,7 +26,7 @@ from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
 MODEL = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
 SHAPE = (6, 8)
 
-USER_MODULE = '''
+USER_MODULE = """
 import numpy as np
 from fogref.models.base import FogResult
 
@@ -59,7 +59,7 @@ class Counting:
     def evaluate(self, camera, positions, precision="float32"):
         type(self).calls += 1
         return _fog(positions, 0.1)
-'''
+"""
 
 
 class NoFog:
@@ -105,28 +105,45 @@ def _compare(exr, out, *rest):
 
 def test_model_evaluate_raising_is_one_line(user_module, truth_exr, tmp_path, capsys):
     truth, exr = truth_exr
-    _cli_error(capsys, _compare(exr, tmp_path / "r", "--model", f"{user_module}:Boom"),
-               "model 'Boom'", "RuntimeError: kaboom", "h9_user_fog.py")
+    _cli_error(
+        capsys,
+        _compare(exr, tmp_path / "r", "--model", f"{user_module}:Boom"),
+        "model 'Boom'",
+        "RuntimeError: kaboom",
+        "h9_user_fog.py",
+    )
     model = build_model(f"{user_module}:Boom")
-    for call in (lambda: check(truth, model), lambda: evaluate_model(truth, model),
-                 lambda: compare(truth, model, tmp_path / "r2", figures=False)):
+    for call in (
+        lambda: check(truth, model),
+        lambda: evaluate_model(truth, model),
+        lambda: compare(truth, model, tmp_path / "r2", figures=False),
+    ):
         with pytest.raises(FogrefError, match="model 'Boom': evaluate.. raised RuntimeError: kaboom"):
             call()
 
 
 def test_module_getattr_raising_import_error(user_module, truth_exr, tmp_path, capsys):
     _, exr = truth_exr
-    _cli_error(capsys, _compare(exr, tmp_path / "r", "--model", "h9_lazy_fog:Fog"),
-               "h9_lazy_fog:Fog", "ImportError: lazy boom")
+    _cli_error(
+        capsys,
+        _compare(exr, tmp_path / "r", "--model", "h9_lazy_fog:Fog"),
+        "h9_lazy_fog:Fog",
+        "ImportError: lazy boom",
+    )
     with pytest.raises(FogrefError, match="h9_lazy_fog:Fog.*ImportError: lazy boom"):
         build_model("h9_lazy_fog:Fog")
 
 
-def test_nan_model_refused_with_count_and_first_pixel_in_check_and_report(user_module, truth_exr, tmp_path,
-                                                                          capsys):
+def test_nan_model_refused_with_count_and_first_pixel_in_check_and_report(
+    user_module, truth_exr, tmp_path, capsys
+):
     truth, exr = truth_exr
-    _cli_error(capsys, _compare(exr, tmp_path / "r", "--model", f"{user_module}:NaNFog"),
-               "1 pixel(s) are non-finite", "first at (x=2, y=1)")
+    _cli_error(
+        capsys,
+        _compare(exr, tmp_path / "r", "--model", f"{user_module}:NaNFog"),
+        "1 pixel(s) are non-finite",
+        "first at (x=2, y=1)",
+    )
     model = build_model(f"{user_module}:NaNFog")
     for call in (lambda: check(truth, model), lambda: compare(truth, model, tmp_path / "r2", figures=False)):
         with pytest.raises(FogrefError, match=r"inscatter: 1 pixel\(s\) are non-finite .*\(x=2, y=1\)"):
@@ -136,12 +153,15 @@ def test_nan_model_refused_with_count_and_first_pixel_in_check_and_report(user_m
 # ---------------------------------------------------------------- 2. --param ranges
 
 
-@pytest.mark.parametrize("param, needle", [
-    ("DirectionalInscatteringExponent=-5", "'DirectionalInscatteringExponent': -5 is outside (0, inf)"),
-    ("SunLuminance=-1", "'SunLuminance': -1 is outside [0, inf)"),
-    ("FogInscatteringColor=[-1,0,0]", "'FogInscatteringColor': (-1, 0, 0) is outside"),
-    ("FogHeight=1e400", "'FogHeight': inf is not finite"),
-])
+@pytest.mark.parametrize(
+    "param, needle",
+    [
+        ("DirectionalInscatteringExponent=-5", "'DirectionalInscatteringExponent': -5 is outside (0, inf)"),
+        ("SunLuminance=-1", "'SunLuminance': -1 is outside [0, inf)"),
+        ("FogInscatteringColor=[-1,0,0]", "'FogInscatteringColor': (-1, 0, 0) is outside"),
+        ("FogHeight=1e400", "'FogHeight': inf is not finite"),
+    ],
+)
 def test_ue4_param_ranges(truth_exr, tmp_path, capsys, param, needle):
     _, exr = truth_exr
     _cli_error(capsys, _compare(exr, tmp_path / "r", "--model", "ue4", "--param", param), needle)
@@ -152,16 +172,19 @@ def test_ue4_param_ranges(truth_exr, tmp_path, capsys, param, needle):
         UE4FogParams(**{key: json.loads(value)})
 
 
-@pytest.mark.parametrize("model, param, needle", [
-    ("hdrp", "meanFreePath=0", "'meanFreePath': 0 is outside (0, inf) m"),
-    ("hdrp", "baseHeight=1e400", "'baseHeight': inf is not finite"),
-    ("unity", "fogDensity=-0.1", "'fogDensity': -0.1 is outside [0, inf)"),
-    ("unity", "fogMode=\"exp3\"", "did you mean"),
-    ("filament", "maximumOpacity=2", "'maximumOpacity': 2 is outside [0, 1]"),
-    ("box", "fog_color=[-1,0,0]", "'fog_color': (-1, 0, 0) is outside"),
-    ("altitude", "_FogPower=true", "'_FogPower': True is not a number"),
-    ("ue4", "SunLuminanse=1", "did you mean 'SunLuminance'"),
-])
+@pytest.mark.parametrize(
+    "model, param, needle",
+    [
+        ("hdrp", "meanFreePath=0", "'meanFreePath': 0 is outside (0, inf) m"),
+        ("hdrp", "baseHeight=1e400", "'baseHeight': inf is not finite"),
+        ("unity", "fogDensity=-0.1", "'fogDensity': -0.1 is outside [0, inf)"),
+        ("unity", 'fogMode="exp3"', "did you mean"),
+        ("filament", "maximumOpacity=2", "'maximumOpacity': 2 is outside [0, 1]"),
+        ("box", "fog_color=[-1,0,0]", "'fog_color': (-1, 0, 0) is outside"),
+        ("altitude", "_FogPower=true", "'_FogPower': True is not a number"),
+        ("ue4", "SunLuminanse=1", "did you mean 'SunLuminance'"),
+    ],
+)
 def test_other_models_param_ranges(truth_exr, tmp_path, capsys, model, param, needle):
     _, exr = truth_exr
     _cli_error(capsys, _compare(exr, tmp_path / "r", "--model", model, "--param", param), needle)
@@ -184,13 +207,16 @@ def _hdr(path, header: bytes, res: bytes, payload: bytes = b"\x80\x80\x80\x81" *
     return path
 
 
-@pytest.mark.parametrize("header, res, needle", [
-    (b"EXPOSURE=abc\n", b"-Y 6 +X 8", "EXPOSURE='abc'"),
-    (b"EXPOSURE=0\n", b"-Y 6 +X 8", "EXPOSURE='0'"),
-    (b"", b"-Y six +X 8", "resolution line"),
-    (b"", b"-Y -6 +X 8", "resolution line"),
-    (b"", b"-Y 100000000 +X 100000000", "claims 100000000x100000000 pixels"),
-])
+@pytest.mark.parametrize(
+    "header, res, needle",
+    [
+        (b"EXPOSURE=abc\n", b"-Y 6 +X 8", "EXPOSURE='abc'"),
+        (b"EXPOSURE=0\n", b"-Y 6 +X 8", "EXPOSURE='0'"),
+        (b"", b"-Y six +X 8", "resolution line"),
+        (b"", b"-Y -6 +X 8", "resolution line"),
+        (b"", b"-Y 100000000 +X 100000000", "claims 100000000x100000000 pixels"),
+    ],
+)
 def test_hdr_header_errors(truth_exr, tmp_path, capsys, header, res, needle):
     _, exr = truth_exr
     img = _hdr(tmp_path / "engine.hdr", header, res)
@@ -205,13 +231,14 @@ def test_hdr_valid_still_reads(tmp_path):
     assert img.shape == (6, 8, 3) and np.isfinite(img).all()
 
 
-# ---------------------------------------------------------------- 4. overflow, vacuous regions, zero reference
+# ---------------------------------------------------- 4. overflow, vacuous regions, zero reference
 
 
 def test_overflowing_model_refused_with_reason_not_null(user_module, truth_exr, tmp_path, capsys):
     truth, exr = truth_exr
-    _cli_error(capsys, _compare(exr, tmp_path / "r", "--model", f"{user_module}:Huge"),
-               "beyond ±1e+30", "overflow")
+    _cli_error(
+        capsys, _compare(exr, tmp_path / "r", "--model", f"{user_module}:Huge"), "beyond ±1e+30", "overflow"
+    )
     model = build_model(f"{user_module}:Huge")
     for call in (lambda: check(truth, model), lambda: compare(truth, model, tmp_path / "r2", figures=False)):
         with pytest.raises(FogrefError, match="too large to measure"):
@@ -232,8 +259,11 @@ def test_vacuous_region_is_no_pixels_never_pass(tmp_path, capsys):
     row = res.row("final", "surface")
     assert row.pixels == 0 and row.verdict == "fail" and "no pixels" in row.note
     out = tmp_path / "r"
-    rc = main(_compare(exr, out, "--model", "ue4", "--param", "FogDensity=0.02", "--tolerance",
-                       "final/surface=0.05"))
+    rc = main(
+        _compare(
+            exr, out, "--model", "ue4", "--param", "FogDensity=0.02", "--tolerance", "final/surface=0.05"
+        )
+    )
     assert rc == 1
     page = (out / "index.md").read_text()
     assert "no pixels" in page
@@ -317,8 +347,12 @@ def test_gate_files_over_an_input_or_a_report_file_refused(truth_exr, tmp_path, 
     _, exr = truth_exr
     before = exr.read_bytes()
     _cli_error(capsys, _compare(exr, tmp_path / "r", "--model", "ue4", option, str(exr)), option, "input EXR")
-    _cli_error(capsys, _compare(exr, tmp_path / "r", "--model", "ue4", option, str(tmp_path / "r" / "metrics.json")),
-               option, "over the output")
+    _cli_error(
+        capsys,
+        _compare(exr, tmp_path / "r", "--model", "ue4", option, str(tmp_path / "r" / "metrics.json")),
+        option,
+        "over the output",
+    )
     assert exr.read_bytes() == before and not (tmp_path / "r").exists()
 
 

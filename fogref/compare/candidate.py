@@ -87,7 +87,8 @@ def _as_image(x, shape, what: str, nonfinite: str = "refuse") -> np.ndarray:
     try:
         a = np.broadcast_to(a, (*shape, 3))
     except ValueError:
-        raise FogrefError(f"{what}: shape {a.shape}, expected {(*shape, 3)} (the truth's H, W, RGB)") from None
+        raise FogrefError(f"{what}: shape {a.shape}, expected {(*shape, 3)} (the truth's H, W, RGB)") \
+            from None
     if nonfinite == "keep":
         return a
     bad = ~np.isfinite(a).all(-1)
@@ -112,7 +113,7 @@ def as_truth(truth, what: str = "truth") -> Truth:
     >>> as_truth(3)
     Traceback (most recent call last):
     ...
-    fogref.errors.ParameterError: api: parameter 'truth': expected a Truth or the path of a ground-truth EXR, got int
+    fogref.errors.ParameterError: api: parameter 'truth': expected a Truth or the path of a ... got int
     """
     if isinstance(truth, Truth):
         return truth
@@ -177,7 +178,8 @@ def evaluate_model(truth: Truth, model, precision: str = "float32",
     extra = {k: v for k, v in (("hit", truth.hit), ("distance", truth.distance)) if _accepts(model.evaluate, k)}
     name = str(getattr(model, "name", None) or type(model).__name__)
     try:
-        result = model.evaluate(truth.camera, truth.world_positions(sky_distance), precision=precision, **extra)
+        positions = truth.world_positions(sky_distance)
+        result = model.evaluate(truth.camera, positions, precision=precision, **extra)
     except FogrefError as e:
         raise FogrefError(f"model '{name}': evaluate() refused: {e}") from e
     except Exception as e:  # the user's code failed: one line naming the model, the error and where

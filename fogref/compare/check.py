@@ -226,7 +226,8 @@ def assert_fog_matches(truth: Truth, candidate, tolerances: dict | None = None, 
                        errors_dir=None, **check_options) -> CheckResult:
     """Assert that ``candidate`` matches ``truth`` within ``tolerances``; return the :class:`CheckResult`.
 
-    Runs :func:`check` (same arguments; ``truth`` may be a Truth or the path of its EXR).  On a failure it writes the error maps and
+    Runs :func:`check` (same arguments; ``truth`` may be a Truth or the path of its EXR).  On a
+    failure it writes the error maps and
     ``check.json`` (:meth:`CheckResult.write`) and raises ``AssertionError`` whose
     message names each failing part and region, the metric's estimate and
     confidence interval against its tolerance, the confidence, and the folder of

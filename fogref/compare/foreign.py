@@ -127,8 +127,9 @@ def _read_hdr(path: Path) -> np.ndarray:
     # each pixel takes at least 4 bytes flat, and a run-length scanline at least 4 + 4 * 2 * ceil(W / 127)
     least = H * W * 4 if not 8 <= W < 32768 else H * (4 + 8 * -(-W // 127))
     if least > payload:
-        raise FogrefError(f"{path}: Radiance header claims {W}x{H} pixels, which need at least {least} bytes, "
-                          f"but the file holds {payload} after its header (truncated, or a damaged header)")
+        raise FogrefError(f"{path}: Radiance header claims {W}x{H} pixels, which need at least {least} "
+                          f"bytes, but the file holds {payload} after its header (truncated, or a damaged "
+                          "header)")
     buf = np.frombuffer(data, dtype=np.uint8, offset=line_end + 1)
     rgbe = np.empty((H, W, 4), np.uint8)
     pos = 0

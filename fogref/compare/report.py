@@ -84,9 +84,26 @@ from fogref.errors import FogrefError, ParameterError
 from fogref.exrio import write_exr
 from fogref.gbuffer import Truth, load_truth
 
-__all__ = ["ALL_PARTS", "DEFAULT_SKY_DISTANCE", "ERRORS_EXR_LAYOUT", "PARTS", "PART_UNITS", "REGIONS",
-           "check_sky_distance", "check_table_markdown", "compare", "compare_images", "evaluate_parts",
-           "figure_paths", "image_parts", "refuse_output_over_input", "report_paths", "truth_provenance", "warnings_of", "write_report"]
+__all__ = [
+    "ALL_PARTS",
+    "DEFAULT_SKY_DISTANCE",
+    "ERRORS_EXR_LAYOUT",
+    "PARTS",
+    "PART_UNITS",
+    "REGIONS",
+    "check_sky_distance",
+    "check_table_markdown",
+    "compare",
+    "compare_images",
+    "evaluate_parts",
+    "figure_paths",
+    "image_parts",
+    "refuse_output_over_input",
+    "report_paths",
+    "truth_provenance",
+    "warnings_of",
+    "write_report",
+]
 
 
 def _errors_exr_channels(truth, parts, errors, sun_angle) -> dict:
@@ -112,7 +129,6 @@ def _errors_exr_channels(truth, parts, errors, sun_angle) -> dict:
     # float32 storage: every map is finite (excluded pixels hold 0 error); clamp the range
     big = float(np.finfo(np.float32).max)
     return {k: np.clip(np.asarray(v, dtype=np.float64), -big, big).astype(np.float32) for k, v in ch.items()}
-
 
 
 # ---------------------------------------------------------------- entry point
@@ -160,7 +176,8 @@ def compare(
     check : CheckResult, optional
         The verdict of :func:`fogref.compare.check.check` on the same truth and model (and
         precision, sky distance): the model's images are taken from it (the model is evaluated
-        once, not again), and its rows go into ``metrics.json`` (``check``), ``check.json`` and a table in ``index.md``.
+        once, not again), and its rows go into ``metrics.json`` (``check``), ``check.json`` and a
+        table in ``index.md``.
 
     Returns
     -------
@@ -175,12 +192,25 @@ def compare(
     parts = parts_from_check(truth, check, model, precision, sky_distance)
     if parts is None:
         parts = evaluate_parts(truth, model, precision, sky_distance)
-    header = {"candidate": {"kind": "model", "name": _model_name(model)},
-              "model": {"name": _model_name(model), "parameters": _model_description(model)},
-              "precision": precision, "sky_distance_m": float(sky_distance)}
-    return write_report(truth, parts, out_dir, header, {"final": True, "attenuated_surface": True},
-                        relmse_eps=relmse_eps, flip_ppd=flip_ppd, distance_bins=distance_bins,
-                        angle_step_deg=angle_step_deg, figures=figures, check=check)
+    header = {
+        "candidate": {"kind": "model", "name": _model_name(model)},
+        "model": {"name": _model_name(model), "parameters": _model_description(model)},
+        "precision": precision,
+        "sky_distance_m": float(sky_distance),
+    }
+    return write_report(
+        truth,
+        parts,
+        out_dir,
+        header,
+        {"final": True, "attenuated_surface": True},
+        relmse_eps=relmse_eps,
+        flip_ppd=flip_ppd,
+        distance_bins=distance_bins,
+        angle_step_deg=angle_step_deg,
+        figures=figures,
+        check=check,
+    )
 
 
 def compare_images(truth, images, out_dir, *, figures: bool = True, check=None, **options) -> dict:
@@ -196,12 +226,25 @@ def compare_images(truth, images, out_dir, *, figures: bool = True, check=None, 
     truth = truth if isinstance(truth, Truth) else load_truth(truth)
     parts = image_parts(truth, images)
     name = getattr(images, "description", "engine images")
-    header = {"candidate": {"kind": "images", "name": name},
-              "images": {"sources": dict(images.sources), "encodings": dict(getattr(images, "encodings", {})),
-                         "encoding_option": getattr(images, "encoding_option", None),
-                         "exposure": float(getattr(images, "exposure", 1.0))}}
-    return write_report(truth, parts, out_dir, header, {"attenuated_surface": True, "composite": True},
-                        figures=figures, check=check, **options)
+    header = {
+        "candidate": {"kind": "images", "name": name},
+        "images": {
+            "sources": dict(images.sources),
+            "encodings": dict(getattr(images, "encodings", {})),
+            "encoding_option": getattr(images, "encoding_option", None),
+            "exposure": float(getattr(images, "exposure", 1.0)),
+        },
+    }
+    return write_report(
+        truth,
+        parts,
+        out_dir,
+        header,
+        {"attenuated_surface": True, "composite": True},
+        figures=figures,
+        check=check,
+        **options,
+    )
 
 
 def _path_of(truth):
@@ -210,9 +253,20 @@ def _path_of(truth):
     return p if isinstance(p, (str, os.PathLike)) and not str(p).startswith("<") else None
 
 
-def write_report(truth: Truth, parts: dict, out_dir, header: dict, composited: dict, *,
-                 relmse_eps: float = M.RELMSE_EPS, flip_ppd: float = FLIP_PPD, distance_bins: int = 24,
-                 angle_step_deg: float = 5.0, figures: bool = True, check=None) -> dict:
+def write_report(
+    truth: Truth,
+    parts: dict,
+    out_dir,
+    header: dict,
+    composited: dict,
+    *,
+    relmse_eps: float = M.RELMSE_EPS,
+    flip_ppd: float = FLIP_PPD,
+    distance_bins: int = 24,
+    angle_step_deg: float = 5.0,
+    figures: bool = True,
+    check=None,
+) -> dict:
     """Metrics, maps, figures and pages of ``parts`` (from :func:`evaluate_parts` or :func:`image_parts`).
 
     ``header``: what the report says about the candidate (``candidate``: ``{"kind", "name"}``, and
@@ -226,70 +280,103 @@ def write_report(truth: Truth, parts: dict, out_dir, header: dict, composited: d
     out.mkdir(parents=True, exist_ok=True)
 
     errors = {
-        part: error_maps(p["reference"], p["model"], white=1.0 if PART_UNITS[part] == "1" else None,
-                           eps=relmse_eps, ppd=flip_ppd, noise_cov=p["cov"], valid=p["valid"], spp=truth.spp)
+        part: error_maps(
+            p["reference"],
+            p["model"],
+            white=1.0 if PART_UNITS[part] == "1" else None,
+            eps=relmse_eps,
+            ppd=flip_ppd,
+            noise_cov=p["cov"],
+            valid=p["valid"],
+            spp=truth.spp,
+        )
         for part, p in parts.items()
     }
     masks = {"all": None, "surface": truth.hit, "sky": truth.sky}
     table = {part: {r: errors[part].summary(masks[r]) for r in REGIONS} for part in names}
 
     sun_angle = truth.sun_angle_deg()
-    by_distance = binned_errors(truth.distance, errors,
-                                log_distance_edges(truth.distance[truth.hit], distance_bins), mask=truth.hit)
+    by_distance = binned_errors(
+        truth.distance, errors, log_distance_edges(truth.distance[truth.hit], distance_bins), mask=truth.hit
+    )
     by_sun = binned_errors(sun_angle, errors, angle_edges(angle_step_deg)) if sun_angle is not None else None
     exposures = {p: (1.0 if PART_UNITS[p] == "1" else exposure_for(parts[p]["reference"])) for p in names}
 
     h, w = truth.shape
-    report = _json_safe({
-        "exr": str(truth.path),
-        "truth": truth_provenance(truth),
-        **header,
-        "image": {"width": w, "height": h, "surface_pixels": int(truth.hit.sum()),
-                  "sky_pixels": int(truth.sky.sum())},
-        "units": {p: PART_UNITS[p] for p in names},
-        "composited": {p: bool(composited.get(p)) for p in names},
-        "conventions": {
-            "relmse_eps": relmse_eps,
-            "relmse": "mean over pixels and RGB of (x - r)^2 / (r^2 + eps)",
-            "rmse": "sqrt(mean over pixels and RGB of (x - r)^2), in the part's units",
-            "mean_error": "mean over pixels and RGB of (x - r): > 0 candidate too bright",
-            "delta_e2000": "CIEDE2000; linear sRGB/Rec.709 / white -> XYZ -> CIELAB (D65), negatives clipped",
-            "delta_e2000_white": {p: errors[p].white for p in names},
-            "flip_ppd": flip_ppd,
-            "flip_params": {p: errors[p].flip_params for p in names},
-            "tone_map": "display = sRGB_OETF(clip(exposure * linear, 0, 1)); "
-                        "exposure = 1 / (99th percentile of the reference part's luminance), transmittance 1",
-            "sky": "a model is evaluated at camera + view * sky_distance, composited over the truth's surface.*",
-            "composite": "model: final = surface * T_model + inscatter_model; images: composite = surface * "
-                         "T_engine + inscatter_engine; attenuated_surface = surface * T; only where "
-                         "surface_coverage > 0; other pixels excluded and counted",
-            "noise": "per-pixel covariance of candidate - truth from the truth's stderr.* and corr.* channels "
-                     "(fogref.compare.noise, through check's comparison core: final/composite = surface * T' + "
-                     "L' against surface * T + L) plus a rounding floor (4 ulp of float32 of |truth|); "
-                     "*_noise_floor: a perfect candidate's score; *_stderr: standard error of the estimate; "
-                     "*_below_noise: within noise_z standard errors of the noise floor (descriptive; the "
-                     "verdict is the check's)",
-            "noise_correlation": truth.attrs.get("fogref.noise_correlation", "measured"),
-            "noise_z": M.NOISE_Z,
-            "nonfinite": "a candidate with NaN, inf or |value| > 1e30 is refused (count and first pixel), "
-                         "as in check; the truth is refused if it holds any non-finite value",
-        },
-        "metrics": table,
-        "diagnostics": {
-            "model_nonfinite_values": {p: M.count_nonfinite(parts[p]["model"])
-                                       for p in ("transmittance", "inscatter") if p in parts},
-            "surface_undefined_pixels": int(np.count_nonzero(~truth.surface_valid)),
-            "reference_identity_max_abs": truth.identity_residual(),
-        },
-        "binned": {"distance_m": by_distance, "sun_angle_deg": by_sun},
-        **({"check": check.to_dict()} if check is not None else {}),
-    })
+    report = _json_safe(
+        {
+            "exr": str(truth.path),
+            "truth": truth_provenance(truth),
+            **header,
+            "image": {
+                "width": w,
+                "height": h,
+                "surface_pixels": int(truth.hit.sum()),
+                "sky_pixels": int(truth.sky.sum()),
+            },
+            "units": {p: PART_UNITS[p] for p in names},
+            "composited": {p: bool(composited.get(p)) for p in names},
+            "conventions": {
+                "relmse_eps": relmse_eps,
+                "relmse": "mean over pixels and RGB of (x - r)^2 / (r^2 + eps)",
+                "rmse": "sqrt(mean over pixels and RGB of (x - r)^2), in the part's units",
+                "mean_error": "mean over pixels and RGB of (x - r): > 0 candidate too bright",
+                "delta_e2000": (
+                    "CIEDE2000; linear sRGB/Rec.709 / white -> XYZ -> CIELAB (D65), negatives clipped"
+                ),
+                "delta_e2000_white": {p: errors[p].white for p in names},
+                "flip_ppd": flip_ppd,
+                "flip_params": {p: errors[p].flip_params for p in names},
+                "tone_map": "display = sRGB_OETF(clip(exposure * linear, 0, 1)); "
+                "exposure = 1 / (99th percentile of the reference part's luminance), transmittance 1",
+                "sky": (
+                    "a model is evaluated at camera + view * sky_distance, composited over the truth's "
+                    "surface.*"
+                ),
+                "composite": "model: final = surface * T_model + inscatter_model; images: composite = "
+                "surface * "
+                "T_engine + inscatter_engine; attenuated_surface = surface * T; only where "
+                "surface_coverage > 0; other pixels excluded and counted",
+                "noise": "per-pixel covariance of candidate - truth from the truth's stderr.* and corr.* "
+                "channels "
+                "(fogref.compare.noise, through check's comparison core: final/composite = surface * T' + "
+                "L' against surface * T + L) plus a rounding floor (4 ulp of float32 of |truth|); "
+                "*_noise_floor: a perfect candidate's score; *_stderr: standard error of the estimate; "
+                "*_below_noise: within noise_z standard errors of the noise floor (descriptive; the "
+                "verdict is the check's)",
+                "noise_correlation": truth.attrs.get("fogref.noise_correlation", "measured"),
+                "noise_z": M.NOISE_Z,
+                "nonfinite": "a candidate with NaN, inf or |value| > 1e30 is refused (count and first "
+                "pixel), "
+                "as in check; the truth is refused if it holds any non-finite value",
+            },
+            "metrics": table,
+            "diagnostics": {
+                "model_nonfinite_values": {
+                    p: M.count_nonfinite(parts[p]["model"])
+                    for p in ("transmittance", "inscatter")
+                    if p in parts
+                },
+                "surface_undefined_pixels": int(np.count_nonzero(~truth.surface_valid)),
+                "reference_identity_max_abs": truth.identity_residual(),
+            },
+            "binned": {"distance_m": by_distance, "sun_angle_deg": by_sun},
+            **({"check": check.to_dict()} if check is not None else {}),
+        }
+    )
     report["warnings"] = warnings_of(report)
 
-    write_exr(out / "errors.exr", _errors_exr_channels(truth, parts, errors, sun_angle),
-              {"fogref.compare": {"exr": str(truth.path), "candidate": report["candidate"],
-                                  **({"model": report["model"], "precision": report["precision"]}
-                                     if "model" in report else {})}})
+    write_exr(
+        out / "errors.exr",
+        _errors_exr_channels(truth, parts, errors, sun_angle),
+        {
+            "fogref.compare": {
+                "exr": str(truth.path),
+                "candidate": report["candidate"],
+                **({"model": report["model"], "precision": report["precision"]} if "model" in report else {}),
+            }
+        },
+    )
     _remove_stale_figures(out)
     if figures:
         _write_figures(out, parts, errors, exposures, by_distance, by_sun, angle_step_deg)
@@ -298,9 +385,6 @@ def write_report(truth: Truth, parts: dict, out_dir, header: dict, composited: d
     write_text_atomic(out / "metrics.json", json.dumps(report, indent=2, allow_nan=False) + "\n")
     write_text_atomic(out / "index.md", index_markdown(report, by_sun is not None, figures, check))
     return report
-
-
-
 
 
 #: The files a report writes into its folder, besides the figures.
@@ -321,7 +405,7 @@ def refuse_output_over_input(outputs, inputs, source: str = "compare", what: str
     >>> refuse_output_over_input([("--out", "r/errors.exr")], [("EXR", "r/../r/errors.exr")])
     Traceback (most recent call last):
     ...
-    fogref.errors.ParameterError: compare: parameter '--out': it would write r/errors.exr over the input EXR ...
+    fogref.errors.ParameterError: compare: parameter '--out': it would write r/errors.exr over ...
     """
     given = {}
     for name, p in inputs:
@@ -330,16 +414,23 @@ def refuse_output_over_input(outputs, inputs, source: str = "compare", what: str
     for name, p in outputs:
         hit = given.get(os.path.realpath(os.fspath(p)))
         if hit is not None:
-            raise ParameterError(source, name, f"it would write {p} over the {what} {hit[0]} ({hit[1]}); "
-                                 f"choose another output path or rename the {what}")
+            raise ParameterError(
+                source,
+                name,
+                f"it would write {p} over the {what} {hit[0]} ({hit[1]}); "
+                f"choose another output path or rename the {what}",
+            )
 
 
 def figure_paths(out_dir) -> list[Path]:
     """Every PNG ``compare`` may write into ``out_dir``."""
     out = Path(out_dir)
-    return [out / "error_vs_distance.png", out / "error_vs_sun_angle.png",
-            *(out / "side_by_side" / f"{p}.png" for p in ALL_PARTS),
-            *(out / "heatmaps" / f"{p}.png" for p in ALL_PARTS)]
+    return [
+        out / "error_vs_distance.png",
+        out / "error_vs_sun_angle.png",
+        *(out / "side_by_side" / f"{p}.png" for p in ALL_PARTS),
+        *(out / "heatmaps" / f"{p}.png" for p in ALL_PARTS),
+    ]
 
 
 def _remove_stale_figures(out: Path) -> None:
@@ -352,14 +443,31 @@ def _write_figures(out: Path, parts, errors, exposures, by_distance, by_sun, ang
     for part in parts:
         e = errors[part]
         ref = parts[part]["reference"]
-        plot_side_by_side(ref, ref + e.signed, exposures[part], part, PART_UNITS[part],
-                          out / "side_by_side" / f"{part}.png", valid=e.valid)
+        plot_side_by_side(
+            ref,
+            ref + e.signed,
+            exposures[part],
+            part,
+            PART_UNITS[part],
+            out / "side_by_side" / f"{part}.png",
+            valid=e.valid,
+        )
         plot_error_heatmaps(e, part, PART_UNITS[part], out / "heatmaps" / f"{part}.png")
     units = {p: PART_UNITS[p] for p in parts}
-    plot_binned_errors(by_distance, units, "distance to the surface [m] (log scale)",
-                       "error vs distance (surface pixels, log-spaced bins)", out / "error_vs_distance.png", True)
+    plot_binned_errors(
+        by_distance,
+        units,
+        "distance to the surface [m] (log scale)",
+        "error vs distance (surface pixels, log-spaced bins)",
+        out / "error_vs_distance.png",
+        True,
+    )
     if by_sun is not None:
-        plot_binned_errors(by_sun, units, "angle between view ray and sun [degrees]",
-                           f"error vs angle to the sun ({angle_step_deg:g}° bins, all pixels)",
-                           out / "error_vs_sun_angle.png", False)
-
+        plot_binned_errors(
+            by_sun,
+            units,
+            "angle between view ray and sun [degrees]",
+            f"error vs angle to the sun ({angle_step_deg:g}° bins, all pixels)",
+            out / "error_vs_sun_angle.png",
+            False,
+        )

@@ -86,9 +86,15 @@ def parts_from_check(truth: Truth, check, model, precision: str, sky_distance: f
     model, precision and sky distance (the model's images it compared), so the model is evaluated
     once; None when ``check`` is not such a result."""
     cp = getattr(check, "parts", None)
-    if (cp is None or cp.source is not model or cp.precision != precision
-            or cp.sky_distance != float(sky_distance) or check.truth != str(truth.path)
-            or "T" not in cp.parts or cp.parts["T"].shape != (*truth.shape, 3)):
+    if (
+        cp is None
+        or cp.source is not model
+        or cp.precision != precision
+        or cp.sky_distance != float(sky_distance)
+        or check.truth != str(truth.path)
+        or "T" not in cp.parts
+        or cp.parts["T"].shape != (*truth.shape, 3)
+    ):
         return None
     out = _from_core(cp)
     out["attenuated_surface"] = _attenuated_surface(truth, cp.parts["T"])
@@ -109,7 +115,9 @@ def image_parts(truth: Truth, images) -> dict:
     """
     out = _from_core(candidate_parts(truth, images))
     if images.transmittance is not None:
-        out["attenuated_surface"] = _attenuated_surface(truth, np.asarray(images.transmittance, dtype=np.float64))
+        out["attenuated_surface"] = _attenuated_surface(
+            truth, np.asarray(images.transmittance, dtype=np.float64)
+        )
     order = ("final", "transmittance", "inscatter", "attenuated_surface", "composite")
     return {p: out[p] for p in order if p in out}
 
@@ -117,19 +125,30 @@ def image_parts(truth: Truth, images) -> dict:
 def _from_core(cp) -> dict:
     """The comparison core's parts (:class:`fogref.compare.check.CandidateParts`) as a report's,
     ``T`` named ``transmittance``."""
-    return {("transmittance" if k == "T" else k): {"reference": cp.reference[k], "model": cp.parts[k],
-                                                   "cov": cp.noise_cov[k], "valid": cp.valid[k]}
-            for k in cp.parts}
+    return {
+        ("transmittance" if k == "T" else k): {
+            "reference": cp.reference[k],
+            "model": cp.parts[k],
+            "cov": cp.noise_cov[k],
+            "valid": cp.valid[k],
+        }
+        for k in cp.parts
+    }
 
 
 def _attenuated_surface(truth: Truth, T) -> dict:
     """``surface * T`` against the truth's ``attenuated_surface``, where ``surface`` is defined."""
-    with np.errstate(invalid="ignore", over="ignore"):  # a model's inf/NaN stays non-finite: counted, excluded
+    with np.errstate(
+        invalid="ignore", over="ignore"
+    ):  # a model's inf/NaN stays non-finite: counted, excluded
         att = truth.surface * T
         cov = truth.noise_cov("attenuated_surface") + noise.scaled(truth.noise_cov("surface"), T)
-    return {"reference": truth.attenuated_surface, "model": att,
-            "cov": noise.add_diagonal(cov, noise.rounding_var(truth.attenuated_surface, att)),
-            "valid": truth.surface_valid}
+    return {
+        "reference": truth.attenuated_surface,
+        "model": att,
+        "cov": noise.add_diagonal(cov, noise.rounding_var(truth.attenuated_surface, att)),
+        "valid": truth.surface_valid,
+    }
 
 
 def truth_provenance(truth: Truth) -> dict:
@@ -137,10 +156,17 @@ def truth_provenance(truth: Truth) -> dict:
     spp, seed, scene (path and SHA-256), overrides, pixel filter, variant, versions."""
     a = truth.attrs
     return {
-        "path": str(truth.path), "schema": a.get("fogref.schema"), "spp": truth.spp, "seed": a.get("fogref.seed"),
-        "scene": a.get("fogref.scene"), "scene_sha256": a.get("fogref.scene_sha256"),
-        "overrides": a.get("fogref.overrides") or {}, "pixel_filter": a.get("fogref.pixel_filter"),
-        "pixel_exact": truth.pixel_exact, "variant": a.get("fogref.variant"), "fogref_version": a.get("fogref.version"),
+        "path": str(truth.path),
+        "schema": a.get("fogref.schema"),
+        "spp": truth.spp,
+        "seed": a.get("fogref.seed"),
+        "scene": a.get("fogref.scene"),
+        "scene_sha256": a.get("fogref.scene_sha256"),
+        "overrides": a.get("fogref.overrides") or {},
+        "pixel_filter": a.get("fogref.pixel_filter"),
+        "pixel_exact": truth.pixel_exact,
+        "variant": a.get("fogref.variant"),
+        "fogref_version": a.get("fogref.version"),
         "mitsuba_version": a.get("fogref.mitsuba"),
     }
 
@@ -165,5 +191,3 @@ def _json_safe(obj):
     if obj is None or isinstance(obj, (int, str)):
         return obj
     return str(obj)
-
-

@@ -132,16 +132,18 @@ class UE4FogParams:
                        SunLuminance=float(luminance))
 
 
-#: The ranges fogref accepts, by parameter: ``(lo, hi, unit)``.  Where Unreal has a range
-#: it is cited: ``ExponentialHeightFogComponent.h`` gives only editor slider ranges (``UIMin``/
-#: ``UIMax``: FogDensity [0, 0.05], FogHeightFalloff [0.001, 2], FogMaxOpacity [0, 1],
-#: StartDistance [0, 5000], FogCutoffDistance [100000, 20000000], DirectionalInscatteringExponent
-#: [2, 64]), which a typed value may leave.  ``FogRendering.cpp`` clamps the exponent to
+#: The ranges fogref accepts, by parameter: ``(lo, hi, unit)``.  Where Unreal has a range it is
+#: cited: ``ExponentialHeightFogComponent.h`` gives only editor slider ranges (``UIMin``/``UIMax``:
+#: FogDensity [0, 0.05], FogHeightFalloff [0.001, 2], FogMaxOpacity [0, 1], StartDistance
+#: [0, 5000], FogCutoffDistance [100000, 20000000], DirectionalInscatteringExponent [2, 64]),
+#: which a typed value may leave.  ``FogRendering.cpp`` clamps the exponent to
 #: ``[0.000001, 1000]`` on the CPU: a large exponent is a narrow cone the engine clamps (kept,
 #: and clamped as the engine does), but one <= 0 is no cone at all (the clamp would turn -5
-#: into 1e-6, a uniform glow the user did not ask for) and is refused.  Densities, distances and colours are >= 0 (negative ones
-#: have no physical meaning and the shader's exp2 would amplify instead of attenuate); FogMaxOpacity
-#: is a fraction in [0, 1] (the shader's ``1 - FogMaxOpacity`` is a minimum transmittance).
+#: into 1e-6, a uniform glow the user did not ask for) and is refused.  Densities, distances
+#: and colours are >= 0 (negative ones have no physical meaning and the shader's exp2 would
+#: amplify instead of attenuate); FogMaxOpacity is a fraction in [0, 1] (the shader's
+#: ``1 - FogMaxOpacity`` is a minimum transmittance); SunLuminance (the light's luminance,
+#: fogref's name) is >= 0; FogHeight is any finite height [cm].
 RANGES = {
     "FogDensity": (0.0, math.inf, ""),
     "FogHeightFalloff": (0.0, math.inf, ""),
@@ -175,7 +177,8 @@ def _validate(p: "UE4FogParams") -> None:
             raise ParameterError(src, "SecondFogData", f"{e} (fields: FogDensity, FogHeightFalloff, "
                                  "FogHeightOffset)") from None
     if not isinstance(p.SecondFogData, SecondFogData):
-        raise ParameterError(src, "SecondFogData", f"expected SecondFogData or a dict, got {p.SecondFogData!r}")
+        raise ParameterError(src, "SecondFogData",
+                             f"expected SecondFogData or a dict, got {p.SecondFogData!r}")
     if p.InscatteringLightDirection is not None:
         w = vector(p.InscatteringLightDirection, "InscatteringLightDirection", source=src)
         norm = float(np.linalg.norm(w))
