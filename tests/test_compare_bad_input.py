@@ -53,6 +53,16 @@ class NaNFog:
         return r
 
 
+class ReturnsNone:
+    def evaluate(self, camera, positions, precision="float32"):
+        return None
+
+
+class ReturnsStrings:
+    def evaluate(self, camera, positions, precision="float32"):
+        return FogResult(inscatter="bright", transmittance="half")
+
+
 class Counting:
     calls = 0
 
@@ -120,6 +130,15 @@ def test_model_evaluate_raising_is_one_line(user_module, truth_exr, tmp_path, ca
     ):
         with pytest.raises(FogrefError, match="model 'Boom': evaluate.. raised RuntimeError: kaboom"):
             call()
+
+
+@pytest.mark.parametrize("cls, needle", [("ReturnsNone", "returned NoneType without 'transmittance'"),
+                                         ("ReturnsStrings", "not an array of numbers")])
+def test_model_returning_none_or_strings_refused(user_module, truth_exr, tmp_path, capsys, cls, needle):
+    truth, exr = truth_exr
+    _cli_error(capsys, _compare(exr, tmp_path / "r", "--model", f"{user_module}:{cls}"), needle)
+    with pytest.raises(FogrefError, match=needle):
+        check(truth, build_model(f"{user_module}:{cls}"))
 
 
 def test_module_getattr_raising_import_error(user_module, truth_exr, tmp_path, capsys):
@@ -340,6 +359,17 @@ def test_engine_image_in_out_dir_refused_through_a_symlink(truth_exr, tmp_path, 
     png.write_bytes(b"not really a png")
     _cli_error(capsys, _compare(exr, out, "--image", str(png)), "over the input --image")
     assert img.read_bytes() == before and png.read_bytes() == b"not really a png"
+
+
+def test_assert_fog_matches_errors_dir_over_the_truth_refused(truth_exr, tmp_path):
+    truth, exr = truth_exr
+    victim = tmp_path / "errors.exr"
+    victim.write_bytes(exr.read_bytes())
+    before = victim.read_bytes()
+    bad = {"inscatter": truth.inscatter * 2, "T": truth.transmittance}
+    with pytest.raises(ParameterError, match="errors_dir.*over the input truth"):
+        assert_fog_matches(str(victim), bad, errors_dir=tmp_path)
+    assert victim.read_bytes() == before
 
 
 @pytest.mark.parametrize("option", ["--json", "--junit"])

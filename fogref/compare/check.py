@@ -53,6 +53,7 @@ from fogref.compare.intervals import (
     estimates_from_sums,
     noise_sd,
 )
+from fogref.compare.paths import refuse_output_over_input
 from fogref.compare.regions import region_masks
 from fogref.compare.results import CheckResult, Row
 from fogref.compare.tolerances import metric_verdict, tolerance_table
@@ -254,6 +255,12 @@ def assert_fog_matches(truth: Truth, candidate, tolerances: dict | None = None, 
     """
     if inconclusive not in ("fail", "pass", "skip"):
         raise FogrefError(f"inconclusive: {inconclusive!r} must be 'fail', 'pass' or 'skip'")
+    if errors_dir is not None:
+        truth_file = truth if isinstance(truth, (str, os.PathLike)) else getattr(truth, "path", None)
+        inputs = [("truth", truth_file)] + list(getattr(candidate, "sources", {}).items())
+        outputs = [("errors_dir", Path(errors_dir) / f) for f in ("errors.exr", "check.json")]
+        refuse_output_over_input(outputs, [(n, p) for n, p in inputs if isinstance(p, (str, os.PathLike))],
+                                 "assert_fog_matches")
     result = check(truth, candidate, tolerances, **check_options)
     failed = result.failures(include_inconclusive=False)
     undecided = [r for r in result.rows if r.verdict == "inconclusive"]

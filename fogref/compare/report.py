@@ -61,6 +61,7 @@ from fogref.atomic import write_text_atomic
 from fogref.compare import metrics as M
 from fogref.compare.binning import angle_edges, binned_errors, log_distance_edges
 from fogref.compare.error_maps import error_maps
+from fogref.compare.paths import refuse_output_over_input
 from fogref.compare.perceptual import FLIP_PPD
 from fogref.compare.plots import plot_binned_errors, plot_error_heatmaps, plot_side_by_side
 from fogref.compare.report_page import ERRORS_EXR_LAYOUT, check_table_markdown, index_markdown, warnings_of
@@ -80,7 +81,7 @@ from fogref.compare.report_parts import (
     truth_provenance,
 )
 from fogref.compare.tonemap import exposure_for
-from fogref.errors import FogrefError, ParameterError
+from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 from fogref.gbuffer import Truth, load_truth
 
@@ -394,32 +395,6 @@ REPORT_FILES = ("index.md", "metrics.json", "check.json", "errors.exr")
 def report_paths(out_dir) -> list[Path]:
     """Every file ``compare`` may write into ``out_dir``: :data:`REPORT_FILES` and :func:`figure_paths`."""
     return [Path(out_dir) / f for f in REPORT_FILES] + figure_paths(out_dir)
-
-
-def refuse_output_over_input(outputs, inputs, source: str = "compare", what: str = "input") -> None:
-    """ParameterError if an output would replace an input: paths compared resolved
-    (:func:`os.path.realpath`: symlinks, ``..`` and relative paths included).
-
-    ``outputs``: ``(option, path)`` pairs; ``inputs``: ``(option, path)`` pairs (None skipped).
-
-    >>> refuse_output_over_input([("--out", "r/errors.exr")], [("EXR", "r/../r/errors.exr")])
-    Traceback (most recent call last):
-    ...
-    fogref.errors.ParameterError: compare: parameter '--out': it would write r/errors.exr over ...
-    """
-    given = {}
-    for name, p in inputs:
-        if p is not None:
-            given.setdefault(os.path.realpath(os.fspath(p)), (name, p))
-    for name, p in outputs:
-        hit = given.get(os.path.realpath(os.fspath(p)))
-        if hit is not None:
-            raise ParameterError(
-                source,
-                name,
-                f"it would write {p} over the {what} {hit[0]} ({hit[1]}); "
-                f"choose another output path or rename the {what}",
-            )
 
 
 def figure_paths(out_dir) -> list[Path]:

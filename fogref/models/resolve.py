@@ -99,8 +99,12 @@ def check_protocol(obj, source: str):
     ...
     fogref.errors.FogrefError: my_mod:NoFog: NoFog is not a fog model: it has no evaluate(camera, positions, precision="float32") method (see docs/byo.md)
     """
-    label = getattr(obj, "__name__", type(obj).__name__)
-    evaluate = getattr(obj, "evaluate", None)
+    try:
+        label = getattr(obj, "__name__", type(obj).__name__)
+        evaluate = getattr(obj, "evaluate", None)
+    except Exception as e:  # an object whose attribute lookup raises (a lazy proxy)
+        raise FogrefError(f"{source}: looking up its evaluate() failed: {type(e).__name__}: "
+                          f"{_one_line(e)}") from e
     if not callable(evaluate):
         raise FogrefError(f"{source}: {label} is not a fog model: it has no evaluate(camera, positions, "
                           f'precision="float32") method (see docs/byo.md)')
