@@ -204,6 +204,9 @@ def test_exact_model_gives_zero_error(exr_path, tmp_path):
         assert s["rmse_below_noise"] and s["mean_error_below_noise"], part
 
 
+NONFINITE = r"transmittance: 4 pixel\(s\) are non-finite \(NaN or inf\), first at"
+
+
 def test_nonfinite_model_output_is_refused_as_in_check(tmp_path):
     # the decision (issue 17): a model's NaN/inf is refused, with the count and the first pixel,
     # by the report as by check(), instead of excluding pixels in one and refusing in the other
@@ -212,9 +215,9 @@ def test_nonfinite_model_output_is_refused_as_in_check(tmp_path):
 
     path = tmp_path / "nosun.exr"
     write_exr(path, *synthetic_channels(with_sun=False))
-    with pytest.raises(FogrefError, match=r"transmittance: 4 pixel\(s\) are non-finite \(NaN or inf\), first at"):
+    with pytest.raises(FogrefError, match=NONFINITE):
         compare(path, BeerLambertFog(nan_rows=2), tmp_path / "r", figures=False)
-    with pytest.raises(FogrefError, match=r"transmittance: 4 pixel\(s\) are non-finite \(NaN or inf\), first at"):
+    with pytest.raises(FogrefError, match=NONFINITE):
         check(load_truth(path), BeerLambertFog(nan_rows=2))
     assert not (tmp_path / "r").exists()
 

@@ -63,9 +63,9 @@ class FilamentFogParams:
         object.__setattr__(self, "maximumOpacity",
                            valid.number(self.maximumOpacity, "maximumOpacity", source=src, lo=0.0, hi=1.0))
         object.__setattr__(self, "height", valid.number(self.height, "height", source=src, unit="m"))
-        if not (isinstance(self.cutOffDistance, float) and self.cutOffDistance == math.inf):  # inf: no cut-off
-            object.__setattr__(self, "cutOffDistance",
-                               valid.number(self.cutOffDistance, "cutOffDistance", source=src, lo=0.0, unit="m"))
+        if not (isinstance(self.cutOffDistance, float) and self.cutOffDistance == math.inf):  # inf: none
+            cut = valid.number(self.cutOffDistance, "cutOffDistance", source=src, lo=0.0, unit="m")
+            object.__setattr__(self, "cutOffDistance", cut)
         for name in ("inScatteringStart", "inScatteringSize"):  # Filament: size < 0 turns it off
             object.__setattr__(self, name, valid.number(getattr(self, name), name, source=src))
         object.__setattr__(self, "color", valid.rgb(self.color, "color", source=src, lo=0.0))
@@ -73,8 +73,8 @@ class FilamentFogParams:
         if not np.linalg.norm(w) > 0:
             raise ParameterError(src, "lightDirection", "(0, 0, 0) has no direction")
         object.__setattr__(self, "lightDirection", tuple(float(x) for x in w / np.linalg.norm(w)))
-        object.__setattr__(self, "lightColorIntensity",
-                           valid.vector(self.lightColorIntensity, "lightColorIntensity", source=src, n=4, lo=0.0))
+        lci = valid.vector(self.lightColorIntensity, "lightColorIntensity", source=src, n=4, lo=0.0)
+        object.__setattr__(self, "lightColorIntensity", lci)
 
 
 @register("filament")

@@ -150,7 +150,8 @@ def _load_spec(spec: str):
             except Exception:  # a module whose __dir__ raises: no hint
                 names = []
             hint = did_you_mean(part, names)
-            raise FogrefError(f"model '{spec}': module '{module_name}' has no attribute '{attr}'{hint}") from None
+            raise FogrefError(f"model '{spec}': module '{module_name}' has no attribute '{attr}'{hint}") \
+                from None
         except Exception as e:  # a module-level __getattr__ (lazy import) that raised
             raise FogrefError(f"model '{spec}': looking up '{attr}' in module '{module_name}' failed: "
                               f"{type(e).__name__}: {_one_line(e)}") from e

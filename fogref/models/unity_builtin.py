@@ -67,7 +67,8 @@ class UnityFogParams:
         src = "<UnityFogParams>"
         valid.choice(self.fogMode, "fogMode", MODES, src)
         valid.choice(self.fog_coordinate, "fog_coordinate", ("depth", "distance"), src)
-        object.__setattr__(self, "fogDensity", valid.number(self.fogDensity, "fogDensity", source=src, lo=0.0))
+        density = valid.number(self.fogDensity, "fogDensity", source=src, lo=0.0)
+        object.__setattr__(self, "fogDensity", density)
         for name in ("fogStartDistance", "fogEndDistance"):
             object.__setattr__(self, name, valid.number(getattr(self, name), name, source=src, unit="m"))
         if self.fogMode == "linear" and not self.fogEndDistance > self.fogStartDistance:
