@@ -312,6 +312,15 @@ def test_tolerances_not_a_dict(bad):
         assert_fog_matches(truth, MODEL, bad)
 
 
+def test_tolerance_values_and_check_options_through_the_validator():
+    truth = synthetic_truth(MODEL, shape=SHAPE)
+    with pytest.raises(ParameterError, match=r"tolerances\['T'\]\['rel_rmse'\]': True is not a number"):
+        check(truth, MODEL, {"T": True})
+    with pytest.raises(ParameterError, match="'sky_distance': -1 is outside \\(0, inf\\) m"):
+        check(truth, MODEL, sky_distance=-1)
+    assert {r.part for r in check(truth, MODEL, parts="inscatter").rows} == {"inscatter"}
+
+
 def test_truth_as_a_path_string_is_loaded(truth_exr, tmp_path):
     truth, exr = truth_exr
     assert check(str(exr), MODEL).verdict == check(truth, MODEL).verdict

@@ -34,6 +34,7 @@ from fogref.compare import noise
 from fogref.errors import FogrefError, ParameterError
 from fogref.gbuffer import Truth
 from fogref.models.base import SKY_DISTANCE as DEFAULT_SKY_DISTANCE
+from fogref.params import number as valid_number
 from fogref.params import path as valid_path
 
 
@@ -173,6 +174,9 @@ def evaluate_model(truth: Truth, model, precision: str = "float32",
     if precision not in ("float32", "float64"):
         raise FogrefError(f"precision must be 'float32' or 'float64', got {precision!r}")
     truth = as_truth(truth)
+    sky_distance = valid_number(sky_distance, "sky_distance", source="api", lo=0.0, lo_open=True, unit="m")
+    if nonfinite not in ("refuse", "keep"):
+        raise ParameterError("api", "nonfinite", f"{nonfinite!r} is not one of refuse, keep")
     if not callable(getattr(model, "evaluate", None)):
         raise FogrefError(f"{model!r} is not a fog model: it has no evaluate(camera, positions, precision)")
     extra = {k: v for k, v in (("hit", truth.hit), ("distance", truth.distance)) if _accepts(model.evaluate, k)}

@@ -143,7 +143,7 @@ def check(truth: Truth, candidate, tolerances: dict | None = None, *, parts=None
     regions = region_masks(truth, distance_bands)
     table = tolerance_table(tolerances, tuple(regions))
     cp = candidate_parts(truth, candidate, precision, sky_distance)
-    wanted = list(cp.parts) if parts is None else list(parts)
+    wanted = list(cp.parts) if parts is None else [parts] if isinstance(parts, str) else list(parts)
     for p in wanted:
         if p not in cp.parts:
             raise FogrefError(f"part '{p}': {cp.name} has only {', '.join(cp.parts)}")

@@ -11,11 +11,11 @@ failure unless told otherwise.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 
 from fogref.compare.intervals import METRICS, SIGNED
 from fogref.errors import FogrefError, ParameterError, did_you_mean
+from fogref.params import number
 
 #: Default tolerances per part: metric -> largest acceptable value (``|value|`` for signed metrics).
 DEFAULT_TOLERANCES: dict = {
@@ -61,14 +61,8 @@ def tolerance_table(tolerances, regions=None) -> dict:
             if metric not in METRICS:
                 raise FogrefError(f"tolerances['{key}']: unknown metric '{metric}'{did_you_mean(metric, METRICS)} "
                                   f"(metrics: {', '.join(METRICS)})")
-            if tol is not None:
-                try:
-                    tol = float(tol)
-                except (TypeError, ValueError):
-                    raise FogrefError(f"tolerances['{key}']['{metric}']: {tol!r} is not a number "
-                                      "(finite, >= 0; None only reports the metric)") from None
-                if not (math.isfinite(tol) and tol >= 0):
-                    raise FogrefError(f"tolerances['{key}']['{metric}']: {tol} must be finite and >= 0")
+            if tol is not None:  # a number (not a bool), finite, >= 0: the one validator
+                tol = number(tol, f"tolerances['{key}']['{metric}']", source="api", lo=0.0)
             clean[metric] = tol
         k = (part, region or None)
         table[k] = {**table.get(k, {}), **clean} if region else {**table[(part, None)], **clean}
