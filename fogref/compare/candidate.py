@@ -103,7 +103,7 @@ def _as_image(x, shape, what: str, nonfinite: str = "refuse") -> np.ndarray:
         y, x_ = np.argwhere(huge)[0]
         raise FogrefError(f"{what}: {int(huge.sum())} pixel(s) beyond ±{LARGEST_VALUE:g}, first at "
                           f"{_first_pixel(huge)} ({np.abs(a[y, x_]).max():.3g}): too large to measure (its "
-                          "squared errors overflow float64); no fog comes near this: check the model's units")
+                          "squared errors overflow float64); no fog comes near this: check its units")
     return a
 
 
