@@ -204,19 +204,31 @@ def test_exact_model_gives_zero_error(exr_path, tmp_path):
         assert s["rmse_below_noise"] and s["mean_error_below_noise"], part
 
 
-def test_nonfinite_model_output_is_reported_not_propagated(tmp_path):
+NONFINITE = r"transmittance: 4 pixel\(s\) are non-finite \(NaN or inf\), first at"
+
+
+def test_nonfinite_model_output_is_refused_as_in_check(tmp_path):
+    # the decision (issue 17): a model's NaN/inf is refused, with the count and the first pixel,
+    # by the report as by check(), instead of excluding pixels in one and refusing in the other
+    from fogref.compare.check import check
+    from fogref.gbuffer import load_truth
+
+    path = tmp_path / "nosun.exr"
+    write_exr(path, *synthetic_channels(with_sun=False))
+    with pytest.raises(FogrefError, match=NONFINITE):
+        compare(path, BeerLambertFog(nan_rows=2), tmp_path / "r", figures=False)
+    with pytest.raises(FogrefError, match=NONFINITE):
+        check(load_truth(path), BeerLambertFog(nan_rows=2))
+    assert not (tmp_path / "r").exists()
+
+
+def test_stale_figures_removed_and_no_sun_said(tmp_path):
     path = tmp_path / "nosun.exr"
     write_exr(path, *synthetic_channels(with_sun=False))
     out = tmp_path / "r"
     (out / "heatmaps").mkdir(parents=True)
     (out / "heatmaps" / "final.png").write_bytes(b"stale")
-    report = compare(path, BeerLambertFog(nan_rows=2), out, figures=False)
-    assert report["diagnostics"]["model_nonfinite_values"] == {"transmittance": 2 * 2 * 3, "inscatter": 2 * W * 3}
-    assert report["metrics"]["inscatter"]["all"]["model_nonfinite_pixels"] == 2 * W
-    assert report["metrics"]["inscatter"]["all"]["pixels"] == (H - 2) * W
-    assert report["metrics"]["transmittance"]["all"]["excluded_pixels"] == 2 * 2
-    assert any("non-finite" in w for w in report["warnings"])
-    assert "**Warning:**" in (out / "index.md").read_text()
+    report = compare(path, BeerLambertFog(), out, figures=False)
     assert report["binned"]["sun_angle_deg"] is None
     assert not list(out.rglob("*.png")), "stale figures must be removed"
     assert "no sun" in (out / "index.md").read_text()

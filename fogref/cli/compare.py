@@ -261,6 +261,30 @@ def check_modes(o: Options, given) -> bool:
     return images
 
 
+def _out_dir(o: Options) -> Path:
+    """The report folder: ``--out``, else :func:`default_out_dir` of the model or the first image."""
+    if o.out:
+        return Path(o.out)
+    name = o.model or Path(o.image or o.inscatter or o.transmittance or o.fog_colour).stem
+    return default_out_dir(o.exr, name)
+
+
+def _refuse_outputs_over_inputs(o: Options) -> None:
+    """A ParameterError (exit 2) before any work when a file the run writes
+    (the report's files and figures, ``--json``, ``--junit``) resolves to an input (the truth, an
+    engine image) or two outputs to the same file (:func:`fogref.compare.report.refuse_output_over_input`)."""
+    from fogref.compare.report import refuse_output_over_input, report_paths
+
+    inputs = [("EXR", o.exr), ("--image", o.image), ("--transmittance", o.transmittance),
+              ("--inscatter", o.inscatter), ("--fog-colour", o.fog_colour)]
+    report = [("--out", p) for p in report_paths(_out_dir(o))]
+    gate = [(n, p) for n, p in (("--json", o.json), ("--junit", o.junit)) if p]
+    refuse_output_over_input(report + gate, inputs, SOURCE)
+    # --json/--junit must not replace a report file nor each other
+    refuse_output_over_input(gate[1:], gate[:1], SOURCE, what="output")
+    refuse_output_over_input(gate, report, SOURCE, what="output")
+
+
 def run(o: Options, given=frozenset()) -> int:
     """Check the candidate, write the report, return the exit code (see :data:`EPILOG`).
 
@@ -276,6 +300,7 @@ def run(o: Options, given=frozenset()) -> int:
 
     images = check_modes(o, given)
     options = {"tolerances": o.tolerance, "distance_bands": o.distance_bands, "confidence": o.confidence}
+    _refuse_outputs_over_inputs(o)
     truth = load_truth(o.exr)
     extra = {}
     if images:
@@ -289,8 +314,7 @@ def run(o: Options, given=frozenset()) -> int:
             shape=truth.shape,
             truth_name=str(o.exr),
         )
-        stem = Path(o.image or o.inscatter or o.transmittance or o.fog_colour).stem
-        out = Path(o.out) if o.out else default_out_dir(o.exr, stem)
+        out = _out_dir(o)
         result = check(truth, imgs, **options)
         report = compare_images(truth, imgs, out, figures=not o.no_figures, check=result)
         extra["encodings"] = report["images"]["encodings"]
@@ -299,7 +323,7 @@ def run(o: Options, given=frozenset()) -> int:
         model = build_model(
             o.model, parse_param_assignments(assignments), truth.params if o.from_scene else None
         )
-        out = Path(o.out) if o.out else default_out_dir(o.exr, o.model)
+        out = _out_dir(o)
         result = check(truth, model, **options, precision=o.precision, sky_distance=o.sky_distance)
         report = compare(
             truth,

@@ -23,14 +23,19 @@ Parts (``(H, W, 3)`` linear RGB):
 from __future__ import annotations
 
 import inspect
+import os
+import traceback
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from fogref.compare import noise
-from fogref.errors import FogrefError
-from fogref.gbuffer import Truth, nonfinite_report
+from fogref.errors import FogrefError, ParameterError
+from fogref.gbuffer import Truth
 from fogref.models.base import SKY_DISTANCE as DEFAULT_SKY_DISTANCE
+from fogref.params import number as valid_number
+from fogref.params import path as valid_path
 
 
 @dataclass
@@ -45,6 +50,8 @@ class CandidateParts:
     ref_cov:   part name -> ``(H, W, 3, 3)`` noise covariance of ``reference``.
     valid:     part name -> ``(H, W)`` bool, pixels where the part is defined.
     name:      what the candidate is, for messages.
+    source:    the candidate object itself (a model: the report reuses these parts only for it).
+    precision, sky_distance: how a model was evaluated (None for images).
     """
 
     parts: dict
@@ -53,21 +60,70 @@ class CandidateParts:
     ref_cov: dict
     valid: dict
     name: str = "candidate"
+    source: object = None
+    precision: str | None = None
+    sky_distance: float | None = None
+
+
+#: The largest magnitude a candidate's value may have.  Far above any fog's radiance or
+#: transmittance (and above float32's 3.4e38, so no engine image reaches it), and low enough that
+#: every statistic of ``check`` and the report (sums of squared errors, and of their squares for
+#: the standard errors) stays finite in float64.  A larger value is refused with this reason
+#: instead of turning a metric into null.
+LARGEST_VALUE = 1e30
+
+
+def _first_pixel(mask) -> str:
+    ys, xs = np.nonzero(mask)
+    return f"(x={xs[0]}, y={ys[0]})"
 
 
 def _as_image(x, shape, what: str, nonfinite: str = "refuse") -> np.ndarray:
-    a = np.asarray(x, dtype=np.float64)
+    """``x`` as a float64 ``shape + (3,)`` image; FogrefError for the wrong shape or (``"refuse"``)
+    a NaN, an infinity or a value beyond :data:`LARGEST_VALUE`, with the count and the first pixel."""
+    try:
+        a = np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise FogrefError(f"{what}: not an array of numbers ({type(x).__name__}: {e})") from None
     try:
         a = np.broadcast_to(a, (*shape, 3))
     except ValueError:
-        raise FogrefError(f"{what}: shape {a.shape}, expected {(*shape, 3)} (the truth's H, W, RGB)") from None
+        raise FogrefError(f"{what}: shape {a.shape}, expected {(*shape, 3)} (the truth's H, W, RGB)") \
+            from None
     if nonfinite == "keep":
         return a
-    bad = nonfinite_report({what: a[..., 0]}) or nonfinite_report({what: a[..., 1]}) or nonfinite_report(
-        {what: a[..., 2]})
-    if bad:
-        raise FogrefError(f"candidate has {bad}")
+    bad = ~np.isfinite(a).all(-1)
+    if bad.any():
+        raise FogrefError(f"{what}: {int(bad.sum())} pixel(s) are non-finite (NaN or inf), first at "
+                          f"{_first_pixel(bad)}; "
+                          "a candidate must be finite everywhere (fogref refuses it rather than drop pixels)")
+    with np.errstate(invalid="ignore"):
+        huge = (np.abs(a) > LARGEST_VALUE).any(-1)
+    if huge.any():
+        y, x_ = np.argwhere(huge)[0]
+        raise FogrefError(f"{what}: {int(huge.sum())} pixel(s) beyond ±{LARGEST_VALUE:g}, first at "
+                          f"{_first_pixel(huge)} ({np.abs(a[y, x_]).max():.3g}): too large to measure (its "
+                          "squared errors overflow float64); no fog comes near this: check its units")
     return a
+
+
+def as_truth(truth, what: str = "truth") -> Truth:
+    """``truth`` as a :class:`~fogref.gbuffer.Truth`: a Truth as it is, a path (str or os.PathLike)
+    read with :func:`fogref.gbuffer.load_truth`; else ParameterError naming ``what``.
+
+    >>> as_truth(3)
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: api: parameter 'truth': expected a Truth or the path of a ... got int
+    """
+    if isinstance(truth, Truth):
+        return truth
+    if isinstance(truth, (str, os.PathLike)):
+        from fogref.gbuffer import load_truth
+
+        return load_truth(valid_path(truth, what, source="api", must_exist=True))
+    raise ParameterError("api", what, f"expected a Truth or the path of a ground-truth EXR, got "
+                         f"{type(truth).__name__}")
 
 
 def evaluate_model(truth: Truth, model, precision: str = "float32",
@@ -80,8 +136,8 @@ def evaluate_model(truth: Truth, model, precision: str = "float32",
 
     Parameters
     ----------
-    truth : Truth
-        The ground truth (see :func:`fogref.gbuffer.load_truth`).
+    truth : Truth or path
+        The ground truth, or the path of its EXR (read with :func:`fogref.gbuffer.load_truth`).
     model : object
         Anything with ``evaluate(camera (3,), positions (H, W, 3), precision)``
         returning an object with ``transmittance`` and ``inscatter`` (broadcastable to
@@ -117,17 +173,42 @@ def evaluate_model(truth: Truth, model, precision: str = "float32",
     """
     if precision not in ("float32", "float64"):
         raise FogrefError(f"precision must be 'float32' or 'float64', got {precision!r}")
+    truth = as_truth(truth)
+    sky_distance = valid_number(sky_distance, "sky_distance", source="api", lo=0.0, lo_open=True, unit="m")
+    if nonfinite not in ("refuse", "keep"):
+        raise ParameterError("api", "nonfinite", f"{nonfinite!r} is not one of refuse, keep")
     if not callable(getattr(model, "evaluate", None)):
         raise FogrefError(f"{model!r} is not a fog model: it has no evaluate(camera, positions, precision)")
     extra = {k: v for k, v in (("hit", truth.hit), ("distance", truth.distance)) if _accepts(model.evaluate, k)}
-    result = model.evaluate(truth.camera, truth.world_positions(sky_distance), precision=precision, **extra)
     name = str(getattr(model, "name", None) or type(model).__name__)
+    try:
+        positions = truth.world_positions(sky_distance)
+        result = model.evaluate(truth.camera, positions, precision=precision, **extra)
+    except FogrefError as e:
+        raise FogrefError(f"model '{name}': evaluate() refused: {e}") from e
+    except Exception as e:  # the user's code failed: one line naming the model, the error and where
+        raise FogrefError(f"model '{name}': evaluate() raised {type(e).__name__}: {_one_line(e)}"
+                          f"{_where(e)}") from e
     for attr in ("transmittance", "inscatter"):
         if not hasattr(result, attr):
             raise FogrefError(f"model '{name}': evaluate() returned {type(result).__name__} without "
                               f"'{attr}' (expected an object with transmittance and inscatter)")
     return {"T": _as_image(result.transmittance, truth.shape, f"model '{name}' transmittance", nonfinite),
             "inscatter": _as_image(result.inscatter, truth.shape, f"model '{name}' inscatter", nonfinite)}
+
+
+def _one_line(e: BaseException) -> str:
+    text = str(e).strip()
+    return text.splitlines()[0] if text else "(no message)"
+
+
+def _where(e: BaseException) -> str:
+    """`` (at file.py:12 in evaluate)``: the innermost frame of ``e``'s traceback."""
+    tb = traceback.extract_tb(e.__traceback__)
+    if not tb:
+        return ""
+    f = tb[-1]
+    return f" (at {Path(f.filename).name}:{f.lineno} in {f.name})"
 
 
 def _accepts(fn, name: str) -> bool:
@@ -198,6 +279,7 @@ def candidate_parts(truth: Truth, candidate, precision: str = "float32",
     >>> sorted(candidate_parts(synthetic_truth(model), model).parts)
     ['T', 'final', 'inscatter']
     """
+    truth = as_truth(truth)
     valid_all = np.ones(truth.shape, bool)
     T_ref, L_ref = truth.transmittance, truth.inscatter
     parts, ref, cov, rcov, valid = {}, {}, {}, {}, {}
@@ -220,7 +302,9 @@ def candidate_parts(truth: Truth, candidate, precision: str = "float32",
     if callable(getattr(candidate, "evaluate", None)):
         m = evaluate_model(truth, candidate, precision, sky_distance)
         name = str(getattr(candidate, "name", None) or type(candidate).__name__)
-        return fog_parts(truth, m["T"], m["inscatter"], name=f"model '{name}'")
+        cp = fog_parts(truth, m["T"], m["inscatter"], name=f"model '{name}'")
+        cp.source, cp.precision, cp.sky_distance = candidate, precision, float(sky_distance)
+        return cp
 
     if isinstance(candidate, dict):
         images, name = candidate, "images"

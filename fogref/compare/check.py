@@ -43,7 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fogref.compare.candidate import candidate_parts
+from fogref.compare.candidate import as_truth, candidate_parts
 from fogref.compare.intervals import (
     METRICS,
     SIGNED,
@@ -53,6 +53,7 @@ from fogref.compare.intervals import (
     estimates_from_sums,
     noise_sd,
 )
+from fogref.compare.paths import refuse_output_over_input
 from fogref.compare.regions import region_masks
 from fogref.compare.results import CheckResult, Row
 from fogref.compare.tolerances import metric_verdict, tolerance_table
@@ -74,8 +75,9 @@ def check(truth: Truth, candidate, tolerances: dict | None = None, *, parts=None
 
     Parameters
     ----------
-    truth : Truth
-        From :func:`fogref.gbuffer.load_truth` (or :func:`fogref.compare.synthetic.synthetic_truth`).
+    truth : Truth or path
+        From :func:`fogref.gbuffer.load_truth` (or :func:`fogref.compare.synthetic.synthetic_truth`);
+        a path (str or os.PathLike) to a ground-truth EXR is read with ``load_truth``.
     candidate : model, EngineImages, Truth or dict
         See :func:`fogref.compare.candidate.candidate_parts`.
     tolerances : dict, optional
@@ -137,10 +139,11 @@ def check(truth: Truth, candidate, tolerances: dict | None = None, *, parts=None
         raise FogrefError(f"block: {block!r} must be an integer >= 1 [px]")
     if not (isinstance(n_boot, int) and n_boot >= 100):
         raise FogrefError(f"n_boot: {n_boot!r} must be an integer >= 100")
+    truth = as_truth(truth)
     regions = region_masks(truth, distance_bands)
     table = tolerance_table(tolerances, tuple(regions))
     cp = candidate_parts(truth, candidate, precision, sky_distance)
-    wanted = list(cp.parts) if parts is None else list(parts)
+    wanted = list(cp.parts) if parts is None else [parts] if isinstance(parts, str) else list(parts)
     for p in wanted:
         if p not in cp.parts:
             raise FogrefError(f"part '{p}': {cp.name} has only {', '.join(cp.parts)}")
@@ -211,7 +214,7 @@ def check(truth: Truth, candidate, tolerances: dict | None = None, *, parts=None
     settings = {"method": method, "block": block, "n_boot": n_boot, "spp": spp, "seed": seed, "distance_bands_m": list(distance_bands or ()),
                 "precision": precision, "sky_distance_m": sky_distance,
                 "tolerances": {f"{p}{'/' + r if r else ''}": t for (p, r), t in table.items()}}
-    return CheckResult(rows, float(confidence), cp.name, str(truth.path), settings, errors)
+    return CheckResult(rows, float(confidence), cp.name, str(truth.path), settings, errors, parts=cp)
 
 
 def _default_errors_dir(result: CheckResult) -> Path:
@@ -224,7 +227,8 @@ def assert_fog_matches(truth: Truth, candidate, tolerances: dict | None = None, 
                        errors_dir=None, **check_options) -> CheckResult:
     """Assert that ``candidate`` matches ``truth`` within ``tolerances``; return the :class:`CheckResult`.
 
-    Runs :func:`check` (same arguments).  On a failure it writes the error maps and
+    Runs :func:`check` (same arguments; ``truth`` may be a Truth or the path of its EXR).  On a
+    failure it writes the error maps and
     ``check.json`` (:meth:`CheckResult.write`) and raises ``AssertionError`` whose
     message names each failing part and region, the metric's estimate and
     confidence interval against its tolerance, the confidence, and the folder of
@@ -251,6 +255,12 @@ def assert_fog_matches(truth: Truth, candidate, tolerances: dict | None = None, 
     """
     if inconclusive not in ("fail", "pass", "skip"):
         raise FogrefError(f"inconclusive: {inconclusive!r} must be 'fail', 'pass' or 'skip'")
+    if errors_dir is not None:
+        truth_file = truth if isinstance(truth, (str, os.PathLike)) else getattr(truth, "path", None)
+        inputs = [("truth", truth_file)] + list(getattr(candidate, "sources", {}).items())
+        outputs = [("errors_dir", Path(errors_dir) / f) for f in ("errors.exr", "check.json")]
+        refuse_output_over_input(outputs, [(n, p) for n, p in inputs if isinstance(p, (str, os.PathLike))],
+                                 "assert_fog_matches")
     result = check(truth, candidate, tolerances, **check_options)
     failed = result.failures(include_inconclusive=False)
     undecided = [r for r in result.rows if r.verdict == "inconclusive"]

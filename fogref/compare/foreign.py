@@ -106,13 +106,30 @@ def _read_hdr(path: Path) -> np.ndarray:
     if fmt and fmt.group(1) != "32-bit_rle_rgbe":
         raise FogrefError(f"{path}: Radiance format {fmt.group(1)}; only 32-bit_rle_rgbe is supported")
     scale = 1.0
-    for m in re.finditer(r"^EXPOSURE=\s*(\S+)", header, re.M):
-        scale *= float(m.group(1))
+    for m in re.finditer(r"^EXPOSURE=\s*(.*)$", header, re.M):
+        try:
+            x = float(m.group(1).strip())
+        except ValueError:
+            x = math.nan
+        if not (math.isfinite(x) and x > 0):
+            raise FogrefError(f"{path}: Radiance header EXPOSURE={m.group(1).strip()!r}: expected a finite "
+                              "number > 0 (the factor the pixels were multiplied by)")
+        scale *= x
     line_end = data.find(b"\n", end + 2)
+    if line_end < 0:
+        raise FogrefError(f"{path}: Radiance HDR has no resolution line after its header")
     res = data[end + 2:line_end].decode("latin-1").split()
-    if len(res) != 4 or res[0] != "-Y" or res[2] != "+X":
-        raise FogrefError(f"{path}: Radiance resolution line {' '.join(res)!r}; only '-Y H +X W' is supported")
+    if len(res) != 4 or res[0] != "-Y" or res[2] != "+X" or not all(_is_count(v) for v in (res[1], res[3])):
+        raise FogrefError(f"{path}: Radiance resolution line {' '.join(res)[:60]!r}; only '-Y H +X W' with "
+                          "whole numbers H, W >= 1 is supported")
     H, W = int(res[1]), int(res[3])
+    payload = len(data) - (line_end + 1)
+    # each pixel takes at least 4 bytes flat, and a run-length scanline at least 4 + 4 * 2 * ceil(W / 127)
+    least = H * W * 4 if not 8 <= W < 32768 else H * (4 + 8 * -(-W // 127))
+    if least > payload:
+        raise FogrefError(f"{path}: Radiance header claims {W}x{H} pixels, which need at least {least} "
+                          f"bytes, but the file holds {payload} after its header (truncated, or a damaged "
+                          "header)")
     buf = np.frombuffer(data, dtype=np.uint8, offset=line_end + 1)
     rgbe = np.empty((H, W, 4), np.uint8)
     pos = 0
@@ -145,6 +162,11 @@ def _read_hdr(path: Path) -> np.ndarray:
     e = rgbe[..., 3].astype(np.int32)
     f = np.where(e > 0, np.ldexp(1.0, e - 136), 0.0)
     return (rgbe[..., :3].astype(np.float64) + 0.5) * f[..., None] * (e[..., None] > 0) / scale
+
+
+def _is_count(text: str) -> bool:
+    """True for a whole number >= 1 written in decimal digits (no sign)."""
+    return text.isdigit() and int(text) >= 1
 
 
 def resolve_encoding(path, encoding: str = "auto") -> str:

@@ -47,14 +47,24 @@ class Row:
     note: str = ""
 
     def describe(self) -> str:
-        """One line: ``inscatter/sky rel_bias = 0.0498 [0.0471, 0.0524] > tolerance 0.02: fail``."""
+        """One line: ``inscatter/sky rel_bias = 0.0498 [0.0471, 0.0524] > tolerance 0.02: fail``;
+        a region without pixels says ``no pixels``."""
         note = f"; {self.note}" if self.note else ""
         if self.estimate is None:
-            return f"{self.part}/{self.region} {self.metric}: {self.verdict} ({self.pixels} px{note})"
+            verdict = "no pixels" if self.verdict == "empty" else self.verdict
+            return f"{self.part}/{self.region} {self.metric}: {verdict} ({self.pixels} px{note})"
         tol = "" if self.tolerance is None else f", tolerance {'|x| ' if self.metric in SIGNED else ''}" \
                                                 f"<= {self.tolerance:g}"
         return (f"{self.part}/{self.region} {self.metric} = {self.estimate:.4g} "
                 f"[{self.low:.4g}, {self.high:.4g}]{tol}: {self.verdict} ({self.pixels} px{note})")
+
+
+def _excess(r: Row) -> float:
+    """How far a row is over its tolerance (estimate / tolerance); a row without an estimate
+    (no pixels, a zero reference) counts as infinitely far, so it is listed first."""
+    if r.estimate is None:
+        return float("inf")
+    return abs(r.estimate) / r.tolerance if r.tolerance else 0.0
 
 
 @dataclass
@@ -64,6 +74,9 @@ class CheckResult:
     ``verdict``: ``fail`` if any row fails, else ``inconclusive`` if any row is,
     else ``pass``.  ``confidence``: two-sided level of every interval.  ``errors``:
     part -> ``(H, W, 3)`` signed error ``candidate - truth`` (0 where undefined).
+    ``parts``: the :class:`~fogref.compare.candidate.CandidateParts` that were compared (the
+    model's evaluated images among them), so a report on the same run does not evaluate the
+    model again (:func:`fogref.compare.report.compare` with ``check=``).
     """
 
     rows: list
@@ -72,6 +85,7 @@ class CheckResult:
     truth: str
     settings: dict
     errors: dict = field(default_factory=dict, repr=False)
+    parts: object = field(default=None, repr=False, compare=False)
 
     @property
     def verdict(self) -> str:
@@ -102,8 +116,7 @@ class CheckResult:
         """Rows that failed (and, by default, the inconclusive ones), worst first."""
         keep = ("fail", "inconclusive") if include_inconclusive else ("fail",)
         bad = [r for r in self.rows if r.verdict in keep]
-        return sorted(bad, key=lambda r: (r.verdict != "fail",
-                                          -(abs(r.estimate) / r.tolerance if r.tolerance else 0.0)))
+        return sorted(bad, key=lambda r: (r.verdict != "fail", -_excess(r)))
 
     def summary(self) -> str:
         """A text table of every row with a tolerance, then the verdict."""

@@ -8,9 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
-from fogref.errors import FogrefError
+from fogref.errors import FogrefError, ParameterError
 from fogref.gbuffer import Truth
 from fogref.models.base import SKY_DISTANCE as DEFAULT_SKY_DISTANCE
+from fogref.params import integer
 
 
 def synthetic_truth(model, shape=(18, 32), noise: float = 0.01, seed: int = 0, fov_deg: float = 70.0,
@@ -30,7 +31,7 @@ def synthetic_truth(model, shape=(18, 32), noise: float = 0.01, seed: int = 0, f
     model : fog model
         Evaluated at float64 on the G-buffer.
     shape : (int, int)
-        ``(H, W)`` pixels.
+        ``(H, W)`` pixels, each in [1, 16384].
     noise : float
         Relative standard error of the noisy parts, >= 0.
     seed : int
@@ -51,7 +52,12 @@ def synthetic_truth(model, shape=(18, 32), noise: float = 0.01, seed: int = 0, f
     """
     if not (math.isfinite(noise) and noise >= 0):
         raise FogrefError(f"noise: {noise} must be finite and >= 0")
-    H, W = (int(x) for x in shape)
+    try:
+        H, W = shape
+    except (TypeError, ValueError):
+        raise ParameterError("synthetic_truth", "shape", f"expected (H, W), got {shape!r}") from None
+    H = integer(H, "shape", source="synthetic_truth", lo=1, hi=1 << 14, unit="pixels (H)")
+    W = integer(W, "shape", source="synthetic_truth", lo=1, hi=1 << 14, unit="pixels (W)")
     camera = np.array([0.0, 2.0, 0.0])
     tan = math.tan(math.radians(fov_deg) / 2)
     u = (np.arange(W) + 0.5) / W * 2 - 1

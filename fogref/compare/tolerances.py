@@ -11,10 +11,11 @@ failure unless told otherwise.
 
 from __future__ import annotations
 
-import math
+from collections.abc import Mapping
 
 from fogref.compare.intervals import METRICS, SIGNED
-from fogref.errors import FogrefError, did_you_mean
+from fogref.errors import FogrefError, ParameterError, did_you_mean
+from fogref.params import number
 
 #: Default tolerances per part: metric -> largest acceptable value (``|value|`` for signed metrics).
 DEFAULT_TOLERANCES: dict = {
@@ -33,7 +34,8 @@ def tolerance_table(tolerances, regions=None) -> dict:
     """Normalise ``tolerances`` to ``{(part, region|None): {metric: tol}}``.
 
     ``regions``: the region names that exist (default: any region is accepted).
-    Unknown parts, regions and metrics are FogrefErrors with a did-you-mean.
+    Unknown parts, regions and metrics are FogrefErrors with a did-you-mean; anything but a
+    dict (or None) is a ParameterError naming ``tolerances`` and the accepted forms.
 
     >>> tolerance_table({"T/skyy": 0.1}, regions=("all", "surface", "sky"))
     Traceback (most recent call last):
@@ -41,6 +43,10 @@ def tolerance_table(tolerances, regions=None) -> dict:
     fogref.errors.FogrefError: tolerances: unknown region 'skyy' in 'T/skyy'; did you mean 'sky'? ...
     """
     table = {(p, None): dict(v) for p, v in DEFAULT_TOLERANCES.items()}
+    if tolerances is not None and not isinstance(tolerances, Mapping):
+        raise ParameterError("api", "tolerances", f"expected a dict, got {type(tolerances).__name__} "
+                             f"{_short(tolerances)}: write {{'part': 0.05}} (rel_rmse), {{'part/region': "
+                             "0.05}} or {'part': {'rel_rmse': 0.05, 'bias': 0.01}}; None for the defaults")
     for key, value in (tolerances or {}).items():
         part, _, region = str(key).partition("/")
         if part not in PART_NAMES:
@@ -55,18 +61,17 @@ def tolerance_table(tolerances, regions=None) -> dict:
             if metric not in METRICS:
                 raise FogrefError(f"tolerances['{key}']: unknown metric '{metric}'{did_you_mean(metric, METRICS)} "
                                   f"(metrics: {', '.join(METRICS)})")
-            if tol is not None:
-                try:
-                    tol = float(tol)
-                except (TypeError, ValueError):
-                    raise FogrefError(f"tolerances['{key}']['{metric}']: {tol!r} is not a number "
-                                      "(finite, >= 0; None only reports the metric)") from None
-                if not (math.isfinite(tol) and tol >= 0):
-                    raise FogrefError(f"tolerances['{key}']['{metric}']: {tol} must be finite and >= 0")
+            if tol is not None:  # a number (not a bool), finite, >= 0: the one validator
+                tol = number(tol, f"tolerances['{key}']['{metric}']", source="api", lo=0.0)
             clean[metric] = tol
         k = (part, region or None)
         table[k] = {**table.get(k, {}), **clean} if region else {**table[(part, None)], **clean}
     return table
+
+
+def _short(x) -> str:
+    text = repr(x)
+    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def metric_verdict(metric: str, low: float, high: float, tol: float | None) -> str:

@@ -17,7 +17,7 @@ import inspect
 import json
 from typing import Any
 
-from fogref.errors import FogrefError, did_you_mean
+from fogref.errors import FogrefError, ParameterError, did_you_mean
 
 __all__ = ["build_model", "current_parameters", "parse_param_assignments"]
 
@@ -77,6 +77,8 @@ def _construct(cls: type, params: dict) -> Any:
     params_class = _params_class(cls, params)
     try:
         return cls(params_class(**params))
+    except ParameterError:  # names the parameter, its value and its range already
+        raise
     except (TypeError, ValueError, KeyError) as e:
         raise FogrefError(f"model '{_label(cls)}': cannot set parameters {sorted(params)}: {e}") from e
 

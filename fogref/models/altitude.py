@@ -40,13 +40,12 @@ relative depth below ``_FogEnd`` where the ray enters the power piece.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from fogref.errors import ParameterError
+from fogref import params as valid
 from fogref.models._num import dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
 
@@ -65,14 +64,12 @@ class AltitudeFogParams:
 
     def __post_init__(self) -> None:
         src = "<AltitudeFogParams>"
-        if not self._FogEnd > self._FogStart:
-            raise ParameterError(src, "_FogEnd", "must be greater than _FogStart")
-        if not (math.isfinite(self._FogPower) and self._FogPower >= 0):
-            raise ParameterError(src, "_FogPower", f"value {self._FogPower} must be >= 0")
-        c = tuple(float(x) for x in self._FogColor)
-        if len(c) != 4 or c[3] < 0:
-            raise ParameterError(src, "_FogColor", "expected (r, g, b, a) with a >= 0")
-        object.__setattr__(self, "_FogColor", c)
+        start = valid.number(self._FogStart, "_FogStart", source=src, unit="m")
+        end = valid.number(self._FogEnd, "_FogEnd", source=src, lo=start, lo_open=True, unit="m")
+        power = valid.number(self._FogPower, "_FogPower", source=src, lo=0.0)
+        c = valid.vector(self._FogColor, "_FogColor", source=src, n=4, lo=0.0)
+        for name, v in (("_FogStart", start), ("_FogEnd", end), ("_FogPower", power), ("_FogColor", c)):
+            object.__setattr__(self, name, v)
 
 
 def _integral(x: Any, k: Any, b: Any, s: Any, e: Any, p: Any, dt: Any) -> Any:

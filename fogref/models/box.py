@@ -31,8 +31,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from fogref import params as valid
 from fogref.errors import ParameterError
-from fogref.media import rgb
 from fogref.models._num import dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
 
@@ -57,17 +57,15 @@ class BoxFogParams:
 
     def __post_init__(self) -> None:
         src = "<BoxFogParams>"
-        lo = tuple(float(x) for x in self.box_min)
-        hi = tuple(float(x) for x in self.box_max)
-        if len(lo) != 3 or len(hi) != 3 or any(a >= b for a, b in zip(lo, hi)):
+        lo = valid.vector(self.box_min, "box_min", source=src, unit="m")
+        hi = valid.vector(self.box_max, "box_max", source=src, unit="m")
+        if any(a >= b for a, b in zip(lo, hi)):
             raise ParameterError(src, "box_min", f"need box_min < box_max per axis, got {lo}, {hi}")
-        if self.mode not in BOX_MODES:
-            raise ParameterError(src, "mode", f"expected one of {BOX_MODES}, got {self.mode!r}")
-        if not (math.isfinite(self.density) and self.density >= 0):
-            raise ParameterError(src, "density", f"value {self.density} must be >= 0")
+        valid.choice(self.mode, "mode", BOX_MODES, src)
+        object.__setattr__(self, "density", valid.number(self.density, "density", source=src, lo=0.0))
         object.__setattr__(self, "box_min", lo)
         object.__setattr__(self, "box_max", hi)
-        object.__setattr__(self, "fog_color", rgb(self.fog_color, "fog_color", src))
+        object.__setattr__(self, "fog_color", valid.rgb(self.fog_color, "fog_color", source=src, lo=0.0))
 
 
 def slab_chord(cam: Any, v: Any, lo: Any, hi: Any, dt: Any) -> Any:

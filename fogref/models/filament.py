@@ -33,8 +33,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from fogref import params as valid
 from fogref.errors import ParameterError
-from fogref.media import NP, rgb
+from fogref.media import NP
 from fogref.media.closed_form import phi
 from fogref.models._num import dtype_of, grey, split
 from fogref.models.base import FogResult, register
@@ -62,16 +63,22 @@ class FilamentFogParams:
     def __post_init__(self) -> None:
         src = "<FilamentFogParams>"
         for name in ("distance", "density", "heightFalloff"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
-                raise ParameterError(src, name, f"value {v} must be finite and >= 0")
-        if not 0 <= self.maximumOpacity <= 1:
-            raise ParameterError(src, "maximumOpacity", "outside [0, 1]")
-        object.__setattr__(self, "color", rgb(self.color, "color", src))
-        w = np.asarray(self.lightDirection, dtype=np.float64)
+            object.__setattr__(self, name, valid.number(getattr(self, name), name, source=src, lo=0.0))
+        object.__setattr__(self, "maximumOpacity",
+                           valid.number(self.maximumOpacity, "maximumOpacity", source=src, lo=0.0, hi=1.0))
+        object.__setattr__(self, "height", valid.number(self.height, "height", source=src, unit="m"))
+        if not (isinstance(self.cutOffDistance, float) and self.cutOffDistance == math.inf):  # inf: none
+            cut = valid.number(self.cutOffDistance, "cutOffDistance", source=src, lo=0.0, unit="m")
+            object.__setattr__(self, "cutOffDistance", cut)
+        for name in ("inScatteringStart", "inScatteringSize"):  # Filament: size < 0 turns it off
+            object.__setattr__(self, name, valid.number(getattr(self, name), name, source=src))
+        object.__setattr__(self, "color", valid.rgb(self.color, "color", source=src, lo=0.0))
+        w = np.asarray(valid.vector(self.lightDirection, "lightDirection", source=src), dtype=np.float64)
+        if not np.linalg.norm(w) > 0:
+            raise ParameterError(src, "lightDirection", "(0, 0, 0) has no direction")
         object.__setattr__(self, "lightDirection", tuple(float(x) for x in w / np.linalg.norm(w)))
-        if len(self.lightColorIntensity) != 4:
-            raise ParameterError(src, "lightColorIntensity", "expected (r, g, b, intensity)")
+        lci = valid.vector(self.lightColorIntensity, "lightColorIntensity", source=src, n=4, lo=0.0)
+        object.__setattr__(self, "lightColorIntensity", lci)
 
 
 @register("filament")

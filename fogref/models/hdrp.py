@@ -33,8 +33,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from fogref import params as valid
 from fogref.errors import ParameterError
-from fogref.media import NP, rgb
+from fogref.media import NP
 from fogref.media.closed_form import phi
 from fogref.models._num import dtype_of, grey, split
 from fogref.models.base import FogResult, register
@@ -63,13 +64,16 @@ class HDRPFogParams:
     maxFogDistance: float = 5000.0
 
     def __post_init__(self) -> None:
+        # Fog.cs: meanFreePath MinFloatParameter(400, 1), maxFogDistance MinFloatParameter(5000, 0),
+        # baseHeight/maximumHeight FloatParameter.  The mean free path's editor minimum of 1 m is
+        # not enforced: fogref's mapping of a dense medium gives less, and the model is exact there.
         src = "<HDRPFogParams>"
-        if not (math.isfinite(self.meanFreePath) and self.meanFreePath > 0):
-            raise ParameterError(src, "meanFreePath", f"value {self.meanFreePath} must be > 0")
-        if not self.maxFogDistance >= 0:
-            raise ParameterError(src, "maxFogDistance", "must be >= 0")
-        object.__setattr__(self, "albedo", rgb(self.albedo, "albedo", src))
-        object.__setattr__(self, "color", rgb(self.color, "color", src))
+        for name, lo, lo_open in (("meanFreePath", 0.0, True), ("maxFogDistance", 0.0, False),
+                                  ("baseHeight", -math.inf, False), ("maximumHeight", -math.inf, False)):
+            x = valid.number(getattr(self, name), name, source=src, lo=lo, lo_open=lo_open, unit="m")
+            object.__setattr__(self, name, x)
+        object.__setattr__(self, "albedo", valid.rgb(self.albedo, "albedo", source=src, lo=0.0))
+        object.__setattr__(self, "color", valid.rgb(self.color, "color", source=src, lo=0.0))
 
     def scale_height(self, dt: Any = np.float64) -> float:
         """H [m] as the CPU computes it."""

@@ -62,8 +62,7 @@ ENTRY_POINT_GROUP = "fogref.models"
 
 def _builtin_names() -> list[str]:
     # the built-in models register themselves on import (the same modules fogref.models imports)
-    from fogref.models import altitude, box, filament, hdrp, ue4, unity_builtin  # noqa: F401
-    from fogref.models import bevy, godot, threejs  # noqa: F401
+    from fogref.models import altitude, bevy, box, filament, godot, hdrp, threejs, ue4, unity_builtin  # noqa: F401  # noqa: F401
 
     return sorted(base._REGISTRY)
 
@@ -101,8 +100,12 @@ def check_protocol(obj: Any, source: str) -> Any:
     ...
     fogref.errors.FogrefError: my_mod:NoFog: NoFog is not a fog model: it has no evaluate(...) method (see docs/byo.md)
     """
-    label = getattr(obj, "__name__", type(obj).__name__)
-    evaluate = getattr(obj, "evaluate", None)
+    try:
+        label = getattr(obj, "__name__", type(obj).__name__)
+        evaluate = getattr(obj, "evaluate", None)
+    except Exception as e:  # an object whose attribute lookup raises (a lazy proxy)
+        raise FogrefError(f"{source}: looking up its evaluate() failed: {type(e).__name__}: "
+                          f"{_one_line(e)}") from e
     if not callable(evaluate):
         raise FogrefError(f"{source}: {label} is not a fog model: it has no evaluate(camera, positions, "
                           f'precision="float32") method (see docs/byo.md)')
@@ -140,12 +143,26 @@ def _load_spec(spec: str) -> Any:
         raise FogrefError(f"model '{spec}': importing '{module_name}' failed: {type(e).__name__}: {e}") from e
     obj = module
     for part in attr.split("."):
-        if not hasattr(obj, part):
-            names = [n for n in dir(obj) if not n.startswith("_")]
+        try:
+            obj = getattr(obj, part)
+        except AttributeError:
+            try:
+                names = [n for n in dir(obj) if not n.startswith("_")]
+            except Exception:  # a module whose __dir__ raises: no hint
+                names = []
             hint = did_you_mean(part, names)
-            raise FogrefError(f"model '{spec}': module '{module_name}' has no attribute '{attr}'{hint}")
-        obj = getattr(obj, part)
+            raise FogrefError(f"model '{spec}': module '{module_name}' has no attribute '{attr}'{hint}") \
+                from None
+        except Exception as e:  # a module-level __getattr__ (lazy import) that raised
+            raise FogrefError(f"model '{spec}': looking up '{attr}' in module '{module_name}' failed: "
+                              f"{type(e).__name__}: {_one_line(e)}") from e
     return check_protocol(obj, spec)
+
+
+def _one_line(e: BaseException) -> str:
+    """The first line of an exception's message (an error is one line on the command line)."""
+    text = str(e).strip()
+    return text.splitlines()[0] if text else "(no message)"
 
 
 def resolve_model(spec: str) -> Any:

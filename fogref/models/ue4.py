@@ -51,10 +51,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from fogref.errors import ParameterError
-from fogref.media import NP, rgb
+from fogref.media import NP
 from fogref.media.closed_form import phi
 from fogref.models._num import LN2, dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
+from fogref.params import number, vector
+from fogref.params import rgb as valid_rgb
 
 if TYPE_CHECKING:
     from fogref.media.medium import FogMedium
@@ -86,6 +88,12 @@ class SecondFogData:
     FogDensity: float = 0.0          #: editor density (x 1/1000 per cm)
     FogHeightFalloff: float = 0.2    #: editor falloff (x 1/1000 per cm)
     FogHeightOffset: float = 0.0     #: cm, relative to the component's Z
+
+    def __post_init__(self):
+        src = "<UE4FogParams.SecondFogData>"
+        for name, lo in (("FogDensity", 0.0), ("FogHeightFalloff", 0.0), ("FogHeightOffset", -math.inf)):
+            unit = "cm" if name == "FogHeightOffset" else ""
+            object.__setattr__(self, name, number(getattr(self, name), name, source=src, lo=lo, unit=unit))
 
 
 @dataclass(frozen=True)
@@ -120,24 +128,68 @@ class UE4FogParams:
     SunLuminance: float = 1.0
 
     def __post_init__(self) -> None:
-        for name in ("FogDensity", "FogHeightFalloff", "FogMaxOpacity", "StartDistance",
-                     "FogCutoffDistance", "EndDistance", "DirectionalInscatteringStartDistance"):
-            v = float(getattr(self, name))
-            if not math.isfinite(v) or v < 0:
-                raise ParameterError("<UE4FogParams>", name, f"value {v} must be finite and >= 0")
-        if not 0 <= self.FogMaxOpacity <= 1:
-            raise ParameterError("<UE4FogParams>", "FogMaxOpacity", f"value {self.FogMaxOpacity} outside [0, 1]")
-        object.__setattr__(self, "FogInscatteringColor", rgb(self.FogInscatteringColor, "FogInscatteringColor"))
-        object.__setattr__(self, "DirectionalInscatteringColor",
-                           rgb(self.DirectionalInscatteringColor, "DirectionalInscatteringColor"))
-        if self.InscatteringLightDirection is not None:
-            w = np.asarray(self.InscatteringLightDirection, dtype=np.float64)
-            object.__setattr__(self, "InscatteringLightDirection", tuple(float(x) for x in w / np.linalg.norm(w)))
+        _validate(self)
 
     def with_sun(self, direction_world: Any, luminance: float = 1.0) -> "UE4FogParams":
         """Copy with the sun given in **fogref's** frame (y-up, toward the sun)."""
         return replace(self, InscatteringLightDirection=direction_to_unreal(direction_world),
                        SunLuminance=float(luminance))
+
+
+#: The ranges fogref accepts, by parameter: ``(lo, hi, unit)``.  Where Unreal has a range it is
+#: cited: ``ExponentialHeightFogComponent.h`` gives only editor slider ranges (``UIMin``/``UIMax``:
+#: FogDensity [0, 0.05], FogHeightFalloff [0.001, 2], FogMaxOpacity [0, 1], StartDistance
+#: [0, 5000], FogCutoffDistance [100000, 20000000], DirectionalInscatteringExponent [2, 64]),
+#: which a typed value may leave.  ``FogRendering.cpp`` clamps the exponent to
+#: ``[0.000001, 1000]`` on the CPU: a large exponent is a narrow cone the engine clamps (kept,
+#: and clamped as the engine does), but one <= 0 is no cone at all (the clamp would turn -5
+#: into 1e-6, a uniform glow the user did not ask for) and is refused.  Densities, distances
+#: and colours are >= 0 (negative ones have no physical meaning and the shader's exp2 would
+#: amplify instead of attenuate); FogMaxOpacity is a fraction in [0, 1] (the shader's
+#: ``1 - FogMaxOpacity`` is a minimum transmittance); SunLuminance (the light's luminance,
+#: fogref's name) is >= 0; FogHeight is any finite height [cm].
+RANGES = {
+    "FogDensity": (0.0, math.inf, ""),
+    "FogHeightFalloff": (0.0, math.inf, ""),
+    "FogHeight": (-math.inf, math.inf, "cm"),
+    "FogMaxOpacity": (0.0, 1.0, ""),
+    "StartDistance": (0.0, math.inf, "cm"),
+    "FogCutoffDistance": (0.0, math.inf, "cm"),
+    "EndDistance": (0.0, math.inf, "cm"),
+    "DirectionalInscatteringExponent": (0.0, math.inf, ""),
+    "DirectionalInscatteringStartDistance": (0.0, math.inf, "cm"),
+    "SunLuminance": (0.0, math.inf, ""),
+}
+#: Parameters whose lower end is open (must be > lo).
+OPEN_LOW = ("DirectionalInscatteringExponent",)
+#: Colours: each of R, G, B finite and >= 0 (linear, the scene's radiance units).
+COLOURS = ("FogInscatteringColor", "DirectionalInscatteringColor")
+
+
+def _validate(p: "UE4FogParams") -> None:
+    """Check and normalise every field of ``p`` through :mod:`fogref.params` (:data:`RANGES`)."""
+    src = "<UE4FogParams>"
+    for name, (lo, hi, unit) in RANGES.items():
+        x = number(getattr(p, name), name, source=src, lo=lo, hi=hi, unit=unit, lo_open=name in OPEN_LOW)
+        object.__setattr__(p, name, x)
+    for name in COLOURS:
+        object.__setattr__(p, name, valid_rgb(getattr(p, name), name, source=src, lo=0.0))
+    if isinstance(p.SecondFogData, dict):
+        try:
+            object.__setattr__(p, "SecondFogData", SecondFogData(**p.SecondFogData))
+        except TypeError as e:
+            raise ParameterError(src, "SecondFogData", f"{e} (fields: FogDensity, FogHeightFalloff, "
+                                 "FogHeightOffset)") from None
+    if not isinstance(p.SecondFogData, SecondFogData):
+        raise ParameterError(src, "SecondFogData",
+                             f"expected SecondFogData or a dict, got {p.SecondFogData!r}")
+    if p.InscatteringLightDirection is not None:
+        w = vector(p.InscatteringLightDirection, "InscatteringLightDirection", source=src)
+        norm = float(np.linalg.norm(w))
+        if not norm > 0:
+            raise ParameterError(src, "InscatteringLightDirection", "(0, 0, 0) has no direction: give a "
+                                 "non-zero vector toward the sun, or None for no sun")
+        object.__setattr__(p, "InscatteringLightDirection", tuple(float(x) for x in np.asarray(w) / norm))
 
 
 def fog_constants(p: UE4FogParams, camera_z_cm: float, dt: Any = np.float32) -> dict:

@@ -35,8 +35,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from fogref import params as valid
 from fogref.errors import ParameterError
-from fogref.media import rgb
 from fogref.models._num import LN2, dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
 
@@ -69,16 +69,18 @@ class UnityFogParams:
 
     def __post_init__(self) -> None:
         src = "<UnityFogParams>"
-        if self.fogMode not in MODES:
-            raise ParameterError(src, "fogMode", f"expected one of {MODES}, got {self.fogMode!r}")
-        if self.fog_coordinate not in ("depth", "distance"):
-            raise ParameterError(src, "fog_coordinate", f"expected 'depth' or 'distance', got {self.fog_coordinate!r}")
-        if not (math.isfinite(self.fogDensity) and self.fogDensity >= 0):
-            raise ParameterError(src, "fogDensity", f"value {self.fogDensity} must be >= 0")
+        valid.choice(self.fogMode, "fogMode", MODES, src)
+        valid.choice(self.fog_coordinate, "fog_coordinate", ("depth", "distance"), src)
+        density = valid.number(self.fogDensity, "fogDensity", source=src, lo=0.0)
+        object.__setattr__(self, "fogDensity", density)
+        for name in ("fogStartDistance", "fogEndDistance"):
+            object.__setattr__(self, name, valid.number(getattr(self, name), name, source=src, unit="m"))
         if self.fogMode == "linear" and not self.fogEndDistance > self.fogStartDistance:
             raise ParameterError(src, "fogEndDistance", "must be greater than fogStartDistance")
-        object.__setattr__(self, "fogColor", rgb(self.fogColor, "fogColor", src))
-        f = np.asarray(self.camera_forward, dtype=np.float64)
+        object.__setattr__(self, "fogColor", valid.rgb(self.fogColor, "fogColor", source=src, lo=0.0))
+        f = np.asarray(valid.vector(self.camera_forward, "camera_forward", source=src), dtype=np.float64)
+        if not np.linalg.norm(f) > 0:
+            raise ParameterError(src, "camera_forward", "(0, 0, 0) has no direction")
         object.__setattr__(self, "camera_forward", tuple(float(x) for x in f / np.linalg.norm(f)))
 
     def fog_params(self, dt: Any = np.float32) -> tuple:
