@@ -23,39 +23,48 @@ from fogref._version import __version__
 from fogref.errors import FogrefError, ParameterError
 from fogref.render.cache import truth_path
 from fogref.render.render import file_sha256
-from fogref.render.scene_defaults import parse_scene, resolve, substitute
+from fogref.render.scene_defaults import declared, parse_scene, resolve, substitute
 from fogref.study.sweep.spec import MAX_CONFIGS, SweepSpec, as_str, design_size
 
 __all__ = ["build_configs", "design_points", "scene_input_files"]
 
 
 def scene_input_files(scene_path, overrides: dict | None = None) -> list[Path]:
-    """The files a scene loads: every ``filename`` attribute (``$defaults`` substituted with
-    ``overrides``) of the XML, relative to the scene's folder, and those of included XML, recursively.
+    """The files a scene loads, in file order: every ``<string name="filename" value="...">`` (meshes,
+    envmaps, textures) and ``<include filename="...">`` of the XML, ``$defaults`` substituted with
+    ``overrides``, relative to the scene's folder (else the working directory), and those of included
+    XML, recursively.
 
     A minimal reader for the sweep's configuration id until :mod:`fogref.render.inputs` lands.
     Raises FogrefError naming the scene and the file when a loaded file does not exist.
     """
     scene_path = Path(scene_path)
     found: list[Path] = []
-    todo = [(scene_path, dict(overrides or {}))]
+    todo: list = [(scene_path, None)]
     while todo:
-        xml, over = todo.pop()
+        xml, parent = todo.pop(0)
         root = parse_scene(xml)
-        defaults = resolve(root, over, source=xml)
+        # an included file sees its own defaults and the including scene's values
+        defaults = resolve(root, overrides, source=xml) if parent is None else {**declared(root), **parent}
         for el in root.iter():
-            name = el.get("filename")
+            if el.tag == "include":
+                name = el.get("filename")
+            elif el.tag == "string" and el.get("name") == "filename":
+                name = el.get("value")
+            else:
+                continue
             if name is None:
                 continue
             f = Path(substitute(name, defaults))
-            f = f if f.is_absolute() else xml.parent / f
+            if not f.is_absolute():
+                f = xml.parent / f if (xml.parent / f).is_file() or not f.is_file() else f
             if not f.is_file():
-                raise FogrefError(f"{xml}: <{el.tag} filename=\"{name}\">: no such file {f}")
-            if f.resolve() in (q.resolve() for q in found):
+                raise FogrefError(f"{xml}: <{el.tag}> '{name}': no such file {f}")
+            if any(f.resolve() == q.resolve() for q in found):
                 continue
             found.append(f)
-            if el.tag == "include" or f.suffix.lower() == ".xml":
-                todo.append((f, {}))
+            if el.tag == "include":
+                todo.append((f, defaults))
     return found
 
 
