@@ -40,8 +40,9 @@ __all__ = ["WORKER_LOG", "SweepInterrupted", "run_sweep"]
 
 #: The file in the output folder that receives the LocalCluster workers' own output (tracebacks at Ctrl-C).
 WORKER_LOG = "sweep-workers.log"
-#: A Dask scheduler address: ``tcp://HOST:PORT`` (or another Dask protocol), ``HOST:PORT``.
-_ADDRESS = re.compile(r"^(?:(tcp|tls|inproc|ucx|ws|wss)://)?[A-Za-z0-9_.\-\[\]:]+:\d{1,5}$")
+#: A Dask scheduler address: ``tcp://HOST:PORT`` (or another Dask protocol: tls, inproc, ucx, ws, wss),
+#: or ``HOST:PORT``.
+_ADDRESS = re.compile(r"^(?:(?:tcp|tls|inproc|ucx|ws|wss)://\S+|[A-Za-z0-9_.\-\[\]:]+:\d{1,5})$")
 _SOURCE = "fogref sweep"
 
 
