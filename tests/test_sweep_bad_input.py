@@ -22,14 +22,16 @@ from fogref.study import sweep as S
 ROOT = Path(__file__).resolve().parents[1]
 VALLEY = ROOT / "scenes" / "valley.xml"
 MODELS = '[[models]]\nname = "ue4"\n'
-TINY = '[render]\nspp = 1\noverrides = { res = 8, resy = 4, max_depth = 2 }\n'
+TINY = "[render]\nspp = 1\noverrides = { res = 8, resy = 4, max_depth = 2 }\n"
 
 
 def _toml(folder: Path, body: str, scene: Path = VALLEY, name: str = "SWEEP.toml") -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     p = folder / name
-    p.write_text(f'[sweep]\nname = "t"\nscenes = ["{scene.as_posix()}"]\ncache = "{(folder / "cache").as_posix()}"\n'
-                 + body)
+    p.write_text(
+        f'[sweep]\nname = "t"\nscenes = ["{scene.as_posix()}"]\ncache = "{(folder / "cache").as_posix()}"\n'
+        + body
+    )
     return p
 
 
@@ -47,81 +49,130 @@ def _refused(p: Path, *needles: str, cls=FogrefError) -> str:
 # ---------------------------------------------------------------- the TOML's values (no Mitsuba)
 
 
-@pytest.mark.parametrize("body, needles", [
-    # duplicate values: two configurations would be the same render
-    (MODELS + "[parameters.sun_elevation]\nvalues = [5, 20, 5]\n", ("[parameters.sun_elevation]", "5", "twice")),
-    (MODELS + '[design]\nkind = "random"\nn = 4\n[parameters.g]\nvalues = [0.1, 0.1]\n', ("twice",)),
-    (MODELS + '[design]\nkind = "list"\n[parameters.g]\nvalues = [0.1, 0.1]\n'
-     '[parameters.sun_elevation]\nvalues = [5, 5]\n', ("[design]", "twice")),
-    (MODELS + "[parameters.g]\nscale = 0\nvalues = [0.1, 0.2]\n", ("'scale'", "0")),
-    # pixel_filter
-    (MODELS + '[render]\npixel_filter = "gauss"\n', ("[render]", "'pixel_filter'", "'gauss'", "centre, box")),
-    (MODELS + '[render]\npixel_filter = "cntre"\n', ("did you mean 'centre'",)),
-    # wrong value types
-    (MODELS + '[design]\nkind = "random"\nn = true\n[parameters.g]\nrange = [0.1, 0.5]\n', ("[design]", "'n'", "True")),
-    (MODELS + '[design]\nkind = "lhs"\nn = "4"\n[parameters.g]\nrange = [0.1, 0.5]\n', ("'n'", "'4'", "without quotes")),
-    (MODELS + '[design]\nkind = "lhs"\nn = 4\nseed = "x"\n[parameters.g]\nrange = [0.1, 0.5]\n', ("[design]", "'seed'", "'x'")),
-    (MODELS + '[render]\nseed = "x"\n', ("[render]", "'seed'", "'x'")),
-    (MODELS + "[render]\nspp = 1.5\n", ("'spp'", "1.5", "[1, 1048576]")),
-    (MODELS + "[render]\nspp = true\n", ("'spp'", "True")),
-    (MODELS + "[execution]\nretries = -1\n", ("[execution]", "'retries'", "[0, 100]")),
-    (MODELS + '[outputs]\nplots = "yes"\n', ("[outputs]", "'plots'", "true or false")),
-    (MODELS + '[parameters.g]\nrange = ["a", 1]\nnum = 2\n', ("'range'", "'a'")),
-    (MODELS + '[parameters.g]\nrange = [0.1, 0.5]\nnum = true\n', ("'num'",)),
-    (MODELS + '[parameters.g]\nrange = [0.1, 0.5]\nlog = "yes"\n', ("'log'",)),
-    (MODELS + '[parameters."ue4.FogDensity"]\nvalues = ["thick", 0.02]\n', ("'values'", "'thick'")),
-    ('[[models]]\nname = "ue4"\nfrom_scene = "yes"\n', ("'from_scene'",)),
-    ('[[models]]\nname = "ue4"\nparams = { FogDensity = "x" }\n', ("'FogDensity'", "'x'")),
-    # an unknown model parameter, swept or fixed, with did-you-mean
-    (MODELS + '[parameters."ue4.Bogus"]\nvalues = [1, 2]\n', ("[parameters.ue4.Bogus]", "no parameter 'Bogus'",
-                                                             "FogDensity")),
-    (MODELS + '[parameters."ue4.FogDensty"]\nvalues = [1, 2]\n', ("did you mean 'FogDensity'",)),
-    ('[[models]]\nname = "ue4"\nparams = { Bogus = 1 }\n', ("'ue4'", "no parameter 'Bogus'")),
-    (MODELS + '[parameters.sun_elevaton]\nvalues = [1, 2]\n', ("did you mean 'sun_elevation'",)),
-    # values the scene refuses: resolution, and the medium's own physical ranges
-    (MODELS + "[render]\noverrides = { res = 0 }\n", ("[render]", "res", "0")),
-    (MODELS + "[parameters.res]\nvalues = [16, 0]\n", ("[parameters.res]", "value 0", "res")),
-    (MODELS + "[parameters.sigma_t]\nvalues = [1e9]\n", ("[parameters.sigma_t]", "sigma_t", "100")),
-    (MODELS + "[parameters.g]\nvalues = [0.5, 1.5]\n", ("[parameters.g]", "value 1.5", "0.999")),
-    (MODELS + '[design]\nkind = "lhs"\nn = 4\n[parameters.albedo]\nrange = [0.5, 2]\n', ("[parameters.albedo]",
-                                                                                        "albedo")),
-    (MODELS + '[parameters.sun_elevation]\nvalues = ["high", 5]\n', ("[parameters.sun_elevation]", "'high'")),
-    (MODELS + "[parameters.sun_elevation]\nvalues = [true, 5]\n", ("[parameters.sun_elevation]",)),
-    (MODELS + "[parameters.FogHeightFalloff]\ntarget = \"falloff\"\nscale = 1e6\nvalues = [0.1, 0.2]\n",
-     ("[parameters.FogHeightFalloff]", "falloff")),
-    # two labels of one target, and a target both swept and fixed
-    (MODELS + "[parameters.g]\nvalues = [0.3, 0.5]\n[parameters.phase]\ntarget = \"g\"\nvalues = [0.8]\n",
-     ("[parameters.phase]", "'g' is also swept by [parameters.g]")),
-    (MODELS + '[parameters."ue4.FogDensity"]\nvalues = [0.01]\n[parameters.density_again]\n'
-     'target = "ue4.FogDensity"\nvalues = [0.02]\n', ("also swept",)),
-    (MODELS + "[render]\noverrides = { g = 0.5 }\n[parameters.g]\nvalues = [0.3, 0.8]\n",
-     ("[parameters.g]", "fixed in [render].overrides")),
-    ('[[models]]\nname = "ue4"\nparams = { FogDensity = 0.02 }\n[parameters."ue4.FogDensity"]\nvalues = [0.01]\n',
-     ("fixed in the [[models]] 'ue4' params",)),
-    # the table must stay inside the output folder
-    (MODELS + '[outputs]\ntable = "../escaped"\n', ("[outputs]", "'table'", "leaves the output folder")),
-    (MODELS + '[outputs]\ntable = "/tmp/escaped"\n', ("leaves the output folder",)),
-    (MODELS + '[outputs]\ntable = "sub/../../escaped"\n', ("leaves the output folder",)),
-])
+@pytest.mark.parametrize(
+    "body, needles",
+    [
+        # duplicate values: two configurations would be the same render
+        (
+            MODELS + "[parameters.sun_elevation]\nvalues = [5, 20, 5]\n",
+            ("[parameters.sun_elevation]", "5", "twice"),
+        ),
+        (MODELS + '[design]\nkind = "random"\nn = 4\n[parameters.g]\nvalues = [0.1, 0.1]\n', ("twice",)),
+        (
+            MODELS + '[design]\nkind = "list"\n[parameters.g]\nvalues = [0.1, 0.1]\n'
+            "[parameters.sun_elevation]\nvalues = [5, 5]\n",
+            ("[design]", "twice"),
+        ),
+        (MODELS + "[parameters.g]\nscale = 0\nvalues = [0.1, 0.2]\n", ("'scale'", "0")),
+        # pixel_filter
+        (
+            MODELS + '[render]\npixel_filter = "gauss"\n',
+            ("[render]", "'pixel_filter'", "'gauss'", "centre, box"),
+        ),
+        (MODELS + '[render]\npixel_filter = "cntre"\n', ("did you mean 'centre'",)),
+        # wrong value types
+        (
+            MODELS + '[design]\nkind = "random"\nn = true\n[parameters.g]\nrange = [0.1, 0.5]\n',
+            ("[design]", "'n'", "True"),
+        ),
+        (
+            MODELS + '[design]\nkind = "lhs"\nn = "4"\n[parameters.g]\nrange = [0.1, 0.5]\n',
+            ("'n'", "'4'", "without quotes"),
+        ),
+        (
+            MODELS + '[design]\nkind = "lhs"\nn = 4\nseed = "x"\n[parameters.g]\nrange = [0.1, 0.5]\n',
+            ("[design]", "'seed'", "'x'"),
+        ),
+        (MODELS + '[render]\nseed = "x"\n', ("[render]", "'seed'", "'x'")),
+        (MODELS + "[render]\nspp = 1.5\n", ("'spp'", "1.5", "[1, 1048576]")),
+        (MODELS + "[render]\nspp = true\n", ("'spp'", "True")),
+        (MODELS + "[execution]\nretries = -1\n", ("[execution]", "'retries'", "[0, 100]")),
+        (MODELS + '[outputs]\nplots = "yes"\n', ("[outputs]", "'plots'", "true or false")),
+        (MODELS + '[parameters.g]\nrange = ["a", 1]\nnum = 2\n', ("'range'", "'a'")),
+        (MODELS + "[parameters.g]\nrange = [0.1, 0.5]\nnum = true\n", ("'num'",)),
+        (MODELS + '[parameters.g]\nrange = [0.1, 0.5]\nlog = "yes"\n', ("'log'",)),
+        (MODELS + '[parameters."ue4.FogDensity"]\nvalues = ["thick", 0.02]\n', ("'values'", "'thick'")),
+        ('[[models]]\nname = "ue4"\nfrom_scene = "yes"\n', ("'from_scene'",)),
+        ('[[models]]\nname = "ue4"\nparams = { FogDensity = "x" }\n', ("'FogDensity'", "'x'")),
+        # an unknown model parameter, swept or fixed, with did-you-mean
+        (
+            MODELS + '[parameters."ue4.Bogus"]\nvalues = [1, 2]\n',
+            ("[parameters.ue4.Bogus]", "no parameter 'Bogus'", "FogDensity"),
+        ),
+        (MODELS + '[parameters."ue4.FogDensty"]\nvalues = [1, 2]\n', ("did you mean 'FogDensity'",)),
+        ('[[models]]\nname = "ue4"\nparams = { Bogus = 1 }\n', ("'ue4'", "no parameter 'Bogus'")),
+        (MODELS + "[parameters.sun_elevaton]\nvalues = [1, 2]\n", ("did you mean 'sun_elevation'",)),
+        # values the scene refuses: resolution, and the medium's own physical ranges
+        (MODELS + "[render]\noverrides = { res = 0 }\n", ("[render]", "res", "0")),
+        (MODELS + "[parameters.res]\nvalues = [16, 0]\n", ("[parameters.res]", "value 0", "res")),
+        (MODELS + "[parameters.sigma_t]\nvalues = [1e9]\n", ("[parameters.sigma_t]", "sigma_t", "100")),
+        (MODELS + "[parameters.g]\nvalues = [0.5, 1.5]\n", ("[parameters.g]", "value 1.5", "0.999")),
+        (
+            MODELS + '[design]\nkind = "lhs"\nn = 4\n[parameters.albedo]\nrange = [0.5, 2]\n',
+            ("[parameters.albedo]", "albedo"),
+        ),
+        (
+            MODELS + '[parameters.sun_elevation]\nvalues = ["high", 5]\n',
+            ("[parameters.sun_elevation]", "'high'"),
+        ),
+        (MODELS + "[parameters.sun_elevation]\nvalues = [true, 5]\n", ("[parameters.sun_elevation]",)),
+        (
+            MODELS + '[parameters.FogHeightFalloff]\ntarget = "falloff"\nscale = 1e6\nvalues = [0.1, 0.2]\n',
+            ("[parameters.FogHeightFalloff]", "falloff"),
+        ),
+        # two labels of one target, and a target both swept and fixed
+        (
+            MODELS
+            + '[parameters.g]\nvalues = [0.3, 0.5]\n[parameters.phase]\ntarget = "g"\nvalues = [0.8]\n',
+            ("[parameters.phase]", "'g' is also swept by [parameters.g]"),
+        ),
+        (
+            MODELS + '[parameters."ue4.FogDensity"]\nvalues = [0.01]\n[parameters.density_again]\n'
+            'target = "ue4.FogDensity"\nvalues = [0.02]\n',
+            ("also swept",),
+        ),
+        (
+            MODELS + "[render]\noverrides = { g = 0.5 }\n[parameters.g]\nvalues = [0.3, 0.8]\n",
+            ("[parameters.g]", "fixed in [render].overrides"),
+        ),
+        (
+            '[[models]]\nname = "ue4"\nparams = { FogDensity = 0.02 }\n'
+            '[parameters."ue4.FogDensity"]\nvalues = [0.01]\n',
+            ("fixed in the [[models]] 'ue4' params",),
+        ),
+        # the table must stay inside the output folder
+        (MODELS + '[outputs]\ntable = "../escaped"\n', ("[outputs]", "'table'", "leaves the output folder")),
+        (MODELS + '[outputs]\ntable = "/tmp/escaped"\n', ("leaves the output folder",)),
+        (MODELS + '[outputs]\ntable = "sub/../../escaped"\n', ("leaves the output folder",)),
+    ],
+)
 def test_bad_sweep_values_are_one_line_errors(tmp_path, body, needles):
     _refused(_toml(tmp_path, body), *needles)
 
 
 def test_table_in_a_subfolder_is_fine(tmp_path):
-    assert S.load_sweep(_toml(tmp_path, MODELS + '[outputs]\ntable = "tables/results"\n')).table == "tables/results"
+    assert (
+        S.load_sweep(_toml(tmp_path, MODELS + '[outputs]\ntable = "tables/results"\n')).table
+        == "tables/results"
+    )
 
 
 def test_a_repeated_scene_is_refused(tmp_path):
     p = _toml(tmp_path, MODELS)
-    p.write_text(p.read_text().replace(f'scenes = ["{VALLEY.as_posix()}"]',
-                                       f'scenes = ["{VALLEY.as_posix()}", "{VALLEY.as_posix()}"]'))
+    p.write_text(
+        p.read_text().replace(
+            f'scenes = ["{VALLEY.as_posix()}"]', f'scenes = ["{VALLEY.as_posix()}", "{VALLEY.as_posix()}"]'
+        )
+    )
     _refused(p, "'scenes'", "twice")
 
 
 def test_two_labels_of_one_default_never_record_values_the_render_did_not_use(tmp_path):
     """Issue 17: the table said g = 0.8 and g = 0.3 while both configurations rendered g = 0.5."""
-    body = (MODELS + '[design]\nkind = "list"\n[parameters.g]\nvalues = [0.8, 0.3]\n'
-            '[parameters.anisotropy]\ntarget = "g"\nvalues = [0.5, 0.5]\n')
+    body = (
+        MODELS + '[design]\nkind = "list"\n[parameters.g]\nvalues = [0.8, 0.3]\n'
+        '[parameters.anisotropy]\ntarget = "g"\nvalues = [0.5, 0.5]\n'
+    )
     _refused(_toml(tmp_path, body), "[parameters.anisotropy]", "'g' is also swept")
 
 
@@ -130,12 +181,19 @@ def test_two_labels_of_one_default_never_record_values_the_render_did_not_use(tm
 
 def test_a_huge_grid_is_refused_with_its_size_and_the_limit_before_it_is_built(tmp_path):
     vals = "[" + ", ".join(str(x) for x in range(1, 254)) + "]"
-    body = MODELS + "".join(f'[parameters."ue4.{k}"]\nvalues = {vals}\n'
-                            for k in ("StartDistance", "FogCutoffDistance", "EndDistance",
-                                      "DirectionalInscatteringStartDistance"))
+    body = MODELS + "".join(
+        f'[parameters."ue4.{k}"]\nvalues = {vals}\n'
+        for k in ("StartDistance", "FogCutoffDistance", "EndDistance", "DirectionalInscatteringStartDistance")
+    )
     t0 = time.perf_counter()
-    msg = _refused(_toml(tmp_path, body), "[design]", "4.097e+09 configurations", "limit is 100000",
-                   "max_configs", cls=ParameterError)
+    msg = _refused(
+        _toml(tmp_path, body),
+        "[design]",
+        "4.097e+09 configurations",
+        "limit is 100000",
+        "max_configs",
+        cls=ParameterError,
+    )
     assert time.perf_counter() - t0 < 30, msg
 
 
@@ -155,7 +213,9 @@ def _scene_with_mesh(folder: Path) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "box.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
     text = VALLEY.read_text().replace(
-        "</scene>", '    <shape type="obj"><string name="filename" value="box.obj"/><ref id="rock"/></shape>\n</scene>')
+        "</scene>",
+        '    <shape type="obj"><string name="filename" value="box.obj"/><ref id="rock"/></shape>\n</scene>',
+    )
     (folder / "scene.xml").write_text(text)
     return folder / "scene.xml"
 
@@ -188,7 +248,8 @@ def _done(p: Path) -> list:
     (Path(spec.out) / "configs").mkdir(parents=True, exist_ok=True)
     for c in cfgs:
         (Path(spec.out) / "configs" / f"{c['id']}.json").write_text(
-            json.dumps({"id": c["id"], "status": "ok", "provenance": {}, "rows": []}))
+            json.dumps({"id": c["id"], "status": "ok", "provenance": {}, "rows": []})
+        )
     return cfgs
 
 
@@ -219,8 +280,9 @@ def test_a_plot_may_not_replace_a_texture_the_scene_loads(tmp_path):
     link = tmp_path / "tex.png"
     link.symlink_to(tex)  # through a symlink: resolved paths are compared
     text = VALLEY.read_text().replace(
-        "</scene>", '    <texture type="bitmap" id="t"><string name="filename" value="tex.png"/></texture>\n'
-                    "</scene>")
+        "</scene>",
+        '    <texture type="bitmap" id="t"><string name="filename" value="tex.png"/></texture>\n</scene>',
+    )
     (tmp_path / "scene.xml").write_text(text)
     p = _toml(tmp_path, MODELS + TINY + "[parameters.g]\nvalues = [0.3]\n", scene=tmp_path / "scene.xml")
     _done(p)
@@ -232,13 +294,16 @@ def test_a_plot_may_not_replace_a_texture_the_scene_loads(tmp_path):
 # ---------------------------------------------------------------- the command's own options
 
 
-@pytest.mark.parametrize("kw, needle", [
-    ({"scheduler": "garbage"}, "'--scheduler': 'garbage' is not a Dask scheduler address"),
-    ({"scheduler": ""}, "'--scheduler'"),
-    ({"n_workers": 0}, "'--workers': 0 is outside [1, 4096]"),
-    ({"n_workers": -1}, "'--workers': -1 is outside"),
-    ({"drjit_threads": -1}, "'--drjit-threads': -1 is outside"),
-])
+@pytest.mark.parametrize(
+    "kw, needle",
+    [
+        ({"scheduler": "garbage"}, "'--scheduler': 'garbage' is not a Dask scheduler address"),
+        ({"scheduler": ""}, "'--scheduler'"),
+        ({"n_workers": 0}, "'--workers': 0 is outside [1, 4096]"),
+        ({"n_workers": -1}, "'--workers': -1 is outside"),
+        ({"drjit_threads": -1}, "'--drjit-threads': -1 is outside"),
+    ],
+)
 def test_bad_options_fail_in_one_line_before_any_work(tmp_path, kw, needle):
     p = _toml(tmp_path, MODELS + TINY)
     with pytest.raises(ParameterError) as e:
@@ -255,13 +320,20 @@ def inprocess_cluster():
     distributed = pytest.importorskip("dask.distributed")
     import logging
 
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None,
-                                  silence_logs=logging.CRITICAL) as c:
+    with distributed.LocalCluster(
+        n_workers=1,
+        threads_per_worker=1,
+        processes=False,
+        dashboard_address=None,
+        silence_logs=logging.CRITICAL,
+    ) as c:
         yield c
 
 
 @pytest.mark.render
-def test_malformed_result_files_are_set_aside_with_a_warning_and_run_again(tmp_path, inprocess_cluster, capsys):
+def test_malformed_result_files_are_set_aside_with_a_warning_and_run_again(
+    tmp_path, inprocess_cluster, capsys
+):
     p = _toml(tmp_path, MODELS + TINY + "[parameters.g]\nvalues = [0.3, 0.6]\n[outputs]\nplots = false\n")
     a, b = S.build_configs(S.load_sweep(p))
     cdir = tmp_path / "configs"
@@ -293,14 +365,23 @@ _CTRL_C = textwrap.dedent("""
 
 @pytest.mark.render
 def test_ctrl_c_stops_the_local_cluster_in_one_line_and_logs_the_workers(tmp_path):
-    body = (MODELS + '[render]\nspp = 1\noverrides = { res = 16, resy = 9, max_depth = 2 }\n'
-            "[parameters.sun_elevation]\nvalues = [" + ", ".join(str(x) for x in range(5, 45)) + "]\n"
-            "[outputs]\nplots = false\n")
+    body = (
+        MODELS + "[render]\nspp = 1\noverrides = { res = 16, resy = 9, max_depth = 2 }\n"
+        "[parameters.sun_elevation]\nvalues = [" + ", ".join(str(x) for x in range(5, 45)) + "]\n"
+        "[outputs]\nplots = false\n"
+    )
     p = _toml(tmp_path, body)
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    proc = subprocess.Popen([sys.executable, "-c", _CTRL_C, str(p)], cwd=tmp_path, env=env, text=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
-    log = tmp_path / S.run.WORKER_LOG
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _CTRL_C, str(p)],
+        cwd=tmp_path,
+        env=env,
+        text=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        start_new_session=True,
+    )
+    log = tmp_path / "sweep-workers.log"
     deadline = time.time() + 240
     while time.time() < deadline and proc.poll() is None and not list((tmp_path / "configs").glob("*.json")):
         time.sleep(0.2)

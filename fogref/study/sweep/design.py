@@ -85,8 +85,12 @@ def _sized(spec: SweepSpec, scenes: int = 1) -> int:
     limit = spec.design.get("max_configs", MAX_CONFIGS)
     size = design_size(spec.design["kind"], spec.parameters, spec.design.get("n"), scenes)
     if size > limit:
-        raise ParameterError(f"{spec.path}: [design]", "size", f"the design has {size:.4g} configurations; "
-                             f"the limit is {limit} (raise it with [design] max_configs = N)")
+        raise ParameterError(
+            f"{spec.path}: [design]",
+            "size",
+            f"the design has {size:.4g} configurations; "
+            f"the limit is {limit} (raise it with [design] max_configs = N)",
+        )
     return size
 
 
@@ -123,8 +127,11 @@ def design_points(spec: SweepSpec) -> list[dict]:
             p = ps[k]
             if "range" in p:
                 lo, hi = p["range"]
-                pt[k] = float(math.exp(math.log(lo) + x * (math.log(hi) - math.log(lo))) if p["log"]
-                              else lo + x * (hi - lo))
+                pt[k] = float(
+                    math.exp(math.log(lo) + x * (math.log(hi) - math.log(lo)))
+                    if p["log"]
+                    else lo + x * (hi - lo)
+                )
             else:
                 pt[k] = p["values"][min(int(x * len(p["values"])), len(p["values"]) - 1)]
         points.append(pt)
@@ -160,21 +167,53 @@ def build_configs(spec: SweepSpec) -> list[dict]:
                     overrides[p["target"]] = as_str(value)
                 else:
                     model_params[p["model"]][p["target"]] = value
-            seed = spec.seed if spec.seed_policy == "fixed" else int(
-                _hash({"seed": spec.seed, "scene": scene_sha, "overrides": overrides}, 8), 16) & 0x7FFFFFFF
+            seed = (
+                spec.seed
+                if spec.seed_policy == "fixed"
+                else int(_hash({"seed": spec.seed, "scene": scene_sha, "overrides": overrides}, 8), 16)
+                & 0x7FFFFFFF
+            )
             key = json.dumps(overrides, sort_keys=True)
             if key not in digests:
                 digests[key] = _scene_inputs_digest(scene, overrides)
             inputs = digests[key]
-            truth = truth_path(scene, spec.spp, seed, overrides, cache_dir=Path(spec.cache) / inputs[:16],
-                               pixel_filter=spec.pixel_filter)
+            truth = truth_path(
+                scene,
+                spec.spp,
+                seed,
+                overrides,
+                cache_dir=Path(spec.cache) / inputs[:16],
+                pixel_filter=spec.pixel_filter,
+            )
             models = [{**m, "params": model_params[m["label"]]} for m in spec.models]
-            cfg = {"scene": str(scene), "scene_sha256": scene_sha, "inputs_sha256": inputs, "values": pt,
-                   "overrides": overrides, "models": models, "spp": spec.spp, "seed": seed,
-                   "pixel_filter": spec.pixel_filter, "truth": str(truth),
-                   "budget": bool(getattr(spec, "budget", False))}
-            cfg["id"] = _hash({k: cfg[k] for k in ("scene_sha256", "inputs_sha256", "overrides", "models",
-                                                   "spp", "seed", "pixel_filter")} | {"fogref": __version__}
-                            | ({"budget": True} if cfg["budget"] else {}))
+            cfg = {
+                "scene": str(scene),
+                "scene_sha256": scene_sha,
+                "inputs_sha256": inputs,
+                "values": pt,
+                "overrides": overrides,
+                "models": models,
+                "spp": spec.spp,
+                "seed": seed,
+                "pixel_filter": spec.pixel_filter,
+                "truth": str(truth),
+                "budget": bool(getattr(spec, "budget", False)),
+            }
+            cfg["id"] = _hash(
+                {
+                    k: cfg[k]
+                    for k in (
+                        "scene_sha256",
+                        "inputs_sha256",
+                        "overrides",
+                        "models",
+                        "spp",
+                        "seed",
+                        "pixel_filter",
+                    )
+                }
+                | {"fogref": __version__}
+                | ({"budget": True} if cfg["budget"] else {})
+            )
             out.append(cfg)
     return out

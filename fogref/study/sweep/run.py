@@ -85,8 +85,13 @@ def _connect(scheduler: str | None, n_workers: int | None, log: Path):
     n = n_workers or cores
     # the workers' own "Compute Failed" logs are silenced: failures are recorded in the table
     with _stderr_to(log):
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                               silence_logs=logging.CRITICAL)
+        cluster = LocalCluster(
+            n_workers=n,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.CRITICAL,
+        )
     return Client(cluster), cluster, max(1, cores // n)
 
 
@@ -105,8 +110,12 @@ def check_outputs(spec: SweepSpec, configs: list[dict]) -> None:
     workers' log.  Inputs: the sweep file, every scene and every file each configuration's scene loads.
     """
     out = Path(spec.out)
-    files = {out / "sweep.json": "the resolved design", out / f"{spec.table}.csv": "the table (CSV)",
-             out / f"{spec.table}.parquet": "the table (Parquet)", out / WORKER_LOG: "the workers' log"}
+    files = {
+        out / "sweep.json": "the resolved design",
+        out / f"{spec.table}.csv": "the table (CSV)",
+        out / f"{spec.table}.parquet": "the table (Parquet)",
+        out / WORKER_LOG: "the workers' log",
+    }
     files.update({f: "a plot" for f in plot_files(spec, out / "plots")})
     inputs = {Path(spec.path): "the sweep file"}
     seen = set()
@@ -123,8 +132,10 @@ def check_outputs(spec: SweepSpec, configs: list[dict]) -> None:
         if hit is None and _inside(i, out / "configs"):
             hit = (out / "configs", "the per-configuration results")
         if hit is not None:
-            raise FogrefError(f"{spec.path}: output {hit[0]} ({hit[1]}) would replace the input {i} "
-                              f"({what_in}); choose another [sweep] out or [outputs] table")
+            raise FogrefError(
+                f"{spec.path}: output {hit[0]} ({hit[1]}) would replace the input {i} "
+                f"({what_in}); choose another [sweep] out or [outputs] table"
+            )
 
 
 def _todo(configs: list[dict], cdir: Path, retry_failed: bool) -> list[dict]:
@@ -169,10 +180,19 @@ def _run(client, todo, configs, spec, threads, cdir, progress) -> int:
     from tqdm import tqdm
 
     failed = 0
-    futures = {client.submit(run_config, cfg, threads, key=f"fogref-sweep-{cfg['id']}",
-                             retries=spec.retries, pure=False): cfg for cfg in todo}
-    with tqdm(total=len(configs), initial=len(configs) - len(todo), unit="config",
-              disable=not progress, desc=spec.name) as bar:
+    futures = {
+        client.submit(
+            run_config, cfg, threads, key=f"fogref-sweep-{cfg['id']}", retries=spec.retries, pure=False
+        ): cfg
+        for cfg in todo
+    }
+    with tqdm(
+        total=len(configs),
+        initial=len(configs) - len(todo),
+        unit="config",
+        disable=not progress,
+        desc=spec.name,
+    ) as bar:
         for fut in as_completed(futures):
             cfg = futures[fut]
             try:
@@ -181,14 +201,22 @@ def _run(client, todo, configs, spec, threads, cdir, progress) -> int:
                 failed += 1
                 tb = "".join(traceback.format_exception_only(type(e), e)).strip()
                 result = {"id": cfg["id"], "status": "error", "error": tb}
-            write_text_atomic(cdir / f"{cfg['id']}.json",
-                              json.dumps({**result, "config": cfg}, indent=1, default=str) + "\n")
+            write_text_atomic(
+                cdir / f"{cfg['id']}.json",
+                json.dumps({**result, "config": cfg}, indent=1, default=str) + "\n",
+            )
             bar.update(1)
     return failed
 
 
-def run_sweep(sweep_path, scheduler: str | None = None, n_workers: int | None = None, progress: bool = True,
-              retry_failed: bool = False, drjit_threads: int | None = None) -> dict:
+def run_sweep(
+    sweep_path,
+    scheduler: str | None = None,
+    n_workers: int | None = None,
+    progress: bool = True,
+    retry_failed: bool = False,
+    drjit_threads: int | None = None,
+) -> dict:
     """Run a sweep; write its table, per-configuration results and plots.
 
     Parameters
@@ -224,8 +252,11 @@ def run_sweep(sweep_path, scheduler: str | None = None, n_workers: int | None = 
         On Ctrl-C, after the cluster is stopped; its message names the workers' log.
     """
     if scheduler is not None and not (isinstance(scheduler, str) and _ADDRESS.match(scheduler.strip())):
-        raise ParameterError(_SOURCE, "--scheduler", f"{scheduler!r} is not a Dask scheduler address "
-                             "(tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786)")
+        raise ParameterError(
+            _SOURCE,
+            "--scheduler",
+            f"{scheduler!r} is not a Dask scheduler address (tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786)",
+        )
     if n_workers is not None:
         n_workers = P.integer(n_workers, "--workers", source=_SOURCE, lo=1, hi=4096)
     if drjit_threads is not None:
@@ -238,11 +269,25 @@ def run_sweep(sweep_path, scheduler: str | None = None, n_workers: int | None = 
     cdir.mkdir(parents=True, exist_ok=True)
     spec.cache.mkdir(parents=True, exist_ok=True)
     todo = _todo(configs, cdir, retry_failed)
-    write_text_atomic(out / "sweep.json", json.dumps(
-        {"sweep": str(spec.path), "name": spec.name, "design": spec.design, "parameters": spec.parameters,
-         "models": spec.models, "spp": spec.spp, "seed": spec.seed, "seed_policy": spec.seed_policy,
-         "configs": [{"id": c["id"], "scene": c["scene"], "values": c["values"]} for c in configs]},
-        indent=2, default=str) + "\n")
+    write_text_atomic(
+        out / "sweep.json",
+        json.dumps(
+            {
+                "sweep": str(spec.path),
+                "name": spec.name,
+                "design": spec.design,
+                "parameters": spec.parameters,
+                "models": spec.models,
+                "spp": spec.spp,
+                "seed": spec.seed,
+                "seed_policy": spec.seed_policy,
+                "configs": [{"id": c["id"], "scene": c["scene"], "values": c["values"]} for c in configs],
+            },
+            indent=2,
+            default=str,
+        )
+        + "\n",
+    )
     t0 = time.perf_counter()
     failed = 0
     if todo:
@@ -255,9 +300,10 @@ def run_sweep(sweep_path, scheduler: str | None = None, n_workers: int | None = 
             _stop(client, cluster, log)
             done = sum(read_result(cdir / f"{c['id']}.json", c)[0] is not None for c in configs)
             where = f"; the workers' output is in {log}" if cluster is not None else ""
-            raise SweepInterrupted(f"fogref sweep: interrupted with {done} of {len(configs)} configurations "
-                                   f"done; the cluster is stopped{where}; run the same command again to resume"
-                                   ) from None
+            raise SweepInterrupted(
+                f"fogref sweep: interrupted with {done} of {len(configs)} configurations "
+                f"done; the cluster is stopped{where}; run the same command again to resume"
+            ) from None
         _stop(client, cluster, log)
     wall = time.perf_counter() - t0
     info = write_table(spec, configs)

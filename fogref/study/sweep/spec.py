@@ -63,7 +63,7 @@ class SweepSpec:
         label -> parameter spec (``target``, ``kind`` ``scene``/``model``, ``model``,
         ``scale``, ``values`` or ``range``/``log``/``num``).
     design : dict
-        ``kind``, ``n``, ``seed``.
+        ``kind``, ``n``, ``seed``, ``max_configs`` (the size limit, default :data:`MAX_CONFIGS`).
     models : list of dict
         ``name``, ``label``, ``from_scene``, ``params``.
     retries : int
@@ -110,7 +110,8 @@ def _src(path, key) -> str:
 
 
 def _typed(v, name: str, src: str, what: str = "a number"):
-    """``v`` unless it is a TOML string or boolean where a number is expected (``seed = "x"``, ``n = true``)."""
+    """``v`` unless it is a TOML string or boolean where a number is expected
+    (``seed = "x"``, ``n = true``)."""
     if isinstance(v, (str, bool)):
         raise ParameterError(src, name, f"{v!r} is not {what} (write a TOML number, without quotes)")
     return v
@@ -156,8 +157,12 @@ def _table(path: Path, doc: dict, name: str, allowed) -> dict:
         raise _err(path, name, "must be a table")
     bad = set(t) - set(allowed)
     if bad:
-        raise _err(path, name, f"unknown key(s) {sorted(bad)}{did_you_mean(sorted(bad)[0], allowed)}; "
-                   f"allowed: {sorted(allowed)}")
+        raise _err(
+            path,
+            name,
+            f"unknown key(s) {sorted(bad)}{did_you_mean(sorted(bad)[0], allowed)}; "
+            f"allowed: {sorted(allowed)}",
+        )
     return t
 
 
@@ -178,12 +183,18 @@ def _read_sweep(path: Path, doc: dict) -> dict:
         if any(p.resolve() == q.resolve() for q in scene_paths):
             raise ParameterError(_src(path, "sweep"), "scenes", f"'{s}' is listed twice")
         scene_paths.append(p)
-    for k in ("out", "cache", "name"):
+    for k in ("out", "cache"):
         if k in sw:
             P.path(sw[k], k, source=_src(path, "sweep"))
+    if "name" in sw and not (isinstance(sw["name"], str) and sw["name"].strip()):
+        raise ParameterError(_src(path, "sweep"), "name", f"{sw['name']!r} is not a non-empty string")
     out = base / sw["out"] if "out" in sw and not Path(sw["out"]).is_absolute() else Path(sw.get("out", base))
-    return {"name": str(sw.get("name", path.stem)), "scenes": scene_paths, "out": out,
-            "cache": Path(sw.get("cache", "out/sweep_cache"))}
+    return {
+        "name": str(sw.get("name", path.stem)),
+        "scenes": scene_paths,
+        "out": out,
+        "cache": Path(sw.get("cache", "out/sweep_cache")),
+    }
 
 
 def _read_render(path: Path, doc: dict) -> dict:
@@ -200,8 +211,13 @@ def _read_render(path: Path, doc: dict) -> dict:
     for k, v in overrides.items():
         if isinstance(v, dict):
             raise ParameterError(src, f"overrides.{k}", f"{v!r} is not a value (a number, list or string)")
-    return {"spp": spp, "seed": seed, "seed_policy": policy, "pixel_filter": pixel_filter,
-            "overrides": {k: as_str(v) for k, v in overrides.items()}}
+    return {
+        "spp": spp,
+        "seed": seed,
+        "seed_policy": policy,
+        "pixel_filter": pixel_filter,
+        "overrides": {k: as_str(v) for k, v in overrides.items()},
+    }
 
 
 def _model_fields(path: Path, key: str, name: str) -> dict:
@@ -228,16 +244,21 @@ def _model_value(v, name: str, src: str, default):
 def _model_param_name(name: str, fields: dict, src: str, model: str) -> str:
     """``name`` if the model has that parameter, else a ParameterError with did-you-mean."""
     if fields and name not in fields:
-        raise ParameterError(src, name, f"model '{model}' has no parameter '{name}'"
-                             f"{did_you_mean(name, list(fields))}; it has: {', '.join(fields)}")
+        raise ParameterError(
+            src,
+            name,
+            f"model '{model}' has no parameter '{name}'"
+            f"{did_you_mean(name, list(fields))}; it has: {', '.join(fields)}",
+        )
     return name
 
 
 def _read_model(path: Path, i: int, m, labels: set) -> dict:
     key = f"models][{i}"
     if not isinstance(m, dict) or "name" not in m:
-        raise _err(path, key, "each [[models]] entry needs a 'name' "
-                              "(a model: \"ue4\", \"my_pkg.fog:MyFog\", ...)")
+        raise _err(
+            path, key, 'each [[models]] entry needs a \'name\' (a model: "ue4", "my_pkg.fog:MyFog", ...)'
+        )
     bad = set(m) - set(_MODEL_KEYS)
     if bad:
         raise _err(path, key, f"unknown key(s) {sorted(bad)}; allowed: {list(_MODEL_KEYS)}")
@@ -252,11 +273,17 @@ def _read_model(path: Path, i: int, m, labels: set) -> dict:
     if not isinstance(params, dict):
         raise _err(path, key, "params must be a table")
     src = _src(path, f"models] '{label}' [params")
-    params = {k: _model_value(v, _model_param_name(k, fields, src, m["name"]), src, fields.get(k))
-              for k, v in params.items()}
-    return {"name": m["name"], "label": label,
-            "from_scene": _bool(m.get("from_scene", True), "from_scene", _src(path, key)),
-            "params": params, "fields": fields}
+    params = {
+        k: _model_value(v, _model_param_name(k, fields, src, m["name"]), src, fields.get(k))
+        for k, v in params.items()
+    }
+    return {
+        "name": m["name"],
+        "label": label,
+        "from_scene": _bool(m.get("from_scene", True), "from_scene", _src(path, key)),
+        "params": params,
+        "fields": fields,
+    }
 
 
 def _read_models(path: Path, doc: dict) -> list[dict]:
@@ -279,10 +306,16 @@ def _read_design(path: Path, doc: dict) -> dict:
     n = dz.get("n")
     if kind in ("random", "lhs"):
         if n is None:
-            raise ParameterError(src, "n", f"kind '{kind}' needs n = the number of configurations, in [1, {limit}]")
+            raise ParameterError(
+                src, "n", f"kind '{kind}' needs n = the number of configurations, in [1, {limit}]"
+            )
         n = _int(n, "n", src, lo=1, hi=limit)
-    return {"kind": kind, "n": n, "seed": _int(dz.get("seed", 0), "seed", src, lo=0, hi=(1 << 32) - 1),
-            "max_configs": limit}
+    return {
+        "kind": kind,
+        "n": n,
+        "seed": _int(dz.get("seed", 0), "seed", src, lo=0, hi=(1 << 32) - 1),
+        "max_configs": limit,
+    }
 
 
 def _parameter_target(path: Path, key: str, target, scene_names: set, models: dict) -> dict:
@@ -293,13 +326,21 @@ def _parameter_target(path: Path, key: str, target, scene_names: set, models: di
     if "." in target:
         mlabel, mparam = target.split(".", 1)
         if mlabel not in models:
-            raise _err(path, key, f"'{target}': model label '{mlabel}' is not a [[models]] label; "
-                       f"allowed: {sorted(models)}{did_you_mean(mlabel, list(models))}")
+            raise _err(
+                path,
+                key,
+                f"'{target}': model label '{mlabel}' is not a [[models]] label; "
+                f"allowed: {sorted(models)}{did_you_mean(mlabel, list(models))}",
+            )
         _model_param_name(mparam, models[mlabel]["fields"], src, models[mlabel]["name"])
         return {"kind": "model", "model": mlabel, "target": mparam}
     if target not in scene_names:
-        raise _err(path, key, f"'{target}' is not a $default of every scene{did_you_mean(target, scene_names)}; "
-                   f"allowed: {sorted(scene_names)}")
+        raise _err(
+            path,
+            key,
+            f"'{target}' is not a $default of every scene{did_you_mean(target, scene_names)}; "
+            f"allowed: {sorted(scene_names)}",
+        )
     return {"kind": "scene", "target": target}
 
 
@@ -309,8 +350,12 @@ def _distinct(path: Path, key: str, vals: list, what: str) -> None:
     for v in vals:
         k = as_str(v)
         if k in seen:
-            raise ParameterError(_src(path, key), what, f"{v!r} is given twice ({vals!r}); "
-                                 "each value must be distinct (a repeated value repeats the same render)")
+            raise ParameterError(
+                _src(path, key),
+                what,
+                f"{v!r} is given twice ({vals!r}); "
+                "each value must be distinct (a repeated value repeats the same render)",
+            )
         seen[k] = v
 
 
@@ -352,8 +397,12 @@ def _read_parameter(path: Path, label: str, spec, scene_names: set, models: dict
         raise _err(path, key, "must be a table with 'values' or 'range'")
     bad = set(spec) - set(_PARAMETER_KEYS)
     if bad:
-        raise _err(path, key, f"unknown key(s) {sorted(bad)}{did_you_mean(sorted(bad)[0], _PARAMETER_KEYS)}; "
-                   f"allowed: {list(_PARAMETER_KEYS)}")
+        raise _err(
+            path,
+            key,
+            f"unknown key(s) {sorted(bad)}{did_you_mean(sorted(bad)[0], _PARAMETER_KEYS)}; "
+            f"allowed: {list(_PARAMETER_KEYS)}",
+        )
     ps = _parameter_target(path, key, spec.get("target", label), scene_names, models)
     src = _src(path, key)
     ps["scale"] = _num(spec.get("scale", 1.0), "scale", src)
@@ -394,17 +443,25 @@ def _check_targets(path: Path, params: dict, overrides: dict, models: dict) -> N
     for label, p in params.items():
         t = p["target"] if p["kind"] == "scene" else f"{p['model']}.{p['target']}"
         if t in seen:
-            raise ParameterError(_src(path, f"parameters.{label}"), "target",
-                                 f"'{t}' is also swept by [parameters.{seen[t]}]: two labels of one "
-                                 "parameter would record values the render never used; keep one")
+            raise ParameterError(
+                _src(path, f"parameters.{label}"),
+                "target",
+                f"'{t}' is also swept by [parameters.{seen[t]}]: two labels of one "
+                "parameter would record values the render never used; keep one",
+            )
         seen[t] = label
         if p["kind"] == "scene" and p["target"] in overrides:
-            raise ParameterError(_src(path, f"parameters.{label}"), "target",
-                                 f"'{t}' is swept here and fixed in [render].overrides; remove one")
+            raise ParameterError(
+                _src(path, f"parameters.{label}"),
+                "target",
+                f"'{t}' is swept here and fixed in [render].overrides; remove one",
+            )
         if p["kind"] == "model" and p["target"] in models[p["model"]]["params"]:
-            raise ParameterError(_src(path, f"parameters.{label}"), "target",
-                                 f"'{t}' is swept here and fixed in the [[models]] '{p['model']}' params; "
-                                 "remove one")
+            raise ParameterError(
+                _src(path, f"parameters.{label}"),
+                "target",
+                f"'{t}' is swept here and fixed in the [[models]] '{p['model']}' params; remove one",
+            )
 
 
 def _check_size(path: Path, design: dict, params: dict, scenes: list) -> int:
@@ -413,17 +470,27 @@ def _check_size(path: Path, design: dict, params: dict, scenes: list) -> int:
     if kind == "list" and params:
         lens = {len(p["values"]) for p in params.values()}
         if len(lens) > 1:
-            raise _err(path, "design",
-                       f"kind 'list' zips the parameters' values: their lengths differ ({sorted(lens)})")
+            raise _err(
+                path,
+                "design",
+                f"kind 'list' zips the parameters' values: their lengths differ ({sorted(lens)})",
+            )
     size = design_size(kind, params, design["n"], len(scenes))
     limit = design["max_configs"]
     if size > limit:
-        raise ParameterError(_src(path, "design"), "size",
-                             f"the {kind} design has {size:.4g} configurations ({len(scenes)} scene(s)); "
-                             f"the limit is {limit} (raise it with [design] max_configs = N)")
+        raise ParameterError(
+            _src(path, "design"),
+            "size",
+            f"the {kind} design has {size:.4g} configurations ({len(scenes)} scene(s)); "
+            f"the limit is {limit} (raise it with [design] max_configs = N)",
+        )
     if kind == "list" and params:
-        _distinct(path, "design", [[as_str(v) for v in row] for row in zip(*(p["values"] for p in params.values()))],
-                  "list rows")
+        _distinct(
+            path,
+            "design",
+            [[as_str(v) for v in row] for row in zip(*(p["values"] for p in params.values()))],
+            "list rows",
+        )
     return size
 
 
@@ -445,20 +512,25 @@ def _check_scene_values(path: Path, scenes: list, overrides: dict, params: dict)
                 try:
                     describe_scene(scene, {**overrides, p["target"]: as_str(value)})
                 except FogrefError as e:
-                    raise _err(path, f"parameters.{label}",
-                               f"value {v!r} refused: {str(e).splitlines()[0]}") from None
+                    raise _err(
+                        path, f"parameters.{label}", f"value {v!r} refused: {str(e).splitlines()[0]}"
+                    ) from None
 
 
-def _read_parameters(path: Path, doc: dict, scenes: list[Path], models: list, design: dict,
-                     overrides: dict) -> dict:
-    """``[parameters.LABEL]``: what each swept parameter sets and its values, checked (see :func:`load_sweep`)."""
+def _read_parameters(
+    path: Path, doc: dict, scenes: list[Path], models: list, design: dict, overrides: dict
+) -> dict:
+    """``[parameters.LABEL]``: what each swept parameter sets and its values, checked
+    (see :func:`load_sweep`)."""
     params = doc.get("parameters", {})
     if not isinstance(params, dict):
         raise _err(path, "parameters", "must be a table of [parameters.NAME] tables")
     scene_names = set.intersection(*(set(declared(p)) for p in scenes)) if scenes else set()
     by_label = {m["label"]: m for m in models}
-    out = {label: _read_parameter(path, label, spec, scene_names, by_label, design)
-           for label, spec in params.items()}
+    out = {
+        label: _read_parameter(path, label, spec, scene_names, by_label, design)
+        for label, spec in params.items()
+    }
     _check_targets(path, out, overrides, by_label)
     _check_size(path, design, out, scenes)
     _check_scene_values(path, scenes, overrides, out)
@@ -481,13 +553,21 @@ def _read_outputs(path: Path, doc: dict, out: Path) -> dict:
     root = out.resolve()
     where = (root / table).resolve()
     if Path(table).is_absolute() or not where.is_relative_to(root) or where == root:
-        raise ParameterError(src, "table", f"'{table}' leaves the output folder {out}: "
-                             "give a name inside it, like \"results\" or \"tables/results\"")
+        raise ParameterError(
+            src,
+            "table",
+            f"'{table}' leaves the output folder {out}: "
+            'give a name inside it, like "results" or "tables/results"',
+        )
     metrics = ou.get("plot_metrics")
     if metrics is not None and not (isinstance(metrics, list) and all(isinstance(x, str) for x in metrics)):
         raise ParameterError(src, "plot_metrics", f"{metrics!r} is not a list of metric names")
-    return {"table": table, "plots": _bool(ou.get("plots", True), "plots", src),
-            "plot_metrics": metrics, "budget": _bool(ou.get("budget", False), "budget", src)}
+    return {
+        "table": table,
+        "plots": _bool(ou.get("plots", True), "plots", src),
+        "plot_metrics": metrics,
+        "budget": _bool(ou.get("budget", False), "budget", src),
+    }
 
 
 def load_sweep(path) -> SweepSpec:
@@ -524,5 +604,13 @@ def load_sweep(path) -> SweepSpec:
     parameters = _read_parameters(path, doc, sweep["scenes"], models, design, render["overrides"])
     for m in models:
         del m["fields"]
-    return SweepSpec(path=path, **sweep, **render, parameters=parameters, design=design, models=models,
-                     **_read_execution(path, doc), **_read_outputs(path, doc, sweep["out"]))
+    return SweepSpec(
+        path=path,
+        **sweep,
+        **render,
+        parameters=parameters,
+        design=design,
+        models=models,
+        **_read_execution(path, doc),
+        **_read_outputs(path, doc, sweep["out"]),
+    )

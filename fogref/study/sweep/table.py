@@ -17,9 +17,15 @@ from fogref.study.sweep.spec import SweepSpec
 __all__ = ["DEFAULT_PLOT_METRICS", "plot_files", "read_result", "set_aside", "write_table"]
 
 #: Metrics plotted when the sweep's ``[outputs] plot_metrics`` is not given.
-DEFAULT_PLOT_METRICS = ("final.all.rmse", "final.all.rmse_debiased", "final.all.relmse",
-                        "final.all.delta_e2000_mean", "final.all.flip_mean", "inscatter.all.rmse",
-                        "transmittance.all.rmse")
+DEFAULT_PLOT_METRICS = (
+    "final.all.rmse",
+    "final.all.rmse_debiased",
+    "final.all.relmse",
+    "final.all.delta_e2000_mean",
+    "final.all.flip_mean",
+    "inscatter.all.rmse",
+    "transmittance.all.rmse",
+)
 
 
 def _problem(cfg: dict, result) -> str:
@@ -60,22 +66,40 @@ def set_aside(path, why: str) -> Path:
     path = Path(path)
     aside = path.with_name(path.name + ".bad")
     path.replace(aside)
-    print(f"fogref sweep: warning: {path}: {why}; set aside as {aside.name}, the configuration runs again",
-          file=sys.stderr)
+    print(
+        f"fogref sweep: warning: {path}: {why}; set aside as {aside.name}, the configuration runs again",
+        file=sys.stderr,
+    )
     return aside
 
 
 def _rows_of(cfg: dict, result: dict) -> list[dict]:
     """Table rows of one configuration's result file."""
-    base = {"config_id": cfg["id"], "scene": Path(cfg["scene"]).name, "scene_path": cfg["scene"],
-            "scene_sha256": cfg["scene_sha256"], **{k: v for k, v in cfg["values"].items()},
-            "overrides": json.dumps(cfg["overrides"], sort_keys=True), "spp": cfg["spp"], "seed": cfg["seed"]}
+    base = {
+        "config_id": cfg["id"],
+        "scene": Path(cfg["scene"]).name,
+        "scene_path": cfg["scene"],
+        "scene_sha256": cfg["scene_sha256"],
+        **{k: v for k, v in cfg["values"].items()},
+        "overrides": json.dumps(cfg["overrides"], sort_keys=True),
+        "spp": cfg["spp"],
+        "seed": cfg["seed"],
+    }
     for k, v in list(base.items()):
         if isinstance(v, (list, dict)):
             base[k] = json.dumps(v)
     if result.get("status") == "error":
-        return [{**base, "model": m["label"], "model_name": m["name"], "status": "error",
-                 "error": result["error"], "truth_path": cfg["truth"]} for m in cfg["models"]]
+        return [
+            {
+                **base,
+                "model": m["label"],
+                "model_name": m["name"],
+                "status": "error",
+                "error": result["error"],
+                "truth_path": cfg["truth"],
+            }
+            for m in cfg["models"]
+        ]
     return [{**base, **result["provenance"], "status": "ok", "error": "", **row} for row in result["rows"]]
 
 
@@ -104,7 +128,11 @@ def plot_files(spec: SweepSpec, plot_dir: Path) -> list[Path]:
     """Every figure :func:`plot_table` may write: ``<metric>_vs_<parameter>.png``."""
     if not spec.plots:
         return []
-    return [plot_dir / f"{m}_vs_{p}.png" for m in (spec.plot_metrics or DEFAULT_PLOT_METRICS) for p in spec.parameters]
+    return [
+        plot_dir / f"{m}_vs_{p}.png"
+        for m in (spec.plot_metrics or DEFAULT_PLOT_METRICS)
+        for p in spec.parameters
+    ]
 
 
 def _noise_column(df, metric: str) -> str | None:
@@ -142,8 +170,13 @@ def plot_table(df, spec: SweepSpec, plot_dir: Path) -> list[Path]:
                 else:
                     ax.plot(x, g[metric], "o", ms=3, alpha=0.4)
                 mean = g.groupby(param)[metric].mean()
-                ax.plot(mean.index if numeric else mean.index.astype(str), mean.values, "-", lw=1.8,
-                        label=f"{model} (mean over other parameters)")
+                ax.plot(
+                    mean.index if numeric else mean.index.astype(str),
+                    mean.values,
+                    "-",
+                    lw=1.8,
+                    label=f"{model} (mean over other parameters)",
+                )
             ax.set_xlabel(param)
             ax.set_ylabel(metric)
             if (ok[metric] > 0).all() and ok[metric].max() > 20 * ok[metric].min():
