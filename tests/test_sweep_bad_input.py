@@ -104,6 +104,8 @@ def _refused(p: Path, *needles: str, cls=FogrefError) -> str:
         (MODELS + "[parameters.sun_elevaton]\nvalues = [1, 2]\n", ("did you mean 'sun_elevation'",)),
         # values the scene refuses: resolution, and the medium's own physical ranges
         (MODELS + "[render]\noverrides = { res = 0 }\n", ("[render]", "res", "0")),
+        (MODELS + "[render]\noverrides = { sigma_t = [1e9] }\n", ("[render]", "sigma_t", "100")),
+        (MODELS + "[render]\noverrides = { res = { x = 1 } }\n", ("[render]", "overrides.res")),
         (MODELS + "[parameters.res]\nvalues = [16, 0]\n", ("[parameters.res]", "value 0", "res")),
         (MODELS + "[parameters.sigma_t]\nvalues = [1e9]\n", ("[parameters.sigma_t]", "sigma_t", "100")),
         (MODELS + "[parameters.g]\nvalues = [0.5, 1.5]\n", ("[parameters.g]", "value 1.5", "0.999")),
