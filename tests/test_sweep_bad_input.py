@@ -332,26 +332,38 @@ def inprocess_cluster():
         yield c
 
 
+def test_a_result_file_with_missing_fields_is_set_aside_not_a_traceback(tmp_path, capsys):
+    p = _toml(tmp_path, MODELS + TINY + "[parameters.g]\nvalues = [0.3, 0.6]\n[outputs]\nplots = false\n")
+    spec = S.load_sweep(p)
+    a, b = S.build_configs(spec)
+    cdir = tmp_path / "configs"
+    cdir.mkdir()
+    for c in (a, b):
+        (cdir / f"{c['id']}.json").write_text(json.dumps({"id": c["id"], "status": "ok"}))  # no rows
+    assert S.run._todo([a], cdir, retry_failed=False) == [a]  # run again
+    assert S.write_table(spec, [a, b])["rows"] == 0  # the table of what is there
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 2 and all("no 'provenance' object; set aside as" in line for line in err), err
+    assert {f.name for f in cdir.iterdir()} == {f"{a['id']}.json.bad", f"{b['id']}.json.bad"}
+
+
 @pytest.mark.render
-def test_malformed_result_files_are_set_aside_with_a_warning_and_run_again(
+def test_a_result_file_holding_a_list_is_set_aside_with_a_warning_and_run_again(
     tmp_path, inprocess_cluster, capsys
 ):
-    p = _toml(tmp_path, MODELS + TINY + "[parameters.g]\nvalues = [0.3, 0.6]\n[outputs]\nplots = false\n")
-    a, b = S.build_configs(S.load_sweep(p))
+    p = _toml(tmp_path, MODELS + TINY + "[outputs]\nplots = false\n")
+    (a,) = S.build_configs(S.load_sweep(p))
     cdir = tmp_path / "configs"
     cdir.mkdir()
     (cdir / f"{a['id']}.json").write_text("[]\n")
-    (cdir / f"{b['id']}.json").write_text(json.dumps({"id": b["id"], "status": "ok"}))  # fields missing
-    info = S.run_sweep(p, scheduler=inprocess_cluster.scheduler_address, progress=False, drjit_threads=1)
-    assert (info["ran"], info["failed"], info["rows"]) == (2, 0, 2)
+    info = S.run_sweep(p, scheduler=inprocess_cluster.scheduler_address, progress=False)
+    assert (info["ran"], info["failed"], info["rows"]) == (1, 0, 1)
     err = capsys.readouterr().err
     warnings = [line for line in err.splitlines() if "set aside" in line]
-    assert len(warnings) == 2 and "Traceback" not in err
-    assert any(f"{a['id']}.json: holds a list" in w for w in warnings)
-    assert any(f"{b['id']}.json: no 'provenance'" in w for w in warnings)
+    assert len(warnings) == 1 and "Traceback" not in err
+    assert f"{a['id']}.json: holds a list, not a result object; set aside as" in warnings[0]
     assert (cdir / f"{a['id']}.json.bad").read_text() == "[]\n"
-    for c in (a, b):
-        assert json.loads((cdir / f"{c['id']}.json").read_text())["status"] == "ok"
+    assert json.loads((cdir / f"{a['id']}.json").read_text())["status"] == "ok"
 
 
 _CTRL_C = textwrap.dedent("""
