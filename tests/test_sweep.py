@@ -35,8 +35,11 @@ MODELS = '[[models]]\nname = "ue4"\n'
 
 
 def test_grid_design_and_scaled_target(tmp_path):
-    p = _toml(tmp_path, MODELS + '[parameters.sun_elevation]\nvalues = [5, 30]\n'
-              '[parameters.FogHeightFalloff]\ntarget = "falloff"\nscale = 0.0693147\nvalues = [0.1, 0.2, 0.4]\n')
+    p = _toml(
+        tmp_path,
+        MODELS + "[parameters.sun_elevation]\nvalues = [5, 30]\n"
+        '[parameters.FogHeightFalloff]\ntarget = "falloff"\nscale = 0.0693147\nvalues = [0.1, 0.2, 0.4]\n',
+    )
     spec = S.load_sweep(p)
     cfgs = S.build_configs(spec)
     assert len(cfgs) == 6 and len({c["id"] for c in cfgs}) == 6
@@ -46,9 +49,12 @@ def test_grid_design_and_scaled_target(tmp_path):
 
 
 def test_lhs_design_is_seeded_stratified_and_in_range(tmp_path):
-    p = _toml(tmp_path, MODELS + '[design]\nkind = "lhs"\nn = 8\nseed = 3\n[render]\nseed_policy = "per_config"\n'
-              '[parameters.g]\nrange = [-0.5, 0.9]\n[parameters.sigma_t]\nrange = [1e-4, 1e-2]\nlog = true\n'
-              '[parameters."ue4.StartDistance"]\nvalues = [0, 10]\n')
+    p = _toml(
+        tmp_path,
+        MODELS + '[design]\nkind = "lhs"\nn = 8\nseed = 3\n[render]\nseed_policy = "per_config"\n'
+        "[parameters.g]\nrange = [-0.5, 0.9]\n[parameters.sigma_t]\nrange = [1e-4, 1e-2]\nlog = true\n"
+        '[parameters."ue4.StartDistance"]\nvalues = [0, 10]\n',
+    )
     spec = S.load_sweep(p)
     pts = S.design_points(spec)
     assert pts == S.design_points(S.load_sweep(p))  # seeded
@@ -63,18 +69,25 @@ def test_lhs_design_is_seeded_stratified_and_in_range(tmp_path):
     assert {c["models"][0]["params"]["StartDistance"] for c in cfgs} == {0, 10}
 
 
-@pytest.mark.parametrize("body, needle", [
-    (MODELS + "[parameters.not_a_default]\nvalues = [1]\n", "not a $default of every scene; allowed: ["),
-    (MODELS + '[design]\nkind = "sobol"\n', "allowed: ['grid', 'list', 'random', 'lhs']"),
-    (MODELS + "[render]\nspp = 0\n", "spp must be an integer in [1, 1048576]"),
-    (MODELS + '[render]\nseed_policy = "random"\n', "allowed: ['fixed', 'per_config']"),
-    (MODELS + "[parameters.g]\nvalue = [1]\n", "unknown key(s) ['value']"),
-    (MODELS + '[parameters."hdrp.x"]\nvalues = [1]\n', "model label 'hdrp' is not a [[models]] label"),
-    ('[[models]]\nname = "no_such_model"\n', "no_such_model"),
-    (MODELS + '[design]\nkind = "list"\n[parameters.g]\nvalues = [0.1, 0.2]\n[parameters.albedo]\nvalues = [0.5]\n',
-     "lengths differ"),
-    (MODELS + "[parameters.g]\nrange = [0.1, 0.2]\n", "needs num = number of points"),
-])
+@pytest.mark.parametrize(
+    "body, needle",
+    [
+        (MODELS + "[parameters.not_a_default]\nvalues = [1]\n", "not a $default of every scene; allowed: ["),
+        (MODELS + '[design]\nkind = "sobol"\n', "'sobol' is not one of grid, list, random, lhs"),
+        (MODELS + "[render]\nspp = 0\n", "parameter 'spp': 0 is outside [1, 1048576]"),
+        (MODELS + '[render]\nseed_policy = "random"\n', "'random' is not one of fixed, per_config"),
+        (MODELS + "[parameters.g]\nvalue = [1]\n", "unknown key(s) ['value']"),
+        (MODELS + '[parameters."hdrp.x"]\nvalues = [1]\n', "model label 'hdrp' is not a [[models]] label"),
+        ('[[models]]\nname = "no_such_model"\n', "no_such_model"),
+        (
+            MODELS
+            + '[design]\nkind = "list"\n[parameters.g]\nvalues = [0.1, 0.2]\n'
+            '[parameters.albedo]\nvalues = [0.5]\n',
+            "lengths differ",
+        ),
+        (MODELS + "[parameters.g]\nrange = [0.1, 0.2]\n", "needs num = number of points"),
+    ],
+)
 def test_invalid_sweep_files_name_file_key_and_allowed_values(tmp_path, body, needle):
     p = _toml(tmp_path, body)
     with pytest.raises(FogrefError) as e:
@@ -90,16 +103,25 @@ def cluster():
     distributed = pytest.importorskip("dask.distributed")
     import logging
 
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
-                                  silence_logs=logging.CRITICAL) as c:
+    with distributed.LocalCluster(
+        n_workers=2,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=None,
+        silence_logs=logging.CRITICAL,
+    ) as c:
         yield c
 
 
-TINY = ('[render]\nspp = 4\noverrides = { res = 16, resy = 9, max_depth = 3 }\n'
-        '[design]\nkind = "list"\n'
-        '[parameters.sun_elevation]\nvalues = [5, 20, 40, 60]\n'
-        '[parameters.g]\nvalues = [0.2, 0.6, 1.5, 0.8]\n'   # g = 1.5 is invalid: that configuration fails
-        '[execution]\nretries = 1\n[outputs]\nplot_metrics = ["final.all.rmse"]\n')
+TINY = (
+    "[render]\nspp = 4\noverrides = { res = 16, resy = 9, max_depth = 3 }\n"
+    '[design]\nkind = "list"\n'
+    "[parameters.sun_elevation]\nvalues = [5, 20, 40, 60]\n"
+    "[parameters.g]\nvalues = [0.2, 0.6, 0.7, 0.8]\n"
+    # Unreal refuses FogMaxOpacity = 5 when the model is built on the worker: that configuration fails
+    '[parameters."ue4.FogMaxOpacity"]\nvalues = [1.0, 1.0, 5.0, 1.0]\n'
+    '[execution]\nretries = 1\n[outputs]\nplot_metrics = ["final.all.rmse"]\n'
+)
 
 
 @pytest.mark.render
@@ -114,13 +136,24 @@ def test_sweep_on_two_worker_cluster_records_failure_resumes_and_reuses_truths(t
     df = pd.read_parquet(info["parquet"])
     assert len(pd.read_csv(info["table"])) == 4
     bad = df[df["status"] == "error"]
-    assert len(bad) == 1 and bad["g"].iloc[0] == 1.5 and "'g'" in bad["error"].iloc[0]
+    assert len(bad) == 1 and bad["g"].iloc[0] == 0.7 and "FogMaxOpacity" in bad["error"].iloc[0]
     ok = df[df["status"] == "ok"]
     assert len(ok) == 3 and (ok["final.all.rmse"] > 0).all() and (ok["final.all.rmse_stderr"] >= 0).all()
-    for col in ("spp", "seed", "fogref_version", "mitsuba_version", "truth_path", "truth_sha256",
-                "render_seconds", "model", "model_parameters", "sun_elevation", "g"):
+    for col in (
+        "spp",
+        "seed",
+        "fogref_version",
+        "mitsuba_version",
+        "truth_path",
+        "truth_sha256",
+        "render_seconds",
+        "model",
+        "model_parameters",
+        "sun_elevation",
+        "g",
+    ):
         assert col in df.columns and ok[col].notna().all(), col
-    assert not ok["truth_cached"].any() and len(list((tmp_path / "cache").glob("*.exr"))) == 3
+    assert not ok["truth_cached"].any() and len(list((tmp_path / "cache").rglob("*.exr"))) == 4
     assert (tmp_path / "plots" / "final.all.rmse_vs_sun_elevation.png").is_file()
     assert len(list((tmp_path / "configs").glob("*.json"))) == 4
 
@@ -132,19 +165,26 @@ def test_sweep_on_two_worker_cluster_records_failure_resumes_and_reuses_truths(t
     assert stamps == {f: f.stat().st_mtime_ns for f in (tmp_path / "configs").glob("*.json")}
 
     # new model parameters, same truths: the truths come from the cache (no render)
-    q = _toml(tmp_path / "second", MODELS.replace('"ue4"\n', '"ue4"\nparams = { StartDistance = 500.0 }\n') + TINY,
-              cache=tmp_path / "cache")
+    q = _toml(
+        tmp_path / "second",
+        MODELS.replace('"ue4"\n', '"ue4"\nparams = { StartDistance = 500.0 }\n') + TINY,
+        cache=tmp_path / "cache",
+    )
     third = S.run_sweep(q, scheduler=addr, progress=False, drjit_threads=1)
     df3 = pd.read_parquet(third["parquet"])
     assert third["ran"] == 4 and df3[df3["status"] == "ok"]["truth_cached"].all()
-    assert all(json.loads(m)["StartDistance"] == 500.0 for m in df3[df3["status"] == "ok"]["model_parameters"])
+    assert all(
+        json.loads(m)["StartDistance"] == 500.0 for m in df3[df3["status"] == "ok"]["model_parameters"]
+    )
 
 
-KILL = ('[render]\nspp = 4\noverrides = { res = 16, resy = 9, max_depth = 3 }\n'
-        '[design]\nkind = "list"\n'
-        '[parameters.sun_elevation]\nvalues = [5, 12, 20, 30, 40, 60]\n'
-        '[parameters.g]\nvalues = [0.21, 0.31, 0.41, 0.51, 0.61, 0.71]\n'
-        '[execution]\nretries = 1\n[outputs]\nplots = false\n')
+KILL = (
+    "[render]\nspp = 4\noverrides = { res = 16, resy = 9, max_depth = 3 }\n"
+    '[design]\nkind = "list"\n'
+    "[parameters.sun_elevation]\nvalues = [5, 12, 20, 30, 40, 60]\n"
+    "[parameters.g]\nvalues = [0.21, 0.31, 0.41, 0.51, 0.61, 0.71]\n"
+    "[execution]\nretries = 1\n[outputs]\nplots = false\n"
+)
 
 
 @pytest.mark.render
@@ -165,14 +205,24 @@ def test_worker_killed_mid_sweep_is_recorded_and_nothing_else_is_lost(tmp_path):
 
     dask = pytest.importorskip("dask")
     distributed = pytest.importorskip("dask.distributed")
-    cfg = {"distributed.scheduler.allowed-failures": 0,
-           # a lock held by the killed worker is freed after 3 s instead of 30 s
-           "distributed.scheduler.locks.lease-timeout": "3s",
-           "distributed.scheduler.locks.lease-validation-interval": "1s"}
+    cfg = {
+        "distributed.scheduler.allowed-failures": 0,
+        # a lock held by the killed worker is freed after 3 s instead of 30 s
+        "distributed.scheduler.locks.lease-timeout": "3s",
+        "distributed.scheduler.locks.lease-validation-interval": "1s",
+    }
     p = _toml(tmp_path, MODELS + KILL)
-    with dask.config.set(cfg), distributed.LocalCluster(
-            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
-            silence_logs=logging.CRITICAL) as cluster, distributed.Client(cluster) as client:
+    with (
+        dask.config.set(cfg),
+        distributed.LocalCluster(
+            n_workers=2,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.CRITICAL,
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
         addr = cluster.scheduler_address
         result = {}
 
@@ -188,8 +238,10 @@ def test_worker_killed_mid_sweep_is_recorded_and_nothing_else_is_lost(tmp_path):
         victim, deadline = None, time.time() + 300
         while victim is None and time.time() < deadline and th.is_alive():
             done = len(list((tmp_path / "configs").glob("*.json")))
-            busy = {w: [k for k in keys if str(k).startswith("fogref-sweep-")]
-                    for w, keys in client.processing().items()}
+            busy = {
+                w: [k for k in keys if str(k).startswith("fogref-sweep-")]
+                for w, keys in client.processing().items()
+            }
             busy = {w: ks for w, ks in busy.items() if ks}
             if done >= 1 and busy:
                 victim = sorted(busy)[0]
@@ -218,8 +270,11 @@ def test_worker_killed_mid_sweep_is_recorded_and_nothing_else_is_lost(tmp_path):
         assert not set(in_flight) & set("fogref-sweep-" + ok["config_id"][ok["worker_pid"] == killed_pid])
 
         # the recorded failures run again; the finished configurations are not touched
-        stamps = {f: f.stat().st_mtime_ns for f in (tmp_path / "configs").glob("*.json")
-                  if json.loads(f.read_text())["status"] == "ok"}
+        stamps = {
+            f: f.stat().st_mtime_ns
+            for f in (tmp_path / "configs").glob("*.json")
+            if json.loads(f.read_text())["status"] == "ok"
+        }
         again = S.run_sweep(p, scheduler=addr, progress=False, drjit_threads=1, retry_failed=True)
         assert again["ran"] == len(bad) and again["failed"] == 0
         assert stamps == {f: f.stat().st_mtime_ns for f in stamps}
@@ -234,8 +289,10 @@ def test_budget_steps_per_configuration(tmp_path):
     kept out of the sun-less render (Mitsuba refuses an unused ``$sun_elevation``)."""
     from fogref.study.budget import STEPS
 
-    body = MODELS + ('[render]\nspp = 4\noverrides = { res = 16, resy = 9, max_depth = 3, sun_elevation = 20 }\n'
-                     '[outputs]\nbudget = true\nplots = false\n')
+    body = MODELS + (
+        "[render]\nspp = 4\noverrides = { res = 16, resy = 9, max_depth = 3, sun_elevation = 20 }\n"
+        "[outputs]\nbudget = true\nplots = false\n"
+    )
     spec = S.load_sweep(_toml(tmp_path, body))
     (cfg,) = S.build_configs(spec)
     (plain,) = S.build_configs(S.load_sweep(_toml(tmp_path / "plain", body.split("[outputs]")[0])))
@@ -244,4 +301,6 @@ def test_budget_steps_per_configuration(tmp_path):
     shares = [row[f"budget.{k}.share"] for k, _, _ in STEPS]
     assert sum(shares) == pytest.approx(1.0, abs=1e-9)
     assert row["budget.total.rmse"] > 0 and row["budget.multiple.rmse_stderr"] >= 0
-    assert Path(row["budget.sky_only_truth"]).is_file() and len(list((tmp_path / "cache").glob("*.exr"))) == 2
+    assert (
+        Path(row["budget.sky_only_truth"]).is_file() and len(list((tmp_path / "cache").rglob("*.exr"))) == 2
+    )

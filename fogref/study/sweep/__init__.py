@@ -26,9 +26,10 @@ Example ``SWEEP.toml``::
     [design]
     kind = "grid"                      # "grid" | "list" | "random" | "lhs"
     # n = 48; seed = 0                 # random / lhs only
+    # max_configs = 100000             # the design is sized before it is built and refused above this
 
-    [parameters.sun_elevation]         # a scene $default ...
-    values = [2, 8, 20, 45]
+    [parameters.sun_elevation]         # a scene $default (each value checked by the scene and its medium) ...
+    values = [2, 8, 20, 45]            # distinct values; one label per target, not also in overrides
     [parameters.FogHeightFalloff]      # ... under a label: falloff = 0.0693147 * value
     target = "falloff"
     scale = 0.0693147
@@ -47,7 +48,7 @@ Example ``SWEEP.toml``::
     retries = 1                        # Dask retries of a failing configuration
 
     [outputs]
-    table = "results"                  # results.csv, results.parquet
+    table = "results"                  # results.csv, results.parquet (inside the output folder)
     plots = true                       # plots/<metric>_vs_<parameter>.png
     plot_metrics = ["final.all.rmse", "final.all.relmse"]   # default: every final.all.* metric
     budget = false                     # true: Unreal's error budget for every "ue4" model (one extra
@@ -59,6 +60,10 @@ Output folder::
     configs/<config id>.json       one result per configuration (written atomically; resume reads them)
     plots/*.png                    each plotted metric against each swept parameter
     sweep.json                     the resolved design and the command
+    sweep-workers.log              the LocalCluster workers' own output (tracebacks at Ctrl-C)
+
+No output may replace an input (the sweep file, the scenes, the files they load):
+:func:`run_sweep` compares resolved paths before any work.
 
 Modules: :mod:`~fogref.study.sweep.spec` (the TOML schema, :func:`load_sweep`),
 :mod:`~fogref.study.sweep.design` (the designs, :func:`build_configs`),

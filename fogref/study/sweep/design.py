@@ -3,8 +3,10 @@
 :func:`design_points` lays the swept parameters out (grid, zipped lists, seeded
 random, Latin hypercube); :func:`build_configs` turns each point of each scene
 into a self-contained, JSON-ready task whose ``id`` hashes everything it does (the
-scene's bytes, the overrides, the models, spp, seed, pixel filter, fogref's
-version), so a finished configuration is recognised on resume.
+bytes of the scene and of every file it loads, the overrides, the models, spp, seed,
+pixel filter, fogref's version), so a finished configuration is recognised on resume
+and an edited mesh, envmap or texture means a fresh one.  A design is sized
+(:func:`~fogref.study.sweep.spec.design_size`) before any point of it is built.
 """
 
 from __future__ import annotations
@@ -13,15 +15,83 @@ import hashlib
 import itertools
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 
 from fogref._version import __version__
+from fogref.errors import FogrefError, ParameterError
 from fogref.render.cache import truth_path
 from fogref.render.render import file_sha256
-from fogref.study.sweep.spec import SweepSpec, as_str
+from fogref.render.scene_defaults import declared, parse_scene, resolve, substitute
+from fogref.study.sweep.spec import MAX_CONFIGS, SweepSpec, as_str, design_size
 
-__all__ = ["build_configs", "design_points"]
+__all__ = ["build_configs", "design_points", "scene_input_files"]
+
+
+def scene_input_files(scene_path, overrides: dict | None = None) -> list[Path]:
+    """The files a scene loads, in file order: every ``<string name="filename" value="...">`` (meshes,
+    envmaps, textures) and ``<include filename="...">`` of the XML, ``$defaults`` substituted with
+    ``overrides``, relative to the scene's folder (else the working directory), and those of included
+    XML, recursively.
+
+    A minimal reader for the sweep's configuration id until :mod:`fogref.render.inputs` lands.
+    Raises FogrefError naming the scene and the file when a loaded file does not exist.
+    """
+    scene_path = Path(scene_path)
+    found: list[Path] = []
+    todo: list = [(scene_path, None)]
+    while todo:
+        xml, parent = todo.pop(0)
+        root = parse_scene(xml)
+        # an included file sees its own defaults and the including scene's values
+        defaults = resolve(root, overrides, source=xml) if parent is None else {**declared(root), **parent}
+        for el in root.iter():
+            if el.tag == "include":
+                name = el.get("filename")
+            elif el.tag == "string" and el.get("name") == "filename":
+                name = el.get("value")
+            else:
+                continue
+            if name is None:
+                continue
+            f = Path(substitute(name, defaults))
+            if not f.is_absolute():
+                f = xml.parent / f if (xml.parent / f).is_file() or not f.is_file() else f
+            if not f.is_file():
+                raise FogrefError(f"{xml}: <{el.tag}> '{name}': no such file {f}")
+            if any(f.resolve() == q.resolve() for q in found):
+                continue
+            found.append(f)
+            if el.tag == "include":
+                todo.append((f, defaults))
+    return found
+
+
+def _scene_inputs_digest(scene_path, overrides: dict | None = None) -> str:
+    """SHA-256 over the scene XML and every file it loads (meshes, envmaps, textures, includes).
+
+    The one place the sweep's configuration id and truth folder learn a scene's inputs.
+    TODO(H6): replace the body with the digest of :mod:`fogref.render.inputs` when it lands.
+    """
+    h = hashlib.sha256(file_sha256(scene_path).encode())
+    for f in scene_input_files(scene_path, overrides):
+        h.update(f"\0{f.name}\0{file_sha256(f)}".encode())
+    return h.hexdigest()
+
+
+def _sized(spec: SweepSpec, scenes: int = 1) -> int:
+    """The design's size, refused above its limit before anything is built."""
+    limit = spec.design.get("max_configs", MAX_CONFIGS)
+    size = design_size(spec.design["kind"], spec.parameters, spec.design.get("n"), scenes)
+    if size > limit:
+        raise ParameterError(
+            f"{spec.path}: [design]",
+            "size",
+            f"the design has {size:.4g} configurations; "
+            f"the limit is {limit} (raise it with [design] max_configs = N)",
+        )
+    return size
 
 
 def design_points(spec: SweepSpec) -> list[dict]:
@@ -37,6 +107,7 @@ def design_points(spec: SweepSpec) -> list[dict]:
     labels = list(ps)
     if not labels:
         return [{}]
+    _sized(spec)
     kind = spec.design["kind"]
     if kind == "grid":
         return [dict(zip(labels, combo)) for combo in itertools.product(*(ps[k]["values"] for k in labels))]
@@ -56,8 +127,11 @@ def design_points(spec: SweepSpec) -> list[dict]:
             p = ps[k]
             if "range" in p:
                 lo, hi = p["range"]
-                pt[k] = float(math.exp(math.log(lo) + x * (math.log(hi) - math.log(lo))) if p["log"]
-                              else lo + x * (hi - lo))
+                pt[k] = float(
+                    math.exp(math.log(lo) + x * (math.log(hi) - math.log(lo)))
+                    if p["log"]
+                    else lo + x * (hi - lo)
+                )
             else:
                 pt[k] = p["values"][min(int(x * len(p["values"])), len(p["values"]) - 1)]
         points.append(pt)
@@ -71,14 +145,19 @@ def _hash(obj, n=16) -> str:
 def build_configs(spec: SweepSpec) -> list[dict]:
     """Every configuration as a self-contained, JSON-ready task description.
 
-    Each holds ``id`` (a hash of everything the task does), the scene path and its
-    content hash, the swept ``values``, the scene ``overrides`` (fixed + swept,
-    strings), the models with their parameters, spp, seed and the truth's cache path.
+    Each holds ``id`` (a hash of everything the task does), the scene path, its
+    content hash and the hash of every file it loads (``inputs_sha256``), the swept
+    ``values``, the scene ``overrides`` (fixed + swept, strings), the models with
+    their parameters, spp, seed and the truth's cache path (in a folder of the
+    inputs' hash, so an edited mesh is never served an old truth).
     """
+    _sized(spec, len(spec.scenes))
     out = []
+    points = design_points(spec)
     for scene in spec.scenes:
         scene_sha = file_sha256(scene)
-        for pt in design_points(spec):
+        digests: dict = {}
+        for pt in points:
             overrides = dict(spec.overrides)
             model_params = {m["label"]: dict(m["params"]) for m in spec.models}
             for label, v in pt.items():
@@ -88,16 +167,53 @@ def build_configs(spec: SweepSpec) -> list[dict]:
                     overrides[p["target"]] = as_str(value)
                 else:
                     model_params[p["model"]][p["target"]] = value
-            seed = spec.seed if spec.seed_policy == "fixed" else int(
-                _hash({"seed": spec.seed, "scene": scene_sha, "overrides": overrides}, 8), 16) & 0x7FFFFFFF
-            truth = truth_path(scene, spec.spp, seed, overrides, cache_dir=spec.cache,
-                               pixel_filter=spec.pixel_filter)
+            seed = (
+                spec.seed
+                if spec.seed_policy == "fixed"
+                else int(_hash({"seed": spec.seed, "scene": scene_sha, "overrides": overrides}, 8), 16)
+                & 0x7FFFFFFF
+            )
+            key = json.dumps(overrides, sort_keys=True)
+            if key not in digests:
+                digests[key] = _scene_inputs_digest(scene, overrides)
+            inputs = digests[key]
+            truth = truth_path(
+                scene,
+                spec.spp,
+                seed,
+                overrides,
+                cache_dir=Path(spec.cache) / inputs[:16],
+                pixel_filter=spec.pixel_filter,
+            )
             models = [{**m, "params": model_params[m["label"]]} for m in spec.models]
-            cfg = {"scene": str(scene), "scene_sha256": scene_sha, "values": pt, "overrides": overrides,
-                   "models": models, "spp": spec.spp, "seed": seed, "pixel_filter": spec.pixel_filter,
-                   "truth": str(truth), "budget": bool(getattr(spec, "budget", False))}
-            cfg["id"] = _hash({k: cfg[k] for k in ("scene_sha256", "overrides", "models", "spp", "seed",
-                                                   "pixel_filter")} | {"fogref": __version__}
-                            | ({"budget": True} if cfg["budget"] else {}))
+            cfg = {
+                "scene": str(scene),
+                "scene_sha256": scene_sha,
+                "inputs_sha256": inputs,
+                "values": pt,
+                "overrides": overrides,
+                "models": models,
+                "spp": spec.spp,
+                "seed": seed,
+                "pixel_filter": spec.pixel_filter,
+                "truth": str(truth),
+                "budget": bool(getattr(spec, "budget", False)),
+            }
+            cfg["id"] = _hash(
+                {
+                    k: cfg[k]
+                    for k in (
+                        "scene_sha256",
+                        "inputs_sha256",
+                        "overrides",
+                        "models",
+                        "spp",
+                        "seed",
+                        "pixel_filter",
+                    )
+                }
+                | {"fogref": __version__}
+                | ({"budget": True} if cfg["budget"] else {})
+            )
             out.append(cfg)
     return out

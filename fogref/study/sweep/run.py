@@ -5,30 +5,71 @@ worker process per core; ``--scheduler tcp://HOST:8786`` uses an existing cluste
 (the same code path).  A configuration that raises is retried ``retries`` times
 and, if it still fails, recorded with its error; the others carry on.  An
 interrupted sweep resumes: configurations whose result file exists are not run
-again (``retry_failed`` re-runs the recorded failures).
+again (``retry_failed`` re-runs the recorded failures; a malformed result file is
+set aside with a one-line warning and run again).
+
+Before any work, every output (table, ``sweep.json``, plots, ``configs/``, the
+workers' log) is compared by resolved path with every input (the sweep file, the
+scenes and the files they load): no output may replace an input.  Ctrl-C stops
+the cluster and raises :class:`SweepInterrupted` (a ``KeyboardInterrupt``) whose
+one line names the log file that holds the workers' output.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import os
+import re
+import signal
+import sys
 import time
 import traceback
 from pathlib import Path
 
+from fogref import params as P
 from fogref.atomic import write_text_atomic
-from fogref.errors import FogrefError
-from fogref.study.sweep.design import build_configs
-from fogref.study.sweep.spec import load_sweep
-from fogref.study.sweep.table import write_table
+from fogref.errors import FogrefError, ParameterError
+from fogref.study.sweep.design import build_configs, scene_input_files
+from fogref.study.sweep.spec import SweepSpec, load_sweep
+from fogref.study.sweep.table import plot_files, read_result, set_aside, write_table
 from fogref.study.sweep.task import run_config
 
-__all__ = ["run_sweep"]
+__all__ = ["WORKER_LOG", "SweepInterrupted", "run_sweep"]
+
+#: The file in the output folder that receives the LocalCluster workers' own output (tracebacks at Ctrl-C).
+WORKER_LOG = "sweep-workers.log"
+#: A Dask scheduler address: ``tcp://HOST:PORT`` (or another Dask protocol: tls, inproc, ucx, ws, wss),
+#: or ``HOST:PORT``.
+_ADDRESS = re.compile(r"^(?:(?:tcp|tls|inproc|ucx|ws|wss)://\S+|[A-Za-z0-9_.\-\[\]:]+:\d{1,5})$")
+_SOURCE = "fogref sweep"
 
 
-def _connect(scheduler: str | None, n_workers: int | None):
-    """A Dask client: on ``scheduler`` (an address) or on a new LocalCluster.
+class SweepInterrupted(KeyboardInterrupt):
+    """Ctrl-C during a sweep: the cluster is stopped; the message names the workers' log."""
+
+
+@contextlib.contextmanager
+def _stderr_to(log: Path):
+    """Send file descriptor 2 (this process and the processes it starts meanwhile) to ``log``."""
+    log.parent.mkdir(parents=True, exist_ok=True)
+    sys.stderr.flush()
+    saved = os.dup(2)
+    fd = os.open(log, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+    try:
+        os.dup2(fd, 2)
+        yield
+    finally:
+        sys.stderr.flush()
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(fd)
+
+
+def _connect(scheduler: str | None, n_workers: int | None, log: Path):
+    """A Dask client: on ``scheduler`` (an address) or on a new LocalCluster whose worker processes
+    write their output to ``log``.
 
     Returns ``(client, cluster or None, drjit_threads per worker or None)``.
     """
@@ -37,18 +78,145 @@ def _connect(scheduler: str | None, n_workers: int | None):
     if scheduler:
         try:
             return Client(scheduler, timeout="30s"), None, None
-        except OSError as e:
-            raise FogrefError(f"--scheduler {scheduler}: cannot connect ({e})") from None
+        except (OSError, ValueError, TypeError) as e:
+            why = str(e).splitlines()[0] if str(e) else type(e).__name__
+            raise ParameterError(_SOURCE, "--scheduler", f"cannot connect to {scheduler} ({why})") from None
     cores = os.cpu_count() or 1
     n = n_workers or cores
     # the workers' own "Compute Failed" logs are silenced: failures are recorded in the table
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                           silence_logs=logging.CRITICAL)
+    with _stderr_to(log):
+        cluster = LocalCluster(
+            n_workers=n,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.CRITICAL,
+        )
     return Client(cluster), cluster, max(1, cores // n)
 
 
-def run_sweep(sweep_path, scheduler: str | None = None, n_workers: int | None = None, progress: bool = True,
-              retry_failed: bool = False, drjit_threads: int | None = None) -> dict:
+def _same(a: Path, b: Path) -> bool:
+    return os.path.realpath(a) == os.path.realpath(b)
+
+
+def _inside(a: Path, folder: Path) -> bool:
+    return Path(os.path.realpath(a)).is_relative_to(os.path.realpath(folder))
+
+
+def check_outputs(spec: SweepSpec, configs: list[dict]) -> None:
+    """Refuse a sweep whose outputs would replace one of its inputs (resolved paths, symlinks followed).
+
+    Outputs: ``sweep.json``, the table (CSV, Parquet), the plots, anything in ``configs/`` and the
+    workers' log.  Inputs: the sweep file, every scene and every file each configuration's scene loads.
+    """
+    out = Path(spec.out)
+    files = {
+        out / "sweep.json": "the resolved design",
+        out / f"{spec.table}.csv": "the table (CSV)",
+        out / f"{spec.table}.parquet": "the table (Parquet)",
+        out / WORKER_LOG: "the workers' log",
+    }
+    files.update({f: "a plot" for f in plot_files(spec, out / "plots")})
+    inputs = {Path(spec.path): "the sweep file"}
+    seen = set()
+    for cfg in configs:
+        key = (cfg["scene"], json.dumps(cfg["overrides"], sort_keys=True))
+        if key in seen:
+            continue
+        seen.add(key)
+        inputs.setdefault(Path(cfg["scene"]), "a scene")
+        for f in scene_input_files(cfg["scene"], cfg["overrides"]):
+            inputs.setdefault(f, f"a file {Path(cfg['scene']).name} loads")
+    for i, what_in in inputs.items():
+        hit = next(((o, w) for o, w in files.items() if _same(o, i)), None)
+        if hit is None and _inside(i, out / "configs"):
+            hit = (out / "configs", "the per-configuration results")
+        if hit is not None:
+            raise FogrefError(
+                f"{spec.path}: output {hit[0]} ({hit[1]}) would replace the input {i} "
+                f"({what_in}); choose another [sweep] out or [outputs] table"
+            )
+
+
+def _todo(configs: list[dict], cdir: Path, retry_failed: bool) -> list[dict]:
+    """The configurations to run: no valid result yet (a malformed one is set aside), or a failure
+    with ``retry_failed``."""
+    todo = []
+    for cfg in configs:
+        f = cdir / f"{cfg['id']}.json"
+        prev, why = read_result(f, cfg)
+        if prev is None and why != "missing":
+            set_aside(f, why)
+        if prev is not None and (prev["status"] != "error" or not retry_failed):
+            continue
+        todo.append(cfg)
+    return todo
+
+
+def _stop(client, cluster, log: Path) -> None:
+    """Close the client and the cluster, their output to ``log``, a second Ctrl-C ignored meanwhile."""
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN) if _main_thread() else None
+    try:
+        with _stderr_to(log) if cluster is not None else contextlib.nullcontext():
+            with contextlib.suppress(Exception):
+                client.close(timeout=10)
+            if cluster is not None:
+                with contextlib.suppress(Exception):
+                    cluster.close(timeout=10)
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGINT, old)
+
+
+def _main_thread() -> bool:
+    import threading
+
+    return threading.current_thread() is threading.main_thread()
+
+
+def _run(client, todo, configs, spec, threads, cdir, progress) -> int:
+    """Submit ``todo``, write each result as it arrives; returns the number of failures."""
+    from dask.distributed import as_completed
+    from tqdm import tqdm
+
+    failed = 0
+    futures = {
+        client.submit(
+            run_config, cfg, threads, key=f"fogref-sweep-{cfg['id']}", retries=spec.retries, pure=False
+        ): cfg
+        for cfg in todo
+    }
+    with tqdm(
+        total=len(configs),
+        initial=len(configs) - len(todo),
+        unit="config",
+        disable=not progress,
+        desc=spec.name,
+    ) as bar:
+        for fut in as_completed(futures):
+            cfg = futures[fut]
+            try:
+                result = {**fut.result(), "status": "ok"}
+            except Exception as e:  # the task's own error, after Dask's retries
+                failed += 1
+                tb = "".join(traceback.format_exception_only(type(e), e)).strip()
+                result = {"id": cfg["id"], "status": "error", "error": tb}
+            write_text_atomic(
+                cdir / f"{cfg['id']}.json",
+                json.dumps({**result, "config": cfg}, indent=1, default=str) + "\n",
+            )
+            bar.update(1)
+    return failed
+
+
+def run_sweep(
+    sweep_path,
+    scheduler: str | None = None,
+    n_workers: int | None = None,
+    progress: bool = True,
+    retry_failed: bool = False,
+    drjit_threads: int | None = None,
+) -> dict:
     """Run a sweep; write its table, per-configuration results and plots.
 
     Parameters
@@ -60,13 +228,13 @@ def run_sweep(sweep_path, scheduler: str | None = None, n_workers: int | None = 
         ``LocalCluster`` of ``n_workers`` single-threaded processes (default: one
         per core) and closes it at the end.
     n_workers : int, optional
-        Workers of the local cluster (ignored with ``scheduler``).
+        Workers of the local cluster, >= 1 (ignored with ``scheduler``).
     progress : bool
         Show a tqdm progress bar over configurations.
     retry_failed : bool
         Re-run configurations whose result file records an error.
     drjit_threads : int, optional
-        Dr.Jit threads per worker process (default: cores / workers for a local
+        Dr.Jit threads per worker process, >= 1 (default: cores / workers for a local
         cluster, Dr.Jit's own default on an existing one).
 
     Returns
@@ -74,57 +242,69 @@ def run_sweep(sweep_path, scheduler: str | None = None, n_workers: int | None = 
     dict
         ``{"table": csv path, "parquet": path, "rows": n, "configs": n, "ran": n,
         "failed": n, "wall_seconds": s, "plots": [paths]}``.
+
+    Raises
+    ------
+    FogrefError
+        One line, before any work: a malformed sweep file (:func:`load_sweep`), an
+        output that would replace an input, a bad ``scheduler`` address or worker count.
+    SweepInterrupted
+        On Ctrl-C, after the cluster is stopped; its message names the workers' log.
     """
+    if scheduler is not None and not (isinstance(scheduler, str) and _ADDRESS.match(scheduler.strip())):
+        raise ParameterError(
+            _SOURCE,
+            "--scheduler",
+            f"{scheduler!r} is not a Dask scheduler address (tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786)",
+        )
+    if n_workers is not None:
+        n_workers = P.integer(n_workers, "--workers", source=_SOURCE, lo=1, hi=4096)
+    if drjit_threads is not None:
+        drjit_threads = P.integer(drjit_threads, "--drjit-threads", source=_SOURCE, lo=1, hi=4096)
     spec = load_sweep(sweep_path)
     configs = build_configs(spec)
+    check_outputs(spec, configs)
     out = Path(spec.out)
     cdir = out / "configs"
     cdir.mkdir(parents=True, exist_ok=True)
     spec.cache.mkdir(parents=True, exist_ok=True)
-    todo = []
-    for cfg in configs:
-        f = cdir / f"{cfg['id']}.json"
-        if f.is_file():
-            try:
-                prev = json.loads(f.read_text())
-                if prev.get("status") != "error" or not retry_failed:
-                    continue
-            except ValueError:
-                pass
-        todo.append(cfg)
-    write_text_atomic(out / "sweep.json", json.dumps(
-        {"sweep": str(spec.path), "name": spec.name, "design": spec.design, "parameters": spec.parameters,
-         "models": spec.models, "spp": spec.spp, "seed": spec.seed, "seed_policy": spec.seed_policy,
-         "configs": [{"id": c["id"], "scene": c["scene"], "values": c["values"]} for c in configs]},
-        indent=2, default=str) + "\n")
+    todo = _todo(configs, cdir, retry_failed)
+    write_text_atomic(
+        out / "sweep.json",
+        json.dumps(
+            {
+                "sweep": str(spec.path),
+                "name": spec.name,
+                "design": spec.design,
+                "parameters": spec.parameters,
+                "models": spec.models,
+                "spp": spec.spp,
+                "seed": spec.seed,
+                "seed_policy": spec.seed_policy,
+                "configs": [{"id": c["id"], "scene": c["scene"], "values": c["values"]} for c in configs],
+            },
+            indent=2,
+            default=str,
+        )
+        + "\n",
+    )
     t0 = time.perf_counter()
     failed = 0
     if todo:
-        from dask.distributed import as_completed
-        from tqdm import tqdm
-
-        client, cluster, threads = _connect(scheduler, n_workers)
+        log = out / WORKER_LOG
+        client, cluster, threads = _connect(scheduler, n_workers, log)
         threads = drjit_threads or threads
         try:
-            futures = {client.submit(run_config, cfg, threads, key=f"fogref-sweep-{cfg['id']}",
-                                     retries=spec.retries, pure=False): cfg for cfg in todo}
-            with tqdm(total=len(configs), initial=len(configs) - len(todo), unit="config",
-                      disable=not progress, desc=spec.name) as bar:
-                for fut in as_completed(futures):
-                    cfg = futures[fut]
-                    try:
-                        result = {**fut.result(), "status": "ok"}
-                    except Exception as e:  # the task's own error, after Dask's retries
-                        failed += 1
-                        tb = "".join(traceback.format_exception_only(type(e), e)).strip()
-                        result = {"id": cfg["id"], "status": "error", "error": tb}
-                    write_text_atomic(cdir / f"{cfg['id']}.json",
-                                      json.dumps({**result, "config": cfg}, indent=1, default=str) + "\n")
-                    bar.update(1)
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
+            failed = _run(client, todo, configs, spec, threads, cdir, progress)
+        except KeyboardInterrupt:
+            _stop(client, cluster, log)
+            done = sum(read_result(cdir / f"{c['id']}.json", c)[0] is not None for c in configs)
+            where = f"; the workers' output is in {log}" if cluster is not None else ""
+            raise SweepInterrupted(
+                f"fogref sweep: interrupted with {done} of {len(configs)} configurations "
+                f"done; the cluster is stopped{where}; run the same command again to resume"
+            ) from None
+        _stop(client, cluster, log)
     wall = time.perf_counter() - t0
     info = write_table(spec, configs)
     return {**info, "configs": len(configs), "ran": len(todo), "failed": failed, "wall_seconds": wall}

@@ -8,30 +8,98 @@ shows each plotted metric against each swept parameter.
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 from fogref.atomic import atomic_write, save_figure_atomic, write_text_atomic
 from fogref.study.sweep.spec import SweepSpec
 
-__all__ = ["DEFAULT_PLOT_METRICS", "plot_table", "write_table"]
+__all__ = ["DEFAULT_PLOT_METRICS", "plot_files", "read_result", "set_aside", "write_table"]
 
 #: Metrics plotted when the sweep's ``[outputs] plot_metrics`` is not given.
-DEFAULT_PLOT_METRICS = ("final.all.rmse", "final.all.rmse_debiased", "final.all.relmse",
-                        "final.all.delta_e2000_mean", "final.all.flip_mean", "inscatter.all.rmse",
-                        "transmittance.all.rmse")
+DEFAULT_PLOT_METRICS = (
+    "final.all.rmse",
+    "final.all.rmse_debiased",
+    "final.all.relmse",
+    "final.all.delta_e2000_mean",
+    "final.all.flip_mean",
+    "inscatter.all.rmse",
+    "transmittance.all.rmse",
+)
+
+
+def _problem(cfg: dict, result) -> str:
+    """Why ``result`` is not a configuration result of ``cfg`` (``""``: it is one)."""
+    if not isinstance(result, dict):
+        return f"holds a {type(result).__name__}, not a result object"
+    if result.get("id") != cfg["id"]:
+        return f"its id {result.get('id')!r} is not {cfg['id']!r}"
+    status = result.get("status")
+    if status == "error":
+        return "" if isinstance(result.get("error"), str) else "an error result without its 'error' text"
+    if status != "ok":
+        return f"status {status!r} is neither 'ok' nor 'error'"
+    rows = result.get("rows")
+    if not isinstance(result.get("provenance"), dict):
+        return "no 'provenance' object"
+    if not isinstance(rows, list) or not all(isinstance(r, dict) and "model" in r for r in rows):
+        return "'rows' is not a list of model rows"
+    return ""
+
+
+def read_result(path, cfg: dict):
+    """The result file of one configuration, or ``(None, why)`` when it is missing, unreadable or malformed
+    (not JSON, ``[]``, missing fields, another configuration's id); else ``(result, "")``."""
+    path = Path(path)
+    if not path.is_file():
+        return None, "missing"
+    try:
+        result = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as e:
+        return None, f"not readable as JSON ({str(e).splitlines()[0]})"
+    why = _problem(cfg, result)
+    return (None, why) if why else (result, "")
+
+
+def set_aside(path, why: str) -> Path:
+    """Rename a malformed result file to ``<name>.bad`` (replacing an older one) and warn in one line."""
+    path = Path(path)
+    aside = path.with_name(path.name + ".bad")
+    path.replace(aside)
+    print(
+        f"fogref sweep: warning: {path}: {why}; set aside as {aside.name}, the configuration runs again",
+        file=sys.stderr,
+    )
+    return aside
 
 
 def _rows_of(cfg: dict, result: dict) -> list[dict]:
     """Table rows of one configuration's result file."""
-    base = {"config_id": cfg["id"], "scene": Path(cfg["scene"]).name, "scene_path": cfg["scene"],
-            "scene_sha256": cfg["scene_sha256"], **{k: v for k, v in cfg["values"].items()},
-            "overrides": json.dumps(cfg["overrides"], sort_keys=True), "spp": cfg["spp"], "seed": cfg["seed"]}
+    base = {
+        "config_id": cfg["id"],
+        "scene": Path(cfg["scene"]).name,
+        "scene_path": cfg["scene"],
+        "scene_sha256": cfg["scene_sha256"],
+        **{k: v for k, v in cfg["values"].items()},
+        "overrides": json.dumps(cfg["overrides"], sort_keys=True),
+        "spp": cfg["spp"],
+        "seed": cfg["seed"],
+    }
     for k, v in list(base.items()):
         if isinstance(v, (list, dict)):
             base[k] = json.dumps(v)
     if result.get("status") == "error":
-        return [{**base, "model": m["label"], "model_name": m["name"], "status": "error",
-                 "error": result["error"], "truth_path": cfg["truth"]} for m in cfg["models"]]
+        return [
+            {
+                **base,
+                "model": m["label"],
+                "model_name": m["name"],
+                "status": "error",
+                "error": result["error"],
+                "truth_path": cfg["truth"],
+            }
+            for m in cfg["models"]
+        ]
     return [{**base, **result["provenance"], "status": "ok", "error": "", **row} for row in result["rows"]]
 
 
@@ -43,14 +111,28 @@ def write_table(spec: SweepSpec, configs: list[dict]) -> dict:
     rows = []
     for cfg in configs:
         f = out / "configs" / f"{cfg['id']}.json"
-        if f.is_file():
-            rows.extend(_rows_of(cfg, json.loads(f.read_text())))
+        result, why = read_result(f, cfg)
+        if result is not None:
+            rows.extend(_rows_of(cfg, result))
+        elif why != "missing":
+            set_aside(f, why)
     df = pd.DataFrame(rows)
     csv, pq = out / f"{spec.table}.csv", out / f"{spec.table}.parquet"
     write_text_atomic(csv, df.to_csv(index=False))
     atomic_write(pq, lambda tmp: df.to_parquet(tmp, index=False))
     plots = plot_table(df, spec, out / "plots") if spec.plots and len(df) else []
     return {"table": csv, "parquet": pq, "rows": len(df), "plots": plots}
+
+
+def plot_files(spec: SweepSpec, plot_dir: Path) -> list[Path]:
+    """Every figure :func:`plot_table` may write: ``<metric>_vs_<parameter>.png``."""
+    if not spec.plots:
+        return []
+    return [
+        plot_dir / f"{m}_vs_{p}.png"
+        for m in (spec.plot_metrics or DEFAULT_PLOT_METRICS)
+        for p in spec.parameters
+    ]
 
 
 def _noise_column(df, metric: str) -> str | None:
@@ -88,8 +170,13 @@ def plot_table(df, spec: SweepSpec, plot_dir: Path) -> list[Path]:
                 else:
                     ax.plot(x, g[metric], "o", ms=3, alpha=0.4)
                 mean = g.groupby(param)[metric].mean()
-                ax.plot(mean.index if numeric else mean.index.astype(str), mean.values, "-", lw=1.8,
-                        label=f"{model} (mean over other parameters)")
+                ax.plot(
+                    mean.index if numeric else mean.index.astype(str),
+                    mean.values,
+                    "-",
+                    lw=1.8,
+                    label=f"{model} (mean over other parameters)",
+                )
             ax.set_xlabel(param)
             ax.set_ylabel(metric)
             if (ok[metric] > 0).all() and ok[metric].max() > 20 * ok[metric].min():
