@@ -22,62 +22,33 @@ import numpy as np
 from fogref._version import __version__
 from fogref.errors import FogrefError, ParameterError
 from fogref.render.cache import truth_path
-from fogref.render.render import file_sha256
-from fogref.render.scene_defaults import declared, parse_scene, resolve, substitute
+from fogref.render.inputs import file_sha256, inputs_digest, scene_inputs
 from fogref.study.sweep.spec import MAX_CONFIGS, SweepSpec, as_str, design_size
 
 __all__ = ["build_configs", "design_points", "scene_input_files"]
 
 
 def scene_input_files(scene_path, overrides: dict | None = None) -> list[Path]:
-    """The files a scene loads, in file order: every ``<string name="filename" value="...">`` (meshes,
-    envmaps, textures) and ``<include filename="...">`` of the XML, ``$defaults`` substituted with
-    ``overrides``, relative to the scene's folder (else the working directory), and those of included
-    XML, recursively.
+    """The files a scene loads (meshes, envmaps, textures, included XML), without the scene itself:
+    :func:`fogref.render.inputs.scene_inputs` with ``overrides`` applied.
 
-    A minimal reader for the sweep's configuration id until :mod:`fogref.render.inputs` lands.
-    Raises FogrefError naming the scene and the file when a loaded file does not exist.
+    Raises FogrefError naming the scene element and the file when a loaded file does not exist.
     """
-    scene_path = Path(scene_path)
-    found: list[Path] = []
-    todo: list = [(scene_path, None)]
-    while todo:
-        xml, parent = todo.pop(0)
-        root = parse_scene(xml)
-        # an included file sees its own defaults and the including scene's values
-        defaults = resolve(root, overrides, source=xml) if parent is None else {**declared(root), **parent}
-        for el in root.iter():
-            if el.tag == "include":
-                name = el.get("filename")
-            elif el.tag == "string" and el.get("name") == "filename":
-                name = el.get("value")
-            else:
-                continue
-            if name is None:
-                continue
-            f = Path(substitute(name, defaults))
-            if not f.is_absolute():
-                f = xml.parent / f if (xml.parent / f).is_file() or not f.is_file() else f
-            if not f.is_file():
-                raise FogrefError(f"{xml}: <{el.tag}> '{name}': no such file {f}")
-            if any(f.resolve() == q.resolve() for q in found):
-                continue
-            found.append(f)
-            if el.tag == "include":
-                todo.append((f, defaults))
+    return [i.path for i in _existing_inputs(scene_path, overrides)[1:]]
+
+
+def _existing_inputs(scene_path, overrides: dict | None) -> list:
+    found = scene_inputs(scene_path, overrides)
+    for i in found:
+        if not i.exists:
+            raise FogrefError(f"{i.source}: no such file {i.path}")
     return found
 
 
 def _scene_inputs_digest(scene_path, overrides: dict | None = None) -> str:
-    """SHA-256 over the scene XML and every file it loads (meshes, envmaps, textures, includes).
-
-    The one place the sweep's configuration id and truth folder learn a scene's inputs.
-    TODO(H6): replace the body with the digest of :mod:`fogref.render.inputs` when it lands.
-    """
-    h = hashlib.sha256(file_sha256(scene_path).encode())
-    for f in scene_input_files(scene_path, overrides):
-        h.update(f"\0{f.name}\0{file_sha256(f)}".encode())
-    return h.hexdigest()
+    """SHA-256 over the scene XML and every file it loads (:func:`fogref.render.inputs.inputs_digest`):
+    the one place the sweep's configuration id and truth folder learn a scene's inputs."""
+    return inputs_digest(scene_path, overrides, inputs=_existing_inputs(scene_path, overrides))
 
 
 def _sized(spec: SweepSpec, scenes: int = 1) -> int:
