@@ -15,6 +15,7 @@ from fogref.cli.spec import UsageError, option, switch, toggle
 from fogref.render.scene_writer import (
     MESH_UP,
     PHYSICAL,
+    RANGES,
     SCATTERING,
     SOURCE,
     UNREAL_IGNORED,
@@ -44,11 +45,8 @@ CAMERA = "camera (y-up, metres)"
 
 
 def _range(table: dict, name: str) -> str:
-    """``in [lo, hi] unit`` of a value of scene_writer's PHYSICAL or SCATTERING table."""
-    from fogref.params import format_range
-
-    _, _, lo, hi, unit = table[name]
-    return f"in {format_range(lo, hi, unit=unit)}"
+    """``in [lo, hi] unit`` of a value of the PHYSICAL, SCATTERING or RANGES table (fog_input, scene_defaults)."""
+    return f"in {table[name].text()}"
 
 
 def _dest(option_name: str) -> str:
@@ -196,16 +194,30 @@ class _Options:
         api=WRITE,
         default_text="0.6",
     )
-    max_depth: int = option(16, "path depth (2 = single scattering)", check=Integer(), group=SCAT, api=WRITE)
+    max_depth: int = option(
+        16,
+        f"path depth (2 = single scattering, -1 = no limit), {_range(RANGES, 'max_depth')}",
+        check=Integer(),
+        group=SCAT,
+        api=WRITE,
+    )
     sun_elevation: float = option(
-        8.0, "sun above the horizon [deg], in [-90, 90]", check=Number(), group=LIGHT, api=WRITE
+        8.0,
+        f"sun above the horizon, {_range(RANGES, 'sun_elevation')}",
+        check=Number(),
+        group=LIGHT,
+        api=WRITE,
     )
     sun_azimuth: float = option(
-        24.0, "sun azimuth from +z toward +x [deg]", check=Number(), group=LIGHT, api=WRITE
+        24.0,
+        f"sun azimuth from +z toward +x, {_range(RANGES, 'sun_azimuth')}",
+        check=Number(),
+        group=LIGHT,
+        api=WRITE,
     )
     sun_irradiance: tuple = option(
         (3.2, 2.9, 2.4),
-        "sun irradiance, grey or RGB >= 0",
+        f"sun irradiance, grey or RGB, {_range(RANGES, 'sun_irradiance')}",
         check=Text(),
         metavar="E|R,G,B",
         group=LIGHT,
@@ -213,7 +225,7 @@ class _Options:
     )
     sky_radiance: tuple | None = option(
         (0.2, 0.3, 0.5),
-        "uniform sky radiance, grey or RGB >= 0, or none (black)",
+        f"uniform sky radiance, grey or RGB, {_range(RANGES, 'sky_radiance')}, or none (black)",
         check=Text(),
         metavar="L|R,G,B|none",
         group=LIGHT,
@@ -231,10 +243,32 @@ class _Options:
         api=WRITE,
     )
     fov: float = option(
-        70.0, "horizontal field of view [deg], in (0, 180)", check=Number(), group=CAMERA, api=WRITE
+        70.0, f"horizontal field of view, {_range(RANGES, 'fov')}", check=Number(), group=CAMERA, api=WRITE
     )
-    res: int = option(320, "image width [pixels], in [1, 65536]", check=Integer(), group=CAMERA, api=WRITE)
-    resy: int = option(180, "image height [pixels], in [1, 65536]", check=Integer(), group=CAMERA, api=WRITE)
+    res: int = option(320, f"image width, {_range(RANGES, 'res')}", check=Integer(), group=CAMERA, api=WRITE)
+    resy: int = option(
+        180, f"image height, {_range(RANGES, 'resy')}", check=Integer(), group=CAMERA, api=WRITE
+    )
+    ground_reflectance: str | None = option(
+        None,
+        f"diffuse reflectance of the ground plane, grey or RGB, {_range(RANGES, 'reflectance')} "
+        "(plane: the reflectance default; with a mesh: its own BSDF unless equal to the mesh's)",
+        check=Text(),
+        metavar="R[,G,B]",
+        group=GEOMETRY,
+        api=WRITE,
+        default_text="0.2",
+    )
+    mesh_reflectance: str | None = option(
+        None,
+        f"diffuse reflectance of the mesh, grey or RGB, {_range(RANGES, 'reflectance')} "
+        "(the reflectance default of a mesh scene)",
+        check=Text(),
+        metavar="R[,G,B]",
+        group=GEOMETRY,
+        api=WRITE,
+        default_text="0.2",
+    )
 
 
 #: the Unreal editor values with no physical counterpart: accepted, written as a note
@@ -309,6 +343,8 @@ def run(a, given=frozenset()) -> int:
         ground=a.ground,
         ground_size=a.ground_size,
         max_depth=a.max_depth,
+        ground_reflectance=a.ground_reflectance,
+        mesh_reflectance=a.mesh_reflectance,
         overwrite=a.force,
         on_note=note,
     )

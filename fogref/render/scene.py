@@ -14,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from fogref.errors import FogrefError, ParameterError
+from fogref import params as P
+from fogref.errors import FogrefError
 from fogref.media.params import medium_from_params
 from fogref.render.scene_defaults import parse_scene, resolve, substitute
 from fogref.render.sun import sun_direction_from_to_world
@@ -84,14 +85,11 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
                 d = [0.0, 0.0, 1.0] if tw is None else [
                     -x for x in sun_direction_from_to_world(tw, lambda s: substitute(s, defaults), str(path))]
             n = math.sqrt(sum(x * x for x in d)) or 1.0
-            E = p.get("irradiance", [1.0, 1.0, 1.0])
-            if any((not math.isfinite(x)) or x < 0 for x in E):
-                raise ParameterError(str(path), "sun.irradiance", f"values {E} must be finite and >= 0")
+            E = list(P.rgb(p.get("irradiance", [1.0, 1.0, 1.0]), "sun.irradiance", source=str(path), lo=0))
             desc["sun"] = {"direction": [-x / n for x in d], "irradiance": E}
         elif t in ("constant", "envmap"):
-            radiance = p.get("radiance")
-            if isinstance(radiance, list) and any((not math.isfinite(x)) or x < 0 for x in radiance):
-                raise ParameterError(str(path), "sky.radiance", f"values {radiance} must be finite and >= 0")
+            if isinstance(p.get("radiance"), list):
+                P.rgb(p["radiance"], "sky.radiance", source=str(path), lo=0)
             desc["sky"] = {"type": t, **{k: v for k, v in p.items() if not isinstance(v, dict)}}
     return desc
 
@@ -134,16 +132,40 @@ def check_supported(path: Path, root) -> None:
                               f"fogpath's fog fills all space outside surfaces (no interfaces)")
 
 
+def check_renderable(path, root) -> None:
+    """Refuse a scene that fogref cannot render as a truth: it needs exactly one ``<sensor>``
+    (the truth's camera) holding one ``<medium type="heightfog">`` (the fog; a fog-free truth
+    is ``sigma_t`` 0, not a missing medium).
+
+    >>> import xml.etree.ElementTree as ET
+    >>> check_renderable("s.xml", ET.fromstring('<scene><sensor type="perspective"/></scene>'))
+    Traceback (most recent call last):
+    ...
+    fogref.errors.FogrefError: s.xml: no fog: fogref renders a <medium type="heightfog"> inside the ...
+    """
+    sensors = root.findall("sensor")
+    if len(sensors) != 1:
+        raise FogrefError(f"{path}: {len(sensors)} <sensor> elements: fogref renders a truth through exactly "
+                          f"one camera (one <sensor> with a <medium type=\"heightfog\"> inside it)")
+    fogs = [m for m in sensors[0].findall("medium") if m.get("type") == "heightfog"]
+    if len(fogs) != 1:
+        what = "no fog" if not fogs else f"{len(fogs)} heightfog media"
+        raise FogrefError(f"{path}: {what}: fogref renders a <medium type=\"heightfog\"> inside the "
+                          f"<sensor> (exactly one; for a fog-free truth give it sigma_t 0)")
+
+
 def load_scene(path, overrides: dict | None = None):
     """``mi.load_file`` with fogref's plugins registered and errors made readable.
 
     Sets Mitsuba up first (:func:`fogref.render.variant.set_variant`: the variant
-    already set, else ``$FOGREF_VARIANT``, else ``llvm_ad_rgb``).
+    already set, else ``$FOGREF_VARIANT``, else ``llvm_ad_rgb``).  The scene's values are
+    checked first (:func:`describe_scene`, :func:`check_renderable`).
     """
     set_variant()
     import mitsuba as mi
 
     desc = describe_scene(path, overrides)
+    check_renderable(path, parse_scene(path))
     try:
         scene = mi.load_file(str(path), **{k: v for k, v in (overrides or {}).items()})
     except Exception as e:  # Mitsuba's message names the file and line: keep all of it
