@@ -45,7 +45,7 @@ CAMERA = "camera (y-up, metres)"
 
 
 def _range(table: dict, name: str) -> str:
-    """``in [lo, hi] unit`` of a value of the PHYSICAL, SCATTERING or RANGES table (fog_input, scene_defaults)."""
+    """``in [lo, hi] unit`` of a value of the PHYSICAL, SCATTERING or RANGES table."""
     return f"in {table[name].text()}"
 
 
@@ -308,7 +308,7 @@ def run(a, given=frozenset()) -> int:
         if v is not None:
             ue[key] = v
     if phys and ue:
-        p_opts = ", ".join(PHYSICAL[k][0] for k in phys)
+        p_opts = ", ".join(PHYSICAL[k].option for k in phys)
         u_opts = ", ".join(sorted(_ue_option(k) for k in _flat_unreal(ue)))
         raise UsageError(
             f"{SOURCE}: give the fog either in physical units or as Unreal editor values, not both "

@@ -46,8 +46,10 @@ class Range:
     Traceback (most recent call last):
     ...
     fogref.errors.ParameterError: s.xml: parameter 'max_depth': 0 is outside {-1} U [1, 8] (-1: no limit)
-    >>> Range(None, "rgb", 0, 1).check("0.5", "albedo", "s.xml"), Range(None, "rgb", 0).check("1 2 3", "E", "s")
-    (0.5, [1.0, 2.0, 3.0])
+    >>> Range(None, "rgb", 0, 1).check("0.5", "albedo", "s.xml")
+    0.5
+    >>> Range(None, "rgb", 0).check("1 2 3", "sun_irradiance", "s.xml")
+    [1.0, 2.0, 3.0]
     """
 
     option: str | None
@@ -84,10 +86,13 @@ class Range:
                 raise ParameterError(source, name, f"{n} is outside {self.text()} (-1: no limit)")
             return n
         if k == "point":
-            return list(params.vector(value, name, source=source, n=3, lo=self.lo, hi=self.hi, unit=self.unit))
+            v = params.vector(value, name, source=source, n=3, lo=self.lo, hi=self.hi, unit=self.unit)
+            return list(v)
         if k == "rgb":
-            v = params.rgb(value, name, source=source, lo=self.lo, hi=self.hi, unit=self.unit)
-            return v[0] if _count(value) == 1 else list(v)
+            if _count(value) == 1:  # grey: one number, shown as given
+                one = value if isinstance(value, (str, numbers.Real)) else list(value)[0]
+                return params.number(one, name, source=source, lo=self.lo, hi=self.hi, unit=self.unit)
+            return list(params.rgb(value, name, source=source, lo=self.lo, hi=self.hi, unit=self.unit))
         raise ValueError(f"unknown kind {k!r}")
 
 

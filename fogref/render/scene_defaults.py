@@ -32,8 +32,9 @@ from fogref import params
 from fogref.errors import FogrefError, ParameterError
 from fogref.mapping.fog_input import MAX_DEPTH, PHYSICAL, SCATTERING, Range
 
-__all__ = ["OPTIONAL_GROUPS", "RANGES", "VOCABULARY", "check_camera", "check_overrides", "check_values", "declared", "overrides_used_by", "parse_scene",
-           "references", "resolve", "substitute", "used_names", "vocabulary_groups"]
+__all__ = ["OPTIONAL_GROUPS", "RANGES", "VOCABULARY", "check_camera", "check_overrides", "check_values",
+           "declared", "overrides_used_by", "parse_scene", "references", "resolve", "substitute",
+           "used_names", "vocabulary_groups"]
 
 #: ``$NAME`` references in an attribute value.
 REFERENCE = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")

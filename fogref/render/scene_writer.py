@@ -26,14 +26,30 @@ from pathlib import Path
 
 from fogref import params
 from fogref.errors import FogrefError, ParameterError
-from fogref.mapping.fog_input import (PHYSICAL, SCATTERING, SOURCE, Range, _check, _fmt, _rgb3, _text,
-                                      fog_from_physical)
+from fogref.mapping.fog_input import (
+    PHYSICAL,
+    SCATTERING,
+    SOURCE,
+    Range,
+    _check,
+    _fmt,
+    _rgb3,
+    _text,
+    fog_from_physical,
+)
 from fogref.mapping.unreal_editor import UNREAL_IGNORED, UNREAL_MAPPED, fog_from_unreal
 from fogref.mapping.unreal_editor import flat_unreal as _flat_unreal
 from fogref.render.scene_defaults import RANGES, check_camera
-from fogref.render.scene_templates import GROUND_SIZE, MESH_PLUGINS, MESH_UP, TEMPLATES, VALLEY_SCENE
+from fogref.render.scene_templates import (
+    GROUND_SIZE,
+    MESH_PLUGINS,
+    MESH_UP,
+    TEMPLATES,
+    VALLEY_SCENE,
+    mesh_files,
+    mesh_has_normals,
+)
 from fogref.render.scene_templates import geometry as resolve_geometry
-from fogref.render.scene_templates import mesh_files, mesh_has_normals
 from fogref.render.scene_xml import DEFAULT_REFLECTANCE, scene_defaults, scene_element, write_xml
 from fogref.render.sun import sun_direction_from_angles
 
@@ -222,7 +238,8 @@ def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, alb
         raise ParameterError(SOURCE, "ground_reflectance (--ground-reflectance)", f"does not apply: {why}")
     g_refl = None if ground_reflectance is None else _check(ground_reflectance, "ground_reflectance",
                                                             GROUND_REFLECTANCE)
-    m_refl = None if mesh_reflectance is None else _check(mesh_reflectance, "mesh_reflectance", MESH_REFLECTANCE)
+    m_refl = None if mesh_reflectance is None else _check(mesh_reflectance, "mesh_reflectance",
+                                                          MESH_REFLECTANCE)
     inputs = mesh_files(geo.mesh) if geo.kind == "mesh" else [VALLEY_SCENE] if geo.kind == "valley" else []
     _check_inputs(out, inputs)
     flat = geo.kind == "mesh" and not mesh_has_normals(geo.mesh)
