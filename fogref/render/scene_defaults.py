@@ -195,7 +195,8 @@ def check_values(path: Path, values: dict, how: str = "<default>") -> None:
     """Check each vocabulary name of ``values`` against :data:`RANGES` (through :mod:`fogref.params`),
     and the camera (:func:`check_camera`) when both its points are there.
 
-    ``how`` says where the values came from in the message (``<default>`` or ``--set``).
+    ``how`` says where the values came from in the message (``<default>``, or ``--set``:
+    ``--set NAME=VALUE`` is quoted).
 
     >>> check_values(Path("s.xml"), {"sun_elevation": "1000", "title": "x"})
     Traceback (most recent call last):
@@ -204,10 +205,20 @@ def check_values(path: Path, values: dict, how: str = "<default>") -> None:
     >>> check_values(Path("s.xml"), {"max_depth": 0}, "--set")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    fogref.errors.ParameterError: s.xml: --set: parameter 'max_depth': 0 is outside {-1} U [1, 2147483647] ...
+    fogref.errors.ParameterError: s.xml: parameter 'max_depth': --set max_depth=0: 0 is outside {-1} U [1, ...
     """
     source = f"{path}: {how}"
-    checked = {name: RANGES[name].check(v, name, source) for name, v in values.items() if name in RANGES}
+    checked = {}
+    for name, v in values.items():
+        if name not in RANGES:
+            continue
+        try:
+            checked[name] = RANGES[name].check(v, name, source if how != "--set" else str(path))
+        except ParameterError as e:
+            if how != "--set":
+                raise
+            why = str(e).split(f"parameter '{name}': ", 1)[-1]
+            raise ParameterError(str(path), name, f"--set {name}={v}: {why}") from None
     if "camera_origin" in checked and "camera_target" in checked:
         check_camera(checked["camera_origin"], checked["camera_target"], source)
 
@@ -247,7 +258,7 @@ def check_overrides(path: Path, defaults: dict, overrides: dict | None) -> None:
             raise ParameterError(str(path), name, f"--set {name}={value}: the scene has no $default '{name}'"
                                  f"{hint}; it has: {', '.join(sorted(defaults))}")
         if name not in RANGES:
-            _like_default(defaults[name], value, name, f"{path}: --set")
+            _like_default(defaults[name], value, name, str(path))
     set_ = dict(overrides or {})
     check_values(path, {k: v for k, v in set_.items() if k != "camera_origin" and k != "camera_target"},
                  "--set")
@@ -266,10 +277,15 @@ def _like_default(default: str, value, name: str, source: str) -> None:
     words = str(value).replace(",", " ").split()
     if not old:
         return
-    if len(old) == 1 or len(words) == 1:
-        params.number(value, name, source=source)
-    else:
-        params.vector(value, name, source=source, n=len(old))
+    try:
+        if len(old) == 1 or len(words) == 1:
+            params.number(value, name, source=source)
+        else:
+            params.vector(value, name, source=source, n=len(old))
+    except ParameterError as e:
+        why = str(e).split(f"parameter '{name}': ", 1)[-1]
+        raise ParameterError(source, name, f"--set {name}={value}: {why} (like the scene's default "
+                                           f"'{default}')") from None
 
 
 def vocabulary_groups(names) -> tuple[list[str], list[str]]:
