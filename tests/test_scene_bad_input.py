@@ -144,6 +144,27 @@ def test_writer_and_set_agree_on_ranges(tmp_path, capsys, kw, option, name, valu
     assert not (tmp_path / "w.xml").exists()
 
 
+LITERAL = ('<scene version="3.0.0"><integrator type="fogpath">{integ}</integrator>'
+           '<sensor type="perspective"><float name="fov" value="{fov}"/><film type="hdrfilm">'
+           '<integer name="width" value="8"/><integer name="height" value="6"/></film>'
+           '<medium type="heightfog" name="medium"><float name="sigma_t" value="0.01"/></medium></sensor>'
+           '<shape type="sphere"/></scene>')
+
+
+@pytest.mark.parametrize("integ, fov, words", [
+    ('<integer name="max_depth" value="0"/>', "70", ["'integrator.max_depth'", "{-1} U [1, 2147483647]"]),
+    ('<integer name="max_depth" value="4"/>', "190", ["'sensor.fov'", "(0, 180) deg"]),
+    ('<integer name="rr_depth" value="-3"/>', "70", ["Mitsuba could not load", "fogpath", "'rr_depth'"]),
+])
+def test_values_written_in_the_xml_are_one_line_errors(tmp_path, capsys, integ, fov, words):
+    scene = tmp_path / "literal.xml"
+    scene.write_text(LITERAL.format(integ=integ, fov=fov))
+    rc, err = cli(capsys, ["render", scene, "--out", tmp_path / "x.exr", "--spp", "1", "--quiet", "--no-png"])
+    assert rc == 2 and all(w in err for w in words), err
+    msg = api_error(render_api, scene, tmp_path / "x.exr")
+    assert all(w in msg for w in words), msg
+
+
 # --------------------------------------------------------------------------- --ue-* values
 
 UE = [

@@ -10,6 +10,7 @@ is a ``constant`` (or ``envmap``) emitter.
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +18,7 @@ import numpy as np
 from fogref import params as P
 from fogref.errors import FogrefError
 from fogref.media.params import medium_from_params
-from fogref.render.scene_defaults import parse_scene, resolve, substitute
+from fogref.render.scene_defaults import RANGES, parse_scene, resolve, substitute
 from fogref.render.sun import sun_direction_from_to_world
 from fogref.render.variant import set_variant
 
@@ -59,7 +60,10 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
     """Fog, sun, sky and camera of a fogref XML scene, validated, as plain data.
 
     Raises :class:`~fogref.errors.ParameterError` naming the file and parameter
-    for an out-of-range fog value, :class:`~fogref.errors.FogrefError` for XML
+    for an out-of-range value (the ``$default``s and ``overrides`` against
+    :data:`~fogref.render.scene_defaults.RANGES`; the fog, the sun's irradiance, the
+    sky's radiance, and the integrator's ``max_depth``, the sensor's ``fov`` and the
+    film's size as written in the XML), :class:`~fogref.errors.FogrefError` for XML
     that can't be parsed.
     """
     path = Path(path)
@@ -71,6 +75,9 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
     integ = root.find("integrator")
     if integ is not None:
         desc["integrator"] = {"type": integ.get("type"), **_params(integ, defaults)}
+        if "max_depth" in desc["integrator"]:
+            RANGES["max_depth"].check(desc["integrator"]["max_depth"], "integrator.max_depth", str(path))
+    _check_sensor_literals(path, root, defaults)
     for med in root.iter("medium"):
         if med.get("type") == "heightfog":
             params = _params(med, defaults)
@@ -92,6 +99,31 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
                 P.rgb(p["radiance"], "sky.radiance", source=str(path), lo=0)
             desc["sky"] = {"type": t, **{k: v for k, v in p.items() if not isinstance(v, dict)}}
     return desc
+
+
+def _check_sensor_literals(path: Path, root, defaults) -> None:
+    """The sensor's ``fov`` and the film's ``width``/``height`` (as written, or via ``$default``s),
+    against the vocabulary's ``fov``, ``res`` and ``resy`` ranges."""
+    for sensor in root.findall("sensor"):
+        p = _params(sensor, defaults)
+        if "fov" in p:
+            RANGES["fov"].check(p["fov"], "sensor.fov", str(path))
+        film = sensor.find("film")
+        size = _params(film, defaults) if film is not None else {}
+        for key, name in (("width", "res"), ("height", "resy")):
+            if key in size:
+                RANGES[name].check(size[key], f"film.{key}", str(path))
+
+
+def _mitsuba_reason(e: Exception) -> str:
+    """Mitsuba's load error on one line: where it happened and, for a plugin that raised, the
+    exception it raised (the last line of the traceback Mitsuba embeds)."""
+    lines = [x.strip() for x in str(e).strip().splitlines() if x.strip()]
+    if not lines:
+        return type(e).__name__
+    first = re.sub(r"^\[[^\]]*\]\s*", "", lines[0]).replace("Traceback (most recent call last):", "")
+    first = first.strip().rstrip(":")
+    return f"{first}: {lines[-1]}" if len(lines) > 1 else first
 
 
 #: Emitters the renderer and the physical description (sun + sky) both handle.
@@ -168,8 +200,8 @@ def load_scene(path, overrides: dict | None = None):
     check_renderable(path, parse_scene(path))
     try:
         scene = mi.load_file(str(path), **{k: v for k, v in (overrides or {}).items()})
-    except Exception as e:  # Mitsuba's message names the file and line: keep all of it
-        raise FogrefError(f"{path}: Mitsuba could not load the scene:\n{str(e).strip()}") from None
+    except Exception as e:  # Mitsuba's message names the file and line: keep that and the reason
+        raise FogrefError(f"{path}: Mitsuba could not load the scene: {_mitsuba_reason(e)}") from None
     desc["camera"] = sensor_camera(scene.sensors()[0])
     return scene, desc
 
