@@ -34,9 +34,12 @@ def _value(el, defaults):
     if tag == "boolean":
         return v.lower() == "true"
     if tag in ("rgb", "point", "vector", "spectrum"):
-        if v == "" and tag in ("point", "vector"):
-            return [float(substitute(el.get(c, "0"), defaults)) for c in "xyz"]
-        parts = [float(x) for x in v.replace(",", " ").split()]
+        try:
+            if v == "" and tag in ("point", "vector"):
+                return [float(substitute(el.get(c, "0"), defaults)) for c in "xyz"]
+            parts = [float(x) for x in v.replace(",", " ").split()]
+        except ValueError:  # left as text: the check of the value names it (fogref.params)
+            return v
         return parts * 3 if len(parts) == 1 else parts
     return v
 
@@ -87,15 +90,19 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
         t, p = em.get("type"), _params(em, defaults)
         if t == "directional":
             d = p.get("direction")
-            if d is None:  # oriented by to_world (the shipped scenes: $sun_elevation, $sun_azimuth)
+            if d is not None:
+                d = list(P.vector(d, "sun.direction", source=str(path)))
+            else:  # oriented by to_world (the shipped scenes: $sun_elevation, $sun_azimuth)
                 tw = em.find("transform[@name='to_world']")
                 d = [0.0, 0.0, 1.0] if tw is None else [
                     -x for x in sun_direction_from_to_world(tw, lambda s: substitute(s, defaults), str(path))]
-            n = math.sqrt(sum(x * x for x in d)) or 1.0
+            n = math.sqrt(sum(x * x for x in d))
+            if n == 0:
+                raise FogrefError(f"{path}: the sun's direction is the zero vector")
             E = list(P.rgb(p.get("irradiance", [1.0, 1.0, 1.0]), "sun.irradiance", source=str(path), lo=0))
             desc["sun"] = {"direction": [-x / n for x in d], "irradiance": E}
         elif t in ("constant", "envmap"):
-            if isinstance(p.get("radiance"), list):
+            if isinstance(p.get("radiance"), list) or (isinstance(p.get("radiance"), str) and p["radiance"]):
                 P.rgb(p["radiance"], "sky.radiance", source=str(path), lo=0)
             desc["sky"] = {"type": t, **{k: v for k, v in p.items() if not isinstance(v, dict)}}
     return desc
