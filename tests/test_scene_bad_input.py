@@ -165,6 +165,23 @@ def test_values_written_in_the_xml_are_one_line_errors(tmp_path, capsys, integ, 
     assert all(w in msg for w in words), msg
 
 
+SKY = 'name="radiance" value="$sky_radiance"'
+
+
+@pytest.mark.parametrize("old, new, words", [
+    (SKY, 'name="radiance" value="abc"', ["'sky.radiance'", "'abc'"]),
+    (SKY, 'name="radiance" value="0.2, nan, 0.5"', ["sky.radiance", "finite"]),  # refused before too
+    ('<rotate x="1" angle="$sun_elevation"/>', '<rotate x="1" angle="$sun_elev"/>',
+     ["<rotate>", "'$sun_elev'"]),
+])
+def test_text_in_xml_values_is_a_one_line_error(tmp_path, capsys, old, new, words):
+    scene = _valley_with(tmp_path, "text.xml", lambda t: t.replace(old, new))
+    rc, err = cli(capsys, ["render", scene, "--out", tmp_path / "x.exr", *TINY])
+    assert rc == 2 and "text.xml" in err and all(w in err for w in words), err
+    msg = api_error(render_api, scene, tmp_path / "x.exr", overrides={"res": 8, "resy": 6})
+    assert all(w in msg for w in words), msg
+
+
 # --------------------------------------------------------------------------- --ue-* values
 
 UE = [
