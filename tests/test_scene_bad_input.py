@@ -211,6 +211,19 @@ def test_unreal_values_are_range_checked(tmp_path, capsys, key, option, value, a
     assert not (tmp_path / "u.xml").exists()
 
 
+@pytest.mark.parametrize("kw, words", [
+    ({"out": 123}, ["'out (--out)'", "expected a path"]),
+    ({"fog": "abc"}, ["'fog'", "expected a dict"]),
+    ({"res": 16.7}, ["'res (--res)'", "not an integer"]),  # refused before too
+    ({"mesh_up": 5}, ["'mesh_up (--mesh-up)'", "y, z, unreal"]),  # refused before too
+])
+def test_write_scene_api_arguments_are_checked(tmp_path, kw, words):
+    from fogref.render.scene_writer import write_scene
+
+    msg = api_error(write_scene, **{"out": tmp_path / "w.xml", **kw})
+    assert all(w in msg for w in words), msg
+
+
 # --------------------------------------------------------------------------- what a truth needs
 
 def _no_fog(t: str) -> str:

@@ -185,6 +185,8 @@ def fog_from_physical(fog: dict | None = None, *, albedo=0.9, g: float = 0.6) ->
     """
     from fogref.models.ue4 import unreal_to_sigma
 
+    if fog is not None and not isinstance(fog, dict):
+        raise ParameterError(SOURCE, "fog", f"expected a dict of physical fog values, got {fog!r}")
     fog = dict(fog or {})
     unknown = sorted(set(fog) - set(PHYSICAL) - set(SCATTERING))
     if unknown:

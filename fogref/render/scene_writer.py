@@ -189,7 +189,7 @@ def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, alb
     Unreal has no albedo or phase function:
     the fog uses albedo 0.9 and Henyey-Greenstein g 0.6 (the albedo and g parameters)
     """
-    out = Path(out)
+    out = params.path(out, "out (--out)", source=SOURCE)
     if out.suffix.lower() != ".xml":
         raise FogrefError(f"{SOURCE}: --out '{out}': a scene file must end in .xml")
     if out.exists() and not overwrite:
