@@ -224,6 +224,14 @@ def test_write_scene_api_arguments_are_checked(tmp_path, kw, words):
     assert all(w in msg for w in words), msg
 
 
+def test_scene_api_arguments_are_checked(tmp_path):
+    from fogref.render.scene import describe_scene, load_scene
+
+    assert "expected a path" in api_error(describe_scene, 123)
+    assert "expected a dict" in api_error(load_scene, VALLEY, "res=8")
+    assert "expected an integer" in api_error(describe_scene, VALLEY, {"res": [8]})
+
+
 # --------------------------------------------------------------------------- what a truth needs
 
 def _no_fog(t: str) -> str:

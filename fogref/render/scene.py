@@ -69,7 +69,7 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
     film's size as written in the XML), :class:`~fogref.errors.FogrefError` for XML
     that can't be parsed.
     """
-    path = Path(path)
+    path = P.path(path, "scene", source="fogref")
     root = parse_scene(path)
     defaults = resolve(root, overrides, source=path)
     check_supported(path, root)

@@ -88,7 +88,7 @@ def parse_scene(path, comments: bool = False) -> ET.Element:
     Raises :class:`~fogref.errors.FogrefError` naming the file when it does not exist
     or is not well-formed XML.
     """
-    path = Path(path)
+    path = params.path(path, "scene", source="fogref")
     if not path.is_file():
         raise FogrefError(f"{path}: no such scene file")
     parser = ET.XMLParser(target=ET.TreeBuilder(insert_comments=True)) if comments else None
@@ -183,6 +183,9 @@ def resolve(scene, overrides: dict | None = None, source=None) -> dict[str, str]
     ...
     fogref.errors.ParameterError: s.xml: parameter 'gg': --set gg=0.2: the scene has no $default 'gg'...
     """
+    if overrides is not None and not isinstance(overrides, dict):
+        raise ParameterError(str(source or "scene"), "overrides",
+                             f"expected a dict of NAME: VALUE (like --set NAME=VALUE), got {overrides!r}")
     values = declared(scene)
     where = source if source is not None else (scene if not isinstance(scene, ET.Element) else "scene")
     check_overrides(Path(str(where)), values, overrides)
