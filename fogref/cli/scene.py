@@ -19,6 +19,7 @@ from fogref.render.scene_writer import (
     SCATTERING,
     SOURCE,
     UNREAL_IGNORED,
+    UNREAL_IGNORED_RANGES,
     UNREAL_MAPPED,
     _flat_unreal,
     write_scene,
@@ -278,7 +279,8 @@ _IGNORED_FIELDS = [
         float | None if kind == "number" else str | None,
         option(
             None,
-            f"{key}: no physical counterpart, ignored with a note ({why})",
+            f"{key}: no physical counterpart, ignored with a note ({why}); "
+            f"{_range(UNREAL_IGNORED_RANGES, key)}",
             flag=opt,
             check=Number() if kind == "number" else Text(),
             metavar="R,G,B" if kind == "rgb" else None,

@@ -7,9 +7,11 @@ XML scene that ``fogref render`` takes as is, built like the shipped ones
 (:data:`fogref.render.scene_defaults.VOCABULARY`), so ``fogref render --set
 NAME=VALUE`` changes any fog, sun, sky or camera value.
 
-The concepts live beside it: the physical fog and the validators in
-:mod:`fogref.mapping.fog_input`, the exact Unreal -> physical mapping in
-:mod:`fogref.mapping.unreal_editor`, the geometry templates (``"plane"``,
+The concepts live beside it: the physical fog and the declared range of each of its
+values in :mod:`fogref.mapping.fog_input` (checked through :mod:`fogref.params`; the
+scene vocabulary's ranges, :data:`fogref.render.scene_defaults.RANGES`, are the same
+declarations that ``fogref render --set`` is checked against), the exact Unreal ->
+physical mapping in :mod:`fogref.mapping.unreal_editor`, the geometry templates (``"plane"``,
 ``"valley"`` read from ``scenes/valley.xml``, ``.obj``/``.ply`` meshes) in
 :mod:`fogref.render.scene_templates` and the XML in :mod:`fogref.render.scene_xml`.
 This module checks the sun, sky, camera and geometry arguments and writes the file.
@@ -37,7 +39,7 @@ from fogref.mapping.fog_input import (
     _text,
     fog_from_physical,
 )
-from fogref.mapping.unreal_editor import UNREAL_IGNORED, UNREAL_MAPPED, fog_from_unreal
+from fogref.mapping.unreal_editor import UNREAL_IGNORED, UNREAL_IGNORED_RANGES, UNREAL_MAPPED, fog_from_unreal
 from fogref.mapping.unreal_editor import flat_unreal as _flat_unreal
 from fogref.render.scene_defaults import RANGES, check_camera
 from fogref.render.scene_templates import (
@@ -54,7 +56,7 @@ from fogref.render.scene_xml import DEFAULT_REFLECTANCE, scene_defaults, scene_e
 from fogref.render.sun import sun_direction_from_angles
 
 __all__ = ["MESH_PLUGINS", "MESH_UP", "PHYSICAL", "RANGES", "SCATTERING", "TEMPLATES", "UNREAL_IGNORED",
-           "UNREAL_MAPPED", "SceneWriteResult", "fog_from_physical", "fog_from_unreal",
+           "UNREAL_IGNORED_RANGES", "UNREAL_MAPPED", "SceneWriteResult", "fog_from_physical", "fog_from_unreal",
            "write_scene"]
 
 #: The writer's own values (not scene $defaults); the vocabulary's are RANGES.
