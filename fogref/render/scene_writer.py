@@ -56,8 +56,8 @@ from fogref.render.scene_xml import DEFAULT_REFLECTANCE, scene_defaults, scene_e
 from fogref.render.sun import sun_direction_from_angles
 
 __all__ = ["MESH_PLUGINS", "MESH_UP", "PHYSICAL", "RANGES", "SCATTERING", "TEMPLATES", "UNREAL_IGNORED",
-           "UNREAL_IGNORED_RANGES", "UNREAL_MAPPED", "SceneWriteResult", "fog_from_physical", "fog_from_unreal",
-           "write_scene"]
+           "UNREAL_IGNORED_RANGES", "UNREAL_MAPPED", "SceneWriteResult", "fog_from_physical",
+           "fog_from_unreal", "write_scene"]
 
 #: The writer's own values (not scene $defaults); the vocabulary's are RANGES.
 MESH_SCALE = Range("--mesh-scale", "number", 0.0, 1e6, "m per file unit", lo_open=True)
