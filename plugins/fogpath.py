@@ -35,6 +35,8 @@ import drjit as dr
 import mitsuba as mi
 from mitsuba.python.ad.integrators.common import mis_weight  # the module set_variant loaded (not a 2nd copy)
 
+from fogref import params
+from fogref.mapping.fog_input import MAX_DEPTH
 from fogref.media import drjit_ops
 
 from .fogpath_camera import FogPathCameraRay
@@ -103,23 +105,19 @@ class FogPathIntegrator(FogPathCameraRay):
 
     def __init__(self, props):
         super().__init__(props)
-        md = props.get("max_depth", 64)
-        if md < -1 or md == 0:
-            raise ValueError(f"fogpath: parameter 'max_depth': value {md} outside {{-1}} U [1, 2^31)")
-        self.max_depth = 2**31 - 1 if md < 0 else int(md)
-        self.rr_depth = int(props.get("rr_depth", 5))
-        if self.rr_depth < 1:
-            raise ValueError(f"fogpath: parameter 'rr_depth': value {self.rr_depth} outside [1, 2^31)")
+        # checked by fogref's one validator (its ParameterError is a ValueError)
+        md = MAX_DEPTH.check(props.get("max_depth", 64), "max_depth", "fogpath")
+        self.max_depth = 2**31 - 1 if md < 0 else md
+        self.rr_depth = params.integer(props.get("rr_depth", 5), "rr_depth", source="fogpath", lo=1,
+                                       hi=2**31 - 1)
         self.hide_emitters = bool(props.get("hide_emitters", False))
         self.sun_sampling = bool(props.get("sun_sampling", True))
         self.sun_sampling_layers = int(props.get("sun_sampling_layers", 1))
         self.sun_sampling_mixture = bool(props.get("sun_sampling_mixture", True))
         self.sun_samples = int(props.get("sun_samples", 2))
         self.sky_cv = str(props.get("sky_cv", "off"))
-        if self.sky_cv not in ("off", "surface", "all"):
-            raise ValueError(f"fogpath: parameter 'sky_cv': {self.sky_cv!r} is not one of off, surface, all")
-        if self.sun_samples < 1:
-            raise ValueError(f"fogpath: parameter 'sun_samples': value {self.sun_samples} outside [1, 64]")
+        params.choice(self.sky_cv, "sky_cv", ("off", "surface", "all"), "fogpath")
+        params.integer(self.sun_samples, "sun_samples", source="fogpath", lo=1, hi=64)
         self.forced_split = bool(props.get("forced_split", FORCED_SPLIT_DEFAULT))
         self.aovs = bool(props.get("aovs", True))
         self.pixel_exact = bool(props.get("pixel_exact", False))

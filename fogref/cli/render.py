@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 from fogref.cli.checks import Assignments, Choice, Integer, Number, PathArg
 from fogref.cli.spec import option, switch
+from fogref.render.variant import VARIANTS
 
 NAME = "render"
 HELP = "path-trace a scene to a ground-truth EXR (+ PNG preview)"
@@ -20,8 +21,6 @@ DESCRIPTION = (
 )
 EPILOG = "exit codes: 0 written, 2 usage or input error, 130 interrupted (run again to resume)"
 API = "fogref.render.render:render"
-#: Mitsuba variants fogref renders with (its plugins need an RGB autodiff variant).
-VARIANTS = ("llvm_ad_rgb", "cuda_ad_rgb")
 #: ``--pixel-filter`` values (fogref.render.render.PIXEL_FILTERS, checked equal by tests/test_cli_spec.py)
 PIXEL_FILTERS = ("centre", "box")
 

@@ -15,9 +15,11 @@ from fogref.cli.spec import UsageError, option, switch, toggle
 from fogref.render.scene_writer import (
     MESH_UP,
     PHYSICAL,
+    RANGES,
     SCATTERING,
     SOURCE,
     UNREAL_IGNORED,
+    UNREAL_IGNORED_RANGES,
     UNREAL_MAPPED,
     _flat_unreal,
     write_scene,
@@ -44,11 +46,8 @@ CAMERA = "camera (y-up, metres)"
 
 
 def _range(table: dict, name: str) -> str:
-    """``in [lo, hi] unit`` of a value of scene_writer's PHYSICAL or SCATTERING table."""
-    from fogref.params import format_range
-
-    _, _, lo, hi, unit = table[name]
-    return f"in {format_range(lo, hi, unit=unit)}"
+    """``in [lo, hi] unit`` of a value of the PHYSICAL, SCATTERING or RANGES table."""
+    return f"in {table[name].text()}"
 
 
 def _dest(option_name: str) -> str:
@@ -196,16 +195,30 @@ class _Options:
         api=WRITE,
         default_text="0.6",
     )
-    max_depth: int = option(16, "path depth (2 = single scattering)", check=Integer(), group=SCAT, api=WRITE)
+    max_depth: int = option(
+        16,
+        f"path depth (2 = single scattering, -1 = no limit), {_range(RANGES, 'max_depth')}",
+        check=Integer(),
+        group=SCAT,
+        api=WRITE,
+    )
     sun_elevation: float = option(
-        8.0, "sun above the horizon [deg], in [-90, 90]", check=Number(), group=LIGHT, api=WRITE
+        8.0,
+        f"sun above the horizon, {_range(RANGES, 'sun_elevation')}",
+        check=Number(),
+        group=LIGHT,
+        api=WRITE,
     )
     sun_azimuth: float = option(
-        24.0, "sun azimuth from +z toward +x [deg]", check=Number(), group=LIGHT, api=WRITE
+        24.0,
+        f"sun azimuth from +z toward +x, {_range(RANGES, 'sun_azimuth')}",
+        check=Number(),
+        group=LIGHT,
+        api=WRITE,
     )
     sun_irradiance: tuple = option(
         (3.2, 2.9, 2.4),
-        "sun irradiance, grey or RGB >= 0",
+        f"sun irradiance, grey or RGB, {_range(RANGES, 'sun_irradiance')}",
         check=Text(),
         metavar="E|R,G,B",
         group=LIGHT,
@@ -213,7 +226,7 @@ class _Options:
     )
     sky_radiance: tuple | None = option(
         (0.2, 0.3, 0.5),
-        "uniform sky radiance, grey or RGB >= 0, or none (black)",
+        f"uniform sky radiance, grey or RGB, {_range(RANGES, 'sky_radiance')}, or none (black)",
         check=Text(),
         metavar="L|R,G,B|none",
         group=LIGHT,
@@ -231,10 +244,32 @@ class _Options:
         api=WRITE,
     )
     fov: float = option(
-        70.0, "horizontal field of view [deg], in (0, 180)", check=Number(), group=CAMERA, api=WRITE
+        70.0, f"horizontal field of view, {_range(RANGES, 'fov')}", check=Number(), group=CAMERA, api=WRITE
     )
-    res: int = option(320, "image width [pixels], in [1, 65536]", check=Integer(), group=CAMERA, api=WRITE)
-    resy: int = option(180, "image height [pixels], in [1, 65536]", check=Integer(), group=CAMERA, api=WRITE)
+    res: int = option(320, f"image width, {_range(RANGES, 'res')}", check=Integer(), group=CAMERA, api=WRITE)
+    resy: int = option(
+        180, f"image height, {_range(RANGES, 'resy')}", check=Integer(), group=CAMERA, api=WRITE
+    )
+    ground_reflectance: str | None = option(
+        None,
+        f"diffuse reflectance of the ground plane, grey or RGB, {_range(RANGES, 'reflectance')} "
+        "(plane: the reflectance default; with a mesh: its own BSDF unless equal to the mesh's)",
+        check=Text(),
+        metavar="R[,G,B]",
+        group=GEOMETRY,
+        api=WRITE,
+        default_text="0.2",
+    )
+    mesh_reflectance: str | None = option(
+        None,
+        f"diffuse reflectance of the mesh, grey or RGB, {_range(RANGES, 'reflectance')} "
+        "(the reflectance default of a mesh scene)",
+        check=Text(),
+        metavar="R[,G,B]",
+        group=GEOMETRY,
+        api=WRITE,
+        default_text="0.2",
+    )
 
 
 #: the Unreal editor values with no physical counterpart: accepted, written as a note
@@ -244,7 +279,8 @@ _IGNORED_FIELDS = [
         float | None if kind == "number" else str | None,
         option(
             None,
-            f"{key}: no physical counterpart, ignored with a note ({why})",
+            f"{key}: no physical counterpart, ignored with a note ({why}); "
+            f"{_range(UNREAL_IGNORED_RANGES, key)}",
             flag=opt,
             check=Number() if kind == "number" else Text(),
             metavar="R,G,B" if kind == "rgb" else None,
@@ -274,7 +310,7 @@ def run(a, given=frozenset()) -> int:
         if v is not None:
             ue[key] = v
     if phys and ue:
-        p_opts = ", ".join(PHYSICAL[k][0] for k in phys)
+        p_opts = ", ".join(PHYSICAL[k].option for k in phys)
         u_opts = ", ".join(sorted(_ue_option(k) for k in _flat_unreal(ue)))
         raise UsageError(
             f"{SOURCE}: give the fog either in physical units or as Unreal editor values, not both "
@@ -309,6 +345,8 @@ def run(a, given=frozenset()) -> int:
         ground=a.ground,
         ground_size=a.ground_size,
         max_depth=a.max_depth,
+        ground_reflectance=a.ground_reflectance,
+        mesh_reflectance=a.mesh_reflectance,
         overwrite=a.force,
         on_note=note,
     )

@@ -1,91 +1,134 @@
-"""The fog a user gives ``fogref scene``, in physical units: checked parameters of a ``heightfog``.
+"""The fog a user gives ``fogref scene``, in physical units, and the declared range of each value.
+
+:class:`Range` is one value's kind (number, angle, integer, path depth, grey-or-RGB,
+point), allowed range and unit, and its check through :mod:`fogref.params` (fogref's
+one validator).  :data:`PHYSICAL` and :data:`SCATTERING` declare the fog's values
+once; the scene vocabulary's table (:data:`fogref.render.scene_defaults.RANGES`) takes
+them from here, so ``fogref scene``, ``fogref render --set`` and a scene's own
+``$default`` values are checked against the same ranges.
 
 :func:`fog_from_physical` validates extinction, falloff, heights, a second layer
 and box bounds (y-up, metres) plus albedo and the Henyey-Greenstein ``g``, and
-returns the ``heightfog`` XML parameters.  ``_check`` and ``_numbers`` are the
-scene writer's validators (every value is finite and in its documented range;
-bad input is one :class:`~fogref.errors.ParameterError` line naming the parameter,
-its command-line option and the range); ``_fmt`` writes a float as the shortest
+returns the ``heightfog`` XML parameters.  ``_fmt`` writes a float as the shortest
 text that reads back to the same float64.
 """
 
 from __future__ import annotations
 
 import math
+import numbers
+from dataclasses import dataclass
 
+from fogref import params
 from fogref.errors import ParameterError
-from fogref.media.params import medium_from_params
-from fogref.models.ue4 import unreal_to_sigma
 
-__all__ = ["PHYSICAL", "SCATTERING", "SOURCE", "fog_from_physical"]
+__all__ = ["PHYSICAL", "SCATTERING", "SOURCE", "Range", "fog_from_physical"]
 
 #: Where messages say a bad value came from.
 SOURCE = "fogref scene"
 
-#: Physical fog parameters: name -> (command-line option, kind, lo, hi, unit).
+#: Mitsuba's path depth: -1 (no limit) or 1 .. 2^31 - 1 (fogpath's ``max_depth``, a 32-bit int).
+_DEPTH_MAX = (1 << 31) - 1
+
+
+@dataclass(frozen=True)
+class Range:
+    """A value's kind, allowed range and unit, declared once, and its check.
+
+    ``kind``: ``"number"``, ``"angle"``, ``"integer"``, ``"depth"`` (an integer in
+    ``{-1} U [1, hi]``, -1 meaning no limit), ``"rgb"`` (1 grey or 3 numbers) or
+    ``"point"`` (3 numbers).  ``option``: the ``fogref scene`` option that sets it
+    (None: none).  Ranges as in :func:`fogref.params.format_range`.
+
+    >>> Range("--fov", "angle", 0, 180, "deg", lo_open=True, hi_open=True).text()
+    '(0, 180) deg'
+    >>> Range(None, "depth", -1, 8).check("0", "max_depth", "s.xml")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: s.xml: parameter 'max_depth': 0 is outside {-1} U [1, 8] (-1: no limit)
+    >>> Range(None, "rgb", 0, 1).check("0.5", "albedo", "s.xml")
+    0.5
+    >>> Range(None, "rgb", 0).check("1 2 3", "sun_irradiance", "s.xml")
+    [1.0, 2.0, 3.0]
+    """
+
+    option: str | None
+    kind: str
+    lo: float = -math.inf
+    hi: float = math.inf
+    unit: str = ""
+    lo_open: bool = False
+    hi_open: bool = False
+
+    def text(self) -> str:
+        """The allowed values as text: ``[0, 1]``, ``(0, 180) deg``, ``{-1} U [1, 8]``."""
+        if self.kind == "depth":
+            return f"{{-1}} U {params.format_range(1, self.hi, unit=self.unit)}"
+        return params.format_range(self.lo, self.hi, self.lo_open, self.hi_open, self.unit)
+
+    def label(self, name: str) -> str:
+        """``name (--option)``: how the writer's messages name the value."""
+        return f"{name} ({self.option})" if self.option else name
+
+    def check(self, value, name: str, source: str):
+        """``value`` converted and checked: a float (number, angle, grey rgb), an int (integer,
+        depth) or a list of 3 floats (rgb, point); else a ParameterError naming ``source``,
+        ``name``, the value and :meth:`text`."""
+        k = self.kind
+        if k in ("number", "angle"):
+            return params.number(value, name, source=source, lo=self.lo, hi=self.hi, lo_open=self.lo_open,
+                                 hi_open=self.hi_open, unit=self.unit)
+        if k == "integer":
+            return params.integer(value, name, source=source, lo=self.lo, hi=self.hi, unit=self.unit)
+        if k == "depth":
+            n = params.integer(value, name, source=source)
+            if n != -1 and not 1 <= n <= self.hi:
+                raise ParameterError(source, name, f"{n} is outside {self.text()} (-1: no limit)")
+            return n
+        if k == "point":
+            v = params.vector(value, name, source=source, n=3, lo=self.lo, hi=self.hi, unit=self.unit)
+            return list(v)
+        if k == "rgb":
+            if _count(value) == 1:  # grey: one number, shown as given
+                one = value if isinstance(value, (str, numbers.Real)) else list(value)[0]
+                return params.number(one, name, source=source, lo=self.lo, hi=self.hi, unit=self.unit)
+            return list(params.rgb(value, name, source=source, lo=self.lo, hi=self.hi, unit=self.unit))
+        raise ValueError(f"unknown kind {k!r}")
+
+
+def _count(value) -> int:
+    """How many numbers ``value`` holds (a number: 1; text ``"a, b c"``: its words)."""
+    if isinstance(value, str):
+        return len(value.replace(",", " ").split())
+    if isinstance(value, numbers.Real) or getattr(value, "ndim", 1) == 0:
+        return 1
+    return len(list(value))
+
+
+#: Physical fog parameters (y-up, metres), each declared once.
 PHYSICAL = {
-    "sigma_t": ("--sigma-t", "rgb", 0.0, 1e2, "1/m"),
-    "density": ("--density", "number", 0.0, 1e6, "relative"),
-    "falloff": ("--falloff", "number", 0.0, 1e3, "1/m"),
-    "height": ("--height", "number", -1e7, 1e7, "m"),
-    "density2": ("--density2", "number", 0.0, 1e6, "relative to sigma_t"),
-    "falloff2": ("--falloff2", "number", 0.0, 1e3, "1/m"),
-    "height2": ("--height2", "number", -1e7, 1e7, "m"),
-    "bounds_min": ("--bounds-min", "point", -1e7, 1e7, "m"),
-    "bounds_max": ("--bounds-max", "point", -1e7, 1e7, "m"),
+    "sigma_t": Range("--sigma-t", "rgb", 0.0, 1e2, "1/m"),
+    "density": Range("--density", "number", 0.0, 1e6, "relative"),
+    "falloff": Range("--falloff", "number", 0.0, 1e3, "1/m"),
+    "height": Range("--height", "number", -1e7, 1e7, "m"),
+    "density2": Range("--density2", "number", 0.0, 1e6, "relative to sigma_t"),
+    "falloff2": Range("--falloff2", "number", 0.0, 1e3, "1/m"),
+    "height2": Range("--height2", "number", -1e7, 1e7, "m"),
+    "bounds_min": Range("--bounds-min", "point", -1e7, 1e7, "m"),
+    "bounds_max": Range("--bounds-max", "point", -1e7, 1e7, "m"),
 }
 #: Shared by both fog inputs (Unreal has neither).
 SCATTERING = {
-    "albedo": ("--albedo", "rgb", 0.0, 1.0, ""),
-    "g": ("--g", "number", -0.999, 0.999, ""),
+    "albedo": Range("--albedo", "rgb", 0.0, 1.0),
+    "g": Range("--g", "number", -0.999, 0.999),
 }
+#: Mitsuba's path depth (the vocabulary's ``max_depth``; fogpath refuses 0).
+MAX_DEPTH = Range("--max-depth", "depth", -1, _DEPTH_MAX)
 
 
-def _label(name: str, option: str | None) -> str:
-    return f"{name} ({option})" if option else name
-
-
-def _range(lo: float, hi: float, unit: str) -> str:
-    return f"[{lo:g}, {hi:g}]" + (f" {unit}" if unit else "")
-
-
-def _numbers(value, name: str, option: str | None, counts: tuple) -> list[float]:
-    """1 or 3 finite numbers from a number, a sequence or a string ``"a, b, c"``."""
-    label = _label(name, option)
-    if isinstance(value, str):
-        parts = value.replace(",", " ").split()
-    elif isinstance(value, (int, float)) and not isinstance(value, bool):
-        parts = [value]
-    else:
-        try:
-            parts = list(value)
-        except TypeError:
-            raise ParameterError(SOURCE, label,
-                                 f"expected a number or {counts[-1]} numbers, got {value!r}") from None
-    try:
-        nums = [float(x) for x in parts]
-    except (TypeError, ValueError):
-        raise ParameterError(SOURCE, label, f"expected numbers, got {value!r}") from None
-    if len(nums) not in counts:
-        want = " or ".join(str(c) for c in counts)
-        raise ParameterError(SOURCE, label, f"expected {want} number(s), got {len(nums)} ({value!r})")
-    if not all(math.isfinite(x) for x in nums):
-        raise ParameterError(SOURCE, label, f"values {nums} must be finite")
-    return nums
-
-
-def _check(value, name: str, option: str | None, kind: str, lo: float = -math.inf, hi: float = math.inf,
-           unit: str = ""):
-    """A validated number (kind "number"), grey or RGB value ("rgb": a float for 1 value,
-    a list for 3) or 3-vector ("point", a list), each component in [lo, hi]."""
-    counts = {"number": (1,), "rgb": (1, 3), "point": (3,)}[kind]
-    nums = _numbers(value, name, option, counts)
-    for x in nums:
-        if not lo <= x <= hi:
-            shown = nums[0] if kind == "number" else nums
-            raise ParameterError(SOURCE, _label(name, option),
-                                 f"value {shown} outside {_range(lo, hi, unit)}")
-    return nums[0] if kind == "number" or (kind == "rgb" and len(nums) == 1) else nums
+def _check(value, name: str, rng: Range):
+    """``value`` checked against ``rng`` by the writer (messages name ``name (--option)``)."""
+    return rng.check(value, rng.label(name), SOURCE)
 
 
 def _rgb3(v) -> list:
@@ -138,8 +181,12 @@ def fog_from_physical(fog: dict | None = None, *, albedo=0.9, g: float = 0.6) ->
     >>> fog_from_physical({"falloff": -1})  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    fogref.errors.ParameterError: fogref scene: parameter 'falloff (--falloff)': value -1.0 outside ...
+    fogref.errors.ParameterError: fogref scene: parameter 'falloff (--falloff)': -1 is outside [0, 1000] 1/m
     """
+    from fogref.models.ue4 import unreal_to_sigma
+
+    if fog is not None and not isinstance(fog, dict):
+        raise ParameterError(SOURCE, "fog", f"expected a dict of physical fog values, got {fog!r}")
     fog = dict(fog or {})
     unknown = sorted(set(fog) - set(PHYSICAL) - set(SCATTERING))
     if unknown:
@@ -151,17 +198,17 @@ def fog_from_physical(fog: dict | None = None, *, albedo=0.9, g: float = 0.6) ->
     defaults = {"sigma_t": sigma0, "density": 1.0, "falloff": falloff0, "height": 0.0,
                 "density2": 0.0, "falloff2": 0.002, "height2": 100.0}
     out = {}
-    for name, (opt, kind, lo, hi, unit) in PHYSICAL.items():
+    for name, rng in PHYSICAL.items():
         v = fog.get(name, defaults.get(name))
         if v is not None:
-            out[name] = _check(v, name, opt, kind, lo, hi, unit)
-    out["albedo"] = _check(albedo, "albedo", SCATTERING["albedo"][0], "rgb", 0.0, 1.0)
-    out["g"] = _check(g, "g", SCATTERING["g"][0], "number", -0.999, 0.999)
+            out[name] = _check(v, name, rng)
+    out["albedo"] = _check(albedo, "albedo", SCATTERING["albedo"])
+    out["g"] = _check(g, "g", SCATTERING["g"])
     if ("bounds_min" in out) != ("bounds_max" in out):
         missing = "bounds_max" if "bounds_min" in out else "bounds_min"
-        raise ParameterError(SOURCE, _label(missing, PHYSICAL[missing][0]), "give both bounds or none")
+        raise ParameterError(SOURCE, PHYSICAL[missing].label(missing), "give both bounds or none")
     if "bounds_min" in out and not all(a < b for a, b in zip(out["bounds_min"], out["bounds_max"])):
-        raise ParameterError(SOURCE, _label("bounds_max", "--bounds-max"),
+        raise ParameterError(SOURCE, PHYSICAL["bounds_max"].label("bounds_max"),
                              f"{out['bounds_max']} must exceed bounds_min {out['bounds_min']} on every axis")
     out["fog_height"] = out.pop("height")
     _check_medium(out)
@@ -177,6 +224,8 @@ def _medium_params(fog: dict) -> dict:
 
 def _check_medium(fog: dict) -> None:
     """The medium parser that ``fogref render`` uses must accept the values too."""
+    from fogref.media.params import medium_from_params
+
     medium_from_params(_medium_params(fog), f"{SOURCE}: fog")
 
 

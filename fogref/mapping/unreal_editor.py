@@ -15,7 +15,7 @@ from __future__ import annotations
 import difflib
 
 from fogref.errors import ParameterError
-from fogref.mapping.fog_input import PHYSICAL, SOURCE, _check, _fmt, _vec, fog_from_physical
+from fogref.mapping.fog_input import PHYSICAL, SOURCE, Range, _check, _fmt, _vec, fog_from_physical
 from fogref.models.ue4 import (
     CM_PER_M,
     SecondFogData,
@@ -25,7 +25,7 @@ from fogref.models.ue4 import (
     unreal_to_sigma,
 )
 
-__all__ = ["UNREAL_IGNORED", "UNREAL_MAPPED", "flat_unreal", "fog_from_unreal"]
+__all__ = ["UNREAL_IGNORED", "UNREAL_IGNORED_RANGES", "UNREAL_MAPPED", "flat_unreal", "fog_from_unreal"]
 
 #: Unreal editor values that map exactly onto the physical fog: name -> command-line option.
 UNREAL_MAPPED = {
@@ -53,6 +53,26 @@ UNREAL_IGNORED = {
     "FogMaxOpacity": ("--ue-fog-max-opacity", "number", "physical transmittance has no clamp"),
     "FogCutoffDistance": ("--ue-fog-cutoff-distance", "number", "physical fog has no cutoff distance"),
     "EndDistance": ("--ue-end-distance", "number", "physical fog does not end at a distance"),
+}
+#: The range of each ignored value (checked although it is ignored: a value Unreal could not
+#: mean is a mistake).  Unreal's ``ExponentialHeightFogComponent.h`` (Engine/Classes/Components;
+#: UE 4.19 and 5.3) gives these UPROPERTYs slider limits only, no ClampMin/ClampMax:
+#: FogMaxOpacity ``UIMin = "0", UIMax = "1"`` (an opacity: [0, 1] here);
+#: DirectionalInscatteringExponent ``UIMin = "2", UIMax = "64"`` (the exponent of
+#: ``pow(saturate(cos), e)``: any e >= 0 is a lobe, a negative one is not); StartDistance
+#: ``UIMin = "0", UIMax = "5000"``; FogCutoffDistance ``UIMin = "100000", UIMax = "20000000"``
+#: (0: no cutoff); DirectionalInscatteringStartDistance none (a distance).  Colours are linear
+#: RGB >= 0 (FLinearColor).  Distances in cm.
+UNREAL_IGNORED_RANGES = {
+    "FogInscatteringColor": Range("--ue-fog-inscattering-color", "rgb", 0.0),
+    "DirectionalInscatteringExponent": Range("--ue-directional-inscattering-exponent", "number", 0.0),
+    "DirectionalInscatteringColor": Range("--ue-directional-inscattering-color", "rgb", 0.0),
+    "DirectionalInscatteringStartDistance": Range("--ue-directional-inscattering-start-distance", "number",
+                                                  0.0, unit="cm"),
+    "StartDistance": Range("--ue-start-distance", "number", 0.0, unit="cm"),
+    "FogMaxOpacity": Range("--ue-fog-max-opacity", "number", 0.0, 1.0),
+    "FogCutoffDistance": Range("--ue-fog-cutoff-distance", "number", 0.0, unit="cm"),
+    "EndDistance": Range("--ue-end-distance", "number", 0.0, unit="cm"),
 }
 
 
@@ -118,8 +138,8 @@ def fog_from_unreal(unreal: dict, *, albedo=0.9, g: float = 0.6) -> tuple[dict, 
         raise ParameterError(SOURCE, unknown[0], f"not an Unreal Exponential Height Fog value{hint}; "
                                                  f"known: {', '.join(sorted(known))}")
     # the editor ranges that keep the physical fog inside what fogref renders (sigma_t <= 1e2, falloff <= 1e3)
-    d_max, f_max = sigma_to_unreal(PHYSICAL["sigma_t"][3], PHYSICAL["falloff"][3])
-    h_max = PHYSICAL["height"][3] * CM_PER_M
+    d_max, f_max = sigma_to_unreal(PHYSICAL["sigma_t"].hi, PHYSICAL["falloff"].hi)
+    h_max = PHYSICAL["height"].hi * CM_PER_M
     limits = {"FogDensity": (0.0, d_max, "", 0.02), "FogHeightFalloff": (0.0, f_max, "", 0.2),
               "FogHeight": (-h_max, h_max, "cm", 0.0),
               "SecondFogData.FogDensity": (0.0, d_max, "", 0.0),
@@ -129,17 +149,17 @@ def fog_from_unreal(unreal: dict, *, albedo=0.9, g: float = 0.6) -> tuple[dict, 
     for key, opt in UNREAL_MAPPED.items():
         lo, hi, unit, default = limits[key]
         raw = _unreal_value(unreal, key)
-        v[key] = _check(default if raw is None else raw, key, opt, "number", lo, hi, unit)
+        v[key] = _check(default if raw is None else raw, key, Range(opt, "number", lo, hi, unit))
     sfd = unreal.get("SecondFogData") or {}
     extra = sorted(set(sfd) - {"FogDensity", "FogHeightFalloff", "FogHeightOffset"})
     if extra:
         raise ParameterError(SOURCE, f"SecondFogData.{extra[0]}", "SecondFogData has FogDensity, "
                                                                   "FogHeightFalloff and FogHeightOffset")
     notes = []
-    for key, (opt, kind, why) in UNREAL_IGNORED.items():
+    for key, (_, _, why) in UNREAL_IGNORED.items():
         if unreal.get(key) is None:
             continue
-        val = _check(unreal[key], key, opt, "rgb" if kind == "rgb" else "number")
+        val = _check(unreal[key], key, UNREAL_IGNORED_RANGES[key])
         shown = _vec(val) if isinstance(val, list) else _fmt(val)
         notes.append(f"Unreal {key} = {shown} is ignored: {why}")
     params = UE4FogParams(FogDensity=v["FogDensity"], FogHeightFalloff=v["FogHeightFalloff"],

@@ -10,13 +10,15 @@ is a ``constant`` (or ``envmap``) emitter.
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
 
-from fogref.errors import FogrefError, ParameterError
+from fogref import params as P
+from fogref.errors import FogrefError
 from fogref.media.params import medium_from_params
-from fogref.render.scene_defaults import parse_scene, resolve, substitute
+from fogref.render.scene_defaults import RANGES, parse_scene, resolve, substitute
 from fogref.render.sun import sun_direction_from_to_world
 from fogref.render.variant import set_variant
 
@@ -32,9 +34,12 @@ def _value(el, defaults):
     if tag == "boolean":
         return v.lower() == "true"
     if tag in ("rgb", "point", "vector", "spectrum"):
-        if v == "" and tag in ("point", "vector"):
-            return [float(substitute(el.get(c, "0"), defaults)) for c in "xyz"]
-        parts = [float(x) for x in v.replace(",", " ").split()]
+        try:
+            if v == "" and tag in ("point", "vector"):
+                return [float(substitute(el.get(c, "0"), defaults)) for c in "xyz"]
+            parts = [float(x) for x in v.replace(",", " ").split()]
+        except ValueError:  # left as text: the check of the value names it (fogref.params)
+            return v
         return parts * 3 if len(parts) == 1 else parts
     return v
 
@@ -58,10 +63,13 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
     """Fog, sun, sky and camera of a fogref XML scene, validated, as plain data.
 
     Raises :class:`~fogref.errors.ParameterError` naming the file and parameter
-    for an out-of-range fog value, :class:`~fogref.errors.FogrefError` for XML
+    for an out-of-range value (the ``$default``s and ``overrides`` against
+    :data:`~fogref.render.scene_defaults.RANGES`; the fog, the sun's irradiance, the
+    sky's radiance, and the integrator's ``max_depth``, the sensor's ``fov`` and the
+    film's size as written in the XML), :class:`~fogref.errors.FogrefError` for XML
     that can't be parsed.
     """
-    path = Path(path)
+    path = P.path(path, "scene", source="fogref")
     root = parse_scene(path)
     defaults = resolve(root, overrides, source=path)
     check_supported(path, root)
@@ -70,6 +78,9 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
     integ = root.find("integrator")
     if integ is not None:
         desc["integrator"] = {"type": integ.get("type"), **_params(integ, defaults)}
+        if "max_depth" in desc["integrator"]:
+            RANGES["max_depth"].check(desc["integrator"]["max_depth"], "integrator.max_depth", str(path))
+    _check_sensor_literals(path, root, defaults)
     for med in root.iter("medium"):
         if med.get("type") == "heightfog":
             params = _params(med, defaults)
@@ -79,21 +90,47 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
         t, p = em.get("type"), _params(em, defaults)
         if t == "directional":
             d = p.get("direction")
-            if d is None:  # oriented by to_world (the shipped scenes: $sun_elevation, $sun_azimuth)
+            if d is not None:
+                d = list(P.vector(d, "sun.direction", source=str(path)))
+            else:  # oriented by to_world (the shipped scenes: $sun_elevation, $sun_azimuth)
                 tw = em.find("transform[@name='to_world']")
                 d = [0.0, 0.0, 1.0] if tw is None else [
                     -x for x in sun_direction_from_to_world(tw, lambda s: substitute(s, defaults), str(path))]
-            n = math.sqrt(sum(x * x for x in d)) or 1.0
-            E = p.get("irradiance", [1.0, 1.0, 1.0])
-            if any((not math.isfinite(x)) or x < 0 for x in E):
-                raise ParameterError(str(path), "sun.irradiance", f"values {E} must be finite and >= 0")
+            n = math.sqrt(sum(x * x for x in d))
+            if n == 0:
+                raise FogrefError(f"{path}: the sun's direction is the zero vector")
+            E = list(P.rgb(p.get("irradiance", [1.0, 1.0, 1.0]), "sun.irradiance", source=str(path), lo=0))
             desc["sun"] = {"direction": [-x / n for x in d], "irradiance": E}
         elif t in ("constant", "envmap"):
-            radiance = p.get("radiance")
-            if isinstance(radiance, list) and any((not math.isfinite(x)) or x < 0 for x in radiance):
-                raise ParameterError(str(path), "sky.radiance", f"values {radiance} must be finite and >= 0")
+            if isinstance(p.get("radiance"), list) or (isinstance(p.get("radiance"), str) and p["radiance"]):
+                P.rgb(p["radiance"], "sky.radiance", source=str(path), lo=0)
             desc["sky"] = {"type": t, **{k: v for k, v in p.items() if not isinstance(v, dict)}}
     return desc
+
+
+def _check_sensor_literals(path: Path, root, defaults) -> None:
+    """The sensor's ``fov`` and the film's ``width``/``height`` (as written, or via ``$default``s),
+    against the vocabulary's ``fov``, ``res`` and ``resy`` ranges."""
+    for sensor in root.findall("sensor"):
+        p = _params(sensor, defaults)
+        if "fov" in p:
+            RANGES["fov"].check(p["fov"], "sensor.fov", str(path))
+        film = sensor.find("film")
+        size = _params(film, defaults) if film is not None else {}
+        for key, name in (("width", "res"), ("height", "resy")):
+            if key in size:
+                RANGES[name].check(size[key], f"film.{key}", str(path))
+
+
+def _mitsuba_reason(e: Exception) -> str:
+    """Mitsuba's load error on one line: where it happened and, for a plugin that raised, the
+    exception it raised (the last line of the traceback Mitsuba embeds)."""
+    lines = [x.strip() for x in str(e).strip().splitlines() if x.strip()]
+    if not lines:
+        return type(e).__name__
+    first = re.sub(r"^\[[^\]]*\]\s*", "", lines[0]).replace("Traceback (most recent call last):", "")
+    first = first.strip().rstrip(":")
+    return f"{first}: {lines[-1]}" if len(lines) > 1 else first
 
 
 #: Emitters the renderer and the physical description (sun + sky) both handle.
@@ -134,20 +171,44 @@ def check_supported(path: Path, root) -> None:
                               f"fogpath's fog fills all space outside surfaces (no interfaces)")
 
 
+def check_renderable(path, root) -> None:
+    """Refuse a scene that fogref cannot render as a truth: it needs exactly one ``<sensor>``
+    (the truth's camera) holding one ``<medium type="heightfog">`` (the fog; a fog-free truth
+    is ``sigma_t`` 0, not a missing medium).
+
+    >>> import xml.etree.ElementTree as ET
+    >>> check_renderable("s.xml", ET.fromstring('<scene><sensor type="perspective"/></scene>'))
+    Traceback (most recent call last):
+    ...
+    fogref.errors.FogrefError: s.xml: no fog: fogref renders a <medium type="heightfog"> inside the ...
+    """
+    sensors = root.findall("sensor")
+    if len(sensors) != 1:
+        raise FogrefError(f"{path}: {len(sensors)} <sensor> elements: fogref renders a truth through exactly "
+                          f"one camera (one <sensor> with a <medium type=\"heightfog\"> inside it)")
+    fogs = [m for m in sensors[0].findall("medium") if m.get("type") == "heightfog"]
+    if len(fogs) != 1:
+        what = "no fog" if not fogs else f"{len(fogs)} heightfog media"
+        raise FogrefError(f"{path}: {what}: fogref renders a <medium type=\"heightfog\"> inside the "
+                          f"<sensor> (exactly one; for a fog-free truth give it sigma_t 0)")
+
+
 def load_scene(path, overrides: dict | None = None):
     """``mi.load_file`` with fogref's plugins registered and errors made readable.
 
     Sets Mitsuba up first (:func:`fogref.render.variant.set_variant`: the variant
-    already set, else ``$FOGREF_VARIANT``, else ``llvm_ad_rgb``).
+    already set, else ``$FOGREF_VARIANT``, else ``llvm_ad_rgb``).  The scene's values are
+    checked first (:func:`describe_scene`, :func:`check_renderable`).
     """
     set_variant()
     import mitsuba as mi
 
     desc = describe_scene(path, overrides)
+    check_renderable(path, parse_scene(path))
     try:
         scene = mi.load_file(str(path), **{k: v for k, v in (overrides or {}).items()})
-    except Exception as e:  # Mitsuba's message names the file and line: keep all of it
-        raise FogrefError(f"{path}: Mitsuba could not load the scene:\n{str(e).strip()}") from None
+    except Exception as e:  # Mitsuba's message names the file and line: keep that and the reason
+        raise FogrefError(f"{path}: Mitsuba could not load the scene: {_mitsuba_reason(e)}") from None
     desc["camera"] = sensor_camera(scene.sensors()[0])
     return scene, desc
 

@@ -14,7 +14,10 @@ A reference is ``$`` followed by the longest run of letters, digits and ``_``
 :data:`VOCABULARY` is the one set of names every shipped and written scene
 declares; :data:`OPTIONAL_GROUPS` are the names a scene declares only as a whole
 group, where the concept applies (a second fog layer, fog bounds, a sky, a
-settable surface reflectance).
+settable surface reflectance).  :data:`RANGES` declares the kind, range and unit of
+each of these names once; :func:`resolve` checks the scene's own values and every
+``--set`` override against it (through :mod:`fogref.params`), and ``fogref scene``
+checks what it writes against the same table.
 """
 
 from __future__ import annotations
@@ -25,10 +28,13 @@ import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+from fogref import params
 from fogref.errors import FogrefError, ParameterError
+from fogref.mapping.fog_input import MAX_DEPTH, PHYSICAL, SCATTERING, Range
 
-__all__ = ["OPTIONAL_GROUPS", "VOCABULARY", "check_overrides", "declared", "overrides_used_by", "parse_scene",
-           "references", "resolve", "substitute", "used_names", "vocabulary_groups"]
+__all__ = ["OPTIONAL_GROUPS", "RANGES", "VOCABULARY", "check_camera", "check_overrides", "check_values",
+           "declared", "overrides_used_by", "parse_scene", "references", "resolve", "substitute",
+           "used_names", "vocabulary_groups"]
 
 #: ``$NAME`` references in an attribute value.
 REFERENCE = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
@@ -46,8 +52,34 @@ OPTIONAL_GROUPS = {
     "bounds": ("bounds_min", "bounds_max"),              # a box the fog is confined to
     "surface": ("reflectance",),                         # one settable diffuse reflectance for all surfaces
 }
-#: Integer $defaults that size the image.
-_RESOLUTION = ("res", "resy")
+#: The kind, range and unit of every vocabulary name, each declared once (the fog's in
+#: :data:`fogref.mapping.fog_input.PHYSICAL` and ``SCATTERING``).  The options are
+#: ``fogref scene``'s.  ``sun_azimuth``: one turn either way; camera points within 1e7 m;
+#: ``fov``: the horizontal field of view of a perspective camera.
+RANGES: dict[str, Range] = {
+    "res": Range("--res", "integer", 1, 65536, "pixels"),
+    "resy": Range("--resy", "integer", 1, 65536, "pixels"),
+    "max_depth": MAX_DEPTH,
+    "sigma_t": PHYSICAL["sigma_t"],
+    "albedo": SCATTERING["albedo"],
+    "g": SCATTERING["g"],
+    "density": PHYSICAL["density"],
+    "falloff": PHYSICAL["falloff"],
+    "fog_height": PHYSICAL["height"],
+    "sun_elevation": Range("--sun-elevation", "angle", -90.0, 90.0, "deg"),
+    "sun_azimuth": Range("--sun-azimuth", "angle", -360.0, 360.0, "deg"),
+    "sun_irradiance": Range("--sun-irradiance", "rgb", 0.0),
+    "camera_origin": Range("--camera-origin", "point", -1e7, 1e7, "m"),
+    "camera_target": Range("--camera-target", "point", -1e7, 1e7, "m"),
+    "fov": Range("--fov", "angle", 0.0, 180.0, "deg", lo_open=True, hi_open=True),
+    "sky_radiance": Range("--sky-radiance", "rgb", 0.0),
+    "density2": PHYSICAL["density2"],
+    "falloff2": PHYSICAL["falloff2"],
+    "height2": PHYSICAL["height2"],
+    "bounds_min": PHYSICAL["bounds_min"],
+    "bounds_max": PHYSICAL["bounds_max"],
+    "reflectance": Range("--ground-reflectance", "rgb", 0.0, 1.0),
+}
 
 
 def parse_scene(path, comments: bool = False) -> ET.Element:
@@ -56,7 +88,7 @@ def parse_scene(path, comments: bool = False) -> ET.Element:
     Raises :class:`~fogref.errors.FogrefError` naming the file when it does not exist
     or is not well-formed XML.
     """
-    path = Path(path)
+    path = params.path(path, "scene", source="fogref")
     if not path.is_file():
         raise FogrefError(f"{path}: no such scene file")
     parser = ET.XMLParser(target=ET.TreeBuilder(insert_comments=True)) if comments else None
@@ -151,19 +183,76 @@ def resolve(scene, overrides: dict | None = None, source=None) -> dict[str, str]
     ...
     fogref.errors.ParameterError: s.xml: parameter 'gg': --set gg=0.2: the scene has no $default 'gg'...
     """
+    if overrides is not None and not isinstance(overrides, dict):
+        raise ParameterError(str(source or "scene"), "overrides",
+                             f"expected a dict of NAME: VALUE (like --set NAME=VALUE), got {overrides!r}")
     values = declared(scene)
     where = source if source is not None else (scene if not isinstance(scene, ET.Element) else "scene")
     check_overrides(Path(str(where)), values, overrides)
+    check_values(Path(str(where)), {k: v for k, v in values.items() if k not in (overrides or {})})
     values.update({k: str(v) for k, v in (overrides or {}).items()})
     return values
+
+
+def check_values(path: Path, values: dict, how: str = "<default>") -> None:
+    """Check each vocabulary name of ``values`` against :data:`RANGES` (through :mod:`fogref.params`),
+    and the camera (:func:`check_camera`) when both its points are there.
+
+    ``how`` says where the values came from in the message (``<default>``, or ``--set``:
+    ``--set NAME=VALUE`` is quoted).
+
+    >>> check_values(Path("s.xml"), {"sun_elevation": "1000", "title": "x"})
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: s.xml: <default>: parameter 'sun_elevation': 1000 is outside [-90, 90] deg
+    >>> check_values(Path("s.xml"), {"max_depth": 0}, "--set")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: s.xml: parameter 'max_depth': --set max_depth=0: 0 is outside {-1} U [1, ...
+    """
+    source = f"{path}: {how}"
+    checked = {}
+    for name, v in values.items():
+        if name not in RANGES:
+            continue
+        try:
+            checked[name] = RANGES[name].check(v, name, source if how != "--set" else str(path))
+        except ParameterError as e:
+            if how != "--set":
+                raise
+            why = str(e).split(f"parameter '{name}': ", 1)[-1]
+            raise ParameterError(str(path), name, f"--set {name}={v}: {why}") from None
+    if "camera_origin" in checked and "camera_target" in checked:
+        check_camera(checked["camera_origin"], checked["camera_target"], source)
+
+
+def check_camera(origin, target, source: str, name: str = "camera_target") -> None:
+    """Refuse a camera whose target is its origin or that looks straight up or down (its up is +y).
+
+    >>> check_camera([0, 2, 0], [0, 5, 0], "s.xml")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: s.xml: parameter 'camera_target': the camera looks straight up ...
+    """
+    d = [float(b) - float(a) for a, b in zip(origin, target)]
+    n = math.sqrt(sum(x * x for x in d))
+    if n == 0:
+        raise ParameterError(source, name, "must differ from camera_origin")
+    if math.hypot(d[0], d[2]) <= 1e-9 * n:
+        raise ParameterError(source, name, f"the camera looks straight {'up' if d[1] > 0 else 'down'} "
+                                           f"(origin {list(origin)}, target {list(target)}); "
+                                           "the camera's up vector is +y, so tilt the view a little")
 
 
 def check_overrides(path: Path, defaults: dict, overrides: dict | None) -> None:
     """Refuse ``--set`` names the scene does not declare and values that don't fit them.
 
-    A name must be one of the scene's ``<default>``s (with a "did you mean");
-    a value replacing a numeric default must be numeric (as many numbers as the
-    default has); ``res``/``resy`` must be integers in [1, 65536].
+    A name must be one of the scene's ``<default>``s (with a "did you mean"); a
+    vocabulary name's value must be in its range (:data:`RANGES`, e.g. ``sun_elevation``
+    in [-90, 90] deg, ``max_depth`` -1 or >= 1, ``res`` an integer in [1, 65536]
+    pixels); any other value replacing a numeric default must be 1 or as many finite
+    numbers as the default has.  The camera is checked with its other point from the
+    scene when one of the two is set.
     """
     for name, value in (overrides or {}).items():
         if name not in defaults:
@@ -171,22 +260,35 @@ def check_overrides(path: Path, defaults: dict, overrides: dict | None) -> None:
             hint = f" (did you mean '{close[0]}'?)" if close else ""
             raise ParameterError(str(path), name, f"--set {name}={value}: the scene has no $default '{name}'"
                                  f"{hint}; it has: {', '.join(sorted(defaults))}")
-        old, new = _numbers(defaults[name]), _numbers(str(value))
-        if old is not None and (new is None or len(new) not in (1, len(old))):
-            count = f"1 or {len(old)} numbers" if len(old) > 1 else "1 number"
-            raise ParameterError(str(path), name, f"--set {name}={value}: expected {count} like the "
-                                 f"scene's default '{defaults[name]}'")
-        if new is not None and not all(math.isfinite(x) for x in new):
-            raise ParameterError(str(path), name, f"--set {name}={value}: values must be finite")
-        if name in _RESOLUTION and not (new and float(new[0]).is_integer() and 1 <= new[0] <= 65536):
-            raise ParameterError(str(path), name, f"--set {name}={value}: an integer in [1, 65536] pixels")
+        if name not in RANGES:
+            _like_default(defaults[name], value, name, str(path))
+    set_ = dict(overrides or {})
+    check_values(path, {k: v for k, v in set_.items() if k != "camera_origin" and k != "camera_target"},
+                 "--set")
+    if "camera_origin" in set_ or "camera_target" in set_:
+        cam = {k: set_.get(k, defaults.get(k)) for k in ("camera_origin", "camera_target")}
+        check_values(path, {k: v for k, v in cam.items() if v is not None},
+                     "--set" if all(k in set_ for k in cam) else "--set and <default>")
 
 
-def _numbers(text: str):
+def _like_default(default: str, value, name: str, source: str) -> None:
+    """A value replacing a numeric default (outside the vocabulary): 1 or as many finite numbers."""
     try:
-        return [float(x) for x in text.replace(",", " ").split()] or None
+        old = [float(x) for x in default.replace(",", " ").split()]
     except ValueError:
-        return None
+        return  # a text default: Mitsuba checks it
+    words = str(value).replace(",", " ").split()
+    if not old:
+        return
+    try:
+        if len(old) == 1 or len(words) == 1:
+            params.number(value, name, source=source)
+        else:
+            params.vector(value, name, source=source, n=len(old))
+    except ParameterError as e:
+        why = str(e).split(f"parameter '{name}': ", 1)[-1]
+        raise ParameterError(source, name, f"--set {name}={value}: {why} (like the scene's default "
+                                           f"'{default}')") from None
 
 
 def vocabulary_groups(names) -> tuple[list[str], list[str]]:

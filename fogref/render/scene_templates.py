@@ -10,6 +10,12 @@ handedness); ``"unreal"`` swaps y and z like fogref's Unreal position mapping,
 ``(x, y, z)_fogref = (X, Z, Y)_Unreal / 100`` with scale 0.01, so a level exported
 in Unreal's world coordinates lines up with cameras converted the same way.
 
+A mesh is shaded as it is: a file with vertex normals (OBJ ``vn`` lines, PLY
+``nx``/``ny``/``nz`` vertex properties) keeps them; a file without them is written
+with ``face_normals`` (Mitsuba's ``obj``/``ply`` plugins would otherwise compute
+smooth normals by averaging at each shared vertex, which rounds a box's corners:
+normals (±0.577, ±0.577, ±0.577) and faces shaded up to half too dark).
+
 Each function adds elements to an :class:`xml.etree.ElementTree.Element`; nothing
 here needs Mitsuba.
 """
@@ -27,6 +33,7 @@ from fogref.mapping.fog_input import SOURCE, _fmt
 from fogref.render.scene_defaults import parse_scene
 
 __all__ = ["GROUND_SIZE", "MESH_PLUGINS", "MESH_UP", "TEMPLATES", "VALLEY_SCENE", "Geometry", "add_mesh",
+           "mesh_files", "mesh_has_normals",
            "add_valley", "diffuse", "geometry", "ground", "sub", "valley_ground_size"]
 
 #: Built-in geometry templates (anything else must be a mesh file).
@@ -78,6 +85,41 @@ def geometry(template) -> Geometry:
     if not path.is_file():
         raise ParameterError(SOURCE, "geometry (--geometry)", f"mesh file '{t}' not found")
     return Geometry("mesh", path, MESH_PLUGINS[ext])
+
+
+def mesh_has_normals(path: Path) -> bool:
+    """Whether a mesh file carries vertex normals: an OBJ ``vn`` line, a PLY vertex property ``nx``.
+
+    >>> import tempfile
+    >>> f = Path(tempfile.mkdtemp()) / "t.obj"
+    >>> _ = f.write_text("v 0 0 0\\nv 1 0 0\\nv 0 1 0\\nf 1 2 3\\n")
+    >>> mesh_has_normals(f)
+    False
+    """
+    if path.suffix.lower() == ".ply":
+        with open(path, "rb") as fh:
+            for raw in fh:  # the header is ASCII lines up to end_header, for binary PLYs too
+                words = raw.decode("ascii", "replace").split()
+                if words[:1] == ["end_header"]:
+                    return False
+                if words[:1] == ["property"] and words[-1:] == ["nx"]:
+                    return True
+        return False
+    with open(path, "rb") as fh:
+        return any(line.lstrip().startswith(b"vn ") or line.lstrip().startswith(b"vn\t") for line in fh)
+
+
+def mesh_files(path: Path) -> list[Path]:
+    """The files a mesh brings: the mesh and, for an OBJ, the material libraries it names
+    (``mtllib``, beside it).  ``fogref scene --out`` must replace none of them."""
+    files = [path]
+    if path.suffix.lower() == ".obj":
+        with open(path, "rb") as fh:
+            for line in fh:
+                words = line.decode("utf-8", "replace").split()
+                if words[:1] == ["mtllib"]:
+                    files += [path.parent / w for w in words[1:]]
+    return files
 
 
 def sub(parent, tag: str, **attrs):
@@ -137,8 +179,10 @@ def add_valley(root, ground_size: float | None = None):
         _valley_ground(root).set("value", _fmt(ground_size))
 
 
-def add_mesh(root, geo: Geometry, out_dir: Path, scale: float, up: str, translate):
-    """The mesh shape of ``geo``, its file named relative to ``out_dir`` (where the scene is written)."""
+def add_mesh(root, geo: Geometry, out_dir: Path, scale: float, up: str, translate,
+             face_normals: bool = False):
+    """The mesh shape of ``geo``, its file named relative to ``out_dir`` (where the scene is written);
+    ``face_normals``: flat faces (for a file without vertex normals, :func:`mesh_has_normals`)."""
     # Mitsuba resolves a relative filename against the scene file's folder
     try:
         filename = os.path.relpath(geo.mesh.resolve(), out_dir.resolve())
@@ -148,6 +192,8 @@ def add_mesh(root, geo: Geometry, out_dir: Path, scale: float, up: str, translat
                            f"(fogref is y-up) "))
     s = sub(root, "shape", type=geo.plugin, id="mesh")
     sub(s, "string", name="filename", value=filename.replace(os.sep, "/"))
+    if face_normals:
+        sub(s, "boolean", name="face_normals", value="true")
     tw = sub(s, "transform", name="to_world")
     sub(tw, "scale", value=_fmt(scale))
     if up == "z":  # (x, y, z) -> (x, z, -y): the file's +z becomes +y, a proper rotation

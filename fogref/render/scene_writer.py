@@ -7,9 +7,11 @@ XML scene that ``fogref render`` takes as is, built like the shipped ones
 (:data:`fogref.render.scene_defaults.VOCABULARY`), so ``fogref render --set
 NAME=VALUE`` changes any fog, sun, sky or camera value.
 
-The concepts live beside it: the physical fog and the validators in
-:mod:`fogref.mapping.fog_input`, the exact Unreal -> physical mapping in
-:mod:`fogref.mapping.unreal_editor`, the geometry templates (``"plane"``,
+The concepts live beside it: the physical fog and the declared range of each of its
+values in :mod:`fogref.mapping.fog_input` (checked through :mod:`fogref.params`; the
+scene vocabulary's ranges, :data:`fogref.render.scene_defaults.RANGES`, are the same
+declarations that ``fogref render --set`` is checked against), the exact Unreal ->
+physical mapping in :mod:`fogref.mapping.unreal_editor`, the geometry templates (``"plane"``,
 ``"valley"`` read from ``scenes/valley.xml``, ``.obj``/``.ply`` meshes) in
 :mod:`fogref.render.scene_templates` and the XML in :mod:`fogref.render.scene_xml`.
 This module checks the sun, sky, camera and geometry arguments and writes the file.
@@ -18,26 +20,52 @@ Units: fogref is **y-up, metres**; Unreal is z-up, centimetres.  Writing needs n
 
 from __future__ import annotations
 
-import math
+import dataclasses
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from fogref import params
 from fogref.errors import FogrefError, ParameterError
-from fogref.mapping.fog_input import PHYSICAL, SCATTERING, SOURCE, _check, _fmt, _text, fog_from_physical
-from fogref.mapping.unreal_editor import UNREAL_IGNORED, UNREAL_MAPPED, fog_from_unreal
+from fogref.mapping.fog_input import (
+    PHYSICAL,
+    SCATTERING,
+    SOURCE,
+    Range,
+    _check,
+    _fmt,
+    _rgb3,
+    _text,
+    fog_from_physical,
+)
+from fogref.mapping.unreal_editor import UNREAL_IGNORED, UNREAL_IGNORED_RANGES, UNREAL_MAPPED, fog_from_unreal
 from fogref.mapping.unreal_editor import flat_unreal as _flat_unreal
-from fogref.render.scene_templates import GROUND_SIZE, MESH_PLUGINS, MESH_UP, TEMPLATES
+from fogref.render.scene_defaults import RANGES, check_camera
+from fogref.render.scene_templates import (
+    GROUND_SIZE,
+    MESH_PLUGINS,
+    MESH_UP,
+    TEMPLATES,
+    VALLEY_SCENE,
+    mesh_files,
+    mesh_has_normals,
+)
 from fogref.render.scene_templates import geometry as resolve_geometry
-from fogref.render.scene_xml import scene_defaults, scene_element, write_xml
+from fogref.render.scene_xml import DEFAULT_REFLECTANCE, scene_defaults, scene_element, write_xml
 from fogref.render.sun import sun_direction_from_angles
 
-__all__ = ["MESH_PLUGINS", "MESH_UP", "PHYSICAL", "SCATTERING", "TEMPLATES", "UNREAL_IGNORED",
-           "UNREAL_MAPPED", "SceneWriteResult", "fog_from_physical", "fog_from_unreal",
-           "write_scene"]
+__all__ = ["MESH_PLUGINS", "MESH_UP", "PHYSICAL", "RANGES", "SCATTERING", "TEMPLATES", "UNREAL_IGNORED",
+           "UNREAL_IGNORED_RANGES", "UNREAL_MAPPED", "SceneWriteResult", "fog_from_physical",
+           "fog_from_unreal", "write_scene"]
 
-_SCALAR_LIMIT = 1e7  # [m] coordinates of cameras and mesh offsets
+#: The writer's own values (not scene $defaults); the vocabulary's are RANGES.
+MESH_SCALE = Range("--mesh-scale", "number", 0.0, 1e6, "m per file unit", lo_open=True)
+MESH_TRANSLATE = Range("--mesh-translate", "point", -1e7, 1e7, "m")
+GROUND_SIZE_RANGE = Range("--ground-size", "number", 0.0, 1e7, "m", lo_open=True)
+#: ``reflectance`` (RANGES) as the ground's and the mesh's options.
+GROUND_REFLECTANCE = RANGES["reflectance"]
+MESH_REFLECTANCE = dataclasses.replace(RANGES["reflectance"], option="--mesh-reflectance")
 
 
 @dataclass
@@ -55,29 +83,19 @@ class SceneWriteResult:
 
 
 def _camera(origin, target, fov, res, resy) -> dict:
-    o = _check(origin, "camera_origin", "--camera-origin", "point", -_SCALAR_LIMIT, _SCALAR_LIMIT, "m")
-    t = _check(target, "camera_target", "--camera-target", "point", -_SCALAR_LIMIT, _SCALAR_LIMIT, "m")
-    d = [b - a for a, b in zip(o, t)]
-    n = math.sqrt(sum(x * x for x in d))
-    if n == 0:
-        raise ParameterError(SOURCE, "camera_target (--camera-target)", "must differ from camera_origin")
-    if math.hypot(d[0], d[2]) <= 1e-9 * n:
-        raise ParameterError(SOURCE, "camera_target (--camera-target)",
-                             f"the camera looks straight {'up' if d[1] > 0 else 'down'} "
-                             f"(origin {o}, target {t}); "
-                             f"the camera's up vector is +y, so tilt the view a little")
-    f = _check(fov, "fov", "--fov", "number", 0.0, 180.0, "deg")
-    if not 0 < f < 180:
-        raise ParameterError(SOURCE, "fov (--fov)",
-                             f"value {f} outside (0, 180) deg (horizontal field of view)")
-    out = {"camera_origin": o, "camera_target": t, "fov": f}
-    for name, v in (("res", res), ("resy", resy)):
-        x = _check(v, name, f"--{name}", "number", 1, 65536, "pixels")
-        if not float(x).is_integer():
-            raise ParameterError(SOURCE, f"{name} (--{name})",
-                                 f"value {x} must be an integer in [1, 65536] pixels")
-        out[name] = int(x)
+    out = {name: _check(v, name, RANGES[name]) for name, v in
+           (("camera_origin", origin), ("camera_target", target), ("fov", fov), ("res", res), ("resy", resy))}
+    check_camera(out["camera_origin"], out["camera_target"], SOURCE, "camera_target (--camera-target)")
     return out
+
+
+def _check_inputs(out: Path, inputs) -> None:
+    """Refuse an ``out`` that is (resolving symlinks) one of the files the scene is made from."""
+    target = out.resolve()
+    for f in inputs:
+        if Path(f).resolve() == target:
+            raise FogrefError(f"{SOURCE}: --out '{out}' is '{f}', an input of this scene; "
+                              f"writing it would replace that file: choose another --out")
 
 
 def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, albedo=None, g=None,
@@ -86,6 +104,7 @@ def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, alb
                 camera_target=(0.15, 2.35, 1.0), fov: float = 70.0, res: int = 320, resy: int = 180,
                 geometry="plane", mesh_scale: float = 1.0, mesh_up: str = "y", mesh_translate=(0.0, 0.0, 0.0),
                 ground: bool | None = None, ground_size: float | None = None, max_depth: int = 16,
+                ground_reflectance=None, mesh_reflectance=None,
                 overwrite: bool = False, on_note: Callable[[str], None] | None = None) -> SceneWriteResult:
     """Write a fogref scene XML (fogpath + heightfog) from fog, sun, sky, camera and geometry.
 
@@ -132,7 +151,13 @@ def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, alb
     ground_size : float, optional
         Half-size of the ground plane [m], > 0 (default 1e5; the valley's 3000).
     max_depth : int
-        Mitsuba's path depth (2 = single scattering, -1 = unlimited).
+        Mitsuba's path depth (2 = single scattering, -1 = unlimited), -1 or >= 1.
+    ground_reflectance, mesh_reflectance : float or 3 floats, optional
+        Diffuse reflectance in [0, 1] of the ground plane and of the mesh (default 0.2).
+        The scene's ``$reflectance`` is the plane's ground, or the mesh's surfaces (the
+        ground then shares it, or has its own BSDF when ``ground_reflectance`` is given).
+        The valley keeps its file's BSDFs.  A mesh file without vertex normals is written
+        with ``face_normals`` (flat faces); one with normals keeps them (a note says which).
     overwrite : bool
         Replace an existing ``out``.
     on_note : callable, optional
@@ -148,7 +173,8 @@ def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, alb
     fogref.errors.ParameterError
         Naming the parameter, its command-line option and the allowed range.
     fogref.errors.FogrefError
-        For an output that exists or is not ``.xml``.
+        For an output that exists or is not ``.xml``, or that is one of the scene's
+        inputs (the mesh, its material libraries, the valley template).
 
     Examples
     --------
@@ -165,7 +191,7 @@ def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, alb
     Unreal has no albedo or phase function:
     the fog uses albedo 0.9 and Henyey-Greenstein g 0.6 (the albedo and g parameters)
     """
-    out = Path(out)
+    out = params.path(out, "out (--out)", source=SOURCE)
     if out.suffix.lower() != ".xml":
         raise FogrefError(f"{SOURCE}: --out '{out}': a scene file must end in .xml")
     if out.exists() and not overwrite:
@@ -185,47 +211,59 @@ def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, alb
     if unreal is not None:
         notes.append(f"Unreal has no albedo or phase function: the fog uses albedo {_text(fogp['albedo'])} "
                      f"and Henyey-Greenstein g {_fmt(fogp['g'])} (the albedo and g parameters)")
-    el = _check(sun_elevation, "sun_elevation", "--sun-elevation", "number", -90.0, 90.0, "deg")
-    az = _check(sun_azimuth, "sun_azimuth", "--sun-azimuth", "number", -360.0, 360.0, "deg")
+    el = _check(sun_elevation, "sun_elevation", RANGES["sun_elevation"])
+    az = _check(sun_azimuth, "sun_azimuth", RANGES["sun_azimuth"])
     sun_direction_from_angles(el, az)
-    sun = _check(sun_irradiance, "sun_irradiance", "--sun-irradiance", "rgb", 0.0, math.inf)
-    sky = None if sky_radiance is None else _check(sky_radiance, "sky_radiance", "--sky-radiance", "rgb",
-                                                   0.0, math.inf)
+    sun = _check(sun_irradiance, "sun_irradiance", RANGES["sun_irradiance"])
+    sky = None if sky_radiance is None else _check(sky_radiance, "sky_radiance", RANGES["sky_radiance"])
     cam = _camera(camera_origin, camera_target, fov, res, resy)
-    depth = _check(max_depth, "max_depth", "--max-depth", "number", -1, 1 << 20)
-    if not float(depth).is_integer() or depth == 0:
-        raise ParameterError(SOURCE, "max_depth (--max-depth)",
-                             f"value {depth}: an integer >= 1, or -1 (no limit)")
+    depth = _check(max_depth, "max_depth", RANGES["max_depth"])
     geo = resolve_geometry(geometry)
-    scale = _check(mesh_scale, "mesh_scale", "--mesh-scale", "number", 0.0, 1e6)
-    if scale <= 0:
-        raise ParameterError(SOURCE, "mesh_scale (--mesh-scale)",
-                             f"value {scale} must be > 0 (metres per file unit)")
-    if mesh_up not in MESH_UP:
-        raise ParameterError(SOURCE, "mesh_up (--mesh-up)", f"'{mesh_up}' is not one of {', '.join(MESH_UP)}")
-    shift = _check(mesh_translate, "mesh_translate", "--mesh-translate", "point", -_SCALAR_LIMIT,
-                   _SCALAR_LIMIT, "m")
+    scale = _check(mesh_scale, "mesh_scale", MESH_SCALE)
+    params.choice(mesh_up, "mesh_up (--mesh-up)", MESH_UP, SOURCE)
+    shift = _check(mesh_translate, "mesh_translate", MESH_TRANSLATE)
     if geo.kind != "mesh":
         given_args = (("mesh_scale", scale != 1.0), ("mesh_up", mesh_up != "y"),
-                      ("mesh_translate", any(shift)))
+                      ("mesh_translate", any(shift)), ("mesh_reflectance", mesh_reflectance is not None))
         for name, given in given_args:
             if given:
                 raise ParameterError(SOURCE, f"{name} (--{name.replace('_', '-')})",
                                      f"applies to a mesh file, not to the '{geo.kind}' template")
-    gsize = GROUND_SIZE.get(geo.kind) if ground_size is None else _check(
-        ground_size, "ground_size", "--ground-size", "number", 0.0, 1e7, "m")
-    if gsize is not None and gsize <= 0:
-        raise ParameterError(SOURCE, "ground_size (--ground-size)", f"value {gsize} must be > 0 m")
+    gsize = GROUND_SIZE.get(geo.kind) if ground_size is None else _check(ground_size, "ground_size",
+                                                                          GROUND_SIZE_RANGE)
     with_ground = (geo.kind != "mesh") if ground is None else bool(ground)
     if geo.kind == "valley" and not with_ground:
         raise ParameterError(SOURCE, "ground (--no-ground)", "the valley template has its own ground")
+    if ground_reflectance is not None and (geo.kind == "valley" or not with_ground):
+        why = ("the valley template keeps the BSDFs of scenes/valley.xml" if geo.kind == "valley"
+               else "there is no ground plane (add one with --ground)")
+        raise ParameterError(SOURCE, "ground_reflectance (--ground-reflectance)", f"does not apply: {why}")
+    g_refl = None if ground_reflectance is None else _check(ground_reflectance, "ground_reflectance",
+                                                            GROUND_REFLECTANCE)
+    m_refl = None if mesh_reflectance is None else _check(mesh_reflectance, "mesh_reflectance",
+                                                          MESH_REFLECTANCE)
+    inputs = mesh_files(geo.mesh) if geo.kind == "mesh" else [VALLEY_SCENE] if geo.kind == "valley" else []
+    _check_inputs(out, inputs)
+    flat = geo.kind == "mesh" and not mesh_has_normals(geo.mesh)
+    if geo.kind == "mesh":
+        notes.append(f"mesh {geo.mesh.name}: " + (
+            "no vertex normals in the file: shaded with face normals (face_normals, flat faces)" if flat
+            else "shaded with the file's vertex normals"))
+    # $reflectance: the plane's ground, or the mesh's surfaces (its ground shares it unless given its own)
+    refl = g_refl if geo.kind == "plane" else m_refl
+    own_ground = geo.kind == "mesh" and g_refl is not None and (
+        _rgb3(g_refl) != _rgb3(DEFAULT_REFLECTANCE if m_refl is None else m_refl))
+    if own_ground:
+        notes.append(f"the ground's reflectance {_text(g_refl)} is written in its BSDF; "
+                     "the reflectance default is the mesh's")
 
-    defaults = scene_defaults(fogp, cam, depth, el, az, sun, sky, geo.kind)
+    defaults = scene_defaults(fogp, cam, depth, el, az, sun, sky, geo.kind, reflectance=refl)
     fog_source = ("Unreal editor values " + ", ".join(f"{k}={v}" for k, v in _flat_unreal(unreal).items())
                   if unreal is not None else "physical units")
     root = scene_element(defaults, fogp, geo, fog_source=fog_source, notes=notes, ground_size=gsize,
                          with_ground=with_ground, out_dir=out.parent, mesh_scale=scale, mesh_up=mesh_up,
-                         mesh_translate=shift)
+                         mesh_translate=shift, ground_reflectance=g_refl if own_ground else None,
+                         face_normals=flat)
     write_xml(out, root)
     if on_note is not None:
         for n in notes:

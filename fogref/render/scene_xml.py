@@ -28,17 +28,20 @@ FOG_DEFAULTS = (("sigma_t", None), ("albedo", None), ("g", "float"), ("density",
                 ("falloff", "float"), ("fog_height", "float"), ("density2", "float"), ("falloff2", "float"),
                 ("height2", "float"),
                 ("bounds_min", "point"), ("bounds_max", "point"))
-#: The reflectance of the plane and mesh templates' one surface (the ``surface`` group's ``$reflectance``).
-SURFACE_REFLECTANCE = "0.2, 0.2, 0.2"
+#: The default reflectance of the plane and mesh templates' surfaces (the ``surface`` group's
+#: ``$reflectance``; ``fogref scene --ground-reflectance``, ``--mesh-reflectance``).
+DEFAULT_REFLECTANCE = 0.2
+SURFACE_REFLECTANCE = _vec(_rgb3(DEFAULT_REFLECTANCE))
 
 
 def scene_defaults(fog: dict, camera: dict, max_depth: int, sun_elevation: float, sun_azimuth: float,
-                   sun_irradiance, sky_radiance, geometry_kind: str) -> dict[str, str]:
+                   sun_irradiance, sky_radiance, geometry_kind: str, reflectance=None) -> dict[str, str]:
     """The ``<default>`` values (XML text) of a written scene, in declaration order.
 
     ``fog``: :func:`fogref.mapping.fog_input.fog_from_physical`'s output; ``camera``:
     ``res``, ``resy``, ``camera_origin``, ``camera_target``, ``fov``; ``sky_radiance``
-    None declares no sky; the plane and mesh templates add ``reflectance``.
+    None declares no sky; the plane and mesh templates add ``reflectance`` (grey or RGB in
+    [0, 1]; None: :data:`SURFACE_REFLECTANCE`): the plane's ground, or the mesh's surfaces.
     """
     d: dict[str, str] = {"res": str(camera["res"]), "resy": str(camera["resy"]),
                          "max_depth": str(int(max_depth))}
@@ -52,7 +55,7 @@ def scene_defaults(fog: dict, camera: dict, max_depth: int, sun_elevation: float
     d.update(camera_origin=_vec(camera["camera_origin"]), camera_target=_vec(camera["camera_target"]),
              fov=_fmt(camera["fov"]))
     if geometry_kind != "valley":
-        d["reflectance"] = SURFACE_REFLECTANCE
+        d["reflectance"] = SURFACE_REFLECTANCE if reflectance is None else _vec(_rgb3(reflectance))
     return d
 
 
@@ -115,10 +118,15 @@ def _lights(root, sky: bool) -> None:
 
 def scene_element(defaults: dict[str, str], fog: dict, geo: Geometry, *, fog_source: str, notes=(),
                   ground_size: float | None, with_ground: bool, out_dir: Path, mesh_scale: float = 1.0,
-                  mesh_up: str = "y", mesh_translate=(0.0, 0.0, 0.0)) -> ET.Element:
+                  mesh_up: str = "y", mesh_translate=(0.0, 0.0, 0.0), ground_reflectance=None,
+                  face_normals: bool = False) -> ET.Element:
     """The ``<scene>`` element: a header comment (``fog_source``, ``notes``), the ``defaults``,
     integrator, sensor with the fog, sun, sky (when ``defaults`` has ``sky_radiance``) and
-    geometry (``out_dir``: the scene's folder, which a mesh's file name is relative to)."""
+    geometry (``out_dir``: the scene's folder, which a mesh's file name is relative to).
+
+    The surfaces share ``$reflectance``; with a mesh, a ``ground_reflectance`` (grey or RGB)
+    gives the ground its own diffuse BSDF with that value written as is.  ``face_normals``:
+    the mesh is shaded with its faces' normals."""
     root = ET.Element("scene", version="3.0.0")
     _header(root, geo, fog_source, notes)
     for k, v in defaults.items():
@@ -131,10 +139,13 @@ def scene_element(defaults: dict[str, str], fog: dict, geo: Geometry, *, fog_sou
         add_valley(root, ground_size)
     else:
         diffuse(root, "surface", "$reflectance", twosided=geo.kind == "mesh")
+        own = geo.kind == "mesh" and ground_reflectance is not None
+        if own:
+            diffuse(root, "ground_surface", _vec(_rgb3(ground_reflectance)))
         if with_ground:
-            ground(root, ground_size, "surface")
+            ground(root, ground_size, "ground_surface" if own else "surface")
         if geo.kind == "mesh":
-            add_mesh(root, geo, out_dir, mesh_scale, mesh_up, mesh_translate)
+            add_mesh(root, geo, out_dir, mesh_scale, mesh_up, mesh_translate, face_normals=face_normals)
     ET.indent(root, space="    ")
     return root
 

@@ -27,6 +27,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from fogref import params
 from fogref.errors import FogrefError
 
 __all__ = ["angles_from_sun_direction", "sun_direction_from_angles", "sun_direction_from_to_world"]
@@ -50,8 +51,8 @@ def sun_direction_from_angles(elevation_deg: float, azimuth_deg: float) -> np.nd
 
     Raises
     ------
-    FogrefError
-        For a non-finite angle or an elevation outside [-90, 90].
+    fogref.errors.ParameterError
+        For a non-finite angle or an elevation outside [-90, 90] (:func:`fogref.params.angle`).
 
     Examples
     --------
@@ -59,12 +60,13 @@ def sun_direction_from_angles(elevation_deg: float, azimuth_deg: float) -> np.nd
     [0.0, 1.0, 0.0]
     >>> sun_direction_from_angles(0, 90).round(12).tolist()
     [1.0, 0.0, 0.0]
+    >>> sun_direction_from_angles(95, 0)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: ...: parameter 'sun_elevation': 95 is outside [-90, 90] deg
     """
-    e, a = float(elevation_deg), float(azimuth_deg)
-    if not (math.isfinite(e) and math.isfinite(a)):
-        raise FogrefError(f"sun angles must be finite, got elevation {e}, azimuth {a}")
-    if not -90.0 <= e <= 90.0:
-        raise FogrefError(f"sun_elevation {e} deg outside [-90, 90]")
+    e = params.angle(elevation_deg, "sun_elevation", source="sun_direction_from_angles", lo=-90.0, hi=90.0)
+    a = params.angle(azimuth_deg, "sun_azimuth", source="sun_direction_from_angles")
     er, ar = math.radians(e), math.radians(a)
     return np.array([math.cos(er) * math.sin(ar), math.sin(er), math.cos(er) * math.cos(ar)])
 
@@ -96,11 +98,9 @@ def angles_from_sun_direction(w) -> tuple[float, float]:
     return math.degrees(math.asin(max(-1.0, min(1.0, v[1])))), math.degrees(math.atan2(v[0], v[2]))
 
 
-def _floats(text: str, what: str) -> list[float]:
-    try:
-        return [float(x) for x in text.replace(",", " ").split()]
-    except ValueError:
-        raise FogrefError(f"{what}: expected numbers, got '{text}'") from None
+def _floats(text: str, what: str, name: str = "value") -> list[float]:
+    """The finite numbers of ``text`` (``"a, b c"``), each through :func:`fogref.params.number`."""
+    return [params.number(x, name, source=what) for x in text.replace(",", " ").split()]
 
 
 def _rotation(axis, angle_deg: float) -> np.ndarray:
@@ -152,15 +152,15 @@ def sun_direction_from_to_world(transform, subst: Callable[[str], str] = lambda 
         tag = op.tag
         what = f"{source}: sun to_world <{tag}>"
         if tag == "rotate":
-            axis = [float(subst(op.get(c, "0"))) for c in "xyz"]
+            axis = [params.number(subst(op.get(c, "0")), c, source=what) for c in "xyz"]
             if not any(axis):
                 raise FogrefError(f"{what}: needs a non-zero axis (x, y or z)")
-            R = _rotation(axis, float(subst(op.get("angle", "0"))))
+            R = _rotation(axis, params.angle(subst(op.get("angle", "0")), "angle", source=what))
         elif tag == "scale":
             if op.get("value") is not None:
-                R = np.eye(3) * float(subst(op.get("value")))
+                R = np.eye(3) * params.number(subst(op.get("value")), "value", source=what)
             else:
-                R = np.diag([float(subst(op.get(c, "1"))) for c in "xyz"])
+                R = np.diag([params.number(subst(op.get(c, "1")), c, source=what) for c in "xyz"])
         elif tag == "matrix":
             v = _floats(subst(op.get("value", "")), what)
             if len(v) not in (9, 16):
@@ -168,9 +168,9 @@ def sun_direction_from_to_world(transform, subst: Callable[[str], str] = lambda 
             m = np.array(v).reshape(4, 4)[:3, :3] if len(v) == 16 else np.array(v).reshape(3, 3)
             R = m
         elif tag == "lookat":
-            o = np.array(_floats(subst(op.get("origin", "0 0 0")), what))
-            t = np.array(_floats(subst(op.get("target", "0 0 1")), what))
-            up = np.array(_floats(subst(op.get("up", "0 1 0")), what))
+            o = np.array(_floats(subst(op.get("origin", "0 0 0")), what, "origin"))
+            t = np.array(_floats(subst(op.get("target", "0 0 1")), what, "target"))
+            up = np.array(_floats(subst(op.get("up", "0 1 0")), what, "up"))
             z = t - o
             x = np.cross(up, z)
             if np.linalg.norm(z) == 0 or np.linalg.norm(x) == 0:
@@ -180,7 +180,8 @@ def sun_direction_from_to_world(transform, subst: Callable[[str], str] = lambda 
         elif tag == "translate":
             continue
         else:
-            raise FogrefError(f"{what}: unsupported operation (allowed: rotate, scale, matrix, lookat, translate)")
+            raise FogrefError(f"{what}: unsupported operation "
+                              "(allowed: rotate, scale, matrix, lookat, translate)")
         M = R @ M
     d = M[:, 2]
     n = float(np.linalg.norm(d))

@@ -17,10 +17,16 @@ from __future__ import annotations
 import contextlib
 import os
 
+from fogref import params
 from fogref._llvm import HELP, ensure_llvm
 from fogref.errors import FogrefError
 
 DEFAULT_VARIANT = "llvm_ad_rgb"
+#: The Mitsuba variants fogref renders with: its plugins (fogpath, heightfog) need an RGB
+#: autodiff variant, on the CPU (LLVM) or an NVIDIA GPU (CUDA).
+VARIANTS = ("llvm_ad_rgb", "cuda_ad_rgb")
+#: What a CUDA variant on a machine without CUDA says (one line, not Dr.Jit's internals).
+NO_CUDA = "{name} needs an NVIDIA GPU with CUDA; none found here: use llvm_ad_rgb"
 _registered: set[str] = set()
 
 
@@ -116,6 +122,16 @@ def _cached_syntax():
         dr.syntax = original
 
 
+def _has_cuda() -> bool:
+    """Whether Dr.Jit finds a CUDA device (a driver and a GPU)."""
+    import drjit as dr
+
+    try:
+        return bool(dr.has_backend(dr.JitBackend.CUDA))
+    except Exception:  # a broken driver install: no usable CUDA
+        return False
+
+
 def set_variant(name: str | None = None) -> str:
     """Set the Mitsuba variant and register fogref's plugins for it.
 
@@ -133,9 +149,13 @@ def set_variant(name: str | None = None) -> str:
 
     Raises
     ------
+    fogref.errors.ParameterError
+        The variant is not one of :data:`VARIANTS` (``scalar_rgb``, spectral variants:
+        fogref's plugins need an RGB autodiff variant), with the allowed list.
     fogref.errors.FogrefError
-        The variant is not one of ``mitsuba.variants()``, it fails to start, or
-        it is an ``llvm_*`` variant and no LLVM >= 16 was found.
+        The variant is not one of ``mitsuba.variants()``, it fails to start, it is
+        ``cuda_*`` and Dr.Jit finds no CUDA device (:data:`NO_CUDA`), or it is an
+        ``llvm_*`` variant and no LLVM >= 16 was found.
 
     Notes
     -----
@@ -145,14 +165,21 @@ def set_variant(name: str | None = None) -> str:
     and the ``fogpath`` integrator) are registered once per variant; Mitsuba
     keeps plugin registrations per variant.
     """
+    if name is not None:
+        params.choice(name, "variant", VARIANTS, "fogref.set_variant")
     llvm = ensure_llvm()  # before Dr.Jit starts its LLVM back end
     with _cached_syntax():  # Mitsuba's import and set_variant, fogpath's import: @dr.syntax
         import mitsuba as mi
 
         if name is None:
-            name = mi.variant() or os.environ.get("FOGREF_VARIANT") or DEFAULT_VARIANT
+            current, env = mi.variant(), os.environ.get("FOGREF_VARIANT")
+            source = ("mitsuba.variant() (set before fogref)" if current
+                      else "$FOGREF_VARIANT" if env else "fogref.set_variant")
+            name = params.choice(current or env or DEFAULT_VARIANT, "variant", VARIANTS, source)
         if name.startswith("llvm") and not llvm:
             raise FogrefError(HELP)
+        if name.startswith("cuda") and not _has_cuda():
+            raise FogrefError(NO_CUDA.format(name=name))
         if name not in mi.variants():
             raise FogrefError(f"Mitsuba variant '{name}' is not available; choose one of {mi.variants()}")
         if mi.variant() != name:
