@@ -76,9 +76,15 @@ def machine_info() -> dict:
                 break
     except OSError:
         pass
-    return {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version(),
-            "mitsuba": mi.__version__, "drjit": dr.__version__, "variant": mi.variant(),
-            "llvm": os.environ.get("DRJIT_LIBLLVM_PATH", "")}
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "python": platform.python_version(),
+        "mitsuba": mi.__version__,
+        "drjit": dr.__version__,
+        "variant": mi.variant(),
+        "llvm": os.environ.get("DRJIT_LIBLLVM_PATH", ""),
+    }
 
 
 def median(xs):

@@ -50,8 +50,16 @@ import math
 import numpy as np
 
 SCENES = ("valley", "valley_open", "two_layer", "zero_falloff")
-METHODS = ("fogpath", "fogpath_before", "fogpath_split", "fogpath_nosplit", "volpath_hf", "grid64", "grid256",
-           "homogeneous")
+METHODS = (
+    "fogpath",
+    "fogpath_before",
+    "fogpath_split",
+    "fogpath_nosplit",
+    "volpath_hf",
+    "grid64",
+    "grid256",
+    "homogeneous",
+)
 #: fogpath as it was before issue 11 (one sun sample, sun sampling only in unbounded
 #: one-layer fog, no sky control variate), measured beside today's defaults
 BEFORE_ISSUE_11 = {"sun_samples": 1, "sun_sampling_mixture": False, "sky_cv": "off", "forced_split": False}
@@ -85,16 +93,25 @@ def scene_spec(name: str) -> dict:
         a = 100 * math.log(2) ** 2 * 0.02 / 1000  # Unreal FogDensity 0.02 -> 1/m
         b = 100 * math.log(2) * 0.2 / 1000  # FogHeightFalloff 0.2 -> 1/m
         boxes = [  # (scale, rotate_y_deg, translate)
-            ((60, 90, 200), 10, (-220, 0, 600)), ((80, 140, 250), -5, (-300, 0, 1300)),
-            ((70, 110, 220), -12, (260, 0, 800)), ((90, 180, 300), 8, (420, 0, 1800)),
-            ((900, 260, 60), 0, (0, 0, 2600)), ((4, 3, 4), 30, (-12, 0, 45)),
+            ((60, 90, 200), 10, (-220, 0, 600)),
+            ((80, 140, 250), -5, (-300, 0, 1300)),
+            ((70, 110, 220), -12, (260, 0, 800)),
+            ((90, 180, 300), 8, (420, 0, 1800)),
+            ((900, 260, 60), 0, (0, 0, 2600)),
+            ((4, 3, 4), 30, (-12, 0, 45)),
         ]
         return dict(
-            origin=[0, 2, 0], target=[0.15, 2.35, 1], fov=70,
+            origin=[0, 2, 0],
+            target=[0.15, 2.35, 1],
+            fov=70,
             fog=dict(sigma_t=a, albedo=0.9, g=0.6, layers=[(1.0, b, 0.0)]),
             bounds=([-1500.0, -1.0, -100.0], [1500.0, 300.0, 2800.0]),
-            sun_dir=[-0.4, -0.139173, -0.906], sun=[3.2, 2.9, 2.4], sky=[0.20, 0.30, 0.50],
-            ground=(3000, [0.12, 0.16, 0.08]), rock=[0.25, 0.23, 0.20], boxes=boxes,
+            sun_dir=[-0.4, -0.139173, -0.906],
+            sun=[3.2, 2.9, 2.4],
+            sky=[0.20, 0.30, 0.50],
+            ground=(3000, [0.12, 0.16, 0.08]),
+            rock=[0.25, 0.23, 0.20],
+            boxes=boxes,
             spheres=[((15, 0, 90), 9)],
         )
     if name == "valley_open":
@@ -106,21 +123,39 @@ def scene_spec(name: str) -> dict:
         spec["bounds"] = None
         return spec
     if name == "two_layer":
-        boxes = [((6, 25, 6), 0, (-20, 0, 150)), ((6, 35, 6), 0, (30, 0, 320)), ((8, 45, 8), 0, (-60, 0, 600))]
+        boxes = [
+            ((6, 25, 6), 0, (-20, 0, 150)),
+            ((6, 35, 6), 0, (30, 0, 320)),
+            ((8, 45, 8), 0, (-60, 0, 600)),
+        ]
         return dict(
-            origin=[0, 5, 0], target=[0, 5.12, 1], fov=75,
+            origin=[0, 5, 0],
+            target=[0, 5.12, 1],
+            fov=75,
             fog=dict(sigma_t=0.0045, albedo=0.92, g=0.85, layers=[(1.0, 0.04, 0.0), (0.15, 0.002, 200.0)]),
             bounds=([-1500.0, -1.0, -200.0], [1500.0, 600.0, 2500.0]),
-            sun_dir=[0.1, -0.2079, -0.9730], sun=[3.3, 3.0, 2.5], sky=[0.20, 0.30, 0.52],
-            ground=(4000, [0.14, 0.15, 0.10]), rock=[0.14, 0.15, 0.10], boxes=boxes, spheres=[],
+            sun_dir=[0.1, -0.2079, -0.9730],
+            sun=[3.3, 3.0, 2.5],
+            sky=[0.20, 0.30, 0.52],
+            ground=(4000, [0.14, 0.15, 0.10]),
+            rock=[0.14, 0.15, 0.10],
+            boxes=boxes,
+            spheres=[],
         )
     if name == "zero_falloff":
         return dict(
-            origin=[0, 4, -20], target=[0, 6, 30], fov=70,
+            origin=[0, 4, -20],
+            target=[0, 6, 30],
+            fov=70,
             fog=dict(sigma_t=0.03, albedo=0.9, g=0.5, layers=[(1.0, 0.0, 0.0)]),
             bounds=([-60.0, -1.0, -60.0], [60.0, 40.0, 60.0]),
-            sun_dir=[-0.3, -0.45, -0.84], sun=[2.0, 1.9, 1.7], sky=[0.2, 0.3, 0.5],
-            ground=(150, [0.3, 0.3, 0.25]), rock=[0.5, 0.4, 0.3], boxes=[((4, 6, 4), 0, (5, 6, 25))], spheres=[],
+            sun_dir=[-0.3, -0.45, -0.84],
+            sun=[2.0, 1.9, 1.7],
+            sky=[0.2, 0.3, 0.5],
+            ground=(150, [0.3, 0.3, 0.25]),
+            rock=[0.5, 0.4, 0.3],
+            boxes=[((4, 6, 4), 0, (5, 6, 25))],
+            spheres=[],
         )
     raise KeyError(name)
 
@@ -146,10 +181,20 @@ def heightfog_dict(mi, spec, **over):
     f = dict(spec["fog"])
     f.update(over)
     layers = f.pop("layers")
-    d = {"type": "heightfog", "profile": "exponential", "sigma_t": f["sigma_t"], "albedo": f["albedo"],
-         "g": f["g"], "density": layers[0][0], "falloff": layers[0][1], "height": layers[0][2]}
+    d = {
+        "type": "heightfog",
+        "profile": "exponential",
+        "sigma_t": f["sigma_t"],
+        "albedo": f["albedo"],
+        "g": f["g"],
+        "density": layers[0][0],
+        "falloff": layers[0][1],
+        "height": layers[0][2],
+    }
     if spec["bounds"] is not None:
-        d.update(bounds_min=mi.ScalarPoint3f(*spec["bounds"][0]), bounds_max=mi.ScalarPoint3f(*spec["bounds"][1]))
+        d.update(
+            bounds_min=mi.ScalarPoint3f(*spec["bounds"][0]), bounds_max=mi.ScalarPoint3f(*spec["bounds"][1])
+        )
     if len(layers) > 1:
         d.update(density2=layers[1][0], falloff2=layers[1][1], height2=layers[1][2])
     return d
@@ -164,19 +209,33 @@ def grid_medium(mi, spec, n: int):
     grid = rho[None, :, None, None].astype(np.float32)  # (z, y, x, channels)
     T = mi.ScalarTransform4f()
     f = spec["fog"]
-    return mi.load_dict({
-        "type": "heterogeneous",
-        "has_spectral_extinction": False,
-        "albedo": f["albedo"],
-        "scale": f["sigma_t"],
-        "sigma_t": {"type": "gridvolume", "grid": mi.VolumeGrid(grid),
-                    "to_world": T.translate(lo.tolist()).scale((hi - lo).tolist())},
-        "phase": {"type": "hg", "g": f["g"]},
-    })
+    return mi.load_dict(
+        {
+            "type": "heterogeneous",
+            "has_spectral_extinction": False,
+            "albedo": f["albedo"],
+            "scale": f["sigma_t"],
+            "sigma_t": {
+                "type": "gridvolume",
+                "grid": mi.VolumeGrid(grid),
+                "to_world": T.translate(lo.tolist()).scale((hi - lo).tolist()),
+            },
+            "phase": {"type": "hg", "g": f["g"]},
+        }
+    )
 
 
-def build(mi, name: str, method: str, res=(96, 54), max_depth: int = 8, sun: bool = True, sky: bool = True,
-          fog_over: dict | None = None, integrator_over: dict | None = None):
+def build(
+    mi,
+    name: str,
+    method: str,
+    res=(96, 54),
+    max_depth: int = 8,
+    sun: bool = True,
+    sky: bool = True,
+    fog_over: dict | None = None,
+    integrator_over: dict | None = None,
+):
     """A loaded ``mi.Scene`` for (scene, method)."""
     spec = scene_spec(name)
     T = mi.ScalarTransform4f()
@@ -194,29 +253,47 @@ def build(mi, name: str, method: str, res=(96, 54), max_depth: int = 8, sun: boo
     elif method == "homogeneous":
         assert all(L[1] == 0 for L in f["layers"]), "homogeneous needs zero falloff"
         rho = sum(L[0] for L in f["layers"])
-        medium = mi.load_dict({"type": "homogeneous", "sigma_t": f["sigma_t"] * rho, "albedo": f["albedo"],
-                               "phase": {"type": "hg", "g": f["g"]}})
+        medium = mi.load_dict(
+            {
+                "type": "homogeneous",
+                "sigma_t": f["sigma_t"] * rho,
+                "albedo": f["albedo"],
+                "phase": {"type": "hg", "g": f["g"]},
+            }
+        )
         lo, hi = np.array(spec["bounds"][0]), np.array(spec["bounds"][1])
-        extra["fogbox"] = {"type": "cube", "to_world": T.translate(((lo + hi) / 2).tolist()).scale(((hi - lo) / 2).tolist()),
-                           "bsdf": {"type": "null"}, "interior": medium}
+        extra["fogbox"] = {
+            "type": "cube",
+            "to_world": T.translate(((lo + hi) / 2).tolist()).scale(((hi - lo) / 2).tolist()),
+            "bsdf": {"type": "null"},
+            "interior": medium,
+        }
     else:
         raise KeyError(method)
     d = {
         "type": "scene",
         "integrator": integ,
         "sensor": {
-            "type": "perspective", "fov": spec["fov"], "fov_axis": "x",
+            "type": "perspective",
+            "fov": spec["fov"],
+            "fov_axis": "x",
             "to_world": T.look_at(origin=spec["origin"], target=spec["target"], up=[0, 1, 0]),
             "film": {"type": "hdrfilm", "width": res[0], "height": res[1], "rfilter": {"type": "box"}},
             "sampler": {"type": "independent"},
             "medium": medium,
         },
-        "ground": {"type": "rectangle", "to_world": T.rotate([1, 0, 0], -90).scale(spec["ground"][0]),
-                   "bsdf": _diffuse(spec["ground"][1])},
+        "ground": {
+            "type": "rectangle",
+            "to_world": T.rotate([1, 0, 0], -90).scale(spec["ground"][0]),
+            "bsdf": _diffuse(spec["ground"][1]),
+        },
     }
     for i, (s, ang, t) in enumerate(spec["boxes"]):
-        d[f"box{i}"] = {"type": "cube", "to_world": T.translate(list(t)).rotate([0, 1, 0], ang).scale(list(s)),
-                        "bsdf": _diffuse(spec["rock"])}
+        d[f"box{i}"] = {
+            "type": "cube",
+            "to_world": T.translate(list(t)).rotate([0, 1, 0], ang).scale(list(s)),
+            "bsdf": _diffuse(spec["rock"]),
+        }
     for i, (c, r) in enumerate(spec["spheres"]):
         d[f"sphere{i}"] = {"type": "sphere", "center": list(c), "radius": r, "bsdf": _diffuse(spec["rock"])}
     if sun:

@@ -43,7 +43,7 @@ from scipy.stats import norm
 
 ROOT = Path(__file__).resolve().parents[1]
 Z_ALPHA_BIAS = norm.ppf(0.995)  # two-sided 1 %
-Z_ALPHA_RMSE = norm.ppf(0.99)   # one-sided 1 %
+Z_ALPHA_RMSE = norm.ppf(0.99)  # one-sided 1 %
 Z_POWER = norm.ppf(0.95)
 PARTS = ("T", "inscatter", "final")
 
@@ -54,8 +54,16 @@ def render_truth(res, spp: int, seed: int, folder: Path):
 
     out = folder / f"valley-{res[0]}x{res[1]}-{spp}spp.exr"
     t0 = time.perf_counter()
-    render(ROOT / "scenes" / "valley.xml", out, spp=spp, seed=seed, overrides={"res": res[0], "resy": res[1]},
-           progress=False, resume=False, png=False)
+    render(
+        ROOT / "scenes" / "valley.xml",
+        out,
+        spp=spp,
+        seed=seed,
+        overrides={"res": res[0], "resy": res[1]},
+        progress=False,
+        resume=False,
+        png=False,
+    )
     return load_truth(out), time.perf_counter() - t0
 
 
@@ -81,8 +89,10 @@ def candidate(truth, part: str, delta: float) -> dict:
     k = 1.0 + delta
     if part == "final":
         return {"final": k * truth.final}
-    return {"T": truth.transmittance * (k if part == "T" else 1.0),
-            "inscatter": truth.inscatter * (k if part == "inscatter" else 1.0)}
+    return {
+        "T": truth.transmittance * (k if part == "T" else 1.0),
+        "inscatter": truth.inscatter * (k if part == "inscatter" else 1.0),
+    }
 
 
 def row(result, part, metric):
@@ -96,8 +106,12 @@ def power_for(truth, spp: int, part: str, n: int, seed: int) -> dict:
     reps = [replicate(truth, rng, spp) for _ in range(n)]  # the same replicates for every δ
     out = {}
     for metric, conf, z_a in (("rel_bias", 0.99, Z_ALPHA_BIAS), ("rel_rmse", 0.98, Z_ALPHA_RMSE)):
-        tol = {part: {"rel_bias": 0.0 if metric == "rel_bias" else None,
-                      "rel_rmse": 0.0 if metric == "rel_rmse" else None}}
+        tol = {
+            part: {
+                "rel_bias": 0.0 if metric == "rel_bias" else None,
+                "rel_rmse": 0.0 if metric == "rel_rmse" else None,
+            }
+        }
 
         def results(delta):
             cand = candidate(truth, part, delta)
@@ -110,8 +124,12 @@ def power_for(truth, spp: int, part: str, n: int, seed: int) -> dict:
         false_alarm = float(np.mean([row(r, part, metric).verdict == "fail" for r in null]))
         est = np.array([row(r, part, metric).estimate for r in null], dtype=float)
         # start: the normal-theory value for the bias, then bracket and bisect (geometric) on measured power
-        guess = max(float((z_a + Z_POWER) * np.std(est, ddof=1)) if metric == "rel_bias" else
-                    float(np.mean([row(r, part, metric).high for r in null])), 1e-7)
+        guess = max(
+            float((z_a + Z_POWER) * np.std(est, ddof=1))
+            if metric == "rel_bias"
+            else float(np.mean([row(r, part, metric).high for r in null])),
+            1e-7,
+        )
         lo, hi = 0.0, guess
         for _ in range(12):
             if power(hi) >= 0.95:
@@ -120,8 +138,12 @@ def power_for(truth, spp: int, part: str, n: int, seed: int) -> dict:
         for _ in range(6):
             mid = np.sqrt(lo * hi) if lo > 0 else hi / 2.0
             lo, hi = (lo, mid) if power(mid) >= 0.95 else (mid, hi)
-        out[metric] = {"min_detectable": float(hi), "power": power(hi), "false_alarm": false_alarm,
-                       "replicates": n}
+        out[metric] = {
+            "min_detectable": float(hi),
+            "power": power(hi),
+            "false_alarm": false_alarm,
+            "replicates": n,
+        }
     return out
 
 
@@ -146,34 +168,61 @@ def main(argv=None) -> int:
                 for part in PARTS:
                     entry["parts"][part] = power_for(truth, spp, part, a.replicates, a.seed + 1)
                 rows.append(entry)
-                print(json.dumps({"res": res_s, "spp": spp, "render_s": round(seconds, 2),
-                                  **{p: round(entry["parts"][p]["rel_bias"]["min_detectable"], 6) for p in PARTS}}),
-                      flush=True)
+                print(
+                    json.dumps(
+                        {
+                            "res": res_s,
+                            "spp": spp,
+                            "render_s": round(seconds, 2),
+                            **{p: round(entry["parts"][p]["rel_bias"]["min_detectable"], 6) for p in PARTS},
+                        }
+                    ),
+                    flush=True,
+                )
     command = "python benchmarks/check_power.py " + " ".join(shlex.quote(x) for x in (argv or sys.argv[1:]))
-    meta = {"command": command.strip(), "scene": "scenes/valley.xml", "machine": platform.platform(),
-            "processor": platform.processor(), "pixel_filter": "centre", "method": "noise",
-            "power": 0.95, "false_alarm": 0.01}
+    meta = {
+        "command": command.strip(),
+        "scene": "scenes/valley.xml",
+        "machine": platform.platform(),
+        "processor": platform.processor(),
+        "pixel_filter": "centre",
+        "method": "noise",
+        "power": 0.95,
+        "false_alarm": 0.01,
+    }
     (out / "power.json").write_text(json.dumps({"meta": meta, "rows": rows}, indent=2) + "\n")
-    lines = ["# Power and cost of `fogref.check` (default scene)", "",
-             f"Made by `{meta['command']}` on {meta['machine']}.", "",
-             "Smallest uniform relative error (δ: candidate = truth × (1 + δ) for one part) that `check` detects "
-             "with 95 % power at a 1 % false-alarm rate, region `all`, `method=\"noise\"`; by `rel_bias` (a shift "
-             "of the mean) and by `rel_rmse`. Measured power and false-alarm rate over the replicates in brackets. "
-             "Render time: this machine (2 cores shared with other jobs), one render after a warm-up render.", "",
-             "| resolution | spp | render [s] | T: rel_bias | T: rel_rmse | inscatter: rel_bias | inscatter: rel_rmse "
-             "| final: rel_bias | final: rel_rmse |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    lines = [
+        "# Power and cost of `fogref.check` (default scene)",
+        "",
+        f"Made by `{meta['command']}` on {meta['machine']}.",
+        "",
+        "Smallest uniform relative error (δ: candidate = truth × (1 + δ) for one part) that `check` detects "
+        'with 95 % power at a 1 % false-alarm rate, region `all`, `method="noise"`; by `rel_bias` (a shift '
+        "of the mean) and by `rel_rmse`. Measured power and false-alarm rate over the replicates in brackets. "
+        "Render time: this machine (2 cores shared with other jobs), one render after a warm-up render.",
+        "",
+        "| resolution | spp | render [s] | T: rel_bias | T: rel_rmse | inscatter: rel_bias | inscatter: rel_rmse "
+        "| final: rel_bias | final: rel_rmse |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
     for e in rows:
         cells = []
         for p in PARTS:
             for m in ("rel_bias", "rel_rmse"):
                 v = e["parts"][p][m]
                 cells.append(f"{100 * v['min_detectable']:.3g} % ({v['power']:.0%}, {v['false_alarm']:.1%})")
-        lines.append(f"| {e['res'][0]}×{e['res'][1]} | {e['spp']} | {e['render_s']:.1f} | " + " | ".join(cells) + " |")
-    lines += ["", "How it is measured: see the docstring of `benchmarks/check_power.py` (replicate truths with the "
-              "rendered truth's per-pixel noise, Gaussian; stderr re-estimated as from `spp` samples). T is "
-              "closed form in a pixel-exact truth: every sample traces the same camera ray, its stderr is exactly 0 "
-              "and any T error above float32 storage is detected (the column shows the smallest error tried). Render times "
-              "vary by 2-5x between runs on a machine shared with other jobs.", ""]
+        lines.append(
+            f"| {e['res'][0]}×{e['res'][1]} | {e['spp']} | {e['render_s']:.1f} | " + " | ".join(cells) + " |"
+        )
+    lines += [
+        "",
+        "How it is measured: see the docstring of `benchmarks/check_power.py` (replicate truths with the "
+        "rendered truth's per-pixel noise, Gaussian; stderr re-estimated as from `spp` samples). T is "
+        "closed form in a pixel-exact truth: every sample traces the same camera ray, its stderr is exactly 0 "
+        "and any T error above float32 storage is detected (the column shows the smallest error tried). Render times "
+        "vary by 2-5x between runs on a machine shared with other jobs.",
+        "",
+    ]
     (out / "power.md").write_text("\n".join(lines))
     print(f"wrote {out / 'power.md'}")
     return 0

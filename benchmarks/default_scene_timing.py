@@ -24,8 +24,11 @@ def main():
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--out", default="reports/benchmarks/default_scene_timing.json")
-    ap.add_argument("--warm-cache", action="store_true",
-                    help="keep Dr.Jit's kernel cache (~/.drjit); default: a fresh one, so compile time is real")
+    ap.add_argument(
+        "--warm-cache",
+        action="store_true",
+        help="keep Dr.Jit's kernel cache (~/.drjit); default: a fresh one, so compile time is real",
+    )
     a = ap.parse_args()
     if not a.warm_cache:  # Dr.Jit keeps its kernel cache under $HOME/.drjit
         import os
@@ -53,12 +56,22 @@ def main():
             dr.sync_thread()
             times.append(time.perf_counter() - t0)
         steady = statistics.median(times[1:])
-        res[name] = {"first_call_s": times[0], "steady_s": steady, "compile_s": max(times[0] - steady, 0.0),
-                     "all_s": times}
+        res[name] = {
+            "first_call_s": times[0],
+            "steady_s": steady,
+            "compile_s": max(times[0] - steady, 0.0),
+            "all_s": times,
+        }
     res["volpath_over_fogpath_steady"] = res["volpath"]["steady_s"] / res["fogpath"]["steady_s"]
-    res["config"] = {"scene": "scenes/valley.xml", "resolution": [320, 180], "spp": a.spp, "variant": a.variant,
-                     "max_depth": 16, "note": "volpath uses the heightfog medium (delta tracking against its per-ray majorant); "
-                     "the valley fog has grey extinction so volpath runs its non-spectral mode"}
+    res["config"] = {
+        "scene": "scenes/valley.xml",
+        "resolution": [320, 180],
+        "spp": a.spp,
+        "variant": a.variant,
+        "max_depth": 16,
+        "note": "volpath uses the heightfog medium (delta tracking against its per-ray majorant); "
+        "the valley fog has grey extinction so volpath runs its non-spectral mode",
+    }
     out = Path(a.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(res, indent=2))

@@ -35,8 +35,16 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "scenes" / "valley.xml"
 #: (sun_elevation, FogHeightFalloff x 0.0693147 = falloff, g): every configuration is new in at least one value
-CONFIGS = [(4, 0.05, 0.3), (10, 0.05, 0.3), (10, 0.1, 0.3), (10, 0.1, 0.6), (20, 0.2, 0.6), (40, 0.2, 0.85),
-           (40, 0.4, 0.85), (4, 0.4, 0.6)]
+CONFIGS = [
+    (4, 0.05, 0.3),
+    (10, 0.05, 0.3),
+    (10, 0.1, 0.3),
+    (10, 0.1, 0.6),
+    (20, 0.2, 0.6),
+    (40, 0.2, 0.85),
+    (40, 0.4, 0.85),
+    (4, 0.4, 0.6),
+]
 
 
 def _child(mode: str, res: tuple, spp: int) -> list:
@@ -55,8 +63,14 @@ def _child(mode: str, res: tuple, spp: int) -> list:
         fogpath.make_scene_values_opaque = lambda scene: 0
     rows = []
     for sun, fhf, g in CONFIGS:
-        scene = mi.load_file(str(SCENE), res=str(res[0]), resy=str(res[1]), sun_elevation=str(sun),
-                             falloff=str(fhf * 0.0693147), g=str(g))
+        scene = mi.load_file(
+            str(SCENE),
+            res=str(res[0]),
+            resy=str(res[1]),
+            sun_elevation=str(sun),
+            falloff=str(fhf * 0.0693147),
+            g=str(g),
+        )
         dr.kernel_history()
         dr.set_flag(dr.JitFlag.KernelHistory, True)
         t0 = time.perf_counter()
@@ -67,10 +81,18 @@ def _child(mode: str, res: tuple, spp: int) -> list:
         hist = [k for k in dr.kernel_history() if str(k.get("type")).endswith("JIT")]
         dr.set_flag(dr.JitFlag.KernelHistory, False)
         compiled = [k for k in hist if not k["cache_hit"]]
-        rows.append({"sun_elevation": sun, "FogHeightFalloff": fhf, "g": g, "wall_s": wall,
-                     "kernels": len(hist), "compiled": len(compiled),
-                     "compile_s": sum(k["codegen_time"] + k["backend_time"] for k in compiled) / 1e3,
-                     "disk_hits": sum(1 for k in hist if k["cache_hit"] and k.get("cache_disk"))})
+        rows.append(
+            {
+                "sun_elevation": sun,
+                "FogHeightFalloff": fhf,
+                "g": g,
+                "wall_s": wall,
+                "kernels": len(hist),
+                "compiled": len(compiled),
+                "compile_s": sum(k["codegen_time"] + k["backend_time"] for k in compiled) / 1e3,
+                "disk_hits": sum(1 for k in hist if k["cache_hit"] and k.get("cache_disk")),
+            }
+        )
         del scene
     return rows
 
@@ -78,8 +100,13 @@ def _child(mode: str, res: tuple, spp: int) -> list:
 def _run(mode: str, res: tuple, spp: int) -> list:
     with tempfile.TemporaryDirectory() as home:
         env = dict(os.environ, HOME=home)
-        out = subprocess.run([sys.executable, __file__, "--child", mode, "--res", *map(str, res), "--spp", str(spp)],
-                             env=env, capture_output=True, text=True, check=True)
+        out = subprocess.run(
+            [sys.executable, __file__, "--child", mode, "--res", *map(str, res), "--spp", str(spp)],
+            env=env,
+            capture_output=True,
+            text=True,
+            check=True,
+        )
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
@@ -98,7 +125,9 @@ def main() -> None:
     for _ in range(a.repeats):
         for mode in runs:
             runs[mode].append(_run(mode, tuple(a.res), a.spp))
-    (Path(a.out).with_suffix(".json")).write_text(json.dumps({"res": a.res, "spp": a.spp, "runs": runs}, indent=1))
+    (Path(a.out).with_suffix(".json")).write_text(
+        json.dumps({"res": a.res, "spp": a.spp, "runs": runs}, indent=1)
+    )
 
     def best(mode, i, key):
         return min(r[i][key] for r in runs[mode])
@@ -122,10 +151,12 @@ def main() -> None:
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for i, (sun, fhf, g) in enumerate(CONFIGS):
-        lines.append(f"| {i + 1} | {sun} | {fhf} | {g} | {best('literal', i, 'compiled')} | "
-                     f"{best('literal', i, 'compile_s'):.2f} | {best('literal', i, 'wall_s'):.2f} | "
-                     f"{best('opaque', i, 'compiled')} | {best('opaque', i, 'compile_s'):.2f} | "
-                     f"{best('opaque', i, 'wall_s'):.2f} |")
+        lines.append(
+            f"| {i + 1} | {sun} | {fhf} | {g} | {best('literal', i, 'compiled')} | "
+            f"{best('literal', i, 'compile_s'):.2f} | {best('literal', i, 'wall_s'):.2f} | "
+            f"{best('opaque', i, 'compiled')} | {best('opaque', i, 'compile_s'):.2f} | "
+            f"{best('opaque', i, 'wall_s'):.2f} |"
+        )
     tot = {m: min(sum(r["wall_s"] for r in run) for run in runs[m]) for m in runs}
     later = {m: min(sum(r["wall_s"] for r in run[1:]) for run in runs[m]) for m in runs}
     med = {m: statistics.median(r["wall_s"] for run in runs[m] for r in run[1:]) for m in runs}

@@ -58,14 +58,16 @@ def main():
             out["models"][f"{name}/{prec}"] = timeit(lambda: m.evaluate(cam, wp, prec), a.repeats)
     U = get("ue4")
     base = U.Params()
-    general = dataclasses.replace(base, SecondFogData=SecondFogData(FogDensity=0.01, FogHeightFalloff=0.1,
-                                                                      FogHeightOffset=500.0)).with_sun([0.4, 0.14, 0.9])
+    general = dataclasses.replace(
+        base, SecondFogData=SecondFogData(FogDensity=0.01, FogHeightFalloff=0.1, FogHeightOffset=500.0)
+    ).with_sun([0.4, 0.14, 0.9])
     variants = {
         "general (2 layers + directional)": general,
         "directional off": dataclasses.replace(general, InscatteringLightDirection=None),
         "second layer off": dataclasses.replace(general, SecondFogData=SecondFogData(FogDensity=0.0)),
-        "both off": dataclasses.replace(general, InscatteringLightDirection=None,
-                                        SecondFogData=SecondFogData(FogDensity=0.0)),
+        "both off": dataclasses.replace(
+            general, InscatteringLightDirection=None, SecondFogData=SecondFogData(FogDensity=0.0)
+        ),
     }
     for prec in ("float32", "float64"):
         times = {k: [] for k in variants}
@@ -76,20 +78,35 @@ def main():
                 m.evaluate(cam, wp, prec)
                 times[k].append(time.perf_counter() - t0)
         g = statistics.median(times["general (2 layers + directional)"])
-        out["ue4_specialisations"][prec] = {k: {"seconds": statistics.median(v), "speedup": g / statistics.median(v)}
-                                            for k, v in times.items()}
+        out["ue4_specialisations"][prec] = {
+            k: {"seconds": statistics.median(v), "speedup": g / statistics.median(v)}
+            for k, v in times.items()
+        }
     d = ROOT / "reports" / "benchmarks"
     d.mkdir(parents=True, exist_ok=True)
     (d / "models_speed.json").write_text(json.dumps(out, indent=2))
-    lines = ["# Game-model speed (1920x1080 G-buffer, numpy, median of runs)", "",
-             "| model | float32 [s] | float64 [s] |", "|---|---|---|"]
+    lines = [
+        "# Game-model speed (1920x1080 G-buffer, numpy, median of runs)",
+        "",
+        "| model | float32 [s] | float64 [s] |",
+        "|---|---|---|",
+    ]
     for name in ("ue4", "unity", "altitude", "box", "hdrp", "filament"):
-        lines.append(f"| {name} | {out['models'][name + '/float32']:.3f} | {out['models'][name + '/float64']:.3f} |")
-    lines += ["", "## Unreal specialisations (interleaved, same G-buffer)", "",
-              "| variant | float32 [s] | speed-up | float64 [s] | speed-up |", "|---|---|---|---|---|"]
+        lines.append(
+            f"| {name} | {out['models'][name + '/float32']:.3f} | {out['models'][name + '/float64']:.3f} |"
+        )
+    lines += [
+        "",
+        "## Unreal specialisations (interleaved, same G-buffer)",
+        "",
+        "| variant | float32 [s] | speed-up | float64 [s] | speed-up |",
+        "|---|---|---|---|---|",
+    ]
     for k in variants:
         a32, a64 = out["ue4_specialisations"]["float32"][k], out["ue4_specialisations"]["float64"][k]
-        lines.append(f"| {k} | {a32['seconds']:.3f} | {a32['speedup']:.2f}x | {a64['seconds']:.3f} | {a64['speedup']:.2f}x |")
+        lines.append(
+            f"| {k} | {a32['seconds']:.3f} | {a32['speedup']:.2f}x | {a64['seconds']:.3f} | {a64['speedup']:.2f}x |"
+        )
     (d / "models_speed.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 

@@ -76,16 +76,35 @@ def path_kernels_per_call(scene_path=SCENE) -> dict:
         dr.set_flag(dr.JitFlag.KernelHistory, False)
     lanes = 16 * 9 * 4
     big = [k for k in hist if k.get("size") == lanes and (k.get("operation_count") or 0) > 1000]
-    return {"kernels": len(hist), "path_tracing_kernels": len(big),
-            "ops_per_path_kernel": sorted({int(k.get("operation_count") or 0) for k in big})}
+    return {
+        "kernels": len(hist),
+        "path_tracing_kernels": len(big),
+        "ops_per_path_kernel": sorted({int(k.get("operation_count") or 0) for k in big}),
+    }
 
 
 # ------------------------------------------------------------------ methods
 
 
 def _cli_cmd(w, h, spp, seed, out):
-    return [str(Path(PY).parent / "fogref"), "render", str(SCENE), "--set", f"res={w}", "--set", f"resy={h}",
-            "--spp", str(spp), "--seed", str(seed), "--out", str(out), "--no-png", "--quiet", "--no-resume"]
+    return [
+        str(Path(PY).parent / "fogref"),
+        "render",
+        str(SCENE),
+        "--set",
+        f"res={w}",
+        "--set",
+        f"resy={h}",
+        "--spp",
+        str(spp),
+        "--seed",
+        str(seed),
+        "--out",
+        str(out),
+        "--no-png",
+        "--quiet",
+        "--no-resume",
+    ]
 
 
 _SCRIPT = """
@@ -141,8 +160,16 @@ class Case:
 
     def render_fn(self, seed):
         t0 = time.perf_counter()
-        self.R.render(SCENE, self.tmp / "fn.exr", spp=self.spp, seed=seed, overrides={"res": self.w, "resy": self.h},
-                      progress=False, resume=False, png=False)
+        self.R.render(
+            SCENE,
+            self.tmp / "fn.exr",
+            spp=self.spp,
+            seed=seed,
+            overrides={"res": self.w, "resy": self.h},
+            progress=False,
+            resume=False,
+            png=False,
+        )
         return time.perf_counter() - t0
 
     def cli(self, seed):
@@ -170,7 +197,7 @@ def measure(cases: list, repeats: int, log) -> dict:
             # the order rotates per repeat: a fresh process started right after another one
             # exited reuses its freed pages, one started after a pause or beside this process's
             # memory faults them in from the VM (up to ~1 s at 640x360 on the measuring machine)
-            for m in names[r % len(names):] + names[:r % len(names)]:
+            for m in names[r % len(names) :] + names[: r % len(names)]:
                 dr.flush_malloc_cache()  # in-process methods give their memory back first
                 t = getattr(c, METHODS[m])(r + 1)
                 res[c.name][m]["steady_s"].append(t)
@@ -185,8 +212,9 @@ def measure(cases: list, repeats: int, log) -> dict:
         base = d["mi.render"]["median_s"]
         d["ratio"] = {m: d[m]["median_s"] / base for m in METHODS}
         # spread of the ratio: each repeat's own ratio (the methods of one repeat ran back to back)
-        d["ratio_per_repeat"] = {m: [a / b for a, b in zip(d[m]["steady_s"], d["mi.render"]["steady_s"])]
-                                 for m in METHODS}
+        d["ratio_per_repeat"] = {
+            m: [a / b for a, b in zip(d[m]["steady_s"], d["mi.render"]["steady_s"])] for m in METHODS
+        }
         d["passes"] = c.passes
     return res
 
@@ -286,13 +314,18 @@ def _startup_phases(ev: dict, exit_at: float) -> dict:
     rm = d("render_moments")
     ph = {
         "interpreter start (python, site)": ev["first_line"],
-        "import fogref.cli, parse arguments": s("render") - ev["first_line"] - d("import fogref.render.render"),
+        "import fogref.cli, parse arguments": s("render")
+        - ev["first_line"]
+        - d("import fogref.render.render"),
         "import fogref.render.render (numpy, OpenEXR glue)": d("import fogref.render.render"),
         "render(): checks before set_variant": s("set_variant") - s("render"),
         "set_variant: find LLVM": d("ensure_llvm"),
         "set_variant: import drjit": imp_dr,
         "set_variant: import mitsuba (without drjit)": imp_mi,
-        "set_variant: mi.set_variant (and the rest)": d("set_variant") - d("ensure_llvm") - imp_dr - imp_mi
+        "set_variant: mi.set_variant (and the rest)": d("set_variant")
+        - d("ensure_llvm")
+        - imp_dr
+        - imp_mi
         - d("register"),
         "register: import fog_medium (+fogref.media)": imp_med,
         "register: import fogpath (+dr.syntax)": imp_fp,
@@ -319,16 +352,34 @@ def startup_breakdown(repeats: int, log, w: int = 16, h: int = 9, spp: int = 1) 
     runs, plain = [], []
     with tempfile.TemporaryDirectory(prefix="fogref-startup-") as tmp:
         out = Path(tmp) / "x.exr"
-        args = ["render", str(SCENE), "--set", f"res={w}", "--set", f"resy={h}", "--spp", str(spp),
-                "--out", str(out), "--no-png", "--quiet", "--no-resume"]
+        args = [
+            "render",
+            str(SCENE),
+            "--set",
+            f"res={w}",
+            "--set",
+            f"resy={h}",
+            "--spp",
+            str(spp),
+            "--out",
+            str(out),
+            "--no-png",
+            "--quiet",
+            "--no-resume",
+        ]
         # the child finds LLVM itself, as a user's shell does (this process's set_variant set the variable)
         env = {k: v for k, v in os.environ.items() if k != "DRJIT_LIBLLVM_PATH" or k in _USER_ENV}
 
         def instrumented(r):
             js = Path(tmp) / f"ev{r}.json"
             t0 = time.perf_counter()
-            p = subprocess.run([PY, "-c", _STARTUP_CHILD, repr(t0), str(js), *args], capture_output=True, text=True,
-                               env=env, cwd=tmp)  # not ROOT: `python -c` puts the folder first on sys.path
+            p = subprocess.run(
+                [PY, "-c", _STARTUP_CHILD, repr(t0), str(js), *args],
+                capture_output=True,
+                text=True,
+                env=env,
+                cwd=tmp,
+            )  # not ROOT: `python -c` puts the folder first on sys.path
             t1 = time.perf_counter()
             if p.returncode != 0:
                 raise RuntimeError(f"instrumented fogref render failed:\n{p.stderr[-3000:]}")
@@ -339,30 +390,46 @@ def startup_breakdown(repeats: int, log, w: int = 16, h: int = 9, spp: int = 1) 
         instrumented(-1)
         for r in range(repeats):  # interleaved: instrumented, plain, `python -c pass`
             runs.append(instrumented(r))
-            plain.append({"fogref render (console script)": _run([str(Path(PY).parent / "fogref"), *args], env=env),
-                          "python -c pass": _run([PY, "-c", "pass"], env=env)})
-            log(f"  run {r + 1}: launch to first kernel {runs[-1]['= launch to first kernel launch']:.3f} s, "
-                f"to exit {runs[-1]['= launch to exit']:.3f} s; console script {plain[-1]['fogref render (console script)']:.3f} s")
-    return {"case": f"{w}x{h} {spp} spp", "repeats": repeats,
-            "phases_min_s": {k: min(r[k] for r in runs) for k in runs[0]},
-            "phases_median_s": {k: statistics.median(r[k] for r in runs) for k in runs[0]},
-            "plain_min_s": {k: min(p[k] for p in plain) for k in plain[0]},
-            "plain_median_s": {k: statistics.median(p[k] for p in plain) for k in plain[0]},
-            "runs": runs, "plain": plain}
+            plain.append(
+                {
+                    "fogref render (console script)": _run([str(Path(PY).parent / "fogref"), *args], env=env),
+                    "python -c pass": _run([PY, "-c", "pass"], env=env),
+                }
+            )
+            log(
+                f"  run {r + 1}: launch to first kernel {runs[-1]['= launch to first kernel launch']:.3f} s, "
+                f"to exit {runs[-1]['= launch to exit']:.3f} s; console script {plain[-1]['fogref render (console script)']:.3f} s"
+            )
+    return {
+        "case": f"{w}x{h} {spp} spp",
+        "repeats": repeats,
+        "phases_min_s": {k: min(r[k] for r in runs) for k in runs[0]},
+        "phases_median_s": {k: statistics.median(r[k] for r in runs) for k in runs[0]},
+        "plain_min_s": {k: min(p[k] for p in plain) for k in plain[0]},
+        "plain_median_s": {k: statistics.median(p[k] for p in plain) for k in plain[0]},
+        "runs": runs,
+        "plain": plain,
+    }
 
 
 def _startup_md(doc: dict) -> str:
     b = doc["startup"]
-    L = ["# `fogref render` start-up: process launch to the first kernel (CPU, llvm_ad_rgb)", "",
-         f"Command: `{doc['command']}`.  Machine: {doc['machine']['cpu']}, {doc['machine']['cores']} cores, "
-         f"shared with other jobs (load average {doc['load_before']} before, {doc['load_after']} after); "
-         f"Mitsuba {doc['machine']['mitsuba']}, Dr.Jit {doc['machine']['drjit']}.", "",
-         f"`fogref render scenes/valley.xml` at {b['case']} (`--no-png --quiet --no-resume`), kernel cache warm, "
-         f"{b['repeats']} fresh processes per method, interleaved.  Phases come from an instrumented child "
-         "(timers put on fogref's functions by an import hook, as their modules are imported; the launch time "
-         "is the parent's `perf_counter`, the same monotonic clock).  Each phase: the minimum over the runs "
-         "(and the median); the totals' minimum is over whole runs, so the phases' minima need not add up to it.",
-         "", "| phase | min [s] | median [s] |", "|---|---|---|"]
+    L = [
+        "# `fogref render` start-up: process launch to the first kernel (CPU, llvm_ad_rgb)",
+        "",
+        f"Command: `{doc['command']}`.  Machine: {doc['machine']['cpu']}, {doc['machine']['cores']} cores, "
+        f"shared with other jobs (load average {doc['load_before']} before, {doc['load_after']} after); "
+        f"Mitsuba {doc['machine']['mitsuba']}, Dr.Jit {doc['machine']['drjit']}.",
+        "",
+        f"`fogref render scenes/valley.xml` at {b['case']} (`--no-png --quiet --no-resume`), kernel cache warm, "
+        f"{b['repeats']} fresh processes per method, interleaved.  Phases come from an instrumented child "
+        "(timers put on fogref's functions by an import hook, as their modules are imported; the launch time "
+        "is the parent's `perf_counter`, the same monotonic clock).  Each phase: the minimum over the runs "
+        "(and the median); the totals' minimum is over whole runs, so the phases' minima need not add up to it.",
+        "",
+        "| phase | min [s] | median [s] |",
+        "|---|---|---|",
+    ]
     for k, v in b["phases_min_s"].items():
         bold = "**" if k.startswith("=") else ""
         L.append(f"| {bold}{k}{bold} | {bold}{v:.3f}{bold} | {b['phases_median_s'][k]:.3f} |")
@@ -380,39 +447,60 @@ def _startup_md(doc: dict) -> str:
 
 def _md(doc: dict) -> str:
     variant = doc.get("variant", "llvm_ad_rgb")
-    L = [f"# Render driver vs one `mi.render` call ({variant})", "",
-         f"Command: `{doc['command']}`.  Machine: {doc['machine']['cpu']}, {doc['machine']['cores']} cores, "
-         f"shared with other jobs while measured (load average {doc['load_before']} before, "
-         f"{doc['load_after']} after); Mitsuba {doc['machine']['mitsuba']}, Dr.Jit {doc['machine']['drjit']}.", "",
-         "Scene: `scenes/valley.xml` (pixel-exact, all AOVs, max_depth 16).  Methods: `mi.render` = one call on a "
-         "loaded scene; `render()` = `fogref.render.render.render` in the same process (scene load, passes, "
-         "float64 moments, EXR, no PNG); `CLI` = `fogref render ... --no-png --quiet --no-resume` in a subprocess; "
-         "`mi.render script` = a subprocess that imports fogref, loads the scene and calls `mi.render` once.  "
-         "First call = tracing + LLVM compile or kernel-cache load; steady = median of the interleaved repeats "
-         "[min, max]; compile = first - steady.  Ratios are of medians; in brackets the range of the "
-         "per-repeat ratios.", "",
-         f"fogpath `render_moments`: {doc['kernels']['path_tracing_kernels']} kernel(s) over all lanes "
-         f"that contain the path tracer ({doc['kernels']['kernels']} kernels in all) per call.", ""]
+    L = [
+        f"# Render driver vs one `mi.render` call ({variant})",
+        "",
+        f"Command: `{doc['command']}`.  Machine: {doc['machine']['cpu']}, {doc['machine']['cores']} cores, "
+        f"shared with other jobs while measured (load average {doc['load_before']} before, "
+        f"{doc['load_after']} after); Mitsuba {doc['machine']['mitsuba']}, Dr.Jit {doc['machine']['drjit']}.",
+        "",
+        "Scene: `scenes/valley.xml` (pixel-exact, all AOVs, max_depth 16).  Methods: `mi.render` = one call on a "
+        "loaded scene; `render()` = `fogref.render.render.render` in the same process (scene load, passes, "
+        "float64 moments, EXR, no PNG); `CLI` = `fogref render ... --no-png --quiet --no-resume` in a subprocess; "
+        "`mi.render script` = a subprocess that imports fogref, loads the scene and calls `mi.render` once.  "
+        "First call = tracing + LLVM compile or kernel-cache load; steady = median of the interleaved repeats "
+        "[min, max]; compile = first - steady.  Ratios are of medians; in brackets the range of the "
+        "per-repeat ratios.",
+        "",
+        f"fogpath `render_moments`: {doc['kernels']['path_tracing_kernels']} kernel(s) over all lanes "
+        f"that contain the path tracer ({doc['kernels']['kernels']} kernels in all) per call.",
+        "",
+    ]
     for label, runs in doc["runs"].items():
-        L += [f"## {label}", "", "| case | passes (spp each) | method | first call [s] | steady [s] median [min, max] | "
-              "compile [s] | / mi.render |", "|---|---|---|---|---|---|---|"]
+        L += [
+            f"## {label}",
+            "",
+            "| case | passes (spp each) | method | first call [s] | steady [s] median [min, max] | "
+            "compile [s] | / mi.render |",
+            "|---|---|---|---|---|---|---|",
+        ]
         for case, d in runs.items():
             for m in METHODS:
                 x = d[m]
                 rr = d["ratio_per_repeat"][m]
-                L.append(f"| {case} | {len(d['passes'])} ({', '.join(map(str, sorted(set(d['passes']))))}) | {m} | "
-                         f"{x['first_s']:.2f} | {x['median_s']:.2f} [{x['min_s']:.2f}, {x['max_s']:.2f}] | "
-                         f"{x['compile_s']:.2f} | {d['ratio'][m]:.2f}x [{min(rr):.2f}, {max(rr):.2f}] |")
+                L.append(
+                    f"| {case} | {len(d['passes'])} ({', '.join(map(str, sorted(set(d['passes']))))}) | {m} | "
+                    f"{x['first_s']:.2f} | {x['median_s']:.2f} [{x['min_s']:.2f}, {x['max_s']:.2f}] | "
+                    f"{x['compile_s']:.2f} | {d['ratio'][m]:.2f}x [{min(rr):.2f}, {max(rr):.2f}] |"
+                )
         L.append("")
-        L += ["Fair comparison (both fresh processes with the same start-up): `CLI` / `mi.render script`, "
-              "ratio of medians [range of the per-repeat ratios]:", ""]
+        L += [
+            "Fair comparison (both fresh processes with the same start-up): `CLI` / `mi.render script`, "
+            "ratio of medians [range of the per-repeat ratios]:",
+            "",
+        ]
         for case, d in runs.items():
             rr = [a / b for a, b in zip(d["CLI"]["steady_s"], d["mi.render script"]["steady_s"])]
-            L.append(f"* {case}: {d['CLI']['median_s'] / d['mi.render script']['median_s']:.2f}x "
-                     f"[{min(rr):.2f}, {max(rr):.2f}]")
+            L.append(
+                f"* {case}: {d['CLI']['median_s'] / d['mi.render script']['median_s']:.2f}x "
+                f"[{min(rr):.2f}, {max(rr):.2f}]"
+            )
         L.append("")
     if not variant.startswith("cuda"):
-        L += ["cuda_ad_rgb: not measured here; run `benchmarks/render_driver.py --variant cuda_ad_rgb` on a GPU.", ""]
+        L += [
+            "cuda_ad_rgb: not measured here; run `benchmarks/render_driver.py --variant cuda_ad_rgb` on a GPU.",
+            "",
+        ]
     if doc.get("reading"):
         L += ["## Reading", "", doc["reading"], ""]
     return "\n".join(L)
@@ -425,14 +513,23 @@ def _load():
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--cases", default="320x180x64,320x180x256,640x360x64", help="WxHxSPP,...")
-    ap.add_argument("--repeats", type=int, default=4, help="timed rounds (4: each method once in each position)")
+    ap.add_argument(
+        "--repeats", type=int, default=4, help="timed rounds (4: each method once in each position)"
+    )
     ap.add_argument("--variant", default=None, help="Mitsuba variant (default llvm_ad_rgb)")
     ap.add_argument("--quick", action="store_true", help="64x36x16 only, 1 repeat (smoke test)")
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks" / "render_driver"))
     ap.add_argument("--reading", default=None, help="a file whose text goes under 'Reading' in the .md")
-    ap.add_argument("--startup", type=int, nargs="?", const=7, default=None, metavar="N",
-                    help="only the CLI's start-up breakdown (16x9, 1 spp) in N fresh processes (default 7); "
-                         "writes <out>_startup.{json,md}")
+    ap.add_argument(
+        "--startup",
+        type=int,
+        nargs="?",
+        const=7,
+        default=None,
+        metavar="N",
+        help="only the CLI's start-up breakdown (16x9, 1 spp) in N fresh processes (default 7); "
+        "writes <out>_startup.{json,md}",
+    )
     ap.add_argument("--startup-case", default="16x9x1", metavar="WxHxSPP", help="the image of --startup")
     a = ap.parse_args(argv)
     if a.startup is not None:
@@ -447,8 +544,14 @@ def main(argv=None):
     variant = fogref.set_variant(a.variant)
     cases = [tuple(int(x) for x in c.split("x")) for c in a.cases.split(",")]
     log = lambda s: print(s, flush=True)  # noqa: E731
-    doc = {"command": "python benchmarks/render_driver.py " + " ".join(argv if argv is not None else sys.argv[1:]),
-           "load_before": _load(), "cases": a.cases, "repeats": a.repeats, "variant": variant}
+    doc = {
+        "command": "python benchmarks/render_driver.py "
+        + " ".join(argv if argv is not None else sys.argv[1:]),
+        "load_before": _load(),
+        "cases": a.cases,
+        "repeats": a.repeats,
+        "variant": variant,
+    }
     sys.path.insert(0, str(ROOT / "benchmarks"))
     from _common import machine_info
 
@@ -476,8 +579,12 @@ def main_startup(a, argv) -> None:
     from _common import machine_info
 
     log = lambda s: print(s, flush=True)  # noqa: E731
-    doc = {"command": "python benchmarks/render_driver.py " + " ".join(argv if argv is not None else sys.argv[1:]),
-           "load_before": _load(), "machine": machine_info()}
+    doc = {
+        "command": "python benchmarks/render_driver.py "
+        + " ".join(argv if argv is not None else sys.argv[1:]),
+        "load_before": _load(),
+        "machine": machine_info(),
+    }
     w, h, spp = (int(x) for x in a.startup_case.split("x"))
     doc["startup"] = startup_breakdown(a.startup, log, w, h, spp)
     doc["load_after"] = _load()

@@ -36,8 +36,12 @@ import _scenes as S
 from _common import ROOT, kernel_profile, machine_info, median, mi, np, timed_render
 
 BASE = "two_layer"
-GENERAL = dict(fog_over={"albedo": 0.9, "layers": [(1.0, 0.04, 0.0), (1e-6, 0.002, 200.0)]},
-               max_depth=16, sun=True, sky=True)
+GENERAL = dict(
+    fog_over={"albedo": 0.9, "layers": [(1.0, 0.04, 0.0), (1e-6, 0.002, 200.0)]},
+    max_depth=16,
+    sun=True,
+    sky=True,
+)
 
 
 def variant(**kw):
@@ -72,8 +76,16 @@ def build(cfg, res, inert=None):
     orig = S.scene_spec
     S.scene_spec = lambda name: spec
     try:
-        return S.build(mi, BASE, "fogpath", res=res, max_depth=cfg["max_depth"], sun=cfg["sun"], sky=cfg["sky"],
-                       fog_over=fog_over)
+        return S.build(
+            mi,
+            BASE,
+            "fogpath",
+            res=res,
+            max_depth=cfg["max_depth"],
+            sun=cfg["sun"],
+            sky=cfg["sky"],
+            fog_over=fog_over,
+        )
     finally:
         S.scene_spec = orig
 
@@ -87,13 +99,20 @@ def measure(scenes: dict, spp, reps, seed0):
     times = {n: [] for n in names}
     imgs = {n: [] for n in names}
     for r in range(reps):
-        order = names[r % len(names):] + names[:r % len(names)]
+        order = names[r % len(names) :] + names[: r % len(names)]
         for n in order:
             img, t = timed_render(scenes[n], spp, seed0 + 100 * r + names.index(n) + 1)
             times[n].append(t)
             imgs[n].append(img)
-    return {n: {"first_call_s": first[n], "times_s": times[n], "steady_s": median(times[n]),
-                "mean": float(np.mean(imgs[n]))} for n in names}
+    return {
+        n: {
+            "first_call_s": first[n],
+            "times_s": times[n],
+            "steady_s": median(times[n]),
+            "mean": float(np.mean(imgs[n])),
+        }
+        for n in names
+    }
 
 
 def main(argv=None):
@@ -112,8 +131,13 @@ def main(argv=None):
             scenes["inert"] = build(GENERAL, res_px, inert=inert)
         m = measure(scenes, spp, reps, 1000 * (i + 1))
         prof = {n: kernel_profile(sc, spp, 4242) for n, sc in scenes.items()}
-        row = {"feature": feature, "inert_twin": inert or ("general (density2 = 1e-6)" if feature == "one layer" else None),
-               "spp": spp, "res": list(res_px), "repeats": reps}
+        row = {
+            "feature": feature,
+            "inert_twin": inert or ("general (density2 = 1e-6)" if feature == "one layer" else None),
+            "spp": spp,
+            "res": list(res_px),
+            "repeats": reps,
+        }
         for n, d in m.items():
             d["ns_per_sample_pixel"] = d["steady_s"] / n_samples * 1e9
             d["main_kernel_ops"] = prof[n]["main_kernel_ops"]
@@ -127,36 +151,55 @@ def main(argv=None):
             row["speedup_code_only"] = row["speedup_vs_general"]
         row["image_mean_change"] = m["specialised"]["mean"] / m["general"]["mean"] - 1.0
         rows.append(row)
-        print(f"{feature:12s} general {m['general']['steady_s']:.3f}s  specialised {m['specialised']['steady_s']:.3f}s"
-              f"  x{row['speedup_vs_general']:.2f}" + (f"  inert {m['inert']['steady_s']:.3f}s" if "inert" in m else ""),
-              flush=True)
+        print(
+            f"{feature:12s} general {m['general']['steady_s']:.3f}s  specialised {m['specialised']['steady_s']:.3f}s"
+            f"  x{row['speedup_vs_general']:.2f}"
+            + (f"  inert {m['inert']['steady_s']:.3f}s" if "inert" in m else ""),
+            flush=True,
+        )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    res = {"config": {"command": "python benchmarks/specialisation.py" + (" --quick" if args.quick else ""),
-                      "scene": BASE, "general": {k: v for k, v in GENERAL.items()}, "res": list(res_px), "spp": spp,
-                      "repeats": reps, "machine": machine_info(), "total_s": time.perf_counter() - t0},
-           "cases": rows}
+    res = {
+        "config": {
+            "command": "python benchmarks/specialisation.py" + (" --quick" if args.quick else ""),
+            "scene": BASE,
+            "general": {k: v for k, v in GENERAL.items()},
+            "res": list(res_px),
+            "spp": spp,
+            "repeats": reps,
+            "machine": machine_info(),
+            "total_s": time.perf_counter() - t0,
+        },
+        "cases": rows,
+    }
     (out / "specialisation.json").write_text(json.dumps(res, indent=1, default=str))
-    L = ["# fogpath trace-time specialisation: speed-ups\n",
-         f"Command: `{res['config']['command']}`; scene `{BASE}` ({res_px[0]}x{res_px[1]}, {spp} spp, median of "
-         f"{reps} interleaved repeats); machine: {res['config']['machine']['cpu']}, "
-         f"{res['config']['machine']['cores']} shared cores.\n",
-         "General scene G: two layers (second density 1e-6), sun + sky, albedo 0.9, max_depth 16. "
-         "Each row removes one feature. *Inert*: G with the feature's code kept but its effect "
-         "zeroed (same image as the specialised scene), so `inert / specialised` isolates the code's cost.\n",
-         "| feature removed | G steady [s] | specialised [s] | speed-up vs G | inert twin | inert [s] | speed-up, code only | "
-         "ns/sample/pixel G -> spec. | kernel ops G -> spec. | image mean change |",
-         "|---|---|---|---|---|---|---|---|---|---|"]
+    L = [
+        "# fogpath trace-time specialisation: speed-ups\n",
+        f"Command: `{res['config']['command']}`; scene `{BASE}` ({res_px[0]}x{res_px[1]}, {spp} spp, median of "
+        f"{reps} interleaved repeats); machine: {res['config']['machine']['cpu']}, "
+        f"{res['config']['machine']['cores']} shared cores.\n",
+        "General scene G: two layers (second density 1e-6), sun + sky, albedo 0.9, max_depth 16. "
+        "Each row removes one feature. *Inert*: G with the feature's code kept but its effect "
+        "zeroed (same image as the specialised scene), so `inert / specialised` isolates the code's cost.\n",
+        "| feature removed | G steady [s] | specialised [s] | speed-up vs G | inert twin | inert [s] | speed-up, code only | "
+        "ns/sample/pixel G -> spec. | kernel ops G -> spec. | image mean change |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for r in rows:
         g, s = r["general"], r["specialised"]
         it = r.get("inert")
-        L.append(f"| {r['feature']} | {g['steady_s']:.3f} | {s['steady_s']:.3f} | **{r['speedup_vs_general']:.2f}x** | "
-                 f"{r['inert_twin'] or '-'} | {it['steady_s']:.3f} | " if it else
-                 f"| {r['feature']} | {g['steady_s']:.3f} | {s['steady_s']:.3f} | **{r['speedup_vs_general']:.2f}x** | "
-                 f"{r['inert_twin'] or '-'} | - | ")
-        L[-1] += (f"{r['speedup_code_only']:.2f}x | " if "speedup_code_only" in r else "- | ")
-        L[-1] += (f"{g['ns_per_sample_pixel']:.0f} -> {s['ns_per_sample_pixel']:.0f} | "
-                  f"{g['main_kernel_ops']} -> {s['main_kernel_ops']} | {r['image_mean_change']:+.1%} |")
+        L.append(
+            f"| {r['feature']} | {g['steady_s']:.3f} | {s['steady_s']:.3f} | **{r['speedup_vs_general']:.2f}x** | "
+            f"{r['inert_twin'] or '-'} | {it['steady_s']:.3f} | "
+            if it
+            else f"| {r['feature']} | {g['steady_s']:.3f} | {s['steady_s']:.3f} | **{r['speedup_vs_general']:.2f}x** | "
+            f"{r['inert_twin'] or '-'} | - | "
+        )
+        L[-1] += f"{r['speedup_code_only']:.2f}x | " if "speedup_code_only" in r else "- | "
+        L[-1] += (
+            f"{g['ns_per_sample_pixel']:.0f} -> {s['ns_per_sample_pixel']:.0f} | "
+            f"{g['main_kernel_ops']} -> {s['main_kernel_ops']} | {r['image_mean_change']:+.1%} |"
+        )
     (out / "specialisation.md").write_text("\n".join(L) + "\n")
     print(f"done in {time.perf_counter() - t0:.0f} s -> {out}", flush=True)
 

@@ -35,8 +35,11 @@ def run(n_workers: int, threads: int, home: str) -> dict:
     with tempfile.TemporaryDirectory(prefix="fogref-scaling-") as tmp:
         p = Path(tmp) / "SWEEP.toml"
         body = text.replace('"scenes/valley.xml"', f'"{(ROOT / "scenes" / "valley.xml").as_posix()}"')
-        p.write_text(body.replace(f'"{cache}"', f'"{(Path(tmp) / "cache").as_posix()}"')
-                     .replace("plots = true", "plots = false"))
+        p.write_text(
+            body.replace(f'"{cache}"', f'"{(Path(tmp) / "cache").as_posix()}"').replace(
+                "plots = true", "plots = false"
+            )
+        )
         old_home = os.environ.get("HOME")
         os.environ["HOME"] = home  # the LocalCluster's worker processes inherit it
         try:
@@ -49,8 +52,14 @@ def run(n_workers: int, threads: int, home: str) -> dict:
         import pandas as pd
 
         df = pd.read_parquet(info["parquet"])
-        return {"workers": n_workers, "threads": threads, "wall": wall, "configs": info["configs"],
-                "failed": info["failed"], "render_sum": float(df["render_seconds"].sum())}
+        return {
+            "workers": n_workers,
+            "threads": threads,
+            "wall": wall,
+            "configs": info["configs"],
+            "failed": info["failed"],
+            "render_sum": float(df["render_seconds"].sum()),
+        }
 
 
 def main(argv=None) -> int:
@@ -66,26 +75,33 @@ def main(argv=None) -> int:
             with tempfile.TemporaryDirectory(prefix="fogref-home-") as home:
                 results[(s, "cold")].append(run(*s, home=home))  # empty Dr.Jit disk cache: compiles
                 results[(s, "warm")].append(run(*s, home=home))  # the kernels the cold run left on disk
-    lines = ["# Sweep scaling: LocalCluster with one worker vs two", "",
-             f"Machine: {platform.processor() or platform.machine()}, {cores} cores; llvm_ad_rgb.  Command: "
-             f"`.venv/bin/python benchmarks/sweep_scaling.py --repeats {a.repeats}`.", "",
-             "Sweep: the example `reports/sweeps/unreal_sun_falloff_g/SWEEP.toml` (48 configurations: valley, "
-             "sun elevation x FogHeightFalloff x g, 64x36 px, 16 spp, model ue4, no plots), empty truth cache "
-             "every run.  Wall time includes starting the cluster and importing Mitsuba in every worker.  "
-             "`cold`: the workers' Dr.Jit disk cache is empty, so each worker compiles fogpath's kernels once "
-             "(scene values are opaque to them, so once is enough: `kernel_reuse.md`); `warm`: a second run "
-             f"on the disk cache the cold run filled.  Shapes alternated, {a.repeats} time(s) each; best wall time "
-             "shown.", "",
-             "| workers | Dr.Jit threads each | Dr.Jit disk cache | wall [s] (best) | wall [s] (all runs) "
-             "| sum of render times [s] | speed-up vs 1 worker |",
-             "|---|---|---|---|---|---|---|"]
+    lines = [
+        "# Sweep scaling: LocalCluster with one worker vs two",
+        "",
+        f"Machine: {platform.processor() or platform.machine()}, {cores} cores; llvm_ad_rgb.  Command: "
+        f"`.venv/bin/python benchmarks/sweep_scaling.py --repeats {a.repeats}`.",
+        "",
+        "Sweep: the example `reports/sweeps/unreal_sun_falloff_g/SWEEP.toml` (48 configurations: valley, "
+        "sun elevation x FogHeightFalloff x g, 64x36 px, 16 spp, model ue4, no plots), empty truth cache "
+        "every run.  Wall time includes starting the cluster and importing Mitsuba in every worker.  "
+        "`cold`: the workers' Dr.Jit disk cache is empty, so each worker compiles fogpath's kernels once "
+        "(scene values are opaque to them, so once is enough: `kernel_reuse.md`); `warm`: a second run "
+        f"on the disk cache the cold run filled.  Shapes alternated, {a.repeats} time(s) each; best wall time "
+        "shown.",
+        "",
+        "| workers | Dr.Jit threads each | Dr.Jit disk cache | wall [s] (best) | wall [s] (all runs) "
+        "| sum of render times [s] | speed-up vs 1 worker |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for kind in ("cold", "warm"):
         base = min(r["wall"] for r in results[(shapes[0], kind)])
         for s in shapes:
             best = min(results[(s, kind)], key=lambda r: r["wall"])
             walls = ", ".join(f"{r['wall']:.1f}" for r in results[(s, kind)])
-            lines.append(f"| {s[0]} | {s[1]} | {kind} | {best['wall']:.1f} | {walls} | {best['render_sum']:.1f} | "
-                         f"{base / best['wall']:.2f}x |")
+            lines.append(
+                f"| {s[0]} | {s[1]} | {kind} | {best['wall']:.1f} | {walls} | {best['render_sum']:.1f} | "
+                f"{base / best['wall']:.2f}x |"
+            )
     lines.append("")
     Path(a.out).parent.mkdir(parents=True, exist_ok=True)
     from fogref.atomic import write_text_atomic

@@ -44,10 +44,16 @@ from _common import ROOT, dr, kernel_profile, machine_info, median, mi, np, time
 
 LADDER = (1, 4, 16, 64, 256, 1024)
 REPEATS = {1: 5, 4: 5, 16: 5, 64: 3, 256: 2, 1024: 1}
-LABEL = {"fogpath": "fogpath (analytic)", "fogpath_before": "fogpath before issue 11",
-         "fogpath_split": "fogpath, forced splitting on", "fogpath_nosplit": "fogpath, forced splitting off", "volpath_hf": "volpath + heightfog (delta tracking)",
-         "grid64": "volpath + heterogeneous 1x64x1", "grid256": "volpath + heterogeneous 1x256x1",
-         "homogeneous": "volpath + homogeneous (null cube)"}
+LABEL = {
+    "fogpath": "fogpath (analytic)",
+    "fogpath_before": "fogpath before issue 11",
+    "fogpath_split": "fogpath, forced splitting on",
+    "fogpath_nosplit": "fogpath, forced splitting off",
+    "volpath_hf": "volpath + heightfog (delta tracking)",
+    "grid64": "volpath + heterogeneous 1x64x1",
+    "grid256": "volpath + heterogeneous 1x256x1",
+    "homogeneous": "volpath + homogeneous (null cube)",
+}
 
 
 #: R,G,B then inscatter.R,G,B in a fogpath render (mi.render: R,G,B + AOVs)
@@ -73,11 +79,14 @@ def variance_shares(scene, spp=64, seeds=(31, 32)):
         for g in gbuffer.SQUARED_GROUPS:
             idx = [names.index(c) for c in (["R", "G", "B"] if g == "final" else gbuffer.channel_names(g))]
             m = sums[..., idx] / spp
-            acc.setdefault(g, []).append(float((sq[..., k:k + 3] / spp - m * m).sum()))
+            acc.setdefault(g, []).append(float((sq[..., k : k + 3] / spp - m * m).sum()))
             k += 3
     tot = float(np.mean(acc["final"]))
-    out = {g: float(np.mean(v)) / tot for g, v in acc.items() if g in ("attenuated_surface", "inscatter", "single",
-                                                                          "multiple")}
+    out = {
+        g: float(np.mean(v)) / tot
+        for g, v in acc.items()
+        if g in ("attenuated_surface", "inscatter", "single", "multiple")
+    }
     out["final_variance_per_sample"] = tot
     return out
 
@@ -129,7 +138,10 @@ def bias_stats(img, var_img, ref, var_ref, rng, n_boot=1000):
         "mean_diff": mean_d,
         "mean_diff_se": se_mean,
         "rel_mean_diff": rel(mean_d, ref_mean),
-        "rel_mean_diff_ci95": [rel(mean_d - 1.96 * se_mean, ref_mean), rel(mean_d + 1.96 * se_mean, ref_mean)],
+        "rel_mean_diff_ci95": [
+            rel(mean_d - 1.96 * se_mean, ref_mean),
+            rel(mean_d + 1.96 * se_mean, ref_mean),
+        ],
         "mean_diff_z": mean_d / se_mean if se_mean > 0 else float("nan"),
         "chi2_per_pixel": float((d * d).mean() / v.mean()),  # ~1 if unbiased
     }
@@ -169,14 +181,25 @@ def run_scene(name, args, rng):
         for m in methods:
             timed_render(scenes[m], spp, 54321)
     # reference
-    refx, var_refx, t_ref, ref_spp = render_reference(scenes["fogpath"], args.ref_spp, channels=_insc_channels())
+    refx, var_refx, t_ref, ref_spp = render_reference(
+        scenes["fogpath"], args.ref_spp, channels=_insc_channels()
+    )
     ref, var_ref, ref_i, var_ref_i = refx[..., :3], var_refx[..., :3], refx[..., 3:], var_refx[..., 3:]
     ref_mean = float(ref.mean())
-    out["reference"] = {"method": "fogpath", "spp": ref_spp, "chunks": 8, "time_s": t_ref, "mean": ref_mean,
-                        "rms_sd_of_mean": float(math.sqrt(var_ref.mean())),
-                        "rel_rms_sd_of_mean": rel(math.sqrt(var_ref.mean()), ref_mean)}
-    print(f"[{name}] reference {ref_spp} spp: {t_ref:.1f} s, mean {ref_mean:.4f}, "
-          f"rel sd {out['reference']['rel_rms_sd_of_mean']:.2e}", flush=True)
+    out["reference"] = {
+        "method": "fogpath",
+        "spp": ref_spp,
+        "chunks": 8,
+        "time_s": t_ref,
+        "mean": ref_mean,
+        "rms_sd_of_mean": float(math.sqrt(var_ref.mean())),
+        "rel_rms_sd_of_mean": rel(math.sqrt(var_ref.mean()), ref_mean),
+    }
+    print(
+        f"[{name}] reference {ref_spp} spp: {t_ref:.1f} s, mean {ref_mean:.4f}, "
+        f"rel sd {out['reference']['rel_rms_sd_of_mean']:.2e}",
+        flush=True,
+    )
     vref = float(var_ref.mean())
 
     # ladder, round-robin over methods (rotated each repeat)
@@ -186,10 +209,12 @@ def run_scene(name, args, rng):
     for spp in args.ladder:
         reps = REPEATS.get(spp, 1)
         for r in range(reps):
-            order = methods[r % len(methods):] + methods[:r % len(methods)]
+            order = methods[r % len(methods) :] + methods[: r % len(methods)]
             for m in order:
                 seed += 1
-                img, t = timed_render(scenes[m], spp, seed, _insc_channels() if m.startswith("fogpath") else slice(0, 3))
+                img, t = timed_render(
+                    scenes[m], spp, seed, _insc_channels() if m.startswith("fogpath") else slice(0, 3)
+                )
                 mse = float(((img[..., :3] - ref) ** 2).mean())
                 d = rec[m].setdefault(spp, {"times": [], "mse_raw": [], "mse_insc_raw": []})
                 d["times"].append(t)
@@ -198,8 +223,10 @@ def run_scene(name, args, rng):
                     d["mse_insc_raw"].append(float(((img[..., 3:] - ref_i) ** 2).mean()))
                 img = img[..., :3]
                 pool[m].append((img, spp))
-        print(f"[{name}] spp {spp}: " + ", ".join(
-            f"{m} {median(rec[m][spp]['times']):.3f}s" for m in methods), flush=True)
+        print(
+            f"[{name}] spp {spp}: " + ", ".join(f"{m} {median(rec[m][spp]['times']):.3f}s" for m in methods),
+            flush=True,
+        )
 
     for m in methods:
         P, var_P, N = pooled(pool[m])
@@ -212,17 +239,36 @@ def run_scene(name, args, rng):
             rmse = math.sqrt(max(mse, 1e-30))
             noise = math.sqrt(max(mse - max(b["bias2"], 0.0), 1e-30))
             if d["mse_insc_raw"]:
-                ladder_insc = math.sqrt(max(float(np.mean(d["mse_insc_raw"])) - float(var_ref_i.mean()), 1e-30))
+                ladder_insc = math.sqrt(
+                    max(float(np.mean(d["mse_insc_raw"])) - float(var_ref_i.mean()), 1e-30)
+                )
             else:
                 ladder_insc = None
-            ladder.append({"spp": spp, "repeats": len(d["times"]), "time_median_s": median(d["times"]),
-                           "rmse_inscatter": ladder_insc,
-                           "time_min_s": float(min(d["times"])), "times_s": d["times"],
-                           "mse_raw": float(np.mean(d["mse_raw"])), "mse": mse, "rmse": rmse,
-                           "rel_rmse": rel(rmse, ref_mean), "noise_rmse": noise, "rel_noise_rmse": rel(noise, ref_mean)})
+            ladder.append(
+                {
+                    "spp": spp,
+                    "repeats": len(d["times"]),
+                    "time_median_s": median(d["times"]),
+                    "rmse_inscatter": ladder_insc,
+                    "time_min_s": float(min(d["times"])),
+                    "times_s": d["times"],
+                    "mse_raw": float(np.mean(d["mse_raw"])),
+                    "mse": mse,
+                    "rmse": rmse,
+                    "rel_rmse": rel(rmse, ref_mean),
+                    "noise_rmse": noise,
+                    "rel_noise_rmse": rel(noise, ref_mean),
+                }
+            )
         steady1 = ladder[0]["time_median_s"]
-        out["methods"][m] = {"label": LABEL[m], "first_call_s": first[m], "steady_1spp_s": steady1,
-                             "compile_s": first[m] - steady1, "ladder": ladder, "bias": b}
+        out["methods"][m] = {
+            "label": LABEL[m],
+            "first_call_s": first[m],
+            "steady_1spp_s": steady1,
+            "compile_s": first[m] - steady1,
+            "ladder": ladder,
+            "bias": b,
+        }
     # equal-error ratios against fogpath
     f_pts = [(p["time_median_s"], p["rmse"]) for p in out["methods"]["fogpath"]["ladder"]]
     f_pts_noise = [(p["time_median_s"], p["noise_rmse"]) for p in out["methods"]["fogpath"]["ladder"]]
@@ -250,8 +296,11 @@ def run_scene(name, args, rng):
                 tfi, _ = fogpath_time_at(p["rmse_inscatter"], f_pts_i)
                 p["equal_error_ratio_inscatter"] = p["time_median_s"] / tfi
             out["methods"][m]["equal_error_ratio_inscatter_top"] = out["methods"][m]["ladder"][-1][
-                "equal_error_ratio_inscatter"]
-        out["methods"][m]["ns_per_sample_top"] = top["time_median_s"] / (top["spp"] * args.res[0] * args.res[1]) * 1e9
+                "equal_error_ratio_inscatter"
+            ]
+        out["methods"][m]["ns_per_sample_top"] = (
+            top["time_median_s"] / (top["spp"] * args.res[0] * args.res[1]) * 1e9
+        )
     # where the variance lives, before and after issue 11 (one sample, per part)
     out["variance_shares"] = {m: variance_shares(scenes[m]) for m in methods if m.startswith("fogpath")}
     # where the time goes (kernel history), fogpath and the slowest stock method
@@ -267,17 +316,49 @@ def write_reports(res, args, outdir: Path):
     (outdir / "time_vs_error.json").write_text(json.dumps(res, indent=1))
     with open(outdir / "time_vs_error.csv", "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["scene", "method", "spp", "repeats", "time_median_s", "time_min_s", "rmse", "rel_rmse",
-                    "noise_rmse", "equal_error_ratio", "equal_error_how", "equal_noise_ratio",
-                    "first_call_s", "compile_s", "bias_rms", "rel_bias_rms"])
+        w.writerow(
+            [
+                "scene",
+                "method",
+                "spp",
+                "repeats",
+                "time_median_s",
+                "time_min_s",
+                "rmse",
+                "rel_rmse",
+                "noise_rmse",
+                "equal_error_ratio",
+                "equal_error_how",
+                "equal_noise_ratio",
+                "first_call_s",
+                "compile_s",
+                "bias_rms",
+                "rel_bias_rms",
+            ]
+        )
         for sname, sc in res["scenes"].items():
             for m, d in sc["methods"].items():
                 for p in d["ladder"]:
-                    w.writerow([sname, m, p["spp"], p["repeats"], f"{p['time_median_s']:.5f}", f"{p['time_min_s']:.5f}",
-                                f"{p['rmse']:.6g}", f"{p['rel_rmse']:.6g}", f"{p['noise_rmse']:.6g}",
-                                f"{p['equal_error_ratio']:.4g}", p["equal_error_how"], f"{p['equal_noise_ratio']:.4g}",
-                                f"{d['first_call_s']:.4f}", f"{d['compile_s']:.4f}", f"{d['bias']['bias_rms']:.6g}",
-                                f"{d['bias']['rel_bias_rms']:.6g}"])
+                    w.writerow(
+                        [
+                            sname,
+                            m,
+                            p["spp"],
+                            p["repeats"],
+                            f"{p['time_median_s']:.5f}",
+                            f"{p['time_min_s']:.5f}",
+                            f"{p['rmse']:.6g}",
+                            f"{p['rel_rmse']:.6g}",
+                            f"{p['noise_rmse']:.6g}",
+                            f"{p['equal_error_ratio']:.4g}",
+                            p["equal_error_how"],
+                            f"{p['equal_noise_ratio']:.4g}",
+                            f"{d['first_call_s']:.4f}",
+                            f"{d['compile_s']:.4f}",
+                            f"{d['bias']['bias_rms']:.6g}",
+                            f"{d['bias']['rel_bias_rms']:.6g}",
+                        ]
+                    )
     # plots
     import matplotlib
 
@@ -286,7 +367,16 @@ def write_reports(res, args, outdir: Path):
 
     names = list(res["scenes"])
     fig, axes = plt.subplots(1, len(names), figsize=(5.2 * len(names), 4.4), squeeze=False)
-    colors = {"fogpath": "C3", "fogpath_before": "C5", "fogpath_split": "C6", "fogpath_nosplit": "C6", "volpath_hf": "C0", "grid64": "C2", "grid256": "C1", "homogeneous": "C4"}
+    colors = {
+        "fogpath": "C3",
+        "fogpath_before": "C5",
+        "fogpath_split": "C6",
+        "fogpath_nosplit": "C6",
+        "volpath_hf": "C0",
+        "grid64": "C2",
+        "grid256": "C1",
+        "homogeneous": "C4",
+    }
     for ax, sname in zip(axes[0], names):
         sc = res["scenes"][sname]
         for m, d in sc["methods"].items():
@@ -295,8 +385,14 @@ def write_reports(res, args, outdir: Path):
             ax.loglog(t, e, "o-", color=colors[m], label=d["label"], lw=2 if m == "fogpath" else 1.2, ms=4)
             for p in d["ladder"]:
                 if p["spp"] in (1, args.ladder[-1]):
-                    ax.annotate(f"{p['spp']}", (p["time_median_s"], p["rel_rmse"]), fontsize=7,
-                                xytext=(3, 3), textcoords="offset points", color=colors[m])
+                    ax.annotate(
+                        f"{p['spp']}",
+                        (p["time_median_s"], p["rel_rmse"]),
+                        fontsize=7,
+                        xytext=(3, 3),
+                        textcoords="offset points",
+                        color=colors[m],
+                    )
             if m.startswith("grid") and d["bias"]["rel_bias_rms"] > 0:
                 ax.axhline(d["bias"]["rel_bias_rms"], color=colors[m], ls=":", lw=1)
         ax.set_title(f"{sname} ({args.res[0]}x{args.res[1]}, max_depth {args.max_depth})")
@@ -313,20 +409,22 @@ def write_reports(res, args, outdir: Path):
 
 def summary_md(res, args) -> str:
     cfg = res["config"]
-    L = ["# Time vs error: fogpath vs stock Mitsuba\n",
-         f"Command: `{cfg['command']}`  ",
-         f"Machine: {cfg['machine']['cpu']}, {cfg['machine']['cores']} cores (shared), mitsuba "
-         f"{cfg['machine']['mitsuba']}, drjit {cfg['machine']['drjit']}, `{cfg['machine']['variant']}`  ",
-         f"Images {cfg['res'][0]}x{cfg['res'][1]}, max_depth {cfg['max_depth']} for every method, rr_depth 5; "
-         f"ladder {cfg['ladder']} spp (repeats {cfg['repeats']}); reference fogpath {cfg['ref_spp']} spp "
-         f"in 8 chunks. Total run {cfg['total_s']:.0f} s.\n",
-         "Times are steady wall times (median of repeats, methods interleaved); the first call "
-         "(tracing + LLVM compilation or kernel-cache load) is reported apart. Grids: density sampled at "
-         "cell **centres** of a 1xNx1 `gridvolume` over the fog box, trilinear, `has_spectral_extinction` false.\n",
-         "![time vs error](time_vs_error.png)\n",
-         "## Equal-error time ratio (method time / fogpath time at the same RMSE; > 1: fogpath faster)\n",
-         "| scene | method | " + " | ".join(f"{s} spp" for s in cfg["ladder"]) + " | noise-only @top |",
-         "|---|---|" + "---|" * len(cfg["ladder"]) + "---|"]
+    L = [
+        "# Time vs error: fogpath vs stock Mitsuba\n",
+        f"Command: `{cfg['command']}`  ",
+        f"Machine: {cfg['machine']['cpu']}, {cfg['machine']['cores']} cores (shared), mitsuba "
+        f"{cfg['machine']['mitsuba']}, drjit {cfg['machine']['drjit']}, `{cfg['machine']['variant']}`  ",
+        f"Images {cfg['res'][0]}x{cfg['res'][1]}, max_depth {cfg['max_depth']} for every method, rr_depth 5; "
+        f"ladder {cfg['ladder']} spp (repeats {cfg['repeats']}); reference fogpath {cfg['ref_spp']} spp "
+        f"in 8 chunks. Total run {cfg['total_s']:.0f} s.\n",
+        "Times are steady wall times (median of repeats, methods interleaved); the first call "
+        "(tracing + LLVM compilation or kernel-cache load) is reported apart. Grids: density sampled at "
+        "cell **centres** of a 1xNx1 `gridvolume` over the fog box, trilinear, `has_spectral_extinction` false.\n",
+        "![time vs error](time_vs_error.png)\n",
+        "## Equal-error time ratio (method time / fogpath time at the same RMSE; > 1: fogpath faster)\n",
+        "| scene | method | " + " | ".join(f"{s} spp" for s in cfg["ladder"]) + " | noise-only @top |",
+        "|---|---|" + "---|" * len(cfg["ladder"]) + "---|",
+    ]
     for sname, sc in res["scenes"].items():
         for m, d in sc["methods"].items():
             if m == "fogpath":
@@ -336,59 +434,92 @@ def summary_md(res, args) -> str:
                 mark = "" if p["equal_error_how"] == "interpolated" else "*"
                 cells.append(f"{p['equal_error_ratio']:.2f}{mark}")
             L.append(f"| {sname} | {m} | " + " | ".join(cells) + f" | {d['equal_noise_ratio_top']:.2f} |")
-    L.append("\n`*`: outside fogpath's measured range (extrapolated with t ~ RMSE^-2, or clamped at fogpath's "
-             "1-spp time).  Noise-only: the same ratio with the method's bias removed from its error.\n")
-    L += ["## Issue 11: before and after, side by side in this run\n",
-          "`fogpath_before` = fogpath with one sun sample, sun sampling only in unbounded one-layer fog and no "
-          "sky control variate (`benchmarks/_scenes.py: BEFORE_ISSUE_11`); `fogpath` = today's defaults; "
-          "`fogpath_split` / `fogpath_nosplit` = today's defaults with forced splitting on the camera ray "
-          "switched to the other setting (`forced_split`). "
-          "Ratios at the top of the ladder (equal-error time ratio; > 1: the second is faster).\n",
-          "| scene | method | ratio vs fogpath (after) | ratio vs fogpath_before | inscatter.* only: method vs fogpath |",
-          "|---|---|---|---|---|"]
+    L.append(
+        "\n`*`: outside fogpath's measured range (extrapolated with t ~ RMSE^-2, or clamped at fogpath's "
+        "1-spp time).  Noise-only: the same ratio with the method's bias removed from its error.\n"
+    )
+    L += [
+        "## Issue 11: before and after, side by side in this run\n",
+        "`fogpath_before` = fogpath with one sun sample, sun sampling only in unbounded one-layer fog and no "
+        "sky control variate (`benchmarks/_scenes.py: BEFORE_ISSUE_11`); `fogpath` = today's defaults; "
+        "`fogpath_split` / `fogpath_nosplit` = today's defaults with forced splitting on the camera ray "
+        "switched to the other setting (`forced_split`). "
+        "Ratios at the top of the ladder (equal-error time ratio; > 1: the second is faster).\n",
+        "| scene | method | ratio vs fogpath (after) | ratio vs fogpath_before | inscatter.* only: method vs fogpath |",
+        "|---|---|---|---|---|",
+    ]
     for sname, sc in res["scenes"].items():
         for m, d in sc["methods"].items():
             if m == "fogpath":
                 continue
             top = d["ladder"][-1]
-            ins = f"{d['equal_error_ratio_inscatter_top']:.2f}" if "equal_error_ratio_inscatter_top" in d else "n/a (no split)"
-            L.append(f"| {sname} | {m} | {top['equal_error_ratio']:.2f} | {top.get('equal_error_ratio_vs_before', float('nan')):.2f} | {ins} |")
-    L += ["\nStock volpath has no `inscatter.*` output (it does not split the fog's light from the surface's), so the "
-          "inscatter-only ratio is fogpath against its other variants.\n",
-          "### Where the variance lives (per-sample variance of each part / that of the final image, 64 spp, 2 seeds)\n",
-          "| scene | method | final var/sample | attenuated surface | single | multiple | inscatter |", "|---|---|---|---|---|---|---|"]
+            ins = (
+                f"{d['equal_error_ratio_inscatter_top']:.2f}"
+                if "equal_error_ratio_inscatter_top" in d
+                else "n/a (no split)"
+            )
+            L.append(
+                f"| {sname} | {m} | {top['equal_error_ratio']:.2f} | {top.get('equal_error_ratio_vs_before', float('nan')):.2f} | {ins} |"
+            )
+    L += [
+        "\nStock volpath has no `inscatter.*` output (it does not split the fog's light from the surface's), so the "
+        "inscatter-only ratio is fogpath against its other variants.\n",
+        "### Where the variance lives (per-sample variance of each part / that of the final image, 64 spp, 2 seeds)\n",
+        "| scene | method | final var/sample | attenuated surface | single | multiple | inscatter |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for sname, sc in res["scenes"].items():
         for m, v in sc.get("variance_shares", {}).items():
-            L.append(f"| {sname} | {m} | {v['final_variance_per_sample']:.4g} | {v['attenuated_surface']:.2f} | "
-                     f"{v['single']:.2f} | {v['multiple']:.2f} | {v['inscatter']:.2f} |")
-    L.append("\nThe parts are correlated (a camera ray either scatters or reaches the surface), so the shares need not add to 1.\n")
-    L += ["## Bias against the fogpath reference (pooled ladder images vs reference)\n",
-          "| scene | method | pooled spp | rel. RMS bias [95% CI] | rel. mean diff [95% CI] | chi2/pixel |",
-          "|---|---|---|---|---|---|"]
+            L.append(
+                f"| {sname} | {m} | {v['final_variance_per_sample']:.4g} | {v['attenuated_surface']:.2f} | "
+                f"{v['single']:.2f} | {v['multiple']:.2f} | {v['inscatter']:.2f} |"
+            )
+    L.append(
+        "\nThe parts are correlated (a camera ray either scatters or reaches the surface), so the shares need not add to 1.\n"
+    )
+    L += [
+        "## Bias against the fogpath reference (pooled ladder images vs reference)\n",
+        "| scene | method | pooled spp | rel. RMS bias [95% CI] | rel. mean diff [95% CI] | chi2/pixel |",
+        "|---|---|---|---|---|---|",
+    ]
     for sname, sc in res["scenes"].items():
         for m, d in sc["methods"].items():
             b = d["bias"]
-            L.append(f"| {sname} | {m} | {b['pooled_spp']} | {b['rel_bias_rms']:.2e} "
-                     f"[{b['rel_bias_rms_ci95'][0]:.1e}, {b['rel_bias_rms_ci95'][1]:.1e}] | "
-                     f"{b['rel_mean_diff']:+.2e} [{b['rel_mean_diff_ci95'][0]:+.1e}, {b['rel_mean_diff_ci95'][1]:+.1e}] | "
-                     f"{b['chi2_per_pixel']:.3f} |")
-    L.append("\nRMS bias = sqrt(mean((X - ref)^2 - Var X - Var ref)) over pixels and RGB; chi2/pixel = "
-             "mean((X-ref)^2) / mean(Var X + Var ref), ~1 when the two agree within noise.\n")
-    L += ["## Time (seconds)\n", "| scene | method | first call | compile (first - steady 1 spp) | steady "
-          f"{cfg['ladder'][-1]} spp | ns / sample / pixel | rel. RMSE @ {cfg['ladder'][-1]} spp |", "|---|---|---|---|---|---|---|"]
+            L.append(
+                f"| {sname} | {m} | {b['pooled_spp']} | {b['rel_bias_rms']:.2e} "
+                f"[{b['rel_bias_rms_ci95'][0]:.1e}, {b['rel_bias_rms_ci95'][1]:.1e}] | "
+                f"{b['rel_mean_diff']:+.2e} [{b['rel_mean_diff_ci95'][0]:+.1e}, {b['rel_mean_diff_ci95'][1]:+.1e}] | "
+                f"{b['chi2_per_pixel']:.3f} |"
+            )
+    L.append(
+        "\nRMS bias = sqrt(mean((X - ref)^2 - Var X - Var ref)) over pixels and RGB; chi2/pixel = "
+        "mean((X-ref)^2) / mean(Var X + Var ref), ~1 when the two agree within noise.\n"
+    )
+    L += [
+        "## Time (seconds)\n",
+        "| scene | method | first call | compile (first - steady 1 spp) | steady "
+        f"{cfg['ladder'][-1]} spp | ns / sample / pixel | rel. RMSE @ {cfg['ladder'][-1]} spp |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for sname, sc in res["scenes"].items():
         for m, d in sc["methods"].items():
             top = d["ladder"][-1]
-            L.append(f"| {sname} | {m} | {d['first_call_s']:.2f} | {d['compile_s']:.2f} | {top['time_median_s']:.3f} | "
-                     f"{d['ns_per_sample_top']:.0f} | {top['rel_rmse']:.2e} |")
-    L += ["\n## Where the time goes (Dr.Jit kernel history, one render each)\n",
-          "| scene | method | spp | wall | main kernel exec | other kernels | host (trace, launch) | main kernel ops |",
-          "|---|---|---|---|---|---|---|---|"]
+            L.append(
+                f"| {sname} | {m} | {d['first_call_s']:.2f} | {d['compile_s']:.2f} | {top['time_median_s']:.3f} | "
+                f"{d['ns_per_sample_top']:.0f} | {top['rel_rmse']:.2e} |"
+            )
+    L += [
+        "\n## Where the time goes (Dr.Jit kernel history, one render each)\n",
+        "| scene | method | spp | wall | main kernel exec | other kernels | host (trace, launch) | main kernel ops |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for sname, sc in res["scenes"].items():
         for m, p in sc["profile"].items():
-            L.append(f"| {sname} | {m} | {p['spp']} | {p['wall_s']:.3f} | {p['exec_s_main_kernel']:.3f} | "
-                     f"{p['exec_s_other_jit'] + p['exec_s_non_jit']:.3f} | {p['host_overhead_s']:.3f} | "
-                     f"{p['main_kernel_ops']} |")
+            L.append(
+                f"| {sname} | {m} | {p['spp']} | {p['wall_s']:.3f} | {p['exec_s_main_kernel']:.3f} | "
+                f"{p['exec_s_other_jit'] + p['exec_s_non_jit']:.3f} | {p['host_overhead_s']:.3f} | "
+                f"{p['main_kernel_ops']} |"
+            )
     return "\n".join(L) + "\n"
 
 
@@ -409,12 +540,21 @@ def main(argv=None):
         args.ref_spp = args.ref_spp or 4096
     rng = np.random.default_rng(0)
     t0 = time.perf_counter()
-    res = {"config": {"command": "python benchmarks/time_vs_error.py" + (" --quick" if args.quick else "")
-                      + (f" --max-spp {args.max_spp}" if args.max_spp != 1024 else "")
-                      + (f" --ref-spp {args.ref_spp}" if args.ref_spp not in (None, 4096, 512) else ""),
-                      "res": list(args.res), "ladder": args.ladder, "repeats": {s: REPEATS[s] for s in args.ladder},
-                      "ref_spp": args.ref_spp, "max_depth": args.max_depth, "machine": machine_info()},
-           "scenes": {}}
+    res = {
+        "config": {
+            "command": "python benchmarks/time_vs_error.py"
+            + (" --quick" if args.quick else "")
+            + (f" --max-spp {args.max_spp}" if args.max_spp != 1024 else "")
+            + (f" --ref-spp {args.ref_spp}" if args.ref_spp not in (None, 4096, 512) else ""),
+            "res": list(args.res),
+            "ladder": args.ladder,
+            "repeats": {s: REPEATS[s] for s in args.ladder},
+            "ref_spp": args.ref_spp,
+            "max_depth": args.max_depth,
+            "machine": machine_info(),
+        },
+        "scenes": {},
+    }
     for name in args.scenes:
         res["scenes"][name] = run_scene(name, args, rng)
         res["config"]["total_s"] = time.perf_counter() - t0

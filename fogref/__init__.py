@@ -35,14 +35,19 @@ from fogref._version import __version__
 #: ``import fogref`` stays free of work.
 _LAZY = {
     "set_variant": "fogref.render.variant",  # Mitsuba set-up: LLVM, the variant, the plugins
-    "load_truth": "fogref.gbuffer", "Truth": "fogref.gbuffer",
+    "load_truth": "fogref.gbuffer",
+    "Truth": "fogref.gbuffer",
     "cached_truth": "fogref.render.cache",
-    "check": "fogref.compare.check", "assert_fog_matches": "fogref.compare.check",
-    "evaluate_model": "fogref.compare.candidate", "synthetic_truth": "fogref.compare.synthetic",
+    "check": "fogref.compare.check",
+    "assert_fog_matches": "fogref.compare.check",
+    "evaluate_model": "fogref.compare.candidate",
+    "synthetic_truth": "fogref.compare.synthetic",
     "CheckResult": "fogref.compare.results",
-    "EngineImages": "fogref.compare.foreign", "load_engine_images": "fogref.compare.foreign",
+    "EngineImages": "fogref.compare.foreign",
+    "load_engine_images": "fogref.compare.foreign",
     "read_image": "fogref.compare.foreign",
-    "resolve_model": "fogref.models.resolve", "build_model": "fogref.mapping.build",
+    "resolve_model": "fogref.models.resolve",
+    "build_model": "fogref.mapping.build",
 }
 
 __all__ = ["__version__", "ensure_llvm", *_LAZY]

@@ -176,5 +176,7 @@ def refuse_overwriting_inputs(outputs, inputs, what: str = "output") -> None:
     for out, olabel in _entries(outputs):
         for inp, ilabel in ins:
             if _same(out, inp):
-                raise FogrefError(f"{what}: the {olabel} {out} would overwrite the {ilabel} {inp}, which is "
-                                  f"an input; choose another output")
+                raise FogrefError(
+                    f"{what}: the {olabel} {out} would overwrite the {ilabel} {inp}, which is "
+                    f"an input; choose another output"
+                )

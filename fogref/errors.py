@@ -13,7 +13,6 @@ Examples
 (True, 'falloff')
 """
 
-
 import difflib
 
 

@@ -61,8 +61,8 @@ def camera_from_views(view: np.ndarray, origin) -> dict:
     # d x (M p) = 0, linear in the 9 entries of M (row-major): (d x M p)_k = eps_kab d_a (M p)_b
     A = np.zeros((len(d), 3, 9))
     for k, (a, b) in enumerate(((1, 2), (2, 0), (0, 1))):
-        A[:, k, 3 * b:3 * b + 3] += d[:, a, None] * p
-        A[:, k, 3 * a:3 * a + 3] -= d[:, b, None] * p
+        A[:, k, 3 * b : 3 * b + 3] += d[:, a, None] * p
+        A[:, k, 3 * a : 3 * a + 3] -= d[:, b, None] * p
     M = np.linalg.svd(A.reshape(-1, 9))[2][-1].reshape(3, 3)
     M /= np.linalg.norm(M[:, 2])
     if M[:, 2] @ d.mean(0) < 0:
@@ -74,11 +74,21 @@ def camera_from_views(view: np.ndarray, origin) -> dict:
     to_world = np.eye(4)
     to_world[:3, 0], to_world[:3, 1] = np.cross(up, forward), up
     to_world[:3, 2], to_world[:3, 3] = forward, origin
-    return {"origin": origin.tolist(), "target": (origin + forward).tolist(), "up": up.tolist(),
-            "forward": forward.tolist(), "right": (right / np.linalg.norm(right)).tolist(), "fov_deg": fov,
-            "fov_axis": "x", "fov_y_deg": math.degrees(2 * math.atan(np.linalg.norm(M[:, 1]))),
-            "to_world": to_world.tolist(), "near_clip": None, "far_clip": None, "resolution": [W, H],
-            "mirrored": bool(right @ np.cross(forward, up) < 0)}
+    return {
+        "origin": origin.tolist(),
+        "target": (origin + forward).tolist(),
+        "up": up.tolist(),
+        "forward": forward.tolist(),
+        "right": (right / np.linalg.norm(right)).tolist(),
+        "fov_deg": fov,
+        "fov_axis": "x",
+        "fov_y_deg": math.degrees(2 * math.atan(np.linalg.norm(M[:, 1]))),
+        "to_world": to_world.tolist(),
+        "near_clip": None,
+        "far_clip": None,
+        "resolution": [W, H],
+        "mirrored": bool(right @ np.cross(forward, up) < 0),
+    }
 
 
 def unreal_camera(camera: dict) -> dict:
@@ -103,12 +113,20 @@ def unreal_camera(camera: dict) -> dict:
     to_world = np.eye(4)
     to_world[:3, 0], to_world[:3, 1], to_world[:3, 2], to_world[:3, 3] = fwd, right, up, origin
     clip = {k: (None if camera.get(k) is None else camera[k] * 100.0) for k in ("near_clip", "far_clip")}
-    return {"location_cm": origin.tolist(), "target_cm": world_to_unreal(camera["target"]).tolist(),
-            "forward": fwd.tolist(), "right": right.tolist(), "up": up.tolist(),
-            "rotation": {"pitch": pitch, "yaw": yaw, "roll": roll}, "fov_deg": camera["fov_deg"],
-            "fov_axis": camera["fov_axis"], "to_world": to_world.tolist(),
-            "near_clip_cm": clip["near_clip"], "far_clip_cm": clip["far_clip"],
-            "resolution": camera["resolution"]}
+    return {
+        "location_cm": origin.tolist(),
+        "target_cm": world_to_unreal(camera["target"]).tolist(),
+        "forward": fwd.tolist(),
+        "right": right.tolist(),
+        "up": up.tolist(),
+        "rotation": {"pitch": pitch, "yaw": yaw, "roll": roll},
+        "fov_deg": camera["fov_deg"],
+        "fov_axis": camera["fov_axis"],
+        "to_world": to_world.tolist(),
+        "near_clip_cm": clip["near_clip"],
+        "far_clip_cm": clip["far_clip"],
+        "resolution": camera["resolution"],
+    }
 
 
 def truth_camera(channels: dict, attrs: dict) -> dict | None:
@@ -147,23 +165,38 @@ def info(path) -> dict:
     except FogrefError as e:
         out["truth_error"] = str(e)
         return out
-    out["pixels"] = {"surface": int(truth.hit.sum()), "sky": int(truth.sky.sum()),
-                     "identity_max_abs": truth.identity_residual()}
+    out["pixels"] = {
+        "surface": int(truth.hit.sum()),
+        "sky": int(truth.sky.sum()),
+        "identity_max_abs": truth.identity_residual(),
+    }
     noise = {}
     for part in ("final", "transmittance", "inscatter", "attenuated_surface", "surface"):
         x, se = truth.part(part), truth.stderr[part]
         ok = np.abs(x) > 1e-12
         rel = np.abs(se[ok]) / np.abs(x[ok]) if ok.any() else np.zeros(1)
         mean = float(np.abs(x.mean()))
-        noise[part] = {"median": float(np.median(rel)), "p95": float(np.percentile(rel, 95)),
-                       "of_mean": float(np.sqrt((se**2).sum()) / x.size / mean) if mean > 0 else 0.0}
+        noise[part] = {
+            "median": float(np.median(rel)),
+            "p95": float(np.percentile(rel, 95)),
+            "of_mean": float(np.sqrt((se**2).sum()) / x.size / mean) if mean > 0 else 0.0,
+        }
     out["noise"] = noise
     return out
 
 
-HEADER_KEYS = ("fogref.schema", "fogref.spp", "fogref.seed", "fogref.pixel_filter", "fogref.scene",
-               "fogref.scene_sha256", "fogref.overrides", "fogref.variant", "fogref.version",
-               "fogref.mitsuba")
+HEADER_KEYS = (
+    "fogref.schema",
+    "fogref.spp",
+    "fogref.seed",
+    "fogref.pixel_filter",
+    "fogref.scene",
+    "fogref.scene_sha256",
+    "fogref.overrides",
+    "fogref.variant",
+    "fogref.version",
+    "fogref.mitsuba",
+)
 
 
 def _vec(v, unit: str = "") -> str:
@@ -172,16 +205,20 @@ def _vec(v, unit: str = "") -> str:
 
 def _camera_lines(cam: dict, ue: dict) -> list[str]:
     clip = "unknown" if cam.get("near_clip") is None else f"{cam['near_clip']:.6g} / {cam['far_clip']:.6g} m"
-    lines = [f"camera ({cam['source']}; y-up, right-handed, metres):",
-             f"  origin {_vec(cam['origin'])}, target {_vec(cam['target'])}, up {_vec(cam['up'])}",
-             f"  fov {cam['fov_deg']:.6g} deg ({cam['fov_axis']} axis; {cam['fov_y_deg']:.6g} deg vertical), "
-             f"resolution {cam['resolution'][0]}x{cam['resolution'][1]} px, near/far clip {clip}",
-             "  to_world " + " ".join(_vec(r) for r in cam["to_world"])]
+    lines = [
+        f"camera ({cam['source']}; y-up, right-handed, metres):",
+        f"  origin {_vec(cam['origin'])}, target {_vec(cam['target'])}, up {_vec(cam['up'])}",
+        f"  fov {cam['fov_deg']:.6g} deg ({cam['fov_axis']} axis; {cam['fov_y_deg']:.6g} deg vertical), "
+        f"resolution {cam['resolution'][0]}x{cam['resolution'][1]} px, near/far clip {clip}",
+        "  to_world " + " ".join(_vec(r) for r in cam["to_world"]),
+    ]
     r = ue["rotation"]
-    lines += ["camera in Unreal (z-up, left-handed, cm):",
-              f"  location {_vec(ue['location_cm'])}, rotation (pitch {r['pitch']:.6g}, yaw {r['yaw']:.6g}, "
-              f"roll {r['roll']:.6g}) deg, FOV {ue['fov_deg']:.6g} deg (horizontal)",
-              f"  forward {_vec(ue['forward'])}, right {_vec(ue['right'])}, up {_vec(ue['up'])}"]
+    lines += [
+        "camera in Unreal (z-up, left-handed, cm):",
+        f"  location {_vec(ue['location_cm'])}, rotation (pitch {r['pitch']:.6g}, yaw {r['yaw']:.6g}, "
+        f"roll {r['roll']:.6g}) deg, FOV {ue['fov_deg']:.6g} deg (horizontal)",
+        f"  forward {_vec(ue['forward'])}, right {_vec(ue['right'])}, up {_vec(ue['up'])}",
+    ]
     return lines
 
 
@@ -212,8 +249,10 @@ def describe(path) -> str:
         lines.append(f"not a readable fogref truth: {d['truth_error']}")
         return "\n".join(lines)
     px = d["pixels"]
-    lines.append(f"pixels: {px['surface']} surface, {px['sky']} sky; "
-                 f"identity |final - (attenuated_surface + inscatter)| max {px['identity_max_abs']:.2g}")
+    lines.append(
+        f"pixels: {px['surface']} surface, {px['sky']} sky; "
+        f"identity |final - (attenuated_surface + inscatter)| max {px['identity_max_abs']:.2g}"
+    )
     lines.append("noise (relative standard error: per pixel median / p95; of the image mean):")
     for part, n in d["noise"].items():
         lines.append(f"  {part:20s} {n['median']:.3g} / {n['p95']:.3g}; {n['of_mean']:.3g}")

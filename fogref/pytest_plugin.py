@@ -54,7 +54,8 @@ def fogref_truth(request):
         path = Path(scene)
         if not path.is_absolute() and not path.exists() and (root / path).exists():
             path = root / path
-        return cached_truth(path, res=res, spp=spp, seed=seed, overrides=overrides, cache_dir=cache,
-                            **render_options)
+        return cached_truth(
+            path, res=res, spp=spp, seed=seed, overrides=overrides, cache_dir=cache, **render_options
+        )
 
     return make

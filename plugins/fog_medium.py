@@ -75,8 +75,11 @@ class HeightFogMedium(mi.Medium):
         if not has_phase:
             props["phase"] = mi.load_dict({"type": "hg", "g": self.fog.g})
         super().__init__(props)
-        default_floor = (self.fog.bounds.lo[1] if self.fog.bounds is not None
-                         else min(L.reference_height for L in self.fog.layers))
+        default_floor = (
+            self.fog.bounds.lo[1]
+            if self.fog.bounds is not None
+            else min(L.reference_height for L in self.fog.layers)
+        )
         self.floor = check_range(src, "floor", params.get("floor", default_floor), -1e7, 1e7)
         self.m_is_homogeneous = False
         # Stock volpath's spectral mode gives every ray that escapes to infinity

@@ -108,8 +108,9 @@ class FogPathIntegrator(FogPathCameraRay):
         # checked by fogref's one validator (its ParameterError is a ValueError)
         md = MAX_DEPTH.check(props.get("max_depth", 64), "max_depth", "fogpath")
         self.max_depth = 2**31 - 1 if md < 0 else md
-        self.rr_depth = params.integer(props.get("rr_depth", 5), "rr_depth", source="fogpath", lo=1,
-                                       hi=2**31 - 1)
+        self.rr_depth = params.integer(
+            props.get("rr_depth", 5), "rr_depth", source="fogpath", lo=1, hi=2**31 - 1
+        )
         self.hide_emitters = bool(props.get("hide_emitters", False))
         self.sun_sampling = bool(props.get("sun_sampling", True))
         self.sun_sampling_layers = int(props.get("sun_sampling_layers", 1))
@@ -190,8 +191,9 @@ class FogPathIntegrator(FogPathCameraRay):
         cv = dr.select(active & (ds.pdf != 0) & infinite & ~ds.delta & (ds.d.y > 0), c, 0.0)
         return dr.select(visible, c * Tr, 0.0), ds.delta, cv
 
-    def _medium_vertex(self, scene, fog, ops, sampler, ray, p, t, phase, ctx, med, first, has_smooth, sun_ss,
-                       sky_cv):
+    def _medium_vertex(
+        self, scene, fog, ops, sampler, ray, p, t, phase, ctx, med, first, has_smooth, sun_ss, sky_cv
+    ):
         """Light sample and phase sample at a medium vertex.  At the first vertex of the
         camera ray the sun is left out when it is sampled along the camera ray, and the
         sky control variate's Monte Carlo part (the same light and phase samples,
@@ -213,7 +215,9 @@ class FogPathIntegrator(FogPathCameraRay):
     def sample(self, scene, sampler, ray, medium=None, active=True):
         fog, ops = self._scene_fog(scene), drjit_ops()
         has_delta, has_smooth = self._scene_lights(scene)
-        phase = scene.sensors()[0].get_medium().phase_function() if (fog is not None and fog.scatters) else None
+        phase = (
+            scene.sensors()[0].get_medium().phase_function() if (fog is not None and fog.scatters) else None
+        )
         phase_ctx, bsdf_ctx = mi.PhaseFunctionContext(sampler), mi.BSDFContext()
 
         ray, active = mi.Ray3f(ray), mi.Bool(active)
@@ -233,15 +237,33 @@ class FogPathIntegrator(FogPathCameraRay):
         has_lights = has_delta or has_smooth
         active &= has_lights  # no emitter: nothing to trace beyond the G-buffer
         cam = None  # with forced splitting: (surface_coverage, depth-0 surface light, q)
-        if dr.hint(self.forced_split and phase is not None and has_lights and self.max_depth >= 2, mode="scalar"):
-            split, β_cam, cam, ray, si, β, medium_first, prev_it, prev_pdf, prev_delta, active = \
-                self._camera_split(scene, fog, ops, sampler, ray, si, D0, phase, phase_ctx, bsdf_ctx, has_smooth,
-                                   sun_ss, sky_cv, active)
+        if dr.hint(
+            self.forced_split and phase is not None and has_lights and self.max_depth >= 2, mode="scalar"
+        ):
+            split, β_cam, cam, ray, si, β, medium_first, prev_it, prev_pdf, prev_delta, active = (
+                self._camera_split(
+                    scene,
+                    fog,
+                    ops,
+                    sampler,
+                    ray,
+                    si,
+                    D0,
+                    phase,
+                    phase_ctx,
+                    bsdf_ctx,
+                    has_smooth,
+                    sun_ss,
+                    sky_cv,
+                    active,
+                )
+            )
             depth = mi.UInt32(1)
         while dr.hint(active, max_iterations=-1, label="fogpath"):
             # ---------------- free flight to a medium vertex or the surface ----------------
-            is_medium, t_end, w_ff = self._free_flight(fog, ops, sampler, ray, dr.select(si.is_valid(), si.t, dr.inf),
-                                                       active)
+            is_medium, t_end, w_ff = self._free_flight(
+                fog, ops, sampler, ray, dr.select(si.is_valid(), si.t, dr.inf), active
+            )
             passed = active & (depth == 0) & ~is_medium
             medium_first |= active & (depth == 0) & is_medium
             β_cam[passed] = w_ff
@@ -262,11 +284,30 @@ class FogPathIntegrator(FogPathCameraRay):
             # ---------------- medium vertex: light sample, phase sample ----------------
             p_med = ray.o + ray.d * dr.select(is_medium, t_end, 0.0)
             med = active & is_medium
-            wo, pdf_next, delta_next, w_next, origin = mi.Vector3f(ray.d), mi.Float(1.0), mi.Bool(False), \
-                mi.Spectrum(1.0), mi.Point3f(p_med)
+            wo, pdf_next, delta_next, w_next, origin = (
+                mi.Vector3f(ray.d),
+                mi.Float(1.0),
+                mi.Bool(False),
+                mi.Spectrum(1.0),
+                mi.Point3f(p_med),
+            )
             if dr.hint(phase is not None and has_lights, mode="scalar"):
-                Ld, wo_m, w_m, pdf_m = self._medium_vertex(scene, fog, ops, sampler, ray, p_med, t_end, phase,
-                                                           phase_ctx, med, depth == 0, has_smooth, sun_ss, sky_cv)
+                Ld, wo_m, w_m, pdf_m = self._medium_vertex(
+                    scene,
+                    fog,
+                    ops,
+                    sampler,
+                    ray,
+                    p_med,
+                    t_end,
+                    phase,
+                    phase_ctx,
+                    med,
+                    depth == 0,
+                    has_smooth,
+                    sun_ss,
+                    sky_cv,
+                )
                 split = split.add(β * Ld, medium_first, depth == 0)
                 wo[med], pdf_next[med], w_next[med] = wo_m, pdf_m, w_m
 
@@ -306,9 +347,13 @@ class FogPathIntegrator(FogPathCameraRay):
         T = mi.Spectrum(1.0)
         if fog is not None:
             T = self._transmittance(fog, ops, ray.o, ray.d, dr.select(hit, si.t, ops.largest))
-        return {"T": [T[0], T[1], T[2]], "distance": [dr.select(hit, si.t, 0.0)],
-                "P": [dr.select(hit, si.p[i], 0.0) for i in range(3)], "view": [ray.d[i] for i in range(3)],
-                "hit": [dr.select(hit, 1.0, 0.0)]}
+        return {
+            "T": [T[0], T[1], T[2]],
+            "distance": [dr.select(hit, si.t, 0.0)],
+            "P": [dr.select(hit, si.p[i], 0.0) for i in range(3)],
+            "view": [ray.d[i] for i in range(3)],
+            "hit": [dr.select(hit, 1.0, 0.0)],
+        }
 
 
 def register() -> None:

@@ -37,8 +37,11 @@ class FogPathCameraRay(FogPathBase):
         weight (``mixture``: bounded fog, several layers), ``sun_samples``
         stratified samples averaged (None when it does not apply; then NEE covers it)."""
         sun = self._scene_sun(scene) if (fog is not None and self.sun_sampling) else None
-        mode = None if (sun is None or self.max_depth < 2) else sun_sampling_mode(
-            fog._obj, sun[0], self.sun_sampling_layers, self.sun_sampling_mixture)
+        mode = (
+            None
+            if (sun is None or self.max_depth < 2)
+            else sun_sampling_mode(fog._obj, sun[0], self.sun_sampling_layers, self.sun_sampling_mixture)
+        )
         if mode is None:
             return None
         w_sun, E_sun = sun
@@ -47,10 +50,13 @@ class FogPathCameraRay(FogPathBase):
             channel = self._draw_channel(sampler, active)  # one-sample spectral MIS inside the sampler
             u = (k + sampler.next_1d(active)) / K  # stratified along the integrand's CDF
             if mode == "exact":
-                t_ss, w_ss = sample_sun_single_scatter(ops, fog._obj, ray.o, ray.d, D, w_sun, E_sun, u, channel)
+                t_ss, w_ss = sample_sun_single_scatter(
+                    ops, fog._obj, ray.o, ray.d, D, w_sun, E_sun, u, channel
+                )
             else:
-                t_ss, w_ss = sample_sun_single_scatter_mixture(ops, fog._obj, ray.o, ray.d, D, w_sun, E_sun, u,
-                                                               sampler.next_1d(active), channel)
+                t_ss, w_ss = sample_sun_single_scatter_mixture(
+                    ops, fog._obj, ray.o, ray.d, D, w_sun, E_sun, u, sampler.next_1d(active), channel
+                )
             to_sun = mi.Vector3f(*ops.params(w_sun))
             vis = active & ~scene.ray_test(mi.Ray3f(ray.o + ray.d * t_ss, to_sun), active)
             total += dr.select(vis, mi.Spectrum(*w_ss), 0.0)
@@ -69,8 +75,12 @@ class FogPathCameraRay(FogPathBase):
         variate made the final image noisier (``reports/benchmarks/variance_reduction.md``)."""
         if self.sky_cv == "off" or fog is None or not fog.scatters or self.max_depth < 2:
             return None
-        smooth_inf = [e for e in scene.emitters() if mi.has_flag(e.flags(), mi.EmitterFlags.Infinite)
-                      and not mi.has_flag(e.flags(), mi.EmitterFlags.Delta)]
+        smooth_inf = [
+            e
+            for e in scene.emitters()
+            if mi.has_flag(e.flags(), mi.EmitterFlags.Infinite)
+            and not mi.has_flag(e.flags(), mi.EmitterFlags.Delta)
+        ]
         if len(smooth_inf) != 1 or not str(smooth_inf[0]).startswith("ConstantBackgroundEmitter"):
             return None
         if abs(fog.g) > 0.95:  # the lobe's table would need more nodes
@@ -129,14 +139,31 @@ class FogPathCameraRay(FogPathBase):
         pdfs, fs = [], []
         for s, a in zip(sig_rgb, alb_rgb):
             norm = sum(om(s * tau) for tau in tau_D)
-            pdfs.append(s * sum(r * dr.exp(-s * tau) for r, tau in zip(rho_t, tau_t)) / dr.maximum(norm, 1e-30))
+            pdfs.append(
+                s * sum(r * dr.exp(-s * tau) for r, tau in zip(rho_t, tau_t)) / dr.maximum(norm, 1e-30)
+            )
             fs.append(a * s * sum(rho_t) * dr.exp(-s * sum(tau_t)))
         pdf = pdfs[0] if grey else (pdfs[0] + pdfs[1] + pdfs[2]) / 3.0
         w = dr.select(valid & (pdf > 0), spectrum(fs) / pdf, 0.0)
         return t0 + t_rel, w, valid & (pdf > 0)
 
-    def _camera_split(self, scene, fog, ops, sampler, ray, si, D, phase, phase_ctx, bsdf_ctx, has_smooth, sun_ss,
-                      sky_cv, active):
+    def _camera_split(
+        self,
+        scene,
+        fog,
+        ops,
+        sampler,
+        ray,
+        si,
+        D,
+        phase,
+        phase_ctx,
+        bsdf_ctx,
+        has_smooth,
+        sun_ss,
+        sky_cv,
+        active,
+    ):
         """Depth 0 with ``forced_split``: the surface branch (light found by the camera
         ray, light sample at the surface; weight ``T`` applied at the end) and a forced
         medium vertex (its light sample feeds ``single``), then one branch continues,
@@ -160,8 +187,22 @@ class FogPathCameraRay(FogPathBase):
         bs, w_b = bsdf.sample(bsdf_ctx, si, sampler.next_1d(surf), sampler.next_2d(surf), surf)
         t_m, w_m, med = self._forced_collision(fog, ops, sampler, ray, D, active)
         p_med = ray.o + ray.d * t_m
-        Ld, wo_m, w_ph, pdf_m = self._medium_vertex(scene, fog, ops, sampler, ray, p_med, t_m, phase, phase_ctx,
-                                                    med, mi.Bool(True), has_smooth, sun_ss, sky_cv)
+        Ld, wo_m, w_ph, pdf_m = self._medium_vertex(
+            scene,
+            fog,
+            ops,
+            sampler,
+            ray,
+            p_med,
+            t_m,
+            phase,
+            phase_ctx,
+            med,
+            mi.Bool(True),
+            has_smooth,
+            sun_ss,
+            sky_cv,
+        )
         split = split.add(dr.select(med, w_m * Ld, 0.0), mi.Bool(True), mi.Bool(True))
         # q = T / (T + w_medium) >= T: it must not depend on the surface branch's own samples
         # (the ratio estimator `surface` keeps the samples that continued it), and q >= T
@@ -178,7 +219,9 @@ class FogPathCameraRay(FogPathBase):
         prev_it = self._vertex(ray, si, go_s, p_med)
         prev_pdf = dr.select(go_s, bs.pdf, pdf_m)
         prev_delta = go_s & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
-        ray = dr.select(go_s, si.spawn_ray(si.to_world(bs.wo)), mi.Ray3f(p_med, wo_m, ray.time, ray.wavelengths))
+        ray = dr.select(
+            go_s, si.spawn_ray(si.to_world(bs.wo)), mi.Ray3f(p_med, wo_m, ray.time, ray.wavelengths)
+        )
         active = (go_s | go_m) & (dr.max(β) > 0) & (self.max_depth > 1)
         si = scene.ray_intersect(ray, active)
         cam = (chose_s, direct, dr.select(hit, q, 1.0))  # surface_coverage, the sample of `surface`

@@ -54,9 +54,11 @@ class Split:
         self.multiple = mi.Spectrum(0.0) if multiple is None else multiple
 
     def add(self, c, medium_first, direct):
-        return Split(self.surface + dr.select(medium_first, 0.0, c),
-                      self.single + dr.select(medium_first & direct, c, 0.0),
-                      self.multiple + dr.select(medium_first & ~direct, c, 0.0))
+        return Split(
+            self.surface + dr.select(medium_first, 0.0, c),
+            self.single + dr.select(medium_first & direct, c, 0.0),
+            self.multiple + dr.select(medium_first & ~direct, c, 0.0),
+        )
 
 
 def spectrum(values):
@@ -163,10 +165,15 @@ class FogPathBase(mi.SamplingIntegrator):
         if gbuf is None:
             return L, mi.Bool(True), []
         rgb = lambda s: [s[0], s[1], s[2]]  # noqa: E731
-        parts = {"attenuated_surface": rgb(att), "inscatter": rgb(split.single + split.multiple),
-                 "single": rgb(split.single), "multiple": rgb(split.multiple),
-                 "surface": rgb(dr.select(cover, s_out, 0.0)), "surface_coverage": [dr.select(cover, 1.0, 0.0)],
-                 **gbuf}
+        parts = {
+            "attenuated_surface": rgb(att),
+            "inscatter": rgb(split.single + split.multiple),
+            "single": rgb(split.single),
+            "multiple": rgb(split.multiple),
+            "surface": rgb(dr.select(cover, s_out, 0.0)),
+            "surface_coverage": [dr.select(cover, 1.0, 0.0)],
+            **gbuf,
+        }
         return L, mi.Bool(True), [c for g in gbuffer.SAMPLE_GROUPS for c in parts[g]]
 
     # ------------------------------------------------------------- render
@@ -188,11 +195,16 @@ class FogPathBase(mi.SamplingIntegrator):
         make_scene_values_opaque(scene)  # one kernel for every value of the scene's parameters
         sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
         if not str(sensor).startswith("PerspectiveCamera"):
-            raise ValueError(f"fogpath renders from a 'perspective' sensor only, not {str(sensor).split('[')[0]}")
+            raise ValueError(
+                f"fogpath renders from a 'perspective' sensor only, not {str(sensor).split('[')[0]}"
+            )
         film = sensor.film()
         if not film.rfilter().is_box_filter():
-            mi.Log(mi.LogLevel.Warn, "fogpath: the film's reconstruction filter is replaced by a box filter "
-                   "(each sample counts in its own pixel)")
+            mi.Log(
+                mi.LogLevel.Warn,
+                "fogpath: the film's reconstruction filter is replaced by a box filter "
+                "(each sample counts in its own pixel)",
+            )
         size = film.crop_size()
         n_pix, spp = int(dr.prod(size)), int(spp)
         sampler = sensor.sampler().clone()
@@ -205,17 +217,23 @@ class FogPathBase(mi.SamplingIntegrator):
         pos.y = idx // size[0]
         pos.x = idx - pos.y * size[0]
         pos_f = mi.Vector2f(pos) + (mi.Vector2f(0.5) if pixel_exact else sampler.next_2d())
-        ray, weight = sensor.sample_ray(sensor.shutter_open(), 0.5, pos_f / mi.ScalarVector2f(size),
-                                        mi.Point2f(0.5))
-        ray = mi.Ray3f(sensor.world_transform().translation(), ray.d, ray.time, ray.wavelengths)  # no clip planes
+        ray, weight = sensor.sample_ray(
+            sensor.shutter_open(), 0.5, pos_f / mi.ScalarVector2f(size), mi.Point2f(0.5)
+        )
+        ray = mi.Ray3f(
+            sensor.world_transform().translation(), ray.d, ray.time, ray.wavelengths
+        )  # no clip planes
         L, _, aovs = self.sample(scene, sampler, ray, None, True)
         L = L * weight
         values = [L[0], L[1], L[2]] + list(aovs)
         names = ["R", "G", "B"] + (AOV_NAMES if self.aovs else [])
         groups = (gbuffer.SQUARED_GROUPS if self.aovs else ("final",)) if squares else ()
         products = [(names.index(c), names.index(c)) for g in groups for c in gbuffer.channel_names(g)]
-        products += [(names.index(gbuffer.channel_names(g)[i]), names.index(gbuffer.channel_names(g)[j]))
-                     for g in groups for i, j in gbuffer.CHANNEL_PAIRS]
+        products += [
+            (names.index(gbuffer.channel_names(g)[i]), names.index(gbuffer.channel_names(g)[j]))
+            for g in groups
+            for i, j in gbuffer.CHANNEL_PAIRS
+        ]
         dr.eval(values)  # one kernel for every output; otherwise each per-pixel sum re-runs the path loop
         sums, sq = self._per_pixel_sums(values, products, n_pix, spp)
         shape = (size[1], size[0], 1)
@@ -241,11 +259,20 @@ class FogPathBase(mi.SamplingIntegrator):
 
         def body(s, sums, squares):
             x = [mi.Float64(v if dr.width(v) == 1 else dr.gather(type(v), v, first + s)) for v in values]
-            return (s + 1, tuple(a + b for a, b in zip(sums, x)),
-                    tuple(a + (dr.square(x[j]) if j == k else x[j] * x[k]) for a, (j, k) in zip(squares, products)))
+            return (
+                s + 1,
+                tuple(a + b for a, b in zip(sums, x)),
+                tuple(
+                    a + (dr.square(x[j]) if j == k else x[j] * x[k]) for a, (j, k) in zip(squares, products)
+                ),
+            )
 
-        _, sums, squares = dr.while_loop((mi.UInt32(0), zeros(len(values)), zeros(len(products))),
-                                         lambda s, sums, squares: s < spp_o, body, label="fogpath_pixel_sums")
+        _, sums, squares = dr.while_loop(
+            (mi.UInt32(0), zeros(len(values)), zeros(len(products))),
+            lambda s, sums, squares: s < spp_o,
+            body,
+            label="fogpath_pixel_sums",
+        )
         dr.eval(sums, squares)  # all at once: one loop kernel (read separately, each would re-run the loop)
         return list(sums), list(squares)
 
@@ -264,9 +291,9 @@ class FogPathBase(mi.SamplingIntegrator):
         passes = pass_sizes(int(dr.prod(sensor.film().crop_size())), spp, max_lanes(mi.variant()))
         total = None
         for k, n in enumerate(passes):
-            sums, _ = self.render_moments(scene, sensor, seed if len(passes) == 1 else pass_seed(seed, k), n,
-                                          squares=False)
+            sums, _ = self.render_moments(
+                scene, sensor, seed if len(passes) == 1 else pass_seed(seed, k), n, squares=False
+            )
             total = sums if total is None else total + sums
             dr.eval(total)
         return mi.TensorXf(total / spp)
-

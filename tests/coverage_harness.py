@@ -32,8 +32,9 @@ METRICS = ("rel_bias", "bias", "rel_rmse", "rmse")
 DISTINCT = [(p, r, m) for p in PARTS for r in ("surface", "sky") for m in ("bias", "rmse")]
 
 
-def render_truths(scene: Path, out_dir: Path, n: int, res=(32, 18), spp: int = 16, first_seed: int = 1000,
-                  overrides=None) -> list:
+def render_truths(
+    scene: Path, out_dir: Path, n: int, res=(32, 18), spp: int = 16, first_seed: int = 1000, overrides=None
+) -> list:
     """``n`` truths of ``scene`` with seeds ``first_seed ...`` (EXRs under ``out_dir``), loaded."""
     from fogref.gbuffer import load_truth
     from fogref.render.render import render
@@ -41,8 +42,16 @@ def render_truths(scene: Path, out_dir: Path, n: int, res=(32, 18), spp: int = 1
     ov = {"res": res[0], "resy": res[1], **(overrides or {})}
     truths = []
     for k in range(n):
-        path = render(scene, Path(out_dir) / f"truth_{k}.exr", spp=spp, seed=first_seed + k, overrides=ov,
-                      progress=False, png=False, resume=False)
+        path = render(
+            scene,
+            Path(out_dir) / f"truth_{k}.exr",
+            spp=spp,
+            seed=first_seed + k,
+            overrides=ov,
+            progress=False,
+            png=False,
+            resume=False,
+        )
         truths.append(load_truth(path))
     return truths
 
@@ -52,7 +61,9 @@ def coverage_rows(truths: list, confidence: float = 0.99, channel_correlation: s
     from fogref.compare.check import check
 
     if channel_correlation == "independent":
-        truths = [dataclasses.replace(t, corr={k: np.zeros_like(v) for k, v in t.corr.items()}) for t in truths]
+        truths = [
+            dataclasses.replace(t, corr={k: np.zeros_like(v) for k, v in t.corr.items()}) for t in truths
+        ]
     no_tol = {p: {m: None for m in METRICS} for p in ("T", "inscatter", "final")}
     out = []
     for k in range(len(truths) // 2):
@@ -87,20 +98,34 @@ def summary(rows: list, confidence: float = 0.99, alpha: float = 0.01) -> dict:
 
     def stats(sel):
         zs = np.array([r[5] for r in sel if r[5] is not None])
-        return {"n": len(sel), "misses": sum(not r[4] for r in sel),
-                "miss_rate": sum(not r[4] for r in sel) / max(len(sel), 1),
-                "z_sd": float(np.std(zs, ddof=1)) if zs.size > 1 else math.nan,
-                "z_mean": float(np.mean(zs)) if zs.size else math.nan}
+        return {
+            "n": len(sel),
+            "misses": sum(not r[4] for r in sel),
+            "miss_rate": sum(not r[4] for r in sel) / max(len(sel), 1),
+            "z_sd": float(np.std(zs, ddof=1)) if zs.size > 1 else math.nan,
+            "z_mean": float(np.mean(zs)) if zs.size else math.nan,
+        }
 
-    table = {f"{p}/{r}/{m}": stats([x for x in rows if x[1:4] == (p, r, m)])
-             for p in PARTS for r in REGIONS for m in METRICS}
+    table = {
+        f"{p}/{r}/{m}": stats([x for x in rows if x[1:4] == (p, r, m)])
+        for p in PARTS
+        for r in REGIONS
+        for m in METRICS
+    }
     distinct = [x for x in rows if x[1:4] in DISTINCT]
     # the signed metrics miss two-sided, the RMSEs one-sided: the expected rate per row
     p_miss = float(np.mean([(1 - confidence) * (1.0 if x[3] == "bias" else 0.5) for x in distinct]))
     n = len(distinct)
     limit = binomial_upper(n, p_miss, alpha)
     signed = [x for x in rows if x[3] in ("rel_bias", "bias")]
-    return {"table": table, "all": stats(rows), "signed": stats(signed), "distinct": stats(distinct),
-            "distinct_expected_miss_rate": p_miss, "binomial_limit": limit,
-            "binomial_p": float(binom.sf(stats(distinct)["misses"] - 1, n, p_miss)),
-            "power_at_10pct": float(binom.sf(limit - 1, n, 0.10)), "confidence": confidence}
+    return {
+        "table": table,
+        "all": stats(rows),
+        "signed": stats(signed),
+        "distinct": stats(distinct),
+        "distinct_expected_miss_rate": p_miss,
+        "binomial_limit": limit,
+        "binomial_p": float(binom.sf(stats(distinct)["misses"] - 1, n, p_miss)),
+        "power_at_10pct": float(binom.sf(limit - 1, n, 0.10)),
+        "confidence": confidence,
+    }

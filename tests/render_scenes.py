@@ -16,23 +16,35 @@ def base_scene(mi, integrator, medium, res=(24, 16), sun=True, sky=True, occlude
         "type": "scene",
         "integrator": integrator,
         "sensor": {
-            "type": "perspective", "fov": fov, "fov_axis": "x",
+            "type": "perspective",
+            "fov": fov,
+            "fov_axis": "x",
             # fogpath's camera rays start at the camera and have no far limit; give
             # stock Mitsuba clip planes that make the same difference negligible
-            "near_clip": 1e-5, "far_clip": 1e7,
+            "near_clip": 1e-5,
+            "far_clip": 1e7,
             "to_world": T.look_at(origin=[0, 4, -20], target=[0, 6, 30], up=[0, 1, 0]),
             "film": {"type": "hdrfilm", "width": res[0], "height": res[1], "rfilter": {"type": "box"}},
             "medium": medium,
         },
-        "ground": {"type": "rectangle", "to_world": T.rotate([1, 0, 0], -90).scale(150),
-                   "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.3, 0.3, 0.25]}}},
+        "ground": {
+            "type": "rectangle",
+            "to_world": T.rotate([1, 0, 0], -90).scale(150),
+            "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.3, 0.3, 0.25]}},
+        },
     }
     if occluder:
-        d["block"] = {"type": "cube", "to_world": T.translate([5, 6, 25]).scale([4, 6, 4]),
-                      "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.5, 0.4, 0.3]}}}
+        d["block"] = {
+            "type": "cube",
+            "to_world": T.translate([5, 6, 25]).scale([4, 6, 4]),
+            "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.5, 0.4, 0.3]}},
+        }
     if sun:
-        d["sun"] = {"type": "directional", "direction": [-0.3, -0.45, -0.84],
-                    "irradiance": {"type": "rgb", "value": [2.0, 1.9, 1.7]}}
+        d["sun"] = {
+            "type": "directional",
+            "direction": [-0.3, -0.45, -0.84],
+            "irradiance": {"type": "rgb", "value": [2.0, 1.9, 1.7]},
+        }
     if sky:
         d["sky"] = {"type": "constant", "radiance": {"type": "rgb", "value": [0.2, 0.3, 0.5]}}
     return d
@@ -57,15 +69,20 @@ def grid_medium(mi, n=256, **kw):
     rho = np.exp(-f["falloff"] * (y - f["height"]))
     grid = np.repeat(np.repeat(rho[None, :, None, None], 2, axis=0), 2, axis=2).astype(np.float32)
     T = mi.ScalarTransform4f()
-    return mi.load_dict({
-        "type": "heterogeneous",
-        "has_spectral_extinction": False,
-        "albedo": f["albedo"],
-        "scale": f["sigma_t"],
-        "sigma_t": {"type": "gridvolume", "grid": mi.VolumeGrid(grid),
-                    "to_world": T.translate(lo.tolist()).scale((hi - lo).tolist())},
-        "phase": {"type": "hg", "g": f["g"]},
-    })
+    return mi.load_dict(
+        {
+            "type": "heterogeneous",
+            "has_spectral_extinction": False,
+            "albedo": f["albedo"],
+            "scale": f["sigma_t"],
+            "sigma_t": {
+                "type": "gridvolume",
+                "grid": mi.VolumeGrid(grid),
+                "to_world": T.translate(lo.tolist()).scale((hi - lo).tolist()),
+            },
+            "phase": {"type": "hg", "g": f["g"]},
+        }
+    )
 
 
 def render_runs(mi, scene, n_runs, spp, aov=False):

@@ -45,8 +45,10 @@ def welch_blocks(runs_a, runs_b, block: int = 4, alpha: float = 1e-3, floor: flo
 
 def assert_agree(runs_a, runs_b, block=4, alpha=1e-3, floor=0.0, what=""):
     p, per, i, d = welch_blocks(runs_a, runs_b, block, alpha, floor)
-    assert p >= per, (f"{what}: block {i} differs (p={p:.2e} < {per:.2e}, family-wise alpha={alpha}): "
-                      f"{d['mean_a']:.6g} vs {d['mean_b']:.6g} (se {d['se']:.3g})")
+    assert p >= per, (
+        f"{what}: block {i} differs (p={p:.2e} < {per:.2e}, family-wise alpha={alpha}): "
+        f"{d['mean_a']:.6g} vs {d['mean_b']:.6g} (se {d['se']:.3g})"
+    )
 
 
 def one_sample_blocks(runs, reference, block=4, alpha=1e-3, floor=0.0, what=""):
@@ -55,12 +57,16 @@ def one_sample_blocks(runs, reference, block=4, alpha=1e-3, floor=0.0, what=""):
     ref = block_means(reference, block)
     m = a.mean(0)
     se = a.std(0, ddof=1) / np.sqrt(len(a)) + floor
-    t = np.where(se > 0, np.abs(m - ref) / np.where(se > 0, se, 1.0), np.where(np.isclose(m, ref), 0.0, np.inf))
+    t = np.where(
+        se > 0, np.abs(m - ref) / np.where(se > 0, se, 1.0), np.where(np.isclose(m, ref), 0.0, np.inf)
+    )
     p = 2 * stats.t.sf(t, len(a) - 1)
     per = alpha / len(p)
     i = int(np.argmin(p))
-    assert p[i] >= per, (f"{what}: block {i} differs from the reference (p={p[i]:.2e} < {per:.2e}, "
-                         f"family-wise alpha={alpha}): {m[i]:.6g} vs {ref[i]:.6g} (se {se[i]:.3g})")
+    assert p[i] >= per, (
+        f"{what}: block {i} differs from the reference (p={p[i]:.2e} < {per:.2e}, "
+        f"family-wise alpha={alpha}): {m[i]:.6g} vs {ref[i]:.6g} (se {se[i]:.3g})"
+    )
     return float(p[i])
 
 
@@ -70,8 +76,12 @@ Z_ALPHA, Z_POWER = 3.29, 1.645
 
 def image_means(mi, scene, n_runs, spp, seed0):
     """Mean over pixels and RGB of ``n_runs`` independent renders (seeds seed0, seed0+1, ...)."""
-    return np.array([float(np.mean(np.array(mi.render(scene, spp=spp, seed=seed0 + k), dtype=np.float64)[..., :3]))
-                     for k in range(n_runs)])
+    return np.array(
+        [
+            float(np.mean(np.array(mi.render(scene, spp=spp, seed=seed0 + k), dtype=np.float64)[..., :3]))
+            for k in range(n_runs)
+        ]
+    )
 
 
 def assert_mean_equals(means, expected, max_detectable=1e-3, what=""):
@@ -85,9 +95,12 @@ def assert_mean_equals(means, expected, max_detectable=1e-3, what=""):
     bias = means.mean() / expected - 1.0
     se = means.std(ddof=1) / np.sqrt(len(means)) / expected
     mde = (Z_ALPHA + Z_POWER) * se
-    assert mde <= max_detectable, f"{what}: underpowered, detects only {mde:.2%} (wanted {max_detectable:.2%})"
-    assert abs(bias) <= Z_ALPHA * se, (f"{what}: image mean biased by {bias:+.4%} +- {se:.4%} "
-                                       f"(z = {bias / se:+.1f}; detects {mde:.3%})")
+    assert mde <= max_detectable, (
+        f"{what}: underpowered, detects only {mde:.2%} (wanted {max_detectable:.2%})"
+    )
+    assert abs(bias) <= Z_ALPHA * se, (
+        f"{what}: image mean biased by {bias:+.4%} +- {se:.4%} (z = {bias / se:+.1f}; detects {mde:.3%})"
+    )
     return bias, se, mde
 
 
@@ -97,6 +110,10 @@ def assert_means_agree(means_a, means_b, max_detectable=1e-3, what=""):
     se = np.sqrt(means_a.var(ddof=1) / len(means_a) + means_b.var(ddof=1) / len(means_b)) / mb
     diff = ma / mb - 1.0
     mde = (Z_ALPHA + Z_POWER) * se
-    assert mde <= max_detectable, f"{what}: underpowered, detects only {mde:.2%} (wanted {max_detectable:.2%})"
-    assert abs(diff) <= Z_ALPHA * se, f"{what}: image means differ by {diff:+.4%} +- {se:.4%} (z = {diff / se:+.1f})"
+    assert mde <= max_detectable, (
+        f"{what}: underpowered, detects only {mde:.2%} (wanted {max_detectable:.2%})"
+    )
+    assert abs(diff) <= Z_ALPHA * se, (
+        f"{what}: image means differ by {diff:+.4%} +- {se:.4%} (z = {diff / se:+.1f})"
+    )
     return diff, se, mde

@@ -38,8 +38,16 @@ def test_false_alarm_rate_at_most_nominal(method):
     fails = 0
     for s in range(200):
         truth = synthetic_truth(MODEL, shape=(36, 64), noise=0.05, seed=100 + s)
-        r = check(truth, evaluate_model(truth, MODEL), {"inscatter": {"rel_bias": 0.0, "rel_rmse": 0.0}},
-                  parts=["inscatter"], distance_bands=(), method=method, n_boot=300, seed=s)
+        r = check(
+            truth,
+            evaluate_model(truth, MODEL),
+            {"inscatter": {"rel_bias": 0.0, "rel_rmse": 0.0}},
+            parts=["inscatter"],
+            distance_bands=(),
+            method=method,
+            n_boot=300,
+            seed=s,
+        )
         fails += r.row("inscatter", "all", "rel_bias").verdict == "fail"
     assert fails <= 6, f"{fails}/200 false alarms ({method})"
 
@@ -49,8 +57,16 @@ def test_block_bootstrap_holds_under_correlated_noise():
     fails = 0
     for s in range(200):
         truth = synthetic_truth(MODEL, shape=(36, 64), noise=0.05, seed=500 + s, correlated=True)
-        r = check(truth, evaluate_model(truth, MODEL), {"inscatter": {"rel_bias": 0.0}}, parts=["inscatter"],
-                  distance_bands=(), method="block", n_boot=300, seed=s)
+        r = check(
+            truth,
+            evaluate_model(truth, MODEL),
+            {"inscatter": {"rel_bias": 0.0}},
+            parts=["inscatter"],
+            distance_bands=(),
+            method="block",
+            n_boot=300,
+            seed=s,
+        )
         fails += r.row("inscatter", "all", "rel_bias").verdict == "fail"
     assert fails <= 8, f"{fails}/200 false alarms"
 
@@ -58,8 +74,11 @@ def test_block_bootstrap_holds_under_correlated_noise():
 def test_inconclusive_between_and_tolerances_per_region():
     truth = synthetic_truth(MODEL, shape=(18, 32), noise=0.3, seed=5)
     p = evaluate_model(truth, MODEL)
-    r = check(truth, {"inscatter": 1.02 * p["inscatter"]},
-              tolerances={"inscatter": {"rel_bias": 0.02}, "inscatter/sky": {"rel_bias": 0.5}})
+    r = check(
+        truth,
+        {"inscatter": 1.02 * p["inscatter"]},
+        tolerances={"inscatter": {"rel_bias": 0.02}, "inscatter/sky": {"rel_bias": 0.5}},
+    )
     assert r.row("inscatter", "all", "rel_bias").verdict == "inconclusive"
     assert r.row("inscatter", "sky", "rel_bias").tolerance == 0.5
     assert r.row("inscatter", "sky", "rel_bias").verdict == "pass"

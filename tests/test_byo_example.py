@@ -9,13 +9,20 @@ import fogref
 def test_fog_matches_truth(fogref_truth):
     truth = fogref_truth("scenes/valley.xml", res=(32, 18), spp=64, seed=0)  # rendered once, cached
     model = fogref.build_model("ue4", scene_params=truth.params)  # yours: "my_pkg.fog:MyFog"
-    fogref.assert_fog_matches(truth, model, distance_bands=(), tolerances={
-        "T": 0.001,                                      # relative RMSE: Unreal's extinction is exact
-        "inscatter": {"rel_rmse": None, "rel_bias": None},   # report only: Unreal has no fog shadows
-        "inscatter/sky": {"rel_rmse": 0.4, "rel_bias": 0.1},
-        "final": {"rel_rmse": None, "rel_bias": None},
-        "final/sky": {"rel_rmse": 0.25, "rel_bias": 0.05},
-    })
+    fogref.assert_fog_matches(
+        truth,
+        model,
+        distance_bands=(),
+        tolerances={
+            "T": 0.001,  # relative RMSE: Unreal's extinction is exact
+            "inscatter": {"rel_rmse": None, "rel_bias": None},  # report only: Unreal has no fog shadows
+            "inscatter/sky": {"rel_rmse": 0.4, "rel_bias": 0.1},
+            "final": {"rel_rmse": None, "rel_bias": None},
+            "final/sky": {"rel_rmse": 0.25, "rel_bias": 0.05},
+        },
+    )
+
+
 # --- example end ---
 
 

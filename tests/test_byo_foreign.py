@@ -14,6 +14,8 @@ from fogref.gbuffer import load_truth
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
 
 MODEL = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
+
+
 def write_hdr(path, img, rle=False):
     """Radiance RGBE written with numpy (flat, or run-length encoded scanlines)."""
     H, W, _ = img.shape
@@ -34,7 +36,7 @@ def write_hdr(path, img, rle=False):
             out += bytes([128 + 2, row[0]])  # a run of two (pixel 1 := pixel 0), then literals
             rest = row[2:]
             for k in range(0, len(rest), 128):
-                chunk = rest[k:k + 128]
+                chunk = rest[k : k + 128]
                 out += bytes([len(chunk)]) + chunk.tobytes()
     path.write_bytes(bytes(out))
     return path
@@ -59,8 +61,24 @@ def test_cli_image_detects_five_percent_inscatter_and_passes_exact(scene, capsys
         L = write_rgb(d / f"L_{name}.exr", k * p["inscatter"])
         final = write_rgb(d / f"final_{name}.exr", truth.surface * p["T"] + k * p["inscatter"])
         out = d / f"report_{name}"
-        assert main(["compare", str(d / "truth.exr"), "--image", str(final), "--transmittance", str(T),
-                     "--inscatter", str(L), "--out", str(out), "--no-figures"]) == code
+        assert (
+            main(
+                [
+                    "compare",
+                    str(d / "truth.exr"),
+                    "--image",
+                    str(final),
+                    "--transmittance",
+                    str(T),
+                    "--inscatter",
+                    str(L),
+                    "--out",
+                    str(out),
+                    "--no-figures",
+                ]
+            )
+            == code
+        )
         report = json.loads((out / "check.json").read_text())
         rows = {(r["part"], r["region"], r["metric"]): r for r in report["rows"]}
         assert rows[("inscatter", "all", "rel_bias")]["verdict"] == verdict, name
@@ -128,9 +146,25 @@ def test_rendered_truth_engine_image_five_percent_caught_exact_not(fogref_truth,
     T = write_rgb(tmp_path / "T.exr", other.transmittance)
     L = write_rgb(tmp_path / "L.exr", 1.05 * other.inscatter)
     out = tmp_path / "report"
-    assert main(["compare", str(truth.path), "--transmittance", str(T), "--inscatter", str(L),
-                 "--out", str(out), "--no-figures"]) == 1
-    rows = {(r["part"], r["region"], r["metric"]): r for r in json.loads((out / "check.json").read_text())["rows"]}
+    assert (
+        main(
+            [
+                "compare",
+                str(truth.path),
+                "--transmittance",
+                str(T),
+                "--inscatter",
+                str(L),
+                "--out",
+                str(out),
+                "--no-figures",
+            ]
+        )
+        == 1
+    )
+    rows = {
+        (r["part"], r["region"], r["metric"]): r for r in json.loads((out / "check.json").read_text())["rows"]
+    }
     bias = rows[("inscatter", "all", "rel_bias")]
     assert bias["verdict"] == "fail" and 0.03 < bias["estimate"] < 0.08, bias
     ue4 = build("ue4", scene_params=truth.params)

@@ -62,7 +62,9 @@ def test_module_class_runs_through_compare_and_check(user_module, tmp_path):
     exr = write_truth_exr(truth, tmp_path / "truth.exr")
     out = tmp_path / "report"
     # MyFog is not the truth's fog: the run completes and the verdict (exit 1) is fail
-    assert main(["compare", str(exr), "--model", f"{user_module}:MyFog", "--out", str(out), "--no-figures"]) == 1
+    assert (
+        main(["compare", str(exr), "--model", f"{user_module}:MyFog", "--out", str(out), "--no-figures"]) == 1
+    )
     metrics = json.loads((out / "metrics.json").read_text())
     assert "final" in metrics["metrics"] and metrics["check"]["verdict"] == "fail"
     model = build(f"{user_module}:MyFog")

@@ -48,7 +48,8 @@ def test_intervals_cover_at_nominal_rate(truths):
     assert s["power_at_10pct"] >= 0.99
     assert d["misses"] < s["binomial_limit"], (
         f"{d['misses']} of {d['n']} distinct 99 % intervals miss 0 (limit {s['binomial_limit']}, "
-        f"nominal {s['distinct_expected_miss_rate']:.2%}, binomial p = {s['binomial_p']:.3g})")
+        f"nominal {s['distinct_expected_miss_rate']:.2%}, binomial p = {s['binomial_p']:.3g})"
+    )
     assert abs(s["signed"]["z_sd"] - 1.0) <= 0.15, s["signed"]
     rmse_z = [r[5] for r in H.coverage_rows(truths) if r[3] == "rmse" and r[5] is not None]
     assert np.std(rmse_z, ddof=1) <= 1.15  # conservative side only (module docstring)
@@ -65,8 +66,13 @@ def test_verdicts_false_alarm_rate(truths):
 
     fails = n = 0
     for k in range(len(truths) // 2):
-        res = check(truths[2 * k], truths[2 * k + 1], {"inscatter/surface": {"bias": 0.0}},
-                    parts=["inscatter"], distance_bands=())
+        res = check(
+            truths[2 * k],
+            truths[2 * k + 1],
+            {"inscatter/surface": {"bias": 0.0}},
+            parts=["inscatter"],
+            distance_bands=(),
+        )
         row = res.row("inscatter", "surface", "bias")
         covered = row.low <= 0 <= row.high
         assert (row.verdict == "fail") == (not covered)

@@ -32,11 +32,17 @@ def test_fog_free_truth_fails_any_nonzero_inscatter():
     row = res.row("inscatter", "all", "rel_rmse")
     assert row.verdict == "fail" and row.estimate is None and "absolute tolerance" in row.note
     # with an absolute tolerance the user states, the verdict is about the size of the error
-    res = check(t, {"inscatter": np.full(t.inscatter.shape, 1e-3)},
-                {"inscatter": {"rel_rmse": None, "rel_bias": None, "rmse": 1e-2}})
+    res = check(
+        t,
+        {"inscatter": np.full(t.inscatter.shape, 1e-3)},
+        {"inscatter": {"rel_rmse": None, "rel_bias": None, "rmse": 1e-2}},
+    )
     assert res.row("inscatter", "all", "rmse").verdict == "pass"
-    res = check(t, {"inscatter": np.full(t.inscatter.shape, 100.0)},
-                {"inscatter": {"rel_rmse": None, "rel_bias": None, "rmse": 1e-2}})
+    res = check(
+        t,
+        {"inscatter": np.full(t.inscatter.shape, 100.0)},
+        {"inscatter": {"rel_rmse": None, "rel_bias": None, "rmse": 1e-2}},
+    )
     assert res.verdict == "fail"
 
 
@@ -90,7 +96,9 @@ def test_synthetic_coverage_with_correlated_channels(rho):
     zs = []
     for seed in range(200):
         t = synthetic_truth(MODEL, noise=0.02, seed=seed, channel_correlation=rho)
-        zs.append(check(t, MODEL, parts=["inscatter"], distance_bands=()).row("inscatter", "all", "rel_bias").z)
+        zs.append(
+            check(t, MODEL, parts=["inscatter"], distance_bands=()).row("inscatter", "all", "rel_bias").z
+        )
     assert abs(np.std(zs, ddof=1) - 1.0) < 0.15
 
 

@@ -230,7 +230,8 @@ def interrupted(tmp_path_factory, mitsuba):
 
 @pytest.mark.parametrize("damage", list(DAMAGE))
 def test_a_damaged_checkpoint_is_set_aside_with_a_warning_and_the_render_starts_over(
-        tmp_path, interrupted, monkeypatch, capsys, damage):
+    tmp_path, interrupted, monkeypatch, capsys, damage
+):
     import fogref.render.render as R
 
     tiny.one_spp_passes(monkeypatch)
@@ -266,8 +267,9 @@ def test_a_flipped_byte_anywhere_is_set_aside_or_harmless(tmp_path, interrupted,
         assert (err == "" and not aside.exists()) or (len(err.splitlines()) == 1 and aside.exists()), (i, err)
 
 
-def test_the_good_checkpoint_resumes_and_a_second_damaged_one_gets_its_own_name(tmp_path, interrupted,
-                                                                                 monkeypatch, capsys):
+def test_the_good_checkpoint_resumes_and_a_second_damaged_one_gets_its_own_name(
+    tmp_path, interrupted, monkeypatch, capsys
+):
     import fogref.render.render as R
 
     tiny.one_spp_passes(monkeypatch)

@@ -132,8 +132,13 @@ def test_model_evaluate_raising_is_one_line(user_module, truth_exr, tmp_path, ca
             call()
 
 
-@pytest.mark.parametrize("cls, needle", [("ReturnsNone", "returned NoneType without 'transmittance'"),
-                                         ("ReturnsStrings", "not an array of numbers")])
+@pytest.mark.parametrize(
+    "cls, needle",
+    [
+        ("ReturnsNone", "returned NoneType without 'transmittance'"),
+        ("ReturnsStrings", "not an array of numbers"),
+    ],
+)
 def test_model_returning_none_or_strings_refused(user_module, truth_exr, tmp_path, capsys, cls, needle):
     truth, exr = truth_exr
     _cli_error(capsys, _compare(exr, tmp_path / "r", "--model", f"{user_module}:{cls}"), needle)

@@ -55,8 +55,19 @@ def test_exr_inscatter_five_percent_fails_exact_passes(scene, tmp_path, capsys):
     d, exr = scene
     for name, code in (("exact", 0), ("bright", 1)):
         out, js = tmp_path / name, tmp_path / f"{name}.json"
-        got, _ = _run(capsys, exr, "--transmittance", d / "T.exr", "--inscatter", d / f"L_{name}.exr",
-                      "--out", out, "--json", js, "--no-figures")
+        got, _ = _run(
+            capsys,
+            exr,
+            "--transmittance",
+            d / "T.exr",
+            "--inscatter",
+            d / f"L_{name}.exr",
+            "--out",
+            out,
+            "--json",
+            js,
+            "--no-figures",
+        )
         assert got == code, name
         g = json.loads(js.read_text())
         assert g["exit_code"] == code and g["verdict"] == ("pass" if code == 0 else "fail")
@@ -80,8 +91,21 @@ def test_png_srgb_inscatter_five_percent_fails_exact_passes(scene, tmp_path, cap
     d, exr = scene
     for name, code in (("exact", 0), ("bright", 1)):
         out, js = tmp_path / name, tmp_path / f"{name}.json"
-        got, _ = _run(capsys, exr, "--transmittance", d / "T.exr", "--inscatter", d / f"L_{name}.png",
-                      "--exposure", EXPOSURE, "--out", out, "--json", js, "--no-figures")
+        got, _ = _run(
+            capsys,
+            exr,
+            "--transmittance",
+            d / "T.exr",
+            "--inscatter",
+            d / f"L_{name}.png",
+            "--exposure",
+            EXPOSURE,
+            "--out",
+            out,
+            "--json",
+            js,
+            "--no-figures",
+        )
         assert got == code, name
         g = json.loads(js.read_text())
         assert g["encodings"] == {"transmittance": "linear", "inscatter": "srgb"}
@@ -90,8 +114,21 @@ def test_png_srgb_inscatter_five_percent_fails_exact_passes(scene, tmp_path, cap
         metrics = json.loads((out / "metrics.json").read_text())
         assert metrics["images"]["encodings"]["inscatter"] == "srgb"
         assert "inscatter `" in (out / "index.md").read_text() and "(srgb)" in (out / "index.md").read_text()
-    got, _ = _run(capsys, exr, "--transmittance", d / "T.exr", "--inscatter", d / "L_exact.png",
-                  "--exposure", EXPOSURE, "--encoding", "linear", "--out", tmp_path / "lin", "--no-figures")
+    got, _ = _run(
+        capsys,
+        exr,
+        "--transmittance",
+        d / "T.exr",
+        "--inscatter",
+        d / "L_exact.png",
+        "--exposure",
+        EXPOSURE,
+        "--encoding",
+        "linear",
+        "--out",
+        tmp_path / "lin",
+        "--no-figures",
+    )
     assert got == 1
 
 
@@ -99,10 +136,14 @@ def test_image_run_gets_the_model_report(scene, tmp_path, capsys):
     """--image runs write the model report's figures, ΔE2000 and FLIP, plus the composite part."""
     d, exr = scene
     out = tmp_path / "r"
-    assert _run(capsys, exr, "--transmittance", d / "T.exr", "--inscatter", d / "L_bright.exr",
-                "--out", out)[0] == 1
+    assert (
+        _run(capsys, exr, "--transmittance", d / "T.exr", "--inscatter", d / "L_bright.exr", "--out", out)[0]
+        == 1
+    )
     for part in ("transmittance", "inscatter", "attenuated_surface", "composite"):
-        assert (out / "side_by_side" / f"{part}.png").is_file() and (out / "heatmaps" / f"{part}.png").is_file()
+        assert (out / "side_by_side" / f"{part}.png").is_file() and (
+            out / "heatmaps" / f"{part}.png"
+        ).is_file()
     assert (out / "error_vs_distance.png").is_file() and (out / "check.json").is_file()
     m = json.loads((out / "metrics.json").read_text())
     s = m["metrics"]["inscatter"]["all"]
@@ -113,9 +154,20 @@ def test_image_run_gets_the_model_report(scene, tmp_path, capsys):
 def test_inconclusive_exits_3_and_maps(scene, tmp_path, capsys):
     """Inscatter 2 % too bright against a |rel_bias| tolerance of 0.02: every interval straddles it."""
     d, exr = scene
-    base = [exr, "--transmittance", d / "T.exr", "--inscatter", d / "L_two.exr", "--no-figures",
-            "--distance-bands", "none", "--tolerance", "inscatter:rel_bias=0.02",
-            "--tolerance", "composite:rel_bias=none"]
+    base = [
+        exr,
+        "--transmittance",
+        d / "T.exr",
+        "--inscatter",
+        d / "L_two.exr",
+        "--no-figures",
+        "--distance-bands",
+        "none",
+        "--tolerance",
+        "inscatter:rel_bias=0.02",
+        "--tolerance",
+        "composite:rel_bias=none",
+    ]
     junit = tmp_path / "j.xml"
     code, out = _run(capsys, *base, "--out", tmp_path / "a", "--junit", junit, "--json", tmp_path / "a.json")
     assert code == 3, out.out
@@ -129,17 +181,40 @@ def test_inconclusive_exits_3_and_maps(scene, tmp_path, capsys):
     assert _run(capsys, *base, "--out", tmp_path / "b", "--inconclusive", "fail")[0] == 1
     assert _run(capsys, *base, "--out", tmp_path / "c", "--inconclusive", "pass", "--junit", junit)[0] == 0
     bias = {(c.get("classname"), c.get("name")): c for c in ET.parse(junit).getroot().iter("testcase")}[
-        ("fogref.inscatter.all", "rel_bias")]
+        ("fogref.inscatter.all", "rel_bias")
+    ]
     assert bias.find("skipped") is not None and bias.find("failure") is None
 
 
 def test_junit_and_json_of_a_failure(scene, tmp_path, capsys):
     d, exr = scene
     junit, js = tmp_path / "j.xml", tmp_path / "g.json"
-    assert _run(capsys, exr, "--transmittance", d / "T.exr", "--inscatter", d / "L_bright.exr",
-                "--out", tmp_path / "r", "--no-figures", "--junit", junit, "--json", js,
-                "--tolerance", "inscatter/sky=0.5", "--tolerance", "T:rel_bias=0.001",
-                "--confidence", "0.95", "--distance-bands", "50,500")[0] == 1
+    assert (
+        _run(
+            capsys,
+            exr,
+            "--transmittance",
+            d / "T.exr",
+            "--inscatter",
+            d / "L_bright.exr",
+            "--out",
+            tmp_path / "r",
+            "--no-figures",
+            "--junit",
+            junit,
+            "--json",
+            js,
+            "--tolerance",
+            "inscatter/sky=0.5",
+            "--tolerance",
+            "T:rel_bias=0.001",
+            "--confidence",
+            "0.95",
+            "--distance-bands",
+            "50,500",
+        )[0]
+        == 1
+    )
     g = json.loads(js.read_text())
     assert g["confidence"] == 0.95 and g["settings"]["distance_bands_m"] == [50.0, 500.0]
     rows = _rows(js)
@@ -156,12 +231,14 @@ def test_junit_and_json_of_a_failure(scene, tmp_path, capsys):
 def test_usage_errors_exit_2_with_one_line(scene, tmp_path, capsys):
     d, exr = scene
     img = ["--inscatter", d / "L_exact.exr", "--out", tmp_path / "r", "--no-figures"]
-    for bad, says in ((["--tolerance", "foo"], "--tolerance foo: expected PART[/REGION][:METRIC]=VALUE"),
-                      (["--tolerance", "inscatter=-1"], "must be a finite number >= 0"),
-                      (["--tolerance", "inscatr=0.1"], "unknown part 'inscatr'"),
-                      (["--confidence", "1.5"], "'--confidence': 1.5 is outside (0, 1)"),
-                      (["--inconclusive", "maybe"], "'--inconclusive': 'maybe' is not one of fail, pass"),
-                      (["--distance-bands", "1000,100"], "--distance-bands 1000,100")):
+    for bad, says in (
+        (["--tolerance", "foo"], "--tolerance foo: expected PART[/REGION][:METRIC]=VALUE"),
+        (["--tolerance", "inscatter=-1"], "must be a finite number >= 0"),
+        (["--tolerance", "inscatr=0.1"], "unknown part 'inscatr'"),
+        (["--confidence", "1.5"], "'--confidence': 1.5 is outside (0, 1)"),
+        (["--inconclusive", "maybe"], "'--inconclusive': 'maybe' is not one of fail, pass"),
+        (["--distance-bands", "1000,100"], "--distance-bands 1000,100"),
+    ):
         code, out = _run(capsys, exr, *img, *bad)
         assert code == 2, bad
         err = out.err.strip().splitlines()
@@ -179,8 +256,10 @@ def test_help_documents_exit_codes(capsys):
 def test_default_out_is_git_ignored_out(scene, tmp_path, monkeypatch, capsys):
     d, exr = scene
     monkeypatch.chdir(tmp_path)
-    assert _run(capsys, exr, "--inscatter", d / "L_exact.exr", "--transmittance", d / "T.exr",
-                "--no-figures")[0] == 0
+    assert (
+        _run(capsys, exr, "--inscatter", d / "L_exact.exr", "--transmittance", d / "T.exr", "--no-figures")[0]
+        == 0
+    )
     assert (tmp_path / "out" / "compare" / "truth-L_exact" / "index.md").is_file()
     assert not (tmp_path / "reports").exists()
 
@@ -194,14 +273,42 @@ def test_model_run_gates_too(scene, tmp_path, capsys):
     p = parse_param_assignments(["FogDensity=0.02", "FogHeightFalloff=0.2"])
     assert build("ue4", p)  # the names exist
     js = tmp_path / "m.json"
-    code, out = _run(capsys, exr, "--model", "ue4", "--param", "FogDensity=0.02", "--param",
-                     "FogHeightFalloff=0.2", "--precision", "float64", "--out", tmp_path / "m", "--no-figures",
-                     "--json", js)
+    code, out = _run(
+        capsys,
+        exr,
+        "--model",
+        "ue4",
+        "--param",
+        "FogDensity=0.02",
+        "--param",
+        "FogHeightFalloff=0.2",
+        "--precision",
+        "float64",
+        "--out",
+        tmp_path / "m",
+        "--no-figures",
+        "--json",
+        js,
+    )
     assert code == 0, out.out
     assert {r["part"] for r in json.loads(js.read_text())["rows"]} == {"T", "inscatter", "final"}
     assert "## Verdict" in (tmp_path / "m" / "index.md").read_text()
-    assert _run(capsys, exr, "--model", "ue4", "--param", "FogDensity=0.03", "--param", "FogHeightFalloff=0.2",
-                "--out", tmp_path / "m2", "--no-figures")[0] == 1
+    assert (
+        _run(
+            capsys,
+            exr,
+            "--model",
+            "ue4",
+            "--param",
+            "FogDensity=0.03",
+            "--param",
+            "FogHeightFalloff=0.2",
+            "--out",
+            tmp_path / "m2",
+            "--no-figures",
+        )[0]
+        == 1
+    )
 
 
 def test_info_json_camera_of_a_synthetic_truth_is_derived(scene, capsys):

@@ -76,7 +76,9 @@ def test_delta_e2000_default_white_is_the_reference_p99_luminance():
     assert w == pytest.approx(np.percentile(y[y > 0], 99))
     np.testing.assert_allclose(P.delta_e2000_map(r, x), P.delta_e2000_map(r, x, white=w))
     # exposure-normalised: scaling both images leaves ΔE unchanged
-    np.testing.assert_allclose(P.delta_e2000_map(10 * r, 10 * x), P.delta_e2000_map(r, x), rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(
+        P.delta_e2000_map(10 * r, 10 * x), P.delta_e2000_map(r, x), rtol=1e-9, atol=1e-9
+    )
 
 
 def test_exposure_white_of_black_image_is_one():

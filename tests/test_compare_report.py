@@ -65,7 +65,9 @@ class BeerLambertFog:
 
     @classmethod
     def from_physical(cls, physical) -> "BeerLambertFog":
-        return cls(sigma=tuple(np.broadcast_to(physical.medium.sigma_t, 3)), ambient=tuple(physical.sky_radiance))
+        return cls(
+            sigma=tuple(np.broadcast_to(physical.medium.sigma_t, 3)), ambient=tuple(physical.sky_radiance)
+        )
 
     def evaluate(self, camera, world_pos, precision="float32"):
         dt = np.float32 if precision == "float32" else np.float64
@@ -106,8 +108,16 @@ def synthetic_channels(with_sun: bool = True):
     surface = np.where(hit[..., None], 0.2 + 0.6 * checker * np.array([1.0, 0.8, 0.6]), SKY)
     trans = np.where(hit[..., None], np.exp(-SIGMA * dist[..., None]), 0.0)  # sky: T(inf) = 0
     inscatter = AMBIENT * (1 - trans)
-    ch = truth_channels(T=trans, surface=surface, inscatter=inscatter, distance=dist, position=pos, view=view,
-                        hit=hit, rel_stderr=0.01)
+    ch = truth_channels(
+        T=trans,
+        surface=surface,
+        inscatter=inscatter,
+        distance=dist,
+        position=pos,
+        view=view,
+        hit=hit,
+        rel_stderr=0.01,
+    )
     params = {
         "camera": {"origin": CAMERA.tolist()},
         "medium": {"kind": "homogeneous", "sigma_t": SIGMA.tolist()},
@@ -131,8 +141,15 @@ def _no_nan_json(text: str):
     return json.loads(text, parse_constant=reject)
 
 
-EXPECTED_FILES = ["index.md", "metrics.json", "errors.exr", "error_vs_distance.png", "error_vs_sun_angle.png",
-                  *(f"side_by_side/{p}.png" for p in PARTS), *(f"heatmaps/{p}.png" for p in PARTS)]
+EXPECTED_FILES = [
+    "index.md",
+    "metrics.json",
+    "errors.exr",
+    "error_vs_distance.png",
+    "error_vs_sun_angle.png",
+    *(f"side_by_side/{p}.png" for p in PARTS),
+    *(f"heatmaps/{p}.png" for p in PARTS),
+]
 
 
 @pytest.fixture(scope="module")
@@ -161,8 +178,12 @@ def test_report_writes_every_file(perturbed_report):
 def test_report_metrics_structure_and_values(perturbed_report):
     _, report = perturbed_report
     surface_px = report["image"]["surface_pixels"]
-    assert report["image"] == {"width": W, "height": H, "surface_pixels": surface_px,
-                               "sky_pixels": W * H - surface_px}
+    assert report["image"] == {
+        "width": W,
+        "height": H,
+        "surface_pixels": surface_px,
+        "sky_pixels": W * H - surface_px,
+    }
     assert 0 < surface_px < W * H
     for part in PARTS:
         for region in REGIONS:
@@ -270,8 +291,13 @@ def test_truth_geometry(exr_path):
 
 
 def test_param_parsing_and_model_building():
-    assert parse_param_assignments(["a=1", "b=[1, 2]", "c=exp2", "d=true", "e="]) == \
-        {"a": 1, "b": [1, 2], "c": "exp2", "d": True, "e": ""}
+    assert parse_param_assignments(["a=1", "b=[1, 2]", "c=exp2", "d=true", "e="]) == {
+        "a": 1,
+        "b": [1, 2],
+        "c": "exp2",
+        "d": True,
+        "e": "",
+    }
     with pytest.raises(FogrefError, match="KEY=VALUE"):
         parse_param_assignments(["novalue"])
     m = build_model(BeerLambertFog, {"sigma": [0.1, 0.1, 0.1]})
@@ -307,8 +333,24 @@ def _registry_importable():
 @pytest.mark.skipif(not _registry_importable(), reason="fogref.models does not import yet")
 def test_cli_from_scene_end_to_end(exr_path, tmp_path, registered_models, capsys):
     out = tmp_path / "cli"
-    assert main([str(exr_path), "--model", "beer_lambert_test", "--from-scene", "--param", "nan_rows=0",
-                 "--out", str(out), "--precision", "float64", "--no-figures"]) == 1  # runs; verdict fail (exit 1)
+    assert (
+        main(
+            [
+                str(exr_path),
+                "--model",
+                "beer_lambert_test",
+                "--from-scene",
+                "--param",
+                "nan_rows=0",
+                "--out",
+                str(out),
+                "--precision",
+                "float64",
+                "--no-figures",
+            ]
+        )
+        == 1
+    )  # runs; verdict fail (exit 1)
     assert "report:" in capsys.readouterr().out
     report = _no_nan_json((out / "metrics.json").read_text())
     assert report["metrics"]["final"]["all"]["rmse"] < 2e-7
@@ -319,8 +361,19 @@ def test_cli_from_scene_end_to_end(exr_path, tmp_path, registered_models, capsys
 
 
 def test_add_cli_registers_subcommand():
-    module, args, _ = parse_command_line(["compare", "a.exr", "--model", "ue4", "--param", "FogDensity=0.05",
-                                          "--param", "FogHeightFalloff=0.2", "--from-scene"])
+    module, args, _ = parse_command_line(
+        [
+            "compare",
+            "a.exr",
+            "--model",
+            "ue4",
+            "--param",
+            "FogDensity=0.05",
+            "--param",
+            "FogHeightFalloff=0.2",
+            "--from-scene",
+        ]
+    )
     assert args.exr == "a.exr" and args.model == "ue4" and args.from_scene
     assert args.param == {"FogDensity": "0.05", "FogHeightFalloff": "0.2"}
     assert args.precision == "float32" and args.out is None and callable(module.run)

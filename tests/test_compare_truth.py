@@ -67,7 +67,7 @@ def horizon_truth(rel_stderr=0.01, undefined_surface=0.0, horizon_rows=4):
     far = np.zeros_like(ground)
     first_ground = np.argmax(ground, axis=0)
     for x in range(W):  # the rows just above the ground see a far shore
-        far[max(first_ground[x] - horizon_rows, 0):first_ground[x], x] = True
+        far[max(first_ground[x] - horizon_rows, 0) : first_ground[x], x] = True
     dist = np.where(far, 1.0e5, dist)
     hit = ground | far
     pos = np.where(hit[..., None], CAMERA + view * dist[..., None], 0.0)
@@ -76,15 +76,35 @@ def horizon_truth(rel_stderr=0.01, undefined_surface=0.0, horizon_rows=4):
     surface = np.where(hit[..., None], np.array([0.3, 0.35, 0.2]), np.array([0.2, 0.3, 0.5]))
     inscatter = 0.5 * (1.0 - T)
     coverage = (T.max(-1) > 0).astype(float)
-    ch = truth_channels(T=T, surface=surface, inscatter=inscatter, distance=dist, position=pos, view=view,
-                        hit=hit, coverage=coverage, rel_stderr=rel_stderr)
+    ch = truth_channels(
+        T=T,
+        surface=surface,
+        inscatter=inscatter,
+        distance=dist,
+        position=pos,
+        view=view,
+        hit=hit,
+        coverage=coverage,
+        rel_stderr=rel_stderr,
+    )
     if undefined_surface:
         for c in ("surface.R", "surface.G", "surface.B"):
             ch[c] = np.where(coverage > 0, ch[c], undefined_surface)
-    params = {"camera": {"origin": CAMERA.tolist()}, "medium": {"sigma_t": SIGMA}, "sun": None,
-              "sky": {"radiance": 0.5}}
-    attrs = truth_attrs(params, spp=32, seed=7, scene="scenes/lake.xml", overrides={"res": W, "resy": H},
-                        pixel_filter="centre", scene_sha256="ab" * 32)
+    params = {
+        "camera": {"origin": CAMERA.tolist()},
+        "medium": {"sigma_t": SIGMA},
+        "sun": None,
+        "sky": {"radiance": 0.5},
+    }
+    attrs = truth_attrs(
+        params,
+        spp=32,
+        seed=7,
+        scene="scenes/lake.xml",
+        overrides={"res": W, "resy": H},
+        pixel_filter="centre",
+        scene_sha256="ab" * 32,
+    )
     return ch, attrs
 
 
@@ -104,7 +124,10 @@ def test_opaque_horizon_gives_finite_composite_and_counts_excluded_pixels(tmp_pa
         assert s["excluded_pixels"] == excluded and s["pixels"] == W * H - excluded, part
         assert math.isfinite(s["rmse"]) and s["rmse"] < 1.0, part  # the old surface = Tsurface/T gave 3.8e19
     for part in ("transmittance", "inscatter"):
-        assert rep["metrics"][part]["all"]["pixels"] == W * H and rep["metrics"][part]["all"]["excluded_pixels"] == 0
+        assert (
+            rep["metrics"][part]["all"]["pixels"] == W * H
+            and rep["metrics"][part]["all"]["excluded_pixels"] == 0
+        )
     assert rep["diagnostics"]["surface_undefined_pixels"] == excluded
     assert any("surface radiance is undefined" in w for w in rep["warnings"])
     page = (tmp_path / "r" / "index.md").read_text()
@@ -116,8 +139,15 @@ def test_undefined_surface_values_are_never_used(tmp_path):
     reps = []
     for k, junk in enumerate((0.0, 1.0e20)):
         ch, attrs = horizon_truth(undefined_surface=junk)
-        reps.append(compare(as_truth(ch, attrs), GreyFog(max_opacity=0.9), tmp_path / str(k),
-                            precision="float64", figures=False))
+        reps.append(
+            compare(
+                as_truth(ch, attrs),
+                GreyFog(max_opacity=0.9),
+                tmp_path / str(k),
+                precision="float64",
+                figures=False,
+            )
+        )
     for part in ("final", "attenuated_surface"):
         a, b = reps[0]["metrics"][part]["all"], reps[1]["metrics"][part]["all"]
         assert a["rmse"] == b["rmse"] and a["mean_error"] == b["mean_error"], part
@@ -136,9 +166,16 @@ def test_exact_model_is_below_the_noise_and_a_wrong_one_is_not(tmp_path):
     assert s["mean_error"] > 0 and s["rmse_debiased"] > 0
     # the noise floor is the RMS of the per-pixel standard error (plus float32 storage)
     se = truth.stderr["inscatter"]
-    assert s["rmse_noise_floor"] == pytest.approx(np.sqrt(np.mean(se ** 2)), rel=1e-3)
-    for key in ("rmse_stderr", "relmse_stderr", "relmse_noise_floor", "mean_error_stderr",
-                "mean_abs_error_noise_floor", "delta_e2000_mean_noise_floor", "flip_mean_noise_floor"):
+    assert s["rmse_noise_floor"] == pytest.approx(np.sqrt(np.mean(se**2)), rel=1e-3)
+    for key in (
+        "rmse_stderr",
+        "relmse_stderr",
+        "relmse_noise_floor",
+        "mean_error_stderr",
+        "mean_abs_error_noise_floor",
+        "delta_e2000_mean_noise_floor",
+        "flip_mean_noise_floor",
+    ):
         assert key in s and s[key] >= 0, key
     page = (tmp_path / "wrong" / "index.md").read_text()
     assert "RMSE noise floor" in page and "above the noise (too bright)" in page
@@ -155,8 +192,8 @@ def test_mse_noise_matches_a_monte_carlo_experiment():
         d = bias + sigma * rng.standard_normal(bias.shape)
         mses.append(M.mse_noise(d, sigma))
     est = np.array([m["mse"] for m in mses])
-    assert np.mean(est) == pytest.approx(np.mean(bias ** 2) + np.mean(sigma ** 2), rel=0.01)
-    assert mses[0]["noise_floor"] == pytest.approx(np.mean(sigma ** 2))
+    assert np.mean(est) == pytest.approx(np.mean(bias**2) + np.mean(sigma**2), rel=0.01)
+    assert mses[0]["noise_floor"] == pytest.approx(np.mean(sigma**2))
     # channels are independent here, so the correlated-channel bound overestimates; it must not underestimate
     sd = np.std(est)
     assert sd <= np.mean([m["stderr"] for m in mses]) <= 2.5 * sd
@@ -169,8 +206,13 @@ def test_metrics_json_records_the_truth(tmp_path):
     rep = compare(path, GreyFog(), tmp_path / "r", figures=False)
     t = json.loads((tmp_path / "r" / "metrics.json").read_text())["truth"]
     assert t == rep["truth"]
-    assert (t["spp"], t["seed"], t["scene"], t["overrides"], t["pixel_filter"]) == \
-        (32, 7, "scenes/lake.xml", {"res": W, "resy": H}, "centre")
+    assert (t["spp"], t["seed"], t["scene"], t["overrides"], t["pixel_filter"]) == (
+        32,
+        7,
+        "scenes/lake.xml",
+        {"res": W, "resy": H},
+        "centre",
+    )
     assert t["pixel_exact"] and t["scene_sha256"] == "ab" * 32
     assert "--set res=24" in (tmp_path / "r" / "index.md").read_text()
 
@@ -182,7 +224,7 @@ def test_signed_error_map_is_diverging(tmp_path):
     r = np.full((H, W, 3), 0.5)
     x = r.copy()
     x[:, : W // 2] += 0.2
-    x[:, W // 2:] -= 0.2
+    x[:, W // 2 :] -= 0.2
     e = error_maps(r, x, white=1.0)
     assert e.signed.mean(-1)[0, 0] > 0 > e.signed.mean(-1)[0, -1]
     png = plot_error_heatmaps(e, "final", "radiance", tmp_path / "h.png")
@@ -228,8 +270,18 @@ def test_cli_sky_distance_out_of_range(tmp_path, capsys, value, grey_registered)
 
     ch, attrs = horizon_truth()
     write_exr(tmp_path / "t.exr", ch, attrs)
-    rc = main(["compare", str(tmp_path / "t.exr"), "--model", "grey_test", f"--sky-distance={value}",
-               "--out", str(tmp_path / "r"), "--no-figures"])
+    rc = main(
+        [
+            "compare",
+            str(tmp_path / "t.exr"),
+            "--model",
+            "grey_test",
+            f"--sky-distance={value}",
+            "--out",
+            str(tmp_path / "r"),
+            "--no-figures",
+        ]
+    )
     err = capsys.readouterr().err
     assert rc == 2 and "--sky-distance" in err and "(0, inf) m" in err
     assert "Traceback" not in err and not (tmp_path / "r").exists()
@@ -240,8 +292,22 @@ def test_cli_prints_noise_and_warnings(tmp_path, capsys, grey_registered):
 
     ch, attrs = horizon_truth()
     write_exr(tmp_path / "t.exr", ch, attrs)
-    assert main(["compare", str(tmp_path / "t.exr"), "--model", "grey_test", "--out", str(tmp_path / "r"),
-                 "--no-figures", "--precision", "float64"]) == 1  # the grey model fails: exit 1
+    assert (
+        main(
+            [
+                "compare",
+                str(tmp_path / "t.exr"),
+                "--model",
+                "grey_test",
+                "--out",
+                str(tmp_path / "r"),
+                "--no-figures",
+                "--precision",
+                "float64",
+            ]
+        )
+        == 1
+    )  # the grey model fails: exit 1
     out = capsys.readouterr()
     assert "noise floor" in out.out and "±" in out.out
     assert "warning" in out.err and "undefined" in out.err

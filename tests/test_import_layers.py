@@ -25,13 +25,19 @@ PACKAGES = {"fogref": ROOT / "fogref", "fogref_plugins": ROOT / "plugins"}
 FLOORS: list[tuple[str, tuple[str, ...]]] = [
     # leaf utilities that import no other fogref module; every floor may use them
     ("base", ("fogref._version", "fogref.errors", "fogref.params", "fogref.atomic", "fogref._llvm")),
-    ("media", ("fogref.media",)),                          # physics: numpy, Dr.Jit only lazily
+    ("media", ("fogref.media",)),  # physics: numpy, Dr.Jit only lazily
     # the ground-truth schema, its I/O and the one display transform
     ("gbuffer", ("fogref.gbuffer", "fogref.exrio", "fogref.display")),
-    ("models", ("fogref.models",)),                        # ports of the engines' shaders
-    ("mapping", ("fogref.mapping",)),                      # physical scene -> model parameters, fits
-    ("render", ("fogref.render", "fogref_plugins",         # Mitsuba glue and plugins;
-                "fogref.render.scene_writer")),            # scene XML writer (no Mitsuba)
+    ("models", ("fogref.models",)),  # ports of the engines' shaders
+    ("mapping", ("fogref.mapping",)),  # physical scene -> model parameters, fits
+    (
+        "render",
+        (
+            "fogref.render",
+            "fogref_plugins",  # Mitsuba glue and plugins;
+            "fogref.render.scene_writer",
+        ),
+    ),  # scene XML writer (no Mitsuba)
     ("compare", ("fogref.compare",)),
     ("study", ("fogref.study",)),
     # entry points: the command line, the pytest plugin and the facade (fogref.set_variant)
@@ -111,9 +117,14 @@ def imports_of(module: str):
 #: ``import fogref`` alone is no arrow (every submodule import runs the facade anyway, and
 #: its module level imports only base modules, see test_the_package_facade_imports_lazily);
 #: each ``fogref.<name>`` or ``from fogref import <name>`` is an arrow to the module behind it.
-FACADE = {"set_variant": "fogref.render.variant", "ensure_llvm": "fogref._llvm",
-          "__version__": "fogref._version", "__file__": "fogref._version", "__name__": "fogref._version",
-          "__path__": "fogref._version"}
+FACADE = {
+    "set_variant": "fogref.render.variant",
+    "ensure_llvm": "fogref._llvm",
+    "__version__": "fogref._version",
+    "__file__": "fogref._version",
+    "__name__": "fogref._version",
+    "__path__": "fogref._version",
+}
 
 
 def _resolve(name: str) -> str | None:
@@ -128,8 +139,13 @@ def _facade_uses(module: str):
     """(``fogref.<name>``, line) for each attribute use of a bare ``import fogref``."""
     path, _ = MODULES[module]
     tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
-    aliases = {a.asname or a.name for n in ast.walk(tree) if isinstance(n, ast.Import)
-               for a in n.names if a.name == "fogref"}
+    aliases = {
+        a.asname or a.name
+        for n in ast.walk(tree)
+        if isinstance(n, ast.Import)
+        for a in n.names
+        if a.name == "fogref"
+    }
     for node in ast.walk(tree):
         if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id in aliases:
             yield f"fogref.{node.attr}", node.lineno
@@ -227,7 +243,12 @@ def test_each_floor_imports_only_floors_below():
 def test_base_modules_import_only_base():
     graph = import_graph()
     base = [m for m in MODULES if floor_of(m) == 0]
-    bad = [f"{_where(m, line)}: {m} imports {t}" for m in base for t, line in graph[m].items() if floor_of(t) != 0]
+    bad = [
+        f"{_where(m, line)}: {m} imports {t}"
+        for m in base
+        for t, line in graph[m].items()
+        if floor_of(t) != 0
+    ]
     assert not bad, "\n".join(bad)
 
 
@@ -244,8 +265,11 @@ def test_no_mitsuba_or_drjit_at_module_level_below_render():
 
 def test_the_package_facade_imports_lazily():
     """``fogref/__init__.py`` imports only base modules at module level; set-up is a call."""
-    bad = [f"{_where('fogref', line)}: {name}" for name, line, top in imports_of("fogref")
-           if top and name.startswith("fogref") and floor_of(_resolve(name)) != 0]
+    bad = [
+        f"{_where('fogref', line)}: {name}"
+        for name, line, top in imports_of("fogref")
+        if top and name.startswith("fogref") and floor_of(_resolve(name)) != 0
+    ]
     import fogref
 
     # "@py_builtins"/"@pytest_ar": pytest rewrites the asserts of a pytest11 plugin's package (fogref)
@@ -254,16 +278,19 @@ def test_the_package_facade_imports_lazily():
     assert not bad, "\n".join(bad)
 
 
-@pytest.mark.parametrize("modules", ["fogref", "fogref.media, fogref.models", "fogref.mapping",
-                                     "fogref.gbuffer, fogref.exrio"])
+@pytest.mark.parametrize(
+    "modules", ["fogref", "fogref.media, fogref.models", "fogref.mapping", "fogref.gbuffer, fogref.exrio"]
+)
 def test_import_does_no_mitsuba_work(modules):
     """Importing the physics, models, mapping and schema imports neither Mitsuba nor Dr.Jit
     and leaves ``DRJIT_LIBLLVM_PATH`` alone (checked in a fresh interpreter)."""
     if modules == "fogref.mapping" and "fogref.mapping" not in MODULES:
         pytest.skip("fogref.mapping not there yet")
-    code = (f"import os, sys, {modules}; "
-            "bad = [m for m in ('mitsuba', 'drjit', 'fogref_plugins') if m in sys.modules]; "
-            "assert not bad, bad; assert 'DRJIT_LIBLLVM_PATH' not in os.environ")
+    code = (
+        f"import os, sys, {modules}; "
+        "bad = [m for m in ('mitsuba', 'drjit', 'fogref_plugins') if m in sys.modules]; "
+        "assert not bad, bad; assert 'DRJIT_LIBLLVM_PATH' not in os.environ"
+    )
     env = {k: v for k, v in os.environ.items() if k != "DRJIT_LIBLLVM_PATH"}
     r = subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT, capture_output=True, text=True)
     assert r.returncode == 0, r.stderr[-2000:]

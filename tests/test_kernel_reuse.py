@@ -27,9 +27,17 @@ VALLEY = str(Path(__file__).resolve().parents[1] / "scenes" / "valley.xml")
 TINY = {"res": "8", "resy": "6"}
 
 VALLEY_CHANGES = [
-    {"g": "0.35"}, {"sigma_t": "0.0021"}, {"albedo": "0.61"}, {"falloff": "0.021"}, {"density": "1.7"},
-    {"fog_height": "3.5"}, {"sun_elevation": "21.5"}, {"sun_azimuth": "61"}, {"sun_irradiance": "1.1, 2.2, 3.3"},
-    {"sky_radiance": "0.11, 0.12, 0.13"}, {"camera_origin": "1, 3, 0"},
+    {"g": "0.35"},
+    {"sigma_t": "0.0021"},
+    {"albedo": "0.61"},
+    {"falloff": "0.021"},
+    {"density": "1.7"},
+    {"fog_height": "3.5"},
+    {"sun_elevation": "21.5"},
+    {"sun_azimuth": "61"},
+    {"sun_irradiance": "1.1, 2.2, 3.3"},
+    {"sky_radiance": "0.11, 0.12, 0.13"},
+    {"camera_origin": "1, 3, 0"},
 ]
 
 
@@ -61,11 +69,21 @@ def test_valley_value_reuses_kernels(mitsuba, change):
 PROFILE_CASES = [
     ("rgb extinction", dict(sigma_t=[0.03, 0.02, 0.01]), dict(sigma_t=[0.02, 0.025, 0.012])),
     ("box bounds", dict(), dict(bounds_max=[50.0, 30.0, 55.0])),
-    ("hdrp", dict(profile="hdrp", density=1.0, base_height=2.0, falloff=0.05),
-     dict(profile="hdrp", density=0.7, base_height=4.0, falloff=0.08)),
-    ("powerlaw", dict(profile="powerlaw", density=1.0, start=0.0, end=30.0, power=1.5),
-     dict(profile="powerlaw", density=0.6, start=2.0, end=25.0, power=2.5)),
-    ("two layers", dict(density2=0.5, falloff2=0.2, height2=1.0), dict(density2=0.8, falloff2=0.3, height2=2.0)),
+    (
+        "hdrp",
+        dict(profile="hdrp", density=1.0, base_height=2.0, falloff=0.05),
+        dict(profile="hdrp", density=0.7, base_height=4.0, falloff=0.08),
+    ),
+    (
+        "powerlaw",
+        dict(profile="powerlaw", density=1.0, start=0.0, end=30.0, power=1.5),
+        dict(profile="powerlaw", density=0.6, start=2.0, end=25.0, power=2.5),
+    ),
+    (
+        "two layers",
+        dict(density2=0.5, falloff2=0.2, height2=1.0),
+        dict(density2=0.8, falloff2=0.3, height2=2.0),
+    ),
 ]
 
 

@@ -52,8 +52,10 @@ def test_import_does_not_touch_the_environment():
     import subprocess
     import sys
 
-    code = ("import os, sys, fogref, fogref.media, fogref.models; "
-            "assert 'DRJIT_LIBLLVM_PATH' not in os.environ; "
-            "assert 'mitsuba' not in sys.modules and 'drjit' not in sys.modules")
+    code = (
+        "import os, sys, fogref, fogref.media, fogref.models; "
+        "assert 'DRJIT_LIBLLVM_PATH' not in os.environ; "
+        "assert 'mitsuba' not in sys.modules and 'drjit' not in sys.modules"
+    )
     env = {k: v for k, v in os.environ.items() if k != "DRJIT_LIBLLVM_PATH"}
     subprocess.run([sys.executable, "-c", code], check=True, env=env)

@@ -85,10 +85,20 @@ PROFILES = [
 ]
 
 RAYS = [  # oy, dy, t
-    (-5.0, 1.0, 100.0), (50.0, -1.0, 200.0), (150.0, -0.5, 400.0), (50.0, 0.0, 40.0),
-    (5.0, 0.3, 150.0), (5.0, 1e-7, 1e5), (60.0, -1e-7, 3e4), (10.0, 0.7, 20.0),
-    (0.0, 1.0, 120.0), (100.0, -1.0, 120.0), (-20.0, 0.0, 10.0), (300.0, -0.9, 700.0),
-    (45.0, -0.05, 800.0), (250.0, 0.02, 500.0),
+    (-5.0, 1.0, 100.0),
+    (50.0, -1.0, 200.0),
+    (150.0, -0.5, 400.0),
+    (50.0, 0.0, 40.0),
+    (5.0, 0.3, 150.0),
+    (5.0, 1e-7, 1e5),
+    (60.0, -1e-7, 3e4),
+    (10.0, 0.7, 20.0),
+    (0.0, 1.0, 120.0),
+    (100.0, -1.0, 120.0),
+    (-20.0, 0.0, 10.0),
+    (300.0, -0.9, 700.0),
+    (45.0, -0.05, 800.0),
+    (250.0, 0.02, 500.0),
 ]
 
 
@@ -100,10 +110,15 @@ def test_component_depth_vs_quadrature(layer):
         assert rel(got, ref) <= 1e-12, (layer, oy, dy, t, float(got), float(ref))
 
 
-@pytest.mark.parametrize("layers", [(ExpLayer(1.0, 0.05, 0.0),),
-                                    (ExpLayer(1.0, 0.05, 0.0), ExpLayer(0.2, 0.004, 30.0)),
-                                    (HDRPLayer(1.0, 10.0, 0.02), PowerLawLayer(0.5, 0.0, 80.0, 1.7))],
-                         ids=["exp1", "exp2", "hdrp+power"])
+@pytest.mark.parametrize(
+    "layers",
+    [
+        (ExpLayer(1.0, 0.05, 0.0),),
+        (ExpLayer(1.0, 0.05, 0.0), ExpLayer(0.2, 0.004, 30.0)),
+        (HDRPLayer(1.0, 10.0, 0.02), PowerLawLayer(0.5, 0.0, 80.0, 1.7)),
+    ],
+    ids=["exp1", "exp2", "hdrp+power"],
+)
 def test_medium_depth_vs_quadrature(layers):
     med = FogMedium(sigma_t=0.02, layers=layers)
     for oy, dy, t in RAYS:
@@ -196,7 +211,9 @@ def test_free_flight_ks_two_layers():
     t = med.sample_distance(NP, o, d, e, sigma)
     assert np.all(np.isfinite(t))
     esc = t >= NP.largest
-    tau_inf = float(med.optical_depth(NP, tuple(a[:1] for a in o), tuple(a[:1] for a in d), a1(NP.largest))[0])
+    tau_inf = float(
+        med.optical_depth(NP, tuple(a[:1] for a in o), tuple(a[:1] for a in d), a1(NP.largest))[0]
+    )
     F_inf = -math.expm1(-sigma * tau_inf)
     tf = np.where(esc, 0.0, t)
     F = -np.expm1(-sigma * med.optical_depth(NP, o, d, tf))
@@ -233,14 +250,19 @@ def mp_single_scatter(layers, sigma, albedo, g, o_y, d, D, w, E):
 
     cos_t = sum(a * b for a, b in zip(d, w))
     phase = hg_phase(NP, a1(cos_t), g)
-    f = lambda s: (sigma * sum(mp_rho(L, o_y + s * dy) for L in layers)
-                   * mp.exp(-sigma * tau(s) - sigma * tau_sun(o_y + s * dy)))
+    f = lambda s: (
+        sigma
+        * sum(mp_rho(L, o_y + s * dy) for L in layers)
+        * mp.exp(-sigma * tau(s) - sigma * tau_sun(o_y + s * dy))
+    )
     return albedo * float(phase) * E * mp.quad(f, mp.linspace(0, D, 5))
 
 
-@pytest.mark.parametrize("layers", [(ExpLayer(1.0, 0.01, 0.0),),
-                                    (ExpLayer(1.0, 0.01, 0.0), ExpLayer(0.4, 0.002, 30.0))],
-                         ids=["one", "two"])
+@pytest.mark.parametrize(
+    "layers",
+    [(ExpLayer(1.0, 0.01, 0.0),), (ExpLayer(1.0, 0.01, 0.0), ExpLayer(0.4, 0.002, 30.0))],
+    ids=["one", "two"],
+)
 @pytest.mark.parametrize("view", [(0.8, 0.6, 0.0), (0.6, -0.8, 0.0), (0.0, 1.0, 0.0), (1.0, 0.0, 0.0)])
 def test_single_scatter_vs_quadrature(layers, view):
     if True:
@@ -249,7 +271,9 @@ def test_single_scatter_vs_quadrature(layers, view):
         d = view
         D, oy = 150.0, 20.0
         med = FogMedium(sigma_t=sigma, albedo=albedo, g=g, layers=layers)
-        got = single_scatter_sun(NP, med, (a1(0.0), a1(oy), a1(0.0)), tuple(a1(v) for v in d), a1(D), w, (E,) * 3)
+        got = single_scatter_sun(
+            NP, med, (a1(0.0), a1(oy), a1(0.0)), tuple(a1(v) for v in d), a1(D), w, (E,) * 3
+        )
         ref = mp_single_scatter(layers, sigma, albedo, g, oy, d, D, w, E)
         for c in got:
             assert rel(c, ref) <= 1e-12, (float(c), ref)
@@ -257,8 +281,14 @@ def test_single_scatter_vs_quadrature(layers, view):
 
 # -- the height-profile protocol and its registry ---------------------------------------
 
-PROTOCOL_LAYERS = [ExpLayer(2.0, 0.05, 3.0), ExpLayer(1.0, 0.0, 0.0), HDRPLayer(1.5, 10.0, 0.02),
-                   HDRPLayer(1.0, 0.0, 0.0), PowerLawLayer(1.0, 0.0, 80.0, 2.0), PowerLawLayer(0.5, -5.0, 5.0, 0.0)]
+PROTOCOL_LAYERS = [
+    ExpLayer(2.0, 0.05, 3.0),
+    ExpLayer(1.0, 0.0, 0.0),
+    HDRPLayer(1.5, 10.0, 0.02),
+    HDRPLayer(1.0, 0.0, 0.0),
+    PowerLawLayer(1.0, 0.0, 80.0, 2.0),
+    PowerLawLayer(0.5, -5.0, 5.0, 0.0),
+]
 
 
 @pytest.mark.parametrize("layer", PROTOCOL_LAYERS, ids=repr)
@@ -272,19 +302,27 @@ def test_profiles_follow_the_protocol(layer):
     # max_density bounds the density on every height range [y_lo, y_hi]
     for i in range(0, len(y), 5):
         for j in range(i, len(y), 7):
-            assert layer.max_density(NP, y[i], y[j]) >= rho[i:j + 1].max() * (1 - 1e-12)
+            assert layer.max_density(NP, y[i], y[j]) >= rho[i : j + 1].max() * (1 - 1e-12)
     assert layer.is_constant == bool(np.all(rho == rho[0]))
     assert not layer.is_empty
     assert np.isfinite(layer.reference_height)
 
 
-@pytest.mark.parametrize("params, layers", [
-    ({"profile": "exponential", "falloff": 0.02, "height": 1.0, "density2": 0.5, "falloff2": 0.1},
-     (ExpLayer(1.0, 0.02, 1.0), ExpLayer(0.5, 0.1, 0.0))),
-    ({"profile": "homogeneous", "density": 2.0}, (ExpLayer(2.0, 0.0, 0.0),)),
-    ({"profile": "hdrp", "base_height": 4.0, "falloff": 0.03}, (HDRPLayer(1.0, 4.0, 0.03),)),
-    ({"profile": "powerlaw", "start": 1.0, "end": 9.0, "power": 3.0}, (PowerLawLayer(1.0, 1.0, 9.0, 3.0),)),
-])
+@pytest.mark.parametrize(
+    "params, layers",
+    [
+        (
+            {"profile": "exponential", "falloff": 0.02, "height": 1.0, "density2": 0.5, "falloff2": 0.1},
+            (ExpLayer(1.0, 0.02, 1.0), ExpLayer(0.5, 0.1, 0.0)),
+        ),
+        ({"profile": "homogeneous", "density": 2.0}, (ExpLayer(2.0, 0.0, 0.0),)),
+        ({"profile": "hdrp", "base_height": 4.0, "falloff": 0.03}, (HDRPLayer(1.0, 4.0, 0.03),)),
+        (
+            {"profile": "powerlaw", "start": 1.0, "end": 9.0, "power": 3.0},
+            (PowerLawLayer(1.0, 1.0, 9.0, 3.0),),
+        ),
+    ],
+)
 def test_profile_registry_parses_each_profile(params, layers):
     from fogref.media import PROFILES, medium_from_params
 
@@ -295,9 +333,13 @@ def test_profile_registry_parses_each_profile(params, layers):
 def test_profile_registry_errors_name_the_parameter():
     from fogref.media import medium_from_params
 
-    for params, name in [({"profile": "fractal"}, "profile"), ({"profile": "box"}, "bounds_min"),
-                         ({"profile": "hdrp", "falloff": -1}, "falloff"), ({"sigma_t": [1, 2]}, "sigma_t"),
-                         ({"bounds_min": [0, 0, 0]}, "bounds_max")]:
+    for params, name in [
+        ({"profile": "fractal"}, "profile"),
+        ({"profile": "box"}, "bounds_min"),
+        ({"profile": "hdrp", "falloff": -1}, "falloff"),
+        ({"sigma_t": [1, 2]}, "sigma_t"),
+        ({"bounds_min": [0, 0, 0]}, "bounds_max"),
+    ]:
         with pytest.raises(ParameterError) as e:
             medium_from_params(params, "<test>")
         assert e.value.name == name

@@ -30,14 +30,14 @@ from fogref.media import NP, ExpLayer, FogMedium, drjit_ops, single_scatter_sun 
 
 fogref.ensure_llvm()  # Dr.Jit's LLVM back end needs LLVM >= 16; before the first array
 D32 = drjit_ops(Float)
-EPS = {"f64": 2.0 ** -53, "f32": 2.0 ** -24}
+EPS = {"f64": 2.0**-53, "f32": 2.0**-24}
 mp.mp.dps = 50
 SET = settings(max_examples=150, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
 
-sigmas = st.floats(-9, 2).map(lambda e: 10.0 ** e)
-falloffs = st.one_of(st.just(0.0), st.floats(-6, 1).map(lambda e: 10.0 ** e))
+sigmas = st.floats(-9, 2).map(lambda e: 10.0**e)
+falloffs = st.one_of(st.just(0.0), st.floats(-6, 1).map(lambda e: 10.0**e))
 heights = st.floats(-1e4, 1e6)
-dists = st.one_of(st.floats(-4, 7).map(lambda e: 10.0 ** e), st.just(math.inf))
+dists = st.one_of(st.floats(-4, 7).map(lambda e: 10.0**e), st.just(math.inf))
 dys = st.one_of(st.sampled_from([0.0, 1.0, -1.0, 1e-7, -1e-7]), st.floats(-1e-7, 1e-7), st.floats(-1, 1))
 precisions = st.sampled_from(["f64", "f32"])
 
@@ -121,7 +121,9 @@ def test_stress_optical_depth(prec, sigma, b, h, oy, dy, t):
 
 
 @SET
-@given(precisions, sigmas, falloffs, heights, heights, st.floats(1e-6, 1.0), st.floats(-1, 1), st.floats(0, 1))
+@given(
+    precisions, sigmas, falloffs, heights, heights, st.floats(1e-6, 1.0), st.floats(-1, 1), st.floats(0, 1)
+)
 def test_stress_sun_transmittance(prec, sigma, b, h, py, wy, wx, unused):
     py, wy, h = rnd(prec, py), rnd(prec, wy), rnd(prec, h)
     layer = ExpLayer(1.0, b, h)
@@ -169,8 +171,15 @@ def test_stress_free_flight(prec, sigma, b, h, oy, dy, u):
 
 
 @SET
-@given(precisions, st.floats(-6, 0).map(lambda e: 10.0 ** e), st.floats(-5, -1).map(lambda e: 10.0 ** e),
-       st.floats(-100, 2000), dys, st.floats(0.05, 1.0), st.one_of(st.floats(1, 5e4), st.just(math.inf)))
+@given(
+    precisions,
+    st.floats(-6, 0).map(lambda e: 10.0**e),
+    st.floats(-5, -1).map(lambda e: 10.0**e),
+    st.floats(-100, 2000),
+    dys,
+    st.floats(0.05, 1.0),
+    st.one_of(st.floats(1, 5e4), st.just(math.inf)),
+)
 def test_stress_single_scatter(prec, sigma, b, oy, dy, wy, Dist):
     """Closed form vs mpmath (closed-form integral in 50 digits), T_sun(o) not underflowing."""
     oy, dy, wy = rnd(prec, oy), rnd(prec, dy), rnd(prec, wy)

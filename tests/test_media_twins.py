@@ -25,7 +25,7 @@ from fogref.media import closed_form as cf  # noqa: E402
 
 fogref.ensure_llvm()  # Dr.Jit's LLVM back end needs LLVM >= 16; before the first array
 D = drjit_ops(Float)
-EPS32 = 2.0 ** -24
+EPS32 = 2.0**-24
 L32 = float(np.finfo(np.float32).max)
 
 
@@ -67,15 +67,24 @@ def compare(fn, args, shift=None, name=""):
     # saturation/escape must agree unless ill-conditioned
     sat_mismatch = ((np.abs(ref) >= 1e28) != (np.abs(got) >= 1e28)) & (sens < 1e-3 * np.abs(ref))
     sat_mismatch &= ~((np.abs(ref) > 1e27) & (np.abs(got) > 1e27))
-    assert not sat_mismatch.any(), (name, [a[sat_mismatch][:5] for a in a64], got[sat_mismatch][:5],
-                                    ref[sat_mismatch][:5])
+    assert not sat_mismatch.any(), (
+        name,
+        [a[sat_mismatch][:5] for a in a64],
+        got[sat_mismatch][:5],
+        ref[sat_mismatch][:5],
+    )
     return np.max(np.where(ok_range & (ref != 0), np.abs(got - ref) / np.where(ref != 0, np.abs(ref), 1), 0))
 
 
 def grid(rng, n):
     """Random rays including extreme inputs: heights, directions, distances."""
-    oy = np.concatenate([rng.uniform(-1e4, 1e6, n // 4), rng.uniform(-200, 400, n // 2),
-                         np.array([0, 10, 100, -20, 5, 300, 1e6, -1e4] * (n // 32 + 1))[: n - 3 * (n // 4)]])
+    oy = np.concatenate(
+        [
+            rng.uniform(-1e4, 1e6, n // 4),
+            rng.uniform(-200, 400, n // 2),
+            np.array([0, 10, 100, -20, 5, 300, 1e6, -1e4] * (n // 32 + 1))[: n - 3 * (n // 4)],
+        ]
+    )
     dy = rng.choice(np.array([0.0, 1e-7, -1e-7, 1.0, -1.0, 3e-4, -3e-4, 0.5, -0.5]), n)
     dy = np.where(rng.random(n) < 0.4, rng.uniform(-1, 1, n), dy)
     t = 10.0 ** rng.uniform(-4, 7, n)
@@ -84,12 +93,24 @@ def grid(rng, n):
 
 
 def test_phi_psi_hg():
-    x = f32(np.concatenate([[0, 1e-30, -1e-30, 1e-7, -1e-7, 1, -1, 80, -80, -87, -88, -100, 1e30, L32],
-                            np.sign(np.random.default_rng(0).normal(size=400))
-                            * 10.0 ** np.random.default_rng(1).uniform(-8, 2.2, 400)]))
+    x = f32(
+        np.concatenate(
+            [
+                [0, 1e-30, -1e-30, 1e-7, -1e-7, 1, -1, 80, -80, -87, -88, -100, 1e30, L32],
+                np.sign(np.random.default_rng(0).normal(size=400))
+                * 10.0 ** np.random.default_rng(1).uniform(-8, 2.2, 400),
+            ]
+        )
+    )
     compare(cf.phi, [x], name="phi")
-    z = f32(np.concatenate([[0, 1e-30, -1e-30, 1e-7, 0.5, 0.9, 0.999, -1, -1e6, 1.0, 2.0],
-                            np.random.default_rng(2).uniform(-5, 0.999, 400)]))
+    z = f32(
+        np.concatenate(
+            [
+                [0, 1e-30, -1e-30, 1e-7, 0.5, 0.9, 0.999, -1, -1e6, 1.0, 2.0],
+                np.random.default_rng(2).uniform(-5, 0.999, 400),
+            ]
+        )
+    )
     compare(cf.psi, [z], name="psi")
     c = f32(np.random.default_rng(3).uniform(-1, 1, 300))
     for g in (0.0, 0.5, -0.7, 0.999):
@@ -107,15 +128,29 @@ def test_exp_layer_forms():
     compare(cf.exp_layer_sample, [log_c, k, s], name="exp_sample")
 
 
-COMPONENTS = [ExpLayer(1.0, 0.05, 0.0), ExpLayer(2.0, 0.0, 0.0), ExpLayer(0.01, 10.0, 100.0),
-              HDRPLayer(2.0, 10.0, 0.05), HDRPLayer(1e-3, 1000.0, 1e-3), HDRPLayer(1.0, 0.0, 0.0),
-              PowerLawLayer(1.5, 0.0, 100.0, 2.3), PowerLawLayer(1.0, -10.0, 40.0, 0.0),
-              PowerLawLayer(0.7, 5.0, 3000.0, 8.0)]
+COMPONENTS = [
+    ExpLayer(1.0, 0.05, 0.0),
+    ExpLayer(2.0, 0.0, 0.0),
+    ExpLayer(0.01, 10.0, 100.0),
+    HDRPLayer(2.0, 10.0, 0.05),
+    HDRPLayer(1e-3, 1000.0, 1e-3),
+    HDRPLayer(1.0, 0.0, 0.0),
+    PowerLawLayer(1.5, 0.0, 100.0, 2.3),
+    PowerLawLayer(1.0, -10.0, 40.0, 0.0),
+    PowerLawLayer(0.7, 5.0, 3000.0, 8.0),
+]
 
 
 def _heights(c):
-    return max(abs(v) for v in (getattr(c, "height", 0), getattr(c, "base_height", 0),
-                                getattr(c, "start", 0), getattr(c, "end", 0)))
+    return max(
+        abs(v)
+        for v in (
+            getattr(c, "height", 0),
+            getattr(c, "base_height", 0),
+            getattr(c, "start", 0),
+            getattr(c, "end", 0),
+        )
+    )
 
 
 @pytest.mark.parametrize("comp", COMPONENTS, ids=repr)

@@ -28,8 +28,12 @@ pytestmark = pytest.mark.render
 USER_MODULE = "resolver_test_fog"
 ENTRY_POINT = "resolver_ep_fog"
 SPECS = {f"{USER_MODULE}:MyFog": "MyFog", ENTRY_POINT: ENTRY_POINT}  # model name -> sweep label
-UNREAL_FIT = ("FogInscatteringColor", "DirectionalInscatteringColor", "DirectionalInscatteringExponent",
-              "DirectionalInscatteringStartDistance")
+UNREAL_FIT = (
+    "FogInscatteringColor",
+    "DirectionalInscatteringColor",
+    "DirectionalInscatteringExponent",
+    "DirectionalInscatteringStartDistance",
+)
 
 
 @pytest.fixture(scope="module")
@@ -62,9 +66,11 @@ def swept(site, tmp_path_factory):
     folder = tmp_path_factory.mktemp("sweep")
     models = "".join(f'[[models]]\nname = "{name}"\n' for name in ["ue4", *SPECS])
     (folder / "SWEEP.toml").write_text(
-        f'[sweep]\nname = "resolver"\nscenes = ["{VALLEY}"]\ncache = "{(folder / "cache").as_posix()}"\n' + models
+        f'[sweep]\nname = "resolver"\nscenes = ["{VALLEY}"]\ncache = "{(folder / "cache").as_posix()}"\n'
+        + models
         + '[render]\nspp = 4\noverrides = { res = 16, resy = 9, max_depth = 3 }\n[design]\nkind = "list"\n'
-          '[parameters.g]\nvalues = [0.6]\n')
+        "[parameters.g]\nvalues = [0.6]\n"
+    )
     info = S.run_sweep(folder / "SWEEP.toml", n_workers=1, progress=False, drjit_threads=1)
     df = pd.read_parquet(info["parquet"])
     assert (df["status"] == "ok").all(), df.get("error")
@@ -79,19 +85,27 @@ def test_user_and_entry_point_models_through_sweep_compare_and_check(swept, tmp_
         row = rows[label]
         assert row["model_name"] == name and row["final.all.rmse"] > 0
         out = tmp_path / label
-        assert main(["compare", truth_path, "--model", name, "--from-scene", "--out", str(out), "--no-figures"]) == 1  # fails: exit 1
+        assert (
+            main(["compare", truth_path, "--model", name, "--from-scene", "--out", str(out), "--no-figures"])
+            == 1
+        )  # fails: exit 1
         rmse = json.loads((out / "metrics.json").read_text())["metrics"]["final"]["all"]["rmse"]
         assert rmse == pytest.approx(row["final.all.rmse"], rel=1e-12)
         model = fogref.build_model(name, scene_params=truth.params)
         assert type(model).__name__ == "MyFog" and model.sigma == 0.003  # its from_physical
-        assert fogref.check(truth, model).row("T", "all").estimate == check(truth, model).row("T", "all").estimate
+        assert (
+            fogref.check(truth, model).row("T", "all").estimate
+            == check(truth, model).row("T", "all").estimate
+        )
 
 
 def test_unknown_names_get_did_you_mean_everywhere(site, tmp_path):
     assert ENTRY_POINT in fogref.models.available_models()
     with pytest.raises(FogrefError, match=f"did you mean '{ENTRY_POINT}'"):
         fogref.resolve_model("resolver_ep_fgo")
-    with pytest.raises(FogrefError, match="unknown fog model 'eu4'; did you mean 'ue4'.*installed: .*resolver_ep"):
+    with pytest.raises(
+        FogrefError, match="unknown fog model 'eu4'; did you mean 'ue4'.*installed: .*resolver_ep"
+    ):
         fogref.build_model("eu4")
     from test_sweep import _toml
 
@@ -112,7 +126,10 @@ def test_fit_from_scene_study_and_sweep_give_the_same_unreal(swept, tmp_path, ca
     sweep_params = _unreal(json.loads(rows["ue4"]["model_parameters"]))
 
     out = tmp_path / "compare"
-    assert main(["compare", truth_path, "--model", "ue4", "--from-scene", "--out", str(out), "--no-figures"]) == 1  # Unreal fails: exit 1
+    assert (
+        main(["compare", truth_path, "--model", "ue4", "--from-scene", "--out", str(out), "--no-figures"])
+        == 1
+    )  # Unreal fails: exit 1
     rep = json.loads((out / "metrics.json").read_text())
     capsys.readouterr()
     assert main(["fit", "--exr", truth_path]) == 0
@@ -124,9 +141,12 @@ def test_fit_from_scene_study_and_sweep_give_the_same_unreal(swept, tmp_path, ca
     study_fit = json.loads((tmp_path / "study" / "fit.json").read_text())["fit"]
     study_rep = json.loads((tmp_path / "study" / "compare" / "metrics.json").read_text())
 
-    paths = {"compare --from-scene": _unreal(rep["model"]["parameters"]), "fit": _unreal(fit_doc["unreal"]),
-             "study fit.json": _unreal(study_fit["unreal"]),
-             "study compare": _unreal(study_rep["model"]["parameters"])}
+    paths = {
+        "compare --from-scene": _unreal(rep["model"]["parameters"]),
+        "fit": _unreal(fit_doc["unreal"]),
+        "study fit.json": _unreal(study_fit["unreal"]),
+        "study compare": _unreal(study_rep["model"]["parameters"]),
+    }
     for where, p in paths.items():
         assert p == pytest.approx(sweep_params, rel=1e-12, abs=1e-12), where
     assert fit_doc["fit"]["directions_converged"] and fit_doc["fit"]["n_dirs"] >= 256

@@ -25,7 +25,9 @@ def blog_get_altitude_fog(cam, wp, S, E, p):
             return x - s_bk
         if y >= e:
             return (e - s) / ((pp + f32(1)) * k)
-        return (np.power(e - s, pp + f32(1)) - np.power(e - y, pp + f32(1))) / (k * (pp + f32(1)) * np.power(e - s, pp))
+        return (np.power(e - s, pp + f32(1)) - np.power(e - y, pp + f32(1))) / (
+            k * (pp + f32(1)) * np.power(e - s, pp)
+        )
 
     def integralZeroK(x, b):
         if b >= _FogEnd:
@@ -73,7 +75,8 @@ def _quad(cam, wp, S, E, p):
     def T(s):
         y = cam[1] + s * dy
         u = min(max((E - y) / (E - S), 0), 1)
-        return u ** p
+        return u**p
+
     pts = [0, L]
     if dy != 0:
         for yb in (S, E):
@@ -102,13 +105,13 @@ def test_integral_against_mpmath_quadrature():
             q = _quad(cam, wp[i], S, E, p)
             assert I64[i] == pytest.approx(q, rel=1e-9, abs=1e-12)
             assert I32[i] == pytest.approx(q, rel=2e-3, abs=2e-3)
-            assert tau[i] == pytest.approx(0.01 * q, rel=1e-9, abs=1e-14)   # medium optical depth = a * I
+            assert tau[i] == pytest.approx(0.01 * q, rel=1e-9, abs=1e-14)  # medium optical depth = a * I
 
 
 def test_linear_blend_not_beer_lambert():
     P = AltitudeFogParams(0.0, 10.0, 1.0, (1, 1, 1, 0.05))
     cam = np.array([0.0, -1.0, 0.0])
-    wp = np.array([[8.0, -1.0, 0.0]])                # fully dense: I = 8, tau = 0.4
+    wp = np.array([[8.0, -1.0, 0.0]])  # fully dense: I = 8, tau = 0.4
     r = AltitudeFog(P).evaluate(cam, wp, "float64")
     assert r.transmittance[0, 0] == pytest.approx(1 - 0.4)
     T_phys = altitude_to_medium(P).transmittance(NP, tuple(cam), (1.0, 0.0, 0.0), 8.0)[0]
@@ -122,7 +125,7 @@ def test_power_layer_sampling_inverts_depth():
     s = np.array([3.0, 4.0, 0.5, 2.0, 0.7])
     t = L.sample(NP, oy, dy, s)
     np.testing.assert_allclose(L.depth(NP, oy, dy, t), s, rtol=1e-9)
-    assert L.sample(NP, np.array(20.0), np.array(0.9), np.array(1.0)) == NP.largest   # escapes (depth 0.855)
+    assert L.sample(NP, np.array(20.0), np.array(0.9), np.array(1.0)) == NP.largest  # escapes (depth 0.855)
 
 
 def test_vertical_and_extreme_rays_are_finite():
@@ -164,14 +167,21 @@ def test_float64_near_fog_end_and_near_horizontal():
     and the old midpoint rule for near-horizontal rays (25 % error)."""
     fog = AltitudeFog(AltitudeFogParams(0.0, 1e6, 2.0, (1, 1, 1, 1.0)))
     cam = np.array([0.0, 1e6, 0.0])
-    wp = np.array([[0.0, 1e6 - 0.2, 0.0], [30.0, 1e6 - 1e-6, 0.0], [1e3, 1e6 - 1e-4, 0.0],
-                   [1e6, 1e6 - 0.1, 0.0], [0.0, 5e5, 0.0]])
+    wp = np.array(
+        [
+            [0.0, 1e6 - 0.2, 0.0],
+            [30.0, 1e6 - 1e-6, 0.0],
+            [1e3, 1e6 - 1e-4, 0.0],
+            [1e6, 1e6 - 0.1, 0.0],
+            [0.0, 5e5, 0.0],
+        ]
+    )
     I = fog.path_integral(cam, wp, "float64")
     for i in range(len(wp)):
         assert I[i] == pytest.approx(float(_mp_power_integral(cam, wp[i], 0.0, 1e6, 2.0)), rel=1e-13, abs=0)
     fog = AltitudeFog(AltitudeFogParams(0.0, 10.0, 2.0, (1, 1, 1, 1.0)))
     cam = np.array([0.0, 5.0, 0.0])
-    wp = np.array([[1e7, 5.0 + 5e-7 * s, 0.0] for s in (-9.0, -1.0, 0.0, 1.0, 9.0)])   # cross 0 and 10 m
+    wp = np.array([[1e7, 5.0 + 5e-7 * s, 0.0] for s in (-9.0, -1.0, 0.0, 1.0, 9.0)])  # cross 0 and 10 m
     I = fog.path_integral(cam, wp, "float64")
     for i in range(len(wp)):
         assert I[i] == pytest.approx(float(_mp_power_integral(cam, wp[i], 0.0, 10.0, 2.0)), rel=1e-13, abs=0)

@@ -23,19 +23,22 @@ def bevy_fog(o, cam, wp, frag):
     if dlc[3] > 0:
         n = view_to_world / distance
         l = np.asarray(o["direction_to_light"], f32)
-        scattering = scattering + np.power(max(f32(n[0] * l[0] + n[1] * l[1] + n[2] * l[2]), f32(0.0)),
-                                           f32(o["exponent"])) * np.asarray(o["light_color"], f32)
+        scattering = scattering + np.power(
+            max(f32(n[0] * l[0] + n[1] * l[1] + n[2] * l[2]), f32(0.0)), f32(o["exponent"])
+        ) * np.asarray(o["light_color"], f32)
     base = np.asarray(o["color"], f32)
     fog_color = base.copy()
-    if dlc[3] > 0:                                           # scattering_adjusted_fog_color
+    if dlc[3] > 0:  # scattering_adjusted_fog_color
         fog_color[:3] = base[:3] + scattering * dlc[:3] * dlc[3]
     frag = np.asarray(frag, f32)
     mode = o["mode"]
     if mode == "Atmospheric":
         extinction_factor = f32(1.0) - f32(1.0) / np.exp(distance * np.asarray(o["be"], f32))
         inscattering_factor = f32(1.0) - f32(1.0) / np.exp(distance * np.asarray(o["bi"], f32))
-        return (frag * (f32(1.0) - extinction_factor * fog_color[3])
-                + fog_color[:3] * inscattering_factor * fog_color[3])
+        return (
+            frag * (f32(1.0) - extinction_factor * fog_color[3])
+            + fog_color[:3] * inscattering_factor * fog_color[3]
+        )
     be_x = f32(o["be"][0])
     if mode == "Linear":
         start, end = f32(o["be"][0]), f32(o["be"][1])
@@ -45,29 +48,50 @@ def bevy_fog(o, cam, wp, frag):
     else:
         distance_times_density = distance * be_x
         fog_color[3] *= f32(1.0) - f32(1.0) / np.exp(distance_times_density * distance_times_density)
-    return frag + (fog_color[:3] - frag) * fog_color[3]      # mix(input, fog, a)
+    return frag + (fog_color[:3] - frag) * fog_color[3]  # mix(input, fog, a)
 
 
 @pytest.mark.parametrize("mode", ["Linear", "Exponential", "ExponentialSquared", "Atmospheric"])
 def test_float32_matches_fog_wgsl(mode):
     rng = np.random.default_rng(1)
-    l = np.array([0.3, 0.6, -0.5]); l /= np.linalg.norm(l)
-    p = BevyFogParams(falloff=mode, start=4.0, end=250.0, density=0.011, extinction=(0.01, 0.02, 0.04),
-                      inscattering=(0.005, 0.01, 0.02), color=(0.3, 0.4, 0.5, 0.9),
-                      directional_light_color=(1.0, 0.9, 0.7, 0.5), directional_light_exponent=12.0,
-                      light_direction=tuple(l), light_color=(2.0, 1.9, 1.7))
-    be = {"Linear": (4.0, 250.0, 0.0), "Exponential": (0.011, 0, 0), "ExponentialSquared": (0.011, 0, 0),
-          "Atmospheric": (0.01, 0.02, 0.04)}[mode]
-    o = dict(mode=mode, be=be, bi=(0.005, 0.01, 0.02), color=(0.3, 0.4, 0.5, 0.9),
-             directional_light_color=(1.0, 0.9, 0.7, 0.5), exponent=12.0, direction_to_light=l,
-             light_color=(2.0, 1.9, 1.7))
+    l = np.array([0.3, 0.6, -0.5])
+    l /= np.linalg.norm(l)
+    p = BevyFogParams(
+        falloff=mode,
+        start=4.0,
+        end=250.0,
+        density=0.011,
+        extinction=(0.01, 0.02, 0.04),
+        inscattering=(0.005, 0.01, 0.02),
+        color=(0.3, 0.4, 0.5, 0.9),
+        directional_light_color=(1.0, 0.9, 0.7, 0.5),
+        directional_light_exponent=12.0,
+        light_direction=tuple(l),
+        light_color=(2.0, 1.9, 1.7),
+    )
+    be = {
+        "Linear": (4.0, 250.0, 0.0),
+        "Exponential": (0.011, 0, 0),
+        "ExponentialSquared": (0.011, 0, 0),
+        "Atmospheric": (0.01, 0.02, 0.04),
+    }[mode]
+    o = dict(
+        mode=mode,
+        be=be,
+        bi=(0.005, 0.01, 0.02),
+        color=(0.3, 0.4, 0.5, 0.9),
+        directional_light_color=(1.0, 0.9, 0.7, 0.5),
+        exponent=12.0,
+        direction_to_light=l,
+        light_color=(2.0, 1.9, 1.7),
+    )
     cam = np.array([0.0, 5.0, 0.0])
     wp = cam + rng.normal(size=(300, 3)) * 10 ** rng.uniform(-1, 3, (300, 1))
     scene = rng.uniform(0, 2, (300, 3))
     out = BevyDistanceFog(p).evaluate(cam, wp, "float32").composite(scene.astype(f32))
     assert out.dtype == np.float32
     for i in range(300):
-        with np.errstate(over="ignore"):                     # exp overflows to inf, 1/inf = 0, as on a GPU
+        with np.errstate(over="ignore"):  # exp overflows to inf, 1/inf = 0, as on a GPU
             ref = bevy_fog(o, cam, wp[i], scene[i])
         np.testing.assert_allclose(out[i], ref, rtol=3e-6, atol=3e-6)
 
@@ -75,12 +99,14 @@ def test_float32_matches_fog_wgsl(mode):
 def test_exponential_and_atmospheric_are_homogeneous_media():
     rng = np.random.default_rng(2)
     cam = np.array([0.0, 1.0, 0.0])
-    d = rng.normal(size=(200, 3)); d /= np.linalg.norm(d, axis=1, keepdims=True)
+    d = rng.normal(size=(200, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
     L = 10 ** rng.uniform(-3, 3.5, 200)
     o, dd = tuple(np.full(200, c) for c in cam), tuple(d.T)
-    for p in (BevyFogParams(falloff="Exponential", density=0.013),
-              BevyFogParams(falloff="Atmospheric", extinction=(0.01, 0.02, 0.03),
-                            inscattering=(0.01, 0.02, 0.03))):
+    for p in (
+        BevyFogParams(falloff="Exponential", density=0.013),
+        BevyFogParams(falloff="Atmospheric", extinction=(0.01, 0.02, 0.03), inscattering=(0.01, 0.02, 0.03)),
+    ):
         m = bevy_to_medium(p)
         T = BevyDistanceFog(p).evaluate(cam, cam + d * L[:, None], "float64").transmittance
         np.testing.assert_allclose(T, np.stack(m.transmittance(NP, o, dd, L), -1), rtol=1e-12, atol=1e-300)
@@ -88,11 +114,16 @@ def test_exponential_and_atmospheric_are_homogeneous_media():
 
 
 def test_mapping_exact_for_coloured_homogeneous_fog_and_lobe():
-    sun = np.array([0.3, 0.5, 0.8]); sun /= np.linalg.norm(sun)
+    sun = np.array([0.3, 0.5, 0.8])
+    sun /= np.linalg.norm(sun)
     med = FogMedium(sigma_t=(0.002, 0.003, 0.005), albedo=0.8, g=0.6, layers=(ExpLayer(1.0, 0.0, 0.0),))
-    ps = PhysicalScene(med, sun_direction=tuple(sun), sun_irradiance=(3.0, 2.8, 2.5),
-                       sky_radiance=(0.2, 0.3, 0.5),
-                       camera=(0.0, 2.0, 0.0))
+    ps = PhysicalScene(
+        med,
+        sun_direction=tuple(sun),
+        sun_irradiance=(3.0, 2.8, 2.5),
+        sky_radiance=(0.2, 0.3, 0.5),
+        camera=(0.0, 2.0, 0.0),
+    )
     fog = from_physical("bevy", ps)
     q = fog.params
     assert q.falloff == "Atmospheric" and q.extinction == pytest.approx((0.002, 0.003, 0.005))
@@ -102,7 +133,8 @@ def test_mapping_exact_for_coloured_homogeneous_fog_and_lobe():
     assert q.light_color == pytest.approx((3.0, 2.8, 2.5))
     rng = np.random.default_rng(3)
     cam = np.array([0.0, 2.0, 0.0])
-    d = rng.normal(size=(200, 3)); d /= np.linalg.norm(d, axis=1, keepdims=True)
+    d = rng.normal(size=(200, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
     L = np.concatenate([10 ** rng.uniform(-2, 4, 199), [1e5]])
     T = fog.evaluate(cam, cam + d * L[:, None], "float64").transmittance
     ref = np.stack(med.transmittance(NP, tuple(np.full(200, c) for c in cam), tuple(d.T), L), -1)
@@ -130,12 +162,19 @@ def test_extremes_are_finite():
     wp = rng.normal(size=(200, 3)) * 10 ** rng.uniform(-4, 9, (200, 1))
     wp = np.vstack([wp, np.zeros(3)])
     lobe = dict(directional_light_color=(1, 1, 1, 1), directional_light_exponent=1e3)
-    for p in (BevyFogParams(falloff="Exponential", density=1e3, **lobe),
-              BevyFogParams(falloff="ExponentialSquared", density=1e2, **lobe),
-              BevyFogParams(falloff="Atmospheric", extinction=1e3, inscattering=1e-9, **lobe),
-              BevyFogParams(falloff="Linear", start=-1e6, end=1e7, **lobe),
-              BevyFogParams(falloff="Linear", start=0.0, end=1e-6, directional_light_color=(1, 1, 1, 1),
-                            directional_light_exponent=0.0)):
+    for p in (
+        BevyFogParams(falloff="Exponential", density=1e3, **lobe),
+        BevyFogParams(falloff="ExponentialSquared", density=1e2, **lobe),
+        BevyFogParams(falloff="Atmospheric", extinction=1e3, inscattering=1e-9, **lobe),
+        BevyFogParams(falloff="Linear", start=-1e6, end=1e7, **lobe),
+        BevyFogParams(
+            falloff="Linear",
+            start=0.0,
+            end=1e-6,
+            directional_light_color=(1, 1, 1, 1),
+            directional_light_exponent=0.0,
+        ),
+    ):
         for prec in ("float32", "float64"):
             r = BevyDistanceFog(p).evaluate(np.zeros(3), wp, prec)
             assert np.all(np.isfinite(r.transmittance)) and np.all(np.isfinite(r.inscatter))

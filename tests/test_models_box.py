@@ -30,9 +30,9 @@ def blog_box_fog(cam, wp, lo, hi, k):
         tn, tf = max(tn, min(t1, t2)), min(tf, max(t1, t2))
     if tf <= max(tn, f32(0)):
         return f32(0)
-    f_ = max(tn, f32(0))                         # |ea|
-    s = tf                                       # |eb|
-    lc = min(max(ray_len, f_), s)                # c clamped into [a, b]
+    f_ = max(tn, f32(0))  # |ea|
+    s = tf  # |eb|
+    lc = min(max(ray_len, f_), s)  # c clamped into [a, b]
     t, d = lc - f_, s - lc
     return np.clip(f32(k) * t / (t + d), 0, 1)
 
@@ -57,7 +57,8 @@ def test_thickness_mode_is_the_box_medium_optical_depth():
     m = box_to_medium(p)
     rng = np.random.default_rng(1)
     for cam in (np.array([0.0, 1.0, 0.0]), np.array([-20.0, 2.0, 3.0]), np.array([1.0, 10.0, 1.0])):
-        d = rng.normal(size=(100, 3)); d /= np.linalg.norm(d, axis=1, keepdims=True)
+        d = rng.normal(size=(100, 3))
+        d /= np.linalg.norm(d, axis=1, keepdims=True)
         L = rng.uniform(0.1, 50, 100)
         wp = cam + d * L[:, None]
         t, _ = BoxFog(p).fog_lengths(cam, wp, "float64")
@@ -76,7 +77,12 @@ def test_ratio_fit_matches_far_wall():
 def test_extremes_are_finite():
     rng = np.random.default_rng(2)
     fog = BoxFog()
-    for cam in (np.zeros(3), np.array([0.0, 20.0, 0.0]), np.array([1e5, -1e5, 3.0]), np.array([50.0, 10.0, 0.0])):
+    for cam in (
+        np.zeros(3),
+        np.array([0.0, 20.0, 0.0]),
+        np.array([1e5, -1e5, 3.0]),
+        np.array([50.0, 10.0, 0.0]),
+    ):
         d = rng.normal(size=(100, 3))
         d[:20, 1] = 0.0
         d[20:30] = [1.0, 0.0, 0.0]

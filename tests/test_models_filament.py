@@ -35,14 +35,36 @@ def filament_fog_fs(cam, wp, o, scene):
 
 def test_float32_matches_fog_fs():
     rng = np.random.default_rng(0)
-    l = np.array([0.2, 0.7, -0.3]); l /= np.linalg.norm(l)
-    o = dict(density=0.05, heightFalloff=0.3, height=2.0, distance=4.0, maximumOpacity=0.9,
-             color=(0.5, 0.6, 0.7), inScatteringStart=10.0, inScatteringSize=8.0, l=l, sun=(2.0, 1.8, 1.5))
-    p = FilamentFogParams(density=0.05, heightFalloff=0.3, height=2.0, distance=4.0, maximumOpacity=0.9,
-                          color=(0.5, 0.6, 0.7), inScatteringStart=10.0, inScatteringSize=8.0,
-                          lightDirection=tuple(l), lightColorIntensity=(1.0, 0.9, 0.75, 2.0))
+    l = np.array([0.2, 0.7, -0.3])
+    l /= np.linalg.norm(l)
+    o = dict(
+        density=0.05,
+        heightFalloff=0.3,
+        height=2.0,
+        distance=4.0,
+        maximumOpacity=0.9,
+        color=(0.5, 0.6, 0.7),
+        inScatteringStart=10.0,
+        inScatteringSize=8.0,
+        l=l,
+        sun=(2.0, 1.8, 1.5),
+    )
+    p = FilamentFogParams(
+        density=0.05,
+        heightFalloff=0.3,
+        height=2.0,
+        distance=4.0,
+        maximumOpacity=0.9,
+        color=(0.5, 0.6, 0.7),
+        inScatteringStart=10.0,
+        inScatteringSize=8.0,
+        lightDirection=tuple(l),
+        lightColorIntensity=(1.0, 0.9, 0.75, 2.0),
+    )
     cam = np.array([0.0, 3.0, 0.0])
-    d = rng.normal(size=(200, 3)); d[:40, 1] = 0; d[40:80, 1] *= 1e-3
+    d = rng.normal(size=(200, 3))
+    d[:40, 1] = 0
+    d[40:80, 1] *= 1e-3
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     wp = cam + d * 10 ** rng.uniform(-1, 3, (200, 1))
     scene = rng.uniform(0, 1, (200, 3))
@@ -56,7 +78,9 @@ def test_float64_equals_exponential_medium():
     m = filament_to_medium(p)
     rng = np.random.default_rng(1)
     cam = np.array([0.0, 4.0, 0.0])
-    d = rng.normal(size=(300, 3)); d[:50, 1] = 0; d[50:100, 1] *= 1e-5
+    d = rng.normal(size=(300, 3))
+    d[:50, 1] = 0
+    d[50:100, 1] *= 1e-5
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     L = 10 ** rng.uniform(-2, 3, 300)
     T = FilamentFog(p).evaluate(cam, cam + d * L[:, None], "float64").transmittance[:, 0]
@@ -64,8 +88,11 @@ def test_float64_equals_exponential_medium():
     q = medium_to_filament(m)
     assert (q.density, q.heightFalloff, q.height) == pytest.approx((0.02, 0.15, -1.0))
     # exp, not exp2: a horizontal ray at the fog height has T = exp(-density L)
-    T1 = FilamentFog(FilamentFogParams(density=0.02, heightFalloff=0.15, height=0.0)).evaluate(
-        np.zeros(3), np.array([[100.0, 0, 0]]), "float64").transmittance[0, 0]
+    T1 = (
+        FilamentFog(FilamentFogParams(density=0.02, heightFalloff=0.15, height=0.0))
+        .evaluate(np.zeros(3), np.array([[100.0, 0, 0]]), "float64")
+        .transmittance[0, 0]
+    )
     assert T1 == pytest.approx(math.exp(-2.0))
 
 
@@ -74,7 +101,8 @@ def test_extremes_are_finite():
     fog = FilamentFog(FilamentFogParams(inScatteringSize=4.0, cutOffDistance=1e6))
     for cam_y in (-1e3, 0.0, 50.0, 1e5):
         cam = np.array([0.0, cam_y, 0.0])
-        d = rng.normal(size=(100, 3)); d[:20, 1] = 0
+        d = rng.normal(size=(100, 3))
+        d[:20, 1] = 0
         d /= np.linalg.norm(d, axis=1, keepdims=True)
         wp = np.vstack([cam + d * 10 ** rng.uniform(-4, 7, (100, 1)), cam])
         for prec in ("float32", "float64"):

@@ -26,8 +26,14 @@ from fogref.models.ue4 import direction_to_unreal
 SUN = np.array([0.4, 0.139, 0.906]) / np.linalg.norm([0.4, 0.139, 0.906])
 VALLEY = {
     "scene": "valley.xml",
-    "medium": {"profile": "exponential", "sigma_t": 0.000960906, "albedo": 0.9, "g": 0.6,
-               "falloff": 0.0138629, "height": 0.0},
+    "medium": {
+        "profile": "exponential",
+        "sigma_t": 0.000960906,
+        "albedo": 0.9,
+        "g": 0.6,
+        "falloff": 0.0138629,
+        "height": 0.0,
+    },
     "sun": {"direction": SUN.tolist(), "irradiance": [3.2, 2.9, 2.4]},
     "sky": {"type": "constant", "radiance": [0.2, 0.3, 0.5]},
     "camera": {"origin": [0.0, 2.0, 0.0]},
@@ -75,6 +81,7 @@ def check_finite(model, camera, pts):
 
 # -- exact transmittance -------------------------------------------------------------
 
+
 @pytest.mark.parametrize("name", ["ue4", "hdrp", "filament"])
 def test_valley_transmittance_is_exact(name):
     pts = views()
@@ -95,8 +102,17 @@ def test_homogeneous_transmittance_is_exact(name):
 
 
 def test_ue4_two_layers_exact():
-    p = scene(profile="exponential", sigma_t=0.001, albedo=0.9, g=0.6, falloff=0.01, height=0.0,
-              density2=0.5, falloff2=0.05, height2=20.0)
+    p = scene(
+        profile="exponential",
+        sigma_t=0.001,
+        albedo=0.9,
+        g=0.6,
+        falloff=0.01,
+        height=0.0,
+        density2=0.5,
+        falloff2=0.05,
+        height2=20.0,
+    )
     pts = views()
     model = from_physical("ue4", p)
     got = model.evaluate(CAMERA, pts, precision="float64").transmittance
@@ -107,25 +123,39 @@ def test_hdrp_profile_exact_and_camera_below_fog_height():
     p = scene(profile="hdrp", sigma_t=0.003, albedo=0.7, g=0.2, base_height=10.0, falloff=0.02)
     pts = views(min_y=-1e9)
     model = from_physical("hdrp", p)
-    np.testing.assert_allclose(model.evaluate(CAMERA, pts, precision="float64").transmittance,
-                               physical_transmittance(p, CAMERA, pts), rtol=1e-9, atol=1e-14)
+    np.testing.assert_allclose(
+        model.evaluate(CAMERA, pts, precision="float64").transmittance,
+        physical_transmittance(p, CAMERA, pts),
+        rtol=1e-9,
+        atol=1e-14,
+    )
     # exponential layer referenced above the camera: HDRP's base goes down to the camera
     q = scene(profile="exponential", sigma_t=0.001, falloff=0.01, height=50.0)
     model = from_physical("hdrp", q)
     assert model.params.baseHeight == pytest.approx(2.0)
     pts = views()
     pts = pts[pts[:, 1] >= 2.0]
-    np.testing.assert_allclose(model.evaluate(CAMERA, pts, precision="float64").transmittance,
-                               physical_transmittance(q, CAMERA, pts), rtol=1e-9, atol=1e-14)
+    np.testing.assert_allclose(
+        model.evaluate(CAMERA, pts, precision="float64").transmittance,
+        physical_transmittance(q, CAMERA, pts),
+        rtol=1e-9,
+        atol=1e-14,
+    )
 
 
 def test_box_exact():
-    p = scene(profile="box", sigma_t=0.05, albedo=0.9, g=0.0, bounds_min=[-30, 0, 20], bounds_max=[30, 15, 80])
+    p = scene(
+        profile="box", sigma_t=0.05, albedo=0.9, g=0.0, bounds_min=[-30, 0, 20], bounds_max=[30, 15, 80]
+    )
     pts = views(min_y=-1e9)
     model = from_physical("box", p)
     assert model.params.mode == "beer"
-    np.testing.assert_allclose(model.evaluate(CAMERA, pts, precision="float64").transmittance,
-                               physical_transmittance(p, CAMERA, pts), rtol=1e-9, atol=1e-14)
+    np.testing.assert_allclose(
+        model.evaluate(CAMERA, pts, precision="float64").transmittance,
+        physical_transmittance(p, CAMERA, pts),
+        rtol=1e-9,
+        atol=1e-14,
+    )
     np.testing.assert_allclose(model.params.fog_color, ALBEDO_SKY)
     check_finite(model, CAMERA, pts)
 
@@ -152,13 +182,17 @@ def test_unity_valley_uses_density_at_camera():
     assert q.fogDensity == pytest.approx(0.000960906 * math.exp(-0.0138629 * 2.0), rel=1e-12)
     # exact for horizontal rays
     flat = CAMERA + np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]) * np.array([[50.0], [5000.0]])
-    np.testing.assert_allclose(model.evaluate(CAMERA, flat, precision="float64").transmittance,
-                               physical_transmittance(VALLEY, CAMERA, flat), rtol=1e-9)
+    np.testing.assert_allclose(
+        model.evaluate(CAMERA, flat, precision="float64").transmittance,
+        physical_transmittance(VALLEY, CAMERA, flat),
+        rtol=1e-9,
+    )
     np.testing.assert_allclose(q.fogColor, ALBEDO_SKY)
     check_finite(model, CAMERA, pts)
 
 
 # -- colours -------------------------------------------------------------------------
+
 
 def test_ue4_colours_from_fit():
     q = from_physical("ue4", VALLEY).params
@@ -166,8 +200,12 @@ def test_ue4_colours_from_fit():
     assert q.SunLuminance == 1.0 and q.StartDistance == 0.0 and q.FogMaxOpacity == 1.0
     pf = PhysicalScene.from_params(VALLEY)
     fit = fit_unreal(pf).params
-    for k in ("FogInscatteringColor", "DirectionalInscatteringColor", "DirectionalInscatteringExponent",
-              "DirectionalInscatteringStartDistance"):
+    for k in (
+        "FogInscatteringColor",
+        "DirectionalInscatteringColor",
+        "DirectionalInscatteringExponent",
+        "DirectionalInscatteringStartDistance",
+    ):
         assert getattr(q, k) == pytest.approx(getattr(fit, k), rel=1e-9, abs=1e-12), k
     # a low forward-scattering sun: a strong lobe, a sky-dominated isotropic colour
     assert max(q.DirectionalInscatteringColor) > 0.1 and q.DirectionalInscatteringExponent > 1
@@ -219,6 +257,7 @@ def test_filament_sun_below_horizon_has_no_lobe():
 
 # -- through the compare factory -----------------------------------------------------
 
+
 def test_build_model_from_scene_with_override():
     model = build_model(get("ue4"), {"FogMaxOpacity": 0.9}, VALLEY)
     assert model.params.FogMaxOpacity == 0.9
@@ -236,14 +275,28 @@ EXP = {"profile": "exponential", "sigma_t": 0.01, "falloff": 0.01}
 BOUNDED_EXP = {**EXP, "bounds_min": [-10, 0, -10], "bounds_max": [10, 10, 10]}
 
 
-@pytest.mark.parametrize("name, medium", [
-    ("ue4", HDRP), ("ue4", POWER), ("ue4", BOX), ("ue4", BOUNDED_EXP),
-    ("unity", BOX), ("unity", BOUNDED_EXP),
-    ("hdrp", POWER), ("hdrp", BOX),
-    ("filament", HDRP), ("filament", POWER), ("filament", BOX),
-    ("altitude", EXP), ("altitude", HDRP), ("altitude", BOX),
-    ("box", EXP), ("box", POWER), ("box", BOUNDED_EXP),
-])
+@pytest.mark.parametrize(
+    "name, medium",
+    [
+        ("ue4", HDRP),
+        ("ue4", POWER),
+        ("ue4", BOX),
+        ("ue4", BOUNDED_EXP),
+        ("unity", BOX),
+        ("unity", BOUNDED_EXP),
+        ("hdrp", POWER),
+        ("hdrp", BOX),
+        ("filament", HDRP),
+        ("filament", POWER),
+        ("filament", BOX),
+        ("altitude", EXP),
+        ("altitude", HDRP),
+        ("altitude", BOX),
+        ("box", EXP),
+        ("box", POWER),
+        ("box", BOUNDED_EXP),
+    ],
+)
 def test_no_counterpart_raises_profile(name, medium):
     with pytest.raises(ParameterError) as e:
         from_physical(name, scene(**medium))
@@ -267,6 +320,7 @@ def test_coloured_extinction_raises(name):
 
 
 # -- the protocols and the registry's fallback ---------------------------------------
+
 
 @pytest.mark.parametrize("name", ["ue4", "unity", "altitude", "box", "hdrp", "filament"])
 def test_builtin_models_follow_the_protocol_and_have_a_mapping(name):

@@ -18,7 +18,7 @@ f32 = np.float32
 def fog_process(u, cam, wp, frag):
     """godotengine/godot scene_forward_clustered.glsl fog_process + mix(frag, fog.rgb, fog.a), and
     sky.glsl for sky pixels, with the CPU side of render_scene_data_rd.cpp; float32, one pixel."""
-    vertex = (np.asarray(wp) - np.asarray(cam)).astype(f32)        # view space: same length, same dots
+    vertex = (np.asarray(wp) - np.asarray(cam)).astype(f32)  # view space: same length, same dots
     length = np.sqrt(np.sum(vertex * vertex))
     fog_light_color = np.asarray(u["fog_light_color"], f32) * f32(u["fog_light_energy"])
     frag = np.asarray(frag, f32)
@@ -32,7 +32,7 @@ def fog_process(u, cam, wp, frag):
             fog_color = fog_color + np.asarray(u["sun_color"], f32) * light_amount * f32(u["fog_sun_scatter"])
         return fog_color
 
-    if length >= f32(u["sky_distance"]):                             # sky.glsl
+    if length >= f32(u["sky_distance"]):  # sky.glsl
         fog_color = fog_light_color + (frag - fog_light_color) * f32(u["fog_aerial_perspective"])
         fog_color = sun_scatter(fog_color)
         a = f32(1.0) * f32(u["fog_sky_affect"])
@@ -51,34 +51,57 @@ def fog_process(u, cam, wp, frag):
     else:
         fog_amount = f32(1.0) - np.exp(min(f32(0.0), -length * f32(u["fog_density"])))
     if u["fog_height_density"] != 0:
-        y = f32(cam[1]) + vertex[1]                                  # (inv_view_matrix * vertex).y
+        y = f32(cam[1]) + vertex[1]  # (inv_view_matrix * vertex).y
         y_dist = y - f32(u["fog_height"])
         vfog_amount = f32(1.0) - np.exp(min(f32(0.0), y_dist * f32(u["fog_height_density"])))
         fog_amount = max(vfog_amount, fog_amount)
     return frag + (fog_color - frag) * fog_amount
 
 
-U = dict(fog_light_color=(0.3, 0.35, 0.45), fog_light_energy=1.3, fog_sun_scatter=0.4, fog_density=0.004,
-         fog_aerial_perspective=0.25, fog_sky_affect=0.7, fog_height=12.0, fog_height_density=0.05,
-         fog_depth_curve=1.7, fog_depth_begin=8.0, fog_depth_end=0.0, z_far=900.0, sky_color=(0.2, 0.3, 0.6),
-         sun_color=(3.0, 2.7, 2.2), sky_distance=SKY_DISTANCE)
+U = dict(
+    fog_light_color=(0.3, 0.35, 0.45),
+    fog_light_energy=1.3,
+    fog_sun_scatter=0.4,
+    fog_density=0.004,
+    fog_aerial_perspective=0.25,
+    fog_sky_affect=0.7,
+    fog_height=12.0,
+    fog_height_density=0.05,
+    fog_depth_curve=1.7,
+    fog_depth_begin=8.0,
+    fog_depth_end=0.0,
+    z_far=900.0,
+    sky_color=(0.2, 0.3, 0.6),
+    sun_color=(3.0, 2.7, 2.2),
+    sky_distance=SKY_DISTANCE,
+)
 
 
 @pytest.mark.parametrize("mode", ["exponential", "depth"])
 @pytest.mark.parametrize("height_density", [0.0, 0.05, -0.02])
 def test_float32_matches_fog_process(mode, height_density):
     rng = np.random.default_rng(0)
-    sun = np.array([0.4, 0.5, -0.7]); sun /= np.linalg.norm(sun)
-    u = dict(U, mode=mode, fog_height_density=height_density, sun_direction=sun,
-             fog_density=0.4 if mode == "depth" else 0.004)
-    p = GodotFogParams(fog_mode=mode, **{k: v for k, v in u.items() if k not in ("mode", "sun_direction")},
-                       sun_direction=tuple(sun))
+    sun = np.array([0.4, 0.5, -0.7])
+    sun /= np.linalg.norm(sun)
+    u = dict(
+        U,
+        mode=mode,
+        fog_height_density=height_density,
+        sun_direction=sun,
+        fog_density=0.4 if mode == "depth" else 0.004,
+    )
+    p = GodotFogParams(
+        fog_mode=mode,
+        **{k: v for k, v in u.items() if k not in ("mode", "sun_direction")},
+        sun_direction=tuple(sun),
+    )
     cam = np.array([0.0, 20.0, 0.0])
-    d = rng.normal(size=(300, 3)); d /= np.linalg.norm(d, axis=1, keepdims=True)
-    d[:20] = sun + rng.normal(size=(20, 3)) * 0.05                   # near the sun: the lobe
+    d = rng.normal(size=(300, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    d[:20] = sun + rng.normal(size=(20, 3)) * 0.05  # near the sun: the lobe
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     L = 10 ** rng.uniform(-1, 3.5, (300, 1))
-    L[-30:] = SKY_DISTANCE                                           # sky pixels
+    L[-30:] = SKY_DISTANCE  # sky pixels
     wp = cam + d * L
     scene = rng.uniform(0, 2, (300, 3))
     out = GodotFog(p).evaluate(cam, wp, "float32").composite(scene.astype(f32))
@@ -92,11 +115,13 @@ def test_exponential_is_homogeneous_medium_and_height_fog_is_not():
     m = godot_to_medium(p)
     rng = np.random.default_rng(1)
     cam = np.array([0.0, 3.0, 0.0])
-    d = rng.normal(size=(200, 3)); d /= np.linalg.norm(d, axis=1, keepdims=True)
+    d = rng.normal(size=(200, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
     L = 10 ** rng.uniform(-3, 3.5, 200)
     T = GodotFog(p).evaluate(cam, cam + d * L[:, None], "float64").transmittance[:, 0]
-    np.testing.assert_allclose(T, m.transmittance(NP, tuple(np.full(200, c) for c in cam), tuple(d.T), L)[0],
-                               rtol=1e-9, atol=1e-14)
+    np.testing.assert_allclose(
+        T, m.transmittance(NP, tuple(np.full(200, c) for c in cam), tuple(d.T), L)[0], rtol=1e-9, atol=1e-14
+    )
     with pytest.raises(ParameterError, match="fog_height_density"):
         godot_to_medium(GodotFogParams(fog_height_density=0.1))
     with pytest.raises(ParameterError, match="fog_mode"):
@@ -109,19 +134,28 @@ def test_exponential_is_homogeneous_medium_and_height_fog_is_not():
 
 
 def test_depth_mode_end_defaults_to_z_far():
-    p = GodotFogParams(fog_mode="depth", fog_density=1.0, fog_depth_begin=10.0, fog_depth_end=0.0,
-                       z_far=110.0)
-    T = GodotFog(p).evaluate(np.zeros(3), np.array([[5.0, 0, 0], [60.0, 0, 0], [200.0, 0, 0]]),
-                             "float64").transmittance[:, 0]
+    p = GodotFogParams(
+        fog_mode="depth", fog_density=1.0, fog_depth_begin=10.0, fog_depth_end=0.0, z_far=110.0
+    )
+    T = (
+        GodotFog(p)
+        .evaluate(np.zeros(3), np.array([[5.0, 0, 0], [60.0, 0, 0], [200.0, 0, 0]]), "float64")
+        .transmittance[:, 0]
+    )
     assert T == pytest.approx([1.0, 0.5, 0.0], abs=1e-4)
 
 
 def test_mapping_homogeneous_exact_including_sky_and_sun_lobe():
-    sun = np.array([0.4, 0.139, 0.906]); sun /= np.linalg.norm(sun)
+    sun = np.array([0.4, 0.139, 0.906])
+    sun /= np.linalg.norm(sun)
     med = FogMedium(sigma_t=0.002, albedo=0.8, g=0.3, layers=(ExpLayer(1.0, 0.0, 0.0),))
-    ps = PhysicalScene(med, sun_direction=tuple(sun), sun_irradiance=(3.2, 2.9, 2.4),
-                       sky_radiance=(0.2, 0.3, 0.5),
-                       camera=(0.0, 2.0, 0.0))
+    ps = PhysicalScene(
+        med,
+        sun_direction=tuple(sun),
+        sun_irradiance=(3.2, 2.9, 2.4),
+        sky_radiance=(0.2, 0.3, 0.5),
+        camera=(0.0, 2.0, 0.0),
+    )
     fog = from_physical("godot", ps)
     q = fog.params
     assert q.fog_density == pytest.approx(0.002) and q.fog_height_density == 0.0
@@ -132,17 +166,19 @@ def test_mapping_homogeneous_exact_including_sky_and_sun_lobe():
     expected = 0.8 * np.array([3.2, 2.9, 2.4]) * ps.sun_transmittance_at_camera() * c
     assert q.sun_color == pytest.approx(tuple(expected))
     valley_fog = FogMedium(sigma_t=0.001, albedo=0.9, g=0.6, layers=(ExpLayer(1.0, 0.0138629, 0.0),))
-    valley = PhysicalScene(valley_fog,
-                           sun_direction=tuple(sun), sun_irradiance=(3.2, 2.9, 2.4), camera=(0.0, 2.0, 0.0))
+    valley = PhysicalScene(
+        valley_fog, sun_direction=tuple(sun), sun_irradiance=(3.2, 2.9, 2.4), camera=(0.0, 2.0, 0.0)
+    )
     qv = from_physical("godot", valley).params
     t_sun = valley.sun_transmittance_at_camera()
     assert 0 < t_sun[0] < 1
     expected = 0.9 * np.array([3.2, 2.9, 2.4]) * t_sun * fixed_lobe_amplitude(0.6, 8.0)
     assert qv.sun_color == pytest.approx(tuple(expected))
-    assert qv.fog_density == pytest.approx(0.001 * math.exp(-0.0138629 * 2.0))      # density at the camera
+    assert qv.fog_density == pytest.approx(0.001 * math.exp(-0.0138629 * 2.0))  # density at the camera
     rng = np.random.default_rng(2)
     cam = np.array([0.0, 2.0, 0.0])
-    d = rng.normal(size=(300, 3)); d /= np.linalg.norm(d, axis=1, keepdims=True)
+    d = rng.normal(size=(300, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
     L = np.concatenate([10 ** rng.uniform(-2, 4, 250), np.full(50, SKY_DISTANCE)])
     T = fog.evaluate(cam, cam + d * L[:, None], "float64").transmittance
     ref = np.stack(med.transmittance(NP, tuple(np.full(300, x) for x in cam), tuple(d.T), L), -1)
@@ -170,8 +206,12 @@ def test_mapping_refuses_box_and_colour():
 
 def test_registered_and_bad_input():
     assert get("godot") is GodotFog
-    for kw, name in ((dict(fog_sky_affect=1.5), "fog_sky_affect"), (dict(fog_density=-1.0), "fog_density"),
-                     (dict(fog_mode="linear"), "fog_mode"), (dict(sun_direction=(0, 0, 0)), "sun_direction")):
+    for kw, name in (
+        (dict(fog_sky_affect=1.5), "fog_sky_affect"),
+        (dict(fog_density=-1.0), "fog_density"),
+        (dict(fog_mode="linear"), "fog_mode"),
+        (dict(sun_direction=(0, 0, 0)), "sun_direction"),
+    ):
         with pytest.raises(ParameterError, match=name):
             GodotFogParams(**kw)
 
@@ -182,12 +222,24 @@ def test_extremes_are_finite():
         cam = np.array([0.0, cam_y, 0.0])
         wp = cam + rng.normal(size=(200, 3)) * 10 ** rng.uniform(-4, 9, (200, 1))
         wp = np.vstack([wp, cam])
-        for p in (GodotFogParams(fog_density=1e3, fog_height_density=1e3, fog_sun_scatter=1e3, sun_color=1e3),
-                  GodotFogParams(fog_density=0.0, fog_height=-1e6, fog_height_density=-10.0),
-                  GodotFogParams(fog_mode="depth", fog_density=1.0, fog_depth_begin=0.0, fog_depth_end=1e-6,
-                                 fog_depth_curve=0.0),
-                  GodotFogParams(fog_mode="depth", fog_density=1.0, fog_depth_begin=1e9, fog_depth_end=1.0,
-                                 fog_depth_curve=50.0)):
+        for p in (
+            GodotFogParams(fog_density=1e3, fog_height_density=1e3, fog_sun_scatter=1e3, sun_color=1e3),
+            GodotFogParams(fog_density=0.0, fog_height=-1e6, fog_height_density=-10.0),
+            GodotFogParams(
+                fog_mode="depth",
+                fog_density=1.0,
+                fog_depth_begin=0.0,
+                fog_depth_end=1e-6,
+                fog_depth_curve=0.0,
+            ),
+            GodotFogParams(
+                fog_mode="depth",
+                fog_density=1.0,
+                fog_depth_begin=1e9,
+                fog_depth_end=1.0,
+                fog_depth_curve=50.0,
+            ),
+        ):
             for prec in ("float32", "float64"):
                 r = GodotFog(p).evaluate(cam, wp, prec)
                 assert np.all(np.isfinite(r.transmittance)) and np.all(np.isfinite(r.inscatter))

@@ -33,15 +33,23 @@ def test_float32_matches_transcription():
     p = HDRPFogParams(meanFreePath=150.0, baseHeight=5.0, maximumHeight=80.0, maxFogDistance=400.0)
     H = f32(max(f32(0.01), f32(80.0) - f32(5.0)) * f32(0.144765))
     for cam in (np.array([0.0, 1.0, 0.0]), np.array([0.0, 50.0, 0.0])):
-        d = rng.normal(size=(200, 3)); d[:40, 1] = 0.0; d[40:60, 1] *= 1e-4
+        d = rng.normal(size=(200, 3))
+        d[:40, 1] = 0.0
+        d[40:60, 1] *= 1e-4
         d /= np.linalg.norm(d, axis=1, keepdims=True)
         wp = cam + d * 10 ** rng.uniform(-1, 3.5, (200, 1))
         od = HDRPFog(p).optical_depth(cam, wp, "float32")
         for i in range(200):
             v = (wp[i] - cam).astype(f32)
             dist = np.sqrt(np.sum(v * v))
-            ref = hdrp_optical_depth(f32(1) / f32(150.0), f32(5.0), (f32(1) / H, H), v[1] / dist, f32(cam[1]),
-                                     min(dist, f32(400.0)))
+            ref = hdrp_optical_depth(
+                f32(1) / f32(150.0),
+                f32(5.0),
+                (f32(1) / H, H),
+                v[1] / dist,
+                f32(cam[1]),
+                min(dist, f32(400.0)),
+            )
             assert od[i] == pytest.approx(ref, rel=2e-5, abs=1e-7)
 
 
@@ -67,7 +75,9 @@ def test_float64_against_mpmath_and_medium():
     m = hdrp_to_medium(p)
     fog = HDRPFog(p)
     for cam in (np.array([0.0, -10.0, 0.0]), np.array([0.0, 5.0, 0.0]), np.array([0.0, 100.0, 0.0])):
-        d = rng.normal(size=(8, 3)); d[0, 1] = 0.0; d[1, 1] = 1e-6
+        d = rng.normal(size=(8, 3))
+        d[0, 1] = 0.0
+        d[1, 1] = 1e-6
         d /= np.linalg.norm(d, axis=1, keepdims=True)
         L = rng.uniform(1, 1500, 8)
         wp = cam + d * L[:, None]
@@ -96,7 +106,8 @@ def test_extremes_are_finite():
     fog = HDRPFog()
     for cam_y in (-1e5, 0.0, 30.0, 1e6):
         cam = np.array([0.0, cam_y, 0.0])
-        d = rng.normal(size=(100, 3)); d[:20, 1] = 0
+        d = rng.normal(size=(100, 3))
+        d[:20, 1] = 0
         d /= np.linalg.norm(d, axis=1, keepdims=True)
         wp = np.vstack([cam + d * 10 ** rng.uniform(-4, 7, (100, 1)), cam])
         for prec in ("float32", "float64"):

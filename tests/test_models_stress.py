@@ -99,7 +99,7 @@ from fogref.models.hdrp import LAYER_DEPTH_TO_H  # noqa: E402
 from fogref.models.ue4 import MAX_OBSERVER_HEIGHT_DIFFERENCE, sigma_to_unreal  # noqa: E402
 
 mp.mp.dps = 40
-EPS = {"float64": 2.0 ** -53, "float32": 2.0 ** -24}
+EPS = {"float64": 2.0**-53, "float32": 2.0**-24}
 TINY = {"float64": float(np.finfo(np.float64).tiny), "float32": float(np.finfo(np.float32).tiny)}
 SET = settings(max_examples=120, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
 PRECISIONS = ("float32", "float64")
@@ -107,18 +107,22 @@ HUGE_LAYER = 1.0e12  # b == 0 for models with a finite layer (hdrp, altitude, bo
 
 
 # ----------------------------------------------------------------- domain
-sigmas = st.floats(-9, 2).map(lambda e: 10.0 ** e)
-falloffs = st.one_of(st.just(0.0), st.floats(-6, 1).map(lambda e: 10.0 ** e))
+sigmas = st.floats(-9, 2).map(lambda e: 10.0**e)
+falloffs = st.one_of(st.just(0.0), st.floats(-6, 1).map(lambda e: 10.0**e))
 fog_heights = st.one_of(st.just(0.0), st.floats(-1e3, 1e3))
-cam_heights = st.one_of(st.floats(-1e4, 1e6), st.sampled_from([-1e4, 0.0, 1e6]),
-                        st.floats(-1.0, 1.0).map(lambda e: 655.36 + e))  # + fog height: observer clamp
-dists = st.floats(-4, 7).map(lambda e: 10.0 ** e)
-_special = st.sampled_from([(1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, 1.0, 0.0), (0.0, -1.0, 0.0),
-                            (0.6, 0.0, -0.8)])
+cam_heights = st.one_of(
+    st.floats(-1e4, 1e6), st.sampled_from([-1e4, 0.0, 1e6]), st.floats(-1.0, 1.0).map(lambda e: 655.36 + e)
+)  # + fog height: observer clamp
+dists = st.floats(-4, 7).map(lambda e: 10.0**e)
+_special = st.sampled_from(
+    [(1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, 1.0, 0.0), (0.0, -1.0, 0.0), (0.6, 0.0, -0.8)]
+)
 _near_h = st.tuples(st.floats(-1.0, 1.0), st.floats(0, 2 * math.pi)).map(
-    lambda a: (math.cos(a[1]), 1e-7 * a[0], math.sin(a[1])))
+    lambda a: (math.cos(a[1]), 1e-7 * a[0], math.sin(a[1]))
+)
 _random = st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, 1)).filter(
-    lambda v: sum(x * x for x in v) > 1e-6)
+    lambda v: sum(x * x for x in v) > 1e-6
+)
 directions = st.one_of(_special, _near_h, _random)
 
 
@@ -148,32 +152,75 @@ def make(name: str, sigma: float, b: float, h: float, variant: str = "plain"):
     if name == "ue4":
         D, f = sigma_to_unreal(sigma, b)
         if variant == "plain":
-            return UE4ExponentialHeightFog(UE4FogParams(FogDensity=D, FogHeightFalloff=f, FogHeight=h * 100.0))
-        p = UE4FogParams(FogDensity=D, FogHeightFalloff=f, FogHeight=h * 100.0,
-                         SecondFogData=SecondFogData(D * 0.5, f * 2.0, 5000.0), FogMaxOpacity=0.9,
-                         StartDistance=1000.0, FogCutoffDistance=5e8, EndDistance=2e8)
+            return UE4ExponentialHeightFog(
+                UE4FogParams(FogDensity=D, FogHeightFalloff=f, FogHeight=h * 100.0)
+            )
+        p = UE4FogParams(
+            FogDensity=D,
+            FogHeightFalloff=f,
+            FogHeight=h * 100.0,
+            SecondFogData=SecondFogData(D * 0.5, f * 2.0, 5000.0),
+            FogMaxOpacity=0.9,
+            StartDistance=1000.0,
+            FogCutoffDistance=5e8,
+            EndDistance=2e8,
+        )
         return UE4ExponentialHeightFog(p.with_sun((0.3, 0.5, 0.8)))
     if name == "unity":
-        mode, coord = {"plain": ("exp", "distance"), "depth": ("exp", "depth"),
-                       "exp2": ("exp2", "depth"), "linear": ("linear", "distance")}[variant]
+        mode, coord = {
+            "plain": ("exp", "distance"),
+            "depth": ("exp", "depth"),
+            "exp2": ("exp2", "depth"),
+            "linear": ("linear", "distance"),
+        }[variant]
         kw = dict(clip_near=0.3, clip_far=1e4) if variant == "exp2" else {}
-        return UnityBuiltinFog(UnityFogParams(fogMode=mode, fogDensity=sigma, fog_coordinate=coord,
-                                              fogStartDistance=0.0, fogEndDistance=1.0 / sigma,
-                                              camera_forward=(0.6, -0.1, 0.8), **kw))
+        return UnityBuiltinFog(
+            UnityFogParams(
+                fogMode=mode,
+                fogDensity=sigma,
+                fog_coordinate=coord,
+                fogStartDistance=0.0,
+                fogEndDistance=1.0 / sigma,
+                camera_forward=(0.6, -0.1, 0.8),
+                **kw,
+            )
+        )
     if name == "filament":
         if variant == "plain":
             return FilamentFog(FilamentFogParams(density=sigma, heightFalloff=b, height=h))
-        return FilamentFog(FilamentFogParams(density=sigma, heightFalloff=b, height=h, distance=10.0,
-                                             maximumOpacity=0.95, cutOffDistance=1e6, inScatteringStart=5.0,
-                                             inScatteringSize=8.0, lightDirection=(0.3, 0.5, 0.8)))
+        return FilamentFog(
+            FilamentFogParams(
+                density=sigma,
+                heightFalloff=b,
+                height=h,
+                distance=10.0,
+                maximumOpacity=0.95,
+                cutOffDistance=1e6,
+                inScatteringStart=5.0,
+                inScatteringSize=8.0,
+                lightDirection=(0.3, 0.5, 0.8),
+            )
+        )
     if name == "hdrp":
         depth = (1.0 / b) / LAYER_DEPTH_TO_H if b > 0 else HUGE_LAYER
-        return HDRPFog(HDRPFogParams(meanFreePath=1.0 / sigma, baseHeight=h, maximumHeight=h + depth,
-                                     maxFogDistance=1e30 if variant == "plain" else 5000.0))
+        return HDRPFog(
+            HDRPFogParams(
+                meanFreePath=1.0 / sigma,
+                baseHeight=h,
+                maximumHeight=h + depth,
+                maxFogDistance=1e30 if variant == "plain" else 5000.0,
+            )
+        )
     if name == "altitude":
         power = {"plain": 2.0, "other": 0.37}[variant]
-        return AltitudeFog(AltitudeFogParams(_FogStart=h, _FogEnd=h + (1.0 / b if b > 0 else HUGE_LAYER),
-                                             _FogPower=power, _FogColor=(0.6, 0.65, 0.7, sigma)))
+        return AltitudeFog(
+            AltitudeFogParams(
+                _FogStart=h,
+                _FogEnd=h + (1.0 / b if b > 0 else HUGE_LAYER),
+                _FogPower=power,
+                _FogColor=(0.6, 0.65, 0.7, sigma),
+            )
+        )
     if name == "box":
         L = 1.0 / b if b > 0 else 1e6
         mode = {"plain": "beer", "other": "ratio", "thickness": "thickness"}[variant]
@@ -181,9 +228,14 @@ def make(name: str, sigma: float, b: float, h: float, variant: str = "plain"):
     raise KeyError(name)
 
 
-VARIANTS = {"ue4": ("plain", "full"), "unity": ("plain", "depth", "exp2", "linear"),
-            "filament": ("plain", "full"), "hdrp": ("plain", "capped"), "altitude": ("plain", "other"),
-            "box": ("plain", "other", "thickness")}
+VARIANTS = {
+    "ue4": ("plain", "full"),
+    "unity": ("plain", "depth", "exp2", "linear"),
+    "filament": ("plain", "full"),
+    "hdrp": ("plain", "capped"),
+    "altitude": ("plain", "other"),
+    "box": ("plain", "other", "thickness"),
+}
 
 
 # ------------------------------------------------------------ references
@@ -305,7 +357,14 @@ def model_errors(name, prec, sigma, b, h, cam, wps):
                 region, bound = "cancellation", None  # 1 - exp(-x) in float32, x < 0.01
             else:
                 region, bound = "exact", 2e-5 + 16 * eps * kappa
-            out.append((region, err, bound, dict(cam_y=cam[1], wp=wp.tolist(), sigma=sigma, b=b, h=h, ref=float(ref))))
+            out.append(
+                (
+                    region,
+                    err,
+                    bound,
+                    dict(cam_y=cam[1], wp=wp.tolist(), sigma=sigma, b=b, h=h, ref=float(ref)),
+                )
+            )
         return out
     if name == "altitude":
         q = fog.params
@@ -389,8 +448,14 @@ def test_no_nan_inf_range(name, data, sigma, b, h, cr):
 
 
 @SET
-@given(st.sampled_from(["ue4", "unity", "filament", "hdrp", "altitude"]), st.sampled_from(PRECISIONS),
-       sigmas, falloffs, fog_heights, rays(n=6))
+@given(
+    st.sampled_from(["ue4", "unity", "filament", "hdrp", "altitude"]),
+    st.sampled_from(PRECISIONS),
+    sigmas,
+    falloffs,
+    fog_heights,
+    rays(n=6),
+)
 def test_accuracy_against_mpmath(name, prec, sigma, b, h, cr):
     """float64: the documented bound everywhere the model is exact; float32: the
     bound in its good region, recorded (not failed) where the shader loses it."""
@@ -410,10 +475,12 @@ def test_altitude_float64_near_end_and_horizontal():
         fog = AltitudeFog(AltitudeFogParams(_FogStart=S, _FogEnd=E, _FogPower=p, _FogColor=(1, 1, 1, 1.0)))
         for cy in (E, E + 1e-3, E + 1e3, 1e6, 0.5 * (S + E), S - 10.0):
             cam = np.array([0.0, cy, 0.0])
-            below = [E - 10.0 ** k for k in (-9, -6, -3, 0, 2) if E - 10.0 ** k > S]
+            below = [E - 10.0**k for k in (-9, -6, -3, 0, 2) if E - 10.0**k > S]
             wps = [np.array([dx, y, 0.0]) for y in below + [S, 0.5 * (S + E)] for dx in (0.0, 1e3)]
-            wps += [cam + np.array([math.cos(a), sy, math.sin(a)]) * L
-                    for a, sy, L in ((0.3, 1e-7, 1e3), (1.1, -1e-7, 1e7), (2.0, 1e-12, 1.0), (0.0, 0.0, 50.0))]
+            wps += [
+                cam + np.array([math.cos(a), sy, math.sin(a)]) * L
+                for a, sy, L in ((0.3, 1e-7, 1e3), (1.1, -1e-7, 1e7), (2.0, 1e-12, 1.0), (0.0, 0.0, 50.0))
+            ]
             wps = np.array(wps)
             I = fog.path_integral(cam, wps, "float64")
             for i, wp in enumerate(wps):
@@ -422,7 +489,16 @@ def test_altitude_float64_near_end_and_horizontal():
                     assert I[i] == 0.0, (S, E, p, cam, wp, I[i])
                     continue
                 err = abs(I[i] - ref) / ref
-                assert err <= 16 * eps * altitude_kappa(S, E, p, cy, wp[1]), (S, E, p, cy, wp.tolist(), I[i], ref, err)
+                assert err <= 16 * eps * altitude_kappa(S, E, p, cy, wp[1]), (
+                    S,
+                    E,
+                    p,
+                    cy,
+                    wp.tolist(),
+                    I[i],
+                    ref,
+                    err,
+                )
 
 
 def test_ue4_observer_clamp_is_engine_rule():
@@ -433,7 +509,7 @@ def test_ue4_observer_clamp_is_engine_rule():
     cam_lo, cam_hi = np.array([0.0, 655.0, 0.0]), np.array([0.0, 700.0, 0.0])
     for cam in (cam_lo, cam_hi):
         wp = cam + np.array([[0.0, -1.0, 0.0]]) * 500.0
-        (region, err, bound, _), = model_errors("ue4", "float64", sigma, b, 0.0, cam, wp)
+        ((region, err, bound, _),) = model_errors("ue4", "float64", sigma, b, 0.0, cam, wp)
         if cam is cam_lo:
             assert region == "exact" and err <= bound
         else:
@@ -486,18 +562,25 @@ def sweep() -> dict:
                         for prec in PRECISIONS:
                             r = fog.evaluate(cam, np.concatenate([wps, cam[None]]), prec)
                             T = r.transmittance
-                            bad += int(np.sum(~np.isfinite(T)) + np.sum(~np.isfinite(r.inscatter))
-                                       + np.sum((T < 0) | (T > 1)))
+                            bad += int(
+                                np.sum(~np.isfinite(T))
+                                + np.sum(~np.isfinite(r.inscatter))
+                                + np.sum((T < 0) | (T > 1))
+                            )
             nonfinite[f"{name}/{variant}"] = bad
     return dict(
-        description=("Worst error of each game model against mpmath (40 digits) on a grid: "
-                     f"sigma {GRID_SIGMA} /m, falloff {GRID_B} /m, fog height {GRID_H} m, camera y {GRID_CAM} m, "
-                     f"directions {GRID_DIR}, distances {GRID_DIST} m. ue4/unity/filament: relative error of "
-                     "the transmittance (absolute where T_ref is subnormal); hdrp/altitude: relative error of "
-                     "the optical depth (ref in [1e-30, 1e30]). Regions: 'exact' = bound asserted by "
-                     "tests/test_models_stress.py; others recorded only (engine rule or shader formula)."),
+        description=(
+            "Worst error of each game model against mpmath (40 digits) on a grid: "
+            f"sigma {GRID_SIGMA} /m, falloff {GRID_B} /m, fog height {GRID_H} m, camera y {GRID_CAM} m, "
+            f"directions {GRID_DIR}, distances {GRID_DIST} m. ue4/unity/filament: relative error of "
+            "the transmittance (absolute where T_ref is subnormal); hdrp/altitude: relative error of "
+            "the optical depth (ref in [1e-30, 1e30]). Regions: 'exact' = bound asserted by "
+            "tests/test_models_stress.py; others recorded only (engine rule or shader formula)."
+        ),
         command=".venv/bin/python tests/test_models_stress.py",
-        errors=res, nonfinite_or_out_of_range_outputs=nonfinite)
+        errors=res,
+        nonfinite_or_out_of_range_outputs=nonfinite,
+    )
 
 
 if __name__ == "__main__":
@@ -508,6 +591,8 @@ if __name__ == "__main__":
     for name, per in rep["errors"].items():
         for prec, regions in per.items():
             for region, w in regions.items():
-                print(f"{name:9s} {prec} {region:20s} worst {w['worst_rel_error']:.3e}  over-bound {w['n_over_bound']}/{w['n']}")
+                print(
+                    f"{name:9s} {prec} {region:20s} worst {w['worst_rel_error']:.3e}  over-bound {w['n_over_bound']}/{w['n']}"
+                )
     print("nonfinite:", rep["nonfinite_or_out_of_range_outputs"])
     sys.exit(0)

@@ -23,54 +23,89 @@ from fogref.models.godot import GodotFog, GodotFogParams
 from fogref.models.threejs import ThreeFogParams, ThreeJSFog
 
 SET = settings(max_examples=150, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
-sigmas = st.floats(-9, 2).map(lambda e: 10.0 ** e)
+sigmas = st.floats(-9, 2).map(lambda e: 10.0**e)
 heights = st.one_of(st.floats(-1e4, 1e6), st.sampled_from([-1e4, 0.0, 1e6]))
-dists = st.floats(-4, 7).map(lambda e: 10.0 ** e)
-_special = st.sampled_from([(1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, 1.0, 0.0), (0.0, -1.0, 0.0),
-                            (0.6, 0.0, -0.8)])
+dists = st.floats(-4, 7).map(lambda e: 10.0**e)
+_special = st.sampled_from(
+    [(1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, 1.0, 0.0), (0.0, -1.0, 0.0), (0.6, 0.0, -0.8)]
+)
 _near_h = st.tuples(st.floats(-1.0, 1.0), st.floats(0, 2 * math.pi)).map(
-    lambda a: (math.cos(a[1]), 1e-7 * a[0], math.sin(a[1])))
+    lambda a: (math.cos(a[1]), 1e-7 * a[0], math.sin(a[1]))
+)
 _random = st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, 1)).filter(
-    lambda v: sum(x * x for x in v) > 1e-6)
+    lambda v: sum(x * x for x in v) > 1e-6
+)
 directions = st.one_of(_special, _near_h, _random)
 
 
 def make(name: str, variant: str, sigma: float, h: float, sun) -> object:
     """One model of the engine ``name`` with extinction-like parameters ``sigma`` [1/m]."""
     if name == "godot":
-        kw = dict(fog_density=sigma, fog_height=h, fog_sun_scatter=1.0, sun_direction=sun,
-                  sun_color=(5.0, 4.0, 3.0), fog_aerial_perspective=0.3, sky_color=(0.2, 0.3, 0.5))
+        kw = dict(
+            fog_density=sigma,
+            fog_height=h,
+            fog_sun_scatter=1.0,
+            sun_direction=sun,
+            sun_color=(5.0, 4.0, 3.0),
+            fog_aerial_perspective=0.3,
+            sky_color=(0.2, 0.3, 0.5),
+        )
         if variant == "height":
             kw.update(fog_height_density=sigma * 10.0)
         elif variant == "height_above":
             kw.update(fog_height_density=-sigma)
         elif variant == "depth":
-            kw.update(fog_mode="depth", fog_density=min(sigma * 100.0, 1.0),
-                      fog_depth_begin=1.0 / sigma ** 0.5, fog_depth_end=0.0, z_far=1e4, fog_depth_curve=2.0)
+            kw.update(
+                fog_mode="depth",
+                fog_density=min(sigma * 100.0, 1.0),
+                fog_depth_begin=1.0 / sigma**0.5,
+                fog_depth_end=0.0,
+                z_far=1e4,
+                fog_depth_curve=2.0,
+            )
         return GodotFog(GodotFogParams(**kw))
     if name == "bevy":
-        lobe = dict(directional_light_color=(1.0, 0.9, 0.8, 1.0), directional_light_exponent=20.0,
-                    light_direction=sun, light_color=(3.0, 3.0, 3.0), color=(0.3, 0.4, 0.5, 0.8))
+        lobe = dict(
+            directional_light_color=(1.0, 0.9, 0.8, 1.0),
+            directional_light_exponent=20.0,
+            light_direction=sun,
+            light_color=(3.0, 3.0, 3.0),
+            color=(0.3, 0.4, 0.5, 0.8),
+        )
         if variant == "Linear":
             return BevyDistanceFog(BevyFogParams(falloff="Linear", start=h, end=h + 1.0 / sigma, **lobe))
         if variant == "Atmospheric":
-            return BevyDistanceFog(BevyFogParams(falloff="Atmospheric",
-                                                 extinction=(sigma, 2 * sigma, 3 * sigma),
-                                                 inscattering=(sigma, sigma, 0.5 * sigma), **lobe))
+            return BevyDistanceFog(
+                BevyFogParams(
+                    falloff="Atmospheric",
+                    extinction=(sigma, 2 * sigma, 3 * sigma),
+                    inscattering=(sigma, sigma, 0.5 * sigma),
+                    **lobe,
+                )
+            )
         return BevyDistanceFog(BevyFogParams(falloff=variant, density=sigma, **lobe))
     if variant == "Fog":
         return ThreeJSFog(ThreeFogParams(mode="Fog", near=h, far=h + 1.0 / sigma, color=(0.5, 0.6, 0.7)))
     return ThreeJSFog(ThreeFogParams(mode="FogExp2", density=sigma, color=(0.5, 0.6, 0.7)))
 
 
-VARIANTS = {"godot": ("exponential", "height", "height_above", "depth"),
-            "bevy": ("Linear", "Exponential", "ExponentialSquared", "Atmospheric"),
-            "threejs": ("Fog", "FogExp2")}
+VARIANTS = {
+    "godot": ("exponential", "height", "height_above", "depth"),
+    "bevy": ("Linear", "Exponential", "ExponentialSquared", "Atmospheric"),
+    "threejs": ("Fog", "FogExp2"),
+}
 
 
 @SET
-@given(st.sampled_from(sorted(VARIANTS)), st.data(), sigmas, heights, heights, directions,
-       st.lists(st.tuples(directions, dists), min_size=1, max_size=12))
+@given(
+    st.sampled_from(sorted(VARIANTS)),
+    st.data(),
+    sigmas,
+    heights,
+    heights,
+    directions,
+    st.lists(st.tuples(directions, dists), min_size=1, max_size=12),
+)
 def test_no_nan_inf_range(name, data, sigma, h, cam_y, sun, rays):
     variant = data.draw(st.sampled_from(VARIANTS[name]))
     cam = np.array([3.0, cam_y, -2.0])

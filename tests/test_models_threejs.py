@@ -26,15 +26,17 @@ def fog_fragment(mode, color, near, far, density, fog_depth, frag):
         fogFactor = t * t * (f32(3.0) - f32(2.0) * t)
     fogColor = np.asarray(color, f32)
     gl = np.asarray(frag, f32)
-    return gl * (f32(1.0) - fogFactor) + fogColor * fogFactor     # mix(gl, fogColor, fogFactor)
+    return gl * (f32(1.0) - fogFactor) + fogColor * fogFactor  # mix(gl, fogColor, fogFactor)
 
 
 @pytest.mark.parametrize("mode", ["Fog", "FogExp2"])
 def test_float32_matches_fog_fragment(mode):
     rng = np.random.default_rng(0)
-    fwd = np.array([0.2, -0.1, -1.0]); fwd /= np.linalg.norm(fwd)
-    p = ThreeFogParams(mode=mode, color=(0.4, 0.5, 0.6), near=5.0, far=150.0, density=0.013,
-                       camera_forward=tuple(fwd))
+    fwd = np.array([0.2, -0.1, -1.0])
+    fwd /= np.linalg.norm(fwd)
+    p = ThreeFogParams(
+        mode=mode, color=(0.4, 0.5, 0.6), near=5.0, far=150.0, density=0.013, camera_forward=tuple(fwd)
+    )
     cam = np.array([1.0, 2.0, 3.0])
     wp = cam + rng.normal(size=(300, 3)) * 10 ** rng.uniform(-2, 3, (300, 1))
     scene = rng.uniform(0, 2, (300, 3))
@@ -43,7 +45,7 @@ def test_float32_matches_fog_fragment(mode):
     f = fwd.astype(f32)
     for i in range(300):
         v = (wp[i] - cam).astype(f32)
-        depth = v[0] * f[0] + v[1] * f[1] + v[2] * f[2]        # vFogDepth = -mvPosition.z
+        depth = v[0] * f[0] + v[1] * f[1] + v[2] * f[2]  # vFogDepth = -mvPosition.z
         ref = fog_fragment(mode, (0.4, 0.5, 0.6), 5.0, 150.0, 0.013, depth, scene[i])
         np.testing.assert_allclose(out[i], ref, rtol=2e-6, atol=2e-6)
 
@@ -51,13 +53,16 @@ def test_float32_matches_fog_fragment(mode):
 def test_depth_not_distance():
     fog = ThreeJSFog(ThreeFogParams(mode="FogExp2", density=0.01))
     r = fog.evaluate(np.zeros(3), np.array([[300.0, 0.0, -100.0], [0.0, 0.0, 100.0]]), "float64")
-    assert r.transmittance[0, 0] == pytest.approx(math.exp(-1.0))      # depth 100, distance 316
-    assert r.transmittance[1, 0] == pytest.approx(math.exp(-1.0))      # behind: depth -100, squared
+    assert r.transmittance[0, 0] == pytest.approx(math.exp(-1.0))  # depth 100, distance 316
+    assert r.transmittance[1, 0] == pytest.approx(math.exp(-1.0))  # behind: depth -100, squared
 
 
 def test_mapping_nearest_exp2():
-    ps = PhysicalScene(FogMedium(sigma_t=0.02, albedo=0.5, layers=(ExpLayer(1.0, 0.0, 0.0),)),
-                       sky_radiance=(0.2, 0.4, 0.6), camera=(0.0, 0.0, 0.0))
+    ps = PhysicalScene(
+        FogMedium(sigma_t=0.02, albedo=0.5, layers=(ExpLayer(1.0, 0.0, 0.0),)),
+        sky_radiance=(0.2, 0.4, 0.6),
+        camera=(0.0, 0.0, 0.0),
+    )
     fog = from_physical("threejs", ps)
     assert fog.params.mode == "FogExp2" and fog.params.density == pytest.approx(0.02)
     assert fog.params.color == pytest.approx((0.1, 0.2, 0.3))
@@ -91,8 +96,12 @@ def test_extremes_are_finite():
     rng = np.random.default_rng(4)
     wp = rng.normal(size=(200, 3)) * 10 ** rng.uniform(-4, 9, (200, 1))
     wp = np.vstack([wp, np.zeros(3)])
-    for p in (ThreeFogParams(mode="FogExp2", density=1e3), ThreeFogParams(mode="FogExp2", density=0.0),
-              ThreeFogParams(mode="Fog", near=-1e6, far=1e7), ThreeFogParams(mode="Fog", near=0.0, far=1e-6)):
+    for p in (
+        ThreeFogParams(mode="FogExp2", density=1e3),
+        ThreeFogParams(mode="FogExp2", density=0.0),
+        ThreeFogParams(mode="Fog", near=-1e6, far=1e7),
+        ThreeFogParams(mode="Fog", near=0.0, far=1e-6),
+    ):
         for prec in ("float32", "float64"):
             r = ThreeJSFog(p).evaluate(np.zeros(3), wp, prec)
             assert np.all(np.isfinite(r.transmittance)) and np.all(np.isfinite(r.inscatter))

@@ -18,8 +18,24 @@ from fogref.models.ue4 import (
 f32 = np.float32
 
 
-def unreal_shader_fog(cam_m, wp_m, D, f, H, D2, f2, H2, color, max_opacity, start, cutoff,
-                light=None, dir_color=(0, 0, 0), dir_exp=4.0, dir_start=0.0):
+def unreal_shader_fog(
+    cam_m,
+    wp_m,
+    D,
+    f,
+    H,
+    D2,
+    f2,
+    H2,
+    color,
+    max_opacity,
+    start,
+    cutoff,
+    light=None,
+    dir_color=(0, 0, 0),
+    dir_exp=4.0,
+    dir_start=0.0,
+):
     """Independent float32 transcription of UE 4.22's ``GetExponentialHeightFog``
     (``Engine/Shaders/Private/HeightFogCommon.ush``, ported y-up) with the uniforms
     that ``InitFogConstants`` (``Engine/Source/Runtime/Renderer/Private/FogRendering.cpp``)
@@ -64,7 +80,9 @@ def unreal_shader_fog(cam_m, wp_m, D, f, H, D2, f2, H2, color, max_opacity, star
     integral = shared * ray_len
     dir_insc = np.zeros(3, f32)
     if light is not None:
-        lobe = np.asarray(dir_color, f32) * np.power(np.clip(f32(np.dot(normd, np.asarray(light, f32))), 0, 1), f32(dir_exp))
+        lobe = np.asarray(dir_color, f32) * np.power(
+            np.clip(f32(np.dot(normd, np.asarray(light, f32))), 0, 1), f32(dir_exp)
+        )
         dint = shared * max(ray_len - f32(dir_start), f32(0))
         dff = np.clip(np.exp2(-dint), 0, 1)
         dir_insc = lobe * (f32(1) - dff)
@@ -77,8 +95,8 @@ def unreal_shader_fog(cam_m, wp_m, D, f, H, D2, f2, H2, color, max_opacity, star
 
 def _rays(rng, n, cam):
     d = rng.normal(size=(n, 3))
-    d[: n // 4, 1] = 0.0                                   # horizontal rays
-    d[n // 4: n // 2, 1] = rng.uniform(-1e-4, 1e-4, n // 4)  # Taylor branch
+    d[: n // 4, 1] = 0.0  # horizontal rays
+    d[n // 4 : n // 2, 1] = rng.uniform(-1e-4, 1e-4, n // 4)  # Taylor branch
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     return cam + d * 10 ** rng.uniform(-1, 4, (n, 1))
 
@@ -87,19 +105,37 @@ def _rays(rng, n, cam):
 def test_float32_matches_shader_transcription(seed):
     rng = np.random.default_rng(seed)
     # sun given in the y-up port's frame; the model takes Unreal's z-up frame
-    sun_y_up = np.array([0.4, 0.6, -0.2]); sun_y_up /= np.linalg.norm(sun_y_up)
-    kw = dict(D=rng.uniform(0.005, 0.2), f=rng.uniform(0.0, 1.0), H=rng.uniform(-500, 500),
-              D2=rng.uniform(0, 0.1), f2=rng.uniform(0, 2.0), H2=rng.uniform(-2000, 2000),
-              color=(0.4, 0.5, 0.9), max_opacity=rng.uniform(0.5, 1.0), start=[0.0, 0.0, 3000.0][seed],
-              cutoff=[0.0, 200000.0, 0.0][seed], light=sun_y_up, dir_color=(1.0, 0.8, 0.5),
-              dir_exp=rng.uniform(1, 16), dir_start=[0.0, 5000.0, 100.0][seed])
-    params = UE4FogParams(FogDensity=kw["D"], FogHeightFalloff=kw["f"], FogHeight=kw["H"],
-                          SecondFogData=SecondFogData(kw["D2"], kw["f2"], kw["H2"] - kw["H"]),
-                          FogInscatteringColor=kw["color"], FogMaxOpacity=kw["max_opacity"],
-                          StartDistance=kw["start"], FogCutoffDistance=kw["cutoff"],
-                          DirectionalInscatteringExponent=kw["dir_exp"],
-                          DirectionalInscatteringStartDistance=kw["dir_start"],
-                          DirectionalInscatteringColor=kw["dir_color"]).with_sun(sun_y_up)
+    sun_y_up = np.array([0.4, 0.6, -0.2])
+    sun_y_up /= np.linalg.norm(sun_y_up)
+    kw = dict(
+        D=rng.uniform(0.005, 0.2),
+        f=rng.uniform(0.0, 1.0),
+        H=rng.uniform(-500, 500),
+        D2=rng.uniform(0, 0.1),
+        f2=rng.uniform(0, 2.0),
+        H2=rng.uniform(-2000, 2000),
+        color=(0.4, 0.5, 0.9),
+        max_opacity=rng.uniform(0.5, 1.0),
+        start=[0.0, 0.0, 3000.0][seed],
+        cutoff=[0.0, 200000.0, 0.0][seed],
+        light=sun_y_up,
+        dir_color=(1.0, 0.8, 0.5),
+        dir_exp=rng.uniform(1, 16),
+        dir_start=[0.0, 5000.0, 100.0][seed],
+    )
+    params = UE4FogParams(
+        FogDensity=kw["D"],
+        FogHeightFalloff=kw["f"],
+        FogHeight=kw["H"],
+        SecondFogData=SecondFogData(kw["D2"], kw["f2"], kw["H2"] - kw["H"]),
+        FogInscatteringColor=kw["color"],
+        FogMaxOpacity=kw["max_opacity"],
+        StartDistance=kw["start"],
+        FogCutoffDistance=kw["cutoff"],
+        DirectionalInscatteringExponent=kw["dir_exp"],
+        DirectionalInscatteringStartDistance=kw["dir_start"],
+        DirectionalInscatteringColor=kw["dir_color"],
+    ).with_sun(sun_y_up)
     cam = np.array([3.0, rng.uniform(-2, 20), -7.0])
     wp = _rays(rng, 64, cam)
     res = UE4ExponentialHeightFog(params).evaluate(cam, wp, "float32")
@@ -120,8 +156,12 @@ def _exact_T(params, cam, wp):
 
 def test_float64_equals_physical_medium():
     rng = np.random.default_rng(5)
-    params = UE4FogParams(FogDensity=0.05, FogHeightFalloff=0.3, FogHeight=150.0,
-                          SecondFogData=SecondFogData(0.02, 0.05, 3000.0))
+    params = UE4FogParams(
+        FogDensity=0.05,
+        FogHeightFalloff=0.3,
+        FogHeight=150.0,
+        SecondFogData=SecondFogData(0.02, 0.05, 3000.0),
+    )
     cam = np.array([0.0, 12.0, 0.0])
     wp = _rays(rng, 400, cam)
     T64 = UE4ExponentialHeightFog(params).evaluate(cam, wp, "float64").transmittance[:, 0]
@@ -132,8 +172,12 @@ def test_float64_equals_physical_medium():
 
 
 def test_sigma_formula_and_roundtrip():
-    p = UE4FogParams(FogDensity=0.04, FogHeightFalloff=0.25, FogHeight=-120.0,
-                     SecondFogData=SecondFogData(0.01, 0.5, 700.0))
+    p = UE4FogParams(
+        FogDensity=0.04,
+        FogHeightFalloff=0.25,
+        FogHeight=-120.0,
+        SecondFogData=SecondFogData(0.01, 0.5, 700.0),
+    )
     m = ue4_to_medium(p)
     a = 100 * math.log(2) ** 2 * 0.04 / 1000
     b = 100 * math.log(2) * 0.25 / 1000
@@ -143,8 +187,9 @@ def test_sigma_formula_and_roundtrip():
     # density at a point (per metre) equals (ln2)^2 D/1000 2^(-f/1000 (z - H)) per cm, x 100
     y = 3.0
     z_cm = 300.0
-    per_cm = math.log(2) ** 2 * 0.04 / 1000 * 2 ** (-0.25 / 1000 * (z_cm + 120.0)) \
-        + math.log(2) ** 2 * 0.01 / 1000 * 2 ** (-0.5 / 1000 * (z_cm - 580.0))
+    per_cm = math.log(2) ** 2 * 0.04 / 1000 * 2 ** (-0.25 / 1000 * (z_cm + 120.0)) + math.log(
+        2
+    ) ** 2 * 0.01 / 1000 * 2 ** (-0.5 / 1000 * (z_cm - 580.0))
     assert m.sigma_t[0] * m.density(NP, (0.0, np.array(y), 0.0)) == pytest.approx(100 * per_cm, rel=1e-12)
     q = medium_to_ue4(m)
     for k in ("FogDensity", "FogHeightFalloff", "FogHeight"):
@@ -172,8 +217,8 @@ def test_engine_rules():
     wp = np.array([[1000.0, 0.0, 0.0], [200.0, 0.0, 0.0]])
     fog = UE4ExponentialHeightFog(UE4FogParams(FogDensity=1.0, FogMaxOpacity=0.7, FogCutoffDistance=50000.0))
     r = fog.evaluate(cam, wp, "float64")
-    assert r.transmittance[0, 0] == 1.0 and np.all(r.inscatter[0] == 0)     # beyond the cutoff
-    assert r.transmittance[1, 0] == pytest.approx(0.3)                      # max opacity
+    assert r.transmittance[0, 0] == 1.0 and np.all(r.inscatter[0] == 0)  # beyond the cutoff
+    assert r.transmittance[1, 0] == pytest.approx(0.3)  # max opacity
     p = UE4FogParams(DirectionalInscatteringExponent=1e9)
     assert UE4ExponentialHeightFog(p).evaluate(cam, wp).transmittance.shape == (2, 3)
 
@@ -187,7 +232,7 @@ def test_observer_height_clamp_and_extremes_are_finite():
         d[:50, 1] = 0
         d /= np.linalg.norm(d, axis=1, keepdims=True)
         wp = cam + d * 10 ** rng.uniform(-4, 7, (200, 1))
-        wp = np.vstack([wp, cam])                     # a pixel at the camera
+        wp = np.vstack([wp, cam])  # a pixel at the camera
         for prec in ("float32", "float64"):
             r = fog.evaluate(cam, wp, prec)
             assert np.all(np.isfinite(r.transmittance)) and np.all(np.isfinite(r.inscatter))
@@ -200,4 +245,4 @@ def test_registry_and_end_distance():
     wp = np.array([[0.0, 0.0, 500.0], [0.0, 0.0, 5000.0]])
     p = UE4FogParams(FogDensity=0.1, FogHeightFalloff=0.0, EndDistance=100000.0)
     T = UE4ExponentialHeightFog(p).evaluate(cam, wp, "float64").transmittance[:, 0]
-    assert T[0] < 1 and T[1] == pytest.approx(T[0] ** 2, rel=1e-9)   # fog stops at 1 km
+    assert T[0] < 1 and T[1] == pytest.approx(T[0] ** 2, rel=1e-9)  # fog stops at 1 km

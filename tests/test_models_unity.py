@@ -35,9 +35,17 @@ def unitycg_fog(mode, density, start, end, color, coord, scene):
 @pytest.mark.parametrize("coordinate", ["distance", "depth"])
 def test_float32_matches_unitycg(mode, coordinate):
     rng = np.random.default_rng(1)
-    fwd = np.array([0.3, -0.1, -1.0]); fwd /= np.linalg.norm(fwd)
-    p = UnityFogParams(fogMode=mode, fogDensity=0.02, fogStartDistance=5.0, fogEndDistance=120.0,
-                       fogColor=(0.3, 0.4, 0.5), fog_coordinate=coordinate, camera_forward=tuple(fwd))
+    fwd = np.array([0.3, -0.1, -1.0])
+    fwd /= np.linalg.norm(fwd)
+    p = UnityFogParams(
+        fogMode=mode,
+        fogDensity=0.02,
+        fogStartDistance=5.0,
+        fogEndDistance=120.0,
+        fogColor=(0.3, 0.4, 0.5),
+        fog_coordinate=coordinate,
+        camera_forward=tuple(fwd),
+    )
     cam = np.array([1.0, 2.0, 3.0])
     wp = cam + rng.normal(size=(200, 3)) * 10 ** rng.uniform(-2, 3, (200, 1))
     scene = rng.uniform(0, 2, size=(200, 3))
@@ -55,7 +63,8 @@ def test_exp_on_distance_is_the_homogeneous_medium():
     assert m.sigma_t[0] == pytest.approx(0.013)
     rng = np.random.default_rng(2)
     cam = np.array([0.0, 1.0, 0.0])
-    d = rng.normal(size=(100, 3)); d /= np.linalg.norm(d, axis=1, keepdims=True)
+    d = rng.normal(size=(100, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
     L = 10 ** rng.uniform(-3, 3, 100)
     T = UnityBuiltinFog(p).evaluate(cam, cam + d * L[:, None], "float64").transmittance[:, 0]
     np.testing.assert_allclose(T, m.transmittance(NP, tuple(cam), tuple(d.T), L)[0], rtol=1e-12)
@@ -63,8 +72,15 @@ def test_exp_on_distance_is_the_homogeneous_medium():
 
 
 def test_nearest_fits_match_at_the_reference_distance():
-    for p, r in ((UnityFogParams(fogMode="linear", fogStartDistance=10, fogEndDistance=90, fog_coordinate="distance"), 50.0),
-                 (UnityFogParams(fogMode="exp2", fogDensity=0.03, fog_coordinate="distance"), 1 / 0.03)):
+    for p, r in (
+        (
+            UnityFogParams(
+                fogMode="linear", fogStartDistance=10, fogEndDistance=90, fog_coordinate="distance"
+            ),
+            50.0,
+        ),
+        (UnityFogParams(fogMode="exp2", fogDensity=0.03, fog_coordinate="distance"), 1 / 0.03),
+    ):
         sigma = unity_to_medium(p).sigma_t[0]
         T = UnityBuiltinFog(p).evaluate(np.zeros(3), np.array([[r, 0, 0]]), "float64").transmittance[0, 0]
         assert math.exp(-sigma * r) == pytest.approx(T, rel=1e-9)

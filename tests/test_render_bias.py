@@ -24,25 +24,50 @@ BOX = dict(bounds_min=(-20.0, 0.0, -20.0), bounds_max=(20.0, 10.0, 20.0))
 CASES = {
     "box, camera inside": ([0, 3, -10], dict(falloff=0.0, **BOX), 40),
     "box, camera outside": ([0, 12, -60], dict(falloff=0.0, **BOX), 40),
-    "box, exponential, RGB extinction": ([0, 3, -10], dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], **BOX), 56),
+    "box, exponential, RGB extinction": (
+        [0, 3, -10],
+        dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], **BOX),
+        56,
+    ),
     # the sky control variate (closed form + Monte Carlo difference) with occluders
     # above the horizon: a white cube in the fog and a white roof over part of it
-    "sky control variate, occluders, exponential, RGB": ([0, 3, -10],
-                                                          dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], **BOX), 80),
+    "sky control variate, occluders, exponential, RGB": (
+        [0, 3, -10],
+        dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], **BOX),
+        80,
+    ),
     "sky control variate, occluders, homogeneous": ([0, 3, -10], dict(falloff=0.0, **BOX), 88),
     # forced splitting on the camera ray (fogpath's ``forced_split``): both branches at depth 0
     "forced split, box, camera inside": ([0, 3, -10], dict(falloff=0.0, **BOX), 40),
     "forced split, box, camera outside": ([0, 12, -60], dict(falloff=0.0, **BOX), 40),
-    "forced split, box, exponential, RGB": ([0, 3, -10], dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], **BOX), 56),
+    "forced split, box, exponential, RGB": (
+        [0, 3, -10],
+        dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], **BOX),
+        56,
+    ),
     # unbounded exponential fog (one and two layers): the ground must then be white on
     # both sides and so wide that no light path reaches the fog below it (an optical
     # depth of ~1e4 on the way), or the furnace would not hold
-    "forced split, unbounded exponential, RGB": ([0, 3, -10], dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065]), 56),
-    "forced split, unbounded, two layers": ([0, 3, -10], dict(falloff=0.1, density2=0.5, falloff2=0.01,
-                                                                height2=5.0), 120),
+    "forced split, unbounded exponential, RGB": (
+        [0, 3, -10],
+        dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065]),
+        56,
+    ),
+    "forced split, unbounded, two layers": (
+        [0, 3, -10],
+        dict(falloff=0.1, density2=0.5, falloff2=0.01, height2=5.0),
+        120,
+    ),
     "forced split, sky control variate, occluders, exponential, RGB": (
-        [0, 3, -10], dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], **BOX), 80),
-    "unbounded exponential, RGB (no forced split)": ([0, 3, -10], dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065]), 56),
+        [0, 3, -10],
+        dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], **BOX),
+        80,
+    ),
+    "unbounded exponential, RGB (no forced split)": (
+        [0, 3, -10],
+        dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065]),
+        56,
+    ),
 }
 #: cases with white occluders above the horizon (cube, roof)
 #: the occluder cases run the sky control variate on every camera ray (fogpath's
@@ -62,19 +87,28 @@ def furnace(mi, origin, fog, occluders=False, **integrator):
             medium[k] = mi.ScalarPoint3f(*medium[k])
     if isinstance(medium["sigma_t"], list):
         medium["sigma_t"] = mi.ScalarColor3f(*medium["sigma_t"])
-    return mi.load_dict({
-        "type": "scene",
-        "integrator": {"type": "fogpath", "max_depth": -1, "rr_depth": 1000, "aovs": False, **integrator},
-        "sensor": {"type": "perspective", "fov": 60,
-                   "to_world": T.look_at(origin=origin, target=[0, 4, 20], up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": 16, "height": 12, "rfilter": {"type": "box"}},
-                   "medium": medium},
-        "ground": {"type": "rectangle", "to_world": T.rotate([1, 0, 0], -90).scale(200 if "bounds_min" in fog else 1e6),
-                   "bsdf": {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": 1.0}}
-                   if "bounds_min" not in fog else {"type": "diffuse", "reflectance": 1.0}},
-        "sky": {"type": "constant", "radiance": 1.0},
-        **(OCCLUDERS(mi) if occluders else {}),
-    })
+    return mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {"type": "fogpath", "max_depth": -1, "rr_depth": 1000, "aovs": False, **integrator},
+            "sensor": {
+                "type": "perspective",
+                "fov": 60,
+                "to_world": T.look_at(origin=origin, target=[0, 4, 20], up=[0, 1, 0]),
+                "film": {"type": "hdrfilm", "width": 16, "height": 12, "rfilter": {"type": "box"}},
+                "medium": medium,
+            },
+            "ground": {
+                "type": "rectangle",
+                "to_world": T.rotate([1, 0, 0], -90).scale(200 if "bounds_min" in fog else 1e6),
+                "bsdf": {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": 1.0}}
+                if "bounds_min" not in fog
+                else {"type": "diffuse", "reflectance": 1.0},
+            },
+            "sky": {"type": "constant", "radiance": 1.0},
+            **(OCCLUDERS(mi) if occluders else {}),
+        }
+    )
 
 
 def OCCLUDERS(mi):
@@ -82,16 +116,22 @@ def OCCLUDERS(mi):
     reflectance 1): they hide part of the upper hemisphere from the fog."""
     T = mi.ScalarTransform4f()
     white = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": 1.0}}
-    return {"cube": {"type": "cube", "to_world": T.translate([2, 4, 8]).scale([3, 4, 3]), "bsdf": white},
-            "roof": {"type": "rectangle", "to_world": T.translate([-10, 14, 10]).rotate([1, 0, 0], 90).scale(12),
-                     "bsdf": white}}
+    return {
+        "cube": {"type": "cube", "to_world": T.translate([2, 4, 8]).scale([3, 4, 3]), "bsdf": white},
+        "roof": {
+            "type": "rectangle",
+            "to_world": T.translate([-10, 14, 10]).rotate([1, 0, 0], 90).scale(12),
+            "bsdf": white,
+        },
+    }
 
 
 @pytest.mark.parametrize("case", list(CASES), ids=list(CASES))
 def test_white_furnace_image_mean_is_exact(mitsuba, case):
     """Smallest detectable bias (95 % power, alpha 1e-3): asserted <= 0.1 %; measured 0.08-0.09 %."""
     origin, fog, n_runs = CASES[case]
-    means = image_means(mitsuba, furnace(mitsuba, origin, fog, **OPTIONS[case]), n_runs=n_runs, spp=512,
-                        seed0=7000)
+    means = image_means(
+        mitsuba, furnace(mitsuba, origin, fog, **OPTIONS[case]), n_runs=n_runs, spp=512, seed0=7000
+    )
     bias, se, mde = assert_mean_equals(means, 1.0, max_detectable=1e-3, what=f"furnace ({case})")
     print(f"furnace ({case}): bias {bias:+.4%} +- {se:.4%}, detects {mde:.3%}")

@@ -57,8 +57,11 @@ def render_truth(tmp_path, scene, overrides, spp=4, name="t.exr"):
 @pytest.fixture(scope="module")
 def valley(tmp_path_factory, mitsuba):
     """The default valley, 48x27, denser fog so that the first centimetre shows."""
-    return render_truth(tmp_path_factory.mktemp("valley"), "valley.xml",
-                        {"res": 48, "resy": 27, "sigma_t": 0.01, "falloff": 0.0138629})
+    return render_truth(
+        tmp_path_factory.mktemp("valley"),
+        "valley.xml",
+        {"res": 48, "resy": 27, "sigma_t": 0.01, "falloff": 0.0138629},
+    )
 
 
 def test_view_is_the_pixel_centre_and_T_is_exact(valley):
@@ -94,8 +97,12 @@ def test_surfaces_beyond_ten_km_are_hit(tmp_path, mitsuba):
     """open_plane: a 100 km ground seen from 300 m; rows just below the horizon hit
     it 10-100 km away (Mitsuba's default far clip would turn them into sky)."""
     W, H = 64, 36
-    t = render_truth(tmp_path, "open_plane.xml", {"res": W, "resy": H, "camera_origin": "0, 300, 0",
-                                                  "camera_target": "0.3, 299.9, 1"}, spp=1)
+    t = render_truth(
+        tmp_path,
+        "open_plane.xml",
+        {"res": W, "resy": H, "camera_origin": "0, 300, 0", "camera_target": "0.3, 299.9, 1"},
+        spp=1,
+    )
     d = pinhole([0, 300, 0], [0.3, 299.9, 1], [0, 1, 0], 90, W, H)
     with np.errstate(divide="ignore"):
         t_ground = np.where(d[..., 1] < 0, -300.0 / d[..., 1], np.inf)
@@ -111,8 +118,9 @@ def test_surface_stays_bounded_where_the_fog_is_opaque(tmp_path, mitsuba):
     up: T ~ 1e-12 at the horizon, 0.5-0.9 looking down).  ``surface`` is a ratio
     estimator: bounded by the brightest surface or sky radiance (sky 0.5, sunlit
     ground < 1), undefined (coverage 0) where T ~ 0."""
-    t = render_truth(tmp_path, "open_plane.xml", {"res": 64, "resy": 36, "sigma_t": 0.02, "falloff": 0.05},
-                     spp=16)
+    t = render_truth(
+        tmp_path, "open_plane.xml", {"res": 64, "resy": 36, "sigma_t": 0.02, "falloff": 0.05}, spp=16
+    )
     assert np.isfinite(t.surface).all() and t.surface.min() >= 0 and t.surface.max() < 1.5
     opaque = t.transmittance.max(axis=-1) < 1e-7
     assert opaque.any() and not t.surface_valid[opaque].any()
@@ -121,5 +129,8 @@ def test_surface_stays_bounded_where_the_fog_is_opaque(tmp_path, mitsuba):
     # on average within their noise (a conservative bound: the two share samples)
     v = t.surface_valid & (t.transmittance.min(axis=-1) > 0.2)
     d = (t.transmittance * t.surface - t.attenuated_surface)[v]
-    se = np.sqrt(((t.transmittance * t.stderr["surface"]) ** 2 + t.stderr["attenuated_surface"] ** 2)[v].sum()) / d.size
+    se = (
+        np.sqrt(((t.transmittance * t.stderr["surface"]) ** 2 + t.stderr["attenuated_surface"] ** 2)[v].sum())
+        / d.size
+    )
     assert abs(d.mean()) < 4 * se, (d.mean(), se)

@@ -34,7 +34,9 @@ def test_every_schema_channel_and_the_parts_add_up(rendered):
     assert sorted(c) == sorted(gbuffer.exr_channel_names())
     for ch in "RGB":
         assert np.allclose(c[ch], c[f"attenuated_surface.{ch}"] + c[f"inscatter.{ch}"], rtol=1e-6, atol=1e-7)
-        assert np.allclose(c[f"inscatter.{ch}"], c[f"single.{ch}"] + c[f"multiple.{ch}"], rtol=1e-6, atol=1e-7)
+        assert np.allclose(
+            c[f"inscatter.{ch}"], c[f"single.{ch}"] + c[f"multiple.{ch}"], rtol=1e-6, atol=1e-7
+        )
         valid = c["surface_coverage"] > 0
         # T * surface estimates attenuated_surface (both consistent; equal in expectation)
         assert np.all(c[f"surface.{ch}"][~valid] == 0)
@@ -52,14 +54,26 @@ def test_same_seed_same_pixels(rendered):
 
 def test_header_records_everything(rendered):
     _, (_, attrs), _ = rendered
-    for k in ("fogref.params", "fogref.spp", "fogref.seed", "fogref.variant", "fogref.version", "fogref.mitsuba",
-              "fogref.schema", "fogref.pixel_filter", "fogref.scene_sha256", "fogref.overrides"):
+    for k in (
+        "fogref.params",
+        "fogref.spp",
+        "fogref.seed",
+        "fogref.variant",
+        "fogref.version",
+        "fogref.mitsuba",
+        "fogref.schema",
+        "fogref.pixel_filter",
+        "fogref.scene_sha256",
+        "fogref.overrides",
+    ):
         assert k in attrs, k
     p = attrs["fogref.params"]
     assert p["medium"]["falloff"] == pytest.approx(0.0138629)
     assert p["sun"]["direction"][1] > 0 and p["sky"]["radiance"] == [0.2, 0.3, 0.5]
     assert attrs["fogref.spp"] == 8 and attrs["fogref.seed"] == 3  # JSON-decoded by read_exr
-    assert attrs["fogref.pixel_filter"] == "centre" and str(attrs["fogref.schema"]) == str(gbuffer.SCHEMA_VERSION)
+    assert attrs["fogref.pixel_filter"] == "centre" and str(attrs["fogref.schema"]) == str(
+        gbuffer.SCHEMA_VERSION
+    )
 
 
 def test_no_temporary_files_left_and_plain_file_mode(rendered):
@@ -77,8 +91,20 @@ def test_stderr_matches_the_spread_of_independent_renders(tmp_path, mitsuba):
     ~0.15 (12 runs x 96 pixels); a factor-of-1.5 mistake in the stderr fails."""
     from fogref.render.render import render
 
-    runs = [read_exr(render(SCENES / "valley.xml", tmp_path / f"r{s}.exr", spp=16, seed=s, overrides=SMALL,
-                            progress=False, png=False))[0] for s in range(12)]
+    runs = [
+        read_exr(
+            render(
+                SCENES / "valley.xml",
+                tmp_path / f"r{s}.exr",
+                spp=16,
+                seed=s,
+                overrides=SMALL,
+                progress=False,
+                png=False,
+            )
+        )[0]
+        for s in range(12)
+    ]
     for part in ("", "inscatter.", "single."):
         vals = np.stack([r[f"{part}G"] for r in runs])
         se2 = np.stack([r[f"stderr.{part}G"] for r in runs]) ** 2
@@ -105,11 +131,15 @@ def test_resume_after_interruption_gives_identical_pixels(tmp_path, mitsuba, mon
     import fogref.render.render as R
 
     monkeypatch.setattr(passes, "MAX_LANES", {"llvm": 96 * 4, "cuda": 96 * 4})  # 4 spp per pass at 12x8
-    ref = R.render(SCENES / "valley.xml", tmp_path / "ref.exr", spp=8, seed=1, overrides=SMALL, progress=False)
+    ref = R.render(
+        SCENES / "valley.xml", tmp_path / "ref.exr", spp=8, seed=1, overrides=SMALL, progress=False
+    )
     real = _interrupting_savez(R, monkeypatch)
     out = tmp_path / "x.exr"
     with pytest.raises(KeyboardInterrupt):
-        R.render(SCENES / "valley.xml", out, spp=8, seed=1, overrides=SMALL, progress=False, checkpoint_seconds=0)
+        R.render(
+            SCENES / "valley.xml", out, spp=8, seed=1, overrides=SMALL, progress=False, checkpoint_seconds=0
+        )
     assert not out.exists() and (tmp_path / "x.exr.partial.npz").exists()
     monkeypatch.setattr(R, "savez_atomic", real)
     R.render(SCENES / "valley.xml", out, spp=8, seed=1, overrides=SMALL, progress=False)
@@ -152,8 +182,19 @@ def test_ctrl_c_stops_cleanly_and_the_rerun_resumes(tmp_path, mitsuba):
     """SIGINT to `fogref render`: exit 130, a one-line message (no traceback), a
     checkpoint; the same command then finishes from it."""
     out = tmp_path / "x.exr"
-    cmd = [sys.executable, "-m", "fogref.cli", "render", str(SCENES / "valley.xml"), "--spp", "4096",
-           "--quiet", "--no-png", "--out", str(out)]  # 320x180: ~36 spp per pass, a second or two each
+    cmd = [
+        sys.executable,
+        "-m",
+        "fogref.cli",
+        "render",
+        str(SCENES / "valley.xml"),
+        "--spp",
+        "4096",
+        "--quiet",
+        "--no-png",
+        "--out",
+        str(out),
+    ]  # 320x180: ~36 spp per pass, a second or two each
     p = subprocess.Popen(cmd, cwd=ROOT, stderr=subprocess.PIPE, text=True)
     time.sleep(12)
     p.send_signal(signal.SIGINT)
@@ -203,8 +244,13 @@ def test_folder_check_happens_before_rendering(tmp_path, mitsuba, monkeypatch):
     monkeypatch.setattr(R, "atomic_write", no_write)
     t = time.perf_counter()
     with pytest.raises(FogrefError, match="not writable"):
-        R.render(SCENES / "valley.xml", tmp_path / "x.exr", spp=64, overrides={"res": 320, "resy": 180},
-                 progress=False)
+        R.render(
+            SCENES / "valley.xml",
+            tmp_path / "x.exr",
+            spp=64,
+            overrides={"res": 320, "resy": 180},
+            progress=False,
+        )
     assert time.perf_counter() - t < 5
 
 
@@ -212,36 +258,54 @@ def test_out_of_range_parameter_is_named(tmp_path, mitsuba):
     from fogref.render.render import render
 
     bad = tmp_path / "bad.xml"
-    bad.write_text((SCENES / "valley.xml").read_text().replace('<default name="g" value="0.6"/>',
-                                                               '<default name="g" value="1.5"/>'))
+    bad.write_text(
+        (SCENES / "valley.xml")
+        .read_text()
+        .replace('<default name="g" value="0.6"/>', '<default name="g" value="1.5"/>')
+    )
     with pytest.raises(ParameterError, match=r"bad.xml.*'g'.*1.5.*outside \[-0.999, 0.999\]"):
         render(bad, tmp_path / "o.exr", spp=1, overrides=SMALL, progress=False)
     with pytest.raises(ParameterError, match=r"'falloff'.*outside"):
-        render(SCENES / "valley.xml", tmp_path / "o.exr", spp=1, overrides={**SMALL, "falloff": -1},
-               progress=False)
+        render(
+            SCENES / "valley.xml",
+            tmp_path / "o.exr",
+            spp=1,
+            overrides={**SMALL, "falloff": -1},
+            progress=False,
+        )
 
 
-@pytest.mark.parametrize("override, message", [
-    ({"sigma_t": "abc"}, r"sigma_t=abc: 'abc' does not parse as a number"),
-    ({"res": "0"}, r"res=0: 0 is outside \[1, 65536\] pixels"),
-    ({"res": "12.5"}, r"res=12.5: 12.5 is not an integer"),
-    ({"sigmat": "0.01"}, r"no \$default 'sigmat' \(did you mean 'sigma_t'\?\)"),
-    ({"sky_radiance": "-0.18, 0.3, 0.5"}, r"sky_radiance.*outside.*\[0, inf\)"),
-    ({"max_depth": "-5"}, r"max_depth.*-5"),
-])
+@pytest.mark.parametrize(
+    "override, message",
+    [
+        ({"sigma_t": "abc"}, r"sigma_t=abc: 'abc' does not parse as a number"),
+        ({"res": "0"}, r"res=0: 0 is outside \[1, 65536\] pixels"),
+        ({"res": "12.5"}, r"res=12.5: 12.5 is not an integer"),
+        ({"sigmat": "0.01"}, r"no \$default 'sigmat' \(did you mean 'sigma_t'\?\)"),
+        ({"sky_radiance": "-0.18, 0.3, 0.5"}, r"sky_radiance.*outside.*\[0, inf\)"),
+        ({"max_depth": "-5"}, r"max_depth.*-5"),
+    ],
+)
 def test_bad_overrides_get_clear_errors(tmp_path, mitsuba, override, message):
     from fogref.render.render import render
 
     with pytest.raises(FogrefError, match=message):
-        render(SCENES / "valley.xml", tmp_path / "o.exr", spp=1, overrides={**SMALL, **override}, progress=False)
+        render(
+            SCENES / "valley.xml", tmp_path / "o.exr", spp=1, overrides={**SMALL, **override}, progress=False
+        )
 
 
 def test_huge_resolution_is_refused_with_the_memory_figure(tmp_path, mitsuba):
     from fogref.render.render import render
 
     with pytest.raises(FogrefError, match=r"20000x20000 pixels need about .* GiB"):
-        render(SCENES / "valley.xml", tmp_path / "o.exr", spp=1, overrides={"res": 20000, "resy": 20000},
-               progress=False)
+        render(
+            SCENES / "valley.xml",
+            tmp_path / "o.exr",
+            spp=1,
+            overrides={"res": 20000, "resy": 20000},
+            progress=False,
+        )
 
 
 def test_non_finite_render_is_refused_and_located(tmp_path, mitsuba, monkeypatch):
@@ -272,8 +336,11 @@ def test_unsupported_emitters_and_media_are_refused(tmp_path, mitsuba):
     with pytest.raises(FogrefError, match="emitter 'sunsky' is not supported"):
         render(sunsky, tmp_path / "o.exr", spp=1, overrides=SMALL, progress=False)
     point = tmp_path / "point.xml"
-    point.write_text(text.replace("</scene>", '<emitter type="point"><point name="position" value="0,5,0"/>'
-                                              '</emitter></scene>'))
+    point.write_text(
+        text.replace(
+            "</scene>", '<emitter type="point"><point name="position" value="0,5,0"/></emitter></scene>'
+        )
+    )
     with pytest.raises(FogrefError, match="emitter 'point' is not supported"):
         render(point, tmp_path / "o.exr", spp=1, overrides=SMALL, progress=False)
 
@@ -285,11 +352,29 @@ def test_malformed_xml_and_cli_message(tmp_path, mitsuba):
 
     with pytest.raises(FogrefError, match="broken.xml: malformed XML"):
         render(bad, tmp_path / "o.exr", spp=1, progress=False)
-    r = subprocess.run([sys.executable, "-m", "fogref.cli", "render", str(bad), "--out", str(tmp_path / "o.exr")],
-                       capture_output=True, text=True, cwd=ROOT)
+    r = subprocess.run(
+        [sys.executable, "-m", "fogref.cli", "render", str(bad), "--out", str(tmp_path / "o.exr")],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
     assert r.returncode == 2 and "broken.xml: malformed XML" in r.stderr and "Traceback" not in r.stderr
-    r = subprocess.run([sys.executable, "-m", "fogref.cli", "render", str(SCENES / "valley.xml"), "--spp", "0",
-                        "--out", str(tmp_path / "o.exr")], capture_output=True, text=True, cwd=ROOT)
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "fogref.cli",
+            "render",
+            str(SCENES / "valley.xml"),
+            "--spp",
+            "0",
+            "--out",
+            str(tmp_path / "o.exr"),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
     assert r.returncode == 2 and "--spp" in r.stderr
 
 
@@ -297,9 +382,14 @@ def test_heightfog_floor_nan_is_refused(tmp_path, mitsuba):
     from fogref.render.render import render
 
     bad = tmp_path / "floor.xml"
-    bad.write_text((SCENES / "valley.xml").read_text().replace(
-        '<float name="height" value="$fog_height"/>', '<float name="height" value="$fog_height"/>'
-        '<float name="floor" value="nan"/>'))
+    bad.write_text(
+        (SCENES / "valley.xml")
+        .read_text()
+        .replace(
+            '<float name="height" value="$fog_height"/>',
+            '<float name="height" value="$fog_height"/><float name="floor" value="nan"/>',
+        )
+    )
     with pytest.raises(FogrefError, match=r"'floor'.*nan"):
         render(bad, tmp_path / "o.exr", spp=1, overrides=SMALL, progress=False)
 
@@ -315,8 +405,21 @@ def test_full_disk_is_an_error_not_a_traceback(tmp_path, mitsuba, monkeypatch, c
         raise OSError(errno.ENOSPC, "No space left on device", str(path))
 
     monkeypatch.setattr(R, "write_exr", full)
-    rc = main(["render", str(SCENES / "valley.xml"), "--set", "res=12", "--set", "resy=8", "--spp", "1",
-               "--quiet", "--out", str(tmp_path / "o.exr")])
+    rc = main(
+        [
+            "render",
+            str(SCENES / "valley.xml"),
+            "--set",
+            "res=12",
+            "--set",
+            "resy=8",
+            "--spp",
+            "1",
+            "--quiet",
+            "--out",
+            str(tmp_path / "o.exr"),
+        ]
+    )
     err = capsys.readouterr().err
     assert rc == 2 and "o.exr: No space left on device" in err and not (tmp_path / "o.exr").exists()
 
@@ -325,6 +428,8 @@ def test_write_exr_refuses_non_finite_channels(tmp_path):
     from fogref.exrio import write_exr
 
     with pytest.raises(FogrefError, match=r"non-finite values in channel\(s\) b, c"):
-        write_exr(tmp_path / "x.exr", {"a": np.zeros((2, 2)), "b": np.full((2, 2), np.nan),
-                                       "c": np.full((2, 2), 1e39)})
+        write_exr(
+            tmp_path / "x.exr",
+            {"a": np.zeros((2, 2)), "b": np.full((2, 2), np.nan), "c": np.full((2, 2), 1e39)},
+        )
     assert not (tmp_path / "x.exr").exists()

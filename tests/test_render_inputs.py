@@ -38,13 +38,23 @@ def test_scene_inputs_follow_mitsubas_resolution(tmp_path, mitsuba, monkeypatch)
     (tmp_path / "proj" / "other.obj").write_text("v 0 0 0\n")
     (tmp_path / "parts").mkdir()
     (tmp_path / "parts" / "rock.xml").write_text(
-        '<scene version="3.0.0"><shape type="obj"><string name="filename" value="rock.obj"/></shape></scene>')
-    scene.write_text(scene.read_text().replace(
-        "</scene>", '<path value="meshes"/><include filename="../parts/rock.xml"/></scene>'))
+        '<scene version="3.0.0"><shape type="obj"><string name="filename" value="rock.obj"/></shape></scene>'
+    )
+    scene.write_text(
+        scene.read_text().replace(
+            "</scene>", '<path value="meshes"/><include filename="../parts/rock.xml"/></scene>'
+        )
+    )
     monkeypatch.chdir(tmp_path)  # relative names are not looked up from the working directory first
     got = [(i.kind, os.path.relpath(i.path, tmp_path)) for i in scene_inputs(scene)]
-    assert got == [("scene", "proj/s.xml"), ("include", "parts/rock.xml"), ("emitter", "proj/sky.exr"),
-                   ("texture", "proj/tex.png"), ("shape", "proj/box.obj"), ("shape", "proj/meshes/rock.obj")]
+    assert got == [
+        ("scene", "proj/s.xml"),
+        ("include", "parts/rock.xml"),
+        ("emitter", "proj/sky.exr"),
+        ("texture", "proj/tex.png"),
+        ("shape", "proj/box.obj"),
+        ("shape", "proj/meshes/rock.obj"),
+    ]
     assert all(i.exists for i in scene_inputs(scene))
     over = [i.path.name for i in scene_inputs(scene, {"mesh": "other.obj", "sky": "sky.exr"})]
     assert "other.obj" in over and "box.obj" not in over
@@ -67,9 +77,11 @@ def test_digest_changes_with_every_input_and_only_with_them(tmp_path, mitsuba):
     (tmp_path / "unused.obj").write_text("v 1 1 1\n")  # a file the scene does not load
     assert (inputs_digest(scene), key()) == (d0, k0)
     seen = {k0}
-    for edit in (lambda: tiny.write_obj(tmp_path / "box.obj", dx=8),
-                 lambda: tiny.write_envmap(mitsuba, tmp_path / "sky.exr", level=0.6),
-                 lambda: tiny.write_texture(mitsuba, tmp_path / "tex.png", grey=30)):
+    for edit in (
+        lambda: tiny.write_obj(tmp_path / "box.obj", dx=8),
+        lambda: tiny.write_envmap(mitsuba, tmp_path / "sky.exr", level=0.6),
+        lambda: tiny.write_texture(mitsuba, tmp_path / "tex.png", grey=30),
+    ):
         edit()
         assert key() not in seen
         seen.add(key())
@@ -102,8 +114,9 @@ EDITS = {
 
 
 @pytest.mark.parametrize("edit", list(EDITS))
-def test_an_edited_input_between_interruption_and_rerun_means_a_fresh_render(tmp_path, mitsuba, monkeypatch,
-                                                                                edit):
+def test_an_edited_input_between_interruption_and_rerun_means_a_fresh_render(
+    tmp_path, mitsuba, monkeypatch, edit
+):
     import fogref.render.render as R
 
     tiny.one_spp_passes(monkeypatch)
@@ -173,8 +186,11 @@ def test_out_whose_png_preview_is_a_texture_is_refused(tmp_path, mitsuba):
 
     scene = tiny.make(mitsuba, tmp_path)
     tex = (tmp_path / "tex.png").read_bytes()
-    with pytest.raises(FogrefError, match=r"--out .*tex\.exr: the PNG preview .*tex\.png would overwrite the "
-                                          r"texture .*tex\.png"):
+    with pytest.raises(
+        FogrefError,
+        match=r"--out .*tex\.exr: the PNG preview .*tex\.png would overwrite the "
+        r"texture .*tex\.png",
+    ):
         render(scene, tmp_path / "tex.exr", spp=1, progress=False)
     assert (tmp_path / "tex.png").read_bytes() == tex and not (tmp_path / "tex.exr").exists()
     render(scene, tmp_path / "tex.exr", spp=1, progress=False, png=False)  # no preview: no clash
@@ -192,8 +208,11 @@ def test_out_over_a_mesh_selected_by_an_override_and_over_an_include_is_refused(
     (tmp_path / "inc.exr.partial.npz").write_text('<scene version="3.0.0"/>')
     include = '<include filename="inc.exr.partial.npz"/></scene>'
     scene.write_text(scene.read_text().replace("</scene>", include))
-    with pytest.raises(FogrefError, match=r"checkpoint .*inc\.exr\.partial\.npz "
-                                          r"would overwrite the included XML"):
+    with pytest.raises(
+        FogrefError,
+        match=r"checkpoint .*inc\.exr\.partial\.npz "
+        r"would overwrite the included XML",
+    ):
         render(scene, tmp_path / "inc.exr", spp=1, progress=False)
 
 

@@ -35,7 +35,10 @@ def test_mi_render_splits_into_seeded_passes(mitsuba, monkeypatch):
     scene = _scene(mi)
     img = np.array(mi.render(scene, spp=8, seed=3))
     integ = scene.integrator()
-    expected = sum(np.array(integ.render_moments(scene, seed=passes.pass_seed(3, k), spp=4)[0]) for k in range(2)) / 8
+    expected = (
+        sum(np.array(integ.render_moments(scene, seed=passes.pass_seed(3, k), spp=4)[0]) for k in range(2))
+        / 8
+    )
     np.testing.assert_allclose(img, expected, rtol=1e-6, atol=1e-7)
     one_pass = np.array(integ.render_moments(scene, seed=3, spp=8)[0]) / 8
     assert not np.allclose(img, one_pass), "the two passes were not seeded apart from one 8-spp call"

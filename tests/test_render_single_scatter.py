@@ -54,10 +54,12 @@ def test_single_channel_matches_closed_form(mitsuba, layers):
     scene, desc = load_scene(SCENES / "open_plane.xml", overrides)
     names = ["R", "G", "B"] + list(scene.integrator().aov_names())
     i0 = names.index("single.R")
-    runs = [r[..., i0:i0 + 3] for r in render_runs(mi, scene, 8, 64, aov=True)]
+    runs = [r[..., i0 : i0 + 3] for r in render_runs(mi, scene, 8, 64, aov=True)]
     ref, medium, (o, d, D) = _reference(mi, scene, desc)
     assert ref.max() > 0.01  # the test has something to measure
-    one_sample_blocks(runs, ref, block=2, alpha=1e-3, what=f"single.* vs closed form ({layers or 'one layer'})")
+    one_sample_blocks(
+        runs, ref, block=2, alpha=1e-3, what=f"single.* vs closed form ({layers or 'one layer'})"
+    )
 
     if layers:  # closed form vs mpmath quadrature on a few of the same rays
         mp.mp.dps = 30
@@ -71,15 +73,34 @@ def test_single_channel_matches_closed_form(mitsuba, layers):
                 return sum(L.density * mp.e ** (-L.falloff * (y - L.height)) for L in medium.layers)
 
             def tau_sun(y):
-                return sum(L.density * mp.e ** (-L.falloff * (y - L.height)) / (L.falloff * w[1]) for L in medium.layers)
+                return sum(
+                    L.density * mp.e ** (-L.falloff * (y - L.height)) / (L.falloff * w[1])
+                    for L in medium.layers
+                )
 
             def tau(t):
                 return mp.quad(lambda s: rho(ok[1] + s * dk[1]), [0, t])
 
             sig, alb, E = medium.sigma_t[0], medium.albedo[0], sun["irradiance"][0]
             p = float(hg_phase(NP, np.dot(dk, w), medium.g))
-            ref_k = mp.quad(lambda t: alb * p * E * sig * rho(ok[1] + t * dk[1])
-                            * mp.e ** (-sig * tau(t) - sig * tau_sun(ok[1] + t * dk[1])), [0, Dk])
-            got = single_scatter_sun(NP, medium, tuple(np.array([x]) for x in ok), tuple(np.array([x]) for x in dk),
-                                     np.array([Dk]), w, sun["irradiance"])[0][0]
+            ref_k = mp.quad(
+                lambda t: (
+                    alb
+                    * p
+                    * E
+                    * sig
+                    * rho(ok[1] + t * dk[1])
+                    * mp.e ** (-sig * tau(t) - sig * tau_sun(ok[1] + t * dk[1]))
+                ),
+                [0, Dk],
+            )
+            got = single_scatter_sun(
+                NP,
+                medium,
+                tuple(np.array([x]) for x in ok),
+                tuple(np.array([x]) for x in dk),
+                np.array([Dk]),
+                w,
+                sun["irradiance"],
+            )[0][0]
             assert abs(got - float(ref_k)) <= 1e-9 * abs(float(ref_k)) + 1e-15

@@ -28,8 +28,12 @@ def test_fogpath_matches_volpath_with_heightfog(mitsuba, profile):
     volpath's delta tracking against the plugin's per-ray majorant."""
     mi = mitsuba
     kw = PROFILES[profile]
-    a = mi.load_dict(base_scene(mi, {"type": "fogpath", "max_depth": 8, "rr_depth": 100}, heightfog(mi, **kw)))
-    b = mi.load_dict(base_scene(mi, {"type": "volpath", "max_depth": 8, "rr_depth": 100}, heightfog(mi, **kw)))
+    a = mi.load_dict(
+        base_scene(mi, {"type": "fogpath", "max_depth": 8, "rr_depth": 100}, heightfog(mi, **kw))
+    )
+    b = mi.load_dict(
+        base_scene(mi, {"type": "volpath", "max_depth": 8, "rr_depth": 100}, heightfog(mi, **kw))
+    )
     ra, rb = render_runs(mi, a, RUNS, SPP), render_runs(mi, b, RUNS, SPP)
     assert np.isfinite(np.stack(ra)).all() and np.isfinite(np.stack(rb)).all()
     assert_agree(ra, rb, block=4, alpha=ALPHA, what=f"fogpath vs volpath+heightfog ({profile})")
@@ -51,11 +55,16 @@ def test_zero_falloff_matches_stock_homogeneous(mitsuba):
     mi = mitsuba
     T = mi.ScalarTransform4f()
     lo, hi = np.array([-60.0, -1.0, -60.0]), np.array([60.0, 40.0, 60.0])
-    homog = mi.load_dict({"type": "homogeneous", "sigma_t": 0.03, "albedo": 0.9,
-                          "phase": {"type": "hg", "g": 0.5}})
+    homog = mi.load_dict(
+        {"type": "homogeneous", "sigma_t": 0.03, "albedo": 0.9, "phase": {"type": "hg", "g": 0.5}}
+    )
     sb = base_scene(mi, {"type": "volpath", "max_depth": 64, "rr_depth": 100}, homog)
-    sb["fogbox"] = {"type": "cube", "to_world": T.translate(((lo + hi) / 2).tolist()).scale(((hi - lo) / 2).tolist()),
-                    "bsdf": {"type": "null"}, "interior": homog}
+    sb["fogbox"] = {
+        "type": "cube",
+        "to_world": T.translate(((lo + hi) / 2).tolist()).scale(((hi - lo) / 2).tolist()),
+        "bsdf": {"type": "null"},
+        "interior": homog,
+    }
     sa = base_scene(mi, {"type": "fogpath", "max_depth": 8, "rr_depth": 100}, heightfog(mi, falloff=0.0))
     # volpath counts null-interface crossings as bounces; give it room (max_depth 64)
     # and compare with fogpath at max_depth 8, which both converge to within noise here.
@@ -70,12 +79,15 @@ def test_fogpath_matches_volpath_with_envmap_sky(mitsuba):
     mi = mitsuba
     h, w = 16, 32
     el = np.linspace(np.pi / 2, -np.pi / 2, h)[:, None, None]
-    sky = np.where(el > 0, np.array([0.2, 0.3, 0.6]) * (0.4 + np.sin(el)) + np.array([0.3, 0.2, 0.1]) * np.cos(el),
-                   0.05)
+    sky = np.where(
+        el > 0, np.array([0.2, 0.3, 0.6]) * (0.4 + np.sin(el)) + np.array([0.3, 0.2, 0.1]) * np.cos(el), 0.05
+    )
     bitmap = mi.Bitmap(np.ascontiguousarray(np.broadcast_to(sky, (h, w, 3)), dtype=np.float32))
     runs = {}
     for integ in ("fogpath", "volpath"):
         d = base_scene(mi, {"type": integ, "max_depth": 8, "rr_depth": 100}, heightfog(mi), sky=False)
         d["sky"] = {"type": "envmap", "bitmap": bitmap}
         runs[integ] = render_runs(mi, mi.load_dict(d), RUNS, SPP)
-    assert_agree(runs["fogpath"], runs["volpath"], block=4, alpha=ALPHA, what="fogpath vs volpath, envmap sky")
+    assert_agree(
+        runs["fogpath"], runs["volpath"], block=4, alpha=ALPHA, what="fogpath vs volpath, envmap sky"
+    )

@@ -38,7 +38,7 @@ def cli(capsys, argv) -> tuple[int, str]:
     err = capsys.readouterr().err
     if rc != 0:
         assert err.startswith("fogref: error: ") and err.count("\n") == 1, err
-        assert "Traceback" not in err and "File \"" not in err, err
+        assert "Traceback" not in err and 'File "' not in err, err
     return rc, err
 
 
@@ -105,8 +105,11 @@ def _valley_with(tmp_path, name: str, edit) -> str:
 
 
 def test_a_scenes_own_default_out_of_range_is_refused(tmp_path, capsys):
-    bad = _valley_with(tmp_path, "bad_sun.xml", lambda t: re.sub(
-        r'(<default name="sun_elevation" value=")[^"]*"', r'\g<1>1000"', t))
+    bad = _valley_with(
+        tmp_path,
+        "bad_sun.xml",
+        lambda t: re.sub(r'(<default name="sun_elevation" value=")[^"]*"', r'\g<1>1000"', t),
+    )
     rc, err = cli(capsys, ["render", bad, "--out", tmp_path / "x.exr", *TINY])
     assert rc == 2 and "bad_sun.xml: <default>" in err and "[-90, 90] deg" in err, err
     from fogref.render.scene import describe_scene
@@ -144,18 +147,23 @@ def test_writer_and_set_agree_on_ranges(tmp_path, capsys, kw, option, name, valu
     assert not (tmp_path / "w.xml").exists()
 
 
-LITERAL = ('<scene version="3.0.0"><integrator type="fogpath">{integ}</integrator>'
-           '<sensor type="perspective"><float name="fov" value="{fov}"/><film type="hdrfilm">'
-           '<integer name="width" value="8"/><integer name="height" value="6"/></film>'
-           '<medium type="heightfog" name="medium"><float name="sigma_t" value="0.01"/></medium></sensor>'
-           '<shape type="sphere"/></scene>')
+LITERAL = (
+    '<scene version="3.0.0"><integrator type="fogpath">{integ}</integrator>'
+    '<sensor type="perspective"><float name="fov" value="{fov}"/><film type="hdrfilm">'
+    '<integer name="width" value="8"/><integer name="height" value="6"/></film>'
+    '<medium type="heightfog" name="medium"><float name="sigma_t" value="0.01"/></medium></sensor>'
+    '<shape type="sphere"/></scene>'
+)
 
 
-@pytest.mark.parametrize("integ, fov, words", [
-    ('<integer name="max_depth" value="0"/>', "70", ["'integrator.max_depth'", "{-1} U [1, 2147483647]"]),
-    ('<integer name="max_depth" value="4"/>', "190", ["'sensor.fov'", "(0, 180) deg"]),
-    ('<integer name="rr_depth" value="-3"/>', "70", ["Mitsuba could not load", "fogpath", "'rr_depth'"]),
-])
+@pytest.mark.parametrize(
+    "integ, fov, words",
+    [
+        ('<integer name="max_depth" value="0"/>', "70", ["'integrator.max_depth'", "{-1} U [1, 2147483647]"]),
+        ('<integer name="max_depth" value="4"/>', "190", ["'sensor.fov'", "(0, 180) deg"]),
+        ('<integer name="rr_depth" value="-3"/>', "70", ["Mitsuba could not load", "fogpath", "'rr_depth'"]),
+    ],
+)
 def test_values_written_in_the_xml_are_one_line_errors(tmp_path, capsys, integ, fov, words):
     scene = tmp_path / "literal.xml"
     scene.write_text(LITERAL.format(integ=integ, fov=fov))
@@ -168,12 +176,18 @@ def test_values_written_in_the_xml_are_one_line_errors(tmp_path, capsys, integ, 
 SKY = 'name="radiance" value="$sky_radiance"'
 
 
-@pytest.mark.parametrize("old, new, words", [
-    (SKY, 'name="radiance" value="abc"', ["'sky.radiance'", "'abc'"]),
-    (SKY, 'name="radiance" value="0.2, nan, 0.5"', ["sky.radiance", "finite"]),  # refused before too
-    ('<rotate x="1" angle="$sun_elevation"/>', '<rotate x="1" angle="$sun_elev"/>',
-     ["<rotate>", "'$sun_elev'"]),
-])
+@pytest.mark.parametrize(
+    "old, new, words",
+    [
+        (SKY, 'name="radiance" value="abc"', ["'sky.radiance'", "'abc'"]),
+        (SKY, 'name="radiance" value="0.2, nan, 0.5"', ["sky.radiance", "finite"]),  # refused before too
+        (
+            '<rotate x="1" angle="$sun_elevation"/>',
+            '<rotate x="1" angle="$sun_elev"/>',
+            ["<rotate>", "'$sun_elev'"],
+        ),
+    ],
+)
 def test_text_in_xml_values_is_a_one_line_error(tmp_path, capsys, old, new, words):
     scene = _valley_with(tmp_path, "text.xml", lambda t: t.replace(old, new))
     rc, err = cli(capsys, ["render", scene, "--out", tmp_path / "x.exr", *TINY])
@@ -191,8 +205,12 @@ UE = [
     ("FogInscatteringColor", "--ue-fog-inscattering-color", "-1,0,0", "[0, inf)"),
     ("DirectionalInscatteringColor", "--ue-directional-inscattering-color", "0,-1,0", "[0, inf)"),
     ("StartDistance", "--ue-start-distance", "-1", "[0, inf) cm"),
-    ("DirectionalInscatteringStartDistance", "--ue-directional-inscattering-start-distance", "-1",
-     "[0, inf) cm"),
+    (
+        "DirectionalInscatteringStartDistance",
+        "--ue-directional-inscattering-start-distance",
+        "-1",
+        "[0, inf) cm",
+    ),
     ("FogCutoffDistance", "--ue-fog-cutoff-distance", "-1", "[0, inf) cm"),
     ("EndDistance", "--ue-end-distance", "-1", "[0, inf) cm"),
     ("FogHeight", "--ue-fog-height", "1e400", "finite"),  # refused before too: a regression
@@ -211,12 +229,15 @@ def test_unreal_values_are_range_checked(tmp_path, capsys, key, option, value, a
     assert not (tmp_path / "u.xml").exists()
 
 
-@pytest.mark.parametrize("kw, words", [
-    ({"out": 123}, ["'out (--out)'", "expected a path"]),
-    ({"fog": "abc"}, ["'fog'", "expected a dict"]),
-    ({"res": 16.7}, ["'res (--res)'", "not an integer"]),  # refused before too
-    ({"mesh_up": 5}, ["'mesh_up (--mesh-up)'", "y, z, unreal"]),  # refused before too
-])
+@pytest.mark.parametrize(
+    "kw, words",
+    [
+        ({"out": 123}, ["'out (--out)'", "expected a path"]),
+        ({"fog": "abc"}, ["'fog'", "expected a dict"]),
+        ({"res": 16.7}, ["'res (--res)'", "not an integer"]),  # refused before too
+        ({"mesh_up": 5}, ["'mesh_up (--mesh-up)'", "y, z, unreal"]),  # refused before too
+    ],
+)
 def test_write_scene_api_arguments_are_checked(tmp_path, kw, words):
     from fogref.render.scene_writer import write_scene
 
@@ -234,6 +255,7 @@ def test_scene_api_arguments_are_checked(tmp_path):
 
 # --------------------------------------------------------------------------- what a truth needs
 
+
 def _no_fog(t: str) -> str:
     return re.sub(r"<medium type=\"heightfog\".*?</medium>", "", t, flags=re.S)
 
@@ -243,8 +265,10 @@ def _two_sensors(t: str) -> str:
     return t.replace(sensor, sensor + "\n" + sensor)
 
 
-@pytest.mark.parametrize("edit, words", [(_no_fog, ["no fog", "heightfog", "<sensor>"]),
-                                         (_two_sensors, ["2 <sensor> elements", "exactly one"])])
+@pytest.mark.parametrize(
+    "edit, words",
+    [(_no_fog, ["no fog", "heightfog", "<sensor>"]), (_two_sensors, ["2 <sensor> elements", "exactly one"])],
+)
 def test_scene_without_fog_or_with_two_sensors_is_refused(tmp_path, capsys, edit, words):
     scene = _valley_with(tmp_path, "odd.xml", edit)
     out = tmp_path / "x.exr"
@@ -256,6 +280,7 @@ def test_scene_without_fog_or_with_two_sensors_is_refused(tmp_path, capsys, edit
 
 
 # --------------------------------------------------------------------------- variants
+
 
 def test_variant_outside_the_list_is_refused_by_the_api(tmp_path, capsys):
     import fogref
@@ -284,16 +309,19 @@ def test_cuda_variant_without_cuda_is_one_plain_line(tmp_path, capsys):
 
 # --------------------------------------------------------------------------- meshes
 
+
 def _box_obj(path, normals: bool = False):
     """A 2 m box centred at the origin, 12 triangles sharing 8 corners (with ``normals``: vn per face)."""
     corners = [(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
     index = {c: i + 1 for i, c in enumerate(corners)}
-    quads = [((-1, -1, 1), (1, -1, 1), (1, 1, 1), (-1, 1, 1)),
-             ((1, -1, -1), (-1, -1, -1), (-1, 1, -1), (1, 1, -1)),
-             ((1, -1, 1), (1, -1, -1), (1, 1, -1), (1, 1, 1)),
-             ((-1, -1, -1), (-1, -1, 1), (-1, 1, 1), (-1, 1, -1)),
-             ((-1, 1, 1), (1, 1, 1), (1, 1, -1), (-1, 1, -1)),
-             ((-1, -1, -1), (1, -1, -1), (1, -1, 1), (-1, -1, 1))]
+    quads = [
+        ((-1, -1, 1), (1, -1, 1), (1, 1, 1), (-1, 1, 1)),
+        ((1, -1, -1), (-1, -1, -1), (-1, 1, -1), (1, 1, -1)),
+        ((1, -1, 1), (1, -1, -1), (1, 1, -1), (1, 1, 1)),
+        ((-1, -1, -1), (-1, -1, 1), (-1, 1, 1), (-1, 1, -1)),
+        ((-1, 1, 1), (1, 1, 1), (1, 1, -1), (-1, 1, -1)),
+        ((-1, -1, -1), (1, -1, -1), (1, -1, 1), (-1, -1, 1)),
+    ]
     lines = [f"v {x} {y} {z}" for x, y, z in corners]
     for k, q in enumerate(quads):
         a, b, c, d = (index[p] for p in q)
@@ -307,8 +335,17 @@ def _box_obj(path, normals: bool = False):
 
 
 #: one face (+z) filling the image, lit by a delta sun, no fog, no sky
-BOX_VIEW = {"sigma_t": "0", "sky_radiance": "none", "camera_origin": "0.3,0.4,6", "camera_target": "0,0,0",
-            "fov": "20", "res": "8", "resy": "6", "sun_elevation": "30", "sun_azimuth": "20"}
+BOX_VIEW = {
+    "sigma_t": "0",
+    "sky_radiance": "none",
+    "camera_origin": "0.3,0.4,6",
+    "camera_target": "0,0,0",
+    "fov": "20",
+    "res": "8",
+    "resy": "6",
+    "sun_elevation": "30",
+    "sun_azimuth": "20",
+}
 
 
 def _face_spread(exr) -> float:
@@ -355,9 +392,11 @@ def test_mesh_with_normals_keeps_them_and_ply_without_gets_face_normals(tmp_path
     r = write_scene(tmp_path / "n.xml", geometry=smooth, on_note=lambda n: None)
     assert _face_normals(r.path) == [] and any("the file's vertex normals" in n for n in r.notes)
     ply = tmp_path / "p.ply"
-    ply.write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                   "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
-                   "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
+    ply.write_text(
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+        "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"
+    )
     r = write_scene(tmp_path / "p.xml", geometry=ply, on_note=lambda n: None)
     assert _face_normals(r.path) == ["true"]
 
@@ -374,8 +413,14 @@ def test_ground_and_mesh_reflectance(tmp_path, capsys):
     rc, err = cli(capsys, ["scene", "--out", tmp_path / "q.xml", "--mesh-reflectance", "0.5"])
     assert rc == 2 and "applies to a mesh file" in err
     box = _box_obj(tmp_path / "box.obj")
-    r = write_scene(tmp_path / "m.xml", geometry=box, ground=True, mesh_reflectance=0.7,
-                    ground_reflectance=[0.1, 0.2, 0.3], on_note=lambda n: None)
+    r = write_scene(
+        tmp_path / "m.xml",
+        geometry=box,
+        ground=True,
+        mesh_reflectance=0.7,
+        ground_reflectance=[0.1, 0.2, 0.3],
+        on_note=lambda n: None,
+    )
     assert r.defaults["reflectance"] == "0.7, 0.7, 0.7"
     root = ET.parse(r.path).getroot()
     own = root.find("bsdf[@id='ground_surface']/rgb[@name='reflectance']")
@@ -385,6 +430,7 @@ def test_ground_and_mesh_reflectance(tmp_path, capsys):
 
 
 # --------------------------------------------------------------------------- --out never an input
+
 
 def test_scene_out_is_never_an_input(tmp_path, capsys, monkeypatch):
     from fogref.render import scene_templates, scene_writer

@@ -16,7 +16,7 @@ import pytest
 
 from conftest import ROOT, SCENES
 
-SOURCE = '''
+SOURCE = """
 import drjit as dr
 
 
@@ -28,7 +28,7 @@ def count(n, step=1):
             i += step
         i += 1
     return i
-'''
+"""
 
 
 def _load(path, name):
@@ -127,8 +127,14 @@ def test_quiet_render_does_not_import_tqdm(tmp_path, mitsuba, monkeypatch):
     from fogref.render.render import render
 
     monkeypatch.setitem(sys.modules, "tqdm", None)  # `import tqdm` now fails
-    out = render(SCENES / "valley.xml", tmp_path / "q.exr", spp=1, overrides={"res": 8, "resy": 4},
-                 progress=False, png=False)
+    out = render(
+        SCENES / "valley.xml",
+        tmp_path / "q.exr",
+        spp=1,
+        overrides={"res": 8, "resy": 4},
+        progress=False,
+        png=False,
+    )
     assert out.is_file()
 
 
@@ -140,8 +146,12 @@ def test_render_takes_dash_o():
 
 
 def test_gc_frozen_only_when_main_owns_the_process():
-    code = ("import gc, sys\nfrom fogref.cli import main\nsys.argv = ['fogref', '--version']\n"
-            "try:\n    main({argv})\nexcept SystemExit:\n    pass\nprint(gc.get_freeze_count() > 0)\n")
+    code = (
+        "import gc, sys\nfrom fogref.cli import main\nsys.argv = ['fogref', '--version']\n"
+        "try:\n    main({argv})\nexcept SystemExit:\n    pass\nprint(gc.get_freeze_count() > 0)\n"
+    )
     for argv, frozen in (("", "True"), ("['--version']", "False")):
-        r = subprocess.run([sys.executable, "-c", code.format(argv=argv)], cwd=ROOT, capture_output=True, text=True)
+        r = subprocess.run(
+            [sys.executable, "-c", code.format(argv=argv)], cwd=ROOT, capture_output=True, text=True
+        )
         assert r.stdout.strip().splitlines()[-1] == frozen, r.stderr

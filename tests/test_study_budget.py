@@ -20,11 +20,25 @@ def _pixels(pf, h=12, w=20, seed=0, rel_stderr=0.0):
     hit = v[..., 1] < 0.05
     D = np.where(hit, rng.uniform(5, 3000, (h, w)), 0.0)
     z3 = np.zeros((h, w, 3))
-    px = Truth(path="<synthetic>", final=z3, transmittance=z3, attenuated_surface=z3, inscatter=z3, single=z3,
-               multiple=z3, surface=rng.uniform(0, 0.5, (h, w, 3)), stderr={},
-               surface_coverage=np.ones((h, w)), distance=D, position=cam + v * D[..., None], view=v,
-               hit_fraction=hit.astype(float), camera=cam,
-               sun_direction=np.asarray(pf.sun_direction), params={})
+    px = Truth(
+        path="<synthetic>",
+        final=z3,
+        transmittance=z3,
+        attenuated_surface=z3,
+        inscatter=z3,
+        single=z3,
+        multiple=z3,
+        surface=rng.uniform(0, 0.5, (h, w, 3)),
+        stderr={},
+        surface_coverage=np.ones((h, w)),
+        distance=D,
+        position=cam + v * D[..., None],
+        view=v,
+        hit_fraction=hit.astype(float),
+        camera=cam,
+        sun_direction=np.asarray(pf.sun_direction),
+        params={},
+    )
     cf = B.closed_forms(px, pf)
     px.transmittance = cf["T"]
     px.attenuated_surface = px.transmittance * px.surface
@@ -33,9 +47,18 @@ def _pixels(pf, h=12, w=20, seed=0, rel_stderr=0.0):
     px.multiple = rng.uniform(0, 0.05, (h, w, 3))
     px.inscatter = px.single + px.multiple
     px.final = px.attenuated_surface + px.inscatter
-    px.stderr = {k: rel_stderr * np.abs(getattr(px, k)) for k in
-                 ("final", "transmittance", "attenuated_surface", "inscatter", "single", "multiple",
-                  "surface")}
+    px.stderr = {
+        k: rel_stderr * np.abs(getattr(px, k))
+        for k in (
+            "final",
+            "transmittance",
+            "attenuated_surface",
+            "inscatter",
+            "single",
+            "multiple",
+            "surface",
+        )
+    }
     return px, sky_single
 
 
@@ -48,16 +71,21 @@ def test_budget_telescopes_exactly():
     pf = _pf()
     px, sky = _pixels(pf)
     lobe = base_params(pf, DirectionalInscatteringColor=(1, 1, 1), DirectionalInscatteringExponent=5.0)
-    model = base_params(pf, DirectionalInscatteringColor=(1.4, 1.3, 1.1),
-                        DirectionalInscatteringExponent=14.0, DirectionalInscatteringStartDistance=3000.0,
-                        FogMaxOpacity=0.95, FogCutoffDistance=150000.0)
+    model = base_params(
+        pf,
+        DirectionalInscatteringColor=(1.4, 1.3, 1.1),
+        DirectionalInscatteringExponent=14.0,
+        DirectionalInscatteringStartDistance=3000.0,
+        FogMaxOpacity=0.95,
+        FogCutoffDistance=150000.0,
+    )
     S = B.chain(px, sky, pf, lobe, model)
     assert len(S) == len(B.STEPS) + 1
     r = B.attribute(S, px.hit)
     assert r["telescoping_residual"] < 1e-12
     assert r["share_sum"] == pytest.approx(1.0, abs=1e-12)
     E = S[-1] - S[0]
-    assert r["total"]["rmse"]["all"] == pytest.approx(np.sqrt(np.mean(E ** 2)))
+    assert r["total"]["rmse"]["all"] == pytest.approx(np.sqrt(np.mean(E**2)))
     keys = [s["key"] for s in r["steps"]]
     assert keys[0] == "multiple" and keys[-1] == "float32"
     # every effect is switched on here, so the engine-setting steps are not zero
@@ -72,7 +100,7 @@ def test_steps_vanish_for_an_unshadowed_closed_form_truth():
     pf = _pf()
     px, _ = _pixels(pf)
     cf = B.closed_forms(px, pf)
-    px.single = cf["sun_att"] + cf["sky"]      # no shadows, unoccluded sky
+    px.single = cf["sun_att"] + cf["sky"]  # no shadows, unoccluded sky
     px.multiple = np.zeros_like(px.multiple)
     px.final = px.attenuated_surface + px.single
     model = base_params(pf)
@@ -132,8 +160,9 @@ def test_every_step_carries_its_noise_from_the_stderr_channels():
     noise = B.chain_noise(px, 0.02 * sky, model, model)
     r = B.attribute(S, px.hit, px.surface_valid, noise)
     by = {s["key"]: s for s in r["steps"]}
-    np.testing.assert_allclose(by["multiple"]["rmse_noise_floor"],
-                               np.sqrt(np.mean(px.stderr["multiple"] ** 2)))
+    np.testing.assert_allclose(
+        by["multiple"]["rmse_noise_floor"], np.sqrt(np.mean(px.stderr["multiple"] ** 2))
+    )
     assert by["sun_attenuation"]["rmse_noise_floor"] == 0.0  # closed forms only
     for s in r["steps"]:
         assert {"rmse_noise_floor", "rmse_stderr", "below_noise"} <= set(s), s["key"]
@@ -144,25 +173,28 @@ def test_every_step_carries_its_noise_from_the_stderr_channels():
 
 # -- Shapley budget ------------------------------------------------------------------
 
+
 def test_shapley_two_additive_independent_effects_known_answer():
     """v(C) = |sum_{k in C} d_k|^2 with orthogonal d_1, d_2: phi_k = |d_k|^2 exactly."""
     rng = np.random.default_rng(0)
-    d1 = np.zeros(100); d1[:50] = rng.normal(size=50)
-    d2 = np.zeros(100); d2[50:] = rng.normal(size=50)
+    d1 = np.zeros(100)
+    d1[:50] = rng.normal(size=50)
+    d2 = np.zeros(100)
+    d2[50:] = rng.normal(size=50)
     d = {"a": d1, "b": d2}
 
     def v(C):
         return float(np.sum(sum((d[k] for k in C), np.zeros(100)) ** 2))
 
     phi = B.shapley_values(v, ["a", "b"])
-    assert phi["a"] == pytest.approx(np.sum(d1 ** 2), rel=1e-12)
-    assert phi["b"] == pytest.approx(np.sum(d2 ** 2), rel=1e-12)
+    assert phi["a"] == pytest.approx(np.sum(d1**2), rel=1e-12)
+    assert phi["b"] == pytest.approx(np.sum(d2**2), rel=1e-12)
     assert phi["a"] + phi["b"] == pytest.approx(v({"a", "b"}), rel=1e-12)
     # not orthogonal: the interaction 2<d1, d2> is split equally
     d["b"] = d2 + 0.5 * d1
     phi = B.shapley_values(v, ["b", "a"])
     cross = float(np.dot(d1, d["b"]))
-    assert phi["a"] == pytest.approx(np.sum(d1 ** 2) + cross, rel=1e-12)
+    assert phi["a"] == pytest.approx(np.sum(d1**2) + cross, rel=1e-12)
     assert phi["b"] == pytest.approx(np.sum(d["b"] ** 2) + cross, rel=1e-12)
 
 
@@ -171,7 +203,7 @@ def test_shapley_values_do_not_depend_on_player_order():
     vecs = {k: rng.normal(size=7) for k in "abcde"}
     target = rng.normal(size=7)
 
-    def v(C):   # a non-additive game
+    def v(C):  # a non-additive game
         x = sum((vecs[k] for k in C), np.zeros(7))
         return float(np.sum((target - np.tanh(x)) ** 2) - np.sum((target - np.tanh(0 * x)) ** 2))
 
@@ -187,9 +219,14 @@ def _shapley_setup(rel_stderr=0.0):
     pf = _pf()
     px, sky = _pixels(pf, rel_stderr=rel_stderr)
     lobe = base_params(pf, DirectionalInscatteringColor=(1, 1, 1), DirectionalInscatteringExponent=5.0)
-    model = base_params(pf, DirectionalInscatteringColor=(1.4, 1.3, 1.1),
-                        DirectionalInscatteringExponent=14.0, DirectionalInscatteringStartDistance=3000.0,
-                        FogMaxOpacity=0.95, FogCutoffDistance=150000.0)
+    model = base_params(
+        pf,
+        DirectionalInscatteringColor=(1.4, 1.3, 1.1),
+        DirectionalInscatteringExponent=14.0,
+        DirectionalInscatteringStartDistance=3000.0,
+        FogMaxOpacity=0.95,
+        FogCutoffDistance=150000.0,
+    )
     parts = B.shapley_parts(px, sky, pf, B.unreal_engine(lobe, model))
     return pf, px, sky, lobe, model, parts
 
@@ -202,7 +239,7 @@ def test_shapley_budget_ends_are_truth_and_model_and_shares_sum_to_one():
     sh = B.shapley_budget(parts, px.surface_valid, resamples=50)
     assert sh["share_sum"] == pytest.approx(1.0, abs=1e-12)
     E = S[-1] - S[0]
-    assert sh["total_sq"] == pytest.approx(float(np.sum(E ** 2)), rel=1e-10)
+    assert sh["total_sq"] == pytest.approx(float(np.sum(E**2)), rel=1e-10)
     assert sh["coalitions"] == 2 ** len(B.EFFECTS)
     assert all(r["share_noise"] >= 0 for r in sh["effects"])
     assert sh["largest"] == max(sh["effects"], key=lambda r: r["share"])["key"]
@@ -220,20 +257,30 @@ def test_shapley_budget_two_independent_effects_known_answer():
     norm over E^2, and every other effect's share is 0."""
     pf, px, sky, lobe, model, parts = _shapley_setup()
     h, w = px.shape
-    left = np.zeros((h, w, 1)); left[:, : w // 2] = 1.0
+    left = np.zeros((h, w, 1))
+    left[:, : w // 2] = 1.0
     rng = np.random.default_rng(7)
     mult = rng.uniform(0, 0.05, (h, w, 3)) * left
     dT = rng.uniform(-0.05, 0.05, (h, w, 3)) * (1 - left)
     T0 = np.full((h, w, 3), 0.6)
-    engine = {k: (T0 + dT * k[B._CONFIG.index("float32")], parts["sun_render"], parts["sky_render"])
-              for k in parts["engine"]}
-    p = dict(parts, att=px.surface * T0, multiple=mult, sun_att=parts["sun_render"],
-             sun_noatt=parts["sun_render"], sky_cf=parts["sky_render"], engine=engine)
+    engine = {
+        k: (T0 + dT * k[B._CONFIG.index("float32")], parts["sun_render"], parts["sky_render"])
+        for k in parts["engine"]
+    }
+    p = dict(
+        parts,
+        att=px.surface * T0,
+        multiple=mult,
+        sun_att=parts["sun_render"],
+        sun_noatt=parts["sun_render"],
+        sky_cf=parts["sky_render"],
+        engine=engine,
+    )
     p["final"] = p["att"] + parts["sun_render"] + parts["sky_render"] + mult
     valid = np.ones((h, w), bool)
     sh = B.shapley_budget(p, valid, resamples=20)
     by = {r["key"]: r for r in sh["effects"]}
-    e_m, e_f = float(np.sum(mult ** 2)), float(np.sum((px.surface * dT) ** 2))
+    e_m, e_f = float(np.sum(mult**2)), float(np.sum((px.surface * dT) ** 2))
     assert sh["total_sq"] == pytest.approx(e_m + e_f, rel=1e-12)
     assert by["multiple"]["share"] == pytest.approx(e_m / (e_m + e_f), rel=1e-10)
     assert by["float32"]["share"] == pytest.approx(e_f / (e_m + e_f), rel=1e-10)
@@ -246,8 +293,10 @@ def test_shapley_in_markdown_and_plot_first(tmp_path):
     pf, px, sky, lobe, model, parts = _shapley_setup()
     S = B.chain(px, sky, pf, lobe, model)
     r = B.add_noise(B.attribute(S, px.hit), S, S, px.hit)
-    r["shapley"] = B.add_shapley_seed_noise(B.shapley_budget(parts, px.surface_valid, resamples=20),
-                                            B.shapley_budget(parts, px.surface_valid, resamples=0))
+    r["shapley"] = B.add_shapley_seed_noise(
+        B.shapley_budget(parts, px.surface_valid, resamples=20),
+        B.shapley_budget(parts, px.surface_valid, resamples=0),
+    )
     md = B.markdown(r)
     assert md.index("Shapley budget") < md.index("Telescoping chain (second view)") < md.index("| 9 | [h]")
     top = next(x for x in r["shapley"]["effects"] if x["key"] == r["shapley"]["largest"])
@@ -264,10 +313,18 @@ def test_study_text_names_the_largest_shapley_term():
     r = B.add_noise(B.attribute(S, px.hit), S, S, px.hit)
     r["shapley"] = B.shapley_budget(parts, px.surface_valid, resamples=20)
     r["inputs"] = {"resolution": [px.shape[1], px.shape[0]]}
-    summary = {"fit": {"unreal_editor": {"Fog Density": 0.1}, "error": {"n_views": 10, "rel_rmse": 0.1}},
-               "exr": "x.exr", "compare": None,
-               "provenance": {"scene": "scenes/valley.xml", "spp": 4, "seed": 0, "truth": "x.exr",
-                              "pixel_filter": "centre"}}
+    summary = {
+        "fit": {"unreal_editor": {"Fog Density": 0.1}, "error": {"n_views": 10, "rel_rmse": 0.1}},
+        "exr": "x.exr",
+        "compare": None,
+        "provenance": {
+            "scene": "scenes/valley.xml",
+            "spp": 4,
+            "seed": 0,
+            "truth": "x.exr",
+            "pixel_filter": "centre",
+        },
+    }
     text = readme(summary, r)
     top = max(r["shapley"]["effects"], key=lambda e: e["share"])
     assert f"Largest Shapley term: **[{top['effect']}] {top['label']}**" in text

@@ -25,8 +25,13 @@ def _pf(g=0.6):
 def test_fit_recovers_parameters_of_synthetic_unreal_data():
     pf = _pf()
     views = sample_views(pf.camera, n_dirs=200)
-    true = base_params(pf, FogInscatteringColor=(0.3, 0.4, 0.6), DirectionalInscatteringColor=(1.5, 1.2, 0.9),
-                       DirectionalInscatteringExponent=8.0, DirectionalInscatteringStartDistance=5000.0)
+    true = base_params(
+        pf,
+        FogInscatteringColor=(0.3, 0.4, 0.6),
+        DirectionalInscatteringColor=(1.5, 1.2, 0.9),
+        DirectionalInscatteringExponent=8.0,
+        DirectionalInscatteringStartDistance=5000.0,
+    )
     target = unreal_inscatter(true, np.asarray(pf.camera), views.world_positions())
     r = fit_unreal(pf, views, target=target)
     p = r.params
@@ -40,8 +45,12 @@ def test_fit_recovers_parameters_of_synthetic_unreal_data():
 def test_fit_recovers_exponent_without_start_distance():
     pf = _pf()
     views = sample_views(pf.camera, n_dirs=150)
-    true = base_params(pf, FogInscatteringColor=(0.1, 0.2, 0.3), DirectionalInscatteringColor=(2.0, 1.0, 0.5),
-                       DirectionalInscatteringExponent=30.0)
+    true = base_params(
+        pf,
+        FogInscatteringColor=(0.1, 0.2, 0.3),
+        DirectionalInscatteringColor=(2.0, 1.0, 0.5),
+        DirectionalInscatteringExponent=30.0,
+    )
     target = unreal_inscatter(true, np.asarray(pf.camera), views.world_positions())
     r = fit_unreal(pf, views, target=target, fit_start=False)
     assert r.params.DirectionalInscatteringExponent == pytest.approx(30.0, rel=1e-3)
@@ -64,10 +73,10 @@ def test_lobe_fit_limits():
     assert r0["rel_error"] < 1e-9 and r0["lobe"] < 1e-9 and r0["exponent"] is None
     assert r0["iso"] == pytest.approx(1.0)
     errs = [lobe_fit(g)["rel_error"] for g in (0.1, 0.3, 0.6, 0.9)]
-    assert errs[0] < 0.05 and all(a < b for a, b in zip(errs, errs[1:]))   # grows with g
+    assert errs[0] < 0.05 and all(a < b for a, b in zip(errs, errs[1:]))  # grows with g
     ns = [lobe_fit(g)["exponent"] for g in (0.3, 0.6, 0.9)]
-    assert all(a < b for a, b in zip(ns, ns[1:]))                           # sharper lobe for larger g
-    back = lobe_fit(-0.5)                                                   # backscatter: lobe can't help
+    assert all(a < b for a, b in zip(ns, ns[1:]))  # sharper lobe for larger g
+    back = lobe_fit(-0.5)  # backscatter: lobe can't help
     assert back["lobe"] < 1e-9
 
 
@@ -77,4 +86,4 @@ def test_physical_target_no_attenuation_matches_hg_formula():
     a = physical_single_scattering(pf, views, sun_attenuation=True)
     b = physical_single_scattering(pf, views, sun_attenuation=False)
     assert np.all(np.isfinite(a)) and np.all(a >= 0)
-    assert np.all(a <= b * (1 + 1e-9) + 1e-12) or np.mean(a) < np.mean(b)   # attenuation removes light
+    assert np.all(a <= b * (1 + 1e-9) + 1e-12) or np.mean(a) < np.mean(b)  # attenuation removes light

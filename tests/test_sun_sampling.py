@@ -11,8 +11,12 @@ from fogref.media import NP, ExpLayer, FogMedium, single_scatter_sun
 from fogref.media.single_scatter import sample_sun_single_scatter, sun_sampling_applies
 
 ONE = FogMedium(sigma_t=(0.01, 0.02, 0.04), albedo=0.9, g=0.6, layers=(ExpLayer(1, 0.02, 0),))
-TWO = FogMedium(sigma_t=(0.004, 0.0045, 0.005), albedo=0.92, g=0.85,
-                layers=(ExpLayer(1, 0.04, 0), ExpLayer(0.15, 0.002, 200)))
+TWO = FogMedium(
+    sigma_t=(0.004, 0.0045, 0.005),
+    albedo=0.92,
+    g=0.85,
+    layers=(ExpLayer(1, 0.04, 0), ExpLayer(0.15, 0.002, 200)),
+)
 SUN = np.array([0.1, 0.2079, 0.973]) / np.linalg.norm([0.1, 0.2079, 0.973])
 E = (3.3, 3.0, 2.5)
 
@@ -25,7 +29,9 @@ def test_inversion_of_optical_depth(medium):
     dy[:50], dy[50:100] = 0.0, 1e-7
     o = (np.zeros(n), rng.uniform(-50, 500, n), np.zeros(n))
     d = (np.sqrt(1 - dy**2), dy, np.zeros(n))
-    D = np.where(dy < 0, rng.uniform(1, 5000, n), np.where(rng.random(n) < 0.3, NP.largest, rng.uniform(1, 5000, n)))
+    D = np.where(
+        dy < 0, rng.uniform(1, 5000, n), np.where(rng.random(n) < 0.3, NP.largest, rng.uniform(1, 5000, n))
+    )
     s = rng.random(n) * 0.9999 * medium.optical_depth(NP, o, d, D)
     t = medium.invert_optical_depth(NP, o, d, s, D)
     assert np.isfinite(t).all() and (t >= 0).all() and (t <= D).all()
@@ -47,12 +53,22 @@ def test_inversion_float32_twin(mitsuba):
     o32 = (Float(0 * oy), Float(oy), Float(0 * oy))
     d32 = (Float(np.sqrt(1 - dy**2)), Float(dy), Float(0 * dy))
     t = TWO.invert_optical_depth(ops, o32, d32, Float(s), Float(D))
-    back = TWO.optical_depth(NP, (0 * oy, oy, 0 * oy), (np.sqrt(1 - dy**2), dy, 0 * dy), np.array(t, dtype=np.float64))
+    back = TWO.optical_depth(
+        NP, (0 * oy, oy, 0 * oy), (np.sqrt(1 - dy**2), dy, 0 * dy), np.array(t, dtype=np.float64)
+    )
     assert np.all(np.abs(back - s) <= 2e-5 * s + 1e-9)
 
 
-CASES = [((0, 0.1, 1), 50.0), ((0, 0.1, 1), 2000.0), ((0, 0.1, 1), None), ((0, -0.05, 1), 50.0),
-         ((0, -0.05, 1), 2000.0), ((0, 1, 0.01), 2000.0), ((0, 1, 0.01), None), ((0.3, 0.3, 1), None)]
+CASES = [
+    ((0, 0.1, 1), 50.0),
+    ((0, 0.1, 1), 2000.0),
+    ((0, 0.1, 1), None),
+    ((0, -0.05, 1), 50.0),
+    ((0, -0.05, 1), 2000.0),
+    ((0, 1, 0.01), 2000.0),
+    ((0, 1, 0.01), None),
+    ((0.3, 0.3, 1), None),
+]
 
 
 @pytest.mark.parametrize("medium", [ONE, TWO], ids=["one-layer", "two-layer"])
@@ -72,7 +88,11 @@ def test_estimator_mean_is_the_closed_form(medium):
         for wc, c in zip(w, cf):
             assert np.isfinite(wc).all()
             se = wc.std(ddof=1) / np.sqrt(n)
-            p = 2 * stats.norm.sf(abs(wc.mean() - c[0]) / se) if se > 0 else float(abs(wc.mean() / c[0] - 1) < 1e-12)
+            p = (
+                2 * stats.norm.sf(abs(wc.mean() - c[0]) / se)
+                if se > 0
+                else float(abs(wc.mean() / c[0] - 1) < 1e-12)
+            )
             assert p >= per_test, (dv, Dv, wc.mean(), c[0], se)
 
 
@@ -83,7 +103,9 @@ def test_zero_variance_looking_along_the_sun():
     o = (np.zeros(n), np.full(n, 5.0), np.zeros(n))
     d = tuple(np.full(n, x) for x in SUN)
     grey = FogMedium(sigma_t=0.004, albedo=0.9, g=0.85, layers=TWO.layers)
-    t, w = sample_sun_single_scatter(NP, grey, o, d, np.full(n, 800.0), SUN, E, rng.random(n), rng.integers(0, 3, n))
+    t, w = sample_sun_single_scatter(
+        NP, grey, o, d, np.full(n, 800.0), SUN, E, rng.random(n), rng.integers(0, 3, n)
+    )
     cf = single_scatter_sun(NP, grey, o, d, np.full(n, 800.0), SUN, E)
     for wc, c in zip(w, cf):
         assert np.allclose(wc, c, rtol=1e-12)
@@ -96,17 +118,34 @@ from fogref.media.medium import Box  # noqa: E402
 from fogref.media.single_scatter import sample_sun_single_scatter_mixture, sun_sampling_mode  # noqa: E402
 
 MIXTURE = {
-    "one layer, box": FogMedium(sigma_t=(0.01, 0.02, 0.04), albedo=0.9, g=0.6, layers=(ExpLayer(1, 0.02, 0),),
-                                bounds=Box((-300, -1, -100), (300, 150, 1500))),
+    "one layer, box": FogMedium(
+        sigma_t=(0.01, 0.02, 0.04),
+        albedo=0.9,
+        g=0.6,
+        layers=(ExpLayer(1, 0.02, 0),),
+        bounds=Box((-300, -1, -100), (300, 150, 1500)),
+    ),
     "two layers, unbounded": TWO,
-    "two layers, box": FogMedium(sigma_t=0.0045, albedo=0.92, g=0.85, layers=TWO.layers,
-                                 bounds=Box((-1500, -1, -200), (1500, 600, 2500))),
-    "homogeneous box": FogMedium(sigma_t=0.03, albedo=0.9, g=0.5, layers=(ExpLayer(1, 0, 0),),
-                                 bounds=Box((-60, -1, -60), (60, 40, 60))),
+    "two layers, box": FogMedium(
+        sigma_t=0.0045,
+        albedo=0.92,
+        g=0.85,
+        layers=TWO.layers,
+        bounds=Box((-1500, -1, -200), (1500, 600, 2500)),
+    ),
+    "homogeneous box": FogMedium(
+        sigma_t=0.03, albedo=0.9, g=0.5, layers=(ExpLayer(1, 0, 0),), bounds=Box((-60, -1, -60), (60, 40, 60))
+    ),
 }
 #: (direction, D, origin): inside and outside the box, rising, descending, missing it
-MIX_RAYS = [((0, 0.1, 1), 50.0, (0, 5, 0)), ((0, 0.1, 1), 2000.0, (0, 5, 0)), ((0, -0.05, 1), 2000.0, (0, 5, 0)),
-            ((0.3, 0.3, 1), None, (0, 5, 0)), ((0, -0.3, 1), None, (0, 50, -100)), ((0.5, 0.1, 0.8), 4000.0, (0, 700, -400))]
+MIX_RAYS = [
+    ((0, 0.1, 1), 50.0, (0, 5, 0)),
+    ((0, 0.1, 1), 2000.0, (0, 5, 0)),
+    ((0, -0.05, 1), 2000.0, (0, 5, 0)),
+    ((0.3, 0.3, 1), None, (0, 5, 0)),
+    ((0, -0.3, 1), None, (0, 50, -100)),
+    ((0.5, 0.1, 0.8), 4000.0, (0, 700, -400)),
+]
 
 
 def _quadrature(medium, o, d, D, w):
@@ -131,8 +170,15 @@ def _quadrature(medium, o, d, D, w):
         return medium.albedo[c] * E[c] * ph * s * medium.density(NP, p) * np.exp(-s * tau)
 
     edges = np.linspace(a, b, 401)
-    return np.array([sum(integrate.quad(f, lo, hi, args=(c,), epsabs=0, epsrel=1e-11, limit=100)[0]
-                         for lo, hi in zip(edges[:-1], edges[1:])) for c in range(3)])
+    return np.array(
+        [
+            sum(
+                integrate.quad(f, lo, hi, args=(c,), epsabs=0, epsrel=1e-11, limit=100)[0]
+                for lo, hi in zip(edges[:-1], edges[1:])
+            )
+            for c in range(3)
+        ]
+    )
 
 
 @pytest.mark.parametrize("name", list(MIXTURE), ids=list(MIXTURE))
@@ -155,8 +201,9 @@ def test_mixture_estimator_mean_is_the_integral(name):
             ref = _quadrature(medium, ov, dd, D, w)
         o = tuple(np.full(n, float(x)) for x in ov)
         d = tuple(np.full(n, x) for x in dd)
-        t, wt = sample_sun_single_scatter_mixture(NP, medium, o, d, np.full(n, D), tuple(w), E, rng.random(n),
-                                                  rng.random(n), rng.integers(0, 3, n))
+        t, wt = sample_sun_single_scatter_mixture(
+            NP, medium, o, d, np.full(n, D), tuple(w), E, rng.random(n), rng.random(n), rng.integers(0, 3, n)
+        )
         assert np.isfinite(t).all() and (t <= D).all()
         for wc, c in zip(wt, ref):
             assert np.isfinite(wc).all() and (wc >= 0).all()

@@ -80,9 +80,8 @@ def test_lhs_design_is_seeded_stratified_and_in_range(tmp_path):
         (MODELS + '[parameters."hdrp.x"]\nvalues = [1]\n', "model label 'hdrp' is not a [[models]] label"),
         ('[[models]]\nname = "no_such_model"\n', "no_such_model"),
         (
-            MODELS
-            + '[design]\nkind = "list"\n[parameters.g]\nvalues = [0.1, 0.2]\n'
-            '[parameters.albedo]\nvalues = [0.5]\n',
+            MODELS + '[design]\nkind = "list"\n[parameters.g]\nvalues = [0.1, 0.2]\n'
+            "[parameters.albedo]\nvalues = [0.5]\n",
             "lengths differ",
         ),
         (MODELS + "[parameters.g]\nrange = [0.1, 0.2]\n", "needs num = number of points"),

@@ -41,8 +41,11 @@ def quadrature_views(camera, n_y: int = 32, n_phi: int = 128):
     d = np.stack([r * np.cos(P), Y, r * np.sin(P)], -1)
     dist = np.geomspace(10.0, 2.0e4, 12)
     up = Y > 0
-    views = Views(np.asarray(camera, float), np.concatenate([np.repeat(d, len(dist), 0), d[up]]),
-                  np.concatenate([np.tile(dist, len(d)), np.full(up.sum(), np.inf)]))
+    views = Views(
+        np.asarray(camera, float),
+        np.concatenate([np.repeat(d, len(dist), 0), d[up]]),
+        np.concatenate([np.tile(dist, len(d)), np.full(up.sum(), np.inf)]),
+    )
     return views, np.concatenate([np.repeat(W, len(dist)), W[up]])
 
 
@@ -52,14 +55,18 @@ def reference_fit(pf):
     target = physical_single_scattering(pf, views)
 
     def solve(log_n):
-        return solve_colours(unreal_basis(pf, views, 10.0 ** log_n, 0.0), target, w)
+        return solve_colours(unreal_basis(pf, views, 10.0**log_n, 0.0), target, w)
 
     grid = np.linspace(*LOG_N_RANGE, 26)
     k = int(np.argmin([solve(g)[2] for g in grid]))
-    res = minimize_scalar(lambda ln: solve(ln)[2], bounds=(grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]),
-                          method="bounded", options={"xatol": 1e-7})
+    res = minimize_scalar(
+        lambda ln: solve(ln)[2],
+        bounds=(grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]),
+        method="bounded",
+        options={"xatol": 1e-7},
+    )
     cf, cd, sse = solve(res.x)
-    return 10.0 ** res.x, cf, cd, math.sqrt(sse / float(np.sum(w[:, None] * target ** 2)))
+    return 10.0**res.x, cf, cd, math.sqrt(sse / float(np.sum(w[:, None] * target**2)))
 
 
 @pytest.fixture(scope="module")
@@ -85,7 +92,7 @@ def test_converged_fit_matches_the_quadrature_reference(valley):
 def test_convergence_record_and_cache(valley):
     r = fit_unreal(valley)
     steps = r.history["convergence"]
-    assert [s["n_dirs"] for s in steps] == [128 * 2 ** i for i in range(len(steps))]
+    assert [s["n_dirs"] for s in steps] == [128 * 2**i for i in range(len(steps))]
     a, b = steps[-2], steps[-1]
     assert abs(a["exponent"] - b["exponent"]) <= FIT_RTOL * b["exponent"]
     assert abs(steps[0]["exponent"] - b["exponent"]) > 0.1 * b["exponent"]  # 128 directions: not converged

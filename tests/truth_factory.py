@@ -20,8 +20,22 @@ from fogref.gbuffer import (
 )
 
 
-def truth_channels(*, T, surface, inscatter, distance, position, view, hit, coverage=None, single=None,
-                   multiple=None, rel_stderr: float = 0.0, stderr=None, corr: float = 1.0) -> dict:
+def truth_channels(
+    *,
+    T,
+    surface,
+    inscatter,
+    distance,
+    position,
+    view,
+    hit,
+    coverage=None,
+    single=None,
+    multiple=None,
+    rel_stderr: float = 0.0,
+    stderr=None,
+    corr: float = 1.0,
+) -> dict:
     """Every channel of a truth, ``(H, W)`` float64 each.
 
     ``T, surface, inscatter``: ``(H, W, 3)``; ``attenuated_surface = T * surface``
@@ -36,9 +50,15 @@ def truth_channels(*, T, surface, inscatter, distance, position, view, hit, cove
         coverage = (T.max(-1) > 0).astype(np.float64)
     surface = np.where(coverage[..., None] > 0, surface, 0.0)
     att = T * surface
-    parts = {"final": att + inscatter, "T": T, "attenuated_surface": att, "inscatter": inscatter,
-             "single": 0.7 * inscatter if single is None else single,
-             "multiple": 0.3 * inscatter if multiple is None else multiple, "surface": surface}
+    parts = {
+        "final": att + inscatter,
+        "T": T,
+        "attenuated_surface": att,
+        "inscatter": inscatter,
+        "single": 0.7 * inscatter if single is None else single,
+        "multiple": 0.3 * inscatter if multiple is None else multiple,
+        "surface": surface,
+    }
     ch = {}
     for name, a in parts.items():
         for i, c in enumerate(channel_names(name)):
@@ -61,13 +81,30 @@ def truth_channels(*, T, surface, inscatter, distance, position, view, hit, cove
     return ch
 
 
-def truth_attrs(params: dict, *, spp: int = 16, seed: int = 0, scene: str = "scenes/synthetic.xml",
-                scene_sha256: str = "0" * 64, overrides: dict | None = None, pixel_filter: str = "centre") -> dict:
+def truth_attrs(
+    params: dict,
+    *,
+    spp: int = 16,
+    seed: int = 0,
+    scene: str = "scenes/synthetic.xml",
+    scene_sha256: str = "0" * 64,
+    overrides: dict | None = None,
+    pixel_filter: str = "centre",
+) -> dict:
     """Header attributes of a truth (non-string values are JSON in the file)."""
-    return {"fogref.schema": str(SCHEMA_VERSION), "fogref.params": params, "fogref.spp": str(spp),
-            "fogref.seed": str(seed), "fogref.scene": scene, "fogref.scene_sha256": scene_sha256,
-            "fogref.overrides": overrides or {}, "fogref.pixel_filter": pixel_filter,
-            "fogref.variant": "llvm_ad_rgb", "fogref.version": "test", "fogref.mitsuba": "test"}
+    return {
+        "fogref.schema": str(SCHEMA_VERSION),
+        "fogref.params": params,
+        "fogref.spp": str(spp),
+        "fogref.seed": str(seed),
+        "fogref.scene": scene,
+        "fogref.scene_sha256": scene_sha256,
+        "fogref.overrides": overrides or {},
+        "fogref.pixel_filter": pixel_filter,
+        "fogref.variant": "llvm_ad_rgb",
+        "fogref.version": "test",
+        "fogref.mitsuba": "test",
+    }
 
 
 def as_truth(channels: dict, attrs: dict, source: str = "<synthetic>"):

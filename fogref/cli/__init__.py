@@ -139,8 +139,10 @@ def _run(argv) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except KeyboardInterrupt as e:  # a sweep's SweepInterrupted names the workers' log
-        print(f"fogref: {e}" if str(e) else "fogref: interrupted; run the same command again to resume",
-              file=sys.stderr)
+        print(
+            f"fogref: {e}" if str(e) else "fogref: interrupted; run the same command again to resume",
+            file=sys.stderr,
+        )
         return 130
     except OSError as e:  # a full disk, a vanished folder, permissions: the file and the reason
         where = f"{e.filename}: " if e.filename else ""

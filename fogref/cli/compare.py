@@ -275,8 +275,13 @@ def _refuse_outputs_over_inputs(o: Options) -> None:
     engine image) or two outputs to the same file (:func:`fogref.compare.report.refuse_output_over_input`)."""
     from fogref.compare.report import refuse_output_over_input, report_paths
 
-    inputs = [("EXR", o.exr), ("--image", o.image), ("--transmittance", o.transmittance),
-              ("--inscatter", o.inscatter), ("--fog-colour", o.fog_colour)]
+    inputs = [
+        ("EXR", o.exr),
+        ("--image", o.image),
+        ("--transmittance", o.transmittance),
+        ("--inscatter", o.inscatter),
+        ("--fog-colour", o.fog_colour),
+    ]
     report = [("--out", p) for p in report_paths(_out_dir(o))]
     gate = [(n, p) for n, p in (("--json", o.json), ("--junit", o.junit)) if p]
     refuse_output_over_input(report + gate, inputs, SOURCE)

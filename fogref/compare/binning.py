@@ -81,7 +81,7 @@ def binned_errors(coordinate, errors: dict[str, ErrorMaps], edges, mask=None) ->
         out["parts"][part] = {
             "pixels": n.tolist(),
             "rmse": root(mean(e.squared)),
-            "rmse_noise_floor": root(mean(e.sigma ** 2)),
+            "rmse_noise_floor": root(mean(e.sigma**2)),
             "mean_error": mean(e.signed),
             "relmse": mean(e.relative_squared),
             "delta_e2000_mean": mean(e.delta_e2000),

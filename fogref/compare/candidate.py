@@ -88,22 +88,27 @@ def _as_image(x, shape, what: str, nonfinite: str = "refuse") -> np.ndarray:
     try:
         a = np.broadcast_to(a, (*shape, 3))
     except ValueError:
-        raise FogrefError(f"{what}: shape {a.shape}, expected {(*shape, 3)} (the truth's H, W, RGB)") \
-            from None
+        raise FogrefError(
+            f"{what}: shape {a.shape}, expected {(*shape, 3)} (the truth's H, W, RGB)"
+        ) from None
     if nonfinite == "keep":
         return a
     bad = ~np.isfinite(a).all(-1)
     if bad.any():
-        raise FogrefError(f"{what}: {int(bad.sum())} pixel(s) are non-finite (NaN or inf), first at "
-                          f"{_first_pixel(bad)}; "
-                          "a candidate must be finite everywhere (fogref refuses it rather than drop pixels)")
+        raise FogrefError(
+            f"{what}: {int(bad.sum())} pixel(s) are non-finite (NaN or inf), first at "
+            f"{_first_pixel(bad)}; "
+            "a candidate must be finite everywhere (fogref refuses it rather than drop pixels)"
+        )
     with np.errstate(invalid="ignore"):
         huge = (np.abs(a) > LARGEST_VALUE).any(-1)
     if huge.any():
         y, x_ = np.argwhere(huge)[0]
-        raise FogrefError(f"{what}: {int(huge.sum())} pixel(s) beyond ±{LARGEST_VALUE:g}, first at "
-                          f"{_first_pixel(huge)} ({np.abs(a[y, x_]).max():.3g}): too large to measure (its "
-                          "squared errors overflow float64); no fog comes near this: check its units")
+        raise FogrefError(
+            f"{what}: {int(huge.sum())} pixel(s) beyond ±{LARGEST_VALUE:g}, first at "
+            f"{_first_pixel(huge)} ({np.abs(a[y, x_]).max():.3g}): too large to measure (its "
+            "squared errors overflow float64); no fog comes near this: check its units"
+        )
     return a
 
 
@@ -122,12 +127,18 @@ def as_truth(truth, what: str = "truth") -> Truth:
         from fogref.gbuffer import load_truth
 
         return load_truth(valid_path(truth, what, source="api", must_exist=True))
-    raise ParameterError("api", what, f"expected a Truth or the path of a ground-truth EXR, got "
-                         f"{type(truth).__name__}")
+    raise ParameterError(
+        "api", what, f"expected a Truth or the path of a ground-truth EXR, got {type(truth).__name__}"
+    )
 
 
-def evaluate_model(truth: Truth, model, precision: str = "float32",
-                   sky_distance: float = DEFAULT_SKY_DISTANCE, nonfinite: str = "refuse") -> dict:
+def evaluate_model(
+    truth: Truth,
+    model,
+    precision: str = "float32",
+    sky_distance: float = DEFAULT_SKY_DISTANCE,
+    nonfinite: str = "refuse",
+) -> dict:
     """A fog model evaluated on a truth's G-buffer: ``{"T", "inscatter"}`` -> ``(H, W, 3)``.
 
     The model shades the point each pixel sees, ``truth.world_positions(sky_distance)``
@@ -179,7 +190,9 @@ def evaluate_model(truth: Truth, model, precision: str = "float32",
         raise ParameterError("api", "nonfinite", f"{nonfinite!r} is not one of refuse, keep")
     if not callable(getattr(model, "evaluate", None)):
         raise FogrefError(f"{model!r} is not a fog model: it has no evaluate(camera, positions, precision)")
-    extra = {k: v for k, v in (("hit", truth.hit), ("distance", truth.distance)) if _accepts(model.evaluate, k)}
+    extra = {
+        k: v for k, v in (("hit", truth.hit), ("distance", truth.distance)) if _accepts(model.evaluate, k)
+    }
     name = str(getattr(model, "name", None) or type(model).__name__)
     try:
         positions = truth.world_positions(sky_distance)
@@ -187,14 +200,19 @@ def evaluate_model(truth: Truth, model, precision: str = "float32",
     except FogrefError as e:
         raise FogrefError(f"model '{name}': evaluate() refused: {e}") from e
     except Exception as e:  # the user's code failed: one line naming the model, the error and where
-        raise FogrefError(f"model '{name}': evaluate() raised {type(e).__name__}: {_one_line(e)}"
-                          f"{_where(e)}") from e
+        raise FogrefError(
+            f"model '{name}': evaluate() raised {type(e).__name__}: {_one_line(e)}{_where(e)}"
+        ) from e
     for attr in ("transmittance", "inscatter"):
         if not hasattr(result, attr):
-            raise FogrefError(f"model '{name}': evaluate() returned {type(result).__name__} without "
-                              f"'{attr}' (expected an object with transmittance and inscatter)")
-    return {"T": _as_image(result.transmittance, truth.shape, f"model '{name}' transmittance", nonfinite),
-            "inscatter": _as_image(result.inscatter, truth.shape, f"model '{name}' inscatter", nonfinite)}
+            raise FogrefError(
+                f"model '{name}': evaluate() returned {type(result).__name__} without "
+                f"'{attr}' (expected an object with transmittance and inscatter)"
+            )
+    return {
+        "T": _as_image(result.transmittance, truth.shape, f"model '{name}' transmittance", nonfinite),
+        "inscatter": _as_image(result.inscatter, truth.shape, f"model '{name}' inscatter", nonfinite),
+    }
 
 
 def _one_line(e: BaseException) -> str:
@@ -231,8 +249,11 @@ def _composite_parts(truth: Truth, T, L, cand_cov_T=None, cand_cov_L=None):
     s = truth.surface
     cand = s * T + L
     ref = s * truth.transmittance + truth.inscatter
-    cov = (truth.noise_cov("inscatter") + noise.scaled(truth.noise_cov("T"), s)
-           + noise.scaled(truth.noise_cov("surface"), T - truth.transmittance))
+    cov = (
+        truth.noise_cov("inscatter")
+        + noise.scaled(truth.noise_cov("T"), s)
+        + noise.scaled(truth.noise_cov("surface"), T - truth.transmittance)
+    )
     if cand_cov_T is not None:
         cov = cov + cand_cov_L + noise.scaled(cand_cov_T, s)
     return cand, ref, cov, truth.noise_cov("final")
@@ -245,16 +266,31 @@ def fog_parts(truth: Truth, T, L, name: str = "fog") -> CandidateParts:
     every = np.ones(truth.shape, bool)
     with np.errstate(invalid="ignore", over="ignore"):
         final = _composite_parts(truth, T, L)
-        parts = {"T": (T, truth.transmittance, truth.noise_cov("T"), truth.noise_cov("T"), every),
-                 "inscatter": (L, truth.inscatter, truth.noise_cov("inscatter"), truth.noise_cov("inscatter"), every),
-                 "final": (*final, truth.surface_valid)}
+        parts = {
+            "T": (T, truth.transmittance, truth.noise_cov("T"), truth.noise_cov("T"), every),
+            "inscatter": (
+                L,
+                truth.inscatter,
+                truth.noise_cov("inscatter"),
+                truth.noise_cov("inscatter"),
+                every,
+            ),
+            "final": (*final, truth.surface_valid),
+        }
         cov = {k: noise.add_diagonal(v[2], noise.rounding_var(v[1], v[0])) for k, v in parts.items()}
-    return CandidateParts({k: v[0] for k, v in parts.items()}, {k: v[1] for k, v in parts.items()}, cov,
-                          {k: v[3] for k, v in parts.items()}, {k: v[4] for k, v in parts.items()}, name=name)
+    return CandidateParts(
+        {k: v[0] for k, v in parts.items()},
+        {k: v[1] for k, v in parts.items()},
+        cov,
+        {k: v[3] for k, v in parts.items()},
+        {k: v[4] for k, v in parts.items()},
+        name=name,
+    )
 
 
-def candidate_parts(truth: Truth, candidate, precision: str = "float32",
-                    sky_distance: float = DEFAULT_SKY_DISTANCE) -> CandidateParts:
+def candidate_parts(
+    truth: Truth, candidate, precision: str = "float32", sky_distance: float = DEFAULT_SKY_DISTANCE
+) -> CandidateParts:
     """What :func:`~fogref.compare.check.check` compares, for any kind of candidate.
 
     ``candidate`` is one of:
@@ -290,13 +326,30 @@ def candidate_parts(truth: Truth, candidate, precision: str = "float32",
 
     if isinstance(candidate, Truth):
         if candidate.shape != truth.shape:
-            raise FogrefError(f"{candidate.path}: {candidate.shape[1]}x{candidate.shape[0]} px, but the truth "
-                              f"{truth.path} is {truth.shape[1]}x{truth.shape[0]}")
+            raise FogrefError(
+                f"{candidate.path}: {candidate.shape[1]}x{candidate.shape[0]} px, but the truth "
+                f"{truth.path} is {truth.shape[1]}x{truth.shape[0]}"
+            )
         for part, c, r in (("T", candidate.transmittance, T_ref), ("inscatter", candidate.inscatter, L_ref)):
-            put(part, c, r, truth.noise_cov(part) + candidate.noise_cov(part), truth.noise_cov(part), valid_all)
-        put("final", *_composite_parts(truth, candidate.transmittance, candidate.inscatter,
-                                       candidate.noise_cov("T"), candidate.noise_cov("inscatter")),
-            truth.surface_valid)
+            put(
+                part,
+                c,
+                r,
+                truth.noise_cov(part) + candidate.noise_cov(part),
+                truth.noise_cov(part),
+                valid_all,
+            )
+        put(
+            "final",
+            *_composite_parts(
+                truth,
+                candidate.transmittance,
+                candidate.inscatter,
+                candidate.noise_cov("T"),
+                candidate.noise_cov("inscatter"),
+            ),
+            truth.surface_valid,
+        )
         return CandidateParts(parts, ref, cov, rcov, valid, name=str(candidate.path))
 
     if callable(getattr(candidate, "evaluate", None)):
@@ -311,8 +364,10 @@ def candidate_parts(truth: Truth, candidate, precision: str = "float32",
     elif hasattr(candidate, "as_dict"):
         images, name = candidate.as_dict(), str(getattr(candidate, "description", "engine images"))
     else:
-        raise FogrefError(f"cannot check {type(candidate).__name__}: give a fog model (with evaluate), "
-                          "EngineImages, a Truth, or a dict of 'T'/'inscatter'/'final' images")
+        raise FogrefError(
+            f"cannot check {type(candidate).__name__}: give a fog model (with evaluate), "
+            "EngineImages, a Truth, or a dict of 'T'/'inscatter'/'final' images"
+        )
     unknown = sorted(set(images) - {"T", "inscatter", "final"})
     if unknown:
         raise FogrefError(f"unknown image part(s) {unknown}: expected 'T', 'inscatter', 'final'")
@@ -325,4 +380,3 @@ def candidate_parts(truth: Truth, candidate, precision: str = "float32",
     if "T" in img and "inscatter" in img:
         put("composite", *_composite_parts(truth, img["T"], img["inscatter"]), truth.surface_valid)
     return CandidateParts(parts, ref, cov, rcov, valid, name=name)
-

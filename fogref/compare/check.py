@@ -67,10 +67,21 @@ def _finite(x) -> float | None:
     return x if math.isfinite(x) else None
 
 
-def check(truth: Truth, candidate, tolerances: dict | None = None, *, parts=None,
-          distance_bands=(100.0, 1000.0), confidence: float = 0.99, method: str = "noise", block: int = 8,
-          n_boot: int = 2000,
-          seed: int = 0, precision: str = "float32", sky_distance: float = DEFAULT_SKY_DISTANCE) -> CheckResult:
+def check(
+    truth: Truth,
+    candidate,
+    tolerances: dict | None = None,
+    *,
+    parts=None,
+    distance_bands=(100.0, 1000.0),
+    confidence: float = 0.99,
+    method: str = "noise",
+    block: int = 8,
+    n_boot: int = 2000,
+    seed: int = 0,
+    precision: str = "float32",
+    sky_distance: float = DEFAULT_SKY_DISTANCE,
+) -> CheckResult:
     """Check a fog model or an engine's images against a ground truth, with confidence intervals.
 
     Parameters
@@ -155,7 +166,13 @@ def check(truth: Truth, candidate, tolerances: dict | None = None, *, parts=None
     spp = int(truth.attrs.get("fogref.spp", 0) or 0)
     rows, errors = [], {}
     for k, part in enumerate(wanted):
-        c, r, v, rv, ok = cp.parts[part], cp.reference[part], cp.noise_cov[part], cp.ref_cov[part], cp.valid[part]
+        c, r, v, rv, ok = (
+            cp.parts[part],
+            cp.reference[part],
+            cp.noise_cov[part],
+            cp.ref_cov[part],
+            cp.valid[part],
+        )
         errors[part] = np.where(ok[..., None], c - r, 0.0)
         for j, (region, mask) in enumerate(regions.items()):
             m = mask & ok
@@ -166,16 +183,29 @@ def check(truth: Truth, candidate, tolerances: dict | None = None, *, parts=None
                 for met in METRICS:
                     t = tols.get(met)
                     if named.get(met) is not None:
-                        rows.append(Row(part, region, met, None, None, None, t, "fail", 0,
-                                        note=f"no pixels in region '{region}' for a tolerance set on it"))
+                        rows.append(
+                            Row(
+                                part,
+                                region,
+                                met,
+                                None,
+                                None,
+                                None,
+                                t,
+                                "fail",
+                                0,
+                                note=f"no pixels in region '{region}' for a tolerance set on it",
+                            )
+                        )
                     else:
                         rows.append(Row(part, region, met, None, None, None, t, "empty", 0))
                 continue
             sums = block_sums(c, r, v, rv, m, block)
             total = sums.sum(0)
             point = estimates_from_sums(total)
-            sd = noise_sd(c, r, v, rv, m, spp, {"_sq": total[0], "_power": total[1], "_err": total[2],
-                                                 "_ref": total[3]})
+            sd = noise_sd(
+                c, r, v, rv, m, spp, {"_sq": total[0], "_power": total[1], "_err": total[2], "_ref": total[3]}
+            )
             # a reference indistinguishable from zero by its own noise has no relative error
             zero_ref = abs(float(total[3])) <= z * sd["_ref_sd"] or float(total[1]) <= 0
             if method == "block":
@@ -183,10 +213,24 @@ def check(truth: Truth, candidate, tolerances: dict | None = None, *, parts=None
             for met in METRICS:
                 tol = tols.get(met)
                 if met.startswith("rel_") and zero_ref:
-                    why = (f"the reference {part} is zero over these pixels (or within its noise of zero): "
-                           "no relative error exists; set an absolute tolerance (rmse, bias) instead")
-                    rows.append(Row(part, region, met, None, None, None, tol,
-                                    "reported" if tol is None else "fail", n_px, note=why))
+                    why = (
+                        f"the reference {part} is zero over these pixels (or within its noise of zero): "
+                        "no relative error exists; set an absolute tolerance (rmse, bias) instead"
+                    )
+                    rows.append(
+                        Row(
+                            part,
+                            region,
+                            met,
+                            None,
+                            None,
+                            None,
+                            tol,
+                            "reported" if tol is None else "fail",
+                            n_px,
+                            note=why,
+                        )
+                    )
                     continue
                 est = _finite(point[met])
                 if method == "block":
@@ -209,11 +253,31 @@ def check(truth: Truth, candidate, tolerances: dict | None = None, *, parts=None
                     if lo <= 0 and method == "noise":
                         hi = max(hi, z_one * sd[met])
                     est, lo, hi = (math.sqrt(max(x, 0.0)) for x in (est, lo, hi))
-                rows.append(Row(part, region, met, est, lo, hi, tol, metric_verdict(met, lo, hi, tol), n_px,
-                                z=_finite(zval) if zval is not None else None))
-    settings = {"method": method, "block": block, "n_boot": n_boot, "spp": spp, "seed": seed, "distance_bands_m": list(distance_bands or ()),
-                "precision": precision, "sky_distance_m": sky_distance,
-                "tolerances": {f"{p}{'/' + r if r else ''}": t for (p, r), t in table.items()}}
+                rows.append(
+                    Row(
+                        part,
+                        region,
+                        met,
+                        est,
+                        lo,
+                        hi,
+                        tol,
+                        metric_verdict(met, lo, hi, tol),
+                        n_px,
+                        z=_finite(zval) if zval is not None else None,
+                    )
+                )
+    settings = {
+        "method": method,
+        "block": block,
+        "n_boot": n_boot,
+        "spp": spp,
+        "seed": seed,
+        "distance_bands_m": list(distance_bands or ()),
+        "precision": precision,
+        "sky_distance_m": sky_distance,
+        "tolerances": {f"{p}{'/' + r if r else ''}": t for (p, r), t in table.items()},
+    }
     return CheckResult(rows, float(confidence), cp.name, str(truth.path), settings, errors, parts=cp)
 
 
@@ -223,8 +287,15 @@ def _default_errors_dir(result: CheckResult) -> Path:
     return base / name
 
 
-def assert_fog_matches(truth: Truth, candidate, tolerances: dict | None = None, *, inconclusive: str = "fail",
-                       errors_dir=None, **check_options) -> CheckResult:
+def assert_fog_matches(
+    truth: Truth,
+    candidate,
+    tolerances: dict | None = None,
+    *,
+    inconclusive: str = "fail",
+    errors_dir=None,
+    **check_options,
+) -> CheckResult:
     """Assert that ``candidate`` matches ``truth`` within ``tolerances``; return the :class:`CheckResult`.
 
     Runs :func:`check` (same arguments; ``truth`` may be a Truth or the path of its EXR).  On a
@@ -259,8 +330,9 @@ def assert_fog_matches(truth: Truth, candidate, tolerances: dict | None = None, 
         truth_file = truth if isinstance(truth, (str, os.PathLike)) else getattr(truth, "path", None)
         inputs = [("truth", truth_file)] + list(getattr(candidate, "sources", {}).items())
         outputs = [("errors_dir", Path(errors_dir) / f) for f in ("errors.exr", "check.json")]
-        refuse_output_over_input(outputs, [(n, p) for n, p in inputs if isinstance(p, (str, os.PathLike))],
-                                 "assert_fog_matches")
+        refuse_output_over_input(
+            outputs, [(n, p) for n, p in inputs if isinstance(p, (str, os.PathLike))], "assert_fog_matches"
+        )
     result = check(truth, candidate, tolerances, **check_options)
     failed = result.failures(include_inconclusive=False)
     undecided = [r for r in result.rows if r.verdict == "inconclusive"]
@@ -273,17 +345,23 @@ def assert_fog_matches(truth: Truth, candidate, tolerances: dict | None = None, 
     out = Path(errors_dir) if errors_dir is not None else _default_errors_dir(result)
     result.write(out)
     rows = failed + (undecided if inconclusive == "fail" else [])
-    lines = [f"fog does not match the truth: {result.candidate} vs {result.truth}",
-             f"{len(failed)} row(s) fail, {len(undecided)} inconclusive, at {result.confidence:.0%} confidence "
-             f"({result.method_text}):"]
+    lines = [
+        f"fog does not match the truth: {result.candidate} vs {result.truth}",
+        f"{len(failed)} row(s) fail, {len(undecided)} inconclusive, at {result.confidence:.0%} confidence "
+        f"({result.method_text}):",
+    ]
     for r in rows[:12]:
         lines.append("  " + r.describe() + _how_much(r))
     if len(rows) > 12:
         lines.append(f"  ... and {len(rows) - 12} more (check.json)")
     if undecided and inconclusive == "fail":
-        lines.append("inconclusive: the interval straddles the tolerance; render the truth with more samples "
-                     "or pixels (reports/check_power/power.md), or pass inconclusive='pass'")
-    lines.append(f"error maps: {out / 'errors.exr'} (signed candidate - truth per part); rows: {out / 'check.json'}")
+        lines.append(
+            "inconclusive: the interval straddles the tolerance; render the truth with more samples "
+            "or pixels (reports/check_power/power.md), or pass inconclusive='pass'"
+        )
+    lines.append(
+        f"error maps: {out / 'errors.exr'} (signed candidate - truth per part); rows: {out / 'check.json'}"
+    )
     raise AssertionError("\n".join(lines))
 
 

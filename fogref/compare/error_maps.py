@@ -100,8 +100,11 @@ class ErrorMaps:
         region = np.ones(self.absolute.shape, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
         sel = region & self.valid
         n = int(np.count_nonzero(sel))
-        out = {"pixels": n, "excluded_pixels": int(np.count_nonzero(region & ~self.valid)),
-               "model_nonfinite_pixels": int(np.count_nonzero(region & self.nonfinite))}
+        out = {
+            "pixels": n,
+            "excluded_pixels": int(np.count_nonzero(region & ~self.valid)),
+            "model_nonfinite_pixels": int(np.count_nonzero(region & self.nonfinite)),
+        }
         if n == 0:
             return out
         for name, weight in (("rmse", None), ("relmse", self.relative_weight)):
@@ -109,24 +112,34 @@ class ErrorMaps:
             value = m["mse"] if name == "relmse" else float(np.sqrt(m["mse"]))
             if name == "rmse":
                 hi, lo = math.sqrt(m["mse"] + m["stderr"]), math.sqrt(max(m["mse"] - m["stderr"], 0.0))
-                extra = {"rmse_stderr": 0.5 * (hi - lo), "rmse_noise_floor": math.sqrt(m["noise_floor"]),
-                         "rmse_debiased": math.sqrt(m["debiased"])}
+                extra = {
+                    "rmse_stderr": 0.5 * (hi - lo),
+                    "rmse_noise_floor": math.sqrt(m["noise_floor"]),
+                    "rmse_debiased": math.sqrt(m["debiased"]),
+                }
             else:
-                extra = {"relmse_stderr": m["stderr"], "relmse_noise_floor": m["noise_floor"],
-                         "relmse_debiased": m["debiased"]}
+                extra = {
+                    "relmse_stderr": m["stderr"],
+                    "relmse_noise_floor": m["noise_floor"],
+                    "relmse_debiased": m["debiased"],
+                }
             out.update({name: value, **extra, f"{name}_below_noise": m["below_noise"]})
         if self.relative_weight is None:  # relMSE without its weight: the map's mean, no noise split
             out["relmse"] = float(np.mean(self.relative_squared[sel]))
         me = mean_noise(self.signed, self.sigma, sel, z, cov=self.noise_cov)
-        out.update({
-            "mean_error": me["mean"], "mean_error_stderr": me["stderr"], "mean_error_below_noise": me["below_noise"],
-            "mean_abs_error": float(np.mean(self.absolute[sel])),
-            "mean_abs_error_noise_floor": float(math.sqrt(2.0 / math.pi) * np.mean(self.sigma[sel])),
-            "max_abs_error": float(np.max(self.absolute[sel])),
-            "delta_e2000_mean": float(np.mean(self.delta_e2000[sel])),
-            "delta_e2000_p95": float(np.percentile(self.delta_e2000[sel], 95)),
-            "flip_mean": float(np.mean(self.flip[sel])),
-        })
+        out.update(
+            {
+                "mean_error": me["mean"],
+                "mean_error_stderr": me["stderr"],
+                "mean_error_below_noise": me["below_noise"],
+                "mean_abs_error": float(np.mean(self.absolute[sel])),
+                "mean_abs_error_noise_floor": float(math.sqrt(2.0 / math.pi) * np.mean(self.sigma[sel])),
+                "max_abs_error": float(np.max(self.absolute[sel])),
+                "delta_e2000_mean": float(np.mean(self.delta_e2000[sel])),
+                "delta_e2000_p95": float(np.percentile(self.delta_e2000[sel], 95)),
+                "flip_mean": float(np.mean(self.flip[sel])),
+            }
+        )
         if self.delta_e2000_noise is not None:
             out["delta_e2000_mean_noise_floor"] = float(np.mean(self.delta_e2000_noise[sel]))
         if self.flip_noise is not None:
@@ -135,8 +148,17 @@ class ErrorMaps:
 
 
 def error_maps(
-    reference, test, *, white: float | None = None, eps: float = RELMSE_EPS, ppd: float = FLIP_PPD,
-    sigma=None, valid=None, noise_seed: int | None = 0, noise_cov=None, spp: int = 0,
+    reference,
+    test,
+    *,
+    white: float | None = None,
+    eps: float = RELMSE_EPS,
+    ppd: float = FLIP_PPD,
+    sigma=None,
+    valid=None,
+    noise_seed: int | None = 0,
+    noise_cov=None,
+    spp: int = 0,
 ) -> ErrorMaps:
     """All per-pixel errors of ``test`` against ``reference`` (both ``(H, W, 3)``).
 

@@ -68,7 +68,9 @@ def _read_exr_rgb(path: Path) -> np.ndarray:
         return np.stack([ch[c] for c in "RGB"], -1)
     if "Y" in ch:
         return np.repeat(ch["Y"][..., None], 3, -1)
-    raise FogrefError(f"{path}: an EXR image needs channels R,G,B (or Y); it has {', '.join(sorted(ch)[:12])}")
+    raise FogrefError(
+        f"{path}: an EXR image needs channels R,G,B (or Y); it has {', '.join(sorted(ch)[:12])}"
+    )
 
 
 def _read_png(path: Path) -> np.ndarray:
@@ -80,8 +82,10 @@ def _read_png(path: Path) -> np.ndarray:
         raise FogrefError(f"{path}: not a PNG file")
     depth, colour_type = head[24], head[25]
     if depth == 16 and colour_type != 0:
-        raise FogrefError(f"{path}: 16-bit colour PNG: it cannot be read at full precision here; "
-                          "write the engine's image as EXR or Radiance .hdr (or 8-bit PNG)")
+        raise FogrefError(
+            f"{path}: 16-bit colour PNG: it cannot be read at full precision here; "
+            "write the engine's image as EXR or Radiance .hdr (or 8-bit PNG)"
+        )
     try:
         with Image.open(path) as im:
             if depth == 16:
@@ -112,24 +116,30 @@ def _read_hdr(path: Path) -> np.ndarray:
         except ValueError:
             x = math.nan
         if not (math.isfinite(x) and x > 0):
-            raise FogrefError(f"{path}: Radiance header EXPOSURE={m.group(1).strip()!r}: expected a finite "
-                              "number > 0 (the factor the pixels were multiplied by)")
+            raise FogrefError(
+                f"{path}: Radiance header EXPOSURE={m.group(1).strip()!r}: expected a finite "
+                "number > 0 (the factor the pixels were multiplied by)"
+            )
         scale *= x
     line_end = data.find(b"\n", end + 2)
     if line_end < 0:
         raise FogrefError(f"{path}: Radiance HDR has no resolution line after its header")
-    res = data[end + 2:line_end].decode("latin-1").split()
+    res = data[end + 2 : line_end].decode("latin-1").split()
     if len(res) != 4 or res[0] != "-Y" or res[2] != "+X" or not all(_is_count(v) for v in (res[1], res[3])):
-        raise FogrefError(f"{path}: Radiance resolution line {' '.join(res)[:60]!r}; only '-Y H +X W' with "
-                          "whole numbers H, W >= 1 is supported")
+        raise FogrefError(
+            f"{path}: Radiance resolution line {' '.join(res)[:60]!r}; only '-Y H +X W' with "
+            "whole numbers H, W >= 1 is supported"
+        )
     H, W = int(res[1]), int(res[3])
     payload = len(data) - (line_end + 1)
     # each pixel takes at least 4 bytes flat, and a run-length scanline at least 4 + 4 * 2 * ceil(W / 127)
     least = H * W * 4 if not 8 <= W < 32768 else H * (4 + 8 * -(-W // 127))
     if least > payload:
-        raise FogrefError(f"{path}: Radiance header claims {W}x{H} pixels, which need at least {least} "
-                          f"bytes, but the file holds {payload} after its header (truncated, or a damaged "
-                          "header)")
+        raise FogrefError(
+            f"{path}: Radiance header claims {W}x{H} pixels, which need at least {least} "
+            f"bytes, but the file holds {payload} after its header (truncated, or a damaged "
+            "header)"
+        )
     buf = np.frombuffer(data, dtype=np.uint8, offset=line_end + 1)
     rgbe = np.empty((H, W, 4), np.uint8)
     pos = 0
@@ -146,16 +156,16 @@ def _read_hdr(path: Path) -> np.ndarray:
                         pos += 1
                         if n > 128:
                             n -= 128
-                            rgbe[y, x:x + n, c] = buf[pos]
+                            rgbe[y, x : x + n, c] = buf[pos]
                             pos += 1
                         else:
                             if n == 0 or x + n > W:
                                 raise FogrefError(f"{path}: corrupt run-length data in scanline {y}")
-                            rgbe[y, x:x + n, c] = buf[pos:pos + n]
+                            rgbe[y, x : x + n, c] = buf[pos : pos + n]
                             pos += n
                         x += n
             else:
-                rgbe[y] = buf[pos:pos + 4 * W].reshape(W, 4)
+                rgbe[y] = buf[pos : pos + 4 * W].reshape(W, 4)
                 pos += 4 * W
     except (IndexError, ValueError):
         raise FogrefError(f"{path}: Radiance HDR data ends early ({H}x{W} expected)") from None
@@ -233,8 +243,9 @@ def read_image(path, encoding: str = "auto", exposure: float = 1.0, radiance: bo
     bad = ~np.isfinite(img)
     if bad.any():
         ys, xs = np.nonzero(bad.any(-1))
-        raise FogrefError(f"{path}: {int(bad.any(-1).sum())} pixel(s) are NaN or infinite, first at "
-                          f"(x={xs[0]}, y={ys[0]})")
+        raise FogrefError(
+            f"{path}: {int(bad.any(-1).sum())} pixel(s) are NaN or infinite, first at (x={xs[0]}, y={ys[0]})"
+        )
     if encoding == "srgb":
         import colour
 
@@ -280,9 +291,17 @@ class EngineImages:
         return {k: v for k, v in d.items() if v is not None}
 
 
-def load_engine_images(image=None, transmittance=None, inscatter=None, fog_colour=None, *,
-                       encoding: str = "auto", exposure: float = 1.0, shape=None,
-                       truth_name: str = "the truth") -> EngineImages:
+def load_engine_images(
+    image=None,
+    transmittance=None,
+    inscatter=None,
+    fog_colour=None,
+    *,
+    encoding: str = "auto",
+    exposure: float = 1.0,
+    shape=None,
+    truth_name: str = "the truth",
+) -> EngineImages:
     """Read an engine's images (any subset) and check their resolution.
 
     Parameters
@@ -312,37 +331,54 @@ def load_engine_images(image=None, transmittance=None, inscatter=None, fog_colou
     if inscatter is not None and fog_colour is not None:
         raise FogrefError("give the engine's inscatter or its fog colour, not both")
     if fog_colour is not None and transmittance is None:
-        raise FogrefError(f"{fog_colour}: a fog colour becomes inscatter as C * (1 - T): give the transmittance too")
-    paths = {"final": image, "transmittance": transmittance, "inscatter": inscatter if fog_colour is None
-             else fog_colour}
+        raise FogrefError(
+            f"{fog_colour}: a fog colour becomes inscatter as C * (1 - T): give the transmittance too"
+        )
+    paths = {
+        "final": image,
+        "transmittance": transmittance,
+        "inscatter": inscatter if fog_colour is None else fog_colour,
+    }
     paths = {k: Path(v) for k, v in paths.items() if v is not None}
     if not paths:
-        raise FogrefError("no engine image given (need at least one of the final image, transmittance, inscatter)")
+        raise FogrefError(
+            "no engine image given (need at least one of the final image, transmittance, inscatter)"
+        )
     if encoding not in ENCODINGS:
         raise FogrefError(f"encoding '{encoding}' (allowed: {', '.join(ENCODINGS)})")
     # a transmittance is data in [0, 1], not a colour: always read linear
     used = {k: resolve_encoding(p, encoding if k != "transmittance" else "linear") for k, p in paths.items()}
-    imgs = {k: read_image(p, encoding=used[k], exposure=exposure, radiance=k != "transmittance")
-            for k, p in paths.items()}
+    imgs = {
+        k: read_image(p, encoding=used[k], exposure=exposure, radiance=k != "transmittance")
+        for k, p in paths.items()
+    }
     want = tuple(shape) if shape is not None else None
     for k, a in imgs.items():
         h, w = a.shape[:2]
         if want is not None and (h, w) != want:
-            raise FogrefError(f"{paths[k]}: {w}x{h} px, but {truth_name} is {want[1]}x{want[0]} px; "
-                              "render the engine's image at the truth's resolution (same camera)")
+            raise FogrefError(
+                f"{paths[k]}: {w}x{h} px, but {truth_name} is {want[1]}x{want[0]} px; "
+                "render the engine's image at the truth's resolution (same camera)"
+            )
         if want is None:
             want = (h, w)
     if fog_colour is not None:
         imgs["inscatter"] = imgs["inscatter"] * (1.0 - imgs["transmittance"])
     label = {k: k if k != "inscatter" or fog_colour is None else "fog_colour" for k in paths}
-    return EngineImages(final=imgs.get("final"), transmittance=imgs.get("transmittance"),
-                        inscatter=imgs.get("inscatter"), sources={label[k]: str(p) for k, p in paths.items()},
-                        encodings={label[k]: e for k, e in used.items()}, encoding_option=encoding,
-                        exposure=float(exposure))
+    return EngineImages(
+        final=imgs.get("final"),
+        transmittance=imgs.get("transmittance"),
+        inscatter=imgs.get("inscatter"),
+        sources={label[k]: str(p) for k, p in paths.items()},
+        encodings={label[k]: e for k, e in used.items()},
+        encoding_option=encoding,
+        exposure=float(exposure),
+    )
 
 
-def compare_images(truth, images: EngineImages, out_dir=None, tolerances=None, *, figures: bool = True,
-                   **check_options):
+def compare_images(
+    truth, images: EngineImages, out_dir=None, tolerances=None, *, figures: bool = True, **check_options
+):
     """Check an engine's images against a truth; optionally write the report.
 
     Every part the engine gave is compared with the truth's matching part, with
@@ -385,8 +421,10 @@ def compare_images(truth, images: EngineImages, out_dir=None, tolerances=None, *
     if not isinstance(truth, Truth):
         truth = load_truth(truth)
     if images.shape is not None and images.shape != truth.shape:
-        raise FogrefError(f"engine images are {images.shape[1]}x{images.shape[0]} px, but {truth.path} is "
-                          f"{truth.shape[1]}x{truth.shape[0]} px")
+        raise FogrefError(
+            f"engine images are {images.shape[1]}x{images.shape[0]} px, but {truth.path} is "
+            f"{truth.shape[1]}x{truth.shape[0]} px"
+        )
     result = check(truth, images, tolerances, **check_options)
     if out_dir is not None:
         from fogref.compare import report

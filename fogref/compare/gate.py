@@ -35,8 +35,10 @@ from fogref.errors import FogrefError
 #: Exit code of each overall verdict (2 is a usage or input error).
 EXIT_CODES: dict[str, int] = {"pass": 0, "fail": 1, "inconclusive": 3}
 USAGE_ERROR = 2
-EXIT_HELP = ("exit codes: 0 pass, 1 fail, 2 usage or input error, 3 inconclusive (no row fails but an "
-             "interval straddles its tolerance; --inconclusive fail|pass maps it to 1|0)")
+EXIT_HELP = (
+    "exit codes: 0 pass, 1 fail, 2 usage or input error, 3 inconclusive (no row fails but an "
+    "interval straddles its tolerance; --inconclusive fail|pass maps it to 1|0)"
+)
 
 
 def parse_tolerances(items) -> dict:
@@ -59,8 +61,10 @@ def parse_tolerances(items) -> dict:
         key, eq, value = str(item).partition("=")
         where, _, metric = key.strip().partition(":")
         if not eq or not where or (":" in key and not metric):
-            raise FogrefError(f"--tolerance {item}: expected PART[/REGION][:METRIC]=VALUE, "
-                              "e.g. inscatter/sky=0.05 or T:rel_bias=0.001")
+            raise FogrefError(
+                f"--tolerance {item}: expected PART[/REGION][:METRIC]=VALUE, "
+                "e.g. inscatter/sky=0.05 or T:rel_bias=0.001"
+            )
         value = value.strip()
         if value.lower() == "none":
             tol = None
@@ -70,8 +74,10 @@ def parse_tolerances(items) -> dict:
             except ValueError:
                 tol = math.nan
             if not (math.isfinite(tol) and tol >= 0):
-                raise FogrefError(f"--tolerance {item}: value '{value}' must be a finite number >= 0 "
-                                  "(relative metrics: 0.05 is 5 %) or 'none'")
+                raise FogrefError(
+                    f"--tolerance {item}: value '{value}' must be a finite number >= 0 "
+                    "(relative metrics: 0.05 is 5 %) or 'none'"
+                )
         row, metric = out.setdefault(where.strip(), {}), metric.strip() or "rel_rmse"
         if metric in row:
             raise FogrefError(f"--tolerance {item}: {where.strip()}:{metric} is given twice; give each once")
@@ -92,8 +98,10 @@ def parse_distance_bands(text: str) -> tuple[float, ...]:
     except ValueError:
         edges = (math.nan,)
     if not all(math.isfinite(e) and e > 0 for e in edges) or any(b <= a for a, b in zip(edges, edges[1:])):
-        raise FogrefError(f"--distance-bands {text}: expected increasing distances [m] > 0 separated by "
-                          "commas (e.g. 100,1000) or 'none'")
+        raise FogrefError(
+            f"--distance-bands {text}: expected increasing distances [m] > 0 separated by "
+            "commas (e.g. 100,1000) or 'none'"
+        )
     return edges
 
 

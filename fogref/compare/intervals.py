@@ -43,8 +43,19 @@ def block_sums(cand, ref, cov, rcov, mask, block: int) -> np.ndarray:
     """``(n_blocks, 5)`` per-block sums of ``e² - s²``, ``r² - s_r²``, ``e``, ``r`` and the count."""
     e = cand - ref
     var, rvar = noise.diagonal(cov), noise.diagonal(rcov)
-    q = np.stack([(e * e - var).sum(-1), (ref * ref - rvar).sum(-1), e.sum(-1), ref.sum(-1),
-                  np.full(mask.shape, 3.0)], -1) * mask[..., None]
+    q = (
+        np.stack(
+            [
+                (e * e - var).sum(-1),
+                (ref * ref - rvar).sum(-1),
+                e.sum(-1),
+                ref.sum(-1),
+                np.full(mask.shape, 3.0),
+            ],
+            -1,
+        )
+        * mask[..., None]
+    )
     H, W = mask.shape
     hb, wb = -(-H // block), -(-W // block)
     pad = np.zeros((hb * block, wb * block, len(_Q)))
@@ -65,9 +76,12 @@ def estimates_from_sums(s: np.ndarray) -> dict:
     """
     sq, power, err, ref, n = (s[..., i] for i in range(5))
     with np.errstate(divide="ignore", invalid="ignore"):
-        return {"rel_rmse": sq / np.where(power > 0, power, np.nan),
-                "rel_bias": err / np.where(ref != 0, ref, np.nan),
-                "rmse": sq / n, "bias": err / n}
+        return {
+            "rel_rmse": sq / np.where(power > 0, power, np.nan),
+            "rel_bias": err / np.where(ref != 0, ref, np.nan),
+            "rmse": sq / n,
+            "bias": err / n,
+        }
 
 
 def block_bootstrap(sums: np.ndarray, n_boot: int, seed: int, chunk: int = 256) -> dict:
@@ -117,9 +131,11 @@ def noise_sd(cand, ref, cov, rcov, mask, spp: int, point: dict) -> dict:
     var_err, var_ref = noise.sum_var(C), noise.sum_var(R)
     n = 3.0 * float(mask.sum())
     power, err, refsum = (float(point[k]) for k in ("_power", "_err", "_ref"))
-    out = {"rmse": math.sqrt(var_sq) / n, "bias": math.sqrt(var_err) / n,
-           "rel_rmse": math.sqrt(var_sq) / power if power > 0 else math.nan,
-           "_ref_sd": math.sqrt(var_ref)}
+    out = {
+        "rmse": math.sqrt(var_sq) / n,
+        "bias": math.sqrt(var_err) / n,
+        "rel_rmse": math.sqrt(var_sq) / power if power > 0 else math.nan,
+        "_ref_sd": math.sqrt(var_ref),
+    }
     out["rel_bias"] = math.sqrt(noise.ratio_var(err, refsum, var_err, var_ref)) if refsum != 0 else math.nan
     return out
-

@@ -104,8 +104,10 @@ def require_finite(x: np.ndarray, what: str) -> None:
     """
     n = count_nonfinite(x)
     if n:
-        raise ValueError(f"{what}: the test image holds {n} non-finite value(s); mask those pixels out "
-                         "(error_maps does, and counts them)")
+        raise ValueError(
+            f"{what}: the test image holds {n} non-finite value(s); mask those pixels out "
+            "(error_maps does, and counts them)"
+        )
 
 
 def _masked_mean(per_pixel: np.ndarray, mask, what: str = "metric") -> float | None:
@@ -216,8 +218,11 @@ def _noise_inputs(diff, sigma, mask, weight, cov):
         raise ValueError("standard errors must be finite and >= 0")
     # no covariance given: the channels' noise is taken as fully correlated (an upper bound
     # for sums of positive weights: they come from the same samples)
-    C = s[..., :, None] * s[..., None, :] if cov is None else np.broadcast_to(
-        np.asarray(cov, dtype=np.float64), d.shape + (3,))
+    C = (
+        s[..., :, None] * s[..., None, :]
+        if cov is None
+        else np.broadcast_to(np.asarray(cov, dtype=np.float64), d.shape + (3,))
+    )
     if mask is not None:
         m = np.asarray(mask, dtype=bool)
         d, w, C = d[m], w[m], C[m]
@@ -280,8 +285,14 @@ def mse_noise(diff, sigma, mask=None, weight=None, z: float = NOISE_Z, cov=None,
     _, var = noise.squared_stat(d, C, spp, w)
     _, null_var = noise.squared_stat(np.zeros_like(d), C, spp, w)
     stderr, null = math.sqrt(var) / n, math.sqrt(null_var) / n
-    return {"mse": mse, "noise_floor": floor, "stderr": stderr, "debiased": max(mse - floor, 0.0),
-            "null_stderr": null, "below_noise": bool(mse - floor <= z * null)}
+    return {
+        "mse": mse,
+        "noise_floor": floor,
+        "stderr": stderr,
+        "debiased": max(mse - floor, 0.0),
+        "null_stderr": null,
+        "below_noise": bool(mse - floor <= z * null),
+    }
 
 
 def mean_noise(diff, sigma, mask=None, z: float = NOISE_Z, cov=None) -> dict | None:

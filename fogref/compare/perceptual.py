@@ -175,9 +175,13 @@ def flip_map(reference, test, ppd: float = FLIP_PPD) -> tuple[np.ndarray, dict]:
         e = float(np.log2(1.0 / y_test))
         params.update(startExposure=e, stopExposure=e, numExposures=2)
     elif span[1] - span[0] > FLIP_MAX_STOPS:
-        params.update(startExposure=span[1] - FLIP_MAX_STOPS, stopExposure=span[1], numExposures=FLIP_MAX_STOPS + 1)
+        params.update(
+            startExposure=span[1] - FLIP_MAX_STOPS, stopExposure=span[1], numExposures=FLIP_MAX_STOPS + 1
+        )
     err, _, used = flip_evaluator.evaluate(
         r.astype(np.float32), x.astype(np.float32), "HDR", applyMagma=False, parameters=params
     )
     err = np.asarray(err, dtype=np.float64).reshape(r.shape[:2])
-    return np.clip(err, 0.0, 1.0), {k: (float(v) if isinstance(v, (int, float)) else v) for k, v in used.items()}
+    return np.clip(err, 0.0, 1.0), {
+        k: (float(v) if isinstance(v, (int, float)) else v) for k, v in used.items()
+    }

@@ -62,8 +62,14 @@ def plot_error_heatmaps(errors: ErrorMaps, part: str, units: str, path) -> Path:
     panels = [
         (signed, "model − reference (signed)", f"[{units}]", "RdBu_r", -lim, lim),
         (errors.absolute, "|model − reference|", f"[{units}]", "viridis", 0.0, _robust_max(errors.absolute)),
-        (errors.relative_squared, "relative squared error", "[1]", "viridis", 0.0,
-         _robust_max(errors.relative_squared)),
+        (
+            errors.relative_squared,
+            "relative squared error",
+            "[1]",
+            "viridis",
+            0.0,
+            _robust_max(errors.relative_squared),
+        ),
         (errors.delta_e2000, "ΔE2000", "[1]", "viridis", 0.0, _robust_max(errors.delta_e2000)),
         (errors.flip, "HDR-FLIP", "[0..1]", "magma", 0.0, 1.0),
     ]
@@ -75,13 +81,18 @@ def plot_error_heatmaps(errors: ErrorMaps, part: str, units: str, path) -> Path:
 
     for ax, (m, title, unit, cmap, vmin, vmax) in zip(axes, panels):
         cm = matplotlib.colormaps[cmap].with_extremes(bad="0.6")
-        im = ax.imshow(np.ma.masked_array(m, ~errors.valid), cmap=cm, vmin=vmin, vmax=vmax, interpolation="nearest")
+        im = ax.imshow(
+            np.ma.masked_array(m, ~errors.valid), cmap=cm, vmin=vmin, vmax=vmax, interpolation="nearest"
+        )
         ax.set_title(f"{title} {unit}", fontsize=9)
         ax.set_axis_off()
         fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04).set_label(unit, fontsize=8)
     excluded = int(np.count_nonzero(~errors.valid))
-    fig.suptitle(f"{part}: per-pixel error of the model"
-                 + (f" (grey: {excluded} excluded pixels)" if excluded else ""), fontsize=10)
+    fig.suptitle(
+        f"{part}: per-pixel error of the model"
+        + (f" (grey: {excluded} excluded pixels)" if excluded else ""),
+        fontsize=10,
+    )
     return save_figure_atomic(fig, path)
 
 
@@ -99,8 +110,11 @@ def plot_side_by_side(reference, model, exposure: float, part: str, units: str, 
     model_img = tone_map(model, exposure)
     error_img = tone_map(np.abs(model - reference), exposure)
     model_img[~valid], error_img[~valid] = magenta, magenta
-    images = [(tone_map(reference, exposure), "reference"), (model_img, "model"),
-              (error_img, "|model − reference|")]
+    images = [
+        (tone_map(reference, exposure), "reference"),
+        (model_img, "model"),
+        (error_img, "|model − reference|"),
+    ]
     pw, ph = _panel_size(reference.shape[:2])
     fig = _figure(pw * 3, ph + 0.8)
     axes = fig.subplots(1, 3)
@@ -146,8 +160,14 @@ def plot_binned_errors(
         ax = axes[1 if dimensionless else 0]
         ax.plot(x, _floats(stats["rmse"]), **style)
         if "rmse_noise_floor" in stats:
-            ax.plot(x, _floats(stats["rmse_noise_floor"]), ls="--", lw=1, color=style["color"],
-                    label=f"{part} noise floor")
+            ax.plot(
+                x,
+                _floats(stats["rmse_noise_floor"]),
+                ls="--",
+                lw=1,
+                color=style["color"],
+                label=f"{part} noise floor",
+            )
         axes[2].plot(x, _floats(stats["delta_e2000_mean"]), **style)
         axes[3].plot(x, _floats(stats["flip_mean"]), **style)
     for ax, label in zip(axes, labels):

@@ -46,4 +46,3 @@ def region_masks(truth: Truth, distance_bands=(100.0, 1000.0)) -> dict:
         for lo, hi in zip(bounds[:-1], bounds[1:]):
             out[_band_name(lo, hi)] = truth.hit & (truth.distance >= lo) & (truth.distance < hi)
     return out
-

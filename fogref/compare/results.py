@@ -53,10 +53,15 @@ class Row:
         if self.estimate is None:
             verdict = "no pixels" if self.verdict == "empty" else self.verdict
             return f"{self.part}/{self.region} {self.metric}: {verdict} ({self.pixels} px{note})"
-        tol = "" if self.tolerance is None else f", tolerance {'|x| ' if self.metric in SIGNED else ''}" \
-                                                f"<= {self.tolerance:g}"
-        return (f"{self.part}/{self.region} {self.metric} = {self.estimate:.4g} "
-                f"[{self.low:.4g}, {self.high:.4g}]{tol}: {self.verdict} ({self.pixels} px{note})")
+        tol = (
+            ""
+            if self.tolerance is None
+            else f", tolerance {'|x| ' if self.metric in SIGNED else ''}<= {self.tolerance:g}"
+        )
+        return (
+            f"{self.part}/{self.region} {self.metric} = {self.estimate:.4g} "
+            f"[{self.low:.4g}, {self.high:.4g}]{tol}: {self.verdict} ({self.pixels} px{note})"
+        )
 
 
 def _excess(r: Row) -> float:
@@ -120,16 +125,23 @@ class CheckResult:
 
     def summary(self) -> str:
         """A text table of every row with a tolerance, then the verdict."""
-        lines = [f"check: {self.candidate} vs {self.truth} ({self.confidence:.0%} intervals, {self.method_text})"]
+        lines = [
+            f"check: {self.candidate} vs {self.truth} ({self.confidence:.0%} intervals, {self.method_text})"
+        ]
         lines += ["  " + r.describe() for r in self.rows if r.tolerance is not None]
         lines.append(f"verdict: {self.verdict}")
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
         """JSON-ready (no NaN): settings, verdict and rows."""
-        return {"truth": self.truth, "candidate": self.candidate, "confidence": self.confidence,
-                "verdict": self.verdict, "settings": self.settings,
-                "rows": [dict(vars(r)) for r in self.rows]}
+        return {
+            "truth": self.truth,
+            "candidate": self.candidate,
+            "confidence": self.confidence,
+            "verdict": self.verdict,
+            "settings": self.settings,
+            "rows": [dict(vars(r)) for r in self.rows],
+        }
 
     def write(self, out_dir) -> Path:
         """Write ``check.json`` and ``errors.exr`` (signed error per part) to ``out_dir``;
@@ -142,8 +154,10 @@ class CheckResult:
                 ch[f"{part}.error.{c}"] = e[..., i]
             ch[f"{part}.abs_error"] = np.abs(e).mean(-1)
         big = float(np.finfo(np.float32).max)
-        write_exr(out / "errors.exr", {k: np.clip(v, -big, big) for k, v in ch.items()},
-                  {"fogref.check": {"truth": self.truth, "candidate": self.candidate}})
+        write_exr(
+            out / "errors.exr",
+            {k: np.clip(v, -big, big) for k, v in ch.items()},
+            {"fogref.check": {"truth": self.truth, "candidate": self.candidate}},
+        )
         write_text_atomic(out / "check.json", json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n")
         return out / "errors.exr"
-

@@ -14,10 +14,18 @@ from fogref.models.base import SKY_DISTANCE as DEFAULT_SKY_DISTANCE
 from fogref.params import integer
 
 
-def synthetic_truth(model, shape=(18, 32), noise: float = 0.01, seed: int = 0, fov_deg: float = 70.0,
-                    surface_radiance=(0.3, 0.25, 0.2), sky_radiance=(0.2, 0.3, 0.5),
-                    sky_distance: float = DEFAULT_SKY_DISTANCE, correlated: bool = False,
-                    channel_correlation: float = 0.0) -> Truth:
+def synthetic_truth(
+    model,
+    shape=(18, 32),
+    noise: float = 0.01,
+    seed: int = 0,
+    fov_deg: float = 70.0,
+    surface_radiance=(0.3, 0.25, 0.2),
+    sky_radiance=(0.2, 0.3, 0.5),
+    sky_distance: float = DEFAULT_SKY_DISTANCE,
+    correlated: bool = False,
+    channel_correlation: float = 0.0,
+) -> Truth:
     """A pixel-exact :class:`~fogref.gbuffer.Truth` on which ``model`` is exact, plus known noise.
 
     The camera (at 2 m) looks over a ground plane (y = 0) below the horizon and a
@@ -96,15 +104,46 @@ def synthetic_truth(model, shape=(18, 32), noise: float = 0.01, seed: int = 0, f
     att = T * s_hat
     final = att + L_hat
     zero = np.zeros((H, W, 3))
-    stderr = {"final": np.sqrt(se_L**2 + (T * se_s) ** 2), "transmittance": zero, "attenuated_surface": T * se_s,
-              "inscatter": se_L, "single": se_L, "multiple": zero, "surface": se_s}
-    params = {"camera": {"origin": camera.tolist()}, "sun": None, "sky": {"type": "constant",
-                                                                         "radiance": list(sky_radiance)}}
-    attrs = {"fogref.schema": "2", "fogref.pixel_filter": "centre", "fogref.spp": 0, "fogref.seed": seed,
-             "fogref.params": params, "fogref.synthetic": True}
-    return Truth(path=Path(f"<synthetic truth, seed {seed}>"), final=final, transmittance=T, attenuated_surface=att,
-                 inscatter=L_hat, single=L_hat, multiple=zero, surface=s_hat, stderr=stderr,
-                 surface_coverage=np.ones((H, W)), distance=t, position=pos, view=d,
-                 hit_fraction=hit.astype(float), camera=camera, sun_direction=None, params=params, attrs=attrs,
-                 corr={k: np.full((H, W, 3), rho) for k in stderr})
-
+    stderr = {
+        "final": np.sqrt(se_L**2 + (T * se_s) ** 2),
+        "transmittance": zero,
+        "attenuated_surface": T * se_s,
+        "inscatter": se_L,
+        "single": se_L,
+        "multiple": zero,
+        "surface": se_s,
+    }
+    params = {
+        "camera": {"origin": camera.tolist()},
+        "sun": None,
+        "sky": {"type": "constant", "radiance": list(sky_radiance)},
+    }
+    attrs = {
+        "fogref.schema": "2",
+        "fogref.pixel_filter": "centre",
+        "fogref.spp": 0,
+        "fogref.seed": seed,
+        "fogref.params": params,
+        "fogref.synthetic": True,
+    }
+    return Truth(
+        path=Path(f"<synthetic truth, seed {seed}>"),
+        final=final,
+        transmittance=T,
+        attenuated_surface=att,
+        inscatter=L_hat,
+        single=L_hat,
+        multiple=zero,
+        surface=s_hat,
+        stderr=stderr,
+        surface_coverage=np.ones((H, W)),
+        distance=t,
+        position=pos,
+        view=d,
+        hit_fraction=hit.astype(float),
+        camera=camera,
+        sun_direction=None,
+        params=params,
+        attrs=attrs,
+        corr={k: np.full((H, W, 3), rho) for k in stderr},
+    )

@@ -44,23 +44,33 @@ def tolerance_table(tolerances, regions=None) -> dict:
     """
     table = {(p, None): dict(v) for p, v in DEFAULT_TOLERANCES.items()}
     if tolerances is not None and not isinstance(tolerances, Mapping):
-        raise ParameterError("api", "tolerances", f"expected a dict, got {type(tolerances).__name__} "
-                             f"{_short(tolerances)}: write {{'part': 0.05}} (rel_rmse), {{'part/region': "
-                             "0.05}} or {'part': {'rel_rmse': 0.05, 'bias': 0.01}}; None for the defaults")
+        raise ParameterError(
+            "api",
+            "tolerances",
+            f"expected a dict, got {type(tolerances).__name__} "
+            f"{_short(tolerances)}: write {{'part': 0.05}} (rel_rmse), {{'part/region': "
+            "0.05}} or {'part': {'rel_rmse': 0.05, 'bias': 0.01}}; None for the defaults",
+        )
     for key, value in (tolerances or {}).items():
         part, _, region = str(key).partition("/")
         if part not in PART_NAMES:
-            raise FogrefError(f"tolerances: unknown part '{part}' in '{key}'{did_you_mean(part, PART_NAMES)} "
-                              f"(parts: {', '.join(PART_NAMES)}; write 'part' or 'part/region')")
+            raise FogrefError(
+                f"tolerances: unknown part '{part}' in '{key}'{did_you_mean(part, PART_NAMES)} "
+                f"(parts: {', '.join(PART_NAMES)}; write 'part' or 'part/region')"
+            )
         if region and regions is not None and region not in regions:
-            raise FogrefError(f"tolerances: unknown region '{region}' in '{key}'{did_you_mean(region, regions)} "
-                              f"(regions: {', '.join(regions)})")
+            raise FogrefError(
+                f"tolerances: unknown region '{region}' in '{key}'{did_you_mean(region, regions)} "
+                f"(regions: {', '.join(regions)})"
+            )
         spec = value if isinstance(value, dict) else {"rel_rmse": value}
         clean = {}
         for metric, tol in spec.items():
             if metric not in METRICS:
-                raise FogrefError(f"tolerances['{key}']: unknown metric '{metric}'{did_you_mean(metric, METRICS)} "
-                                  f"(metrics: {', '.join(METRICS)})")
+                raise FogrefError(
+                    f"tolerances['{key}']: unknown metric '{metric}'{did_you_mean(metric, METRICS)} "
+                    f"(metrics: {', '.join(METRICS)})"
+                )
             if tol is not None:  # a number (not a bool), finite, >= 0: the one validator
                 tol = number(tol, f"tolerances['{key}']['{metric}']", source="api", lo=0.0)
             clean[metric] = tol

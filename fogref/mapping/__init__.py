@@ -37,8 +37,24 @@ from fogref.mapping.unreal import (
 )
 from fogref.models.base import SKY_DISTANCE
 
-__all__ = ["FIT_DIRECTIONS_MAX", "FIT_DIRECTIONS_START", "FIT_RTOL", "MAPPINGS", "SKY_DISTANCE", "FitResult",
-           "PhysicalScene", "Views",
-           "base_params", "fit_unreal", "from_physical", "has_mapping", "lobe_fit", "lobe_table",
-           "physical_single_scattering", "register_mapping", "sample_views", "ue4_from_physical",
-           "unreal_inscatter"]
+__all__ = [
+    "FIT_DIRECTIONS_MAX",
+    "FIT_DIRECTIONS_START",
+    "FIT_RTOL",
+    "MAPPINGS",
+    "SKY_DISTANCE",
+    "FitResult",
+    "PhysicalScene",
+    "Views",
+    "base_params",
+    "fit_unreal",
+    "from_physical",
+    "has_mapping",
+    "lobe_fit",
+    "lobe_table",
+    "physical_single_scattering",
+    "register_mapping",
+    "sample_views",
+    "ue4_from_physical",
+    "unreal_inscatter",
+]

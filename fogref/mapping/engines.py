@@ -30,9 +30,17 @@ from fogref.models.hdrp import (
 )
 from fogref.models.unity_builtin import UnityBuiltinFog, medium_to_unity
 
-__all__ = ["altitude_from_physical", "bevy_from_physical", "box_from_physical", "filament_from_physical",
-           "fixed_lobe_amplitude", "godot_from_physical", "hdrp_from_physical", "threejs_from_physical",
-           "unity_from_physical"]
+__all__ = [
+    "altitude_from_physical",
+    "bevy_from_physical",
+    "box_from_physical",
+    "filament_from_physical",
+    "fixed_lobe_amplitude",
+    "godot_from_physical",
+    "hdrp_from_physical",
+    "threejs_from_physical",
+    "unity_from_physical",
+]
 
 
 @register_mapping("unity")
@@ -56,15 +64,19 @@ def unity_from_physical(ps: PhysicalScene) -> UnityBuiltinFog:
     >>> unity_from_physical(ps).params.fogDensity
     0.01
     """
-    ps.require_profile("Unity", ("homogeneous", "exponential", "hdrp", "powerlaw"),
-                       "Unity's built-in fog fills all space (no bounds)")
+    ps.require_profile(
+        "Unity",
+        ("homogeneous", "exponential", "hdrp", "powerlaw"),
+        "Unity's built-in fog fills all space (no bounds)",
+    )
     ps.require_unbounded("Unity")
     sigma = ps.grey_sigma_t("Unity")
     m = ps.medium
     if not m.is_homogeneous:
         rho = float(np.asarray(m.density(NP, tuple(np.asarray([c]) for c in ps.camera))).reshape(-1)[0])
-        m = FogMedium(sigma_t=sigma * rho, albedo=m.albedo, g=m.g, layers=(ExpLayer(1.0, 0.0, 0.0),),
-                      source=ps.source)
+        m = FogMedium(
+            sigma_t=sigma * rho, albedo=m.albedo, g=m.g, layers=(ExpLayer(1.0, 0.0, 0.0),), source=ps.source
+        )
     return UnityBuiltinFog(medium_to_unity(m, fogColor=ps.sky_colour()))
 
 
@@ -85,13 +97,22 @@ def altitude_from_physical(ps: PhysicalScene) -> AltitudeFog:
     >>> altitude_from_physical(ps).params._FogColor[3]
     0.02
     """
-    ps.require_profile("altitude fog", ("powerlaw",),
-                       "the altitude fog's density is the power law ((end - y)/(end - start))^power")
+    ps.require_profile(
+        "altitude fog",
+        ("powerlaw",),
+        "the altitude fog's density is the power law ((end - y)/(end - start))^power",
+    )
     ps.require_unbounded("altitude fog")
     sigma = ps.grey_sigma_t("altitude fog")
     L = ps.medium.layers[0]
-    return AltitudeFog(AltitudeFogParams(_FogStart=L.start, _FogEnd=L.end, _FogPower=L.power,
-                                         _FogColor=(*ps.sky_colour(), sigma * L.density)))
+    return AltitudeFog(
+        AltitudeFogParams(
+            _FogStart=L.start,
+            _FogEnd=L.end,
+            _FogPower=L.power,
+            _FogColor=(*ps.sky_colour(), sigma * L.density),
+        )
+    )
 
 
 @register_mapping("box")
@@ -114,16 +135,23 @@ def box_from_physical(ps: PhysicalScene) -> BoxFog:
     """
     m = ps.medium
     if m.bounds is None:
-        raise ParameterError(ps.source, "profile",
-                             f"'{ps.profile}' fog is unbounded; box fog needs a box (profile 'box', "
-                             f"bounds_min and bounds_max)")
+        raise ParameterError(
+            ps.source,
+            "profile",
+            f"'{ps.profile}' fog is unbounded; box fog needs a box (profile 'box', "
+            f"bounds_min and bounds_max)",
+        )
     if not m.is_homogeneous:
-        raise ParameterError(ps.source, "profile",
-                             f"'{ps.profile}' varies with height; box fog is homogeneous inside its box")
+        raise ParameterError(
+            ps.source, "profile", f"'{ps.profile}' varies with height; box fog is homogeneous inside its box"
+        )
     sigma = ps.grey_sigma_t("box fog")
     k = sigma * sum(L.density for L in m.layers)
-    return BoxFog(BoxFogParams(box_min=m.bounds.lo, box_max=m.bounds.hi, density=k,
-                               fog_color=ps.sky_colour(), mode="beer"))
+    return BoxFog(
+        BoxFogParams(
+            box_min=m.bounds.lo, box_max=m.bounds.hi, density=k, fog_color=ps.sky_colour(), mode="beer"
+        )
+    )
 
 
 @register_mapping("hdrp")
@@ -153,8 +181,11 @@ def hdrp_from_physical(ps: PhysicalScene) -> HDRPFog:
     >>> hdrp_from_physical(ps).params.baseHeight
     5.0
     """
-    ps.require_profile("HDRP", ("hdrp", "homogeneous", "exponential"),
-                       "HDRP's fog is constant below a base height and exponential above")
+    ps.require_profile(
+        "HDRP",
+        ("hdrp", "homogeneous", "exponential"),
+        "HDRP's fog is constant below a base height and exponential above",
+    )
     ps.require_unbounded("HDRP")
     sigma = ps.grey_sigma_t("HDRP")
     m = ps.medium
@@ -167,11 +198,15 @@ def hdrp_from_physical(ps: PhysicalScene) -> HDRPFog:
         layer = L
     else:  # ExpLayer with falloff > 0
         base = min(L.height, float(ps.camera[1]))
-        layer = HDRPLayer(density=L.density * math.exp(-L.falloff * (base - L.height)), base_height=base,
-                          falloff=L.falloff)
+        layer = HDRPLayer(
+            density=L.density * math.exp(-L.falloff * (base - L.height)), base_height=base, falloff=L.falloff
+        )
     m = FogMedium(sigma_t=sigma, albedo=m.albedo, g=m.g, layers=(layer,), source=ps.source)
-    return HDRPFog(medium_to_hdrp(m, color=tuple(float(x) for x in ps.sky_radiance),
-                                  maxFogDistance=FROM_PHYSICAL_MAX_FOG_DISTANCE))
+    return HDRPFog(
+        medium_to_hdrp(
+            m, color=tuple(float(x) for x in ps.sky_radiance), maxFogDistance=FROM_PHYSICAL_MAX_FOG_DISTANCE
+        )
+    )
 
 
 @register_mapping("filament")
@@ -204,25 +239,37 @@ def filament_from_physical(ps: PhysicalScene) -> FilamentFog:
     >>> filament_from_physical(ps).params.inScatteringSize
     -1.0
     """
-    ps.require_profile("Filament", ("exponential", "homogeneous"), "Filament's fog is one exponential height layer")
+    ps.require_profile(
+        "Filament", ("exponential", "homogeneous"), "Filament's fog is one exponential height layer"
+    )
     ps.require_unbounded("Filament")
     ps.grey_sigma_t("Filament")
     if len(ps.medium.layers) != 1:
         raise ParameterError(ps.source, "density2", "Filament fog has a single exponential layer")
-    kw = {"distance": 0.0, "cutOffDistance": math.inf, "maximumOpacity": 1.0, "color": ps.sky_colour(),
-          "inScatteringStart": 0.0, "inScatteringSize": -1.0}
+    kw = {
+        "distance": 0.0,
+        "cutOffDistance": math.inf,
+        "maximumOpacity": 1.0,
+        "color": ps.sky_colour(),
+        "inScatteringStart": 0.0,
+        "inScatteringSize": -1.0,
+    }
     w = ps.sun_direction
     if ps.has_sun and w[1] > 0:
         lobe = lobe_fit(ps.medium.g, isotropic=False)
         if lobe["exponent"] is not None:
             c = lobe["lobe"] / (4.0 * math.pi)
             sun = ps.albedo * np.asarray(ps.sun_irradiance) * ps.sun_transmittance_at_camera() * c
-            kw.update(inScatteringSize=float(lobe["exponent"]), lightDirection=tuple(float(x) for x in w),
-                      lightColorIntensity=(*(float(x) for x in sun), 1.0))
+            kw.update(
+                inScatteringSize=float(lobe["exponent"]),
+                lightDirection=tuple(float(x) for x in w),
+                lightColorIntensity=(*(float(x) for x in sun), 1.0),
+            )
     return FilamentFog(medium_to_filament(ps.medium, **kw))
 
 
 # -- Godot, Bevy, three.js (issue 19) ------------------------------------------------
+
 
 def _density_at_camera(ps: PhysicalScene) -> float:
     """``rho(camera)``: the medium's relative density at the camera (1 for a homogeneous fog)."""
@@ -246,7 +293,7 @@ def fixed_lobe_amplitude(g: float, exponent: float, n_quad: int = 256) -> float:
     x, w = np.polynomial.legendre.leggauss(n_quad)
     mu, w = 0.5 * (x + 1.0), 0.5 * w
     p = (1.0 - g * g) / (4.0 * math.pi * (1.0 + g * g - 2.0 * g * mu) ** 1.5)
-    return float((2.0 * exponent + 1.0) * np.sum(w * p * mu ** exponent))
+    return float((2.0 * exponent + 1.0) * np.sum(w * p * mu**exponent))
 
 
 @register_mapping("godot")
@@ -278,20 +325,34 @@ def godot_from_physical(ps: PhysicalScene):
     from fogref.models.base import SKY_DISTANCE
     from fogref.models.godot import SUN_SCATTER_EXPONENT, GodotFog, GodotFogParams
 
-    ps.require_profile("Godot", ("homogeneous", "exponential", "hdrp", "powerlaw"),
-                       "Godot's environment fog fills all space (no bounds)")
+    ps.require_profile(
+        "Godot",
+        ("homogeneous", "exponential", "hdrp", "powerlaw"),
+        "Godot's environment fog fills all space (no bounds)",
+    )
     ps.require_unbounded("Godot")
     sigma = ps.grey_sigma_t("Godot") * _density_at_camera(ps)
-    kw = {"fog_mode": "exponential", "fog_density": sigma, "fog_height_density": 0.0,
-          "fog_light_color": ps.sky_colour(), "fog_light_energy": 1.0, "fog_aerial_perspective": 0.0,
-          "fog_sky_affect": float(-math.expm1(-sigma * SKY_DISTANCE)), "sky_distance": SKY_DISTANCE,
-          "sky_color": tuple(float(x) for x in np.asarray(ps.sky_radiance)), "fog_sun_scatter": 0.0}
+    kw = {
+        "fog_mode": "exponential",
+        "fog_density": sigma,
+        "fog_height_density": 0.0,
+        "fog_light_color": ps.sky_colour(),
+        "fog_light_energy": 1.0,
+        "fog_aerial_perspective": 0.0,
+        "fog_sky_affect": float(-math.expm1(-sigma * SKY_DISTANCE)),
+        "sky_distance": SKY_DISTANCE,
+        "sky_color": tuple(float(x) for x in np.asarray(ps.sky_radiance)),
+        "fog_sun_scatter": 0.0,
+    }
     w = ps.sun_direction
     if ps.has_sun and w[1] > 0:
         c = fixed_lobe_amplitude(ps.medium.g, SUN_SCATTER_EXPONENT)
         sun = ps.albedo * np.asarray(ps.sun_irradiance) * ps.sun_transmittance_at_camera() * c
-        kw.update(fog_sun_scatter=1.0, sun_direction=tuple(float(x) for x in w),
-                  sun_color=tuple(float(x) for x in sun))
+        kw.update(
+            fog_sun_scatter=1.0,
+            sun_direction=tuple(float(x) for x in w),
+            sun_color=tuple(float(x) for x in sun),
+        )
     return GodotFog(GodotFogParams(**kw))
 
 
@@ -322,13 +383,21 @@ def bevy_from_physical(ps: PhysicalScene):
     """
     from fogref.models.bevy import BevyDistanceFog, medium_to_bevy
 
-    ps.require_profile("Bevy", ("homogeneous", "exponential", "hdrp", "powerlaw"),
-                       "Bevy's DistanceFog fills all space (no bounds)")
+    ps.require_profile(
+        "Bevy",
+        ("homogeneous", "exponential", "hdrp", "powerlaw"),
+        "Bevy's DistanceFog fills all space (no bounds)",
+    )
     ps.require_unbounded("Bevy")
     m = ps.medium
     rho = _density_at_camera(ps)
-    m = FogMedium(sigma_t=tuple(float(x) * rho for x in np.asarray(m.sigma_t, dtype=np.float64)),
-                  albedo=m.albedo, g=m.g, layers=(ExpLayer(1.0, 0.0, 0.0),), source=ps.source)
+    m = FogMedium(
+        sigma_t=tuple(float(x) * rho for x in np.asarray(m.sigma_t, dtype=np.float64)),
+        albedo=m.albedo,
+        g=m.g,
+        layers=(ExpLayer(1.0, 0.0, 0.0),),
+        source=ps.source,
+    )
     kw = {"color": (*ps.sky_colour(), 1.0), "directional_light_color": (0.0, 0.0, 0.0, 0.0)}
     w = ps.sun_direction
     if ps.has_sun and w[1] > 0:
@@ -336,10 +405,12 @@ def bevy_from_physical(ps: PhysicalScene):
         if lobe["exponent"] is not None:
             c = lobe["lobe"] / (4.0 * math.pi)
             dl = ps.albedo * ps.sun_transmittance_at_camera() * c
-            kw.update(directional_light_exponent=float(lobe["exponent"]),
-                      light_direction=tuple(float(x) for x in w),
-                      light_color=tuple(float(x) for x in ps.sun_irradiance),
-                      directional_light_color=(*(float(x) for x in dl), 1.0))
+            kw.update(
+                directional_light_exponent=float(lobe["exponent"]),
+                light_direction=tuple(float(x) for x in w),
+                light_color=tuple(float(x) for x in ps.sun_irradiance),
+                directional_light_color=(*(float(x) for x in dl), 1.0),
+            )
     return BevyDistanceFog(medium_to_bevy(m, **kw))
 
 
@@ -365,8 +436,11 @@ def threejs_from_physical(ps: PhysicalScene):
     """
     from fogref.models.threejs import ThreeFogParams, ThreeJSFog
 
-    ps.require_profile("three.js", ("homogeneous", "exponential", "hdrp", "powerlaw"),
-                       "three.js fog fills all space (no bounds)")
+    ps.require_profile(
+        "three.js",
+        ("homogeneous", "exponential", "hdrp", "powerlaw"),
+        "three.js fog fills all space (no bounds)",
+    )
     ps.require_unbounded("three.js")
     sigma = ps.grey_sigma_t("three.js") * _density_at_camera(ps)
     return ThreeJSFog(ThreeFogParams(mode="FogExp2", density=sigma, color=ps.sky_colour()))

@@ -76,8 +76,16 @@ class Range:
         ``name``, the value and :meth:`text`."""
         k = self.kind
         if k in ("number", "angle"):
-            return params.number(value, name, source=source, lo=self.lo, hi=self.hi, lo_open=self.lo_open,
-                                 hi_open=self.hi_open, unit=self.unit)
+            return params.number(
+                value,
+                name,
+                source=source,
+                lo=self.lo,
+                hi=self.hi,
+                lo_open=self.lo_open,
+                hi_open=self.hi_open,
+                unit=self.unit,
+            )
         if k == "integer":
             return params.integer(value, name, source=source, lo=self.lo, hi=self.hi, unit=self.unit)
         if k == "depth":
@@ -144,6 +152,7 @@ def _fmt(x: float) -> str:
 def _vec(v) -> str:
     return ", ".join(_fmt(x) for x in v)
 
+
 def fog_from_physical(fog: dict | None = None, *, albedo=0.9, g: float = 0.6) -> dict:
     """The ``heightfog`` parameters of a fog given in physical units, validated.
 
@@ -190,13 +199,21 @@ def fog_from_physical(fog: dict | None = None, *, albedo=0.9, g: float = 0.6) ->
     fog = dict(fog or {})
     unknown = sorted(set(fog) - set(PHYSICAL) - set(SCATTERING))
     if unknown:
-        raise ParameterError(SOURCE, unknown[0],
-                             f"not a physical fog parameter; known: {', '.join(PHYSICAL)}")
+        raise ParameterError(
+            SOURCE, unknown[0], f"not a physical fog parameter; known: {', '.join(PHYSICAL)}"
+        )
     albedo = fog.pop("albedo", albedo)
     g = fog.pop("g", g)
     sigma0, falloff0 = unreal_to_sigma(0.02, 0.2)  # the shipped valley's fog
-    defaults = {"sigma_t": sigma0, "density": 1.0, "falloff": falloff0, "height": 0.0,
-                "density2": 0.0, "falloff2": 0.002, "height2": 100.0}
+    defaults = {
+        "sigma_t": sigma0,
+        "density": 1.0,
+        "falloff": falloff0,
+        "height": 0.0,
+        "density2": 0.0,
+        "falloff2": 0.002,
+        "height2": 100.0,
+    }
     out = {}
     for name, rng in PHYSICAL.items():
         v = fog.get(name, defaults.get(name))
@@ -208,8 +225,11 @@ def fog_from_physical(fog: dict | None = None, *, albedo=0.9, g: float = 0.6) ->
         missing = "bounds_max" if "bounds_min" in out else "bounds_min"
         raise ParameterError(SOURCE, PHYSICAL[missing].label(missing), "give both bounds or none")
     if "bounds_min" in out and not all(a < b for a, b in zip(out["bounds_min"], out["bounds_max"])):
-        raise ParameterError(SOURCE, PHYSICAL["bounds_max"].label("bounds_max"),
-                             f"{out['bounds_max']} must exceed bounds_min {out['bounds_min']} on every axis")
+        raise ParameterError(
+            SOURCE,
+            PHYSICAL["bounds_max"].label("bounds_max"),
+            f"{out['bounds_max']} must exceed bounds_min {out['bounds_min']} on every axis",
+        )
     out["fog_height"] = out.pop("height")
     _check_medium(out)
     return out
@@ -231,4 +251,3 @@ def _check_medium(fog: dict) -> None:
 
 def _text(v) -> str:
     return _vec(v) if isinstance(v, list) else _fmt(v)
-

@@ -95,7 +95,9 @@ class PhysicalScene:
         w = np.asarray(rgb(self.sun_direction, "direction", src), dtype=np.float64)
         n = float(np.linalg.norm(w))
         if not np.isfinite(n) or n == 0:
-            raise ParameterError(src, "direction", f"sun direction {tuple(self.sun_direction)} is not a direction")
+            raise ParameterError(
+                src, "direction", f"sun direction {tuple(self.sun_direction)} is not a direction"
+            )
         object.__setattr__(self, "sun_direction", tuple(float(x) for x in w / n))
         object.__setattr__(self, "sun_irradiance", rgb(self.sun_irradiance, "irradiance", src, 0.0))
         sky = (0.0, 0.0, 0.0) if self.sky_radiance is None else self.sky_radiance
@@ -148,8 +150,15 @@ class PhysicalScene:
         if camera is None:
             camera = (params.get("camera") or {}).get("origin", DEFAULT_CAMERA)
         camera = rgb(camera, "origin", f"{scene}: camera")
-        return cls(medium, direction, irradiance, radiance, camera,
-                   profile=str(mp.get("profile", "exponential")), source=src)
+        return cls(
+            medium,
+            direction,
+            irradiance,
+            radiance,
+            camera,
+            profile=str(mp.get("profile", "exponential")),
+            source=src,
+        )
 
     # -- what the mappings ask --------------------------------------------------
     @property
@@ -169,14 +178,19 @@ class PhysicalScene:
     def require_profile(self, model: str, allowed: tuple, why: str) -> None:
         """ParameterError naming 'profile' unless the medium's profile is in ``allowed``."""
         if self.profile not in allowed:
-            raise ParameterError(self.source, "profile", f"'{self.profile}' has no {model} counterpart: {why}")
+            raise ParameterError(
+                self.source, "profile", f"'{self.profile}' has no {model} counterpart: {why}"
+            )
 
     def require_unbounded(self, model: str) -> None:
         """ParameterError naming 'profile' when the fog is confined to a box."""
         if self.medium.bounds is not None:
-            raise ParameterError(self.source, "profile",
-                                 f"'{self.profile}' fog confined to bounds_min/bounds_max has no {model} "
-                                 f"counterpart: {model} fog is unbounded")
+            raise ParameterError(
+                self.source,
+                "profile",
+                f"'{self.profile}' fog confined to bounds_min/bounds_max has no {model} "
+                f"counterpart: {model} fog is unbounded",
+            )
 
     def grey_sigma_t(self, model: str) -> float:
         """The (grey) extinction scale [1/m]; ParameterError naming 'sigma_t' if the channels differ."""
@@ -196,5 +210,7 @@ class PhysicalScene:
         if not self.has_sun:
             return np.ones(3)
         o = tuple(np.asarray([c]) for c in self.camera)
-        tau = np.asarray(self.medium.sun_optical_depth(NP, o, self.sun_direction), dtype=np.float64).reshape(-1)[0]
+        tau = np.asarray(self.medium.sun_optical_depth(NP, o, self.sun_direction), dtype=np.float64).reshape(
+            -1
+        )[0]
         return np.exp(-np.asarray(self.medium.sigma_t, dtype=np.float64) * tau)

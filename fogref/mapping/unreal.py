@@ -42,11 +42,26 @@ from fogref.media.single_scatter import single_scatter_sky
 from fogref.models.base import SKY_DISTANCE
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams, medium_to_ue4
 
-__all__ = ["Basis", "EXPONENT_RANGE", "FIT_DIRECTIONS_MAX", "FIT_DIRECTIONS_START", "FIT_RTOL", "FitResult",
-           "LOG_N_RANGE",
-           "MAX_START_CM", "Views", "base_params", "fibonacci_directions", "fit_unreal",
-           "physical_single_scattering", "sample_views", "solve_colours", "ue4_from_physical", "unreal_basis",
-           "unreal_inscatter"]
+__all__ = [
+    "Basis",
+    "EXPONENT_RANGE",
+    "FIT_DIRECTIONS_MAX",
+    "FIT_DIRECTIONS_START",
+    "FIT_RTOL",
+    "FitResult",
+    "LOG_N_RANGE",
+    "MAX_START_CM",
+    "Views",
+    "base_params",
+    "fibonacci_directions",
+    "fit_unreal",
+    "physical_single_scattering",
+    "sample_views",
+    "solve_colours",
+    "ue4_from_physical",
+    "unreal_basis",
+    "unreal_inscatter",
+]
 
 #: Unreal clamps DirectionalInscatteringExponent to this range.
 EXPONENT_RANGE = (1e-6, 1000.0)
@@ -88,8 +103,9 @@ def fibonacci_directions(n: int) -> np.ndarray:
     return np.stack([r * np.cos(phi), y, r * np.sin(phi)], axis=-1)
 
 
-def sample_views(camera, n_dirs: int = 400, distances=None, min_dy: float = -0.5,
-                 sky_min_dy: float = 0.0) -> Views:
+def sample_views(
+    camera, n_dirs: int = 400, distances=None, min_dy: float = -0.5, sky_min_dy: float = 0.0
+) -> Views:
     """Views from ``camera``: Fibonacci directions with ``d_y >= min_dy`` at each of
     ``distances`` [m] (default 12 log-spaced from 10 m to 20 km), plus the sky
     (infinite distance) for directions with ``d_y > sky_min_dy``."""
@@ -106,8 +122,9 @@ def sample_views(camera, n_dirs: int = 400, distances=None, min_dy: float = -0.5
     return Views(np.asarray(camera, dtype=float), d_all, D_all)
 
 
-def physical_single_scattering(pf: PhysicalScene, views: Views, sun_attenuation: bool = True,
-                               sky: bool = True, sun: bool = True) -> np.ndarray:
+def physical_single_scattering(
+    pf: PhysicalScene, views: Views, sun_attenuation: bool = True, sky: bool = True, sun: bool = True
+) -> np.ndarray:
     """Closed-form single scattering (sun + sky, no occluders) of each view, (N, 3).
 
     ``sun_attenuation=False``: the sun term without its attenuation in the fog,
@@ -136,8 +153,13 @@ def physical_single_scattering(pf: PhysicalScene, views: Views, sun_attenuation:
 def base_params(pf: PhysicalScene, **kw) -> UE4FogParams:
     """Unreal parameters with the exact density/falloff/height of ``pf.medium``, the
     sun direction, and ``kw`` (other fields; start distances default to 0)."""
-    defaults = dict(DirectionalInscatteringStartDistance=0.0, StartDistance=0.0, FogMaxOpacity=1.0,
-                    FogCutoffDistance=0.0, SunLuminance=1.0)
+    defaults = dict(
+        DirectionalInscatteringStartDistance=0.0,
+        StartDistance=0.0,
+        FogMaxOpacity=1.0,
+        FogCutoffDistance=0.0,
+        SunLuminance=1.0,
+    )
     defaults.update(kw)
     p = medium_to_ue4(pf.medium, replace(UE4FogParams(), **defaults))
     return p.with_sun(pf.sun_direction, p.SunLuminance)
@@ -153,17 +175,22 @@ def unreal_inscatter(params: UE4FogParams, camera, world_pos, precision: str = "
 class Basis:
     """The two basis images of Unreal's inscatter at fixed exponent and start distance."""
 
-    iso: np.ndarray   # (N,) 1 - T
+    iso: np.ndarray  # (N,) 1 - T
     lobe: np.ndarray  # (N,) max(cos,0)^n (1 - T_dir)
 
 
-def unreal_basis(pf: PhysicalScene, views: Views, exponent: float, start_cm: float,
-                 sky_distance: float = SKY_DISTANCE) -> Basis:
+def unreal_basis(
+    pf: PhysicalScene, views: Views, exponent: float, start_cm: float, sky_distance: float = SKY_DISTANCE
+) -> Basis:
     """Unreal (float64) evaluated with unit colours: the isotropic and lobe images."""
     wp = views.world_positions(sky_distance)
-    p = base_params(pf, DirectionalInscatteringExponent=exponent,
-                    DirectionalInscatteringStartDistance=start_cm,
-                    FogInscatteringColor=(1.0, 0.0, 0.0), DirectionalInscatteringColor=(0.0, 1.0, 0.0))
+    p = base_params(
+        pf,
+        DirectionalInscatteringExponent=exponent,
+        DirectionalInscatteringStartDistance=start_cm,
+        FogInscatteringColor=(1.0, 0.0, 0.0),
+        DirectionalInscatteringColor=(0.0, 1.0, 0.0),
+    )
     ins = unreal_inscatter(p, np.asarray(pf.camera), wp)
     return Basis(iso=ins[:, 0], lobe=ins[:, 1])
 
@@ -192,8 +219,8 @@ class FitResult:
     """Best Unreal parameters for a physical fog, and how well they do on the views."""
 
     params: UE4FogParams
-    rmse: float                  #: RMSE of the inscatter over the views (radiance)
-    rel_rmse: float              #: rmse / RMS of the physical inscatter
+    rmse: float  #: RMSE of the inscatter over the views (radiance)
+    rel_rmse: float  #: rmse / RMS of the physical inscatter
     target_rms: float
     n_views: int
     sun_attenuation: bool
@@ -220,7 +247,8 @@ class FitResult:
         p = self.params
         return {
             "unreal": {
-                "FogDensity": p.FogDensity, "FogHeightFalloff": p.FogHeightFalloff,
+                "FogDensity": p.FogDensity,
+                "FogHeightFalloff": p.FogHeightFalloff,
                 "FogHeight_cm": p.FogHeight,
                 "FogInscatteringColor": list(p.FogInscatteringColor),
                 "DirectionalInscatteringColor": list(p.DirectionalInscatteringColor),
@@ -228,24 +256,39 @@ class FitResult:
                 "DirectionalInscatteringStartDistance_cm": p.DirectionalInscatteringStartDistance,
                 "InscatteringLightDirection_unreal": list(p.InscatteringLightDirection or ()),
                 "SunLuminance": p.SunLuminance,
-                "SecondFogData": {"FogDensity": p.SecondFogData.FogDensity,
-                                  "FogHeightFalloff": p.SecondFogData.FogHeightFalloff,
-                                  "FogHeightOffset_cm": p.SecondFogData.FogHeightOffset},
+                "SecondFogData": {
+                    "FogDensity": p.SecondFogData.FogDensity,
+                    "FogHeightFalloff": p.SecondFogData.FogHeightFalloff,
+                    "FogHeightOffset_cm": p.SecondFogData.FogHeightOffset,
+                },
             },
             "unreal_editor": self.editor_properties(),
-            "error": {"rmse": self.rmse, "rel_rmse": self.rel_rmse, "target_rms": self.target_rms,
-                      "n_views": self.n_views},
-            "fit": {"sun_attenuation_in_target": self.sun_attenuation,
-                    "start_distance_fitted": self.fit_start,
-                    "loss": "mean squared inscatter error over views (all RGB channels), model float64",
-                    **self.history},
+            "error": {
+                "rmse": self.rmse,
+                "rel_rmse": self.rel_rmse,
+                "target_rms": self.target_rms,
+                "n_views": self.n_views,
+            },
+            "fit": {
+                "sun_attenuation_in_target": self.sun_attenuation,
+                "start_distance_fitted": self.fit_start,
+                "loss": "mean squared inscatter error over views (all RGB channels), model float64",
+                **self.history,
+            },
         }
 
 
-def fit_unreal(pf: PhysicalScene, views: Views | None = None, *, sun_attenuation: bool = True,
-               fit_start: bool = True, target: np.ndarray | None = None,
-               sky_distance: float = SKY_DISTANCE, exponent: float | None = None,
-               rtol: float = FIT_RTOL) -> FitResult:
+def fit_unreal(
+    pf: PhysicalScene,
+    views: Views | None = None,
+    *,
+    sun_attenuation: bool = True,
+    fit_start: bool = True,
+    target: np.ndarray | None = None,
+    sky_distance: float = SKY_DISTANCE,
+    exponent: float | None = None,
+    rtol: float = FIT_RTOL,
+) -> FitResult:
     """Best FogInscatteringColor, DirectionalInscatteringColor, exponent and (if
     ``fit_start``) DirectionalInscatteringStartDistance for ``pf``: Unreal's one fit.
 
@@ -304,8 +347,16 @@ def fit_unreal(pf: PhysicalScene, views: Views | None = None, *, sun_attenuation
             fit = _fit_converged
         except TypeError:  # a scene holding arrays: not cached
             fit = _fit_converged.__wrapped__
-        return copy.deepcopy(fit(pf, sun_attenuation, fit_start, float(sky_distance),
-                                 None if exponent is None else float(exponent), float(rtol)))
+        return copy.deepcopy(
+            fit(
+                pf,
+                sun_attenuation,
+                fit_start,
+                float(sky_distance),
+                None if exponent is None else float(exponent),
+                float(rtol),
+            )
+        )
     if target is None:
         target = physical_single_scattering(pf, views, sun_attenuation=sun_attenuation)
     target = np.asarray(target, dtype=float)
@@ -317,7 +368,7 @@ def fit_unreal(pf: PhysicalScene, views: Views | None = None, *, sun_attenuation
         start_cm = float(np.clip(start_cm, 0.0, MAX_START_CM)) if fit_start else 0.0
         key = (round(log_n, 12), round(start_cm, 9))
         if key not in cache:
-            b = unreal_basis(pf, views, 10.0 ** log_n, start_cm, sky_distance)
+            b = unreal_basis(pf, views, 10.0**log_n, start_cm, sky_distance)
             cache[key] = solve_colours(b, target)
         return cache[key]
 
@@ -345,9 +396,17 @@ def fit_unreal(pf: PhysicalScene, views: Views | None = None, *, sun_attenuation
                 pen = s * s
             return sse(ln, max(s, 0.0))[2] * (1.0 + pen)
 
-        res = minimize(f, np.asarray(x0), method="Nelder-Mead",
-                       options={"xatol": 1e-4, "fatol": 1e-12 * max(1.0, float(np.sum(target ** 2))),
-                                "maxiter": 400, "initial_simplex": None})
+        res = minimize(
+            f,
+            np.asarray(x0),
+            method="Nelder-Mead",
+            options={
+                "xatol": 1e-4,
+                "fatol": 1e-12 * max(1.0, float(np.sum(target**2))),
+                "maxiter": 400,
+                "initial_simplex": None,
+            },
+        )
         x = res.x
         i = 0
         if exponent is None:
@@ -356,20 +415,33 @@ def fit_unreal(pf: PhysicalScene, views: Views | None = None, *, sun_attenuation
         if fit_start:
             s0 = float(np.clip(x[i] * 1e4, 0.0, MAX_START_CM))
     cf, cd, best = sse(ln0, s0)
-    params = base_params(pf, FogInscatteringColor=tuple(cf), DirectionalInscatteringColor=tuple(cd),
-                         DirectionalInscatteringExponent=10.0 ** ln0,
-                         DirectionalInscatteringStartDistance=s0 if fit_start else 0.0)
+    params = base_params(
+        pf,
+        FogInscatteringColor=tuple(cf),
+        DirectionalInscatteringColor=tuple(cd),
+        DirectionalInscatteringExponent=10.0**ln0,
+        DirectionalInscatteringStartDistance=s0 if fit_start else 0.0,
+    )
     rmse = math.sqrt(best / (3 * N))
-    trms = math.sqrt(float(np.mean(target ** 2)))
-    return FitResult(params=params, rmse=rmse, rel_rmse=rmse / trms if trms > 0 else 0.0, target_rms=trms,
-                     n_views=N, sun_attenuation=sun_attenuation, fit_start=fit_start,
-                     history={"evaluations": len(cache)})
+    trms = math.sqrt(float(np.mean(target**2)))
+    return FitResult(
+        params=params,
+        rmse=rmse,
+        rel_rmse=rmse / trms if trms > 0 else 0.0,
+        target_rms=trms,
+        n_views=N,
+        sun_attenuation=sun_attenuation,
+        fit_start=fit_start,
+        history={"evaluations": len(cache)},
+    )
 
 
 def _agree(p: UE4FogParams, q: UE4FogParams, rtol: float) -> bool:
     """Whether two fits agree within ``rtol`` (the criterion of :func:`fit_unreal`)."""
-    for a, b in ((p.FogInscatteringColor, q.FogInscatteringColor),
-                 (p.DirectionalInscatteringColor, q.DirectionalInscatteringColor)):
+    for a, b in (
+        (p.FogInscatteringColor, q.FogInscatteringColor),
+        (p.DirectionalInscatteringColor, q.DirectionalInscatteringColor),
+    ):
         if max(abs(x - y) for x, y in zip(a, b)) > rtol * max(max(b), 1e-300):
             return False
     lobe_on = max(q.DirectionalInscatteringColor) > 1e-6 * max(max(q.FogInscatteringColor), 1e-300)
@@ -379,31 +451,51 @@ def _agree(p: UE4FogParams, q: UE4FogParams, rtol: float) -> bool:
 
 
 @functools.lru_cache(maxsize=64)
-def _fit_converged(pf: PhysicalScene, sun_attenuation: bool, fit_start: bool, sky_distance: float,
-                   exponent: float | None, rtol: float) -> FitResult:
+def _fit_converged(
+    pf: PhysicalScene,
+    sun_attenuation: bool,
+    fit_start: bool,
+    sky_distance: float,
+    exponent: float | None,
+    rtol: float,
+) -> FitResult:
     """:func:`fit_unreal` with the direction count doubled until two fits agree within ``rtol``."""
     if not 0.0 < rtol < 1.0:
         raise ValueError(f"fit_unreal: rtol {rtol!r} must be in (0, 1)")
     t0 = time.perf_counter()
     steps, prev, n = [], None, FIT_DIRECTIONS_START
     while True:
-        r = fit_unreal(pf, sample_views(pf.camera, n_dirs=n), sun_attenuation=sun_attenuation,
-                       fit_start=fit_start, sky_distance=sky_distance, exponent=exponent)
+        r = fit_unreal(
+            pf,
+            sample_views(pf.camera, n_dirs=n),
+            sun_attenuation=sun_attenuation,
+            fit_start=fit_start,
+            sky_distance=sky_distance,
+            exponent=exponent,
+        )
         q = r.params
-        steps.append({"n_dirs": n, "exponent": q.DirectionalInscatteringExponent,
-                      "FogInscatteringColor": list(q.FogInscatteringColor),
-                      "DirectionalInscatteringColor": list(q.DirectionalInscatteringColor),
-                      "DirectionalInscatteringStartDistance": q.DirectionalInscatteringStartDistance,
-                      "rel_rmse": r.rel_rmse})
+        steps.append(
+            {
+                "n_dirs": n,
+                "exponent": q.DirectionalInscatteringExponent,
+                "FogInscatteringColor": list(q.FogInscatteringColor),
+                "DirectionalInscatteringColor": list(q.DirectionalInscatteringColor),
+                "DirectionalInscatteringStartDistance": q.DirectionalInscatteringStartDistance,
+                "rel_rmse": r.rel_rmse,
+            }
+        )
         converged = prev is not None and _agree(prev.params, q, rtol)
         if converged or n >= FIT_DIRECTIONS_MAX:
             break
         prev, n = r, 2 * n
-    r.history.update(n_dirs=n, directions_converged=converged, rtol=rtol, convergence=steps,
-                     fit_seconds=time.perf_counter() - t0)
+    r.history.update(
+        n_dirs=n,
+        directions_converged=converged,
+        rtol=rtol,
+        convergence=steps,
+        fit_seconds=time.perf_counter() - t0,
+    )
     return r
-
-
 
 
 @register_mapping("ue4")
@@ -446,21 +538,35 @@ def ue4_from_physical(ps: PhysicalScene) -> UE4ExponentialHeightFog:
     >>> round(p.FogHeightFalloff, 4), [round(c, 3) for c in p.FogInscatteringColor]
     (0.2885, [0.18, 0.27, 0.45])
     """
-    ps.require_profile("Unreal", ("exponential", "homogeneous"),
-                       "Unreal's height fog is 1-2 exponential layers (homogeneous = falloff 0)")
+    ps.require_profile(
+        "Unreal",
+        ("exponential", "homogeneous"),
+        "Unreal's height fog is 1-2 exponential layers (homogeneous = falloff 0)",
+    )
     ps.require_unbounded("Unreal")
     ps.grey_sigma_t("Unreal")
-    base = replace(UE4FogParams(), StartDistance=0.0, FogMaxOpacity=1.0, FogCutoffDistance=0.0,
-                   EndDistance=0.0, DirectionalInscatteringStartDistance=0.0, SunLuminance=1.0,
-                   FogInscatteringColor=ps.sky_colour(), DirectionalInscatteringColor=(0.0, 0.0, 0.0),
-                   InscatteringLightDirection=None)
+    base = replace(
+        UE4FogParams(),
+        StartDistance=0.0,
+        FogMaxOpacity=1.0,
+        FogCutoffDistance=0.0,
+        EndDistance=0.0,
+        DirectionalInscatteringStartDistance=0.0,
+        SunLuminance=1.0,
+        FogInscatteringColor=ps.sky_colour(),
+        DirectionalInscatteringColor=(0.0, 0.0, 0.0),
+        InscatteringLightDirection=None,
+    )
     p = medium_to_ue4(ps.medium, base)
     if not ps.has_sun:
         return UE4ExponentialHeightFog(p)
     fit = fit_unreal(ps)
     q = fit.params
-    p = replace(p, FogInscatteringColor=q.FogInscatteringColor,
-                DirectionalInscatteringColor=q.DirectionalInscatteringColor,
-                DirectionalInscatteringExponent=q.DirectionalInscatteringExponent,
-                DirectionalInscatteringStartDistance=q.DirectionalInscatteringStartDistance)
+    p = replace(
+        p,
+        FogInscatteringColor=q.FogInscatteringColor,
+        DirectionalInscatteringColor=q.DirectionalInscatteringColor,
+        DirectionalInscatteringExponent=q.DirectionalInscatteringExponent,
+        DirectionalInscatteringStartDistance=q.DirectionalInscatteringStartDistance,
+    )
     return UE4ExponentialHeightFog(p.with_sun(ps.sun_direction, 1.0))

@@ -38,17 +38,27 @@ UNREAL_MAPPED = {
 }
 #: Unreal editor values with no physical counterpart: name -> (option, kind, why it is ignored).
 UNREAL_IGNORED = {
-    "FogInscatteringColor": ("--ue-fog-inscattering-color", "rgb",
-                             "it stands for albedo x sky radiance (a fit output, fogref fit); "
-                             "the truth's sky is sky_radiance and its albedo is albedo"),
-    "DirectionalInscatteringExponent": ("--ue-directional-inscattering-exponent", "number",
-                                        "a cosine lobe is not a phase function; the truth scatters with "
-                                        "Henyey-Greenstein g"),
-    "DirectionalInscatteringColor": ("--ue-directional-inscattering-color", "rgb",
-                                     "it stands for albedo x sun irradiance x phase; the truth's sun is "
-                                     "sun_irradiance"),
-    "DirectionalInscatteringStartDistance": ("--ue-directional-inscattering-start-distance", "number",
-                                             "physical fog scatters sunlight from the camera on"),
+    "FogInscatteringColor": (
+        "--ue-fog-inscattering-color",
+        "rgb",
+        "it stands for albedo x sky radiance (a fit output, fogref fit); "
+        "the truth's sky is sky_radiance and its albedo is albedo",
+    ),
+    "DirectionalInscatteringExponent": (
+        "--ue-directional-inscattering-exponent",
+        "number",
+        "a cosine lobe is not a phase function; the truth scatters with Henyey-Greenstein g",
+    ),
+    "DirectionalInscatteringColor": (
+        "--ue-directional-inscattering-color",
+        "rgb",
+        "it stands for albedo x sun irradiance x phase; the truth's sun is sun_irradiance",
+    ),
+    "DirectionalInscatteringStartDistance": (
+        "--ue-directional-inscattering-start-distance",
+        "number",
+        "physical fog scatters sunlight from the camera on",
+    ),
     "StartDistance": ("--ue-start-distance", "number", "physical fog starts at the camera"),
     "FogMaxOpacity": ("--ue-fog-max-opacity", "number", "physical transmittance has no clamp"),
     "FogCutoffDistance": ("--ue-fog-cutoff-distance", "number", "physical fog has no cutoff distance"),
@@ -67,8 +77,9 @@ UNREAL_IGNORED_RANGES = {
     "FogInscatteringColor": Range("--ue-fog-inscattering-color", "rgb", 0.0),
     "DirectionalInscatteringExponent": Range("--ue-directional-inscattering-exponent", "number", 0.0),
     "DirectionalInscatteringColor": Range("--ue-directional-inscattering-color", "rgb", 0.0),
-    "DirectionalInscatteringStartDistance": Range("--ue-directional-inscattering-start-distance", "number",
-                                                  0.0, unit="cm"),
+    "DirectionalInscatteringStartDistance": Range(
+        "--ue-directional-inscattering-start-distance", "number", 0.0, unit="cm"
+    ),
     "StartDistance": Range("--ue-start-distance", "number", 0.0, unit="cm"),
     "FogMaxOpacity": Range("--ue-fog-max-opacity", "number", 0.0, 1.0),
     "FogCutoffDistance": Range("--ue-fog-cutoff-distance", "number", 0.0, unit="cm"),
@@ -80,8 +91,9 @@ def _unreal_value(unreal: dict, key: str):
     if key.startswith("SecondFogData."):
         sfd = unreal.get("SecondFogData") or {}
         if not isinstance(sfd, dict):
-            raise ParameterError(SOURCE, "SecondFogData", "expected a dict of FogDensity, FogHeightFalloff, "
-                                                          "FogHeightOffset")
+            raise ParameterError(
+                SOURCE, "SecondFogData", "expected a dict of FogDensity, FogHeightFalloff, FogHeightOffset"
+            )
         return sfd.get(key.split(".", 1)[1])
     return unreal.get(key)
 
@@ -135,16 +147,22 @@ def fog_from_unreal(unreal: dict, *, albedo=0.9, g: float = 0.6) -> tuple[dict, 
     if unknown:
         close = difflib.get_close_matches(unknown[0], sorted(known), n=1)
         hint = f" (did you mean '{close[0]}'?)" if close else ""
-        raise ParameterError(SOURCE, unknown[0], f"not an Unreal Exponential Height Fog value{hint}; "
-                                                 f"known: {', '.join(sorted(known))}")
+        raise ParameterError(
+            SOURCE,
+            unknown[0],
+            f"not an Unreal Exponential Height Fog value{hint}; known: {', '.join(sorted(known))}",
+        )
     # the editor ranges that keep the physical fog inside what fogref renders (sigma_t <= 1e2, falloff <= 1e3)
     d_max, f_max = sigma_to_unreal(PHYSICAL["sigma_t"].hi, PHYSICAL["falloff"].hi)
     h_max = PHYSICAL["height"].hi * CM_PER_M
-    limits = {"FogDensity": (0.0, d_max, "", 0.02), "FogHeightFalloff": (0.0, f_max, "", 0.2),
-              "FogHeight": (-h_max, h_max, "cm", 0.0),
-              "SecondFogData.FogDensity": (0.0, d_max, "", 0.0),
-              "SecondFogData.FogHeightFalloff": (0.0, f_max, "", 0.2),
-              "SecondFogData.FogHeightOffset": (-h_max, h_max, "cm", 0.0)}
+    limits = {
+        "FogDensity": (0.0, d_max, "", 0.02),
+        "FogHeightFalloff": (0.0, f_max, "", 0.2),
+        "FogHeight": (-h_max, h_max, "cm", 0.0),
+        "SecondFogData.FogDensity": (0.0, d_max, "", 0.0),
+        "SecondFogData.FogHeightFalloff": (0.0, f_max, "", 0.2),
+        "SecondFogData.FogHeightOffset": (-h_max, h_max, "cm", 0.0),
+    }
     v = {}
     for key, opt in UNREAL_MAPPED.items():
         lo, hi, unit, default = limits[key]
@@ -153,8 +171,11 @@ def fog_from_unreal(unreal: dict, *, albedo=0.9, g: float = 0.6) -> tuple[dict, 
     sfd = unreal.get("SecondFogData") or {}
     extra = sorted(set(sfd) - {"FogDensity", "FogHeightFalloff", "FogHeightOffset"})
     if extra:
-        raise ParameterError(SOURCE, f"SecondFogData.{extra[0]}", "SecondFogData has FogDensity, "
-                                                                  "FogHeightFalloff and FogHeightOffset")
+        raise ParameterError(
+            SOURCE,
+            f"SecondFogData.{extra[0]}",
+            "SecondFogData has FogDensity, FogHeightFalloff and FogHeightOffset",
+        )
     notes = []
     for key, (_, _, why) in UNREAL_IGNORED.items():
         if unreal.get(key) is None:
@@ -162,25 +183,37 @@ def fog_from_unreal(unreal: dict, *, albedo=0.9, g: float = 0.6) -> tuple[dict, 
         val = _check(unreal[key], key, UNREAL_IGNORED_RANGES[key])
         shown = _vec(val) if isinstance(val, list) else _fmt(val)
         notes.append(f"Unreal {key} = {shown} is ignored: {why}")
-    params = UE4FogParams(FogDensity=v["FogDensity"], FogHeightFalloff=v["FogHeightFalloff"],
-                          FogHeight=v["FogHeight"],
-                          SecondFogData=SecondFogData(v["SecondFogData.FogDensity"],
-                                                      v["SecondFogData.FogHeightFalloff"],
-                                                      v["SecondFogData.FogHeightOffset"]))
+    params = UE4FogParams(
+        FogDensity=v["FogDensity"],
+        FogHeightFalloff=v["FogHeightFalloff"],
+        FogHeight=v["FogHeight"],
+        SecondFogData=SecondFogData(
+            v["SecondFogData.FogDensity"],
+            v["SecondFogData.FogHeightFalloff"],
+            v["SecondFogData.FogHeightOffset"],
+        ),
+    )
     medium = ue4_to_medium(params)
     layers = medium.layers
     if params.FogDensity == 0 and params.SecondFogData.FogDensity == 0:  # no fog: keep layer 1's shape
         _, b = unreal_to_sigma(0.0, params.FogHeightFalloff)
         fog = {"sigma_t": 0.0, "density": 1.0, "falloff": b, "height": params.FogHeight / CM_PER_M}
     else:
-        fog = {"sigma_t": medium.sigma_t[0], "density": layers[0].density, "falloff": layers[0].falloff,
-               "height": layers[0].height}
+        fog = {
+            "sigma_t": medium.sigma_t[0],
+            "density": layers[0].density,
+            "falloff": layers[0].falloff,
+            "height": layers[0].height,
+        }
     if len(layers) > 1:
         fog.update(density2=layers[1].density, falloff2=layers[1].falloff, height2=layers[1].height)
     else:  # no second layer (density2 = 0), but its shape stays settable with --set
         _, b2 = unreal_to_sigma(0.0, params.SecondFogData.FogHeightFalloff)
-        fog.update(density2=0.0, falloff2=b2,
-                   height2=(params.FogHeight + params.SecondFogData.FogHeightOffset) / CM_PER_M)
+        fog.update(
+            density2=0.0,
+            falloff2=b2,
+            height2=(params.FogHeight + params.SecondFogData.FogHeightOffset) / CM_PER_M,
+        )
     return fog_from_physical(fog, albedo=albedo, g=g), notes
 
 

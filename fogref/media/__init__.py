@@ -16,6 +16,22 @@ from fogref.media.profiles import HDRPLayer, PowerLawLayer
 from fogref.media.protocol import PROFILES, HeightProfile, register_profile, rgb
 from fogref.media.single_scatter import single_scatter_sun
 
-__all__ = ["TAU_MAX", "NP", "PROFILES", "Box", "ExpLayer", "FogMedium", "HDRPLayer", "HeightProfile",
-           "PowerLawLayer", "drjit_ops", "hg_phase", "medium_from_params", "phi", "psi", "register_profile",
-           "rgb", "single_scatter_sun"]
+__all__ = [
+    "TAU_MAX",
+    "NP",
+    "PROFILES",
+    "Box",
+    "ExpLayer",
+    "FogMedium",
+    "HDRPLayer",
+    "HeightProfile",
+    "PowerLawLayer",
+    "drjit_ops",
+    "hg_phase",
+    "medium_from_params",
+    "phi",
+    "psi",
+    "register_profile",
+    "rgb",
+    "single_scatter_sun",
+]

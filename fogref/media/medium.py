@@ -98,12 +98,22 @@ class ExpLayer:
         >>> ExpLayer.from_params({"falloff": 0.02, "height": 5.0})
         (ExpLayer(density=1.0, falloff=0.02, height=5.0),)
         """
-        layers = [cls(number(params, "density", 1.0, src, 0.0, 1e6), number(params, "falloff", 0.01, src, 0.0, 1e3),
-                      number(params, "height", 0.0, src, -1e7, 1e7))]
+        layers = [
+            cls(
+                number(params, "density", 1.0, src, 0.0, 1e6),
+                number(params, "falloff", 0.01, src, 0.0, 1e3),
+                number(params, "height", 0.0, src, -1e7, 1e7),
+            )
+        ]
         d2 = number(params, "density2", 0.0, src, 0.0, 1e6)
         if d2 > 0:
-            layers.append(cls(d2, number(params, "falloff2", 0.01, src, 0.0, 1e3),
-                              number(params, "height2", 0.0, src, -1e7, 1e7)))
+            layers.append(
+                cls(
+                    d2,
+                    number(params, "falloff2", 0.01, src, 0.0, 1e3),
+                    number(params, "height2", 0.0, src, -1e7, 1e7),
+                )
+            )
         return tuple(layers)
 
     @classmethod

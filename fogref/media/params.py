@@ -53,11 +53,17 @@ def medium_from_params(params: dict, src: str = "<params>") -> FogMedium:
     """
     name = str(params.get("profile", "exponential"))
     entry = profile_entry(name, src)
-    sigma_t = rgb(params["sigma_t"], "sigma_t", src, 0.0, 1e2) if params.get("sigma_t") is not None else (0.01,) * 3
-    albedo = rgb(params["albedo"], "albedo", src, 0.0, 1.0) if params.get("albedo") is not None else (0.9,) * 3
+    sigma_t = (
+        rgb(params["sigma_t"], "sigma_t", src, 0.0, 1e2) if params.get("sigma_t") is not None else (0.01,) * 3
+    )
+    albedo = (
+        rgb(params["albedo"], "albedo", src, 0.0, 1.0) if params.get("albedo") is not None else (0.9,) * 3
+    )
     g = number(params, "g", 0.0, src, -0.999, 0.999)
     layers = entry.parse(params, src)
-    lo, hi = (rgb(params[k], k, src) if params.get(k) is not None else None for k in ("bounds_min", "bounds_max"))
+    lo, hi = (
+        rgb(params[k], k, src) if params.get(k) is not None else None for k in ("bounds_min", "bounds_max")
+    )
     if entry.needs_bounds and (lo is None or hi is None):
         raise ParameterError(src, "bounds_min", f"profile '{name}' needs bounds_min and bounds_max")
     if (lo is None) != (hi is None):

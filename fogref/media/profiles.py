@@ -104,9 +104,13 @@ class HDRPLayer:
         >>> HDRPLayer.from_params({"base_height": 5.0})
         (HDRPLayer(density=1.0, base_height=5.0, falloff=0.01),)
         """
-        return (cls(number(params, "density", 1.0, src, 0.0, 1e6),
-                    number(params, "base_height", 0.0, src, -1e7, 1e7),
-                    number(params, "falloff", 0.01, src, 0.0, 1e3)),)
+        return (
+            cls(
+                number(params, "density", 1.0, src, 0.0, 1e6),
+                number(params, "base_height", 0.0, src, -1e7, 1e7),
+                number(params, "falloff", 0.01, src, 0.0, 1e3),
+            ),
+        )
 
     @property
     def is_constant(self) -> bool:
@@ -163,15 +167,19 @@ class HDRPLayer:
         t_b, below0, up, down = self._pieces(ops, oy, dy)
         t_bp = ops.maximum(t_b, 0.0)
         # constant piece length
-        len_c = ops.where(up, ops.where(below0, ops.minimum(t, t_bp), 0.0),
-                          ops.where(down, ops.where(below0, t, ops.maximum(t - t_bp, 0.0)),
-                                    ops.where(below0, t, 0.0)))
+        len_c = ops.where(
+            up,
+            ops.where(below0, ops.minimum(t, t_bp), 0.0),
+            ops.where(down, ops.where(below0, t, ops.maximum(t - t_bp, 0.0)), ops.where(below0, t, 0.0)),
+        )
         # exponential piece: start height and length
         y0 = ops.where(up & below0, hb, oy)
         rest = ops.where(t >= L, L, ops.maximum(t - t_bp, 0.0))
-        len_e = ops.where(up, ops.where(below0, rest, t),
-                          ops.where(down, ops.where(below0, 0.0, ops.minimum(t, t_bp)),
-                                    ops.where(below0, 0.0, t)))
+        len_e = ops.where(
+            up,
+            ops.where(below0, rest, t),
+            ops.where(down, ops.where(below0, 0.0, ops.minimum(t, t_bp)), ops.where(below0, 0.0, t)),
+        )
         tau_c = ops.minimum(density * ops.minimum(len_c, ops.largest), ops.largest)
         tau_c = ops.where((len_c >= L) & (self.density > 0), cf.TAU_MAX, tau_c)
         tau_e = cf.exp_layer_optical_depth(ops, self._log_c(ops, y0), k, len_e)
@@ -193,17 +201,21 @@ class HDRPLayer:
         tau_c1 = ops.minimum(density * t_bp, L)
         s_rem_up = ops.maximum(s - tau_c1, 0.0)
         t_up_exp = cf.exp_layer_sample(ops, self._log_c(ops, hb + 0.0 * oy), k, s_rem_up)
-        t_up_below = ops.where(s <= tau_c1, t_const,
-                               ops.where(t_up_exp >= L, L, ops.minimum(t_bp + t_up_exp, L)))
+        t_up_below = ops.where(
+            s <= tau_c1, t_const, ops.where(t_up_exp >= L, L, ops.minimum(t_bp + t_up_exp, L))
+        )
         # exponential from oy (above base: up, horizontal, or down until the base)
         t_exp = cf.exp_layer_sample(ops, self._log_c(ops, oy), k, s)
         # going down from above: exponential to the base, then constant
         tau_e1 = cf.exp_layer_optical_depth(ops, self._log_c(ops, oy), k, t_bp)
-        t_down_above = ops.where(s <= tau_e1, t_exp,
-                                 ops.minimum(t_bp + ops.maximum(s - tau_e1, 0.0) * inv_d, L))
-        t = ops.where(up, ops.where(below0, t_up_below, t_exp),
-                      ops.where(down, ops.where(below0, t_const, t_down_above),
-                                ops.where(below0, t_const, t_exp)))
+        t_down_above = ops.where(
+            s <= tau_e1, t_exp, ops.minimum(t_bp + ops.maximum(s - tau_e1, 0.0) * inv_d, L)
+        )
+        t = ops.where(
+            up,
+            ops.where(below0, t_up_below, t_exp),
+            ops.where(down, ops.where(below0, t_const, t_down_above), ops.where(below0, t_const, t_exp)),
+        )
         t = ops.where(t >= L, L, t)
         return ops.where(s > 0, t, 0.0)
 
@@ -241,8 +253,14 @@ class PowerLawLayer:
         >>> PowerLawLayer.from_params({"end": 50.0, "power": 2.0})
         (PowerLawLayer(density=1.0, start=0.0, end=50.0, power=2.0),)
         """
-        return (cls(number(params, "density", 1.0, src, 0.0, 1e6), number(params, "start", 0.0, src, -1e7, 1e7),
-                    number(params, "end", 100.0, src, -1e7, 1e7), number(params, "power", 1.0, src, 0.0, 1e3)),)
+        return (
+            cls(
+                number(params, "density", 1.0, src, 0.0, 1e6),
+                number(params, "start", 0.0, src, -1e7, 1e7),
+                number(params, "end", 100.0, src, -1e7, 1e7),
+                number(params, "power", 1.0, src, 0.0, 1e3),
+            ),
+        )
 
     @property
     def is_constant(self) -> bool:
@@ -269,9 +287,12 @@ class PowerLawLayer:
         check_layer_param(src, i, "end", self.end, -1e7, 1e7)
         check_layer_param(src, i, "power", self.power, 0.0, 100.0)
         if not self.end > self.start:
-            raise ParameterError(src, f"layer{i}.end",
-                                 f"value {float(self.end)} outside [start={float(self.start)}, 1e7]"
-                                 " (end must be greater than start)")
+            raise ParameterError(
+                src,
+                f"layer{i}.end",
+                f"value {float(self.end)} outside [start={float(self.start)}, 1e7]"
+                " (end must be greater than start)",
+            )
 
     @property
     def _H(self) -> Real:
@@ -321,9 +342,15 @@ class PowerLawLayer:
         s_S, s_E, up, down = self._geometry(ops, oy, dy)
         abs_dy = ops.abs(dy)
         # constant piece (y <= S)
-        len_c = ops.where(up, ops.where(oy < S, ops.minimum(t, s_S), 0.0),
-                          ops.where(down, ops.where(t >= L, L, t - ops.minimum(ops.maximum(s_S, 0.0), t)),
-                                    ops.where(oy <= S, t, 0.0)))
+        len_c = ops.where(
+            up,
+            ops.where(oy < S, ops.minimum(t, s_S), 0.0),
+            ops.where(
+                down,
+                ops.where(t >= L, L, t - ops.minimum(ops.maximum(s_S, 0.0), t)),
+                ops.where(oy <= S, t, 0.0),
+            ),
+        )
         # power piece: parameter interval [a, b] and lower end height
         a = ops.where(up, ops.maximum(s_S, 0.0), ops.where(down, ops.maximum(s_E, 0.0), 0.0))
         b = ops.where(up, ops.minimum(t, s_E), ops.where(down, ops.minimum(t, s_S), t))
@@ -331,8 +358,11 @@ class PowerLawLayer:
         length = ops.where(up | down, ops.maximum(b - a, 0.0), ops.where(inside_h, t, 0.0))
         # gap = E - (lower end of the piece), formed without cancellation
         gap_dn = (E - oy) + ops.minimum(ops.where(t >= L, 0.0, t) * abs_dy, ops.largest)
-        gap = ops.where(up, E - ops.maximum(oy, S),
-                        ops.where(down, ops.where((t >= L) | (t >= s_S), E - S, gap_dn), E - oy))
+        gap = ops.where(
+            up,
+            E - ops.maximum(oy, S),
+            ops.where(down, ops.where((t >= L) | (t >= s_S), E - S, gap_dn), E - oy),
+        )
         reaches_end = (up & (t >= s_E)) | (down & (oy >= E))
         tau_p = self._power_piece(ops, gap, abs_dy, length, reaches_end)
         tau = density * ops.minimum(len_c, L) + density * tau_p
@@ -390,8 +420,7 @@ class PowerLawLayer:
         # --- going up: constant [0, s_S+] then power from max(oy, S), then escape
         c1 = ops.where(oy < S, s_Sp, 0.0)  # constant length before the power piece
         t_up_p = self._invert_power(ops, ops.maximum(oy, S), dy, ops.maximum(sig - c1, 0.0))
-        t_up = ops.where(sig <= c1, sig,
-                         ops.where(t_up_p >= L, L, ops.minimum(c1 + t_up_p, L)))
+        t_up = ops.where(sig <= c1, sig, ops.where(t_up_p >= L, L, ops.minimum(c1 + t_up_p, L)))
         # --- going down: nothing to s_E+, power from min(oy, E) down to S, then constant
         y_a = ops.minimum(oy, E)
         len_p = ops.maximum(s_Sp - s_Ep, 0.0)
@@ -399,13 +428,23 @@ class PowerLawLayer:
         tot_p = self._power_piece(ops, E - S + 0.0 * oy, ops.abs(dy), len_p, oy >= E)
         tot_p = ops.where(oy <= S, 0.0, tot_p)
         t_dn_p = self._invert_power(ops, y_a, dy, sig)
-        t_dn = ops.where(sig < tot_p, ops.minimum(s_Ep + t_dn_p, L),
-                         ops.minimum(ops.maximum(s_Sp, 0.0) + ops.maximum(sig - tot_p, 0.0), L))
+        t_dn = ops.where(
+            sig < tot_p,
+            ops.minimum(s_Ep + t_dn_p, L),
+            ops.minimum(ops.maximum(s_Sp, 0.0) + ops.maximum(sig - tot_p, 0.0), L),
+        )
         t_dn = ops.where(oy <= S, sig, t_dn)
         # --- horizontal
         u0 = self._u(ops, oy)
-        t_h = ops.where(oy <= S, sig,
-                        ops.where(oy >= E, L, cf.exp_times(ops, -ops.param(self.power) * ops.log(ops.maximum(u0, ops.tiny)), sig)))
+        t_h = ops.where(
+            oy <= S,
+            sig,
+            ops.where(
+                oy >= E,
+                L,
+                cf.exp_times(ops, -ops.param(self.power) * ops.log(ops.maximum(u0, ops.tiny)), sig),
+            ),
+        )
         t = ops.where(up, t_up, ops.where(down, t_dn, t_h))
         t = ops.where(t >= L, L, t)
         return ops.where(s > 0, t, 0.0)

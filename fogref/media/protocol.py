@@ -33,8 +33,16 @@ from typing import Any, Callable, ClassVar, Protocol, runtime_checkable
 
 from fogref import params
 
-__all__ = ["HeightProfile", "ProfileEntry", "PROFILES", "register_profile", "profile_entry", "check_range",
-           "number", "rgb"]
+__all__ = [
+    "HeightProfile",
+    "ProfileEntry",
+    "PROFILES",
+    "register_profile",
+    "profile_entry",
+    "check_range",
+    "number",
+    "rgb",
+]
 
 
 @runtime_checkable
@@ -139,8 +147,9 @@ def check_range(src: str, name: str, v, lo: float, hi: float) -> float:
     return params.number(v, name, source=src, lo=lo, hi=hi)
 
 
-def number(values: dict, key: str, default: float, src: str, lo: float = -math.inf,
-           hi: float = math.inf) -> float:
+def number(
+    values: dict, key: str, default: float, src: str, lo: float = -math.inf, hi: float = math.inf
+) -> float:
     """``values[key]`` (or ``default``) as a finite float in ``[lo, hi]`` (:func:`fogref.params.number`).
 
     Examples
@@ -157,8 +166,9 @@ def number(values: dict, key: str, default: float, src: str, lo: float = -math.i
     return params.number(values.get(key, default), key, source=src, lo=lo, hi=hi)
 
 
-def rgb(v, name: str = "colour", source: str = "<params>", lo: float = -math.inf,
-        hi: float = math.inf) -> tuple[float, float, float]:
+def rgb(
+    v, name: str = "colour", source: str = "<params>", lo: float = -math.inf, hi: float = math.inf
+) -> tuple[float, float, float]:
     """An RGB triple (or a 3-vector) from 1 or 3 numbers, a sequence or a string
     (:func:`fogref.params.rgb`).
 

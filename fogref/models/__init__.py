@@ -30,17 +30,36 @@ from fogref.models.filament import FilamentFog, FilamentFogParams
 from fogref.models.hdrp import HDRPFog, HDRPFogParams
 from fogref.models.resolve import available_models, get, resolve_model
 from fogref.models.ue4 import (
-           SecondFogData,
-           UE4ExponentialHeightFog,
-           UE4FogParams,
-           medium_to_ue4,
-           ue4_to_medium,
+    SecondFogData,
+    UE4ExponentialHeightFog,
+    UE4FogParams,
+    medium_to_ue4,
+    ue4_to_medium,
 )
 from fogref.models.unity_builtin import UnityBuiltinFog, UnityFogParams
 
-__all__ = ["SKY_DISTANCE", "FogModel", "FogResult", "as_points", "available_models", "get", "register",
-           "resolve_model",
-           "AltitudeFog", "AltitudeFogParams", "BoxFog", "BoxFogParams",
-           "FilamentFog", "FilamentFogParams", "HDRPFog", "HDRPFogParams",
-           "SecondFogData", "UE4ExponentialHeightFog", "UE4FogParams", "medium_to_ue4", "ue4_to_medium",
-           "UnityBuiltinFog", "UnityFogParams"]
+__all__ = [
+    "SKY_DISTANCE",
+    "FogModel",
+    "FogResult",
+    "as_points",
+    "available_models",
+    "get",
+    "register",
+    "resolve_model",
+    "AltitudeFog",
+    "AltitudeFogParams",
+    "BoxFog",
+    "BoxFogParams",
+    "FilamentFog",
+    "FilamentFogParams",
+    "HDRPFog",
+    "HDRPFogParams",
+    "SecondFogData",
+    "UE4ExponentialHeightFog",
+    "UE4FogParams",
+    "medium_to_ue4",
+    "ue4_to_medium",
+    "UnityBuiltinFog",
+    "UnityFogParams",
+]

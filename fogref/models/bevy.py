@@ -165,7 +165,7 @@ class BevyDistanceFog:
                 scattering = lobe[..., None] * np.asarray(p.light_color, dtype=dt)
                 dl = p.directional_light_color
                 color = color + scattering * np.asarray(dl[:3], dtype=dt) * dt(dl[3])
-            exact = dt is np.float64      # same values, without the cancellation of 1 - (1 - 1/exp(x))
+            exact = dt is np.float64  # same values, without the cancellation of 1 - (1 - 1/exp(x))
             if p.falloff == "Atmospheric":
                 xe = d[..., None] * np.asarray(p.extinction, dtype=dt)
                 I = _one_minus_inv_exp(d[..., None] * np.asarray(p.inscattering, dtype=dt), dt)
@@ -212,20 +212,26 @@ def bevy_sigma(params: BevyFogParams, reference_distance: float | None = None) -
         if params.density <= 0:
             return (0.0,) * 3
         r = reference_distance or 1.0 / params.density
-        return (params.density ** 2 * r,) * 3
+        return (params.density**2 * r,) * 3
     s, e = params.start, params.end
     r = reference_distance if reference_distance is not None else 0.5 * (s + e)
     T = min(max((e - r) / (e - s), 1e-300), 1.0)
     return (-math.log(T) / r if r > 0 else 0.0,) * 3
 
 
-def bevy_to_medium(params: BevyFogParams, reference_distance: float | None = None, albedo=(1.0, 1.0, 1.0),
-                   g: float = 0.0):
+def bevy_to_medium(
+    params: BevyFogParams, reference_distance: float | None = None, albedo=(1.0, 1.0, 1.0), g: float = 0.0
+):
     """Homogeneous :class:`~fogref.media.FogMedium` for ``params`` (see :func:`bevy_sigma`)."""
     from fogref.media import ExpLayer, FogMedium
 
-    return FogMedium(sigma_t=bevy_sigma(params, reference_distance), albedo=albedo, g=g,
-                     layers=(ExpLayer(1.0, 0.0, 0.0),), source="<bevy_to_medium>")
+    return FogMedium(
+        sigma_t=bevy_sigma(params, reference_distance),
+        albedo=albedo,
+        g=g,
+        layers=(ExpLayer(1.0, 0.0, 0.0),),
+        source="<bevy_to_medium>",
+    )
 
 
 def medium_to_bevy(medium, **kw) -> BevyFogParams:

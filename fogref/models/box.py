@@ -139,8 +139,9 @@ class BoxFog:
         return box_to_medium(self.params, **kw)
 
 
-def box_to_medium(params: BoxFogParams, reference_chord: float | None = None,
-                  albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
+def box_to_medium(
+    params: BoxFogParams, reference_chord: float | None = None, albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0
+) -> FogMedium:
     """The homogeneous medium ``sigma_t`` [1/m] inside :class:`~fogref.media.Box`.
 
     "thickness"/"beer": ``sigma_t = k`` (optical depth ``k t`` exactly; "beer" is
@@ -155,5 +156,11 @@ def box_to_medium(params: BoxFogParams, reference_chord: float | None = None,
         sigma = -math.log1p(-min(params.density, 1.0 - 1e-6)) / L
     else:
         sigma = params.density
-    return FogMedium(sigma_t=sigma, albedo=albedo, g=g, layers=(ExpLayer(1.0, 0.0, 0.0),),
-                     bounds=Box(params.box_min, params.box_max), source="<box_to_medium>")
+    return FogMedium(
+        sigma_t=sigma,
+        albedo=albedo,
+        g=g,
+        layers=(ExpLayer(1.0, 0.0, 0.0),),
+        bounds=Box(params.box_min, params.box_max),
+        source="<box_to_medium>",
+    )

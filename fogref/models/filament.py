@@ -64,8 +64,11 @@ class FilamentFogParams:
         src = "<FilamentFogParams>"
         for name in ("distance", "density", "heightFalloff"):
             object.__setattr__(self, name, valid.number(getattr(self, name), name, source=src, lo=0.0))
-        object.__setattr__(self, "maximumOpacity",
-                           valid.number(self.maximumOpacity, "maximumOpacity", source=src, lo=0.0, hi=1.0))
+        object.__setattr__(
+            self,
+            "maximumOpacity",
+            valid.number(self.maximumOpacity, "maximumOpacity", source=src, lo=0.0, hi=1.0),
+        )
         object.__setattr__(self, "height", valid.number(self.height, "height", source=src, unit="m"))
         if not (isinstance(self.cutOffDistance, float) and self.cutOffDistance == math.inf):  # inf: none
             cut = valid.number(self.cutOffDistance, "cutOffDistance", source=src, lo=0.0, unit="m")
@@ -98,18 +101,26 @@ class FilamentFog:
         # CPU: density at the viewer's height
         with np.errstate(all="ignore"):
             A = dt(q.density) * np.exp(dt(-q.heightFalloff) * (dt(cam[1]) - dt(q.height)))
-            A = min(A, dt(np.finfo(dt).max))           # robustness: no inf density
+            A = min(A, dt(np.finfo(dt).max))  # robustness: no inf density
         falloff = dt(q.heightFalloff)
         with np.errstate(all="ignore"):
             view = (wp - cam).astype(dt)
             h = falloff * view[..., 1]
+
             # robust line integral in log form (no 0 * inf when the camera is far above)
             def robust(hh: Any) -> Any:
-                log_a = (math.log(q.density) if q.density > 0 else -1e4) - q.heightFalloff * (cam[1] - q.height)
+                log_a = (math.log(q.density) if q.density > 0 else -1e4) - q.heightFalloff * (
+                    cam[1] - q.height
+                )
                 h64 = hh.astype(np.float64)
-                return np.where(h64 > -1.0, np.exp(min(log_a, 700.0)) * phi(NP, np.maximum(h64, -1.0)),
-                                np.exp(np.minimum(log_a - h64, 700.0)) * (-np.expm1(np.minimum(h64, 0.0)))
-                                / np.where(h64 < 0, -h64, 1.0))
+                return np.where(
+                    h64 > -1.0,
+                    np.exp(min(log_a, 700.0)) * phi(NP, np.maximum(h64, -1.0)),
+                    np.exp(np.minimum(log_a - h64, 700.0))
+                    * (-np.expm1(np.minimum(h64, 0.0)))
+                    / np.where(h64 < 0, -h64, 1.0),
+                )
+
             if dt is np.float64:
                 fi = robust(h)
             else:
@@ -120,7 +131,7 @@ class FilamentFog:
             d = np.sqrt(np.sum(view * view, axis=-1))
             run = np.maximum(d - dt(q.distance), dt(0.0))
             integral = np.where(run > 0, fi * run, dt(0.0))
-            if dt is np.float64:      # same value, without the cancellation of 1 - (1 - T)
+            if dt is np.float64:  # same value, without the cancellation of 1 - (1 - T)
                 trans = np.maximum(np.exp(-integral), dt(1.0) - dt(q.maximumOpacity))
                 opacity = dt(1.0) - trans
             else:
@@ -134,9 +145,14 @@ class FilamentFog:
                 lc = q.lightColorIntensity
                 sun = np.asarray(lc[:3], dtype=dt) * dt(lc[3])
                 l = np.asarray(q.lightDirection, dtype=dt)
-                amount = np.maximum((view[..., 0] * l[0] + view[..., 1] * l[1] + view[..., 2] * l[2])
-                                    / np.maximum(d, dt(1e-30)), dt(0.0))
-                fog_color = fog_color + sun * (np.power(amount, dt(q.inScatteringSize)) * insc_opacity)[..., None]
+                amount = np.maximum(
+                    (view[..., 0] * l[0] + view[..., 1] * l[1] + view[..., 2] * l[2])
+                    / np.maximum(d, dt(1e-30)),
+                    dt(0.0),
+                )
+                fog_color = (
+                    fog_color + sun * (np.power(amount, dt(q.inScatteringSize)) * insc_opacity)[..., None]
+                )
             if math.isfinite(q.cutOffDistance):
                 cut = d > dt(q.cutOffDistance)
                 trans = np.where(cut, dt(1.0), trans)
@@ -155,8 +171,13 @@ def filament_to_medium(params: FilamentFogParams, albedo: Any = (1.0, 1.0, 1.0),
     """Exact medium ``sigma_t = density`` [1/m], ``ExpLayer(1, heightFalloff, height)``."""
     from fogref.media import ExpLayer, FogMedium
 
-    return FogMedium(sigma_t=params.density, albedo=albedo, g=g,
-                     layers=(ExpLayer(1.0, params.heightFalloff, params.height),), source="<filament_to_medium>")
+    return FogMedium(
+        sigma_t=params.density,
+        albedo=albedo,
+        g=g,
+        layers=(ExpLayer(1.0, params.heightFalloff, params.height),),
+        source="<filament_to_medium>",
+    )
 
 
 def medium_to_filament(medium: FogMedium, **kw: Any) -> FilamentFogParams:

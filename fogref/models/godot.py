@@ -124,8 +124,14 @@ class GodotFogParams:
         src = "<GodotFogParams>"
         if self.fog_mode not in MODES:
             raise ParameterError(src, "fog_mode", f"expected one of {MODES}, got {self.fog_mode!r}")
-        for name in ("fog_light_energy", "fog_sun_scatter", "fog_density", "fog_depth_curve", "z_far",
-                     "sky_distance"):
+        for name in (
+            "fog_light_energy",
+            "fog_sun_scatter",
+            "fog_density",
+            "fog_depth_curve",
+            "z_far",
+            "sky_distance",
+        ):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ParameterError(src, name, f"value {v} must be finite and >= 0")
@@ -186,8 +192,9 @@ class GodotFog:
             d = np.sqrt(np.sum(v * v, axis=-1))
             light = np.asarray(p.fog_light_color, dtype=dt) * dt(p.fog_light_energy)
             ap = dt(p.fog_aerial_perspective)
-            fog_color = np.broadcast_to(light + (np.asarray(p.sky_color, dtype=dt) - light) * ap,
-                                        d.shape + (3,)).astype(dt)
+            fog_color = np.broadcast_to(
+                light + (np.asarray(p.sky_color, dtype=dt) - light) * ap, d.shape + (3,)
+            ).astype(dt)
             scatter = np.zeros(d.shape + (3,), dtype=dt)
             if p.fog_sun_scatter > SUN_SCATTER_MIN:
                 l = np.asarray(p.sun_direction, dtype=dt)
@@ -239,8 +246,9 @@ def godot_to_medium(params: GodotFogParams, albedo=(1.0, 1.0, 1.0), g: float = 0
         raise ParameterError(src, "fog_mode", "only the exponential mode has a physical counterpart")
     if params.fog_height_density != 0.0:
         raise ParameterError(src, "fog_height_density", "Godot's height fog is not an optical depth")
-    return FogMedium(sigma_t=params.fog_density, albedo=albedo, g=g, layers=(ExpLayer(1.0, 0.0, 0.0),),
-                     source=src)
+    return FogMedium(
+        sigma_t=params.fog_density, albedo=albedo, g=g, layers=(ExpLayer(1.0, 0.0, 0.0),), source=src
+    )
 
 
 def medium_to_godot(medium, **kw) -> GodotFogParams:
@@ -249,5 +257,9 @@ def medium_to_godot(medium, **kw) -> GodotFogParams:
     if medium.bounds is not None or not medium.is_homogeneous:
         raise ParameterError(src, "layers", "Godot's fog needs an unbounded homogeneous medium")
     s = medium.grey_sigma_t("Godot")
-    return GodotFogParams(fog_mode="exponential", fog_density=s * sum(L.density for L in medium.layers),
-                          fog_height_density=0.0, **kw)
+    return GodotFogParams(
+        fog_mode="exponential",
+        fog_density=s * sum(L.density for L in medium.layers),
+        fog_height_density=0.0,
+        **kw,
+    )

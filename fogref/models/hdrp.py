@@ -68,8 +68,12 @@ class HDRPFogParams:
         # baseHeight/maximumHeight FloatParameter.  The mean free path's editor minimum of 1 m is
         # not enforced: fogref's mapping of a dense medium gives less, and the model is exact there.
         src = "<HDRPFogParams>"
-        for name, lo, lo_open in (("meanFreePath", 0.0, True), ("maxFogDistance", 0.0, False),
-                                  ("baseHeight", -math.inf, False), ("maximumHeight", -math.inf, False)):
+        for name, lo, lo_open in (
+            ("meanFreePath", 0.0, True),
+            ("maxFogDistance", 0.0, False),
+            ("baseHeight", -math.inf, False),
+            ("maximumHeight", -math.inf, False),
+        ):
             x = valid.number(getattr(self, name), name, source=src, lo=lo, lo_open=lo_open, unit="m")
             object.__setattr__(self, name, x)
         object.__setattr__(self, "albedo", valid.rgb(self.albedo, "albedo", source=src, lo=0.0))
@@ -81,8 +85,16 @@ class HDRPFogParams:
         return dt(depth * dt(LAYER_DEPTH_TO_H))
 
 
-def optical_depth_height_fog(base_extinction: Any, base_height: Any, exps: Any, cos_zenith: Any, start_height: Any, interval: Any, dt: Any,
-                             exact: bool = False) -> Any:
+def optical_depth_height_fog(
+    base_extinction: Any,
+    base_height: Any,
+    exps: Any,
+    cos_zenith: Any,
+    start_height: Any,
+    interval: Any,
+    dt: Any,
+    exact: bool = False,
+) -> Any:
     """AtmosphericScattering.hlsl ``OpticalDepthHeightFog`` (vectorised)."""
     rcpH, H = exps
     Z = cos_zenith
@@ -91,8 +103,11 @@ def optical_depth_height_fog(base_extinction: Any, base_height: Any, exps: Any, 
     h = np.maximum(min_height - base_height, dt(0.0))
     if exact:
         absZ = np.abs(Z)
-        hom = np.where(absZ > 0, np.clip((base_height - min_height) / np.where(absZ > 0, absZ, dt(1.0)), 0.0, interval),
-                       np.where(start_height <= base_height, interval, dt(0.0)))
+        hom = np.where(
+            absZ > 0,
+            np.clip((base_height - min_height) / np.where(absZ > 0, absZ, dt(1.0)), 0.0, interval),
+            np.where(start_height <= base_height, interval, dt(0.0)),
+        )
         exp_dist = interval - hom
         mult = np.exp(-h * rcpH) * exp_dist * phi(NP, exp_dist * absZ * rcpH)
         return base_extinction * (hom + mult)
@@ -125,8 +140,16 @@ class HDRPFog:
             dist = np.sqrt(np.sum(v * v, axis=-1))
             cos_z = np.where(dist > 0, v[..., 1] / np.where(dist > 0, dist, dt(1.0)), dt(0.0))
             interval = np.minimum(dist, dt(q.maxFogDistance))
-            od = optical_depth_height_fog(ext, dt(q.baseHeight), (dt(1.0) / H, H), cos_z, dt(cam[1]),
-                                          interval, dt, exact=(dt is np.float64))
+            od = optical_depth_height_fog(
+                ext,
+                dt(q.baseHeight),
+                (dt(1.0) / H, H),
+                cos_z,
+                dt(cam[1]),
+                interval,
+                dt,
+                exact=(dt is np.float64),
+            )
         return od.astype(dt, copy=False)
 
     def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
@@ -151,11 +174,18 @@ def hdrp_to_medium(params: HDRPFogParams, g: float = 0.0) -> FogMedium:
     from fogref.media import FogMedium, HDRPLayer
 
     H = float(params.scale_height(np.float64))
-    return FogMedium(sigma_t=1.0 / params.meanFreePath, albedo=params.albedo, g=g,
-                     layers=(HDRPLayer(density=1.0, base_height=params.baseHeight, falloff=1.0 / H),), source="<hdrp_to_medium>")
+    return FogMedium(
+        sigma_t=1.0 / params.meanFreePath,
+        albedo=params.albedo,
+        g=g,
+        layers=(HDRPLayer(density=1.0, base_height=params.baseHeight, falloff=1.0 / H),),
+        source="<hdrp_to_medium>",
+    )
 
 
-def medium_to_hdrp(medium: FogMedium, color: Any = (0.5, 0.6, 0.7), maxFogDistance: float = 5000.0) -> HDRPFogParams:
+def medium_to_hdrp(
+    medium: FogMedium, color: Any = (0.5, 0.6, 0.7), maxFogDistance: float = 5000.0
+) -> HDRPFogParams:
     """HDRP parameters for a grey medium with one :class:`~fogref.media.HDRPLayer` (or a
     homogeneous layer); ``maximumHeight = baseHeight + H ln(1000)``."""
     from fogref.media import ExpLayer, HDRPLayer
@@ -172,5 +202,11 @@ def medium_to_hdrp(medium: FogMedium, color: Any = (0.5, 0.6, 0.7), maxFogDistan
     ext = s[0] * L.density
     depth = (1.0 / L.falloff) / LAYER_DEPTH_TO_H if L.falloff > 0 else 1e9
     base = L.base_height if isinstance(L, HDRPLayer) else L.height
-    return HDRPFogParams(meanFreePath=1.0 / ext, baseHeight=base, maximumHeight=base + depth,
-                         albedo=medium.albedo, color=color, maxFogDistance=maxFogDistance)
+    return HDRPFogParams(
+        meanFreePath=1.0 / ext,
+        baseHeight=base,
+        maximumHeight=base + depth,
+        albedo=medium.albedo,
+        color=color,
+        maxFogDistance=maxFogDistance,
+    )

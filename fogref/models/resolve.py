@@ -55,7 +55,14 @@ from typing import Any
 from fogref.errors import FogrefError, did_you_mean
 from fogref.models import base
 
-__all__ = ["ENTRY_POINT_GROUP", "available_models", "check_protocol", "entry_point_models", "get", "resolve_model"]
+__all__ = [
+    "ENTRY_POINT_GROUP",
+    "available_models",
+    "check_protocol",
+    "entry_point_models",
+    "get",
+    "resolve_model",
+]
 
 ENTRY_POINT_GROUP = "fogref.models"
 
@@ -104,11 +111,14 @@ def check_protocol(obj: Any, source: str) -> Any:
         label = getattr(obj, "__name__", type(obj).__name__)
         evaluate = getattr(obj, "evaluate", None)
     except Exception as e:  # an object whose attribute lookup raises (a lazy proxy)
-        raise FogrefError(f"{source}: looking up its evaluate() failed: {type(e).__name__}: "
-                          f"{_one_line(e)}") from e
+        raise FogrefError(
+            f"{source}: looking up its evaluate() failed: {type(e).__name__}: {_one_line(e)}"
+        ) from e
     if not callable(evaluate):
-        raise FogrefError(f"{source}: {label} is not a fog model: it has no evaluate(camera, positions, "
-                          f'precision="float32") method (see docs/byo.md)')
+        raise FogrefError(
+            f"{source}: {label} is not a fog model: it has no evaluate(camera, positions, "
+            f'precision="float32") method (see docs/byo.md)'
+        )
     try:
         sig = inspect.signature(evaluate)
     except (TypeError, ValueError):
@@ -120,11 +130,15 @@ def check_protocol(obj: Any, source: str) -> Any:
         try:
             inspect.Signature(params).bind(None, None, precision="float32")
         except TypeError as e:
-            raise FogrefError(f"{source}: {label}.evaluate{sig} cannot be called as evaluate(camera, positions, "
-                              f'precision="float32") ({e}); see docs/byo.md') from None
+            raise FogrefError(
+                f"{source}: {label}.evaluate{sig} cannot be called as evaluate(camera, positions, "
+                f'precision="float32") ({e}); see docs/byo.md'
+            ) from None
     fp = inspect.getattr_static(obj, "from_physical", None)
     if fp is not None and not callable(getattr(obj, "from_physical", None)):
-        raise FogrefError(f"{source}: {label}.from_physical is not callable (a classmethod from_physical(params))")
+        raise FogrefError(
+            f"{source}: {label}.from_physical is not callable (a classmethod from_physical(params))"
+        )
     return obj
 
 
@@ -136,8 +150,9 @@ def _load_spec(spec: str) -> Any:
         module = importlib.import_module(module_name)
     except ModuleNotFoundError as e:
         if e.name and module_name.startswith(e.name):
-            raise FogrefError(f"model '{spec}': no module named '{e.name}' (is it installed, or on "
-                              "PYTHONPATH?)") from None
+            raise FogrefError(
+                f"model '{spec}': no module named '{e.name}' (is it installed, or on PYTHONPATH?)"
+            ) from None
         raise FogrefError(f"model '{spec}': importing '{module_name}' failed: {e}") from e
     except Exception as e:  # the user's module raised while importing: say so, with its message
         raise FogrefError(f"model '{spec}': importing '{module_name}' failed: {type(e).__name__}: {e}") from e
@@ -151,11 +166,14 @@ def _load_spec(spec: str) -> Any:
             except Exception:  # a module whose __dir__ raises: no hint
                 names = []
             hint = did_you_mean(part, names)
-            raise FogrefError(f"model '{spec}': module '{module_name}' has no attribute '{attr}'{hint}") \
-                from None
+            raise FogrefError(
+                f"model '{spec}': module '{module_name}' has no attribute '{attr}'{hint}"
+            ) from None
         except Exception as e:  # a module-level __getattr__ (lazy import) that raised
-            raise FogrefError(f"model '{spec}': looking up '{attr}' in module '{module_name}' failed: "
-                              f"{type(e).__name__}: {_one_line(e)}") from e
+            raise FogrefError(
+                f"model '{spec}': looking up '{attr}' in module '{module_name}' failed: "
+                f"{type(e).__name__}: {_one_line(e)}"
+            ) from e
     return check_protocol(obj, spec)
 
 
@@ -195,13 +213,17 @@ def resolve_model(spec: str) -> Any:
         try:
             obj = eps[spec].load()
         except Exception as e:
-            raise FogrefError(f"model '{spec}': entry point '{eps[spec].value}' (group {ENTRY_POINT_GROUP}) "
-                              f"failed to load: {type(e).__name__}: {e}") from e
+            raise FogrefError(
+                f"model '{spec}': entry point '{eps[spec].value}' (group {ENTRY_POINT_GROUP}) "
+                f"failed to load: {type(e).__name__}: {e}"
+            ) from e
         return check_protocol(obj, f"entry point {spec} = {eps[spec].value}")
     known = available_models()
     hint = did_you_mean(spec, known)
     extra = sorted(eps)
-    listing = f"built-in: {', '.join(_builtin_names())}" + (f"; installed: {', '.join(extra)}" if extra else "")
+    listing = f"built-in: {', '.join(_builtin_names())}" + (
+        f"; installed: {', '.join(extra)}" if extra else ""
+    )
     raise FogrefError(f"unknown fog model '{spec}'{hint} ({listing}; or give module.path:Class)")
 
 

@@ -155,7 +155,7 @@ def threejs_sigma(params: ThreeFogParams, reference_depth: float | None = None) 
         if params.density <= 0:
             return 0.0
         r = reference_depth or 1.0 / params.density
-        return params.density ** 2 * r
+        return params.density**2 * r
     r = reference_depth if reference_depth is not None else 0.5 * (params.near + params.far)
     t = min(max((r - params.near) / (params.far - params.near), 0.0), 1.0)
     f = t * t * (3 - 2 * t)
@@ -163,10 +163,16 @@ def threejs_sigma(params: ThreeFogParams, reference_depth: float | None = None) 
     return -math.log(T) / r if r > 0 else 0.0
 
 
-def threejs_to_medium(params: ThreeFogParams, reference_depth: float | None = None, albedo=(1.0, 1.0, 1.0),
-                      g: float = 0.0):
+def threejs_to_medium(
+    params: ThreeFogParams, reference_depth: float | None = None, albedo=(1.0, 1.0, 1.0), g: float = 0.0
+):
     """Homogeneous :class:`~fogref.media.FogMedium` nearest to ``params`` (see :func:`threejs_sigma`)."""
     from fogref.media import ExpLayer, FogMedium
 
-    return FogMedium(sigma_t=threejs_sigma(params, reference_depth), albedo=albedo, g=g,
-                     layers=(ExpLayer(1.0, 0.0, 0.0),), source="<threejs_to_medium>")
+    return FogMedium(
+        sigma_t=threejs_sigma(params, reference_depth),
+        albedo=albedo,
+        g=g,
+        layers=(ExpLayer(1.0, 0.0, 0.0),),
+        source="<threejs_to_medium>",
+    )

@@ -85,9 +85,9 @@ def direction_to_unreal(w: Any) -> tuple:
 class SecondFogData:
     """UExponentialHeightFogComponent::SecondFogData (editor units)."""
 
-    FogDensity: float = 0.0          #: editor density (x 1/1000 per cm)
-    FogHeightFalloff: float = 0.2    #: editor falloff (x 1/1000 per cm)
-    FogHeightOffset: float = 0.0     #: cm, relative to the component's Z
+    FogDensity: float = 0.0  #: editor density (x 1/1000 per cm)
+    FogHeightFalloff: float = 0.2  #: editor falloff (x 1/1000 per cm)
+    FogHeightOffset: float = 0.0  #: cm, relative to the component's Z
 
     def __post_init__(self):
         src = "<UE4FogParams.SecondFogData>"
@@ -132,8 +132,11 @@ class UE4FogParams:
 
     def with_sun(self, direction_world: Any, luminance: float = 1.0) -> "UE4FogParams":
         """Copy with the sun given in **fogref's** frame (y-up, toward the sun)."""
-        return replace(self, InscatteringLightDirection=direction_to_unreal(direction_world),
-                       SunLuminance=float(luminance))
+        return replace(
+            self,
+            InscatteringLightDirection=direction_to_unreal(direction_world),
+            SunLuminance=float(luminance),
+        )
 
 
 #: The ranges fogref accepts, by parameter: ``(lo, hi, unit)``.  Where Unreal has a range it is
@@ -178,17 +181,22 @@ def _validate(p: "UE4FogParams") -> None:
         try:
             object.__setattr__(p, "SecondFogData", SecondFogData(**p.SecondFogData))
         except TypeError as e:
-            raise ParameterError(src, "SecondFogData", f"{e} (fields: FogDensity, FogHeightFalloff, "
-                                 "FogHeightOffset)") from None
+            raise ParameterError(
+                src, "SecondFogData", f"{e} (fields: FogDensity, FogHeightFalloff, FogHeightOffset)"
+            ) from None
     if not isinstance(p.SecondFogData, SecondFogData):
-        raise ParameterError(src, "SecondFogData",
-                             f"expected SecondFogData or a dict, got {p.SecondFogData!r}")
+        raise ParameterError(
+            src, "SecondFogData", f"expected SecondFogData or a dict, got {p.SecondFogData!r}"
+        )
     if p.InscatteringLightDirection is not None:
         w = vector(p.InscatteringLightDirection, "InscatteringLightDirection", source=src)
         norm = float(np.linalg.norm(w))
         if not norm > 0:
-            raise ParameterError(src, "InscatteringLightDirection", "(0, 0, 0) has no direction: give a "
-                                 "non-zero vector toward the sun, or None for no sun")
+            raise ParameterError(
+                src,
+                "InscatteringLightDirection",
+                "(0, 0, 0) has no direction: give a non-zero vector toward the sun, or None for no sun",
+            )
         object.__setattr__(p, "InscatteringLightDirection", tuple(float(x) for x in np.asarray(w) / norm))
 
 
@@ -212,7 +220,11 @@ def fog_constants(p: UE4FogParams, camera_z_cm: float, dt: Any = np.float32) -> 
     for i in range(2):
         power = np.clip(-fall[i] * (obs - height[i]), f(-126.0 + 1.0), f(127.0 - 1.0)).astype(dt)
         collapsed.append(dens[i] * np.power(f(2.0), power))
-    light_w = f(max(0.0, p.DirectionalInscatteringStartDistance)) if p.InscatteringLightDirection is not None else f(-1.0)
+    light_w = (
+        f(max(0.0, p.DirectionalInscatteringStartDistance))
+        if p.InscatteringLightDirection is not None
+        else f(-1.0)
+    )
     light_dir = p.InscatteringLightDirection or (0.0, 0.0, 0.0)
     return dict(
         P=(f(collapsed[0]), fall[0], max_obs, f(p.StartDistance)),
@@ -357,8 +369,10 @@ def ue4_to_medium(params: UE4FogParams, albedo: Any = (1.0, 1.0, 1.0), g: float 
     from fogref.media import ExpLayer, FogMedium
 
     sfd = params.SecondFogData
-    specs = [(params.FogDensity, params.FogHeightFalloff, params.FogHeight),
-             (sfd.FogDensity, sfd.FogHeightFalloff, params.FogHeight + sfd.FogHeightOffset)]
+    specs = [
+        (params.FogDensity, params.FogHeightFalloff, params.FogHeight),
+        (sfd.FogDensity, sfd.FogHeightFalloff, params.FogHeight + sfd.FogHeightOffset),
+    ]
     specs = [s for s in specs if s[0] > 0]
     if not specs:
         return FogMedium(sigma_t=0.0, albedo=albedo, g=g, layers=(ExpLayer(),), source="<ue4_to_medium>")
@@ -392,7 +406,9 @@ def medium_to_ue4(medium: FogMedium, base: UE4FogParams | None = None) -> UE4Fog
     base = base or UE4FogParams()
     second = SecondFogData(FogDensity=0.0, FogHeightFalloff=base.SecondFogData.FogHeightFalloff)
     if len(vals) == 2:
-        second = SecondFogData(FogDensity=vals[1][0], FogHeightFalloff=vals[1][1],
-                               FogHeightOffset=vals[1][2] - vals[0][2])
-    return replace(base, FogDensity=vals[0][0], FogHeightFalloff=vals[0][1], FogHeight=vals[0][2],
-                   SecondFogData=second)
+        second = SecondFogData(
+            FogDensity=vals[1][0], FogHeightFalloff=vals[1][1], FogHeightOffset=vals[1][2] - vals[0][2]
+        )
+    return replace(
+        base, FogDensity=vals[0][0], FogHeightFalloff=vals[0][1], FogHeight=vals[0][2], SecondFogData=second
+    )

@@ -124,7 +124,7 @@ class UnityBuiltinFog:
         if p.clip_near is None:
             return z
         n, f = dt(p.clip_near), dt(p.clip_far)
-        zc = n * (f - z) / (f - n)                      # reversed-Z clip-space z
+        zc = n * (f - z) / (f - n)  # reversed-Z clip-space z
         return np.maximum((dt(1.0) - zc / n) * f, dt(0.0))
 
     def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
@@ -158,20 +158,29 @@ def unity_sigma(params: UnityFogParams, reference_distance: float | None = None)
         return params.fogDensity
     if params.fogMode == "exp2":
         r = reference_distance or (1.0 / params.fogDensity if params.fogDensity > 0 else 1.0)
-        return params.fogDensity ** 2 * r
+        return params.fogDensity**2 * r
     s, e = params.fogStartDistance, params.fogEndDistance
     r = reference_distance if reference_distance is not None else 0.5 * (s + e)
     T = min(max((e - r) / (e - s), 1e-12), 1.0)
     return -math.log(T) / r if r > 0 else 0.0
 
 
-def unity_to_medium(params: UnityFogParams, reference_distance: float | None = None,
-                    albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
+def unity_to_medium(
+    params: UnityFogParams,
+    reference_distance: float | None = None,
+    albedo: Any = (1.0, 1.0, 1.0),
+    g: float = 0.0,
+) -> FogMedium:
     """Homogeneous :class:`~fogref.media.FogMedium` for ``params`` (see :func:`unity_sigma`)."""
     from fogref.media import ExpLayer, FogMedium
 
-    return FogMedium(sigma_t=unity_sigma(params, reference_distance), albedo=albedo, g=g,
-                     layers=(ExpLayer(1.0, 0.0, 0.0),), source="<unity_to_medium>")
+    return FogMedium(
+        sigma_t=unity_sigma(params, reference_distance),
+        albedo=albedo,
+        g=g,
+        layers=(ExpLayer(1.0, 0.0, 0.0),),
+        source="<unity_to_medium>",
+    )
 
 
 def medium_to_unity(medium: FogMedium, fogColor: Any = (0.5, 0.5, 0.5)) -> UnityFogParams:

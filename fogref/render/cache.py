@@ -67,22 +67,35 @@ def truth_key(scene, spp: int, seed: int, overrides: dict | None = None, pixel_f
     from fogref import __version__
     from fogref.render.inputs import inputs_digest
 
-    spec = {"inputs": inputs_digest(scene, overrides), "spp": int(spp), "seed": int(seed),
-            "pixel_filter": pixel_filter,
-            "overrides": {str(k): str(v) for k, v in sorted((overrides or {}).items())},
-            "version": __version__, "renderer": _renderer_hash()}
+    spec = {
+        "inputs": inputs_digest(scene, overrides),
+        "spp": int(spp),
+        "seed": int(seed),
+        "pixel_filter": pixel_filter,
+        "overrides": {str(k): str(v) for k, v in sorted((overrides or {}).items())},
+        "version": __version__,
+        "renderer": _renderer_hash(),
+    }
     return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:24]
 
 
-def truth_path(scene, spp: int, seed: int, overrides: dict | None = None, cache_dir=None,
-               pixel_filter: str = "centre") -> Path:
+def truth_path(
+    scene, spp: int, seed: int, overrides: dict | None = None, cache_dir=None, pixel_filter: str = "centre"
+) -> Path:
     """Where the cache keeps the truth of these inputs: ``<cache>/<scene stem>-<key>.exr``."""
     folder = Path(cache_dir) if cache_dir is not None else default_cache_dir()
     return folder / f"{Path(scene).stem}-{truth_key(scene, spp, seed, overrides, pixel_filter)}.exr"
 
 
-def render_cached(scene, spp: int = 16, seed: int = 0, overrides: dict | None = None, cache_dir=None,
-                  variant: str | None = None, pixel_filter: str = "centre") -> tuple[Path, bool]:
+def render_cached(
+    scene,
+    spp: int = 16,
+    seed: int = 0,
+    overrides: dict | None = None,
+    cache_dir=None,
+    variant: str | None = None,
+    pixel_filter: str = "centre",
+) -> tuple[Path, bool]:
     """The cached EXR of a truth, rendered first if needed: ``(path, was_cached)``.
 
     Parameters as :func:`cached_truth` (``overrides`` holds ``res``/``resy`` if wanted).
@@ -104,13 +117,31 @@ def render_cached(scene, spp: int = 16, seed: int = 0, overrides: dict | None = 
     from fogref.render.render import render
 
     folder.mkdir(parents=True, exist_ok=True)
-    render(scene, path, spp=int(spp), seed=int(seed), variant=variant, overrides=over, progress=False,
-           resume=False, png=False, pixel_filter=pixel_filter)
+    render(
+        scene,
+        path,
+        spp=int(spp),
+        seed=int(seed),
+        variant=variant,
+        overrides=over,
+        progress=False,
+        resume=False,
+        png=False,
+        pixel_filter=pixel_filter,
+    )
     return path, False
 
 
-def cached_truth(scene, res=(32, 18), spp: int = 16, seed: int = 0, overrides: dict | None = None,
-                 cache_dir=None, variant: str | None = None, pixel_filter: str = "centre"):
+def cached_truth(
+    scene,
+    res=(32, 18),
+    spp: int = 16,
+    seed: int = 0,
+    overrides: dict | None = None,
+    cache_dir=None,
+    variant: str | None = None,
+    pixel_filter: str = "centre",
+):
     """A ground truth of ``scene``, rendered on first use and read from the cache after.
 
     Parameters

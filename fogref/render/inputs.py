@@ -91,8 +91,14 @@ class SceneInput:
         >>> SceneInput(Path("sky.exr"), "emitter", "s.xml", True, "envmap").label
         'envmap'
         """
-        named = {"scene": "scene file", "include": "included XML", "spectrum": "spectrum file",
-                 "shape": "mesh", "texture": "texture", "volume": "volume grid"}
+        named = {
+            "scene": "scene file",
+            "include": "included XML",
+            "spectrum": "spectrum file",
+            "shape": "mesh",
+            "texture": "texture",
+            "volume": "volume grid",
+        }
         if self.kind == "emitter" and self.plugin == "envmap":
             return "envmap"
         other = f"{self.kind} '{self.plugin}' file" if self.plugin else f"{self.kind} file"
@@ -118,7 +124,7 @@ def substitute(value: str, params: list) -> str:
             if pos > 0 and value[pos - 1] == "\\":
                 pos += len(key)
             else:
-                value = value[:pos] + rep + value[pos + len(key):]
+                value = value[:pos] + rep + value[pos + len(key) :]
                 pos += len(rep)
     return value.replace("\\$", "$")
 
@@ -193,8 +199,9 @@ class _Walker:
         elif tag == "spectrum" and el.get("filename"):
             self.add(_resolve(el.get("filename"), resolver), "spectrum", where)
         elif tag == "string" and parent is not None and el.get("value"):
-            self.strings.append((el.get("value"), parent.tag, parent.get("type", ""), where,
-                                 el.get("name") == "filename"))
+            self.strings.append(
+                (el.get("value"), parent.tag, parent.get("type", ""), where, el.get("name") == "filename")
+            )
         if tag == "transform":
             for c in el:
                 for k, v in c.attrib.items():
@@ -272,8 +279,9 @@ def _label(path: Path, folder: Path) -> str:
         return path.as_posix()
 
 
-def inputs_digest(scene, overrides: dict | None = None, inputs: list | None = None,
-                  record: dict | None = None) -> str:
+def inputs_digest(
+    scene, overrides: dict | None = None, inputs: list | None = None, record: dict | None = None
+) -> str:
     """SHA-256 (hex) of the scene file and every file it loads: path, size and content of each.
 
     Parameters

@@ -85,12 +85,15 @@ def check_output(out: Path, scene_path: Path, png: bool, inputs: list | None = N
     :func:`fogref.render.inputs.scene_inputs`; only the scene when None).
     """
     if out.suffix.lower() != ".exr":
-        raise FogrefError(f"--out {out}: the ground truth is an EXR; give a path ending in .exr "
-                          f"(the PNG preview is written beside it)")
+        raise FogrefError(
+            f"--out {out}: the ground truth is an EXR; give a path ending in .exr "
+            f"(the PNG preview is written beside it)"
+        )
     outputs = [(out, "EXR")] + ([(out.with_suffix(".png"), "PNG preview")] if png else [])
     outputs.append((checkpoint_path(out), "checkpoint"))
-    refuse_overwriting_inputs(outputs, inputs if inputs is not None else [(scene_path, "scene file")],
-                              f"--out {out}")
+    refuse_overwriting_inputs(
+        outputs, inputs if inputs is not None else [(scene_path, "scene file")], f"--out {out}"
+    )
     for o, _ in outputs:
         if o.is_dir():
             raise FogrefError(f"--out {out}: {o} is a directory")
@@ -180,9 +183,19 @@ class _Interrupt:
         return False
 
 
-def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = None,
-           overrides: dict | None = None, progress: bool = True, resume: bool = True, png: bool = True,
-           pixel_filter: str = "centre", checkpoint_seconds: float = 60.0) -> Path:
+def render(
+    scene_path,
+    out,
+    spp: int = 64,
+    seed: int = 0,
+    variant: str | None = None,
+    overrides: dict | None = None,
+    progress: bool = True,
+    resume: bool = True,
+    png: bool = True,
+    pixel_filter: str = "centre",
+    checkpoint_seconds: float = 60.0,
+) -> Path:
     """Render ``scene_path`` with ``spp`` samples per pixel into the EXR ``out``.
 
     Parameters
@@ -226,15 +239,28 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
     W, H = (int(x) for x in scene.sensors()[0].film().crop_size())
     need = W * H * _HOST_BYTES_PER_PIXEL
     if need > 0.5 * _physical_memory():
-        raise FogrefError(f"{scene_path}: {W}x{H} pixels need about {need / 2**30:.1f} GiB of memory for the "
-                          f"ground truth; this machine has {_physical_memory() / 2**30:.1f} GiB "
-                          f"(limit: half)")
+        raise FogrefError(
+            f"{scene_path}: {W}x{H} pixels need about {need / 2**30:.1f} GiB of memory for the "
+            f"ground truth; this machine has {_physical_memory() / 2**30:.1f} GiB "
+            f"(limit: half)"
+        )
     passes = pass_sizes(W * H, spp, max_lanes(variant))
     scene_sha = file_sha256(scene_path)
-    key = json.dumps({"inputs_sha256": digest, "overrides": {k: str(v) for k, v in (overrides or {}).items()},
-                      "size": [W, H], "spp": spp, "seed": seed, "variant": variant, "passes": passes,
-                      "pixel_filter": pixel_filter, "version": __version__,
-                      "schema": gbuffer.SCHEMA_VERSION}, sort_keys=True)
+    key = json.dumps(
+        {
+            "inputs_sha256": digest,
+            "overrides": {k: str(v) for k, v in (overrides or {}).items()},
+            "size": [W, H],
+            "spp": spp,
+            "seed": seed,
+            "variant": variant,
+            "passes": passes,
+            "pixel_filter": pixel_filter,
+            "version": __version__,
+            "schema": gbuffer.SCHEMA_VERSION,
+        },
+        sort_keys=True,
+    )
     ckpt = checkpoint_path(out)
     leftovers = re.compile(f"{temporary_names(ckpt)}|{temporary_names(out)}")
     for stale in out.parent.glob(f"{out.name}.*.tmp*"):  # a writer killed mid-write (SIGKILL)
@@ -258,8 +284,9 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
         try:
             for k in range(saved, len(passes)):
                 ts = time.perf_counter()
-                s, q = integrator.render_moments(scene, 0, pass_seed(seed, k), passes[k],
-                                                 pixel_exact=pixel_filter == "centre")
+                s, q = integrator.render_moments(
+                    scene, 0, pass_seed(seed, k), passes[k], pixel_exact=pixel_filter == "centre"
+                )
                 s, q = _device_f64(s), _device_f64(q)
                 if state is not None:
                     s, q = state[0] + s, state[1] + q
@@ -288,8 +315,10 @@ def render(scene_path, out, spp: int = 64, seed: int = 0, variant: str | None = 
     channels = _host_float32(_channels(sums, squares, spp))  # arithmetic on the device, one copy
     bad = gbuffer.nonfinite_report(channels)
     if bad:
-        raise FogrefError(f"{scene_path}: the render produced {bad}; no ground truth written "
-                          f"(please report this with the scene and the command)")
+        raise FogrefError(
+            f"{scene_path}: the render produced {bad}; no ground truth written "
+            f"(please report this with the scene and the command)"
+        )
     attrs = {
         "fogref.schema": str(gbuffer.SCHEMA_VERSION),
         "fogref.params": desc,
@@ -367,8 +396,14 @@ def _checkpoint(ckpt: Path, state, key: str) -> None:
     to ``ckpt`` as one record: the three together with a SHA-256 over them."""
     sums, squares, done = state
     sums, squares = np.asarray(sums, dtype=np.float64), np.asarray(squares, dtype=np.float64)
-    savez_atomic(ckpt, sums=sums, squares=squares, done=np.array(done), key=np.array(key),
-                 sha256=np.array(_record_sha256(key, done, sums, squares)))
+    savez_atomic(
+        ckpt,
+        sums=sums,
+        squares=squares,
+        done=np.array(done),
+        key=np.array(key),
+        sha256=np.array(_record_sha256(key, done, sums, squares)),
+    )
 
 
 def _channels(sums, squares, spp: int) -> dict:
@@ -378,11 +413,11 @@ def _channels(sums, squares, spp: int) -> dict:
     by_group, i = {}, 0
     for g in names:
         k = len(gbuffer.channel_names(g))
-        by_group[g] = sums[..., i:i + k]
+        by_group[g] = sums[..., i : i + k]
         i += k
     k = 3 * len(gbuffer.SQUARED_GROUPS)  # squares first, then the channel-pair products
-    sq = {g: squares[..., 3 * i:3 * i + 3] for i, g in enumerate(gbuffer.SQUARED_GROUPS)}
-    cross = {g: squares[..., k + 3 * i:k + 3 * i + 3] for i, g in enumerate(gbuffer.SQUARED_GROUPS)}
+    sq = {g: squares[..., 3 * i : 3 * i + 3] for i, g in enumerate(gbuffer.SQUARED_GROUPS)}
+    cross = {g: squares[..., k + 3 * i : k + 3 * i + 3] for i, g in enumerate(gbuffer.SQUARED_GROUPS)}
     return gbuffer.moments_to_channels(by_group, sq, spp, cross)
 
 
@@ -450,8 +485,10 @@ def _set_aside(ckpt: Path, reason: str) -> None:
         where = f"set aside as {aside}"
     except OSError as e:
         where = f"could not be set aside ({e.strerror}); it will be replaced"
-    print(f"fogref render: warning: checkpoint {ckpt}: {reason}; {where}; rendering from the start",
-          file=sys.stderr)
+    print(
+        f"fogref render: warning: checkpoint {ckpt}: {reason}; {where}; rendering from the start",
+        file=sys.stderr,
+    )
 
 
 def _resume(ckpt: Path, key: str, shape: tuple, passes: list):

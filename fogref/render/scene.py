@@ -73,8 +73,14 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
     root = parse_scene(path)
     defaults = resolve(root, overrides, source=path)
     check_supported(path, root)
-    desc: dict = {"scene": path.name, "medium": None, "sun": None, "sky": None, "camera": None,
-                  "integrator": None}
+    desc: dict = {
+        "scene": path.name,
+        "medium": None,
+        "sun": None,
+        "sky": None,
+        "camera": None,
+        "integrator": None,
+    }
     integ = root.find("integrator")
     if integ is not None:
         desc["integrator"] = {"type": integ.get("type"), **_params(integ, defaults)}
@@ -94,8 +100,14 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
                 d = list(P.vector(d, "sun.direction", source=str(path)))
             else:  # oriented by to_world (the shipped scenes: $sun_elevation, $sun_azimuth)
                 tw = em.find("transform[@name='to_world']")
-                d = [0.0, 0.0, 1.0] if tw is None else [
-                    -x for x in sun_direction_from_to_world(tw, lambda s: substitute(s, defaults), str(path))]
+                d = (
+                    [0.0, 0.0, 1.0]
+                    if tw is None
+                    else [
+                        -x
+                        for x in sun_direction_from_to_world(tw, lambda s: substitute(s, defaults), str(path))
+                    ]
+                )
             n = math.sqrt(sum(x * x for x in d))
             if n == 0:
                 raise FogrefError(f"{path}: the sun's direction is the zero vector")
@@ -134,8 +146,13 @@ def _mitsuba_reason(e: Exception) -> str:
 
 
 #: Emitters the renderer and the physical description (sun + sky) both handle.
-SUPPORTED_EMITTERS = {"directional": "the sun", "constant": "a uniform sky",
-                      "envmap": "an environment-map sky"}
+SUPPORTED_EMITTERS = {
+    "directional": "the sun",
+    "constant": "a uniform sky",
+    "envmap": "an environment-map sky",
+}
+
+
 def check_supported(path: Path, root) -> None:
     """Refuse scene features that fogpath or the physical description would ignore.
 
@@ -149,26 +166,34 @@ def check_supported(path: Path, root) -> None:
         t = em.get("type")
         if t not in SUPPORTED_EMITTERS:
             what = ", ".join(f"'{k}' ({v})" for k, v in SUPPORTED_EMITTERS.items())
-            raise FogrefError(f"{path}: emitter '{t}' is not supported: fogref's ground truth and its "
-                              f"physical description take {what}. Express a sun and sky with those "
-                              f"(e.g. 'sunsky' -> a directional sun + a constant or envmap sky)")
+            raise FogrefError(
+                f"{path}: emitter '{t}' is not supported: fogref's ground truth and its "
+                f"physical description take {what}. Express a sun and sky with those "
+                f"(e.g. 'sunsky' -> a directional sun + a constant or envmap sky)"
+            )
         kind = "sun" if t == "directional" else "sky"
         counts[kind] = counts.get(kind, 0) + 1
         if counts[kind] > 1:
-            raise FogrefError(f"{path}: more than one {kind} emitter; "
-                              "fogref takes at most one sun and one sky")
+            raise FogrefError(
+                f"{path}: more than one {kind} emitter; fogref takes at most one sun and one sky"
+            )
     sensors = root.findall("sensor")
     for med in root.iter("medium"):
         if med.get("type") != "heightfog" or not any(med in list(s) for s in sensors):
             name = med.get("name") or med.get("id") or "unnamed"
-            raise FogrefError(f"{path}: medium '{med.get('type')}' ({name}):"
-                              f" fogref supports one 'heightfog' medium inside the <sensor> only")
+            raise FogrefError(
+                f"{path}: medium '{med.get('type')}' ({name}):"
+                f" fogref supports one 'heightfog' medium inside the <sensor> only"
+            )
     for shape in root.iter("shape"):
-        if any(c.tag == "medium" or (c.tag == "ref" and c.get("name") in ("interior", "exterior"))
-               for c in shape):
+        if any(
+            c.tag == "medium" or (c.tag == "ref" and c.get("name") in ("interior", "exterior")) for c in shape
+        ):
             what = shape.get("id") or shape.get("type")
-            raise FogrefError(f"{path}: shape '{what}' has a medium attached; "
-                              f"fogpath's fog fills all space outside surfaces (no interfaces)")
+            raise FogrefError(
+                f"{path}: shape '{what}' has a medium attached; "
+                f"fogpath's fog fills all space outside surfaces (no interfaces)"
+            )
 
 
 def check_renderable(path, root) -> None:
@@ -184,13 +209,17 @@ def check_renderable(path, root) -> None:
     """
     sensors = root.findall("sensor")
     if len(sensors) != 1:
-        raise FogrefError(f"{path}: {len(sensors)} <sensor> elements: fogref renders a truth through exactly "
-                          f"one camera (one <sensor> with a <medium type=\"heightfog\"> inside it)")
+        raise FogrefError(
+            f"{path}: {len(sensors)} <sensor> elements: fogref renders a truth through exactly "
+            f'one camera (one <sensor> with a <medium type="heightfog"> inside it)'
+        )
     fogs = [m for m in sensors[0].findall("medium") if m.get("type") == "heightfog"]
     if len(fogs) != 1:
         what = "no fog" if not fogs else f"{len(fogs)} heightfog media"
-        raise FogrefError(f"{path}: {what}: fogref renders a <medium type=\"heightfog\"> inside the "
-                          f"<sensor> (exactly one; for a fog-free truth give it sigma_t 0)")
+        raise FogrefError(
+            f'{path}: {what}: fogref renders a <medium type="heightfog"> inside the '
+            f"<sensor> (exactly one; for a fog-free truth give it sigma_t 0)"
+        )
 
 
 def load_scene(path, overrides: dict | None = None):
@@ -236,8 +265,17 @@ def sensor_camera(sensor) -> dict:
     W, H = (int(x) for x in sensor.film().crop_size())
     origin, up, forward = m[:3, 3], m[:3, 1], m[:3, 2]
     fov_y = math.degrees(2 * math.atan(math.tan(math.radians(fov) / 2) * H / W))
-    return {"origin": origin.tolist(), "target": (origin + forward).tolist(), "up": up.tolist(),
-            "forward": forward.tolist(), "right": np.cross(forward, up).tolist(), "fov_deg": fov,
-            "fov_axis": "x",
-            "fov_y_deg": fov_y, "to_world": m.tolist(), "near_clip": float(sensor.near_clip()),
-            "far_clip": float(sensor.far_clip()), "resolution": [W, H]}
+    return {
+        "origin": origin.tolist(),
+        "target": (origin + forward).tolist(),
+        "up": up.tolist(),
+        "forward": forward.tolist(),
+        "right": np.cross(forward, up).tolist(),
+        "fov_deg": fov,
+        "fov_axis": "x",
+        "fov_y_deg": fov_y,
+        "to_world": m.tolist(),
+        "near_clip": float(sensor.near_clip()),
+        "far_clip": float(sensor.far_clip()),
+        "resolution": [W, H],
+    }

@@ -32,25 +32,51 @@ from fogref import params
 from fogref.errors import FogrefError, ParameterError
 from fogref.mapping.fog_input import MAX_DEPTH, PHYSICAL, SCATTERING, Range
 
-__all__ = ["OPTIONAL_GROUPS", "RANGES", "VOCABULARY", "check_camera", "check_overrides", "check_values",
-           "declared", "overrides_used_by", "parse_scene", "references", "resolve", "substitute",
-           "used_names", "vocabulary_groups"]
+__all__ = [
+    "OPTIONAL_GROUPS",
+    "RANGES",
+    "VOCABULARY",
+    "check_camera",
+    "check_overrides",
+    "check_values",
+    "declared",
+    "overrides_used_by",
+    "parse_scene",
+    "references",
+    "resolve",
+    "substitute",
+    "used_names",
+    "vocabulary_groups",
+]
 
 #: ``$NAME`` references in an attribute value.
 REFERENCE = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
 
 #: The ``$default`` names every fogref scene declares (shipped ``scenes/*.xml`` and
 #: ``fogref scene``'s output): image, path depth, fog, sun, camera.
-VOCABULARY = ("res", "resy", "max_depth",
-              "sigma_t", "albedo", "g", "density", "falloff", "fog_height",
-              "sun_elevation", "sun_azimuth", "sun_irradiance",
-              "camera_origin", "camera_target", "fov")
+VOCABULARY = (
+    "res",
+    "resy",
+    "max_depth",
+    "sigma_t",
+    "albedo",
+    "g",
+    "density",
+    "falloff",
+    "fog_height",
+    "sun_elevation",
+    "sun_azimuth",
+    "sun_irradiance",
+    "camera_origin",
+    "camera_target",
+    "fov",
+)
 #: Names a scene declares only all together, where the concept applies: group -> names.
 OPTIONAL_GROUPS = {
-    "sky": ("sky_radiance",),                            # a uniform sky (none: a black sky)
+    "sky": ("sky_radiance",),  # a uniform sky (none: a black sky)
     "second_layer": ("density2", "falloff2", "height2"),  # a second exponential fog layer
-    "bounds": ("bounds_min", "bounds_max"),              # a box the fog is confined to
-    "surface": ("reflectance",),                         # one settable diffuse reflectance for all surfaces
+    "bounds": ("bounds_min", "bounds_max"),  # a box the fog is confined to
+    "surface": ("reflectance",),  # one settable diffuse reflectance for all surfaces
 }
 #: The kind, range and unit of every vocabulary name, each declared once (the fog's in
 #: :data:`fogref.mapping.fog_input.PHYSICAL` and ``SCATTERING``).  The options are
@@ -184,8 +210,11 @@ def resolve(scene, overrides: dict | None = None, source=None) -> dict[str, str]
     fogref.errors.ParameterError: s.xml: parameter 'gg': --set gg=0.2: the scene has no $default 'gg'...
     """
     if overrides is not None and not isinstance(overrides, dict):
-        raise ParameterError(str(source or "scene"), "overrides",
-                             f"expected a dict of NAME: VALUE (like --set NAME=VALUE), got {overrides!r}")
+        raise ParameterError(
+            str(source or "scene"),
+            "overrides",
+            f"expected a dict of NAME: VALUE (like --set NAME=VALUE), got {overrides!r}",
+        )
     values = declared(scene)
     where = source if source is not None else (scene if not isinstance(scene, ET.Element) else "scene")
     check_overrides(Path(str(where)), values, overrides)
@@ -239,9 +268,13 @@ def check_camera(origin, target, source: str, name: str = "camera_target") -> No
     if n == 0:
         raise ParameterError(source, name, "must differ from camera_origin")
     if math.hypot(d[0], d[2]) <= 1e-9 * n:
-        raise ParameterError(source, name, f"the camera looks straight {'up' if d[1] > 0 else 'down'} "
-                                           f"(origin {list(origin)}, target {list(target)}); "
-                                           "the camera's up vector is +y, so tilt the view a little")
+        raise ParameterError(
+            source,
+            name,
+            f"the camera looks straight {'up' if d[1] > 0 else 'down'} "
+            f"(origin {list(origin)}, target {list(target)}); "
+            "the camera's up vector is +y, so tilt the view a little",
+        )
 
 
 def check_overrides(path: Path, defaults: dict, overrides: dict | None) -> None:
@@ -258,17 +291,25 @@ def check_overrides(path: Path, defaults: dict, overrides: dict | None) -> None:
         if name not in defaults:
             close = difflib.get_close_matches(name, defaults, n=1)
             hint = f" (did you mean '{close[0]}'?)" if close else ""
-            raise ParameterError(str(path), name, f"--set {name}={value}: the scene has no $default '{name}'"
-                                 f"{hint}; it has: {', '.join(sorted(defaults))}")
+            raise ParameterError(
+                str(path),
+                name,
+                f"--set {name}={value}: the scene has no $default '{name}'"
+                f"{hint}; it has: {', '.join(sorted(defaults))}",
+            )
         if name not in RANGES:
             _like_default(defaults[name], value, name, str(path))
     set_ = dict(overrides or {})
-    check_values(path, {k: v for k, v in set_.items() if k != "camera_origin" and k != "camera_target"},
-                 "--set")
+    check_values(
+        path, {k: v for k, v in set_.items() if k != "camera_origin" and k != "camera_target"}, "--set"
+    )
     if "camera_origin" in set_ or "camera_target" in set_:
         cam = {k: set_.get(k, defaults.get(k)) for k in ("camera_origin", "camera_target")}
-        check_values(path, {k: v for k, v in cam.items() if v is not None},
-                     "--set" if all(k in set_ for k in cam) else "--set and <default>")
+        check_values(
+            path,
+            {k: v for k, v in cam.items() if v is not None},
+            "--set" if all(k in set_ for k in cam) else "--set and <default>",
+        )
 
 
 def _like_default(default: str, value, name: str, source: str) -> None:
@@ -287,8 +328,9 @@ def _like_default(default: str, value, name: str, source: str) -> None:
             params.vector(value, name, source=source, n=len(old))
     except ParameterError as e:
         why = str(e).split(f"parameter '{name}': ", 1)[-1]
-        raise ParameterError(source, name, f"--set {name}={value}: {why} (like the scene's default "
-                                           f"'{default}')") from None
+        raise ParameterError(
+            source, name, f"--set {name}={value}: {why} (like the scene's default '{default}')"
+        ) from None
 
 
 def vocabulary_groups(names) -> tuple[list[str], list[str]]:

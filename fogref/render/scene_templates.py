@@ -32,9 +32,23 @@ from fogref.errors import ParameterError
 from fogref.mapping.fog_input import SOURCE, _fmt
 from fogref.render.scene_defaults import parse_scene
 
-__all__ = ["GROUND_SIZE", "MESH_PLUGINS", "MESH_UP", "TEMPLATES", "VALLEY_SCENE", "Geometry", "add_mesh",
-           "mesh_files", "mesh_has_normals",
-           "add_valley", "diffuse", "geometry", "ground", "sub", "valley_ground_size"]
+__all__ = [
+    "GROUND_SIZE",
+    "MESH_PLUGINS",
+    "MESH_UP",
+    "TEMPLATES",
+    "VALLEY_SCENE",
+    "Geometry",
+    "add_mesh",
+    "mesh_files",
+    "mesh_has_normals",
+    "add_valley",
+    "diffuse",
+    "geometry",
+    "ground",
+    "sub",
+    "valley_ground_size",
+]
 
 #: Built-in geometry templates (anything else must be a mesh file).
 TEMPLATES = ("plane", "valley")
@@ -77,10 +91,13 @@ def geometry(template) -> Geometry:
     choices = f"choose {', '.join(TEMPLATES)} or a mesh file ({', '.join(MESH_PLUGINS)})"
     if ext not in MESH_PLUGINS:
         if path.is_file():
-            raise ParameterError(SOURCE, "geometry (--geometry)",
-                                 f"'{t}': Mitsuba loads meshes from {', '.join(MESH_PLUGINS)} files only, "
-                                 f"not "
-                                 f"'{ext or 'no extension'}'; convert it, or {choices}")
+            raise ParameterError(
+                SOURCE,
+                "geometry (--geometry)",
+                f"'{t}': Mitsuba loads meshes from {', '.join(MESH_PLUGINS)} files only, "
+                f"not "
+                f"'{ext or 'no extension'}'; convert it, or {choices}",
+            )
         raise ParameterError(SOURCE, "geometry (--geometry)", f"unknown template '{t}': {choices}")
     if not path.is_file():
         raise ParameterError(SOURCE, "geometry (--geometry)", f"mesh file '{t}' not found")
@@ -149,9 +166,12 @@ def ground(parent, size: float, bsdf_id: str, shape_id: str = "ground"):
 def _valley_root() -> ET.Element:
     """``scenes/valley.xml`` with its comments (they label the ridges)."""
     if not VALLEY_SCENE.is_file():
-        raise ParameterError(SOURCE, "geometry (--geometry)",
-                             f"the valley template reads {VALLEY_SCENE}, which is missing "
-                             "(a source checkout of fogref ships it)")
+        raise ParameterError(
+            SOURCE,
+            "geometry (--geometry)",
+            f"the valley template reads {VALLEY_SCENE}, which is missing "
+            "(a source checkout of fogref ships it)",
+        )
     return parse_scene(VALLEY_SCENE, comments=True)
 
 
@@ -179,8 +199,9 @@ def add_valley(root, ground_size: float | None = None):
         _valley_ground(root).set("value", _fmt(ground_size))
 
 
-def add_mesh(root, geo: Geometry, out_dir: Path, scale: float, up: str, translate,
-             face_normals: bool = False):
+def add_mesh(
+    root, geo: Geometry, out_dir: Path, scale: float, up: str, translate, face_normals: bool = False
+):
     """The mesh shape of ``geo``, its file named relative to ``out_dir`` (where the scene is written);
     ``face_normals``: flat faces (for a file without vertex normals, :func:`mesh_has_normals`)."""
     # Mitsuba resolves a relative filename against the scene file's folder
@@ -188,8 +209,11 @@ def add_mesh(root, geo: Geometry, out_dir: Path, scale: float, up: str, translat
         filename = os.path.relpath(geo.mesh.resolve(), out_dir.resolve())
     except ValueError:  # another drive (Windows)
         filename = str(geo.mesh.resolve())
-    root.append(ET.Comment(f" mesh: {geo.mesh.name}, {_fmt(scale)} m per file unit, {up}-up in the file "
-                           f"(fogref is y-up) "))
+    root.append(
+        ET.Comment(
+            f" mesh: {geo.mesh.name}, {_fmt(scale)} m per file unit, {up}-up in the file (fogref is y-up) "
+        )
+    )
     s = sub(root, "shape", type=geo.plugin, id="mesh")
     sub(s, "string", name="filename", value=filename.replace(os.sep, "/"))
     if face_normals:

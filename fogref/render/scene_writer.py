@@ -55,9 +55,21 @@ from fogref.render.scene_templates import geometry as resolve_geometry
 from fogref.render.scene_xml import DEFAULT_REFLECTANCE, scene_defaults, scene_element, write_xml
 from fogref.render.sun import sun_direction_from_angles
 
-__all__ = ["MESH_PLUGINS", "MESH_UP", "PHYSICAL", "RANGES", "SCATTERING", "TEMPLATES", "UNREAL_IGNORED",
-           "UNREAL_IGNORED_RANGES", "UNREAL_MAPPED", "SceneWriteResult", "fog_from_physical",
-           "fog_from_unreal", "write_scene"]
+__all__ = [
+    "MESH_PLUGINS",
+    "MESH_UP",
+    "PHYSICAL",
+    "RANGES",
+    "SCATTERING",
+    "TEMPLATES",
+    "UNREAL_IGNORED",
+    "UNREAL_IGNORED_RANGES",
+    "UNREAL_MAPPED",
+    "SceneWriteResult",
+    "fog_from_physical",
+    "fog_from_unreal",
+    "write_scene",
+]
 
 #: The writer's own values (not scene $defaults); the vocabulary's are RANGES.
 MESH_SCALE = Range("--mesh-scale", "number", 0.0, 1e6, "m per file unit", lo_open=True)
@@ -83,8 +95,16 @@ class SceneWriteResult:
 
 
 def _camera(origin, target, fov, res, resy) -> dict:
-    out = {name: _check(v, name, RANGES[name]) for name, v in
-           (("camera_origin", origin), ("camera_target", target), ("fov", fov), ("res", res), ("resy", resy))}
+    out = {
+        name: _check(v, name, RANGES[name])
+        for name, v in (
+            ("camera_origin", origin),
+            ("camera_target", target),
+            ("fov", fov),
+            ("res", res),
+            ("resy", resy),
+        )
+    }
     check_camera(out["camera_origin"], out["camera_target"], SOURCE, "camera_target (--camera-target)")
     return out
 
@@ -94,18 +114,40 @@ def _check_inputs(out: Path, inputs) -> None:
     target = out.resolve()
     for f in inputs:
         if Path(f).resolve() == target:
-            raise FogrefError(f"{SOURCE}: --out '{out}' is '{f}', an input of this scene; "
-                              f"writing it would replace that file: choose another --out")
+            raise FogrefError(
+                f"{SOURCE}: --out '{out}' is '{f}', an input of this scene; "
+                f"writing it would replace that file: choose another --out"
+            )
 
 
-def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, albedo=None, g=None,
-                sun_elevation: float = 8.0, sun_azimuth: float = 24.0, sun_irradiance=(3.2, 2.9, 2.4),
-                sky_radiance=(0.2, 0.3, 0.5), camera_origin=(0.0, 2.0, 0.0),
-                camera_target=(0.15, 2.35, 1.0), fov: float = 70.0, res: int = 320, resy: int = 180,
-                geometry="plane", mesh_scale: float = 1.0, mesh_up: str = "y", mesh_translate=(0.0, 0.0, 0.0),
-                ground: bool | None = None, ground_size: float | None = None, max_depth: int = 16,
-                ground_reflectance=None, mesh_reflectance=None,
-                overwrite: bool = False, on_note: Callable[[str], None] | None = None) -> SceneWriteResult:
+def write_scene(
+    out,
+    *,
+    fog: dict | None = None,
+    unreal: dict | None = None,
+    albedo=None,
+    g=None,
+    sun_elevation: float = 8.0,
+    sun_azimuth: float = 24.0,
+    sun_irradiance=(3.2, 2.9, 2.4),
+    sky_radiance=(0.2, 0.3, 0.5),
+    camera_origin=(0.0, 2.0, 0.0),
+    camera_target=(0.15, 2.35, 1.0),
+    fov: float = 70.0,
+    res: int = 320,
+    resy: int = 180,
+    geometry="plane",
+    mesh_scale: float = 1.0,
+    mesh_up: str = "y",
+    mesh_translate=(0.0, 0.0, 0.0),
+    ground: bool | None = None,
+    ground_size: float | None = None,
+    max_depth: int = 16,
+    ground_reflectance=None,
+    mesh_reflectance=None,
+    overwrite: bool = False,
+    on_note: Callable[[str], None] | None = None,
+) -> SceneWriteResult:
     """Write a fogref scene XML (fogpath + heightfog) from fog, sun, sky, camera and geometry.
 
     Parameters
@@ -200,8 +242,10 @@ def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, alb
         raise FogrefError(f"{SOURCE}: --out '{out}' is a folder")
     scatter = {"albedo": 0.9 if albedo is None else albedo, "g": 0.6 if g is None else g}
     if fog is not None and unreal is not None:
-        raise FogrefError(f"{SOURCE}: give the fog either in physical units (sigma_t, falloff, ...) or as "
-                          f"Unreal editor values (FogDensity, ...), not both")
+        raise FogrefError(
+            f"{SOURCE}: give the fog either in physical units (sigma_t, falloff, ...) or as "
+            f"Unreal editor values (FogDensity, ...), not both"
+        )
     ignored: list[str] = []
     if unreal is not None:
         fogp, ignored = fog_from_unreal(unreal, **scatter)
@@ -209,8 +253,10 @@ def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, alb
         fogp = fog_from_physical(fog, **scatter)
     notes = list(ignored)
     if unreal is not None:
-        notes.append(f"Unreal has no albedo or phase function: the fog uses albedo {_text(fogp['albedo'])} "
-                     f"and Henyey-Greenstein g {_fmt(fogp['g'])} (the albedo and g parameters)")
+        notes.append(
+            f"Unreal has no albedo or phase function: the fog uses albedo {_text(fogp['albedo'])} "
+            f"and Henyey-Greenstein g {_fmt(fogp['g'])} (the albedo and g parameters)"
+        )
     el = _check(sun_elevation, "sun_elevation", RANGES["sun_elevation"])
     az = _check(sun_azimuth, "sun_azimuth", RANGES["sun_azimuth"])
     sun_direction_from_angles(el, az)
@@ -223,47 +269,88 @@ def write_scene(out, *, fog: dict | None = None, unreal: dict | None = None, alb
     params.choice(mesh_up, "mesh_up (--mesh-up)", MESH_UP, SOURCE)
     shift = _check(mesh_translate, "mesh_translate", MESH_TRANSLATE)
     if geo.kind != "mesh":
-        given_args = (("mesh_scale", scale != 1.0), ("mesh_up", mesh_up != "y"),
-                      ("mesh_translate", any(shift)), ("mesh_reflectance", mesh_reflectance is not None))
+        given_args = (
+            ("mesh_scale", scale != 1.0),
+            ("mesh_up", mesh_up != "y"),
+            ("mesh_translate", any(shift)),
+            ("mesh_reflectance", mesh_reflectance is not None),
+        )
         for name, given in given_args:
             if given:
-                raise ParameterError(SOURCE, f"{name} (--{name.replace('_', '-')})",
-                                     f"applies to a mesh file, not to the '{geo.kind}' template")
-    gsize = GROUND_SIZE.get(geo.kind) if ground_size is None else _check(ground_size, "ground_size",
-                                                                          GROUND_SIZE_RANGE)
+                raise ParameterError(
+                    SOURCE,
+                    f"{name} (--{name.replace('_', '-')})",
+                    f"applies to a mesh file, not to the '{geo.kind}' template",
+                )
+    gsize = (
+        GROUND_SIZE.get(geo.kind)
+        if ground_size is None
+        else _check(ground_size, "ground_size", GROUND_SIZE_RANGE)
+    )
     with_ground = (geo.kind != "mesh") if ground is None else bool(ground)
     if geo.kind == "valley" and not with_ground:
         raise ParameterError(SOURCE, "ground (--no-ground)", "the valley template has its own ground")
     if ground_reflectance is not None and (geo.kind == "valley" or not with_ground):
-        why = ("the valley template keeps the BSDFs of scenes/valley.xml" if geo.kind == "valley"
-               else "there is no ground plane (add one with --ground)")
+        why = (
+            "the valley template keeps the BSDFs of scenes/valley.xml"
+            if geo.kind == "valley"
+            else "there is no ground plane (add one with --ground)"
+        )
         raise ParameterError(SOURCE, "ground_reflectance (--ground-reflectance)", f"does not apply: {why}")
-    g_refl = None if ground_reflectance is None else _check(ground_reflectance, "ground_reflectance",
-                                                            GROUND_REFLECTANCE)
-    m_refl = None if mesh_reflectance is None else _check(mesh_reflectance, "mesh_reflectance",
-                                                          MESH_REFLECTANCE)
+    g_refl = (
+        None
+        if ground_reflectance is None
+        else _check(ground_reflectance, "ground_reflectance", GROUND_REFLECTANCE)
+    )
+    m_refl = (
+        None if mesh_reflectance is None else _check(mesh_reflectance, "mesh_reflectance", MESH_REFLECTANCE)
+    )
     inputs = mesh_files(geo.mesh) if geo.kind == "mesh" else [VALLEY_SCENE] if geo.kind == "valley" else []
     _check_inputs(out, inputs)
     flat = geo.kind == "mesh" and not mesh_has_normals(geo.mesh)
     if geo.kind == "mesh":
-        notes.append(f"mesh {geo.mesh.name}: " + (
-            "no vertex normals in the file: shaded with face normals (face_normals, flat faces)" if flat
-            else "shaded with the file's vertex normals"))
+        notes.append(
+            f"mesh {geo.mesh.name}: "
+            + (
+                "no vertex normals in the file: shaded with face normals (face_normals, flat faces)"
+                if flat
+                else "shaded with the file's vertex normals"
+            )
+        )
     # $reflectance: the plane's ground, or the mesh's surfaces (its ground shares it unless given its own)
     refl = g_refl if geo.kind == "plane" else m_refl
-    own_ground = geo.kind == "mesh" and g_refl is not None and (
-        _rgb3(g_refl) != _rgb3(DEFAULT_REFLECTANCE if m_refl is None else m_refl))
+    own_ground = (
+        geo.kind == "mesh"
+        and g_refl is not None
+        and (_rgb3(g_refl) != _rgb3(DEFAULT_REFLECTANCE if m_refl is None else m_refl))
+    )
     if own_ground:
-        notes.append(f"the ground's reflectance {_text(g_refl)} is written in its BSDF; "
-                     "the reflectance default is the mesh's")
+        notes.append(
+            f"the ground's reflectance {_text(g_refl)} is written in its BSDF; "
+            "the reflectance default is the mesh's"
+        )
 
     defaults = scene_defaults(fogp, cam, depth, el, az, sun, sky, geo.kind, reflectance=refl)
-    fog_source = ("Unreal editor values " + ", ".join(f"{k}={v}" for k, v in _flat_unreal(unreal).items())
-                  if unreal is not None else "physical units")
-    root = scene_element(defaults, fogp, geo, fog_source=fog_source, notes=notes, ground_size=gsize,
-                         with_ground=with_ground, out_dir=out.parent, mesh_scale=scale, mesh_up=mesh_up,
-                         mesh_translate=shift, ground_reflectance=g_refl if own_ground else None,
-                         face_normals=flat)
+    fog_source = (
+        "Unreal editor values " + ", ".join(f"{k}={v}" for k, v in _flat_unreal(unreal).items())
+        if unreal is not None
+        else "physical units"
+    )
+    root = scene_element(
+        defaults,
+        fogp,
+        geo,
+        fog_source=fog_source,
+        notes=notes,
+        ground_size=gsize,
+        with_ground=with_ground,
+        out_dir=out.parent,
+        mesh_scale=scale,
+        mesh_up=mesh_up,
+        mesh_translate=shift,
+        ground_reflectance=g_refl if own_ground else None,
+        face_normals=flat,
+    )
     write_xml(out, root)
     if on_note is not None:
         for n in notes:

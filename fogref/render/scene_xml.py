@@ -24,18 +24,36 @@ __all__ = ["FOG_DEFAULTS", "comment_text", "scene_defaults", "scene_element", "w
 
 #: The fog's ``$default``s in the order they are declared, and the ``heightfog`` tag of each
 #: (None: "rgb" for three values, "float" for one).
-FOG_DEFAULTS = (("sigma_t", None), ("albedo", None), ("g", "float"), ("density", "float"),
-                ("falloff", "float"), ("fog_height", "float"), ("density2", "float"), ("falloff2", "float"),
-                ("height2", "float"),
-                ("bounds_min", "point"), ("bounds_max", "point"))
+FOG_DEFAULTS = (
+    ("sigma_t", None),
+    ("albedo", None),
+    ("g", "float"),
+    ("density", "float"),
+    ("falloff", "float"),
+    ("fog_height", "float"),
+    ("density2", "float"),
+    ("falloff2", "float"),
+    ("height2", "float"),
+    ("bounds_min", "point"),
+    ("bounds_max", "point"),
+)
 #: The default reflectance of the plane and mesh templates' surfaces (the ``surface`` group's
 #: ``$reflectance``; ``fogref scene --ground-reflectance``, ``--mesh-reflectance``).
 DEFAULT_REFLECTANCE = 0.2
 SURFACE_REFLECTANCE = _vec(_rgb3(DEFAULT_REFLECTANCE))
 
 
-def scene_defaults(fog: dict, camera: dict, max_depth: int, sun_elevation: float, sun_azimuth: float,
-                   sun_irradiance, sky_radiance, geometry_kind: str, reflectance=None) -> dict[str, str]:
+def scene_defaults(
+    fog: dict,
+    camera: dict,
+    max_depth: int,
+    sun_elevation: float,
+    sun_azimuth: float,
+    sun_irradiance,
+    sky_radiance,
+    geometry_kind: str,
+    reflectance=None,
+) -> dict[str, str]:
     """The ``<default>`` values (XML text) of a written scene, in declaration order.
 
     ``fog``: :func:`fogref.mapping.fog_input.fog_from_physical`'s output; ``camera``:
@@ -43,17 +61,26 @@ def scene_defaults(fog: dict, camera: dict, max_depth: int, sun_elevation: float
     None declares no sky; the plane and mesh templates add ``reflectance`` (grey or RGB in
     [0, 1]; None: :data:`SURFACE_REFLECTANCE`): the plane's ground, or the mesh's surfaces.
     """
-    d: dict[str, str] = {"res": str(camera["res"]), "resy": str(camera["resy"]),
-                         "max_depth": str(int(max_depth))}
+    d: dict[str, str] = {
+        "res": str(camera["res"]),
+        "resy": str(camera["resy"]),
+        "max_depth": str(int(max_depth)),
+    }
     for k, _ in FOG_DEFAULTS:
         if k in fog:
             d[k] = _text(fog[k])
-    d.update(sun_elevation=_fmt(sun_elevation), sun_azimuth=_fmt(sun_azimuth),
-             sun_irradiance=_vec(_rgb3(sun_irradiance)))
+    d.update(
+        sun_elevation=_fmt(sun_elevation),
+        sun_azimuth=_fmt(sun_azimuth),
+        sun_irradiance=_vec(_rgb3(sun_irradiance)),
+    )
     if sky_radiance is not None:
         d["sky_radiance"] = _vec(_rgb3(sky_radiance))
-    d.update(camera_origin=_vec(camera["camera_origin"]), camera_target=_vec(camera["camera_target"]),
-             fov=_fmt(camera["fov"]))
+    d.update(
+        camera_origin=_vec(camera["camera_origin"]),
+        camera_target=_vec(camera["camera_target"]),
+        fov=_fmt(camera["fov"]),
+    )
     if geometry_kind != "valley":
         d["reflectance"] = SURFACE_REFLECTANCE if reflectance is None else _vec(_rgb3(reflectance))
     return d
@@ -72,11 +99,16 @@ def comment_text(text: str) -> str:
 
 def _header(root, geo: Geometry, fog_source: str, notes) -> None:
     geo_text = geo.kind if geo.kind != "mesh" else f"mesh {geo.mesh.name}"
-    root.append(ET.Comment(comment_text(
-        f" Written by fogref scene (fogref {__version__}). Geometry: {geo_text}. Fog from {fog_source}. "
-        "Units: metres, y up; the sun's elevation is above the horizon and its azimuth is from +z toward +x "
-        "[deg] (fogref/render/sun.py). Every default below can be changed by the set option of fogref render "
-        "(NAME=VALUE). ")))
+    root.append(
+        ET.Comment(
+            comment_text(
+                f" Written by fogref scene (fogref {__version__}). Geometry: {geo_text}. Fog from {fog_source}. "
+                "Units: metres, y up; the sun's elevation is above the horizon and its azimuth is from +z toward +x "
+                "[deg] (fogref/render/sun.py). Every default below can be changed by the set option of fogref render "
+                "(NAME=VALUE). "
+            )
+        )
+    )
     for n in notes:
         root.append(ET.Comment(comment_text(f" note: {n} ")))
 
@@ -116,10 +148,22 @@ def _lights(root, sky: bool) -> None:
         root.append(ET.Comment(" no sky: the sky is black "))
 
 
-def scene_element(defaults: dict[str, str], fog: dict, geo: Geometry, *, fog_source: str, notes=(),
-                  ground_size: float | None, with_ground: bool, out_dir: Path, mesh_scale: float = 1.0,
-                  mesh_up: str = "y", mesh_translate=(0.0, 0.0, 0.0), ground_reflectance=None,
-                  face_normals: bool = False) -> ET.Element:
+def scene_element(
+    defaults: dict[str, str],
+    fog: dict,
+    geo: Geometry,
+    *,
+    fog_source: str,
+    notes=(),
+    ground_size: float | None,
+    with_ground: bool,
+    out_dir: Path,
+    mesh_scale: float = 1.0,
+    mesh_up: str = "y",
+    mesh_translate=(0.0, 0.0, 0.0),
+    ground_reflectance=None,
+    face_normals: bool = False,
+) -> ET.Element:
     """The ``<scene>`` element: a header comment (``fog_source``, ``notes``), the ``defaults``,
     integrator, sensor with the fog, sun, sky (when ``defaults`` has ``sky_radiance``) and
     geometry (``out_dir``: the scene's folder, which a mesh's file name is relative to).

@@ -112,8 +112,9 @@ def _rotation(axis, angle_deg: float) -> np.ndarray:
     return np.eye(3) + math.sin(t) * K + (1 - math.cos(t)) * (K @ K)
 
 
-def sun_direction_from_to_world(transform, subst: Callable[[str], str] = lambda s: s,
-                                source: str = "scene") -> list[float]:
+def sun_direction_from_to_world(
+    transform, subst: Callable[[str], str] = lambda s: s, source: str = "scene"
+) -> list[float]:
     """Unit vector toward the sun of a ``directional`` emitter oriented by ``to_world``.
 
     Parameters
@@ -180,8 +181,9 @@ def sun_direction_from_to_world(transform, subst: Callable[[str], str] = lambda 
         elif tag == "translate":
             continue
         else:
-            raise FogrefError(f"{what}: unsupported operation "
-                              "(allowed: rotate, scale, matrix, lookat, translate)")
+            raise FogrefError(
+                f"{what}: unsupported operation (allowed: rotate, scale, matrix, lookat, translate)"
+            )
         M = R @ M
     d = M[:, 2]
     n = float(np.linalg.norm(d))

@@ -92,13 +92,26 @@ def _cached_syntax():
     def syntax(f=None, *, recursive=False, print_ast=False, print_code=False):
         if f is None:
             return lambda g: syntax(g, recursive=recursive, print_ast=print_ast, print_code=print_code)
-        if (print_ast or print_code or not isinstance(f, types.FunctionType)
-                or f.__module__.startswith(("drjit", "pytest"))):  # Dr.Jit's own output or error
+        if (
+            print_ast
+            or print_code
+            or not isinstance(f, types.FunctionType)
+            or f.__module__.startswith(("drjit", "pytest"))
+        ):  # Dr.Jit's own output or error
             return original(f, recursive=recursive, print_ast=print_ast, print_code=print_code)
         code = f.__code__
         try:
-            key = repr((dr.__version__, importlib.util.MAGIC_NUMBER.hex(), f.__qualname__, code.co_filename,
-                        code.co_firstlineno, bool(recursive), file_digest(code.co_filename)))
+            key = repr(
+                (
+                    dr.__version__,
+                    importlib.util.MAGIC_NUMBER.hex(),
+                    f.__qualname__,
+                    code.co_filename,
+                    code.co_firstlineno,
+                    bool(recursive),
+                    file_digest(code.co_filename),
+                )
+            )
         except OSError:  # no source file: Dr.Jit's own error or result
             return original(f, recursive=recursive)
         path = folder / (hashlib.sha256(key.encode()).hexdigest()[:32] + ".code")
@@ -173,8 +186,13 @@ def set_variant(name: str | None = None) -> str:
 
         if name is None:
             current, env = mi.variant(), os.environ.get("FOGREF_VARIANT")
-            source = ("mitsuba.variant() (set before fogref)" if current
-                      else "$FOGREF_VARIANT" if env else "fogref.set_variant")
+            source = (
+                "mitsuba.variant() (set before fogref)"
+                if current
+                else "$FOGREF_VARIANT"
+                if env
+                else "fogref.set_variant"
+            )
             name = params.choice(current or env or DEFAULT_VARIANT, "variant", VARIANTS, source)
         if name.startswith("llvm") and not llvm:
             raise FogrefError(HELP)

@@ -104,8 +104,12 @@ def closed_forms(truth: Truth, pf) -> dict:
     else:
         sun_noatt = np.zeros_like(T)
     sky = np.stack(single_scatter_sky(NP, m, o, d, D, pf.sky_radiance or (0.0, 0.0, 0.0)), -1)
-    return {"T": T.reshape(shape), "sun_att": sun_att.reshape(shape), "sun_noatt": sun_noatt.reshape(shape),
-            "sky": sky.reshape(shape)}
+    return {
+        "T": T.reshape(shape),
+        "sun_att": sun_att.reshape(shape),
+        "sun_noatt": sun_noatt.reshape(shape),
+        "sky": sky.reshape(shape),
+    }
 
 
 def _unreal(params: UE4FogParams, truth: Truth, precision: str, sky_distance: float):
@@ -117,15 +121,26 @@ def _model_configs(lobe_params: UE4FogParams, model_params: UE4FogParams) -> lis
     """``(params, precision)`` of steps 5..9."""
     from dataclasses import replace
 
-    plain = dict(DirectionalInscatteringStartDistance=0.0, StartDistance=0.0, FogMaxOpacity=1.0,
-                 FogCutoffDistance=0.0)
-    return [(replace(lobe_params, **plain), "float64"), (replace(model_params, **plain), "float64"),
-            (replace(model_params, FogMaxOpacity=1.0, FogCutoffDistance=0.0), "float64"),
-            (model_params, "float64"), (model_params, "float32")]
+    plain = dict(
+        DirectionalInscatteringStartDistance=0.0, StartDistance=0.0, FogMaxOpacity=1.0, FogCutoffDistance=0.0
+    )
+    return [
+        (replace(lobe_params, **plain), "float64"),
+        (replace(model_params, **plain), "float64"),
+        (replace(model_params, FogMaxOpacity=1.0, FogCutoffDistance=0.0), "float64"),
+        (model_params, "float64"),
+        (model_params, "float32"),
+    ]
 
 
-def chain(truth: Truth, sky_single: np.ndarray, pf, lobe_params: UE4FogParams, model_params: UE4FogParams,
-          sky_distance: float = 1.0e5) -> list[np.ndarray]:
+def chain(
+    truth: Truth,
+    sky_single: np.ndarray,
+    pf,
+    lobe_params: UE4FogParams,
+    model_params: UE4FogParams,
+    sky_distance: float = 1.0e5,
+) -> list[np.ndarray]:
     """The images ``S_0 .. S_9`` (see the module doc), each ``(H, W, 3)``.
 
     ``sky_single``: (H, W, 3) ``single.*`` of a render of the same scene with the sun
@@ -136,19 +151,26 @@ def chain(truth: Truth, sky_single: np.ndarray, pf, lobe_params: UE4FogParams, m
     """
     cf = closed_forms(truth, pf)
     att = truth.attenuated_surface
-    S = [truth.final,
-         att + truth.single,
-         att + cf["sun_att"] + sky_single,
-         att + cf["sun_att"] + cf["sky"],
-         att + cf["sun_noatt"] + cf["sky"]]
+    S = [
+        truth.final,
+        att + truth.single,
+        att + cf["sun_att"] + sky_single,
+        att + cf["sun_att"] + cf["sky"],
+        att + cf["sun_noatt"] + cf["sky"],
+    ]
     for p, precision in _model_configs(lobe_params, model_params):
         Tm, Lm = _unreal(p, truth, precision, sky_distance)
         S.append(truth.surface * Tm + Lm)
     return S
 
 
-def chain_noise(truth: Truth, sky_single_stderr: np.ndarray, lobe_params: UE4FogParams,
-                model_params: UE4FogParams, sky_distance: float = 1.0e5) -> dict:
+def chain_noise(
+    truth: Truth,
+    sky_single_stderr: np.ndarray,
+    lobe_params: UE4FogParams,
+    model_params: UE4FogParams,
+    sky_distance: float = 1.0e5,
+) -> dict:
     """Per-pixel standard errors ``(H, W, 3)`` of each ``Δ_k`` and of the total ``E``.
 
     From the truth's ``stderr.*`` channels and ``sky_single_stderr`` (the sun-less
@@ -156,11 +178,18 @@ def chain_noise(truth: Truth, sky_single_stderr: np.ndarray, lobe_params: UE4Fog
     σ_9], "total": σ_E}`` [radiance].
     """
     se = truth.stderr
-    Tms = [_unreal(p, truth, precision, sky_distance)[0] for p, precision in _model_configs(lobe_params,
-                                                                                          model_params)]
+    Tms = [
+        _unreal(p, truth, precision, sky_distance)[0]
+        for p, precision in _model_configs(lobe_params, model_params)
+    ]
     zero = np.zeros(truth.final.shape)
-    steps = [se["multiple"], np.hypot(se["single"], sky_single_stderr), sky_single_stderr, zero,
-             np.hypot(Tms[0] * se["surface"], se["attenuated_surface"])]
+    steps = [
+        se["multiple"],
+        np.hypot(se["single"], sky_single_stderr),
+        sky_single_stderr,
+        zero,
+        np.hypot(Tms[0] * se["surface"], se["attenuated_surface"]),
+    ]
     steps += [np.abs(Tms[k] - Tms[k - 1]) * se["surface"] for k in range(1, len(Tms))]
     return {"steps": steps, "total": np.hypot(se["final"], Tms[-1] * se["surface"])}
 
@@ -178,12 +207,17 @@ def _noise_fields(d: np.ndarray, sigma: np.ndarray, mask: np.ndarray) -> dict:
     if m is None:
         return {}
     hi, lo = np.sqrt(m["mse"] + m["stderr"]), np.sqrt(max(m["mse"] - m["stderr"], 0.0))
-    return {"rmse_noise_floor": float(np.sqrt(m["noise_floor"])), "rmse_stderr": float(0.5 * (hi - lo)),
-            "rmse_debiased": float(np.sqrt(m["debiased"])), "below_noise": m["below_noise"]}
+    return {
+        "rmse_noise_floor": float(np.sqrt(m["noise_floor"])),
+        "rmse_stderr": float(0.5 * (hi - lo)),
+        "rmse_debiased": float(np.sqrt(m["debiased"])),
+        "below_noise": m["below_noise"],
+    }
 
 
-def attribute(S: list[np.ndarray], hit: np.ndarray, valid: np.ndarray | None = None,
-              noise: dict | None = None) -> dict:
+def attribute(
+    S: list[np.ndarray], hit: np.ndarray, valid: np.ndarray | None = None, noise: dict | None = None
+) -> dict:
     """Per-step statistics of a chain over the ``valid`` pixels (default all).
 
     ``noise``: :func:`chain_noise`'s per-pixel standard errors; with it every RMSE
@@ -201,7 +235,9 @@ def attribute(S: list[np.ndarray], hit: np.ndarray, valid: np.ndarray | None = N
     steps = []
     for i, ((key, letter, label), dk, Sk) in enumerate(zip(STEPS, deltas, S[1:])):
         step = {
-            "key": key, "effect": letter, "label": label,
+            "key": key,
+            "effect": letter,
+            "label": label,
             "rmse": {r: _rmse(dk, m) for r, m in masks.items()},
             "mean": float(np.mean(dk[valid])) if valid.any() else 0.0,
             "share": float(np.sum((dk * E)[valid]) / e2) if e2 > 0 else 0.0,
@@ -210,17 +246,30 @@ def attribute(S: list[np.ndarray], hit: np.ndarray, valid: np.ndarray | None = N
         if noise is not None:
             step.update(_noise_fields(dk, noise["steps"][i], valid))
         steps.append(step)
-    total = {"rmse": {r: _rmse(E, m) for r, m in masks.items()},
-             "mean": float(np.mean(E[valid])) if valid.any() else 0.0, "truth_rms": _rmse(S[0], valid)}
+    total = {
+        "rmse": {r: _rmse(E, m) for r, m in masks.items()},
+        "mean": float(np.mean(E[valid])) if valid.any() else 0.0,
+        "truth_rms": _rmse(S[0], valid),
+    }
     if noise is not None:
         total.update(_noise_fields(E, noise["total"], valid))
-    return {"total": total, "steps": steps, "telescoping_residual": resid,
-            "share_sum": float(sum(s["share"] for s in steps)),
-            "pixels": int(valid.sum()), "excluded_pixels": int((~valid).sum())}
+    return {
+        "total": total,
+        "steps": steps,
+        "telescoping_residual": resid,
+        "share_sum": float(sum(s["share"] for s in steps)),
+        "pixels": int(valid.sum()),
+        "excluded_pixels": int((~valid).sum()),
+    }
 
 
-def add_noise(result: dict, S_a: list[np.ndarray], S_b: list[np.ndarray], hit: np.ndarray,
-              valid: np.ndarray | None = None) -> dict:
+def add_noise(
+    result: dict,
+    S_a: list[np.ndarray],
+    S_b: list[np.ndarray],
+    hit: np.ndarray,
+    valid: np.ndarray | None = None,
+) -> dict:
     """Add Monte Carlo noise estimates from a second chain ``S_b`` (other seeds) to ``result``
     (computed from ``S_a``), over the pixels valid in both (default all)."""
     valid = np.ones(hit.shape, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
@@ -230,7 +279,7 @@ def add_noise(result: dict, S_a: list[np.ndarray], S_b: list[np.ndarray], hit: n
     r2 = math.sqrt(2.0)
     for s, so, a, b in zip(result["steps"], other["steps"], da, db):
         s["noise"] = {
-            "pixel_rms": _rmse(a - b, valid) / r2,     # per-pixel noise of Δ_k
+            "pixel_rms": _rmse(a - b, valid) / r2,  # per-pixel noise of Δ_k
             # RMSE of Δ_k with the noise removed in quadrature (noise adds variance)
             "rmse_denoised": math.sqrt(max(s["rmse"]["all"] ** 2 - (_rmse(a - b, valid) / r2) ** 2, 0.0)),
             "rmse": abs(s["rmse"]["all"] - so["rmse"]["all"]) / r2,
@@ -253,13 +302,18 @@ def footprint_check(truth: Truth, pf, S: list[np.ndarray], step: str = "shadows"
     mixed = np.abs(cf["T"] - truth.transmittance).max(-1) > tol
     dk = S[k] - S[k - 1]
     tot = float(np.sum(dk * dk))
-    return {"tolerance": tol, "pixel_fraction": float(mixed.mean()), "step": step,
-            "share_of_step_sq": float(np.sum(dk[mixed] ** 2) / tot) if tot > 0 else 0.0,
-            "max_T_difference": float(np.abs(cf["T"] - truth.transmittance).max())}
+    return {
+        "tolerance": tol,
+        "pixel_fraction": float(mixed.mean()),
+        "step": step,
+        "share_of_step_sq": float(np.sum(dk[mixed] ** 2) / tot) if tot > 0 else 0.0,
+        "max_T_difference": float(np.abs(cf["T"] - truth.transmittance).max()),
+    }
 
 
-def what_if(truth: Truth, model_params: UE4FogParams, variants: dict,
-            sky_distance: float = 1.0e5) -> list[dict]:
+def what_if(
+    truth: Truth, model_params: UE4FogParams, variants: dict, sky_distance: float = 1.0e5
+) -> list[dict]:
     """RMSE against the truth of the model with some fields changed (``variants``:
     name -> dict of UE4FogParams fields), float32; and the change vs the model.
 
@@ -293,78 +347,113 @@ def _floor(s: dict) -> str:
 def markdown(result: dict, title: str = "Error budget of Unreal's exponential height fog") -> str:
     """The budget table as Markdown."""
     t = result["total"]
-    lines = [f"# {title}", "",
-             f"Total error of the Unreal model (float32, as compared) against the path-traced truth: "
-             f"**RMSE {t['rmse']['all']:.4g}** (surface pixels {t['rmse']['surface']:.4g}, "
-             f"sky {t['rmse']['sky']:.4g}; truth RMS {t['truth_rms']:.4g}; Monte Carlo noise of the total "
-             f"±{t.get('noise_rmse', float('nan')):.2g}"
-             + (f"; noise floor {t['rmse_noise_floor']:.2g} from the truth's stderr, "
-                f"{'**below the noise**' if t['below_noise'] else 'above the noise'}"
-                if "rmse_noise_floor" in t else "") + ").",
-             ""]
+    lines = [
+        f"# {title}",
+        "",
+        f"Total error of the Unreal model (float32, as compared) against the path-traced truth: "
+        f"**RMSE {t['rmse']['all']:.4g}** (surface pixels {t['rmse']['surface']:.4g}, "
+        f"sky {t['rmse']['sky']:.4g}; truth RMS {t['truth_rms']:.4g}; Monte Carlo noise of the total "
+        f"±{t.get('noise_rmse', float('nan')):.2g}"
+        + (
+            f"; noise floor {t['rmse_noise_floor']:.2g} from the truth's stderr, "
+            f"{'**below the noise**' if t['below_noise'] else 'above the noise'}"
+            if "rmse_noise_floor" in t
+            else ""
+        )
+        + ").",
+        "",
+    ]
     if result.get("shapley"):
         lines += [shapley_markdown(result["shapley"]), ""]
         if result.get("shapley_colours_in_lobe"):
-            lines += [shapley_markdown(result["shapley_colours_in_lobe"],
-                                       "### Variant: the colour re-fit folded into the lobe"), ""]
+            lines += [
+                shapley_markdown(
+                    result["shapley_colours_in_lobe"], "### Variant: the colour re-fit folded into the lobe"
+                ),
+                "",
+            ]
         lines += ["## Telescoping chain (second view)", ""]
-    lines += [f"Pixels: {result.get('pixels', '?')} used, {result.get('excluded_pixels', 0)} excluded "
-              "(the truth's "
-             "unattenuated surface is undefined there: no sample reached it, so no model can be composited "
-             "on it).",
-             "",
-             "Each row switches one effect, going from the truth to Unreal; Δ_k = S_k − S_{k−1}. "
-             "*Share* = ⟨Δ_k, E⟩/⟨E, E⟩ with E = model − truth: the shares add up to 100 % exactly "
-             f"(sum {100 * result['share_sum']:.6f} %, "
-             f"largest |ΣΔ_k − E| = {result['telescoping_residual']:.2g}); "
-             "a negative share means the step cancels part of the other errors. "
-             "*Noise*: per-pixel Monte Carlo noise of Δ_k and the noise of its share, from a second render "
-             "with another seed (closed-form steps are noise-free).", "",
-             "*Denoised*: √(RMSE² − noise²), the step's size without the Monte Carlo noise.", "",
-             "*Noise floor*: the RMSE Δ_k would have from the truths' per-pixel standard errors alone "
-             "(`stderr.*` channels); *below the noise*: Δ_k cannot be told from 0 at this sample count.", "",
-             "| k | effect | step | RMSE of Δ_k | denoised | (surface / sky) | share of E² | "
-             "noise: pixel RMS / share | noise floor (stderr) | RMSE vs truth after step |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+    lines += [
+        f"Pixels: {result.get('pixels', '?')} used, {result.get('excluded_pixels', 0)} excluded "
+        "(the truth's "
+        "unattenuated surface is undefined there: no sample reached it, so no model can be composited "
+        "on it).",
+        "",
+        "Each row switches one effect, going from the truth to Unreal; Δ_k = S_k − S_{k−1}. "
+        "*Share* = ⟨Δ_k, E⟩/⟨E, E⟩ with E = model − truth: the shares add up to 100 % exactly "
+        f"(sum {100 * result['share_sum']:.6f} %, "
+        f"largest |ΣΔ_k − E| = {result['telescoping_residual']:.2g}); "
+        "a negative share means the step cancels part of the other errors. "
+        "*Noise*: per-pixel Monte Carlo noise of Δ_k and the noise of its share, from a second render "
+        "with another seed (closed-form steps are noise-free).",
+        "",
+        "*Denoised*: √(RMSE² − noise²), the step's size without the Monte Carlo noise.",
+        "",
+        "*Noise floor*: the RMSE Δ_k would have from the truths' per-pixel standard errors alone "
+        "(`stderr.*` channels); *below the noise*: Δ_k cannot be told from 0 at this sample count.",
+        "",
+        "| k | effect | step | RMSE of Δ_k | denoised | (surface / sky) | share of E² | "
+        "noise: pixel RMS / share | noise floor (stderr) | RMSE vs truth after step |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for k, s in enumerate(result["steps"], 1):
         n = s.get("noise")
         rendered = n and s["key"] in RENDERED
         ns = f"{n['pixel_rms']:.2g} / ±{100 * n['share']:.2g} %" if rendered else "0 (closed form)"
         dn = f"{n['rmse_denoised']:.4g}" if n and s["key"] in RENDERED else f"{s['rmse']['all']:.4g}"
-        lines.append(f"| {k} | [{s['effect']}] | {s['label']} | {s['rmse']['all']:.4g} | {dn} | "
-                     f"{s['rmse']['surface']:.3g} / {s['rmse']['sky']:.3g} | {100 * s['share']:+.1f} % | "
-                     f"{ns} | "
-                     f"{_floor(s)} | {s['rmse_vs_truth_after']:.4g} |")
+        lines.append(
+            f"| {k} | [{s['effect']}] | {s['label']} | {s['rmse']['all']:.4g} | {dn} | "
+            f"{s['rmse']['surface']:.3g} / {s['rmse']['sky']:.3g} | {100 * s['share']:+.1f} % | "
+            f"{ns} | "
+            f"{_floor(s)} | {s['rmse_vs_truth_after']:.4g} |"
+        )
     by = {s["key"]: s for s in result["steps"]}
     off = [k for k in ("start_distance", "opacity_cutoff") if by.get(k) and by[k]["rmse"]["all"] == 0]
     if off:
-        lines += ["", "Steps " + " and ".join(f"[{by[k]['effect']}]" for k in off) + " are exactly 0 "
-                  "because the model under study has those settings off (the fitted "
-                  "DirectionalInscatteringStartDistance is "
-                  "0; StartDistance 0, FogMaxOpacity 1 and FogCutoffDistance 0 are the editor defaults); the "
-                  "*What if* table below measures them switched on."]
+        lines += [
+            "",
+            "Steps " + " and ".join(f"[{by[k]['effect']}]" for k in off) + " are exactly 0 "
+            "because the model under study has those settings off (the fitted "
+            "DirectionalInscatteringStartDistance is "
+            "0; StartDistance 0, FogMaxOpacity 1 and FogCutoffDistance 0 are the editor defaults); the "
+            "*What if* table below measures them switched on.",
+        ]
     fc = result.get("footprint")
     if fc:
-        lines += ["", f"Pixel footprint: {100 * fc['pixel_fraction']:.2g} % of the pixels straddle an edge "
-                  "(their "
-                  f"closed-form T differs from the EXR's by more than {fc['tolerance']}); they hold "
-                  f"{100 * fc['share_of_step_sq']:.2g} % of the squared '{fc['step']}' step, so that step is "
-                  "not an artefact of per-pixel (G-buffer) evaluation."]
+        lines += [
+            "",
+            f"Pixel footprint: {100 * fc['pixel_fraction']:.2g} % of the pixels straddle an edge "
+            "(their "
+            f"closed-form T differs from the EXR's by more than {fc['tolerance']}); they hold "
+            f"{100 * fc['share_of_step_sq']:.2g} % of the squared '{fc['step']}' step, so that step is "
+            "not an artefact of per-pixel (G-buffer) evaluation.",
+        ]
     oc = result.get("open_plane_check")
     if oc:
-        lines += ["", f"Closed-form check on `{oc['scene']}` (no occluders, {oc['resolution'][0]}×"
-                  f"{oc['resolution'][1]}, {oc['spp']} spp): the 'shadows' step there is RMSE "
-                  f"{oc['shadows_rmse']:.3g} against an expected pure-noise level of {oc['noise_rmse']:.3g} "
-                  f"(mean {oc['shadows_mean']:+.2g} vs single-scattering RMS {oc['single_rms']:.3g}): "
-                  "the closed-form sun "
-                  "single scattering matches the path tracer where nothing casts shadows."]
+        lines += [
+            "",
+            f"Closed-form check on `{oc['scene']}` (no occluders, {oc['resolution'][0]}×"
+            f"{oc['resolution'][1]}, {oc['spp']} spp): the 'shadows' step there is RMSE "
+            f"{oc['shadows_rmse']:.3g} against an expected pure-noise level of {oc['noise_rmse']:.3g} "
+            f"(mean {oc['shadows_mean']:+.2g} vs single-scattering RMS {oc['single_rms']:.3g}): "
+            "the closed-form sun "
+            "single scattering matches the path tracer where nothing casts shadows.",
+        ]
     if result.get("what_if"):
-        lines += ["", "## What if (engine settings the study leaves at their defaults)", "",
-                  "RMSE of the float32 model against the truth with one setting changed:", "",
-                  "| variant | fields | RMSE | Δ RMSE | noise floor |", "|---|---|---|---|---|"]
+        lines += [
+            "",
+            "## What if (engine settings the study leaves at their defaults)",
+            "",
+            "RMSE of the float32 model against the truth with one setting changed:",
+            "",
+            "| variant | fields | RMSE | Δ RMSE | noise floor |",
+            "|---|---|---|---|---|",
+        ]
         for r in result["what_if"]:
-            lines.append(f"| {r['variant']} | `{r['fields']}` | {r['rmse']:.4g} | {r['delta_rmse']:+.3g} | "
-                         f"{_floor(r)} |")
+            lines.append(
+                f"| {r['variant']} | `{r['fields']}` | {r['rmse']:.4g} | {r['delta_rmse']:+.3g} | "
+                f"{_floor(r)} |"
+            )
     lines += ["", "![budget](budget.png)", ""]
     return "\n".join(lines)
 
@@ -395,8 +484,9 @@ def plot(result: dict, path) -> None:
         a0.barh(y, sv, xerr=se, capsize=3, color=["#c0504d" if v > 0 else "#9bbb59" for v in sv])
         a0.axvline(0, color="k", lw=0.8)
         a0.set_yticks(y, labels)
-        a0.set_xlabel("Shapley share of the squared error [%]\n"
-                      "all coalitions, order-free; bars: bootstrap noise")
+        a0.set_xlabel(
+            "Shapley share of the squared error [%]\nall coalitions, order-free; bars: bootstrap noise"
+        )
         for yy, v in zip(y, sv):
             a0.text(v, yy, f" {v:+.1f}%", va="center", ha="left" if v >= 0 else "right", fontsize=8)
         a0.grid(axis="x", alpha=0.3)
@@ -414,8 +504,9 @@ def plot(result: dict, path) -> None:
         ax[1].text(v, yy, f" {v:+.1f}%", va="center", ha="left" if v >= 0 else "right", fontsize=8)
     for a in ax:
         a.grid(axis="x", alpha=0.3)
-    fig.suptitle("Unreal exponential height fog: error budget "
-                 f"(total RMSE {result['total']['rmse']['all']:.4g})")
+    fig.suptitle(
+        f"Unreal exponential height fog: error budget (total RMSE {result['total']['rmse']['all']:.4g})"
+    )
     fig.tight_layout()
     save_figure(fig, path)
     plt.close(fig)
@@ -499,17 +590,21 @@ def shapley_values(value, players) -> dict:
     return {p: (float(phi[i]) if phi[i].ndim == 0 else phi[i]) for i, p in enumerate(players)}
 
 
-def _config_params(lobe_params: UE4FogParams, model_params: UE4FogParams, refit: bool, start: bool,
-                   opacity: bool) -> UE4FogParams:
+def _config_params(
+    lobe_params: UE4FogParams, model_params: UE4FogParams, refit: bool, start: bool, opacity: bool
+) -> UE4FogParams:
     from dataclasses import replace
 
     p = model_params if refit else lobe_params
     m = model_params
     dist = m.DirectionalInscatteringStartDistance if start else 0.0
-    return replace(p, DirectionalInscatteringStartDistance=dist,
-                   StartDistance=m.StartDistance if start else 0.0,
-                   FogMaxOpacity=model_params.FogMaxOpacity if opacity else 1.0,
-                   FogCutoffDistance=model_params.FogCutoffDistance if opacity else 0.0)
+    return replace(
+        p,
+        DirectionalInscatteringStartDistance=dist,
+        StartDistance=m.StartDistance if start else 0.0,
+        FogMaxOpacity=model_params.FogMaxOpacity if opacity else 1.0,
+        FogCutoffDistance=model_params.FogCutoffDistance if opacity else 0.0,
+    )
 
 
 def unreal_engine(lobe_params: UE4FogParams, model_params: UE4FogParams):
@@ -526,8 +621,9 @@ def unreal_engine(lobe_params: UE4FogParams, model_params: UE4FogParams):
     from dataclasses import replace
 
     def engine(truth: Truth, config: dict, sky_distance: float):
-        p = _config_params(lobe_params, model_params, config["refit"], config["start_distance"],
-                           config["opacity_cutoff"])
+        p = _config_params(
+            lobe_params, model_params, config["refit"], config["start_distance"], config["opacity_cutoff"]
+        )
         prec = "float32" if config["float32"] else "float64"
         T, L = _unreal(p, truth, prec, sky_distance)
         no_sun = replace(p, DirectionalInscatteringColor=(0.0, 0.0, 0.0))
@@ -550,10 +646,18 @@ def shapley_parts(truth: Truth, sky_single: np.ndarray, pf, engine, sky_distance
     eng = {}
     for bits in itertools.product((False, True), repeat=len(_CONFIG)):
         eng[bits] = engine(truth, dict(zip(_CONFIG, bits)), sky_distance)
-    return {"final": truth.final, "att": truth.attenuated_surface, "surface": truth.surface,
-            "multiple": truth.final - truth.attenuated_surface - truth.single,
-            "sun_render": truth.single - sky_single, "sky_render": sky_single,
-            "sun_att": cf["sun_att"], "sun_noatt": cf["sun_noatt"], "sky_cf": cf["sky"], "engine": eng}
+    return {
+        "final": truth.final,
+        "att": truth.attenuated_surface,
+        "surface": truth.surface,
+        "multiple": truth.final - truth.attenuated_surface - truth.single,
+        "sun_render": truth.single - sky_single,
+        "sky_render": sky_single,
+        "sun_att": cf["sun_att"],
+        "sun_noatt": cf["sun_noatt"],
+        "sky_cf": cf["sky"],
+        "engine": eng,
+    }
 
 
 def coalition_image(parts: dict, coalition, fixed=()) -> np.ndarray:
@@ -607,8 +711,14 @@ def _block_ids(shape: tuple, block: int) -> np.ndarray:
     return by * ((w + block - 1) // block) + bx
 
 
-def shapley_budget(parts: dict, valid: np.ndarray, effects=EFFECTS, block: int = BOOTSTRAP_BLOCK,
-                   resamples: int = BOOTSTRAP_RESAMPLES, seed: int = 0) -> dict:
+def shapley_budget(
+    parts: dict,
+    valid: np.ndarray,
+    effects=EFFECTS,
+    block: int = BOOTSTRAP_BLOCK,
+    resamples: int = BOOTSTRAP_RESAMPLES,
+    seed: int = 0,
+) -> dict:
     """Shapley shares of the squared error ``sum |S(all) - S(empty)|^2`` over ``valid`` pixels.
 
     The game: ``e(C) = sum over valid pixels and channels of |coalition_image(C) - truth|^2``
@@ -640,8 +750,8 @@ def shapley_budget(parts: dict, valid: np.ndarray, effects=EFFECTS, block: int =
         e = np.sum(d[valid] ** 2, axis=-1)
         return np.bincount(ids, weights=e, minlength=nb)
 
-    phi_blocks = shapley_values(per_block, effects)                    # key -> (nb,)
-    P = np.stack([phi_blocks[k] for k in effects])                     # (k, nb)
+    phi_blocks = shapley_values(per_block, effects)  # key -> (nb,)
+    P = np.stack([phi_blocks[k] for k in effects])  # (k, nb)
     phi = P.sum(1)
     total = float(phi.sum())
     rng = np.random.default_rng(seed)
@@ -657,13 +767,28 @@ def shapley_budget(parts: dict, valid: np.ndarray, effects=EFFECTS, block: int =
     rows = []
     for i, k in enumerate(effects):
         _, letter, label = meta.get(k, (k, "?", k))
-        rows.append({"key": k, "effect": letter, "label": label, "phi": float(phi[i]),
-                     "share": float(phi[i] / total) if total > 0 else 0.0, "share_noise": float(noise[i])})
+        rows.append(
+            {
+                "key": k,
+                "effect": letter,
+                "label": label,
+                "phi": float(phi[i]),
+                "share": float(phi[i] / total) if total > 0 else 0.0,
+                "share_noise": float(noise[i]),
+            }
+        )
     largest = max(rows, key=lambda r: r["share"])["key"] if rows else None
-    return {"effects": rows, "total_sq": total, "share_sum": float(sum(r["share"] for r in rows)),
-            "largest": largest, "fixed": list(fixed), "block": block, "resamples": resamples,
-            "coalitions": 1 << len(effects),
-            "pixels": int(valid.sum())}
+    return {
+        "effects": rows,
+        "total_sq": total,
+        "share_sum": float(sum(r["share"] for r in rows)),
+        "largest": largest,
+        "fixed": list(fixed),
+        "block": block,
+        "resamples": resamples,
+        "coalitions": 1 << len(effects),
+        "pixels": int(valid.sum()),
+    }
 
 
 def add_shapley_seed_noise(result: dict, other: dict) -> dict:
@@ -681,22 +806,37 @@ def shapley_markdown(sh: dict, title: str = "## Shapley budget (order-independen
     """The Shapley table as Markdown (largest share first)."""
     rows = sorted(sh["effects"], key=lambda r: -r["share"])
     top = next(r for r in rows if r["key"] == sh["largest"])
-    fixed = ("  Held on the engine's side in every coalition: " + ", ".join(sh["fixed"]) + "."
-             if sh.get("fixed") else "")
-    lines = [title, "",
-             f"Largest term: **[{top['effect']}] {top['label']}**, {100 * top['share']:.1f} % "
-             f"± {100 * top['share_noise']:.1f} % of the squared error.", "",
-             f"Each effect's share is its Shapley value in the game 'squared error of the image with these "
-             f"effects switched to the engine's side', over all {sh['coalitions']} coalitions of the "
-             f"{len(rows)} effects, divided by the total: the shares sum to 100 % "
-             f"({100 * sh['share_sum']:.6f} %) and no order of the effects is privileged. "
-             f"*Noise*: block bootstrap ({sh['block']}×{sh['block']}-pixel blocks, "
-             f"{sh['resamples']} resamples)"
-             + ("; *seeds*: |share(seed a) − share(seed b)|/√2 from a second render." if "share_noise_seeds"
-                in rows[0] else ".") + fixed, "",
-             "| effect | Shapley share of E² | noise (bootstrap) | noise (seeds) |", "|---|---|---|---|"]
+    fixed = (
+        "  Held on the engine's side in every coalition: " + ", ".join(sh["fixed"]) + "."
+        if sh.get("fixed")
+        else ""
+    )
+    lines = [
+        title,
+        "",
+        f"Largest term: **[{top['effect']}] {top['label']}**, {100 * top['share']:.1f} % "
+        f"± {100 * top['share_noise']:.1f} % of the squared error.",
+        "",
+        f"Each effect's share is its Shapley value in the game 'squared error of the image with these "
+        f"effects switched to the engine's side', over all {sh['coalitions']} coalitions of the "
+        f"{len(rows)} effects, divided by the total: the shares sum to 100 % "
+        f"({100 * sh['share_sum']:.6f} %) and no order of the effects is privileged. "
+        f"*Noise*: block bootstrap ({sh['block']}×{sh['block']}-pixel blocks, "
+        f"{sh['resamples']} resamples)"
+        + (
+            "; *seeds*: |share(seed a) − share(seed b)|/√2 from a second render."
+            if "share_noise_seeds" in rows[0]
+            else "."
+        )
+        + fixed,
+        "",
+        "| effect | Shapley share of E² | noise (bootstrap) | noise (seeds) |",
+        "|---|---|---|---|",
+    ]
     for r in rows:
         ns = f"±{100 * r['share_noise_seeds']:.2g} %" if "share_noise_seeds" in r else "—"
-        lines.append(f"| [{r['effect']}] {r['label']} | {100 * r['share']:+.1f} % | "
-                     f"±{100 * r['share_noise']:.2g} % | {ns} |")
+        lines.append(
+            f"| [{r['effect']}] {r['label']} | {100 * r['share']:+.1f} % | "
+            f"±{100 * r['share_noise']:.2g} % | {ns} |"
+        )
     return "\n".join(lines)

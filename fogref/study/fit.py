@@ -28,7 +28,7 @@ def physical_from_scene(path, camera=None) -> PhysicalScene:
     the sensor's ``lookat`` origin (``camera`` [m] overrides it)."""
     desc = describe_scene(path)
     if desc["medium"] is None:
-        raise FogrefError(f"{path}: no <medium type=\"heightfog\"> in the scene")
+        raise FogrefError(f'{path}: no <medium type="heightfog"> in the scene')
     if camera is None:
         camera = (desc.get("camera") or {}).get("origin") or _lookat_origin(path)
     return PhysicalScene.from_params(desc, camera)
@@ -50,11 +50,13 @@ def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -
     """``lobe_table.json``, ``lobe_table.md`` and ``lobe_table.png`` in ``out_dir``."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    doc = {"description": "Best Unreal cosine lobe a + c max(mu,0)^n for Henyey-Greenstein p_g(mu); "
-                          "coefficients relative to 1/(4 pi); rel_error = L2 over the sphere / ||p||. "
-                          "scene_*: full fit (sun + sky, sun attenuation, start distance) on "
-                          f"{scene_name or 'the scene'}'s fog with that g.",
-           "rows": rows}
+    doc = {
+        "description": "Best Unreal cosine lobe a + c max(mu,0)^n for Henyey-Greenstein p_g(mu); "
+        "coefficients relative to 1/(4 pi); rel_error = L2 over the sphere / ||p||. "
+        "scene_*: full fit (sun + sky, sun attenuation, start distance) on "
+        f"{scene_name or 'the scene'}'s fog with that g.",
+        "rows": rows,
+    }
     write_text(out / "lobe_table.json", json.dumps(doc, indent=2) + "\n")
     has_scene = any("scene_rel_rmse" in r for r in rows)
 
@@ -66,27 +68,38 @@ def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -
     if has_scene:
         head += " scene fit: n | scene fit: start [m] | scene fit: rel. RMSE |"
         sep += "---|---|---|"
-    lines = ["# Cosine lobe vs Henyey–Greenstein", "",
-             "Best `a + c·max(cosθ, 0)^n` (Unreal: FogInscatteringColor carries `a`, "
-             "DirectionalInscatteringColor carries `c`, DirectionalInscatteringExponent is `n`) "
-             "for the HG phase function of asymmetry g; least squares over the sphere of directions.  "
-             "`c·4π`, `a·4π` are relative to "
-             "the isotropic phase 1/(4π) (multiply by albedo × sun irradiance for the colours).  "
-             "`rel. error` = ‖fit − p‖/‖p‖.  *Lobe only*: without the isotropic term.  "
-             "— : the best lobe is 0 (flat: the isotropic term does everything); "
-             "for g ≤ 0 the cosine lobe cannot help (it only adds light "
-             "forward), and n = 0.01 is the search bound (the lobe degenerates to a half-sphere step).", ""]
+    lines = [
+        "# Cosine lobe vs Henyey–Greenstein",
+        "",
+        "Best `a + c·max(cosθ, 0)^n` (Unreal: FogInscatteringColor carries `a`, "
+        "DirectionalInscatteringColor carries `c`, DirectionalInscatteringExponent is `n`) "
+        "for the HG phase function of asymmetry g; least squares over the sphere of directions.  "
+        "`c·4π`, `a·4π` are relative to "
+        "the isotropic phase 1/(4π) (multiply by albedo × sun irradiance for the colours).  "
+        "`rel. error` = ‖fit − p‖/‖p‖.  *Lobe only*: without the isotropic term.  "
+        "— : the best lobe is 0 (flat: the isotropic term does everything); "
+        "for g ≤ 0 the cosine lobe cannot help (it only adds light "
+        "forward), and n = 0.01 is the search bound (the lobe degenerates to a half-sphere step).",
+        "",
+    ]
     if has_scene:
-        lines += ["*Scene fit*: the full fit of `fogref fit` (sun + sky single scattering with sun "
-                  f"attenuation, views from the camera) on {scene_name or 'the scene'}'s fog with that g; "
-                  "relative RMSE of the inscatter over the views.", ""]
+        lines += [
+            "*Scene fit*: the full fit of `fogref fit` (sun + sky single scattering with sun "
+            f"attenuation, views from the camera) on {scene_name or 'the scene'}'s fog with that g; "
+            "relative RMSE of the inscatter over the views.",
+            "",
+        ]
     lines += [head, sep]
     for r in rows:
-        s = (f"| {r['g']:+.1f} | {f(r['exponent'])} | {r['lobe']:.3g} | {r['iso']:.3g} | "
-             f"{r['rel_error']:.3f} | {f(r['lobe_only_exponent'])} | {r['lobe_only_rel_error']:.3f} |")
+        s = (
+            f"| {r['g']:+.1f} | {f(r['exponent'])} | {r['lobe']:.3g} | {r['iso']:.3g} | "
+            f"{r['rel_error']:.3f} | {f(r['lobe_only_exponent'])} | {r['lobe_only_rel_error']:.3f} |"
+        )
         if has_scene:
-            s += (f" {f(r.get('scene_exponent'))} | {r.get('scene_start_distance_cm', 0) / 100:.1f} | "
-                  f"{f(r.get('scene_rel_rmse'), '{:.3f}')} |")
+            s += (
+                f" {f(r.get('scene_exponent'))} | {r.get('scene_start_distance_cm', 0) / 100:.1f} | "
+                f"{f(r.get('scene_rel_rmse'), '{:.3f}')} |"
+            )
         lines.append(s)
     lines += ["", "![lobe table](lobe_table.png)", ""]
     write_text(out / "lobe_table.md", "\n".join(lines))
@@ -116,7 +129,7 @@ def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -
         r = lobe_fit(gg)
         p = hg_phase(NP, mu, gg) * 4 * math.pi
         fit = r["iso"] + r["lobe"] * np.maximum(mu, 0) ** (r["exponent"] or 1.0)
-        line, = ax[2].semilogy(mu, p, label=f"HG g={gg}")
+        (line,) = ax[2].semilogy(mu, p, label=f"HG g={gg}")
         ax[2].semilogy(mu, np.maximum(fit, 1e-3), "--", color=line.get_color())
     ax[2].set_xlabel("cos θ (view · sun)"), ax[2].set_ylabel("phase × 4π (solid: HG, dashed: fit)")
     ax[2].legend(fontsize=8), ax[2].grid(alpha=0.3)

@@ -38,8 +38,9 @@ from fogref.study import budget as B
 
 #: What-if variants of the engine settings (Unreal units, cm).
 WHAT_IF = {
-    "Unreal default DirectionalInscatteringStartDistance (100 m)":
-        {"DirectionalInscatteringStartDistance": 10000.0},
+    "Unreal default DirectionalInscatteringStartDistance (100 m)": {
+        "DirectionalInscatteringStartDistance": 10000.0
+    },
     "StartDistance 20 m": {"StartDistance": 2000.0},
     "FogMaxOpacity 0.9": {"FogMaxOpacity": 0.9},
     "FogCutoffDistance 2 km": {"FogCutoffDistance": 200000.0},
@@ -67,8 +68,10 @@ def scene_of_truth(truth: Truth, scene: str | None = None) -> Path:
     recorded = None if recorded is None else str(recorded)
     sha = truth.attrs.get("fogref.scene_sha256")
     if not sha:
-        raise FogrefError(f"{exr}: header attribute 'fogref.scene_sha256' is missing, so the scene it was "
-                          "rendered from cannot be checked; render the truth again with this fogref")
+        raise FogrefError(
+            f"{exr}: header attribute 'fogref.scene_sha256' is missing, so the scene it was "
+            "rendered from cannot be checked; render the truth again with this fogref"
+        )
     sha = str(sha)
     cands = [Path(scene)] if scene else []
     if recorded and not scene:
@@ -83,7 +86,8 @@ def scene_of_truth(truth: Truth, scene: str | None = None) -> Path:
     raise FogrefError(
         f"{exr}: the scene file {c} has changed since this truth was rendered (its SHA-256 is now "
         f"{_sha256(c)}, the truth recorded {sha}). The study re-renders budget steps from the scene as the "
-        "truth recorded it: restore that version (or pass it with --scene), or render the truth again.")
+        "truth recorded it: restore that version (or pass it with --scene), or render the truth again."
+    )
 
 
 def sunless_scene(scene: Path, out_dir: Path) -> Path:
@@ -120,8 +124,9 @@ def overrides_used_by(scene: Path, overrides: dict | None) -> dict:
     return used(scene, overrides)
 
 
-def _render_cached(scene: Path, out: Path, spp: int, seed: int, overrides: dict, log,
-                   pixel_filter: str = "centre") -> Path:
+def _render_cached(
+    scene: Path, out: Path, spp: int, seed: int, overrides: dict, log, pixel_filter: str = "centre"
+) -> Path:
     """A truth of ``scene`` from fogref's render cache (:mod:`fogref.render.cache`) in ``out``'s folder."""
     from fogref.render.cache import render_cached
 
@@ -148,11 +153,16 @@ def open_plane_check(scene: Path, rdir: Path, log, spp: int = 64, res=(160, 90))
     sun = B.closed_forms(a, pf)["sun_att"]
     sh = a.single - sa.single - sun
     sh_b = b.single - sb.single - sun
-    return {"scene": str(scene), "spp": spp, "resolution": list(res),
-            "shadows_rmse": float(np.sqrt(np.mean(sh ** 2))), "shadows_mean": float(sh.mean()),
-            "noise_rmse": float(np.sqrt(np.mean((sh - sh_b) ** 2)) / np.sqrt(2.0)),
-            "noise_floor_stderr": float(np.sqrt(np.mean(a.stderr["single"] ** 2 + sa.stderr["single"] ** 2))),
-            "single_rms": float(np.sqrt(np.mean(a.single ** 2)))}
+    return {
+        "scene": str(scene),
+        "spp": spp,
+        "resolution": list(res),
+        "shadows_rmse": float(np.sqrt(np.mean(sh**2))),
+        "shadows_mean": float(sh.mean()),
+        "noise_rmse": float(np.sqrt(np.mean((sh - sh_b) ** 2)) / np.sqrt(2.0)),
+        "noise_floor_stderr": float(np.sqrt(np.mean(a.stderr["single"] ** 2 + sa.stderr["single"] ** 2))),
+        "single_rms": float(np.sqrt(np.mean(a.single**2))),
+    }
 
 
 def _overrides(truth: Truth) -> dict:
@@ -162,9 +172,16 @@ def _overrides(truth: Truth) -> dict:
     return {str(k): v for k, v in ov.items()}
 
 
-def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scene: str | None = None,
-              compare_report: bool = True, settings: dict | None = None, log=print,
-              open_plane: str | None = "scenes/open_plane.xml") -> dict:
+def run_study(
+    exr,
+    out_dir="reports/unreal_study",
+    renders_dir="out/study",
+    scene: str | None = None,
+    compare_report: bool = True,
+    settings: dict | None = None,
+    log=print,
+    open_plane: str | None = "scenes/open_plane.xml",
+) -> dict:
     """Run the whole study; returns the summary dict (also written as ``summary.json``).
 
     FogrefError (before any work) for a truth that :func:`fogref.gbuffer.load_truth`
@@ -188,9 +205,15 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
     scene_path = scene_of_truth(truth, scene)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    provenance = {"truth": str(exr), "scene": str(scene_path),
-                  "scene_sha256": str(truth.attrs["fogref.scene_sha256"]), "overrides": overrides, "spp": spp,
-                  "seed": seed, "pixel_filter": pixel_filter}
+    provenance = {
+        "truth": str(exr),
+        "scene": str(scene_path),
+        "scene_sha256": str(truth.attrs["fogref.scene_sha256"]),
+        "overrides": overrides,
+        "spp": spp,
+        "seed": seed,
+        "pixel_filter": pixel_filter,
+    }
 
     # -- 1. fits ------------------------------------------------------------
     log("fitting Unreal's colours, exponent and start distance ...")
@@ -199,11 +222,21 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
     model = build_model("ue4", settings, params)
     model_params = model.params
     fit_doc = fit.to_dict()
-    fit_doc["unreal_editor"].update({k: v for k, v in {
-        "Start Distance": model_params.StartDistance, "Fog Max Opacity": model_params.FogMaxOpacity,
-        "Fog Cutoff Distance": model_params.FogCutoffDistance}.items()})
-    write_text(out / "fit.json", json.dumps({"scene": params.get("scene"), "fit": fit_doc,
-                                             "lobe_only_fit": lobe.to_dict()}, indent=2) + "\n")
+    fit_doc["unreal_editor"].update(
+        {
+            k: v
+            for k, v in {
+                "Start Distance": model_params.StartDistance,
+                "Fog Max Opacity": model_params.FogMaxOpacity,
+                "Fog Cutoff Distance": model_params.FogCutoffDistance,
+            }.items()
+        }
+    )
+    write_text(
+        out / "fit.json",
+        json.dumps({"scene": params.get("scene"), "fit": fit_doc, "lobe_only_fit": lobe.to_dict()}, indent=2)
+        + "\n",
+    )
 
     # -- 2. comparison --------------------------------------------------------
     cmp_summary = None
@@ -218,20 +251,24 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
     rdir = Path(renders_dir)
     nosun = sunless_scene(scene_path, rdir)
     ov_nosun = overrides_used_by(nosun, overrides)
-    sky_a = _render_cached(nosun, rdir / f"{exr.stem}_nosun_s{seed}.exr", spp, seed, ov_nosun, log,
-                           pixel_filter)
-    truth_b = _render_cached(scene_path, rdir / f"{exr.stem}_s{seed + 1}.exr", spp, seed + 1, overrides, log,
-                             pixel_filter)
-    sky_b = _render_cached(nosun, rdir / f"{exr.stem}_nosun_s{seed + 1}.exr", spp, seed + 1, ov_nosun, log,
-                           pixel_filter)
+    sky_a = _render_cached(
+        nosun, rdir / f"{exr.stem}_nosun_s{seed}.exr", spp, seed, ov_nosun, log, pixel_filter
+    )
+    truth_b = _render_cached(
+        scene_path, rdir / f"{exr.stem}_s{seed + 1}.exr", spp, seed + 1, overrides, log, pixel_filter
+    )
+    sky_b = _render_cached(
+        nosun, rdir / f"{exr.stem}_nosun_s{seed + 1}.exr", spp, seed + 1, ov_nosun, log, pixel_filter
+    )
 
     # -- 4. budget -------------------------------------------------------------
     log("computing the error budget ...")
     tb, sa, sb = load_truth(truth_b), load_truth(sky_a), load_truth(sky_b)
     for other, path in ((tb, truth_b), (sa, sky_a), (sb, sky_b)):
         if other.shape != truth.shape:
-            raise FogrefError(f"{path}: resolution {other.shape[::-1]} differs from {exr} "
-                              f"{truth.shape[::-1]}")
+            raise FogrefError(
+                f"{path}: resolution {other.shape[::-1]} differs from {exr} {truth.shape[::-1]}"
+            )
     S_a = B.chain(truth, sa.single, pf, lobe.params, model_params)
     S_b = B.chain(tb, sb.single, pf, lobe.params, model_params)
     valid = truth.surface_valid & tb.surface_valid
@@ -243,8 +280,9 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
     parts_a = B.shapley_parts(truth, sa.single, pf, engine)
     parts_b = B.shapley_parts(tb, sb.single, pf, engine)
     for key, effects in (("shapley", B.EFFECTS), ("shapley_colours_in_lobe", B.EFFECTS_COLOURS_IN_LOBE)):
-        res[key] = B.add_shapley_seed_noise(B.shapley_budget(parts_a, valid, effects),
-                                            B.shapley_budget(parts_b, valid, effects, resamples=0))
+        res[key] = B.add_shapley_seed_noise(
+            B.shapley_budget(parts_a, valid, effects), B.shapley_budget(parts_b, valid, effects, resamples=0)
+        )
     del parts_a, parts_b
     res["what_if"] = B.what_if(truth, model_params, WHAT_IF)
     res["footprint"] = B.footprint_check(truth, pf, S_a)
@@ -253,24 +291,40 @@ def run_study(exr, out_dir="reports/unreal_study", renders_dir="out/study", scen
         if op.is_file():
             log("closed-form check on the open plane ...")
             res["open_plane_check"] = open_plane_check(op, rdir, log)
-    res["inputs"] = {**provenance, "sky_only": str(sky_a), "truth_other_seed": str(truth_b),
-                     "sky_only_other_seed": str(sky_b), "resolution": list(truth.shape[::-1]),
-                     "unreal_params": fit_doc["unreal"] | {
-                         "StartDistance_cm": model_params.StartDistance,
-                         "FogMaxOpacity": model_params.FogMaxOpacity,
-                         "FogCutoffDistance_cm": model_params.FogCutoffDistance},
-                     "lobe_fit_params": lobe.to_dict()["unreal"]}
+    res["inputs"] = {
+        **provenance,
+        "sky_only": str(sky_a),
+        "truth_other_seed": str(truth_b),
+        "sky_only_other_seed": str(sky_b),
+        "resolution": list(truth.shape[::-1]),
+        "unreal_params": fit_doc["unreal"]
+        | {
+            "StartDistance_cm": model_params.StartDistance,
+            "FogMaxOpacity": model_params.FogMaxOpacity,
+            "FogCutoffDistance_cm": model_params.FogCutoffDistance,
+        },
+        "lobe_fit_params": lobe.to_dict()["unreal"],
+    }
     res["method"] = B.__doc__
     write_text(out / "budget.json", json.dumps(res, indent=2) + "\n")
-    write_text(out / "budget.md", B.markdown(res, title=f"Error budget of Unreal's exponential height fog on "
-                                                        f"`{scene_path.stem}`"))
+    write_text(
+        out / "budget.md",
+        B.markdown(res, title=f"Error budget of Unreal's exponential height fog on `{scene_path.stem}`"),
+    )
     B.plot(res, out / "budget.png")
 
-    summary = {"exr": str(exr), "scene": str(scene_path), "provenance": provenance, "fit": fit_doc,
-               "lobe_fit": lobe.to_dict(), "compare": cmp_summary, "budget_total": res["total"],
-               "largest_term": max(res["steps"], key=lambda s: s["share"]),
-               "largest_shapley_term": max(res["shapley"]["effects"], key=lambda s: s["share"]),
-               "seconds": time.perf_counter() - t0}
+    summary = {
+        "exr": str(exr),
+        "scene": str(scene_path),
+        "provenance": provenance,
+        "fit": fit_doc,
+        "lobe_fit": lobe.to_dict(),
+        "compare": cmp_summary,
+        "budget_total": res["total"],
+        "largest_term": max(res["steps"], key=lambda s: s["share"]),
+        "largest_shapley_term": max(res["shapley"]["effects"], key=lambda s: s["share"]),
+        "seconds": time.perf_counter() - t0,
+    }
     write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
     write_text(out / "README.md", readme(summary, res))
     log(f"study written to {out} ({summary['seconds']:.1f} s)")
@@ -287,9 +341,11 @@ def reproduce_command(provenance: dict) -> str:
     'fogref render scenes/lake.xml --spp 32 --seed 1 --set res=64 --out out/lake.exr && fogref study ...'
     """
     sets = "".join(f" --set {k}={v}" for k, v in (provenance.get("overrides") or {}).items())
-    return (f"fogref render {provenance['scene']} --spp {provenance['spp']} "
-            f"--seed {provenance['seed']}{sets} "
-            f"--out {provenance['truth']} && fogref study {provenance['truth']}")
+    return (
+        f"fogref render {provenance['scene']} --spp {provenance['spp']} "
+        f"--seed {provenance['seed']}{sets} "
+        f"--out {provenance['truth']} && fogref study {provenance['truth']}"
+    )
 
 
 def readme(summary: dict, res: dict) -> str:
@@ -304,40 +360,58 @@ def readme(summary: dict, res: dict) -> str:
     prov = summary.get("provenance") or res["inputs"]
     name = Path(prov["scene"]).stem
     ov = prov.get("overrides") or {}
-    lines = ["# Unreal Exponential Height Fog vs path-traced truth", "",
-             f"Scene `{prov['scene']}`"
-             + (f" with {', '.join(f'`{k}={v}`' for k, v in ov.items())}" if ov else "")
-             + f", ground truth `{summary['exr']}` ({res['inputs']['resolution'][0]}×"
-             f"{res['inputs']['resolution'][1]}, {prov['spp']} spp, seed {prov['seed']}, pixel filter "
-             f"`{prov.get('pixel_filter')}`). Reproduce with `{reproduce_command(prov)}`.", "",
-             "## Unreal settings used (derived from the physical fog)", "",
-             "| property | value |", "|---|---|"]
+    lines = [
+        "# Unreal Exponential Height Fog vs path-traced truth",
+        "",
+        f"Scene `{prov['scene']}`"
+        + (f" with {', '.join(f'`{k}={v}`' for k, v in ov.items())}" if ov else "")
+        + f", ground truth `{summary['exr']}` ({res['inputs']['resolution'][0]}×"
+        f"{res['inputs']['resolution'][1]}, {prov['spp']} spp, seed {prov['seed']}, pixel filter "
+        f"`{prov.get('pixel_filter')}`). Reproduce with `{reproduce_command(prov)}`.",
+        "",
+        "## Unreal settings used (derived from the physical fog)",
+        "",
+        "| property | value |",
+        "|---|---|",
+    ]
     for k, v in ed.items():
         lines.append(f"| {k} | {col(v) if isinstance(v, list) else f'{v:.6g}'} |")
-    lines += ["",
-              "Density, falloff and height: exact mapping (`medium_to_ue4`).  Colours, exponent and "
-              "directional start distance: `fogref fit` (least squares against the closed-form sun + sky "
-              f"single scattering with sun attenuation over {fit['error']['n_views']} views from the camera; "
-              f"relative RMSE of the fit on those views {fit['error']['rel_rmse']:.3f}).  Sun luminance 1 "
-              "(the colour carries it).", "",
-              "## Headline", ""]
+    lines += [
+        "",
+        "Density, falloff and height: exact mapping (`medium_to_ue4`).  Colours, exponent and "
+        "directional start distance: `fogref fit` (least squares against the closed-form sun + sky "
+        f"single scattering with sun attenuation over {fit['error']['n_views']} views from the camera; "
+        f"relative RMSE of the fit on those views {fit['error']['rel_rmse']:.3f}).  Sun luminance 1 "
+        "(the colour carries it).",
+        "",
+        "## Headline",
+        "",
+    ]
     c = summary.get("compare")
-    lines.append(f"- **Final image RMSE of Unreal (float32) vs truth: {t['rmse']['all']:.4g}** "
-                 f"(surface pixels {t['rmse']['surface']:.4g}, sky {t['rmse']['sky']:.4g}; "
-                 f"truth RMS {t['truth_rms']:.4g}, i.e. {100 * t['rmse']['all'] / t['truth_rms']:.1f} % "
-                 "relative; "
-                 f"Monte Carlo noise of this number ±{t.get('noise_rmse', 0):.1g}"
-                 + (f"; noise floor {t['rmse_noise_floor']:.2g}, "
-                    f"{'below the noise' if t['below_noise'] else 'above the noise'}"
-                    if "rmse_noise_floor" in t else "") + ").")
+    lines.append(
+        f"- **Final image RMSE of Unreal (float32) vs truth: {t['rmse']['all']:.4g}** "
+        f"(surface pixels {t['rmse']['surface']:.4g}, sky {t['rmse']['sky']:.4g}; "
+        f"truth RMS {t['truth_rms']:.4g}, i.e. {100 * t['rmse']['all'] / t['truth_rms']:.1f} % "
+        "relative; "
+        f"Monte Carlo noise of this number ±{t.get('noise_rmse', 0):.1g}"
+        + (
+            f"; noise floor {t['rmse_noise_floor']:.2g}, "
+            f"{'below the noise' if t['below_noise'] else 'above the noise'}"
+            if "rmse_noise_floor" in t
+            else ""
+        )
+        + ")."
+    )
     if c:
         f = c["final"]
-        lines.append(f"- fogref.compare (final image): relMSE {f.get('relmse', float('nan')):.4g}, "
-                     f"mean ΔE2000 {f.get('delta_e2000_mean', float('nan')):.3g}, "
-                     f"mean FLIP {f.get('flip_mean', float('nan')):.3g}; inscatter RMSE "
-                     f"{c['inscatter'].get('rmse', float('nan')):.4g}; transmittance RMSE "
-                     f"{c['transmittance'].get('rmse', float('nan')):.3g}.  "
-                     "Full report: [compare/index.md](compare/index.md).")
+        lines.append(
+            f"- fogref.compare (final image): relMSE {f.get('relmse', float('nan')):.4g}, "
+            f"mean ΔE2000 {f.get('delta_e2000_mean', float('nan')):.3g}, "
+            f"mean FLIP {f.get('flip_mean', float('nan')):.3g}; inscatter RMSE "
+            f"{c['inscatter'].get('rmse', float('nan')):.4g}; transmittance RMSE "
+            f"{c['transmittance'].get('rmse', float('nan')):.3g}.  "
+            "Full report: [compare/index.md](compare/index.md)."
+        )
     fc = res.get("footprint")
     oc = res.get("open_plane_check")
     top = steps[0]
@@ -345,48 +419,77 @@ def readme(summary: dict, res: dict) -> str:
     if sh:
         rows = sorted(sh["effects"], key=lambda r: -r["share"])
         st = rows[0]
-        lines.append(f"- Largest Shapley term: **[{st['effect']}] {st['label']}**, {100 * st['share']:.1f} % "
-                     f"± {100 * st['share_noise']:.1f} % of the squared error (order-independent: "
-                     f"its Shapley value over all {sh['coalitions']} coalitions of the effects).")
-        lines.append("- Shapley budget, by share of the squared error: " + "; ".join(
-            f"[{r['effect']}] {r['label']} {100 * r['share']:+.1f} %" for r in rows) + ".")
-    lines.append(f"- Largest term of the telescoping chain (second view, depends on the chain's order): "
-                 f"**[{top['effect']}] {top['label']}**, {100 * top['share']:.1f} % of the "
-                 f"squared error (step RMSE {top['rmse']['all']:.4g}).")
-    lines.append("- Chain, by share of the squared error: " + "; ".join(
-        f"[{s['effect']}] {s['label']} {100 * s['share']:+.1f} %" for s in steps) + ".")
+        lines.append(
+            f"- Largest Shapley term: **[{st['effect']}] {st['label']}**, {100 * st['share']:.1f} % "
+            f"± {100 * st['share_noise']:.1f} % of the squared error (order-independent: "
+            f"its Shapley value over all {sh['coalitions']} coalitions of the effects)."
+        )
+        lines.append(
+            "- Shapley budget, by share of the squared error: "
+            + "; ".join(f"[{r['effect']}] {r['label']} {100 * r['share']:+.1f} %" for r in rows)
+            + "."
+        )
+    lines.append(
+        f"- Largest term of the telescoping chain (second view, depends on the chain's order): "
+        f"**[{top['effect']}] {top['label']}**, {100 * top['share']:.1f} % of the "
+        f"squared error (step RMSE {top['rmse']['all']:.4g})."
+    )
+    lines.append(
+        "- Chain, by share of the squared error: "
+        + "; ".join(f"[{s['effect']}] {s['label']} {100 * s['share']:+.1f} %" for s in steps)
+        + "."
+    )
     shadows = next((s for s in res["steps"] if s["key"] == "shadows"), None)
     if oc and shadows:
-        here = (f"on `{name}` the same step is below the noise (RMSE {shadows['rmse']['all']:.3g}, "
-                f"noise floor {shadows['rmse_noise_floor']:.3g}): nothing here casts a measurable shadow "
-                "into the fog"
-                if shadows.get("below_noise") else
-                f"on `{name}` it is RMSE {shadows['rmse']['all']:.3g}"
-                + (f" against a noise floor of {shadows['rmse_noise_floor']:.3g}"
-                   if "rmse_noise_floor" in shadows else "")
-                + ": geometric shadows (light shafts) that the engine does not model")
-        lines.append(f"- Check: on `{oc['scene']}` (no occluders) the shadow step is pure noise (RMSE "
-                     f"{oc['shadows_rmse']:.3g} vs noise {oc['noise_rmse']:.3g}), so the closed-form single "
-                     f"scattering agrees with the path tracer; {here}"
-                     + (f" (edge pixels: {100 * fc['pixel_fraction']:.1f} % of pixels, "
-                        f"{100 * fc['share_of_step_sq']:.1f} % of that step)." if fc else "."))
+        here = (
+            f"on `{name}` the same step is below the noise (RMSE {shadows['rmse']['all']:.3g}, "
+            f"noise floor {shadows['rmse_noise_floor']:.3g}): nothing here casts a measurable shadow "
+            "into the fog"
+            if shadows.get("below_noise")
+            else f"on `{name}` it is RMSE {shadows['rmse']['all']:.3g}"
+            + (
+                f" against a noise floor of {shadows['rmse_noise_floor']:.3g}"
+                if "rmse_noise_floor" in shadows
+                else ""
+            )
+            + ": geometric shadows (light shafts) that the engine does not model"
+        )
+        lines.append(
+            f"- Check: on `{oc['scene']}` (no occluders) the shadow step is pure noise (RMSE "
+            f"{oc['shadows_rmse']:.3g} vs noise {oc['noise_rmse']:.3g}), so the closed-form single "
+            f"scattering agrees with the path tracer; {here}"
+            + (
+                f" (edge pixels: {100 * fc['pixel_fraction']:.1f} % of pixels, "
+                f"{100 * fc['share_of_step_sq']:.1f} % of that step)."
+                if fc
+                else "."
+            )
+        )
     if res.get("excluded_pixels"):
-        lines.append(f"- {res['excluded_pixels']} pixel(s) are excluded from the budget and the comparison's "
-                     "composited parts: the truth's unattenuated surface radiance is undefined there "
-                     "(no sample reached the surface through the fog).")
-    lines += ["", "See [budget.md](budget.md) for the table (RMSE, share and noise of each step), "
-              "[budget.png](budget.png), [budget.json](budget.json), [fit.json](fit.json).", "",
-              "## Reading the budget", "",
-              "The Shapley shares do not depend on any order: each effect's share is its average "
-              "contribution to the squared error over every order in which the effects could be switched "
-              "from the truth to the engine (all coalitions, closed forms and renders cached).  "
-              "The chain below is the second view.  "
-              "The steps telescope exactly: truth → no multiple scattering → closed-form sun without "
-              "shadows → closed-form sky without ground occlusion/attenuation → no sun attenuation → "
-              "Unreal's cosine lobe (colours fitted without attenuation) → colours re-fitted with "
-              "attenuation → start distances → max opacity/cutoff → float32.  The shares sum to 100 %; "
-              "negative shares are compensations (the re-fit absorbs part of the sun attenuation on average; "
-              "removing multiple scattering removes light Unreal also lacks, etc.).  The RMSE column gives "
-              "each step's own size; steps 1–3 use renders and carry Monte Carlo noise (given per row) — "
-              "compare a term with its noise before reading it.", ""]
+        lines.append(
+            f"- {res['excluded_pixels']} pixel(s) are excluded from the budget and the comparison's "
+            "composited parts: the truth's unattenuated surface radiance is undefined there "
+            "(no sample reached the surface through the fog)."
+        )
+    lines += [
+        "",
+        "See [budget.md](budget.md) for the table (RMSE, share and noise of each step), "
+        "[budget.png](budget.png), [budget.json](budget.json), [fit.json](fit.json).",
+        "",
+        "## Reading the budget",
+        "",
+        "The Shapley shares do not depend on any order: each effect's share is its average "
+        "contribution to the squared error over every order in which the effects could be switched "
+        "from the truth to the engine (all coalitions, closed forms and renders cached).  "
+        "The chain below is the second view.  "
+        "The steps telescope exactly: truth → no multiple scattering → closed-form sun without "
+        "shadows → closed-form sky without ground occlusion/attenuation → no sun attenuation → "
+        "Unreal's cosine lobe (colours fitted without attenuation) → colours re-fitted with "
+        "attenuation → start distances → max opacity/cutoff → float32.  The shares sum to 100 %; "
+        "negative shares are compensations (the re-fit absorbs part of the sun attenuation on average; "
+        "removing multiple scattering removes light Unreal also lacks, etc.).  The RMSE column gives "
+        "each step's own size; steps 1–3 use renders and carry Monte Carlo noise (given per row) — "
+        "compare a term with its noise before reading it.",
+        "",
+    ]
     return "\n".join(lines)

@@ -80,5 +80,13 @@ from fogref.study.sweep.spec import SweepSpec, load_sweep
 from fogref.study.sweep.table import plot_table, write_table
 from fogref.study.sweep.task import run_config
 
-__all__ = ["SweepSpec", "build_configs", "design_points", "load_sweep", "plot_table", "run_config",
-           "run_sweep", "write_table"]
+__all__ = [
+    "SweepSpec",
+    "build_configs",
+    "design_points",
+    "load_sweep",
+    "plot_table",
+    "run_config",
+    "run_sweep",
+    "write_table",
+]

@@ -47,8 +47,13 @@ def _worker_setup(drjit_threads: int | None = None) -> dict:
 
     if drjit_threads:
         dr.set_thread_count(int(drjit_threads))
-    return {"fogref_version": __version__, "mitsuba_version": mi.__version__, "variant": variant,
-            "pid": os.getpid(), "host": socket.gethostname()}
+    return {
+        "fogref_version": __version__,
+        "mitsuba_version": mi.__version__,
+        "variant": variant,
+        "pid": os.getpid(),
+        "host": socket.gethostname(),
+    }
 
 
 def _truth_lock(name: str):
@@ -98,16 +103,29 @@ def run_config(cfg: dict, drjit_threads: int | None = None) -> dict:
     truth = Path(cfg["truth"])
     t0 = time.perf_counter()
     with _truth_lock(f"fogref-truth-{truth.stem}"):  # configurations sharing a truth render it once
-        truth, cached = render_cached(cfg["scene"], cfg["spp"], cfg["seed"], cfg["overrides"],
-                                      cache_dir=truth.parent, pixel_filter=cfg["pixel_filter"])
+        truth, cached = render_cached(
+            cfg["scene"],
+            cfg["spp"],
+            cfg["seed"],
+            cfg["overrides"],
+            cache_dir=truth.parent,
+            pixel_filter=cfg["pixel_filter"],
+        )
     wall_render = time.perf_counter() - t0
     header = read_exr(truth)[1]
     rs = header.get("fogref.render_seconds")
     render_seconds = float(rs.get("total", wall_render)) if isinstance(rs, dict) else float(rs or wall_render)
-    prov = {"truth_path": str(truth), "truth_sha256": file_sha256(truth), "truth_cached": cached,
-            "render_seconds": render_seconds, "worker_host": env["host"], "worker_pid": env["pid"],
-            "fogref_version": env["fogref_version"], "mitsuba_version": env["mitsuba_version"],
-            "variant": header.get("fogref.variant", env["variant"])}
+    prov = {
+        "truth_path": str(truth),
+        "truth_sha256": file_sha256(truth),
+        "truth_cached": cached,
+        "render_seconds": render_seconds,
+        "worker_host": env["host"],
+        "worker_pid": env["pid"],
+        "fogref_version": env["fogref_version"],
+        "mitsuba_version": env["mitsuba_version"],
+        "variant": header.get("fogref.variant", env["variant"]),
+    }
     scene_params = header.get("fogref.params")
     rows = []
     with tempfile.TemporaryDirectory(prefix="fogref-sweep-") as tmp:
@@ -115,10 +133,14 @@ def run_config(cfg: dict, drjit_threads: int | None = None) -> dict:
             tc = time.perf_counter()
             model = build_model(m["name"], m["params"], scene_params if m["from_scene"] else None)
             report = compare(truth, model, Path(tmp) / m["label"], figures=False)
-            row = {"model": m["label"], "model_name": m["name"],
-                   "model_parameters": json.dumps(report.get("model", {}).get("parameters"), sort_keys=True,
-                                                  default=str),
-                   "compare_seconds": time.perf_counter() - tc}
+            row = {
+                "model": m["label"],
+                "model_name": m["name"],
+                "model_parameters": json.dumps(
+                    report.get("model", {}).get("parameters"), sort_keys=True, default=str
+                ),
+                "compare_seconds": time.perf_counter() - tc,
+            }
             metrics: dict = {}
             _flatten("", report.get("metrics", {}), metrics)
             row.update(metrics)
@@ -143,14 +165,24 @@ def _budget_columns(cfg: dict, truth_path: Path, model) -> dict:
     sky_key = file_sha256(nosun)[:24]
     with _truth_lock(f"fogref-truth-{sky_key}"):
         sky_overrides = overrides_used_by(nosun, cfg["overrides"])
-        sky_path, _ = render_cached(nosun, cfg["spp"], cfg["seed"], sky_overrides,
-                                    cache_dir=truth_path.parent, pixel_filter=cfg["pixel_filter"])
+        sky_path, _ = render_cached(
+            nosun,
+            cfg["spp"],
+            cfg["seed"],
+            sky_overrides,
+            cache_dir=truth_path.parent,
+            pixel_filter=cfg["pixel_filter"],
+        )
     truth, sky = load_truth(truth_path), load_truth(sky_path)
     pf = PhysicalScene.from_params(truth.params)
     lobe = fit_unreal(pf, sun_attenuation=False, fit_start=False)
     S = B.chain(truth, sky.single, pf, lobe.params, model.params)
-    res = B.attribute(S, truth.hit, truth.surface_valid,
-                      B.chain_noise(truth, sky.stderr["single"], lobe.params, model.params))
+    res = B.attribute(
+        S,
+        truth.hit,
+        truth.surface_valid,
+        B.chain_noise(truth, sky.stderr["single"], lobe.params, model.params),
+    )
     cols = {"budget.total.rmse": res["total"]["rmse"]["all"], "budget.sky_only_truth": str(sky_path)}
     for st in res["steps"]:
         cols[f"budget.{st['key']}.share"] = st["share"]
