@@ -48,6 +48,8 @@ _LAZY = {
     "read_image": "fogref.compare.foreign",
     "resolve_model": "fogref.models.resolve",
     "build_model": "fogref.mapping.build",
+    "fit_model": "fogref.study.fit",
+    "translate": "fogref.study.fit",
 }
 
 __all__ = ["__version__", "ensure_llvm", *_LAZY]
