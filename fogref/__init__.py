@@ -43,6 +43,7 @@ _LAZY = {
     "EngineImages": "fogref.compare.foreign", "load_engine_images": "fogref.compare.foreign",
     "read_image": "fogref.compare.foreign",
     "resolve_model": "fogref.models.resolve", "build_model": "fogref.mapping.build",
+    "fit_model": "fogref.study.fit", "translate": "fogref.study.fit",
 }
 
 __all__ = ["__version__", "ensure_llvm", *_LAZY]

@@ -1,4 +1,9 @@
-"""``fogref fit``: Unreal's fog colours, exponent and start distance fitted to a physical fog.
+"""``fogref fit``: a fog model's free parameters fitted to a physical fog (Unreal by default).
+
+``--model NAME`` (any model: a built-in name or ``module.path:Class``) fits its free parameters
+(:mod:`fogref.mapping.free`) with :func:`fogref.mapping.fit.fit_model`, over the sun elevations
+of ``--sun-elevation``; every parameter gets its uncertainty.  Unreal without ``--generic``,
+``--sun-elevation`` or ``--param`` keeps its own fit and output.
 
 The physical fog comes from a scene (``--scene``), a truth's header (``--exr``) or flags
 (each flag also overrides the scene's or the EXR's value).  The fit is
@@ -12,17 +17,18 @@ import sys
 from dataclasses import dataclass
 
 from fogref import params
-from fogref.cli.checks import RGB, Integer, Number, PathArg, Vector
+from fogref.cli.checks import RGB, Assignments, Integer, Number, PathArg, Text, Vector
 from fogref.cli.spec import UsageError, option, switch
 
 NAME = "fit"
 SOURCE = "fogref fit"
-HELP = "fit Unreal's fog colours, exponent and start distance to a physical fog (prints JSON)"
+HELP = "fit a fog model's parameters (default Unreal's colours and lobe) to a physical fog (prints JSON)"
 DESCRIPTION = (
     "Find Unreal's FogInscatteringColor, DirectionalInscatteringColor, DirectionalInscatteringExponent "
     "and DirectionalInscatteringStartDistance that best match the closed-form single scattering of "
     "a physical fog.  JSON on stdout; the details-panel values on stderr.  Without --scene or --exr "
-    "the fog is the valley's, changed by the flags."
+    "the fog is the valley's, changed by the flags.  --model fits another model's free parameters "
+    "(fogref.mapping.free), each with its uncertainty."
 )
 EPILOG = "exit codes: 0 fitted, 2 usage or input error"
 FIT = "fogref.mapping:fit_unreal"
@@ -53,8 +59,21 @@ def _valley(name: str) -> str:
     )
 
 
+MODEL_GROUP = "the model (default Unreal)"
+
+
 @dataclass
 class Options:
+    model: str = option("ue4", "fog model: a built-in name (ue4, unity, godot, ...) or module.path:Class",
+                        check=Text(), metavar="NAME", group=MODEL_GROUP)
+    param: dict | None = option(None, "fix a model setting (VALUE parsed as JSON when possible)", repeat=True,
+                                check=Assignments(), metavar="KEY=VALUE", group=MODEL_GROUP)
+    sun_elevation: list | None = option(None, "a sun elevation to fit over (repeat for several; fitted "
+                                        "together)", repeat=True, check=Number(-90.0, 90.0, unit="deg"),
+                                        metavar="DEG", group=MODEL_GROUP,
+                                        default_text="the scene's sun")
+    generic: bool = switch("Unreal too through the generic fit (every parameter with its uncertainty)",
+                           group=MODEL_GROUP)
     scene: str | None = option(
         None, "fogref XML scene (fog, sun, sky, camera)", check=PathArg(), metavar="XML", group=SOURCE_GROUP
     )
@@ -218,30 +237,56 @@ def physical_from_options(o: Options):
     return pf
 
 
+def physical_doc(pf) -> dict:
+    return {
+        "sigma_t": list(pf.medium.sigma_t),
+        "albedo": list(pf.medium.albedo),
+        "g": pf.medium.g,
+        "layers": [vars(L) if hasattr(L, "__dict__") else repr(L) for L in pf.medium.layers],
+        "sun_direction": list(pf.sun_direction),
+        "sun_irradiance": list(pf.sun_irradiance),
+        "sky_radiance": list(pf.sky_radiance),
+        "camera": list(pf.camera),
+    }
+
+
+def run_generic(o: Options, pf) -> int:
+    """Any model through :func:`fogref.mapping.fit.fit_model`: JSON on stdout, a table on stderr."""
+    from fogref.mapping.build import parse_param_assignments
+    from fogref.mapping.fit import fit_model
+
+    fixed = parse_param_assignments(f"{k}={v}" for k, v in (o.param or {}).items())
+    r = fit_model(o.model, pf, views=o.directions, sun_elevations=o.sun_elevation, params=fixed,
+                  transmittance_weight=1.0)
+    print(json.dumps({"physical": physical_doc(pf), **r.to_dict()}, indent=2))
+    print(f"{r.model}: best fit (± uncertainty from the Jacobian; spread over two direction counts):",
+          file=sys.stderr)
+    for k, v in r.values.items():
+        sp = f"  spread {r.spread[k]:.2g}" if r.spread else ""
+        print(f"  {k:42s} {v:.6g} ± {r.uncertainty[k]:.2g}{sp}", file=sys.stderr)
+    print(f"  (inscatter relative RMSE over {r.n_views} views: {r.rel_rmse:.3f}; transmittance RMSE "
+          f"{r.rmse_T:.3f})", file=sys.stderr)
+    return 0
+
+
 def run(o: Options, given=frozenset()) -> int:
     from fogref.mapping import fit_unreal, lobe_table, sample_views
+    from fogref.mapping.fit import model_class
     from fogref.study.fit import write_lobe_table
 
+    cls = model_class(o.model)  # an unknown model: "did you mean", before any work
     pf = physical_from_options(o)
     check_physical(pf, o.scene or o.exr or "fogref fit flags")
+    if getattr(cls, "name", None) != "ue4" or o.generic or o.sun_elevation or o.param:
+        if o.lobe_table:
+            raise UsageError(f"{SOURCE}: --lobe-table is Unreal's own fit (without --model/--generic)")
+        return run_generic(o, pf)
     # the one fit: its direction count by the convergence criterion, unless --directions fixes it
     views = None if o.directions is None else sample_views(pf.camera, n_dirs=o.directions)
     r = fit_unreal(pf, views, sun_attenuation=not o.no_sun_attenuation, fit_start=not o.no_start_distance)
     if views is None:
         views = sample_views(pf.camera, n_dirs=r.history["n_dirs"])
-    doc = {
-        "physical": {
-            "sigma_t": list(pf.medium.sigma_t),
-            "albedo": list(pf.medium.albedo),
-            "g": pf.medium.g,
-            "layers": [vars(L) if hasattr(L, "__dict__") else repr(L) for L in pf.medium.layers],
-            "sun_direction": list(pf.sun_direction),
-            "sun_irradiance": list(pf.sun_irradiance),
-            "sky_radiance": list(pf.sky_radiance),
-            "camera": list(pf.camera),
-        },
-        **r.to_dict(),
-    }
+    doc = {"physical": physical_doc(pf), **r.to_dict()}
     if o.lobe_table:
         rows = lobe_table(pf=pf, views=views)
         write_lobe_table(rows, o.out, scene_name=o.scene or o.exr or "the flags'")

@@ -124,3 +124,37 @@ def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -
     save_figure(fig, out / "lobe_table.png")
     plt.close(fig)
     return doc
+
+
+#: The reference scene of :func:`fit_model` and :func:`translate` without one.
+DEFAULT_SCENE = "scenes/valley.xml"
+
+
+def _physical(scene, camera=None) -> PhysicalScene:
+    if scene is None:
+        scene = DEFAULT_SCENE
+    if isinstance(scene, (str, Path)):
+        if not Path(scene).is_file():
+            raise FogrefError(f"{scene}: no such scene file")
+        return physical_from_scene(scene, camera=camera)
+    if isinstance(scene, dict):
+        return PhysicalScene.from_params(scene, camera)
+    return scene
+
+
+def fit_model(name, scene=None, views=None, sun_elevations=None, **kw):
+    """``fogref.fit_model``: :func:`fogref.mapping.fit.fit_model` of a model for a scene XML path
+    (default :data:`DEFAULT_SCENE`), an EXR's ``fogref.params`` dict or a
+    :class:`~fogref.mapping.PhysicalScene`.  Returns a :class:`fogref.mapping.fit.ModelFit`."""
+    from fogref.mapping.fit import fit_model as fit
+
+    return fit(name, _physical(scene), views=views, sun_elevations=sun_elevations, **kw)
+
+
+def translate(source, target, params: dict | None = None, scene=None, **kw):
+    """``fogref.translate``: :func:`fogref.mapping.translate.translate` with a scene XML path
+    (default :data:`DEFAULT_SCENE`), dict or scene as the reference.  Returns a
+    :class:`fogref.mapping.translate.Translation`."""
+    from fogref.mapping.translate import translate as tr
+
+    return tr(source, target, params, _physical(scene), **kw)

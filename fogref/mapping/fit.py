@@ -1,0 +1,429 @@
+"""A fit of any fog model to the physical fog: the free parameters of :mod:`fogref.mapping.free`.
+
+:func:`fit_model` generalises :func:`fogref.mapping.unreal.fit_unreal` to every model (the
+built-in ones and a user's ``module:Class``, resolved by :func:`fogref.models.resolve_model`).
+The target needs no rendering: the closed-form single scattering of the physical fog
+(sun + uniform sky, :func:`~fogref.mapping.unreal.physical_single_scattering`) and its
+transmittance, over the views of :func:`~fogref.mapping.unreal.sample_views` (Fibonacci
+directions with ``d_y >= -0.5`` at 12 distances from 10 m to 20 km, plus the sky), for each
+sun elevation asked for (the sun keeps the scene's azimuth).  One parameter set is fitted
+over all the elevations together; the model's light follows the sun
+(:attr:`~fogref.mapping.free.FitSpec.sun`).
+
+Loss (least squares, :func:`scipy.optimize.least_squares`, trust-region reflective within
+the bounds): the residuals are the inscatter errors ``L_model - L_phys`` (all RGB channels,
+radiance) and ``w s (T_model - T_phys)`` with ``s`` the RMS of the physical inscatter and
+``w = transmittance_weight`` (default 1): a transmittance error of 1 costs as much as the
+whole inscatter.  The model is evaluated in float64.  Parameters flagged ``log`` are fitted
+as log10.
+
+Uncertainty of each fitted parameter, two numbers:
+
+* ``uncertainty``: from the Jacobian ``J`` at the optimum, ``cov = s^2 (J^T J)^+`` with
+  ``s^2 = SSE / (m - p)`` (m residuals, p parameters; ``+``: the pseudo-inverse, so a
+  direction the views do not constrain gets 0 and the flag ``at_bound`` or a rank
+  deficit, ``rank``), mapped through ``d value / d log10 value = ln(10) value`` for log
+  parameters.  It treats the model's misfit as noise: it measures how sharply the views
+  pin the parameter, and shrinks as ``1/sqrt(views)``.
+* ``spread``: ``|value(2N) - value(N)|`` between the last two direction counts of the
+  convergence check (the quadrature's own error).
+
+Direction count: without ``views``, ``FIT_DIRECTIONS_START`` (128) directions, doubled until
+every parameter changes by at most ``max(rtol |value|, uncertainty)`` (default ``rtol``
+5e-3), at most :data:`FIT_DIRECTIONS_MAX_GENERIC`.
+
+Examples
+--------
+>>> from fogref.media import ExpLayer, FogMedium
+>>> from fogref.mapping.physical import PhysicalScene
+>>> ps = PhysicalScene(FogMedium(sigma_t=0.01, albedo=0.5, layers=(ExpLayer(1.0, 0.0, 0.0),)),
+...                    sky_radiance=(1.0, 1.0, 1.0))
+>>> r = fit_model("unity", ps, views=64)
+>>> round(r.values["fogDensity"], 6), r.rel_rmse < 1e-6
+(0.01, True)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from fogref.errors import FogrefError, ParameterError
+from fogref.mapping.free import FitSpec, Free, fit_spec
+from fogref.mapping.physical import PhysicalScene
+from fogref.mapping.unreal import FIT_DIRECTIONS_START, FIT_RTOL, Views, physical_single_scattering, sample_views
+from fogref.media import NP
+from fogref.models.base import SKY_DISTANCE
+
+__all__ = ["FIT_DIRECTIONS_MAX_GENERIC", "ModelFit", "Target", "fit_model", "fit_to_targets",
+           "model_class", "physical_targets", "start_params", "sun_elevation", "with_sun_elevation"]
+
+#: The most directions :func:`fit_model` doubles to (each fit has up to ~15 parameters).
+FIT_DIRECTIONS_MAX_GENERIC = 4096
+
+
+def sun_elevation(pf: PhysicalScene) -> float:
+    """The scene's sun elevation above the horizon [degrees], in [-90, 90].
+
+    Examples
+    --------
+    >>> from fogref.media import FogMedium
+    >>> round(sun_elevation(PhysicalScene(FogMedium(), (1.0, 1.0, 0.0), 1.0)), 6)
+    45.0
+    """
+    return math.degrees(math.asin(max(-1.0, min(1.0, pf.sun_direction[1]))))
+
+
+def with_sun_elevation(pf: PhysicalScene, elevation_deg: float) -> PhysicalScene:
+    """``pf`` with the sun at ``elevation_deg`` [degrees, -90..90], same azimuth (north +z if
+    the scene's sun is at the zenith).  ParameterError naming 'sun_elevation' outside the range."""
+    e = float(elevation_deg)
+    if not (math.isfinite(e) and -90.0 <= e <= 90.0):
+        raise ParameterError(pf.source, "sun_elevation", f"{elevation_deg} outside [-90, 90] degrees")
+    w = np.asarray(pf.sun_direction, dtype=float)
+    h = math.hypot(w[0], w[2])
+    ax, az = (w[0] / h, w[2] / h) if h > 1e-12 else (0.0, 1.0)
+    c, s = math.cos(math.radians(e)), math.sin(math.radians(e))
+    return replace(pf, sun_direction=(c * ax, s, c * az))
+
+
+@dataclass
+class Target:
+    """The physical fog on a set of views: inscatter ``L`` and transmittance ``T`` (N, 3)."""
+
+    scene: PhysicalScene
+    views: Views
+    L: np.ndarray
+    T: np.ndarray
+
+
+def physical_targets(pf: PhysicalScene, views: Views, elevations=None) -> list[Target]:
+    """One :class:`Target` per sun elevation (default: the scene's own sun)."""
+    scenes = [pf] if elevations is None else [with_sun_elevation(pf, e) for e in elevations]
+    out = []
+    for ps in scenes:
+        L = physical_single_scattering(ps, views)
+        o = tuple(np.full(len(views.D), c) for c in views.camera)
+        d = tuple(views.d[:, i] for i in range(3))
+        D = np.where(views.sky, NP.largest, views.D)
+        T = np.stack(ps.medium.transmittance(NP, o, d, D), axis=-1)
+        out.append(Target(ps, views, np.asarray(L, float), np.asarray(T, float)))
+    return out
+
+
+def model_class(model):
+    """The model class a name (or class) stands for (:func:`fogref.models.resolve.resolve_model`)."""
+    import inspect
+
+    from fogref.models.resolve import resolve_model
+
+    cls = resolve_model(model) if isinstance(model, str) else model
+    if not inspect.isclass(cls):
+        raise FogrefError(f"model '{model}' names an instance, not a class: the fit builds its own instances")
+    return cls
+
+
+def _label(cls) -> str:
+    return getattr(cls, "name", None) or cls.__name__
+
+
+def start_params(cls, pf: PhysicalScene, spec: FitSpec | None = None, overrides: dict | None = None):
+    """The parameters the fit starts from: the physical mapping of ``pf`` where the model has
+    one for it, else the model's defaults; then ``spec.start`` and ``overrides``.
+
+    Returns ``(params, source)`` with source "mapping" or "defaults".
+    """
+    from fogref.mapping.registry import from_physical, has_mapping
+
+    spec = spec or fit_spec(cls)
+    params, source = None, "defaults"
+    if has_mapping(cls):
+        try:
+            params, source = from_physical(cls, pf).params, "mapping"
+        except (ParameterError, FogrefError):
+            params = None
+    if params is None:
+        pc = getattr(cls, "Params", None)
+        if not (isinstance(pc, type) and dataclasses.is_dataclass(pc)):
+            raise FogrefError(f"model '{_label(cls)}': the fit needs a parameter dataclass 'Params'")
+        params = pc()
+    kw = {k: v for k, v in spec.start.items() if source == "defaults" or k not in _MAPPED_KEEP}
+    kw.update(overrides or {})
+    names = {f.name for f in dataclasses.fields(params)}
+    bad = [k for k in kw if k not in names]
+    if bad:
+        from fogref.errors import did_you_mean
+
+        raise FogrefError(f"model '{_label(cls)}': no parameter '{bad[0]}'{did_you_mean(bad[0], names)}")
+    try:
+        return replace(params, **kw), source
+    except (TypeError, ValueError) as e:
+        raise FogrefError(f"model '{_label(cls)}': cannot set {sorted(kw)}: {e}") from e
+
+
+#: Start settings the physical mapping chooses better than a generic start (the lobe it fitted).
+_MAPPED_KEEP = ("lightColorIntensity", "inScatteringSize")
+
+
+def _get(params, f: Free) -> float:
+    v = getattr(params, f.field)
+    return float(v if f.index is None else v[f.index])
+
+
+def _set(params, free, values):
+    upd: dict = {}
+    for f, v in zip(free, values):
+        if f.index is None:
+            upd[f.field] = float(v)
+        else:
+            cur = list(upd.get(f.field, getattr(params, f.field)))
+            cur[f.index] = float(v)
+            upd[f.field] = tuple(cur)
+    return replace(params, **upd)
+
+
+def _to_internal(f: Free, v: float) -> float:
+    return math.log10(max(v, f.lo if f.lo > 0 else 1e-300)) if f.log else v
+
+
+def _to_value(f: Free, x: float) -> float:
+    return 10.0 ** x if f.log else x
+
+
+def _bounds(free):
+    lo = [math.log10(f.lo) if f.log else f.lo for f in free]
+    hi = [math.log10(f.hi) if f.log else f.hi for f in free]
+    return np.array(lo, float), np.array(hi, float)
+
+
+def _evaluate(cls, params, view_sets):
+    out = []
+    for views in view_sets:
+        r = cls(params).evaluate(views.camera, views.world_positions(SKY_DISTANCE), "float64")
+        L = np.broadcast_to(np.asarray(r.inscatter, float), (len(views.D), 3))
+        T = np.broadcast_to(np.asarray(r.transmittance, float), (len(views.D), 3))
+        out.append((L, T))
+    return out
+
+
+def fit_to_targets(cls, targets: list[Target], params0, spec: FitSpec | None = None,
+                   transmittance_weight: float = 1.0, x0=None) -> dict:
+    """Least squares of the free parameters of ``cls`` (starting at ``params0``) to ``targets``.
+
+    Returns ``{"params" (dataclass, the scene's own sun), "x" (internal), "values", "uncertainty",
+    "at_bound", "rank", "rmse", "rel_rmse", "rmse_T", "target_rms", "n_views", "nfev", "free"}``.
+    """
+    from scipy.optimize import least_squares
+
+    spec = spec or fit_spec(cls)
+    free = spec.free
+    lo, hi = _bounds(free)
+    if x0 is None:
+        x0 = np.array([_to_internal(f, _get(params0, f)) for f in free])
+    span = np.where(np.isfinite(hi - lo), hi - lo, 1.0)
+    x0 = np.clip(np.asarray(x0, float), lo + 1e-9 * span, hi - 1e-9 * span)
+    L_t = np.concatenate([t.L for t in targets])
+    T_t = np.concatenate([t.T for t in targets])
+    s = float(np.sqrt(np.mean(L_t ** 2))) or 1.0
+    wT = float(transmittance_weight) * s
+    suns = [t.scene.sun_direction for t in targets]
+
+    def params_at(x, w=None):
+        p = _set(params0, free, [_to_value(f, xi) for f, xi in zip(free, x)])
+        return spec.sun(p, w) if (spec.sun is not None and w is not None) else p
+
+    def predict(x):
+        Ls, Ts = [], []
+        for t, w in zip(targets, suns):
+            (L, T), = _evaluate(cls, params_at(x, w), [t.views])
+            Ls.append(L)
+            Ts.append(T)
+        return np.concatenate(Ls), np.concatenate(Ts)
+
+    bad = np.full(2 * L_t.size, 1.0e3 * max(s, 1.0))
+
+    def resid(x):
+        try:
+            L, T = predict(x)
+        except (ParameterError, ValueError, FloatingPointError):
+            return bad
+        r = np.concatenate([(L - L_t).ravel(), wT * (T - T_t).ravel()])
+        return r if np.all(np.isfinite(r)) else bad
+
+    res = least_squares(resid, x0, bounds=(lo, hi), method="trf", x_scale="jac", ftol=1e-12, xtol=1e-12,
+                        gtol=1e-12, max_nfev=200 * (len(free) + 1))
+    x = res.x
+    r = res.fun
+    J = np.asarray(res.jac, float)
+    m, p = r.size, len(free)
+    s2 = float(r @ r) / max(m - p, 1)
+    cov = s2 * np.linalg.pinv(J.T @ J)
+    sig_int = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    values = {f.name: _to_value(f, xi) for f, xi in zip(free, x)}
+    unc = {f.name: float(math.log(10.0) * values[f.name] * si) if f.log else float(si)
+           for f, si in zip(free, sig_int)}
+    at_bound = {f.name: bool(np.isclose(xi, l, atol=1e-7 * sp) or np.isclose(xi, h, atol=1e-7 * sp))
+                for f, xi, l, h, sp in zip(free, x, lo, hi, span)}
+    L, T = predict(x)
+    rmse = float(np.sqrt(np.mean((L - L_t) ** 2)))
+    return {"params": params_at(x, suns[0]), "x": x, "values": values, "uncertainty": unc,
+            "at_bound": at_bound, "rank": int(np.linalg.matrix_rank(J)) if J.size else 0,
+            "rmse": rmse, "rel_rmse": rmse / s if s > 0 else 0.0,
+            "rmse_T": float(np.sqrt(np.mean((T - T_t) ** 2))), "target_rms": s,
+            "n_views": int(len(L_t)), "nfev": int(res.nfev), "free": [f.name for f in free]}
+
+
+@dataclass
+class ModelFit:
+    """The best parameters of one model for a physical fog, with uncertainties (see the module doc)."""
+
+    model: str
+    params: object
+    values: dict
+    uncertainty: dict
+    spread: dict | None
+    at_bound: dict
+    rmse: float            #: RMSE of the inscatter over the views (radiance)
+    rel_rmse: float        #: rmse / RMS of the physical inscatter
+    rmse_T: float          #: RMSE of the transmittance
+    target_rms: float
+    n_views: int
+    n_dirs: int
+    sun_elevations: list
+    start: str             #: "mapping" or "defaults"
+    note: str = ""
+    history: dict = field(default_factory=dict)
+
+    def instance(self):
+        """The fitted model (the scene's own sun)."""
+        from fogref.mapping.build import build_model
+
+        return build_model(self.model, _param_dict(self.params))
+
+    def to_dict(self) -> dict:
+        return {"model": self.model,
+                "parameters": {k: {"value": v, "uncertainty": self.uncertainty[k],
+                                   **({"spread": self.spread[k]} if self.spread else {}),
+                                   **({"at_bound": True} if self.at_bound.get(k) else {})}
+                               for k, v in self.values.items()},
+                "settings": _jsonable(_param_dict(self.params)),
+                "error": {"rmse": self.rmse, "rel_rmse": self.rel_rmse, "rmse_transmittance": self.rmse_T,
+                          "target_rms": self.target_rms, "n_views": self.n_views},
+                "fit": {"n_dirs": self.n_dirs, "sun_elevations_deg": self.sun_elevations, "start": self.start,
+                        "uncertainty": "Jacobian at the optimum, cov = s^2 (J^T J)^+, s^2 = SSE/(m - p)",
+                        "spread": "|value(2N) - value(N)| between the last two direction counts",
+                        "loss": "sum of squared inscatter errors (RGB) + (w s)^2 sum of squared transmittance "
+                                "errors, s = RMS physical inscatter; model float64",
+                        "cannot_represent": self.note, **self.history}}
+
+
+def _param_dict(params) -> dict:
+    return {f.name: getattr(params, f.name) for f in dataclasses.fields(params) if f.init}
+
+
+def _jsonable(d):
+    out = {}
+    for k, v in d.items():
+        if dataclasses.is_dataclass(v):
+            v = _jsonable(_param_dict(v))
+        elif isinstance(v, float) and not math.isfinite(v):
+            v = str(v)
+        elif isinstance(v, tuple):
+            v = list(v)
+        out[k] = v
+    return out
+
+
+def fit_model(model, scene, views=None, sun_elevations=None, *, params: dict | None = None,
+              transmittance_weight: float = 1.0, rtol: float = FIT_RTOL,
+              max_dirs: int = FIT_DIRECTIONS_MAX_GENERIC) -> ModelFit:
+    """Fit ``model``'s free parameters to the physical fog of ``scene``.
+
+    Parameters
+    ----------
+    model : str or type
+        A registry name ("ue4", "unity", "hdrp", "filament", "altitude", "box", "godot", "bevy",
+        "threejs"), ``module.path:Class`` or a model class.
+    scene : PhysicalScene or dict
+        The physical fog (an EXR's ``fogref.params`` dict or a scene; :func:`fogref.fit_model`
+        also reads a scene XML path).
+    views : int or Views, optional
+        A fixed number of Fibonacci directions, or the views themselves; default: doubled from
+        128 until converged (module doc).
+    sun_elevations : sequence of float, optional
+        Sun elevations [degrees] fitted together; default the scene's sun.
+    params : dict, optional
+        Fixed settings (the model's names) that override the start (e.g. a mode).
+    transmittance_weight : float
+        Weight ``w`` of the transmittance residuals, >= 0.
+    rtol : float
+        Convergence tolerance of the direction count, in (0, 1).
+
+    Raises
+    ------
+    FogrefError
+        Unknown model (with a "did you mean"), a model without parameter dataclass.
+    fogref.errors.ParameterError
+        A sun elevation outside [-90, 90], a bad weight or tolerance.
+    """
+    t0 = time.perf_counter()
+    cls = model_class(model)
+    pf = _scene(scene)
+    if not (0.0 <= float(transmittance_weight) < math.inf):
+        raise ParameterError("fit_model", "transmittance_weight", f"{transmittance_weight} outside [0, inf)")
+    if not 0.0 < float(rtol) < 1.0:
+        raise ParameterError("fit_model", "rtol", f"{rtol} outside (0, 1)")
+    elevations = None if sun_elevations is None else [float(e) for e in sun_elevations]
+    spec = fit_spec(cls)
+    p0, source = start_params(cls, pf, spec, params)
+
+    def one(v: Views, x0=None):
+        return fit_to_targets(cls, physical_targets(pf, v, elevations), p0, spec, transmittance_weight, x0)
+
+    spread, history = None, {}
+    if isinstance(views, Views):
+        r, n = one(views), None
+    elif views is not None:
+        n = int(views)
+        if not 8 <= n <= 100_000:
+            raise ParameterError("fit_model", "views", f"{views} directions outside [8, 100000]")
+        r = one(sample_views(pf.camera, n_dirs=n))
+    else:
+        n = FIT_DIRECTIONS_START
+        prev = one(sample_views(pf.camera, n_dirs=n))
+        conv, converged = [], False
+        while True:
+            conv.append({"n_dirs": n, "rel_rmse": prev["rel_rmse"], **prev["values"]})
+            if 2 * n > max_dirs:
+                r = prev
+                break
+            r = one(sample_views(pf.camera, n_dirs=2 * n), prev["x"])
+            n *= 2
+            spread = {k: abs(r["values"][k] - prev["values"][k]) for k in r["values"]}
+            if all(spread[k] <= max(rtol * abs(r["values"][k]), r["uncertainty"][k]) for k in spread):
+                converged = True
+                conv.append({"n_dirs": n, "rel_rmse": r["rel_rmse"], **r["values"]})
+                break
+            prev = r
+        history = {"directions_converged": converged, "convergence": conv}
+    history["fit_seconds"] = time.perf_counter() - t0
+    name = getattr(cls, "name", None) or f"{cls.__module__}:{cls.__qualname__}"
+    return ModelFit(model=name, params=r["params"], values=r["values"], uncertainty=r["uncertainty"],
+                    spread=spread, at_bound=r["at_bound"], rmse=r["rmse"], rel_rmse=r["rel_rmse"],
+                    rmse_T=r["rmse_T"], target_rms=r["target_rms"], n_views=r["n_views"],
+                    n_dirs=n if n is not None else len(views.D),
+                    sun_elevations=elevations if elevations is not None else [sun_elevation(pf)],
+                    start=source, note=spec.note, history=history)
+
+
+def _scene(scene) -> PhysicalScene:
+    if isinstance(scene, PhysicalScene):
+        return scene
+    if isinstance(scene, dict):
+        return PhysicalScene.from_params(scene)
+    raise FogrefError(f"fit_model: scene {scene!r} is not a PhysicalScene or a fogref.params dict "
+                      "(fogref.fit_model reads a scene XML path)")
