@@ -9,6 +9,7 @@ compare     check a fog model or an engine's images against a truth; exit      :
             0 pass, 1 fail, 2 usage or input error, 3 inconclusive
 study       the Unreal study: fit, compare, error budget, README               :mod:`~.study`
 fit         fit Unreal's fog colours and exponent to a physical fog (JSON)     :mod:`~.fit`
+translate   carry one engine's fog settings to another's through the truth     :mod:`~.translate`
 scene       write a scene XML from fog, sun, sky, camera and geometry          :mod:`~.scene`
 sweep       run a declarative error study (SWEEP.toml) on Dask                 :mod:`~.sweep`
 ==========  =================================================================  =====================
@@ -40,7 +41,8 @@ __all__ = ["COMMANDS", "build_parser", "main", "parse"]
 
 #: The commands, in the order ``fogref --help`` lists them, and the module of each.
 COMMANDS = {
-    name: f"fogref.cli.{name}" for name in ("render", "info", "compare", "study", "fit", "scene", "sweep")
+    name: f"fogref.cli.{name}"
+    for name in ("render", "info", "compare", "study", "fit", "translate", "scene", "sweep")
 }
 
 DESCRIPTION = (
