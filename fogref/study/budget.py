@@ -700,3 +700,86 @@ def shapley_markdown(sh: dict, title: str = "## Shapley budget (order-independen
         lines.append(f"| [{r['effect']}] {r['label']} | {100 * r['share']:+.1f} % | "
                      f"±{100 * r['share_noise']:.2g} % | {ns} |")
     return "\n".join(lines)
+
+
+# ------------------------------------------------------------------------------------------
+# The same Shapley budget for every model
+# ------------------------------------------------------------------------------------------
+
+#: Effects that are Unreal's own settings (the chain's steps 7 and 8); another model has none.
+UNREAL_ONLY = ("start_distance", "opacity_cutoff")
+
+
+def _evaluate(model, truth: Truth, precision: str, sky_distance: float):
+    r = model.evaluate(truth.camera, truth.world_positions(sky_distance), precision)
+    shape = (*truth.shape, 3)
+    return (np.broadcast_to(np.asarray(r.transmittance, np.float64), shape),
+            np.broadcast_to(np.asarray(r.inscatter, np.float64), shape))
+
+
+def model_engine(model, lobe_model=None):
+    """The engine side of the Shapley game for any fog model instance (the signature of
+    :func:`unreal_engine`): ``engine(truth, config, sky_distance) -> (T, L_sun, L_sky)``.
+
+    ``config["refit"]``: ``model`` (else ``lobe_model``, the model fitted to the unattenuated
+    target; without one, ``model`` in both); ``config["float32"]``: the shader's arithmetic, else
+    float64; the Unreal-only settings (:data:`UNREAL_ONLY`) do not apply and are ignored.
+    ``L_sun``: the model's inscatter minus the same model with its sun lobe off
+    (:attr:`fogref.mapping.free.FitSpec.sun_off`; a model without a sun: 0).
+    """
+    from fogref.mapping.free import fit_spec
+
+    def sun_off(m):
+        spec = fit_spec(type(m))
+        if spec.sun_off is None or not hasattr(m, "params"):
+            return None
+        return type(m)(spec.sun_off(m.params))
+
+    def engine(truth: Truth, config: dict, sky_distance: float):
+        m = model if (config["refit"] or lobe_model is None) else lobe_model
+        prec = "float32" if config["float32"] else "float64"
+        T, L = _evaluate(m, truth, prec, sky_distance)
+        off = sun_off(m)
+        L_sky = L if off is None else _evaluate(off, truth, prec, sky_distance)[1]
+        return T, L - L_sky, L_sky
+
+    return engine
+
+
+def applicable_effects(model, lobe_model=None) -> tuple[str, ...]:
+    """The effects of :data:`EFFECTS` that apply to ``model``: all of them for Unreal; without
+    Unreal's start distances and opacity/cutoff for the others; without "refit" when there is
+    no separate ``lobe_model``."""
+    name = getattr(model, "name", None)
+    out = [k for k in EFFECTS if name == "ue4" or k not in UNREAL_ONLY]
+    if lobe_model is None:
+        out.remove("refit")
+    return tuple(out)
+
+
+def run_budget(truth: Truth, sky_single: np.ndarray, pf, model, lobe_model=None, valid=None,
+               sky_distance: float = 1.0e5, resamples: int = BOOTSTRAP_RESAMPLES, seed: int = 0) -> dict:
+    """The Shapley budget of any model (an instance, or a name built by
+    :func:`fogref.mapping.from_physical` of ``pf``) against a truth.
+
+    Unreal with a ``lobe_model`` uses :func:`unreal_engine`; every other model
+    :func:`model_engine`, over :func:`applicable_effects`.  ``sky_single``: the sun-less
+    render's ``single``; ``valid``: pixels (default ``truth.surface_valid``).  Returns
+    :func:`shapley_budget`'s dict with ``"model"`` added.
+    """
+    if isinstance(model, str):
+        from fogref.mapping.registry import from_physical
+
+        model = from_physical(model, pf)
+    if isinstance(lobe_model, str):
+        raise TypeError("run_budget: lobe_model must be a model instance")
+    name = getattr(model, "name", type(model).__name__)
+    if name == "ue4" and lobe_model is not None:
+        engine = unreal_engine(lobe_model.params, model.params)
+    else:
+        engine = model_engine(model, lobe_model)
+    parts = shapley_parts(truth, sky_single, pf, engine, sky_distance)
+    valid = truth.surface_valid if valid is None else valid
+    out = shapley_budget(parts, valid, applicable_effects(model, lobe_model), resamples=resamples, seed=seed)
+    out["model"] = name
+    return out
