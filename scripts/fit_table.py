@@ -58,18 +58,21 @@ def markdown(doc: dict) -> str:
              f"Made by `{doc['command']}` (closed forms, no rendering; {doc['seconds']:.0f} s).", "",
              f"Scene `{doc['scene']}`; the sun at {', '.join(f'{e:g}°' for e in el)} above the horizon "
              f"(the first is the scene's own; same azimuth), each elevation fitted on its own.  Target: the "
-             "closed-form single scattering (sun + sky) and transmittance of the physical fog over views from "
-             "the camera (Fibonacci directions with d_y ≥ −0.5 at 12 distances from 10 m to 20 km, plus the "
-             f"sky), directions doubled from 128 until converged (at most {doc['max_directions']}).  Loss: "
+             "closed-form single scattering (sun + sky) and transmittance of the physical fog over "
+             "views from the camera (Fibonacci directions with d_y ≥ −0.5 at 12 distances from 10 m to "
+             "20 km, plus the sky), directions doubled from 128 until converged (at most "
+             f"{doc['max_directions']}).  Loss: "
              "squared inscatter error + squared transmittance error times the RMS inscatter "
              "(`fogref.mapping.fit`).  Free parameters and bounds: `fogref.mapping.free`; the other "
-             "settings come from the model's physical mapping (or its defaults where the scene has none).", "",
+             "settings come from the model's physical mapping (or its defaults where the scene has "
+             "none).", "",
              "*Residual*: relative RMSE of the inscatter (RMSE / RMS of the physical inscatter) and RMSE of "
              "the transmittance at the best fit: the error no setting of that engine can remove.  "
              "*±*: 1σ from the Jacobian at the optimum, cov = s²(JᵀJ)⁺, s² = SSE/(m − p) (the misfit "
              "treated as noise: how sharply the views pin the parameter).", "",
              "## Residual error", "",
-             "| model | " + " | ".join(f"{e:g}°: inscatter rel. RMSE / T RMSE" for e in el) + " | cannot represent |",
+             "| model | " + " | ".join(f"{e:g}°: inscatter rel. RMSE / T RMSE" for e in el)
+             + " | cannot represent |",
              "|---|" + "---|" * len(el) + "---|"]
     for m, rs in by.items():
         cells = [f"{r['error']['rel_rmse']:.3f} / {r['error']['rmse_transmittance']:.3f}" for r in rs]

@@ -21,7 +21,8 @@ SIGMA = 0.004
 
 def _homogeneous(sun=False):
     med = FogMedium(sigma_t=SIGMA, albedo=0.8, g=0.5, layers=(ExpLayer(1.0, 0.0, 0.0),))
-    return PhysicalScene(med, (0.4, 0.3, 0.87), (3.0, 2.8, 2.5) if sun else 0.0, (0.2, 0.3, 0.5), (0.0, 2.0, 0.0))
+    E = (3.0, 2.8, 2.5) if sun else 0.0
+    return PhysicalScene(med, (0.4, 0.3, 0.87), E, (0.2, 0.3, 0.5), (0.0, 2.0, 0.0))
 
 
 def _valley():

@@ -55,7 +55,13 @@ import numpy as np
 from fogref.errors import FogrefError, ParameterError
 from fogref.mapping.free import FitSpec, Free, fit_spec
 from fogref.mapping.physical import PhysicalScene
-from fogref.mapping.unreal import FIT_DIRECTIONS_START, FIT_RTOL, Views, physical_single_scattering, sample_views
+from fogref.mapping.unreal import (
+    FIT_DIRECTIONS_START,
+    FIT_RTOL,
+    Views,
+    physical_single_scattering,
+    sample_views,
+)
 from fogref.media import NP
 from fogref.models.base import SKY_DISTANCE
 
@@ -266,8 +272,8 @@ def fit_to_targets(cls, targets: list[Target], params0, spec: FitSpec | None = N
     values = {f.name: _to_value(f, xi) for f, xi in zip(free, x)}
     unc = {f.name: float(math.log(10.0) * values[f.name] * si) if f.log else float(si)
            for f, si in zip(free, sig_int)}
-    at_bound = {f.name: bool(np.isclose(xi, l, atol=1e-7 * sp) or np.isclose(xi, h, atol=1e-7 * sp))
-                for f, xi, l, h, sp in zip(free, x, lo, hi, span)}
+    at_bound = {f.name: bool(np.isclose(xi, a, atol=1e-7 * sp) or np.isclose(xi, b, atol=1e-7 * sp))
+                for f, xi, a, b, sp in zip(free, x, lo, hi, span)}
     L, T = predict(x)
     rmse = float(np.sqrt(np.mean((L - L_t) ** 2)))
     return {"params": params_at(x, suns[0]), "x": x, "values": values, "uncertainty": unc,
@@ -314,9 +320,11 @@ class ModelFit:
                 "error": {"rmse": self.rmse, "rel_rmse": self.rel_rmse, "rmse_transmittance": self.rmse_T,
                           "target_rms": self.target_rms, "n_views": self.n_views},
                 "fit": {"n_dirs": self.n_dirs, "sun_elevations_deg": self.sun_elevations, "start": self.start,
-                        "uncertainty": "Jacobian at the optimum, cov = s^2 (J^T J)^+, s^2 = SSE/(m - p)",
+                        "uncertainty": "Jacobian at the optimum, cov = s^2 (J^T J)^+, "
+                                       "s^2 = SSE/(m - p)",
                         "spread": "|value(2N) - value(N)| between the last two direction counts",
-                        "loss": "sum of squared inscatter errors (RGB) + (w s)^2 sum of squared transmittance "
+                        "loss": "sum of squared inscatter errors (RGB) + (w s)^2 sum of squared "
+                                "transmittance "
                                 "errors, s = RMS physical inscatter; model float64",
                         "cannot_represent": self.note, **self.history}}
 

@@ -117,7 +117,8 @@ class PhysicalFog:
 
 
 def _physical_spec(exact: bool) -> FitSpec:
-    light = (Free("g", -0.95, 0.95), *rgb_free("sun_irradiance", 0.0, 1e4), *rgb_free("sky_radiance", 0.0, 1e4))
+    light = (Free("g", -0.95, 0.95), *rgb_free("sun_irradiance", 0.0, 1e4),
+             *rgb_free("sky_radiance", 0.0, 1e4))
     ext = () if exact else (Free("sigma_t", 1e-8, 10.0, log=True), Free("falloff", 0.0, 1.0))
     return FitSpec(free=ext + light, sun=lambda p, w: replace(p, sun_direction=tuple(float(x) for x in w)),
                    note="single scattering, HG phase, unoccluded sky")
