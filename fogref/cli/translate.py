@@ -23,6 +23,7 @@ DESCRIPTION = (
     "the residual error no target setting can remove, against the physical fog and against the source."
 )
 EPILOG = "exit codes: 0 translated, 2 usage or input error"
+API = "fogref.study.fit:translate"
 
 
 @dataclass
@@ -33,7 +34,7 @@ class Options:
     param: dict | None = option(None, "a source setting (VALUE parsed as JSON when possible)", repeat=True,
                                 check=Assignments(), metavar="KEY=VALUE")
     scene: str = option("scenes/valley.xml", "reference scene (camera, albedo, sun azimuth, light)",
-                        check=PathArg(), metavar="XML")
+                        check=PathArg(), metavar="XML", api=API)
     sun_elevation: list | None = option(None, "a sun elevation to fit over (repeat for several)", repeat=True,
                                         check=Number(-90.0, 90.0, unit="deg"), metavar="DEG",
                                         default_text="the scene's sun")

@@ -269,7 +269,7 @@ def fit_to_targets(cls, targets: list[Target], params0, spec: FitSpec | None = N
     s2 = float(r @ r) / max(m - p, 1)
     cov = s2 * np.linalg.pinv(J.T @ J)
     sig_int = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    values = {f.name: _to_value(f, xi) for f, xi in zip(free, x)}
+    values = {f.name: float(_to_value(f, xi)) for f, xi in zip(free, x)}
     unc = {f.name: float(math.log(10.0) * values[f.name] * si) if f.log else float(si)
            for f, si in zip(free, sig_int)}
     at_bound = {f.name: bool(np.isclose(xi, a, atol=1e-7 * sp) or np.isclose(xi, b, atol=1e-7 * sp))

@@ -151,7 +151,7 @@ def fit_model(name, scene=None, views=None, sun_elevations=None, **kw):
     return fit(name, _physical(scene), views=views, sun_elevations=sun_elevations, **kw)
 
 
-def translate(source, target, params: dict | None = None, scene=None, **kw):
+def translate(source, target, params: dict | None = None, scene=DEFAULT_SCENE, **kw):
     """``fogref.translate``: :func:`fogref.mapping.translate.translate` with a scene XML path
     (default :data:`DEFAULT_SCENE`), dict or scene as the reference.  Returns a
     :class:`fogref.mapping.translate.Translation`."""
