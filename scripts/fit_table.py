@@ -4,7 +4,9 @@ Usage: ``.venv/bin/python scripts/fit_table.py [--scene scenes/valley.xml] [--ou
 
 For each built-in model, :func:`fogref.fit_model` on the scene's fog with the sun at the scene's
 own elevation and at 30 and 60 degrees (the scene's azimuth), each elevation fitted on its own;
-directions doubled from 128 to at most 512.  Closed forms only (no rendering).
+directions doubled from 128 to at most 512.  Then :func:`fogref.translate` of the scene's Unreal
+settings (its physical mapping) to every engine, at the scene's sun, on 256 directions.  Closed
+forms only (no rendering).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from pathlib import Path
 MODELS = ("ue4", "unity", "hdrp", "filament", "altitude", "box", "godot", "bevy", "threejs")
 EXTRA_ELEVATIONS = (30.0, 60.0)
 MAX_DIRS = 512
+TRANSLATE_DIRS = 256
 
 
 def main(argv=None) -> int:
@@ -27,7 +30,7 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     from fogref.atomic import write_text_atomic as write_text
     from fogref.mapping.fit import sun_elevation
-    from fogref.study.fit import _physical, fit_model
+    from fogref.study.fit import _physical, fit_model, translate
 
     pf = _physical(a.scene)
     elevations = [round(sun_elevation(pf), 2), *EXTRA_ELEVATIONS]
@@ -40,10 +43,17 @@ def main(argv=None) -> int:
             rows.append(r.to_dict())
             print(f"{name:9s} {e:5.1f} deg  rel RMSE {r.rel_rmse:.3f}  T RMSE {r.rmse_T:.3f}  "
                   f"({r.history['fit_seconds']:.1f} s)", file=sys.stderr)
+    translations = []
+    for name in MODELS:
+        t = translate("ue4", name, None, pf, views=TRANSLATE_DIRS)
+        translations.append(t.to_dict())
+        print(f"ue4 -> {name:9s} vs truth {t.residual_vs_truth:.3f}  vs source {t.residual_vs_source:.3f}",
+              file=sys.stderr)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     doc = {"command": command, "scene": a.scene, "sun_elevations_deg": elevations, "max_directions": MAX_DIRS,
-           "fits": rows, "seconds": time.perf_counter() - t0}
+           "fits": rows, "translations": translations, "translate_directions": TRANSLATE_DIRS,
+           "seconds": time.perf_counter() - t0}
     write_text(out / "engines.json", json.dumps(doc, indent=2) + "\n")
     write_text(out / "engines.md", markdown(doc))
     return 0
@@ -77,6 +87,21 @@ def markdown(doc: dict) -> str:
     for m, rs in by.items():
         cells = [f"{r['error']['rel_rmse']:.3f} / {r['error']['rmse_transmittance']:.3f}" for r in rs]
         lines.append(f"| {m} | " + " | ".join(cells) + f" | {rs[0]['fit']['cannot_represent']} |")
+    if doc.get("translations"):
+        lines += ["", "## Unreal's settings translated to every engine", "",
+                  f"`fogref.translate('ue4', NAME)`: the scene's Unreal settings (its physical mapping) -> "
+                  "their physical fog (Unreal's exact extinction; g, sun and sky fitted to Unreal's "
+                  "inscatter) "
+                  f"-> NAME fitted to it; the scene's sun, {doc['translate_directions']} directions.  "
+                  "Residual: relative RMSE of the inscatter of NAME's best settings against the physical fog "
+                  "and against Unreal itself.  ue4 -> ue4 is not the identity with a sun: the physical "
+                  "fog reproduces Unreal's cosine lobe only to the 'physical vs Unreal' error, and Unreal's "
+                  "best fit to that fog differs from the settings it came from by that much.", "",
+                  "| target | vs physical fog | vs Unreal | physical fog vs Unreal |", "|---|---|---|---|"]
+        for t in doc["translations"]:
+            r = t["residual"]
+            lines.append(f"| {t['target']['model']} | {r['target_vs_truth_rel_rmse']:.3f} | "
+                         f"{r['target_vs_source_rel_rmse']:.3f} | {r['physical_vs_source_rel_rmse']:.3f} |")
     lines += ["", "## Best-fit parameters", ""]
     for m, rs in by.items():
         lines += [f"### {m}", "", "| parameter | " + " | ".join(f"{e:g}°" for e in el) + " |",

@@ -8,7 +8,10 @@ Layering: ``fogref.media`` (physics) <- ``fogref.models`` (pure shader ports) <-
 * :mod:`~fogref.mapping.registry`  :func:`from_physical` and the mapping registry
 * :mod:`~fogref.mapping.unreal`    Unreal's colour/lobe fit (:func:`fit_unreal`) and its mapping
 * :mod:`~fogref.mapping.lobe`      the best cosine lobe for an HG phase (:func:`lobe_fit`, :func:`lobe_table`)
-* :mod:`~fogref.mapping.engines`   Unity, altitude, box, HDRP and Filament mappings
+* :mod:`~fogref.mapping.engines`   Unity, altitude, box, HDRP, Filament, Godot, Bevy, three.js mappings
+* :mod:`~fogref.mapping.free`      each model's free parameters and bounds (:data:`FIT_SPECS`)
+* :mod:`~fogref.mapping.fit`       any model fitted to the physical fog, with uncertainties
+* :mod:`~fogref.mapping.translate` one engine's settings to another's through the physical fog
 
 Examples
 --------
@@ -19,9 +22,12 @@ Examples
 """
 
 from fogref.mapping import engines  # noqa: F401  (registers the non-Unreal mappings)
+from fogref.mapping.fit import ModelFit, fit_model
+from fogref.mapping.free import FIT_SPECS
 from fogref.mapping.lobe import lobe_fit, lobe_table
 from fogref.mapping.physical import PhysicalScene
 from fogref.mapping.registry import MAPPINGS, from_physical, has_mapping, register_mapping
+from fogref.mapping.translate import Translation, translate
 from fogref.mapping.unreal import (
     FIT_DIRECTIONS_MAX,
     FIT_DIRECTIONS_START,
@@ -37,7 +43,8 @@ from fogref.mapping.unreal import (
 )
 from fogref.models.base import SKY_DISTANCE
 
-__all__ = ["FIT_DIRECTIONS_MAX", "FIT_DIRECTIONS_START", "FIT_RTOL", "MAPPINGS", "SKY_DISTANCE", "FitResult",
+__all__ = ["FIT_DIRECTIONS_MAX", "FIT_DIRECTIONS_START", "FIT_RTOL", "FIT_SPECS", "MAPPINGS", "SKY_DISTANCE",
+           "FitResult", "ModelFit", "Translation", "fit_model", "translate",
            "PhysicalScene", "Views",
            "base_params", "fit_unreal", "from_physical", "has_mapping", "lobe_fit", "lobe_table",
            "physical_single_scattering", "register_mapping", "sample_views", "ue4_from_physical",
