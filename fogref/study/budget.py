@@ -12,6 +12,11 @@ forms and the engine's 16 configurations are computed once (:func:`shapley_parts
 reused by all coalitions.  Noise: a block bootstrap over the image and, with a second pair
 of renders, the seed-to-seed difference.  **Second, the telescoping chain** below.
 
+**Every model** (:func:`run_budget`): the same Shapley game with another model's engine side
+(:func:`model_engine`: its transmittance and inscatter, the sun lobe split off with
+:attr:`fogref.mapping.free.FitSpec.sun_off`), over the effects that apply to it
+(:func:`applicable_effects`: Unreal's start distances and opacity/cutoff are Unreal's own).
+
 A chain of images ``S_0 .. S_K`` goes from the ground truth (``S_0``, the EXR's
 ``R,G,B``) to what Unreal computes (``S_K``), switching **one** effect at a time.
 Every image is final radiance over the truth's surface, so only the fog differs:
