@@ -147,7 +147,10 @@ def start_params(cls, pf: PhysicalScene, spec: FitSpec | None = None, overrides:
 
     spec = spec or fit_spec(cls)
     params, source = None, "defaults"
-    if has_mapping(cls):
+    if spec.initial is not None:
+        params = spec.initial(pf)
+        source = "mapping" if params is not None else source
+    if params is None and has_mapping(cls):
         try:
             params, source = from_physical(cls, pf).params, "mapping"
         except (ParameterError, FogrefError):

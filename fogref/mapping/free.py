@@ -11,6 +11,7 @@ plus :attr:`FitSpec.start`.  A :class:`FitSpec` per registry name (:data:`FIT_SP
 * ``sun``: ``(params, direction) -> params``, pointing the model's light at the sun
   (fogref frame, toward the sun) for each sun elevation; None for models without a sun;
 * ``sun_off``: ``params -> params`` without the sun lobe (the error budget's sky/sun split);
+* ``initial``: ``scene -> params`` or None, a cheaper start than the mapping where it has one;
 * ``exact_medium``: ``params -> FogMedium`` when these settings have an exact physical
   extinction (:mod:`fogref.mapping.translate`), else None;
 * ``note``: what the model cannot represent.
@@ -73,6 +74,7 @@ class FitSpec:
     start: dict = field(default_factory=dict)
     sun: Callable | None = None
     sun_off: Callable | None = None
+    initial: Callable | None = None
     exact_medium: Callable | None = None
     note: str = ""
 
@@ -91,6 +93,16 @@ def _ue4_exact(p):
 
     plain = p.StartDistance == 0 and p.FogCutoffDistance == 0 and p.FogMaxOpacity == 1 and p.EndDistance == 0
     return ue4_to_medium(p) if plain else None
+
+
+def _ue4_initial(ps):
+    """Without a sun above the horizon, Unreal's mapping (its lobe fit) has nothing to fit: start from
+    the exact extinction and the sky colour instead."""
+    from fogref.mapping.unreal import base_params
+
+    if ps.has_sun and ps.sun_direction[1] > 0:
+        return None
+    return base_params(ps, FogInscatteringColor=ps.sky_colour(), DirectionalInscatteringColor=(0.0, 0.0, 0.0))
 
 
 def _unity_exact(p):
@@ -144,6 +156,7 @@ def _builtin_specs() -> dict[str, FitSpec]:
             start={"StartDistance": 0.0, "FogMaxOpacity": 1.0, "FogCutoffDistance": 0.0},
             sun=lambda p, w: p.with_sun(w, p.SunLuminance),
             sun_off=lambda p: replace(p, DirectionalInscatteringColor=(0.0, 0.0, 0.0)),
+            initial=_try(_ue4_initial),
             exact_medium=_try(_ue4_exact),
             note="cosine lobe max(cos,0)^n instead of HG; no sun attenuation along the view ray"),
         "unity": FitSpec(

@@ -11,8 +11,8 @@
      fog on distance, Godot's exponential mode, Bevy's Exponential/Atmospheric, HDRP, Filament, box
      "beer"), else a fit of ``sigma_t`` and the falloff of one exponential layer at the scene's
      layer height (three.js, the altitude fog's blend, the depth modes);
-   * the phase asymmetry ``g``, the sun irradiance (RGB) and the sky radiance (RGB) fitted to the
-     source's inscatter (the engines' colours stand for ``albedo E`` and ``albedo L_sky``, so the
+   * the phase asymmetry ``g`` and the sun irradiance (RGB; only when the scene has a sun) and the
+     sky radiance (RGB) fitted to the source's inscatter (the engines' colours stand for ``albedo E`` and ``albedo L_sky``, so the
      albedo is kept and the light is fitted).
 
    The fit is :func:`fogref.mapping.fit.fit_to_targets` on :class:`PhysicalFog`, the closed forms
@@ -116,9 +116,9 @@ class PhysicalFog:
         return FogResult(inscatter=L.reshape(shape), transmittance=T.reshape(shape))
 
 
-def _physical_spec(exact: bool) -> FitSpec:
-    light = (Free("g", -0.95, 0.95), *rgb_free("sun_irradiance", 0.0, 1e4),
-             *rgb_free("sky_radiance", 0.0, 1e4))
+def _physical_spec(exact: bool, sun: bool = True) -> FitSpec:
+    light = (Free("g", -0.95, 0.95), *rgb_free("sun_irradiance", 0.0, 1e4)) if sun else ()
+    light += rgb_free("sky_radiance", 0.0, 1e4)
     ext = () if exact else (Free("sigma_t", 1e-8, 10.0, log=True), Free("falloff", 0.0, 1.0))
     return FitSpec(free=ext + light, sun=lambda p, w: replace(p, sun_direction=tuple(float(x) for x in w)),
                    note="single scattering, HG phase, unoccluded sky")
@@ -153,7 +153,7 @@ def physical_of_model(cls, params, pf: PhysicalScene, views: Views, elevations=N
     p0 = PhysicalFogParams(sigma_t=sigma, falloff=falloff, height=height, albedo=tuple(pf.medium.albedo),
                            g=float(m.g), sun_irradiance=tuple(pf.sun_irradiance),
                            sky_radiance=tuple(pf.sky_radiance), sun_direction=pf.sun_direction, medium=medium)
-    fit = fit_to_targets(PhysicalFog, targets, p0, _physical_spec(medium is not None))
+    fit = fit_to_targets(PhysicalFog, targets, p0, _physical_spec(medium is not None, pf.has_sun))
     info = {"extinction": "exact" if medium is not None else "fitted"}
     return fit, info
 
