@@ -26,7 +26,7 @@ TRANSLATE_DIRS = 256
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scene", default="scenes/valley.xml")
-    ap.add_argument("--out", default="reports/fit")
+    ap.add_argument("--out", default="out/fit")
     a = ap.parse_args(argv)
     from fogref.atomic import write_text_atomic as write_text
     from fogref.mapping.fit import sun_elevation

@@ -185,7 +185,7 @@ class Options:
         "keep DirectionalInscatteringStartDistance 0", api=FIT, api_name="fit_start", negates=True
     )
     lobe_table: bool = switch("also tabulate the best lobe for g = -0.9..0.9")
-    out: str = option("reports/fit", "folder of the lobe table", check=PathArg())
+    out: str = option("out/fit", "folder of the lobe table", check=PathArg())
 
 
 def check_physical(pf, source: str) -> None:

@@ -24,7 +24,7 @@ UNREAL = "Unreal settings of the study's model"
 @dataclass
 class Options:
     exr: str = option("out/valley.exr", "ground-truth EXR", positional=True, check=PathArg(), metavar="EXR")
-    out: str = option("reports/unreal_study", "report folder", check=PathArg(), api=STUDY, api_name="out_dir")
+    out: str = option("out/unreal_study", "report folder", check=PathArg(), api=STUDY, api_name="out_dir")
     renders: str = option(
         "out/study",
         "cache folder of the budget's extra renders",

@@ -174,7 +174,7 @@ def _overrides(truth: Truth) -> dict:
 
 def run_study(
     exr,
-    out_dir="reports/unreal_study",
+    out_dir="out/unreal_study",
     renders_dir="out/study",
     scene: str | None = None,
     compare_report: bool = True,
