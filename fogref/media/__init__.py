@@ -3,6 +3,7 @@
 * :mod:`~fogref.media.protocol`      the height-profile protocol, the profile registry, parameter parsers
 * :mod:`~fogref.media.medium`        :class:`FogMedium`, :class:`ExpLayer` (exponential, homogeneous, box)
 * :mod:`~fogref.media.profiles`      :class:`HDRPLayer`, :class:`PowerLawLayer`
+* :mod:`~fogref.media.ue_pathtracer` :class:`UEPathTracerLayer`, :class:`Cylinder` (Unreal's path-traced fog)
 * :mod:`~fogref.media.params`        :func:`medium_from_params` (the ``heightfog`` XML parameters)
 * :mod:`~fogref.media.closed_form`   optical depth, free flight, ``phi``/``psi``, HG phase
 * :mod:`~fogref.media.single_scatter` closed-form and sampled sun single scattering
@@ -15,7 +16,8 @@ from fogref.media.params import medium_from_params
 from fogref.media.profiles import HDRPLayer, PowerLawLayer
 from fogref.media.protocol import PROFILES, HeightProfile, register_profile, rgb
 from fogref.media.single_scatter import single_scatter_sun
+from fogref.media.ue_pathtracer import Cylinder, UEPathTracerLayer
 
-__all__ = ["TAU_MAX", "NP", "PROFILES", "Box", "ExpLayer", "FogMedium", "HDRPLayer", "HeightProfile",
+__all__ = ["TAU_MAX", "NP", "PROFILES", "Box", "Cylinder", "ExpLayer", "FogMedium", "HDRPLayer", "HeightProfile",
            "PowerLawLayer", "drjit_ops", "hg_phase", "medium_from_params", "phi", "psi", "register_profile",
-           "rgb", "single_scatter_sun"]
+           "rgb", "single_scatter_sun", "UEPathTracerLayer"]

@@ -170,10 +170,55 @@ register_profile("box", ExpLayer.homogeneous_from_params, needs_bounds=True)
 
 @dataclass(frozen=True)
 class Box:
-    """Axis-aligned box [m]: ``lo`` and ``hi`` corners, each (x, y, z)."""
+    """Axis-aligned box [m]: ``lo`` and ``hi`` corners, each (x, y, z).
+
+    A bounds object of :class:`FogMedium` (like :class:`fogref.media.ue_pathtracer.Cylinder`):
+    ``lo``/``hi`` (its bounding box), ``validate(src)``, ``inside(ops, p)`` and
+    ``clip(ops, o, d)``, the ray interval inside it in closed form.
+
+    Examples
+    --------
+    >>> from fogref.media import NP
+    >>> t0, t1 = Box((0, 0, 0), (10, 10, 10)).clip(NP, (-5.0, 5.0, 5.0), (1.0, 0.0, 0.0))
+    >>> float(t0), float(t1)
+    (5.0, 15.0)
+    """
 
     lo: tuple
     hi: tuple
+
+    def validate(self, src: str) -> Box:
+        """This box with float corners; ParameterError naming 'bounds' unless lo < hi per axis."""
+        lo, hi = tuple(map(float, self.lo)), tuple(map(float, self.hi))
+        if len(lo) != 3 or len(hi) != 3 or any(a >= b for a, b in zip(lo, hi)):
+            raise ParameterError(src, "bounds", f"need lo < hi per axis, got {lo}, {hi}")
+        return Box(lo, hi)
+
+    def inside(self, ops: Any, p: Any) -> Any:
+        """Whether the points ``p`` (3-sequence of arrays) lie in the closed box."""
+        m = True
+        for a in range(3):
+            m = m & (p[a] >= ops.param(self.lo[a], a)) & (p[a] <= ops.param(self.hi[a], a))
+        return m
+
+    def clip(self, ops: Any, o: Any, d: Any) -> Any:
+        """Ray interval ``[t0, t1]`` (t0 >= 0) inside the box (slabs); ``t1 < t0`` if none."""
+        t0, t1 = 0.0, ops.largest
+        for a in range(3):
+            lo, hi = ops.param(self.lo[a], a), ops.param(self.hi[a], a)
+            da = d[a]
+            par = ops.abs(da) < 1e-30
+            inv = 1.0 / ops.where(par, 1.0, da)
+            ta = (lo - o[a]) * inv
+            tb = (hi - o[a]) * inv
+            near = ops.minimum(ta, tb)
+            far = ops.maximum(ta, tb)
+            outside = (o[a] < lo) | (o[a] > hi)
+            near = ops.where(par, ops.where(outside, ops.largest, -ops.largest), near)
+            far = ops.where(par, ops.where(outside, -ops.largest, ops.largest), far)
+            t0 = ops.maximum(t0, near)
+            t1 = ops.minimum(t1, far)
+        return t0, t1
 
 
 @dataclass(frozen=True)
@@ -185,7 +230,9 @@ class FogMedium:
     g:       Henyey–Greenstein asymmetry, -0.999 to 0.999.
     layers:  1 to 4 :class:`~fogref.media.protocol.HeightProfile` layers; empty
              layers are dropped (one is kept if all are empty).
-    bounds:  optional :class:`Box`; the fog is 0 outside it.
+    bounds:  optional :class:`Box` (or another convex bounds object with the same
+             methods, e.g. :class:`fogref.media.ue_pathtracer.Cylinder`); the fog
+             is 0 outside it.
 
     Examples
     --------
@@ -200,7 +247,7 @@ class FogMedium:
     albedo: Any = (0.9, 0.9, 0.9)  # likewise
     g: float = 0.0
     layers: tuple = (ExpLayer(),)
-    bounds: Box | None = None
+    bounds: Any = None
     source: str = field(default="<FogMedium>", compare=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -218,10 +265,7 @@ class FogMedium:
         kept = tuple(L for L in layers if not L.is_empty)
         object.__setattr__(self, "layers", kept or layers[:1])
         if self.bounds is not None:
-            lo, hi = tuple(map(float, self.bounds.lo)), tuple(map(float, self.bounds.hi))
-            if len(lo) != 3 or len(hi) != 3 or any(a >= b for a, b in zip(lo, hi)):
-                raise ParameterError(src, "bounds", f"need lo < hi per axis, got {lo}, {hi}")
-            object.__setattr__(self, "bounds", Box(lo, hi))
+            object.__setattr__(self, "bounds", self.bounds.validate(src))
 
     # -- what the scene needs (trace-time specialisation) ---------------------
     @property
@@ -272,34 +316,15 @@ class FogMedium:
 
     def _inside(self, ops: Any, p: Any) -> Any:
         assert self.bounds is not None  # only called on bounded fog
-        lo, hi = self.bounds.lo, self.bounds.hi
-        m = True
-        for a in range(3):
-            m = m & (p[a] >= ops.param(lo[a], a)) & (p[a] <= ops.param(hi[a], a))
-        return m
+        return self.bounds.inside(ops, p)
 
-    # -- clipping to the box -------------------------------------------------
+    # -- clipping to the bounds ----------------------------------------------
     @quiet_numpy
     def clip(self, ops: Any, o: Any, d: Any) -> Any:
         """Ray interval ``[t0, t1]`` (t0 >= 0) inside the bounds; ``t1 < t0`` if none."""
         if self.bounds is None:
             return 0.0, ops.largest
-        t0, t1 = 0.0, ops.largest
-        for a in range(3):
-            lo, hi = ops.param(self.bounds.lo[a], a), ops.param(self.bounds.hi[a], a)
-            da = d[a]
-            par = ops.abs(da) < 1e-30
-            inv = 1.0 / ops.where(par, 1.0, da)
-            ta = (lo - o[a]) * inv
-            tb = (hi - o[a]) * inv
-            near = ops.minimum(ta, tb)
-            far = ops.maximum(ta, tb)
-            outside = (o[a] < lo) | (o[a] > hi)
-            near = ops.where(par, ops.where(outside, ops.largest, -ops.largest), near)
-            far = ops.where(par, ops.where(outside, -ops.largest, ops.largest), far)
-            t0 = ops.maximum(t0, near)
-            t1 = ops.minimum(t1, far)
-        return t0, t1
+        return self.bounds.clip(ops, o, d)
 
     # -- optical depth -------------------------------------------------------
     def _layers_depth(self, ops: Any, oy: Any, dy: Any, t: Any) -> Any:

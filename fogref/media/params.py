@@ -63,4 +63,8 @@ def medium_from_params(params: dict, src: str = "<params>") -> FogMedium:
     if (lo is None) != (hi is None):
         raise ParameterError(src, "bounds_max" if hi is None else "bounds_min", "give both bounds or none")
     bounds = Box(lo, hi) if lo is not None and hi is not None else None
+    if entry.parse_bounds is not None:
+        if bounds is not None:
+            raise ParameterError(src, "bounds_min", f"profile '{name}' has its own bounds; give no bounds_min/max")
+        bounds = entry.parse_bounds(params, src)
     return FogMedium(sigma_t=sigma_t, albedo=albedo, g=g, layers=tuple(layers), bounds=bounds, source=src)

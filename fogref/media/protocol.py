@@ -74,19 +74,23 @@ class HeightProfile(Protocol):
 
 @dataclass(frozen=True)
 class ProfileEntry:
-    """A registered profile: its name, its parser ``(params, src) -> layers`` and
-    whether it needs ``bounds_min``/``bounds_max``."""
+    """A registered profile: its name, its parser ``(params, src) -> layers``,
+    whether it needs ``bounds_min``/``bounds_max``, and optionally its own bounds
+    parser ``(params, src) -> bounds object or None`` (e.g. Unreal's path-traced
+    fog: a camera-centred cylinder, :mod:`fogref.media.ue_pathtracer`)."""
 
     name: str
     parse: Callable[[dict, str], tuple]
     needs_bounds: bool = False
+    parse_bounds: Callable[[dict, str], Any] | None = None
 
 
 #: XML profile name -> :class:`ProfileEntry` (filled by :func:`register_profile`).
 PROFILES: dict[str, ProfileEntry] = {}
 
 
-def register_profile(name: str, parse: Callable[[dict, str], tuple], needs_bounds: bool = False) -> None:
+def register_profile(name: str, parse: Callable[[dict, str], tuple], needs_bounds: bool = False,
+                     parse_bounds: Callable[[dict, str], Any] | None = None) -> None:
     """Make ``profile="<name>"`` parse with ``parse(params, src) -> tuple of layers``.
 
     Parameters
@@ -98,6 +102,10 @@ def register_profile(name: str, parse: Callable[[dict, str], tuple], needs_bound
         :class:`HeightProfile` layers; raises ParameterError on a bad value.
     needs_bounds : bool
         The profile is only meaningful inside a box (``box``).
+    parse_bounds : callable, optional
+        ``parse_bounds(params, src)`` returning the profile's own bounds object
+        (see :class:`fogref.media.medium.Box`) or None; such a profile takes no
+        ``bounds_min``/``bounds_max``.
 
     Examples
     --------
@@ -108,7 +116,7 @@ def register_profile(name: str, parse: Callable[[dict, str], tuple], needs_bound
     (ExpLayer(density=1.0, falloff=0.0, height=0.0),)
     >>> del PROFILES["doc_example"]
     """
-    PROFILES[name] = ProfileEntry(name, parse, needs_bounds)
+    PROFILES[name] = ProfileEntry(name, parse, needs_bounds, parse_bounds)
 
 
 def profile_entry(name: str, src: str = "<params>") -> ProfileEntry:
