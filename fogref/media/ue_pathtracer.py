@@ -9,10 +9,18 @@ The editor settings -> these values are :mod:`fogref.mapping.unreal_pathtracer`.
 Sources
 -------
 [PT] ``Engine/Source/Runtime/Renderer/Private/PathTracing.cpp`` (UE 5.x),
-``FPathTracingFogParameters`` and ``PrepareFogParameters``, read in the public
-mirror ``unicorn2022/UE5.8.0`` (same text in ``lakeone/UE5.51MagicM``); the 5.6
-version switch quoted in ``jambuttenshaw/HVPT``
-``Source/HVPT/Private/Rendering/Helpers.cpp`` (a copy of ``PrepareFogParameters``).
+``CVarPathTracingFogDensityClamp``, ``FPathTracingFogParameters`` and
+``PrepareFogParameters``, read in the public mirror ``unicorn2022/UE5.8.0`` (commit
+5d9a05c); the pre-5.6 constant in the ``#if ENGINE_MINOR_VERSION >= 6`` switch of
+``jambuttenshaw/HVPT`` ``Source/HVPT/Private/Rendering/Helpers.cpp`` (a plug-in's
+copy of ``PrepareFogParameters``).
+[SC] ``Engine/Source/Runtime/Renderer/Private/SceneCore.cpp``
+(``FExponentialHeightFogSceneInfo``'s constructor, ``unicorn2022/UE5.8.0``): the
+editor density and falloff / 1000, ``FogData[1].Height = Height +
+SecondFogData.FogHeightOffset``, ``VolumetricFogScatteringDistribution`` clamped to
+[-0.99, 0.99], ``VolumetricFogAlbedo = FLinearColor(FColor)``,
+``VolumetricFogExtinctionScale = max(., 0)``, ``VolumetricFogDistance =
+max(VolumetricFogStartDistance + VolumetricFogDistance, 0)``.
 [FOG] ``Engine/Shaders/Private/PathTracing/Volume/PathTracingFog.ush``: only its
 first lines could be read (the parameter block and the start of ``FogIntersect``,
 a capped vertical cylinder from (FogCenter, FogMinZ) to (FogCenter, FogMaxZ) of
@@ -22,9 +30,8 @@ transmittance functions were not in the searchable index.
 transmittance is ``FogGetTransmittance`` (analytic) or a ratio-tracking loop over
 ``FogGetDensity`` inside ``FogIntersect``'s interval.
 
-Verified in [PT] (Unreal units: cm, z-up; ``FogData[i]`` are the scene-info values,
-whose density and falloff are the editor values / 1000 per [PT]'s own comment
-"the factor of 1000.0 that is applied in FExponentialHeightFogSceneInfo()")::
+Verified in [PT] and [SC] (Unreal units: cm, z-up; ``FogData[i]`` are [SC]'s values,
+the editor density and falloff / 1000)::
 
     FogDensity_i  = 0.5 * FogData[i].Density * VolumetricFogExtinctionScale   (1/cm)
                     ("MatchHeightFogFactor = .5", "See VolumetricFog.usf")
