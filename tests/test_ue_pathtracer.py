@@ -57,7 +57,8 @@ def _rho_ref(layers, cyl, p):
 def _wall_roots(cyl, o, d, t_end):
     """Parameters where the ray crosses the cylinder's wall, by bisection on a fine grid."""
     def f(t):
-        return (o[0] + t * d[0] - cyl.center_x) ** 2 + (o[2] + t * d[2] - cyl.center_z) ** 2 - mp.mpf(cyl.radius) ** 2
+        dx, dz = o[0] + t * d[0] - cyl.center_x, o[2] + t * d[2] - cyl.center_z
+        return dx ** 2 + dz ** 2 - mp.mpf(cyl.radius) ** 2
 
     grid = np.linspace(0.0, t_end, 4001)
     vals = [f(mp.mpf(t)) for t in grid]
@@ -152,7 +153,8 @@ def test_free_flight_inverts_the_optical_depth_per_layer():
                 if e >= total:
                     assert t == NP.largest  # escapes through the cylinder
                 else:
-                    assert SIGMA * float(m.optical_depth(NP, o, d, t)) == pytest.approx(e, rel=1e-9, abs=1e-12)
+                    tau = SIGMA * float(m.optical_depth(NP, o, d, t))
+                    assert tau == pytest.approx(e, rel=1e-9, abs=1e-12)
 
 
 def test_density_is_clamped_and_zero_outside():
@@ -182,7 +184,8 @@ def test_params_parse_and_errors():
 
 def test_mapping_follows_prepare_fog_parameters():
     ue = UE4FogParams(FogDensity=0.05, FogHeightFalloff=0.0, FogHeight=250.0,
-                      SecondFogData=SecondFogData(FogDensity=0.02, FogHeightFalloff=0.5, FogHeightOffset=-300.0))
+                      SecondFogData=SecondFogData(FogDensity=0.02, FogHeightFalloff=0.5,
+                                                  FogHeightOffset=-300.0))
     pt = UEPathTracerSettings(VolumetricFogExtinctionScale=2.0, VolumetricFogDistance=5000.0,
                               VolumetricFogStartDistance=1000.0, VolumetricFogScatteringDistribution=1.5,
                               FogDensityClamp=4.0)

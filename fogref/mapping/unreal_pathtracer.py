@@ -35,7 +35,9 @@ from fogref.media import ExpLayer, FogMedium, medium_from_params, rgb
 from fogref.media.ue_pathtracer import DENSITY_CLAMP_DEFAULT, DENSITY_CLAMP_RANGE
 from fogref.models.ue4 import UE4FogParams
 
-__all__ = ["CM_PER_M", "DROPPED", "PT_DENSITY_FACTOR", "UEPathTracerSettings", "density_clamp", "exact_medium",
+__all__ = ["CM_PER_M", "DROPPED", "PT_DENSITY_FACTOR", "UEPathTracerSettings", "density_clamp",
+           "exact_fog_params",
+           "exact_medium",
            "pathtracer_fog_params", "pathtracer_layers", "pathtracer_medium", "rewrite_scene",
            "settings_from"]
 
@@ -50,7 +52,8 @@ G_RANGE = (-0.99, 0.99)
 #: Editor values of the fog component the path tracer does not use ([PT]'s
 #: ``FPathTracingFogParameters`` has no field for them): name -> what it does in raster.
 DROPPED = {
-    "FogInscatteringColor": "raster inscattering colour (the path tracer lights the fog with the scene's lights)",
+    "FogInscatteringColor": "raster inscattering colour (the path tracer lights the fog with the scene's "
+                            "lights)",
     "InscatteringColorCubemap": "raster inscattering cubemap",
     "DirectionalInscatteringColor": "raster sun lobe colour (the path tracer uses the HG phase)",
     "DirectionalInscatteringExponent": "raster sun lobe exponent",
@@ -107,8 +110,8 @@ class UEPathTracerSettings:
             if not math.isfinite(v):
                 raise ParameterError(src, name, f"value {v} must be finite")
             object.__setattr__(self, name, v)
-        object.__setattr__(self, "VolumetricFogAlbedo", rgb(self.VolumetricFogAlbedo, "VolumetricFogAlbedo", src,
-                                                              0.0, 1.0))
+        albedo = rgb(self.VolumetricFogAlbedo, "VolumetricFogAlbedo", src, 0.0, 1.0)
+        object.__setattr__(self, "VolumetricFogAlbedo", albedo)
         if self.radius_cm <= 0:
             raise ParameterError(src, "VolumetricFogDistance",
                                  f"VolumetricFogStartDistance + VolumetricFogDistance = {self.radius_cm} cm: "
@@ -187,7 +190,8 @@ def pathtracer_fog_params(ue: UE4FogParams, pt: UEPathTracerSettings, camera) ->
     (s0, b0, h0), (s1, b1, h1) = pathtracer_layers(ue, pt)
     ref = max(s0, s1)
     d0, d1 = (s0 / ref, s1 / ref) if ref > 0 else (1.0, 0.0)
-    return {"profile": "ue_pathtracer", "sigma_t": [ref] * 3, "albedo": list(pt.VolumetricFogAlbedo), "g": pt.g,
+    return {"profile": "ue_pathtracer", "sigma_t": [ref] * 3, "albedo": list(pt.VolumetricFogAlbedo),
+            "g": pt.g,
             "density": d0, "falloff": b0, "height": h0, "density2": d1, "falloff2": b1, "height2": h1,
             "clamp": pt.density_clamp, "radius": pt.radius_cm / CM_PER_M, "center": list(_camera(camera))}
 
@@ -224,6 +228,25 @@ def exact_medium(ue: UE4FogParams, pt: UEPathTracerSettings) -> FogMedium:
                      source="<unreal_pathtracer exact>")
 
 
+def exact_fog_params(ue: UE4FogParams, pt: UEPathTracerSettings) -> dict:
+    """The ``heightfog`` parameters (profile ``"exponential"``) of :func:`exact_medium`.
+
+    Examples
+    --------
+    >>> p = exact_fog_params(UE4FogParams(), UEPathTracerSettings())
+    >>> p["profile"], p["density2"], "center" in p
+    ('exponential', 0.0, False)
+    """
+    m = exact_medium(ue, pt)
+    out = {"profile": "exponential", "sigma_t": list(m.sigma_t), "albedo": list(m.albedo), "g": m.g}
+    L0 = m.layers[0]
+    out.update(density=L0.density, falloff=L0.falloff, height=L0.height, density2=0.0)
+    if len(m.layers) > 1:
+        L1 = m.layers[1]
+        out.update(density2=L1.density, falloff2=L1.falloff, height2=L1.height)
+    return out
+
+
 def _tag(value) -> tuple[str, str]:
     if isinstance(value, str):
         return "string", value
@@ -233,9 +256,10 @@ def _tag(value) -> tuple[str, str]:
 
 
 def rewrite_scene(src: str | Path, dst: str | Path, ue: UE4FogParams, pt: UEPathTracerSettings,
-                  camera=None) -> dict:
+                  camera=None, params: dict | None = None) -> dict:
     """Copy the fogref scene ``src`` to ``dst`` with its ``heightfog`` replaced by UE's
-    path-traced fog of ``ue`` and ``pt``; returns the new fog parameters.
+    path-traced fog of ``ue`` and ``pt`` (or by ``params``, e.g. :func:`exact_fog_params`);
+    returns the new fog parameters.
 
     ``camera`` [m, y-up]: the cylinder's centre; default the scene's ``$camera_origin``
     ``<default>`` (the ``center`` is then written as ``$camera_origin``, so
@@ -247,13 +271,15 @@ def rewrite_scene(src: str | Path, dst: str | Path, ue: UE4FogParams, pt: UEPath
     med = next((m for m in root.iter("medium") if m.get("type") == "heightfog"), None)
     if med is None:
         raise ParameterError(str(src), "medium", "the scene has no heightfog medium to replace")
-    follow = camera is None
+    follow = camera is None and params is None
     if follow:
         d = next((e for e in root.findall("default") if e.get("name") == "camera_origin"), None)
         if d is None:
-            raise ParameterError(str(src), "camera_origin", "no $camera_origin default: give the camera position")
+            raise ParameterError(str(src), "camera_origin",
+                                 "no $camera_origin default: give the camera position")
         camera = [float(x) for x in d.get("value", "").replace(",", " ").split()]
-    params = pathtracer_fog_params(ue, pt, camera)
+    if params is None:
+        params = pathtracer_fog_params(ue, pt, camera)
     for child in [c for c in med if c.get("name") is not None and c.tag != "phase"]:
         med.remove(child)
     for k, v in params.items():

@@ -18,6 +18,7 @@ from fogref.media.protocol import PROFILES, HeightProfile, register_profile, rgb
 from fogref.media.single_scatter import single_scatter_sun
 from fogref.media.ue_pathtracer import Cylinder, UEPathTracerLayer
 
-__all__ = ["TAU_MAX", "NP", "PROFILES", "Box", "Cylinder", "ExpLayer", "FogMedium", "HDRPLayer", "HeightProfile",
+__all__ = ["TAU_MAX", "NP", "PROFILES", "Box", "Cylinder", "ExpLayer", "FogMedium", "HDRPLayer",
+           "HeightProfile",
            "PowerLawLayer", "drjit_ops", "hg_phase", "medium_from_params", "phi", "psi", "register_profile",
            "rgb", "single_scatter_sun", "UEPathTracerLayer"]

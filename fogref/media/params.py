@@ -65,6 +65,7 @@ def medium_from_params(params: dict, src: str = "<params>") -> FogMedium:
     bounds = Box(lo, hi) if lo is not None and hi is not None else None
     if entry.parse_bounds is not None:
         if bounds is not None:
-            raise ParameterError(src, "bounds_min", f"profile '{name}' has its own bounds; give no bounds_min/max")
+            raise ParameterError(src, "bounds_min",
+                                 f"profile '{name}' has its own bounds; give no bounds_min/max")
         bounds = entry.parse_bounds(params, src)
     return FogMedium(sigma_t=sigma_t, albedo=albedo, g=g, layers=tuple(layers), bounds=bounds, source=src)

@@ -135,7 +135,8 @@ class UEPathTracerLayer:
         (UEPathTracerLayer(density=1.0, falloff=0.02, height=0.0, clamp=4.0),)
         """
         clamp = number(params, "clamp", DENSITY_CLAMP_DEFAULT, src, *DENSITY_CLAMP_RANGE)
-        layers = [cls(number(params, "density", 1.0, src, 0.0, 1e6), number(params, "falloff", 0.01, src, 0.0, 1e3),
+        layers = [cls(number(params, "density", 1.0, src, 0.0, 1e6),
+                      number(params, "falloff", 0.01, src, 0.0, 1e3),
                       number(params, "height", 0.0, src, -1e7, 1e7), clamp)]
         d2 = number(params, "density2", 0.0, src, 0.0, 1e6)
         if d2 > 0:
@@ -241,7 +242,8 @@ class Cylinder:
                 raise ParameterError(src, f"cylinder.{name}", f"value {v} outside [{lo:g}, {hi:g}]")
             vals[name] = v
         if not vals["y_min"] < vals["y_max"]:
-            raise ParameterError(src, "cylinder.y_max", f"value {vals['y_max']} must exceed y_min {vals['y_min']}")
+            raise ParameterError(src, "cylinder.y_max",
+                                 f"value {vals['y_max']} must exceed y_min {vals['y_min']}")
         return Cylinder(**vals)
 
     def inside(self, ops: Ops, p: Any) -> Any:
@@ -249,7 +251,8 @@ class Cylinder:
         px = p[0] - ops.param(self.center_x, 0)
         pz = p[2] - ops.param(self.center_z, 2)
         r = ops.param(self.radius)
-        return ((px * px + pz * pz) <= r * r) & (p[1] >= ops.param(self.y_min, 1)) & (p[1] <= ops.param(self.y_max, 1))
+        in_y = (p[1] >= ops.param(self.y_min, 1)) & (p[1] <= ops.param(self.y_max, 1))
+        return ((px * px + pz * pz) <= r * r) & in_y
 
     def clip(self, ops: Ops, o: Any, d: Any) -> Any:
         """Ray interval ``[t0, t1]`` (t0 >= 0) inside the cylinder; ``t1 < t0`` if none.
