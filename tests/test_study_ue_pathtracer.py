@@ -38,9 +38,13 @@ def test_closed_form_split_sees_the_cylinder_and_the_clamp():
     # no wall in reach; what is left is the clamp far below (downward views) and the cylinder's top,
     # put by Unreal where the density falls to 1e-6 per cm (upward views): under 1 %
     assert 1e-4 < near["opacity_rel_max"] < 0.01
-    wall = departure_row(closed_form_split(ue, UEPathTracerSettings(VolumetricFogDistance=3000.0,
-                                                                    FogDensityClamp=256), cam, views))
-    assert wall["opacity_rel_max"] > 0.01 and wall["horizon_first_departure_m"] == 50.0
+    wall_30m = UEPathTracerSettings(VolumetricFogDistance=3000.0, FogDensityClamp=256)
+    wall = departure_row(closed_form_split(UE4FogParams(FogDensity=0.05, FogHeightFalloff=1.0), wall_30m, cam, views))
+    assert wall["opacity_rel_max"] > 0.01 and wall["opacity_nearest_departure_m"] == 50.0
+    # fog height 30 m, radius 30 m: the cylinder's floor (FogMinZ = FogHeight - radius) is the ground,
+    # so downward views already depart at 10 m
+    floor = departure_row(closed_form_split(ue, wall_30m, cam, views))
+    assert floor["opacity_nearest_departure_m"] == 10.0
     clamp_1 = UEPathTracerSettings(VolumetricFogDistance=1e7, FogDensityClamp=1.0)
     clamp = departure_row(closed_form_split(ue, clamp_1, cam, views))
     assert clamp["opacity_rel_max"] > 0.01  # clamp height = fog height 30 m, above the camera

@@ -247,11 +247,12 @@ def exact_fog_params(ue: UE4FogParams, pt: UEPathTracerSettings) -> dict:
     return out
 
 
-def _tag(value) -> tuple[str, str]:
+def _tag(name: str, value) -> tuple[str, str]:
+    """The XML tag and text of one ``heightfog`` parameter (``center``: a point; colours: rgb)."""
     if isinstance(value, str):
         return "string", value
     if isinstance(value, (list, tuple)):
-        return ("point" if len(value) == 3 else "rgb"), ", ".join(repr(float(x)) for x in value)
+        return ("point" if name == "center" else "rgb"), ", ".join(repr(float(x)) for x in value)
     return "float", repr(float(value))
 
 
@@ -283,7 +284,7 @@ def rewrite_scene(src: str | Path, dst: str | Path, ue: UE4FogParams, pt: UEPath
     for child in [c for c in med if c.get("name") is not None and c.tag != "phase"]:
         med.remove(child)
     for k, v in params.items():
-        tag, text = _tag(v)
+        tag, text = _tag(k, v)
         if k == "center" and follow:
             text = "$camera_origin"
         ET.SubElement(med, tag, name=k, value=text)
@@ -299,3 +300,33 @@ def settings_from(ue: UE4FogParams | None = None, **pt: Any) -> tuple[UE4FogPara
     rest = {k: v for k, v in pt.items() if k not in ue_fields}
     return replace(ue, **ue_fields), UEPathTracerSettings(**rest)
 
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m fogref.mapping.unreal_pathtracer SRC.xml DST.xml [NAME=VALUE ...]``: write DST,
+    the scene SRC with UE's path-traced fog for the given editor values (names of
+    :class:`~fogref.models.ue4.UE4FogParams` and :class:`UEPathTracerSettings`, Unreal units;
+    ``exact=1`` writes the exact fog instead); then ``fogref render DST.xml``."""
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="python -m fogref.mapping.unreal_pathtracer", description=main.__doc__)
+    ap.add_argument("src")
+    ap.add_argument("dst")
+    ap.add_argument("values", nargs="*", metavar="NAME=VALUE")
+    a = ap.parse_args(argv)
+    kw: dict[str, Any] = {}
+    for item in a.values:
+        name, sep, text = item.partition("=")
+        if not sep:
+            raise ParameterError("<command line>", item, "expected NAME=VALUE")
+        kw[name] = [float(x) for x in text.replace(",", " ").split()] if name == "VolumetricFogAlbedo" else float(text)
+    exact = bool(kw.pop("exact", 0.0))
+    ue, pt = settings_from(**kw)
+    params = exact_fog_params(ue, pt) if exact else None
+    rewrite_scene(a.src, a.dst, ue, pt, params=params)
+    print(f"wrote {a.dst}: {'the exact fog' if exact else 'UE path-traced fog'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -100,8 +100,8 @@ class UEPathTracerLayer:
     """One layer of Unreal's path-traced fog: ``density * min(exp(-falloff (y - height)), clamp)``.
 
     density: relative scale at ``height`` (multiplies ``sigma_t``), 0 to 1e6.
-    falloff: b [1/m], 0 (homogeneous: no clamp applies) to 1e3; Unreal's
-             ``2^(-F z)`` per cm is ``b = 100 ln(2) F``.
+    falloff: b [1/m], 1e-6 to 1e3 (Unreal floors it at 6.9e-5: never homogeneous);
+             Unreal's ``2^(-F z)`` per cm is ``b = 100 ln(2) F``.
     height:  h [m], -1e7 to 1e7: where the relative density is ``density``.
     clamp:   C, 1 to 256 (``r.PathTracing.FogDensityClamp``): the density never
              exceeds ``C * density``; below ``clamp_height`` it is that constant.
@@ -136,11 +136,11 @@ class UEPathTracerLayer:
         """
         clamp = number(params, "clamp", DENSITY_CLAMP_DEFAULT, src, *DENSITY_CLAMP_RANGE)
         layers = [cls(number(params, "density", 1.0, src, 0.0, 1e6),
-                      number(params, "falloff", 0.01, src, 0.0, 1e3),
+                      number(params, "falloff", 0.01, src, 1e-6, 1e3),
                       number(params, "height", 0.0, src, -1e7, 1e7), clamp)]
         d2 = number(params, "density2", 0.0, src, 0.0, 1e6)
         if d2 > 0:
-            layers.append(cls(d2, number(params, "falloff2", 0.01, src, 0.0, 1e3),
+            layers.append(cls(d2, number(params, "falloff2", 0.01, src, 1e-6, 1e3),
                               number(params, "height2", 0.0, src, -1e7, 1e7), clamp))
         return tuple(layers)
 
@@ -161,8 +161,8 @@ class UEPathTracerLayer:
 
     @property
     def is_constant(self) -> bool:
-        """Constant everywhere when ``falloff == 0``."""
-        return self.falloff == 0
+        """Never (``falloff > 0``)."""
+        return False
 
     @property
     def is_empty(self) -> bool:
@@ -176,7 +176,7 @@ class UEPathTracerLayer:
 
     def validate(self, src: str, i: int) -> None:
         check_layer_param(src, i, "density", self.density, 0.0, 1e6)
-        check_layer_param(src, i, "falloff", self.falloff, 0.0, 1e3)
+        check_layer_param(src, i, "falloff", self.falloff, 1e-6, 1e3)
         check_layer_param(src, i, "height", self.height, -1e7, 1e7)
         check_layer_param(src, i, "clamp", self.clamp, *DENSITY_CLAMP_RANGE)
 

@@ -124,7 +124,7 @@ def closed_form_split(ue: UE4FogParams, pt: UEPathTracerSettings, camera, views:
     views = views or sample_views(camera)
     m_pt, m_ex = pathtracer_medium(ue, pt, camera), exact_medium(ue, pt)
     o, d, D = _rays(views)
-    out: dict[str, Any] = {"views": views, "T_raster": _raster_T(ue, views),
+    out: dict[str, Any] = {"views": views, "radius_m": m_pt.bounds.radius, "T_raster": _raster_T(ue, views),
                            "T_pt": m_pt.transmittance(NP, o, d, D)[0],
                            "T_exact": m_ex.transmittance(NP, o, d, D)[0]}
     if sun is not None:
@@ -137,28 +137,35 @@ def closed_form_split(ue: UE4FogParams, pt: UEPathTracerSettings, camera, views:
 
 
 def _rel(a: np.ndarray, b: np.ndarray, floor: float) -> np.ndarray:
-    return np.abs(a - b) / np.maximum(np.abs(b), floor)
+    return np.abs(a - b) / np.maximum(np.abs(b), max(floor, 1e-12))
 
 
 def departure_row(split: dict, threshold: float = 0.01) -> dict:
     """Summary of :func:`closed_form_split`: how far UE's path-traced fog departs from the exact
     fog (and the raster fog from the path-traced one), in the fog's opacity ``1 - T`` (what the
     sky's single scattering ``alpha L_sky (1 - T)`` is proportional to) and in the sun's single
-    scattering; relative to the exact value (floor 1e-3 of the largest)."""
+    scattering; relative to the exact value (floor: 1e-3 of the largest, and 1e-12)."""
     op_pt, op_ex, op_r = 1 - split["T_pt"], 1 - split["T_exact"], 1 - split["T_raster"]
     rel = _rel(op_pt, op_ex, 1e-3 * max(op_ex.max(), 1e-300))
     rel_r = _rel(op_r, op_pt, 1e-3 * max(op_pt.max(), 1e-300))
     v = split["views"]
-    horiz = np.abs(v.d[:, 1]) < 0.05
-    far = np.where(horiz & (rel > threshold) & np.isfinite(v.D), v.D, np.inf)
+    inside = np.isfinite(v.D) & (v.D <= split.get("radius_m", np.inf))
     row = {"opacity_rel_max": float(rel.max()), "opacity_frac_over": float((rel > threshold).mean()),
-           "horizon_first_departure_m": float(far.min()) if np.isfinite(far.min()) else None,
-           "raster_vs_pt_opacity_rel_max": float(rel_r.max()),
+           "opacity_rel_max_inside": float(rel[inside].max()) if inside.any() else None,
+           "opacity_nearest_departure_m": _nearest(v, rel > threshold),
            "raster_vs_pt_opacity_rel_median": float(np.median(rel_r))}
     if "ss_pt" in split:
         rs = _rel(split["ss_pt"], split["ss_exact"], 1e-3 * max(split["ss_exact"].max(), 1e-300))
-        row.update(sun_ss_rel_max=float(rs.max()), sun_ss_frac_over=float((rs > threshold).mean()))
+        row.update(sun_ss_rel_max=float(rs.max()), sun_ss_frac_over=float((rs > threshold).mean()),
+                   sun_ss_nearest_departure_m=_nearest(split["ss_views"], rs > threshold))
     return row
+
+
+def _nearest(views: Views, over: np.ndarray) -> float | None:
+    """The shortest view distance [m] at which some view departs (``inf``: only the sky; None: none)."""
+    if not over.any():
+        return None
+    return float(np.min(views.D[over]))
 
 
 # -- renders -----------------------------------------------------------------------
@@ -265,6 +272,16 @@ def render_split(scene_xml: str | Path, ue: UE4FogParams, pt: UEPathTracerSettin
 
 
 # -- the sweep ---------------------------------------------------------------------
+def _grounded(views: Views, ground: float | None) -> Views:
+    """``views`` with every downward ray stopped at the plane ``y = ground`` [m] (None: no ground)."""
+    if ground is None:
+        return views
+    dy = views.d[:, 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_g = np.where(dy < 0, (float(ground) - views.camera[1]) / dy, np.inf)
+    return Views(views.camera, views.d, np.minimum(views.D, np.where(t_g > 0, t_g, np.inf)))
+
+
 def run_sweep(toml_path: str | Path, out: str | Path | None = None) -> list[dict]:
     """Run the closed-form sweep of ``toml_path`` (``reports/sweeps/ue_pathtracer/SWEEP.toml``)
     and write its table (``results.csv`` and ``results.md`` beside it, or in ``out``)."""
@@ -275,6 +292,7 @@ def run_sweep(toml_path: str | Path, out: str | Path | None = None) -> list[dict
     toml_path = Path(toml_path)
     spec = tomllib.loads(toml_path.read_text())
     fixed = dict(spec.get("fixed", {}))
+    thr = float(spec.get("sweep", {}).get("threshold", 0.01))
     camera = tuple(fixed.pop("camera", (0.0, 2.0, 0.0)))
     sun = spec.get("sun", {}).get("direction")
     sun = None if sun is None else tuple(np.asarray(sun, float) / np.linalg.norm(sun))
@@ -282,10 +300,9 @@ def run_sweep(toml_path: str | Path, out: str | Path | None = None) -> list[dict
     names = list(spec["parameters"])
     grids = [spec["parameters"][n]["values"] for n in names]
     dist = np.geomspace(*v.get("distances", [10, 2e4, 12]))
-    views = sample_views(camera, n_dirs=int(v.get("n_dirs", 400)), distances=dist)
-    sv = sample_views(camera, n_dirs=int(v.get("ss_n_dirs", 64)),
-                      distances=np.geomspace(*v.get("ss_distances", [30, 1e4, 6])))
-    thr = float(spec.get("threshold", 0.01))
+    views = _grounded(sample_views(camera, n_dirs=int(v.get("n_dirs", 400)), distances=dist), v.get("ground"))
+    sv = _grounded(sample_views(camera, n_dirs=int(v.get("ss_n_dirs", 64)),
+                                distances=np.geomspace(*v.get("ss_distances", [30, 1e4, 6]))), v.get("ground"))
     rows = []
     for combo in itertools.product(*grids):
         kw = {**fixed, **dict(zip(names, combo))}
