@@ -39,7 +39,9 @@ def test_closed_form_split_sees_the_cylinder_and_the_clamp():
     # put by Unreal where the density falls to 1e-6 per cm (upward views): under 1 %
     assert 1e-4 < near["opacity_rel_max"] < 0.01
     wall_30m = UEPathTracerSettings(VolumetricFogDistance=3000.0, FogDensityClamp=256)
-    wall = departure_row(closed_form_split(UE4FogParams(FogDensity=0.05, FogHeightFalloff=1.0), wall_30m, cam, views))
+    wall = departure_row(
+        closed_form_split(UE4FogParams(FogDensity=0.05, FogHeightFalloff=1.0), wall_30m, cam, views)
+    )
     assert wall["opacity_rel_max"] > 0.01 and wall["opacity_nearest_departure_m"] == 50.0
     # fog height 30 m, radius 30 m: the cylinder's floor (FogMinZ = FogHeight - radius) is the ground,
     # so downward views already depart at 10 m
@@ -52,8 +54,14 @@ def test_closed_form_split_sees_the_cylinder_and_the_clamp():
 
 def test_render_split_on_a_tiny_image(mitsuba, tmp_path):
     ue = UE4FogParams(FogDensity=0.05, FogHeightFalloff=2.0, FogHeight=2000.0)
-    out = render_split("scenes/valley.xml", ue, UEPathTracerSettings(FogDensityClamp=1.0), tmp_path, spp=16,
-                       overrides={"res": 16, "resy": 9, "max_depth": 2})
+    out = render_split(
+        "scenes/valley.xml",
+        ue,
+        UEPathTracerSettings(FogDensityClamp=1.0),
+        tmp_path,
+        spp=16,
+        overrides={"res": 16, "resy": 9, "max_depth": 2},
+    )
     for k in ("raster_vs_pt", "pt_vs_exact", "raster_vs_exact"):
         s = out[k]
         assert np.isfinite(s.rmse) and np.isfinite(s.noise_floor) and s.noise_floor > 0

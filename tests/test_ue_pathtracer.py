@@ -50,15 +50,17 @@ def _rho_ref(layers, cyl, p):
         return mp.mpf(0)
     if not (cyl.y_min <= y <= cyl.y_max):
         return mp.mpf(0)
-    return sum(mp.mpf(L.density) * min(mp.exp(-mp.mpf(L.falloff) * (y - L.height)), mp.mpf(L.clamp))
-               for L in layers)
+    return sum(
+        mp.mpf(L.density) * min(mp.exp(-mp.mpf(L.falloff) * (y - L.height)), mp.mpf(L.clamp)) for L in layers
+    )
 
 
 def _wall_roots(cyl, o, d, t_end):
     """Parameters where the ray crosses the cylinder's wall, by bisection on a fine grid."""
+
     def f(t):
         dx, dz = o[0] + t * d[0] - cyl.center_x, o[2] + t * d[2] - cyl.center_z
-        return dx ** 2 + dz ** 2 - mp.mpf(cyl.radius) ** 2
+        return dx**2 + dz**2 - mp.mpf(cyl.radius) ** 2
 
     grid = np.linspace(0.0, t_end, 4001)
     vals = [f(mp.mpf(t)) for t in grid]
@@ -86,8 +88,11 @@ def _tau_ref(layers, cyl, sigma, o, d, t_end):
     cuts = sorted(cuts)
     tau = mp.mpf(0)
     for a, b in zip(cuts[:-1], cuts[1:]):
-        tau += mp.quad(lambda t: _rho_ref(layers, cyl, [o[i] + t * d[i] for i in range(3)]), [a, b],
-                       method="gauss-legendre")
+        tau += mp.quad(
+            lambda t: _rho_ref(layers, cyl, [o[i] + t * d[i] for i in range(3)]),
+            [a, b],
+            method="gauss-legendre",
+        )
     return sigma * tau
 
 
@@ -98,14 +103,14 @@ def _unit(v):
 
 # rays: (origin, direction, end distance); every one crosses a clamp height or the wall
 RAYS = [
-    (CAM, _unit([1.0, -0.08, 0.3]), 200.0),        # down through both clamp heights, out of the wall
-    (CAM, _unit([-0.3, -0.02, 1.0]), 80.0),        # nearly level, below both clamp heights, out of the wall
-    (CAM, _unit([0.2, 0.5, -1.0]), 150.0),         # up through the clamp heights (one above CAM), the wall
-    (CAM, _unit([0.0, 1.0, 0.0]), 100.0),          # straight up: the top cap
-    (CAM, _unit([0.0, -1.0, 0.0]), 57.0),          # straight down, ends above the bottom cap
-    (CAM, _unit([1.0, 0.0, 0.0]), 30.0),           # horizontal, ends inside
+    (CAM, _unit([1.0, -0.08, 0.3]), 200.0),  # down through both clamp heights, out of the wall
+    (CAM, _unit([-0.3, -0.02, 1.0]), 80.0),  # nearly level, below both clamp heights, out of the wall
+    (CAM, _unit([0.2, 0.5, -1.0]), 150.0),  # up through the clamp heights (one above CAM), the wall
+    (CAM, _unit([0.0, 1.0, 0.0]), 100.0),  # straight up: the top cap
+    (CAM, _unit([0.0, -1.0, 0.0]), 57.0),  # straight down, ends above the bottom cap
+    (CAM, _unit([1.0, 0.0, 0.0]), 30.0),  # horizontal, ends inside
     ((-90.0, 10.0, -4.0), _unit([1.0, -0.05, 0.02]), 200.0),  # from outside: enters and leaves the wall
-    ((40.0, -20.0, 30.0), _unit([-0.6, 0.3, -0.5]), 120.0),   # inside, below the clamp heights, rising out
+    ((40.0, -20.0, 30.0), _unit([-0.6, 0.3, -0.5]), 120.0),  # inside, below the clamp heights, rising out
 ]
 
 
@@ -113,8 +118,11 @@ RAYS = [
 def test_optical_depth_and_T_match_quadrature(o, d, t_end):
     m = _medium()
     tau_ref = _tau_ref(LAYERS, CYL, SIGMA, o, d, t_end)
-    tau = SIGMA * float(m.optical_depth(NP, tuple(np.array([x]) for x in o), tuple(np.array([x]) for x in d),
-                                        np.array([t_end]))[0])
+    tau = SIGMA * float(
+        m.optical_depth(
+            NP, tuple(np.array([x]) for x in o), tuple(np.array([x]) for x in d), np.array([t_end])
+        )[0]
+    )
     assert float(tau_ref) > 0.05, "the ray must see some fog for the check to mean something"
     assert tau == pytest.approx(float(tau_ref), rel=1e-5)
     T = float(m.transmittance(NP, o, d, t_end)[0])
@@ -126,7 +134,8 @@ def test_ray_to_infinity_is_the_ray_to_the_cylinder_exit():
     o, d = CAM, _unit([1.0, -0.08, 0.3])
     t0, t1 = CYL.clip(NP, o, d)
     assert float(m.optical_depth(NP, o, d, NP.largest)) == pytest.approx(
-        float(m.optical_depth(NP, o, d, float(t1))), rel=1e-12)
+        float(m.optical_depth(NP, o, d, float(t1))), rel=1e-12
+    )
     assert float(t0) == 0.0
 
 
@@ -168,8 +177,14 @@ def test_density_is_clamped_and_zero_outside():
 
 
 def test_params_parse_and_errors():
-    p = {"profile": "ue_pathtracer", "sigma_t": 0.01, "falloff": 0.05, "center": [1, 2, 3], "radius": 30,
-         "clamp": 16}
+    p = {
+        "profile": "ue_pathtracer",
+        "sigma_t": 0.01,
+        "falloff": 0.05,
+        "center": [1, 2, 3],
+        "radius": 30,
+        "clamp": 16,
+    }
     m = medium_from_params(p, "<t>")
     assert isinstance(m.bounds, Cylinder) and m.bounds.center_z == 3.0 and m.layers[0].clamp == 16.0
     with pytest.raises(ParameterError, match="'center'"):
@@ -183,14 +198,21 @@ def test_params_parse_and_errors():
 
 
 def test_mapping_follows_prepare_fog_parameters():
-    ue = UE4FogParams(FogDensity=0.05, FogHeightFalloff=0.0, FogHeight=250.0,
-                      SecondFogData=SecondFogData(FogDensity=0.02, FogHeightFalloff=0.5,
-                                                  FogHeightOffset=-300.0))
-    pt = UEPathTracerSettings(VolumetricFogExtinctionScale=2.0, VolumetricFogDistance=5000.0,
-                              VolumetricFogStartDistance=1000.0, VolumetricFogScatteringDistribution=1.5,
-                              FogDensityClamp=4.0)
+    ue = UE4FogParams(
+        FogDensity=0.05,
+        FogHeightFalloff=0.0,
+        FogHeight=250.0,
+        SecondFogData=SecondFogData(FogDensity=0.02, FogHeightFalloff=0.5, FogHeightOffset=-300.0),
+    )
+    pt = UEPathTracerSettings(
+        VolumetricFogExtinctionScale=2.0,
+        VolumetricFogDistance=5000.0,
+        VolumetricFogStartDistance=1000.0,
+        VolumetricFogScatteringDistribution=1.5,
+        FogDensityClamp=4.0,
+    )
     (s0, b0, h0), (s1, b1, h1) = pathtracer_layers(ue, pt)
-    assert s0 == pytest.approx(100 * 0.5 * 0.05 / 1000 * 2.0)   # per cm -> per m
+    assert s0 == pytest.approx(100 * 0.5 * 0.05 / 1000 * 2.0)  # per cm -> per m
     assert b0 == pytest.approx(100 * math.log(2) * 0.001 / 1000)  # falloff floor 0.001
     assert (h0, h1) == (2.5, -0.5)
     m = pathtracer_medium(ue, pt, (0.0, 1.0, 0.0))
@@ -204,15 +226,20 @@ def test_mapping_follows_prepare_fog_parameters():
     assert m.bounds.y_min == pytest.approx((min(H) - R) / 100.0, rel=1e-12)
     assert m.bounds.y_max == pytest.approx(zmax / 100.0, rel=1e-12)
     assert UEPathTracerSettings(FogDensityClamp=3.0, version=(5, 4)).density_clamp == 8.0
-    assert {"FogInscatteringColor", "DirectionalInscatteringExponent", "StartDistance", "FogMaxOpacity",
-            "FogCutoffDistance"} <= set(DROPPED)
+    assert {
+        "FogInscatteringColor",
+        "DirectionalInscatteringExponent",
+        "StartDistance",
+        "FogMaxOpacity",
+        "FogCutoffDistance",
+    } <= set(DROPPED)
 
 
 def test_exact_medium_equals_pathtracer_fog_where_neither_clamp_nor_cylinder_acts():
     ue, pt = UE4FogParams(FogHeight=-10000.0), UEPathTracerSettings(VolumetricFogDistance=1e6)
     cam = (0.0, 2.0, 0.0)
     pt_m, ex = pathtracer_medium(ue, pt, cam), exact_medium(ue, pt)
-    o, d = cam, _unit([1.0, 0.05, 0.0])   # rising, far above the clamp height, short of the wall
+    o, d = cam, _unit([1.0, 0.05, 0.0])  # rising, far above the clamp height, short of the wall
     a = float(pt_m.optical_depth(NP, o, d, 500.0))
     assert a == pytest.approx(float(ex.optical_depth(NP, o, d, 500.0)), rel=1e-9)
 

@@ -35,11 +35,20 @@ from fogref.media import ExpLayer, FogMedium, medium_from_params, rgb
 from fogref.media.ue_pathtracer import DENSITY_CLAMP_DEFAULT, DENSITY_CLAMP_RANGE
 from fogref.models.ue4 import UE4FogParams
 
-__all__ = ["CM_PER_M", "DROPPED", "PT_DENSITY_FACTOR", "UEPathTracerSettings", "density_clamp",
-           "exact_fog_params",
-           "exact_medium",
-           "pathtracer_fog_params", "pathtracer_layers", "pathtracer_medium", "rewrite_scene",
-           "settings_from"]
+__all__ = [
+    "CM_PER_M",
+    "DROPPED",
+    "PT_DENSITY_FACTOR",
+    "UEPathTracerSettings",
+    "density_clamp",
+    "exact_fog_params",
+    "exact_medium",
+    "pathtracer_fog_params",
+    "pathtracer_layers",
+    "pathtracer_medium",
+    "rewrite_scene",
+    "settings_from",
+]
 
 CM_PER_M = 100.0
 #: [PT] ``MatchHeightFogFactor``: the path tracer's density is half the scene-info density.
@@ -53,7 +62,7 @@ G_RANGE = (-0.99, 0.99)
 #: ``FPathTracingFogParameters`` has no field for them): name -> what it does in raster.
 DROPPED = {
     "FogInscatteringColor": "raster inscattering colour (the path tracer lights the fog with the scene's "
-                            "lights)",
+    "lights)",
     "InscatteringColorCubemap": "raster inscattering cubemap",
     "DirectionalInscatteringColor": "raster sun lobe colour (the path tracer uses the HG phase)",
     "DirectionalInscatteringExponent": "raster sun lobe exponent",
@@ -104,8 +113,13 @@ class UEPathTracerSettings:
 
     def __post_init__(self) -> None:
         src = "<UEPathTracerSettings>"
-        for name in ("VolumetricFogExtinctionScale", "VolumetricFogScatteringDistribution",
-                     "VolumetricFogDistance", "VolumetricFogStartDistance", "FogDensityClamp"):
+        for name in (
+            "VolumetricFogExtinctionScale",
+            "VolumetricFogScatteringDistribution",
+            "VolumetricFogDistance",
+            "VolumetricFogStartDistance",
+            "FogDensityClamp",
+        ):
             v = float(getattr(self, name))
             if not math.isfinite(v):
                 raise ParameterError(src, name, f"value {v} must be finite")
@@ -113,9 +127,12 @@ class UEPathTracerSettings:
         albedo = rgb(self.VolumetricFogAlbedo, "VolumetricFogAlbedo", src, 0.0, 1.0)
         object.__setattr__(self, "VolumetricFogAlbedo", albedo)
         if self.radius_cm <= 0:
-            raise ParameterError(src, "VolumetricFogDistance",
-                                 f"VolumetricFogStartDistance + VolumetricFogDistance = {self.radius_cm} cm: "
-                                 "the path-traced fog would be empty (need > 0)")
+            raise ParameterError(
+                src,
+                "VolumetricFogDistance",
+                f"VolumetricFogStartDistance + VolumetricFogDistance = {self.radius_cm} cm: "
+                "the path-traced fog would be empty (need > 0)",
+            )
 
     @property
     def density_clamp(self) -> float:
@@ -155,8 +172,10 @@ def pathtracer_layers(ue: UE4FogParams, pt: UEPathTracerSettings) -> list[tuple[
     [(0.001, 0.013862944, 0.0), (0.0, 0.013862944, 0.0)]
     """
     sfd = ue.SecondFogData
-    specs = [(ue.FogDensity, ue.FogHeightFalloff, ue.FogHeight),
-             (sfd.FogDensity, sfd.FogHeightFalloff, ue.FogHeight + sfd.FogHeightOffset)]
+    specs = [
+        (ue.FogDensity, ue.FogHeightFalloff, ue.FogHeight),
+        (sfd.FogDensity, sfd.FogHeightFalloff, ue.FogHeight + sfd.FogHeightOffset),
+    ]
     es = max(pt.VolumetricFogExtinctionScale, 0.0)
     out = []
     for d, f, h in specs:
@@ -166,14 +185,14 @@ def pathtracer_layers(ue: UE4FogParams, pt: UEPathTracerSettings) -> list[tuple[
     return out
 
 
-def _camera(camera) -> tuple[float, float, float]:
+def _camera(camera: Any) -> tuple[float, float, float]:
     c = tuple(float(x) for x in camera)
     if len(c) != 3 or not all(math.isfinite(x) for x in c):
         raise ParameterError("<unreal_pathtracer>", "camera", f"expected 3 finite numbers [m], got {camera}")
     return c
 
 
-def pathtracer_fog_params(ue: UE4FogParams, pt: UEPathTracerSettings, camera) -> dict:
+def pathtracer_fog_params(ue: UE4FogParams, pt: UEPathTracerSettings, camera: Any) -> dict:
     """The ``heightfog`` parameters (profile ``"ue_pathtracer"``) of UE's path-traced fog.
 
     ``camera``: the camera position in fogref's frame (m, y-up); the cylinder is
@@ -190,13 +209,24 @@ def pathtracer_fog_params(ue: UE4FogParams, pt: UEPathTracerSettings, camera) ->
     (s0, b0, h0), (s1, b1, h1) = pathtracer_layers(ue, pt)
     ref = max(s0, s1)
     d0, d1 = (s0 / ref, s1 / ref) if ref > 0 else (1.0, 0.0)
-    return {"profile": "ue_pathtracer", "sigma_t": [ref] * 3, "albedo": list(pt.VolumetricFogAlbedo),
-            "g": pt.g,
-            "density": d0, "falloff": b0, "height": h0, "density2": d1, "falloff2": b1, "height2": h1,
-            "clamp": pt.density_clamp, "radius": pt.radius_cm / CM_PER_M, "center": list(_camera(camera))}
+    return {
+        "profile": "ue_pathtracer",
+        "sigma_t": [ref] * 3,
+        "albedo": list(pt.VolumetricFogAlbedo),
+        "g": pt.g,
+        "density": d0,
+        "falloff": b0,
+        "height": h0,
+        "density2": d1,
+        "falloff2": b1,
+        "height2": h1,
+        "clamp": pt.density_clamp,
+        "radius": pt.radius_cm / CM_PER_M,
+        "center": list(_camera(camera)),
+    }
 
 
-def pathtracer_medium(ue: UE4FogParams, pt: UEPathTracerSettings, camera) -> FogMedium:
+def pathtracer_medium(ue: UE4FogParams, pt: UEPathTracerSettings, camera: Any) -> FogMedium:
     """The :class:`~fogref.media.FogMedium` UE's path tracer renders for these settings.
 
     Examples
@@ -221,11 +251,17 @@ def exact_medium(ue: UE4FogParams, pt: UEPathTracerSettings) -> FogMedium:
     (s0, b0, h0), (s1, b1, h1) = pathtracer_layers(ue, pt)
     ref = max(s0, s1)
     if ref <= 0:
-        return FogMedium(sigma_t=0.0, albedo=pt.VolumetricFogAlbedo, g=pt.g, layers=(ExpLayer(),),
-                         source="<unreal_pathtracer exact>")
+        return FogMedium(
+            sigma_t=0.0,
+            albedo=pt.VolumetricFogAlbedo,
+            g=pt.g,
+            layers=(ExpLayer(),),
+            source="<unreal_pathtracer exact>",
+        )
     layers = tuple(ExpLayer(s / ref, b, h) for s, b, h in ((s0, b0, h0), (s1, b1, h1)) if s > 0)
-    return FogMedium(sigma_t=ref, albedo=pt.VolumetricFogAlbedo, g=pt.g, layers=layers,
-                     source="<unreal_pathtracer exact>")
+    return FogMedium(
+        sigma_t=ref, albedo=pt.VolumetricFogAlbedo, g=pt.g, layers=layers, source="<unreal_pathtracer exact>"
+    )
 
 
 def exact_fog_params(ue: UE4FogParams, pt: UEPathTracerSettings) -> dict:
@@ -247,7 +283,7 @@ def exact_fog_params(ue: UE4FogParams, pt: UEPathTracerSettings) -> dict:
     return out
 
 
-def _tag(name: str, value) -> tuple[str, str]:
+def _tag(name: str, value: Any) -> tuple[str, str]:
     """The XML tag and text of one ``heightfog`` parameter (``center``: a point; colours: rgb)."""
     if isinstance(value, str):
         return "string", value
@@ -256,8 +292,14 @@ def _tag(name: str, value) -> tuple[str, str]:
     return "float", repr(float(value))
 
 
-def rewrite_scene(src: str | Path, dst: str | Path, ue: UE4FogParams, pt: UEPathTracerSettings,
-                  camera=None, params: dict | None = None) -> dict:
+def rewrite_scene(
+    src: str | Path,
+    dst: str | Path,
+    ue: UE4FogParams,
+    pt: UEPathTracerSettings,
+    camera: Any = None,
+    params: dict | None = None,
+) -> dict:
     """Copy the fogref scene ``src`` to ``dst`` with its ``heightfog`` replaced by UE's
     path-traced fog of ``ue`` and ``pt`` (or by ``params``, e.g. :func:`exact_fog_params`);
     returns the new fog parameters.
@@ -276,8 +318,9 @@ def rewrite_scene(src: str | Path, dst: str | Path, ue: UE4FogParams, pt: UEPath
     if follow:
         d = next((e for e in root.findall("default") if e.get("name") == "camera_origin"), None)
         if d is None:
-            raise ParameterError(str(src), "camera_origin",
-                                 "no $camera_origin default: give the camera position")
+            raise ParameterError(
+                str(src), "camera_origin", "no $camera_origin default: give the camera position"
+            )
         camera = [float(x) for x in d.get("value", "").replace(",", " ").split()]
     if params is None:
         params = pathtracer_fog_params(ue, pt, camera)
@@ -301,7 +344,6 @@ def settings_from(ue: UE4FogParams | None = None, **pt: Any) -> tuple[UE4FogPara
     return replace(ue, **ue_fields), UEPathTracerSettings(**rest)
 
 
-
 def main(argv: list[str] | None = None) -> int:
     """``python -m fogref.mapping.unreal_pathtracer SRC.xml DST.xml [NAME=VALUE ...]``: write DST,
     the scene SRC with UE's path-traced fog for the given editor values (names of
@@ -319,7 +361,11 @@ def main(argv: list[str] | None = None) -> int:
         name, sep, text = item.partition("=")
         if not sep:
             raise ParameterError("<command line>", item, "expected NAME=VALUE")
-        kw[name] = [float(x) for x in text.replace(",", " ").split()] if name == "VolumetricFogAlbedo" else float(text)
+        kw[name] = (
+            [float(x) for x in text.replace(",", " ").split()]
+            if name == "VolumetricFogAlbedo"
+            else float(text)
+        )
     exact = bool(kw.pop("exact", 0.0))
     ue, pt = settings_from(**kw)
     params = exact_fog_params(ue, pt) if exact else None

@@ -83,8 +83,15 @@ from fogref.media.ops import Ops, Real
 from fogref.media.profiles import HDRPLayer
 from fogref.media.protocol import number, register_profile, rgb
 
-__all__ = ["DENSITY_CLAMP_DEFAULT", "DENSITY_CLAMP_RANGE", "DENSITY_EPSILON_PER_CM", "Cylinder",
-           "UEPathTracerLayer", "bounds_from_params", "ue_fog_y_range"]
+__all__ = [
+    "DENSITY_CLAMP_DEFAULT",
+    "DENSITY_CLAMP_RANGE",
+    "DENSITY_EPSILON_PER_CM",
+    "Cylinder",
+    "UEPathTracerLayer",
+    "bounds_from_params",
+    "ue_fog_y_range",
+]
 
 #: ``r.PathTracing.FogDensityClamp``'s default, and the constant before UE 5.6 ([PT]).
 DENSITY_CLAMP_DEFAULT = 8.0
@@ -135,13 +142,24 @@ class UEPathTracerLayer:
         (UEPathTracerLayer(density=1.0, falloff=0.02, height=0.0, clamp=4.0),)
         """
         clamp = number(params, "clamp", DENSITY_CLAMP_DEFAULT, src, *DENSITY_CLAMP_RANGE)
-        layers = [cls(number(params, "density", 1.0, src, 0.0, 1e6),
-                      number(params, "falloff", 0.01, src, 1e-6, 1e3),
-                      number(params, "height", 0.0, src, -1e7, 1e7), clamp)]
+        layers = [
+            cls(
+                number(params, "density", 1.0, src, 0.0, 1e6),
+                number(params, "falloff", 0.01, src, 1e-6, 1e3),
+                number(params, "height", 0.0, src, -1e7, 1e7),
+                clamp,
+            )
+        ]
         d2 = number(params, "density2", 0.0, src, 0.0, 1e6)
         if d2 > 0:
-            layers.append(cls(d2, number(params, "falloff2", 0.01, src, 1e-6, 1e3),
-                              number(params, "height2", 0.0, src, -1e7, 1e7), clamp))
+            layers.append(
+                cls(
+                    d2,
+                    number(params, "falloff2", 0.01, src, 1e-6, 1e3),
+                    number(params, "height2", 0.0, src, -1e7, 1e7),
+                    clamp,
+                )
+            )
         return tuple(layers)
 
     @property
@@ -235,15 +253,21 @@ class Cylinder:
     def validate(self, src: str) -> Cylinder:
         """This cylinder with float fields; ParameterError naming the bad field."""
         vals = {}
-        for name, lo, hi in (("center_x", -1e7, 1e7), ("center_z", -1e7, 1e7), ("radius", 1e-3, 1e7),
-                             ("y_min", -2e7, 2e7), ("y_max", -2e7, 2e7)):
+        for name, lo, hi in (
+            ("center_x", -1e7, 1e7),
+            ("center_z", -1e7, 1e7),
+            ("radius", 1e-3, 1e7),
+            ("y_min", -2e7, 2e7),
+            ("y_max", -2e7, 2e7),
+        ):
             v = float(getattr(self, name))
             if not (math.isfinite(v) and lo <= v <= hi):
                 raise ParameterError(src, f"cylinder.{name}", f"value {v} outside [{lo:g}, {hi:g}]")
             vals[name] = v
         if not vals["y_min"] < vals["y_max"]:
-            raise ParameterError(src, "cylinder.y_max",
-                                 f"value {vals['y_max']} must exceed y_min {vals['y_min']}")
+            raise ParameterError(
+                src, "cylinder.y_max", f"value {vals['y_max']} must exceed y_min {vals['y_min']}"
+            )
         return Cylinder(**vals)
 
     def inside(self, ops: Ops, p: Any) -> Any:
@@ -342,12 +366,21 @@ def bounds_from_params(params: dict, src: str = "<params>") -> Cylinder:
     radius = number(params, "radius", 60.0, src, 1e-3, 1e7)
     sig = params.get("sigma_t")
     sigma = max(rgb(sig, "sigma_t", src, 0.0, 1e2)) if sig is not None else 0.01
-    specs = [(number(params, "density", 1.0, src, 0.0, 1e6), number(params, "falloff", 0.01, src, 0.0, 1e3),
-              number(params, "height", 0.0, src, -1e7, 1e7))]
+    specs = [
+        (
+            number(params, "density", 1.0, src, 0.0, 1e6),
+            number(params, "falloff", 0.01, src, 0.0, 1e3),
+            number(params, "height", 0.0, src, -1e7, 1e7),
+        )
+    ]
     if params.get("height2") is not None or number(params, "density2", 0.0, src, 0.0, 1e6) > 0:
-        specs.append((number(params, "density2", 0.0, src, 0.0, 1e6),
-                      number(params, "falloff2", 0.01, src, 0.0, 1e3),
-                      number(params, "height2", 0.0, src, -1e7, 1e7)))
+        specs.append(
+            (
+                number(params, "density2", 0.0, src, 0.0, 1e6),
+                number(params, "falloff2", 0.01, src, 0.0, 1e3),
+                number(params, "height2", 0.0, src, -1e7, 1e7),
+            )
+        )
     y_lo, y_hi = ue_fog_y_range(sigma, specs, radius)
     y_lo = number(params, "y_min", y_lo, src, -2e7, 2e7)
     y_hi = number(params, "y_max", y_hi, src, -2e7, 2e7)

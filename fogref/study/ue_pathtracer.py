@@ -39,8 +39,15 @@ from fogref.media import NP, hg_phase, single_scatter_sun
 from fogref.models.base import SKY_DISTANCE
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
 
-__all__ = ["SplitStats", "closed_form_split", "departure_row", "render_split", "run_sweep", "split_stats",
-           "sun_single_scatter"]
+__all__ = [
+    "SplitStats",
+    "closed_form_split",
+    "departure_row",
+    "render_split",
+    "run_sweep",
+    "split_stats",
+    "sun_single_scatter",
+]
 
 #: Gauss-Legendre nodes per panel and panels per ray of :func:`sun_single_scatter`.
 GL_NODES = 16
@@ -87,7 +94,7 @@ def sun_single_scatter(medium, views: Views, w, E: float = 1.0, t_cap: float = 2
     x, wts = np.polynomial.legendre.leggauss(GL_NODES)
     lo, hi = edges[:, :-1], edges[:, 1:]
     half = 0.5 * (hi - lo)
-    t = (0.5 * (hi + lo))[..., None] + half[..., None] * x          # (n, panels, nodes)
+    t = (0.5 * (hi + lo))[..., None] + half[..., None] * x  # (n, panels, nodes)
     wt = half[..., None] * wts
     tf = t.reshape(n, -1)
     P = tuple(o[i][:, None] + tf * d[i][:, None] for i in range(3))
@@ -111,8 +118,14 @@ def _raster_T(ue: UE4FogParams, views: Views) -> np.ndarray:
     return np.asarray(r.transmittance, dtype=float)[:, 0]
 
 
-def closed_form_split(ue: UE4FogParams, pt: UEPathTracerSettings, camera, views: Views | None = None,
-                      sun=None, ss_views: Views | None = None) -> dict:
+def closed_form_split(
+    ue: UE4FogParams,
+    pt: UEPathTracerSettings,
+    camera,
+    views: Views | None = None,
+    sun=None,
+    ss_views: Views | None = None,
+) -> dict:
     """Per-view transmittance of the raster fog, UE's path-traced fog and the exact fog,
     and (with ``sun``, a unit direction toward the sun) the sun's single scattering of
     the last two on ``ss_views`` (default: ``views``).
@@ -124,9 +137,13 @@ def closed_form_split(ue: UE4FogParams, pt: UEPathTracerSettings, camera, views:
     views = views or sample_views(camera)
     m_pt, m_ex = pathtracer_medium(ue, pt, camera), exact_medium(ue, pt)
     o, d, D = _rays(views)
-    out: dict[str, Any] = {"views": views, "radius_m": m_pt.bounds.radius, "T_raster": _raster_T(ue, views),
-                           "T_pt": m_pt.transmittance(NP, o, d, D)[0],
-                           "T_exact": m_ex.transmittance(NP, o, d, D)[0]}
+    out: dict[str, Any] = {
+        "views": views,
+        "radius_m": m_pt.bounds.radius,
+        "T_raster": _raster_T(ue, views),
+        "T_pt": m_pt.transmittance(NP, o, d, D)[0],
+        "T_exact": m_ex.transmittance(NP, o, d, D)[0],
+    }
     if sun is not None:
         sv = ss_views or views
         so, sd, sD = _rays(sv)
@@ -150,14 +167,20 @@ def departure_row(split: dict, threshold: float = 0.01) -> dict:
     rel_r = _rel(op_r, op_pt, 1e-3 * max(op_pt.max(), 1e-300))
     v = split["views"]
     inside = np.isfinite(v.D) & (v.D <= split.get("radius_m", np.inf))
-    row = {"opacity_rel_max": float(rel.max()), "opacity_frac_over": float((rel > threshold).mean()),
-           "opacity_rel_max_inside": float(rel[inside].max()) if inside.any() else None,
-           "opacity_nearest_departure_m": _nearest(v, rel > threshold),
-           "raster_vs_pt_opacity_rel_median": float(np.median(rel_r))}
+    row = {
+        "opacity_rel_max": float(rel.max()),
+        "opacity_frac_over": float((rel > threshold).mean()),
+        "opacity_rel_max_inside": float(rel[inside].max()) if inside.any() else None,
+        "opacity_nearest_departure_m": _nearest(v, rel > threshold),
+        "raster_vs_pt_opacity_rel_median": float(np.median(rel_r)),
+    }
     if "ss_pt" in split:
         rs = _rel(split["ss_pt"], split["ss_exact"], 1e-3 * max(split["ss_exact"].max(), 1e-300))
-        row.update(sun_ss_rel_max=float(rs.max()), sun_ss_frac_over=float((rs > threshold).mean()),
-                   sun_ss_nearest_departure_m=_nearest(split["ss_views"], rs > threshold))
+        row.update(
+            sun_ss_rel_max=float(rs.max()),
+            sun_ss_frac_over=float((rs > threshold).mean()),
+            sun_ss_nearest_departure_m=_nearest(split["ss_views"], rs > threshold),
+        )
     return row
 
 
@@ -209,8 +232,15 @@ def _moments(mi, scene, spp: int, seed: int):
     return names, mean, sq
 
 
-def render_split(scene_xml: str | Path, ue: UE4FogParams, pt: UEPathTracerSettings, out_dir: str | Path,
-                 spp: int = 16, seed: int = 0, overrides: dict | None = None) -> dict:
+def render_split(
+    scene_xml: str | Path,
+    ue: UE4FogParams,
+    pt: UEPathTracerSettings,
+    out_dir: str | Path,
+    spp: int = 16,
+    seed: int = 0,
+    overrides: dict | None = None,
+) -> dict:
     """Render ``scene_xml`` with UE's path-traced fog and with the exact fog, and split
     ``raster - exact`` into ``raster - PT`` and ``PT - exact`` (final radiance, RGB).
 
@@ -262,13 +292,16 @@ def render_split(scene_xml: str | Path, ue: UE4FogParams, pt: UEPathTracerSettin
     surface = m_pt[..., [ix["surface.R"], ix["surface.G"], ix["surface.B"]]]
     S_raster = surface * T_r + L_r
     S_pt, S_ex = m_pt[..., rgb], m_ex[..., rgb]
-    return {"raster_vs_pt": split_stats(S_raster - S_pt, var_pt),
-            "pt_vs_exact": split_stats(S_pt - S_ex, var_pt + var_ex),
-            "raster_vs_exact": split_stats(S_raster - S_ex, var_ex),
-            "images": {"raster": S_raster, "pt": S_pt, "exact": S_ex},
-            "notes": ["the raster image's noise through the rendered surface is neglected",
-                      "colours of the raster fog are ue's (FogInscatteringColor, "
-                      "DirectionalInscatteringColor)"]}
+    return {
+        "raster_vs_pt": split_stats(S_raster - S_pt, var_pt),
+        "pt_vs_exact": split_stats(S_pt - S_ex, var_pt + var_ex),
+        "raster_vs_exact": split_stats(S_raster - S_ex, var_ex),
+        "images": {"raster": S_raster, "pt": S_pt, "exact": S_ex},
+        "notes": [
+            "the raster image's noise through the rendered surface is neglected",
+            "colours of the raster fog are ue's (FogInscatteringColor, DirectionalInscatteringColor)",
+        ],
+    }
 
 
 # -- the sweep ---------------------------------------------------------------------
@@ -287,6 +320,7 @@ def run_sweep(toml_path: str | Path, out: str | Path | None = None) -> list[dict
     and write its table (``results.csv`` and ``results.md`` beside it, or in ``out``)."""
     import csv
     import itertools
+
     import tomllib
 
     toml_path = Path(toml_path)
@@ -301,8 +335,14 @@ def run_sweep(toml_path: str | Path, out: str | Path | None = None) -> list[dict
     grids = [spec["parameters"][n]["values"] for n in names]
     dist = np.geomspace(*v.get("distances", [10, 2e4, 12]))
     views = _grounded(sample_views(camera, n_dirs=int(v.get("n_dirs", 400)), distances=dist), v.get("ground"))
-    sv = _grounded(sample_views(camera, n_dirs=int(v.get("ss_n_dirs", 64)),
-                                distances=np.geomspace(*v.get("ss_distances", [30, 1e4, 6]))), v.get("ground"))
+    sv = _grounded(
+        sample_views(
+            camera,
+            n_dirs=int(v.get("ss_n_dirs", 64)),
+            distances=np.geomspace(*v.get("ss_distances", [30, 1e4, 6])),
+        ),
+        v.get("ground"),
+    )
     rows = []
     for combo in itertools.product(*grids):
         kw = {**fixed, **dict(zip(names, combo))}
@@ -318,7 +358,7 @@ def run_sweep(toml_path: str | Path, out: str | Path | None = None) -> list[dict
         wr = csv.DictWriter(f, keys)
         wr.writeheader()
         wr.writerows(rows)
-    fmt = lambda x: ("" if x is None else f"{x:.3g}" if isinstance(x, float) else str(x))  # noqa: E731
+    fmt = lambda x: "" if x is None else f"{x:.3g}" if isinstance(x, float) else str(x)  # noqa: E731
     lines = ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
     lines += ["| " + " | ".join(fmt(r[k]) for k in keys) + " |" for r in rows]
     (out / "results.md").write_text("\n".join(lines) + "\n")
