@@ -8,7 +8,9 @@ JSON are decoded on reading.
 
 from __future__ import annotations
 
+import errno
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -46,8 +48,14 @@ def write_exr(path, channels: dict, attrs: dict | None = None) -> None:
         raise FogrefError(f"{path}: refusing to write non-finite values in channel(s) {', '.join(bad)}")
 
     def write(tmp):
-        with OpenEXR.File(header, chans) as f:
-            f.write(tmp)
+        try:
+            with OpenEXR.File(header, chans) as f:
+                f.write(tmp)
+        except RuntimeError as e:  # OpenEXR reports I/O failures (a full disk) as RuntimeError
+            code = errno.ENOSPC if "No space left" in str(e) else errno.EIO
+            raise OSError(
+                code, f"{os.strerror(code)}; {path} was not written (an older file there is kept)", str(path)
+            ) from e
 
     atomic_write(path, write)
 
