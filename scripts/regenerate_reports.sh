@@ -12,4 +12,5 @@ echo "regenerate_reports: rewriting reports/unreal_study/ and reports/fit/"
 .venv/bin/fogref study out/valley.exr --out reports/unreal_study --renders out/study
 .venv/bin/fogref fit --scene scenes/valley.xml --lobe-table --out reports/fit
 .venv/bin/python scripts/fit_table.py --scene scenes/valley.xml --out reports/fit   # engines.md
+.venv/bin/python scripts/make_html_examples.py --truth out/valley.exr   # report.html pages + screenshots
 git status --short reports/
