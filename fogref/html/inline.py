@@ -1,0 +1,154 @@
+"""What an HTML page of fogref embeds, encoded inline: float images, masks, PNGs, tables.
+
+Float images are stored as IEEE 754 half floats (numpy ``float16``: 11 significant bits,
+a relative rounding error of at most 2^-11 ~ 4.9e-4, range ±65504), pixel-interleaved,
+byte-shuffled (all low bytes, then all high bytes: what makes them compress) and
+zlib-deflated, then base64-encoded.  The page's JavaScript inflates them with the
+browser's own ``DecompressionStream("deflate")`` (no library, no network) and decodes the
+half floats exactly, so exposure changes in the viewer act on the linear values, not on
+a re-tone-mapped 8-bit picture.  Values outside the half range are clamped to ±65504;
+non-finite values are stored as 0.
+
+Examples
+--------
+>>> import numpy as np
+>>> img = np.array([[[0.0, 0.5, 2.0]]])
+>>> enc = encode_half(img)
+>>> enc["shape"], enc["encoding"]
+([1, 1, 3], 'f16-shuffle-deflate')
+>>> decode_half(enc).tolist()
+[[[0.0, 0.5, 2.0]]]
+>>> decode_mask(encode_mask(np.array([[True, False]]))).tolist()
+[[1, 0]]
+>>> table_html(["a", "b"], [[1, "x<y"]])
+'<table class="fr-table"><thead><tr><th>a</th><th>b</th></tr></thead><tbody><tr><td>1</td><td>x&lt;y</td></tr></tbody></table>'
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import zlib
+
+import numpy as np
+
+#: Largest finite half float.
+HALF_MAX = 65504.0
+ENCODING = "f16-shuffle-deflate"
+
+
+def encode_half(image) -> dict:
+    """``{"shape": [H, W, C], "encoding", "data": base64}`` of a float image ``(H, W)`` or ``(H, W, C)``.
+
+    Domain: any real array (non-finite values -> 0; beyond ±65504 clamped).  The decoded values
+    are the array rounded to half precision (:func:`decode_half`).
+    """
+    a = np.asarray(image, dtype=np.float64)
+    if a.ndim == 2:
+        a = a[..., None]
+    a = np.clip(np.where(np.isfinite(a), a, 0.0), -HALF_MAX, HALF_MAX).astype("<f2")
+    raw = np.ascontiguousarray(a).reshape(-1).view(np.uint8).reshape(-1, 2).T.tobytes()
+    return {"shape": [int(s) for s in a.shape], "encoding": ENCODING,
+            "data": base64.b64encode(zlib.compress(raw, 9)).decode("ascii")}
+
+
+def decode_half(enc: dict) -> np.ndarray:
+    """The float64 array of :func:`encode_half`'s output (what the page's JavaScript decodes)."""
+    raw = np.frombuffer(zlib.decompress(base64.b64decode(enc["data"])), np.uint8)
+    n = raw.size // 2
+    pairs = np.stack([raw[:n], raw[n:]], -1).reshape(-1)
+    return pairs.view("<f2").astype(np.float64).reshape(enc["shape"])
+
+
+def encode_mask(mask) -> dict:
+    """A ``(H, W)`` array of small non-negative integers (< 256: a bool mask or region bits)
+    as ``{"shape", "encoding": "u8-deflate", "data"}``."""
+    a = np.asarray(mask).astype(np.uint8)
+    return {"shape": [int(s) for s in a.shape], "encoding": "u8-deflate",
+            "data": base64.b64encode(zlib.compress(a.tobytes(), 9)).decode("ascii")}
+
+
+def decode_mask(enc: dict) -> np.ndarray:
+    """The ``uint8`` array of :func:`encode_mask`'s output."""
+    return np.frombuffer(zlib.decompress(base64.b64decode(enc["data"])), np.uint8).reshape(enc["shape"])
+
+
+def png_data_uri(path_or_bytes) -> str:
+    """A PNG file (path) or PNG bytes as a ``data:image/png;base64,...`` URI."""
+    data = path_or_bytes if isinstance(path_or_bytes, bytes) else open(path_or_bytes, "rb").read()
+    return "data:image/png;base64," + base64.b64encode(data).decode("ascii")
+
+
+def thumbnail_uri(linear_rgb, exposure: float, width: int = 160) -> str:
+    """A PNG thumbnail of a linear image, at most ``width`` px wide [px >= 1], tone-mapped by
+    :func:`fogref.display.tone_map` at ``exposure``, as a data URI."""
+    from PIL import Image
+
+    from fogref.display import tone_map
+
+    px = (np.clip(tone_map(linear_rgb, exposure), 0, 1) * 255).astype(np.uint8)
+    im = Image.fromarray(px)
+    if im.width > width:
+        im = im.resize((int(width), max(1, round(im.height * width / im.width))), Image.BILINEAR)
+    buf = io.BytesIO()
+    im.save(buf, format="PNG")
+    return png_data_uri(buf.getvalue())
+
+
+def esc(x) -> str:
+    """``x`` as HTML text (``&``, ``<``, ``>``, quotes escaped)."""
+    return html.escape(str(x), quote=True)
+
+
+def fmt(v, digits: int = 4) -> str:
+    """A number for a table: ``digits`` significant digits; None/NaN -> an em dash.
+
+    >>> fmt(0.000123456), fmt(None), fmt(3), fmt(True)
+    ('0.0001235', '—', '3', 'yes')
+    """
+    if v is None:
+        return "—"
+    if isinstance(v, (bool, np.bool_)):
+        return "yes" if v else "no"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    if isinstance(v, (float, np.floating)):
+        return f"{float(v):.{digits}g}" if np.isfinite(v) else "—"
+    return str(v)
+
+
+def table_html(header, rows, classes=None) -> str:
+    """An HTML table; ``rows``: sequences of cells (formatted with :func:`fmt`, escaped);
+    ``classes``: one CSS class per row (e.g. its verdict), or None."""
+    head = "".join(f"<th>{esc(h)}</th>" for h in header)
+    body = []
+    for i, row in enumerate(rows):
+        cls = f' class="{esc(classes[i])}"' if classes and classes[i] else ""
+        body.append(f"<tr{cls}>" + "".join(f"<td>{esc(fmt(c))}</td>" for c in row) + "</tr>")
+    return (f'<table class="fr-table"><thead><tr>{head}</tr></thead><tbody>{"".join(body)}'
+            "</tbody></table>")
+
+
+def check_rows_html(rows, confidence: float | None = None) -> str:
+    """The rows of a :class:`~fogref.compare.results.CheckResult` (objects or dicts) as a table, each
+    row classed by its verdict (``v-pass``, ``v-fail``, ``v-inconclusive``, ...)."""
+    def get(r, k):
+        return r.get(k) if isinstance(r, dict) else getattr(r, k)
+
+    out, cls = [], []
+    for r in rows:
+        est, lo, hi = get(r, "estimate"), get(r, "low"), get(r, "high")
+        ci = "—" if est is None or lo is None else f"[{fmt(lo)}, {fmt(hi)}]"
+        out.append([get(r, "part"), get(r, "region"), get(r, "metric"), est, ci, get(r, "tolerance"),
+                    get(r, "verdict"), get(r, "pixels")])
+        cls.append("v-" + str(get(r, "verdict")))
+    level = "" if confidence is None else f" ({confidence:.0%})"
+    return table_html(["part", "region", "metric", "estimate", f"interval{level}", "tolerance", "verdict",
+                       "pixels"], out, cls)
+
+
+#: The CSS of notebook displays (a page has its own, :mod:`fogref.html.assets`).
+NOTEBOOK_CSS = ("<style>.fr-table{border-collapse:collapse;font:12px sans-serif}.fr-table td,.fr-table th"
+                "{border:1px solid #ccc;padding:2px 6px;text-align:right}.v-fail td{background:#fdd}"
+                ".v-pass td{background:#dfd}.v-inconclusive td{background:#ffd}</style>")

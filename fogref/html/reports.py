@@ -1,0 +1,188 @@
+"""``report.html`` of ``fogref compare``, ``fogref study``, ``fogref sweep`` and of a batch of images.
+
+Each is one self-contained page (:mod:`fogref.html.page`) written next to the command's
+Markdown: the compare page has the viewer (:mod:`fogref.html.viewer`), the check's rows with
+their intervals and verdicts, the descriptive metrics with their standard errors and noise
+floors, and the report's figures; the study page adds the fit and the error budget; the
+sweep page the table and its plots.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+from fogref.html.inline import check_rows_html, esc, fmt, table_html
+from fogref.html.page import figure, verdict_badge, write_page
+from fogref.html.viewer import viewer_data
+
+#: Columns of the descriptive metric table: (metrics.json key, heading, with its ± stderr).
+METRIC_COLUMNS = (("pixels", "pixels", False), ("rmse", "RMSE", True), ("rmse_noise_floor", "RMSE noise floor",
+                  False), ("relmse", "relMSE", True), ("mean_error", "mean error", True),
+                  ("mean_abs_error", "mean |error|", False), ("delta_e2000_mean", "ΔE2000 mean", False),
+                  ("flip_mean", "FLIP mean", False), ("rmse_below_noise", "below the noise", False))
+
+
+def _pm(s: dict, key: str, with_err: bool) -> str:
+    v = s.get(key)
+    e = s.get(f"{key}_stderr") if with_err else None
+    return fmt(v) if e is None or v is None else f"{fmt(v)} ± {fmt(e, 2)}"
+
+
+def metrics_table_html(metrics: dict, units: dict) -> str:
+    """The descriptive metrics of a compare report (``metrics.json``'s ``metrics``) as a table."""
+    rows = []
+    for part, regions in metrics.items():
+        for region, s in regions.items():
+            rows.append([part, units.get(part, ""), region, *(_pm(s, k, e) for k, _, e in METRIC_COLUMNS)])
+    return '<div class="fr-wide">' + table_html(["part", "units", "region", *(h for _, h, _ in METRIC_COLUMNS)],
+                                                rows) + "</div>"
+
+
+def _figures(folder: Path, names) -> list[str]:
+    out = []
+    for rel, caption in names:
+        p = folder / rel
+        if p.is_file():
+            out.append(figure(p, caption))
+    return out
+
+
+def compare_sections(report: dict, folder: Path) -> list[str]:
+    """The sections of a compare page below the viewer."""
+    cand = report.get("candidate", {})
+    check = report.get("check")
+    s = [f"<p>candidate: <b>{esc(cand.get('name', ''))}</b> ({esc(cand.get('kind', ''))}); truth "
+         f"<code>{esc(report.get('exr', ''))}</code>, {esc(report.get('truth', {}).get('spp'))} spp, "
+         f"{report['image']['width']}×{report['image']['height']} px.</p>"]
+    s += [f'<p class="fr-note">warning: {esc(w)}</p>' for w in report.get("warnings", [])]
+    if check:
+        s += ["<h2>Check</h2>", f"<p>verdict: {verdict_badge(check['verdict'])} at "
+              f"{check['confidence']:.0%} confidence; intervals from the truth's per-pixel noise. A row passes "
+              "when its interval lies within the tolerance, fails when wholly outside, else is inconclusive.</p>",
+              '<div class="fr-wide">' + check_rows_html(check["rows"], check["confidence"]) + "</div>"]
+    s += ["<h2>Metrics</h2>", '<p class="fr-note">± one standard error from the truth\'s noise; the noise '
+          "floor is what a perfect candidate scores against this truth.</p>",
+          metrics_table_html(report.get("metrics", {}), report.get("units", {}))]
+    parts = list(report.get("metrics", {}))
+    figs = _figures(folder, [(f"heatmaps/{p}.png", f"{p}: error heatmaps") for p in parts]
+                    + [("error_vs_distance.png", "error vs distance"), ("error_vs_sun_angle.png",
+                                                                        "error vs angle to the sun")])
+    if figs:
+        s += ["<h2>Figures</h2>", *figs]
+    return s
+
+
+def write_compare_html(out_dir, truth=None, title: str | None = None) -> Path:
+    """``out_dir/report.html`` from a compare report folder (``metrics.json``, ``errors.exr``, the PNGs)
+    and, when given, its truth (:class:`fogref.gbuffer.Truth`: every part and its standard error in the
+    viewer).  Returns the path."""
+    folder = Path(out_dir)
+    report = json.loads((folder / "metrics.json").read_text())
+    name = report.get("candidate", {}).get("name", "candidate")
+    title = title or f"fogref compare: {name} vs {Path(report.get('exr', 'truth')).name}"
+    data = viewer_data(truth, folder, title=title)
+    return write_page(folder / "report.html", title, compare_sections(report, folder), data)
+
+
+def _csv_table(path: Path, columns=None, limit: int = 400) -> str:
+    with open(path, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    if not rows:
+        return "<p>(empty table)</p>"
+    cols = [c for c in (columns or rows[0].keys()) if c in rows[0]]
+
+    def num(v):
+        try:
+            return float(v) if v not in ("", None) else None
+        except ValueError:
+            return v
+
+    body = [[num(r[c]) for c in cols] for r in rows[:limit]]
+    more = f"<p class='fr-note'>first {limit} of {len(rows)} rows; all in {esc(path.name)}</p>" \
+        if len(rows) > limit else ""
+    return '<div class="fr-wide">' + table_html(cols, body) + "</div>" + more
+
+
+def write_sweep_html(sweep_dir, table: str = "results") -> Path:
+    """``sweep_dir/report.html``: the sweep's table (its main columns) and every plot of ``plots/``."""
+    folder = Path(sweep_dir)
+    info = json.loads((folder / "sweep.json").read_text()) if (folder / "sweep.json").is_file() else {}
+    name = (info.get("spec") or {}).get("name") or info.get("name") or folder.name
+    params = list((info.get("spec") or {}).get("parameters") or info.get("parameters") or {})
+    csv_path = folder / f"{table}.csv"
+    cols = ["config_id", *params, "model", "status", "final.all.rmse", "final.all.rmse_stderr",
+            "final.all.rmse_debiased", "final.all.relmse", "final.all.delta_e2000_mean", "final.all.flip_mean",
+            "inscatter.all.rmse", "transmittance.all.rmse"]
+    s = [f"<p>sweep <b>{esc(name)}</b>: one row per configuration × model "
+         f"(<code>{esc(csv_path.name)}</code>; the Parquet file has every column).</p>"]
+    if csv_path.is_file():
+        s += ["<h2>Table</h2>", _csv_table(csv_path, cols)]
+    plots = sorted((folder / "plots").glob("*.png")) if (folder / "plots").is_dir() else []
+    if plots:
+        s += ["<h2>Plots</h2>", *(figure(p, p.stem.replace("_vs_", " vs ")) for p in plots)]
+    return write_page(folder / "report.html", f"fogref sweep: {name}", s)
+
+
+def write_study_html(study_dir, truth=None) -> Path:
+    """``study_dir/report.html``: the fit, the error budget (table and plot), the comparison's
+    verdicts and metrics with the viewer (from ``compare/``; the truth's every part when given)."""
+    folder = Path(study_dir)
+    s = []
+    summary = json.loads((folder / "summary.json").read_text()) if (folder / "summary.json").is_file() else {}
+    prov = summary.get("provenance", {})
+    if prov:
+        s += [f"<p>truth <code>{esc(prov.get('truth'))}</code> of <code>{esc(prov.get('scene'))}</code>, "
+              f"{esc(prov.get('spp'))} spp, seed {esc(prov.get('seed'))}.</p>"]
+    fit = summary.get("fit", {}).get("unreal") or {}
+    if fit:
+        s += ["<h2>Fit (Unreal's fog parameters)</h2>",
+              table_html(["parameter", "value"], [[k, json.dumps(v) if isinstance(v, (list, dict)) else v]
+                                                  for k, v in fit.items()])]
+    budget = folder / "budget.json"
+    if budget.is_file():
+        s += ["<h2>Error budget</h2>", _budget_html(json.loads(budget.read_text()))]
+        s += _figures(folder, [("budget.png", "error budget")])
+    data = None
+    comp = folder / "compare"
+    if (comp / "metrics.json").is_file():
+        report = json.loads((comp / "metrics.json").read_text())
+        data = viewer_data(truth, comp, title="study")
+        s += compare_sections(report, comp)
+    return write_page(folder / "report.html", "fogref study: Unreal's fog against the ground truth", s, data)
+
+
+def _budget_html(budget) -> str:
+    """The error budget as a table: every list of flat dicts in ``budget.json`` becomes a table."""
+    out = []
+
+    def walk(obj, path):
+        if isinstance(obj, list) and obj and all(isinstance(x, dict) for x in obj):
+            keys = [k for k in obj[0] if not isinstance(obj[0][k], (dict, list))]
+            out.append(f"<h3>{esc(path or 'budget')}</h3>" + '<div class="fr-wide">'
+                       + table_html(keys, [[x.get(k) for k in keys] for x in obj]) + "</div>")
+        elif isinstance(obj, dict):
+            flat = {k: v for k, v in obj.items() if not isinstance(v, (dict, list))}
+            if flat and path:
+                out.append(f"<h3>{esc(path)}</h3>" + table_html(["quantity", "value"], list(flat.items())))
+            for k, v in obj.items():
+                if isinstance(v, (dict, list)):
+                    walk(v, f"{path}.{k}" if path else k)
+
+    walk(budget, "")
+    return "\n".join(out[:20]) or "<p>(no table)</p>"
+
+
+def write_batch_html(out_dir, rows: list[dict], truth_path: str, columns) -> Path:
+    """``out_dir/report.html`` of a batch (one row per image, every metric and its interval) with
+    links to each image's own report."""
+    folder = Path(out_dir)
+    body = [[r.get(c) for c in columns] for r in rows]
+    cls = ["v-" + str(r.get("verdict", "")) for r in rows]
+    s = [f"<p>{len(rows)} image(s) against <code>{esc(truth_path)}</code>; each image's full report "
+         "(viewer, figures) is in its own folder:</p><ul>"
+         + "".join(f'<li><a href="{esc(r["report"])}/report.html">{esc(r["image"])}</a>: '
+                   f'{verdict_badge(str(r.get("verdict")))}</li>' for r in rows) + "</ul>",
+         "<h2>Table</h2>", '<div class="fr-wide">' + table_html(list(columns), body, cls) + "</div>"]
+    return write_page(folder / "report.html", "fogref compare: a batch of images", s)

@@ -1,0 +1,136 @@
+"""The viewer's data: every part of a truth, a candidate's error, noise and region masks.
+
+:func:`viewer_data` gathers, per part, the truth (``(H, W, 3)``, half floats), its per-pixel
+standard error, the candidate's signed error (candidate - truth; the viewer shows the
+candidate as truth + error), the pixels where the part is compared and the noise of the
+error (:mod:`fogref.compare.noise`, mean over RGB), from
+
+* a truth (:class:`fogref.gbuffer.Truth`): the parts ``final``, ``T``, ``inscatter``,
+  ``single``, ``multiple``, ``surface`` and their ``stderr.*`` channels, and
+* a compare report folder's ``errors.exr`` (:data:`fogref.compare.report.ERRORS_EXR_LAYOUT`):
+  the compared parts' errors (``transmittance`` is the truth's ``T``).
+
+Without the truth (a committed report whose truth is not at hand) the compared parts'
+references come from ``errors.exr`` and the noise stands in for the standard error.
+Regions: :func:`fogref.compare.regions.region_masks` (``surface``, ``sky``, distance bands),
+one bit each.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+
+from fogref.compare.regions import region_masks
+from fogref.compare.tonemap import exposure_for
+from fogref.exrio import read_exr
+from fogref.html.inline import encode_half, encode_mask
+
+#: The truth's parts the viewer shows, in order (``T`` is the transmittance).
+TRUTH_PARTS = ("final", "T", "inscatter", "single", "multiple", "surface")
+#: A report's part name -> the truth's part it is compared with.
+REPORT_TO_TRUTH = {"final": "final", "transmittance": "T", "inscatter": "inscatter",
+                   "attenuated_surface": "attenuated_surface", "composite": "final"}
+#: The exposure a truth part borrows (single and multiple: the inscatter's, so that they compare).
+EXPOSURE_FROM = {"single": "inscatter", "multiple": "inscatter"}
+UNITS_RADIANCE = "radiance (the scene's units)"
+
+
+def _units(part: str) -> str:
+    return "1 (transmittance)" if part in ("T", "transmittance") else UNITS_RADIANCE
+
+
+def _rgb(ch: dict, prefix: str) -> np.ndarray:
+    return np.stack([np.asarray(ch[f"{prefix}.{c}"], np.float64) for c in "RGB"], -1)
+
+
+def error_limit(error, valid=None) -> float:
+    """The false-colour limit of an error image ``(H, W, 3)``: the 99th percentile of
+    ``|mean over RGB|`` over ``valid`` pixels [the part's units]; > 0 (1 for a zero error).
+
+    >>> error_limit(np.full((2, 2, 3), -0.5))
+    0.5
+    """
+    e = np.abs(np.asarray(error, np.float64).mean(-1))
+    e = e[valid] if valid is not None else e.ravel()
+    e = e[np.isfinite(e)]
+    if e.size == 0:
+        return 1.0
+    lim = float(np.percentile(e, 99))
+    lim = lim if lim > 0 else float(e.max())
+    return lim if lim > 0 else 1.0
+
+
+def _truth_part(truth, part: str) -> tuple[np.ndarray, np.ndarray | None]:
+    img = truth.transmittance if part == "T" else getattr(truth, part)
+    return img, truth.stderr.get(part)
+
+
+def viewer_data(truth=None, report_dir=None, *, title: str = "", distance_bands=None,
+                stderr: bool = True) -> dict:
+    """The viewer's JSON-ready data (see the module's docstring); ``truth`` and/or a compare
+    report folder ``report_dir`` (with ``errors.exr`` and ``metrics.json``).  ``distance_bands``
+    [m]: the region bands (default: the report's check settings, else ``(100, 1000)``);
+    ``stderr``: embed the truth's per-channel standard error (False: smaller page, the noise
+    of the error only)."""
+    ch, meta = {}, {}
+    if report_dir is not None:
+        rd = Path(report_dir)
+        ch = read_exr(rd / "errors.exr")[0]
+        if (rd / "metrics.json").is_file():
+            meta = json.loads((rd / "metrics.json").read_text())
+    compared = [p for p in REPORT_TO_TRUTH if f"{p}.error.R" in ch]
+    if distance_bands is None:
+        distance_bands = ((meta.get("check") or {}).get("settings") or {}).get("distance_bands_m", (100.0, 1000.0))
+    if truth is not None:
+        shape, geo = truth.shape, truth
+    elif ch:
+        hit = np.asarray(ch["hit"]) > 0.5
+        shape = hit.shape
+        geo = SimpleNamespace(shape=shape, hit=hit, sky=~hit, distance=np.asarray(ch["distance"], np.float64))
+    else:
+        raise ValueError("viewer_data needs a truth or a report folder")
+    layers, exposures = [], {}
+
+    def exposure(part, img):
+        if part in ("T", "transmittance"):
+            return 1.0
+        if part not in exposures:
+            exposures[part] = exposure_for(img)
+        return exposures[part]
+
+    def add(name, truth_img, std, rpart):
+        src = EXPOSURE_FROM.get(name)
+        ex_img = _truth_part(truth, src)[0] if (src and truth is not None) else truth_img
+        layer = {"part": name, "units": _units(name), "exposure": exposure(src or name, ex_img),
+                 "truth": encode_half(truth_img), "stderr": encode_half(std) if std is not None else None,
+                 "error": None, "valid": None, "noise": None, "error_limit": 1.0, "compared_as": rpart}
+        if rpart is not None:
+            err, valid = _rgb(ch, f"{rpart}.error"), np.asarray(ch[f"{rpart}.valid"]) > 0.5
+            layer.update(error=encode_half(err), valid=encode_mask(valid),
+                         noise=encode_half(ch[f"{rpart}.noise"]), error_limit=error_limit(err, valid))
+        layers.append(layer)
+
+    by_truth = {REPORT_TO_TRUTH[p]: p for p in compared if p != "composite"}
+    if truth is not None:
+        names = [p for p in TRUTH_PARTS] + (["attenuated_surface"] if "attenuated_surface" in by_truth else [])
+        for p in names:
+            img, std = _truth_part(truth, p)
+            add(p, img, std if stderr else None, by_truth.get(p))
+        if "composite" in compared:
+            add("composite", truth.final, truth.stderr.get("final") if stderr else None, "composite")
+    else:
+        for p in compared:
+            name = REPORT_TO_TRUTH[p] if p != "composite" else "composite"
+            noise = np.asarray(ch[f"{p}.noise"], np.float64)
+            add(name, _rgb(ch, f"{p}.reference"), noise if stderr else None, p)
+    regions = {k: v for k, v in region_masks(geo, tuple(distance_bands)).items() if k != "all"}
+    bits = np.zeros(shape, np.uint8)
+    for i, m in enumerate(regions.values()):
+        bits |= (np.asarray(m, bool).astype(np.uint8) << i)
+    h, w = shape
+    return {"width": int(w), "height": int(h), "title": title, "layers": layers, "regions": list(regions),
+            "region_bits": encode_mask(bits)}
