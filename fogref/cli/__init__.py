@@ -7,6 +7,7 @@ render      path-trace a scene to a ground-truth EXR (+ PNG preview)           :
 info        channels, parameters, spp, seed and noise level of an EXR          :mod:`~.info`
 compare     check a fog model or an engine's images against a truth; exit      :mod:`~.compare`
             0 pass, 1 fail, 2 usage or input error, 3 inconclusive
+diff        two truths or images: equal within noise? exit 0 equal, 1 differ   :mod:`~.diff`
 study       the Unreal study: fit, compare, error budget, README               :mod:`~.study`
 fit         fit Unreal's fog colours and exponent to a physical fog (JSON)     :mod:`~.fit`
 scene       write a scene XML from fog, sun, sky, camera and geometry          :mod:`~.scene`
@@ -40,7 +41,7 @@ __all__ = ["COMMANDS", "build_parser", "main", "parse"]
 
 #: The commands, in the order ``fogref --help`` lists them, and the module of each.
 COMMANDS = {
-    name: f"fogref.cli.{name}" for name in ("render", "info", "compare", "study", "fit", "scene", "sweep")
+    name: f"fogref.cli.{name}" for name in ("render", "info", "compare", "diff", "study", "fit", "scene", "sweep")
 }
 
 DESCRIPTION = (

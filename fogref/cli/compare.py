@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fogref.cli.checks import Assignments, Check, Choice, Number, PathArg
+from fogref.cli.compare_batch import ImageList
 from fogref.cli.spec import UsageError, option, refuse, switch
 
 NAME = "compare"
@@ -122,8 +123,10 @@ class Options:
     )
     image: str | None = option(
         None,
-        "the engine's final image (.exr, .png, .hdr) of the truth's view and resolution",
-        check=PathArg(),
+        "the engine's final image (.exr, .png, .hdr) of the truth's view and resolution; several "
+        "files or a pattern: one report each and one table (fogref.cli.compare_batch)",
+        check=ImageList(),
+        nargs="+",
         metavar="FILE",
         group=IMAGE_GROUP,
         api=IMAGES,
@@ -275,6 +278,10 @@ def run(o: Options, given=frozenset()) -> int:
     from fogref.mapping.build import build_model, parse_param_assignments
 
     images = check_modes(o, given)
+    if images and isinstance(o.image, tuple):  # several images: one table (fogref.cli.compare_batch)
+        from fogref.cli.compare_batch import run_batch
+
+        return run_batch(o, given)
     options = {"tolerances": o.tolerance, "distance_bands": o.distance_bands, "confidence": o.confidence}
     truth = load_truth(o.exr)
     extra = {}
@@ -314,4 +321,7 @@ def run(o: Options, given=frozenset()) -> int:
     for w in report["warnings"]:
         print(f"fogref compare: warning: {w}", file=sys.stderr)
     print(f"report: {out / 'index.md'}")
+    from fogref.html.reports import write_compare_html
+
+    print(f"html: {write_compare_html(out, truth)}")
     return gate.finish(o, result, report=str(out), **extra)

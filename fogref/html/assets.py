@@ -180,7 +180,8 @@ function readout(x, y) {
     var ok = !!L.error && !(L.valid && !L.valid.data[i]);
     $("ro-model-" + ch).textContent = ok ? f(value(L, "model", i, c)) : "\u2014";
     $("ro-error-" + ch).textContent = ok ? f(value(L, "error", i, c)) : "\u2014";
-    $("ro-z-" + ch).textContent = ok && L.noise ? f(value(L, "error", i, c) / L.noise.data[i]) : "\u2014";
+    var sd = L.noise ? L.noise.data[i] : stderrOf(L, i, c);
+    $("ro-z-" + ch).textContent = ok && sd > 0 ? f(value(L, "error", i, c) / sd) : "\u2014";
   }
   $("ro-units").textContent = L.meta.units;
 }

@@ -51,7 +51,8 @@ Exposure and false colour act on the linear values (half floats, relative precis
 <tr><th>error / noise</th><td id="ro-z-R"></td><td id="ro-z-G"></td><td id="ro-z-B"></td></tr>
 </tbody></table>
 <p class="fr-note">units: <span id="ro-units"></span>; regions: <span id="ro-regions"></span>.
-noise: the standard error of candidate − truth (mean over RGB).</p>
+error / noise: the error in standard errors of the truth's noise (per channel, or the mean over RGB when
+only that is at hand).</p>
 </div></div>
 """
 

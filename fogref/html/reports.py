@@ -175,14 +175,58 @@ def _budget_html(budget) -> str:
 
 
 def write_batch_html(out_dir, rows: list[dict], truth_path: str, columns) -> Path:
-    """``out_dir/report.html`` of a batch (one row per image, every metric and its interval) with
-    links to each image's own report."""
+    """``out_dir/report.html`` of a batch: one row per image, the verdict, each check row over all
+    pixels as ``estimate [low, high]`` (every region's rows are in ``batch.csv``), the descriptive
+    metrics of ``final``, and links to each image's own report."""
     folder = Path(out_dir)
-    body = [[r.get(c) for c in columns] for r in rows]
+    keys = [c for c in columns if "/all:" in c and "." not in c.split(":")[1]]
+    desc = [c for c in columns if c.startswith("final.all.")]
+    body = []
+    for r in rows:
+        cells = [r["image"], r.get("verdict")]
+        for k in keys:
+            e, lo, hi = r.get(k), r.get(k + ".low"), r.get(k + ".high")
+            cells.append("—" if e is None else f"{fmt(e)} [{fmt(lo)}, {fmt(hi)}] {r.get(k + '.verdict')}")
+        body.append(cells + [r.get(c) for c in desc])
     cls = ["v-" + str(r.get("verdict", "")) for r in rows]
     s = [f"<p>{len(rows)} image(s) against <code>{esc(truth_path)}</code>; each image's full report "
          "(viewer, figures) is in its own folder:</p><ul>"
          + "".join(f'<li><a href="{esc(r["report"])}/report.html">{esc(r["image"])}</a>: '
                    f'{verdict_badge(str(r.get("verdict")))}</li>' for r in rows) + "</ul>",
-         "<h2>Table</h2>", '<div class="fr-wide">' + table_html(list(columns), body, cls) + "</div>"]
+         "<h2>Table</h2>", "<p class='fr-note'>estimate [interval] verdict per part over all pixels; "
+         "batch.csv has every region.</p>",
+         '<div class="fr-wide">' + table_html(["image", "verdict", *keys, *desc], body, cls) + "</div>"]
     return write_page(folder / "report.html", "fogref compare: a batch of images", s)
+
+
+def write_diff_html(out_dir, result, a, b) -> Path:
+    """``out_dir/report.html`` of :func:`fogref.compare.diff.diff`: the viewer (A as the truth, B as
+    the candidate: its error is B - A) and the rows tested."""
+    import numpy as np
+
+    from fogref.gbuffer import Truth
+
+    folder = Path(out_dir)
+    truth = a if isinstance(a, Truth) else b if isinstance(b, Truth) else None
+    ch: dict = {}
+    for part, e in result.errors.items():
+        name = "transmittance" if part == "T" else part
+        for i, c in enumerate("RGB"):
+            ch[f"{name}.error.{c}"] = e[..., i]
+        valid = truth.surface_valid if (truth is not None and part == "final") else np.ones(e.shape[:2], bool)
+        ch[f"{name}.valid"] = valid.astype(np.float32)
+        ch[f"{name}.noise"] = np.zeros(e.shape[:2])
+        if truth is None:
+            for i, c in enumerate("RGB"):
+                ch[f"{name}.reference.{c}"] = a[..., i]
+    if truth is None:
+        ch["hit"] = np.ones(a.shape[:2])
+        ch["distance"] = np.ones(a.shape[:2])
+    title = f"fogref diff: {result.verdict}"
+    data = viewer_data(truth, None, title=title, channels=ch, stderr=truth is not None)
+    s = [f"<p>B = <code>{esc(result.b)}</code> ({esc(result.kinds[1])}) against A = <code>{esc(result.a)}"
+         f"</code> ({esc(result.kinds[0])}): {verdict_badge(result.verdict)}</p>",
+         "<pre>" + esc("\n".join(result.lines())) + "</pre>"]
+    if result.rows:
+        s += ["<h2>Rows tested</h2>", check_rows_html(result.rows, result.row_confidence)]
+    return write_page(folder / "report.html", title, s, data)

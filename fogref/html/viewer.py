@@ -70,13 +70,13 @@ def _truth_part(truth, part: str) -> tuple[np.ndarray, np.ndarray | None]:
 
 
 def viewer_data(truth=None, report_dir=None, *, title: str = "", distance_bands=None,
-                stderr: bool = True) -> dict:
+                stderr: bool = True, channels: dict | None = None) -> dict:
     """The viewer's JSON-ready data (see the module's docstring); ``truth`` and/or a compare
     report folder ``report_dir`` (with ``errors.exr`` and ``metrics.json``).  ``distance_bands``
     [m]: the region bands (default: the report's check settings, else ``(100, 1000)``);
     ``stderr``: embed the truth's per-channel standard error (False: smaller page, the noise
-    of the error only)."""
-    ch, meta = {}, {}
+    of the error only); ``channels``: ``errors.exr``'s channels given directly instead of a folder."""
+    ch, meta = dict(channels or {}), {}
     if report_dir is not None:
         rd = Path(report_dir)
         ch = read_exr(rd / "errors.exr")[0]
@@ -110,8 +110,11 @@ def viewer_data(truth=None, report_dir=None, *, title: str = "", distance_bands=
                  "error": None, "valid": None, "noise": None, "error_limit": 1.0, "compared_as": rpart}
         if rpart is not None:
             err, valid = _rgb(ch, f"{rpart}.error"), np.asarray(ch[f"{rpart}.valid"]) > 0.5
-            layer.update(error=encode_half(err), valid=encode_mask(valid),
-                         noise=encode_half(ch[f"{rpart}.noise"]), error_limit=error_limit(err, valid))
+            # the error's noise (mean over RGB): embedded only where the truth's stderr is not (a model's
+            # or engine's error has the truth's noise plus a rounding floor of 4 ulp)
+            noise = None if std is not None else encode_half(ch[f"{rpart}.noise"])
+            layer.update(error=encode_half(err), valid=encode_mask(valid), noise=noise,
+                         error_limit=error_limit(err, valid))
         layers.append(layer)
 
     by_truth = {REPORT_TO_TRUTH[p]: p for p in compared if p != "composite"}
