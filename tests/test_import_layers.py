@@ -27,13 +27,15 @@ FLOORS: list[tuple[str, tuple[str, ...]]] = [
     ("base", ("fogref._version", "fogref.errors", "fogref.params", "fogref.atomic", "fogref._llvm")),
     ("media", ("fogref.media",)),                          # physics: numpy, Dr.Jit only lazily
     # the ground-truth schema, its I/O and the one display transform
-    ("gbuffer", ("fogref.gbuffer", "fogref.exrio", "fogref.display")),
+    ("gbuffer", ("fogref.gbuffer", "fogref.exrio", "fogref.display",
+                 "fogref.html.inline")),                   # (+ the encodings of HTML and notebook displays)
     ("models", ("fogref.models",)),                        # ports of the engines' shaders
     ("mapping", ("fogref.mapping",)),                      # physical scene -> model parameters, fits
     ("render", ("fogref.render", "fogref_plugins",         # Mitsuba glue and plugins;
                 "fogref.render.scene_writer")),            # scene XML writer (no Mitsuba)
     ("compare", ("fogref.compare",)),
     ("study", ("fogref.study",)),
+    ("html", ("fogref.html",)),                            # self-contained HTML reports (fogref.html)
     # entry points: the command line, the pytest plugin and the facade (fogref.set_variant)
     ("cli", ("fogref.cli", "fogref.pytest_plugin", "fogref.info", "fogref")),
 ]

@@ -1,0 +1,145 @@
+"""HTML reports, ``fogref diff`` and batch ``fogref compare`` (no browser; see test_html_browser.py).
+
+Tiny truths of the default scene (16x9 px, 16 spp) rendered once per session.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import re
+
+import numpy as np
+import pytest
+
+from conftest import SCENES
+from fogref.cli import main
+from fogref.html.inline import decode_half, decode_mask, encode_half, encode_mask
+
+TINY = {"res": 16, "resy": 9}
+
+
+@pytest.fixture(scope="session")
+def truths(tmp_path_factory, mitsuba):
+    """Three 16x9, 16 spp truths: seeds 0 and 1 at the default sun, seed 0 with the sun at 30 deg."""
+    from fogref.render.render import render
+
+    d = tmp_path_factory.mktemp("html_truths")
+    out = {}
+    for name, seed, extra in (("s0", 0, {}), ("s1", 1, {}), ("sun30", 0, {"sun_elevation": 30})):
+        out[name] = render(SCENES / "valley.xml", d / f"{name}.exr", spp=16, seed=seed,
+                           overrides={**TINY, **extra}, progress=False, png=False)
+    return out
+
+
+def _data(html: str) -> dict:
+    m = re.search(r'<script type="application/json" id="fr-data">(.*?)</script>', html, re.S)
+    return json.loads(m.group(1).replace("<\\/", "</"))
+
+
+def test_half_encoding_round_trip_is_half_rounding():
+    rng = np.random.default_rng(0)
+    a = rng.lognormal(size=(5, 7, 3)) * 10.0 ** rng.integers(-3, 3, size=(5, 7, 1))
+    got = decode_half(encode_half(a))
+    assert np.array_equal(got, a.astype(np.float16).astype(np.float64))
+    assert np.max(np.abs(got / a - 1)) <= 2.0**-11
+    bad = decode_half(encode_half(np.array([[np.nan, np.inf, 1e9]])))
+    assert bad.tolist() == [[[0.0], [0.0], [65504.0]]]
+    m = rng.integers(0, 32, size=(4, 6))
+    assert np.array_equal(decode_mask(encode_mask(m)), m)
+
+
+@pytest.mark.render
+def test_diff_same_scene_different_seeds_equal_within_noise(truths, tmp_path, capsys):
+    js = tmp_path / "d.json"
+    code = main(["diff", str(truths["s0"]), str(truths["s1"]), "--json", str(js), "--out", str(tmp_path / "r")])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    assert "verdict: equal within noise" in out
+    d = json.loads(js.read_text())
+    assert d["verdict"] == "equal within noise" and d["exit_code"] == 0 and d["kinds"] == ["truth", "truth"]
+    assert {r["part"] for r in d["rows"]} == {"T", "inscatter", "final"}
+    assert (tmp_path / "r" / "report.html").is_file()
+
+
+@pytest.mark.render
+def test_diff_different_sun_elevation_differs(truths, capsys):
+    code = main(["diff", str(truths["s0"]), str(truths["sun30"])])
+    out = capsys.readouterr().out
+    assert code == 1, out
+    assert "verdict: differ" in out and "differs: " in out
+
+
+@pytest.mark.render
+def test_diff_images_and_usage(truths, tmp_path, capsys):
+    from fogref.exrio import write_exr
+    from fogref.gbuffer import load_truth
+
+    t = load_truth(truths["s0"])
+    a, b = tmp_path / "a.exr", tmp_path / "b.exr"
+    write_exr(a, {c: t.final[..., i] for i, c in enumerate("RGB")})
+    write_exr(b, {c: t.final[..., i] * 1.01 for i, c in enumerate("RGB")})
+    assert main(["diff", str(a), str(a)]) == 0
+    assert main(["diff", str(a), str(b)]) == 1
+    assert main(["diff", str(a), str(b), "--tolerance", "1e3"]) == 0
+    # a truth against its own final image: no difference beyond the truth's noise
+    assert main(["diff", str(truths["s0"]), str(a)]) == 0
+    capsys.readouterr()
+    assert main(["diff", str(a), str(tmp_path / "missing.exr")]) == 2
+    assert "fogref: error:" in capsys.readouterr().err
+
+
+@pytest.mark.render
+def test_compare_writes_report_html(truths, tmp_path, capsys):
+    out = tmp_path / "cmp"
+    main(["compare", str(truths["s0"]), "--model", "ue4", "--from-scene", "--out", str(out), "--no-figures"])
+    html = (out / "report.html").read_text()
+    assert "http://" not in html and "https://" not in html
+    d = _data(html)
+    assert (d["width"], d["height"]) == (16, 9)
+    parts = [layer["part"] for layer in d["layers"]]
+    assert parts[:6] == ["final", "T", "inscatter", "single", "multiple", "surface"]
+    final = d["layers"][0]
+    from fogref.gbuffer import load_truth
+
+    t = load_truth(truths["s0"])
+    assert np.array_equal(decode_half(final["truth"]), t.final.astype(np.float16).astype(np.float64))
+    assert d["regions"][:2] == ["surface", "sky"]
+    assert "v-fail" in html or "v-pass" in html or "v-inconclusive" in html
+
+
+@pytest.mark.render
+def test_compare_batch_three_images_one_table(truths, tmp_path, capsys):
+    from fogref.exrio import write_exr
+    from fogref.gbuffer import load_truth
+
+    t = load_truth(truths["s0"])
+    imgs = []
+    for name, scale in (("exact", 1.0), ("bright", 1.2), ("dark", 0.7)):
+        p = tmp_path / "engine" / f"{name}.exr"
+        p.parent.mkdir(exist_ok=True)
+        write_exr(p, {c: t.final[..., i] * scale for i, c in enumerate("RGB")})
+        imgs.append(str(p))
+    out = tmp_path / "batch"
+    code = main(["compare", str(truths["s0"]), "--image", *imgs, "--out", str(out), "--no-figures"])
+    text = capsys.readouterr().out
+    assert code == 1, text  # the scaled images fail
+    rows = list(csv.DictReader(open(out / "batch.csv")))
+    assert [r["image"] for r in rows] == imgs
+    assert [r["verdict"] for r in rows][1:] == ["fail", "fail"]
+    assert rows[0]["verdict"] != "fail"
+    for key in ("final/all:rel_rmse", "final/all:rel_rmse.low", "final/all:rel_rmse.high", "final.all.rmse"):
+        assert key in rows[0]
+    assert float(rows[1]["final/all:rel_bias"]) == pytest.approx(0.2, abs=0.02)
+    d = json.loads((out / "batch.json").read_text())
+    assert d["exit_code"] == 1 and len(d["rows"]) == 3
+    assert (out / "report.html").is_file() and all((out / n / "report.html").is_file()
+                                                  for n in ("exact", "bright", "dark"))
+    # a pattern gives the same three images (sorted)
+    code = main(["compare", str(truths["s0"]), "--image", str(tmp_path / "engine" / "*.exr"),
+                 "--out", str(tmp_path / "batch2"), "--no-figures"])
+    assert code == 1
+    assert len(list(csv.DictReader(open(tmp_path / "batch2" / "batch.csv")))) == 3
+    capsys.readouterr()
+    assert main(["compare", str(truths["s0"]), "--image", str(tmp_path / "none*.exr")]) == 2
+    assert "matches no file" in capsys.readouterr().err
