@@ -281,7 +281,7 @@ def run(o: Options, given=frozenset()) -> int:
     if images and isinstance(o.image, tuple):  # several images: one table (fogref.cli.compare_batch)
         from fogref.cli.compare_batch import run_batch
 
-        return run_batch(o, given)
+        return run_batch(o, given, default_out_dir(o.exr, "batch"))
     options = {"tolerances": o.tolerance, "distance_bands": o.distance_bands, "confidence": o.confidence}
     truth = load_truth(o.exr)
     extra = {}

@@ -84,10 +84,10 @@ def batch_rows(results) -> tuple[list[dict], list[str]]:
     return rows, cols
 
 
-def run_batch(o, given) -> int:
-    """Check and report every image of ``o.image`` (a tuple) against the truth; write the table."""
+def run_batch(o, given, default_out) -> int:
+    """Check and report every image of ``o.image`` (a tuple) against the truth; write the table into
+    ``o.out``, else ``default_out``."""
     from fogref.atomic import write_text_atomic
-    from fogref.cli.compare import default_out_dir
     from fogref.cli.spec import UsageError
     from fogref.compare.check import check
     from fogref.compare.foreign import load_engine_images
@@ -102,7 +102,7 @@ def run_batch(o, given) -> int:
                              "(the batch writes batch.json and batch.csv)")
     options = {"tolerances": o.tolerance, "distance_bands": o.distance_bands, "confidence": o.confidence}
     truth = load_truth(o.exr)
-    out = Path(o.out) if o.out else default_out_dir(o.exr, "batch")
+    out = Path(o.out) if o.out else Path(default_out)
     results = []
     for image, name in zip(o.image, _stem_names(o.image)):
         imgs = load_engine_images(image, encoding=o.encoding, exposure=o.exposure, shape=truth.shape,
