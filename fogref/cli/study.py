@@ -66,4 +66,8 @@ def run(o: Options, given=frozenset()) -> int:
         if v is not None
     }
     run_study(o.exr, o.out, o.renders, scene=o.scene, compare_report=not o.no_compare, settings=settings)
+    from fogref.gbuffer import load_truth
+    from fogref.html.reports import write_study_html
+
+    print(f"html: {write_study_html(o.out, load_truth(o.exr))}")
     return 0

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from pathlib import Path
 
 from fogref.cli.checks import Check, Integer, PathArg
 from fogref.cli.spec import option, refuse, switch
@@ -105,4 +106,7 @@ def run(a: Options, given=frozenset()) -> int:
         f"{info['wall_seconds']:.1f} s; table: {info['table']} ({info['rows']} rows), {info['parquet']}; "
         f"{len(info['plots'])} plots"
     )
+    from fogref.html.reports import write_sweep_html
+
+    print(f"html: {write_sweep_html(Path(info['table']).parent, Path(info['table']).stem)}")
     return 0

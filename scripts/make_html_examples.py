@@ -1,0 +1,49 @@
+"""Write the example HTML reports from the committed data, and their screenshots.
+
+    .venv/bin/python scripts/make_html_examples.py
+
+reports/unreal_study/report.html (from summary.json, budget.json and compare/: the truth,
+out/valley.exr, is not committed, so the viewer shows the compared parts, with the noise of
+the error as their standard error) and reports/sweeps/unreal_sun_falloff_g/report.html (from
+results.csv and plots/), each with report.png (the page in headless Chromium) beside it.
+No study or sweep is re-run.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+from browser_util import console_errors, find_browser, load, screenshot, start  # noqa: E402
+
+from fogref.html.reports import write_study_html, write_sweep_html  # noqa: E402
+
+
+def main() -> int:
+    pages = [write_study_html(ROOT / "reports/unreal_study"),
+             write_sweep_html(ROOT / "reports/sweeps/unreal_sun_falloff_g")]
+    for p in pages:
+        print(f"{p.relative_to(ROOT)}: {p.stat().st_size / 1e6:.2f} MB")
+    *_, why = find_browser()
+    if why:
+        print(f"no screenshots: {why}")
+        return 0
+    drv = start()
+    try:
+        for p in pages:
+            load(drv, p)
+            errors = console_errors(drv)
+            if errors:
+                raise SystemExit(f"{p}: console errors {errors}")
+            shot = screenshot(drv, p.with_suffix(".png"))
+            print(f"{shot.relative_to(ROOT)}")
+    finally:
+        drv.quit()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
