@@ -38,6 +38,11 @@ def main() -> int:
             errors = console_errors(drv)
             if errors:
                 raise SystemExit(f"{p}: console errors {errors}")
+            if drv.find_elements("id", "fr-canvas"):  # show the viewer at work: a swipe truth | error
+                drv.execute_script(
+                    "var s=function(id,v){var e=document.getElementById(id);e.value=v;"
+                    "e.dispatchEvent(new Event('change'));};s('fr-b','error');s('fr-mode','swipe');"
+                    "window.fogrefViewer.readout(200, 150);")
             shot = screenshot(drv, p.with_suffix(".png"))
             print(f"{shot.relative_to(ROOT)}")
     finally:

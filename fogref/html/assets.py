@@ -26,13 +26,14 @@ h1{font-size:20px}h2{font-size:17px;margin-top:28px;border-bottom:1px solid #ddd
 .v-fail td,.verdict-fail{background:#fdd}.v-pass td,.verdict-pass{background:#dfd}
 .v-inconclusive td,.verdict-inconclusive{background:#ffd}
 .verdict{display:inline-block;padding:2px 10px;border-radius:4px;font-weight:bold}
-#fr-viewer{display:flex;flex-wrap:wrap;gap:12px}
-#fr-controls{display:grid;grid-template-columns:auto auto;gap:4px 8px;align-content:start;font-size:13px}
-#fr-stage{position:relative}
+#fr-viewer{display:flex;flex-wrap:nowrap;gap:16px;align-items:flex-start}
+#fr-controls{display:grid;grid-template-columns:max-content 210px;gap:4px 8px;align-content:start;font-size:13px}
+#fr-stage{position:relative;flex:0 0 auto}
 #fr-canvas{image-rendering:pixelated;cursor:crosshair;border:1px solid #888;display:block}
 #fr-bar{height:12px;margin-top:4px;border:1px solid #888}
 #fr-barlabels{display:flex;justify-content:space-between;font-size:12px}
 #fr-readout td{font-family:ui-monospace,monospace}
+#fr-stage .fr-note{max-width:720px}
 figure{display:inline-block;margin:6px}figure img{max-width:560px;border:1px solid #ddd}
 figcaption{font-size:12px;color:#555}
 .fr-note{color:#555;font-size:12px}
@@ -241,6 +242,7 @@ Promise.all(jobs).then(function () {
   populate(); bind();
   var cv = $("fr-canvas"); cv.width = W; cv.height = H;
   cv.style.width = Math.min(4, Math.max(1, Math.floor(720 / W))) * W + "px";
+  $("fr-bar").style.width = cv.style.width; $("fr-barlabels").style.width = cv.style.width;
   render(); readout(Math.floor(W / 2), Math.floor(H / 2));
   document.body.setAttribute("data-ready", "1");
 }).catch(function (err) { console.error("fogref viewer: " + err); });

@@ -117,11 +117,11 @@ def write_sweep_html(sweep_dir, table: str = "results") -> Path:
             "inscatter.all.rmse", "transmittance.all.rmse"]
     s = [f"<p>sweep <b>{esc(name)}</b>: one row per configuration × model "
          f"(<code>{esc(csv_path.name)}</code>; the Parquet file has every column).</p>"]
-    if csv_path.is_file():
-        s += ["<h2>Table</h2>", _csv_table(csv_path, cols)]
     plots = sorted((folder / "plots").glob("*.png")) if (folder / "plots").is_dir() else []
     if plots:
         s += ["<h2>Plots</h2>", *(figure(p, p.stem.replace("_vs_", " vs ")) for p in plots)]
+    if csv_path.is_file():
+        s += ["<h2>Table</h2>", _csv_table(csv_path, cols)]
     return write_page(folder / "report.html", f"fogref sweep: {name}", s)
 
 
