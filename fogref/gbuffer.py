@@ -297,6 +297,12 @@ class Truth:
         if self.corr is None:  # a truth built in memory without correlations: its channels' noise is one
             self.corr = {k: np.ones(v.shape) for k, v in self.stderr.items()}
 
+    def _repr_html_(self) -> str:
+        """Jupyter's display: thumbnails of every part and the provenance (:func:`fogref.html.inline.truth_html`)."""
+        from fogref.html.inline import truth_html
+
+        return truth_html(self)
+
     def noise_cov(self, part: str) -> np.ndarray:
         """``(H, W, 3, 3)`` covariance of the noise of part ``part``'s R, G, B at each pixel
         [part units²], from ``stderr`` and ``corr``.

@@ -143,3 +143,19 @@ def test_compare_batch_three_images_one_table(truths, tmp_path, capsys):
     capsys.readouterr()
     assert main(["compare", str(truths["s0"]), "--image", str(tmp_path / "none*.exr")]) == 2
     assert "matches no file" in capsys.readouterr().err
+
+
+@pytest.mark.render
+def test_notebook_displays(truths):
+    from fogref.compare.check import check
+    from fogref.gbuffer import load_truth
+    from fogref.html.notebook import sweep_table
+
+    t = load_truth(truths["s0"])
+    html = t._repr_html_()
+    assert html.count("data:image/png;base64,") == 6 and "16×9 px" in html
+    r = check(t, load_truth(truths["sun30"]))
+    h = r._repr_html_()
+    assert r.verdict in h and "v-" in h and h.count("data:image/png") == len(r.errors)
+    s = sweep_table("reports/sweeps/unreal_sun_falloff_g")._repr_html_()
+    assert "<table" in s and "FogHeightFalloff" in s and "data:image/png" in s

@@ -112,6 +112,12 @@ class CheckResult:
         lines.append(f"verdict: {self.verdict}")
         return "\n".join(lines)
 
+    def _repr_html_(self) -> str:
+        """Jupyter's display: verdict, error thumbnails, rows (:func:`fogref.html.inline.check_html`)."""
+        from fogref.html.inline import check_html
+
+        return check_html(self)
+
     def to_dict(self) -> dict:
         """JSON-ready (no NaN): settings, verdict and rows."""
         return {"truth": self.truth, "candidate": self.candidate, "confidence": self.confidence,

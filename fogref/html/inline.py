@@ -152,3 +152,64 @@ def check_rows_html(rows, confidence: float | None = None) -> str:
 NOTEBOOK_CSS = ("<style>.fr-table{border-collapse:collapse;font:12px sans-serif}.fr-table td,.fr-table th"
                 "{border:1px solid #ccc;padding:2px 6px;text-align:right}.v-fail td{background:#fdd}"
                 ".v-pass td{background:#dfd}.v-inconclusive td{background:#ffd}</style>")
+
+
+def _diverging_thumb(error, width: int = 160) -> str:
+    """A PNG thumbnail (data URI) of a signed error ``(H, W, 3)``: its mean over RGB on a blue-white-red
+    map with symmetric limits (the 99th percentile of ``|error|``)."""
+    from PIL import Image
+
+    e = np.asarray(error, np.float64).mean(-1)
+    e = np.where(np.isfinite(e), e, 0.0)
+    lim = float(np.percentile(np.abs(e), 99)) or float(np.abs(e).max()) or 1.0
+    t = np.clip(e / lim, -1, 1)
+    red = np.stack([np.ones_like(t), 1 - t, 1 - t], -1)
+    blue = np.stack([1 + t, 1 + t, np.ones_like(t)], -1)
+    rgb = np.where((t >= 0)[..., None], red, blue)
+    im = Image.fromarray((np.clip(rgb, 0, 1) * 255).astype(np.uint8))
+    if im.width > width:
+        im = im.resize((int(width), max(1, round(im.height * width / im.width))), Image.NEAREST)
+    buf = io.BytesIO()
+    im.save(buf, format="PNG")
+    return png_data_uri(buf.getvalue())
+
+
+def _figures_row(items) -> str:
+    return "<div>" + "".join(
+        f'<figure style="display:inline-block;margin:4px"><img src="{uri}" style="image-rendering:pixelated;'
+        f'width:160px"><figcaption style="font-size:11px">{esc(cap)}</figcaption></figure>' for cap, uri in items
+    ) + "</div>"
+
+
+def truth_html(truth) -> str:
+    """A truth's notebook display: thumbnails of ``final``, ``T``, ``inscatter``, ``single``,
+    ``multiple``, ``surface`` (radiance parts at :func:`fogref.display.preview_exposure` of ``final``;
+    inscatter, single and multiple share the inscatter's; ``T`` at exposure 1) and its provenance."""
+    from fogref.display import preview_exposure
+
+    ex_final, ex_in = preview_exposure(truth.final), preview_exposure(truth.inscatter)
+    thumbs = [(p, thumbnail_uri(img, ex)) for p, img, ex in (
+        ("final", truth.final, ex_final), ("T", truth.transmittance, 1.0), ("inscatter", truth.inscatter, ex_in),
+        ("single", truth.single, ex_in), ("multiple", truth.multiple, ex_in), ("surface", truth.surface, ex_final))]
+    h, w = truth.shape
+    a = truth.attrs
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = truth.stderr["final"] / np.abs(truth.final)
+    rel_noise = float(np.median(rel[np.isfinite(rel)])) if np.isfinite(rel).any() else None
+    rows = [["path", str(truth.path)], ["size", f"{w}×{h} px"], ["spp", truth.spp],
+            ["seed", a.get("fogref.seed")], ["scene", a.get("fogref.scene")],
+            ["median relative stderr of final", rel_noise], ["sun", "yes" if truth.sun_direction is not None else "no"]]
+    return (NOTEBOOK_CSS + "<div><b>fogref Truth</b>" + _figures_row(thumbs)
+            + table_html(["", ""], rows) + "</div>")
+
+
+def check_html(result) -> str:
+    """A :class:`~fogref.compare.results.CheckResult`'s notebook display: the verdict, thumbnails of the
+    signed error of each part, and the rows with a tolerance (all rows when none has one)."""
+    rows = [r for r in result.rows if r.tolerance is not None] or list(result.rows)
+    thumbs = [(f"{p}: candidate − truth", _diverging_thumb(e)) for p, e in result.errors.items()]
+    colour = {"pass": "#dfd", "fail": "#fdd"}.get(result.verdict, "#ffd")
+    return (NOTEBOOK_CSS + f'<div><b>fogref check</b>: {esc(result.candidate)} vs {esc(result.truth)} '
+            f'<span style="background:{colour};padding:1px 8px;font-weight:bold">{esc(result.verdict)}</span> '
+            f"({result.confidence:.0%} intervals, {esc(result.method_text)})" + _figures_row(thumbs)
+            + check_rows_html(rows, result.confidence) + "</div>")

@@ -1,0 +1,61 @@
+"""A sweep's table in a notebook: :func:`sweep_table` gives a :class:`SweepTable` that Jupyter shows
+as HTML (the main columns, the plots as thumbnails, the row count and the failed configurations).
+
+``Truth`` and ``CheckResult`` display themselves (their ``_repr_html_``,
+:func:`fogref.html.inline.truth_html` and :func:`~fogref.html.inline.check_html`).
+
+Examples
+--------
+>>> root = Path(__file__).resolve().parents[2]
+>>> t = sweep_table(root / "reports/sweeps/unreal_sun_falloff_g")
+>>> len(t.frame), bool(t.frame["status"].eq("ok").all())
+(48, True)
+>>> "<table" in t._repr_html_()
+True
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+from fogref.html.inline import NOTEBOOK_CSS, esc, png_data_uri, table_html
+
+#: Columns shown first (when present), after the swept parameters.
+MAIN_COLUMNS = ("model", "status", "final.all.rmse", "final.all.rmse_debiased", "final.all.relmse",
+                "final.all.delta_e2000_mean", "final.all.flip_mean", "inscatter.all.rmse", "transmittance.all.rmse")
+
+
+@dataclass
+class SweepTable:
+    """A sweep's table: ``frame`` (pandas DataFrame of ``results.csv``), ``parameters`` (the swept
+    ones), ``plots`` (the PNGs of ``plots/``) and ``folder``."""
+
+    frame: object
+    parameters: list
+    plots: list
+    folder: Path
+
+    def _repr_html_(self, max_rows: int = 60) -> str:
+        df = self.frame
+        cols = [c for c in ("config_id", *self.parameters, *MAIN_COLUMNS) if c in df.columns]
+        shown = df[cols].head(max_rows)
+        failed = int((df["status"] != "ok").sum()) if "status" in df.columns else 0
+        thumbs = "".join(f'<img title="{esc(p.stem)}" src="{png_data_uri(p)}" style="width:220px;margin:2px">'
+                         for p in self.plots[:12])
+        return (NOTEBOOK_CSS + f"<div><b>fogref sweep</b> {esc(self.folder.name)}: {len(df)} rows, "
+                f"{failed} failed; swept {esc(', '.join(self.parameters))}<div>{thumbs}</div>"
+                + table_html(cols, shown.values.tolist())
+                + (f"<p>first {max_rows} rows of {len(df)}</p>" if len(df) > max_rows else "") + "</div>")
+
+
+def sweep_table(folder, table: str = "results") -> SweepTable:
+    """The :class:`SweepTable` of a sweep's output folder (``results.csv``, ``sweep.json``, ``plots/``)."""
+    import pandas as pd
+
+    folder = Path(folder)
+    info = json.loads((folder / "sweep.json").read_text()) if (folder / "sweep.json").is_file() else {}
+    params = list(info.get("parameters") or {})
+    plots = sorted((folder / "plots").glob("*.png")) if (folder / "plots").is_dir() else []
+    return SweepTable(pd.read_csv(folder / f"{table}.csv"), params, plots, folder)
