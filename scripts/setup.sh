@@ -2,7 +2,8 @@
 # Create .venv and install fogref with everything it needs, on a fresh machine: the exact
 # versions of requirements.lock, then fogref itself (editable, no further dependencies).
 # Installs Debian's libllvm19 when no LLVM >= 16 is present (Dr.Jit's LLVM back end
-# aborts with LLVM 15 on AVX-512 CPUs and refuses LLVM 14).
+# aborts with LLVM 15 on AVX-512 CPUs and refuses LLVM 14), and Debian's chromium and
+# chromium-driver for the browser tests of the HTML reports (skipped without them).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -18,6 +19,20 @@ if ! have_llvm && [ -z "${DRJIT_LIBLLVM_PATH:-}" ]; then
     echo "setup: no LLVM >= 16 found. Install one (e.g. 'sudo apt-get install libllvm19')" >&2
     echo "       or set DRJIT_LIBLLVM_PATH=/path/to/libLLVM.so" >&2
     exit 1
+  fi
+fi
+
+# the HTML reports' browser tests (tests/test_html_browser.py) drive Debian's headless Chromium
+# through chromium-driver; without them those tests skip, saying so
+if ! command -v chromium >/dev/null || ! command -v chromedriver >/dev/null; then
+  if command -v apt-get >/dev/null && [ "$(id -u)" = 0 ]; then
+    echo "setup: installing chromium and chromium-driver (the browser tests of the HTML reports)"
+    { apt-get update -qq \
+      && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver >/dev/null; } \
+      || echo "setup: chromium could not be installed; the browser tests will skip" >&2
+  else
+    echo "setup: no chromium/chromedriver; the browser tests will skip" \
+      "(install them with 'sudo apt-get install chromium chromium-driver')" >&2
   fi
 fi
 
