@@ -5,7 +5,7 @@
 reports/unreal_study/report.html (from summary.json, budget.json and compare/: the truth,
 out/valley.exr, is not committed, so the viewer shows the compared parts, with the noise of
 the error as their standard error) and reports/sweeps/unreal_sun_falloff_g/report.html (from
-results.csv and plots/), each with report.png (the page in headless Chromium) beside it.
+results.csv, with plots/ redrawn from it), each with report.png (the page in headless Chromium) beside it.
 No study or sweep is re-run.
 """
 
@@ -22,9 +22,21 @@ from browser_util import console_errors, find_browser, load, screenshot, start  
 from fogref.html.reports import write_study_html, write_sweep_html  # noqa: E402
 
 
+def replot_sweep(folder: Path) -> None:
+    """The sweep's plots again from its committed table (fogref.study.sweep.table.plot_table)."""
+    import pandas as pd
+
+    from fogref.study.sweep import load_sweep
+    from fogref.study.sweep.table import plot_table
+
+    spec = load_sweep(folder / "SWEEP.toml")
+    plot_table(pd.read_csv(folder / "results.csv"), spec, folder / "plots")
+
+
 def main() -> int:
-    pages = [write_study_html(ROOT / "reports/unreal_study"),
-             write_sweep_html(ROOT / "reports/sweeps/unreal_sun_falloff_g")]
+    sweep = ROOT / "reports/sweeps/unreal_sun_falloff_g"
+    replot_sweep(sweep)
+    pages = [write_study_html(ROOT / "reports/unreal_study"), write_sweep_html(sweep)]
     for p in pages:
         print(f"{p.relative_to(ROOT)}: {p.stat().st_size / 1e6:.2f} MB")
     *_, why = find_browser()

@@ -11,6 +11,7 @@ import json
 from pathlib import Path
 
 from fogref.atomic import atomic_write, save_figure_atomic, write_text_atomic
+from fogref.study.plot_units import metric_label, parameter_label
 from fogref.study.sweep.spec import SweepSpec
 
 __all__ = ["DEFAULT_PLOT_METRICS", "plot_table", "write_table"]
@@ -80,18 +81,21 @@ def plot_table(df, spec: SweepSpec, plot_dir: Path) -> list[Path]:
         numeric = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in ok[param])
         for metric in metrics:
             fig, ax = plt.subplots(figsize=(5.2, 3.6))
-            for model, g in ok.groupby("model"):
+            for i, (model, g) in enumerate(ok.groupby("model")):
+                colour = f"C{i}"  # one colour per model: its points, error bars and mean line
                 x = g[param] if numeric else g[param].astype(str)
                 noise = _noise_column(ok, metric)
                 if noise:
-                    ax.errorbar(x, g[metric], yerr=2 * g[noise], fmt="o", ms=3, alpha=0.4, capsize=2)
+                    ax.errorbar(x, g[metric], yerr=2 * g[noise], fmt="o", ms=3, alpha=0.4, capsize=2,
+                                color=colour, label=f"{model}: each configuration (±2 standard errors)")
                 else:
-                    ax.plot(x, g[metric], "o", ms=3, alpha=0.4)
+                    ax.plot(x, g[metric], "o", ms=3, alpha=0.4, color=colour,
+                            label=f"{model}: each configuration")
                 mean = g.groupby(param)[metric].mean()
                 ax.plot(mean.index if numeric else mean.index.astype(str), mean.values, "-", lw=1.8,
-                        label=f"{model} (mean over other parameters)")
-            ax.set_xlabel(param)
-            ax.set_ylabel(metric)
+                        color=colour, label=f"{model}: mean over the other parameters")
+            ax.set_xlabel(parameter_label(param), fontsize=8)
+            ax.set_ylabel(metric_label(metric), fontsize=8)
             if (ok[metric] > 0).all() and ok[metric].max() > 20 * ok[metric].min():
                 ax.set_yscale("log")
             ax.legend(fontsize=7)

@@ -1,0 +1,50 @@
+"""Axis labels with units for the study's and the sweep's plots.
+
+A metric ``<part>.<region>.<name>`` of a sweep's table is in its part's units: radiance (the
+scene's units) for ``final``, ``inscatter``, ``attenuated_surface`` and ``composite``, 1 for
+``transmittance``; relative metrics, ΔE2000 and FLIP are dimensionless.  A swept parameter's unit
+is known for the scene's ``$default`` names and Unreal's parameters below, else the label says
+the value is as written in SWEEP.toml.
+
+Examples
+--------
+>>> metric_label("final.all.rmse")
+'final.all.rmse [radiance, scene units]'
+>>> metric_label("transmittance.all.rmse")
+'transmittance.all.rmse [1]'
+>>> parameter_label("sun_elevation"), parameter_label("something")
+('sun_elevation [degrees]', 'something (as in SWEEP.toml)')
+"""
+
+from __future__ import annotations
+
+#: Units of swept parameters fogref knows (scene ``$default`` names, Unreal's fog parameters).
+PARAMETER_UNITS = {
+    "sun_elevation": "degrees", "sun_azimuth": "degrees", "g": "1, Henyey-Greenstein asymmetry",
+    "FogHeightFalloff": "Unreal's FogHeightFalloff: falloff = 0.0693147 × value [1/m]",
+    "falloff": "1/m", "density": "1/m", "sigma_t": "1/m", "albedo": "1", "fov": "degrees",
+    "FogDensity": "Unreal's FogDensity", "StartDistance": "cm", "FogCutoffDistance": "cm",
+    "FogMaxOpacity": "1", "spp": "samples per pixel",
+}
+DIMENSIONLESS = ("relmse", "rel_", "delta_e2000", "flip")
+
+
+def metric_label(metric: str) -> str:
+    """``metric`` with its unit in brackets (see the module's docstring)."""
+    part, _, rest = metric.partition(".")
+    name = rest.rsplit(".", 1)[-1]
+    if name.startswith("delta_e2000"):
+        unit = "ΔE2000"
+    elif name.startswith("flip"):
+        unit = "HDR-FLIP, 0..1"
+    elif any(name.startswith(d) for d in DIMENSIONLESS) or part == "transmittance":
+        unit = "1"
+    else:
+        unit = "radiance, scene units"
+    return f"{metric} [{unit}]"
+
+
+def parameter_label(name: str) -> str:
+    """A swept parameter with its unit (a model parameter ``label.name`` by its ``name``)."""
+    unit = PARAMETER_UNITS.get(name) or PARAMETER_UNITS.get(name.rsplit(".", 1)[-1])
+    return f"{name} [{unit}]" if unit else f"{name} (as in SWEEP.toml)"
