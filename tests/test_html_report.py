@@ -159,3 +159,29 @@ def test_notebook_displays(truths):
     assert r.verdict in h and "v-" in h and h.count("data:image/png") == len(r.errors)
     s = sweep_table("reports/sweeps/unreal_sun_falloff_g")._repr_html_()
     assert "<table" in s and "FogHeightFalloff" in s and "data:image/png" in s
+
+
+def test_study_and_sweep_pages_from_committed_data(tmp_path):
+    """The study page (fit, budget, the comparison's viewer and tables) and the sweep page (plots,
+    table) from the committed example data, with no network reference."""
+    import shutil
+
+    from conftest import ROOT
+    from fogref.html.reports import write_study_html, write_sweep_html
+
+    study = tmp_path / "study"
+    (study / "compare").mkdir(parents=True)
+    for rel in ("summary.json", "budget.json", "budget.png", "compare/metrics.json", "compare/errors.exr"):
+        shutil.copy(ROOT / "reports/unreal_study" / rel, study / rel)
+    html = write_study_html(study).read_text()
+    d = _data(html)
+    assert [layer["part"] for layer in d["layers"]] == ["final", "T", "inscatter", "attenuated_surface"]
+    assert (d["width"], d["height"]) == (320, 180)
+    assert "Error budget" in html and "FogHeightFalloff" in html and html.count("data:image/png") == 1
+    assert "http://" not in html and "https://" not in html
+    sweep = tmp_path / "sweep"
+    shutil.copytree(ROOT / "reports/sweeps/unreal_sun_falloff_g", sweep,
+                    ignore=shutil.ignore_patterns("report.*", "configs"))
+    html = write_sweep_html(sweep).read_text()
+    assert html.count("data:image/png") == len(list((sweep / "plots").glob("*.png"))) > 0
+    assert html.count("<tr") == 48 + 1 and "sun_elevation" in html
