@@ -110,6 +110,13 @@ def test_probe_pixel_readout_and_canvas_match_the_exr(driver, tiny_report):
         model = float(driver.find_element("id", f"ro-model-{c}").text)
         error = float(driver.find_element("id", f"ro-error-{c}").text)
         assert model == pytest.approx(value + error, rel=1e-3, abs=1e-6)
+    # another part: the pinned readout follows it (T: no Monte Carlo noise in a pixel-exact truth)
+    from selenium.webdriver.support.ui import Select
+
+    Select(driver.find_element("id", "fr-part")).select_by_value("T")
+    t_r = float(driver.find_element("id", "ro-truth-R").get_attribute("data-value"))
+    assert t_r == pytest.approx(t.transmittance[y, x, 0], rel=2.0**-11)
+    Select(driver.find_element("id", "fr-part")).select_by_value("final")
     # the canvas is fogref.display.tone_map of the half-float truth at the part's exposure (JS == Python)
     ex = _data(html)["layers"][0]["exposure"]
     assert _pixel(driver, x, y)[:3] == _expected_8bit(t.final[y, x], ex)

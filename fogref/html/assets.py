@@ -94,7 +94,8 @@ var D = JSON.parse(el.textContent), W = D.width, H = D.height, N = W * H;
 var $ = function (id) { return document.getElementById(id); };
 var layers = {}, regionBits = null;
 var state = {part: D.layers[0].part, a: "truth", b: "model", show: "a", mode: "single", stops: 0,
-             errmode: "signed", errstops: 0, region: 0, swipe: 0.5, pin: null};
+             errmode: "signed", errstops: 0, region: 0, swipe: 0.5, pin: null,
+             hover: null};
 var timer = null;
 
 function layer() { return layers[state.part]; }
@@ -163,7 +164,8 @@ function render() {
   $("fr-bar-hi").textContent = lim.toPrecision(3);
   $("fr-showing").textContent = state.mode === "swipe" ? A + " | " + B :
     (one === null ? (state.show === "a" ? A : B) : one);
-  if (state.pin) readout(state.pin[0], state.pin[1]);
+  var at = state.pin || state.hover;  // the readout follows the part and the view
+  if (at) readout(at[0], at[1]);
   document.body.setAttribute("data-rendered", String(+(document.body.getAttribute("data-rendered") || 0) + 1));
 }
 function f(v) { return isFinite(v) ? v.toPrecision(5) : "\u2014"; }
@@ -223,9 +225,15 @@ function bind() {
     return [Math.min(W - 1, Math.max(0, Math.floor((e.clientX - r.left) * W / r.width))),
             Math.min(H - 1, Math.max(0, Math.floor((e.clientY - r.top) * H / r.height)))];
   };
-  cv.addEventListener("mousemove", function (e) { if (!state.pin) { var p = at(e); readout(p[0], p[1]); } });
-  cv.addEventListener("click", function (e) { state.pin = state.pin ? null : at(e);
-    if (state.pin) readout(state.pin[0], state.pin[1]); });
+  cv.addEventListener("mousemove", function (e) {
+    state.hover = at(e);
+    if (!state.pin) readout(state.hover[0], state.hover[1]);
+  });
+  cv.addEventListener("click", function (e) {
+    state.pin = state.pin ? null : at(e);
+    var p = state.pin || at(e);
+    readout(p[0], p[1]);
+  });
   document.addEventListener("keydown", function (e) {
     if (e.key === "f" || e.key === " ") { e.preventDefault(); $("fr-flip").click(); }
   });
@@ -243,7 +251,8 @@ Promise.all(jobs).then(function () {
   var cv = $("fr-canvas"); cv.width = W; cv.height = H;
   cv.style.width = Math.min(4, Math.max(1, Math.floor(720 / W))) * W + "px";
   $("fr-bar").style.width = cv.style.width; $("fr-barlabels").style.width = cv.style.width;
-  render(); readout(Math.floor(W / 2), Math.floor(H / 2));
+  state.hover = [Math.floor(W / 2), Math.floor(H / 2)];
+  render();
   document.body.setAttribute("data-ready", "1");
 }).catch(function (err) { console.error("fogref viewer: " + err); });
 })();
