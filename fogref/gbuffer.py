@@ -298,7 +298,8 @@ class Truth:
             self.corr = {k: np.ones(v.shape) for k, v in self.stderr.items()}
 
     def _repr_html_(self) -> str:
-        """Jupyter's display: thumbnails of every part and the provenance (:func:`fogref.html.inline.truth_html`)."""
+        """Jupyter's display: thumbnails of every part and the provenance
+        (:func:`fogref.html.inline.truth_html`)."""
         from fogref.html.inline import truth_html
 
         return truth_html(self)

@@ -54,7 +54,8 @@ def main() -> int:
                 drv.execute_script(
                     "var s=function(id,v){var e=document.getElementById(id);e.value=v;"
                     "e.dispatchEvent(new Event('change'));};s('fr-b','error');s('fr-mode','swipe');"
-                    "window.fogrefViewer.readout(200, 150);")
+                    "window.fogrefViewer.readout(200, 150);"
+                )
             shot = screenshot(drv, p.with_suffix(".png"))
             print(f"{shot.relative_to(ROOT)}")
     finally:

@@ -22,8 +22,14 @@ def find_browser() -> tuple[str | None, str | None, str]:
     b = next((shutil.which(n) for n in BROWSERS if shutil.which(n)), None)
     d = next((shutil.which(n) for n in DRIVERS if shutil.which(n)), None)
     if not b or not d:
-        return b, d, ("no chromium/chromedriver on PATH (apt-get install chromium chromium-driver; "
-                      "scripts/setup.sh does it where it runs as root)")
+        return (
+            b,
+            d,
+            (
+                "no chromium/chromedriver on PATH (apt-get install chromium chromium-driver; "
+                "scripts/setup.sh does it where it runs as root)"
+            ),
+        )
     return b, d, ""
 
 
@@ -37,8 +43,15 @@ def start(width: int = 1400, height: int = 1100):
         raise RuntimeError(why)
     o = webdriver.ChromeOptions()
     o.binary_location = browser
-    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-              f"--window-size={width},{height}", "--force-device-scale-factor=1", "--hide-scrollbars"):
+    for a in (
+        "--headless=new",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-dev-shm-usage",
+        f"--window-size={width},{height}",
+        "--force-device-scale-factor=1",
+        "--hide-scrollbars",
+    ):
         o.add_argument(a)
     o.set_capability("goog:loggingPrefs", {"browser": "ALL", "performance": "ALL"})
     return webdriver.Chrome(service=Service(driver), options=o)

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from browser_util import console_errors, find_browser, load, requests, screenshot, start
+
 from conftest import ROOT, SCENES
 
 _, _, WHY = find_browser()
@@ -40,8 +40,15 @@ def tiny_report(tmp_path_factory, mitsuba):
     from fogref.render.render import render
 
     d = tmp_path_factory.mktemp("browser")
-    exr = render(SCENES / "valley.xml", d / "t.exr", spp=16, seed=0, overrides={"res": 16, "resy": 9},
-                 progress=False, png=False)
+    exr = render(
+        SCENES / "valley.xml",
+        d / "t.exr",
+        spp=16,
+        seed=0,
+        overrides={"res": 16, "resy": 9},
+        progress=False,
+        png=False,
+    )
     main(["compare", str(exr), "--model", "ue4", "--from-scene", "--out", str(d / "cmp"), "--no-figures"])
     return exr, d / "cmp" / "report.html"
 
@@ -59,7 +66,10 @@ def _canvas(drv) -> str:
 def _pixel(drv, x, y) -> list[int]:
     return drv.execute_script(
         "var c=document.getElementById('fr-canvas');"
-        "return Array.from(c.getContext('2d').getImageData(arguments[0],arguments[1],1,1).data);", x, y)
+        "return Array.from(c.getContext('2d').getImageData(arguments[0],arguments[1],1,1).data);",
+        x,
+        y,
+    )
 
 
 def _rendered(drv) -> int:
@@ -120,8 +130,10 @@ def test_probe_pixel_readout_and_canvas_match_the_exr(driver, tiny_report):
     # the canvas is fogref.display.tone_map of the half-float truth at the part's exposure (JS == Python)
     ex = _data(html)["layers"][0]["exposure"]
     assert _pixel(driver, x, y)[:3] == _expected_8bit(t.final[y, x], ex)
-    js = driver.execute_script("return [0.0, 0.001, 0.0031308, 0.2, 0.7, 1.5, NaN].map(function(v)"
-                               "{return window.fogrefToneMap(v, 1.3);})")
+    js = driver.execute_script(
+        "return [0.0, 0.001, 0.0031308, 0.2, 0.7, 1.5, NaN].map(function(v)"
+        "{return window.fogrefToneMap(v, 1.3);})"
+    )
     from fogref.display import tone_map
 
     py = tone_map(np.array([0.0, 0.001, 0.0031308, 0.2, 0.7, 1.5, np.nan]), 1.3)
@@ -177,8 +189,9 @@ def test_flip_ab_shows_the_other_image(driver, tiny_report):
     assert console_errors(driver) == []
 
 
-@pytest.mark.parametrize("rel", ["reports/unreal_study/report.html",
-                                 "reports/sweeps/unreal_sun_falloff_g/report.html"])
+@pytest.mark.parametrize(
+    "rel", ["reports/unreal_study/report.html", "reports/sweeps/unreal_sun_falloff_g/report.html"]
+)
 def test_committed_example_reports_load_offline(driver, rel, tmp_path):
     path = ROOT / rel
     if not path.is_file():

@@ -27,8 +27,15 @@ def truths(tmp_path_factory, mitsuba):
     d = tmp_path_factory.mktemp("html_truths")
     out = {}
     for name, seed, extra in (("s0", 0, {}), ("s1", 1, {}), ("sun30", 0, {"sun_elevation": 30})):
-        out[name] = render(SCENES / "valley.xml", d / f"{name}.exr", spp=16, seed=seed,
-                           overrides={**TINY, **extra}, progress=False, png=False)
+        out[name] = render(
+            SCENES / "valley.xml",
+            d / f"{name}.exr",
+            spp=16,
+            seed=seed,
+            overrides={**TINY, **extra},
+            progress=False,
+            png=False,
+        )
     return out
 
 
@@ -52,7 +59,9 @@ def test_half_encoding_round_trip_is_half_rounding():
 @pytest.mark.render
 def test_diff_same_scene_different_seeds_equal_within_noise(truths, tmp_path, capsys):
     js = tmp_path / "d.json"
-    code = main(["diff", str(truths["s0"]), str(truths["s1"]), "--json", str(js), "--out", str(tmp_path / "r")])
+    code = main(
+        ["diff", str(truths["s0"]), str(truths["s1"]), "--json", str(js), "--out", str(tmp_path / "r")]
+    )
     out = capsys.readouterr().out
     assert code == 0, out
     assert "verdict: equal within noise" in out
@@ -133,11 +142,21 @@ def test_compare_batch_three_images_one_table(truths, tmp_path, capsys):
     assert float(rows[1]["final/all:rel_bias"]) == pytest.approx(0.2, abs=0.02)
     d = json.loads((out / "batch.json").read_text())
     assert d["exit_code"] == 1 and len(d["rows"]) == 3
-    assert (out / "report.html").is_file() and all((out / n / "report.html").is_file()
-                                                  for n in ("exact", "bright", "dark"))
+    assert (out / "report.html").is_file() and all(
+        (out / n / "report.html").is_file() for n in ("exact", "bright", "dark")
+    )
     # a pattern gives the same three images (sorted)
-    code = main(["compare", str(truths["s0"]), "--image", str(tmp_path / "engine" / "*.exr"),
-                 "--out", str(tmp_path / "batch2"), "--no-figures"])
+    code = main(
+        [
+            "compare",
+            str(truths["s0"]),
+            "--image",
+            str(tmp_path / "engine" / "*.exr"),
+            "--out",
+            str(tmp_path / "batch2"),
+            "--no-figures",
+        ]
+    )
     assert code == 1
     assert len(list(csv.DictReader(open(tmp_path / "batch2" / "batch.csv")))) == 3
     capsys.readouterr()
@@ -180,8 +199,11 @@ def test_study_and_sweep_pages_from_committed_data(tmp_path):
     assert "Error budget" in html and "FogHeightFalloff" in html and html.count("data:image/png") == 1
     assert "http://" not in html and "https://" not in html
     sweep = tmp_path / "sweep"
-    shutil.copytree(ROOT / "reports/sweeps/unreal_sun_falloff_g", sweep,
-                    ignore=shutil.ignore_patterns("report.*", "configs"))
+    shutil.copytree(
+        ROOT / "reports/sweeps/unreal_sun_falloff_g",
+        sweep,
+        ignore=shutil.ignore_patterns("report.*", "configs"),
+    )
     html = write_sweep_html(sweep).read_text()
     assert html.count("data:image/png") == len(list((sweep / "plots").glob("*.png"))) > 0
     assert html.count("<tr") == 48 + 1 and "sun_elevation" in html

@@ -22,8 +22,17 @@ from fogref.cli.checks import Check
 from fogref.errors import FogrefError
 
 #: Descriptive metrics of the ``final`` part over all pixels added to each row (metrics.json keys).
-DESCRIPTIVE = ("rmse", "rmse_stderr", "rmse_noise_floor", "relmse", "relmse_stderr", "mean_error",
-               "mean_error_stderr", "delta_e2000_mean", "flip_mean")
+DESCRIPTIVE = (
+    "rmse",
+    "rmse_stderr",
+    "rmse_noise_floor",
+    "relmse",
+    "relmse_stderr",
+    "mean_error",
+    "mean_error_stderr",
+    "delta_e2000_mean",
+    "flip_mean",
+)
 
 
 class ImageList(Check):
@@ -76,7 +85,7 @@ def batch_rows(results) -> tuple[list[dict], list[str]]:
             key = f"{r.part}/{r.region}:{r.metric}"
             for k, v in (("", r.estimate), (".low", r.low), (".high", r.high), (".verdict", r.verdict)):
                 row[key + k] = v
-        final = (report.get("metrics", {}).get("final") or report.get("metrics", {}).get("composite") or {})
+        final = report.get("metrics", {}).get("final") or report.get("metrics", {}).get("composite") or {}
         for k in DESCRIPTIVE:
             row[f"final.all.{k}"] = (final.get("all") or {}).get(k)
         rows.append(row)
@@ -98,15 +107,19 @@ def run_batch(o, given, default_out) -> int:
 
     for opt in ("transmittance", "inscatter", "fog_colour", "json", "junit"):
         if opt in given:
-            raise UsageError(f"fogref compare: --{opt.replace('_', '-')} does not apply to several --image files "
-                             "(the batch writes batch.json and batch.csv)")
+            flag = "--" + opt.replace("_", "-")
+            raise UsageError(
+                f"fogref compare: {flag} does not apply to several --image files "
+                "(the batch writes batch.json and batch.csv)"
+            )
     options = {"tolerances": o.tolerance, "distance_bands": o.distance_bands, "confidence": o.confidence}
     truth = load_truth(o.exr)
     out = Path(o.out) if o.out else Path(default_out)
     results = []
     for image, name in zip(o.image, _stem_names(o.image)):
-        imgs = load_engine_images(image, encoding=o.encoding, exposure=o.exposure, shape=truth.shape,
-                                  truth_name=str(o.exr))
+        imgs = load_engine_images(
+            image, encoding=o.encoding, exposure=o.exposure, shape=truth.shape, truth_name=str(o.exr)
+        )
         result = check(truth, imgs, **options)
         report = compare_images(truth, imgs, out / name, figures=not o.no_figures, check=result)
         write_compare_html(out / name, truth)
@@ -122,8 +135,13 @@ def run_batch(o, given, default_out) -> int:
     write_text_atomic(out / "batch.csv", buf.getvalue())
     codes = [exit_code(r.verdict, o.inconclusive) for _, _, r, _ in results]
     code = 1 if 1 in codes else 3 if 3 in codes else 0
-    write_text_atomic(out / "batch.json", json.dumps({"truth": str(o.exr), "exit_code": code, "columns": cols,
-                                                      "rows": rows}, indent=2, allow_nan=False) + "\n")
+    write_text_atomic(
+        out / "batch.json",
+        json.dumps(
+            {"truth": str(o.exr), "exit_code": code, "columns": cols, "rows": rows}, indent=2, allow_nan=False
+        )
+        + "\n",
+    )
     write_batch_html(out, rows, str(o.exr), cols)
     print(f"table: {out / 'batch.csv'}; report: {out / 'report.html'}")
     print(f"exit code {code}")

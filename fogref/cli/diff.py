@@ -27,21 +27,43 @@ EPILOG = "exit codes: 0 equal (within noise), 1 differ, 2 usage or input error"
 
 @dataclass
 class Options:
-    a: str = option(help="first truth EXR or image (.exr, .png, .hdr)", positional=True,
-                    check=PathArg(must_exist=True), metavar="A")
-    b: str = option(help="second truth EXR or image", positional=True, check=PathArg(must_exist=True),
-                    metavar="B")
-    confidence: float = option(0.99, "level of the whole verdict (Bonferroni over the rows)",
-                               check=Number(0.0, 1.0, lo_open=True, hi_open=True), metavar="C",
-                               api="fogref.compare.diff:diff")
-    tolerance: float = option(0.0, "two images: largest |B - A| still equal [the images' units]",
-                              check=Number(0.0), metavar="X", api="fogref.compare.diff:diff")
-    encoding: str = option("auto", "how images (not truths) are encoded (auto: 8-bit PNG is sRGB)",
-                           check=Choice(("auto", "linear", "srgb")))
-    json: str | None = option(None, "write the verdict, the rows and the exit code as JSON", check=PathArg(),
-                              metavar="FILE")
-    out: str | None = option(None, "also write report.html (the viewer: A as the truth, B as the candidate)",
-                             check=PathArg(), metavar="DIR")
+    a: str = option(
+        help="first truth EXR or image (.exr, .png, .hdr)",
+        positional=True,
+        check=PathArg(must_exist=True),
+        metavar="A",
+    )
+    b: str = option(
+        help="second truth EXR or image", positional=True, check=PathArg(must_exist=True), metavar="B"
+    )
+    confidence: float = option(
+        0.99,
+        "level of the whole verdict (Bonferroni over the rows)",
+        check=Number(0.0, 1.0, lo_open=True, hi_open=True),
+        metavar="C",
+        api="fogref.compare.diff:diff",
+    )
+    tolerance: float = option(
+        0.0,
+        "two images: largest |B - A| still equal [the images' units]",
+        check=Number(0.0),
+        metavar="X",
+        api="fogref.compare.diff:diff",
+    )
+    encoding: str = option(
+        "auto",
+        "how images (not truths) are encoded (auto: 8-bit PNG is sRGB)",
+        check=Choice(("auto", "linear", "srgb")),
+    )
+    json: str | None = option(
+        None, "write the verdict, the rows and the exit code as JSON", check=PathArg(), metavar="FILE"
+    )
+    out: str | None = option(
+        None,
+        "also write report.html (the viewer: A as the truth, B as the candidate)",
+        check=PathArg(),
+        metavar="DIR",
+    )
 
 
 def run(o: Options, given=frozenset()) -> int:

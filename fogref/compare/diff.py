@@ -71,9 +71,11 @@ class DiffResult:
         """A text report: what was compared, each differing row (or the statistics), the verdict."""
         out = [f"diff: B = {self.b} ({self.kinds[1]}) against A = {self.a} ({self.kinds[0]})"]
         if self.rows:
-            out.append(f"  {len(self.rows)} rows tested (bias, rmse of T, inscatter, final per region), each at "
-                       f"{self.row_confidence:.6g} (Bonferroni: {self.confidence:.0%} overall); noise of B - A: "
-                       + ("both truths'" if self.kinds == ("truth", "truth") else "the truth's"))
+            out.append(
+                f"  {len(self.rows)} rows tested (bias, rmse of T, inscatter, final per region), "
+                f"each at {self.row_confidence:.6g} (Bonferroni: {self.confidence:.0%} overall); "
+                "noise of B - A: " + ("both truths'" if self.kinds == ("truth", "truth") else "the truth's")
+            )
             bad = [r for r in self.rows if r.differs]
             out += ["  differs: " + r.describe().replace(": reported", "") for r in bad[:12]]
             if len(bad) > 12:
@@ -86,9 +88,17 @@ class DiffResult:
     def to_dict(self) -> dict:
         """JSON-ready (no NaN)."""
         rows = [{**{k: v for k, v in vars(r).items()}, "differs": bool(r.differs)} for r in self.rows]
-        return {"a": self.a, "b": self.b, "kinds": list(self.kinds), "verdict": self.verdict,
-                "exit_code": self.code, "confidence": self.confidence, "row_confidence": self.row_confidence,
-                "stats": self.stats, "rows": rows}
+        return {
+            "a": self.a,
+            "b": self.b,
+            "kinds": list(self.kinds),
+            "verdict": self.verdict,
+            "exit_code": self.code,
+            "confidence": self.confidence,
+            "row_confidence": self.row_confidence,
+            "stats": self.stats,
+            "rows": rows,
+        }
 
 
 def is_truth(path) -> bool:
@@ -127,14 +137,20 @@ def diff_images(a, b, tolerance: float = 0.0, names=("A", "B")) -> DiffResult:
     if not (math.isfinite(tolerance) and tolerance >= 0):
         raise FogrefError(f"tolerance: {tolerance!r} must be a finite number >= 0")
     e = b - a
-    stats = {"rmse": float(np.sqrt(np.mean(e * e))), "mean": float(e.mean()), "max_abs": float(np.abs(e).max())}
+    stats = {
+        "rmse": float(np.sqrt(np.mean(e * e))),
+        "mean": float(e.mean()),
+        "max_abs": float(np.abs(e).max()),
+    }
     verdict = EQUAL_EXACT if stats["max_abs"] <= tolerance else DIFFER
-    return DiffResult(verdict, str(names[0]), str(names[1]), ("image", "image"), 1.0, stats=stats,
-                      errors={"final": e})
+    return DiffResult(
+        verdict, str(names[0]), str(names[1]), ("image", "image"), 1.0, stats=stats, errors={"final": e}
+    )
 
 
-def diff(a, b, *, confidence: float = 0.99, tolerance: float = 0.0, distance_bands=(100.0, 1000.0),
-         names=None) -> DiffResult:
+def diff(
+    a, b, *, confidence: float = 0.99, tolerance: float = 0.0, distance_bands=(100.0, 1000.0), names=None
+) -> DiffResult:
     """Whether ``b`` differs from ``a`` beyond noise (see the module's docstring).
 
     ``a``, ``b``: :class:`~fogref.gbuffer.Truth` or ``(H, W, 3)`` images; ``confidence``: of the

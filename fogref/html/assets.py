@@ -27,7 +27,8 @@ h1{font-size:20px}h2{font-size:17px;margin-top:28px;border-bottom:1px solid #ddd
 .v-inconclusive td,.verdict-inconclusive{background:#ffd}
 .verdict{display:inline-block;padding:2px 10px;border-radius:4px;font-weight:bold}
 #fr-viewer{display:flex;flex-wrap:nowrap;gap:16px;align-items:flex-start}
-#fr-controls{display:grid;grid-template-columns:max-content 210px;gap:4px 8px;align-content:start;font-size:13px}
+#fr-controls{display:grid;grid-template-columns:max-content 210px;gap:4px 8px;align-content:start;
+  font-size:13px}
 #fr-stage{position:relative;flex:0 0 auto}
 #fr-canvas{image-rendering:pixelated;cursor:crosshair;border:1px solid #888;display:block}
 #fr-bar{height:12px;margin-top:4px;border:1px solid #888}
@@ -166,14 +167,17 @@ function render() {
     (one === null ? (state.show === "a" ? A : B) : one);
   var at = state.pin || state.hover;  // the readout follows the part and the view
   if (at) readout(at[0], at[1]);
-  document.body.setAttribute("data-rendered", String(+(document.body.getAttribute("data-rendered") || 0) + 1));
+  var count = +(document.body.getAttribute("data-rendered") || 0) + 1;
+  document.body.setAttribute("data-rendered", String(count));
 }
 function f(v) { return isFinite(v) ? v.toPrecision(5) : "\u2014"; }
 function readout(x, y) {
   var L = layer(), i = y * W + x;
   $("ro-xy").textContent = "(" + x + ", " + y + ")";
   var names = [];
-  for (var r = 0; r < D.regions.length; r++) if (regionBits && (regionBits.data[i] & (1 << r))) names.push(D.regions[r]);
+  for (var r = 0; r < D.regions.length; r++) {
+    if (regionBits && (regionBits.data[i] & (1 << r))) names.push(D.regions[r]);
+  }
   $("ro-regions").textContent = "all" + (names.length ? ", " + names.join(", ") : "");
   for (var c = 0; c < 3; c++) {
     var ch = "RGB"[c], t = value(L, "truth", i, c), s = stderrOf(L, i, c);

@@ -20,8 +20,8 @@ Examples
 [[[0.0, 0.5, 2.0]]]
 >>> decode_mask(encode_mask(np.array([[True, False]]))).tolist()
 [[1, 0]]
->>> table_html(["a", "b"], [[1, "x<y"]])
-'<table class="fr-table"><thead><tr><th>a</th><th>b</th></tr></thead><tbody><tr><td>1</td><td>x&lt;y</td></tr></tbody></table>'
+>>> table_html(["a", "b"], [[1, "x<y"]]).split("<tbody>")[1]
+'<tr><td>1</td><td>x&lt;y</td></tr></tbody></table>'
 """
 
 from __future__ import annotations
@@ -49,8 +49,11 @@ def encode_half(image) -> dict:
         a = a[..., None]
     a = np.clip(np.where(np.isfinite(a), a, 0.0), -HALF_MAX, HALF_MAX).astype("<f2")
     raw = np.ascontiguousarray(a).reshape(-1).view(np.uint8).reshape(-1, 2).T.tobytes()
-    return {"shape": [int(s) for s in a.shape], "encoding": ENCODING,
-            "data": base64.b64encode(zlib.compress(raw, 9)).decode("ascii")}
+    return {
+        "shape": [int(s) for s in a.shape],
+        "encoding": ENCODING,
+        "data": base64.b64encode(zlib.compress(raw, 9)).decode("ascii"),
+    }
 
 
 def decode_half(enc: dict) -> np.ndarray:
@@ -65,8 +68,11 @@ def encode_mask(mask) -> dict:
     """A ``(H, W)`` array of small non-negative integers (< 256: a bool mask or region bits)
     as ``{"shape", "encoding": "u8-deflate", "data"}``."""
     a = np.asarray(mask).astype(np.uint8)
-    return {"shape": [int(s) for s in a.shape], "encoding": "u8-deflate",
-            "data": base64.b64encode(zlib.compress(a.tobytes(), 9)).decode("ascii")}
+    return {
+        "shape": [int(s) for s in a.shape],
+        "encoding": "u8-deflate",
+        "data": base64.b64encode(zlib.compress(a.tobytes(), 9)).decode("ascii"),
+    }
 
 
 def decode_mask(enc: dict) -> np.ndarray:
@@ -126,13 +132,13 @@ def table_html(header, rows, classes=None) -> str:
     for i, row in enumerate(rows):
         cls = f' class="{esc(classes[i])}"' if classes and classes[i] else ""
         body.append(f"<tr{cls}>" + "".join(f"<td>{esc(fmt(c))}</td>" for c in row) + "</tr>")
-    return (f'<table class="fr-table"><thead><tr>{head}</tr></thead><tbody>{"".join(body)}'
-            "</tbody></table>")
+    return f'<table class="fr-table"><thead><tr>{head}</tr></thead><tbody>{"".join(body)}</tbody></table>'
 
 
 def check_rows_html(rows, confidence: float | None = None) -> str:
     """The rows of a :class:`~fogref.compare.results.CheckResult` (objects or dicts) as a table, each
     row classed by its verdict (``v-pass``, ``v-fail``, ``v-inconclusive``, ...)."""
+
     def get(r, k):
         return r.get(k) if isinstance(r, dict) else getattr(r, k)
 
@@ -140,18 +146,33 @@ def check_rows_html(rows, confidence: float | None = None) -> str:
     for r in rows:
         est, lo, hi = get(r, "estimate"), get(r, "low"), get(r, "high")
         ci = "—" if est is None or lo is None else f"[{fmt(lo)}, {fmt(hi)}]"
-        out.append([get(r, "part"), get(r, "region"), get(r, "metric"), est, ci, get(r, "tolerance"),
-                    get(r, "verdict"), get(r, "pixels")])
+        out.append(
+            [
+                get(r, "part"),
+                get(r, "region"),
+                get(r, "metric"),
+                est,
+                ci,
+                get(r, "tolerance"),
+                get(r, "verdict"),
+                get(r, "pixels"),
+            ]
+        )
         cls.append("v-" + str(get(r, "verdict")))
     level = "" if confidence is None else f" ({confidence:.0%})"
-    return table_html(["part", "region", "metric", "estimate", f"interval{level}", "tolerance", "verdict",
-                       "pixels"], out, cls)
+    return table_html(
+        ["part", "region", "metric", "estimate", f"interval{level}", "tolerance", "verdict", "pixels"],
+        out,
+        cls,
+    )
 
 
 #: The CSS of notebook displays (a page has its own, :mod:`fogref.html.assets`).
-NOTEBOOK_CSS = ("<style>.fr-table{border-collapse:collapse;font:12px sans-serif}.fr-table td,.fr-table th"
-                "{border:1px solid #ccc;padding:2px 6px;text-align:right}.v-fail td{background:#fdd}"
-                ".v-pass td{background:#dfd}.v-inconclusive td{background:#ffd}</style>")
+NOTEBOOK_CSS = (
+    "<style>.fr-table{border-collapse:collapse;font:12px sans-serif}.fr-table td,.fr-table th"
+    "{border:1px solid #ccc;padding:2px 6px;text-align:right}.v-fail td{background:#fdd}"
+    ".v-pass td{background:#dfd}.v-inconclusive td{background:#ffd}</style>"
+)
 
 
 def _diverging_thumb(error, width: int = 160) -> str:
@@ -175,10 +196,10 @@ def _diverging_thumb(error, width: int = 160) -> str:
 
 
 def _figures_row(items) -> str:
-    return "<div>" + "".join(
-        f'<figure style="display:inline-block;margin:4px"><img src="{uri}" style="image-rendering:pixelated;'
-        f'width:160px"><figcaption style="font-size:11px">{esc(cap)}</figcaption></figure>' for cap, uri in items
-    ) + "</div>"
+    fig = '<figure style="display:inline-block;margin:4px">'
+    img = '<img style="image-rendering:pixelated;width:160px" src="{}">'
+    cap = '<figcaption style="font-size:11px">{}</figcaption></figure>'
+    return "<div>" + "".join(fig + img.format(u) + cap.format(esc(c)) for c, u in items) + "</div>"
 
 
 def truth_html(truth) -> str:
@@ -188,19 +209,38 @@ def truth_html(truth) -> str:
     from fogref.display import preview_exposure
 
     ex_final, ex_in = preview_exposure(truth.final), preview_exposure(truth.inscatter)
-    thumbs = [(p, thumbnail_uri(img, ex)) for p, img, ex in (
-        ("final", truth.final, ex_final), ("T", truth.transmittance, 1.0), ("inscatter", truth.inscatter, ex_in),
-        ("single", truth.single, ex_in), ("multiple", truth.multiple, ex_in), ("surface", truth.surface, ex_final))]
+    thumbs = [
+        (p, thumbnail_uri(img, ex))
+        for p, img, ex in (
+            ("final", truth.final, ex_final),
+            ("T", truth.transmittance, 1.0),
+            ("inscatter", truth.inscatter, ex_in),
+            ("single", truth.single, ex_in),
+            ("multiple", truth.multiple, ex_in),
+            ("surface", truth.surface, ex_final),
+        )
+    ]
     h, w = truth.shape
     a = truth.attrs
     with np.errstate(divide="ignore", invalid="ignore"):
         rel = truth.stderr["final"] / np.abs(truth.final)
     rel_noise = float(np.median(rel[np.isfinite(rel)])) if np.isfinite(rel).any() else None
-    rows = [["path", str(truth.path)], ["size", f"{w}×{h} px"], ["spp", truth.spp],
-            ["seed", a.get("fogref.seed")], ["scene", a.get("fogref.scene")],
-            ["median relative stderr of final", rel_noise], ["sun", "yes" if truth.sun_direction is not None else "no"]]
-    return (NOTEBOOK_CSS + "<div><b>fogref Truth</b>" + _figures_row(thumbs)
-            + table_html(["", ""], rows) + "</div>")
+    rows = [
+        ["path", str(truth.path)],
+        ["size", f"{w}×{h} px"],
+        ["spp", truth.spp],
+        ["seed", a.get("fogref.seed")],
+        ["scene", a.get("fogref.scene")],
+        ["median relative stderr of final", rel_noise],
+        ["sun", "yes" if truth.sun_direction is not None else "no"],
+    ]
+    return (
+        NOTEBOOK_CSS
+        + "<div><b>fogref Truth</b>"
+        + _figures_row(thumbs)
+        + table_html(["", ""], rows)
+        + "</div>"
+    )
 
 
 def check_html(result) -> str:
@@ -209,7 +249,12 @@ def check_html(result) -> str:
     rows = [r for r in result.rows if r.tolerance is not None] or list(result.rows)
     thumbs = [(f"{p}: candidate − truth", _diverging_thumb(e)) for p, e in result.errors.items()]
     colour = {"pass": "#dfd", "fail": "#fdd"}.get(result.verdict, "#ffd")
-    return (NOTEBOOK_CSS + f'<div><b>fogref check</b>: {esc(result.candidate)} vs {esc(result.truth)} '
-            f'<span style="background:{colour};padding:1px 8px;font-weight:bold">{esc(result.verdict)}</span> '
-            f"({result.confidence:.0%} intervals, {esc(result.method_text)})" + _figures_row(thumbs)
-            + check_rows_html(rows, result.confidence) + "</div>")
+    return (
+        NOTEBOOK_CSS + f"<div><b>fogref check</b>: {esc(result.candidate)} vs {esc(result.truth)} "
+        f'<span style="background:{colour};padding:1px 8px;font-weight:bold">'
+        f"{esc(result.verdict)}</span> "
+        f"({result.confidence:.0%} intervals, {esc(result.method_text)})"
+        + _figures_row(thumbs)
+        + check_rows_html(rows, result.confidence)
+        + "</div>"
+    )

@@ -23,8 +23,17 @@ from pathlib import Path
 from fogref.html.inline import NOTEBOOK_CSS, esc, png_data_uri, table_html
 
 #: Columns shown first (when present), after the swept parameters.
-MAIN_COLUMNS = ("model", "status", "final.all.rmse", "final.all.rmse_debiased", "final.all.relmse",
-                "final.all.delta_e2000_mean", "final.all.flip_mean", "inscatter.all.rmse", "transmittance.all.rmse")
+MAIN_COLUMNS = (
+    "model",
+    "status",
+    "final.all.rmse",
+    "final.all.rmse_debiased",
+    "final.all.relmse",
+    "final.all.delta_e2000_mean",
+    "final.all.flip_mean",
+    "inscatter.all.rmse",
+    "transmittance.all.rmse",
+)
 
 
 @dataclass
@@ -42,12 +51,17 @@ class SweepTable:
         cols = [c for c in ("config_id", *self.parameters, *MAIN_COLUMNS) if c in df.columns]
         shown = df[cols].head(max_rows)
         failed = int((df["status"] != "ok").sum()) if "status" in df.columns else 0
-        thumbs = "".join(f'<img title="{esc(p.stem)}" src="{png_data_uri(p)}" style="width:220px;margin:2px">'
-                         for p in self.plots[:12])
-        return (NOTEBOOK_CSS + f"<div><b>fogref sweep</b> {esc(self.folder.name)}: {len(df)} rows, "
-                f"{failed} failed; swept {esc(', '.join(self.parameters))}<div>{thumbs}</div>"
-                + table_html(cols, shown.values.tolist())
-                + (f"<p>first {max_rows} rows of {len(df)}</p>" if len(df) > max_rows else "") + "</div>")
+        thumbs = "".join(
+            f'<img title="{esc(p.stem)}" src="{png_data_uri(p)}" style="width:220px;margin:2px">'
+            for p in self.plots[:12]
+        )
+        return (
+            NOTEBOOK_CSS + f"<div><b>fogref sweep</b> {esc(self.folder.name)}: {len(df)} rows, "
+            f"{failed} failed; swept {esc(', '.join(self.parameters))}<div>{thumbs}</div>"
+            + table_html(cols, shown.values.tolist())
+            + (f"<p>first {max_rows} rows of {len(df)}</p>" if len(df) > max_rows else "")
+            + "</div>"
+        )
 
 
 def sweep_table(folder, table: str = "results") -> SweepTable:

@@ -59,8 +59,10 @@ only that is at hand).</p>
 
 def figure(path_or_bytes, caption: str) -> str:
     """A PNG figure embedded as a data URI, with its caption."""
-    return (f'<figure><img alt="{esc(caption)}" src="{png_data_uri(path_or_bytes)}">'
-            f"<figcaption>{esc(caption)}</figcaption></figure>")
+    return (
+        f'<figure><img alt="{esc(caption)}" src="{png_data_uri(path_or_bytes)}">'
+        f"<figcaption>{esc(caption)}</figcaption></figure>"
+    )
 
 
 def verdict_badge(verdict: str) -> str:
@@ -75,11 +77,16 @@ def page(title: str, sections: list[str], viewer: dict | None = None) -> str:
     if viewer is not None:
         blob = json.dumps(viewer, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
         data = f'<script type="application/json" id="fr-data">{blob}</script>'
-    return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-            f"<meta name=\"viewport\" content=\"width=device-width\"><title>{esc(title)}</title>"
-            f"<style>{CSS}</style></head><body>\n<h1>{esc(title)}</h1>\n"
-            + (VIEWER_HTML if viewer is not None else "") + "\n".join(sections) + "\n" + data
-            + f"\n<script>{JS}</script>\n</body></html>\n")
+    return (
+        '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+        f'<meta name="viewport" content="width=device-width"><title>{esc(title)}</title>'
+        f"<style>{CSS}</style></head><body>\n<h1>{esc(title)}</h1>\n"
+        + (VIEWER_HTML if viewer is not None else "")
+        + "\n".join(sections)
+        + "\n"
+        + data
+        + f"\n<script>{JS}</script>\n</body></html>\n"
+    )
 
 
 def write_page(path, title: str, sections: list[str], viewer: dict | None = None) -> Path:

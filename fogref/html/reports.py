@@ -18,10 +18,17 @@ from fogref.html.page import figure, verdict_badge, write_page
 from fogref.html.viewer import viewer_data
 
 #: Columns of the descriptive metric table: (metrics.json key, heading, with its ± stderr).
-METRIC_COLUMNS = (("pixels", "pixels", False), ("rmse", "RMSE", True), ("rmse_noise_floor", "RMSE noise floor",
-                  False), ("relmse", "relMSE", True), ("mean_error", "mean error", True),
-                  ("mean_abs_error", "mean |error|", False), ("delta_e2000_mean", "ΔE2000 mean", False),
-                  ("flip_mean", "FLIP mean", False), ("rmse_below_noise", "below the noise", False))
+METRIC_COLUMNS = (
+    ("pixels", "pixels", False),
+    ("rmse", "RMSE", True),
+    ("rmse_noise_floor", "RMSE noise floor", False),
+    ("relmse", "relMSE", True),
+    ("mean_error", "mean error", True),
+    ("mean_abs_error", "mean |error|", False),
+    ("delta_e2000_mean", "ΔE2000 mean", False),
+    ("flip_mean", "FLIP mean", False),
+    ("rmse_below_noise", "below the noise", False),
+)
 
 
 def _pm(s: dict, key: str, with_err: bool) -> str:
@@ -36,8 +43,8 @@ def metrics_table_html(metrics: dict, units: dict) -> str:
     for part, regions in metrics.items():
         for region, s in regions.items():
             rows.append([part, units.get(part, ""), region, *(_pm(s, k, e) for k, _, e in METRIC_COLUMNS)])
-    return '<div class="fr-wide">' + table_html(["part", "units", "region", *(h for _, h, _ in METRIC_COLUMNS)],
-                                                rows) + "</div>"
+    header = ["part", "units", "region", *(h for _, h, _ in METRIC_COLUMNS)]
+    return '<div class="fr-wide">' + table_html(header, rows) + "</div>"
 
 
 def _figures(folder: Path, names) -> list[str]:
@@ -53,22 +60,36 @@ def compare_sections(report: dict, folder: Path) -> list[str]:
     """The sections of a compare page below the viewer."""
     cand = report.get("candidate", {})
     check = report.get("check")
-    s = [f"<p>candidate: <b>{esc(cand.get('name', ''))}</b> ({esc(cand.get('kind', ''))}); truth "
-         f"<code>{esc(report.get('exr', ''))}</code>, {esc(report.get('truth', {}).get('spp'))} spp, "
-         f"{report['image']['width']}×{report['image']['height']} px.</p>"]
+    s = [
+        f"<p>candidate: <b>{esc(cand.get('name', ''))}</b> ({esc(cand.get('kind', ''))}); truth "
+        f"<code>{esc(report.get('exr', ''))}</code>, {esc(report.get('truth', {}).get('spp'))} spp, "
+        f"{report['image']['width']}×{report['image']['height']} px.</p>"
+    ]
     s += [f'<p class="fr-note">warning: {esc(w)}</p>' for w in report.get("warnings", [])]
     if check:
-        s += ["<h2>Check</h2>", f"<p>verdict: {verdict_badge(check['verdict'])} at "
-              f"{check['confidence']:.0%} confidence; intervals from the truth's per-pixel noise. A row passes "
-              "when its interval lies within the tolerance, fails when wholly outside, else is inconclusive.</p>",
-              '<div class="fr-wide">' + check_rows_html(check["rows"], check["confidence"]) + "</div>"]
-    s += ["<h2>Metrics</h2>", '<p class="fr-note">± one standard error from the truth\'s noise; the noise '
-          "floor is what a perfect candidate scores against this truth.</p>",
-          metrics_table_html(report.get("metrics", {}), report.get("units", {}))]
+        s += [
+            "<h2>Check</h2>",
+            f"<p>verdict: {verdict_badge(check['verdict'])} at "
+            f"{check['confidence']:.0%} confidence; intervals from the truth's per-pixel noise. A row "
+            "passes when its interval lies within the tolerance, fails when wholly outside, else is "
+            "inconclusive.</p>",
+            '<div class="fr-wide">' + check_rows_html(check["rows"], check["confidence"]) + "</div>",
+        ]
+    s += [
+        "<h2>Metrics</h2>",
+        '<p class="fr-note">± one standard error from the truth\'s noise; the noise '
+        "floor is what a perfect candidate scores against this truth.</p>",
+        metrics_table_html(report.get("metrics", {}), report.get("units", {})),
+    ]
     parts = list(report.get("metrics", {}))
-    figs = _figures(folder, [(f"heatmaps/{p}.png", f"{p}: error heatmaps") for p in parts]
-                    + [("error_vs_distance.png", "error vs distance"), ("error_vs_sun_angle.png",
-                                                                        "error vs angle to the sun")])
+    figs = _figures(
+        folder,
+        [(f"heatmaps/{p}.png", f"{p}: error heatmaps") for p in parts]
+        + [
+            ("error_vs_distance.png", "error vs distance"),
+            ("error_vs_sun_angle.png", "error vs angle to the sun"),
+        ],
+    )
     if figs:
         s += ["<h2>Figures</h2>", *figs]
     return s
@@ -100,8 +121,11 @@ def _csv_table(path: Path, columns=None, limit: int = 400) -> str:
             return v
 
     body = [[num(r[c]) for c in cols] for r in rows[:limit]]
-    more = f"<p class='fr-note'>first {limit} of {len(rows)} rows; all in {esc(path.name)}</p>" \
-        if len(rows) > limit else ""
+    more = (
+        f"<p class='fr-note'>first {limit} of {len(rows)} rows; all in {esc(path.name)}</p>"
+        if len(rows) > limit
+        else ""
+    )
     return '<div class="fr-wide">' + table_html(cols, body) + "</div>" + more
 
 
@@ -112,11 +136,24 @@ def write_sweep_html(sweep_dir, table: str = "results") -> Path:
     name = (info.get("spec") or {}).get("name") or info.get("name") or folder.name
     params = list((info.get("spec") or {}).get("parameters") or info.get("parameters") or {})
     csv_path = folder / f"{table}.csv"
-    cols = ["config_id", *params, "model", "status", "final.all.rmse", "final.all.rmse_stderr",
-            "final.all.rmse_debiased", "final.all.relmse", "final.all.delta_e2000_mean", "final.all.flip_mean",
-            "inscatter.all.rmse", "transmittance.all.rmse"]
-    s = [f"<p>sweep <b>{esc(name)}</b>: one row per configuration × model "
-         f"(<code>{esc(csv_path.name)}</code>; the Parquet file has every column).</p>"]
+    cols = [
+        "config_id",
+        *params,
+        "model",
+        "status",
+        "final.all.rmse",
+        "final.all.rmse_stderr",
+        "final.all.rmse_debiased",
+        "final.all.relmse",
+        "final.all.delta_e2000_mean",
+        "final.all.flip_mean",
+        "inscatter.all.rmse",
+        "transmittance.all.rmse",
+    ]
+    s = [
+        f"<p>sweep <b>{esc(name)}</b>: one row per configuration × model "
+        f"(<code>{esc(csv_path.name)}</code>; the Parquet file has every column).</p>"
+    ]
     plots = sorted((folder / "plots").glob("*.png")) if (folder / "plots").is_dir() else []
     if plots:
         s += ["<h2>Plots</h2>", *(figure(p, p.stem.replace("_vs_", " vs ")) for p in plots)]
@@ -133,13 +170,19 @@ def write_study_html(study_dir, truth=None) -> Path:
     summary = json.loads((folder / "summary.json").read_text()) if (folder / "summary.json").is_file() else {}
     prov = summary.get("provenance", {})
     if prov:
-        s += [f"<p>truth <code>{esc(prov.get('truth'))}</code> of <code>{esc(prov.get('scene'))}</code>, "
-              f"{esc(prov.get('spp'))} spp, seed {esc(prov.get('seed'))}.</p>"]
+        s += [
+            f"<p>truth <code>{esc(prov.get('truth'))}</code> of <code>{esc(prov.get('scene'))}</code>, "
+            f"{esc(prov.get('spp'))} spp, seed {esc(prov.get('seed'))}.</p>"
+        ]
     fit = summary.get("fit", {}).get("unreal") or {}
     if fit:
-        s += ["<h2>Fit (Unreal's fog parameters)</h2>",
-              table_html(["parameter", "value"], [[k, json.dumps(v) if isinstance(v, (list, dict)) else v]
-                                                  for k, v in fit.items()])]
+        s += [
+            "<h2>Fit (Unreal's fog parameters)</h2>",
+            table_html(
+                ["parameter", "value"],
+                [[k, json.dumps(v) if isinstance(v, (list, dict)) else v] for k, v in fit.items()],
+            ),
+        ]
     budget = folder / "budget.json"
     if budget.is_file():
         s += ["<h2>Error budget</h2>", _budget_html(json.loads(budget.read_text()))]
@@ -160,8 +203,12 @@ def _budget_html(budget) -> str:
     def walk(obj, path):
         if isinstance(obj, list) and obj and all(isinstance(x, dict) for x in obj):
             keys = [k for k in obj[0] if not isinstance(obj[0][k], (dict, list))]
-            out.append(f"<h3>{esc(path or 'budget')}</h3>" + '<div class="fr-wide">'
-                       + table_html(keys, [[x.get(k) for k in keys] for x in obj]) + "</div>")
+            out.append(
+                f"<h3>{esc(path or 'budget')}</h3>"
+                + '<div class="fr-wide">'
+                + table_html(keys, [[x.get(k) for k in keys] for x in obj])
+                + "</div>"
+            )
         elif isinstance(obj, dict):
             flat = {k: v for k, v in obj.items() if not isinstance(v, (dict, list))}
             if flat and path:
@@ -189,13 +236,20 @@ def write_batch_html(out_dir, rows: list[dict], truth_path: str, columns) -> Pat
             cells.append("—" if e is None else f"{fmt(e)} [{fmt(lo)}, {fmt(hi)}] {r.get(k + '.verdict')}")
         body.append(cells + [r.get(c) for c in desc])
     cls = ["v-" + str(r.get("verdict", "")) for r in rows]
-    s = [f"<p>{len(rows)} image(s) against <code>{esc(truth_path)}</code>; each image's full report "
-         "(viewer, figures) is in its own folder:</p><ul>"
-         + "".join(f'<li><a href="{esc(r["report"])}/report.html">{esc(r["image"])}</a>: '
-                   f'{verdict_badge(str(r.get("verdict")))}</li>' for r in rows) + "</ul>",
-         "<h2>Table</h2>", "<p class='fr-note'>estimate [interval] verdict per part over all pixels; "
-         "batch.csv has every region.</p>",
-         '<div class="fr-wide">' + table_html(["image", "verdict", *keys, *desc], body, cls) + "</div>"]
+    s = [
+        f"<p>{len(rows)} image(s) against <code>{esc(truth_path)}</code>; each image's full report "
+        "(viewer, figures) is in its own folder:</p><ul>"
+        + "".join(
+            f'<li><a href="{esc(r["report"])}/report.html">{esc(r["image"])}</a>: '
+            f"{verdict_badge(str(r.get('verdict')))}</li>"
+            for r in rows
+        )
+        + "</ul>",
+        "<h2>Table</h2>",
+        "<p class='fr-note'>estimate [interval] verdict per part over all pixels; "
+        "batch.csv has every region.</p>",
+        '<div class="fr-wide">' + table_html(["image", "verdict", *keys, *desc], body, cls) + "</div>",
+    ]
     return write_page(folder / "report.html", "fogref compare: a batch of images", s)
 
 
@@ -224,9 +278,11 @@ def write_diff_html(out_dir, result, a, b) -> Path:
         ch["distance"] = np.ones(a.shape[:2])
     title = f"fogref diff: {result.verdict}"
     data = viewer_data(truth, None, title=title, channels=ch, stderr=truth is not None)
-    s = [f"<p>B = <code>{esc(result.b)}</code> ({esc(result.kinds[1])}) against A = <code>{esc(result.a)}"
-         f"</code> ({esc(result.kinds[0])}): {verdict_badge(result.verdict)}</p>",
-         "<pre>" + esc("\n".join(result.lines())) + "</pre>"]
+    s = [
+        f"<p>B = <code>{esc(result.b)}</code> ({esc(result.kinds[1])}) against A = <code>{esc(result.a)}"
+        f"</code> ({esc(result.kinds[0])}): {verdict_badge(result.verdict)}</p>",
+        "<pre>" + esc("\n".join(result.lines())) + "</pre>",
+    ]
     if result.rows:
         s += ["<h2>Rows tested</h2>", check_rows_html(result.rows, result.row_confidence)]
     return write_page(folder / "report.html", title, s, data)

@@ -32,8 +32,13 @@ from fogref.html.inline import encode_half, encode_mask
 #: The truth's parts the viewer shows, in order (``T`` is the transmittance).
 TRUTH_PARTS = ("final", "T", "inscatter", "single", "multiple", "surface")
 #: A report's part name -> the truth's part it is compared with.
-REPORT_TO_TRUTH = {"final": "final", "transmittance": "T", "inscatter": "inscatter",
-                   "attenuated_surface": "attenuated_surface", "composite": "final"}
+REPORT_TO_TRUTH = {
+    "final": "final",
+    "transmittance": "T",
+    "inscatter": "inscatter",
+    "attenuated_surface": "attenuated_surface",
+    "composite": "final",
+}
 #: The exposure a truth part borrows (single and multiple: the inscatter's, so that they compare).
 EXPOSURE_FROM = {"single": "inscatter", "multiple": "inscatter"}
 UNITS_RADIANCE = "radiance (the scene's units)"
@@ -69,8 +74,15 @@ def _truth_part(truth, part: str) -> tuple[np.ndarray, np.ndarray | None]:
     return img, truth.stderr.get(part)
 
 
-def viewer_data(truth=None, report_dir=None, *, title: str = "", distance_bands=None,
-                stderr: bool = True, channels: dict | None = None) -> dict:
+def viewer_data(
+    truth=None,
+    report_dir=None,
+    *,
+    title: str = "",
+    distance_bands=None,
+    stderr: bool = True,
+    channels: dict | None = None,
+) -> dict:
     """The viewer's JSON-ready data (see the module's docstring); ``truth`` and/or a compare
     report folder ``report_dir`` (with ``errors.exr`` and ``metrics.json``).  ``distance_bands``
     [m]: the region bands (default: the report's check settings, else ``(100, 1000)``);
@@ -84,7 +96,8 @@ def viewer_data(truth=None, report_dir=None, *, title: str = "", distance_bands=
             meta = json.loads((rd / "metrics.json").read_text())
     compared = [p for p in REPORT_TO_TRUTH if f"{p}.error.R" in ch]
     if distance_bands is None:
-        distance_bands = ((meta.get("check") or {}).get("settings") or {}).get("distance_bands_m", (100.0, 1000.0))
+        settings = (meta.get("check") or {}).get("settings") or {}
+        distance_bands = settings.get("distance_bands_m", (100.0, 1000.0))
     if truth is not None:
         shape, geo = truth.shape, truth
     elif ch:
@@ -105,21 +118,34 @@ def viewer_data(truth=None, report_dir=None, *, title: str = "", distance_bands=
     def add(name, truth_img, std, rpart):
         src = EXPOSURE_FROM.get(name)
         ex_img = _truth_part(truth, src)[0] if (src and truth is not None) else truth_img
-        layer = {"part": name, "units": _units(name), "exposure": exposure(src or name, ex_img),
-                 "truth": encode_half(truth_img), "stderr": encode_half(std) if std is not None else None,
-                 "error": None, "valid": None, "noise": None, "error_limit": 1.0, "compared_as": rpart}
+        layer = {
+            "part": name,
+            "units": _units(name),
+            "exposure": exposure(src or name, ex_img),
+            "truth": encode_half(truth_img),
+            "stderr": encode_half(std) if std is not None else None,
+            "error": None,
+            "valid": None,
+            "noise": None,
+            "error_limit": 1.0,
+            "compared_as": rpart,
+        }
         if rpart is not None:
             err, valid = _rgb(ch, f"{rpart}.error"), np.asarray(ch[f"{rpart}.valid"]) > 0.5
             # the error's noise (mean over RGB): embedded only where the truth's stderr is not (a model's
             # or engine's error has the truth's noise plus a rounding floor of 4 ulp)
             noise = None if std is not None else encode_half(ch[f"{rpart}.noise"])
-            layer.update(error=encode_half(err), valid=encode_mask(valid), noise=noise,
-                         error_limit=error_limit(err, valid))
+            layer.update(
+                error=encode_half(err),
+                valid=encode_mask(valid),
+                noise=noise,
+                error_limit=error_limit(err, valid),
+            )
         layers.append(layer)
 
     by_truth = {REPORT_TO_TRUTH[p]: p for p in compared if p != "composite"}
     if truth is not None:
-        names = [p for p in TRUTH_PARTS] + (["attenuated_surface"] if "attenuated_surface" in by_truth else [])
+        names = list(TRUTH_PARTS) + (["attenuated_surface"] if "attenuated_surface" in by_truth else [])
         for p in names:
             img, std = _truth_part(truth, p)
             add(p, img, std if stderr else None, by_truth.get(p))
@@ -133,7 +159,13 @@ def viewer_data(truth=None, report_dir=None, *, title: str = "", distance_bands=
     regions = {k: v for k, v in region_masks(geo, tuple(distance_bands)).items() if k != "all"}
     bits = np.zeros(shape, np.uint8)
     for i, m in enumerate(regions.values()):
-        bits |= (np.asarray(m, bool).astype(np.uint8) << i)
+        bits |= np.asarray(m, bool).astype(np.uint8) << i
     h, w = shape
-    return {"width": int(w), "height": int(h), "title": title, "layers": layers, "regions": list(regions),
-            "region_bits": encode_mask(bits)}
+    return {
+        "width": int(w),
+        "height": int(h),
+        "title": title,
+        "layers": layers,
+        "regions": list(regions),
+        "region_bits": encode_mask(bits),
+    }

@@ -20,11 +20,20 @@ from __future__ import annotations
 
 #: Units of swept parameters fogref knows (scene ``$default`` names, Unreal's fog parameters).
 PARAMETER_UNITS = {
-    "sun_elevation": "degrees", "sun_azimuth": "degrees", "g": "1, Henyey-Greenstein asymmetry",
+    "sun_elevation": "degrees",
+    "sun_azimuth": "degrees",
+    "g": "1, Henyey-Greenstein asymmetry",
     "FogHeightFalloff": "Unreal's FogHeightFalloff: falloff = 0.0693147 × value [1/m]",
-    "falloff": "1/m", "density": "1/m", "sigma_t": "1/m", "albedo": "1", "fov": "degrees",
-    "FogDensity": "Unreal's FogDensity", "StartDistance": "cm", "FogCutoffDistance": "cm",
-    "FogMaxOpacity": "1", "spp": "samples per pixel",
+    "falloff": "1/m",
+    "density": "1/m",
+    "sigma_t": "1/m",
+    "albedo": "1",
+    "fov": "degrees",
+    "FogDensity": "Unreal's FogDensity",
+    "StartDistance": "cm",
+    "FogCutoffDistance": "cm",
+    "FogMaxOpacity": "1",
+    "spp": "samples per pixel",
 }
 DIMENSIONLESS = ("relmse", "rel_", "delta_e2000", "flip")
 
