@@ -1,6 +1,6 @@
 """Write the example HTML reports from the committed data, and their screenshots.
 
-    .venv/bin/python scripts/make_html_examples.py
+    .venv/bin/python scripts/make_html_examples.py [--truth out/valley.exr]
 
 reports/unreal_study/report.html (from summary.json, budget.json and compare/: the truth,
 out/valley.exr, is not committed, so the viewer shows the compared parts, with the noise of
@@ -33,10 +33,17 @@ def replot_sweep(folder: Path) -> None:
     plot_table(pd.read_csv(folder / "results.csv"), spec, folder / "plots")
 
 
-def main() -> int:
+def main(argv=None) -> int:
+    """``[--truth EXR]``: the study's truth, when at hand (the viewer then shows its every part)."""
+    argv = sys.argv[1:] if argv is None else argv
+    truth = None
+    if argv[:1] == ["--truth"]:
+        from fogref.gbuffer import load_truth
+
+        truth = load_truth(argv[1])
     sweep = ROOT / "reports/sweeps/unreal_sun_falloff_g"
     replot_sweep(sweep)
-    pages = [write_study_html(ROOT / "reports/unreal_study"), write_sweep_html(sweep)]
+    pages = [write_study_html(ROOT / "reports/unreal_study", truth), write_sweep_html(sweep)]
     for p in pages:
         print(f"{p.relative_to(ROOT)}: {p.stat().st_size / 1e6:.2f} MB")
     *_, why = find_browser()

@@ -11,4 +11,5 @@ echo "regenerate_reports: rewriting reports/unreal_study/ and reports/fit/"
 .venv/bin/fogref render scenes/valley.xml --spp "$SPP" --seed 0 --out out/valley.exr
 .venv/bin/fogref study out/valley.exr --out reports/unreal_study --renders out/study
 .venv/bin/fogref fit --scene scenes/valley.xml --lobe-table --out reports/fit
+.venv/bin/python scripts/make_html_examples.py --truth out/valley.exr   # report.html pages + screenshots
 git status --short reports/
