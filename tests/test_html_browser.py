@@ -202,3 +202,29 @@ def test_committed_example_reports_load_offline(driver, rel, tmp_path):
     assert not math.isnan(float(driver.execute_script("return document.images.length")))
     shot = screenshot(driver, tmp_path / "shot.png")
     assert shot.stat().st_size > 10_000
+
+
+def test_flicker_swipe_and_false_colours(driver, tiny_report):
+    import time
+
+    from selenium.webdriver.support.ui import Select
+
+    from fogref.html.inline import decode_half
+
+    exr, html = tiny_report
+    load(driver, html)
+    layer = _data(html)["layers"][0]
+    truth, error = decode_half(layer["truth"]), decode_half(layer["error"])
+    n = _rendered(driver)
+    Select(driver.find_element("id", "fr-mode")).select_by_value("flicker")
+    time.sleep(2.0)
+    assert _rendered(driver) >= n + 3  # a frame every 0.6 s
+    Select(driver.find_element("id", "fr-mode")).select_by_value("swipe")
+    Select(driver.find_element("id", "fr-b")).select_by_value("error")
+    w = int(driver.execute_script("return document.getElementById('fr-canvas').width"))
+    assert _pixel(driver, 0, 2)[:3] == _expected_8bit(truth[2, 0], layer["exposure"])  # left: A, the truth
+    # right: B, the signed error in false colour: red where the candidate is too bright, blue too dark
+    e = error[2, w - 1].mean()
+    r, _, b, _ = _pixel(driver, w - 1, 2)
+    assert (r > b) == (e > 0) or abs(e) < 1e-6
+    assert console_errors(driver) == []
