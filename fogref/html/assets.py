@@ -205,7 +205,7 @@ function populate() {
 }
 function bind() {
   var on = function (id, ev, fn) { $(id).addEventListener(ev, function (e) { fn(e); render(); }); };
-  on("fr-part", "change", function (e) { state.part = e.target.value; });
+  on("fr-part", "change", function (e) { if (layers[e.target.value]) state.part = e.target.value; });
   on("fr-a", "change", function (e) { state.a = e.target.value; });
   on("fr-b", "change", function (e) { state.b = e.target.value; });
   on("fr-mode", "change", function (e) {
