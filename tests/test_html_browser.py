@@ -228,3 +228,23 @@ def test_flicker_swipe_and_false_colours(driver, tiny_report):
     r, _, b, _ = _pixel(driver, w - 1, 2)
     assert (r > b) == (e > 0) or abs(e) < 1e-6
     assert console_errors(driver) == []
+
+
+def test_diff_and_batch_pages_load_offline(driver, tiny_report, tmp_path):
+    from fogref.cli import main
+    from fogref.exrio import write_exr
+    from fogref.gbuffer import load_truth
+
+    exr = tiny_report[0]
+    t = load_truth(exr)
+    imgs = []
+    for k, scale in enumerate((1.0, 1.1)):
+        imgs.append(tmp_path / f"e{k}.exr")
+        write_exr(imgs[-1], {c: t.final[..., i] * scale for i, c in enumerate("RGB")})
+    main(["diff", str(exr), str(imgs[1]), "--out", str(tmp_path / "diff")])
+    main(["diff", str(imgs[0]), str(imgs[1]), "--out", str(tmp_path / "diff2")])
+    main(["compare", str(exr), "--image", *map(str, imgs), "--out", str(tmp_path / "b"), "--no-figures"])
+    for page in ("diff/report.html", "diff2/report.html", "b/report.html", "b/e1/report.html"):
+        load(driver, tmp_path / page)
+        assert console_errors(driver) == [], page
+        assert all(u.startswith(LOCAL) for u in requests(driver)), page
