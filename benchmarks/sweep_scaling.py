@@ -86,7 +86,8 @@ def main(argv=None) -> int:
         "every run.  Wall time includes starting the cluster and importing Mitsuba in every worker.  "
         "`cold`: the workers' Dr.Jit disk cache is empty, so each worker compiles fogpath's kernels once "
         "(scene values are opaque to them, so once is enough: `kernel_reuse.md`); `warm`: a second run "
-        f"on the disk cache the cold run filled.  Shapes alternated, {a.repeats} time(s) each; best wall time "
+        f"on the disk cache the cold run filled.  Shapes alternated, {a.repeats} time(s) each; best wall "
+        "time "
         "shown.",
         "",
         "| workers | Dr.Jit threads each | Dr.Jit disk cache | wall [s] (best) | wall [s] (all runs) "

@@ -54,7 +54,8 @@ __all__ = ["__version__", "ensure_llvm", *_LAZY]
 
 
 def __getattr__(name: str):
-    """``fogref.set_variant``, ``fogref.check``, ...: the public API of :data:`_LAZY`, imported on first use."""
+    """``fogref.set_variant``, ``fogref.check``, ...: the public API of :data:`_LAZY`, imported on first
+    use."""
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'fogref' has no attribute '{name}'")

@@ -1,4 +1,5 @@
-"""fogref's Mitsuba plugins (installed as ``fogref_plugins``), registered for the current variant by ``register()``."""
+"""fogref's Mitsuba plugins (installed as ``fogref_plugins``), registered for the current variant by
+``register()``."""
 
 
 def register() -> None:

@@ -261,8 +261,9 @@ def _composite_parts(truth: Truth, T, L, cand_cov_T=None, cand_cov_L=None):
 
 def fog_parts(truth: Truth, T, L, name: str = "fog") -> CandidateParts:
     """A noise-free fog ``(T, L)`` (a model's, ``(H, W, 3)`` each) as
-    :func:`~fogref.compare.check.check` compares it: parts ``T``, ``inscatter`` and ``final`` (the fog over the truth's surface, where that is
-    defined), each with its reference and noise covariance.  Non-finite values stay."""
+    :func:`~fogref.compare.check.check` compares it: parts ``T``, ``inscatter`` and ``final`` (the fog
+    over the truth's surface, where that is defined), each with its reference and noise covariance.
+    Non-finite values stay."""
     every = np.ones(truth.shape, bool)
     with np.errstate(invalid="ignore", over="ignore"):
         final = _composite_parts(truth, T, L)

@@ -105,7 +105,7 @@ def check_protocol(obj: Any, source: str) -> Any:
     >>> check_protocol(NoFog, "my_mod:NoFog")
     Traceback (most recent call last):
     ...
-    fogref.errors.FogrefError: my_mod:NoFog: NoFog is not a fog model: it has no evaluate(...) method (see docs/byo.md)
+    fogref.errors.FogrefError: my_mod:NoFog: NoFog is not a fog model: it has no evaluate(...) method ...
     """
     try:
         label = getattr(obj, "__name__", type(obj).__name__)
