@@ -32,6 +32,7 @@ import functools
 import math
 import time
 from dataclasses import dataclass, field, replace
+from typing import Any, Callable
 
 import numpy as np
 
@@ -104,7 +105,7 @@ def fibonacci_directions(n: int) -> np.ndarray:
 
 
 def sample_views(
-    camera, n_dirs: int = 400, distances=None, min_dy: float = -0.5, sky_min_dy: float = 0.0
+    camera: Any, n_dirs: int = 400, distances: Any = None, min_dy: float = -0.5, sky_min_dy: float = 0.0
 ) -> Views:
     """Views from ``camera``: Fibonacci directions with ``d_y >= min_dy`` at each of
     ``distances`` [m] (default 12 log-spaced from 10 m to 20 km), plus the sky
@@ -150,10 +151,10 @@ def physical_single_scattering(
     return out
 
 
-def base_params(pf: PhysicalScene, **kw) -> UE4FogParams:
+def base_params(pf: PhysicalScene, **kw: Any) -> UE4FogParams:
     """Unreal parameters with the exact density/falloff/height of ``pf.medium``, the
     sun direction, and ``kw`` (other fields; start distances default to 0)."""
-    defaults = dict(
+    defaults: dict[str, Any] = dict(
         DirectionalInscatteringStartDistance=0.0,
         StartDistance=0.0,
         FogMaxOpacity=1.0,
@@ -165,7 +166,7 @@ def base_params(pf: PhysicalScene, **kw) -> UE4FogParams:
     return p.with_sun(pf.sun_direction, p.SunLuminance)
 
 
-def unreal_inscatter(params: UE4FogParams, camera, world_pos, precision: str = "float64") -> np.ndarray:
+def unreal_inscatter(params: UE4FogParams, camera: Any, world_pos: Any, precision: str = "float64") -> np.ndarray:
     """Unreal's inscatter (N, 3) for the given parameters."""
     fog = UE4ExponentialHeightFog(params)
     return np.asarray(fog.evaluate(camera, world_pos, precision).inscatter, dtype=float)
@@ -195,7 +196,7 @@ def unreal_basis(
     return Basis(iso=ins[:, 0], lobe=ins[:, 1])
 
 
-def solve_colours(basis: Basis, target: np.ndarray, weights=None) -> tuple[np.ndarray, np.ndarray, float]:
+def solve_colours(basis: Basis, target: np.ndarray, weights: Any = None) -> tuple[np.ndarray, np.ndarray, float]:
     """Non-negative least squares per channel: ``target ≈ C_fog iso + C_dir lobe``.
 
     Returns ``(C_fog (3,), C_dir (3,), sse)`` with ``sse`` the weighted sum of
@@ -344,7 +345,7 @@ def fit_unreal(
             raise ValueError("fit_unreal: a target needs the views it was computed on")
         try:
             hash(pf)
-            fit = _fit_converged
+            fit: Callable[..., FitResult] = _fit_converged
         except TypeError:  # a scene holding arrays: not cached
             fit = _fit_converged.__wrapped__
         return copy.deepcopy(
@@ -363,7 +364,7 @@ def fit_unreal(
     N = len(views.D)
     cache: dict = {}
 
-    def sse(log_n: float, start_cm: float):
+    def sse(log_n: float, start_cm: float) -> tuple[np.ndarray, np.ndarray, float]:
         log_n = float(np.clip(log_n, *LOG_N_RANGE))
         start_cm = float(np.clip(start_cm, 0.0, MAX_START_CM)) if fit_start else 0.0
         key = (round(log_n, 12), round(start_cm, 9))
@@ -384,7 +385,7 @@ def fit_unreal(
         if fit_start:
             x0.append(s0 / 1e4)
 
-        def f(x):
+        def f(x: np.ndarray) -> float:
             i = 0
             ln = ln0
             if exponent is None:
