@@ -28,6 +28,7 @@ True
 
 from __future__ import annotations
 
+from fogref._llvm import require_llvm as _require_llvm
 from fogref._version import __version__
 
 #: The public API for checking a fog model or an engine's images against a truth
@@ -81,6 +82,4 @@ def ensure_llvm() -> str:
         No LLVM >= 16 was found and ``$DRJIT_LIBLLVM_PATH`` is unset; the message
         says what to install.
     """
-    from fogref._llvm import require_llvm
-
-    return require_llvm()
+    return _require_llvm()

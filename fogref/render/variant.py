@@ -19,6 +19,7 @@ import os
 
 from fogref import params
 from fogref._llvm import HELP, ensure_llvm
+from fogref.atomic import atomic_write
 from fogref.errors import FogrefError
 
 DEFAULT_VARIANT = "llvm_ad_rgb"
@@ -77,8 +78,6 @@ def _cached_syntax():
     from pathlib import Path
 
     import drjit as dr
-
-    from fogref.atomic import atomic_write
 
     original = dr.syntax
     digests: dict[str, str] = {}
@@ -206,6 +205,7 @@ def set_variant(name: str | None = None) -> str:
             except Exception as e:  # CUDA without a GPU, a broken LLVM, ...
                 raise FogrefError(f"cannot use Mitsuba variant '{name}': {e}") from e
         if name not in _registered:
+            # here, not at module level: fogref_plugins is Mitsuba's side, loaded with a variant
             import fogref_plugins
 
             fogref_plugins.register()
