@@ -282,8 +282,7 @@ def sun_sampling_applies(medium: Real, w: Real, max_layers: int = 1) -> bool:
 
     ``max_layers``: fogpath uses it for one layer only by default: with two
     layers the Newton inversion costs more time than the variance it removes
-    (``reports/benchmarks/variance_reduction.md``: 0.84x at equal error on the
-    two-layer scene, 4.4x on the one-layer valley).
+    (``reports/benchmarks/variance_reduction.md``).
     """
     return (
         medium.bounds is None

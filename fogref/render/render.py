@@ -277,7 +277,7 @@ def render(
         from tqdm import tqdm
 
         bar = tqdm(total=spp, initial=sum(passes[:saved]), unit="spp", desc=scene_path.name)
-    else:  # no bar, no tqdm import (20 ms of a quiet CLI run's start-up)
+    else:  # no bar, no tqdm import (a quiet run's start-up skips it)
         bar = _NoBar()
     t0, last_ckpt, timings = time.perf_counter(), time.perf_counter(), []
     with _Interrupt() as stop, bar:
@@ -358,9 +358,8 @@ def _host_float32(channels: dict) -> dict:
     """The EXR's channels, ``(H, W)`` float64 tensors on the device, as host float32 planes.
 
     All channels are cast and stacked on the device and copied to the host in one
-    contiguous block (each channel a contiguous plane).  At 1920x1080 the channel
-    arithmetic in numpy on the host and the per-channel copies took 4.2 s of a 10.3 s
-    render (4 spp, CPU); on the device they are part of one kernel.
+    contiguous block (each channel a contiguous plane): the channel arithmetic is part of
+    one kernel on the device, not numpy work on the host after per-channel copies.
     """
     import drjit as dr
     import mitsuba as mi

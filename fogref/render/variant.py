@@ -6,8 +6,8 @@ renderer's sake; ``import fogref`` does not call it (see :mod:`fogref`).
 Start-up (``benchmarks/render_driver.py --startup``): importing Mitsuba, setting a
 variant and registering fogpath run ``@dr.syntax`` on 11 functions (Mitsuba's
 Python integrators and projective helpers, fogpath's ``sample``), each a parse, an
-AST rewrite and a compile of its source: ~90 ms of every process's start (~170 ms
-while fogpath's ``import mitsuba.ad...`` loads Mitsuba's integrators a second time).
+AST rewrite and a compile of its source, in every process's start (twice for
+Mitsuba's integrators while fogpath's ``import mitsuba.ad...`` loads them a second time).
 While :func:`set_variant` runs, ``dr.syntax`` is wrapped by :func:`_cached_syntax`,
 which keeps the rewritten code objects on disk, keyed on the source file's bytes.
 """
@@ -57,7 +57,7 @@ def _cached_syntax():
 
     ``@dr.syntax`` turns a function's source into another function (Dr.Jit's
     ``while``/``if`` rewrite) when the decorated module is imported: a parse, an
-    AST rewrite and a compile, 1-16 ms per function, in every process.  Here a
+    AST rewrite and a compile per function, in every process.  Here a
     cache hit returns the same function built the same way from the stored code
     object (``marshal``, as Python's ``__pycache__``); a miss, or any failure to
     read or write the cache, calls Dr.Jit's own ``syntax`` (and stores its result).
