@@ -203,8 +203,7 @@ def main(argv=None) -> int:
         "Render time: this machine (2 cores shared with other jobs), one render after a warm-up render.",
         "",
         "| resolution | spp | render [s] | T: rel_bias | T: rel_rmse | inscatter: rel_bias | inscatter: "
-        "rel_rmse "
-        "| final: rel_bias | final: rel_rmse |",
+        "rel_rmse | final: rel_bias | final: rel_rmse |",
         "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for e in rows:
@@ -221,10 +220,8 @@ def main(argv=None) -> int:
         "How it is measured: see the docstring of `benchmarks/check_power.py` (replicate truths with the "
         "rendered truth's per-pixel noise, Gaussian; stderr re-estimated as from `spp` samples). T is "
         "closed form in a pixel-exact truth: every sample traces the same camera ray, its stderr is "
-        "exactly 0 "
-        "and any T error above float32 storage is detected (the column shows the smallest error tried). "
-        "Render times "
-        "vary by 2-5x between runs on a machine shared with other jobs.",
+        "exactly 0 and any T error above float32 storage is detected (the column shows the smallest error "
+        "tried). Render times vary by 2-5x between runs on a machine shared with other jobs.",
         "",
     ]
     (out / "power.md").write_text("\n".join(lines))

@@ -425,12 +425,11 @@ def _startup_md(doc: dict) -> str:
         f"Mitsuba {doc['machine']['mitsuba']}, Dr.Jit {doc['machine']['drjit']}.",
         "",
         f"`fogref render scenes/valley.xml` at {b['case']} (`--no-png --quiet --no-resume`), kernel cache "
-        "warm, "
-        f"{b['repeats']} fresh processes per method, interleaved.  Phases come from an instrumented child "
-        "(timers put on fogref's functions by an import hook, as their modules are imported; the launch time "
-        "is the parent's `perf_counter`, the same monotonic clock).  Each phase: the minimum over the runs "
-        "(and the median); the totals' minimum is over whole runs, so the phases' minima need not add up "
-        "to it.",
+        f"warm, {b['repeats']} fresh processes per method, interleaved.  Phases come from an instrumented "
+        "child (timers put on fogref's functions by an import hook, as their modules are imported; the "
+        "launch time is the parent's `perf_counter`, the same monotonic clock).  Each phase: the minimum "
+        "over the runs (and the median); the totals' minimum is over whole runs, so the phases' minima "
+        "need not add up to it.",
         "",
         "| phase | min [s] | median [s] |",
         "|---|---|---|",
@@ -460,15 +459,12 @@ def _md(doc: dict) -> str:
         f"{doc['load_after']} after); Mitsuba {doc['machine']['mitsuba']}, Dr.Jit {doc['machine']['drjit']}.",
         "",
         "Scene: `scenes/valley.xml` (pixel-exact, all AOVs, max_depth 16).  Methods: `mi.render` = one "
-        "call on a "
-        "loaded scene; `render()` = `fogref.render.render.render` in the same process (scene load, passes, "
-        "float64 moments, EXR, no PNG); `CLI` = `fogref render ... --no-png --quiet --no-resume` in a "
-        "subprocess; "
-        "`mi.render script` = a subprocess that imports fogref, loads the scene and calls `mi.render` once.  "
-        "First call = tracing + LLVM compile or kernel-cache load; steady = median of the interleaved "
-        "repeats "
-        "[min, max]; compile = first - steady.  Ratios are of medians; in brackets the range of the "
-        "per-repeat ratios.",
+        "call on a loaded scene; `render()` = `fogref.render.render.render` in the same process (scene "
+        "load, passes, float64 moments, EXR, no PNG); `CLI` = `fogref render ... --no-png --quiet "
+        "--no-resume` in a subprocess; `mi.render script` = a subprocess that imports fogref, loads the "
+        "scene and calls `mi.render` once.  First call = tracing + LLVM compile or kernel-cache load; "
+        "steady = median of the interleaved repeats [min, max]; compile = first - steady.  Ratios are of "
+        "medians; in brackets the range of the per-repeat ratios.",
         "",
         f"fogpath `render_moments`: {doc['kernels']['path_tracing_kernels']} kernel(s) over all lanes "
         f"that contain the path tracer ({doc['kernels']['kernels']} kernels in all) per call.",
@@ -487,9 +483,8 @@ def _md(doc: dict) -> str:
                 x = d[m]
                 rr = d["ratio_per_repeat"][m]
                 L.append(
-                    f"| {case} | {len(d['passes'])} ({', '.join(map(str, sorted(set(d['passes']))))}) | "
-                    f"{m} | "
-                    f"{x['first_s']:.2f} | {x['median_s']:.2f} [{x['min_s']:.2f}, {x['max_s']:.2f}] | "
+                    f"| {case} | {len(d['passes'])} ({', '.join(map(str, sorted(set(d['passes']))))}) | {m} "
+                    f"| {x['first_s']:.2f} | {x['median_s']:.2f} [{x['min_s']:.2f}, {x['max_s']:.2f}] | "
                     f"{x['compile_s']:.2f} | {d['ratio'][m]:.2f}x [{min(rr):.2f}, {max(rr):.2f}] |"
                 )
         L.append("")

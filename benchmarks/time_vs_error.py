@@ -466,8 +466,7 @@ def summary_md(res, args) -> str:
             )
     L += [
         "\nStock volpath has no `inscatter.*` output (it does not split the fog's light from the "
-        "surface's), so the "
-        "inscatter-only ratio is fogpath against its other variants.\n",
+        "surface's), so the inscatter-only ratio is fogpath against its other variants.\n",
         "### Where the variance lives (per-sample variance of each part / that of the final image, 64 spp, "
         "2 seeds)\n",
         "| scene | method | final var/sample | attenuated surface | single | multiple | inscatter |",
@@ -495,8 +494,7 @@ def summary_md(res, args) -> str:
                 f"| {sname} | {m} | {b['pooled_spp']} | {b['rel_bias_rms']:.2e} "
                 f"[{b['rel_bias_rms_ci95'][0]:.1e}, {b['rel_bias_rms_ci95'][1]:.1e}] | "
                 f"{b['rel_mean_diff']:+.2e} [{b['rel_mean_diff_ci95'][0]:+.1e}, "
-                f"{b['rel_mean_diff_ci95'][1]:+.1e}] | "
-                f"{b['chi2_per_pixel']:.3f} |"
+                f"{b['rel_mean_diff_ci95'][1]:+.1e}] | {b['chi2_per_pixel']:.3f} |"
             )
     L.append(
         "\nRMS bias = sqrt(mean((X - ref)^2 - Var X - Var ref)) over pixels and RGB; chi2/pixel = "
@@ -513,8 +511,7 @@ def summary_md(res, args) -> str:
             top = d["ladder"][-1]
             L.append(
                 f"| {sname} | {m} | {d['first_call_s']:.2f} | {d['compile_s']:.2f} | "
-                f"{top['time_median_s']:.3f} | "
-                f"{d['ns_per_sample_top']:.0f} | {top['rel_rmse']:.2e} |"
+                f"{top['time_median_s']:.3f} | {d['ns_per_sample_top']:.0f} | {top['rel_rmse']:.2e} |"
             )
     L += [
         "\n## Where the time goes (Dr.Jit kernel history, one render each)\n",

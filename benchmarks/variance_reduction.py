@@ -106,8 +106,7 @@ def changes_md(out_dir):
         "(sky cv off, today's other defaults): its own gain is its row over that row (last table).",
         "",
         "| scene | variant | final var/sample | inscatter var/sample | time [s] | gain (final) | gain "
-        "(inscatter) "
-        "| att. surface | single | multiple |",
+        "(inscatter) | att. surface | single | multiple |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, agg in out["scenes"].items():
@@ -115,11 +114,10 @@ def changes_md(out_dir):
         for k, a in agg.items():
             lines.append(
                 f"| {name} | {k} | {a['final_variance_per_sample']:.4g} | "
-                f"{a['inscatter_variance_per_sample']:.4g} "
-                f"| {a['time_s']:.3f} | {a['efficiency'] / b['efficiency']:.2f} | "
+                f"{a['inscatter_variance_per_sample']:.4g} | {a['time_s']:.3f} | "
+                f"{a['efficiency'] / b['efficiency']:.2f} | "
                 f"{a['efficiency_inscatter'] / b['efficiency_inscatter']:.2f} | "
-                f"{a['attenuated_surface']:.2f} | "
-                f"{a['single']:.2f} | {a['multiple']:.2f} |"
+                f"{a['attenuated_surface']:.2f} | {a['single']:.2f} | {a['multiple']:.2f} |"
             )
     lines += [
         "",
