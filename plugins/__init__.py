@@ -4,6 +4,7 @@
 
 def register() -> None:
     """Register the fog media and the ``fogpath`` integrator with Mitsuba."""
+    # here, not at module level: the plugins import Mitsuba, which needs a variant set first
     import mitsuba as mi
     from fogref_plugins.fog_medium import register as register_media
     from fogref_plugins.fogpath import FogPathIntegrator
