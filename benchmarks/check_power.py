@@ -198,11 +198,12 @@ def main(argv=None) -> int:
         "",
         "Smallest uniform relative error (δ: candidate = truth × (1 + δ) for one part) that `check` detects "
         'with 95 % power at a 1 % false-alarm rate, region `all`, `method="noise"`; by `rel_bias` (a shift '
-        "of the mean) and by `rel_rmse`. Measured power and false-alarm rate over the replicates in brackets. "
+        "of the mean) and by `rel_rmse`. Measured power and false-alarm rate over the replicates in "
+        "brackets. "
         "Render time: this machine (2 cores shared with other jobs), one render after a warm-up render.",
         "",
-        "| resolution | spp | render [s] | T: rel_bias | T: rel_rmse | inscatter: rel_bias | inscatter: rel_rmse "
-        "| final: rel_bias | final: rel_rmse |",
+        "| resolution | spp | render [s] | T: rel_bias | T: rel_rmse | inscatter: rel_bias | inscatter: "
+        "rel_rmse | final: rel_bias | final: rel_rmse |",
         "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for e in rows:
@@ -218,9 +219,9 @@ def main(argv=None) -> int:
         "",
         "How it is measured: see the docstring of `benchmarks/check_power.py` (replicate truths with the "
         "rendered truth's per-pixel noise, Gaussian; stderr re-estimated as from `spp` samples). T is "
-        "closed form in a pixel-exact truth: every sample traces the same camera ray, its stderr is exactly 0 "
-        "and any T error above float32 storage is detected (the column shows the smallest error tried). Render times "
-        "vary by 2-5x between runs on a machine shared with other jobs.",
+        "closed form in a pixel-exact truth: every sample traces the same camera ray, its stderr is "
+        "exactly 0 and any T error above float32 storage is detected (the column shows the smallest error "
+        "tried). Render times vary by 2-5x between runs on a machine shared with other jobs.",
         "",
     ]
     (out / "power.md").write_text("\n".join(lines))

@@ -34,7 +34,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "scenes" / "valley.xml"
-#: (sun_elevation, FogHeightFalloff x 0.0693147 = falloff, g): every configuration is new in at least one value
+#: (sun_elevation, FogHeightFalloff x 0.0693147 = falloff, g): each configuration is new in at least one value
 CONFIGS = [
     (4, 0.05, 0.3),
     (10, 0.05, 0.3),
@@ -135,16 +135,15 @@ def main() -> None:
     lines = [
         "# Do sweep configurations reuse compiled kernels?",
         "",
-        f"Machine: {platform.machine()}, {os.cpu_count()} cores; llvm_ad_rgb.  Command: "
-        f"`.venv/bin/python benchmarks/kernel_reuse.py --res {a.res[0]} {a.res[1]} --spp {a.spp} "
-        f"--repeats {a.repeats}`.",
+        f"Machine: {platform.machine()}, {os.cpu_count()} cores; llvm_ad_rgb.  Command: `.venv/bin/python "
+        f"benchmarks/kernel_reuse.py --res {a.res[0]} {a.res[1]} --spp {a.spp} --repeats {a.repeats}`.",
         "",
-        f"One process renders {len(CONFIGS)} valley configurations in turn ({a.res[0]}×{a.res[1]} px, {a.spp} spp, "
-        "`render_moments`, each scene loaded afresh as a sweep worker does), each new in g, FogHeightFalloff "
-        "or sun elevation.  Each process starts with an empty Dr.Jit disk cache.  `literal`: the same code "
-        "with `ops.param` and `make_scene_values_opaque` patched out, so that every scene value is traced "
-        "into the kernels as a constant (fogref before commit 481a8f8).  `opaque`: fogref as it is.  "
-        f"Processes alternate, {a.repeats} per mode; the best of each is shown.",
+        f"One process renders {len(CONFIGS)} valley configurations in turn ({a.res[0]}×{a.res[1]} px, "
+        f"{a.spp} spp, `render_moments`, each scene loaded afresh as a sweep worker does), each new in g, "
+        "FogHeightFalloff or sun elevation.  Each process starts with an empty Dr.Jit disk cache.  "
+        "`literal`: the same code with `ops.param` and `make_scene_values_opaque` patched out, so that "
+        "every scene value is traced into the kernels as a constant (fogref before commit 481a8f8).  "
+        f"`opaque`: fogref as it is.  Processes alternate, {a.repeats} per mode; the best of each is shown.",
         "",
         "| # | sun [deg] | FogHeightFalloff | g | literal: compiled kernels | literal: compile [s] "
         "| literal: wall [s] | opaque: compiled kernels | opaque: compile [s] | opaque: wall [s] |",

@@ -105,7 +105,8 @@ def main():
     for k in variants:
         a32, a64 = out["ue4_specialisations"]["float32"][k], out["ue4_specialisations"]["float64"][k]
         lines.append(
-            f"| {k} | {a32['seconds']:.3f} | {a32['speedup']:.2f}x | {a64['seconds']:.3f} | {a64['speedup']:.2f}x |"
+            f"| {k} | {a32['seconds']:.3f} | {a32['speedup']:.2f}x | {a64['seconds']:.3f} | "
+            f"{a64['speedup']:.2f}x |"
         )
     (d / "models_speed.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))

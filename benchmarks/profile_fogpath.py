@@ -81,9 +81,11 @@ def main(argv=None):
     (o / "profile_fogpath.json").write_text(json.dumps(out, indent=1))
     L = [
         "# Where fogpath's time goes\n",
-        f"Command: `{out['config']['command']}`; {res_px[0]}x{res_px[1]}, {spp} spp, max_depth 8, median of {reps} "
-        f"interleaved repeats; {out['config']['machine']['cpu']}, {out['config']['machine']['cores']} shared cores.\n",
-        "| scene | method | steady [s] | ns/sample/pixel | main kernel exec [s] | host (trace+launch) [s] | kernel ops | vs fogpath |",
+        f"Command: `{out['config']['command']}`; {res_px[0]}x{res_px[1]}, {spp} spp, max_depth 8, median of "
+        f"{reps} interleaved repeats; {out['config']['machine']['cpu']}, "
+        f"{out['config']['machine']['cores']} shared cores.\n",
+        "| scene | method | steady [s] | ns/sample/pixel | main kernel exec [s] | host (trace+launch) [s] "
+        "| kernel ops | vs fogpath |",
         "|---|---|---|---|---|---|---|---|",
     ]
     for name, d in out["scenes"].items():

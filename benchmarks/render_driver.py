@@ -264,11 +264,13 @@ def patch(name, m):
     if name == "fogref.render.render":
         m.render, m.write_exr = clock("render", m.render), clock("write_exr", m.write_exr)
     elif name == "fogref.render.variant":
-        m.set_variant, m.ensure_llvm = clock("set_variant", m.set_variant), clock("ensure_llvm", m.ensure_llvm)
+        m.set_variant = clock("set_variant", m.set_variant)
+        m.ensure_llvm = clock("ensure_llvm", m.ensure_llvm)
     elif name == "fogref_plugins":
         m.register = clock("register", m.register)
     elif name == "fogref.render.scene":
-        m.load_scene, m.describe_scene = clock("load_scene", m.load_scene), clock("describe_scene", m.describe_scene)
+        m.load_scene = clock("load_scene", m.load_scene)
+        m.describe_scene = clock("describe_scene", m.describe_scene)
     elif name == "fogref_plugins.fogpath":
         m.FogPathIntegrator.render_moments = first_moments(m.FogPathIntegrator.render_moments)
 WATCH = {"fogref.render.render", "fogref.render.variant", "fogref_plugins", "fogref.render.scene",
@@ -398,7 +400,8 @@ def startup_breakdown(repeats: int, log, w: int = 16, h: int = 9, spp: int = 1) 
             )
             log(
                 f"  run {r + 1}: launch to first kernel {runs[-1]['= launch to first kernel launch']:.3f} s, "
-                f"to exit {runs[-1]['= launch to exit']:.3f} s; console script {plain[-1]['fogref render (console script)']:.3f} s"
+                f"to exit {runs[-1]['= launch to exit']:.3f} s; console script "
+                f"{plain[-1]['fogref render (console script)']:.3f} s"
             )
     return {
         "case": f"{w}x{h} {spp} spp",
@@ -421,11 +424,12 @@ def _startup_md(doc: dict) -> str:
         f"shared with other jobs (load average {doc['load_before']} before, {doc['load_after']} after); "
         f"Mitsuba {doc['machine']['mitsuba']}, Dr.Jit {doc['machine']['drjit']}.",
         "",
-        f"`fogref render scenes/valley.xml` at {b['case']} (`--no-png --quiet --no-resume`), kernel cache warm, "
-        f"{b['repeats']} fresh processes per method, interleaved.  Phases come from an instrumented child "
-        "(timers put on fogref's functions by an import hook, as their modules are imported; the launch time "
-        "is the parent's `perf_counter`, the same monotonic clock).  Each phase: the minimum over the runs "
-        "(and the median); the totals' minimum is over whole runs, so the phases' minima need not add up to it.",
+        f"`fogref render scenes/valley.xml` at {b['case']} (`--no-png --quiet --no-resume`), kernel cache "
+        f"warm, {b['repeats']} fresh processes per method, interleaved.  Phases come from an instrumented "
+        "child (timers put on fogref's functions by an import hook, as their modules are imported; the "
+        "launch time is the parent's `perf_counter`, the same monotonic clock).  Each phase: the minimum "
+        "over the runs (and the median); the totals' minimum is over whole runs, so the phases' minima "
+        "need not add up to it.",
         "",
         "| phase | min [s] | median [s] |",
         "|---|---|---|",
@@ -454,13 +458,13 @@ def _md(doc: dict) -> str:
         f"shared with other jobs while measured (load average {doc['load_before']} before, "
         f"{doc['load_after']} after); Mitsuba {doc['machine']['mitsuba']}, Dr.Jit {doc['machine']['drjit']}.",
         "",
-        "Scene: `scenes/valley.xml` (pixel-exact, all AOVs, max_depth 16).  Methods: `mi.render` = one call on a "
-        "loaded scene; `render()` = `fogref.render.render.render` in the same process (scene load, passes, "
-        "float64 moments, EXR, no PNG); `CLI` = `fogref render ... --no-png --quiet --no-resume` in a subprocess; "
-        "`mi.render script` = a subprocess that imports fogref, loads the scene and calls `mi.render` once.  "
-        "First call = tracing + LLVM compile or kernel-cache load; steady = median of the interleaved repeats "
-        "[min, max]; compile = first - steady.  Ratios are of medians; in brackets the range of the "
-        "per-repeat ratios.",
+        "Scene: `scenes/valley.xml` (pixel-exact, all AOVs, max_depth 16).  Methods: `mi.render` = one "
+        "call on a loaded scene; `render()` = `fogref.render.render.render` in the same process (scene "
+        "load, passes, float64 moments, EXR, no PNG); `CLI` = `fogref render ... --no-png --quiet "
+        "--no-resume` in a subprocess; `mi.render script` = a subprocess that imports fogref, loads the "
+        "scene and calls `mi.render` once.  First call = tracing + LLVM compile or kernel-cache load; "
+        "steady = median of the interleaved repeats [min, max]; compile = first - steady.  Ratios are of "
+        "medians; in brackets the range of the per-repeat ratios.",
         "",
         f"fogpath `render_moments`: {doc['kernels']['path_tracing_kernels']} kernel(s) over all lanes "
         f"that contain the path tracer ({doc['kernels']['kernels']} kernels in all) per call.",
@@ -479,8 +483,8 @@ def _md(doc: dict) -> str:
                 x = d[m]
                 rr = d["ratio_per_repeat"][m]
                 L.append(
-                    f"| {case} | {len(d['passes'])} ({', '.join(map(str, sorted(set(d['passes']))))}) | {m} | "
-                    f"{x['first_s']:.2f} | {x['median_s']:.2f} [{x['min_s']:.2f}, {x['max_s']:.2f}] | "
+                    f"| {case} | {len(d['passes'])} ({', '.join(map(str, sorted(set(d['passes']))))}) | {m} "
+                    f"| {x['first_s']:.2f} | {x['median_s']:.2f} [{x['min_s']:.2f}, {x['max_s']:.2f}] | "
                     f"{x['compile_s']:.2f} | {d['ratio'][m]:.2f}x [{min(rr):.2f}, {max(rr):.2f}] |"
                 )
         L.append("")
@@ -498,7 +502,8 @@ def _md(doc: dict) -> str:
         L.append("")
     if not variant.startswith("cuda"):
         L += [
-            "cuda_ad_rgb: not measured here; run `benchmarks/render_driver.py --variant cuda_ad_rgb` on a GPU.",
+            "cuda_ad_rgb: not measured here; run `benchmarks/render_driver.py --variant cuda_ad_rgb` on a "
+            "GPU.",
             "",
         ]
     if doc.get("reading"):

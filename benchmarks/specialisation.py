@@ -152,8 +152,8 @@ def main(argv=None):
         row["image_mean_change"] = m["specialised"]["mean"] / m["general"]["mean"] - 1.0
         rows.append(row)
         print(
-            f"{feature:12s} general {m['general']['steady_s']:.3f}s  specialised {m['specialised']['steady_s']:.3f}s"
-            f"  x{row['speedup_vs_general']:.2f}"
+            f"{feature:12s} general {m['general']['steady_s']:.3f}s  specialised "
+            f"{m['specialised']['steady_s']:.3f}s  x{row['speedup_vs_general']:.2f}"
             + (f"  inert {m['inert']['steady_s']:.3f}s" if "inert" in m else ""),
             flush=True,
         )
@@ -175,25 +175,25 @@ def main(argv=None):
     (out / "specialisation.json").write_text(json.dumps(res, indent=1, default=str))
     L = [
         "# fogpath trace-time specialisation: speed-ups\n",
-        f"Command: `{res['config']['command']}`; scene `{BASE}` ({res_px[0]}x{res_px[1]}, {spp} spp, median of "
-        f"{reps} interleaved repeats); machine: {res['config']['machine']['cpu']}, "
+        f"Command: `{res['config']['command']}`; scene `{BASE}` ({res_px[0]}x{res_px[1]}, {spp} spp, median "
+        f"of {reps} interleaved repeats); machine: {res['config']['machine']['cpu']}, "
         f"{res['config']['machine']['cores']} shared cores.\n",
         "General scene G: two layers (second density 1e-6), sun + sky, albedo 0.9, max_depth 16. "
         "Each row removes one feature. *Inert*: G with the feature's code kept but its effect "
         "zeroed (same image as the specialised scene), so `inert / specialised` isolates the code's cost.\n",
-        "| feature removed | G steady [s] | specialised [s] | speed-up vs G | inert twin | inert [s] | speed-up, code only | "
-        "ns/sample/pixel G -> spec. | kernel ops G -> spec. | image mean change |",
+        "| feature removed | G steady [s] | specialised [s] | speed-up vs G | inert twin | inert [s] | "
+        "speed-up, code only | ns/sample/pixel G -> spec. | kernel ops G -> spec. | image mean change |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         g, s = r["general"], r["specialised"]
         it = r.get("inert")
         L.append(
-            f"| {r['feature']} | {g['steady_s']:.3f} | {s['steady_s']:.3f} | **{r['speedup_vs_general']:.2f}x** | "
-            f"{r['inert_twin'] or '-'} | {it['steady_s']:.3f} | "
+            f"| {r['feature']} | {g['steady_s']:.3f} | {s['steady_s']:.3f} | "
+            f"**{r['speedup_vs_general']:.2f}x** | {r['inert_twin'] or '-'} | {it['steady_s']:.3f} | "
             if it
-            else f"| {r['feature']} | {g['steady_s']:.3f} | {s['steady_s']:.3f} | **{r['speedup_vs_general']:.2f}x** | "
-            f"{r['inert_twin'] or '-'} | - | "
+            else f"| {r['feature']} | {g['steady_s']:.3f} | {s['steady_s']:.3f} | "
+            f"**{r['speedup_vs_general']:.2f}x** | {r['inert_twin'] or '-'} | - | "
         )
         L[-1] += f"{r['speedup_code_only']:.2f}x | " if "speedup_code_only" in r else "- | "
         L[-1] += (

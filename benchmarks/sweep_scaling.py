@@ -85,8 +85,8 @@ def main(argv=None) -> int:
         "sun elevation x FogHeightFalloff x g, 64x36 px, 16 spp, model ue4, no plots), empty truth cache "
         "every run.  Wall time includes starting the cluster and importing Mitsuba in every worker.  "
         "`cold`: the workers' Dr.Jit disk cache is empty, so each worker compiles fogpath's kernels once "
-        "(scene values are opaque to them, so once is enough: `kernel_reuse.md`); `warm`: a second run "
-        f"on the disk cache the cold run filled.  Shapes alternated, {a.repeats} time(s) each; best wall time "
+        "(scene values are opaque to them, so once is enough: `kernel_reuse.md`); `warm`: a second run on "
+        f"the disk cache the cold run filled.  Shapes alternated, {a.repeats} time(s) each; best wall time "
         "shown.",
         "",
         "| workers | Dr.Jit threads each | Dr.Jit disk cache | wall [s] (best) | wall [s] (all runs) "

@@ -419,7 +419,8 @@ def summary_md(res, args) -> str:
         f"in 8 chunks. Total run {cfg['total_s']:.0f} s.\n",
         "Times are steady wall times (median of repeats, methods interleaved); the first call "
         "(tracing + LLVM compilation or kernel-cache load) is reported apart. Grids: density sampled at "
-        "cell **centres** of a 1xNx1 `gridvolume` over the fog box, trilinear, `has_spectral_extinction` false.\n",
+        "cell **centres** of a 1xNx1 `gridvolume` over the fog box, trilinear, `has_spectral_extinction` "
+        "false.\n",
         "![time vs error](time_vs_error.png)\n",
         "## Equal-error time ratio (method time / fogpath time at the same RMSE; > 1: fogpath faster)\n",
         "| scene | method | " + " | ".join(f"{s} spp" for s in cfg["ladder"]) + " | noise-only @top |",
@@ -445,7 +446,8 @@ def summary_md(res, args) -> str:
         "`fogpath_split` / `fogpath_nosplit` = today's defaults with forced splitting on the camera ray "
         "switched to the other setting (`forced_split`). "
         "Ratios at the top of the ladder (equal-error time ratio; > 1: the second is faster).\n",
-        "| scene | method | ratio vs fogpath (after) | ratio vs fogpath_before | inscatter.* only: method vs fogpath |",
+        "| scene | method | ratio vs fogpath (after) | ratio vs fogpath_before | inscatter.* only: method "
+        "vs fogpath |",
         "|---|---|---|---|---|",
     ]
     for sname, sc in res["scenes"].items():
@@ -459,12 +461,14 @@ def summary_md(res, args) -> str:
                 else "n/a (no split)"
             )
             L.append(
-                f"| {sname} | {m} | {top['equal_error_ratio']:.2f} | {top.get('equal_error_ratio_vs_before', float('nan')):.2f} | {ins} |"
+                f"| {sname} | {m} | {top['equal_error_ratio']:.2f} | "
+                f"{top.get('equal_error_ratio_vs_before', float('nan')):.2f} | {ins} |"
             )
     L += [
-        "\nStock volpath has no `inscatter.*` output (it does not split the fog's light from the surface's), so the "
-        "inscatter-only ratio is fogpath against its other variants.\n",
-        "### Where the variance lives (per-sample variance of each part / that of the final image, 64 spp, 2 seeds)\n",
+        "\nStock volpath has no `inscatter.*` output (it does not split the fog's light from the "
+        "surface's), so the inscatter-only ratio is fogpath against its other variants.\n",
+        "### Where the variance lives (per-sample variance of each part / that of the final image, 64 spp, "
+        "2 seeds)\n",
         "| scene | method | final var/sample | attenuated surface | single | multiple | inscatter |",
         "|---|---|---|---|---|---|---|",
     ]
@@ -475,7 +479,8 @@ def summary_md(res, args) -> str:
                 f"{v['single']:.2f} | {v['multiple']:.2f} | {v['inscatter']:.2f} |"
             )
     L.append(
-        "\nThe parts are correlated (a camera ray either scatters or reaches the surface), so the shares need not add to 1.\n"
+        "\nThe parts are correlated (a camera ray either scatters or reaches the surface), so the shares "
+        "need not add to 1.\n"
     )
     L += [
         "## Bias against the fogpath reference (pooled ladder images vs reference)\n",
@@ -488,8 +493,8 @@ def summary_md(res, args) -> str:
             L.append(
                 f"| {sname} | {m} | {b['pooled_spp']} | {b['rel_bias_rms']:.2e} "
                 f"[{b['rel_bias_rms_ci95'][0]:.1e}, {b['rel_bias_rms_ci95'][1]:.1e}] | "
-                f"{b['rel_mean_diff']:+.2e} [{b['rel_mean_diff_ci95'][0]:+.1e}, {b['rel_mean_diff_ci95'][1]:+.1e}] | "
-                f"{b['chi2_per_pixel']:.3f} |"
+                f"{b['rel_mean_diff']:+.2e} [{b['rel_mean_diff_ci95'][0]:+.1e}, "
+                f"{b['rel_mean_diff_ci95'][1]:+.1e}] | {b['chi2_per_pixel']:.3f} |"
             )
     L.append(
         "\nRMS bias = sqrt(mean((X - ref)^2 - Var X - Var ref)) over pixels and RGB; chi2/pixel = "
@@ -505,12 +510,13 @@ def summary_md(res, args) -> str:
         for m, d in sc["methods"].items():
             top = d["ladder"][-1]
             L.append(
-                f"| {sname} | {m} | {d['first_call_s']:.2f} | {d['compile_s']:.2f} | {top['time_median_s']:.3f} | "
-                f"{d['ns_per_sample_top']:.0f} | {top['rel_rmse']:.2e} |"
+                f"| {sname} | {m} | {d['first_call_s']:.2f} | {d['compile_s']:.2f} | "
+                f"{top['time_median_s']:.3f} | {d['ns_per_sample_top']:.0f} | {top['rel_rmse']:.2e} |"
             )
     L += [
         "\n## Where the time goes (Dr.Jit kernel history, one render each)\n",
-        "| scene | method | spp | wall | main kernel exec | other kernels | host (trace, launch) | main kernel ops |",
+        "| scene | method | spp | wall | main kernel exec | other kernels | host (trace, launch) | main "
+        "kernel ops |",
         "|---|---|---|---|---|---|---|---|",
     ]
     for sname, sc in res["scenes"].items():

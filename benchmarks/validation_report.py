@@ -219,8 +219,8 @@ def markdown(r: dict) -> str:
         "",
         "## Exact geometry (pixel-exact truth)",
         "",
-        f"* Unreal's transmittance with the exact extinction mapping vs `T`, default scene ({g['valley_spp']} spp): "
-        f"max |ΔT| {g['ue4_T_max_abs_error_surface']:.2g} over surface pixels, "
+        "* Unreal's transmittance with the exact extinction mapping vs `T`, default scene "
+        f"({g['valley_spp']} spp): max |ΔT| {g['ue4_T_max_abs_error_surface']:.2g} over surface pixels, "
         f"{g['ue4_T_max_abs_error_silhouettes']:.2g} on the {g['silhouette_pixels']} silhouette pixels, "
         f"RMSE {g['ue4_T_rmse_all']:.2g} over all pixels (was 0.0077, max 0.12, box-filtered).",
         f"* `T` from the camera origin vs an independent float64 formula: max relative error "

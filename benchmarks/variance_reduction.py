@@ -105,18 +105,19 @@ def changes_md(out_dir):
         "noisy and only the side-by-side ratios mean anything. `+forced split` is built on `+2 sun samples` "
         "(sky cv off, today's other defaults): its own gain is its row over that row (last table).",
         "",
-        "| scene | variant | final var/sample | inscatter var/sample | time [s] | gain (final) | gain (inscatter) "
-        "| att. surface | single | multiple |",
+        "| scene | variant | final var/sample | inscatter var/sample | time [s] | gain (final) | gain "
+        "(inscatter) | att. surface | single | multiple |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, agg in out["scenes"].items():
         b = agg["before"]
         for k, a in agg.items():
             lines.append(
-                f"| {name} | {k} | {a['final_variance_per_sample']:.4g} | {a['inscatter_variance_per_sample']:.4g} "
-                f"| {a['time_s']:.3f} | {a['efficiency'] / b['efficiency']:.2f} | "
-                f"{a['efficiency_inscatter'] / b['efficiency_inscatter']:.2f} | {a['attenuated_surface']:.2f} | "
-                f"{a['single']:.2f} | {a['multiple']:.2f} |"
+                f"| {name} | {k} | {a['final_variance_per_sample']:.4g} | "
+                f"{a['inscatter_variance_per_sample']:.4g} | {a['time_s']:.3f} | "
+                f"{a['efficiency'] / b['efficiency']:.2f} | "
+                f"{a['efficiency_inscatter'] / b['efficiency_inscatter']:.2f} | "
+                f"{a['attenuated_surface']:.2f} | {a['single']:.2f} | {a['multiple']:.2f} |"
             )
     lines += [
         "",
@@ -194,7 +195,8 @@ def main():
     lines = [
         "# Variance reduction: sun single-scattering sampling",
         "",
-        f"fogpath, {res[0]}x{res[1]}, max_depth 16; reference {ref_spp} spp; RMSE mean of 3 runs; time median of 3.",
+        f"fogpath, {res[0]}x{res[1]}, max_depth 16; reference {ref_spp} spp; RMSE mean of 3 runs; time "
+        "median of 3.",
         "",
         "Verdict: kept for one layer (on by default); for several layers the Newton inversion costs "
         "more time than the variance it removes, so fogpath's `sun_sampling_layers` defaults to 1.",

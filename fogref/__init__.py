@@ -28,6 +28,7 @@ True
 
 from __future__ import annotations
 
+from fogref._llvm import require_llvm as _require_llvm
 from fogref._version import __version__
 
 #: The public API for checking a fog model or an engine's images against a truth
@@ -56,7 +57,8 @@ __all__ = ["__version__", "ensure_llvm", *_LAZY]
 
 
 def __getattr__(name: str):
-    """``fogref.set_variant``, ``fogref.check``, ...: the public API of :data:`_LAZY`, imported on first use."""
+    """``fogref.set_variant``, ``fogref.check``, ...: the public API of :data:`_LAZY`, imported on first
+    use."""
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'fogref' has no attribute '{name}'")
@@ -82,6 +84,4 @@ def ensure_llvm() -> str:
         No LLVM >= 16 was found and ``$DRJIT_LIBLLVM_PATH`` is unset; the message
         says what to install.
     """
-    from fogref._llvm import require_llvm
-
-    return require_llvm()
+    return _require_llvm()

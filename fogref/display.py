@@ -2,8 +2,8 @@
 
 Every picture fogref writes (the render preview, the report's side-by-side images)
 goes through :func:`tone_map`, which computes colour-science's sRGB encoding
-(``colour.cctf_encoding(..., function="sRGB")``, bit for bit; see :func:`srgb_encode`).  Only the choice of exposure
-differs: the render preview maps the mean luminance to 0.18
+(``colour.cctf_encoding(..., function="sRGB")``, bit for bit; see :func:`srgb_encode`).  Only the choice
+of exposure differs: the render preview maps the mean luminance to 0.18
 (:func:`preview_exposure`); reports map a percentile to white.
 
 Examples

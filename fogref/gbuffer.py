@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from fogref.errors import FogrefError
+from fogref.exrio import read_exr
 
 #: Version of the channel layout below; stored in the header as ``fogref.schema``.
 #: 3 added the ``corr.*`` channels; 2 (no correlations) is still read, see :func:`truth_from_channels`.
@@ -499,7 +500,5 @@ def truth_from_channels(channels: dict, attrs: dict, source: str = "<memory>") -
 
 def load_truth(path: str | Path) -> Truth:
     """Read and check a ground-truth EXR written by ``fogref render``."""
-    from fogref.exrio import read_exr
-
     channels, attrs = read_exr(path)
     return truth_from_channels(channels, attrs, str(path))

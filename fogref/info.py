@@ -21,6 +21,9 @@ import math
 import numpy as np
 
 from fogref.errors import FogrefError
+from fogref.exrio import read_exr
+from fogref.gbuffer import truth_from_channels
+from fogref.models.ue4 import direction_to_unreal, world_to_unreal
 
 
 def _groups(names) -> list[str]:
@@ -100,8 +103,6 @@ def unreal_camera(camera: dict) -> dict:
     ``{pitch, yaw, roll}`` [deg] whose X axis is ``forward`` and Z axis ``up``
     (FRotationMatrix).  ``fov_deg``: Unreal's FOV is horizontal, as ``camera["fov_deg"]``.
     """
-    from fogref.models.ue4 import direction_to_unreal, world_to_unreal
-
     origin = world_to_unreal(camera["origin"])
     fwd, up, right = (np.array(direction_to_unreal(camera[k])) for k in ("forward", "up", "right"))
     pitch = math.degrees(math.asin(max(-1.0, min(1.0, fwd[2]))))
@@ -145,8 +146,6 @@ def truth_camera(channels: dict, attrs: dict) -> dict | None:
 
 def info(path) -> dict:
     """What ``fogref info --json`` prints for ``path``: size, channels, header, camera, noise."""
-    from fogref.exrio import read_exr
-
     channels, attrs = read_exr(path)
     h, w = next(iter(channels.values())).shape if channels else (0, 0)
     out: dict = {"path": str(path), "width": w, "height": h, "channels": sorted(channels), "header": {}}
@@ -159,8 +158,6 @@ def info(path) -> dict:
     out["camera"] = cam
     out["camera_unreal"] = unreal_camera(cam) if cam else None
     try:
-        from fogref.gbuffer import truth_from_channels
-
         truth = truth_from_channels(channels, attrs, str(path))
     except FogrefError as e:
         out["truth_error"] = str(e)

@@ -37,6 +37,8 @@ __all__ = ["assert_fog_matches", "check", "fogref_truth"]
 def fogref_truth(request):
     """Factory ``(scene, res=(32, 18), spp=16, seed=0, overrides=None, **render_options) -> Truth``
     (cached)."""
+    # here, not at module level: pytest loads this plugin in every session of a project that
+    # installs fogref; the renderer is imported only by a test that asks for a truth
     from fogref.render.cache import cached_truth
 
     env = os.environ.get("FOGREF_CACHE")

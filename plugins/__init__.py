@@ -1,8 +1,10 @@
-"""fogref's Mitsuba plugins (installed as ``fogref_plugins``), registered for the current variant by ``register()``."""
+"""fogref's Mitsuba plugins (installed as ``fogref_plugins``), registered for the current variant by
+``register()``."""
 
 
 def register() -> None:
     """Register the fog media and the ``fogpath`` integrator with Mitsuba."""
+    # here, not at module level: the plugins import Mitsuba, which needs a variant set first
     import mitsuba as mi
     from fogref_plugins.fog_medium import register as register_media
     from fogref_plugins.fogpath import FogPathIntegrator

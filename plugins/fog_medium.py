@@ -5,8 +5,8 @@ is not virtual); it does delta tracking against ``get_majorant``.  This plugin
 gives it a *tight per-ray majorant*: ``intersect_aabb`` clips the ray to the fog's
 bounds and records the largest density on the clipped segment, which it asks the
 height profiles for (``max_density`` over the segment's height range, see
-:class:`fogref.media.protocol.HeightProfile`), and ``get_majorant`` returns it.  ``fogpath`` instead uses :attr:`fog` (the physics
-object) for analytic free flight and closed-form transmittance.
+:class:`fogref.media.protocol.HeightProfile`), and ``get_majorant`` returns it.  ``fogpath`` instead uses
+:attr:`fog` (the physics object) for analytic free flight and closed-form transmittance.
 
 XML parameters (SI units, y-up):
 

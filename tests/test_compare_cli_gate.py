@@ -1,4 +1,5 @@
-"""``fogref compare`` gates CI: check()'s verdict as the exit code, --json/--junit, sRGB PNGs, ``fogref info``.
+"""``fogref compare`` gates CI: check()'s verdict as the exit code, --json/--junit, sRGB PNGs,
+``fogref info``.
 
 The truth is synthetic (:func:`fogref.compare.check.synthetic_truth`: 64x36 px, 2 % relative
 noise on the inscatter and surface, T noise-free) written as a schema-2 EXR; the engine's

@@ -12,8 +12,9 @@ f32 = np.float32
 
 
 def blog_box_fog(cam, wp, lo, hi, k):
-    """Transcription of the box fog of Jim's GameDev Blog, "体积雾" (2016) (float32): e = camera, c = pixel, a/b = entry/exit of the
-    eye ray with the box (RaySlabIntersection); t = |ac|, d = |cb|; fog = k t/(t+d)."""
+    """Transcription of the box fog of Jim's GameDev Blog, "体积雾" (2016) (float32): e = camera,
+    c = pixel, a/b = entry/exit of the eye ray with the box (RaySlabIntersection);
+    t = |ac|, d = |cb|; fog = k t/(t+d)."""
     e = np.asarray(cam, f32)
     c = np.asarray(wp, f32)
     ray = c - e

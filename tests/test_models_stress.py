@@ -592,7 +592,8 @@ if __name__ == "__main__":
         for prec, regions in per.items():
             for region, w in regions.items():
                 print(
-                    f"{name:9s} {prec} {region:20s} worst {w['worst_rel_error']:.3e}  over-bound {w['n_over_bound']}/{w['n']}"
+                    f"{name:9s} {prec} {region:20s} worst {w['worst_rel_error']:.3e}  over-bound "
+                    f"{w['n_over_bound']}/{w['n']}"
                 )
     print("nonfinite:", rep["nonfinite_or_out_of_range_outputs"])
     sys.exit(0)

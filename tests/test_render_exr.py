@@ -169,7 +169,8 @@ def test_checkpoint_of_an_edited_scene_is_not_resumed(tmp_path, mitsuba, monkeyp
 
 
 def test_leftover_temporary_checkpoint_is_removed(tmp_path, mitsuba):
-    """A writer killed mid-write (SIGKILL) leaves '<out>.partial.npz.XXXX.tmp.npz'; the next run removes it."""
+    """A writer killed mid-write (SIGKILL) leaves '<out>.partial.npz.XXXX.tmp.npz'; the next run
+    removes it."""
     from fogref.render.render import render
 
     stale = tmp_path / "x.exr.partial.npz.abc123.tmp.npz"

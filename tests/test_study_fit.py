@@ -1,4 +1,5 @@
-"""fogref.mapping's fits (Unreal, cosine lobe): recovering known Unreal parameters, the lobe table's limits."""
+"""fogref.mapping's fits (Unreal, cosine lobe): recovering known Unreal parameters, the lobe table's
+limits."""
 
 import math
 

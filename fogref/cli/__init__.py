@@ -35,6 +35,7 @@ from __future__ import annotations
 import importlib
 import sys
 
+from fogref._version import __version__
 from fogref.cli.spec import Parser, UsageError, add_options, parse_options
 from fogref.errors import FogrefError, did_you_mean
 
@@ -68,8 +69,6 @@ def build_parser(only: str | None = None) -> Parser:
     >>> sorted(build_parser(only="render")._subparsers._group_actions[0].choices)
     ['render']
     """
-    from fogref._version import __version__
-
     p = Parser(prog="fogref", description=DESCRIPTION, epilog=EPILOG)
     p.add_argument("--version", action="version", version=f"fogref {__version__}")
     sub = p.add_subparsers(dest="cmd", required=True, metavar="COMMAND", title="commands")

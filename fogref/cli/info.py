@@ -10,6 +10,7 @@ from pathlib import Path
 
 from fogref.cli.checks import PathArg
 from fogref.cli.spec import option, switch
+from fogref.info import describe, info
 
 NAME = "info"
 HELP = "channels, parameters, spp, seed and noise level of an EXR"
@@ -29,8 +30,6 @@ class Options:
 def run(o: Options, given=frozenset()) -> int:
     """Print :func:`fogref.info.describe`, or with ``--json`` :func:`fogref.info.info` as JSON
     (quietly stops when the reader closes the pipe)."""
-    from fogref.info import describe, info
-
     text = json.dumps(info(Path(o.exr)), indent=2, default=float) if o.json else describe(Path(o.exr))
     try:
         print(text)

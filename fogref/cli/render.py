@@ -82,6 +82,7 @@ class Options:
 
 def run(o: Options, given=frozenset()) -> int:
     """Render; print the EXR's path."""
+    # here, not at module level: parsing a command line imports no renderer (test_cli_spec)
     from fogref.render.render import render
 
     path = render(

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 from fogref.cli.checks import Number, PathArg
 from fogref.cli.spec import option, switch
+from fogref.study.unreal import run_study
 
 NAME = "study"
 HELP = "the Unreal study of a truth: fit, compare, error budget, README"
@@ -54,8 +55,6 @@ class Options:
 
 
 def run(o: Options, given=frozenset()) -> int:
-    from fogref.study.unreal import run_study
-
     settings = {
         k: v
         for k, v in (

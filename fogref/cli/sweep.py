@@ -13,6 +13,7 @@ from pathlib import Path
 from fogref.cli.checks import Check, Integer, PathArg
 from fogref.cli.spec import option, refuse, switch
 from fogref.errors import ParameterError
+from fogref.study.sweep import run_sweep
 
 NAME = "sweep"
 SOURCE = "fogref sweep"
@@ -88,8 +89,6 @@ class Options:
 
 def run(a: Options, given=frozenset()) -> int:
     """Run the sweep; print a one-line summary."""
-    from fogref.study.sweep import run_sweep
-
     refuse(
         Options, given, ("scheduler",), ("workers",), SOURCE, "the workers of a running scheduler are its own"
     )

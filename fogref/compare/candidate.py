@@ -32,7 +32,7 @@ import numpy as np
 
 from fogref.compare import noise
 from fogref.errors import FogrefError, ParameterError
-from fogref.gbuffer import Truth
+from fogref.gbuffer import Truth, load_truth
 from fogref.models.base import SKY_DISTANCE as DEFAULT_SKY_DISTANCE
 from fogref.params import number as valid_number
 from fogref.params import path as valid_path
@@ -124,8 +124,6 @@ def as_truth(truth, what: str = "truth") -> Truth:
     if isinstance(truth, Truth):
         return truth
     if isinstance(truth, (str, os.PathLike)):
-        from fogref.gbuffer import load_truth
-
         return load_truth(valid_path(truth, what, source="api", must_exist=True))
     raise ParameterError(
         "api", what, f"expected a Truth or the path of a ground-truth EXR, got {type(truth).__name__}"
@@ -261,8 +259,9 @@ def _composite_parts(truth: Truth, T, L, cand_cov_T=None, cand_cov_L=None):
 
 def fog_parts(truth: Truth, T, L, name: str = "fog") -> CandidateParts:
     """A noise-free fog ``(T, L)`` (a model's, ``(H, W, 3)`` each) as
-    :func:`~fogref.compare.check.check` compares it: parts ``T``, ``inscatter`` and ``final`` (the fog over the truth's surface, where that is
-    defined), each with its reference and noise covariance.  Non-finite values stay."""
+    :func:`~fogref.compare.check.check` compares it: parts ``T``, ``inscatter`` and ``final`` (the fog
+    over the truth's surface, where that is defined), each with its reference and noise covariance.
+    Non-finite values stay."""
     every = np.ones(truth.shape, bool)
     with np.errstate(invalid="ignore", over="ignore"):
         final = _composite_parts(truth, T, L)

@@ -51,7 +51,11 @@ from pathlib import Path
 
 import numpy as np
 
+from fogref.compare import report
+from fogref.compare.check import check
 from fogref.errors import FogrefError
+from fogref.exrio import read_exr
+from fogref.gbuffer import Truth, load_truth
 
 ENCODINGS = ("auto", "linear", "srgb")
 IMAGE_SUFFIXES = (".exr", ".png", ".hdr", ".pic")
@@ -61,8 +65,6 @@ IMAGE_SUFFIXES = (".exr", ".png", ".hdr", ".pic")
 
 
 def _read_exr_rgb(path: Path) -> np.ndarray:
-    from fogref.exrio import read_exr
-
     ch, _ = read_exr(path)
     if all(c in ch for c in "RGB"):
         return np.stack([ch[c] for c in "RGB"], -1)
@@ -415,9 +417,6 @@ def compare_images(
     >>> r.row("inscatter", "all", "rel_bias").verdict, r.row("T", "all").verdict
     ('fail', 'pass')
     """
-    from fogref.compare.check import check
-    from fogref.gbuffer import Truth, load_truth
-
     if not isinstance(truth, Truth):
         truth = load_truth(truth)
     if images.shape is not None and images.shape != truth.shape:
@@ -427,7 +426,5 @@ def compare_images(
         )
     result = check(truth, images, tolerances, **check_options)
     if out_dir is not None:
-        from fogref.compare import report
-
         report.compare_images(truth, images, out_dir, figures=figures, check=result)
     return result

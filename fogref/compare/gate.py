@@ -30,6 +30,7 @@ import json
 import math
 from pathlib import Path
 
+from fogref.atomic import write_text_atomic
 from fogref.errors import FogrefError
 
 #: Exit code of each overall verdict (2 is a usage or input error).
@@ -123,8 +124,6 @@ def gate_dict(result, code: int, **extra) -> dict:
 
 def write_json(path, result, code: int, **extra) -> Path:
     """Write :func:`gate_dict` to ``path`` atomically (no NaN)."""
-    from fogref.atomic import write_text_atomic
-
     text = json.dumps(gate_dict(result, code, **extra), indent=2, allow_nan=False)
     return write_text_atomic(path, text + "\n")
 
@@ -152,8 +151,6 @@ def junit_xml(result, inconclusive: str | None = None) -> str:
 
 def write_junit(path, result, inconclusive: str | None = None) -> Path:
     """Write :func:`junit_xml` to ``path`` atomically."""
-    from fogref.atomic import write_text_atomic
-
     return write_text_atomic(path, junit_xml(result, inconclusive))
 
 

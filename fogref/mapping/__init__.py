@@ -7,6 +7,8 @@ Layering: ``fogref.media`` (physics) <- ``fogref.models`` (pure shader ports) <-
   parser (:meth:`PhysicalScene.from_params`, an EXR's ``fogref.params``)
 * :mod:`~fogref.mapping.registry`  :func:`from_physical` and the mapping registry
 * :mod:`~fogref.mapping.unreal`    Unreal's colour/lobe fit (:func:`fit_unreal`) and its mapping
+* :mod:`~fogref.mapping.unreal_basis`  Unreal's inscatter, linear in its two colours, and the colour solve
+* :mod:`~fogref.mapping.views`     sample views from the camera and the physical single scattering on them
 * :mod:`~fogref.mapping.lobe`      the best cosine lobe for an HG phase (:func:`lobe_fit`, :func:`lobe_table`)
 * :mod:`~fogref.mapping.engines`   Unity, altitude, box, HDRP, Filament, Godot, Bevy, three.js mappings
 * :mod:`~fogref.mapping.free`      each model's free parameters and bounds (:data:`FIT_SPECS`)

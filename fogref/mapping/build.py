@@ -18,6 +18,9 @@ import json
 from typing import Any
 
 from fogref.errors import FogrefError, ParameterError, did_you_mean
+from fogref.mapping.physical import PhysicalScene
+from fogref.mapping.registry import from_physical, has_mapping
+from fogref.models.resolve import resolve_model
 
 __all__ = ["build_model", "current_parameters", "parse_param_assignments"]
 
@@ -116,8 +119,6 @@ def build_model(model: Any, params: dict | None = None, scene_params: dict | Non
     ...
     fogref.errors.FogrefError: model 'ue4': no parameter 'FogDensty'; did you mean 'FogDensity'? ...
     """
-    from fogref.models.resolve import resolve_model
-
     cls = resolve_model(model) if isinstance(model, str) else model
     params = dict(params or {})
     if not inspect.isclass(cls):
@@ -136,9 +137,6 @@ def build_model(model: Any, params: dict | None = None, scene_params: dict | Non
                 f"model '{_label(cls)}': {cls.__name__}() needs arguments ({e}); give --param "
                 "KEY=VALUE (with a Params dataclass) or --from-scene (with from_physical)"
             ) from e
-    from fogref.mapping.physical import PhysicalScene
-    from fogref.mapping.registry import from_physical, has_mapping
-
     if not has_mapping(cls):
         raise FogrefError(
             f"model '{_label(cls)}' has no physical mapping (fogref.mapping) and no "

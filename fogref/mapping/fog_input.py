@@ -18,9 +18,12 @@ from __future__ import annotations
 import math
 import numbers
 from dataclasses import dataclass
+from typing import Any
 
 from fogref import params
 from fogref.errors import ParameterError
+from fogref.media.params import medium_from_params
+from fogref.models.ue4 import unreal_to_sigma
 
 __all__ = ["PHYSICAL", "SCATTERING", "SOURCE", "Range", "fog_from_physical"]
 
@@ -70,7 +73,7 @@ class Range:
         """``name (--option)``: how the writer's messages name the value."""
         return f"{name} ({self.option})" if self.option else name
 
-    def check(self, value, name: str, source: str):
+    def check(self, value: Any, name: str, source: str) -> float | int | list[float]:
         """``value`` converted and checked: a float (number, angle, grey rgb), an int (integer,
         depth) or a list of 3 floats (rgb, point); else a ParameterError naming ``source``,
         ``name``, the value and :meth:`text`."""
@@ -104,7 +107,7 @@ class Range:
         raise ValueError(f"unknown kind {k!r}")
 
 
-def _count(value) -> int:
+def _count(value: Any) -> int:
     """How many numbers ``value`` holds (a number: 1; text ``"a, b c"``: its words)."""
     if isinstance(value, str):
         return len(value.replace(",", " ").split())
@@ -134,12 +137,12 @@ SCATTERING = {
 MAX_DEPTH = Range("--max-depth", "depth", -1, _DEPTH_MAX)
 
 
-def _check(value, name: str, rng: Range):
+def _check(value: Any, name: str, rng: Range) -> Any:
     """``value`` checked against ``rng`` by the writer (messages name ``name (--option)``)."""
     return rng.check(value, rng.label(name), SOURCE)
 
 
-def _rgb3(v) -> list:
+def _rgb3(v: Any) -> list:
     return list(v) if isinstance(v, list) else [v] * 3
 
 
@@ -149,11 +152,11 @@ def _fmt(x: float) -> str:
     return repr(0.0 if x == 0 else x)
 
 
-def _vec(v) -> str:
+def _vec(v: Any) -> str:
     return ", ".join(_fmt(x) for x in v)
 
 
-def fog_from_physical(fog: dict | None = None, *, albedo=0.9, g: float = 0.6) -> dict:
+def fog_from_physical(fog: dict | None = None, *, albedo: Any = 0.9, g: float = 0.6) -> dict:
     """The ``heightfog`` parameters of a fog given in physical units, validated.
 
     Parameters
@@ -192,8 +195,6 @@ def fog_from_physical(fog: dict | None = None, *, albedo=0.9, g: float = 0.6) ->
     ...
     fogref.errors.ParameterError: fogref scene: parameter 'falloff (--falloff)': -1 is outside [0, 1000] 1/m
     """
-    from fogref.models.ue4 import unreal_to_sigma
-
     if fog is not None and not isinstance(fog, dict):
         raise ParameterError(SOURCE, "fog", f"expected a dict of physical fog values, got {fog!r}")
     fog = dict(fog or {})
@@ -244,10 +245,8 @@ def _medium_params(fog: dict) -> dict:
 
 def _check_medium(fog: dict) -> None:
     """The medium parser that ``fogref render`` uses must accept the values too."""
-    from fogref.media.params import medium_from_params
-
     medium_from_params(_medium_params(fog), f"{SOURCE}: fog")
 
 
-def _text(v) -> str:
+def _text(v: Any) -> str:
     return _vec(v) if isinstance(v, list) else _fmt(v)

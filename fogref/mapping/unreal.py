@@ -1,28 +1,12 @@
 """Unreal's fog fitted to the physical single scattering, and its ``from_physical``.
 
-Unreal's Exponential Height Fog adds, per pixel (start distances 0, see
-:mod:`fogref.models.ue4`)::
-
-    inscatter = FogInscatteringColor (1 - T) + DirectionalInscatteringColor max(cos, 0)^n (1 - T_dir)
-
-where ``T_dir`` is the transmittance of the part of the ray beyond
-DirectionalInscatteringStartDistance.  The physical single scattering of a sun
-(irradiance E, toward ``w``) and a uniform sky ``L_sky`` in the same medium is
-(closed forms of :mod:`fogref.media.single_scatter`)::
-
-    L = alpha E p_HG(cos) T_sun(o) tau phi(m tau)  +  alpha L_sky (1 - T)
-
-Given the exponent ``n`` and the start distance, the model is **linear** in the
-two colours, so each colour channel is a 2-parameter non-negative least-squares
-problem on two basis images (the model evaluated with unit colours); ``n`` and
-the start distance are then found by scipy (a grid, then Nelder–Mead on
-``(log10 n, start)``).  Density, falloff and height come from the exact mapping
-:func:`fogref.models.ue4.medium_to_ue4`; the model is evaluated in float64.
-
-The loss is the mean squared error of the inscattered radiance over a set of
-views (:func:`sample_views`): directions on a Fibonacci sphere from the scene's
-camera, at log-spaced distances, plus the sky (an infinite distance, fogged by
-the model at :data:`~fogref.models.base.SKY_DISTANCE`) for upward views.
+:func:`fit_unreal` matches Unreal's inscatter (:mod:`fogref.mapping.unreal_basis`: linear in
+its two colours, solved by non-negative least squares) to the closed-form physical single
+scattering of sun and sky over sample views from the camera (:mod:`fogref.mapping.views`).
+The exponent ``n`` and the start distance are found by scipy (a grid, then Nelder–Mead on
+``(log10 n, start)``); density, falloff and height come from the exact mapping
+:func:`fogref.models.ue4.medium_to_ue4`.  :func:`ue4_from_physical` registers the result as
+the ``"ue4"`` mapping.
 """
 
 from __future__ import annotations
@@ -32,13 +16,14 @@ import functools
 import math
 import time
 from dataclasses import dataclass, field, replace
+from typing import Callable
 
 import numpy as np
 
 from fogref.mapping.physical import PhysicalScene
 from fogref.mapping.registry import register_mapping
-from fogref.media import NP, hg_phase, single_scatter_sun
-from fogref.media.single_scatter import single_scatter_sky
+from fogref.mapping.unreal_basis import Basis, base_params, solve_colours, unreal_basis, unreal_inscatter
+from fogref.mapping.views import Views, fibonacci_directions, physical_single_scattering, sample_views
 from fogref.models.base import SKY_DISTANCE
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams, medium_to_ue4
 
@@ -75,143 +60,6 @@ FIT_DIRECTIONS_START = 128
 FIT_DIRECTIONS_MAX = 16384
 #: :func:`fit_unreal`'s convergence tolerance (relative) between two doublings.
 FIT_RTOL = 5e-3
-
-
-@dataclass
-class Views:
-    """Sample views: unit directions ``d`` (N, 3), distances ``D`` (N,) [m] (inf: sky)."""
-
-    camera: np.ndarray
-    d: np.ndarray
-    D: np.ndarray
-
-    @property
-    def sky(self) -> np.ndarray:
-        return ~np.isfinite(self.D)
-
-    def world_positions(self, sky_distance: float = SKY_DISTANCE) -> np.ndarray:
-        D = np.where(self.sky, sky_distance, self.D)
-        return self.camera + self.d * D[:, None]
-
-
-def fibonacci_directions(n: int) -> np.ndarray:
-    """``n`` nearly uniform unit directions on the sphere (y-up), (n, 3)."""
-    i = np.arange(n) + 0.5
-    y = 1.0 - 2.0 * i / n
-    r = np.sqrt(np.maximum(0.0, 1.0 - y * y))
-    phi = i * math.pi * (3.0 - math.sqrt(5.0))
-    return np.stack([r * np.cos(phi), y, r * np.sin(phi)], axis=-1)
-
-
-def sample_views(
-    camera, n_dirs: int = 400, distances=None, min_dy: float = -0.5, sky_min_dy: float = 0.0
-) -> Views:
-    """Views from ``camera``: Fibonacci directions with ``d_y >= min_dy`` at each of
-    ``distances`` [m] (default 12 log-spaced from 10 m to 20 km), plus the sky
-    (infinite distance) for directions with ``d_y > sky_min_dy``."""
-    if distances is None:
-        distances = np.geomspace(10.0, 2.0e4, 12)
-    dirs = fibonacci_directions(n_dirs)
-    dirs = dirs[dirs[:, 1] >= min_dy]
-    D = np.asarray(distances, dtype=float)
-    d_all = np.repeat(dirs, len(D), axis=0)
-    D_all = np.tile(D, len(dirs))
-    up = dirs[dirs[:, 1] > sky_min_dy]
-    d_all = np.concatenate([d_all, up])
-    D_all = np.concatenate([D_all, np.full(len(up), np.inf)])
-    return Views(np.asarray(camera, dtype=float), d_all, D_all)
-
-
-def physical_single_scattering(
-    pf: PhysicalScene, views: Views, sun_attenuation: bool = True, sky: bool = True, sun: bool = True
-) -> np.ndarray:
-    """Closed-form single scattering (sun + sky, no occluders) of each view, (N, 3).
-
-    ``sun_attenuation=False``: the sun term without its attenuation in the fog,
-    ``alpha E p (1 - T)``.  The sky term is ``alpha L_sky (1 - T)`` (unoccluded,
-    unattenuated: what FogInscatteringColor stands for).
-    """
-    m = pf.medium
-    o = tuple(np.full(len(views.D), c) for c in views.camera)
-    d = tuple(views.d[:, i] for i in range(3))
-    D = np.where(views.sky, NP.largest, views.D)
-    out = np.zeros((len(D), 3))
-    if sun and max(pf.sun_irradiance) > 0:
-        w = pf.sun_direction
-        if sun_attenuation:
-            out += np.stack(single_scatter_sun(NP, m, o, d, D, w, pf.sun_irradiance), axis=-1)
-        elif w[1] > 0:
-            cos = d[0] * w[0] + d[1] * w[1] + d[2] * w[2]
-            p = hg_phase(NP, cos, m.g)
-            T = np.stack(m.transmittance(NP, o, d, D), axis=-1)
-            out += (np.asarray(m.albedo) * np.asarray(pf.sun_irradiance)) * p[:, None] * (1.0 - T)
-    if sky and max(pf.sky_radiance) > 0:
-        out += np.stack(single_scatter_sky(NP, m, o, d, D, pf.sky_radiance), axis=-1)
-    return out
-
-
-def base_params(pf: PhysicalScene, **kw) -> UE4FogParams:
-    """Unreal parameters with the exact density/falloff/height of ``pf.medium``, the
-    sun direction, and ``kw`` (other fields; start distances default to 0)."""
-    defaults = dict(
-        DirectionalInscatteringStartDistance=0.0,
-        StartDistance=0.0,
-        FogMaxOpacity=1.0,
-        FogCutoffDistance=0.0,
-        SunLuminance=1.0,
-    )
-    defaults.update(kw)
-    p = medium_to_ue4(pf.medium, replace(UE4FogParams(), **defaults))
-    return p.with_sun(pf.sun_direction, p.SunLuminance)
-
-
-def unreal_inscatter(params: UE4FogParams, camera, world_pos, precision: str = "float64") -> np.ndarray:
-    """Unreal's inscatter (N, 3) for the given parameters."""
-    fog = UE4ExponentialHeightFog(params)
-    return np.asarray(fog.evaluate(camera, world_pos, precision).inscatter, dtype=float)
-
-
-@dataclass
-class Basis:
-    """The two basis images of Unreal's inscatter at fixed exponent and start distance."""
-
-    iso: np.ndarray  # (N,) 1 - T
-    lobe: np.ndarray  # (N,) max(cos,0)^n (1 - T_dir)
-
-
-def unreal_basis(
-    pf: PhysicalScene, views: Views, exponent: float, start_cm: float, sky_distance: float = SKY_DISTANCE
-) -> Basis:
-    """Unreal (float64) evaluated with unit colours: the isotropic and lobe images."""
-    wp = views.world_positions(sky_distance)
-    p = base_params(
-        pf,
-        DirectionalInscatteringExponent=exponent,
-        DirectionalInscatteringStartDistance=start_cm,
-        FogInscatteringColor=(1.0, 0.0, 0.0),
-        DirectionalInscatteringColor=(0.0, 1.0, 0.0),
-    )
-    ins = unreal_inscatter(p, np.asarray(pf.camera), wp)
-    return Basis(iso=ins[:, 0], lobe=ins[:, 1])
-
-
-def solve_colours(basis: Basis, target: np.ndarray, weights=None) -> tuple[np.ndarray, np.ndarray, float]:
-    """Non-negative least squares per channel: ``target ≈ C_fog iso + C_dir lobe``.
-
-    Returns ``(C_fog (3,), C_dir (3,), sse)`` with ``sse`` the weighted sum of
-    squared residuals over all channels.
-    """
-    from scipy.optimize import nnls
-
-    A = np.stack([basis.iso, basis.lobe], axis=-1)
-    sw = np.ones(len(A)) if weights is None else np.sqrt(np.asarray(weights, dtype=float))
-    Aw = A * sw[:, None]
-    cf, cd, sse = np.zeros(3), np.zeros(3), 0.0
-    for c in range(3):
-        x, r = nnls(Aw, target[:, c] * sw)
-        cf[c], cd[c] = x
-        sse += r * r
-    return cf, cd, float(sse)
 
 
 @dataclass
@@ -344,7 +192,7 @@ def fit_unreal(
             raise ValueError("fit_unreal: a target needs the views it was computed on")
         try:
             hash(pf)
-            fit = _fit_converged
+            fit: Callable[..., FitResult] = _fit_converged
         except TypeError:  # a scene holding arrays: not cached
             fit = _fit_converged.__wrapped__
         return copy.deepcopy(
@@ -363,7 +211,7 @@ def fit_unreal(
     N = len(views.D)
     cache: dict = {}
 
-    def sse(log_n: float, start_cm: float):
+    def sse(log_n: float, start_cm: float) -> tuple[np.ndarray, np.ndarray, float]:
         log_n = float(np.clip(log_n, *LOG_N_RANGE))
         start_cm = float(np.clip(start_cm, 0.0, MAX_START_CM)) if fit_start else 0.0
         key = (round(log_n, 12), round(start_cm, 9))
@@ -384,7 +232,7 @@ def fit_unreal(
         if fit_start:
             x0.append(s0 / 1e4)
 
-        def f(x):
+        def f(x: np.ndarray) -> float:
             i = 0
             ln = ln0
             if exponent is None:

@@ -13,6 +13,7 @@ reported as notes, never silently dropped.
 from __future__ import annotations
 
 import difflib
+from typing import Any
 
 from fogref.errors import ParameterError
 from fogref.mapping.fog_input import PHYSICAL, SOURCE, Range, _check, _fmt, _vec, fog_from_physical
@@ -87,7 +88,7 @@ UNREAL_IGNORED_RANGES = {
 }
 
 
-def _unreal_value(unreal: dict, key: str):
+def _unreal_value(unreal: dict, key: str) -> Any:
     if key.startswith("SecondFogData."):
         sfd = unreal.get("SecondFogData") or {}
         if not isinstance(sfd, dict):
@@ -98,7 +99,7 @@ def _unreal_value(unreal: dict, key: str):
     return unreal.get(key)
 
 
-def fog_from_unreal(unreal: dict, *, albedo=0.9, g: float = 0.6) -> tuple[dict, list[str]]:
+def fog_from_unreal(unreal: dict, *, albedo: Any = 0.9, g: float = 0.6) -> tuple[dict, list[str]]:
     """The ``heightfog`` parameters of Unreal editor values, through the exact mapping.
 
     Parameters

@@ -43,7 +43,7 @@ def quiet_numpy(fn: Any) -> Any:
     return wrapper
 
 
-def check_layer_param(src, i, name, v, lo, hi):
+def check_layer_param(src: str, i: int, name: str, v: Any, lo: float, hi: float) -> None:
     """Raise ParameterError naming ``layer{i}.{name}`` unless ``lo <= v <= hi`` (finite;
     :func:`fogref.params.number`).
 

@@ -143,7 +143,7 @@ def profile_entry(name: str, src: str = "<params>") -> ProfileEntry:
     return PROFILES[params.choice(name, "profile", PROFILES, src)]
 
 
-def check_range(src: str, name: str, v, lo: float, hi: float) -> float:
+def check_range(src: str, name: str, v: Any, lo: float, hi: float) -> float:
     """``float(v)``, or ParameterError naming ``name`` unless finite and in ``[lo, hi]``
     (:func:`fogref.params.number`).
 
@@ -179,7 +179,7 @@ def number(
 
 
 def rgb(
-    v, name: str = "colour", source: str = "<params>", lo: float = -math.inf, hi: float = math.inf
+    v: Any, name: str = "colour", source: str = "<params>", lo: float = -math.inf, hi: float = math.inf
 ) -> tuple[float, float, float]:
     """An RGB triple (or a 3-vector) from 1 or 3 numbers, a sequence or a string
     (:func:`fogref.params.rgb`).

@@ -24,6 +24,7 @@ import math
 from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
 from fogref.media.closed_form import phi, psi
+from fogref.media.medium import ExpLayer
 from fogref.media.ops import Ops, Real
 
 
@@ -200,8 +201,6 @@ def sample_sun_single_scatter_mixture(
     t0 = ops.where(ok, t0, 0.0)
     seg = ops.where(ok, seg, 0.0)
     oy, dy = o[1] + t0 * d[1], d[1]
-    from fogref.media.medium import ExpLayer
-
     # m_l: the exact exponent for exponential layers (sun above the horizon); any other
     # profile (or a constant layer) gets m = 1, a truncated free flight: the proposal
     # stays a normalised closed form for any profile that inverts its optical depth.
@@ -283,11 +282,8 @@ def sun_sampling_applies(medium: Real, w: Real, max_layers: int = 1) -> bool:
 
     ``max_layers``: fogpath uses it for one layer only by default: with two
     layers the Newton inversion costs more time than the variance it removes
-    (``reports/benchmarks/variance_reduction.md``: 0.84x at equal error on the
-    two-layer scene, 4.4x on the one-layer valley).
+    (``reports/benchmarks/variance_reduction.md``).
     """
-    from fogref.media.medium import ExpLayer
-
     return (
         medium.bounds is None
         and len(medium.layers) <= max_layers

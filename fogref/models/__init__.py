@@ -9,6 +9,9 @@ registry name   class                                          source
 ``box``         :class:`~fogref.models.box.BoxFog`                     box volume fog (Unity)
 ``hdrp``        :class:`~fogref.models.hdrp.HDRPFog`                   HDRP AtmosphericScattering.hlsl
 ``filament``    :class:`~fogref.models.filament.FilamentFog`           Filament fog.fs
+``godot``       :class:`~fogref.models.godot.GodotFog`                 Godot scene_forward_clustered.glsl
+``bevy``        :class:`~fogref.models.bevy.BevyDistanceFog`           Bevy fog.wgsl
+``threejs``     :class:`~fogref.models.threejs.ThreeJSFog`             three.js fog_fragment.glsl.js
 ==============  =============================================  ==========================
 
 Every model follows :class:`~fogref.models.base.FogModel`:
@@ -22,7 +25,17 @@ Names are resolved by one function, :func:`~fogref.models.resolve.resolve_model`
 group ``fogref.models``; an unknown name gets a FogrefError with a "did you mean".
 """
 
-from fogref.models import altitude, box, filament, hdrp, ue4, unity_builtin  # noqa: F401  (registration)
+from fogref.models import (  # noqa: F401  (registration)
+    altitude,
+    bevy,
+    box,
+    filament,
+    godot,
+    hdrp,
+    threejs,
+    ue4,
+    unity_builtin,
+)
 from fogref.models.altitude import AltitudeFog, AltitudeFogParams
 from fogref.models.base import SKY_DISTANCE, FogModel, FogResult, as_points, register
 from fogref.models.box import BoxFog, BoxFogParams

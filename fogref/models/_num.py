@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from fogref.errors import ParameterError
+from fogref.models.base import as_points
 
 LN2 = 0.6931471805599453
 
@@ -33,8 +34,6 @@ def saturate(x: Any) -> Any:
 
 def split(camera: Any, world_pos: Any) -> Any:
     """camera (3,) and world positions (..., 3) as float64 arrays, checked."""
-    from fogref.models.base import as_points
-
     cam = as_points(camera)
     if cam.shape != (3,):
         raise ValueError(f"camera must have shape (3,), got {cam.shape}")

@@ -41,16 +41,14 @@ relative depth below ``_FogEnd`` where the ray enters the power piece.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from fogref import params as valid
+from fogref.media import NP, FogMedium, PowerLawLayer
 from fogref.models._num import dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
-
-if TYPE_CHECKING:
-    from fogref.media.medium import FogMedium
 
 
 @dataclass(frozen=True)
@@ -101,8 +99,6 @@ def path_integral_exact(cam: Any, wp: Any, s: Any, e: Any, p: Any) -> np.ndarray
 
     Stable at all slopes (horizontal rays included) and near ``_FogEnd``; see the module doc.
     """
-    from fogref.media import NP, PowerLawLayer
-
     d = np.asarray(wp, np.float64) - np.asarray(cam, np.float64)
     dist = np.sqrt(np.sum(d * d, axis=-1))
     y_lo = np.minimum(np.broadcast_to(np.float64(cam[1]), dist.shape), wp[..., 1])
@@ -165,8 +161,6 @@ class AltitudeFog:
 # -- physical counterpart ---------------------------------------------------------
 def altitude_to_medium(params: AltitudeFogParams, albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
     """The medium ``sigma_t = _FogColor.a * T(y)`` [1/m]: its optical depth is ``a * I``."""
-    from fogref.media import FogMedium, PowerLawLayer
-
     return FogMedium(
         sigma_t=params._FogColor[3],
         albedo=albedo,

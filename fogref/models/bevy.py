@@ -45,11 +45,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from fogref.errors import ParameterError
-from fogref.media import rgb
+from fogref.media import ExpLayer, FogMedium, rgb
 from fogref.models._num import dtype_of, grey, split
 from fogref.models.base import FogResult, register
 
@@ -92,7 +93,7 @@ class BevyFogParams:
     light_direction: tuple = (0.0, 1.0, 0.0)
     light_color: tuple = (1.0, 1.0, 1.0)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         src = "<BevyFogParams>"
         if self.falloff not in FALLOFFS:
             raise ParameterError(src, "falloff", f"expected one of {FALLOFFS}, got {self.falloff!r}")
@@ -124,7 +125,7 @@ class BevyFogParams:
         object.__setattr__(self, "light_direction", tuple(float(x) for x in w / n))
 
 
-def _one_minus_inv_exp(x, dt):
+def _one_minus_inv_exp(x: Any, dt: Any) -> Any:
     """``1 - 1/exp(x)`` as the WGSL writes it (exp overflows to inf: 1 - 0 = 1)."""
     return dt(1.0) - dt(1.0) / np.exp(x)
 
@@ -146,7 +147,7 @@ class BevyDistanceFog:
     def __init__(self, params: BevyFogParams | None = None):
         self.params = params or BevyFogParams()
 
-    def evaluate(self, camera, world_pos, precision: str = "float32") -> FogResult:
+    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
         """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
         dt = dtype_of(precision)
         p = self.params
@@ -187,7 +188,7 @@ class BevyDistanceFog:
                 insc = color * f[..., None]
         return FogResult(inscatter=insc.astype(dt), transmittance=trans.astype(dt))
 
-    def to_medium(self, **kw):
+    def to_medium(self, **kw: Any) -> FogMedium:
         return bevy_to_medium(self.params, **kw)
 
 
@@ -220,11 +221,12 @@ def bevy_sigma(params: BevyFogParams, reference_distance: float | None = None) -
 
 
 def bevy_to_medium(
-    params: BevyFogParams, reference_distance: float | None = None, albedo=(1.0, 1.0, 1.0), g: float = 0.0
-):
+    params: BevyFogParams,
+    reference_distance: float | None = None,
+    albedo: Any = (1.0, 1.0, 1.0),
+    g: float = 0.0,
+) -> FogMedium:
     """Homogeneous :class:`~fogref.media.FogMedium` for ``params`` (see :func:`bevy_sigma`)."""
-    from fogref.media import ExpLayer, FogMedium
-
     return FogMedium(
         sigma_t=bevy_sigma(params, reference_distance),
         albedo=albedo,
@@ -234,7 +236,7 @@ def bevy_to_medium(
     )
 
 
-def medium_to_bevy(medium, **kw) -> BevyFogParams:
+def medium_to_bevy(medium: FogMedium, **kw: Any) -> BevyFogParams:
     """Atmospheric fog equal to a homogeneous, unbounded medium (RGB extinction allowed).
 
     ``extinction = inscattering = sigma_t * density`` [1/m]; ``kw``: the other options

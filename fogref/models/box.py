@@ -27,17 +27,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from fogref import params as valid
 from fogref.errors import ParameterError
+from fogref.media import Box, ExpLayer, FogMedium
 from fogref.models._num import dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
-
-if TYPE_CHECKING:
-    from fogref.media.medium import FogMedium
 
 BOX_MODES = ("ratio", "thickness", "beer")
 
@@ -149,8 +147,6 @@ def box_to_medium(
     of length ``reference_chord`` (default: the box's smallest side):
     ``1 - exp(-sigma L) = min(k, 1 - 1e-6)``.
     """
-    from fogref.media import Box, ExpLayer, FogMedium
-
     if params.mode == "ratio":
         L = reference_chord or min(h - l for l, h in zip(params.box_min, params.box_max))
         sigma = -math.log1p(-min(params.density, 1.0 - 1e-6)) / L

@@ -29,19 +29,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from fogref import params as valid
 from fogref.errors import ParameterError
-from fogref.media import NP
+from fogref.media import NP, ExpLayer, FogMedium
 from fogref.media.closed_form import phi
 from fogref.models._num import dtype_of, grey, split
 from fogref.models.base import FogResult, register
-
-if TYPE_CHECKING:
-    from fogref.media.medium import FogMedium
 
 
 @dataclass(frozen=True)
@@ -169,8 +166,6 @@ class FilamentFog:
 
 def filament_to_medium(params: FilamentFogParams, albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
     """Exact medium ``sigma_t = density`` [1/m], ``ExpLayer(1, heightFalloff, height)``."""
-    from fogref.media import ExpLayer, FogMedium
-
     return FogMedium(
         sigma_t=params.density,
         albedo=albedo,
@@ -182,8 +177,6 @@ def filament_to_medium(params: FilamentFogParams, albedo: Any = (1.0, 1.0, 1.0),
 
 def medium_to_filament(medium: FogMedium, **kw: Any) -> FilamentFogParams:
     """Filament options for an unbounded grey medium with one ExpLayer (``kw``: other options)."""
-    from fogref.media import ExpLayer
-
     src = getattr(medium, "source", "<medium>")
     if medium.bounds is not None or len(medium.layers) != 1 or not isinstance(medium.layers[0], ExpLayer):
         raise ParameterError(src, "layers", "Filament fog needs one unbounded ExpLayer")

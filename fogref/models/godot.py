@@ -57,11 +57,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from fogref.errors import ParameterError
-from fogref.media import rgb
+from fogref.media import ExpLayer, FogMedium, rgb
 from fogref.models._num import dtype_of, grey, split
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
@@ -74,7 +75,7 @@ SUN_SCATTER_EXPONENT = 8.0
 SUN_SCATTER_MIN = 0.001
 
 
-def srgb_to_linear(c) -> tuple:
+def srgb_to_linear(c: Any) -> tuple:
     """Godot's ``Color.srgb_to_linear`` of an RGB triple (each component in [0, 1]).
 
     Examples
@@ -120,7 +121,7 @@ class GodotFogParams:
     sky_color: tuple = (0.0, 0.0, 0.0)
     sky_distance: float = SKY_DISTANCE
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         src = "<GodotFogParams>"
         if self.fog_mode not in MODES:
             raise ParameterError(src, "fog_mode", f"expected one of {MODES}, got {self.fog_mode!r}")
@@ -152,14 +153,14 @@ class GodotFogParams:
             raise ParameterError(src, "sun_direction", "expected a non-zero finite 3-vector")
         object.__setattr__(self, "sun_direction", tuple(float(x) for x in w / n))
 
-    def depth_range(self, dt=np.float32) -> tuple:
+    def depth_range(self, dt: Any = np.float32) -> tuple:
         """(begin, end) [m] as the CPU passes them (end <= 0 means z_far; begin < end)."""
         end = dt(self.fog_depth_end) if self.fog_depth_end > 0 else dt(self.z_far)
         begin = min(dt(self.fog_depth_begin), dt(end - dt(0.001)))
         return dt(begin), dt(end)
 
 
-def glsl_smoothstep(e0, e1, x, dt):
+def glsl_smoothstep(e0: Any, e1: Any, x: Any, dt: Any) -> Any:
     """GLSL ``smoothstep(e0, e1, x)`` in ``dt`` (e1 > e0)."""
     t = np.minimum(np.maximum((x - e0) / (e1 - e0), dt(0.0)), dt(1.0))
     return t * t * (dt(3.0) - dt(2.0) * t)
@@ -182,7 +183,7 @@ class GodotFog:
     def __init__(self, params: GodotFogParams | None = None):
         self.params = params or GodotFogParams()
 
-    def evaluate(self, camera, world_pos, precision: str = "float32") -> FogResult:
+    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
         """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
         dt = dtype_of(precision)
         p = self.params
@@ -226,11 +227,11 @@ class GodotFog:
                 insc = np.where(sky[..., None], i_sky, insc)
         return FogResult(inscatter=insc.astype(dt), transmittance=grey(trans, dt))
 
-    def to_medium(self, **kw):
+    def to_medium(self, **kw: Any) -> FogMedium:
         return godot_to_medium(self.params, **kw)
 
 
-def godot_to_medium(params: GodotFogParams, albedo=(1.0, 1.0, 1.0), g: float = 0.0):
+def godot_to_medium(params: GodotFogParams, albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
     """The homogeneous medium ``sigma_t = fog_density`` [1/m] (exact for the exponential
     mode without height fog; ParameterError naming 'fog_mode' or 'fog_height_density' otherwise).
 
@@ -239,8 +240,6 @@ def godot_to_medium(params: GodotFogParams, albedo=(1.0, 1.0, 1.0), g: float = 0
     >>> float(godot_to_medium(GodotFogParams(fog_density=0.02)).sigma_t[0])
     0.02
     """
-    from fogref.media import ExpLayer, FogMedium
-
     src = "<godot_to_medium>"
     if params.fog_mode != "exponential":
         raise ParameterError(src, "fog_mode", "only the exponential mode has a physical counterpart")
@@ -251,7 +250,7 @@ def godot_to_medium(params: GodotFogParams, albedo=(1.0, 1.0, 1.0), g: float = 0
     )
 
 
-def medium_to_godot(medium, **kw) -> GodotFogParams:
+def medium_to_godot(medium: FogMedium, **kw: Any) -> GodotFogParams:
     """Exponential Godot fog equal to a homogeneous, unbounded, grey medium (``kw``: other options)."""
     src = getattr(medium, "source", "<medium>")
     if medium.bounds is not None or not medium.is_homogeneous:

@@ -29,19 +29,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from fogref import params as valid
 from fogref.errors import ParameterError
-from fogref.media import NP
+from fogref.media import NP, ExpLayer, FogMedium, HDRPLayer
 from fogref.media.closed_form import phi
 from fogref.models._num import dtype_of, grey, split
 from fogref.models.base import FogResult, register
-
-if TYPE_CHECKING:
-    from fogref.media.medium import FogMedium
 
 #: VolumeRendering.cs ScaleHeightFromLayerDepth: 1 / ln(1000).
 LAYER_DEPTH_TO_H = 0.144765
@@ -171,8 +168,6 @@ class HDRPFog:
 # -- physical counterpart ---------------------------------------------------------
 def hdrp_to_medium(params: HDRPFogParams, g: float = 0.0) -> FogMedium:
     """Exact medium: ``sigma_t = 1/meanFreePath`` [1/m] with a :class:`~fogref.media.HDRPLayer`."""
-    from fogref.media import FogMedium, HDRPLayer
-
     H = float(params.scale_height(np.float64))
     return FogMedium(
         sigma_t=1.0 / params.meanFreePath,
@@ -188,8 +183,6 @@ def medium_to_hdrp(
 ) -> HDRPFogParams:
     """HDRP parameters for a grey medium with one :class:`~fogref.media.HDRPLayer` (or a
     homogeneous layer); ``maximumHeight = baseHeight + H ln(1000)``."""
-    from fogref.media import ExpLayer, HDRPLayer
-
     src = getattr(medium, "source", "<medium>")
     if medium.bounds is not None or len(medium.layers) != 1:
         raise ParameterError(src, "layers", "HDRP fog needs one unbounded height profile")

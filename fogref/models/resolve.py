@@ -43,7 +43,7 @@ Examples
 >>> resolve_model("eu4")
 Traceback (most recent call last):
 ...
-fogref.errors.FogrefError: unknown fog model 'eu4'; did you mean 'ue4'? (built-in: altitude, box, ...)
+fogref.errors.FogrefError: unknown fog model 'eu4'; did you mean 'ue4'? (built-in: altitude, bevy, box, ...)
 """
 
 from __future__ import annotations
@@ -68,9 +68,7 @@ ENTRY_POINT_GROUP = "fogref.models"
 
 
 def _builtin_names() -> list[str]:
-    # the built-in models register themselves on import (the same modules fogref.models imports)
-    from fogref.models import altitude, bevy, box, filament, godot, hdrp, threejs, ue4, unity_builtin  # noqa: F401  # noqa: F401
-
+    # the built-in models registered themselves when fogref.models (which imports this module) imported them
     return sorted(base._REGISTRY)
 
 
@@ -105,7 +103,7 @@ def check_protocol(obj: Any, source: str) -> Any:
     >>> check_protocol(NoFog, "my_mod:NoFog")
     Traceback (most recent call last):
     ...
-    fogref.errors.FogrefError: my_mod:NoFog: NoFog is not a fog model: it has no evaluate(...) method (see docs/byo.md)
+    fogref.errors.FogrefError: my_mod:NoFog: NoFog is not a fog model: it has no evaluate(...) method ...
     """
     try:
         label = getattr(obj, "__name__", type(obj).__name__)

@@ -35,11 +35,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from fogref.errors import ParameterError
-from fogref.media import rgb
+from fogref.media import ExpLayer, FogMedium, rgb
 from fogref.models._num import dtype_of, grey, split
 from fogref.models.base import FogResult, register
 
@@ -71,7 +72,7 @@ class ThreeFogParams:
     density: float = 0.00025
     camera_forward: tuple = (0.0, 0.0, -1.0)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         src = "<ThreeFogParams>"
         if self.mode not in MODES:
             raise ParameterError(src, "mode", f"expected one of {MODES}, got {self.mode!r}")
@@ -90,7 +91,7 @@ class ThreeFogParams:
         object.__setattr__(self, "camera_forward", tuple(float(x) for x in f / n))
 
 
-def glsl_smoothstep(e0, e1, x, dt):
+def glsl_smoothstep(e0: Any, e1: Any, x: Any, dt: Any) -> Any:
     """GLSL ``smoothstep(e0, e1, x)`` in ``dt`` (e1 > e0)."""
     t = np.minimum(np.maximum((x - dt(e0)) / (dt(e1) - dt(e0)), dt(0.0)), dt(1.0))
     return t * t * (dt(3.0) - dt(2.0) * t)
@@ -113,14 +114,14 @@ class ThreeJSFog:
     def __init__(self, params: ThreeFogParams | None = None):
         self.params = params or ThreeFogParams()
 
-    def fog_depth(self, camera, world_pos, dt=np.float64) -> np.ndarray:
+    def fog_depth(self, camera: Any, world_pos: Any, dt: Any = np.float64) -> np.ndarray:
         """``vFogDepth`` [m]: the eye depth ``dot(p - camera, camera_forward)`` of each pixel."""
         cam, wp = split(camera, world_pos)
         v = (wp - cam).astype(dt)
         f = np.asarray(self.params.camera_forward, dtype=dt)
         return v[..., 0] * f[0] + v[..., 1] * f[1] + v[..., 2] * f[2]
 
-    def evaluate(self, camera, world_pos, precision: str = "float32") -> FogResult:
+    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
         """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
         dt = dtype_of(precision)
         p = self.params
@@ -135,7 +136,7 @@ class ThreeJSFog:
         color = np.asarray(p.color, dtype=dt)
         return FogResult(inscatter=color * factor[..., None], transmittance=grey(dt(1.0) - factor, dt))
 
-    def to_medium(self, **kw):
+    def to_medium(self, **kw: Any) -> FogMedium:
         return threejs_to_medium(self.params, **kw)
 
 
@@ -164,11 +165,12 @@ def threejs_sigma(params: ThreeFogParams, reference_depth: float | None = None) 
 
 
 def threejs_to_medium(
-    params: ThreeFogParams, reference_depth: float | None = None, albedo=(1.0, 1.0, 1.0), g: float = 0.0
-):
+    params: ThreeFogParams,
+    reference_depth: float | None = None,
+    albedo: Any = (1.0, 1.0, 1.0),
+    g: float = 0.0,
+) -> FogMedium:
     """Homogeneous :class:`~fogref.media.FogMedium` nearest to ``params`` (see :func:`threejs_sigma`)."""
-    from fogref.media import ExpLayer, FogMedium
-
     return FogMedium(
         sigma_t=threejs_sigma(params, reference_depth),
         albedo=albedo,

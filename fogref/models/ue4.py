@@ -46,20 +46,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from fogref.errors import ParameterError
-from fogref.media import NP
+from fogref.media import NP, ExpLayer, FogMedium
 from fogref.media.closed_form import phi
 from fogref.models._num import LN2, dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
 from fogref.params import number, vector
 from fogref.params import rgb as valid_rgb
-
-if TYPE_CHECKING:
-    from fogref.media.medium import FogMedium
 
 CM_PER_M = 100.0
 #: HeightFogCommon.ush: threshold of the Taylor branch of the line integral.
@@ -89,7 +86,7 @@ class SecondFogData:
     FogHeightFalloff: float = 0.2  #: editor falloff (x 1/1000 per cm)
     FogHeightOffset: float = 0.0  #: cm, relative to the component's Z
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         src = "<UE4FogParams.SecondFogData>"
         for name, lo in (("FogDensity", 0.0), ("FogHeightFalloff", 0.0), ("FogHeightOffset", -math.inf)):
             unit = "cm" if name == "FogHeightOffset" else ""
@@ -366,8 +363,6 @@ def ue4_to_medium(params: UE4FogParams, albedo: Any = (1.0, 1.0, 1.0), g: float 
     density > 0 (see module doc).  Albedo and g are free (Unreal has neither;
     its FogInscatteringColor stands for ``albedo * L_sky``).
     """
-    from fogref.media import ExpLayer, FogMedium
-
     sfd = params.SecondFogData
     specs = [
         (params.FogDensity, params.FogHeightFalloff, params.FogHeight),
@@ -390,8 +385,6 @@ def medium_to_ue4(medium: FogMedium, base: UE4FogParams | None = None) -> UE4Fog
     The medium must be unbounded, grey (equal sigma_t per channel) and made of
     at most two :class:`~fogref.media.ExpLayer`.  Other fields come from ``base``.
     """
-    from fogref.media import ExpLayer
-
     src = getattr(medium, "source", "<medium>")
     if medium.bounds is not None:
         raise ParameterError(src, "bounds", "Unreal's height fog is unbounded")

@@ -31,17 +31,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from fogref import params as valid
 from fogref.errors import ParameterError
+from fogref.media import ExpLayer, FogMedium
 from fogref.models._num import LN2, dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
-
-if TYPE_CHECKING:
-    from fogref.media.medium import FogMedium
 
 MODES = ("linear", "exp", "exp2")
 
@@ -172,8 +170,6 @@ def unity_to_medium(
     g: float = 0.0,
 ) -> FogMedium:
     """Homogeneous :class:`~fogref.media.FogMedium` for ``params`` (see :func:`unity_sigma`)."""
-    from fogref.media import ExpLayer, FogMedium
-
     return FogMedium(
         sigma_t=unity_sigma(params, reference_distance),
         albedo=albedo,

@@ -23,7 +23,12 @@ import json
 import os
 from pathlib import Path
 
+import fogref
+from fogref._version import __version__
 from fogref.errors import FogrefError
+from fogref.gbuffer import load_truth
+from fogref.render.inputs import inputs_digest
+from fogref.render.render import render
 
 
 def default_cache_dir() -> Path:
@@ -33,14 +38,12 @@ def default_cache_dir() -> Path:
 
 
 def _renderer_hash() -> str:
-    import fogref
-
     root = Path(fogref.__file__).resolve().parent
     files = sorted((root / "media").glob("*.py")) + sorted((root / "render").glob("*.py"))
     files.append(root / "gbuffer.py")
     plugins = root.parent / "plugins"
     if not plugins.is_dir():
-        try:
+        try:  # an installed fogref without the source tree; the plugins are optional here
             import fogref_plugins
 
             plugins = Path(fogref_plugins.__file__).resolve().parent
@@ -64,9 +67,6 @@ def truth_key(scene, spp: int, seed: int, overrides: dict | None = None, pixel_f
     >>> len(k), k == truth_key("scenes/valley.xml", 16, 1, {"res": 32, "resy": 18})
     (24, False)
     """
-    from fogref import __version__
-    from fogref.render.inputs import inputs_digest
-
     spec = {
         "inputs": inputs_digest(scene, overrides),
         "spp": int(spp),
@@ -106,16 +106,12 @@ def render_cached(
     over = dict(overrides or {})
     path = truth_path(scene, spp, seed, over, cache_dir, pixel_filter)
     folder = path.parent
-    from fogref.gbuffer import load_truth
-
     if path.is_file():
         try:
             load_truth(path)
             return path, True
         except FogrefError:
             path.unlink(missing_ok=True)
-    from fogref.render.render import render
-
     folder.mkdir(parents=True, exist_ok=True)
     render(
         scene,
@@ -168,8 +164,6 @@ def cached_truth(
     Truth
         From :func:`fogref.gbuffer.load_truth`; ``truth.path`` is the cached EXR.
     """
-    from fogref.gbuffer import load_truth
-
     over = dict(overrides or {})
     if res is not None:
         w, h = (int(x) for x in res)

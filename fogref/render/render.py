@@ -49,10 +49,13 @@ import numpy as np
 from fogref import gbuffer
 from fogref._version import __version__
 from fogref.atomic import atomic_write, refuse_overwriting_inputs, savez_atomic, temporary_names
+from fogref.display import write_preview
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
+from fogref.render import scene as scene_reader
 from fogref.render.inputs import file_sha256, inputs_digest, scene_inputs
 from fogref.render.passes import max_lanes, pass_seed, pass_sizes
+from fogref.render.variant import set_variant
 
 PIXEL_FILTERS = ("centre", "box")
 #: Bytes per pixel the driver holds: float64 sums of 30 channels and 42 squares and
@@ -224,14 +227,11 @@ def render(
     hashes: dict = {}  # before the scene is loaded: what its pixels will see
     digest = inputs_digest(scene_path, overrides, inputs, record=hashes)
 
-    from fogref.render.scene import load_scene
-    from fogref.render.variant import set_variant
-
     variant = set_variant(variant)
     import drjit as dr
     import mitsuba as mi
 
-    scene, desc = load_scene(scene_path, overrides)
+    scene, desc = scene_reader.load_scene(scene_path, overrides)
     integrator = scene.integrator()
     if not hasattr(integrator, "render_moments"):
         raise FogrefError(f"{scene_path}: the scene's integrator must be 'fogpath' to write a ground truth")
@@ -277,7 +277,7 @@ def render(
         from tqdm import tqdm
 
         bar = tqdm(total=spp, initial=sum(passes[:saved]), unit="spp", desc=scene_path.name)
-    else:  # no bar, no tqdm import (20 ms of a quiet CLI run's start-up)
+    else:  # no bar, no tqdm import (a quiet run's start-up skips it)
         bar = _NoBar()
     t0, last_ckpt, timings = time.perf_counter(), time.perf_counter(), []
     with _Interrupt() as stop, bar:
@@ -339,8 +339,6 @@ def render(
     _exr_threads()
     write_exr(out, channels, attrs)
     if png:
-        from fogref.display import write_preview
-
         write_preview(np.stack([channels[c] for c in "RGB"], axis=-1), out.with_suffix(".png"))
     ckpt.unlink(missing_ok=True)
     return out
@@ -360,9 +358,8 @@ def _host_float32(channels: dict) -> dict:
     """The EXR's channels, ``(H, W)`` float64 tensors on the device, as host float32 planes.
 
     All channels are cast and stacked on the device and copied to the host in one
-    contiguous block (each channel a contiguous plane).  At 1920x1080 the channel
-    arithmetic in numpy on the host and the per-channel copies took 4.2 s of a 10.3 s
-    render (4 spp, CPU); on the device they are part of one kernel.
+    contiguous block (each channel a contiguous plane): the channel arithmetic is part of
+    one kernel on the device, not numpy work on the host after per-channel copies.
     """
     import drjit as dr
     import mitsuba as mi

@@ -102,10 +102,10 @@ def _header(root, geo: Geometry, fog_source: str, notes) -> None:
     root.append(
         ET.Comment(
             comment_text(
-                f" Written by fogref scene (fogref {__version__}). Geometry: {geo_text}. Fog from {fog_source}. "
-                "Units: metres, y up; the sun's elevation is above the horizon and its azimuth is from +z toward +x "
-                "[deg] (fogref/render/sun.py). Every default below can be changed by the set option of fogref render "
-                "(NAME=VALUE). "
+                f" Written by fogref scene (fogref {__version__}). Geometry: {geo_text}. Fog from "
+                f"{fog_source}. Units: metres, y up; the sun's elevation is above the horizon and its "
+                "azimuth is from +z toward +x [deg] (fogref/render/sun.py). Every default below can be "
+                "changed by the set option of fogref render (NAME=VALUE). "
             )
         )
     )

@@ -6,8 +6,8 @@ renderer's sake; ``import fogref`` does not call it (see :mod:`fogref`).
 Start-up (``benchmarks/render_driver.py --startup``): importing Mitsuba, setting a
 variant and registering fogpath run ``@dr.syntax`` on 11 functions (Mitsuba's
 Python integrators and projective helpers, fogpath's ``sample``), each a parse, an
-AST rewrite and a compile of its source: ~90 ms of every process's start (~170 ms
-while fogpath's ``import mitsuba.ad...`` loads Mitsuba's integrators a second time).
+AST rewrite and a compile of its source, in every process's start (twice for
+Mitsuba's integrators while fogpath's ``import mitsuba.ad...`` loads them a second time).
 While :func:`set_variant` runs, ``dr.syntax`` is wrapped by :func:`_cached_syntax`,
 which keeps the rewritten code objects on disk, keyed on the source file's bytes.
 """
@@ -19,6 +19,7 @@ import os
 
 from fogref import params
 from fogref._llvm import HELP, ensure_llvm
+from fogref.atomic import atomic_write
 from fogref.errors import FogrefError
 
 DEFAULT_VARIANT = "llvm_ad_rgb"
@@ -56,7 +57,7 @@ def _cached_syntax():
 
     ``@dr.syntax`` turns a function's source into another function (Dr.Jit's
     ``while``/``if`` rewrite) when the decorated module is imported: a parse, an
-    AST rewrite and a compile, 1-16 ms per function, in every process.  Here a
+    AST rewrite and a compile per function, in every process.  Here a
     cache hit returns the same function built the same way from the stored code
     object (``marshal``, as Python's ``__pycache__``); a miss, or any failure to
     read or write the cache, calls Dr.Jit's own ``syntax`` (and stores its result).
@@ -77,8 +78,6 @@ def _cached_syntax():
     from pathlib import Path
 
     import drjit as dr
-
-    from fogref.atomic import atomic_write
 
     original = dr.syntax
     digests: dict[str, str] = {}
@@ -206,6 +205,7 @@ def set_variant(name: str | None = None) -> str:
             except Exception as e:  # CUDA without a GPU, a broken LLVM, ...
                 raise FogrefError(f"cannot use Mitsuba variant '{name}': {e}") from e
         if name not in _registered:
+            # here, not at module level: fogref_plugins is Mitsuba's side, loaded with a variant
             import fogref_plugins
 
             fogref_plugins.register()

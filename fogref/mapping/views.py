@@ -1,0 +1,100 @@
+"""Sample views from a camera and the physical single scattering on them: the target of the fits.
+
+The loss of :func:`fogref.mapping.unreal.fit_unreal` (and of the lobe table,
+:mod:`fogref.mapping.lobe`) is the mean squared error of the inscattered radiance
+over a set of views (:func:`sample_views`): directions on a Fibonacci sphere from
+the scene's camera, at log-spaced distances, plus the sky (an infinite distance,
+fogged by a model at :data:`~fogref.models.base.SKY_DISTANCE`) for upward views.
+The physical single scattering of a sun (irradiance E, toward ``w``) and a uniform
+sky ``L_sky`` (closed forms of :mod:`fogref.media.single_scatter`)::
+
+    L = alpha E p_HG(cos) T_sun(o) tau phi(m tau)  +  alpha L_sky (1 - T)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from fogref.mapping.physical import PhysicalScene
+from fogref.media import NP, hg_phase, single_scatter_sun
+from fogref.media.single_scatter import single_scatter_sky
+from fogref.models.base import SKY_DISTANCE
+
+__all__ = ["Views", "fibonacci_directions", "physical_single_scattering", "sample_views"]
+
+
+@dataclass
+class Views:
+    """Sample views: unit directions ``d`` (N, 3), distances ``D`` (N,) [m] (inf: sky)."""
+
+    camera: np.ndarray
+    d: np.ndarray
+    D: np.ndarray
+
+    @property
+    def sky(self) -> np.ndarray:
+        return ~np.isfinite(self.D)
+
+    def world_positions(self, sky_distance: float = SKY_DISTANCE) -> np.ndarray:
+        D = np.where(self.sky, sky_distance, self.D)
+        return self.camera + self.d * D[:, None]
+
+
+def fibonacci_directions(n: int) -> np.ndarray:
+    """``n`` nearly uniform unit directions on the sphere (y-up), (n, 3)."""
+    i = np.arange(n) + 0.5
+    y = 1.0 - 2.0 * i / n
+    r = np.sqrt(np.maximum(0.0, 1.0 - y * y))
+    phi = i * math.pi * (3.0 - math.sqrt(5.0))
+    return np.stack([r * np.cos(phi), y, r * np.sin(phi)], axis=-1)
+
+
+def sample_views(
+    camera: Any, n_dirs: int = 400, distances: Any = None, min_dy: float = -0.5, sky_min_dy: float = 0.0
+) -> Views:
+    """Views from ``camera``: Fibonacci directions with ``d_y >= min_dy`` at each of
+    ``distances`` [m] (default 12 log-spaced from 10 m to 20 km), plus the sky
+    (infinite distance) for directions with ``d_y > sky_min_dy``."""
+    if distances is None:
+        distances = np.geomspace(10.0, 2.0e4, 12)
+    dirs = fibonacci_directions(n_dirs)
+    dirs = dirs[dirs[:, 1] >= min_dy]
+    D = np.asarray(distances, dtype=float)
+    d_all = np.repeat(dirs, len(D), axis=0)
+    D_all = np.tile(D, len(dirs))
+    up = dirs[dirs[:, 1] > sky_min_dy]
+    d_all = np.concatenate([d_all, up])
+    D_all = np.concatenate([D_all, np.full(len(up), np.inf)])
+    return Views(np.asarray(camera, dtype=float), d_all, D_all)
+
+
+def physical_single_scattering(
+    pf: PhysicalScene, views: Views, sun_attenuation: bool = True, sky: bool = True, sun: bool = True
+) -> np.ndarray:
+    """Closed-form single scattering (sun + sky, no occluders) of each view, (N, 3).
+
+    ``sun_attenuation=False``: the sun term without its attenuation in the fog,
+    ``alpha E p (1 - T)``.  The sky term is ``alpha L_sky (1 - T)`` (unoccluded,
+    unattenuated: what FogInscatteringColor stands for).
+    """
+    m = pf.medium
+    o = tuple(np.full(len(views.D), c) for c in views.camera)
+    d = tuple(views.d[:, i] for i in range(3))
+    D = np.where(views.sky, NP.largest, views.D)
+    out = np.zeros((len(D), 3))
+    if sun and max(pf.sun_irradiance) > 0:
+        w = pf.sun_direction
+        if sun_attenuation:
+            out += np.stack(single_scatter_sun(NP, m, o, d, D, w, pf.sun_irradiance), axis=-1)
+        elif w[1] > 0:
+            cos = d[0] * w[0] + d[1] * w[1] + d[2] * w[2]
+            p = hg_phase(NP, cos, m.g)
+            T = np.stack(m.transmittance(NP, o, d, D), axis=-1)
+            out += (np.asarray(m.albedo) * np.asarray(pf.sun_irradiance)) * p[:, None] * (1.0 - T)
+    if sky and max(pf.sky_radiance) > 0:
+        out += np.stack(single_scatter_sky(NP, m, o, d, D, pf.sky_radiance), axis=-1)
+    return out
