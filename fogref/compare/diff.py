@@ -35,7 +35,11 @@ from pathlib import Path
 
 import numpy as np
 
+from fogref.compare.check import check
+from fogref.compare.foreign import read_image
 from fogref.errors import FogrefError
+from fogref.exrio import read_exr
+from fogref.gbuffer import Truth, load_truth
 
 #: Metrics a noisy diff tests, and how a row says "differ".
 TESTED = ("bias", "rmse")
@@ -105,7 +109,6 @@ def is_truth(path) -> bool:
     """True if ``path`` is an EXR written by ``fogref render`` (its header has ``fogref.schema``)."""
     if Path(path).suffix.lower() != ".exr":
         return False
-    from fogref.exrio import read_exr
 
     return "fogref.schema" in read_exr(path)[1]
 
@@ -113,10 +116,7 @@ def is_truth(path) -> bool:
 def load_side(path, encoding: str = "auto", exposure: float = 1.0):
     """A ground truth (:class:`fogref.gbuffer.Truth`) or an image ``(H, W, 3)`` linear RGB."""
     if is_truth(path):
-        from fogref.gbuffer import load_truth
-
         return load_truth(path)
-    from fogref.compare.foreign import read_image
 
     return read_image(path, encoding=encoding, exposure=exposure)
 
@@ -157,8 +157,6 @@ def diff(
     whole verdict, in (0, 1); ``tolerance``: for two images only [units]; ``distance_bands``
     [m]: the regions of :func:`fogref.compare.regions.region_masks`.
     """
-    from fogref.compare.check import check
-    from fogref.gbuffer import Truth
 
     if not (isinstance(confidence, float | int) and 0 < confidence < 1):
         raise FogrefError(f"confidence: {confidence!r} must be in (0, 1)")

@@ -13,6 +13,7 @@ from fogref.atomic import write_text_atomic
 from fogref.compare.intervals import SIGNED
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
+from fogref.html.inline import check_html
 
 
 @dataclass
@@ -134,7 +135,6 @@ class CheckResult:
 
     def _repr_html_(self) -> str:
         """Jupyter's display: verdict, error thumbnails, rows (:func:`fogref.html.inline.check_html`)."""
-        from fogref.html.inline import check_html
 
         return check_html(self)
 

@@ -33,6 +33,8 @@ import zlib
 
 import numpy as np
 
+from fogref.display import preview_exposure, tone_map
+
 #: Largest finite half float.
 HALF_MAX = 65504.0
 ENCODING = "f16-shuffle-deflate"
@@ -90,8 +92,6 @@ def thumbnail_uri(linear_rgb, exposure: float, width: int = 160) -> str:
     """A PNG thumbnail of a linear image, at most ``width`` px wide [px >= 1], tone-mapped by
     :func:`fogref.display.tone_map` at ``exposure``, as a data URI."""
     from PIL import Image
-
-    from fogref.display import tone_map
 
     px = (np.clip(tone_map(linear_rgb, exposure), 0, 1) * 255).astype(np.uint8)
     im = Image.fromarray(px)
@@ -206,7 +206,6 @@ def truth_html(truth) -> str:
     """A truth's notebook display: thumbnails of ``final``, ``T``, ``inscatter``, ``single``,
     ``multiple``, ``surface`` (radiance parts at :func:`fogref.display.preview_exposure` of ``final``;
     inscatter, single and multiple share the inscatter's; ``T`` at exposure 1) and its provenance."""
-    from fogref.display import preview_exposure
 
     ex_final, ex_in = preview_exposure(truth.final), preview_exposure(truth.inscatter)
     thumbs = [

@@ -13,6 +13,7 @@ import csv
 import json
 from pathlib import Path
 
+from fogref.gbuffer import Truth
 from fogref.html.inline import check_rows_html, esc, fmt, table_html
 from fogref.html.page import figure, verdict_badge, write_page
 from fogref.html.viewer import viewer_data
@@ -257,8 +258,6 @@ def write_diff_html(out_dir, result, a, b) -> Path:
     """``out_dir/report.html`` of :func:`fogref.compare.diff.diff`: the viewer (A as the truth, B as
     the candidate: its error is B - A) and the rows tested."""
     import numpy as np
-
-    from fogref.gbuffer import Truth
 
     folder = Path(out_dir)
     truth = a if isinstance(a, Truth) else b if isinstance(b, Truth) else None

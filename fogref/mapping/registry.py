@@ -13,6 +13,7 @@ from typing import Any, Callable
 
 from fogref.errors import FogrefError
 from fogref.mapping.physical import PhysicalScene
+from fogref.models.resolve import resolve_model
 
 __all__ = ["MAPPINGS", "from_physical", "has_mapping", "register_mapping"]
 
@@ -41,8 +42,6 @@ def register_mapping(name: str) -> Any:
 
 def _name_and_class(model: Any) -> tuple[str | None, type | None]:
     if isinstance(model, str):
-        from fogref.models.resolve import resolve_model
-
         cls = resolve_model(model)
         return getattr(cls, "name", None), cls
     return getattr(model, "name", None), model

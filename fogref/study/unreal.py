@@ -30,10 +30,14 @@ from pathlib import Path
 import numpy as np
 
 from fogref.atomic import write_text_atomic as write_text
+from fogref.compare import compare
 from fogref.errors import FogrefError
 from fogref.gbuffer import Truth, load_truth
 from fogref.mapping import PhysicalScene, fit_unreal
 from fogref.mapping.build import build_model
+from fogref.render.cache import render_cached
+from fogref.render.render import file_sha256
+from fogref.render.scene_defaults import overrides_used_by as used
 from fogref.study import budget as B
 
 #: What-if variants of the engine settings (Unreal units, cm).
@@ -49,7 +53,6 @@ WHAT_IF = {
 
 def _sha256(path: Path) -> str:
     """The scene hash as the render driver recorded it (``fogref.scene_sha256``)."""
-    from fogref.render.render import file_sha256
 
     return file_sha256(path)
 
@@ -119,7 +122,6 @@ def overrides_used_by(scene: Path, overrides: dict | None) -> dict:
     >>> overrides_used_by(p, {"g": 0.5, "sun_elevation": 4, "sun": 1})
     {'g': 0.5, 'sun': 1}
     """
-    from fogref.render.scene_defaults import overrides_used_by as used  # the one reader of $defaults
 
     return used(scene, overrides)
 
@@ -128,7 +130,6 @@ def _render_cached(
     scene: Path, out: Path, spp: int, seed: int, overrides: dict, log, pixel_filter: str = "centre"
 ) -> Path:
     """A truth of ``scene`` from fogref's render cache (:mod:`fogref.render.cache`) in ``out``'s folder."""
-    from fogref.render.cache import render_cached
 
     t = time.perf_counter()
     path, cached = render_cached(scene, spp, seed, overrides, cache_dir=out.parent, pixel_filter=pixel_filter)
@@ -187,7 +188,6 @@ def run_study(
     FogrefError (before any work) for a truth that :func:`fogref.gbuffer.load_truth`
     refuses or whose scene changed since it was rendered (:func:`scene_of_truth`).
     """
-    from fogref.compare import compare
 
     t0 = time.perf_counter()
     exr = Path(exr)
