@@ -11,6 +11,7 @@ it cannot.  Colours follow the convention of :mod:`fogref.mapping.physical`
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -29,6 +30,11 @@ from fogref.models.hdrp import (
     medium_to_hdrp,
 )
 from fogref.models.unity_builtin import UnityBuiltinFog, medium_to_unity
+
+if TYPE_CHECKING:
+    from fogref.models.bevy import BevyDistanceFog
+    from fogref.models.godot import GodotFog
+    from fogref.models.threejs import ThreeJSFog
 
 __all__ = [
     "altitude_from_physical",
@@ -297,7 +303,7 @@ def fixed_lobe_amplitude(g: float, exponent: float, n_quad: int = 256) -> float:
 
 
 @register_mapping("godot")
-def godot_from_physical(ps: PhysicalScene):
+def godot_from_physical(ps: PhysicalScene) -> GodotFog:
     """The Godot 4 environment fog that best represents a physical scene.
 
     Exponential mode (``fog_density`` [1/m] on distance), no height fog.  Profile
@@ -332,7 +338,7 @@ def godot_from_physical(ps: PhysicalScene):
     )
     ps.require_unbounded("Godot")
     sigma = ps.grey_sigma_t("Godot") * _density_at_camera(ps)
-    kw = {
+    kw: dict[str, Any] = {
         "fog_mode": "exponential",
         "fog_density": sigma,
         "fog_height_density": 0.0,
@@ -357,7 +363,7 @@ def godot_from_physical(ps: PhysicalScene):
 
 
 @register_mapping("bevy")
-def bevy_from_physical(ps: PhysicalScene):
+def bevy_from_physical(ps: PhysicalScene) -> BevyDistanceFog:
     """The Bevy ``DistanceFog`` that best represents a physical scene.
 
     ``FogFalloff::Atmospheric`` with ``extinction = inscattering = sigma_t`` [1/m] (RGB: a
@@ -398,7 +404,7 @@ def bevy_from_physical(ps: PhysicalScene):
         layers=(ExpLayer(1.0, 0.0, 0.0),),
         source=ps.source,
     )
-    kw = {"color": (*ps.sky_colour(), 1.0), "directional_light_color": (0.0, 0.0, 0.0, 0.0)}
+    kw: dict[str, Any] = {"color": (*ps.sky_colour(), 1.0), "directional_light_color": (0.0, 0.0, 0.0, 0.0)}
     w = ps.sun_direction
     if ps.has_sun and w[1] > 0:
         lobe = lobe_fit(ps.medium.g, isotropic=False)
@@ -415,7 +421,7 @@ def bevy_from_physical(ps: PhysicalScene):
 
 
 @register_mapping("threejs")
-def threejs_from_physical(ps: PhysicalScene):
+def threejs_from_physical(ps: PhysicalScene) -> ThreeJSFog:
     """The three.js fog nearest to a physical scene: ``FogExp2``, **never exact**.
 
     three.js has no Beer–Lambert mode, no height term and no sun.  ``FogExp2`` with

@@ -49,8 +49,10 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass, field, replace
+from typing import Any, Iterable, Sequence
 
 import numpy as np
+import numpy.typing as npt
 
 from fogref.errors import FogrefError, ParameterError
 from fogref.mapping.free import FitSpec, Free, fit_spec
@@ -63,7 +65,7 @@ from fogref.mapping.unreal import (
     sample_views,
 )
 from fogref.media import NP
-from fogref.models.base import SKY_DISTANCE
+from fogref.models.base import SKY_DISTANCE, FogModel
 
 __all__ = [
     "FIT_DIRECTIONS_MAX_GENERIC",
@@ -117,7 +119,9 @@ class Target:
     T: np.ndarray
 
 
-def physical_targets(pf: PhysicalScene, views: Views, elevations=None) -> list[Target]:
+def physical_targets(
+    pf: PhysicalScene, views: Views, elevations: Iterable[float] | None = None
+) -> list[Target]:
     """One :class:`Target` per sun elevation (default: the scene's own sun)."""
     scenes = [pf] if elevations is None else [with_sun_elevation(pf, e) for e in elevations]
     out = []
@@ -131,7 +135,7 @@ def physical_targets(pf: PhysicalScene, views: Views, elevations=None) -> list[T
     return out
 
 
-def model_class(model):
+def model_class(model: str | type) -> type:
     """The model class a name (or class) stands for (:func:`fogref.models.resolve.resolve_model`)."""
     import inspect
 
@@ -143,11 +147,13 @@ def model_class(model):
     return cls
 
 
-def _label(cls) -> str:
+def _label(cls: type) -> str:
     return getattr(cls, "name", None) or cls.__name__
 
 
-def start_params(cls, pf: PhysicalScene, spec: FitSpec | None = None, overrides: dict | None = None):
+def start_params(
+    cls: type, pf: PhysicalScene, spec: FitSpec | None = None, overrides: dict[str, Any] | None = None
+) -> tuple[Any, str]:
     """The parameters the fit starts from: the physical mapping of ``pf`` where the model has
     one for it, else the model's defaults; then ``spec.start`` and ``overrides``.
 
@@ -156,13 +162,15 @@ def start_params(cls, pf: PhysicalScene, spec: FitSpec | None = None, overrides:
     from fogref.mapping.registry import from_physical, has_mapping
 
     spec = spec or fit_spec(cls)
-    params, source = None, "defaults"
+    params: Any = None  # the model's Params dataclass
+    source = "defaults"
     if spec.initial is not None:
         params = spec.initial(pf)
         source = "mapping" if params is not None else source
     if params is None and has_mapping(cls):
         try:
-            params, source = from_physical(cls, pf).params, "mapping"
+            model: Any = from_physical(cls, pf)  # a model instance; its settings are .params
+            params, source = model.params, "mapping"
         except (ParameterError, FogrefError):
             params = None
     if params is None:
@@ -188,13 +196,13 @@ def start_params(cls, pf: PhysicalScene, spec: FitSpec | None = None, overrides:
 _MAPPED_KEEP = ("lightColorIntensity", "inScatteringSize")
 
 
-def _get(params, f: Free) -> float:
+def _get(params: Any, f: Free) -> float:
     v = getattr(params, f.field)
     return float(v if f.index is None else v[f.index])
 
 
-def _set(params, free, values):
-    upd: dict = {}
+def _set(params: Any, free: Sequence[Free], values: Iterable[float]) -> Any:
+    upd: dict[str, Any] = {}
     for f, v in zip(free, values):
         if f.index is None:
             upd[f.field] = float(v)
@@ -213,13 +221,13 @@ def _to_value(f: Free, x: float) -> float:
     return 10.0**x if f.log else x
 
 
-def _bounds(free):
+def _bounds(free: Sequence[Free]) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     lo = [math.log10(f.lo) if f.log else f.lo for f in free]
     hi = [math.log10(f.hi) if f.log else f.hi for f in free]
     return np.array(lo, float), np.array(hi, float)
 
 
-def _evaluate(cls, params, view_sets):
+def _evaluate(cls: type, params: Any, view_sets: Iterable[Views]) -> list[tuple[np.ndarray, np.ndarray]]:
     out = []
     for views in view_sets:
         r = cls(params).evaluate(views.camera, views.world_positions(SKY_DISTANCE), "float64")
@@ -230,13 +238,13 @@ def _evaluate(cls, params, view_sets):
 
 
 def fit_to_targets(
-    cls,
+    cls: type,
     targets: list[Target],
-    params0,
+    params0: Any,
     spec: FitSpec | None = None,
     transmittance_weight: float = 1.0,
-    x0=None,
-) -> dict:
+    x0: npt.ArrayLike | None = None,
+) -> dict[str, Any]:
     """Least squares of the free parameters of ``cls`` (starting at ``params0``) to ``targets``.
 
     Returns ``{"params" (dataclass, the scene's own sun), "x" (internal), "values", "uncertainty",
@@ -257,11 +265,11 @@ def fit_to_targets(
     wT = float(transmittance_weight) * s
     suns = [t.scene.sun_direction for t in targets]
 
-    def params_at(x, w=None):
+    def params_at(x: Iterable[float], w: Any = None) -> Any:
         p = _set(params0, free, [_to_value(f, xi) for f, xi in zip(free, x)])
         return spec.sun(p, w) if (spec.sun is not None and w is not None) else p
 
-    def predict(x):
+    def predict(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         Ls, Ts = [], []
         for t, w in zip(targets, suns):
             ((L, T),) = _evaluate(cls, params_at(x, w), [t.views])
@@ -271,7 +279,7 @@ def fit_to_targets(
 
     bad = np.full(2 * L_t.size, 1.0e3 * max(s, 1.0))
 
-    def resid(x):
+    def resid(x: np.ndarray) -> np.ndarray:
         try:
             L, T = predict(x)
         except (ParameterError, ValueError, FloatingPointError):
@@ -346,7 +354,7 @@ class ModelFit:
     note: str = ""
     history: dict = field(default_factory=dict)
 
-    def instance(self):
+    def instance(self) -> FogModel:
         """The fitted model (the scene's own sun)."""
         from fogref.mapping.build import build_model
 
@@ -387,11 +395,11 @@ class ModelFit:
         }
 
 
-def _param_dict(params) -> dict:
+def _param_dict(params: Any) -> dict[str, Any]:
     return {f.name: getattr(params, f.name) for f in dataclasses.fields(params) if f.init}
 
 
-def _jsonable(d):
+def _jsonable(d: dict[str, Any]) -> dict[str, Any]:
     out = {}
     for k, v in d.items():
         if dataclasses.is_dataclass(v):
@@ -405,12 +413,12 @@ def _jsonable(d):
 
 
 def fit_model(
-    model,
-    scene,
-    views=None,
-    sun_elevations=None,
+    model: str | type,
+    scene: PhysicalScene | dict[str, Any],
+    views: int | Views | None = None,
+    sun_elevations: Iterable[float] | None = None,
     *,
-    params: dict | None = None,
+    params: dict[str, Any] | None = None,
     transmittance_weight: float = 1.0,
     rtol: float = FIT_RTOL,
     max_dirs: int = FIT_DIRECTIONS_MAX_GENERIC,
@@ -455,12 +463,13 @@ def fit_model(
     spec = fit_spec(cls)
     p0, source = start_params(cls, pf, spec, params)
 
-    def one(v: Views, x0=None):
+    def one(v: Views, x0: np.ndarray | None = None) -> dict[str, Any]:
         return fit_to_targets(cls, physical_targets(pf, v, elevations), p0, spec, transmittance_weight, x0)
 
-    spread, history = None, {}
+    spread: dict[str, float] | None = None
+    history: dict[str, Any] = {}
     if isinstance(views, Views):
-        r, n = one(views), None
+        r, n = one(views), len(views.D)
     elif views is not None:
         n = int(views)
         if not 8 <= n <= 100_000:
@@ -469,7 +478,8 @@ def fit_model(
     else:
         n = FIT_DIRECTIONS_START
         prev = one(sample_views(pf.camera, n_dirs=n))
-        conv, converged = [], False
+        conv: list[dict[str, Any]] = []
+        converged = False
         while True:
             conv.append({"n_dirs": n, "rel_rmse": prev["rel_rmse"], **prev["values"]})
             if 2 * n > max_dirs:
@@ -498,7 +508,7 @@ def fit_model(
         rmse_T=r["rmse_T"],
         target_rms=r["target_rms"],
         n_views=r["n_views"],
-        n_dirs=n if n is not None else len(views.D),
+        n_dirs=n,
         sun_elevations=elevations if elevations is not None else [sun_elevation(pf)],
         start=source,
         note=spec.note,
@@ -506,7 +516,7 @@ def fit_model(
     )
 
 
-def _scene(scene) -> PhysicalScene:
+def _scene(scene: object) -> PhysicalScene:
     if isinstance(scene, PhysicalScene):
         return scene
     if isinstance(scene, dict):

@@ -35,13 +35,27 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field, replace
-from typing import Callable
+from typing import TYPE_CHECKING, Any, Callable, Mapping, TypeVar
 
 from fogref.errors import FogrefError, ParameterError
+
+if TYPE_CHECKING:
+    from fogref.mapping.physical import PhysicalScene
+    from fogref.media import FogMedium
+    from fogref.models.bevy import BevyFogParams
+    from fogref.models.box import BoxFogParams
+    from fogref.models.filament import FilamentFogParams
+    from fogref.models.godot import GodotFogParams
+    from fogref.models.hdrp import HDRPFogParams
+    from fogref.models.ue4 import UE4FogParams
+    from fogref.models.unity_builtin import UnityFogParams
 
 __all__ = ["FIT_SPECS", "FitSpec", "Free", "fit_spec", "rgb_free"]
 
 INF = math.inf
+
+_P = TypeVar("_P")
+_R = TypeVar("_R")
 
 
 @dataclass(frozen=True)
@@ -71,16 +85,17 @@ class FitSpec:
     """What the generic fit changes in one model (see the module doc)."""
 
     free: tuple[Free, ...]
-    start: dict = field(default_factory=dict)
-    sun: Callable | None = None
-    sun_off: Callable | None = None
-    initial: Callable | None = None
-    exact_medium: Callable | None = None
+    start: dict[str, Any] = field(default_factory=dict)
+    #: ``(params, direction toward the sun) -> params`` (params: the model's ``Params`` dataclass)
+    sun: Callable[[Any, Any], Any] | None = None
+    sun_off: Callable[[Any], Any] | None = None
+    initial: Callable[[PhysicalScene], Any] | None = None
+    exact_medium: Callable[[Any], FogMedium | None] | None = None
     note: str = ""
 
 
-def _try(fn):
-    def wrapped(p):
+def _try(fn: Callable[[_P], _R]) -> Callable[[_P], _R | None]:
+    def wrapped(p: _P) -> _R | None:
         try:
             return fn(p)
         except (ParameterError, ValueError):
@@ -89,14 +104,14 @@ def _try(fn):
     return wrapped
 
 
-def _ue4_exact(p):
+def _ue4_exact(p: UE4FogParams) -> FogMedium | None:
     from fogref.models.ue4 import ue4_to_medium
 
     plain = p.StartDistance == 0 and p.FogCutoffDistance == 0 and p.FogMaxOpacity == 1 and p.EndDistance == 0
     return ue4_to_medium(p) if plain else None
 
 
-def _ue4_initial(ps):
+def _ue4_initial(ps: PhysicalScene) -> UE4FogParams | None:
     """Without a sun above the horizon, Unreal's mapping (its lobe fit) has nothing to fit: start from
     the exact extinction and the sky colour instead."""
     from fogref.mapping.unreal import base_params
@@ -106,19 +121,19 @@ def _ue4_initial(ps):
     return base_params(ps, FogInscatteringColor=ps.sky_colour(), DirectionalInscatteringColor=(0.0, 0.0, 0.0))
 
 
-def _unity_exact(p):
+def _unity_exact(p: UnityFogParams) -> FogMedium | None:
     from fogref.models.unity_builtin import unity_to_medium
 
     return unity_to_medium(p) if p.fogMode == "exp" and p.fog_coordinate == "distance" else None
 
 
-def _godot_exact(p):
+def _godot_exact(p: GodotFogParams) -> FogMedium:
     from fogref.models.godot import godot_to_medium
 
     return godot_to_medium(p)
 
 
-def _bevy_exact(p):
+def _bevy_exact(p: BevyFogParams) -> FogMedium | None:
     from fogref.models.bevy import bevy_to_medium
 
     if p.falloff not in ("Exponential", "Atmospheric"):
@@ -128,20 +143,20 @@ def _bevy_exact(p):
     return bevy_to_medium(p)
 
 
-def _hdrp_exact(p):
+def _hdrp_exact(p: HDRPFogParams) -> FogMedium:
     from fogref.models.hdrp import hdrp_to_medium
 
     return hdrp_to_medium(p)
 
 
-def _filament_exact(p):
+def _filament_exact(p: FilamentFogParams) -> FogMedium | None:
     from fogref.models.filament import filament_to_medium
 
     plain = p.distance == 0 and math.isinf(p.cutOffDistance) and p.maximumOpacity == 1
     return filament_to_medium(p) if plain else None
 
 
-def _box_exact(p):
+def _box_exact(p: BoxFogParams) -> FogMedium | None:
     from fogref.models.box import box_to_medium
 
     return box_to_medium(p) if p.mode == "beer" else None
@@ -267,7 +282,7 @@ def _builtin_specs() -> dict[str, FitSpec]:
 FIT_SPECS: dict[str, FitSpec] = _builtin_specs()
 
 
-def _default_free(cls) -> tuple[Free, ...]:
+def _default_free(cls: type) -> tuple[Free, ...]:
     params_cls = getattr(cls, "Params", None)
     if not (isinstance(params_cls, type) and dataclasses.is_dataclass(params_cls)):
         raise FogrefError(
@@ -293,7 +308,7 @@ def _default_free(cls) -> tuple[Free, ...]:
     return tuple(out)
 
 
-def _parse_declared(cls, declared: dict) -> tuple[Free, ...]:
+def _parse_declared(cls: type, declared: Mapping[str, tuple[float, float]]) -> tuple[Free, ...]:
     out = []
     for key, bounds in declared.items():
         name, _, rest = str(key).partition("[")
@@ -303,7 +318,7 @@ def _parse_declared(cls, declared: dict) -> tuple[Free, ...]:
     return tuple(out)
 
 
-def fit_spec(cls) -> FitSpec:
+def fit_spec(cls: type) -> FitSpec:
     """The :class:`FitSpec` of a model class: the built-in one for its registry name, else
     from its ``FIT_PARAMETERS`` (and optional ``FIT_START``), else every float of its ``Params``.
 

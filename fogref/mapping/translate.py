@@ -12,8 +12,8 @@
      "beer"), else a fit of ``sigma_t`` and the falloff of one exponential layer at the scene's
      layer height (three.js, the altitude fog's blend, the depth modes);
    * the phase asymmetry ``g`` and the sun irradiance (RGB; only when the scene has a sun) and the
-     sky radiance (RGB) fitted to the source's inscatter (the engines' colours stand for ``albedo E`` and ``albedo L_sky``, so the
-     albedo is kept and the light is fitted).
+     sky radiance (RGB) fitted to the source's inscatter (the engines' colours stand for
+     ``albedo E`` and ``albedo L_sky``, so the albedo is kept and the light is fitted).
 
    The fit is :func:`fogref.mapping.fit.fit_to_targets` on :class:`PhysicalFog`, the closed forms
    as a model.
@@ -37,8 +37,10 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Any, Iterable, Sequence
 
 import numpy as np
+import numpy.typing as npt
 
 from fogref.errors import FogrefError, ParameterError
 from fogref.mapping.fit import (
@@ -80,7 +82,7 @@ class PhysicalFogParams:
     sun_direction: tuple = (0.0, 1.0, 0.0)
     medium: FogMedium | None = None
 
-    def scene(self, camera) -> PhysicalScene:
+    def scene(self, camera: Iterable[float]) -> PhysicalScene:
         if self.medium is not None:
             m = replace(self.medium, albedo=self.albedo, g=self.g)
         else:
@@ -106,7 +108,9 @@ class PhysicalFog:
     def __init__(self, params: PhysicalFogParams | None = None):
         self.params = params or PhysicalFogParams()
 
-    def evaluate(self, camera, positions, precision: str = "float64") -> FogResult:
+    def evaluate(
+        self, camera: npt.ArrayLike, positions: npt.ArrayLike, precision: str = "float64"
+    ) -> FogResult:
         cam = np.asarray(camera, float)
         rel = np.asarray(positions, float).reshape(-1, 3) - cam
         D = np.linalg.norm(rel, axis=-1)
@@ -137,7 +141,14 @@ def _physical_spec(exact: bool, sun: bool = True) -> FitSpec:
     )
 
 
-def _source_targets(cls, spec, params, pf, views, elevations) -> list[Target]:
+def _source_targets(
+    cls: type,
+    spec: FitSpec,
+    params: Any,
+    pf: PhysicalScene,
+    views: Views,
+    elevations: Sequence[float] | None,
+) -> list[Target]:
     scenes = [pf] if elevations is None else [with_sun_elevation(pf, e) for e in elevations]
     out = []
     for ps in scenes:
@@ -147,7 +158,9 @@ def _source_targets(cls, spec, params, pf, views, elevations) -> list[Target]:
     return out
 
 
-def physical_of_model(cls, params, pf: PhysicalScene, views: Views, elevations=None) -> tuple[dict, dict]:
+def physical_of_model(
+    cls: type, params: Any, pf: PhysicalScene, views: Views, elevations: Sequence[float] | None = None
+) -> tuple[dict[str, Any], dict[str, str]]:
     """The physical fog of a model's settings (module doc, step 2).
 
     Returns ``(fit, info)``: :func:`~fogref.mapping.fit.fit_to_targets`'s dict for
@@ -209,13 +222,13 @@ class Translation:
 
 
 def translate(
-    source,
-    target,
-    params: dict | None = None,
-    scene: PhysicalScene | dict | None = None,
-    views=None,
-    sun_elevations=None,
-    target_params: dict | None = None,
+    source: str | type,
+    target: str | type,
+    params: dict[str, Any] | None = None,
+    scene: PhysicalScene | dict[str, Any] | None = None,
+    views: int | Views | None = None,
+    sun_elevations: Iterable[float] | None = None,
+    target_params: dict[str, Any] | None = None,
 ) -> Translation:
     """Carry ``source``'s settings (``params``, its own names) to ``target`` through the physical fog.
 
