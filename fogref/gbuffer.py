@@ -32,6 +32,7 @@ import numpy as np
 
 from fogref.errors import FogrefError
 from fogref.exrio import read_exr
+from fogref.html.inline import truth_html
 
 #: Version of the channel layout below; stored in the header as ``fogref.schema``.
 #: 3 added the ``corr.*`` channels; 2 (no correlations) is still read, see :func:`truth_from_channels`.
@@ -299,10 +300,7 @@ class Truth:
             self.corr = {k: np.ones(v.shape) for k, v in self.stderr.items()}
 
     def _repr_html_(self) -> str:
-        """Jupyter's display: thumbnails of every part and the provenance
-        (:func:`fogref.html.inline.truth_html`)."""
-        from fogref.html.inline import truth_html
-
+        """Jupyter's display (:func:`fogref.html.inline.truth_html`): part thumbnails, provenance."""
         return truth_html(self)
 
     def noise_cov(self, part: str) -> np.ndarray:
@@ -474,12 +472,8 @@ def truth_from_channels(channels: dict, attrs: dict, source: str = "<memory>") -
     view = get("view")
     view = view / np.maximum(np.linalg.norm(view, axis=-1, keepdims=True), 1e-30)
     noisy = [g.name for g in GROUPS if g.noisy]
-    attrs = {
-        **attrs,
-        "fogref.noise_correlation": "assumed 1 (schema 2 has no corr.* channels)"
-        if version == "2"
-        else "measured (corr.* channels)",
-    }
+    note = "assumed 1 (schema 2 has no corr.* channels)" if version == "2" else "measured (corr.* channels)"
+    attrs = {**attrs, "fogref.noise_correlation": note}
     names = {"final": "final", "transmittance": "T", "attenuated_surface": "attenuated_surface"}
     names.update(
         {g: g for g in ("inscatter", "single", "multiple", "surface", "surface_coverage", "distance")}

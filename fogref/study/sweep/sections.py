@@ -1,0 +1,218 @@
+"""The readers of a sweep file's tables other than ``[parameters.*]``: ``[sweep]``,
+``[render]``, ``[[models]]``, ``[design]``, ``[execution]`` and ``[outputs]``.
+
+Each takes the file's path and the parsed TOML and returns the validated fields of
+:class:`~fogref.study.sweep.spec.SweepSpec` it holds; the schema is in
+:mod:`fogref.study.sweep`'s docstring.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+from fogref import params as P
+from fogref.errors import FogrefError, ParameterError, did_you_mean
+from fogref.models.resolve import resolve_model
+from fogref.render.render import PIXEL_FILTERS
+from fogref.study.sweep.values import _bool, _err, _int, _num, _src, _table, as_str
+
+DESIGN_KINDS = ("grid", "list", "random", "lhs")
+SEED_POLICIES = ("fixed", "per_config")
+
+
+_MODEL_KEYS = ("from_scene", "label", "name", "params")
+#: The most configurations a sweep may have unless its ``[design] max_configs`` says more.
+MAX_CONFIGS = 100_000
+
+
+def _resolve(base: Path, p: str) -> Path:
+    q = Path(p)
+    if q.is_absolute():
+        return q
+    return base / q if (base / q).exists() else q
+
+
+def _read_sweep(path: Path, doc: dict) -> dict:
+    """``[sweep]``: name, scene paths (relative to the TOML file, else the working directory), out, cache."""
+    base = path.parent
+    sw = _table(path, doc, "sweep", ("name", "scenes", "out", "cache"))
+    scenes = sw.get("scenes")
+    if isinstance(scenes, str):
+        scenes = [scenes]
+    if not scenes or not all(isinstance(s, str) for s in scenes):
+        raise _err(path, "sweep", "'scenes' must be a non-empty list of scene file paths")
+    scene_paths = []
+    for s in scenes:
+        p = _resolve(base, s)
+        if not p.is_file():
+            raise _err(path, "sweep", f"scene '{s}' not found (relative to {base} or the working directory)")
+        if any(p.resolve() == q.resolve() for q in scene_paths):
+            raise ParameterError(_src(path, "sweep"), "scenes", f"'{s}' is listed twice")
+        scene_paths.append(p)
+    for k in ("out", "cache"):
+        if k in sw:
+            P.path(sw[k], k, source=_src(path, "sweep"))
+    if "name" in sw and not (isinstance(sw["name"], str) and sw["name"].strip()):
+        raise ParameterError(_src(path, "sweep"), "name", f"{sw['name']!r} is not a non-empty string")
+    out = base / sw["out"] if "out" in sw and not Path(sw["out"]).is_absolute() else Path(sw.get("out", base))
+    return {
+        "name": str(sw.get("name", path.stem)),
+        "scenes": scene_paths,
+        "out": out,
+        "cache": Path(sw.get("cache", "out/sweep_cache")),
+    }
+
+
+def _read_render(path: Path, doc: dict) -> dict:
+    """``[render]``: spp, seed, seed_policy, pixel_filter and the fixed ``$default`` overrides (as text)."""
+    rd = _table(path, doc, "render", ("spp", "seed", "seed_policy", "overrides", "pixel_filter"))
+    src = _src(path, "render")
+    spp = _int(rd.get("spp", 16), "spp", src, lo=1, hi=1 << 20)
+    seed = _int(rd.get("seed", 0), "seed", src, lo=0, hi=(1 << 31) - 1)
+    policy = P.choice(rd.get("seed_policy", "fixed"), "seed_policy", SEED_POLICIES, src)
+    pixel_filter = P.choice(rd.get("pixel_filter", "centre"), "pixel_filter", PIXEL_FILTERS, src)
+    overrides = rd.get("overrides", {})
+    if not isinstance(overrides, dict):
+        raise _err(path, "render", "overrides must be a table of $default = value")
+    for k, v in overrides.items():
+        if isinstance(v, dict):
+            raise ParameterError(src, f"overrides.{k}", f"{v!r} is not a value (a number, list or string)")
+    return {
+        "spp": spp,
+        "seed": seed,
+        "seed_policy": policy,
+        "pixel_filter": pixel_filter,
+        "overrides": {k: as_str(v) for k, v in overrides.items()},
+    }
+
+
+def _model_fields(path: Path, key: str, name: str) -> dict:
+    """The model's parameters: name -> default (its ``Params`` dataclass), or ``{}`` if it has none."""
+    try:
+        cls = resolve_model(name)
+    except FogrefError as e:
+        raise _err(path, key, str(e)) from None
+    pc = getattr(cls, "Params", None)
+    if not (isinstance(pc, type) and dataclasses.is_dataclass(pc)):
+        return {}
+    return {f.name: f.default for f in dataclasses.fields(pc) if f.init}
+
+
+def _model_value(v, name: str, src: str, default):
+    """A model parameter's value: a number where the model's default is a number, else as given."""
+    if isinstance(default, (int, float)) and not isinstance(default, bool):
+        return _num(v, name, src)
+    if isinstance(default, bool):
+        return _bool(v, name, src)
+    return v
+
+
+def _model_param_name(name: str, fields: dict, src: str, model: str) -> str:
+    """``name`` if the model has that parameter, else a ParameterError with did-you-mean."""
+    if fields and name not in fields:
+        raise ParameterError(
+            src,
+            name,
+            f"model '{model}' has no parameter '{name}'"
+            f"{did_you_mean(name, list(fields))}; it has: {', '.join(fields)}",
+        )
+    return name
+
+
+def _read_model(path: Path, i: int, m, labels: set) -> dict:
+    key = f"models][{i}"
+    if not isinstance(m, dict) or "name" not in m:
+        raise _err(
+            path, key, 'each [[models]] entry needs a \'name\' (a model: "ue4", "my_pkg.fog:MyFog", ...)'
+        )
+    bad = set(m) - set(_MODEL_KEYS)
+    if bad:
+        raise _err(path, key, f"unknown key(s) {sorted(bad)}; allowed: {list(_MODEL_KEYS)}")
+    if not isinstance(m["name"], str):
+        raise ParameterError(_src(path, key), "name", f"{m['name']!r} is not a model name (a string)")
+    fields = _model_fields(path, key, m["name"])
+    # "my_pkg.fog:MyFog" is labelled "MyFog" (a label has no '.')
+    label = str(m.get("label", str(m["name"]).rpartition(":")[2]))
+    if label in labels or "." in label:
+        raise _err(path, key, f"model label '{label}' must be unique and contain no '.'")
+    params = m.get("params", {})
+    if not isinstance(params, dict):
+        raise _err(path, key, "params must be a table")
+    src = _src(path, f"models] '{label}' [params")
+    params = {
+        k: _model_value(v, _model_param_name(k, fields, src, m["name"]), src, fields.get(k))
+        for k, v in params.items()
+    }
+    return {
+        "name": m["name"],
+        "label": label,
+        "from_scene": _bool(m.get("from_scene", True), "from_scene", _src(path, key)),
+        "params": params,
+        "fields": fields,
+    }
+
+
+def _read_models(path: Path, doc: dict) -> list[dict]:
+    """``[[models]]``: at least one; each name resolvable, each label unique, each parameter the model's."""
+    models = doc.get("models", [])
+    if not isinstance(models, list) or not models:
+        raise _err(path, "models", "need at least one [[models]] entry with a 'name'")
+    out: list[dict] = []
+    for i, m in enumerate(models):
+        out.append(_read_model(path, i, m, {x["label"] for x in out}))
+    return out
+
+
+def _read_design(path: Path, doc: dict) -> dict:
+    """``[design]``: kind (grid, list, random, lhs), n (random and lhs), seed, max_configs."""
+    dz = _table(path, doc, "design", ("kind", "n", "seed", "max_configs"))
+    src = _src(path, "design")
+    kind = P.choice(dz.get("kind", "grid"), "kind", DESIGN_KINDS, src)
+    limit = _int(dz.get("max_configs", MAX_CONFIGS), "max_configs", src, lo=1)
+    n = dz.get("n")
+    if kind in ("random", "lhs"):
+        if n is None:
+            raise ParameterError(
+                src, "n", f"kind '{kind}' needs n = the number of configurations, in [1, {limit}]"
+            )
+        n = _int(n, "n", src, lo=1, hi=limit)
+    return {
+        "kind": kind,
+        "n": n,
+        "seed": _int(dz.get("seed", 0), "seed", src, lo=0, hi=(1 << 32) - 1),
+        "max_configs": limit,
+    }
+
+
+def _read_execution(path: Path, doc: dict) -> dict:
+    """``[execution]``: Dask retries of a failing configuration."""
+    retries = _table(path, doc, "execution", ("retries",)).get("retries", 1)
+    return {"retries": _int(retries, "retries", _src(path, "execution"), lo=0, hi=100)}
+
+
+def _read_outputs(path: Path, doc: dict, out: Path) -> dict:
+    """``[outputs]``: table name (inside the output folder), plots, plotted metrics, Unreal budget columns."""
+    ou = _table(path, doc, "outputs", ("table", "plots", "plot_metrics", "budget"))
+    src = _src(path, "outputs")
+    table = ou.get("table", "results")
+    if not isinstance(table, str) or not table.strip():
+        raise ParameterError(src, "table", f"{table!r} is not a file name")
+    root = out.resolve()
+    where = (root / table).resolve()
+    if Path(table).is_absolute() or not where.is_relative_to(root) or where == root:
+        raise ParameterError(
+            src,
+            "table",
+            f"'{table}' leaves the output folder {out}: "
+            'give a name inside it, like "results" or "tables/results"',
+        )
+    metrics = ou.get("plot_metrics")
+    if metrics is not None and not (isinstance(metrics, list) and all(isinstance(x, str) for x in metrics)):
+        raise ParameterError(src, "plot_metrics", f"{metrics!r} is not a list of metric names")
+    return {
+        "table": table,
+        "plots": _bool(ou.get("plots", True), "plots", src),
+        "plot_metrics": metrics,
+        "budget": _bool(ou.get("budget", False), "budget", src),
+    }
