@@ -44,3 +44,19 @@ def grey(x: Any, dt: Any) -> Any:
     """Broadcast a (...,) scalar field to (..., 3) RGB."""
     x = np.asarray(x, dtype=dt)
     return np.repeat(x[..., None], 3, axis=-1)
+
+
+def view_ray(cam: Any, wp: Any, dt: Any) -> Any:
+    """Camera-to-point vectors ``v`` (..., 3) [m] and their lengths ``d`` (...,) [m], in ``dt``.
+
+    ``cam`` (3,) and ``wp`` (..., 3) as :func:`split` returns them; ``v = wp - cam`` rounded to
+    ``dt`` and ``d = sqrt(v . v)`` as a shader computes ``length(v)`` (overflow gives inf, no warning).
+
+    >>> v, d = view_ray(np.zeros(3), np.array([[3.0, 4.0, 0.0]]), np.float32)
+    >>> float(d[0]), v.dtype
+    (5.0, dtype('float32'))
+    """
+    with np.errstate(all="ignore"):
+        v = (wp - cam).astype(dt)
+        d = np.sqrt(np.sum(v * v, axis=-1))
+    return v, d

@@ -51,7 +51,7 @@ import numpy as np
 
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, rgb
-from fogref.models._num import dtype_of, grey, split
+from fogref.models._num import dtype_of, grey, split, view_ray
 from fogref.models.base import FogResult, register
 
 FALLOFFS = ("Linear", "Exponential", "ExponentialSquared", "Atmospheric")
@@ -152,9 +152,8 @@ class BevyDistanceFog:
         dt = dtype_of(precision)
         p = self.params
         cam, wp = split(camera, world_pos)
+        v, d = view_ray(cam, wp, dt)
         with np.errstate(all="ignore"):
-            v = (wp - cam).astype(dt)
-            d = np.sqrt(np.sum(v * v, axis=-1))
             base = np.asarray(p.color[:3], dtype=dt)
             a = dt(p.color[3])
             color = np.broadcast_to(base, d.shape + (3,)).astype(dt)

@@ -63,7 +63,7 @@ import numpy as np
 
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, rgb
-from fogref.models._num import dtype_of, grey, split
+from fogref.models._num import dtype_of, grey, split, view_ray
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
 MODES = ("exponential", "depth")
@@ -188,9 +188,8 @@ class GodotFog:
         dt = dtype_of(precision)
         p = self.params
         cam, wp = split(camera, world_pos)
+        v, d = view_ray(cam, wp, dt)
         with np.errstate(all="ignore"):
-            v = (wp - cam).astype(dt)
-            d = np.sqrt(np.sum(v * v, axis=-1))
             light = np.asarray(p.fog_light_color, dtype=dt) * dt(p.fog_light_energy)
             ap = dt(p.fog_aerial_perspective)
             fog_color = np.broadcast_to(
