@@ -8,6 +8,7 @@ the shader uses a numerical shortcut (a Taylor branch), its exact closed form.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -60,3 +61,22 @@ def view_ray(cam: Any, wp: Any, dt: Any) -> Any:
         v = (wp - cam).astype(dt)
         d = np.sqrt(np.sum(v * v, axis=-1))
     return v, d
+
+
+def unit_direction(value: Any, name: str, source: str) -> tuple:
+    """``value`` (a non-zero finite 3-vector, any length) normalised to a unit tuple of floats.
+
+    Raises :class:`~fogref.errors.ParameterError` naming ``source`` and ``name`` otherwise.
+
+    >>> unit_direction((0.0, 2.0, 0.0), "sun_direction", "<P>")
+    (0.0, 1.0, 0.0)
+    >>> unit_direction((0.0, 0.0, 0.0), "sun_direction", "<P>")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: <P>: parameter 'sun_direction': expected a non-zero finite 3-vector
+    """
+    w = np.asarray(value, dtype=np.float64)
+    n = float(np.linalg.norm(w))
+    if w.shape != (3,) or not (math.isfinite(n) and n > 0):
+        raise ParameterError(source, name, "expected a non-zero finite 3-vector")
+    return tuple(float(x) for x in w / n)
