@@ -35,7 +35,7 @@ from pathlib import Path
 
 from fogref.errors import ParameterError, did_you_mean
 
-__all__ = ["angle", "choice", "format_range", "integer", "number", "path", "rgb", "vector"]
+__all__ = ["angle", "choice", "format_range", "integer", "number", "number_within", "path", "rgb", "vector"]
 
 INF = math.inf
 
@@ -157,6 +157,31 @@ def number(
             source, name, f"{_show(value if not isinstance(value, str) else x)} is outside {rng}"
         )
     return x
+
+
+def number_within(value, name: str, *, source: str, bounds) -> float:
+    """:func:`number` with the interval and unit of ``bounds``: any object with the attributes
+    ``lo``, ``hi``, ``lo_open``, ``hi_open`` and ``unit`` (a declared option's check, a spec).
+
+    >>> from types import SimpleNamespace
+    >>> b = SimpleNamespace(lo=0.0, hi=1.0, lo_open=False, hi_open=True, unit="")
+    >>> number_within("0.25", "albedo", source="api", bounds=b)
+    0.25
+    >>> number_within(1, "albedo", source="api", bounds=b)
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: api: parameter 'albedo': 1 is outside [0, 1)
+    """
+    return number(
+        value,
+        name,
+        source=source,
+        lo=bounds.lo,
+        hi=bounds.hi,
+        lo_open=bounds.lo_open,
+        hi_open=bounds.hi_open,
+        unit=bounds.unit,
+    )
 
 
 def angle(

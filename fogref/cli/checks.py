@@ -59,16 +59,7 @@ class Number(Check):
     unit: str = ""
 
     def parse(self, raw, name, source):
-        return params.number(
-            raw,
-            name,
-            source=source,
-            lo=self.lo,
-            hi=self.hi,
-            lo_open=self.lo_open,
-            hi_open=self.hi_open,
-            unit=self.unit,
-        )
+        return params.number_within(raw, name, source=source, bounds=self)
 
     def describe(self):
         if self.lo == -INF and self.hi == INF:

@@ -184,13 +184,10 @@ def check(
                     t = tols.get(met)
                     if named.get(met) is not None:
                         rows.append(
-                            Row(
+                            Row.without_estimate(
                                 part,
                                 region,
                                 met,
-                                None,
-                                None,
-                                None,
                                 t,
                                 "fail",
                                 0,
@@ -198,7 +195,7 @@ def check(
                             )
                         )
                     else:
-                        rows.append(Row(part, region, met, None, None, None, t, "empty", 0))
+                        rows.append(Row.without_estimate(part, region, met, t, "empty", 0))
                 continue
             sums = block_sums(c, r, v, rv, m, block)
             total = sums.sum(0)
@@ -218,17 +215,8 @@ def check(
                         "no relative error exists; set an absolute tolerance (rmse, bias) instead"
                     )
                     rows.append(
-                        Row(
-                            part,
-                            region,
-                            met,
-                            None,
-                            None,
-                            None,
-                            tol,
-                            "reported" if tol is None else "fail",
-                            n_px,
-                            note=why,
+                        Row.without_estimate(
+                            part, region, met, tol, "reported" if tol is None else "fail", n_px, note=why
                         )
                     )
                     continue
@@ -239,7 +227,7 @@ def check(
                 else:
                     ok_ci = est is not None and math.isfinite(sd[met])
                 if not ok_ci:
-                    rows.append(Row(part, region, met, None, None, None, tol, "empty", n_px))
+                    rows.append(Row.without_estimate(part, region, met, tol, "empty", n_px))
                     continue
                 zval = est / sd[met] if sd[met] > 0 else None
                 if method == "block":

@@ -47,6 +47,24 @@ class Row:
     z: float | None = None
     note: str = ""
 
+    @classmethod
+    def without_estimate(
+        cls,
+        part: str,
+        region: str,
+        metric: str,
+        tolerance: float | None,
+        verdict: str,
+        pixels: int,
+        note: str = "",
+    ) -> "Row":
+        """A row whose metric has no value (no pixels, or a zero reference): estimate, low and high None.
+
+        >>> Row.without_estimate("inscatter", "sky", "rmse", None, "empty", 0).describe()
+        'inscatter/sky rmse: no pixels (0 px)'
+        """
+        return cls(part, region, metric, None, None, None, tolerance, verdict, pixels, note=note)
+
     def describe(self) -> str:
         """One line: ``inscatter/sky rel_bias = 0.0498 [0.0471, 0.0524] > tolerance 0.02: fail``;
         a region without pixels says ``no pixels``."""

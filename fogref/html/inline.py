@@ -91,12 +91,19 @@ def png_data_uri(path_or_bytes) -> str:
 def thumbnail_uri(linear_rgb, exposure: float, width: int = 160) -> str:
     """A PNG thumbnail of a linear image, at most ``width`` px wide [px >= 1], tone-mapped by
     :func:`fogref.display.tone_map` at ``exposure``, as a data URI."""
+    px = (np.clip(tone_map(linear_rgb, exposure), 0, 1) * 255).astype(np.uint8)
+    return png_thumbnail_uri(px, width, smooth=True)
+
+
+def png_thumbnail_uri(px, width: int, smooth: bool) -> str:
+    """8-bit pixels ``px`` (H, W, 3) as a PNG data URI, shrunk to at most ``width`` px wide [px >= 1]
+    (the height in proportion, >= 1) with bilinear (``smooth``) or nearest-neighbour filtering."""
     from PIL import Image
 
-    px = (np.clip(tone_map(linear_rgb, exposure), 0, 1) * 255).astype(np.uint8)
     im = Image.fromarray(px)
     if im.width > width:
-        im = im.resize((int(width), max(1, round(im.height * width / im.width))), Image.BILINEAR)
+        resample = Image.BILINEAR if smooth else Image.NEAREST
+        im = im.resize((int(width), max(1, round(im.height * width / im.width))), resample)
     buf = io.BytesIO()
     im.save(buf, format="PNG")
     return png_data_uri(buf.getvalue())
@@ -178,8 +185,6 @@ NOTEBOOK_CSS = (
 def _diverging_thumb(error, width: int = 160) -> str:
     """A PNG thumbnail (data URI) of a signed error ``(H, W, 3)``: its mean over RGB on a blue-white-red
     map with symmetric limits (the 99th percentile of ``|error|``)."""
-    from PIL import Image
-
     e = np.asarray(error, np.float64).mean(-1)
     e = np.where(np.isfinite(e), e, 0.0)
     lim = float(np.percentile(np.abs(e), 99)) or float(np.abs(e).max()) or 1.0
@@ -187,12 +192,7 @@ def _diverging_thumb(error, width: int = 160) -> str:
     red = np.stack([np.ones_like(t), 1 - t, 1 - t], -1)
     blue = np.stack([1 + t, 1 + t, np.ones_like(t)], -1)
     rgb = np.where((t >= 0)[..., None], red, blue)
-    im = Image.fromarray((np.clip(rgb, 0, 1) * 255).astype(np.uint8))
-    if im.width > width:
-        im = im.resize((int(width), max(1, round(im.height * width / im.width))), Image.NEAREST)
-    buf = io.BytesIO()
-    im.save(buf, format="PNG")
-    return png_data_uri(buf.getvalue())
+    return png_thumbnail_uri((np.clip(rgb, 0, 1) * 255).astype(np.uint8), width, smooth=False)
 
 
 def _figures_row(items) -> str:

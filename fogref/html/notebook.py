@@ -21,19 +21,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fogref.html.inline import NOTEBOOK_CSS, esc, png_data_uri, table_html
+from fogref.study.plot_units import HEADLINE_METRICS
 
 #: Columns shown first (when present), after the swept parameters.
-MAIN_COLUMNS = (
-    "model",
-    "status",
-    "final.all.rmse",
-    "final.all.rmse_debiased",
-    "final.all.relmse",
-    "final.all.delta_e2000_mean",
-    "final.all.flip_mean",
-    "inscatter.all.rmse",
-    "transmittance.all.rmse",
-)
+MAIN_COLUMNS = ("model", "status", *HEADLINE_METRICS)
 
 
 @dataclass

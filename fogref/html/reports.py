@@ -17,6 +17,7 @@ from fogref.gbuffer import Truth
 from fogref.html.inline import check_rows_html, esc, fmt, table_html
 from fogref.html.page import figure, verdict_badge, write_page
 from fogref.html.viewer import viewer_data
+from fogref.study.plot_units import HEADLINE_METRICS
 
 #: Columns of the descriptive metric table: (metrics.json key, heading, with its ± stderr).
 METRIC_COLUMNS = (
@@ -137,20 +138,8 @@ def write_sweep_html(sweep_dir, table: str = "results") -> Path:
     name = (info.get("spec") or {}).get("name") or info.get("name") or folder.name
     params = list((info.get("spec") or {}).get("parameters") or info.get("parameters") or {})
     csv_path = folder / f"{table}.csv"
-    cols = [
-        "config_id",
-        *params,
-        "model",
-        "status",
-        "final.all.rmse",
-        "final.all.rmse_stderr",
-        "final.all.rmse_debiased",
-        "final.all.relmse",
-        "final.all.delta_e2000_mean",
-        "final.all.flip_mean",
-        "inscatter.all.rmse",
-        "transmittance.all.rmse",
-    ]
+    rmse, *rest = HEADLINE_METRICS  # final.all.rmse, then its standard error beside it
+    cols = ["config_id", *params, "model", "status", rmse, f"{rmse}_stderr", *rest]
     s = [
         f"<p>sweep <b>{esc(name)}</b>: one row per configuration × model "
         f"(<code>{esc(csv_path.name)}</code>; the Parquet file has every column).</p>"

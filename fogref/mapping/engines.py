@@ -70,12 +70,7 @@ def unity_from_physical(ps: PhysicalScene) -> UnityBuiltinFog:
     >>> unity_from_physical(ps).params.fogDensity
     0.01
     """
-    ps.require_profile(
-        "Unity",
-        ("homogeneous", "exponential", "hdrp", "powerlaw"),
-        "Unity's built-in fog fills all space (no bounds)",
-    )
-    ps.require_unbounded("Unity")
+    _require_space_filling(ps, "Unity", "Unity's built-in fog fills all space (no bounds)")
     sigma = ps.grey_sigma_t("Unity")
     m = ps.medium
     if not m.is_homogeneous:
@@ -285,6 +280,23 @@ def _density_at_camera(ps: PhysicalScene) -> float:
     return float(np.asarray(m.density(NP, tuple(np.asarray([c]) for c in ps.camera))).reshape(-1)[0])
 
 
+#: The profiles an engine fog that fills all space can stand for (no box, no bounds).
+SPACE_FILLING_PROFILES = ("homogeneous", "exponential", "hdrp", "powerlaw")
+
+
+def _require_space_filling(ps: PhysicalScene, model: str, why: str) -> None:
+    """ParameterError naming 'profile' unless ``ps`` is an unbounded fog of one of
+    :data:`SPACE_FILLING_PROFILES` (``why``: what ``model``'s fog is, for the message)."""
+    ps.require_profile(model, SPACE_FILLING_PROFILES, why)
+    ps.require_unbounded(model)
+
+
+def _grey_extinction_at_camera(ps: PhysicalScene, model: str) -> float:
+    """``sigma_t rho(camera)`` [1/m]: the grey extinction at the camera (ParameterError naming
+    'sigma_t' for a coloured one, see :meth:`PhysicalScene.grey_sigma_t`)."""
+    return ps.grey_sigma_t(model) * _density_at_camera(ps)
+
+
 def fixed_lobe_amplitude(g: float, exponent: float, n_quad: int = 256) -> float:
     """Least-squares ``c`` [1/sr] of ``c max(mu, 0)^n`` against the HG phase ``p_g(mu)`` over the sphere.
 
@@ -331,13 +343,8 @@ def godot_from_physical(ps: PhysicalScene) -> GodotFog:
     from fogref.models.base import SKY_DISTANCE
     from fogref.models.godot import SUN_SCATTER_EXPONENT, GodotFog, GodotFogParams
 
-    ps.require_profile(
-        "Godot",
-        ("homogeneous", "exponential", "hdrp", "powerlaw"),
-        "Godot's environment fog fills all space (no bounds)",
-    )
-    ps.require_unbounded("Godot")
-    sigma = ps.grey_sigma_t("Godot") * _density_at_camera(ps)
+    _require_space_filling(ps, "Godot", "Godot's environment fog fills all space (no bounds)")
+    sigma = _grey_extinction_at_camera(ps, "Godot")
     kw: dict[str, Any] = {
         "fog_mode": "exponential",
         "fog_density": sigma,
@@ -389,12 +396,7 @@ def bevy_from_physical(ps: PhysicalScene) -> BevyDistanceFog:
     """
     from fogref.models.bevy import BevyDistanceFog, medium_to_bevy
 
-    ps.require_profile(
-        "Bevy",
-        ("homogeneous", "exponential", "hdrp", "powerlaw"),
-        "Bevy's DistanceFog fills all space (no bounds)",
-    )
-    ps.require_unbounded("Bevy")
+    _require_space_filling(ps, "Bevy", "Bevy's DistanceFog fills all space (no bounds)")
     m = ps.medium
     rho = _density_at_camera(ps)
     m = FogMedium(
@@ -442,11 +444,6 @@ def threejs_from_physical(ps: PhysicalScene) -> ThreeJSFog:
     """
     from fogref.models.threejs import ThreeFogParams, ThreeJSFog
 
-    ps.require_profile(
-        "three.js",
-        ("homogeneous", "exponential", "hdrp", "powerlaw"),
-        "three.js fog fills all space (no bounds)",
-    )
-    ps.require_unbounded("three.js")
-    sigma = ps.grey_sigma_t("three.js") * _density_at_camera(ps)
+    _require_space_filling(ps, "three.js", "three.js fog fills all space (no bounds)")
+    sigma = _grey_extinction_at_camera(ps, "three.js")
     return ThreeJSFog(ThreeFogParams(mode="FogExp2", density=sigma, color=ps.sky_colour()))

@@ -79,16 +79,7 @@ class Range:
         ``name``, the value and :meth:`text`."""
         k = self.kind
         if k in ("number", "angle"):
-            return params.number(
-                value,
-                name,
-                source=source,
-                lo=self.lo,
-                hi=self.hi,
-                lo_open=self.lo_open,
-                hi_open=self.hi_open,
-                unit=self.unit,
-            )
+            return params.number_within(value, name, source=source, bounds=self)
         if k == "integer":
             return params.integer(value, name, source=source, lo=self.lo, hi=self.hi, unit=self.unit)
         if k == "depth":

@@ -27,7 +27,7 @@ from typing import Any
 
 from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
-from fogref.media.protocol import number, register_profile, rgb
+from fogref.media.protocol import NonIncreasingLayer, number, register_profile, rgb
 from fogref.params import number as valid_number
 
 
@@ -59,7 +59,7 @@ def check_layer_param(src: str, i: int, name: str, v: Any, lo: float, hi: float)
 
 
 @dataclass(frozen=True)
-class ExpLayer:
+class ExpLayer(NonIncreasingLayer):
     """One exponential layer: ``density * exp(-falloff * (y - height))``.
 
     density: relative scale, dimensionless, >= 0 (multiplies ``sigma_t``).
@@ -133,11 +133,6 @@ class ExpLayer:
         return self.falloff == 0
 
     @property
-    def is_empty(self) -> bool:
-        """The density is 0 everywhere."""
-        return self.density <= 0
-
-    @property
     def reference_height(self) -> float:
         """``height`` [m]: where the relative density equals ``density``."""
         return float(self.height)
@@ -167,10 +162,6 @@ class ExpLayer:
     def sample(self, ops: Any, oy: Any, dy: Any, s: Any) -> Any:
         """Distance [m] where the shape optical depth reaches ``s``; ops.largest if never."""
         return cf.exp_layer_sample(ops, self.log_c(ops, oy), ops.param(self.falloff) * dy, s)
-
-    def max_density(self, ops: Any, y_lo: Any, y_hi: Any) -> Any:
-        """Largest relative density on heights ``[y_lo, y_hi]``: at ``y_lo`` (non-increasing)."""
-        return self.rho(ops, y_lo)
 
 
 register_profile("exponential", ExpLayer.from_params)

@@ -51,7 +51,7 @@ from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
 from fogref.media.medium import check_layer_param, quiet_numpy
 from fogref.media.ops import Ops, Real
-from fogref.media.protocol import number, register_profile
+from fogref.media.protocol import NonIncreasingLayer, number, register_profile
 
 __all__ = ["HDRPLayer", "PowerLawLayer"]
 
@@ -74,7 +74,7 @@ def _pow(ops: Ops, u: Real, p: Real) -> Real:
 
 
 @dataclass(frozen=True)
-class HDRPLayer:
+class HDRPLayer(NonIncreasingLayer):
     """Unity HDRP height profile: ``density`` below ``base_height``, then exponential.
 
     density:     relative scale (multiplies ``sigma_t``), 0 to 1e6.
@@ -118,18 +118,9 @@ class HDRPLayer:
         return self.falloff == 0
 
     @property
-    def is_empty(self) -> bool:
-        """The density is 0 everywhere."""
-        return self.density <= 0
-
-    @property
     def reference_height(self) -> float:
         """``base_height`` [m]: the top of the constant part."""
         return float(self.base_height)
-
-    def max_density(self, ops: Ops, y_lo: Real, y_hi: Real) -> Real:
-        """Largest relative density on heights ``[y_lo, y_hi]``: at ``y_lo`` (non-increasing)."""
-        return self.rho(ops, y_lo)
 
     def validate(self, src: str, i: int) -> None:
         check_layer_param(src, i, "density", self.density, 0.0, 1e6)
@@ -221,7 +212,7 @@ class HDRPLayer:
 
 
 @dataclass(frozen=True)
-class PowerLawLayer:
+class PowerLawLayer(NonIncreasingLayer):
     """Power-law altitude profile (Unity altitude fog, :mod:`fogref.models.altitude`), physical.
 
     density: relative scale (multiplies ``sigma_t``), 0 to 1e6.
@@ -268,18 +259,9 @@ class PowerLawLayer:
         return False
 
     @property
-    def is_empty(self) -> bool:
-        """The density is 0 everywhere."""
-        return self.density <= 0
-
-    @property
     def reference_height(self) -> float:
         """``start`` [m]: full density at and below it."""
         return float(self.start)
-
-    def max_density(self, ops: Ops, y_lo: Real, y_hi: Real) -> Real:
-        """Largest relative density on heights ``[y_lo, y_hi]``: at ``y_lo`` (non-increasing)."""
-        return self.rho(ops, y_lo)
 
     def validate(self, src: str, i: int) -> None:
         check_layer_param(src, i, "density", self.density, 0.0, 1e6)

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Callable, ClassVar, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Callable, ClassVar, Protocol, runtime_checkable
 
 from fogref import params
 
@@ -37,6 +37,7 @@ __all__ = [
     "HeightProfile",
     "ProfileEntry",
     "PROFILES",
+    "NonIncreasingLayer",
     "register_profile",
     "profile_entry",
     "check_range",
@@ -78,6 +79,40 @@ class HeightProfile(Protocol):
 
     @property
     def reference_height(self) -> float: ...
+
+
+class NonIncreasingLayer:
+    """The members shared by the layers whose ``rho`` is ``density`` [1/m] times a shape that never
+    increases with height (:class:`~fogref.media.ExpLayer`, :class:`~fogref.media.HDRPLayer`,
+    :class:`~fogref.media.PowerLawLayer`, :class:`~fogref.media.UEPathTracerLayer`).
+
+    A mixin for a frozen dataclass with a ``density`` field (>= 0) and a ``rho(ops, y)`` method:
+    the layer is empty when ``density <= 0``, and the largest ``rho`` on ``[y_lo, y_hi]`` is
+    ``rho(y_lo)``.
+
+    Examples
+    --------
+    >>> from fogref.media import NP, ExpLayer
+    >>> ExpLayer(0.0, 0.1, 0.0).is_empty, ExpLayer(0.5, 0.1, 0.0).is_empty
+    (True, False)
+    >>> float(ExpLayer(0.5, 0.1, 0.0).max_density(NP, 0.0, 10.0))
+    0.5
+    """
+
+    density: float
+
+    if TYPE_CHECKING:
+
+        def rho(self, ops: Any, y: Any) -> Any: ...
+
+    @property
+    def is_empty(self) -> bool:
+        """The density is 0 everywhere."""
+        return self.density <= 0
+
+    def max_density(self, ops: Any, y_lo: Any, y_hi: Any) -> Any:
+        """Largest relative density on heights ``[y_lo, y_hi]``: at ``y_lo`` (non-increasing)."""
+        return self.rho(ops, y_lo)
 
 
 @dataclass(frozen=True)

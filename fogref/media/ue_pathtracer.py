@@ -81,7 +81,7 @@ from fogref.errors import ParameterError
 from fogref.media.medium import check_layer_param
 from fogref.media.ops import Ops, Real
 from fogref.media.profiles import HDRPLayer
-from fogref.media.protocol import number, register_profile, rgb
+from fogref.media.protocol import NonIncreasingLayer, number, register_profile, rgb
 
 __all__ = [
     "DENSITY_CLAMP_DEFAULT",
@@ -103,7 +103,7 @@ _CM_PER_M = 100.0
 
 
 @dataclass(frozen=True)
-class UEPathTracerLayer:
+class UEPathTracerLayer(NonIncreasingLayer):
     """One layer of Unreal's path-traced fog: ``density * min(exp(-falloff (y - height)), clamp)``.
 
     density: relative scale at ``height`` (multiplies ``sigma_t``), 0 to 1e6.
@@ -183,11 +183,6 @@ class UEPathTracerLayer:
         return False
 
     @property
-    def is_empty(self) -> bool:
-        """The density is 0 everywhere."""
-        return self.density <= 0
-
-    @property
     def reference_height(self) -> float:
         """``height`` [m]: where the relative density is ``density``."""
         return float(self.height)
@@ -209,10 +204,6 @@ class UEPathTracerLayer:
     def sample(self, ops: Ops, oy: Real, dy: Real, s: Real) -> Real:
         """Distance [m] where the shape optical depth reaches ``s`` (exact); ops.largest if never."""
         return self.piecewise.sample(ops, oy, dy, s)
-
-    def max_density(self, ops: Ops, y_lo: Real, y_hi: Real) -> Real:
-        """Largest relative density on heights ``[y_lo, y_hi]``: at ``y_lo`` (non-increasing)."""
-        return self.rho(ops, y_lo)
 
 
 @dataclass(frozen=True)

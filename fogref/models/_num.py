@@ -8,6 +8,7 @@ the shader uses a numerical shortcut (a Taylor branch), its exact closed form.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -44,3 +45,38 @@ def grey(x: Any, dt: Any) -> Any:
     """Broadcast a (...,) scalar field to (..., 3) RGB."""
     x = np.asarray(x, dtype=dt)
     return np.repeat(x[..., None], 3, axis=-1)
+
+
+def view_ray(cam: Any, wp: Any, dt: Any) -> Any:
+    """Camera-to-point vectors ``v`` (..., 3) [m] and their lengths ``d`` (...,) [m], in ``dt``.
+
+    ``cam`` (3,) and ``wp`` (..., 3) as :func:`split` returns them; ``v = wp - cam`` rounded to
+    ``dt`` and ``d = sqrt(v . v)`` as a shader computes ``length(v)`` (overflow gives inf, no warning).
+
+    >>> v, d = view_ray(np.zeros(3), np.array([[3.0, 4.0, 0.0]]), np.float32)
+    >>> float(d[0]), v.dtype
+    (5.0, dtype('float32'))
+    """
+    with np.errstate(all="ignore"):
+        v = (wp - cam).astype(dt)
+        d = np.sqrt(np.sum(v * v, axis=-1))
+    return v, d
+
+
+def unit_direction(value: Any, name: str, source: str) -> tuple:
+    """``value`` (a non-zero finite 3-vector, any length) normalised to a unit tuple of floats.
+
+    Raises :class:`~fogref.errors.ParameterError` naming ``source`` and ``name`` otherwise.
+
+    >>> unit_direction((0.0, 2.0, 0.0), "sun_direction", "<P>")
+    (0.0, 1.0, 0.0)
+    >>> unit_direction((0.0, 0.0, 0.0), "sun_direction", "<P>")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: <P>: parameter 'sun_direction': expected a non-zero finite 3-vector
+    """
+    w = np.asarray(value, dtype=np.float64)
+    n = float(np.linalg.norm(w))
+    if w.shape != (3,) or not (math.isfinite(n) and n > 0):
+        raise ParameterError(source, name, "expected a non-zero finite 3-vector")
+    return tuple(float(x) for x in w / n)

@@ -51,7 +51,7 @@ import numpy as np
 
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, rgb
-from fogref.models._num import dtype_of, grey, split
+from fogref.models._num import dtype_of, grey, split, unit_direction, view_ray
 from fogref.models.base import FogResult, register
 
 FALLOFFS = ("Linear", "Exponential", "ExponentialSquared", "Atmospheric")
@@ -118,11 +118,9 @@ class BevyFogParams:
             if not 0.0 <= v[3] <= 1.0:
                 raise ParameterError(src, name, f"alpha {v[3]} outside [0, 1]")
             object.__setattr__(self, name, v)
-        w = np.asarray(self.light_direction, dtype=np.float64)
-        n = float(np.linalg.norm(w))
-        if w.shape != (3,) or not (math.isfinite(n) and n > 0):
-            raise ParameterError(src, "light_direction", "expected a non-zero finite 3-vector")
-        object.__setattr__(self, "light_direction", tuple(float(x) for x in w / n))
+        object.__setattr__(
+            self, "light_direction", unit_direction(self.light_direction, "light_direction", src)
+        )
 
 
 def _one_minus_inv_exp(x: Any, dt: Any) -> Any:
@@ -152,9 +150,8 @@ class BevyDistanceFog:
         dt = dtype_of(precision)
         p = self.params
         cam, wp = split(camera, world_pos)
+        v, d = view_ray(cam, wp, dt)
         with np.errstate(all="ignore"):
-            v = (wp - cam).astype(dt)
-            d = np.sqrt(np.sum(v * v, axis=-1))
             base = np.asarray(p.color[:3], dtype=dt)
             a = dt(p.color[3])
             color = np.broadcast_to(base, d.shape + (3,)).astype(dt)

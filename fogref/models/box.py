@@ -34,7 +34,7 @@ import numpy as np
 from fogref import params as valid
 from fogref.errors import ParameterError
 from fogref.media import Box, ExpLayer, FogMedium
-from fogref.models._num import dtype_of, grey, saturate, split
+from fogref.models._num import dtype_of, grey, saturate, split, view_ray
 from fogref.models.base import FogResult, register
 
 BOX_MODES = ("ratio", "thickness", "beer")
@@ -103,9 +103,8 @@ class BoxFog:
         dt = dtype_of(precision)
         q = self.params
         cam, wp = split(camera, world_pos)
+        v, length = view_ray(cam, wp, dt)
         with np.errstate(all="ignore"):
-            v = (wp - cam).astype(dt)
-            length = np.sqrt(np.sum(v * v, axis=-1))
             s0, s1 = slab_chord(cam, v, q.box_min, q.box_max, dt)
             hit = s1 > s0
             c = np.minimum(np.maximum(dt(1.0), s0), s1)

@@ -63,7 +63,7 @@ import numpy as np
 
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, rgb
-from fogref.models._num import dtype_of, grey, split
+from fogref.models._num import dtype_of, grey, split, unit_direction, view_ray
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
 MODES = ("exponential", "depth")
@@ -147,11 +147,7 @@ class GodotFogParams:
             raise ParameterError(src, "fog_density", f"depth mode: {self.fog_density} outside [0, 1]")
         for name in ("fog_light_color", "sun_color", "sky_color"):
             object.__setattr__(self, name, rgb(getattr(self, name), name, src, lo=0.0))
-        w = np.asarray(self.sun_direction, dtype=np.float64)
-        n = float(np.linalg.norm(w))
-        if w.shape != (3,) or not (math.isfinite(n) and n > 0):
-            raise ParameterError(src, "sun_direction", "expected a non-zero finite 3-vector")
-        object.__setattr__(self, "sun_direction", tuple(float(x) for x in w / n))
+        object.__setattr__(self, "sun_direction", unit_direction(self.sun_direction, "sun_direction", src))
 
     def depth_range(self, dt: Any = np.float32) -> tuple:
         """(begin, end) [m] as the CPU passes them (end <= 0 means z_far; begin < end)."""
@@ -188,9 +184,8 @@ class GodotFog:
         dt = dtype_of(precision)
         p = self.params
         cam, wp = split(camera, world_pos)
+        v, d = view_ray(cam, wp, dt)
         with np.errstate(all="ignore"):
-            v = (wp - cam).astype(dt)
-            d = np.sqrt(np.sum(v * v, axis=-1))
             light = np.asarray(p.fog_light_color, dtype=dt) * dt(p.fog_light_energy)
             ap = dt(p.fog_aerial_perspective)
             fog_color = np.broadcast_to(

@@ -37,7 +37,7 @@ from fogref import params as valid
 from fogref.errors import ParameterError
 from fogref.media import NP, ExpLayer, FogMedium, HDRPLayer
 from fogref.media.closed_form import phi
-from fogref.models._num import dtype_of, grey, split
+from fogref.models._num import dtype_of, grey, split, view_ray
 from fogref.models.base import FogResult, register
 
 #: VolumeRendering.cs ScaleHeightFromLayerDepth: 1 / ln(1000).
@@ -132,9 +132,8 @@ class HDRPFog:
         cam, wp = split(camera, world_pos)
         H = q.scale_height(dt)
         ext = dt(1.0) / dt(q.meanFreePath)
+        v, dist = view_ray(cam, wp, dt)
         with np.errstate(all="ignore"):
-            v = (wp - cam).astype(dt)
-            dist = np.sqrt(np.sum(v * v, axis=-1))
             cos_z = np.where(dist > 0, v[..., 1] / np.where(dist > 0, dist, dt(1.0)), dt(0.0))
             interval = np.minimum(dist, dt(q.maxFogDistance))
             od = optical_depth_height_fog(

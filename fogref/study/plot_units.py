@@ -36,6 +36,17 @@ PARAMETER_UNITS = {
     "spp": "samples per pixel",
 }
 DIMENSIONLESS = ("relmse", "rel_", "delta_e2000", "flip")
+#: The headline metrics of a sweep's table (``<part>.<region>.<name>``): what a sweep plots when its
+#: ``[outputs] plot_metrics`` is not given and what a notebook's sweep table shows first.
+HEADLINE_METRICS = (
+    "final.all.rmse",
+    "final.all.rmse_debiased",
+    "final.all.relmse",
+    "final.all.delta_e2000_mean",
+    "final.all.flip_mean",
+    "inscatter.all.rmse",
+    "transmittance.all.rmse",
+)
 
 
 def metric_label(metric: str) -> str:

@@ -12,21 +12,13 @@ import sys
 from pathlib import Path
 
 from fogref.atomic import atomic_write, save_figure_atomic, write_text_atomic
-from fogref.study.plot_units import metric_label, parameter_label
+from fogref.study.plot_units import HEADLINE_METRICS, metric_label, parameter_label
 from fogref.study.sweep.spec import SweepSpec
 
 __all__ = ["DEFAULT_PLOT_METRICS", "plot_files", "read_result", "set_aside", "write_table"]
 
 #: Metrics plotted when the sweep's ``[outputs] plot_metrics`` is not given.
-DEFAULT_PLOT_METRICS = (
-    "final.all.rmse",
-    "final.all.rmse_debiased",
-    "final.all.relmse",
-    "final.all.delta_e2000_mean",
-    "final.all.flip_mean",
-    "inscatter.all.rmse",
-    "transmittance.all.rmse",
-)
+DEFAULT_PLOT_METRICS = HEADLINE_METRICS
 
 
 def _problem(cfg: dict, result) -> str:
