@@ -55,16 +55,15 @@ import numpy as np
 import numpy.typing as npt
 
 from fogref.errors import FogrefError, ParameterError
+from fogref.mapping.fit_targets import Target, physical_targets, sun_elevation, with_sun_elevation
 from fogref.mapping.free import FitSpec, Free, fit_spec
 from fogref.mapping.physical import PhysicalScene
 from fogref.mapping.unreal import (
     FIT_DIRECTIONS_START,
     FIT_RTOL,
     Views,
-    physical_single_scattering,
     sample_views,
 )
-from fogref.media import NP
 from fogref.models.base import SKY_DISTANCE, FogModel
 
 __all__ = [
@@ -82,57 +81,6 @@ __all__ = [
 
 #: The most directions :func:`fit_model` doubles to (each fit has up to ~15 parameters).
 FIT_DIRECTIONS_MAX_GENERIC = 4096
-
-
-def sun_elevation(pf: PhysicalScene) -> float:
-    """The scene's sun elevation above the horizon [degrees], in [-90, 90].
-
-    Examples
-    --------
-    >>> from fogref.media import FogMedium
-    >>> round(sun_elevation(PhysicalScene(FogMedium(), (1.0, 1.0, 0.0), 1.0)), 6)
-    45.0
-    """
-    return math.degrees(math.asin(max(-1.0, min(1.0, pf.sun_direction[1]))))
-
-
-def with_sun_elevation(pf: PhysicalScene, elevation_deg: float) -> PhysicalScene:
-    """``pf`` with the sun at ``elevation_deg`` [degrees, -90..90], same azimuth (north +z if
-    the scene's sun is at the zenith).  ParameterError naming 'sun_elevation' outside the range."""
-    e = float(elevation_deg)
-    if not (math.isfinite(e) and -90.0 <= e <= 90.0):
-        raise ParameterError(pf.source, "sun_elevation", f"{elevation_deg} outside [-90, 90] degrees")
-    w = np.asarray(pf.sun_direction, dtype=float)
-    h = math.hypot(w[0], w[2])
-    ax, az = (w[0] / h, w[2] / h) if h > 1e-12 else (0.0, 1.0)
-    c, s = math.cos(math.radians(e)), math.sin(math.radians(e))
-    return replace(pf, sun_direction=(c * ax, s, c * az))
-
-
-@dataclass
-class Target:
-    """The physical fog on a set of views: inscatter ``L`` and transmittance ``T`` (N, 3)."""
-
-    scene: PhysicalScene
-    views: Views
-    L: np.ndarray
-    T: np.ndarray
-
-
-def physical_targets(
-    pf: PhysicalScene, views: Views, elevations: Iterable[float] | None = None
-) -> list[Target]:
-    """One :class:`Target` per sun elevation (default: the scene's own sun)."""
-    scenes = [pf] if elevations is None else [with_sun_elevation(pf, e) for e in elevations]
-    out = []
-    for ps in scenes:
-        L = physical_single_scattering(ps, views)
-        o = tuple(np.full(len(views.D), c) for c in views.camera)
-        d = tuple(views.d[:, i] for i in range(3))
-        D = np.where(views.sky, NP.largest, views.D)
-        T = np.stack(ps.medium.transmittance(NP, o, d, D), axis=-1)
-        out.append(Target(ps, views, np.asarray(L, float), np.asarray(T, float)))
-    return out
 
 
 def model_class(model: str | type) -> type:
