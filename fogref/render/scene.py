@@ -9,6 +9,7 @@ is a ``constant`` (or ``envmap``) emitter.
 
 from __future__ import annotations
 
+import copy
 import math
 import re
 from pathlib import Path
@@ -117,6 +118,16 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
             if isinstance(p.get("radiance"), list) or (isinstance(p.get("radiance"), str) and p["radiance"]):
                 P.rgb(p["radiance"], "sky.radiance", source=str(path), lo=0)
             desc["sky"] = {"type": t, **{k: v for k, v in p.items() if not isinstance(v, dict)}}
+        elif t == "sunsky":  # the sky (sun removed) and its sun, each once (fogref/render/sunsky.py)
+            from fogref.render.sunsky import lower_sunsky
+
+            parts = lower_sunsky(copy.deepcopy(root), defaults, path)
+            if parts is not None:
+                desc["sky"], desc["sun"] = parts["sky"], parts["sun"]
+    if desc["sun"] is not None and "sun_angular_diameter" in defaults:
+        desc["sun"]["angular_diameter"] = RANGES["sun_angular_diameter"].check(
+            defaults["sun_angular_diameter"], "sun_angular_diameter", str(path)
+        )
     return desc
 
 
@@ -150,16 +161,17 @@ SUPPORTED_EMITTERS = {
     "directional": "the sun",
     "constant": "a uniform sky",
     "envmap": "an environment-map sky",
+    "sunsky": "Mitsuba's physical sun and sky (fogref/render/sunsky.py: split into a sky and a sun)",
 }
 
 
 def check_supported(path: Path, root) -> None:
     """Refuse scene features that fogpath or the physical description would ignore.
 
-    Emitters other than one ``directional`` sun and one ``constant``/``envmap`` sky
-    (e.g. ``sunsky``, point or area lights: the models' physical description has no
-    place for them), media other than the sensor's ``heightfog``, and shapes with
-    interior/exterior media.
+    Emitters other than one ``directional`` sun and one ``constant``/``envmap``/``sunsky`` sky
+    (e.g. point or area lights: the models' physical description has no place for them; a
+    ``sunsky`` brings its own sun, so no ``directional`` beside it), media other than the
+    sensor's ``heightfog``, and shapes with interior/exterior media.
     """
     counts: dict = {}
     for em in root.iter("emitter"):
@@ -168,10 +180,11 @@ def check_supported(path: Path, root) -> None:
             what = ", ".join(f"'{k}' ({v})" for k, v in SUPPORTED_EMITTERS.items())
             raise FogrefError(
                 f"{path}: emitter '{t}' is not supported: fogref's ground truth and its "
-                f"physical description take {what}. Express a sun and sky with those "
-                f"(e.g. 'sunsky' -> a directional sun + a constant or envmap sky)"
+                f"physical description take {what}. Express the lights with those"
             )
         kind = "sun" if t == "directional" else "sky"
+        if t == "sunsky" and any(e.get("type") == "directional" for e in root.iter("emitter")):
+            raise FogrefError(f"{path}: a sunsky brings its own sun: remove the directional emitter")
         counts[kind] = counts.get(kind, 0) + 1
         if counts[kind] > 1:
             raise FogrefError(
@@ -233,9 +246,19 @@ def load_scene(path, overrides: dict | None = None):
     import mitsuba as mi
 
     desc = describe_scene(path, overrides)
-    check_renderable(path, parse_scene(path))
+    root = parse_scene(path)
+    check_renderable(path, root)
+    lowered = None
+    if any(e.get("type") == "sunsky" for e in root.iter("emitter")):  # sky and sun split, each once
+        from fogref.render.sunsky import load_lowered, lower_sunsky
+
+        lower_sunsky(root, resolve(root, overrides, source=path), path)
+        lowered = root
     try:
-        scene = mi.load_file(str(path), **{k: v for k, v in (overrides or {}).items()})
+        if lowered is not None:
+            scene = load_lowered(path, lowered, overrides)
+        else:
+            scene = mi.load_file(str(path), **{k: v for k, v in (overrides or {}).items()})
     except Exception as e:  # Mitsuba's message names the file and line: keep that and the reason
         raise FogrefError(f"{path}: Mitsuba could not load the scene: {_mitsuba_reason(e)}") from None
     desc["camera"] = sensor_camera(scene.sensors()[0])
