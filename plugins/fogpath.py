@@ -31,6 +31,8 @@ MIS); Mitsuba 3, ``src/python/python/ad/integrators/prb.py`` (loop structure).
 
 from __future__ import annotations
 
+import math
+
 import drjit as dr
 import mitsuba as mi
 from mitsuba.python.ad.integrators.common import mis_weight  # the module set_variant loaded (not a 2nd copy)
@@ -93,6 +95,13 @@ class FogPathIntegrator(FogPathCameraRay):
          Monte Carlo difference occluders make: ``off``, ``surface`` (camera rays
          that end on a surface) or ``all``. Default: ``off`` (see
          :meth:`_sky_control_variate`).
+     * - sun_angular_diameter
+       - float
+       - The sun's angular diameter [deg], in [0, 10]: 0 is a delta (Mitsuba's ``directional``);
+         above 0 the sun is a uniform disk of the same irradiance, sampled in next-event
+         estimation (uniform cone, pdf ``1 / (2 pi (1 - cos theta_max))``, radiance
+         ``E / Omega``; the sun's single scattering along camera rays is then left to that
+         next-event estimation).  Default: 0.
      * - forced_split
        - bool
        - Forced splitting on the camera ray: every sample traces both branches at
@@ -120,6 +129,11 @@ class FogPathIntegrator(FogPathCameraRay):
         params.choice(self.sky_cv, "sky_cv", ("off", "surface", "all"), "fogpath")
         params.integer(self.sun_samples, "sun_samples", source="fogpath", lo=1, hi=64)
         self.forced_split = bool(props.get("forced_split", FORCED_SPLIT_DEFAULT))
+        diameter = params.number(
+            props.get("sun_angular_diameter", 0.0), "sun_angular_diameter", source="fogpath", lo=0.0, hi=10.0
+        )
+        #: 1 - cos of the sun disk's angular radius (float64), None for the delta sun
+        self.sun_one_minus_cos = 2.0 * math.sin(math.radians(diameter) / 4.0) ** 2 if diameter > 0 else None
         self.aovs = bool(props.get("aovs", True))
         self.pixel_exact = bool(props.get("pixel_exact", False))
 
@@ -175,6 +189,8 @@ class FogPathIntegrator(FogPathCameraRay):
         in_medium = isinstance(scatter, mi.PhaseFunction)
         ds, em_w = scene.sample_emitter_direction(it, sampler.next_2d(active), False, active)
         infinite = mi.has_flag(ds.emitter.flags(), mi.EmitterFlags.Infinite)
+        if dr.hint(self.sun_one_minus_cos is not None, mode="scalar"):
+            ds.d = self._sun_disk_direction(sampler, ds.d, ds.delta & infinite, active)
         shadow = mi.Ray3f(it.p, ds.d) if in_medium else it.spawn_ray(ds.d)
         shadow.maxt = dr.select(infinite, dr.inf, ds.dist * (1.0 - 1e-4))
         visible = active & (ds.pdf != 0) & ~scene.ray_test(shadow, active)
@@ -190,6 +206,19 @@ class FogPathIntegrator(FogPathCameraRay):
             c *= dr.select(ds.delta, 1.0, mis_weight(ds.pdf, f_pdf))
         cv = dr.select(active & (ds.pdf != 0) & infinite & ~ds.delta & (ds.d.y > 0), c, 0.0)
         return dr.select(visible, c * Tr, 0.0), ds.delta, cv
+
+    def _sun_disk_direction(self, sampler, d, is_sun, active):
+        """``d`` (toward the delta sun) replaced on ``is_sun`` lanes by a direction uniform in
+        the sun's disk: ``cos = 1 - u (1 - cos theta_max)`` (1 - cos in float64, opaque), a
+        uniform azimuth.  The emitter's weight ``E`` is unchanged: radiance ``E / Omega`` over
+        pdf ``1 / Omega``."""
+        u = sampler.next_2d(active)
+        omc = dr.opaque(mi.Float, self.sun_one_minus_cos)
+        x = u.x * omc  # 1 - cos
+        sin_t = dr.safe_sqrt(x * (2.0 - x))
+        s, c = dr.sincos(2.0 * dr.pi * u.y)
+        local = mi.Vector3f(c * sin_t, s * sin_t, 1.0 - x)
+        return dr.select(is_sun, dr.normalize(mi.Frame3f(d).to_world(local)), d)
 
     def _medium_vertex(
         self, scene, fog, ops, sampler, ray, p, t, phase, ctx, med, first, has_smooth, sun_ss, sky_cv

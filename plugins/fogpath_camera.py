@@ -37,6 +37,8 @@ class FogPathCameraRay(FogPathBase):
         weight (``mixture``: bounded fog, several layers), ``sun_samples``
         stratified samples averaged (None when it does not apply; then NEE covers it)."""
         sun = self._scene_sun(scene) if (fog is not None and self.sun_sampling) else None
+        if self.sun_one_minus_cos is not None:  # a sun disk: next-event estimation samples it
+            sun = None
         mode = (
             None
             if (sun is None or self.max_depth < 2)

@@ -232,6 +232,24 @@ class _Options:
         group=LIGHT,
         api=WRITE,
     )
+    sky: str = option(
+        "constant",
+        "the sky: constant (the uniform sky of --sky-radiance) or sunsky (Mitsuba's physical sun and "
+        "sky, its sun along --sun-elevation/--sun-azimuth; fogref/render/sunsky.py)",
+        check=Choice(("constant", "sunsky")),
+        group=LIGHT,
+        api=WRITE,
+    )
+    turbidity: float = option(
+        3.0, "the sunsky's atmospheric turbidity, [1, 10]", check=Number(), group=LIGHT, api=WRITE
+    )
+    sun_angular_diameter: float | None = option(
+        None,
+        "the sun's angular diameter [deg], [0, 10]: 0 a delta, 0.53 the real sun (default: none declared)",
+        check=Number(),
+        group=LIGHT,
+        api=WRITE,
+    )
     camera_origin: tuple = option(
         (0.0, 2.0, 0.0), "camera position [m]", check=Text(), metavar="X,Y,Z", group=CAMERA, api=WRITE
     )
@@ -333,6 +351,9 @@ def run(a, given=frozenset()) -> int:
         sun_azimuth=a.sun_azimuth,
         sun_irradiance=a.sun_irradiance,
         sky_radiance=sky,
+        sky=a.sky,
+        turbidity=a.turbidity,
+        sun_angular_diameter=a.sun_angular_diameter,
         camera_origin=a.camera_origin,
         camera_target=a.camera_target,
         fov=a.fov,

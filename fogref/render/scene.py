@@ -9,6 +9,7 @@ is a ``constant`` (or ``envmap``) emitter.
 
 from __future__ import annotations
 
+import copy
 import math
 import re
 from pathlib import Path
@@ -117,6 +118,16 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
             if isinstance(p.get("radiance"), list) or (isinstance(p.get("radiance"), str) and p["radiance"]):
                 P.rgb(p["radiance"], "sky.radiance", source=str(path), lo=0)
             desc["sky"] = {"type": t, **{k: v for k, v in p.items() if not isinstance(v, dict)}}
+        elif t == "sunsky":  # the sky (sun removed) and its sun, each once (fogref/render/sunsky.py)
+            from fogref.render.sunsky import lower_sunsky
+
+            parts = lower_sunsky(copy.deepcopy(root), defaults, path)
+            if parts is not None:
+                desc["sky"], desc["sun"] = parts["sky"], parts["sun"]
+    if desc["sun"] is not None and "sun_angular_diameter" in defaults:
+        desc["sun"]["angular_diameter"] = RANGES["sun_angular_diameter"].check(
+            defaults["sun_angular_diameter"], "sun_angular_diameter", str(path)
+        )
     return desc
 
 
@@ -150,6 +161,7 @@ SUPPORTED_EMITTERS = {
     "directional": "the sun",
     "constant": "a uniform sky",
     "envmap": "an environment-map sky",
+    "sunsky": "Mitsuba's physical sun and sky (fogref/render/sunsky.py: split into a sky and a sun)",
 }
 
 
@@ -172,6 +184,8 @@ def check_supported(path: Path, root) -> None:
                 f"(e.g. 'sunsky' -> a directional sun + a constant or envmap sky)"
             )
         kind = "sun" if t == "directional" else "sky"
+        if t == "sunsky" and any(e.get("type") == "directional" for e in root.iter("emitter")):
+            raise FogrefError(f"{path}: a sunsky brings its own sun: remove the directional emitter")
         counts[kind] = counts.get(kind, 0) + 1
         if counts[kind] > 1:
             raise FogrefError(
@@ -233,9 +247,19 @@ def load_scene(path, overrides: dict | None = None):
     import mitsuba as mi
 
     desc = describe_scene(path, overrides)
-    check_renderable(path, parse_scene(path))
+    root = parse_scene(path)
+    check_renderable(path, root)
+    lowered = None
+    if any(e.get("type") == "sunsky" for e in root.iter("emitter")):  # sky and sun split, each once
+        from fogref.render.sunsky import load_lowered, lower_sunsky
+
+        lower_sunsky(root, resolve(root, overrides, source=path), path)
+        lowered = root
     try:
-        scene = mi.load_file(str(path), **{k: v for k, v in (overrides or {}).items()})
+        if lowered is not None:
+            scene = load_lowered(path, lowered, overrides)
+        else:
+            scene = mi.load_file(str(path), **{k: v for k, v in (overrides or {}).items()})
     except Exception as e:  # Mitsuba's message names the file and line: keep that and the reason
         raise FogrefError(f"{path}: Mitsuba could not load the scene: {_mitsuba_reason(e)}") from None
     desc["camera"] = sensor_camera(scene.sensors()[0])

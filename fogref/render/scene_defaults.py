@@ -77,6 +77,8 @@ OPTIONAL_GROUPS = {
     "second_layer": ("density2", "falloff2", "height2"),  # a second exponential fog layer
     "bounds": ("bounds_min", "bounds_max"),  # a box the fog is confined to
     "surface": ("reflectance",),  # one settable diffuse reflectance for all surfaces
+    "turbidity": ("turbidity",),  # a sunsky's atmosphere (fogref/render/sunsky.py)
+    "sun_size": ("sun_angular_diameter",),  # the sun's angular diameter (0: a delta)
 }
 #: The kind, range and unit of every vocabulary name, each declared once (the fog's in
 #: :data:`fogref.mapping.fog_input.PHYSICAL` and ``SCATTERING``).  The options are
@@ -105,6 +107,8 @@ RANGES: dict[str, Range] = {
     "bounds_min": PHYSICAL["bounds_min"],
     "bounds_max": PHYSICAL["bounds_max"],
     "reflectance": Range("--ground-reflectance", "rgb", 0.0, 1.0),
+    "turbidity": Range("--turbidity", "number", 1.0, 10.0),
+    "sun_angular_diameter": Range("--sun-angular-diameter", "number", 0.0, 10.0, "deg"),
 }
 
 

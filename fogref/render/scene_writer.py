@@ -131,6 +131,9 @@ def write_scene(
     sun_azimuth: float = 24.0,
     sun_irradiance=(3.2, 2.9, 2.4),
     sky_radiance=(0.2, 0.3, 0.5),
+    sky: str = "constant",
+    turbidity: float = 3.0,
+    sun_angular_diameter: float | None = None,
     camera_origin=(0.0, 2.0, 0.0),
     camera_target=(0.15, 2.35, 1.0),
     fov: float = 70.0,
@@ -173,6 +176,15 @@ def write_scene(
         RGB sun irradiance on a plane facing the sun, >= 0 (relative linear units).
     sky_radiance : float, 3 floats or None
         RGB radiance of a uniform sky, >= 0; None: no sky emitter (black sky).
+    sky : str
+        ``"constant"`` (the uniform sky of ``sky_radiance``) or ``"sunsky"``: Mitsuba's
+        physical sun and sky with its own sun (``sun_irradiance`` and ``sky_radiance`` are
+        then not used; :mod:`fogref.render.sunsky`).
+    turbidity : float
+        The sunsky's atmospheric turbidity in [1, 10] (the ``$turbidity`` default).
+    sun_angular_diameter : float or None
+        The sun's angular diameter [deg] in [0, 10] (``$sun_angular_diameter``: fogpath's
+        disk sun; 0 a delta); None declares none (a delta sun).
     camera_origin, camera_target : 3 floats
         Camera position and a point it looks at [m], y-up.
     fov : float
@@ -261,6 +273,7 @@ def write_scene(
     az = _check(sun_azimuth, "sun_azimuth", RANGES["sun_azimuth"])
     sun_direction_from_angles(el, az)
     sun = _check(sun_irradiance, "sun_irradiance", RANGES["sun_irradiance"])
+    sky_kind = sky
     sky = None if sky_radiance is None else _check(sky_radiance, "sky_radiance", RANGES["sky_radiance"])
     cam = _camera(camera_origin, camera_target, fov, res, resy)
     depth = _check(max_depth, "max_depth", RANGES["max_depth"])
@@ -330,7 +343,17 @@ def write_scene(
             "the reflectance default is the mesh's"
         )
 
+    params.choice(sky_kind, "sky (--sky)", ("constant", "sunsky"), SOURCE)
+    if sky_kind == "sunsky":
+        sky = None
     defaults = scene_defaults(fogp, cam, depth, el, az, sun, sky, geo.kind, reflectance=refl)
+    if sky_kind == "sunsky":
+        defaults["turbidity"] = _fmt(_check(turbidity, "turbidity", RANGES["turbidity"]))
+        if sun_angular_diameter is None:
+            sun_angular_diameter = 0.0
+    if sun_angular_diameter is not None:
+        size = _check(sun_angular_diameter, "sun_angular_diameter", RANGES["sun_angular_diameter"])
+        defaults["sun_angular_diameter"] = _fmt(size)
     fog_source = (
         "Unreal editor values " + ", ".join(f"{k}={v}" for k, v in _flat_unreal(unreal).items())
         if unreal is not None

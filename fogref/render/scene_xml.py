@@ -102,10 +102,11 @@ def _header(root, geo: Geometry, fog_source: str, notes) -> None:
     root.append(
         ET.Comment(
             comment_text(
-                f" Written by fogref scene (fogref {__version__}). Geometry: {geo_text}. Fog from {fog_source}. "
-                "Units: metres, y up; the sun's elevation is above the horizon and its azimuth is from +z toward +x "
-                "[deg] (fogref/render/sun.py). Every default below can be changed by the set option of fogref render "
-                "(NAME=VALUE). "
+                f" Written by fogref scene (fogref {__version__}). Geometry: {geo_text}. "
+                f"Fog from {fog_source}. "
+                "Units: metres, y up; the sun's elevation is above the horizon and its azimuth is from +z "
+                "toward +x [deg] (fogref/render/sun.py). Every default below can be changed by the set "
+                "option of fogref render (NAME=VALUE). "
             )
         )
     )
@@ -133,7 +134,24 @@ def _sensor(root, fog: dict) -> None:
         sub(med, tag, name="height" if k == "fog_height" else k, value=f"${k}")
 
 
-def _lights(root, sky: bool) -> None:
+def _lights(root, sky) -> None:
+    """The sun and the sky: ``sky`` True (a ``constant`` sky), False (none) or ``"sunsky"``
+    (Mitsuba's sunsky, turned y-up, with its own sun along ``$sun_elevation``, ``$sun_azimuth``:
+    fogref/render/sunsky.py)."""
+    if sky == "sunsky":
+        root.append(
+            ET.Comment(
+                " Mitsuba's physical sun and sky. fogref sets its sun_direction from sun_elevation and "
+                "sun_azimuth and splits it into a sky (sun_scale 0) and a directional sun with the disk's "
+                "irradiance (fogref/render/sunsky.py); sun_irradiance is not used "
+            )
+        )
+        el = sub(root, "emitter", type="sunsky", id="sky")
+        sub(el, "float", name="turbidity", value="$turbidity")
+        tw = sub(el, "transform", name="to_world")
+        tw.append(ET.Comment(" sunsky is z-up, fogref y-up "))
+        sub(tw, "rotate", x="1", angle="-90")
+        return
     sun_el = sub(root, "emitter", type="directional", id="sun")
     tw = sub(sun_el, "transform", name="to_world")
     tw.append(ET.Comment(" light travels along -w(sun_elevation, sun_azimuth): fogref/render/sun.py "))
@@ -177,8 +195,10 @@ def scene_element(
         sub(root, "default", name=k, value=v)
     integ = sub(root, "integrator", type="fogpath")
     sub(integ, "integer", name="max_depth", value="$max_depth")
+    if "sun_angular_diameter" in defaults:
+        sub(integ, "float", name="sun_angular_diameter", value="$sun_angular_diameter")
     _sensor(root, fog)
-    _lights(root, "sky_radiance" in defaults)
+    _lights(root, "sunsky" if "turbidity" in defaults else "sky_radiance" in defaults)
     if geo.kind == "valley":
         add_valley(root, ground_size)
     else:
