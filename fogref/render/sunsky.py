@@ -249,11 +249,13 @@ def load_lowered(path: Path, root: ET.Element, overrides: dict | None):
     """``mi.load_string`` of a lowered scene, relative files resolved against the scene's folder."""
     import mitsuba as mi
 
-    fr = mi.Thread.thread().file_resolver()
+    from fogref.render.scene_defaults import overrides_used_by
+
+    fr = mi.file_resolver()
     before = [str(fr[i]) for i in range(len(fr))]
     fr.prepend(str(Path(path).resolve().parent))
     try:
-        return mi.load_string(ET.tostring(root, encoding="unicode"), **(overrides or {}))
+        return mi.load_string(ET.tostring(root, encoding="unicode"), **overrides_used_by(root, overrides))
     finally:
         fr.clear()
         for folder in before:
