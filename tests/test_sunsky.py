@@ -286,3 +286,42 @@ def test_disk_sun_softens_a_shadow_edge(mi):
     ma, mb = a.mean(1), b.mean(1)
     se_m = math.sqrt(ma.var(ddof=1) / len(ma) + mb.var(ddof=1) / len(mb))
     assert abs(ma.mean() - mb.mean()) < 4 * se_m + 0.01 * lit, (ma.mean(), mb.mean(), se_m)
+
+
+def test_fogref_scene_cli_writes_a_sunsky_scene(tmp_path):
+    import subprocess
+    import sys
+
+    from fogref.render.scene_defaults import declared, vocabulary_groups
+
+    out = tmp_path / "s.xml"
+    cmd = [
+        sys.executable,
+        "-m",
+        "fogref.cli",
+        "scene",
+        "--sky",
+        "sunsky",
+        "--turbidity",
+        "6",
+        "--out",
+        str(out),
+    ]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    names = declared(out)
+    assert names["turbidity"] == "6.0" and names["sun_angular_diameter"] == "0.0"
+    wrong, groups = vocabulary_groups(names)
+    assert not wrong and {"turbidity", "sun_size"} <= set(groups)
+    bad = subprocess.run(
+        cmd[:-2] + ["--turbidity", "11", "--out", str(tmp_path / "b.xml")], capture_output=True, text=True
+    )
+    assert bad.returncode != 0 and "turbidity" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def test_a_bad_turbidity_override_is_one_line(mi, tmp_path):
+    from fogref.errors import FogrefError
+    from fogref.render.scene import load_scene
+
+    with pytest.raises(FogrefError, match="turbidity"):
+        load_scene(_sunsky_scene(tmp_path), {"turbidity": "11"})
