@@ -333,7 +333,7 @@ def test_unsupported_emitters_and_media_are_refused(tmp_path, mitsuba):
     text = (SCENES / "valley.xml").read_text()
     sunsky = tmp_path / "sunsky.xml"
     sunsky.write_text(text.replace("</scene>", '<emitter type="sunsky"/></scene>'))
-    with pytest.raises(FogrefError, match="emitter 'sunsky' is not supported"):
+    with pytest.raises(FogrefError, match="a sunsky brings its own sun"):  # a 2nd sun and a 2nd sky
         render(sunsky, tmp_path / "o.exr", spp=1, overrides=SMALL, progress=False)
     point = tmp_path / "point.xml"
     point.write_text(
