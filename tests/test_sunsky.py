@@ -111,6 +111,12 @@ def test_sunsky_scene_is_split_once_each(mi, tmp_path):
     _, d2 = load_scene(path, {"sun_elevation": "40"})
     assert abs(math.degrees(math.asin(d2["sky"]["sun_direction"][1])) - 40) < 1e-9
     assert d2["sun"]["direction"] == d2["sky"]["sun_direction"]
+    # the models' physical description: the sky's isotropic projection, its parameters, the sun's size
+    from fogref.mapping.physical import PhysicalScene
+
+    ps = PhysicalScene.from_params(desc)
+    assert ps.sky_model["turbidity"] == 5.0 and ps.sun_angular_diameter == 0.0 and ps.has_sun
+    assert np.allclose(ps.sky_radiance, desc["sky"]["radiance"]) and min(ps.sky_radiance) > 0
 
 
 def _runs(mi, scene, n, spp, seed0):

@@ -7,6 +7,8 @@ A ground truth's EXR carries its scene in the header attribute ``fogref.params``
      "medium": {heightfog XML parameters: profile, sigma_t, albedo, g, ...},
      "sun": {"direction": [x, y, z] (toward the sun), "irradiance": [r, g, b]} | None,
      "sky": {"type": "constant", "radiance": [r, g, b]} | None,
+            (a ``sunsky``: {"type": "sunsky", "turbidity", "albedo", "sun_direction", ...,
+             "radiance": its isotropic projection}, fogref/render/sunsky.py)
      "camera": {"origin": [x, y, z], ...}}
 
 :meth:`PhysicalScene.from_params` decodes it; the medium is built by
@@ -16,7 +18,11 @@ in ``fogref render``.
 Colour convention shared by every model: the engine's constant fog colour stands
 for the single scattering of a uniform, unoccluded sky whose own attenuation is
 ignored, ``albedo * L_sky * (1 - T)``, i.e. colour = ``albedo * L_sky``
-(:meth:`PhysicalScene.sky_colour`).
+(:meth:`PhysicalScene.sky_colour`).  For a physical sky (``sunsky``), ``L_sky`` is its
+isotropic projection ``(1/4 pi) int_{up} L dw``, the uniform sky whose single scattering is the
+same at ``g = 0``; the sky's own parameters are in :attr:`PhysicalScene.sky_model`, and its
+exact single scattering for any ``g`` is ``alpha S(d) (1 - T)``
+(:func:`fogref.media.single_scatter.sky_phase_projection`).
 """
 
 from __future__ import annotations
@@ -88,6 +94,10 @@ class PhysicalScene:
     camera: tuple = DEFAULT_CAMERA
     profile: str | None = None
     source: str = field(default=None, compare=False)  # type: ignore[assignment]  # None: the medium's
+    #: A physical sky's parameters (``sunsky``: turbidity, albedo, sun_direction, ...), else None.
+    sky_model: Any = field(default=None, compare=False)
+    #: The sun's angular diameter [deg] (0: a delta).
+    sun_angular_diameter: float = 0.0
 
     def __post_init__(self) -> None:
         src: str = self.source or getattr(self.medium, "source", "<PhysicalScene>")
@@ -147,6 +157,8 @@ class PhysicalScene:
             irradiance = rgb(sun.get("irradiance", 0.0), "irradiance", f"{scene}: sun", 0.0)
         sky = params.get("sky") or {}
         radiance = rgb(sky.get("radiance", 0.0), "radiance", f"{scene}: sky", 0.0) if sky else None
+        model = dict(sky) if sky.get("type") == "sunsky" else None
+        size = float((sun or {}).get("angular_diameter", 0.0) or 0.0)
         if camera is None:
             camera = (params.get("camera") or {}).get("origin", DEFAULT_CAMERA)
         camera = rgb(camera, "origin", f"{scene}: camera")
@@ -158,6 +170,8 @@ class PhysicalScene:
             camera,
             profile=str(mp.get("profile", "exponential")),
             source=src,
+            sky_model=model,
+            sun_angular_diameter=size,
         )
 
     # -- what the mappings ask --------------------------------------------------
