@@ -125,9 +125,11 @@ def _runs(mi, scene, n, spp, seed0):
     )
 
 
-def test_sun_plus_sky_equals_stock_volpath_with_mitsubas_sunsky(mi):
-    """fogpath (sky with sun_scale 0 + fogref's sun of the disk's irradiance) against stock
-    volpath with Mitsuba's own full sunsky: image means over independent runs, within noise."""
+@pytest.mark.parametrize("diameter", [0.0, 0.5358])
+def test_sun_plus_sky_equals_stock_volpath_with_mitsubas_sunsky(mi, diameter):
+    """fogpath (sky with sun_scale 0 + fogref's sun of the disk's irradiance, a delta or the
+    sunsky's own disk) against stock volpath with Mitsuba's own full sunsky: image means over
+    independent runs (their own seeds), within noise."""
     import render_scenes as rs
 
     from fogref.render.sunsky import sun_irradiance, sunsky_dict
@@ -149,7 +151,8 @@ def test_sun_plus_sky_equals_stock_volpath_with_mitsubas_sunsky(mi):
             d["sky"] = full
         return mi.load_dict(d)
 
-    ours = _runs(mi, scene({"type": "fogpath", "max_depth": 8, "aovs": False}, True), 6, 32, 10)
+    fogpath = {"type": "fogpath", "max_depth": 8, "aovs": False, "sun_angular_diameter": diameter}
+    ours = _runs(mi, scene(fogpath, True), 6, 32, 10)
     stock = _runs(mi, scene({"type": "volpath", "max_depth": 8}, False), 6, 64, 500)
     m_o, m_s = ours.mean((1, 2)), stock.mean((1, 2))  # (runs, 3) image means
     se = np.sqrt(m_o.var(0, ddof=1) / len(m_o) + m_s.var(0, ddof=1) / len(m_s))
