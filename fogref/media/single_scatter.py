@@ -44,6 +44,10 @@ def single_scatter_sun(
     the sun is at or below the horizon (``w_y <= 0``) or a layer is homogeneous
     and unbounded (the sun is then fully extinguished).
 
+    The sun is a delta along ``w``.  For a sun disk (fogpath's ``sun_angular_diameter``) use
+    :func:`single_scatter_sun_disk`; the delta's relative error at 0.53 deg is 1.2e-4 at
+    ``g = 0.6`` and 14 % at ``g = 0.99`` looking into the sun, below 1e-4 30 deg away from it.
+
     Examples
     --------
     >>> from fogref.media import NP, ExpLayer, FogMedium
@@ -86,7 +90,8 @@ def single_scatter_sun(
 
 
 def single_scatter_sky(ops: Ops, medium: Real, o: Real, d: Real, D: Real, L_sky: Real) -> Real:
-    """Single-scattered uniform sky, unoccluded and unattenuated: alpha L (1 - T(D))."""
+    """Single-scattered uniform sky, unoccluded and unattenuated: alpha L (1 - T(D)).
+    A non-uniform sky (``sunsky``): :func:`single_scatter_sky_projected`."""
     tau = medium.optical_depth(ops, o, d, D)
     alb_L = ops.params([alb * L for alb, L in zip(medium.albedo, L_sky)])
     return tuple(aL * -ops.expm1(-sig * tau) for sig, aL in zip(ops.params(medium.sigma_t), alb_L))
