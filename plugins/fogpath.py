@@ -100,8 +100,9 @@ class FogPathIntegrator(FogPathCameraRay):
        - The sun's angular diameter [deg], in [0, 10]: 0 is a delta (Mitsuba's ``directional``);
          above 0 the sun is a uniform disk of the same irradiance, sampled in next-event
          estimation (uniform cone, pdf ``1 / (2 pi (1 - cos theta_max))``, radiance
-         ``E / Omega``; the sun's single scattering along camera rays is then left to that
-         next-event estimation).  Default: 0.
+         ``E / Omega``; along camera rays, ``sun_sampling``'s exact sampler aims at a point of
+         the disk drawn per sample when the whole disk is above the horizon, else next-event
+         estimation covers it).  The disk is not drawn where a camera ray sees it. Default: 0.
      * - forced_split
        - bool
        - Forced splitting on the camera ray: every sample traces both branches at

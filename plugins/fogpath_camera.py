@@ -14,6 +14,8 @@ and the estimator (:class:`fogref_plugins.fogpath.FogPathIntegrator`), whose pie
 
 from __future__ import annotations
 
+import math
+
 import drjit as dr
 import mitsuba as mi
 
@@ -37,13 +39,18 @@ class FogPathCameraRay(FogPathBase):
         weight (``mixture``: bounded fog, several layers), ``sun_samples``
         stratified samples averaged (None when it does not apply; then NEE covers it)."""
         sun = self._scene_sun(scene) if (fog is not None and self.sun_sampling) else None
-        if self.sun_one_minus_cos is not None:  # a sun disk: next-event estimation samples it
-            sun = None
         mode = (
             None
             if (sun is None or self.max_depth < 2)
             else sun_sampling_mode(fog._obj, sun[0], self.sun_sampling_layers, self.sun_sampling_mixture)
         )
+        disk = self.sun_one_minus_cos is not None
+        if disk and mode is not None:
+            # a sun disk: the exact sampler toward a point of the disk drawn per sample, when the
+            # whole disk is above the horizon; otherwise next-event estimation samples it
+            sin_radius = math.sqrt(self.sun_one_minus_cos * (2.0 - self.sun_one_minus_cos))
+            if mode != "exact" or sun[0][1] <= sin_radius + 1e-6:
+                mode = None
         if mode is None:
             return None
         w_sun, E_sun = sun
@@ -51,15 +58,17 @@ class FogPathCameraRay(FogPathBase):
         for k in range(K):
             channel = self._draw_channel(sampler, active)  # one-sample spectral MIS inside the sampler
             u = (k + sampler.next_1d(active)) / K  # stratified along the integrand's CDF
+            to_sun = mi.Vector3f(*ops.params(w_sun))
+            w_k = w_sun
+            if disk:  # uniform in the disk: the disk's mean of the delta sun's estimator
+                to_sun = self._sun_disk_direction(sampler, to_sun, mi.Bool(True), active)
+                w_k = (to_sun.x, to_sun.y, to_sun.z)
             if mode == "exact":
-                t_ss, w_ss = sample_sun_single_scatter(
-                    ops, fog._obj, ray.o, ray.d, D, w_sun, E_sun, u, channel
-                )
+                t_ss, w_ss = sample_sun_single_scatter(ops, fog._obj, ray.o, ray.d, D, w_k, E_sun, u, channel)
             else:
                 t_ss, w_ss = sample_sun_single_scatter_mixture(
                     ops, fog._obj, ray.o, ray.d, D, w_sun, E_sun, u, sampler.next_1d(active), channel
                 )
-            to_sun = mi.Vector3f(*ops.params(w_sun))
             vis = active & ~scene.ray_test(mi.Ray3f(ray.o + ray.d * t_ss, to_sun), active)
             total += dr.select(vis, mi.Spectrum(*w_ss), 0.0)
         return total / K

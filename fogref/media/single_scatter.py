@@ -35,7 +35,8 @@ def single_scatter_sun(
     medium: :class:`~fogref.media.FogMedium` without bounds.
     o, d:   camera position [m] and unit view direction (away from the camera).
     D:      distance to the first surface [m] (``ops.largest`` for the sky).
-    w:      unit direction toward the sun (a 3-tuple of floats).
+    w:      unit direction toward the sun (a 3-tuple of floats; or of arrays, one direction
+            per sample, all above the horizon: the caller checks, e.g. a point of a sun disk).
     E:      RGB sun irradiance on a plane facing the sun [W/m^2 or any unit].
     tau:    optional shape optical depth over ``[0, D]`` when the caller has it
             (saves recomputing it; default: computed here).
@@ -61,11 +62,14 @@ def single_scatter_sun(
         raise ParameterError(
             medium.source, "bounds", "closed-form single scattering needs an unbounded medium"
         )
-    wy = float(w[1])
+    try:
+        wy, per_sample = float(w[1]), False
+    except (TypeError, RuntimeError):  # one direction per sample: the caller keeps them up
+        wy, per_sample = 1.0, True
     if wy <= 0 or any(L.is_constant for L in medium.layers):
         zero = 0.0 * d[0]
         return (zero, zero, zero)
-    w_ = ops.params(w)
+    w_ = tuple(w) if per_sample else ops.params(w)
     cos_theta = d[0] * w_[0] + d[1] * w_[1] + d[2] * w_[2]
     phase = cf.hg_phase(ops, cos_theta, medium.g)
     if tau is None:
