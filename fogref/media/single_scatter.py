@@ -513,7 +513,7 @@ def single_scatter_sun_disk(
     """
     import numpy as np
 
-    from fogref.media import NP
+    from fogref.media.ops import NP
 
     dirs, wts = sun_disk_directions(w, angular_diameter_deg, n_r, n_phi)
     total = np.zeros(3)
