@@ -168,10 +168,10 @@ SUPPORTED_EMITTERS = {
 def check_supported(path: Path, root) -> None:
     """Refuse scene features that fogpath or the physical description would ignore.
 
-    Emitters other than one ``directional`` sun and one ``constant``/``envmap`` sky
-    (e.g. ``sunsky``, point or area lights: the models' physical description has no
-    place for them), media other than the sensor's ``heightfog``, and shapes with
-    interior/exterior media.
+    Emitters other than one ``directional`` sun and one ``constant``/``envmap``/``sunsky`` sky
+    (e.g. point or area lights: the models' physical description has no place for them; a
+    ``sunsky`` brings its own sun, so no ``directional`` beside it), media other than the
+    sensor's ``heightfog``, and shapes with interior/exterior media.
     """
     counts: dict = {}
     for em in root.iter("emitter"):
@@ -180,8 +180,7 @@ def check_supported(path: Path, root) -> None:
             what = ", ".join(f"'{k}' ({v})" for k, v in SUPPORTED_EMITTERS.items())
             raise FogrefError(
                 f"{path}: emitter '{t}' is not supported: fogref's ground truth and its "
-                f"physical description take {what}. Express a sun and sky with those "
-                f"(e.g. 'sunsky' -> a directional sun + a constant or envmap sky)"
+                f"physical description take {what}. Express the lights with those"
             )
         kind = "sun" if t == "directional" else "sky"
         if t == "sunsky" and any(e.get("type") == "directional" for e in root.iter("emitter")):
