@@ -1,7 +1,8 @@
 """The render checkpoint is one atomic record (issue 17, item 2).
 
 * An interruption at any line of the pass loop, or of the functions it calls in
-  ``fogref/render/render.py`` and ``fogref/atomic.py`` (the checkpoint write included),
+  ``fogref/render/render.py``, ``fogref/render/checkpoint.py`` and ``fogref/atomic.py``
+  (the checkpoint write included),
   leaves a state that the rerun resumes to a truth bitwise equal to an uninterrupted one.
   The interruption is a KeyboardInterrupt raised at that line (``sys.settrace``: stronger
   than a signal, which the driver may defer) or two real SIGINTs delivered there.
@@ -23,7 +24,9 @@ from fogref.exrio import read_exr
 
 pytestmark = pytest.mark.render
 ROOT = Path(__file__).resolve().parents[1]
-TRACED = {str(ROOT / "fogref" / "render" / "render.py"), str(ROOT / "fogref" / "atomic.py")}
+TRACED = {str(ROOT / "fogref" / "render" / f) for f in ("render.py", "checkpoint.py")} | {
+    str(ROOT / "fogref" / "atomic.py")
+}
 SPP = 3  # three passes of 1 spp (tiny.one_spp_passes)
 
 
@@ -116,13 +119,14 @@ def test_an_interruption_at_every_line_of_the_pass_loop_resumes_bitwise(tmp_path
 def test_a_second_ctrl_c_during_the_checkpoint_write_waits_for_it(tmp_path, mitsuba, monkeypatch):
     """The issue's race: a second Ctrl-C right after a pass is summed.  The checkpoint on disk then
     holds the sums of the passes it says it holds, and the resumed truth is the uninterrupted one."""
+    import fogref.render.checkpoint as C
     import fogref.render.render as R
 
     tiny.one_spp_passes(monkeypatch)
     scene = tiny.make(mitsuba, tmp_path / "scene")
     kw = dict(spp=SPP, seed=5, progress=False, png=False)
     ref = _pixels(R.render(scene, tmp_path / "ref.exr", **kw))
-    real = R.savez_atomic
+    real = C.savez_atomic
     calls = []
 
     def ctrl_c_twice_then_write(path, **arrays):
@@ -131,11 +135,11 @@ def test_a_second_ctrl_c_during_the_checkpoint_write_waits_for_it(tmp_path, mits
         os.kill(os.getpid(), signal.SIGINT)
         return real(path, **arrays)
 
-    monkeypatch.setattr(R, "savez_atomic", ctrl_c_twice_then_write)
+    monkeypatch.setattr(C, "savez_atomic", ctrl_c_twice_then_write)
     out = tmp_path / "x.exr"
     with pytest.raises(KeyboardInterrupt):
         R.render(scene, out, checkpoint_seconds=0, **kw)
-    monkeypatch.setattr(R, "savez_atomic", real)
+    monkeypatch.setattr(C, "savez_atomic", real)
     with np.load(tmp_path / "x.exr.partial.npz") as z:
         assert int(z["done"]) == 1 and calls == [1]
     R.render(scene, out, **kw)
@@ -153,13 +157,13 @@ def _flip_byte(p: Path, at: float) -> None:
 
 def _rewrite(p: Path, **change) -> None:
     """Rewrite the checkpoint with some fields changed; the SHA-256 is recomputed unless given."""
-    import fogref.render.render as R
+    import fogref.render.checkpoint as C
 
     with np.load(p) as z:
         d = {k: z[k] for k in z.files}
     d.update(change)
     if "sha256" not in change and "sha256" in d:
-        d["sha256"] = np.array(R._record_sha256(str(d["key"]), int(d["done"]), d["sums"], d["squares"]))
+        d["sha256"] = np.array(C.record_sha256(str(d["key"]), int(d["done"]), d["sums"], d["squares"]))
     np.savez(p, **d)
 
 
@@ -206,6 +210,7 @@ DAMAGE = {
 @pytest.fixture(scope="module")
 def interrupted(tmp_path_factory, mitsuba):
     """A checkpoint after 1 of 3 passes, and the uninterrupted truth."""
+    import fogref.render.checkpoint as C
     import fogref.render.passes as passes
     import fogref.render.render as R
 
@@ -215,13 +220,13 @@ def interrupted(tmp_path_factory, mitsuba):
     mp = pytest.MonkeyPatch()
     mp.setattr(passes, "MAX_LANES", {"llvm": 48, "cuda": 48})
     ref = _pixels(R.render(scene, d / "ref.exr", **kw))
-    real = R.savez_atomic
+    real = C.savez_atomic
 
     def savez_then_interrupt(path, **kw2):
         real(path, **kw2)
         raise KeyboardInterrupt
 
-    mp.setattr(R, "savez_atomic", savez_then_interrupt)
+    mp.setattr(C, "savez_atomic", savez_then_interrupt)
     with pytest.raises(KeyboardInterrupt):
         R.render(scene, d / "x.exr", checkpoint_seconds=0, **kw)
     mp.undo()
@@ -270,6 +275,7 @@ def test_a_flipped_byte_anywhere_is_set_aside_or_harmless(tmp_path, interrupted,
 def test_the_good_checkpoint_resumes_and_a_second_damaged_one_gets_its_own_name(
     tmp_path, interrupted, monkeypatch, capsys
 ):
+    import fogref.render.checkpoint as C
     import fogref.render.render as R
 
     tiny.one_spp_passes(monkeypatch)
@@ -277,8 +283,8 @@ def test_the_good_checkpoint_resumes_and_a_second_damaged_one_gets_its_own_name(
     ckpt = tmp_path / "x.exr.partial.npz"
     ckpt.write_bytes(good)
     resumed = []
-    real = R._resume
-    monkeypatch.setattr(R, "_resume", lambda *a: resumed.append(real(*a)) or resumed[-1])
+    real = C.resume
+    monkeypatch.setattr(C, "resume", lambda *a: resumed.append(real(*a)) or resumed[-1])
     R.render(scene, tmp_path / "x.exr", **kw)
     assert resumed[0] is not None and resumed[0][2] == 1  # resumed after pass 1
     assert _equal(_pixels(tmp_path / "x.exr"), ref) and capsys.readouterr().err == ""

@@ -10,6 +10,7 @@ import time
 import numpy as np
 import pytest
 
+import fogref.render.checkpoint as C
 from conftest import ROOT, SCENES
 from fogref import gbuffer
 from fogref.errors import FogrefError, ParameterError
@@ -115,18 +116,19 @@ def test_stderr_matches_the_spread_of_independent_renders(tmp_path, mitsuba):
 
 
 def _interrupting_savez(R, monkeypatch):
-    real = R.savez_atomic
+    real = C.savez_atomic
 
     def savez_then_interrupt(path, **kw):
         real(path, **kw)
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(R, "savez_atomic", savez_then_interrupt)
+    monkeypatch.setattr(C, "savez_atomic", savez_then_interrupt)
     return real
 
 
 def test_resume_after_interruption_gives_identical_pixels(tmp_path, mitsuba, monkeypatch):
     """Interrupt after the first checkpoint; the rerun resumes and gives the same pixels."""
+    import fogref.render.checkpoint as C
     import fogref.render.passes as passes
     import fogref.render.render as R
 
@@ -141,7 +143,7 @@ def test_resume_after_interruption_gives_identical_pixels(tmp_path, mitsuba, mon
             SCENES / "valley.xml", out, spp=8, seed=1, overrides=SMALL, progress=False, checkpoint_seconds=0
         )
     assert not out.exists() and (tmp_path / "x.exr.partial.npz").exists()
-    monkeypatch.setattr(R, "savez_atomic", real)
+    monkeypatch.setattr(C, "savez_atomic", real)
     R.render(SCENES / "valley.xml", out, spp=8, seed=1, overrides=SMALL, progress=False)
     a, b = read_exr(ref)[0], read_exr(out)[0]
     assert all(np.array_equal(a[k], b[k]) for k in a) and not (tmp_path / "x.exr.partial.npz").exists()
@@ -150,6 +152,7 @@ def test_resume_after_interruption_gives_identical_pixels(tmp_path, mitsuba, mon
 def test_checkpoint_of_an_edited_scene_is_not_resumed(tmp_path, mitsuba, monkeypatch):
     """The checkpoint key is the scene's content: edit the scene between the
     interruption and the rerun, and the rerun starts over (no mixed image)."""
+    import fogref.render.checkpoint as C
     import fogref.render.passes as passes
     import fogref.render.render as R
 
@@ -160,7 +163,7 @@ def test_checkpoint_of_an_edited_scene_is_not_resumed(tmp_path, mitsuba, monkeyp
     out = tmp_path / "x.exr"
     with pytest.raises(KeyboardInterrupt):
         R.render(scene, out, spp=8, seed=1, overrides=SMALL, progress=False, checkpoint_seconds=0)
-    monkeypatch.setattr(R, "savez_atomic", real)
+    monkeypatch.setattr(C, "savez_atomic", real)
     scene.write_text(scene.read_text().replace('name="albedo" value="0.9"', 'name="albedo" value="0.5"'))
     R.render(scene, out, spp=8, seed=1, overrides=SMALL, progress=False)
     fresh = R.render(scene, tmp_path / "fresh.exr", spp=8, seed=1, overrides=SMALL, progress=False)

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 import tiny_inputs_scene as tiny
 
+import fogref.render.checkpoint as C
 from fogref.errors import FogrefError
 from fogref.exrio import read_exr
 
@@ -96,14 +97,14 @@ def test_digest_changes_with_every_input_and_only_with_them(tmp_path, mitsuba):
 
 
 def _interrupt_after_first_checkpoint(R, monkeypatch):
-    real = R.savez_atomic
+    real = C.savez_atomic
 
     def savez_then_interrupt(path, **kw):
         real(path, **kw)
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(R, "savez_atomic", savez_then_interrupt)
-    return lambda: monkeypatch.setattr(R, "savez_atomic", real)
+    monkeypatch.setattr(C, "savez_atomic", savez_then_interrupt)
+    return lambda: monkeypatch.setattr(C, "savez_atomic", real)
 
 
 EDITS = {

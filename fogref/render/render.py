@@ -35,29 +35,30 @@ the back end's memory allows, and turns them into means and standard errors.
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import os
 import re
 import signal
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from fogref import gbuffer
+from fogref import cluster, gbuffer
 from fogref._version import __version__
-from fogref.atomic import atomic_write, refuse_overwriting_inputs, savez_atomic, temporary_names
+from fogref.atomic import atomic_write, refuse_overwriting_inputs, temporary_names
 from fogref.display import write_preview
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
+from fogref.render import checkpoint
 from fogref.render import scene as scene_reader
+from fogref.render.distributed import PassFailed
 from fogref.render.inputs import file_sha256, inputs_digest, scene_inputs
 from fogref.render.passes import max_lanes, pass_seed, pass_sizes
 from fogref.render.variant import set_variant
 
 PIXEL_FILTERS = ("centre", "box")
+_SOURCE = "fogref render"
 #: Bytes per pixel the driver holds: float64 sums of 30 channels and 42 squares and
 #: channel-pair products, twice (running sum and the pass being added), plus the EXR's
 #: float32 channels.
@@ -80,12 +81,22 @@ def checkpoint_path(out) -> Path:
     return out.with_name(out.name + ".partial.npz")
 
 
-def check_output(out: Path, scene_path: Path, png: bool, inputs: list | None = None) -> None:
+def workers_log_path(out) -> Path:
+    """Where a LocalCluster's workers write their own output while rendering ``out``:
+    ``<out>.workers.log``."""
+    out = Path(out)
+    return out.with_name(out.name + ".workers.log")
+
+
+def check_output(
+    out: Path, scene_path: Path, png: bool, inputs: list | None = None, workers_log: bool = False
+) -> None:
     """Refuse outputs that would overwrite an input or cannot be written, before rendering.
 
-    The outputs are ``out``, its PNG preview (when ``png``) and its checkpoint; the inputs
-    are the scene and every file it loads (``inputs``, from
-    :func:`fogref.render.inputs.scene_inputs`; only the scene when None).
+    The outputs are ``out``, its PNG preview (when ``png``), its checkpoint and, with
+    ``workers_log``, the workers' log (:func:`workers_log_path`); the inputs are the scene
+    and every file it loads (``inputs``, from :func:`fogref.render.inputs.scene_inputs`;
+    only the scene when None).
     """
     if out.suffix.lower() != ".exr":
         raise FogrefError(
@@ -94,6 +105,8 @@ def check_output(out: Path, scene_path: Path, png: bool, inputs: list | None = N
         )
     outputs = [(out, "EXR")] + ([(out.with_suffix(".png"), "PNG preview")] if png else [])
     outputs.append((checkpoint_path(out), "checkpoint"))
+    if workers_log:
+        outputs.append((workers_log_path(out), "workers' log"))
     refuse_overwriting_inputs(
         outputs, inputs if inputs is not None else [(scene_path, "scene file")], f"--out {out}"
     )
@@ -198,6 +211,8 @@ def render(
     png: bool = True,
     pixel_filter: str = "centre",
     checkpoint_seconds: float = 60.0,
+    scheduler: str | None = None,
+    workers: int | None = None,
 ) -> Path:
     """Render ``scene_path`` with ``spp`` samples per pixel into the EXR ``out``.
 
@@ -210,6 +225,10 @@ def render(
     overrides:    XML ``$name`` defaults to replace, e.g. ``{"res": 64}``.
     pixel_filter: ``"centre"`` (pixel-exact, the default for truths) or ``"box"``.
     checkpoint_seconds: time between checkpoints (and one on Ctrl-C or SIGTERM).
+    scheduler:    a running Dask scheduler's address (``tcp://HOST:8786``): the passes run on its
+                  workers (:mod:`fogref.render.distributed`), the same pixels as here.
+    workers:      with no ``scheduler``: the passes run on a new LocalCluster of this many
+                  single-threaded worker processes [1, 4096] (their output: ``<out>.workers.log``).
 
     Returns the EXR path.  Raises :class:`FogrefError` (or its ParameterError) for bad input,
     and before any work when an output (the EXR, the PNG, the checkpoint) is the scene or a
@@ -221,9 +240,12 @@ def render(
         raise FogrefError(f"--seed: {seed} outside [0, 2^31)")
     if pixel_filter not in PIXEL_FILTERS:
         raise FogrefError(f"--pixel-filter: '{pixel_filter}' is not one of {PIXEL_FILTERS}")
+    scheduler = cluster.check_scheduler(scheduler, _SOURCE)
+    workers = cluster.check_workers(workers, _SOURCE)
+    on_cluster = scheduler is not None or workers is not None
     scene_path, out = Path(scene_path), Path(out)
     inputs = scene_inputs(scene_path, overrides)
-    check_output(out, scene_path, png, inputs)
+    check_output(out, scene_path, png, inputs, workers_log=on_cluster and scheduler is None)
     hashes: dict = {}  # before the scene is loaded: what its pixels will see
     digest = inputs_digest(scene_path, overrides, inputs, record=hashes)
 
@@ -268,7 +290,7 @@ def render(
             stale.unlink(missing_ok=True)
     # the running state, one tuple (sums, squares, passes they hold): replaced in one assignment, so
     # an interruption anywhere sees the sums with their own count; the sums live on the device
-    state = _resume(ckpt, key, (H, W), passes) if resume else None
+    state = checkpoint.resume(ckpt, key, (H, W), passes) if resume else None
     if state is not None:
         state = (mi.TensorXd(state[0]), mi.TensorXd(state[1]), state[2])
     saved = state[2] if state is not None else 0  # passes in the checkpoint on disk
@@ -280,36 +302,46 @@ def render(
     else:  # no bar, no tqdm import (a quiet run's start-up skips it)
         bar = _NoBar()
     t0, last_ckpt, timings = time.perf_counter(), time.perf_counter(), []
-    with _Interrupt() as stop, bar:
+    with _Interrupt() as stop, bar, contextlib.ExitStack() as closing:
+        if on_cluster:  # the passes' sums come from Dask workers, in pass order
+            j = (scene_path, overrides, digest, variant, seed, pixel_filter)
+            source = _cluster_passes(
+                closing, scheduler, workers, out, j, passes, saved, lambda: stop.requested
+            )
+        else:
+            source = _local_passes(integrator, scene, seed, pixel_filter, passes, saved)
         try:
-            for k in range(saved, len(passes)):
-                ts = time.perf_counter()
-                s, q = integrator.render_moments(
-                    scene, 0, pass_seed(seed, k), passes[k], pixel_exact=pixel_filter == "centre"
-                )
+            for k, s, q, seconds in source:
                 s, q = _device_f64(s), _device_f64(q)
                 if state is not None:
                     s, q = state[0] + s, state[1] + q
                 dr.eval(s, q)
                 dr.sync_thread()
                 state = (s, q, k + 1)
-                timings.append(time.perf_counter() - ts)
+                timings.append(seconds)
                 bar.update(passes[k])
                 if stop.requested:
                     raise KeyboardInterrupt
                 if state[2] < len(passes) and time.perf_counter() - last_ckpt > checkpoint_seconds:
                     with stop.deferred():
-                        _checkpoint(ckpt, state, key)
+                        checkpoint.write_checkpoint(ckpt, state, key)
                         saved = state[2]
                     last_ckpt = time.perf_counter()
-        except (KeyboardInterrupt, RuntimeError) as e:
+        except (KeyboardInterrupt, RuntimeError, PassFailed) as e:
             if isinstance(e, RuntimeError) and "KeyboardInterrupt" not in str(e):
                 raise
             done = state  # one read: the sums and their count
             if done is not None and saved < done[2] < len(passes):
                 with stop.deferred():
-                    _checkpoint(ckpt, done, key)
+                    checkpoint.write_checkpoint(ckpt, done, key)
+            if (
+                isinstance(e, PassFailed) and not stop.requested
+            ):  # (a Ctrl-C also stops a LocalCluster's workers)
+                why = f"{scene_path}: {e}; the passes done are checkpointed, run again to resume"
+                raise FogrefError(why) from None
             raise KeyboardInterrupt from None
+        finally:
+            source.close()
 
     sums, squares = state[0], state[1]
     channels = _host_float32(_channels(sums, squares, spp))  # arithmetic on the device, one copy
@@ -342,6 +374,34 @@ def render(
         write_preview(np.stack([channels[c] for c in "RGB"], axis=-1), out.with_suffix(".png"))
     ckpt.unlink(missing_ok=True)
     return out
+
+
+def _local_passes(integrator, scene, seed: int, pixel_filter: str, passes: list, start: int):
+    """Passes ``start..`` rendered in this process: ``(k, sums, squares, seconds)`` in pass order."""
+    for k in range(start, len(passes)):
+        ts = time.perf_counter()
+        s, q = integrator.render_moments(
+            scene, 0, pass_seed(seed, k), passes[k], pixel_exact=pixel_filter == "centre"
+        )
+        yield k, s, q, time.perf_counter() - ts
+
+
+def _cluster_passes(closing, scheduler, workers, out, render_args: tuple, passes: list, start: int, stop):
+    """Passes ``start..`` rendered on Dask workers (:mod:`fogref.render.distributed`): ``(k, sums,
+    squares, seconds)`` in pass order; ``stop()`` true (a Ctrl-C) ends the wait.  ``render_args``:
+    the scene, overrides, inputs digest, variant, seed and pixel filter.  The cluster (a new
+    LocalCluster of ``workers``, or the one of ``scheduler``) is closed when ``closing`` (an
+    ExitStack) ends."""
+    from fogref.render import distributed
+
+    if start >= len(passes):
+        return
+    log = workers_log_path(out)
+    client, local, threads = cluster.connect(scheduler, workers, log, _SOURCE)
+    closing.callback(cluster.stop, client, local, log)
+    j = distributed.job(*render_args, threads)
+    for r in distributed.passes_in_order(client, j, passes, start, stop=stop):
+        yield r["k"], r["sums"], r["squares"], r["seconds"]
 
 
 def _device_f64(x):
@@ -380,29 +440,6 @@ def _exr_threads() -> None:
         OpenEXR.set_global_thread_count(os.cpu_count() or 1)
 
 
-def _record_sha256(key: str, done: int, sums: np.ndarray, squares: np.ndarray) -> str:
-    """SHA-256 binding a checkpoint's parts: its key, its pass count and its sums' bytes and shapes."""
-    h = hashlib.sha256(f"{key}\0{done}\0{sums.shape}\0{squares.shape}\0".encode())
-    h.update(np.ascontiguousarray(sums, dtype="<f8").tobytes())
-    h.update(np.ascontiguousarray(squares, dtype="<f8").tobytes())
-    return h.hexdigest()
-
-
-def _checkpoint(ckpt: Path, state, key: str) -> None:
-    """Write the running state ``(sums, squares, passes done)`` (copied from the device) atomically
-    to ``ckpt`` as one record: the three together with a SHA-256 over them."""
-    sums, squares, done = state
-    sums, squares = np.asarray(sums, dtype=np.float64), np.asarray(squares, dtype=np.float64)
-    savez_atomic(
-        ckpt,
-        sums=sums,
-        squares=squares,
-        done=np.array(done),
-        key=np.array(key),
-        sha256=np.array(_record_sha256(key, done, sums, squares)),
-    )
-
-
 def _channels(sums, squares, spp: int) -> dict:
     """EXR channels from the integrator's per-pixel sums, ``(H, W, K)`` Dr.Jit float64
     tensors or numpy arrays (see :func:`gbuffer.moments_to_channels`)."""
@@ -416,94 +453,3 @@ def _channels(sums, squares, spp: int) -> dict:
     sq = {g: squares[..., 3 * i : 3 * i + 3] for i, g in enumerate(gbuffer.SQUARED_GROUPS)}
     cross = {g: squares[..., k + 3 * i : k + 3 * i + 3] for i, g in enumerate(gbuffer.SQUARED_GROUPS)}
     return gbuffer.moments_to_channels(by_group, sq, spp, cross)
-
-
-#: Per-sample channels bounded by [0, 1]: per pixel, their sums can't exceed the sample count.
-_BOUNDED = ("T", "surface_coverage", "hit")
-
-
-def _sum_channels(group: str) -> slice:
-    """Where ``group``'s channels sit in the last axis of the sums (``final`` first, then
-    :data:`fogref.gbuffer.SAMPLE_GROUPS`)."""
-    i = 0
-    for g in ("final",) + tuple(gbuffer.SAMPLE_GROUPS):
-        k = len(gbuffer.channel_names(g))
-        if g == group:
-            return slice(i, i + k)
-        i += k
-    raise KeyError(group)
-
-
-def _sum_widths() -> tuple[int, int]:
-    """Channels of the sums and of the squares (each squared group: 3 squares, 3 channel-pair products)."""
-    n = sum(len(gbuffer.channel_names(g)) for g in ("final",) + tuple(gbuffer.SAMPLE_GROUPS))
-    return n, 6 * len(gbuffer.SQUARED_GROUPS)
-
-
-def _checkpoint_problem(z, key: str, shape: tuple, passes: list):
-    """Why the loaded checkpoint ``z`` can't be resumed (a phrase), else None.  'stale' when it
-    belongs to other inputs or settings."""
-    names = set(z.files)
-    if not {"sums", "squares", "done", "key", "sha256"} <= names:
-        missing = sorted({"sums", "squares", "done", "key", "sha256"} - names)
-        return f"not a checkpoint of this fogref (no {', '.join(missing)})"
-    if str(z["key"]) != key:
-        return "stale"
-    sums, squares, done = z["sums"], z["squares"], z["done"]
-    if done.shape != () or done.dtype.kind not in "iu" or not 1 <= int(done) <= len(passes):
-        return f"pass count {done.tolist()!r} outside [1, {len(passes)}]"
-    done = int(done)
-    ns, nq = _sum_widths()
-    if sums.dtype != np.float64 or squares.dtype != np.float64:
-        return f"sums of type {sums.dtype}/{squares.dtype}, not float64"
-    if sums.shape != (*shape, ns) or squares.shape != (*shape, nq):
-        return f"sums of shape {sums.shape}/{squares.shape}, expected {(*shape, ns)}/{(*shape, nq)}"
-    if str(z["sha256"]) != _record_sha256(key, done, sums, squares):
-        return "its SHA-256 does not match its content"
-    if not (np.isfinite(sums).all() and np.isfinite(squares).all()):
-        return "non-finite sums"
-    n = sum(passes[:done])
-    for g in _BOUNDED:
-        part = sums[..., _sum_channels(g)]
-        if part.min() < 0 or part.max() > n * (1 + 1e-9):
-            return f"the sums of '{g}' leave [0, {n}] (the samples of {done} pass(es))"
-    return None
-
-
-def _set_aside(ckpt: Path, reason: str) -> None:
-    """Rename a checkpoint that can't be resumed to an unused ``<ckpt>.damaged[N]``, with a one-line
-    warning."""
-    aside = ckpt.with_name(ckpt.name + ".damaged")
-    n = 1
-    while aside.exists() or aside.is_symlink():
-        aside, n = ckpt.with_name(f"{ckpt.name}.damaged{n}"), n + 1
-    try:
-        os.replace(ckpt, aside)
-        where = f"set aside as {aside}"
-    except OSError as e:
-        where = f"could not be set aside ({e.strerror}); it will be replaced"
-    print(
-        f"fogref render: warning: checkpoint {ckpt}: {reason}; {where}; rendering from the start",
-        file=sys.stderr,
-    )
-
-
-def _resume(ckpt: Path, key: str, shape: tuple, passes: list):
-    """``(sums, squares, passes done)`` from a checkpoint of this render, else None.
-
-    A checkpoint of other inputs or settings is left to be replaced; one that can't be
-    read or fails a check (:func:`_checkpoint_problem`) is set aside (:func:`_set_aside`).
-    """
-    if not ckpt.exists():
-        return None
-    try:
-        with np.load(ckpt, allow_pickle=False) as z:
-            problem = _checkpoint_problem(z, key, shape, passes)
-            if problem is None:
-                return z["sums"], z["squares"], int(z["done"])
-    except Exception as e:  # any way a damaged file fails to read: zip, npy header, CRC, pickle refused
-        detail = (str(e).splitlines() or ["no detail"])[0]
-        problem = f"unreadable ({type(e).__name__}: {detail[:80]}{'...' if len(detail) > 80 else ''})"
-    if problem != "stale":
-        _set_aside(ckpt, problem)
-    return None

@@ -1,0 +1,139 @@
+"""The render checkpoint: one atomic record of a render's running sums.
+
+The per-pixel float64 sums, squares and channel-pair products, the number of passes they
+hold and the render's key are written together in one ``.npz`` with a SHA-256 over all of
+them (:func:`write_checkpoint`, through :func:`fogref.atomic.savez_atomic`).  :func:`resume`
+reads one back only when every check passes (:func:`checkpoint_problem`: fields, key, pass
+count, dtype, shape, checksum, finite values, the sums of the [0, 1]-bounded channels within
+the sample count); a checkpoint of other inputs or settings is left to be replaced, and one
+that is damaged is renamed ``<name>.damaged[N]`` with a one-line warning (:func:`set_aside`).
+The driver (:mod:`fogref.render.render`) defers SIGINT/SIGTERM across the write.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from fogref import gbuffer
+from fogref.atomic import savez_atomic
+
+__all__ = ["checkpoint_problem", "record_sha256", "resume", "set_aside", "write_checkpoint"]
+
+
+def record_sha256(key: str, done: int, sums: np.ndarray, squares: np.ndarray) -> str:
+    """SHA-256 binding a checkpoint's parts: its key, its pass count and its sums' bytes and shapes."""
+    h = hashlib.sha256(f"{key}\0{done}\0{sums.shape}\0{squares.shape}\0".encode())
+    h.update(np.ascontiguousarray(sums, dtype="<f8").tobytes())
+    h.update(np.ascontiguousarray(squares, dtype="<f8").tobytes())
+    return h.hexdigest()
+
+
+def write_checkpoint(ckpt: Path, state, key: str) -> None:
+    """Write the running state ``(sums, squares, passes done)`` (copied from the device) atomically
+    to ``ckpt`` as one record: the three together with a SHA-256 over them."""
+    sums, squares, done = state
+    sums, squares = np.asarray(sums, dtype=np.float64), np.asarray(squares, dtype=np.float64)
+    savez_atomic(
+        ckpt,
+        sums=sums,
+        squares=squares,
+        done=np.array(done),
+        key=np.array(key),
+        sha256=np.array(record_sha256(key, done, sums, squares)),
+    )
+
+
+#: Per-sample channels bounded by [0, 1]: per pixel, their sums can't exceed the sample count.
+_BOUNDED = ("T", "surface_coverage", "hit")
+
+
+def _sum_channels(group: str) -> slice:
+    """Where ``group``'s channels sit in the last axis of the sums (``final`` first, then
+    :data:`fogref.gbuffer.SAMPLE_GROUPS`)."""
+    i = 0
+    for g in ("final",) + tuple(gbuffer.SAMPLE_GROUPS):
+        k = len(gbuffer.channel_names(g))
+        if g == group:
+            return slice(i, i + k)
+        i += k
+    raise KeyError(group)
+
+
+def _sum_widths() -> tuple[int, int]:
+    """Channels of the sums and of the squares (each squared group: 3 squares, 3 channel-pair products)."""
+    n = sum(len(gbuffer.channel_names(g)) for g in ("final",) + tuple(gbuffer.SAMPLE_GROUPS))
+    return n, 6 * len(gbuffer.SQUARED_GROUPS)
+
+
+def checkpoint_problem(z, key: str, shape: tuple, passes: list):
+    """Why the loaded checkpoint ``z`` can't be resumed (a phrase), else None.  'stale' when it
+    belongs to other inputs or settings."""
+    names = set(z.files)
+    if not {"sums", "squares", "done", "key", "sha256"} <= names:
+        missing = sorted({"sums", "squares", "done", "key", "sha256"} - names)
+        return f"not a checkpoint of this fogref (no {', '.join(missing)})"
+    if str(z["key"]) != key:
+        return "stale"
+    sums, squares, done = z["sums"], z["squares"], z["done"]
+    if done.shape != () or done.dtype.kind not in "iu" or not 1 <= int(done) <= len(passes):
+        return f"pass count {done.tolist()!r} outside [1, {len(passes)}]"
+    done = int(done)
+    ns, nq = _sum_widths()
+    if sums.dtype != np.float64 or squares.dtype != np.float64:
+        return f"sums of type {sums.dtype}/{squares.dtype}, not float64"
+    if sums.shape != (*shape, ns) or squares.shape != (*shape, nq):
+        return f"sums of shape {sums.shape}/{squares.shape}, expected {(*shape, ns)}/{(*shape, nq)}"
+    if str(z["sha256"]) != record_sha256(key, done, sums, squares):
+        return "its SHA-256 does not match its content"
+    if not (np.isfinite(sums).all() and np.isfinite(squares).all()):
+        return "non-finite sums"
+    n = sum(passes[:done])
+    for g in _BOUNDED:
+        part = sums[..., _sum_channels(g)]
+        if part.min() < 0 or part.max() > n * (1 + 1e-9):
+            return f"the sums of '{g}' leave [0, {n}] (the samples of {done} pass(es))"
+    return None
+
+
+def set_aside(ckpt: Path, reason: str) -> None:
+    """Rename a checkpoint that can't be resumed to an unused ``<ckpt>.damaged[N]``, with a one-line
+    warning."""
+    aside = ckpt.with_name(ckpt.name + ".damaged")
+    n = 1
+    while aside.exists() or aside.is_symlink():
+        aside, n = ckpt.with_name(f"{ckpt.name}.damaged{n}"), n + 1
+    try:
+        os.replace(ckpt, aside)
+        where = f"set aside as {aside}"
+    except OSError as e:
+        where = f"could not be set aside ({e.strerror}); it will be replaced"
+    print(
+        f"fogref render: warning: checkpoint {ckpt}: {reason}; {where}; rendering from the start",
+        file=sys.stderr,
+    )
+
+
+def resume(ckpt: Path, key: str, shape: tuple, passes: list):
+    """``(sums, squares, passes done)`` from a checkpoint of this render, else None.
+
+    A checkpoint of other inputs or settings is left to be replaced; one that can't be
+    read or fails a check (:func:`checkpoint_problem`) is set aside (:func:`set_aside`).
+    """
+    if not ckpt.exists():
+        return None
+    try:
+        with np.load(ckpt, allow_pickle=False) as z:
+            problem = checkpoint_problem(z, key, shape, passes)
+            if problem is None:
+                return z["sums"], z["squares"], int(z["done"])
+    except Exception as e:  # any way a damaged file fails to read: zip, npy header, CRC, pickle refused
+        detail = (str(e).splitlines() or ["no detail"])[0]
+        problem = f"unreadable ({type(e).__name__}: {detail[:80]}{'...' if len(detail) > 80 else ''})"
+    if problem != "stale":
+        set_aside(ckpt, problem)
+    return None
