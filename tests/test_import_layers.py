@@ -24,7 +24,10 @@ PACKAGES = {"fogref": ROOT / "fogref", "fogref_plugins": ROOT / "plugins"}
 #: its longest matching prefix; "fogref" alone is the package facade (``fogref.set_variant``).
 FLOORS: list[tuple[str, tuple[str, ...]]] = [
     # leaf utilities that import no other fogref module; every floor may use them
-    ("base", ("fogref._version", "fogref.errors", "fogref.params", "fogref.atomic", "fogref._llvm")),
+    (
+        "base",
+        ("fogref._version", "fogref.errors", "fogref.params", "fogref.atomic", "fogref._llvm", "fogref.cluster"),
+    ),
     ("media", ("fogref.media",)),  # physics: numpy, Dr.Jit only lazily
     # the ground-truth schema, its I/O and the one display transform
     (

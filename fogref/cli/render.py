@@ -9,10 +9,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from fogref.cli.checks import Assignments, Choice, Integer, Number, PathArg
-from fogref.cli.spec import option, switch
+from fogref.cli.spec import option, refuse, switch
+from fogref.cli.sweep import Address
 from fogref.render.variant import VARIANTS
 
 NAME = "render"
+SOURCE = "fogref render"
 HELP = "path-trace a scene to a ground-truth EXR (+ PNG preview)"
 DESCRIPTION = (
     "Path-trace a Mitsuba 3 scene (fogpath integrator, heightfog medium) into a ground-truth EXR "
@@ -78,12 +80,31 @@ class Options:
         metavar="S",
         api=API,
     )
+    scheduler: str | None = option(
+        None,
+        "a running Dask scheduler (tcp://HOST:8786): its workers render the passes (same pixels)",
+        check=Address(),
+        metavar="ADDRESS",
+        api=API,
+        default_text="this process, or a LocalCluster with --workers",
+    )
+    workers: int | None = option(
+        None,
+        "render the passes on a LocalCluster of N single-threaded worker processes (same pixels)",
+        check=Integer(1, 4096),
+        api=API,
+        metavar="N",
+        default_text="none: this process",
+    )
 
 
 def run(o: Options, given=frozenset()) -> int:
     """Render; print the EXR's path."""
     from fogref.render.render import render
 
+    refuse(
+        Options, given, ("scheduler",), ("workers",), SOURCE, "the workers of a running scheduler are its own"
+    )
     path = render(
         o.scene,
         o.out,
@@ -96,6 +117,8 @@ def run(o: Options, given=frozenset()) -> int:
         png=not o.no_png,
         pixel_filter=o.pixel_filter,
         checkpoint_seconds=o.checkpoint_seconds,
+        scheduler=o.scheduler,
+        workers=o.workers,
     )
     print(path)
     return 0

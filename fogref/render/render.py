@@ -46,15 +46,17 @@ from pathlib import Path
 
 import numpy as np
 
-from fogref import gbuffer
+from fogref import cluster, gbuffer
 from fogref._version import __version__
 from fogref.atomic import atomic_write, refuse_overwriting_inputs, savez_atomic, temporary_names
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
+from fogref.render.distributed import PassFailed
 from fogref.render.inputs import file_sha256, inputs_digest, scene_inputs
 from fogref.render.passes import max_lanes, pass_seed, pass_sizes
 
 PIXEL_FILTERS = ("centre", "box")
+_SOURCE = "fogref render"
 #: Bytes per pixel the driver holds: float64 sums of 30 channels and 42 squares and
 #: channel-pair products, twice (running sum and the pass being added), plus the EXR's
 #: float32 channels.
@@ -77,12 +79,22 @@ def checkpoint_path(out) -> Path:
     return out.with_name(out.name + ".partial.npz")
 
 
-def check_output(out: Path, scene_path: Path, png: bool, inputs: list | None = None) -> None:
+def workers_log_path(out) -> Path:
+    """Where a LocalCluster's workers write their own output while rendering ``out``:
+    ``<out>.workers.log``."""
+    out = Path(out)
+    return out.with_name(out.name + ".workers.log")
+
+
+def check_output(
+    out: Path, scene_path: Path, png: bool, inputs: list | None = None, workers_log: bool = False
+) -> None:
     """Refuse outputs that would overwrite an input or cannot be written, before rendering.
 
-    The outputs are ``out``, its PNG preview (when ``png``) and its checkpoint; the inputs
-    are the scene and every file it loads (``inputs``, from
-    :func:`fogref.render.inputs.scene_inputs`; only the scene when None).
+    The outputs are ``out``, its PNG preview (when ``png``), its checkpoint and, with
+    ``workers_log``, the workers' log (:func:`workers_log_path`); the inputs are the scene
+    and every file it loads (``inputs``, from :func:`fogref.render.inputs.scene_inputs`;
+    only the scene when None).
     """
     if out.suffix.lower() != ".exr":
         raise FogrefError(
@@ -91,6 +103,8 @@ def check_output(out: Path, scene_path: Path, png: bool, inputs: list | None = N
         )
     outputs = [(out, "EXR")] + ([(out.with_suffix(".png"), "PNG preview")] if png else [])
     outputs.append((checkpoint_path(out), "checkpoint"))
+    if workers_log:
+        outputs.append((workers_log_path(out), "workers' log"))
     refuse_overwriting_inputs(
         outputs, inputs if inputs is not None else [(scene_path, "scene file")], f"--out {out}"
     )
@@ -195,6 +209,8 @@ def render(
     png: bool = True,
     pixel_filter: str = "centre",
     checkpoint_seconds: float = 60.0,
+    scheduler: str | None = None,
+    workers: int | None = None,
 ) -> Path:
     """Render ``scene_path`` with ``spp`` samples per pixel into the EXR ``out``.
 
@@ -207,6 +223,10 @@ def render(
     overrides:    XML ``$name`` defaults to replace, e.g. ``{"res": 64}``.
     pixel_filter: ``"centre"`` (pixel-exact, the default for truths) or ``"box"``.
     checkpoint_seconds: time between checkpoints (and one on Ctrl-C or SIGTERM).
+    scheduler:    a running Dask scheduler's address (``tcp://HOST:8786``): the passes run on its
+                  workers (:mod:`fogref.render.distributed`), the same pixels as here.
+    workers:      with no ``scheduler``: the passes run on a new LocalCluster of this many
+                  single-threaded worker processes [1, 4096] (their output: ``<out>.workers.log``).
 
     Returns the EXR path.  Raises :class:`FogrefError` (or its ParameterError) for bad input,
     and before any work when an output (the EXR, the PNG, the checkpoint) is the scene or a
@@ -218,9 +238,12 @@ def render(
         raise FogrefError(f"--seed: {seed} outside [0, 2^31)")
     if pixel_filter not in PIXEL_FILTERS:
         raise FogrefError(f"--pixel-filter: '{pixel_filter}' is not one of {PIXEL_FILTERS}")
+    scheduler = cluster.check_scheduler(scheduler, _SOURCE)
+    workers = cluster.check_workers(workers, _SOURCE)
+    on_cluster = scheduler is not None or workers is not None
     scene_path, out = Path(scene_path), Path(out)
     inputs = scene_inputs(scene_path, overrides)
-    check_output(out, scene_path, png, inputs)
+    check_output(out, scene_path, png, inputs, workers_log=on_cluster and scheduler is None)
     hashes: dict = {}  # before the scene is loaded: what its pixels will see
     digest = inputs_digest(scene_path, overrides, inputs, record=hashes)
 
@@ -280,20 +303,23 @@ def render(
     else:  # no bar, no tqdm import (20 ms of a quiet CLI run's start-up)
         bar = _NoBar()
     t0, last_ckpt, timings = time.perf_counter(), time.perf_counter(), []
-    with _Interrupt() as stop, bar:
+    with _Interrupt() as stop, bar, contextlib.ExitStack() as closing:
+        if on_cluster:  # the passes' sums come from Dask workers, in pass order
+            source = _cluster_passes(
+                closing, scheduler, workers, out, scene_path, overrides, digest, variant, seed, pixel_filter,
+                passes, saved,
+            )  # fmt: skip
+        else:
+            source = _local_passes(integrator, scene, seed, pixel_filter, passes, saved)
         try:
-            for k in range(saved, len(passes)):
-                ts = time.perf_counter()
-                s, q = integrator.render_moments(
-                    scene, 0, pass_seed(seed, k), passes[k], pixel_exact=pixel_filter == "centre"
-                )
+            for k, s, q, seconds in source:
                 s, q = _device_f64(s), _device_f64(q)
                 if state is not None:
                     s, q = state[0] + s, state[1] + q
                 dr.eval(s, q)
                 dr.sync_thread()
                 state = (s, q, k + 1)
-                timings.append(time.perf_counter() - ts)
+                timings.append(seconds)
                 bar.update(passes[k])
                 if stop.requested:
                     raise KeyboardInterrupt
@@ -302,14 +328,19 @@ def render(
                         _checkpoint(ckpt, state, key)
                         saved = state[2]
                     last_ckpt = time.perf_counter()
-        except (KeyboardInterrupt, RuntimeError) as e:
+        except (KeyboardInterrupt, RuntimeError, PassFailed) as e:
             if isinstance(e, RuntimeError) and "KeyboardInterrupt" not in str(e):
                 raise
             done = state  # one read: the sums and their count
             if done is not None and saved < done[2] < len(passes):
                 with stop.deferred():
                     _checkpoint(ckpt, done, key)
+            if isinstance(e, PassFailed) and not stop.requested:  # (a Ctrl-C also stops a LocalCluster's workers)
+                why = f"{scene_path}: {e}; the passes done are checkpointed, run again to resume"
+                raise FogrefError(why) from None
             raise KeyboardInterrupt from None
+        finally:
+            source.close()
 
     sums, squares = state[0], state[1]
     channels = _host_float32(_channels(sums, squares, spp))  # arithmetic on the device, one copy
@@ -344,6 +375,45 @@ def render(
         write_preview(np.stack([channels[c] for c in "RGB"], axis=-1), out.with_suffix(".png"))
     ckpt.unlink(missing_ok=True)
     return out
+
+
+def _local_passes(integrator, scene, seed: int, pixel_filter: str, passes: list, start: int):
+    """Passes ``start..`` rendered in this process: ``(k, sums, squares, seconds)`` in pass order."""
+    for k in range(start, len(passes)):
+        ts = time.perf_counter()
+        s, q = integrator.render_moments(
+            scene, 0, pass_seed(seed, k), passes[k], pixel_exact=pixel_filter == "centre"
+        )
+        yield k, s, q, time.perf_counter() - ts
+
+
+def _cluster_passes(
+    closing,
+    scheduler,
+    workers,
+    out,
+    scene_path,
+    overrides,
+    digest,
+    variant,
+    seed,
+    pixel_filter,
+    passes,
+    start,
+):
+    """Passes ``start..`` rendered on Dask workers (:mod:`fogref.render.distributed`): ``(k, sums,
+    squares, seconds)`` in pass order.  The cluster (a new LocalCluster of ``workers``, or the one
+    of ``scheduler``) is closed when ``closing`` (an ExitStack) ends."""
+    from fogref.render import distributed
+
+    if start >= len(passes):
+        return
+    log = workers_log_path(out)
+    client, local, threads = cluster.connect(scheduler, workers, log, _SOURCE)
+    closing.callback(cluster.stop, client, local, log)
+    j = distributed.job(scene_path, overrides, digest, variant, seed, pixel_filter, threads)
+    for r in distributed.passes_in_order(client, j, passes, start):
+        yield r["k"], r["sums"], r["squares"], r["seconds"]
 
 
 def _device_f64(x):

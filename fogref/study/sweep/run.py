@@ -17,20 +17,16 @@ one line names the log file that holds the workers' output.
 
 from __future__ import annotations
 
-import contextlib
 import json
-import logging
 import os
-import re
-import signal
-import sys
 import time
 import traceback
 from pathlib import Path
 
+from fogref import cluster
 from fogref import params as P
 from fogref.atomic import write_text_atomic
-from fogref.errors import FogrefError, ParameterError
+from fogref.errors import FogrefError
 from fogref.study.sweep.design import build_configs, scene_input_files
 from fogref.study.sweep.spec import SweepSpec, load_sweep
 from fogref.study.sweep.table import plot_files, read_result, set_aside, write_table
@@ -40,59 +36,11 @@ __all__ = ["WORKER_LOG", "SweepInterrupted", "run_sweep"]
 
 #: The file in the output folder that receives the LocalCluster workers' own output (tracebacks at Ctrl-C).
 WORKER_LOG = "sweep-workers.log"
-#: A Dask scheduler address: ``tcp://HOST:PORT`` (or another Dask protocol: tls, inproc, ucx, ws, wss),
-#: or ``HOST:PORT``.
-_ADDRESS = re.compile(r"^(?:(?:tcp|tls|inproc|ucx|ws|wss)://\S+|[A-Za-z0-9_.\-\[\]:]+:\d{1,5})$")
 _SOURCE = "fogref sweep"
 
 
 class SweepInterrupted(KeyboardInterrupt):
     """Ctrl-C during a sweep: the cluster is stopped; the message names the workers' log."""
-
-
-@contextlib.contextmanager
-def _stderr_to(log: Path):
-    """Send file descriptor 2 (this process and the processes it starts meanwhile) to ``log``."""
-    log.parent.mkdir(parents=True, exist_ok=True)
-    sys.stderr.flush()
-    saved = os.dup(2)
-    fd = os.open(log, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
-    try:
-        os.dup2(fd, 2)
-        yield
-    finally:
-        sys.stderr.flush()
-        os.dup2(saved, 2)
-        os.close(saved)
-        os.close(fd)
-
-
-def _connect(scheduler: str | None, n_workers: int | None, log: Path):
-    """A Dask client: on ``scheduler`` (an address) or on a new LocalCluster whose worker processes
-    write their output to ``log``.
-
-    Returns ``(client, cluster or None, drjit_threads per worker or None)``.
-    """
-    from dask.distributed import Client, LocalCluster
-
-    if scheduler:
-        try:
-            return Client(scheduler, timeout="30s"), None, None
-        except (OSError, ValueError, TypeError) as e:
-            why = str(e).splitlines()[0] if str(e) else type(e).__name__
-            raise ParameterError(_SOURCE, "--scheduler", f"cannot connect to {scheduler} ({why})") from None
-    cores = os.cpu_count() or 1
-    n = n_workers or cores
-    # the workers' own "Compute Failed" logs are silenced: failures are recorded in the table
-    with _stderr_to(log):
-        cluster = LocalCluster(
-            n_workers=n,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-            silence_logs=logging.CRITICAL,
-        )
-    return Client(cluster), cluster, max(1, cores // n)
 
 
 def _same(a: Path, b: Path) -> bool:
@@ -151,27 +99,6 @@ def _todo(configs: list[dict], cdir: Path, retry_failed: bool) -> list[dict]:
             continue
         todo.append(cfg)
     return todo
-
-
-def _stop(client, cluster, log: Path) -> None:
-    """Close the client and the cluster, their output to ``log``, a second Ctrl-C ignored meanwhile."""
-    old = signal.signal(signal.SIGINT, signal.SIG_IGN) if _main_thread() else None
-    try:
-        with _stderr_to(log) if cluster is not None else contextlib.nullcontext():
-            with contextlib.suppress(Exception):
-                client.close(timeout=10)
-            if cluster is not None:
-                with contextlib.suppress(Exception):
-                    cluster.close(timeout=10)
-    finally:
-        if old is not None:
-            signal.signal(signal.SIGINT, old)
-
-
-def _main_thread() -> bool:
-    import threading
-
-    return threading.current_thread() is threading.main_thread()
 
 
 def _run(client, todo, configs, spec, threads, cdir, progress) -> int:
@@ -251,14 +178,8 @@ def run_sweep(
     SweepInterrupted
         On Ctrl-C, after the cluster is stopped; its message names the workers' log.
     """
-    if scheduler is not None and not (isinstance(scheduler, str) and _ADDRESS.match(scheduler.strip())):
-        raise ParameterError(
-            _SOURCE,
-            "--scheduler",
-            f"{scheduler!r} is not a Dask scheduler address (tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786)",
-        )
-    if n_workers is not None:
-        n_workers = P.integer(n_workers, "--workers", source=_SOURCE, lo=1, hi=4096)
+    scheduler = cluster.check_scheduler(scheduler, _SOURCE)
+    n_workers = cluster.check_workers(n_workers, _SOURCE)
     if drjit_threads is not None:
         drjit_threads = P.integer(drjit_threads, "--drjit-threads", source=_SOURCE, lo=1, hi=4096)
     spec = load_sweep(sweep_path)
@@ -292,19 +213,19 @@ def run_sweep(
     failed = 0
     if todo:
         log = out / WORKER_LOG
-        client, cluster, threads = _connect(scheduler, n_workers, log)
+        client, local, threads = cluster.connect(scheduler, n_workers, log, _SOURCE)
         threads = drjit_threads or threads
         try:
             failed = _run(client, todo, configs, spec, threads, cdir, progress)
         except KeyboardInterrupt:
-            _stop(client, cluster, log)
+            cluster.stop(client, local, log)
             done = sum(read_result(cdir / f"{c['id']}.json", c)[0] is not None for c in configs)
-            where = f"; the workers' output is in {log}" if cluster is not None else ""
+            where = f"; the workers' output is in {log}" if local is not None else ""
             raise SweepInterrupted(
                 f"fogref sweep: interrupted with {done} of {len(configs)} configurations "
                 f"done; the cluster is stopped{where}; run the same command again to resume"
             ) from None
-        _stop(client, cluster, log)
+        cluster.stop(client, local, log)
     wall = time.perf_counter() - t0
     info = write_table(spec, configs)
     return {**info, "configs": len(configs), "ran": len(todo), "failed": failed, "wall_seconds": wall}

@@ -1,0 +1,128 @@
+"""The Dask cluster of ``fogref sweep`` and ``fogref render``: check, connect, log, stop.
+
+One code path for both commands (Dask distributed): ``--scheduler ADDRESS`` connects to a
+running scheduler; otherwise a ``LocalCluster`` of ``--workers`` single-threaded worker
+processes (default: one per core) is started, its workers' own output going to a log file,
+and closed at the end.  A second Ctrl-C while the cluster closes is ignored, so the close
+finishes.  Importing this module does no work (Dask is imported when a cluster is made).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import re
+import signal
+import sys
+import threading
+from pathlib import Path
+
+from fogref import params as P
+from fogref.errors import ParameterError
+
+__all__ = ["ADDRESS", "check_scheduler", "check_workers", "connect", "stderr_to", "stop", "main_thread"]
+
+#: A Dask scheduler address: ``tcp://HOST:PORT`` (or another Dask protocol: tls, inproc, ucx, ws, wss),
+#: or ``HOST:PORT``.
+ADDRESS = re.compile(r"^(?:(?:tcp|tls|inproc|ucx|ws|wss)://\S+|[A-Za-z0-9_.\-\[\]:]+:\d{1,5})$")
+
+
+def check_scheduler(scheduler, source: str) -> str | None:
+    """``scheduler`` (None, or a Dask scheduler address, stripped), else a one-line ParameterError.
+
+    >>> check_scheduler("tcp://127.0.0.1:8786", "fogref render")
+    'tcp://127.0.0.1:8786'
+    >>> check_scheduler("nowhere", "fogref render")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: fogref render: parameter '--scheduler': 'nowhere' is not a Dask ...
+    """
+    if scheduler is None:
+        return None
+    if not (isinstance(scheduler, str) and ADDRESS.match(scheduler.strip())):
+        raise ParameterError(
+            source,
+            "--scheduler",
+            f"{scheduler!r} is not a Dask scheduler address (tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786)",
+        )
+    return scheduler.strip()
+
+
+def check_workers(n_workers, source: str) -> int | None:
+    """``n_workers`` (None, or a worker count in [1, 4096]), else a one-line ParameterError.
+
+    >>> check_workers(2, "fogref render")
+    2
+    """
+    if n_workers is None:
+        return None
+    return P.integer(n_workers, "--workers", source=source, lo=1, hi=4096)
+
+
+@contextlib.contextmanager
+def stderr_to(log: Path):
+    """Send file descriptor 2 (this process and the processes it starts meanwhile) to ``log``."""
+    log.parent.mkdir(parents=True, exist_ok=True)
+    sys.stderr.flush()
+    saved = os.dup(2)
+    fd = os.open(log, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+    try:
+        os.dup2(fd, 2)
+        yield
+    finally:
+        sys.stderr.flush()
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(fd)
+
+
+def connect(scheduler: str | None, n_workers: int | None, log: Path, source: str):
+    """A Dask client: on ``scheduler`` (an address) or on a new LocalCluster of ``n_workers``
+    (default: one per core) single-threaded worker processes whose output goes to ``log``.
+
+    Returns ``(client, cluster or None, Dr.Jit threads per worker or None)``: cores / workers
+    on a LocalCluster, None (Dr.Jit's own default) on an existing cluster.  An unreachable
+    scheduler is a one-line ParameterError naming ``source``.
+    """
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler:
+        try:
+            return Client(scheduler, timeout="30s"), None, None
+        except (OSError, ValueError, TypeError) as e:
+            why = str(e).splitlines()[0] if str(e) else type(e).__name__
+            raise ParameterError(source, "--scheduler", f"cannot connect to {scheduler} ({why})") from None
+    cores = os.cpu_count() or 1
+    n = n_workers or cores
+    # the workers' own "Compute Failed" logs are silenced: the callers report failures themselves
+    with stderr_to(log):
+        cluster = LocalCluster(
+            n_workers=n,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.CRITICAL,
+        )
+    return Client(cluster), cluster, max(1, cores // n)
+
+
+def main_thread() -> bool:
+    """Whether this is the main thread (the only one where signal handlers can be set)."""
+    return threading.current_thread() is threading.main_thread()
+
+
+def stop(client, cluster, log: Path) -> None:
+    """Close the client and the cluster (when it is ours: not None), their output to ``log``, a
+    second Ctrl-C ignored meanwhile."""
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN) if main_thread() else None
+    try:
+        with stderr_to(log) if cluster is not None else contextlib.nullcontext():
+            with contextlib.suppress(Exception):
+                client.close(timeout=10)
+            if cluster is not None:
+                with contextlib.suppress(Exception):
+                    cluster.close(timeout=10)
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGINT, old)

@@ -1,0 +1,185 @@
+"""One truth's passes on Dask workers (``fogref render --scheduler ADDRESS`` / ``--workers N``).
+
+A render is a sum of independent passes (:mod:`fogref.render.passes`): pass ``k`` draws
+``passes[k]`` samples per pixel with the seed :func:`~fogref.render.passes.pass_seed`
+``(seed, k)``.  Here each pass is one Dask task, :func:`render_pass`, which returns the
+pass's float64 per-pixel sums and squares; :func:`passes_in_order` hands them to the render
+driver (:func:`fogref.render.render.render`) in pass order, whatever order they arrive in, and
+the driver adds them exactly as it adds its own passes.  Float64 addition is not associative,
+so the fixed order is what makes the truth bitwise equal to a one-process render of the same
+``(scene, overrides, spp, seed, pixel filter, variant)`` on any number of workers (on workers
+of the same instruction set: the LLVM back end compiles for the host CPU).
+
+* **A killed worker's passes are redone**: the scheduler reruns the tasks of a worker that
+  dies (Dask's ``distributed.scheduler.allowed-failures``), and a task that raises is retried
+  ``retries`` times; a pass is a pure function of its key, so a rerun gives the same sums.
+* **Workers keep their compiled kernels**: a worker process loads the scene once (cached by
+  the digest of its inputs, the variant and the overrides, :data:`_LOADED`) and keeps it for
+  every later pass of that render; the seed and spp are opaque to the kernels, so every pass
+  after a worker's first reuses its compiled kernels.
+* **Same inputs everywhere**: a worker renders only if the digest of the scene and of every
+  file it loads (:func:`fogref.render.inputs.inputs_digest`), read on the worker, is the
+  driver's; workers on other machines need the scene at the same path (a shared file system).
+* **Bounded memory**: at most ``window`` passes are submitted ahead of the next pass to merge,
+  so the driver holds at most that many passes' sums that arrived early.
+
+The cluster itself (a LocalCluster or a running scheduler, the workers' log, closing it) is
+:mod:`fogref.cluster`, shared with ``fogref sweep``.  Importing this module does no work.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import secrets
+import time
+from pathlib import Path
+
+from fogref.errors import FogrefError
+
+__all__ = ["PassFailed", "job", "render_pass", "passes_in_order", "transfer_bytes"]
+
+#: Scenes loaded by this worker process: ``(inputs digest, variant, overrides, threads)`` ->
+#: ``(scene, integrator)``.  The last few renders' scenes only (:data:`_KEEP`).
+_LOADED: dict = {}
+_KEEP = 4
+
+
+class PassFailed(FogrefError):
+    """A pass failed on the cluster after its retries (one line: the pass and the error)."""
+
+
+def job(scene_path, overrides, digest: str, variant: str, seed: int, pixel_filter: str, threads) -> dict:
+    """What every pass of one render needs on a worker: a small dict, sent with each task.
+
+    >>> sorted(job("a.xml", {}, "0" * 64, "llvm_ad_rgb", 0, "centre", 1))  # doctest: +NORMALIZE_WHITESPACE
+    ['digest', 'overrides', 'pixel_filter', 'scene', 'seed', 'threads', 'variant']
+    """
+    return {
+        "scene": os.path.abspath(scene_path),
+        "overrides": dict(overrides or {}),
+        "digest": digest,
+        "variant": variant,
+        "seed": int(seed),
+        "pixel_filter": pixel_filter,
+        "threads": threads,
+    }
+
+
+def _worker_scene(j: dict):
+    """``(scene, integrator)`` of ``j`` in this process: loaded on the first pass, then reused."""
+    key = (j["digest"], j["variant"], json.dumps(j["overrides"], sort_keys=True, default=str), j["threads"])
+    hit = _LOADED.get(key)
+    if hit is not None:
+        return hit
+    from fogref.render.inputs import inputs_digest
+    from fogref.render.scene import load_scene
+    from fogref.render.variant import set_variant
+
+    set_variant(j["variant"])
+    if j["threads"]:
+        import drjit as dr
+
+        if dr.thread_count() != int(j["threads"]):
+            dr.set_thread_count(int(j["threads"]))
+    digest = inputs_digest(Path(j["scene"]), j["overrides"])
+    if digest != j["digest"]:
+        raise FogrefError(
+            f"{j['scene']}: this worker (pid {os.getpid()}) reads other inputs than the driver "
+            f"(inputs SHA-256 {digest[:12]}..., not {j['digest'][:12]}...); the workers need the scene "
+            f"and the files it loads at the same path"
+        )
+    scene, _ = load_scene(Path(j["scene"]), j["overrides"] or None)
+    integrator = scene.integrator()
+    integrator.aovs = True
+    while len(_LOADED) >= _KEEP:
+        _LOADED.pop(next(iter(_LOADED)))
+    _LOADED[key] = (scene, integrator)
+    return scene, integrator
+
+
+def render_pass(j: dict, k: int, spp: int) -> dict:
+    """Pass ``k`` (``spp`` samples per pixel, seed ``pass_seed(j["seed"], k)``) on this process.
+
+    Returns ``{"k", "sums", "squares", "seconds", "pid"}``: the float64 per-pixel sums and
+    squares of :meth:`FogPathIntegrator.render_moments` as numpy arrays ``(H, W, 30)`` and
+    ``(H, W, 42)``, the seconds the pass took (its first pass on this process includes loading
+    the scene and compiling the kernels) and the process id.
+    """
+    import numpy as np
+
+    from fogref.render.passes import pass_seed
+
+    t0 = time.perf_counter()
+    scene, integrator = _worker_scene(j)
+    s, q = integrator.render_moments(
+        scene, 0, pass_seed(j["seed"], k), int(spp), pixel_exact=j["pixel_filter"] == "centre"
+    )
+    sums, squares = np.asarray(s, dtype=np.float64), np.asarray(q, dtype=np.float64)
+    return {"k": k, "sums": sums, "squares": squares, "seconds": time.perf_counter() - t0, "pid": os.getpid()}
+
+
+def transfer_bytes(width: int, height: int) -> int:
+    """Bytes of float64 moments one pass sends back: 30 sums and 42 squares per pixel.
+
+    >>> transfer_bytes(160, 90)
+    8294400
+    """
+    return width * height * (30 + 42) * 8
+
+
+def passes_in_order(
+    client, j: dict, passes: list[int], start: int, retries: int = 2, window: int | None = None
+):
+    """Run passes ``start..len(passes)-1`` on ``client``'s workers; yield their results in pass order.
+
+    Each yielded item is :func:`render_pass`'s dict.  At most ``window`` passes (default:
+    4 per worker, at least 4) are submitted beyond the next one to yield.  A pass whose
+    task still fails after ``retries`` reruns raises :class:`PassFailed`.  Closing the
+    generator (an interruption) cancels the passes still queued or running.
+    """
+    from dask.distributed import as_completed
+
+    if window is None:
+        window = max(4, 4 * len(client.scheduler_info().get("workers", {})))
+    tag = secrets.token_hex(6)
+    running = as_completed()
+    futures = {}
+    arrived: dict[int, dict] = {}
+    nxt, merge = start, start
+    try:
+        while merge < len(passes):
+            while nxt < len(passes) and nxt - merge < window:
+                f = client.submit(
+                    render_pass,
+                    j,
+                    nxt,
+                    passes[nxt],
+                    key=f"fogref-render-{tag}-{nxt}",
+                    retries=retries,
+                    pure=False,
+                )
+                futures[f.key] = (nxt, f)
+                running.add(f)
+                nxt += 1
+            f = next(running)
+            k, _ = futures.pop(f.key)
+            try:
+                arrived[k] = f.result()
+            except FogrefError:
+                raise
+            except Exception as e:  # the task's own error, after Dask's retries; KilledWorker
+                detail = (str(e).splitlines() or [""])[0][:200]
+                raise PassFailed(
+                    f"pass {k} of {len(passes)} failed on the cluster: {type(e).__name__}: {detail}"
+                ) from None
+            while merge in arrived:
+                yield arrived.pop(merge)
+                merge += 1
+    finally:
+        left = [f for _, f in futures.values()]
+        if left:
+            try:
+                client.cancel(left)
+            except Exception:  # noqa: BLE001 - a closed client: nothing left to cancel
+                pass
