@@ -26,7 +26,14 @@ FLOORS: list[tuple[str, tuple[str, ...]]] = [
     # leaf utilities that import no other fogref module; every floor may use them
     (
         "base",
-        ("fogref._version", "fogref.errors", "fogref.params", "fogref.atomic", "fogref._llvm", "fogref.cluster"),
+        (
+            "fogref._version",
+            "fogref.errors",
+            "fogref.params",
+            "fogref.atomic",
+            "fogref._llvm",
+            "fogref.cluster",
+        ),
     ),
     ("media", ("fogref.media",)),  # physics: numpy, Dr.Jit only lazily
     # the ground-truth schema, its I/O and the one display transform

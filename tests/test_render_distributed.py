@@ -1,0 +1,254 @@
+"""One truth's passes on a real two-worker Dask LocalCluster (issue 22, part 1).
+
+The default scene at 16x9 pixels and 8 spp, in 8 passes of 1 spp (``MAX_LANES`` shrunk as in
+``tests/test_render_passes.py``), rendered once in this process: the reference.  On the
+cluster (``processes=True``, one thread per worker, not a mock) the same render must give the
+same pixels bit for bit: on two workers, after a worker is SIGKILLed mid-render (its passes
+are redone), and after an interruption resumed from the checkpoint on another worker count or
+in one process.  Smallest error detected: any pass missing, counted twice, mis-seeded or
+merged out of order changes some float32 pixel value (the comparison is exact).
+"""
+
+import logging
+import os
+import signal
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fogref.exrio import read_exr
+
+pytestmark = pytest.mark.render
+ROOT = Path(__file__).resolve().parents[1]
+SCENE = ROOT / "scenes" / "valley.xml"
+RES = {"res": 16, "resy": 9}
+SPP, SEED = 8, 5
+
+
+def _pixels(path) -> dict:
+    return read_exr(path)[0]
+
+
+def _assert_equal(a: dict, b: dict) -> None:
+    assert sorted(a) == sorted(b)
+    differ = [k for k in a if not np.array_equal(a[k], b[k])]
+    assert not differ, f"channels not bitwise equal: {differ[:8]}"
+
+
+@pytest.fixture
+def one_spp_passes(monkeypatch):
+    """Passes of 1 spp at 16x9 (8 passes for 8 spp), in this process (the driver)."""
+    import fogref.render.passes as passes
+
+    lanes = RES["res"] * RES["resy"]
+    monkeypatch.setattr(passes, "MAX_LANES", {"llvm": lanes, "cuda": lanes})
+    assert passes.pass_sizes(lanes, SPP, passes.max_lanes("llvm_ad_rgb")) == [1] * SPP
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    distributed = pytest.importorskip("dask.distributed")
+    with distributed.LocalCluster(
+        n_workers=2,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=None,
+        silence_logs=logging.CRITICAL,
+    ) as c:
+        yield c
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """The one-process render (its own pass sizes set here: a module-scoped fixture)."""
+    import fogref.render.passes as passes
+    from fogref.render.render import render
+
+    saved = passes.MAX_LANES
+    passes.MAX_LANES = {"llvm": RES["res"] * RES["resy"], "cuda": RES["res"] * RES["resy"]}
+    try:
+        out = tmp_path_factory.mktemp("reference") / "one.exr"
+        render(SCENE, out, spp=SPP, seed=SEED, overrides=RES, progress=False, png=False)
+    finally:
+        passes.MAX_LANES = saved
+    return _pixels(out)
+
+
+def _render(out, **kw):
+    from fogref.render.render import render
+
+    return render(SCENE, out, spp=SPP, seed=SEED, overrides=RES, progress=False, png=False, **kw)
+
+
+def test_two_workers_give_the_one_process_pixels_bitwise(tmp_path, one_spp_passes, cluster, reference):
+    import fogref.render.distributed as D
+
+    seen = []
+    real = D.passes_in_order
+
+    def spy(*a, **kw):
+        for r in real(*a, **kw):
+            seen.append((r["k"], r["pid"]))
+            yield r
+
+    from unittest import mock
+
+    with mock.patch.object(D, "passes_in_order", spy):
+        _render(tmp_path / "two.exr", scheduler=cluster.scheduler_address)
+    _assert_equal(_pixels(tmp_path / "two.exr"), reference)
+    assert [k for k, _ in seen] == list(range(SPP)), "passes not merged in pass order"
+    assert len({pid for _, pid in seen}) == 2, "the passes did not run on both workers"
+    assert os.getpid() not in {pid for _, pid in seen}
+    assert not (tmp_path / "two.exr.partial.npz").exists()
+
+
+def _arm(marker: str, disarm: bool = False):
+    """On a worker: the first worker to start its second pass kills itself with SIGKILL (once across
+    the cluster: ``marker`` is created exclusively and holds the pid).  Tasks name ``render_pass`` by
+    reference, so the wrapper set here is what they call."""
+    import fogref.render.distributed as D
+
+    orig = getattr(D.render_pass, "__wrapped__", D.render_pass)
+    if disarm:
+        D.render_pass = orig
+        return os.getpid()
+    done = []
+
+    def kill_on_second_pass(*a, **kw):
+        if done:
+            try:
+                fd = os.open(marker, os.O_WRONLY | os.O_CREAT | os.O_EXCL)
+            except FileExistsError:
+                pass
+            else:
+                os.write(fd, f"{os.getpid()} {a[1]}".encode())
+                os.close(fd)
+                os.kill(os.getpid(), signal.SIGKILL)
+        done.append(a[1])
+        return orig(*a, **kw)
+
+    kill_on_second_pass.__wrapped__ = orig
+    D.render_pass = kill_on_second_pass
+    return os.getpid()
+
+
+def test_a_worker_killed_mid_render_has_its_passes_redone(tmp_path, one_spp_passes, cluster, reference):
+    """A worker SIGKILLs itself as its second pass starts (its first pass done, the second in flight);
+    the scheduler reruns its passes on the other worker (or the one the nanny restarts)."""
+    from unittest import mock
+
+    import fogref.render.distributed as D
+
+    marker = tmp_path / "killed"
+    real = D.passes_in_order
+
+    def armed(client, *a, **kw):
+        client.run(_arm, str(marker))
+        try:
+            yield from real(client, *a, **kw)
+        finally:
+            client.run(_arm, str(marker), True)
+
+    with mock.patch.object(D, "passes_in_order", armed):
+        _render(tmp_path / "killed.exr", scheduler=cluster.scheduler_address)
+    assert marker.exists(), "no worker was killed"
+    pid, k = (int(x) for x in marker.read_text().split())
+    assert 0 < k < SPP
+    _assert_equal(_pixels(tmp_path / "killed.exr"), reference)
+    with pytest.raises(OSError):
+        os.kill(pid, 0)  # the worker is gone: its passes were rendered elsewhere
+
+
+def _interrupt_after(n: int, real):
+    """A pass source that raises KeyboardInterrupt (a Ctrl-C) after yielding ``n`` passes."""
+
+    def source(*a, **kw):
+        for i, r in enumerate(real(*a, **kw)):
+            if i == n:
+                raise KeyboardInterrupt
+            yield r
+
+    return source
+
+
+def _checkpoint_done(out) -> int:
+    with np.load(Path(str(out) + ".partial.npz")) as z:
+        return int(z["done"])
+
+
+def test_interrupted_on_two_workers_resumes_on_one_worker(tmp_path, one_spp_passes, cluster, reference):
+    """The checkpoint of a cluster render resumes on a LocalCluster of one worker (``workers=1``,
+    started by fogref, its output in ``<out>.workers.log``), to the same pixels."""
+    from unittest import mock
+
+    import fogref.render.distributed as D
+
+    out = tmp_path / "resumed.exr"
+    with mock.patch.object(D, "passes_in_order", _interrupt_after(3, D.passes_in_order)):
+        with pytest.raises(KeyboardInterrupt):
+            _render(out, scheduler=cluster.scheduler_address, checkpoint_seconds=1e9)
+    assert _checkpoint_done(out) == 3 and not out.exists()
+    resumed = []
+    real = D.passes_in_order
+
+    def spy(client, j, passes, start, **kw):
+        resumed.append(start)
+        yield from real(client, j, passes, start, **kw)
+
+    with mock.patch.object(D, "passes_in_order", spy):
+        _render(out, workers=1)
+    assert resumed == [3], "the resumed render did not start at the checkpoint's pass"
+    assert Path(str(out) + ".workers.log").exists()
+    _assert_equal(_pixels(out), reference)
+
+
+def test_interrupted_in_one_process_resumes_on_the_cluster_and_back(
+    tmp_path, one_spp_passes, cluster, reference
+):
+    from unittest import mock
+
+    import fogref.render.render as R
+
+    out = tmp_path / "mixed.exr"
+    with mock.patch.object(R, "_local_passes", _interrupt_after(2, R._local_passes)):
+        with pytest.raises(KeyboardInterrupt):
+            _render(out, checkpoint_seconds=1e9)
+    assert _checkpoint_done(out) == 2
+    import fogref.render.distributed as D
+
+    with mock.patch.object(D, "passes_in_order", _interrupt_after(3, D.passes_in_order)):
+        with pytest.raises(KeyboardInterrupt):
+            _render(out, scheduler=cluster.scheduler_address, checkpoint_seconds=1e9)
+    assert _checkpoint_done(out) == 5
+    _render(out)  # the last three passes in this process
+    _assert_equal(_pixels(out), reference)
+
+
+@pytest.mark.parametrize(
+    "args, says",
+    [
+        (["--workers", "0"], "--workers"),
+        (["--workers", "two"], "--workers"),
+        (["--scheduler", "not an address"], "--scheduler"),
+        (["--scheduler", "tcp://127.0.0.1:8786", "--workers", "2"], "does not apply"),
+    ],
+)
+def test_bad_workers_or_scheduler_is_refused_in_one_line(tmp_path, capsys, args, says):
+    from fogref.cli import main
+
+    out = tmp_path / "x.exr"
+    assert main(["render", str(SCENE), "--out", str(out), "--quiet", *args]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and says in err and "Traceback" not in err, err
+    assert not out.exists()
+
+
+def test_the_api_refuses_bad_workers_and_scheduler_before_any_work(tmp_path):
+    from fogref.errors import ParameterError
+    from fogref.render.render import render
+
+    for kw in ({"workers": 0}, {"workers": 1.5}, {"scheduler": "nowhere"}, {"scheduler": 8786}):
+        with pytest.raises(ParameterError, match="fogref render"):
+            render(SCENE, tmp_path / "x.exr", **kw)
+    assert not list(tmp_path.iterdir())
