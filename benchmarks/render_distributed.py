@@ -1,0 +1,282 @@
+"""Distributed render scaling: one truth's passes on 1 and 2 single-thread Dask workers.
+
+The default scene (``scenes/valley.xml``) at ``--res`` (160x90) and ``--spp`` (64), split into
+``--passes`` (8) equal passes (``MAX_LANES`` set to pixels x spp / passes in this driver: at
+this size the default would make one pass), rendered by :func:`fogref.render.render.render`:
+
+* ``one process``: in this process, Dr.Jit on one thread;
+* ``N workers``: on a LocalCluster of N worker processes (``processes=True``, one Dask thread,
+  Dr.Jit on one thread each), N = 1, 2, started fresh for each N.
+
+Each way renders once first (``first``: on fresh workers it includes tracing and compiling the
+kernels, or loading them from Dr.Jit's disk cache), then ``--repeats`` (3) times (``steady``:
+median and range).  Compile time = first - median steady.  Every render's pixels are compared
+bitwise with the one-process render.  Efficiency of 2 workers = T(1 worker) / (2 T(2 workers)),
+steady medians.
+
+The model for N machines uses the measured per-pass time on a worker ``t_p`` (the median of the
+workers' own pass times, steady), the bytes of float64 moments a pass sends back ``b``
+(:func:`fogref.render.distributed.transfer_bytes`: 576 B per pixel), the driver's measured
+merge rate (adding one pass's moments on the device) and an assumed network rate (10 GbE).
+The driver receives and merges the passes one after another, so with P passes on N workers
+
+    T(N) = t_fixed + max(ceil(P / N) t_p, P t_d),   t_d = b / network + b / merge rate,
+
+and the efficiency is T(1) / (N T(N)).
+
+    .venv/bin/python benchmarks/render_distributed.py [--res 160x90] [--spp 64] [--passes 8]
+
+Writes reports/benchmarks/render_distributed.{json,md}.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import math
+import os
+import platform
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENE = ROOT / "scenes" / "valley.xml"
+NETWORK = 1.25e9  # bytes/s: 10 GbE
+
+
+def _one_thread():
+    import drjit as dr
+
+    from fogref.render.variant import set_variant
+
+    set_variant(None)
+    dr.set_thread_count(1)
+    return os.getpid()
+
+
+def _pixels(path):
+    from fogref.exrio import read_exr
+
+    return read_exr(path)
+
+
+def _render(out, args, **kw) -> tuple[float, list]:
+    from fogref.render.render import render
+
+    t0 = time.perf_counter()
+    render(SCENE, out, spp=args.spp, seed=0, overrides=args.overrides, progress=False, png=False,
+           resume=False, **kw)  # fmt: skip
+    wall = time.perf_counter() - t0
+    return wall, _pixels(out)[1]["fogref.render_seconds"]["passes"]
+
+
+def _series(args, tmp: Path, name: str, reference, **kw) -> dict:
+    """First render and ``repeats`` steady renders, pixels checked against ``reference``."""
+    import numpy as np
+
+    runs, pass_times = [], []
+    for i in range(1 + args.repeats):
+        out = tmp / f"{name}-{i}.exr"
+        wall, passes = _render(out, args, **kw)
+        ch = _pixels(out)[0]
+        if reference is not None:
+            bad = [c for c in ch if not np.array_equal(ch[c], reference[c])]
+            assert not bad, f"{name}: pixels differ from the one-process render in {bad[:5]}"
+        runs.append(wall)
+        if i:
+            pass_times += passes
+        else:
+            first_passes = passes
+        print(f"  {name} run {i}: {wall:.2f} s", file=sys.stderr)
+    steady = runs[1:]
+    return {
+        "first_s": runs[0],
+        "steady_median_s": statistics.median(steady),
+        "steady_min_s": min(steady),
+        "steady_max_s": max(steady),
+        "compile_s": runs[0] - statistics.median(steady),
+        "first_passes_s": first_passes,
+        "pass_median_s": statistics.median(pass_times),
+        "bitwise_equal": reference is not None,
+    }
+
+
+def _merge_rate(w: int, h: int, repeats: int = 20) -> float:
+    """Bytes per second at which the driver adds one pass's float64 moments (host -> device, add)."""
+    import drjit as dr
+    import numpy as np
+
+    from fogref.render.render import _device_f64
+
+    rng = np.random.default_rng(0)
+    s, q = rng.random((h, w, 30)), rng.random((h, w, 42))
+    acc = (_device_f64(s), _device_f64(q))
+    t0 = time.perf_counter()
+    for _ in range(repeats):
+        a, b = acc[0] + _device_f64(s), acc[1] + _device_f64(q)
+        dr.eval(a, b)
+        dr.sync_thread()
+        acc = (a, b)
+    return repeats * (s.nbytes + q.nbytes) / (time.perf_counter() - t0)
+
+
+def _model(t_fixed: float, t_p: float, t_d: float, passes: int, ns=(1, 2, 4, 8, 16, 32, 64)) -> list:
+    def t(n):
+        return t_fixed + max(math.ceil(passes / n) * t_p, passes * t_d)
+
+    return [{"n": n, "T_s": t(n), "efficiency": t(1) / (n * t(n))} for n in ns]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--res", default="160x90")
+    ap.add_argument("--spp", type=int, default=64)
+    ap.add_argument("--passes", type=int, default=8)
+    ap.add_argument("--repeats", type=int, default=3)
+    args = ap.parse_args()
+    w, h = (int(x) for x in args.res.split("x"))
+    args.overrides = {"res": w, "resy": h}
+
+    from dask.distributed import Client, LocalCluster
+
+    import fogref.render.passes as P
+    from fogref.render.distributed import transfer_bytes
+
+    lanes = w * h * (args.spp // args.passes)
+    P.MAX_LANES = {"llvm": lanes, "cuda": lanes}
+    sizes = P.pass_sizes(w * h, args.spp, P.max_lanes("llvm_ad_rgb"))
+    assert len(sizes) == args.passes, sizes
+    _one_thread()
+    result = {
+        "scene": "scenes/valley.xml",
+        "res": [w, h],
+        "spp": args.spp,
+        "passes": sizes,
+        "repeats": args.repeats,
+        "machine": {
+            "cpus": os.cpu_count(),
+            "platform": platform.platform(),
+            "python": platform.python_version(),
+        },
+    }
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        print("one process", file=sys.stderr)
+        wall, _ = _render(tmp / "reference.exr", args)
+        reference = _pixels(tmp / "reference.exr")[0]
+        result["one_process"] = _series(args, tmp, "one", reference)
+        for n in (1, 2):
+            print(f"{n} worker(s)", file=sys.stderr)
+            t0 = time.perf_counter()
+            with (
+                LocalCluster(
+                    n_workers=n,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                    silence_logs=logging.CRITICAL,
+                ) as cluster,
+                Client(cluster) as client,
+            ):
+                start = time.perf_counter() - t0
+                client.run(_one_thread)
+                r = _series(args, tmp, f"w{n}", reference, scheduler=cluster.scheduler_address)
+                r["cluster_start_s"] = start
+            result[f"workers_{n}"] = r
+        result["merge_bytes_per_s"] = _merge_rate(w, h)
+    t1, t2 = result["workers_1"]["steady_median_s"], result["workers_2"]["steady_median_s"]
+    result["efficiency_2"] = t1 / (2 * t2)
+    b = transfer_bytes(w, h)
+    t_p = result["workers_1"]["pass_median_s"]
+    t_d = b / NETWORK + b / result["merge_bytes_per_s"]
+    t_fixed = max(0.0, t1 - len(sizes) * t_p)  # the driver's own work: scene load, EXR, scheduling
+    result["model"] = {
+        "bytes_per_pass": b,
+        "t_pass_s": t_p,
+        "t_driver_per_pass_s": t_d,
+        "t_fixed_s": t_fixed,
+        "network_bytes_per_s": NETWORK,
+        "this_case": _model(t_fixed, t_p, t_d, len(sizes)),
+        # the same per-lane cost at a studio's size: 3840x2160, 1024 spp in passes of 1 spp (CPU MAX_LANES)
+        "uhd_1024spp": _model(
+            t_fixed, t_p * (3840 * 2160) / lanes, transfer_bytes(3840, 2160) * t_d / b, 1024
+        ),
+    }
+    out = ROOT / "reports" / "benchmarks"
+    (out / "render_distributed.json").write_text(json.dumps(result, indent=1) + "\n")
+    (out / "render_distributed.md").write_text(_report(result))
+    print(out / "render_distributed.md")
+
+
+def _report(r: dict) -> str:
+    w, h = r["res"]
+    m = r["model"]
+    rows = []
+    for name, key in (("one process", "one_process"), ("1 worker", "workers_1"), ("2 workers", "workers_2")):
+        x = r[key]
+        rows.append(
+            f"| {name} | {x['first_s']:.2f} | {x['steady_median_s']:.2f} "
+            f"({x['steady_min_s']:.2f}-{x['steady_max_s']:.2f}) | {x['compile_s']:.2f} | "
+            f"{x['pass_median_s'] * 1e3:.0f} | {'yes' if x['bitwise_equal'] else '-'} |"
+        )
+
+    def table(model):
+        return "\n".join(
+            ["| machines N | T(N) [s] | efficiency |", "|---:|---:|---:|"]
+            + [f"| {x['n']} | {x['T_s']:.2f} | {x['efficiency']:.2f} |" for x in model]
+        )
+
+    return f"""# Distributed render: one truth's passes on Dask workers
+
+`benchmarks/render_distributed.py`: `scenes/valley.xml` at {w}x{h}, {r["spp"]} spp in {len(r["passes"])}
+passes of {r["passes"][0]} spp, seed 0, on a {r["machine"]["cpus"]}-core machine shared with other work
+({r["machine"]["platform"]}, Python {r["machine"]["python"]}).  Workers: LocalCluster processes, one
+Dask thread and one Dr.Jit thread each; the one-process render also on one Dr.Jit thread.  Times
+are whole `fogref.render.render.render` calls (scene load in the driver, passes, merge, EXR
+write), median of {r["repeats"]} after a first render; compile = first - median (on fresh
+workers: tracing and compiling the kernels, or loading them from Dr.Jit's disk cache).
+
+| way | first [s] | steady median (range) [s] | compile [s] | pass median [ms] | bitwise = one process |
+|---|---:|---:|---:|---:|---|
+{chr(10).join(rows)}
+
+Cluster start: {r["workers_1"]["cluster_start_s"]:.1f} s (1 worker), {r["workers_2"]["cluster_start_s"]:.1f} s
+(2 workers), not in the times above.
+
+**Efficiency of 2 single-thread workers against 1: {r["efficiency_2"]:.2f}**
+(T1 / (2 T2), steady medians; 2 cores shared with the driver and with other users, so this is a
+lower bound of what two machines give).
+
+## Model for N machines
+
+Each pass sends back its float64 moments: {m["bytes_per_pass"] / 1e6:.1f} MB at {w}x{h}
+(576 bytes per pixel: 30 sums and 42 squares).  The driver receives and merges them one after
+another (in pass order, which makes the pixels independent of N): per pass
+t_d = b / network + b / merge rate = {m["t_driver_per_pass_s"] * 1e3:.1f} ms (network
+{m["network_bytes_per_s"] / 1e9:.2f} GB/s assumed, 10 GbE; merge rate measured here
+{r["merge_bytes_per_s"] / 1e9:.2f} GB/s).  A pass on one single-thread worker takes
+t_p = {m["t_pass_s"] * 1e3:.0f} ms; the driver's fixed work t_fixed = {m["t_fixed_s"]:.2f} s.
+T(N) = t_fixed + max(ceil(P / N) t_p, P t_d), efficiency = T(1) / (N T(N)):
+
+This case ({len(r["passes"])} passes):
+
+{table(m["this_case"])}
+
+A studio frame, 3840x2160 at 1024 spp (1024 passes of 1 spp under the CPU's `MAX_LANES`; t_p and
+t_d scaled by the pixels: {m["t_pass_s"] * 3840 * 2160 / (w * h * r["passes"][0]):.1f} s and
+{m["t_driver_per_pass_s"] * 3840 * 2160 / (w * h):.2f} s per pass):
+
+{table(m["uhd_1024spp"])}
+
+The driver's per-pass receive and merge bounds the speed-up at t_p / t_d: passes of more
+samples per pixel (more lanes per pass on machines with more memory) raise it, since the
+bytes per pass do not grow with the samples.
+"""
+
+
+if __name__ == "__main__":
+    main()
