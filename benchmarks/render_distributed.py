@@ -26,6 +26,9 @@ and the efficiency is T(1) / (N T(N)).
 
     .venv/bin/python benchmarks/render_distributed.py [--res 160x90] [--spp 64] [--passes 8]
 
+Each way starts in a fresh ``$HOME`` (no Dr.Jit kernel cache): ``first`` includes the whole
+compile; ``--warm`` keeps the user's ``$HOME`` (kernels loaded from the disk cache).
+
 Writes reports/benchmarks/render_distributed.{json,md}.
 """
 
@@ -64,31 +67,53 @@ def _pixels(path):
     return read_exr(path)
 
 
-def _render(out, args, **kw) -> tuple[float, list]:
+def _render(out, args, **kw) -> tuple[float, list, list]:
+    """(wall seconds, each pass's wall seconds, each pass's CPU seconds) of one render.  The CPU
+    seconds are the workers' own (their process time) on a cluster, this process's here."""
+    from unittest import mock
+
+    import fogref.render.distributed as D
     from fogref.render.render import render
 
-    t0 = time.perf_counter()
-    render(SCENE, out, spp=args.spp, seed=0, overrides=args.overrides, progress=False, png=False,
-           resume=False, **kw)  # fmt: skip
+    cpu, real = [], D.passes_in_order
+
+    def spy(*a, **k):
+        for r in real(*a, **k):
+            cpu.append(r["cpu_seconds"])
+            yield r
+
+    t0, c0 = time.perf_counter(), time.process_time()
+    with mock.patch.object(D, "passes_in_order", spy):
+        render(SCENE, out, spp=args.spp, seed=0, overrides=args.overrides, progress=False, png=False,
+               resume=False, **kw)  # fmt: skip
     wall = time.perf_counter() - t0
-    return wall, _pixels(out)[1]["fogref.render_seconds"]["passes"]
+    passes = _pixels(out)[1]["fogref.render_seconds"]["passes"]
+    if not cpu:  # in this process: its CPU time, shared out over the passes by their wall time
+        c = time.process_time() - c0
+        cpu = [c * p / sum(passes) for p in passes]
+    return wall, passes, cpu
 
 
-def _series(args, tmp: Path, name: str, reference, **kw) -> dict:
-    """First render and ``repeats`` steady renders, pixels checked against ``reference``."""
+def _series(args, tmp: Path, name: str, reference, **kw) -> tuple[dict, dict]:
+    """First render and ``repeats`` steady renders, pixels checked against ``reference`` (None: the
+    first render's); returns the timings and the reference."""
     import numpy as np
 
-    runs, pass_times = [], []
+    runs, pass_times, pass_cpu = [], [], []
+    load = os.getloadavg()[0]
     for i in range(1 + args.repeats):
         out = tmp / f"{name}-{i}.exr"
-        wall, passes = _render(out, args, **kw)
+        wall, passes, cpu = _render(out, args, **kw)
         ch = _pixels(out)[0]
-        if reference is not None:
+        if reference is None:  # the first one-process render is the reference
+            reference = ch
+        else:
             bad = [c for c in ch if not np.array_equal(ch[c], reference[c])]
             assert not bad, f"{name}: pixels differ from the one-process render in {bad[:5]}"
         runs.append(wall)
         if i:
             pass_times += passes
+            pass_cpu += cpu
         else:
             first_passes = passes
         print(f"  {name} run {i}: {wall:.2f} s", file=sys.stderr)
@@ -101,8 +126,10 @@ def _series(args, tmp: Path, name: str, reference, **kw) -> dict:
         "compile_s": runs[0] - statistics.median(steady),
         "first_passes_s": first_passes,
         "pass_median_s": statistics.median(pass_times),
-        "bitwise_equal": reference is not None,
-    }
+        "pass_cpu_median_s": statistics.median(pass_cpu),
+        "load_average": [load, os.getloadavg()[0]],
+        "bitwise_equal": True,
+    }, reference
 
 
 def _merge_rate(w: int, h: int, repeats: int = 20) -> float:
@@ -137,7 +164,15 @@ def main() -> None:
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--passes", type=int, default=8)
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--report-only", action="store_true", help="rewrite the .md from the .json")
+    ap.add_argument("--warm", action="store_true", help="keep $HOME (Dr.Jit's kernel cache) as it is")
     args = ap.parse_args()
+    out = ROOT / "reports" / "benchmarks"
+    if args.report_only:
+        (out / "render_distributed.md").write_text(
+            _report(json.loads((out / "render_distributed.json").read_text()))
+        )
+        return
     w, h = (int(x) for x in args.res.split("x"))
     args.overrides = {"res": w, "resy": h}
 
@@ -150,8 +185,12 @@ def main() -> None:
     P.MAX_LANES = {"llvm": lanes, "cuda": lanes}
     sizes = P.pass_sizes(w * h, args.spp, P.max_lanes("llvm_ad_rgb"))
     assert len(sizes) == args.passes, sizes
+    homes = tempfile.TemporaryDirectory()
+    if not args.warm:  # a fresh $HOME for this process: no Dr.Jit kernel cache, no fogref syntax cache
+        os.environ["HOME"] = tempfile.mkdtemp(dir=homes.name)
     _one_thread()
     result = {
+        "cold": not args.warm,
         "scene": "scenes/valley.xml",
         "res": [w, h],
         "spp": args.spp,
@@ -166,11 +205,11 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         print("one process", file=sys.stderr)
-        wall, _ = _render(tmp / "reference.exr", args)
-        reference = _pixels(tmp / "reference.exr")[0]
-        result["one_process"] = _series(args, tmp, "one", reference)
+        result["one_process"], reference = _series(args, tmp, "one", None)
         for n in (1, 2):
             print(f"{n} worker(s)", file=sys.stderr)
+            if not args.warm:  # the workers inherit a fresh $HOME: they compile their kernels
+                os.environ["HOME"] = tempfile.mkdtemp(dir=homes.name)
             t0 = time.perf_counter()
             with (
                 LocalCluster(
@@ -184,14 +223,14 @@ def main() -> None:
             ):
                 start = time.perf_counter() - t0
                 client.run(_one_thread)
-                r = _series(args, tmp, f"w{n}", reference, scheduler=cluster.scheduler_address)
+                r, _ = _series(args, tmp, f"w{n}", reference, scheduler=cluster.scheduler_address)
                 r["cluster_start_s"] = start
             result[f"workers_{n}"] = r
         result["merge_bytes_per_s"] = _merge_rate(w, h)
     t1, t2 = result["workers_1"]["steady_median_s"], result["workers_2"]["steady_median_s"]
     result["efficiency_2"] = t1 / (2 * t2)
     b = transfer_bytes(w, h)
-    t_p = result["workers_1"]["pass_median_s"]
+    t_p = result["workers_1"]["pass_cpu_median_s"]  # on a dedicated core: its CPU time
     t_d = b / NETWORK + b / result["merge_bytes_per_s"]
     t_fixed = max(0.0, t1 - len(sizes) * t_p)  # the driver's own work: scene load, EXR, scheduling
     result["model"] = {
@@ -206,7 +245,6 @@ def main() -> None:
             t_fixed, t_p * (3840 * 2160) / lanes, transfer_bytes(3840, 2160) * t_d / b, 1024
         ),
     }
-    out = ROOT / "reports" / "benchmarks"
     (out / "render_distributed.json").write_text(json.dumps(result, indent=1) + "\n")
     (out / "render_distributed.md").write_text(_report(result))
     print(out / "render_distributed.md")
@@ -221,7 +259,9 @@ def _report(r: dict) -> str:
         rows.append(
             f"| {name} | {x['first_s']:.2f} | {x['steady_median_s']:.2f} "
             f"({x['steady_min_s']:.2f}-{x['steady_max_s']:.2f}) | {x['compile_s']:.2f} | "
-            f"{x['pass_median_s'] * 1e3:.0f} | {'yes' if x['bitwise_equal'] else '-'} |"
+            f"{x['pass_median_s'] * 1e3:.0f} | {x['pass_cpu_median_s'] * 1e3:.0f} | "
+            f"{x['load_average'][0]:.1f}-{x['load_average'][1]:.1f} | "
+            f"{'yes' if x['bitwise_equal'] else '-'} |"
         )
 
     def table(model):
@@ -237,11 +277,16 @@ passes of {r["passes"][0]} spp, seed 0, on a {r["machine"]["cpus"]}-core machine
 ({r["machine"]["platform"]}, Python {r["machine"]["python"]}).  Workers: LocalCluster processes, one
 Dask thread and one Dr.Jit thread each; the one-process render also on one Dr.Jit thread.  Times
 are whole `fogref.render.render.render` calls (scene load in the driver, passes, merge, EXR
-write), median of {r["repeats"]} after a first render; compile = first - median (on fresh
-workers: tracing and compiling the kernels, or loading them from Dr.Jit's disk cache).
+write), median of {r["repeats"]} after a first render; compile = first - median: tracing and
+compiling the kernels, {
+        "each way in a fresh `$HOME` (no Dr.Jit kernel cache, no fogref syntax cache)"
+        if r["cold"]
+        else "or loading them from Dr.Jit's disk cache (`--warm`)"
+    }.
 
-| way | first [s] | steady median (range) [s] | compile [s] | pass median [ms] | bitwise = one process |
-|---|---:|---:|---:|---:|---|
+| way | first [s] | steady median (range) [s] | compile [s] | pass wall [ms] | pass CPU [ms] | load avg |\
+ bitwise = one process |
+|---|---:|---:|---:|---:|---:|---:|---|
 {chr(10).join(rows)}
 
 Cluster start: {r["workers_1"]["cluster_start_s"]:.1f} s (1 worker), {r["workers_2"]["cluster_start_s"]:.1f} s
@@ -259,6 +304,7 @@ another (in pass order, which makes the pixels independent of N): per pass
 t_d = b / network + b / merge rate = {m["t_driver_per_pass_s"] * 1e3:.1f} ms (network
 {m["network_bytes_per_s"] / 1e9:.2f} GB/s assumed, 10 GbE; merge rate measured here
 {r["merge_bytes_per_s"] / 1e9:.2f} GB/s).  A pass on one single-thread worker takes
+(its CPU time, what it takes on a dedicated core)
 t_p = {m["t_pass_s"] * 1e3:.0f} ms; the driver's fixed work t_fixed = {m["t_fixed_s"]:.2f} s.
 T(N) = t_fixed + max(ceil(P / N) t_p, P t_d), efficiency = T(1) / (N T(N)):
 
@@ -272,9 +318,20 @@ t_d scaled by the pixels: {m["t_pass_s"] * 3840 * 2160 / (w * h * r["passes"][0]
 
 {table(m["uhd_1024spp"])}
 
-The driver's per-pass receive and merge bounds the speed-up at t_p / t_d: passes of more
-samples per pixel (more lanes per pass on machines with more memory) raise it, since the
-bytes per pass do not grow with the samples.
+The driver receives and merges the passes one at a time, so the speed-up is bounded by
+t_p / t_d, whatever N: {m["t_pass_s"] / m["t_driver_per_pass_s"]:.1f} in this case, and
+{
+        m["t_pass_s"]
+        * 3840
+        * 2160
+        / (w * h * r["passes"][0])
+        / (m["t_driver_per_pass_s"] * 3840 * 2160 / (w * h)):.1f}
+for the studio frame on single-thread workers (less on many-core workers, whose t_p is shorter).
+At 1 spp per pass a pass's 576 bytes per pixel cost about as much to send as to render.  The
+bytes per pass do not grow with the samples, so more samples per pass (a larger `MAX_LANES`
+on machines with the memory) raise the bound in proportion; so would workers that add a
+fixed block of consecutive passes before sending them (the one-process driver adding the same
+blocks in the same order, to keep the pixels independent of N).
 """
 
 

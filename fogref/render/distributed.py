@@ -101,22 +101,29 @@ def _worker_scene(j: dict):
 def render_pass(j: dict, k: int, spp: int) -> dict:
     """Pass ``k`` (``spp`` samples per pixel, seed ``pass_seed(j["seed"], k)``) on this process.
 
-    Returns ``{"k", "sums", "squares", "seconds", "pid"}``: the float64 per-pixel sums and
-    squares of :meth:`FogPathIntegrator.render_moments` as numpy arrays ``(H, W, 30)`` and
-    ``(H, W, 42)``, the seconds the pass took (its first pass on this process includes loading
-    the scene and compiling the kernels) and the process id.
+    Returns ``{"k", "sums", "squares", "seconds", "cpu_seconds", "pid"}``: the float64 per-pixel
+    sums and squares of :meth:`FogPathIntegrator.render_moments` as numpy arrays ``(H, W, 30)``
+    and ``(H, W, 42)``, the wall and CPU seconds the pass took in this process (its first pass
+    on this process includes loading the scene and compiling the kernels) and the process id.
     """
     import numpy as np
 
     from fogref.render.passes import pass_seed
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     scene, integrator = _worker_scene(j)
     s, q = integrator.render_moments(
         scene, 0, pass_seed(j["seed"], k), int(spp), pixel_exact=j["pixel_filter"] == "centre"
     )
     sums, squares = np.asarray(s, dtype=np.float64), np.asarray(q, dtype=np.float64)
-    return {"k": k, "sums": sums, "squares": squares, "seconds": time.perf_counter() - t0, "pid": os.getpid()}
+    return {
+        "k": k,
+        "sums": sums,
+        "squares": squares,
+        "seconds": time.perf_counter() - t0,
+        "cpu_seconds": time.process_time() - c0,
+        "pid": os.getpid(),
+    }
 
 
 def transfer_bytes(width: int, height: int) -> int:
