@@ -252,3 +252,13 @@ def test_the_api_refuses_bad_workers_and_scheduler_before_any_work(tmp_path):
         with pytest.raises(ParameterError, match="fogref render"):
             render(SCENE, tmp_path / "x.exr", **kw)
     assert not list(tmp_path.iterdir())
+
+
+def test_a_worker_that_reads_other_inputs_refuses_to_render(tmp_path):
+    """The digest of the scene and every file it loads, read on the worker, must be the driver's."""
+    import fogref.render.distributed as D
+    from fogref.errors import FogrefError
+
+    j = D.job(SCENE, RES, "0" * 64, "llvm_ad_rgb", SEED, "centre", None)
+    with pytest.raises(FogrefError, match="reads other inputs than the driver"):
+        D.render_pass(j, 0, 1)
