@@ -136,14 +136,17 @@ def transfer_bytes(width: int, height: int) -> int:
 
 
 def passes_in_order(
-    client, j: dict, passes: list[int], start: int, retries: int = 2, window: int | None = None
+    client, j: dict, passes: list[int], start: int, retries: int = 2, window: int | None = None, stop=None
 ):
     """Run passes ``start..len(passes)-1`` on ``client``'s workers; yield their results in pass order.
 
     Each yielded item is :func:`render_pass`'s dict.  At most ``window`` passes (default:
     4 per worker, at least 4) are submitted beyond the next one to yield.  A pass whose
-    task still fails after ``retries`` reruns raises :class:`PassFailed`.  Closing the
-    generator (an interruption) cancels the passes still queued or running.
+    task still fails after ``retries`` reruns raises :class:`PassFailed`.  ``stop`` (a
+    callable, e.g. "Ctrl-C was pressed") is polled every 50 ms while waiting: when true,
+    KeyboardInterrupt is raised (a terminal's Ctrl-C also stops a LocalCluster's workers, so
+    no more passes would come).  Closing the generator (an interruption) cancels the passes
+    still queued or running.
     """
     from dask.distributed import as_completed
 
@@ -169,6 +172,10 @@ def passes_in_order(
                 futures[f.key] = (nxt, f)
                 running.add(f)
                 nxt += 1
+            while stop is not None and not running.has_ready():
+                if stop():
+                    raise KeyboardInterrupt
+                time.sleep(0.05)
             f = next(running)
             k, _ = futures.pop(f.key)
             try:

@@ -305,10 +305,10 @@ def render(
     t0, last_ckpt, timings = time.perf_counter(), time.perf_counter(), []
     with _Interrupt() as stop, bar, contextlib.ExitStack() as closing:
         if on_cluster:  # the passes' sums come from Dask workers, in pass order
+            j = (scene_path, overrides, digest, variant, seed, pixel_filter)
             source = _cluster_passes(
-                closing, scheduler, workers, out, scene_path, overrides, digest, variant, seed, pixel_filter,
-                passes, saved,
-            )  # fmt: skip
+                closing, scheduler, workers, out, j, passes, saved, lambda: stop.requested
+            )
         else:
             source = _local_passes(integrator, scene, seed, pixel_filter, passes, saved)
         try:
@@ -335,7 +335,9 @@ def render(
             if done is not None and saved < done[2] < len(passes):
                 with stop.deferred():
                     _checkpoint(ckpt, done, key)
-            if isinstance(e, PassFailed) and not stop.requested:  # (a Ctrl-C also stops a LocalCluster's workers)
+            if (
+                isinstance(e, PassFailed) and not stop.requested
+            ):  # (a Ctrl-C also stops a LocalCluster's workers)
                 why = f"{scene_path}: {e}; the passes done are checkpointed, run again to resume"
                 raise FogrefError(why) from None
             raise KeyboardInterrupt from None
@@ -387,23 +389,12 @@ def _local_passes(integrator, scene, seed: int, pixel_filter: str, passes: list,
         yield k, s, q, time.perf_counter() - ts
 
 
-def _cluster_passes(
-    closing,
-    scheduler,
-    workers,
-    out,
-    scene_path,
-    overrides,
-    digest,
-    variant,
-    seed,
-    pixel_filter,
-    passes,
-    start,
-):
+def _cluster_passes(closing, scheduler, workers, out, render_args: tuple, passes: list, start: int, stop):
     """Passes ``start..`` rendered on Dask workers (:mod:`fogref.render.distributed`): ``(k, sums,
-    squares, seconds)`` in pass order.  The cluster (a new LocalCluster of ``workers``, or the one
-    of ``scheduler``) is closed when ``closing`` (an ExitStack) ends."""
+    squares, seconds)`` in pass order; ``stop()`` true (a Ctrl-C) ends the wait.  ``render_args``:
+    the scene, overrides, inputs digest, variant, seed and pixel filter.  The cluster (a new
+    LocalCluster of ``workers``, or the one of ``scheduler``) is closed when ``closing`` (an
+    ExitStack) ends."""
     from fogref.render import distributed
 
     if start >= len(passes):
@@ -411,8 +402,8 @@ def _cluster_passes(
     log = workers_log_path(out)
     client, local, threads = cluster.connect(scheduler, workers, log, _SOURCE)
     closing.callback(cluster.stop, client, local, log)
-    j = distributed.job(scene_path, overrides, digest, variant, seed, pixel_filter, threads)
-    for r in distributed.passes_in_order(client, j, passes, start):
+    j = distributed.job(*render_args, threads)
+    for r in distributed.passes_in_order(client, j, passes, start, stop=stop):
         yield r["k"], r["sums"], r["squares"], r["seconds"]
 
 
