@@ -78,24 +78,39 @@ def reference(tmp_path_factory):
 def _render(out, **kw):
     from fogref.render.render import render
 
-    return render(SCENE, out, spp=SPP, seed=SEED, overrides=RES, progress=False, png=False, **kw)
+    seed = kw.pop("seed", SEED)
+    return render(SCENE, out, spp=SPP, seed=seed, overrides=RES, progress=False, png=False, **kw)
+
+
+def _loaded_scenes() -> dict:
+    """On a worker: its pid -> the ids of the scenes it holds (:data:`fogref.render.distributed._LOADED`)."""
+    import fogref.render.distributed as D
+
+    return {os.getpid(): sorted(id(scene) for scene, _ in D._LOADED.values())}
 
 
 def test_two_workers_give_the_one_process_pixels_bitwise(tmp_path, one_spp_passes, cluster, reference):
+    """...and each worker loads the scene once: a second render (another seed) reuses it, with the
+    kernels compiled for it."""
     import fogref.render.distributed as D
 
-    seen = []
+    seen, held = [], []
     real = D.passes_in_order
 
-    def spy(*a, **kw):
-        for r in real(*a, **kw):
+    def spy(client, *a, **kw):
+        for r in real(client, *a, **kw):
             seen.append((r["k"], r["pid"]))
             yield r
+        held.append(client.run(_loaded_scenes))
 
     from unittest import mock
 
     with mock.patch.object(D, "passes_in_order", spy):
         _render(tmp_path / "two.exr", scheduler=cluster.scheduler_address)
+        _render(tmp_path / "again.exr", scheduler=cluster.scheduler_address, seed=SEED + 1)
+    first, second = ({pid: ids for d in h.values() for pid, ids in d.items()} for h in held)
+    assert first == second and all(len(ids) == 1 for ids in first.values()), (first, second)
+    seen = seen[:SPP]
     _assert_equal(_pixels(tmp_path / "two.exr"), reference)
     assert [k for k, _ in seen] == list(range(SPP)), "passes not merged in pass order"
     assert len({pid for _, pid in seen}) == 2, "the passes did not run on both workers"
