@@ -293,8 +293,11 @@ Cluster start: {r["workers_1"]["cluster_start_s"]:.1f} s (1 worker), {r["workers
 (2 workers), not in the times above.
 
 **Efficiency of 2 single-thread workers against 1: {r["efficiency_2"]:.2f}**
-(T1 / (2 T2), steady medians; 2 cores shared with the driver and with other users, so this is a
-lower bound of what two machines give).
+(T1 / (2 T2), steady medians; 2 cores shared with the driver and with other users, at the load
+average in the table, so this is a lower bound of what two machines give).  The work per pass does
+not grow with the workers: a pass's CPU time on 1 worker / on each of 2 workers =
+{r["workers_1"]["pass_cpu_median_s"] / r["workers_2"]["pass_cpu_median_s"]:.2f}; the wall time per
+pass grows with the contention for the 2 cores.
 
 ## Model for N machines
 
