@@ -41,6 +41,18 @@ UE = (
     "sigma_t = 100 (ln 2)^2 FogDensity/1000 /m, falloff = 100 ln 2 FogHeightFalloff/1000 /m"
 )
 SCAT = "scattering (both fog inputs; Unreal has none)"
+PT = (
+    "Unreal's path-traced fog (UE 5.x PathTracing.cpp: the Unreal fog values above with the clamp and "
+    "the camera-centred cylinder; fogref/mapping/unreal_pathtracer.py)"
+)
+#: ``--ue-*`` option -> UEPathTracerSettings field (fogref.mapping.unreal_pathtracer.SETTING_RANGES)
+PT_OPTIONS = {
+    "--ue-volumetric-fog-distance": "VolumetricFogDistance",
+    "--ue-volumetric-fog-extinction-scale": "VolumetricFogExtinctionScale",
+    "--ue-volumetric-fog-albedo": "VolumetricFogAlbedo",
+    "--ue-volumetric-fog-scattering-distribution": "VolumetricFogScatteringDistribution",
+    "--ue-fog-density-clamp": "FogDensityClamp",
+}
 LIGHT = "sun and sky"
 CAMERA = "camera (y-up, metres)"
 
@@ -177,6 +189,49 @@ class _Options:
     )
     ue_second_fog_height_offset: float | None = option(
         None, "Second Fog Data: Fog Height Offset [cm]", check=Number(), group=UE, default_text="0"
+    )
+    ue_pathtracer: bool = switch(
+        "write the fog Unreal's path tracer renders for the Unreal values (profile ue_pathtracer: "
+        "density x extinction scale, clamped below the fog height, inside a cylinder centred on the "
+        "camera) instead of the exact fog",
+        group=PT,
+    )
+    ue_volumetric_fog_distance: float | None = option(
+        None,
+        "VolumetricFogDistance: the cylinder's radius [cm], > 0",
+        check=Number(),
+        group=PT,
+        default_text="6000",
+    )
+    ue_volumetric_fog_extinction_scale: float | None = option(
+        None,
+        "VolumetricFogExtinctionScale: multiplies the density, >= 0",
+        check=Number(),
+        group=PT,
+        default_text="1",
+    )
+    ue_volumetric_fog_albedo: str | None = option(
+        None,
+        "VolumetricFogAlbedo: linear RGB (or grey) in [0, 1]",
+        check=Text(),
+        metavar="A|R,G,B",
+        group=PT,
+        default_text="1",
+    )
+    ue_volumetric_fog_scattering_distribution: float | None = option(
+        None,
+        "VolumetricFogScatteringDistribution: the HG g, [-0.99, 0.99]",
+        check=Number(),
+        group=PT,
+        default_text="0.2",
+    )
+    ue_fog_density_clamp: float | None = option(
+        None,
+        "r.PathTracing.FogDensityClamp: the density's growth below the fog height, in multiples of "
+        "the fog density, [1, 256]",
+        check=Number(),
+        group=PT,
+        default_text="8",
     )
     albedo: str | None = option(
         None,
@@ -334,11 +389,19 @@ def run(a, given=frozenset()) -> int:
             f"{SOURCE}: give the fog either in physical units or as Unreal editor values, not both "
             f"(got {p_opts} and {u_opts})"
         )
+    pt_given = {opt: getattr(a, _dest(opt)) for opt in PT_OPTIONS if getattr(a, _dest(opt)) is not None}
+    pt = None
+    if a.ue_pathtracer:
+        pt = _pathtracer_settings(pt_given, phys, a)
+    elif pt_given:
+        raise UsageError(f"{SOURCE}: {', '.join(pt_given)}: only with --ue-pathtracer (the path-traced fog)")
     sky = a.sky_radiance
     if isinstance(sky, str) and sky.strip().lower() == "none":
         sky = None
 
     def note(n: str) -> None:
+        if pt is not None and n.startswith("Unreal has no albedo"):
+            return  # the path-traced fog has VolumetricFogAlbedo and its g
         print(f"fogref scene: note: {n}", file=sys.stderr)
 
     r = write_scene(
@@ -371,5 +434,33 @@ def run(a, given=frozenset()) -> int:
         overwrite=a.force,
         on_note=note,
     )
+    if pt is not None:
+        from fogref.mapping.unreal_pathtracer import DROPPED, rewrite_scene
+        from fogref.models.ue4 import UE4FogParams
+
+        mapped = {k: v for k, v in ue.items() if k not in UNREAL_IGNORED}
+        rewrite_scene(r.path, r.path, UE4FogParams(**mapped), pt)  # the cylinder follows $camera_origin
+        dropped = sorted(k for k in ue if k in DROPPED)
+        if dropped:
+            note(f"Unreal's path tracer does not use {', '.join(dropped)} (raster-only values)")
     print(r.path)
     return 0
+
+
+def _pathtracer_settings(given: dict, phys: dict, a) -> object:
+    """The checked path-traced fog settings of ``--ue-*`` (refused beside physical fog, --albedo, --g)."""
+    from fogref.mapping.unreal_pathtracer import validated_settings
+
+    clash = [PHYSICAL[k].option for k in phys]
+    clash += [opt for opt, v in (("--albedo", a.albedo), ("--g", a.g)) if v is not None]
+    if clash:
+        raise UsageError(
+            f"{SOURCE}: --ue-pathtracer takes the fog as Unreal values (its albedo and g are "
+            "--ue-volumetric-fog-albedo and --ue-volumetric-fog-scattering-distribution), "
+            f"not {', '.join(clash)}"
+        )
+    return validated_settings(
+        SOURCE,
+        dict((v, k) for k, v in PT_OPTIONS.items()),
+        **{PT_OPTIONS[opt]: v for opt, v in given.items()},
+    )

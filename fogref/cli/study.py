@@ -6,6 +6,7 @@ The work is :func:`fogref.study.unreal.run_study`; its defaults are the options'
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 from fogref.cli.checks import Number, PathArg
 from fogref.cli.spec import option, switch
@@ -39,6 +40,11 @@ class Options:
     no_compare: bool = switch(
         "skip the fogref.compare report", api=STUDY, api_name="compare_report", negates=True
     )
+    ue_pathtracer: bool = switch(
+        "also split what a UE user sees into raster EHF vs UE's path-traced fog and UE's path-traced "
+        "fog vs the exact fog, each with its noise (fogref.study.ue_pathtracer.split_study): a section "
+        "of budget.md, summary.json's ue_pathtracer_split and ue_pathtracer_split.json"
+    )
     start_distance: float | None = option(
         None, "Unreal StartDistance", check=Number(0.0, unit="cm"), group=UNREAL, default_text="0"
     )
@@ -65,6 +71,10 @@ def run(o: Options, given=frozenset()) -> int:
         if v is not None
     }
     run_study(o.exr, o.out, o.renders, scene=o.scene, compare_report=not o.no_compare, settings=settings)
+    if o.ue_pathtracer:
+        from fogref.study.ue_pathtracer import split_study
+
+        split_study(o.exr, o.out, Path(o.renders) / "ue_pathtracer", scene=o.scene)
     from fogref.gbuffer import load_truth
     from fogref.html.reports import write_study_html
 

@@ -27,6 +27,7 @@ exact single scattering for any ``g`` is ``alpha S(d) (1 - T)``
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -50,6 +51,13 @@ def _infer_profile(medium: FogMedium) -> str:
     if medium.is_homogeneous:
         return "box" if medium.bounds is not None else "homogeneous"
     return "exponential"
+
+
+class _SkyModel(dict):
+    """A physical sky's parameters (a dict) that hash by value, so a scene keeps its hash."""
+
+    def __hash__(self) -> int:  # type: ignore[override]
+        return hash(json.dumps(self, sort_keys=True, default=str))
 
 
 @dataclass(frozen=True)
@@ -94,8 +102,9 @@ class PhysicalScene:
     camera: tuple = DEFAULT_CAMERA
     profile: str | None = None
     source: str = field(default=None, compare=False)  # type: ignore[assignment]  # None: the medium's
-    #: A physical sky's parameters (``sunsky``: turbidity, albedo, sun_direction, ...), else None.
-    sky_model: Any = field(default=None, compare=False)
+    #: A physical sky's parameters (``sunsky``: turbidity, albedo, sun_direction, ...), else None;
+    #: part of the scene's identity (the fits' closed forms project this sky, fogref.mapping.views).
+    sky_model: Any = None
     #: The sun's angular diameter [deg] (0: a delta).
     sun_angular_diameter: float = 0.0
 
@@ -115,6 +124,8 @@ class PhysicalScene:
         object.__setattr__(self, "camera", rgb(self.camera, "origin", src))
         if self.profile is None:
             object.__setattr__(self, "profile", _infer_profile(self.medium))
+        if self.sky_model is not None:
+            object.__setattr__(self, "sky_model", _SkyModel(self.sky_model))
 
     # -- the one parser ---------------------------------------------------------
     @classmethod

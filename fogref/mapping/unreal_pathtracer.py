@@ -30,6 +30,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from fogref import params as P
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, medium_from_params, rgb
 from fogref.media.ue_pathtracer import DENSITY_CLAMP_DEFAULT, DENSITY_CLAMP_RANGE
@@ -48,6 +49,8 @@ __all__ = [
     "pathtracer_medium",
     "rewrite_scene",
     "settings_from",
+    "SETTING_RANGES",
+    "validated_settings",
 ]
 
 CM_PER_M = 100.0
@@ -334,6 +337,52 @@ def rewrite_scene(
     ET.indent(tree, space="    ")
     tree.write(dst, encoding="unicode", xml_declaration=True)
     return params
+
+
+#: The settings a user gives (``fogref scene --ue-*``): name -> (lo, hi, lo_open, unit) as the engine
+#: takes them: the cylinder's radius ``VolumetricFogDistance`` > 0 cm ([SC]; with the default
+#: ``VolumetricFogStartDistance`` 0 the fog would otherwise be empty), ``VolumetricFogExtinctionScale``
+#: >= 0 ([SC] multiplies the density by it), g in :data:`G_RANGE` ([SC] clamps to it),
+#: ``r.PathTracing.FogDensityClamp`` in ``DENSITY_CLAMP_RANGE`` ([PT] clamps to it), albedo a
+#: linear RGB in [0, 1] (from the editor's FColor, [SC]).
+SETTING_RANGES: dict[str, tuple[float, float, bool, str]] = {
+    "VolumetricFogDistance": (0.0, math.inf, True, "cm"),
+    "VolumetricFogExtinctionScale": (0.0, math.inf, False, ""),
+    "VolumetricFogScatteringDistribution": (G_RANGE[0], G_RANGE[1], False, ""),
+    "FogDensityClamp": (DENSITY_CLAMP_RANGE[0], DENSITY_CLAMP_RANGE[1], False, ""),
+    "VolumetricFogAlbedo": (0.0, 1.0, False, ""),
+}
+
+
+def validated_settings(source: str, names: dict | None = None, **values: Any) -> UEPathTracerSettings:
+    """:class:`UEPathTracerSettings` from user values (numbers or text), each checked through
+    :mod:`fogref.params` against :data:`SETTING_RANGES` (one-line ParameterError naming
+    ``source`` and the value, shown as ``names[name]`` if given, e.g. a command-line option);
+    values not given keep the engine's defaults.
+
+    Examples
+    --------
+    >>> validated_settings("doc", VolumetricFogDistance="3000", FogDensityClamp=4).radius_cm
+    3000.0
+    >>> validated_settings("doc", {"FogDensityClamp": "--ue-fog-density-clamp"}, FogDensityClamp=512)
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: doc: parameter '--ue-fog-density-clamp': 512 is outside [1, 256]
+    """
+    names = names or {}
+    out: dict[str, Any] = {}
+    for name, value in values.items():
+        if value is None:
+            continue
+        if name not in SETTING_RANGES:
+            raise ParameterError(source, name, f"not a path-traced fog setting ({', '.join(SETTING_RANGES)})")
+        lo, hi, lo_open, unit = SETTING_RANGES[name]
+        shown = names.get(name, name)
+        if name == "VolumetricFogAlbedo":
+            out[name] = P.rgb(value, shown, source=source, lo=lo, hi=hi, unit=unit)
+        else:
+            out[name] = P.number(value, shown, source=source, lo=lo, hi=hi, lo_open=lo_open, unit=unit)
+    return UEPathTracerSettings(**out)
 
 
 def settings_from(ue: UE4FogParams | None = None, **pt: Any) -> tuple[UE4FogParams, UEPathTracerSettings]:

@@ -9,6 +9,10 @@ The physical single scattering of a sun (irradiance E, toward ``w``) and a unifo
 sky ``L_sky`` (closed forms of :mod:`fogref.media.single_scatter`)::
 
     L = alpha E p_HG(cos) T_sun(o) tau phi(m tau)  +  alpha L_sky (1 - T)
+
+A physical sky (``PhysicalScene.sky_model``, a ``sunsky``) replaces ``L_sky`` by its projection
+onto the phase function per view direction, ``S(d) = int_{up} L(w) p_HG(w . d) dw``
+(:func:`sky_projection`), so the fitted colours come from the real sky.
 """
 
 from __future__ import annotations
@@ -21,10 +25,16 @@ import numpy as np
 
 from fogref.mapping.physical import PhysicalScene
 from fogref.media import NP, hg_phase, single_scatter_sun
-from fogref.media.single_scatter import single_scatter_sky
+from fogref.media.single_scatter import single_scatter_sky, single_scatter_sky_projected, sky_phase_projection
 from fogref.models.base import SKY_DISTANCE
 
-__all__ = ["Views", "fibonacci_directions", "physical_single_scattering", "sample_views"]
+__all__ = [
+    "Views",
+    "fibonacci_directions",
+    "physical_single_scattering",
+    "sample_views",
+    "sky_projection",
+]
 
 
 @dataclass
@@ -79,7 +89,8 @@ def physical_single_scattering(
 
     ``sun_attenuation=False``: the sun term without its attenuation in the fog,
     ``alpha E p (1 - T)``.  The sky term is ``alpha L_sky (1 - T)`` (unoccluded,
-    unattenuated: what FogInscatteringColor stands for).
+    unattenuated: what FogInscatteringColor stands for) for a uniform sky, and
+    ``alpha S(d) (1 - T)`` for a physical sky (``pf.sky_model``; :func:`sky_projection`).
     """
     m = pf.medium
     o = tuple(np.full(len(views.D), c) for c in views.camera)
@@ -95,6 +106,32 @@ def physical_single_scattering(
             p = hg_phase(NP, cos, m.g)
             T = np.stack(m.transmittance(NP, o, d, D), axis=-1)
             out += (np.asarray(m.albedo) * np.asarray(pf.sun_irradiance)) * p[:, None] * (1.0 - T)
-    if sky and max(pf.sky_radiance) > 0:
+    if sky and pf.sky_model is not None:
+        S = sky_projection(pf, views.d)
+        out += np.stack(single_scatter_sky_projected(NP, m, o, d, D, tuple(S.T)), axis=-1)
+    elif sky and max(pf.sky_radiance) > 0:
         out += np.stack(single_scatter_sky(NP, m, o, d, D, pf.sky_radiance), axis=-1)
     return out
+
+
+def sky_projection(pf: PhysicalScene, d: np.ndarray, sky: Any = None) -> np.ndarray:
+    """The sky of ``pf`` projected onto its phase function per view direction, (N, 3).
+
+    ``S(v) = int_{w_y > 0} L_sky(w) p_HG(w . v; g) dw``
+    (:func:`fogref.media.single_scatter.sky_phase_projection`), each distinct direction of ``d``
+    ((N, 3) unit, away from the camera) once.  ``sky``: the radiance function ((M, 3) directions
+    -> (M, 3) RGB); default the physical sky of ``pf.sky_model`` (Mitsuba's ``sunsky`` without
+    its sun, :func:`fogref.media.sky.sky_radiance`), else the uniform ``pf.sky_radiance`` above
+    the horizon (then ``S = L H(v_y)``, :func:`fogref.media.single_scatter.hg_upper_fraction`).
+    """
+    from fogref.media.sky import sky_radiance
+
+    if sky is None:
+        if pf.sky_model is not None:
+            sky = sky_radiance(pf.sky_model)
+        else:
+            L = np.asarray(pf.sky_radiance, dtype=np.float64)
+            sky = lambda w: np.broadcast_to(L, (len(w), 3))  # noqa: E731
+    d = np.asarray(d, dtype=np.float64)
+    uniq, inv = np.unique(d, axis=0, return_inverse=True)
+    return sky_phase_projection(sky, float(pf.medium.g), uniq)[np.asarray(inv).reshape(-1)]

@@ -400,8 +400,8 @@ def sky_phase_projection(sky: Real, g: float, views: Real, n_xi: int = 48, n_phi
     phase function, per view direction ``v`` (numpy float64, any sky radiance unit).
 
     ``sky``: callable, ``(N, 3)`` unit directions toward the sky -> ``(N, 3)`` RGB radiance
-    (e.g. :func:`fogref.render.sunsky.sky_radiance`); it is only asked about directions
-    above the horizon (``w_y > 0``: below it the ground or unbounded fog are dark).
+    (e.g. :func:`fogref.media.sky.sky_radiance`; called once per batch of views); it is only
+    asked about directions above the horizon (``w_y > 0``: below it the ground or unbounded fog are dark).
     ``views``: ``(V, 3)`` unit view directions (away from the camera).  Returns ``(V, 3)``.
 
     Quadrature in the lobe's own frame: the HG inverse CDF maps ``xi`` in [0, 1] to the angle
@@ -419,28 +419,33 @@ def sky_phase_projection(sky: Real, g: float, views: Real, n_xi: int = 48, n_phi
     x, wx = np.polynomial.legendre.leggauss(int(n_xi))
     phi = (np.arange(int(n_phi)) + 0.5) * (2.0 * np.pi / int(n_phi))
     out = np.zeros((len(V), 3))
-    for k, v in enumerate(V):
-        helper = np.array([1.0, 0.0, 0.0]) if abs(v[0]) < 0.9 else np.array([0.0, 0.0, 1.0])
-        t1 = np.cross(v, helper)
-        t1 /= np.linalg.norm(t1)
-        t2 = np.cross(v, t1)
-        A = v[1]
-        B = np.cos(phi) * t1[1] + np.sin(phi) * t2[1]  # w_y = mu A + sin(theta) B
-        delta = np.arctan2(B, A)
-        delta = np.where(delta < -np.pi / 2, delta + 2.0 * np.pi, delta)  # the interval that meets [0, pi]
-        th_lo, th_hi = np.maximum(0.0, delta - np.pi / 2), np.minimum(np.pi, delta + np.pi / 2)
-        ok = th_hi > th_lo
-        xi_a, xi_b = _hg_xi(g, np.cos(th_hi)), _hg_xi(g, np.cos(th_lo))  # mu = cos(theta) falls
-        xi = (xi_a[:, None] + xi_b[:, None]) / 2 + (xi_b - xi_a)[:, None] / 2 * x[None]
-        mu = _hg_mu(g, xi)
-        s = np.sqrt(np.maximum(1.0 - mu * mu, 0.0))
-        cp, sp = np.cos(phi)[:, None], np.sin(phi)[:, None]
-        w = mu[..., None] * v + s[..., None] * (cp[..., None] * t1 + sp[..., None] * t2)
-        w[..., 1] = np.maximum(w[..., 1], 1e-9)
-        w /= np.linalg.norm(w, axis=-1, keepdims=True)
-        L = np.asarray(sky(w.reshape(-1, 3)), dtype=np.float64).reshape(len(phi), len(x), 3)
-        wt = np.where(ok, (xi_b - xi_a) / 2, 0.0)[:, None] * wx[None]
-        out[k] = (L * wt[..., None]).sum((0, 1)) / len(phi)
+    chunk = max(1, 65536 // (len(phi) * len(x)))  # views per call of ``sky`` (one batch each)
+    for k0 in range(0, len(V), chunk):
+        ws, wts = [], []
+        for v in V[k0 : k0 + chunk]:
+            helper = np.array([1.0, 0.0, 0.0]) if abs(v[0]) < 0.9 else np.array([0.0, 0.0, 1.0])
+            t1 = np.cross(v, helper)
+            t1 /= np.linalg.norm(t1)
+            t2 = np.cross(v, t1)
+            A = v[1]
+            B = np.cos(phi) * t1[1] + np.sin(phi) * t2[1]  # w_y = mu A + sin(theta) B
+            delta = np.arctan2(B, A)
+            delta = np.where(delta < -np.pi / 2, delta + 2.0 * np.pi, delta)  # the interval meeting [0, pi]
+            th_lo, th_hi = np.maximum(0.0, delta - np.pi / 2), np.minimum(np.pi, delta + np.pi / 2)
+            ok = th_hi > th_lo
+            xi_a, xi_b = _hg_xi(g, np.cos(th_hi)), _hg_xi(g, np.cos(th_lo))  # mu = cos(theta) falls
+            xi = (xi_a[:, None] + xi_b[:, None]) / 2 + (xi_b - xi_a)[:, None] / 2 * x[None]
+            mu = _hg_mu(g, xi)
+            s = np.sqrt(np.maximum(1.0 - mu * mu, 0.0))
+            cp, sp = np.cos(phi)[:, None], np.sin(phi)[:, None]
+            w = mu[..., None] * v + s[..., None] * (cp[..., None] * t1 + sp[..., None] * t2)
+            w[..., 1] = np.maximum(w[..., 1], 1e-9)
+            w /= np.linalg.norm(w, axis=-1, keepdims=True)
+            ws.append(w.reshape(-1, 3))
+            wts.append(np.where(ok, (xi_b - xi_a) / 2, 0.0)[:, None] * wx[None])
+        L_all = np.asarray(sky(np.concatenate(ws)), dtype=np.float64).reshape(len(ws), len(phi), len(x), 3)
+        for j, wt in enumerate(wts):
+            out[k0 + j] = (L_all[j] * wt[..., None]).sum((0, 1)) / len(phi)
     return out
 
 

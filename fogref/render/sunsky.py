@@ -35,6 +35,8 @@ import numpy as np
 
 from fogref import params as P
 from fogref.errors import FogrefError
+from fogref.media.sky import SUNSKY_APERTURE, sky_radiance, sunsky_dict
+from fogref.media.sky import eval_emitter as _eval
 from fogref.render.scene_defaults import substitute
 from fogref.render.sun import sun_direction_from_angles
 
@@ -48,46 +50,10 @@ __all__ = [
     "sunsky_from_element",
 ]
 
-#: Mitsuba's default sun aperture (angular diameter) [deg] (``sunsky.cpp``).
-SUNSKY_APERTURE = 0.5358
 #: The sunsky's ``to_world`` in fogref scenes: a rotation of -90 deg about +x (z-up -> y-up).
 Z_UP_TO_Y_UP = (("x", -90.0),)
 #: sunsky parameters that fix the sun by date and place: fogref needs a direction.
 _TIME_PLACE = ("latitude", "longitude", "timezone", "year", "month", "day", "hour", "minute", "second")
-
-
-def sunsky_dict(
-    sun_direction,
-    turbidity: float = 3.0,
-    albedo: float = 0.3,
-    sun_aperture: float = SUNSKY_APERTURE,
-    sky_scale: float = 1.0,
-    sun_scale: float = 1.0,
-) -> dict:
-    """A ``mi.load_dict`` description of a y-up ``sunsky`` (``sun_direction``: world, toward the sun)."""
-    import mitsuba as mi
-
-    return {
-        "type": "sunsky",
-        "sun_direction": [float(x) for x in sun_direction],
-        "turbidity": float(turbidity),
-        "albedo": float(albedo),
-        "sun_aperture": float(sun_aperture),
-        "sky_scale": float(sky_scale),
-        "sun_scale": float(sun_scale),
-        "to_world": mi.ScalarTransform4f().rotate([1, 0, 0], -90.0),
-    }
-
-
-def _eval(emitter, dirs: np.ndarray) -> np.ndarray:
-    """The emitter's RGB radiance toward ``dirs`` ((N, 3), unit, toward the sky): (N, 3) float64."""
-    import drjit as dr
-    import mitsuba as mi
-
-    d = np.asarray(dirs, dtype=np.float64)
-    si = dr.zeros(mi.SurfaceInteraction3f, len(d))
-    si.wi = mi.Vector3f(-d[:, 0], -d[:, 1], -d[:, 2])
-    return np.asarray(emitter.eval(si), dtype=np.float64).T
 
 
 def sun_irradiance(desc: dict, n_gamma: int = 8, n_phi: int = 16) -> np.ndarray:
@@ -119,16 +85,6 @@ def sun_irradiance(desc: dict, n_gamma: int = 8, n_phi: int = 16) -> np.ndarray:
     L = _eval(sun_only, dirs.reshape(-1, 3)).reshape(len(gam), len(phi), 3)
     E = (L * wg[:, None, None]).sum((0, 1)) * (2.0 * math.pi / len(phi))
     return np.maximum(E, 0.0) * float(desc.get("sun_scale", 1.0))
-
-
-def sky_radiance(desc: dict):
-    """The sky part of a sunsky (sun removed), as a numpy function: ``(N, 3)`` unit
-    directions toward the sky -> ``(N, 3)`` RGB radiance (0 below the horizon); times
-    ``desc["sky_scale"]``.  For :func:`fogref.media.single_scatter.sky_phase_projection`."""
-    import mitsuba as mi
-
-    sky_only = mi.load_dict({**desc, "sun_scale": 0.0})
-    return lambda dirs: _eval(sky_only, dirs)
 
 
 def _float_param(el: ET.Element, name: str, defaults: dict, default: float, source: str) -> float:

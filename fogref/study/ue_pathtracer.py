@@ -17,6 +17,12 @@ the path tracer's noise.  This module separates them with fogref:
   quadrature along each ray of closed-form transmittances: :func:`sun_single_scatter`),
   over a set of views; what the committed sweep ``reports/sweeps/ue_pathtracer`` uses
   (:func:`run_sweep`, ``python -m fogref.study.ue_pathtracer SWEEP.toml``).
+* :func:`split_study`: :func:`render_split` for a truth (``fogref study TRUTH --ue-pathtracer``):
+  the raster EHF is the study's Unreal fog of the truth's physical fog
+  (:func:`fogref.mapping.unreal.ue4_from_physical`), the path-traced fog is what UE's path tracer
+  renders for the same settings; the split, each part with its noise, goes into the study's
+  report (a section of ``budget.md``, ``summary.json``'s ``"ue_pathtracer_split"`` and
+  ``ue_pathtracer_split.json``).
 """
 
 from __future__ import annotations
@@ -46,6 +52,7 @@ __all__ = [
     "render_split",
     "run_sweep",
     "split_stats",
+    "split_study",
     "sun_single_scatter",
 ]
 
@@ -302,6 +309,150 @@ def render_split(
             "colours of the raster fog are ue's (FogInscatteringColor, DirectionalInscatteringColor)",
         ],
     }
+
+
+# -- the study's section --------------------------------------------------------------
+#: The markers of :func:`split_study`'s section in ``budget.md`` (replaced when run again).
+SECTION_BEGIN = "<!-- fogref: ue_pathtracer split -->"
+SECTION_END = "<!-- /fogref: ue_pathtracer split -->"
+#: The three differences of the split, in the report's order, with what each one is.
+SPLIT_ROWS = (
+    ("raster_vs_pt", "raster EHF - UE path-traced fog", "what the raster fog's approximations cost"),
+    ("pt_vs_exact", "UE path-traced fog - exact fog", "what the path tracer's clamp and cylinder cost"),
+    ("raster_vs_exact", "raster EHF - exact fog", "the sum of both (telescoping)"),
+)
+
+
+def split_section(split: dict, ue: UE4FogParams, pt: UEPathTracerSettings, spp: int) -> str:
+    """The Markdown section of :func:`split_study` (between :data:`SECTION_BEGIN` and :data:`SECTION_END`).
+
+    Examples
+    --------
+    >>> s = {k: split_stats(np.full((1, 1, 3), 0.1), np.full((1, 1, 3), 1e-4)) for k, _, _ in SPLIT_ROWS}
+    >>> print(split_section(s, UE4FogParams(), UEPathTracerSettings(), 4).splitlines()[7])
+    | raster EHF - UE path-traced fog | 0.1 | 0.01 | 0.0995 | no | what the raster fog's approximations cost |
+    """
+    lines = [
+        SECTION_BEGIN,
+        "## What a UE user sees: raster EHF, UE's path-traced fog, the exact fog",
+        "",
+        f"Final radiance (RGB), fogpath at {spp} spp; noise: the renders' per-pixel standard errors "
+        "(fogref.study.ue_pathtracer.split_study).",
+        "",
+        "| difference | RMSE | noise floor | RMSE without noise | within 2x noise | what it is |",
+        "|---|---|---|---|---|---|",
+    ]
+    for key, name, what in SPLIT_ROWS:
+        st = split[key]
+        below = "yes" if st.below_noise else "no"
+        lines.append(
+            f"| {name} | {st.rmse:.3g} | {st.noise_floor:.3g} | {st.debiased:.3g} | {below} | {what} |"
+        )
+    lines += [
+        "",
+        f"Path tracer: density clamp {pt.density_clamp:g} (r.PathTracing.FogDensityClamp), cylinder radius "
+        f"{pt.radius_cm:g} cm (VolumetricFogDistance), extinction scale {pt.VolumetricFogExtinctionScale:g}, "
+        f"albedo {', '.join(f'{a:.3g}' for a in pt.VolumetricFogAlbedo)}, g {pt.g:g}; raster FogDensity "
+        f"{ue.FogDensity:.4g}, FogHeightFalloff {ue.FogHeightFalloff:.4g}.",
+        SECTION_END,
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def _put_section(path: Path, section: str) -> None:
+    from fogref.atomic import write_text_atomic
+
+    text = path.read_text(encoding="utf-8") if path.exists() else ""
+    if SECTION_BEGIN in text and SECTION_END in text:
+        head, rest = text.split(SECTION_BEGIN, 1)
+        text = head + section.rstrip("\n") + rest.split(SECTION_END, 1)[1]
+    else:
+        text = text + ("\n" if text and not text.endswith("\n\n") else "") + section
+    write_text_atomic(path, text)
+
+
+def split_study(
+    exr: str | Path,
+    out_dir: str | Path = "out/unreal_study",
+    renders_dir: str | Path | None = None,
+    pt: UEPathTracerSettings | None = None,
+    ue: UE4FogParams | None = None,
+    spp: int | None = None,
+    seed: int | None = None,
+    scene: str | Path | None = None,
+) -> dict:
+    """What a UE user sees for the truth ``exr``, split into raster EHF vs UE's path-traced fog and
+    UE's path-traced fog vs the exact fog, each with its noise (:func:`render_split`), written
+    into the study's report folder ``out_dir``.
+
+    ``ue``: the raster EHF settings (default: the study's Unreal fog of the truth's physical fog,
+    :func:`fogref.mapping.unreal.ue4_from_physical`: exact density, falloff and height, fitted
+    colours); ``pt``: the path tracer's settings (default: UEPathTracerSettings with the truth's
+    albedo and g as VolumetricFogAlbedo and VolumetricFogScatteringDistribution, the engine's
+    defaults otherwise).  The scene is the truth's (checked against its recorded hash), with its
+    overrides; ``spp`` and ``seed`` default to the truth's.  Renders go to ``renders_dir``
+    (default ``out_dir/ue_pathtracer``).
+
+    Writes ``ue_pathtracer_split.json``, a section of ``budget.md`` (:func:`split_section`,
+    replaced when run again) and, when the study's ``summary.json`` exists, its key
+    ``"ue_pathtracer_split"``.  Returns the JSON's dict.
+    """
+    import json
+
+    from fogref.atomic import write_text_atomic
+    from fogref.gbuffer import load_truth
+    from fogref.mapping import PhysicalScene
+    from fogref.mapping.unreal import ue4_from_physical
+    from fogref.study.unreal import _overrides, scene_of_truth
+
+    truth = load_truth(exr)
+    pf = PhysicalScene.from_params(truth.params)
+    if ue is None:
+        ue = ue4_from_physical(pf).params
+    if pt is None:
+        pt = UEPathTracerSettings(
+            VolumetricFogAlbedo=tuple(float(a) for a in pf.albedo),
+            VolumetricFogScatteringDistribution=float(pf.medium.g),
+        )
+    spp = int(truth.spp if spp is None else spp)
+    seed = int(truth.attrs.get("fogref.seed", 0) if seed is None else seed)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    rdir = Path(renders_dir) if renders_dir is not None else out / "ue_pathtracer"
+    path = scene_of_truth(truth, None if scene is None else str(scene))
+    split = render_split(path, ue, pt, rdir, spp=spp, seed=seed, overrides=_overrides(truth))
+    doc = {
+        "truth": str(exr),
+        "scene": str(path),
+        "spp": spp,
+        "seed": seed,
+        "pathtracer": {
+            "density_clamp": pt.density_clamp,
+            "radius_cm": pt.radius_cm,
+            "extinction_scale": pt.VolumetricFogExtinctionScale,
+            "albedo": list(pt.VolumetricFogAlbedo),
+            "g": pt.g,
+        },
+        "raster": {"FogDensity": ue.FogDensity, "FogHeightFalloff": ue.FogHeightFalloff},
+        **{
+            key: {
+                "rmse": split[key].rmse,
+                "noise_floor": split[key].noise_floor,
+                "debiased": split[key].debiased,
+                "below_noise": bool(split[key].below_noise),
+            }
+            for key, _, _ in SPLIT_ROWS
+        },
+        "notes": split["notes"],
+    }
+    write_text_atomic(out / "ue_pathtracer_split.json", json.dumps(doc, indent=2) + "\n")
+    _put_section(out / "budget.md", split_section(split, ue, pt, spp))
+    summary = out / "summary.json"
+    if summary.exists():
+        d = json.loads(summary.read_text(encoding="utf-8"))
+        d["ue_pathtracer_split"] = doc
+        write_text_atomic(summary, json.dumps(d, indent=2) + "\n")
+    return doc
 
 
 # -- the sweep ---------------------------------------------------------------------
