@@ -13,7 +13,7 @@ import pytest
 
 from fogref.cli import main
 from fogref.mapping.unreal_pathtracer import UEPathTracerSettings
-from fogref.study.ue_pathtracer import SECTION_BEGIN, SECTION_END, split_study
+from fogref.study.ue_pathtracer_split import SECTION_BEGIN, SECTION_END, split_study
 
 
 @pytest.fixture(scope="module")
@@ -51,7 +51,7 @@ def test_split_study_writes_its_section_and_json(tiny_truth, tmp_path):
 def test_cli_study_flag_calls_the_split(tiny_truth, tmp_path, monkeypatch):
     import fogref.cli.study as cs
     import fogref.html.reports as hr
-    import fogref.study.ue_pathtracer as sp
+    import fogref.study.ue_pathtracer_split as sp
 
     calls = []
     monkeypatch.setattr(cs, "run_study", lambda *a, **k: calls.append("study"))

@@ -194,7 +194,7 @@ def lower_sunsky(root: ET.Element, defaults: dict, source) -> dict | None:
     ET.SubElement(sun, "rgb", name="irradiance", value=", ".join(repr(float(x)) for x in E))
     root.append(sun)
     # isotropic projection of the sky: the g = 0 single scattering per unit alpha (1 - T)
-    from fogref.media.single_scatter import sky_phase_projection
+    from fogref.media.single_scatter_nonuniform import sky_phase_projection
 
     L_iso = sky_phase_projection(sky_radiance(desc), 0.0, [[0.0, 1.0, 0.0]])[0]
     sky = {"type": "sunsky", **d, "radiance": [float(x) for x in L_iso]}
