@@ -60,8 +60,8 @@ def plot_error_heatmaps(errors: ErrorMaps, part: str, units: str, path) -> Path:
     signed = errors.signed.mean(-1)
     lim = _symmetric_limit(signed[errors.valid]) if errors.valid.any() else 1.0
     panels = [
-        (signed, "model − reference (signed)", f"[{units}]", "RdBu_r", -lim, lim),
-        (errors.absolute, "|model − reference|", f"[{units}]", "viridis", 0.0, _robust_max(errors.absolute)),
+        (signed, "candidate − truth (signed)", f"[{units}]", "RdBu_r", -lim, lim),
+        (errors.absolute, "|candidate − truth|", f"[{units}]", "viridis", 0.0, _robust_max(errors.absolute)),
         (
             errors.relative_squared,
             "relative squared error",
@@ -89,7 +89,7 @@ def plot_error_heatmaps(errors: ErrorMaps, part: str, units: str, path) -> Path:
         fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04).set_label(unit, fontsize=8)
     excluded = int(np.count_nonzero(~errors.valid))
     fig.suptitle(
-        f"{part}: per-pixel error of the model"
+        f"{part}: per-pixel error of the candidate (model or engine image)"
         + (f" (grey: {excluded} excluded pixels)" if excluded else ""),
         fontsize=10,
     )
@@ -111,9 +111,9 @@ def plot_side_by_side(reference, model, exposure: float, part: str, units: str, 
     error_img = tone_map(np.abs(model - reference), exposure)
     model_img[~valid], error_img[~valid] = magenta, magenta
     images = [
-        (tone_map(reference, exposure), "reference"),
-        (model_img, "model"),
-        (error_img, "|model − reference|"),
+        (tone_map(reference, exposure), "truth"),
+        (model_img, "candidate"),
+        (error_img, "|candidate − truth|"),
     ]
     pw, ph = _panel_size(reference.shape[:2])
     fig = _figure(pw * 3, ph + 0.8)
