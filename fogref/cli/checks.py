@@ -16,11 +16,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 
 from fogref import params
 from fogref.errors import ParameterError
 
-__all__ = ["Assignments", "Check", "Choice", "Integer", "Number", "PathArg", "RGB", "Text", "Vector"]
+__all__ = ["Address", "Assignments", "Check", "Choice", "Integer", "Number", "PathArg", "RGB", "Text", "Vector"]
 
 INF = math.inf
 
@@ -173,3 +174,29 @@ class Assignments(Check):
                 )
             out[key] = value
         return out
+
+
+class Address(Check):
+    """A Dask scheduler address: ``[PROTOCOL://]HOST[:PORT]`` (``tcp://10.0.0.5:8786``).
+
+    >>> Address().parse("tcp://10.0.0.5:8786", "--scheduler", "fogref sweep")
+    'tcp://10.0.0.5:8786'
+    >>> Address().parse("not an address", "--scheduler", "fogref sweep")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: fogref sweep: parameter '--scheduler': 'not an address' is not ...
+    """
+
+    PATTERN = re.compile(r"^([a-z][a-z0-9+.-]*://)?[A-Za-z0-9_.\-\[\]:]+$")
+
+    def parse(self, raw, name, source):
+        if not self.PATTERN.match(str(raw)):
+            raise ParameterError(
+                source,
+                name,
+                f"{raw!r} is not a scheduler address [PROTOCOL://]HOST[:PORT], e.g. tcp://10.0.0.5:8786",
+            )
+        return str(raw)
+
+    def describe(self):
+        return "[PROTOCOL://]HOST[:PORT]"

@@ -8,9 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from fogref.cli.checks import Assignments, Choice, Integer, Number, PathArg
+from fogref.cli.checks import Address, Assignments, Choice, Integer, Number, PathArg
 from fogref.cli.spec import option, refuse, switch
-from fogref.cli.sweep import Address
 from fogref.render.variant import VARIANTS
 
 NAME = "render"

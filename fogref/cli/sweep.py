@@ -6,13 +6,11 @@ its defaults are the options' defaults.
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from fogref.cli.checks import Check, Integer, PathArg
+from fogref.cli.checks import Address, Integer, PathArg
 from fogref.cli.spec import option, refuse, switch
-from fogref.errors import ParameterError
 from fogref.study.sweep import run_sweep
 
 NAME = "sweep"
@@ -29,32 +27,6 @@ EPILOG = (
     "130 interrupted (run again to resume)"
 )
 RUN = "fogref.study.sweep:run_sweep"
-
-
-class Address(Check):
-    """A Dask scheduler address: ``[PROTOCOL://]HOST[:PORT]`` (``tcp://10.0.0.5:8786``).
-
-    >>> Address().parse("tcp://10.0.0.5:8786", "--scheduler", "fogref sweep")
-    'tcp://10.0.0.5:8786'
-    >>> Address().parse("not an address", "--scheduler", "fogref sweep")
-    Traceback (most recent call last):
-    ...
-    fogref.errors.ParameterError: fogref sweep: parameter '--scheduler': 'not an address' is not ...
-    """
-
-    PATTERN = re.compile(r"^([a-z][a-z0-9+.-]*://)?[A-Za-z0-9_.\-\[\]:]+$")
-
-    def parse(self, raw, name, source):
-        if not self.PATTERN.match(str(raw)):
-            raise ParameterError(
-                source,
-                name,
-                f"{raw!r} is not a scheduler address [PROTOCOL://]HOST[:PORT], e.g. tcp://10.0.0.5:8786",
-            )
-        return str(raw)
-
-    def describe(self):
-        return "[PROTOCOL://]HOST[:PORT]"
 
 
 @dataclass
