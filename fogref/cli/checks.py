@@ -21,7 +21,18 @@ import re
 from fogref import params
 from fogref.errors import ParameterError
 
-__all__ = ["Address", "Assignments", "Check", "Choice", "Integer", "Number", "PathArg", "RGB", "Text", "Vector"]
+__all__ = [
+    "Address",
+    "Assignments",
+    "Check",
+    "Choice",
+    "Integer",
+    "Number",
+    "PathArg",
+    "RGB",
+    "Text",
+    "Vector",
+]
 
 INF = math.inf
 
