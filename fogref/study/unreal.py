@@ -94,9 +94,14 @@ def scene_of_truth(truth: Truth, scene: str | None = None) -> Path:
 
 
 def sunless_scene(scene: Path, out_dir: Path) -> Path:
-    """A copy of ``scene`` without its ``directional`` emitter(s) (sky-only light)."""
+    """A copy of ``scene`` without its ``directional`` emitter(s) (sky-only light), written in
+    ``out_dir``.  Its first element is ``<path value="SCENE'S FOLDER"/>``, so the meshes,
+    envmaps and textures it names relatively resolve where the original's do (Mitsuba's
+    search path; :func:`fogref.render.inputs.scene_inputs` follows it, so the copy's cache
+    keys cover the original's files)."""
     tree = ET.parse(scene)
     root = tree.getroot()
+    root.insert(0, ET.Element("path", value=str(Path(scene).resolve().parent)))
     for parent in list(root.iter()):
         for ch in list(parent):
             if ch.tag == "emitter" and ch.get("type") == "directional":

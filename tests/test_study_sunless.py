@@ -1,0 +1,25 @@
+"""The budget's sun-less copy of a scene finds the files the original loads (issue 17).
+
+The copy is written in the study's renders folder; before it named a relative mesh, envmap or
+texture relative to that folder, where none of them is, so a scene with its own files could
+not be budgeted (and its cache key missed them).
+"""
+
+import tiny_inputs_scene as tiny
+
+from fogref.render.inputs import inputs_digest, scene_inputs
+from fogref.study.unreal import sunless_scene
+
+
+def test_sunless_copy_loads_the_originals_files(tmp_path, mitsuba):
+    scene = tiny.make(mitsuba, tmp_path / "project")
+    copy = sunless_scene(scene, tmp_path / "renders")
+    assert copy.parent == tmp_path / "renders"
+    loaded = {i.path.name: i for i in scene_inputs(copy)[1:]}
+    assert {"box.obj", "sky.exr", "tex.png"} <= set(loaded)
+    assert all(i.exists and i.path.parent.resolve() == scene.parent.resolve() for i in loaded.values())
+    before = inputs_digest(copy)
+    (scene.parent / "box.obj").write_text((scene.parent / "box.obj").read_text() + "v 0 0 0\n")
+    assert inputs_digest(copy) != before  # the copy's key covers the original's mesh
+    s = mitsuba.load_file(str(copy), **tiny.RES)  # Mitsuba finds them too, and the sun is gone
+    assert all("Directional" not in str(e) for e in s.emitters())
