@@ -28,7 +28,7 @@ __all__ = ["ADDRESS", "check_scheduler", "check_workers", "connect", "stderr_to"
 ADDRESS = re.compile(r"^(?:(?:tcp|tls|inproc|ucx|ws|wss)://\S+|[A-Za-z0-9_.\-\[\]:]+:\d{1,5})$")
 
 
-def check_scheduler(scheduler, source: str) -> str | None:
+def check_scheduler(scheduler, source: str, name: str = "--scheduler") -> str | None:
     """``scheduler`` (None, or a Dask scheduler address, stripped), else a one-line ParameterError.
 
     >>> check_scheduler("tcp://127.0.0.1:8786", "fogref render")
@@ -43,8 +43,9 @@ def check_scheduler(scheduler, source: str) -> str | None:
     if not (isinstance(scheduler, str) and ADDRESS.match(scheduler.strip())):
         raise ParameterError(
             source,
-            "--scheduler",
-            f"{scheduler!r} is not a Dask scheduler address (tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786)",
+            name,
+            f"{scheduler!r} is not a Dask scheduler address [PROTOCOL://]HOST[:PORT] (a protocol or a "
+            "port is needed, e.g. tcp://127.0.0.1:8786)",
         )
     return scheduler.strip()
 

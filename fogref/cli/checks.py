@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import re
 
 from fogref import params
+from fogref.cluster import check_scheduler
 from fogref.errors import ParameterError
 
 __all__ = [
@@ -188,7 +188,8 @@ class Assignments(Check):
 
 
 class Address(Check):
-    """A Dask scheduler address: ``[PROTOCOL://]HOST[:PORT]`` (``tcp://10.0.0.5:8786``).
+    """A Dask scheduler address, checked by :func:`fogref.cluster.check_scheduler` (the one
+    definition, which ``fogref render`` and ``fogref sweep`` also apply through the API).
 
     >>> Address().parse("tcp://10.0.0.5:8786", "--scheduler", "fogref sweep")
     'tcp://10.0.0.5:8786'
@@ -198,16 +199,8 @@ class Address(Check):
     fogref.errors.ParameterError: fogref sweep: parameter '--scheduler': 'not an address' is not ...
     """
 
-    PATTERN = re.compile(r"^([a-z][a-z0-9+.-]*://)?[A-Za-z0-9_.\-\[\]:]+$")
-
     def parse(self, raw, name, source):
-        if not self.PATTERN.match(str(raw)):
-            raise ParameterError(
-                source,
-                name,
-                f"{raw!r} is not a scheduler address [PROTOCOL://]HOST[:PORT], e.g. tcp://10.0.0.5:8786",
-            )
-        return str(raw)
+        return check_scheduler(str(raw), source, name)
 
     def describe(self):
         return "[PROTOCOL://]HOST[:PORT]"
