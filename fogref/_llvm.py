@@ -20,6 +20,10 @@ import re
 
 from fogref.errors import FogrefError
 
+#: The Mitsuba variant fogref sets when none is set (:func:`fogref.set_variant`, and the sky
+#: evaluation of :mod:`fogref.media.sky`, which runs below the render floor).
+DEFAULT_VARIANT = "llvm_ad_rgb"
+
 _SEARCH = [
     "/usr/lib/x86_64-linux-gnu/libLLVM*.so*",
     "/usr/lib/aarch64-linux-gnu/libLLVM*.so*",

@@ -21,19 +21,17 @@ __all__ = ["SUNSKY_APERTURE", "SUNSKY_KEYS", "eval_emitter", "sky_radiance", "su
 SUNSKY_APERTURE = 0.5358
 #: The parameters of a fogref sunsky (:func:`sunsky_dict`'s arguments).
 SUNSKY_KEYS = ("sun_direction", "turbidity", "albedo", "sun_aperture", "sky_scale", "sun_scale")
-#: The variant set when none is (fogref.render.variant.DEFAULT_VARIANT; the sky needs no plugin).
-_VARIANT = "llvm_ad_rgb"
 
 
 def _mitsuba() -> Any:
     """Mitsuba with a variant set (the one already set, else LLVM RGB)."""
-    from fogref._llvm import ensure_llvm
+    from fogref._llvm import DEFAULT_VARIANT, ensure_llvm
 
     ensure_llvm()
     import mitsuba as mi
 
     if mi.variant() is None:
-        mi.set_variant(_VARIANT)
+        mi.set_variant(DEFAULT_VARIANT)  # the sky needs no fogref plugin
     return mi
 
 

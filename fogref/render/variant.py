@@ -18,11 +18,10 @@ import contextlib
 import os
 
 from fogref import params
-from fogref._llvm import HELP, ensure_llvm
+from fogref._llvm import DEFAULT_VARIANT, HELP, ensure_llvm
 from fogref.atomic import atomic_write
 from fogref.errors import FogrefError
 
-DEFAULT_VARIANT = "llvm_ad_rgb"
 #: The Mitsuba variants fogref renders with: its plugins (fogpath, heightfog) need an RGB
 #: autodiff variant, on the CPU (LLVM) or an NVIDIA GPU (CUDA).
 VARIANTS = ("llvm_ad_rgb", "cuda_ad_rgb")
