@@ -12,7 +12,10 @@ themselves::
 
     import fogref, mitsuba as mi
     fogref.set_variant()                     # llvm_ad_rgb unless told otherwise
-    scene = mi.load_file("scenes/valley.xml", res=160, resy=90)
+    scene = mi.load_file("scenes/valley.xml", parallel=False, res=160, resy=90)
+
+``parallel=False``: Mitsuba 3.9.1's parallel loading can corrupt a ``sunsky`` built after a
+render through the Python ``heightfog`` medium (docs/design.md, section 6).
 
 Code that uses Dr.Jit's LLVM arrays without Mitsuba calls :func:`ensure_llvm`
 before the first array is built.

@@ -73,7 +73,7 @@ class HeightFogMedium(mi.Medium):
         src = f"heightfog '{props.id()}'" if props.id() else "heightfog"
         self.fog = medium_from_params(params, src)
         if not has_phase:
-            props["phase"] = mi.load_dict({"type": "hg", "g": self.fog.g})
+            props["phase"] = mi.load_dict({"type": "hg", "g": self.fog.g}, parallel=False)
         super().__init__(props)
         default_floor = (
             self.fog.bounds.lo[1]

@@ -71,7 +71,7 @@ def eval_emitter(emitter: Any, dirs: np.ndarray) -> np.ndarray:
 @functools.lru_cache(maxsize=16)
 def _sky_emitter(variant: str, key: str) -> Any:
     mi = _mitsuba()
-    return mi.load_dict({**sunsky_dict(**json.loads(key)), "sun_scale": 0.0})
+    return mi.load_dict({**sunsky_dict(**json.loads(key)), "sun_scale": 0.0}, parallel=False)
 
 
 def sky_radiance(desc: dict) -> Callable[[np.ndarray], np.ndarray]:

@@ -258,7 +258,7 @@ def load_scene(path, overrides: dict | None = None):
         if lowered is not None:
             scene = load_lowered(path, lowered, overrides)
         else:
-            scene = mi.load_file(str(path), **{k: v for k, v in (overrides or {}).items()})
+            scene = mi.load_file(str(path), parallel=False, **{k: v for k, v in (overrides or {}).items()})
     except Exception as e:  # Mitsuba's message names the file and line: keep that and the reason
         raise FogrefError(f"{path}: Mitsuba could not load the scene: {_mitsuba_reason(e)}") from None
     desc["camera"] = sensor_camera(scene.sensors()[0])

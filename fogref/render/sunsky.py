@@ -66,7 +66,7 @@ def sun_irradiance(desc: dict, n_gamma: int = 8, n_phi: int = 16) -> np.ndarray:
     """
     import mitsuba as mi
 
-    sun_only = mi.load_dict({**desc, "sky_scale": 0.0, "sun_scale": 1.0})
+    sun_only = mi.load_dict({**desc, "sky_scale": 0.0, "sun_scale": 1.0}, parallel=False)
     w = np.asarray(desc["sun_direction"], dtype=np.float64)
     w /= np.linalg.norm(w)
     half = math.radians(float(desc.get("sun_aperture", SUNSKY_APERTURE))) / 2.0
@@ -211,7 +211,9 @@ def load_lowered(path: Path, root: ET.Element, overrides: dict | None):
     before = [str(fr[i]) for i in range(len(fr))]
     fr.prepend(str(Path(path).resolve().parent))
     try:
-        return mi.load_string(ET.tostring(root, encoding="unicode"), **overrides_used_by(root, overrides))
+        return mi.load_string(
+            ET.tostring(root, encoding="unicode"), parallel=False, **overrides_used_by(root, overrides)
+        )
     finally:
         fr.clear()
         for folder in before:
