@@ -70,11 +70,7 @@ SPLIT = {"fogpath_split": {"forced_split": True}, "fogpath_nosplit": {"forced_sp
 
 def split_method() -> str:
     """The forced-splitting variant that differs from fogpath's default."""
-    import sys
-    from pathlib import Path
-
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "plugins"))
-    from fogpath import FORCED_SPLIT_DEFAULT
+    from fogref_plugins.fogpath import FORCED_SPLIT_DEFAULT
 
     return "fogpath_nosplit" if FORCED_SPLIT_DEFAULT else "fogpath_split"
 

@@ -536,13 +536,15 @@ def main(argv=None):
     ap.add_argument("--max-depth", type=int, default=8)
     ap.add_argument("--ref-spp", type=int, default=None)
     ap.add_argument("--max-spp", type=int, default=1024, help="top of the spp ladder")
+    ap.add_argument("--res", type=int, nargs=2, default=None, metavar=("W", "H"), help="default 96 54")
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
     args = ap.parse_args(argv)
+    res_given = args.res
     if args.quick:
         args.res, args.ladder = (32, 18), [s for s in LADDER if s <= 64]
         args.ref_spp = args.ref_spp or 512
     else:
-        args.res, args.ladder = (96, 54), [s for s in LADDER if s <= args.max_spp]
+        args.res, args.ladder = tuple(res_given or (96, 54)), [s for s in LADDER if s <= args.max_spp]
         args.ref_spp = args.ref_spp or 4096
     rng = np.random.default_rng(0)
     t0 = time.perf_counter()
@@ -551,7 +553,8 @@ def main(argv=None):
             "command": "python benchmarks/time_vs_error.py"
             + (" --quick" if args.quick else "")
             + (f" --max-spp {args.max_spp}" if args.max_spp != 1024 else "")
-            + (f" --ref-spp {args.ref_spp}" if args.ref_spp not in (None, 4096, 512) else ""),
+            + (f" --ref-spp {args.ref_spp}" if args.ref_spp not in (None, 4096, 512) else "")
+            + (f" --res {args.res[0]} {args.res[1]}" if res_given else ""),
             "res": list(args.res),
             "ladder": args.ladder,
             "repeats": {s: REPEATS[s] for s in args.ladder},
