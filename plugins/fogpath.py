@@ -46,6 +46,8 @@ from .fogpath_common import AOV_NAMES, Split, spectrum
 
 #: ``forced_split``'s default (see ``reports/benchmarks/variance_reduction_issue11.md``)
 FORCED_SPLIT_DEFAULT = True
+#: ``sky_at_surfaces``'s default (see ``reports/benchmarks/summary.md``)
+SKY_AT_SURFACES_DEFAULT = "mis"
 
 
 class FogPathIntegrator(FogPathCameraRay):
@@ -103,6 +105,14 @@ class FogPathIntegrator(FogPathCameraRay):
          ``E / Omega``; along camera rays, ``sun_sampling``'s exact sampler aims at a point of
          the disk drawn per sample when the whole disk is above the horizon, else next-event
          estimation covers it).  The disk is not drawn where a camera ray sees it. Default: 0.
+     * - sky_at_surfaces
+       - string
+       - How a ``constant`` sky lights surfaces: ``mis`` (next-event estimation and the
+         BSDF sample, power heuristic, as Mitsuba's ``path``) or ``bsdf`` (the BSDF sample
+         alone, weight 1; next-event estimation keeps the sun and other emitters).  With
+         ``bsdf`` a Lambertian surface that sees the whole sky gets it with zero variance
+         (a cosine-weighted sample of a constant radiance).  Other skies always use
+         ``mis``.  Default: ``SKY_AT_SURFACES_DEFAULT``.
      * - forced_split
        - bool
        - Forced splitting on the camera ray: every sample traces both branches at
@@ -130,6 +140,8 @@ class FogPathIntegrator(FogPathCameraRay):
         params.choice(self.sky_cv, "sky_cv", ("off", "surface", "all"), "fogpath")
         params.integer(self.sun_samples, "sun_samples", source="fogpath", lo=1, hi=64)
         self.forced_split = bool(props.get("forced_split", FORCED_SPLIT_DEFAULT))
+        self.sky_at_surfaces = str(props.get("sky_at_surfaces", SKY_AT_SURFACES_DEFAULT))
+        params.choice(self.sky_at_surfaces, "sky_at_surfaces", ("mis", "bsdf"), "fogpath")
         diameter = params.number(
             props.get("sun_angular_diameter", 0.0), "sun_angular_diameter", source="fogpath", lo=0.0, hi=10.0
         )
@@ -186,10 +198,14 @@ class FogPathIntegrator(FogPathCameraRay):
         function or BSDF, MIS-weighted against it for non-delta emitters.
         Returns (contribution without the path throughput, is the sample delta, the
         same sample's value for the sky control variate: a non-delta infinite emitter
-        above the horizon, without transmittance and visibility)."""
+        above the horizon, without transmittance and visibility).  At a surface with
+        ``sky_at_surfaces = "bsdf"`` a sample of the constant sky contributes 0: the BSDF
+        sample carries the sky alone (:meth:`_sky_by_bsdf`)."""
         in_medium = isinstance(scatter, mi.PhaseFunction)
         ds, em_w = scene.sample_emitter_direction(it, sampler.next_2d(active), False, active)
         infinite = mi.has_flag(ds.emitter.flags(), mi.EmitterFlags.Infinite)
+        if dr.hint(not in_medium and self._sky_by_bsdf(scene), mode="scalar"):
+            em_w = dr.select(infinite & ~ds.delta, 0.0, em_w)  # the only smooth infinite emitter: the sky
         if dr.hint(self.sun_one_minus_cos is not None, mode="scalar"):
             ds.d = self._sun_disk_direction(sampler, ds.d, ds.delta & infinite, active)
         shadow = mi.Ray3f(it.p, ds.d) if in_medium else it.spawn_ray(ds.d)
@@ -207,6 +223,10 @@ class FogPathIntegrator(FogPathCameraRay):
             c *= dr.select(ds.delta, 1.0, mis_weight(ds.pdf, f_pdf))
         cv = dr.select(active & (ds.pdf != 0) & infinite & ~ds.delta & (ds.d.y > 0), c, 0.0)
         return dr.select(visible, c * Tr, 0.0), ds.delta, cv
+
+    def _sky_by_bsdf(self, scene):
+        """Does the BSDF sample alone carry a constant sky at surfaces (trace-time)?"""
+        return self.sky_at_surfaces == "bsdf" and self._constant_sky(scene) is not None
 
     def _sun_disk_direction(self, sampler, d, is_sun, active):
         """``d`` (toward the delta sun) replaced on ``is_sun`` lanes by a direction uniform in
@@ -307,6 +327,8 @@ class FogPathIntegrator(FogPathCameraRay):
                     em &= ~((depth == 0) & escaped)
                 ds = mi.DirectionSample3f(scene, si=si, ref=prev_it)
                 em_pdf = scene.pdf_emitter_direction(prev_it, ds, em & ~prev_delta)
+                if dr.hint(self._sky_by_bsdf(scene), mode="scalar"):  # from a surface: weight 1
+                    em_pdf = dr.select(escaped & (dr.squared_norm(prev_it.n) > 0), 0.0, em_pdf)
                 Le = β * mis_weight(prev_pdf, dr.select(prev_delta, 0.0, em_pdf)) * ds.emitter.eval(si, em)
                 split = split.add(dr.select(em, Le, 0.0), medium_first, depth == 1)
             active &= ~escaped & (depth + 1 < self.max_depth)  # max_depth = 2: single scattering

@@ -86,17 +86,9 @@ class FogPathCameraRay(FogPathBase):
         variate made the final image noisier (``reports/benchmarks/variance_reduction.md``)."""
         if self.sky_cv == "off" or fog is None or not fog.scatters or self.max_depth < 2:
             return None
-        smooth_inf = [
-            e
-            for e in scene.emitters()
-            if mi.has_flag(e.flags(), mi.EmitterFlags.Infinite)
-            and not mi.has_flag(e.flags(), mi.EmitterFlags.Delta)
-        ]
-        if len(smooth_inf) != 1 or not str(smooth_inf[0]).startswith("ConstantBackgroundEmitter"):
+        sky = self._constant_sky(scene)
+        if sky is None or abs(fog.g) > 0.95:  # > 0.95: the lobe's table would need more nodes
             return None
-        if abs(fog.g) > 0.95:  # the lobe's table would need more nodes
-            return None
-        sky = smooth_inf[0]
         idx = [i for i, e in enumerate(scene.emitters()) if e is sky]
         pdf_sel = float(scene.pdf_emitter(idx[0])[0]) if idx else 1.0 / len(scene.emitters())
         Lv = mi.traverse(sky)["radiance.value"]

@@ -115,6 +115,20 @@ class FogPathBase(mi.SamplingIntegrator):
         return any(delta), not all(delta)
 
     @staticmethod
+    def _constant_sky(scene):
+        """The scene's ``constant`` sky emitter when it is the only non-delta infinite
+        emitter, else None (trace-time)."""
+        smooth_inf = [
+            e
+            for e in scene.emitters()
+            if mi.has_flag(e.flags(), mi.EmitterFlags.Infinite)
+            and not mi.has_flag(e.flags(), mi.EmitterFlags.Delta)
+        ]
+        if len(smooth_inf) == 1 and str(smooth_inf[0]).startswith("ConstantBackgroundEmitter"):
+            return smooth_inf[0]
+        return None
+
+    @staticmethod
     def _scene_sun(scene):
         """(direction toward the sun, RGB irradiance) of the only delta directional
         emitter, or None (trace-time, Python floats)."""
@@ -142,7 +156,8 @@ class FogPathBase(mi.SamplingIntegrator):
 
     @staticmethod
     def _vertex(ray, si, surf, p_med):
-        """The interaction a sampled direction leaves from (for MIS on emitters it hits)."""
+        """The interaction a sampled direction leaves from (for MIS on emitters it hits):
+        a surface's, or at a medium vertex one with normal 0."""
         it = dr.zeros(mi.Interaction3f)
         it.p = dr.select(surf, si.p, p_med)
         it.n = dr.select(surf, si.n, 0.0)
