@@ -28,6 +28,8 @@ Scenes (96x54 by default):
 Methods (``METHODS``):
 
 ``fogpath``      fogref's integrator with the ``heightfog`` medium (analytic free flight).
+``fogpath_skybsdf`` fogpath with ``sky_at_surfaces = "bsdf"`` (a constant sky at surfaces
+                 from the BSDF sample alone).
 ``volpath_hf``   stock ``volpath`` with the ``heightfog`` medium (delta tracking
                  against heightfog's tight per-ray majorant).
 ``grid64``,      stock ``volpath`` with Mitsuba's ``heterogeneous`` medium on a
@@ -55,6 +57,7 @@ METHODS = (
     "fogpath_before",
     "fogpath_split",
     "fogpath_nosplit",
+    "fogpath_skybsdf",
     "volpath_hf",
     "grid64",
     "grid256",
@@ -66,6 +69,8 @@ BEFORE_ISSUE_11 = {"sun_samples": 1, "sun_sampling_mixture": False, "sky_cv": "o
 #: fogpath with forced splitting on the camera ray on / off (all else default): the
 #: benchmarks measure the one that is not fogpath's default beside ``fogpath``
 SPLIT = {"fogpath_split": {"forced_split": True}, "fogpath_nosplit": {"forced_split": False}}
+#: fogpath with one option changed (all else default), measured beside ``fogpath``
+VARIANTS = {"fogpath_skybsdf": {"sky_at_surfaces": "bsdf"}}
 
 
 def split_method() -> str:
@@ -161,7 +166,7 @@ def methods_for(name: str) -> list[str]:
     spec = scene_spec(name)
     homog = all(L[1] == 0 for L in spec["fog"]["layers"])
     if spec["bounds"] is None:  # grids and stock homogeneous need a box
-        return ["fogpath", "fogpath_before", split_method(), "volpath_hf"]
+        return ["fogpath", "fogpath_before", split_method(), *VARIANTS, "volpath_hf"]
     skip = set(SPLIT) - {split_method()}
     return [m for m in METHODS if (m != "homogeneous" or homog) and m not in skip]
 
@@ -240,6 +245,7 @@ def build(
     if method == "fogpath_before":
         integ.update(BEFORE_ISSUE_11)
     integ.update(SPLIT.get(method, {}))
+    integ.update(VARIANTS.get(method, {}))
     integ.update(integrator_over or {})
     extra = {}
     if method.startswith("fogpath") or method == "volpath_hf":
