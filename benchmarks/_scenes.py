@@ -30,6 +30,8 @@ Methods (``METHODS``):
 ``fogpath``      fogref's integrator with the ``heightfog`` medium (analytic free flight).
 ``fogpath_skybsdf`` fogpath with ``sky_at_surfaces = "bsdf"`` (a constant sky at surfaces
                  from the BSDF sample alone).
+``fogpath_ss2``  fogpath with ``sun_sampling_rays = 2`` (the sun also sampled along the
+                 segment after the first vertex).
 ``volpath_hf``   stock ``volpath`` with the ``heightfog`` medium (delta tracking
                  against heightfog's tight per-ray majorant).
 ``grid64``,      stock ``volpath`` with Mitsuba's ``heterogeneous`` medium on a
@@ -58,6 +60,7 @@ METHODS = (
     "fogpath_split",
     "fogpath_nosplit",
     "fogpath_skybsdf",
+    "fogpath_ss2",
     "volpath_hf",
     "grid64",
     "grid256",
@@ -70,7 +73,7 @@ BEFORE_ISSUE_11 = {"sun_samples": 1, "sun_sampling_mixture": False, "sky_cv": "o
 #: benchmarks measure the one that is not fogpath's default beside ``fogpath``
 SPLIT = {"fogpath_split": {"forced_split": True}, "fogpath_nosplit": {"forced_split": False}}
 #: fogpath with one option changed (all else default), measured beside ``fogpath``
-VARIANTS = {"fogpath_skybsdf": {"sky_at_surfaces": "bsdf"}}
+VARIANTS = {"fogpath_skybsdf": {"sky_at_surfaces": "bsdf"}, "fogpath_ss2": {"sun_sampling_rays": 2}}
 
 
 def split_method() -> str:

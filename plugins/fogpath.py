@@ -46,6 +46,8 @@ from .fogpath_common import AOV_NAMES, Split, spectrum
 
 #: ``forced_split``'s default (see ``reports/benchmarks/variance_reduction_issue11.md``)
 FORCED_SPLIT_DEFAULT = True
+#: ``sun_sampling_rays``'s default (see ``reports/benchmarks/summary.md``)
+SUN_SAMPLING_RAYS_DEFAULT = 1
 #: ``sky_at_surfaces``'s default (see ``reports/benchmarks/summary.md``)
 SKY_AT_SURFACES_DEFAULT = "mis"
 
@@ -88,6 +90,12 @@ class FogPathIntegrator(FogPathCameraRay):
        - Where the exact sampler does not apply (fog in a box, more layers), sample
          the sun's single scattering along camera rays from a closed-form mixture of
          per-layer integrands, weighted by the exact integrand. Default: true.
+     * - sun_sampling_rays
+       - int
+       - Path segments along which ``sun_sampling`` samples the sun's scattering from its
+         exact integrand: 1 (the camera ray) or 2 (also the segment after the first
+         vertex, one sample and shadow ray: the sun's share of double scattering; medium
+         vertices on it then skip sun NEE).  Default: ``SUN_SAMPLING_RAYS_DEFAULT``.
      * - sun_samples
        - int
        - Stratified sun samples per camera ray (each one shadow ray). Default: 2.
@@ -136,6 +144,13 @@ class FogPathIntegrator(FogPathCameraRay):
         self.sun_sampling_layers = int(props.get("sun_sampling_layers", 1))
         self.sun_sampling_mixture = bool(props.get("sun_sampling_mixture", True))
         self.sun_samples = int(props.get("sun_samples", 2))
+        self.sun_sampling_rays = params.integer(
+            props.get("sun_sampling_rays", SUN_SAMPLING_RAYS_DEFAULT),
+            "sun_sampling_rays",
+            source="fogpath",
+            lo=1,
+            hi=2,
+        )
         self.sky_cv = str(props.get("sky_cv", "off"))
         params.choice(self.sky_cv, "sky_cv", ("off", "surface", "all"), "fogpath")
         params.integer(self.sun_samples, "sun_samples", source="fogpath", lo=1, hi=64)
@@ -242,17 +257,34 @@ class FogPathIntegrator(FogPathCameraRay):
         return dr.select(is_sun, dr.normalize(mi.Frame3f(d).to_world(local)), d)
 
     def _medium_vertex(
-        self, scene, fog, ops, sampler, ray, p, t, phase, ctx, med, first, has_smooth, sun_ss, sky_cv
+        self,
+        scene,
+        fog,
+        ops,
+        sampler,
+        ray,
+        p,
+        t,
+        phase,
+        ctx,
+        med,
+        first,
+        has_smooth,
+        sun_ss,
+        sky_cv,
+        sun_sampled=None,
     ):
         """Light sample and phase sample at a medium vertex.  At the first vertex of the
         camera ray the sun is left out when it is sampled along the camera ray, and the
         sky control variate's Monte Carlo part (the same light and phase samples,
         unoccluded and unattenuated, upper hemisphere) is subtracted.
+        ``sun_sampled``: lanes whose segment's sun scattering was sampled along it (default
+        ``first``); their sun NEE is left out.
         Returns (contribution without the throughput, direction, phase weight, its pdf)."""
         mei = self._medium_interaction(ray, p, t)
         Ld, delta, cv = self._direct(scene, fog, ops, sampler, mei, ctx, phase, med, has_smooth)
-        if sun_ss is not None:  # the sun at depth 0 is sampled above
-            Ld = dr.select(delta & first, 0.0, Ld)
+        if sun_ss is not None:  # the sun on this segment is sampled along it
+            Ld = dr.select(delta & (first if sun_sampled is None else sun_sampled), 0.0, Ld)
         wo, w, pdf = phase.sample(ctx, mei, sampler.next_1d(med), sampler.next_2d(med), med)
         if sky_cv is not None:
             cv_phase = sky_cv["L"] * w * mis_weight(pdf, mi.Float(sky_cv["pdf"]))
@@ -309,7 +341,14 @@ class FogPathIntegrator(FogPathCameraRay):
                 )
             )
             depth = mi.UInt32(1)
+        # the sun along the depth-1 segment (its vertices scatter only when max_depth >= 3)
+        ss_next = sun_ss is not None and self.sun_sampling_rays >= 2 and self.max_depth >= 3
         while dr.hint(active, max_iterations=-1, label="fogpath"):
+            if dr.hint(ss_next, mode="scalar"):
+                on = active & (depth == 1)
+                D1 = dr.select(si.is_valid(), si.t, ops.largest)
+                ss1 = self._sun_single_scatter(scene, fog, ops, sampler, ray, D1, on, samples=1)
+                split = split.add(dr.select(on, β * ss1, 0.0), medium_first, mi.Bool(False))
             # ---------------- free flight to a medium vertex or the surface ----------------
             is_medium, t_end, w_ff = self._free_flight(
                 fog, ops, sampler, ray, dr.select(si.is_valid(), si.t, dr.inf), active
@@ -359,6 +398,7 @@ class FogPathIntegrator(FogPathCameraRay):
                     has_smooth,
                     sun_ss,
                     sky_cv,
+                    (depth <= 1) if ss_next else (depth == 0),
                 )
                 split = split.add(β * Ld, medium_first, depth == 0)
                 wo[med], pdf_next[med], w_next[med] = wo_m, pdf_m, w_m

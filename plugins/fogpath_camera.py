@@ -33,11 +33,12 @@ from .fogpath_common import FogPathBase, Split, spectrum
 class FogPathCameraRay(FogPathBase):
     """The camera-ray estimators of fogpath (see module)."""
 
-    def _sun_single_scatter(self, scene, fog, ops, sampler, ray, D, active):
+    def _sun_single_scatter(self, scene, fog, ops, sampler, ray, D, active, samples=None):
         """The sun's single scattering along the camera ray, sampled from its exact
         integrand (``exact``) or a closed-form mixture proposal with the exact
         weight (``mixture``: bounded fog, several layers), ``sun_samples``
-        stratified samples averaged (None when it does not apply; then NEE covers it)."""
+        stratified samples averaged (``samples``, if given, instead; None when it does not
+        apply; then NEE covers it)."""
         sun = self._scene_sun(scene) if (fog is not None and self.sun_sampling) else None
         mode = (
             None
@@ -54,7 +55,7 @@ class FogPathCameraRay(FogPathBase):
         if mode is None:
             return None
         w_sun, E_sun = sun
-        K, total = self.sun_samples, mi.Spectrum(0.0)
+        K, total = samples or self.sun_samples, mi.Spectrum(0.0)
         for k in range(K):
             channel = self._draw_channel(sampler, active)  # one-sample spectral MIS inside the sampler
             u = (k + sampler.next_1d(active)) / K  # stratified along the integrand's CDF
