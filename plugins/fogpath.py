@@ -59,7 +59,7 @@ class FogPathIntegrator(FogPathCameraRay):
 
      * - max_depth
        - int
-       - Longest path (Mitsuba's convention: 1 = direct surface light only,
+       - Longest path (Mitsuba's convention: 1 = emitters seen directly only,
          2 = single scattering; -1 = no limit). Default: 64.
      * - rr_depth
        - int
@@ -217,14 +217,21 @@ class FogPathIntegrator(FogPathCameraRay):
         ``sky_at_surfaces = "bsdf"`` a sample of the constant sky contributes 0: the BSDF
         sample carries the sky alone (:meth:`_sky_by_bsdf`)."""
         in_medium = isinstance(scatter, mi.PhaseFunction)
-        ds, em_w = scene.sample_emitter_direction(it, sampler.next_2d(active), False, active)
+        if dr.hint(not in_medium and self._sky_by_bsdf(scene) and len(scene.emitters()) > 1, mode="scalar"):
+            ds, em_w = self._sample_emitter_but_sky(scene, it, sampler.next_2d(active), active)
+        else:
+            ds, em_w = scene.sample_emitter_direction(it, sampler.next_2d(active), False, active)
         infinite = mi.has_flag(ds.emitter.flags(), mi.EmitterFlags.Infinite)
         if dr.hint(not in_medium and self._sky_by_bsdf(scene), mode="scalar"):
-            em_w = dr.select(infinite & ~ds.delta, 0.0, em_w)  # the only smooth infinite emitter: the sky
+            em_w = dr.select(infinite & ~ds.delta, 0.0, em_w)  # the sky alone: no light sample here
         if dr.hint(self.sun_one_minus_cos is not None, mode="scalar"):
             ds.d = self._sun_disk_direction(sampler, ds.d, ds.delta & infinite, active)
-        shadow = mi.Ray3f(it.p, ds.d) if in_medium else it.spawn_ray(ds.d)
-        shadow.maxt = dr.select(infinite, dr.inf, ds.dist * (1.0 - 1e-4))
+        if in_medium:  # a medium vertex: no offset from a surface
+            shadow = mi.Ray3f(it.p, ds.d)
+            shadow.maxt = dr.select(infinite, dr.inf, ds.dist * (1.0 - 1e-4))
+        else:  # spawn_ray moves the origin off the surface by (1 + |p|) eps (~2 mm at 20 m): a light
+            # at a finite distance needs spawn_ray_to, which stops short of the light by the same rule
+            shadow = dr.select(infinite, it.spawn_ray(ds.d), it.spawn_ray_to(ds.p))
         visible = active & (ds.pdf != 0) & ~scene.ray_test(shadow, active)
         if in_medium:
             f, f_pdf = scatter.eval_pdf(ctx, it, ds.d, active)
@@ -242,6 +249,30 @@ class FogPathIntegrator(FogPathCameraRay):
     def _sky_by_bsdf(self, scene):
         """Does the BSDF sample alone carry a constant sky at surfaces (trace-time)?"""
         return self.sky_at_surfaces == "bsdf" and self._constant_sky(scene) is not None
+
+    def _sky_selection(self, scene):
+        """(the sky's probability of being chosen by ``scene.sample_emitter``, the summed
+        probability of the emitters before it): trace-time floats."""
+        sky = self._constant_sky(scene)
+        probs = [float(scene.pdf_emitter(i)[0]) for i in range(len(scene.emitters()))]
+        j = next(i for i, e in enumerate(scene.emitters()) if e is sky)
+        return probs[j], sum(probs[:j])
+
+    def _sample_emitter_but_sky(self, scene, it, u, active):
+        """``scene.sample_emitter_direction`` (no visibility test) among the emitters other
+        than the constant sky: the selection's CDF with the sky's share cut out, ``u.x``
+        stretched over the rest, so an emitter is chosen with probability ``p / (1 - p_sky)``
+        and the sun of a sun + sky scene every time.  Returns (ds, weight) with ``ds.pdf``
+        the selection probability times the direction's pdf, as Mitsuba's."""
+        p_sky, below = self._sky_selection(scene)
+        x = u.x * (1.0 - p_sky)
+        x = dr.minimum(dr.select(x >= below, x + p_sky, x), 1.0 - 2.0**-24)
+        idx, sel_w, x_reuse = scene.sample_emitter(x, active)
+        emitter = dr.gather(mi.EmitterPtr, scene.emitters_dr(), idx, active)
+        ds, w = emitter.sample_direction(it, mi.Point2f(x_reuse, u.y), active)
+        sel_w = sel_w * (1.0 - p_sky)  # 1 / (p / (1 - p_sky))
+        ds.pdf = dr.select(sel_w > 0, ds.pdf / sel_w, 0.0)
+        return ds, w * sel_w
 
     def _sun_disk_direction(self, sampler, d, is_sun, active):
         """``d`` (toward the delta sun) replaced on ``is_sun`` lanes by a direction uniform in
@@ -366,8 +397,11 @@ class FogPathIntegrator(FogPathCameraRay):
                     em &= ~((depth == 0) & escaped)
                 ds = mi.DirectionSample3f(scene, si=si, ref=prev_it)
                 em_pdf = scene.pdf_emitter_direction(prev_it, ds, em & ~prev_delta)
-                if dr.hint(self._sky_by_bsdf(scene), mode="scalar"):  # from a surface: weight 1
-                    em_pdf = dr.select(escaped & (dr.squared_norm(prev_it.n) > 0), 0.0, em_pdf)
+                if dr.hint(self._sky_by_bsdf(scene), mode="scalar"):  # from a surface: the sky at weight 1,
+                    from_surface = dr.squared_norm(prev_it.n) > 0  # other lights as _sample_emitter_but_sky
+                    p_sky = self._sky_selection(scene)[0]
+                    other = em_pdf / (1.0 - p_sky) if p_sky < 1.0 else em_pdf  # p_sky 1: the sky alone
+                    em_pdf = dr.select(from_surface, dr.select(escaped, 0.0, other), em_pdf)
                 Le = β * mis_weight(prev_pdf, dr.select(prev_delta, 0.0, em_pdf)) * ds.emitter.eval(si, em)
                 split = split.add(dr.select(em, Le, 0.0), medium_first, depth == 1)
             active &= ~escaped & (depth + 1 < self.max_depth)  # max_depth = 2: single scattering
