@@ -12,7 +12,7 @@ prints its own log lines on stdout, which the driver skips):
 * then ``{"spp": n, "seed": s, "persistent": bool}``: renders, writes linear float32
   RGBA to ``exr`` (outside the timed region), answers ``{"wall_s"}``.
 
-Only the standard library and ``bpy`` / ``mathutils`` are imported here: ``bpy``'s
+Only the standard library and (in :func:`main`) ``bpy`` / ``mathutils`` are imported here: ``bpy``'s
 wheel pins a numpy that fogref's lock does not allow, so it lives in its own venv.
 """
 
@@ -23,11 +23,8 @@ import math
 import sys
 import time
 
-T0 = time.perf_counter()
-import bpy  # noqa: E402
-from mathutils import Vector  # noqa: E402
-
-IMPORT_S = time.perf_counter() - T0
+bpy = Vector = None  # imported by main(): cycles_peer.py imports this file without bpy
+IMPORT_S = 0.0
 
 
 def to_blender(p):
@@ -150,7 +147,16 @@ def _box(name, lo, hi, mat):
     """Axis-aligned box (Blender coordinates), outward faces."""
     x0, y0, z0 = lo
     x1, y1, z1 = hi
-    v = [(x0, y0, z0), (x1, y0, z0), (x1, y1, z0), (x0, y1, z0), (x0, y0, z1), (x1, y0, z1), (x1, y1, z1), (x0, y1, z1)]
+    v = [
+        (x0, y0, z0),
+        (x1, y0, z0),
+        (x1, y1, z0),
+        (x0, y1, z0),
+        (x0, y0, z1),
+        (x1, y0, z1),
+        (x1, y1, z1),
+        (x0, y1, z1),
+    ]
     f = [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)]
     return _mesh(name, v, f, mat)
 
@@ -221,7 +227,12 @@ def build(cfg):
         wo = world.node_tree.nodes.new("ShaderNodeOutputWorld")
         world.node_tree.links.new(bg.outputs[0], wo.inputs["Surface"])
     g = spec["ground"][0]
-    _mesh("ground", [(-g, -g, 0), (g, -g, 0), (g, g, 0), (-g, g, 0)], [(0, 1, 2, 3)], _diffuse_material("ground", spec["ground"][1]))
+    _mesh(
+        "ground",
+        [(-g, -g, 0), (g, -g, 0), (g, g, 0), (-g, g, 0)],
+        [(0, 1, 2, 3)],
+        _diffuse_material("ground", spec["ground"][1]),
+    )
     rock = _diffuse_material("rock", spec["rock"])
     for i, (s, ang, c) in enumerate(spec["boxes"]):
         assert ang == 0, "only axis-aligned boxes"
@@ -248,10 +259,22 @@ def reply(d):
 
 
 def main():
+    global bpy, Vector, IMPORT_S
+    t0 = time.perf_counter()
+    import bpy
+    from mathutils import Vector
+
+    IMPORT_S = time.perf_counter() - t0
     cfg = json.loads(sys.stdin.readline())
     t0 = time.perf_counter()
     build(cfg)
-    reply({"import_s": IMPORT_S, "build_s": time.perf_counter() - t0, "versions": {"blender": bpy.app.version_string}})
+    reply(
+        {
+            "import_s": IMPORT_S,
+            "build_s": time.perf_counter() - t0,
+            "versions": {"blender": bpy.app.version_string},
+        }
+    )
     for line in sys.stdin:
         if not line.strip():
             continue

@@ -2,7 +2,6 @@
 
     .venv/bin/python benchmarks/cycles_peer.py --quick     # ~5 min on 2 cores
     .venv/bin/python benchmarks/cycles_peer.py             # full (~30 min on 2 cores)
-    .venv/bin/python benchmarks/cycles_peer.py --check     # image alignment only
 
 An optional benchmark, not a test.  Cycles comes from PyPI's ``bpy`` (``pip install
 'fogref[cycles]'``, Python 3.11); its wheel pins numpy 1.26, so it usually lives in a
@@ -70,8 +69,11 @@ NO_BPY = (
 def find_bpy_python(arg: str | None) -> str:
     """The first interpreter among --bpy-python, $FOGREF_BPY_PYTHON, this one that imports bpy."""
     for py in (arg, os.environ.get("FOGREF_BPY_PYTHON"), sys.executable):
-        if py and subprocess.run([py, "-c", "import bpy"], capture_output=True).returncode == 0:
-            return py
+        try:
+            if py and subprocess.run([py, "-c", "import bpy"], capture_output=True).returncode == 0:
+                return py
+        except OSError:
+            pass
     raise SystemExit(NO_BPY)
 
 
@@ -82,7 +84,11 @@ class Cycles:
         self.dir = tempfile.mkdtemp(prefix="cycles_peer_")
         self.exr = os.path.join(self.dir, "out.exr")
         self.p = subprocess.Popen(
-            [py, str(WORKER)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True
+            [py, str(WORKER)],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            text=True,
         )
         cfg = {"spec": spec, "res": list(res), "max_depth": max_depth, "threads": threads, "exr": self.exr}
         self.info = self._ask(cfg)
@@ -141,3 +147,321 @@ def mitsuba_scene(mi, S, spec, res, max_depth):
             "bsdf": S._diffuse(spec["rock"]),
         }
     return mi.load_dict(d, optimize=False)
+
+
+def rmse(img, ref, var_ref):
+    return math.sqrt(max(float(((img - ref) ** 2).mean() - var_ref.mean()), 1e-30))
+
+
+def ladder_stats(np, runs, ref, var_ref):
+    """runs: {spp: [(img, wall)]} -> per spp RMSE (rms over repeats), median time,
+    variance per sample (spp x per-pixel variance across repeats)."""
+    rows = []
+    for spp, rs in sorted(runs.items()):
+        imgs = np.stack([im for im, _ in rs])
+        e = [rmse(im, ref, var_ref) for im, _ in rs]
+        rows.append(
+            {
+                "spp": spp,
+                "repeats": len(rs),
+                "rmse": math.sqrt(sum(x * x for x in e) / len(e)),
+                "rmse_each": e,
+                "time_s": float(np.median([t for _, t in rs])),
+                "time_each": [t for _, t in rs],
+                "var_per_sample": float(spp * imgs.var(0, ddof=1).mean()) if len(rs) > 1 else None,
+            }
+        )
+    return rows
+
+
+def per_sample(np, rows):
+    """(per-call seconds, seconds per sample) from a least-squares line through the
+    median times; variance per sample averaged over the ladder."""
+    x = np.array([r["spp"] for r in rows], float)
+    y = np.array([r["time_s"] for r in rows], float)
+    c, a = np.polyfit(x, y, 1)
+    v = [r["var_per_sample"] for r in rows if r["var_per_sample"] is not None]
+    return float(a), float(c), float(np.mean(v))
+
+
+def mean_bias(np, runs, ref_mean, ref_mean_se):
+    """Image mean of all runs minus the reference's, SE from the spread of the runs'
+    means (a run of n spp has variance sigma^2 / n) and the reference's own SE."""
+    n = np.array([s for s, rs in runs.items() for _ in rs], float)
+    m = np.array([float(im.mean()) for _, rs in runs.items() for im, _ in rs])
+    N = n.sum()
+    M = float((n * m).sum() / N)
+    s2 = float((n * (m - M) ** 2).sum() / (len(m) - 1))
+    se = math.sqrt(s2 / N + ref_mean_se**2)
+    return {
+        "mean": M,
+        "bias": M - ref_mean,
+        "se": se,
+        "rel_bias": (M - ref_mean) / ref_mean,
+        "z": (M - ref_mean) / se,
+    }
+
+
+def equal_error(tva, rows_cy, rows_fr, rep=None):
+    """Cycles time / fogref time at each Cycles ladder RMSE (fogref's time interpolated
+    log-log on its ladder); ``rep``: one repeat's images and times only."""
+
+    def pt(r):
+        return (r["time_each"][rep], r["rmse_each"][rep]) if rep is not None else (r["time_s"], r["rmse"])
+
+    f_pts = [pt(r) for r in rows_fr]
+    out = []
+    for r in rows_cy:
+        t, e = pt(r)
+        tf, how = tva.fogpath_time_at(e, f_pts)
+        out.append({"spp": r["spp"], "rmse": e, "cycles_s": t, "fogref_s": tf, "ratio": t / tf, "how": how})
+    return out
+
+
+def run_scene(name, args, py, env):
+    mi, np, S, tva = env["mi"], env["np"], env["S"], env["tva"]
+    from _common import kernel_profile, timed_render
+
+    spec = SCENES[name]
+    res, D = (64, 36), args.max_depth
+    out: dict = {"spec": spec, "res": list(res), "max_depth": D}
+    t0 = time.perf_counter()
+    scene = mitsuba_scene(mi, S, spec, res, D)
+    fr = {"scene_load_s": time.perf_counter() - t0}
+    k = kernel_profile(scene, args.ladder_fr[0], 777)
+    fr.update(
+        first_call_s=k["wall_s"],
+        first_call_llvm_backend_s=k["backend_s"],
+        first_call_codegen_s=k["codegen_s"],
+    )
+    for spp in args.ladder_fr[1:]:  # each spp is its own kernel: compile it outside the ladder
+        timed_render(scene, spp, 778)
+    cy = Cycles(py, spec, res, D, args.threads)
+    c0 = args.ladder_cy[0]
+    cyi = {"import_bpy_s": cy.info["import_s"], "scene_build_s": cy.info["build_s"]}
+    cyi["first_render_s"] = cy.render(c0, 777)[1]
+    cyi["steady_same_spp_s"] = cy.render(c0, 778)[1]
+    cyi["render_without_persistent_data_s"] = cy.render(c0, 779, persistent=False)[1]
+    cy.render(c0, 780)  # persistent data again (this call re-syncs)
+    homog = dict(spec, fog=dict(spec["fog"], layers=[(1.0, 0.0, 0.0)]))
+    cyh = Cycles(py, homog, res, D, args.threads)
+    cyi["first_render_homogeneous_fog_s"] = cyh.render(c0, 777)[1]
+    cyh.close()
+    out["blender"] = cy.info["versions"]["blender"]
+    # reference: fogpath in 8 chunks
+    ref, var_ref, t_ref, ref_spp = tva.render_reference(scene, args.ref_spp)
+    ref_mean = float(ref.mean())
+    ref_se = math.sqrt(float(var_ref.sum())) / var_ref.size
+    out["reference"] = {"spp": ref_spp, "time_s": t_ref, "mean": ref_mean, "mean_se": ref_se}
+    print(f"[{name}] reference {ref_spp} spp in {t_ref:.1f} s, mean {ref_mean:.5f}", flush=True)
+    runs_fr: dict = {s: [] for s in args.ladder_fr}
+    runs_cy: dict = {s: [] for s in args.ladder_cy}
+    for rep in range(args.repeats):  # round-robin: load from other work falls on both alike
+        for i, spp in enumerate(sorted(set(args.ladder_fr) | set(args.ladder_cy))):
+            seed = 1000 * rep + i
+            if spp in runs_fr:
+                runs_fr[spp].append(timed_render(scene, spp, seed))
+            if spp in runs_cy:
+                runs_cy[spp].append(cy.render(spp, seed))
+        print(f"[{name}] repeat {rep + 1}/{args.repeats} done", flush=True)
+    bias_runs = {s: list(v) for s, v in runs_cy.items()}
+    for j in range(args.bias_runs):
+        bias_runs.setdefault(args.bias_spp, []).append(cy.render(args.bias_spp, 50_000 + j))
+    cy.close()
+    rows_fr, rows_cy = (ladder_stats(np, r, ref, var_ref) for r in (runs_fr, runs_cy))
+    for key, rows in (("fogref", rows_fr), ("cycles", rows_cy)):
+        a, c, v = per_sample(np, rows)
+        out[key] = {"ladder": rows, "per_call_s": a, "time_per_sample_s": c, "var_per_sample": v}
+    out["fogref"]["one_time"], out["cycles"]["one_time"] = fr, cyi
+    out["fogref"]["bias"] = mean_bias(np, runs_fr, ref_mean, ref_se)
+    out["cycles"]["bias"] = mean_bias(np, bias_runs, ref_mean, ref_se)
+    rng = np.random.default_rng(5)
+    for key, runs in (("fogref", runs_fr), ("cycles", bias_runs)):
+        pool, var_pool, N = tva.pooled([(im, s) for s, rs in runs.items() for im, _ in rs])
+        b = tva.bias_stats(pool, var_pool, ref, var_ref, rng)
+        out[key]["pixel_bias"] = {
+            "N": N,
+            **{k: b[k] for k in ("bias_rms", "bias_rms_ci95", "chi2_per_pixel")},
+        }
+        if key == "cycles":  # alignment: row / column profiles of the pooled Cycles image vs the reference
+            out["alignment"] = {
+                "row_means_ref": ref.mean((1, 2)).tolist(),
+                "row_means_cycles": pool.mean((1, 2)).tolist(),
+                "max_rel_row_diff": float(np.abs(pool.mean((1, 2)) / ref.mean((1, 2)) - 1).max()),
+                "max_rel_col_diff": float(np.abs(pool.mean((0, 2)) / ref.mean((0, 2)) - 1).max()),
+            }
+    ee = equal_error(tva, rows_cy, rows_fr)
+    per_rep = [equal_error(tva, rows_cy, rows_fr, rep) for rep in range(args.repeats)]
+    for i, row in enumerate(ee):
+        rs = [p[i]["ratio"] for p in per_rep]
+        row["ratio_sd_over_repeats"] = float(np.std(rs, ddof=1)) if len(rs) > 1 else None
+    inter = [r["ratio"] for r in ee if r["how"] == "interpolated"]
+    eff = (out["cycles"]["time_per_sample_s"] * out["cycles"]["var_per_sample"]) / (
+        out["fogref"]["time_per_sample_s"] * out["fogref"]["var_per_sample"]
+    )
+    out["equal_error"] = {"points": ee, "median_interpolated": float(np.median(inter)) if inter else None}
+    out["asymptotic_ratio"] = eff
+    print(
+        f"[{name}] equal-error ratio (Cycles/fogref): {out['equal_error']['median_interpolated']}, "
+        f"asymptotic {eff:.2f}; Cycles bias {out['cycles']['bias']['rel_bias']:+.2e} "
+        f"(z {out['cycles']['bias']['z']:+.1f})",
+        flush=True,
+    )
+    return out
+
+
+def _f(x, n=3):
+    return "-" if x is None else f"{x:.{n}g}"
+
+
+def write_report(res, path_md, path_json):
+    from _cycles_worker import fair_settings
+
+    m, a = res["machine"], res["args"]
+    L = [
+        "# Blender Cycles as a measured peer (issue 22, part 3)",
+        "",
+        f"Written by `benchmarks/cycles_peer.py{' --quick' if a['quick'] else ''}` ({res['date']}, "
+        f"{res['wall_min']:.1f} min). An optional benchmark, not a test.",
+        "",
+        f"Machine: {m['cpu']}, {m['cores']} cores (shared; renders niced), {a['threads']} threads in both. "
+        f"Mitsuba {m['mitsuba']}, Dr.Jit {m['drjit']}, `{m['variant']}`; Blender {res['blender']} "
+        f"(`bpy` from PyPI, Python {res['bpy_python_version']}).",
+        "",
+        "Scenes: 64x36, exponential height fog sigma_t = 0.03 exp(-0.06 y) /m, albedo 0.9, HG g 0.5, in "
+        "the box [-60, 60] x [-1, 40] x [-60, 60] m; delta sun E = (2, 1.9, 1.7) W/m^2; constant sky "
+        "(0.2, 0.3, 0.5); diffuse ground 300 x 300 m; `box` adds one 8 x 12 x 8 m block. "
+        f"fogref: `fogpath` + bounded `heightfog`, max_depth {a['max_depth']}; Cycles: the same scene "
+        f"in z-up (x, y, z) -> (x, -z, y), {a['max_depth'] - 2} bounces of every kind.",
+        "",
+        "Equal-error ratio = Cycles steady time / fogref steady time at the same RMSE against a fogref "
+        "reference (> 1: fogref faster). *Interpolated*: at each Cycles ladder point, fogref's time "
+        "interpolated log-log on its ladder (median over points; +- the sd over repeats of the ratio "
+        "at the points). *Asymptotic*: (time per sample x variance per sample) of Cycles over fogref's, "
+        "the ratio when per-call costs vanish and both are unbiased.",
+        "",
+        "| scene | ratio, interpolated | sd over repeats | ratio, asymptotic | Cycles bias (rel, z) "
+        "| fogref bias (rel, z) | Cycles row / col profile vs ref (max rel diff) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for name, r in res["scenes"].items():
+        ee = r["equal_error"]
+        sds = [p["ratio_sd_over_repeats"] for p in ee["points"] if p["how"] == "interpolated"]
+        cb, fb, al = r["cycles"]["bias"], r["fogref"]["bias"], r["alignment"]
+        L.append(
+            f"| {name} | {_f(ee['median_interpolated'])} | {_f(max(sds) if sds else None, 2)} "
+            f"| {_f(r['asymptotic_ratio'])} | {cb['rel_bias']:+.2e} ({cb['z']:+.1f}) "
+            f"| {fb['rel_bias']:+.2e} ({fb['z']:+.1f}) "
+            f"| {al['max_rel_row_diff']:.3f} / {al['max_rel_col_diff']:.3f} |"
+        )
+    for name, r in res["scenes"].items():
+        fr, cy = r["fogref"], r["cycles"]
+        o1, o2 = fr["one_time"], cy["one_time"]
+        L += [
+            "",
+            f"## {name}",
+            "",
+            f"Reference: fogref {r['reference']['spp']} spp ({r['reference']['time_s']:.1f} s), image mean "
+            f"{r['reference']['mean']:.5f} +- {r['reference']['mean_se']:.1e}.",
+            "",
+            "One-time costs (s): fogref scene load (`mi.load_dict`) "
+            f"{o1['scene_load_s']:.3f}, first call {o1['first_call_s']:.2f} (of which LLVM back end "
+            f"{o1['first_call_llvm_backend_s']:.2f}, codegen {o1['first_call_codegen_s']:.2f}; a "
+            f"kernel-cache hit has ~0 back end). Cycles `import bpy` {o2['import_bpy_s']:.2f}, scene build "
+            f"(bpy data) "
+            f"{o2['scene_build_s']:.3f}, first render {o2['first_render_s']:.2f} vs steady "
+            f"{o2['steady_same_spp_s']:.3f} at the same spp (difference: device + sync + BVH + volume "
+            f"set-up), a render without persistent data {o2['render_without_persistent_data_s']:.2f} "
+            f"(sync + BVH every call); the same first render with the fog made homogeneous (falloff 0) "
+            f"{o2['first_render_homogeneous_fog_s']:.3f}: the rest is the set-up of the procedural "
+            "(heterogeneous) volume for null scattering.",
+            "",
+            "| | per-call s | time per sample s | variance per sample | bias rms per pixel (95%) "
+            "| chi2/pixel |",
+            "|---|---|---|---|---|---|",
+        ]
+        for key, d in (("fogref", fr), ("Cycles", cy)):
+            pb = d["pixel_bias"]
+            L.append(
+                f"| {key} | {_f(d['per_call_s'])} | {_f(d['time_per_sample_s'])} | {_f(d['var_per_sample'])} "
+                f"| {_f(pb['bias_rms'])} ({_f(pb['bias_rms_ci95'][0])}..{_f(pb['bias_rms_ci95'][1])}) "
+                f"| {_f(pb['chi2_per_pixel'])} |"
+            )
+        L += [
+            "",
+            "| spp | fogref RMSE | fogref s | Cycles RMSE | Cycles s | equal-error ratio | how |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        by_f = {x["spp"]: x for x in fr["ladder"]}
+        by_c = {x["spp"]: x for x in cy["ladder"]}
+        by_e = {x["spp"]: x for x in r["equal_error"]["points"]}
+        for spp in sorted(set(by_f) | set(by_c)):
+            f_, c_, e_ = by_f.get(spp), by_c.get(spp), by_e.get(spp)
+            L.append(
+                f"| {spp} | {_f(f_ and f_['rmse'])} | {_f(f_ and f_['time_s'])} | {_f(c_ and c_['rmse'])} "
+                f"| {_f(c_ and c_['time_s'])} | {_f(e_ and e_['ratio'])} | {e_['how'] if e_ else ''} |"
+            )
+    L += ["", "## Cycles settings", "", "`scene.cycles.<name>` (Blender Python API), as set:", ""]
+    L += [f"- `{k} = {v!r}`" for k, v in fair_settings(a["max_depth"]).items()]
+    L += [
+        "- `scene.render.threads_mode = 'FIXED'`, `threads`, `use_persistent_data = True` (steady renders "
+        "keep the synced scene, like fogref keeps its loaded scene); `film_transparent = False`",
+        "- `view_settings.view_transform = 'Standard'`, `look = 'None'`, `exposure = 0`, `gamma = 1`; "
+        "output `OPEN_EXR`, `RGBA`, `color_depth = '32'` (linear float), written after the clock stops",
+        "- sun: `Light.type = 'SUN'`, `angle = 0` (delta), `energy` = max(E), `color` = E / max(E); world "
+        "`Background` color = sky radiance, strength 1; camera `sensor_fit = 'HORIZONTAL'`, `angle` = fov, "
+        "`clip_start = 1e-4`, `clip_end = 1e7` (the default 100 m would cut the fog)",
+        "- fog: a volume-only material on the fog box mesh: `Volume Scatter` (white, density sigma_t "
+        "rho(z) albedo, `phase = 'HENYEY_GREENSTEIN'`) + `Volume Absorption` (black, density sigma_t "
+        "rho(z) (1 - albedo)); rho from Math nodes on `Geometry.Position` z; "
+        "`material.cycles.volume_sampling = 'MULTIPLE_IMPORTANCE'`",
+        "",
+    ]
+    Path(path_md).write_text("\n".join(L))
+    Path(path_json).write_text(json.dumps(res, indent=1))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="small ladders, 1024-spp reference (~5 min)")
+    ap.add_argument("--bpy-python", help="a Python that imports bpy (default: $FOGREF_BPY_PYTHON, this one)")
+    ap.add_argument("--scenes", default="open,box")
+    ap.add_argument("--max-depth", type=int, default=8)
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--out", default=str(HERE.parent / "reports" / "benchmarks"))
+    args = ap.parse_args()
+    py = find_bpy_python(args.bpy_python)
+    q = args.quick
+    args.ladder_fr = (1, 4, 16, 64) if q else (1, 4, 16, 64, 256, 1024)
+    args.ladder_cy = (4, 16, 64) if q else (4, 16, 64, 256, 1024)
+    args.repeats = 3 if q else 6
+    args.ref_spp = 1024 if q else 16384
+    args.bias_spp, args.bias_runs = (256, 2) if q else (1024, 12)
+    import _scenes as S
+    import time_vs_error as tva
+    from _common import dr, machine_info, mi, np
+
+    env = {"mi": mi, "np": np, "S": S, "tva": tva, "dr": dr}
+    t0 = time.time()
+    vers = subprocess.run(
+        [py, "-c", "import platform; print(platform.python_version())"], capture_output=True, text=True
+    )
+    res: dict = {
+        "machine": {**machine_info(), "drjit_threads": dr.thread_count()},
+        "bpy_python_version": vers.stdout.strip(),
+        "scenes": {},
+    }
+    res["args"] = {k: v for k, v in vars(args).items() if k != "out"}
+    for name in args.scenes.split(","):
+        res["scenes"][name] = run_scene(name, args, py, env)
+    res["blender"] = next(iter(res["scenes"].values()))["blender"]
+    res["date"] = time.strftime("%Y-%m-%d")
+    res["wall_min"] = (time.time() - t0) / 60
+    out = Path(args.out)
+    suffix = "_quick" if q else ""
+    write_report(res, out / f"cycles{suffix}.md", out / f"cycles{suffix}.json")
+    print(f"wrote {out / f'cycles{suffix}.md'}")
+
+
+if __name__ == "__main__":
+    main()
