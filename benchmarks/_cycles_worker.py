@@ -67,6 +67,22 @@ def fair_settings(max_depth: int) -> dict:
     }
 
 
+#: the rest of what build() sets, as the report lists it
+OTHER_SETTINGS = [
+    "- `scene.render.threads_mode = 'FIXED'`, `threads`, `use_persistent_data = True` (steady renders "
+    "keep the synced scene, like fogref keeps its loaded scene); `film_transparent = False`",
+    "- `view_settings.view_transform = 'Standard'`, `look = 'None'`, `exposure = 0`, `gamma = 1`; "
+    "output `OPEN_EXR`, `RGBA`, `color_depth = '32'` (linear float), written after the clock stops",
+    "- sun: `Light.type = 'SUN'`, `angle = 0` (delta), `energy` = max(E), `color` = E / max(E); world "
+    "`Background` color = sky radiance, strength 1; camera `sensor_fit = 'HORIZONTAL'`, `angle` = fov, "
+    "`clip_start = 1e-4`, `clip_end = 1e7` (the default 100 m would cut the fog)",
+    "- fog: a volume-only material on the fog box mesh: `Volume Scatter` (white, density sigma_t "
+    "rho(z) albedo, `phase = 'HENYEY_GREENSTEIN'`) + `Volume Absorption` (black, density sigma_t "
+    "rho(z) (1 - albedo)); rho from Math nodes on `Geometry.Position` z; "
+    "`material.cycles.volume_sampling = 'MULTIPLE_IMPORTANCE'`",
+]
+
+
 def _link(nt, a, b):
     nt.links.new(a, b)
 
@@ -207,7 +223,6 @@ def build(cfg):
     sc.camera = co
     if spec.get("sun") is not None:
         lamp = bpy.data.lights.new("sun", "SUN")
-        lamp.energy = 1.0
         lamp.angle = 0.0  # delta light, like Mitsuba's directional
         E = spec["sun"]
         s = max(E)

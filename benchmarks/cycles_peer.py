@@ -1,7 +1,7 @@
 """Blender Cycles as a measured peer: equal-error time of fogref (fogpath) vs Cycles.
 
-    .venv/bin/python benchmarks/cycles_peer.py --quick     # ~5 min on 2 cores
-    .venv/bin/python benchmarks/cycles_peer.py             # full (~30 min on 2 cores)
+    FOGREF_BPY_PYTHON=/path/to/bpy-venv/bin/python \
+    .venv/bin/python benchmarks/cycles_peer.py [--quick]   # ~9 min (--quick ~1.5 min), 2 cores
 
 An optional benchmark, not a test.  Cycles comes from PyPI's ``bpy`` (``pip install
 'fogref[cycles]'``, Python 3.11); its wheel pins numpy 1.26, so it usually lives in a
@@ -18,17 +18,16 @@ sigma_t = 0.03 exp(-0.06 y) /m, albedo 0.9, HG g = 0.5 in the box [-60, 60] x [-
 * per renderer, a ladder of spp x repeats: RMSE against the reference vs the steady wall
   time (median over repeats; Mitsuba's first call per spp compiles, Cycles' first call
   loads and syncs: both are timed apart and kept out of the ladder);
-* one-time costs: Mitsuba's scene load and first call (LLVM compile or kernel-cache
-  load); Cycles' ``import bpy``, scene build, first render (device + sync + BVH +
-  volume set-up) and a render without persistent data (sync + BVH every call);
-* variance per sample and time per sample (slope of steady time over spp);
-* Cycles' bias: the image mean of all its runs minus the reference, with the standard
-  error from the spread of runs, and fogpath's own (it should be 0 within noise);
-* the equal-error time ratio Cycles / fogref (> 1: fogref faster), interpolated log-log
-  on the ladders at each Cycles ladder RMSE, and asymptotically from
-  (time per sample x variance per sample); its noise from the spread over repeats.
+* one-time costs: Mitsuba's scene load and first call, here and in a fresh ``$HOME`` (no
+  kernel cache: LLVM compiles); Cycles' ``import bpy``, scene build, first render (device +
+  sync + BVH + volume set-up), a render without persistent data (sync + BVH every call);
+* variance per sample, time per sample (relative least squares of steady time over spp);
+* the bias of both: image mean of all runs minus the reference's, SE from the runs' spread;
+* the equal-error time ratio Cycles / fogref (> 1: fogref faster), interpolated log-log on
+  fogref's ladder at each Cycles ladder RMSE, and asymptotically from (time per sample x
+  variance per sample); noise by a jackknife over the repeats.
 
-Writes ``reports/benchmarks/cycles.{md,json}``.
+Writes ``reports/benchmarks/cycles.{md,json}`` (``cycles_quick.*`` with ``--quick``).
 """
 
 from __future__ import annotations
@@ -37,6 +36,7 @@ import argparse
 import json
 import math
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -57,7 +57,6 @@ BASE = dict(
     ground=(150, [0.3, 0.3, 0.25]),
     rock=[0.5, 0.4, 0.3],
     boxes=[],
-    spheres=[],
 )
 SCENES = {"open": dict(BASE), "box": dict(BASE, boxes=[((4, 6, 4), 0, (5, 6, 25))])}
 NO_BPY = (
@@ -113,6 +112,7 @@ class Cycles:
             self.p.stdin.write('{"quit": true}\n')
             self.p.stdin.close()
         self.p.wait(timeout=60)
+        shutil.rmtree(self.dir, ignore_errors=True)
 
 
 def mitsuba_scene(mi, S, spec, res, max_depth):
@@ -179,7 +179,7 @@ def per_sample(np, rows):
     median times; variance per sample averaged over the ladder."""
     x = np.array([r["spp"] for r in rows], float)
     y = np.array([r["time_s"] for r in rows], float)
-    c, a = np.polyfit(x, y, 1)
+    c, a = np.polyfit(x, y, 1, w=1 / y)  # relative residuals: the small spp count too
     v = [r["var_per_sample"] for r in rows if r["var_per_sample"] is not None]
     return float(a), float(c), float(np.mean(v))
 
@@ -202,19 +202,33 @@ def mean_bias(np, runs, ref_mean, ref_mean_se):
     }
 
 
-def equal_error(tva, rows_cy, rows_fr, rep=None):
+def equal_error(tva, rows_cy, rows_fr):
     """Cycles time / fogref time at each Cycles ladder RMSE (fogref's time interpolated
-    log-log on its ladder); ``rep``: one repeat's images and times only."""
-
-    def pt(r):
-        return (r["time_each"][rep], r["rmse_each"][rep]) if rep is not None else (r["time_s"], r["rmse"])
-
-    f_pts = [pt(r) for r in rows_fr]
+    log-log on its ladder)."""
+    f_pts = [(r["time_s"], r["rmse"]) for r in rows_fr]
     out = []
     for r in rows_cy:
-        t, e = pt(r)
+        t, e = r["time_s"], r["rmse"]
         tf, how = tva.fogpath_time_at(e, f_pts)
         out.append({"spp": r["spp"], "rmse": e, "cycles_s": t, "fogref_s": tf, "ratio": t / tf, "how": how})
+    return out
+
+
+def headline(np, tva, runs_fr, runs_cy, ref, var_ref):
+    """Ladder statistics of both renderers and the two equal-error ratios."""
+    out: dict = {}
+    rows_fr, rows_cy = (ladder_stats(np, r, ref, var_ref) for r in (runs_fr, runs_cy))
+    for key, rows in (("fogref", rows_fr), ("cycles", rows_cy)):
+        a, c, v = per_sample(np, rows)
+        out[key] = {"ladder": rows, "per_call_s": a, "time_per_sample_s": c, "var_per_sample": v}
+    ee = equal_error(tva, rows_cy, rows_fr)
+    inter = [r["ratio"] for r in ee if r["how"] == "interpolated"]
+    out["points"] = ee
+    out["at_lowest_rmse"] = inter[-1] if inter else None  # the top of Cycles' ladder
+    cy, fr = out["cycles"], out["fogref"]
+    out["asymptotic"] = (cy["time_per_sample_s"] * cy["var_per_sample"]) / (
+        fr["time_per_sample_s"] * fr["var_per_sample"]
+    )
     return out
 
 
@@ -229,10 +243,15 @@ def run_scene(name, args, py, env):
     scene = mitsuba_scene(mi, S, spec, res, D)
     fr = {"scene_load_s": time.perf_counter() - t0}
     k = kernel_profile(scene, args.ladder_fr[0], 777)
+    fr.update(first_call_s=k["wall_s"], first_call_llvm_backend_s=k["backend_s"])
+    fr.update(first_call_codegen_s=k["codegen_s"])
+    home = tempfile.mkdtemp(prefix="cycles_peer_home_")  # no ~/.drjit kernel cache: LLVM compiles
+    cmd = [sys.executable, __file__, "--cold-child", name, "--max-depth", str(D)]
+    p = subprocess.run(cmd, env={**os.environ, "HOME": home}, capture_output=True, text=True)
+    shutil.rmtree(home, ignore_errors=True)
+    k = json.loads([x for x in p.stdout.splitlines() if x.startswith("@@MI ")][-1][5:])
     fr.update(
-        first_call_s=k["wall_s"],
-        first_call_llvm_backend_s=k["backend_s"],
-        first_call_codegen_s=k["codegen_s"],
+        cold_first_call_s=k["wall_s"], cold_llvm_backend_s=k["backend_s"], cold_codegen_s=k["codegen_s"]
     )
     for spp in args.ladder_fr[1:]:  # each spp is its own kernel: compile it outside the ladder
         timed_render(scene, spp, 778)
@@ -268,10 +287,28 @@ def run_scene(name, args, py, env):
     for j in range(args.bias_runs):
         bias_runs.setdefault(args.bias_spp, []).append(cy.render(args.bias_spp, 50_000 + j))
     cy.close()
-    rows_fr, rows_cy = (ladder_stats(np, r, ref, var_ref) for r in (runs_fr, runs_cy))
-    for key, rows in (("fogref", rows_fr), ("cycles", rows_cy)):
-        a, c, v = per_sample(np, rows)
-        out[key] = {"ladder": rows, "per_call_s": a, "time_per_sample_s": c, "var_per_sample": v}
+    h = headline(np, tva, runs_fr, runs_cy, ref, var_ref)
+    for key in ("fogref", "cycles"):
+        out[key] = h[key]
+    # noise of the two ratios: jackknife over the repeats (each leaves one repeat of both out)
+    R = args.repeats
+    jk = [
+        headline(
+            np,
+            tva,
+            *({s: v[:r] + v[r + 1 :] for s, v in x.items()} for x in (runs_fr, runs_cy)),
+            ref,
+            var_ref,
+        )
+        for r in range(R)
+    ]
+    for k in ("at_lowest_rmse", "asymptotic"):
+        th = np.array([j[k] for j in jk], float)
+        out[k] = {
+            "ratio": h[k],
+            "jackknife_se": float(math.sqrt((R - 1) / R * ((th - th.mean()) ** 2).sum())),
+        }
+    out["equal_error_points"] = h["points"]
     out["fogref"]["one_time"], out["cycles"]["one_time"] = fr, cyi
     out["fogref"]["bias"] = mean_bias(np, runs_fr, ref_mean, ref_se)
     out["cycles"]["bias"] = mean_bias(np, bias_runs, ref_mean, ref_se)
@@ -290,20 +327,9 @@ def run_scene(name, args, py, env):
                 "max_rel_row_diff": float(np.abs(pool.mean((1, 2)) / ref.mean((1, 2)) - 1).max()),
                 "max_rel_col_diff": float(np.abs(pool.mean((0, 2)) / ref.mean((0, 2)) - 1).max()),
             }
-    ee = equal_error(tva, rows_cy, rows_fr)
-    per_rep = [equal_error(tva, rows_cy, rows_fr, rep) for rep in range(args.repeats)]
-    for i, row in enumerate(ee):
-        rs = [p[i]["ratio"] for p in per_rep]
-        row["ratio_sd_over_repeats"] = float(np.std(rs, ddof=1)) if len(rs) > 1 else None
-    inter = [r["ratio"] for r in ee if r["how"] == "interpolated"]
-    eff = (out["cycles"]["time_per_sample_s"] * out["cycles"]["var_per_sample"]) / (
-        out["fogref"]["time_per_sample_s"] * out["fogref"]["var_per_sample"]
-    )
-    out["equal_error"] = {"points": ee, "median_interpolated": float(np.median(inter)) if inter else None}
-    out["asymptotic_ratio"] = eff
     print(
-        f"[{name}] equal-error ratio (Cycles/fogref): {out['equal_error']['median_interpolated']}, "
-        f"asymptotic {eff:.2f}; Cycles bias {out['cycles']['bias']['rel_bias']:+.2e} "
+        f"[{name}] equal-error ratio (Cycles/fogref): {out['at_lowest_rmse']}, "
+        f"asymptotic {out['asymptotic']}; Cycles bias {out['cycles']['bias']['rel_bias']:+.2e} "
         f"(z {out['cycles']['bias']['z']:+.1f})",
         flush=True,
     )
@@ -314,8 +340,8 @@ def _f(x, n=3):
     return "-" if x is None else f"{x:.{n}g}"
 
 
-def write_report(res, path_md, path_json):
-    from _cycles_worker import fair_settings
+def write_report(res, path_md):
+    from _cycles_worker import OTHER_SETTINGS, fair_settings
 
     m, a = res["machine"], res["args"]
     L = [
@@ -336,21 +362,22 @@ def write_report(res, path_md, path_json):
         "",
         "Equal-error ratio = Cycles steady time / fogref steady time at the same RMSE against a fogref "
         "reference (> 1: fogref faster). *Interpolated*: at each Cycles ladder point, fogref's time "
-        "interpolated log-log on its ladder (median over points; +- the sd over repeats of the ratio "
-        "at the points). *Asymptotic*: (time per sample x variance per sample) of Cycles over fogref's, "
-        "the ratio when per-call costs vanish and both are unbiased.",
+        "interpolated log-log on its ladder; in the summary, at the lowest RMSE (the top of Cycles' "
+        "ladder). *Asymptotic*: (time per "
+        "sample x variance per sample) of Cycles over fogref's, the ratio when per-call costs vanish "
+        "and both are unbiased. +- : jackknife standard error over the repeats. Bias: image mean "
+        "minus the reference's, relative, with z = bias / standard error.",
         "",
-        "| scene | ratio, interpolated | sd over repeats | ratio, asymptotic | Cycles bias (rel, z) "
+        "| scene | ratio at the lowest RMSE | ratio, asymptotic | Cycles bias (rel, z) "
         "| fogref bias (rel, z) | Cycles row / col profile vs ref (max rel diff) |",
-        "|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|",
     ]
     for name, r in res["scenes"].items():
-        ee = r["equal_error"]
-        sds = [p["ratio_sd_over_repeats"] for p in ee["points"] if p["how"] == "interpolated"]
+        mi_, as_ = r["at_lowest_rmse"], r["asymptotic"]
         cb, fb, al = r["cycles"]["bias"], r["fogref"]["bias"], r["alignment"]
         L.append(
-            f"| {name} | {_f(ee['median_interpolated'])} | {_f(max(sds) if sds else None, 2)} "
-            f"| {_f(r['asymptotic_ratio'])} | {cb['rel_bias']:+.2e} ({cb['z']:+.1f}) "
+            f"| {name} | {_f(mi_['ratio'])} +- {_f(mi_['jackknife_se'], 2)} "
+            f"| {_f(as_['ratio'])} +- {_f(as_['jackknife_se'], 2)} | {cb['rel_bias']:+.2e} ({cb['z']:+.1f}) "
             f"| {fb['rel_bias']:+.2e} ({fb['z']:+.1f}) "
             f"| {al['max_rel_row_diff']:.3f} / {al['max_rel_col_diff']:.3f} |"
         )
@@ -367,7 +394,9 @@ def write_report(res, path_md, path_json):
             "One-time costs (s): fogref scene load (`mi.load_dict`) "
             f"{o1['scene_load_s']:.3f}, first call {o1['first_call_s']:.2f} (of which LLVM back end "
             f"{o1['first_call_llvm_backend_s']:.2f}, codegen {o1['first_call_codegen_s']:.2f}; a "
-            f"kernel-cache hit has ~0 back end). Cycles `import bpy` {o2['import_bpy_s']:.2f}, scene build "
+            f"kernel-cache hit has ~0 back end); in a fresh `$HOME` (no kernel cache) "
+            f"{o1['cold_first_call_s']:.2f} (LLVM back end {o1['cold_llvm_backend_s']:.2f}, codegen "
+            f"{o1['cold_codegen_s']:.2f}). Cycles `import bpy` {o2['import_bpy_s']:.2f}, scene build "
             f"(bpy data) "
             f"{o2['scene_build_s']:.3f}, first render {o2['first_render_s']:.2f} vs steady "
             f"{o2['steady_same_spp_s']:.3f} at the same spp (difference: device + sync + BVH + volume "
@@ -394,7 +423,7 @@ def write_report(res, path_md, path_json):
         ]
         by_f = {x["spp"]: x for x in fr["ladder"]}
         by_c = {x["spp"]: x for x in cy["ladder"]}
-        by_e = {x["spp"]: x for x in r["equal_error"]["points"]}
+        by_e = {x["spp"]: x for x in r["equal_error_points"]}
         for spp in sorted(set(by_f) | set(by_c)):
             f_, c_, e_ = by_f.get(spp), by_c.get(spp), by_e.get(spp)
             L.append(
@@ -403,33 +432,27 @@ def write_report(res, path_md, path_json):
             )
     L += ["", "## Cycles settings", "", "`scene.cycles.<name>` (Blender Python API), as set:", ""]
     L += [f"- `{k} = {v!r}`" for k, v in fair_settings(a["max_depth"]).items()]
-    L += [
-        "- `scene.render.threads_mode = 'FIXED'`, `threads`, `use_persistent_data = True` (steady renders "
-        "keep the synced scene, like fogref keeps its loaded scene); `film_transparent = False`",
-        "- `view_settings.view_transform = 'Standard'`, `look = 'None'`, `exposure = 0`, `gamma = 1`; "
-        "output `OPEN_EXR`, `RGBA`, `color_depth = '32'` (linear float), written after the clock stops",
-        "- sun: `Light.type = 'SUN'`, `angle = 0` (delta), `energy` = max(E), `color` = E / max(E); world "
-        "`Background` color = sky radiance, strength 1; camera `sensor_fit = 'HORIZONTAL'`, `angle` = fov, "
-        "`clip_start = 1e-4`, `clip_end = 1e7` (the default 100 m would cut the fog)",
-        "- fog: a volume-only material on the fog box mesh: `Volume Scatter` (white, density sigma_t "
-        "rho(z) albedo, `phase = 'HENYEY_GREENSTEIN'`) + `Volume Absorption` (black, density sigma_t "
-        "rho(z) (1 - albedo)); rho from Math nodes on `Geometry.Position` z; "
-        "`material.cycles.volume_sampling = 'MULTIPLE_IMPORTANCE'`",
-        "",
-    ]
+    L += [*OTHER_SETTINGS, ""]
     Path(path_md).write_text("\n".join(L))
-    Path(path_json).write_text(json.dumps(res, indent=1))
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--quick", action="store_true", help="small ladders, 1024-spp reference (~5 min)")
+    ap.add_argument("--quick", action="store_true", help="small ladders, 1024-spp reference (~1.5 min)")
     ap.add_argument("--bpy-python", help="a Python that imports bpy (default: $FOGREF_BPY_PYTHON, this one)")
     ap.add_argument("--scenes", default="open,box")
     ap.add_argument("--max-depth", type=int, default=8)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--out", default=str(HERE.parent / "reports" / "benchmarks"))
+    ap.add_argument("--cold-child", help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.cold_child:  # a fresh process in a fresh $HOME: fogref's first call with LLVM compiling
+        import _scenes as S
+        from _common import kernel_profile, mi
+
+        sc = mitsuba_scene(mi, S, SCENES[args.cold_child], (64, 36), args.max_depth)
+        print("@@MI " + json.dumps(kernel_profile(sc, 1, 777)))
+        return
     py = find_bpy_python(args.bpy_python)
     q = args.quick
     args.ladder_fr = (1, 4, 16, 64) if q else (1, 4, 16, 64, 256, 1024)
@@ -459,7 +482,9 @@ def main():
     res["wall_min"] = (time.time() - t0) / 60
     out = Path(args.out)
     suffix = "_quick" if q else ""
-    write_report(res, out / f"cycles{suffix}.md", out / f"cycles{suffix}.json")
+    out.mkdir(parents=True, exist_ok=True)
+    (out / f"cycles{suffix}.json").write_text(json.dumps(res, indent=1))
+    write_report(res, out / f"cycles{suffix}.md")
     print(f"wrote {out / f'cycles{suffix}.md'}")
 
 
