@@ -39,7 +39,6 @@ def fair_settings(max_depth: int) -> dict:
     b = max(max_depth - 2, 0)
     return {
         "device": "CPU",
-        "samples": 1,
         "use_adaptive_sampling": False,  # fixed spp, like fogref
         "use_denoising": False,
         "use_guiding": False,
@@ -69,6 +68,8 @@ def fair_settings(max_depth: int) -> dict:
 
 #: the rest of what build() sets, as the report lists it
 OTHER_SETTINGS = [
+    "- `scene.cycles.samples` = the spp and `scene.cycles.seed` = a seed per render (fixed per run, "
+    "varied across repeats, `use_animated_seed = False`)",
     "- `scene.render.threads_mode = 'FIXED'`, `threads`, `use_persistent_data = True` (steady renders "
     "keep the synced scene, like fogref keeps its loaded scene); `film_transparent = False`",
     "- `view_settings.view_transform = 'Standard'`, `look = 'None'`, `exposure = 0`, `gamma = 1`; "
