@@ -28,10 +28,8 @@ Scenes (96x54 by default):
 Methods (``METHODS``):
 
 ``fogpath``      fogref's integrator with the ``heightfog`` medium (analytic free flight).
-``fogpath_skybsdf`` fogpath with ``sky_at_surfaces = "bsdf"`` (a constant sky at surfaces
-                 from the BSDF sample alone).
-``fogpath_ss2``  fogpath with ``sun_sampling_rays = 2`` (the sun also sampled along the
-                 segment after the first vertex).
+``fogpath_prev`` fogpath as it was before issue 22 (``sky_at_surfaces = "mis"``,
+                 ``sun_sampling_rays = 1``), measured beside today's defaults.
 ``volpath_hf``   stock ``volpath`` with the ``heightfog`` medium (delta tracking
                  against heightfog's tight per-ray majorant).
 ``grid64``,      stock ``volpath`` with Mitsuba's ``heterogeneous`` medium on a
@@ -59,8 +57,7 @@ METHODS = (
     "fogpath_before",
     "fogpath_split",
     "fogpath_nosplit",
-    "fogpath_skybsdf",
-    "fogpath_ss2",
+    "fogpath_prev",
     "volpath_hf",
     "grid64",
     "grid256",
@@ -68,12 +65,19 @@ METHODS = (
 )
 #: fogpath as it was before issue 11 (one sun sample, sun sampling only in unbounded
 #: one-layer fog, no sky control variate), measured beside today's defaults
-BEFORE_ISSUE_11 = {"sun_samples": 1, "sun_sampling_mixture": False, "sky_cv": "off", "forced_split": False}
+BEFORE_ISSUE_11 = {
+    "sun_samples": 1,
+    "sun_sampling_mixture": False,
+    "sky_cv": "off",
+    "forced_split": False,
+    "sky_at_surfaces": "mis",
+    "sun_sampling_rays": 1,
+}
 #: fogpath with forced splitting on the camera ray on / off (all else default): the
 #: benchmarks measure the one that is not fogpath's default beside ``fogpath``
 SPLIT = {"fogpath_split": {"forced_split": True}, "fogpath_nosplit": {"forced_split": False}}
 #: fogpath with one option changed (all else default), measured beside ``fogpath``
-VARIANTS = {"fogpath_skybsdf": {"sky_at_surfaces": "bsdf"}, "fogpath_ss2": {"sun_sampling_rays": 2}}
+VARIANTS = {"fogpath_prev": {"sky_at_surfaces": "mis", "sun_sampling_rays": 1}}
 
 
 def split_method() -> str:

@@ -47,9 +47,9 @@ from .fogpath_common import AOV_NAMES, Split, spectrum
 #: ``forced_split``'s default (see ``reports/benchmarks/variance_reduction_issue11.md``)
 FORCED_SPLIT_DEFAULT = True
 #: ``sun_sampling_rays``'s default (see ``reports/benchmarks/summary.md``)
-SUN_SAMPLING_RAYS_DEFAULT = 1
+SUN_SAMPLING_RAYS_DEFAULT = 2
 #: ``sky_at_surfaces``'s default (see ``reports/benchmarks/summary.md``)
-SKY_AT_SURFACES_DEFAULT = "mis"
+SKY_AT_SURFACES_DEFAULT = "bsdf"
 
 
 class FogPathIntegrator(FogPathCameraRay):
