@@ -47,7 +47,7 @@ from .fogpath_common import AOV_NAMES, Split, spectrum
 #: ``forced_split``'s default (see ``reports/benchmarks/variance_reduction_issue11.md``)
 FORCED_SPLIT_DEFAULT = True
 #: ``sun_sampling_rays``'s default (see ``reports/benchmarks/summary.md``)
-SUN_SAMPLING_RAYS_DEFAULT = "auto"
+SUN_SAMPLING_RAYS_DEFAULT = 2
 #: ``sky_at_surfaces``'s default (see ``reports/benchmarks/summary.md``)
 SKY_AT_SURFACES_DEFAULT = "bsdf"
 
@@ -91,13 +91,11 @@ class FogPathIntegrator(FogPathCameraRay):
          the sun's single scattering along camera rays from a closed-form mixture of
          per-layer integrands, weighted by the exact integrand. Default: true.
      * - sun_sampling_rays
-       - int or string
+       - int
        - Path segments along which ``sun_sampling`` samples the sun's scattering from its
          integrand: 1 (the camera ray) or 2 (also the segment after the first vertex, one
          sample and shadow ray: the sun's share of double scattering; medium vertices on it
-         then skip sun NEE), or ``auto``: 2 where the exact sampler applies (one unbounded
-         exponential layer), 1 where the costlier mixture would be used.
-         Default: ``SUN_SAMPLING_RAYS_DEFAULT``.
+         then skip sun NEE).  Default: ``SUN_SAMPLING_RAYS_DEFAULT``.
      * - sun_samples
        - int
        - Stratified sun samples per camera ray (each one shadow ray). Default: 2.
@@ -146,12 +144,12 @@ class FogPathIntegrator(FogPathCameraRay):
         self.sun_sampling_layers = int(props.get("sun_sampling_layers", 1))
         self.sun_sampling_mixture = bool(props.get("sun_sampling_mixture", True))
         self.sun_samples = int(props.get("sun_samples", 2))
-        rays = props.get("sun_sampling_rays", SUN_SAMPLING_RAYS_DEFAULT)
-        #: 1, 2, or None: "auto", 2 where the exact sampler applies, else 1
-        self.sun_sampling_rays = (
-            None
-            if rays == "auto"
-            else params.integer(rays, "sun_sampling_rays", source="fogpath", lo=1, hi=2)
+        self.sun_sampling_rays = params.integer(
+            props.get("sun_sampling_rays", SUN_SAMPLING_RAYS_DEFAULT),
+            "sun_sampling_rays",
+            source="fogpath",
+            lo=1,
+            hi=2,
         )
         self.sky_cv = str(props.get("sky_cv", "off"))
         params.choice(self.sky_cv, "sky_cv", ("off", "surface", "all"), "fogpath")
@@ -375,8 +373,7 @@ class FogPathIntegrator(FogPathCameraRay):
             )
             depth = mi.UInt32(1)
         # the sun along the depth-1 segment (its vertices scatter only when max_depth >= 3)
-        rays = self.sun_sampling_rays or (2 if self._sun_sampler(scene, fog) == "exact" else 1)
-        ss_next = sun_ss is not None and rays >= 2 and self.max_depth >= 3
+        ss_next = sun_ss is not None and self.sun_sampling_rays >= 2 and self.max_depth >= 3
         while dr.hint(active, max_iterations=-1, label="fogpath"):
             if dr.hint(ss_next, mode="scalar"):
                 on = active & (depth == 1)

@@ -52,22 +52,3 @@ def test_single_scattering_only_is_unchanged(mitsuba):
     a = np.array(mi.render(_scene(mi, fog, max_depth=2, sun_sampling_rays=2), spp=8, seed=1))
     b = np.array(mi.render(_scene(mi, fog, max_depth=2, sun_sampling_rays=1), spp=8, seed=1))
     assert np.array_equal(a, b)
-
-
-@pytest.mark.parametrize("bounded", [True, False], ids=["box-mixture", "unbounded-exact"])
-def test_auto_is_two_segments_only_where_the_exact_sampler_applies(mitsuba, bounded):
-    """``auto`` (the default) renders bitwise as 2 in unbounded one-layer fog (the exact
-    sampler: cheap, +38-47 % efficiency on the valleys) and as 1 in a box (the mixture:
-    0.85-0.91x), per reports/benchmarks/summary.md."""
-    mi = mitsuba
-    fog = heightfog(mi)
-    if not bounded:
-        fog = {k: v for k, v in fog.items() if not k.startswith("bounds")}
-    auto = np.array(mi.render(_scene(mi, fog, max_depth=6), spp=4, seed=2))
-    fixed = np.array(
-        mi.render(_scene(mi, fog, max_depth=6, sun_sampling_rays=1 if bounded else 2), spp=4, seed=2)
-    )
-    other = np.array(
-        mi.render(_scene(mi, fog, max_depth=6, sun_sampling_rays=2 if bounded else 1), spp=4, seed=2)
-    )
-    assert np.array_equal(auto, fixed) and not np.array_equal(auto, other)
