@@ -10,18 +10,9 @@ at infinity, were never affected.
 
 import numpy as np
 import pytest
-from render_scenes import base_scene, heightfog
+from render_scenes import base_scene, heightfog, image_means
 
 pytestmark = pytest.mark.render
-
-
-def _means(mi, scene, n, spp, seed0):
-    return np.array(
-        [
-            np.array(mi.render(scene, spp=spp, seed=seed0 + k), dtype=np.float64)[..., :3].mean((0, 1))
-            for k in range(n)
-        ]
-    )
 
 
 def _scene(mi, integrator, fog):
@@ -50,8 +41,8 @@ def test_area_light_matches_stock(mitsuba, fog):
     mi = mitsuba
     medium = heightfog(mi) if fog else None
     stock = {"type": "volpath" if fog else "path", "max_depth": 3}
-    ours = _means(mi, _scene(mi, {"type": "fogpath", "max_depth": 3}, medium), 16, 128, 10)
-    ref = _means(mi, _scene(mi, stock, heightfog(mi) if fog else None), 16, 128, 5000)
+    ours = image_means(mi, _scene(mi, {"type": "fogpath", "max_depth": 3}, medium), 16, 128, 10)
+    ref = image_means(mi, _scene(mi, stock, heightfog(mi) if fog else None), 16, 128, 5000)
     se = np.sqrt(ours.var(0, ddof=1) / len(ours) + ref.var(0, ddof=1) / len(ref))
     diff = ours.mean(0) - ref.mean(0)
     assert np.all(se < 2e-3 * ref.mean(0)), (se, ref.mean(0))

@@ -8,18 +8,9 @@ tests/test_render_vs_stock.py), with independent seeds.
 
 import numpy as np
 import pytest
-from render_scenes import base_scene, heightfog
+from render_scenes import base_scene, heightfog, image_means
 
 pytestmark = pytest.mark.render
-
-
-def _means(mi, scene, n, spp, seed0):
-    return np.array(
-        [
-            np.array(mi.render(scene, spp=spp, seed=seed0 + k), dtype=np.float64)[..., :3].mean((0, 1))
-            for k in range(n)
-        ]
-    )
 
 
 def _scene(mi, fog, **integrator):
@@ -37,8 +28,8 @@ def test_two_sun_sampled_segments_agree_with_one(mitsuba, bounded):
     fog = heightfog(mi)
     if not bounded:  # unbounded fog: the exact sampler
         fog = {k: v for k, v in fog.items() if not k.startswith("bounds")}
-    two = _means(mi, _scene(mi, fog, max_depth=6, sun_sampling_rays=2), 32, 64, 100)
-    one = _means(mi, _scene(mi, fog, max_depth=6, sun_sampling_rays=1), 32, 64, 7000)
+    two = image_means(mi, _scene(mi, fog, max_depth=6, sun_sampling_rays=2), 32, 64, 100)
+    one = image_means(mi, _scene(mi, fog, max_depth=6, sun_sampling_rays=1), 32, 64, 7000)
     se = np.sqrt(two.var(0, ddof=1) / len(two) + one.var(0, ddof=1) / len(one))
     diff = two.mean(0) - one.mean(0)
     assert np.all(np.abs(diff) < 4 * se + 5e-4 * one.mean(0)), (diff, se, one.mean(0))
