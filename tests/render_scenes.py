@@ -92,15 +92,3 @@ def render_runs(mi, scene, n_runs, spp, aov=False):
         img = np.array(mi.render(scene, spp=spp, seed=1000 + s), dtype=np.float64)
         out.append(img if aov else img[..., :3])
     return out
-
-
-def image_means(mi, scene, n_runs, spp, seed0):
-    """(n_runs, 3) float64 R,G,B image means of independent renders with seeds seed0, seed0 + 1, ...
-
-    For comparisons of image means with the standard error taken from the runs' spread."""
-    return np.array(
-        [
-            np.array(mi.render(scene, spp=spp, seed=seed0 + k), dtype=np.float64)[..., :3].mean((0, 1))
-            for k in range(n_runs)
-        ]
-    )

@@ -74,14 +74,20 @@ def one_sample_blocks(runs, reference, block=4, alpha=1e-3, floor=0.0, what=""):
 Z_ALPHA, Z_POWER = 3.29, 1.645
 
 
-def image_means(mi, scene, n_runs, spp, seed0):
-    """Mean over pixels and RGB of ``n_runs`` independent renders (seeds seed0, seed0+1, ...)."""
+def image_means_rgb(mi, scene, n_runs, spp, seed0):
+    """(n_runs, 3): the R, G, B means over pixels of ``n_runs`` independent renders (seeds
+    seed0, seed0+1, ...), float64."""
     return np.array(
         [
-            float(np.mean(np.array(mi.render(scene, spp=spp, seed=seed0 + k), dtype=np.float64)[..., :3]))
+            np.array(mi.render(scene, spp=spp, seed=seed0 + k), dtype=np.float64)[..., :3].mean((0, 1))
             for k in range(n_runs)
         ]
     )
+
+
+def image_means(mi, scene, n_runs, spp, seed0):
+    """Mean over pixels and RGB of ``n_runs`` independent renders (seeds seed0, seed0+1, ...)."""
+    return image_means_rgb(mi, scene, n_runs, spp, seed0).mean(1)
 
 
 def assert_mean_equals(means, expected, max_detectable=1e-3, what=""):

@@ -10,7 +10,8 @@ at infinity, were never affected.
 
 import numpy as np
 import pytest
-from render_scenes import base_scene, heightfog, image_means
+from render_scenes import base_scene, heightfog
+from stats import image_means_rgb
 
 pytestmark = pytest.mark.render
 
@@ -41,8 +42,8 @@ def test_area_light_matches_stock(mitsuba, fog):
     mi = mitsuba
     medium = heightfog(mi) if fog else None
     stock = {"type": "volpath" if fog else "path", "max_depth": 3}
-    ours = image_means(mi, _scene(mi, {"type": "fogpath", "max_depth": 3}, medium), 16, 128, 10)
-    ref = image_means(mi, _scene(mi, stock, heightfog(mi) if fog else None), 16, 128, 5000)
+    ours = image_means_rgb(mi, _scene(mi, {"type": "fogpath", "max_depth": 3}, medium), 16, 128, 10)
+    ref = image_means_rgb(mi, _scene(mi, stock, heightfog(mi) if fog else None), 16, 128, 5000)
     se = np.sqrt(ours.var(0, ddof=1) / len(ours) + ref.var(0, ddof=1) / len(ref))
     diff = ours.mean(0) - ref.mean(0)
     assert np.all(se < 2e-3 * ref.mean(0)), (se, ref.mean(0))

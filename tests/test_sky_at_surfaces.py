@@ -8,7 +8,8 @@ stock with its own seeds, standard error from the spread of runs).
 
 import numpy as np
 import pytest
-from render_scenes import base_scene, heightfog, image_means
+from render_scenes import base_scene, heightfog
+from stats import image_means_rgb
 
 pytestmark = pytest.mark.render
 
@@ -67,12 +68,12 @@ def test_bsdf_sky_in_fog_matches_mis_and_stock_volpath(mitsuba):
       1.1 % or more fails even if ``mis`` were wrong too."""
     mi = mitsuba
     fogpath = {"type": "fogpath", "max_depth": 6}
-    bsdf = image_means(mi, _fog_scene(mi, {**fogpath, "sky_at_surfaces": "bsdf"}), 12, 64, 100)
-    mis = image_means(mi, _fog_scene(mi, {**fogpath, "sky_at_surfaces": "mis"}), 12, 64, 100)
+    bsdf = image_means_rgb(mi, _fog_scene(mi, {**fogpath, "sky_at_surfaces": "bsdf"}), 12, 64, 100)
+    mis = image_means_rgb(mi, _fog_scene(mi, {**fogpath, "sky_at_surfaces": "mis"}), 12, 64, 100)
     d = bsdf - mis
     se_d = d.std(0, ddof=1) / np.sqrt(len(d))
     assert np.all(np.abs(d.mean(0)) < 4 * se_d + 1e-4 * mis.mean(0)), (d.mean(0), se_d)
-    stock = image_means(mi, _fog_scene(mi, {"type": "volpath", "max_depth": 6}), 12, 128, 9000)
+    stock = image_means_rgb(mi, _fog_scene(mi, {"type": "volpath", "max_depth": 6}), 12, 128, 9000)
     se = np.sqrt(bsdf.var(0, ddof=1) / len(bsdf) + stock.var(0, ddof=1) / len(stock))
     diff = bsdf.mean(0) - stock.mean(0)
     assert np.all(np.abs(diff) < 4 * se + 2e-3 * stock.mean(0)), (diff, se, stock.mean(0))
@@ -99,7 +100,7 @@ def test_bsdf_sky_with_an_area_light_matches_mis(mitsuba):
         }
         return mi.load_dict(d, parallel=False)
 
-    bsdf, mis = image_means(mi, scene("bsdf"), 24, 64, 40), image_means(mi, scene("mis"), 24, 64, 40)
+    bsdf, mis = image_means_rgb(mi, scene("bsdf"), 24, 64, 40), image_means_rgb(mi, scene("mis"), 24, 64, 40)
     d = bsdf - mis
     se_d = d.std(0, ddof=1) / np.sqrt(len(d))
     assert np.all(se_d < 3e-3 * mis.mean(0)), se_d

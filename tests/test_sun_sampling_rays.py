@@ -8,7 +8,8 @@ tests/test_render_vs_stock.py), with independent seeds.
 
 import numpy as np
 import pytest
-from render_scenes import base_scene, heightfog, image_means
+from render_scenes import base_scene, heightfog
+from stats import image_means_rgb
 
 pytestmark = pytest.mark.render
 
@@ -28,8 +29,8 @@ def test_two_sun_sampled_segments_agree_with_one(mitsuba, bounded):
     fog = heightfog(mi)
     if not bounded:  # unbounded fog: the exact sampler
         fog = {k: v for k, v in fog.items() if not k.startswith("bounds")}
-    two = image_means(mi, _scene(mi, fog, max_depth=6, sun_sampling_rays=2), 32, 64, 100)
-    one = image_means(mi, _scene(mi, fog, max_depth=6, sun_sampling_rays=1), 32, 64, 7000)
+    two = image_means_rgb(mi, _scene(mi, fog, max_depth=6, sun_sampling_rays=2), 32, 64, 100)
+    one = image_means_rgb(mi, _scene(mi, fog, max_depth=6, sun_sampling_rays=1), 32, 64, 7000)
     se = np.sqrt(two.var(0, ddof=1) / len(two) + one.var(0, ddof=1) / len(one))
     diff = two.mean(0) - one.mean(0)
     assert np.all(np.abs(diff) < 4 * se + 5e-4 * one.mean(0)), (diff, se, one.mean(0))
