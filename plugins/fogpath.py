@@ -217,13 +217,14 @@ class FogPathIntegrator(FogPathCameraRay):
         ``sky_at_surfaces = "bsdf"`` a sample of the constant sky contributes 0: the BSDF
         sample carries the sky alone (:meth:`_sky_by_bsdf`)."""
         in_medium = isinstance(scatter, mi.PhaseFunction)
-        if dr.hint(not in_medium and self._sky_by_bsdf(scene) and len(scene.emitters()) > 1, mode="scalar"):
+        sky_by_bsdf = not in_medium and self._sky_by_bsdf(scene)
+        if dr.hint(sky_by_bsdf and len(scene.emitters()) > 1, mode="scalar"):
             ds, em_w = self._sample_emitter_but_sky(scene, it, sampler.next_2d(active), active)
         else:
             ds, em_w = scene.sample_emitter_direction(it, sampler.next_2d(active), False, active)
         infinite = mi.has_flag(ds.emitter.flags(), mi.EmitterFlags.Infinite)
-        if dr.hint(not in_medium and self._sky_by_bsdf(scene), mode="scalar"):
-            em_w = dr.select(infinite & ~ds.delta, 0.0, em_w)  # the sky alone: no light sample here
+        if dr.hint(sky_by_bsdf, mode="scalar"):  # the sky alone (or a rounding edge of the remap)
+            em_w = dr.select(infinite & ~ds.delta, 0.0, em_w)
         if dr.hint(self.sun_one_minus_cos is not None, mode="scalar"):
             ds.d = self._sun_disk_direction(sampler, ds.d, ds.delta & infinite, active)
         if in_medium:  # a medium vertex: no offset from a surface
@@ -249,14 +250,6 @@ class FogPathIntegrator(FogPathCameraRay):
     def _sky_by_bsdf(self, scene):
         """Does the BSDF sample alone carry a constant sky at surfaces (trace-time)?"""
         return self.sky_at_surfaces == "bsdf" and self._constant_sky(scene) is not None
-
-    def _sky_selection(self, scene):
-        """(the sky's probability of being chosen by ``scene.sample_emitter``, the summed
-        probability of the emitters before it): trace-time floats."""
-        sky = self._constant_sky(scene)
-        probs = [float(scene.pdf_emitter(i)[0]) for i in range(len(scene.emitters()))]
-        j = next(i for i, e in enumerate(scene.emitters()) if e is sky)
-        return probs[j], sum(probs[:j])
 
     def _sample_emitter_but_sky(self, scene, it, u, active):
         """``scene.sample_emitter_direction`` (no visibility test) among the emitters other

@@ -33,32 +33,29 @@ from .fogpath_common import FogPathBase, Split, spectrum
 class FogPathCameraRay(FogPathBase):
     """The camera-ray estimators of fogpath (see module)."""
 
-    def _sun_sampler(self, scene, fog):
-        """Which sampler draws the sun's scattering along a ray: ``"exact"``, ``"mixture"`` or
-        None (next-event estimation covers it) (trace-time)."""
+    def _sun_single_scatter(self, scene, fog, ops, sampler, ray, D, active, samples=None):
+        """The sun's single scattering along the ray (the camera ray, or with
+        ``sun_sampling_rays = 2`` the next segment), sampled from its exact
+        integrand (``exact``) or a closed-form mixture proposal with the exact
+        weight (``mixture``: bounded fog, several layers), ``sun_samples``
+        stratified samples averaged (``samples``, if given, instead; None when it does not
+        apply; then NEE covers it)."""
         sun = self._scene_sun(scene) if (fog is not None and self.sun_sampling) else None
-        if sun is None or self.max_depth < 2:
-            return None
-        mode = sun_sampling_mode(fog._obj, sun[0], self.sun_sampling_layers, self.sun_sampling_mixture)
-        if self.sun_one_minus_cos is not None and mode is not None:
+        mode = (
+            None
+            if (sun is None or self.max_depth < 2)
+            else sun_sampling_mode(fog._obj, sun[0], self.sun_sampling_layers, self.sun_sampling_mixture)
+        )
+        disk = self.sun_one_minus_cos is not None
+        if disk and mode is not None:
             # a sun disk: the exact sampler toward a point of the disk drawn per sample, when the
             # whole disk is above the horizon; otherwise next-event estimation samples it
             sin_radius = math.sqrt(self.sun_one_minus_cos * (2.0 - self.sun_one_minus_cos))
             if mode != "exact" or sun[0][1] <= sin_radius + 1e-6:
                 mode = None
-        return mode
-
-    def _sun_single_scatter(self, scene, fog, ops, sampler, ray, D, active, samples=None):
-        """The sun's single scattering along the camera ray, sampled from its exact
-        integrand (``exact``) or a closed-form mixture proposal with the exact
-        weight (``mixture``: bounded fog, several layers), ``sun_samples``
-        stratified samples averaged (``samples``, if given, instead; None when it does not
-        apply; then NEE covers it)."""
-        mode = self._sun_sampler(scene, fog)
         if mode is None:
             return None
-        w_sun, E_sun = self._scene_sun(scene)
-        disk = self.sun_one_minus_cos is not None
+        w_sun, E_sun = sun
         K, total = samples or self.sun_samples, mi.Spectrum(0.0)
         for k in range(K):
             channel = self._draw_channel(sampler, active)  # one-sample spectral MIS inside the sampler
@@ -94,8 +91,7 @@ class FogPathCameraRay(FogPathBase):
         sky = self._constant_sky(scene)
         if sky is None or abs(fog.g) > 0.95:  # > 0.95: the lobe's table would need more nodes
             return None
-        idx = [i for i, e in enumerate(scene.emitters()) if e is sky]
-        pdf_sel = float(scene.pdf_emitter(idx[0])[0]) if idx else 1.0 / len(scene.emitters())
+        pdf_sel, _ = self._sky_selection(scene)
         Lv = mi.traverse(sky)["radiance.value"]
         L = spectrum(ops.params([float(Lv[i][0]) for i in range(3)] if len(Lv) == 3 else [float(Lv[0][0])]))
         table = hg_upper_fraction_table(float(fog.g))

@@ -128,6 +128,14 @@ class FogPathBase(mi.SamplingIntegrator):
             return smooth_inf[0]
         return None
 
+    def _sky_selection(self, scene):
+        """(the constant sky's probability of being chosen by ``scene.sample_emitter``, the
+        summed probability of the emitters before it): trace-time floats."""
+        sky = self._constant_sky(scene)
+        probs = [float(scene.pdf_emitter(i)[0]) for i in range(len(scene.emitters()))]
+        j = next(i for i, e in enumerate(scene.emitters()) if e is sky)
+        return probs[j], sum(probs[:j])
+
     @staticmethod
     def _scene_sun(scene):
         """(direction toward the sun, RGB irradiance) of the only delta directional
