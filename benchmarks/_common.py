@@ -49,6 +49,7 @@ def kernel_profile(scene, spp: int, seed: int) -> dict:
     jit = [k for k in hist if str(k.get("type")).endswith("JIT")]
     other = [k for k in hist if not str(k.get("type")).endswith("JIT")]
     main = max(jit, key=lambda k: k["execution_time"]) if jit else None
+    largest = max(jit, key=lambda k: k.get("operation_count") or 0) if jit else None  # the path kernel
     exec_ms = sum(k["execution_time"] for k in hist)
     return {
         "spp": spp,
@@ -64,6 +65,13 @@ def kernel_profile(scene, spp: int, seed: int) -> dict:
         "codegen_s": sum(k.get("codegen_time", 0.0) for k in jit) / 1e3,
         "backend_s": sum(k.get("backend_time", 0.0) for k in jit) / 1e3,
         "host_overhead_s": wall - exec_ms / 1e3,  # Python tracing, scene/film set-up, launches
+        # the largest kernel (most operations): compiled here (neither in memory nor on disk)?
+        "largest_kernel_compiled": bool(largest and not largest["cache_hit"]),
+        "largest_kernel_compile_s": (
+            (largest.get("codegen_time", 0.0) + largest.get("backend_time", 0.0)) / 1e3
+            if largest and not largest["cache_hit"]
+            else 0.0
+        ),
     }
 
 

@@ -44,13 +44,9 @@ CALLS = [
 
 def _child(pattern: str) -> list:
     import gc
-    import time
 
-    import fogref
-
-    fogref.set_variant("llvm_ad_rgb")
-    import drjit as dr
     import mitsuba as mi
+    from _common import kernel_profile  # sets the variant ($FOGREF_VARIANT, else llvm_ad_rgb)
 
     rows, scene = [], None
     for what, seed, over in CALLS:
@@ -58,23 +54,14 @@ def _child(pattern: str) -> list:
             scene = None
             gc.collect()
         scene = mi.load_file(str(ROOT / "scenes" / "valley.xml"), parallel=False, res="32", resy="18", **over)
-        dr.kernel_history()
-        dr.set_flag(dr.JitFlag.KernelHistory, True)
-        t0 = time.perf_counter()
-        dr.eval(mi.render(scene, spp=16, seed=seed))
-        dr.sync_thread()
-        wall = time.perf_counter() - t0
-        hist = [k for k in dr.kernel_history() if str(k.get("type")).endswith("JIT")]
-        dr.set_flag(dr.JitFlag.KernelHistory, False)
-        path = max(hist, key=lambda k: k["operation_count"])
-        ms = path["codegen_time"] + path["backend_time"]
+        prof = kernel_profile(scene, 16, seed)
         rows.append(
             {
                 "call": what,
                 "seed": seed,
-                "wall_s": wall,
-                "path_kernel_compiled": not path["cache_hit"],
-                "compile_s": 0.0 if path["cache_hit"] else ms / 1e3,
+                "wall_s": prof["wall_s"],
+                "path_kernel_compiled": prof["largest_kernel_compiled"],
+                "compile_s": prof["largest_kernel_compile_s"],
             }
         )
     return rows
