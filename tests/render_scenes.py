@@ -85,10 +85,14 @@ def grid_medium(mi, n=256, **kw):
     )
 
 
-def render_runs(mi, scene, n_runs, spp, aov=False):
-    """n independent renders (seeds 0..n-1) as float64 arrays (H, W, C)."""
+#: the first seed of the stock methods' runs: their own seeds, apart from fogpath's
+STOCK_SEED0 = 500_000
+
+
+def render_runs(mi, scene, n_runs, spp, aov=False, seed0=1000):
+    """n independent renders (seeds seed0 .. seed0 + n - 1) as float64 arrays (H, W, C)."""
     out = []
     for s in range(n_runs):
-        img = np.array(mi.render(scene, spp=spp, seed=1000 + s), dtype=np.float64)
+        img = np.array(mi.render(scene, spp=spp, seed=seed0 + s), dtype=np.float64)
         out.append(img if aov else img[..., :3])
     return out

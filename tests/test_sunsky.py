@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 import pytest
+from render_scenes import render_runs
 
 from fogref.media.single_scatter import hg_upper_fraction, single_scatter_sun
 from fogref.media.single_scatter_nonuniform import single_scatter_sun_disk, sky_phase_projection
@@ -148,12 +149,6 @@ def test_serial_loading_avoids_mitsubas_sunsky_race(mi):
     assert _load_sunsky_after_python_medium_renders(mi, 60, parallel=False) == 0
 
 
-def _runs(mi, scene, n, spp, seed0):
-    return np.array(
-        [np.array(mi.render(scene, spp=spp, seed=seed0 + k), dtype=np.float64)[..., :3] for k in range(n)]
-    )
-
-
 @pytest.mark.parametrize("diameter", [0.0, 0.5358])
 def test_sun_plus_sky_equals_stock_volpath_with_mitsubas_sunsky(mi, diameter):
     """fogpath (sky with sun_scale 0 + fogref's sun of the disk's irradiance, a delta or the
@@ -181,8 +176,8 @@ def test_sun_plus_sky_equals_stock_volpath_with_mitsubas_sunsky(mi, diameter):
         return mi.load_dict(d, parallel=False)
 
     fogpath = {"type": "fogpath", "max_depth": 8, "aovs": False, "sun_angular_diameter": diameter}
-    ours = _runs(mi, scene(fogpath, True), 6, 32, 10)
-    stock = _runs(mi, scene({"type": "volpath", "max_depth": 8}, False), 6, 64, 500)
+    ours = np.array(render_runs(mi, scene(fogpath, True), 6, 32, seed0=10))
+    stock = np.array(render_runs(mi, scene({"type": "volpath", "max_depth": 8}, False), 6, 64, seed0=500))
     m_o, m_s = ours.mean((1, 2)), stock.mean((1, 2))  # (runs, 3) image means
     se = np.sqrt(m_o.var(0, ddof=1) / len(m_o) + m_s.var(0, ddof=1) / len(m_s))
     diff = m_o.mean(0) - m_s.mean(0)
@@ -232,7 +227,7 @@ def test_disk_and_delta_suns_in_renders(mi):
     dimmer at the centre of the image (the delta's peak is spread over the disk)."""
 
     def means(g, diameter, look, seed0):
-        r = _runs(mi, _plane_fog_scene(mi, g, diameter, look), 5, 16, seed0)
+        r = np.array(render_runs(mi, _plane_fog_scene(mi, g, diameter, look), 5, 16, seed0=seed0))
         return r
 
     a, b = means(0.6, 0.0, False, 0), means(0.6, 0.53, False, 100)
@@ -312,8 +307,9 @@ def test_disk_sun_softens_a_shadow_edge(mi):
     """The penumbra (0.19 m on the ground for a 0.53 deg sun 14 m behind the edge): the columns
     across the edge differ from the delta sun's hard shadow by many standard errors, while the
     columns away from it and the image mean (the shadow's area) agree within noise."""
-    a = _runs(mi, _shadow_edge_scene(mi, 0.0), 4, 32, 0).mean(1)[..., 0]  # (runs, columns)
-    b = _runs(mi, _shadow_edge_scene(mi, 0.53), 4, 32, 100).mean(1)[..., 0]
+    # (runs, columns)
+    a = np.array(render_runs(mi, _shadow_edge_scene(mi, 0.0), 4, 32, seed0=0)).mean(1)[..., 0]
+    b = np.array(render_runs(mi, _shadow_edge_scene(mi, 0.53), 4, 32, seed0=100)).mean(1)[..., 0]
     lit = max(a.mean(0).max(), b.mean(0).max())
     # + 1e-4 lit: the disk's mean cosine on the ground is below the centre's by ~theta_s^2 / 4
     se = np.sqrt(a.var(0, ddof=1) / len(a) + b.var(0, ddof=1) / len(b)) + 1e-4 * lit / 4
