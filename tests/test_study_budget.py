@@ -2,74 +2,15 @@
 
 import numpy as np
 import pytest
+from budget_truth import budget_scene, synthetic_pixels
 
-from fogref.gbuffer import Truth
-from fogref.mapping import PhysicalScene as PhysicalFog
 from fogref.mapping import base_params
-from fogref.media import ExpLayer, FogMedium
 from fogref.study import budget as B
 
 
-def _pixels(pf, h=12, w=20, seed=0, rel_stderr=0.0):
-    """A synthetic schema-2 Truth consistent with the closed forms of ``pf``, and a sun-less ``single``."""
-    rng = np.random.default_rng(seed)
-    cam = np.asarray(pf.camera)
-    v = rng.normal(size=(h, w, 3))
-    v[..., 2] = np.abs(v[..., 2]) + 1.0
-    v /= np.linalg.norm(v, axis=-1, keepdims=True)
-    hit = v[..., 1] < 0.05
-    D = np.where(hit, rng.uniform(5, 3000, (h, w)), 0.0)
-    z3 = np.zeros((h, w, 3))
-    px = Truth(
-        path="<synthetic>",
-        final=z3,
-        transmittance=z3,
-        attenuated_surface=z3,
-        inscatter=z3,
-        single=z3,
-        multiple=z3,
-        surface=rng.uniform(0, 0.5, (h, w, 3)),
-        stderr={},
-        surface_coverage=np.ones((h, w)),
-        distance=D,
-        position=cam + v * D[..., None],
-        view=v,
-        hit_fraction=hit.astype(float),
-        camera=cam,
-        sun_direction=np.asarray(pf.sun_direction),
-        params={},
-    )
-    cf = B.closed_forms(px, pf)
-    px.transmittance = cf["T"]
-    px.attenuated_surface = px.transmittance * px.surface
-    sky_single = cf["sky"] * rng.uniform(0.5, 1.0, (h, w, 1))
-    px.single = cf["sun_att"] * rng.uniform(0.0, 1.0, (h, w, 1)) + sky_single
-    px.multiple = rng.uniform(0, 0.05, (h, w, 3))
-    px.inscatter = px.single + px.multiple
-    px.final = px.attenuated_surface + px.inscatter
-    px.stderr = {
-        k: rel_stderr * np.abs(getattr(px, k))
-        for k in (
-            "final",
-            "transmittance",
-            "attenuated_surface",
-            "inscatter",
-            "single",
-            "multiple",
-            "surface",
-        )
-    }
-    return px, sky_single
-
-
-def _pf():
-    med = FogMedium(sigma_t=0.001, albedo=0.9, g=0.6, layers=(ExpLayer(1.0, 0.014, 0.0),))
-    return PhysicalFog(med, (0.4, 0.14, 0.906), (3.2, 2.9, 2.4), (0.2, 0.3, 0.5), (0.0, 2.0, 0.0))
-
-
 def test_budget_telescopes_exactly():
-    pf = _pf()
-    px, sky = _pixels(pf)
+    pf = budget_scene()
+    px, sky = synthetic_pixels(pf)
     lobe = base_params(pf, DirectionalInscatteringColor=(1, 1, 1), DirectionalInscatteringExponent=5.0)
     model = base_params(
         pf,
@@ -97,8 +38,8 @@ def test_budget_telescopes_exactly():
 
 
 def test_steps_vanish_for_an_unshadowed_closed_form_truth():
-    pf = _pf()
-    px, _ = _pixels(pf)
+    pf = budget_scene()
+    px, _ = synthetic_pixels(pf)
     cf = B.closed_forms(px, pf)
     px.single = cf["sun_att"] + cf["sky"]  # no shadows, unoccluded sky
     px.multiple = np.zeros_like(px.multiple)
@@ -113,8 +54,8 @@ def test_steps_vanish_for_an_unshadowed_closed_form_truth():
 
 
 def test_markdown_and_plot(tmp_path):
-    pf = _pf()
-    px, sky = _pixels(pf)
+    pf = budget_scene()
+    px, sky = synthetic_pixels(pf)
     p = base_params(pf, DirectionalInscatteringColor=(1, 1, 1))
     S = B.chain(px, sky, pf, p, p)
     r = B.add_noise(B.attribute(S, px.hit), S, S, px.hit)
@@ -138,8 +79,8 @@ def _opaque_horizon(px, rows=3):
 
 
 def test_budget_and_what_if_exclude_undefined_surface_and_stay_finite():
-    pf = _pf()
-    px, sky = _pixels(pf, rel_stderr=0.01)
+    pf = budget_scene()
+    px, sky = synthetic_pixels(pf, rel_stderr=0.01)
     px = _opaque_horizon(px)
     model = base_params(pf, FogMaxOpacity=0.9)
     S = B.chain(px, sky, pf, model, model)
@@ -153,8 +94,8 @@ def test_budget_and_what_if_exclude_undefined_surface_and_stay_finite():
 
 
 def test_every_step_carries_its_noise_from_the_stderr_channels():
-    pf = _pf()
-    px, sky = _pixels(pf, rel_stderr=0.02)
+    pf = budget_scene()
+    px, sky = synthetic_pixels(pf, rel_stderr=0.02)
     model = base_params(pf)
     S = B.chain(px, sky, pf, model, model)
     noise = B.chain_noise(px, 0.02 * sky, model, model)
@@ -216,8 +157,8 @@ def test_shapley_values_do_not_depend_on_player_order():
 
 
 def _shapley_setup(rel_stderr=0.0):
-    pf = _pf()
-    px, sky = _pixels(pf, rel_stderr=rel_stderr)
+    pf = budget_scene()
+    px, sky = synthetic_pixels(pf, rel_stderr=rel_stderr)
     lobe = base_params(pf, DirectionalInscatteringColor=(1, 1, 1), DirectionalInscatteringExponent=5.0)
     model = base_params(
         pf,
