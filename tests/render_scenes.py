@@ -50,6 +50,16 @@ def base_scene(mi, integrator, medium, res=(24, 16), sun=True, sky=True, occlude
     return d
 
 
+def area_lamp(mi):
+    """An 8 x 8 m ``area`` light 3 m over the ground at (2, 3, 20), facing down (radiance 20, 18, 15)."""
+    T = mi.ScalarTransform4f()
+    return {
+        "type": "rectangle",
+        "to_world": T.translate([2, 3, 20]).rotate([1, 0, 0], 90).scale(4.0),
+        "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [20.0, 18.0, 15.0]}},
+    }
+
+
 FOG = dict(sigma_t=0.03, albedo=0.9, g=0.5, falloff=0.06, height=0.0)
 
 

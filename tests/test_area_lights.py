@@ -10,7 +10,7 @@ at infinity, were never affected.
 
 import numpy as np
 import pytest
-from render_scenes import base_scene, heightfog
+from render_scenes import area_lamp, base_scene, heightfog
 from stats import image_means_rgb
 
 pytestmark = pytest.mark.render
@@ -25,11 +25,7 @@ def _scene(mi, integrator, fog):
     d["sensor"]["to_world"] = T.look_at(origin=[2, 1.5, 20], target=[2, 0, 20], up=[0, 0, 1])
     if fog is None:
         del d["sensor"]["medium"]
-    d["lamp"] = {
-        "type": "rectangle",
-        "to_world": T.translate([2, 3, 20]).rotate([1, 0, 0], 90).scale(4.0),
-        "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [20.0, 18.0, 15.0]}},
-    }
+    d["lamp"] = area_lamp(mi)
     return mi.load_dict(d, parallel=False)
 
 

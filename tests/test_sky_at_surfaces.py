@@ -8,7 +8,7 @@ stock with its own seeds, standard error from the spread of runs).
 
 import numpy as np
 import pytest
-from render_scenes import base_scene, heightfog
+from render_scenes import area_lamp, base_scene, heightfog
 from stats import image_means_rgb
 
 pytestmark = pytest.mark.render
@@ -88,16 +88,11 @@ def test_bsdf_sky_with_an_area_light_matches_mis(mitsuba):
     a bias of 0.6 % or more fails (leaving out the ``1 / (1 - p_sky)`` in the hit's MIS
     weight makes one of 1-2 % here)."""
     mi = mitsuba
-    T = mi.ScalarTransform4f()
 
     def scene(mode):
         d = base_scene(mi, {"type": "fogpath", "max_depth": 4, "sky_at_surfaces": mode}, None, res=(16, 9))
         del d["sensor"]["medium"]
-        d["lamp"] = {
-            "type": "rectangle",
-            "to_world": T.translate([2, 3, 20]).rotate([1, 0, 0], 90).scale(4.0),
-            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [20.0, 18.0, 15.0]}},
-        }
+        d["lamp"] = area_lamp(mi)
         return mi.load_dict(d, parallel=False)
 
     bsdf, mis = image_means_rgb(mi, scene("bsdf"), 24, 64, 40), image_means_rgb(mi, scene("mis"), 24, 64, 40)
