@@ -36,6 +36,23 @@ if ! command -v chromium >/dev/null || ! command -v chromedriver >/dev/null; the
   fi
 fi
 
+# the web engines (three.js, Babylon.js, PlayCanvas, Filament) at the versions of package-lock.json,
+# for the tests and `fogref engine` that render them in headless Chromium; pages load them from
+# node_modules/ through file://, nothing is fetched at run time
+if ! command -v npm >/dev/null; then
+  if command -v apt-get >/dev/null && [ "$(id -u)" = 0 ]; then
+    echo "setup: installing nodejs and npm (the web engines)"
+    { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq nodejs npm >/dev/null; } \
+      || echo "setup: npm could not be installed; the engine tests will skip" >&2
+  else
+    echo "setup: no npm; the engine tests will skip (install Node.js and npm)" >&2
+  fi
+fi
+if command -v npm >/dev/null && ! cmp -s package-lock.json node_modules/.fogref-package-lock.json; then
+  npm ci --no-audit --no-fund --loglevel=error >/dev/null
+  cp package-lock.json node_modules/.fogref-package-lock.json
+fi
+
 PY=${PYTHON:-python3}
 [ -x .venv/bin/python ] || "$PY" -m venv .venv
 .venv/bin/python -m pip install -q --upgrade pip
