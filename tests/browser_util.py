@@ -33,8 +33,13 @@ def find_browser() -> tuple[str | None, str | None, str]:
     return b, d, ""
 
 
-def start(width: int = 1400, height: int = 1100):
-    """A headless Chromium with console and network logging."""
+def start(width: int = 1400, height: int = 1100, webgl: bool = False):
+    """A headless Chromium with console and network logging.
+
+    ``webgl``: WebGL 2 on SwiftShader (Chromium's CPU rasteriser; ``--enable-unsafe-swiftshader``
+    since Chromium 137) and ES modules and ``fetch``-free XHR from ``file://``
+    (``--allow-file-access-from-files``), for the engine pages of ``tests/web/``.
+    """
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
 
@@ -43,10 +48,15 @@ def start(width: int = 1400, height: int = 1100):
         raise RuntimeError(why)
     o = webdriver.ChromeOptions()
     o.binary_location = browser
+    gpu = (
+        ("--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--allow-file-access-from-files")
+        if webgl
+        else ("--disable-gpu",)
+    )
     for a in (
         "--headless=new",
         "--no-sandbox",
-        "--disable-gpu",
+        *gpu,
         "--disable-dev-shm-usage",
         f"--window-size={width},{height}",
         "--force-device-scale-factor=1",

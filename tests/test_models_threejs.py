@@ -1,5 +1,6 @@
 """three.js Fog / FogExp2: fog_fragment.glsl.js transcription, the mapping, extremes."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -8,8 +9,8 @@ import pytest
 from fogref.errors import ParameterError
 from fogref.mapping import PhysicalScene, from_physical
 from fogref.media import ExpLayer, FogMedium
-from fogref.models import get
-from fogref.models.threejs import ThreeFogParams, ThreeJSFog, threejs_sigma
+from fogref.models import SKY_DISTANCE, get
+from fogref.models.threejs import ThreeFogParams, ThreeJSFog, srgb_transfer_oetf, threejs_sigma
 
 f32 = np.float32
 
@@ -106,3 +107,46 @@ def test_extremes_are_finite():
             r = ThreeJSFog(p).evaluate(np.zeros(3), wp, prec)
             assert np.all(np.isfinite(r.transmittance)) and np.all(np.isfinite(r.inscatter))
             assert np.all((r.transmittance >= 0) & (r.transmittance <= 1)) and np.all(r.inscatter >= 0)
+
+
+def test_canvas_blends_after_the_srgb_encoding():
+    """meshbasic.glsl.js: colorspace_fragment (sRGBTransferOETF), then fog_fragment with the fog
+    colour converted to sRGB on the CPU (LinearToSRGB), transcribed here per pixel in float32."""
+
+    def oetf(x):  # colorspace_pars_fragment.glsl.js, float32
+        x = f32(x)
+        return x * f32(12.92) if x <= f32(0.0031308) else np.power(x, f32(0.41666)) * f32(1.055) - f32(0.055)
+
+    rng = np.random.default_rng(2)
+    color = (0.630, 0.026, 0.039)
+    fog_srgb = [f32(c * 12.92 if c < 0.0031308 else 1.055 * c**0.41666 - 0.055) for c in color]
+    p = ThreeFogParams(mode="FogExp2", color=color, density=0.3287, output="canvas")
+    wp = np.stack([rng.uniform(-1, 1, 200), rng.uniform(-1, 1, 200), -rng.uniform(0.1, 8, 200)], -1)
+    scene = rng.uniform(0, 1, (200, 3))
+    r = ThreeJSFog(p).evaluate(np.zeros(3), wp, "float32")
+    got = r.display(scene)
+    for i in range(200):
+        d = f32(-wp[i, 2])
+        factor = f32(1.0) - np.exp(-f32(0.3287) * f32(0.3287) * d * d)
+        ref = [oetf(scene[i, c]) * (f32(1) - factor) + fog_srgb[c] * factor for c in range(3)]
+        np.testing.assert_allclose(got[i], ref, rtol=0, atol=3e-7)
+    # the linear target's blend, encoded, is another colour (up to 40/255 on these pixels)
+    linear = ThreeJSFog(dataclasses.replace(p, output="linear")).evaluate(np.zeros(3), wp, "float32")
+    encoded = np.array([[oetf(v) for v in px] for px in linear.composite(scene.astype(f32))])
+    assert np.abs(encoded - got).max() * 255 > 20
+    # composite() is the canvas decoded back to linear (three.js's 0.41666 is not exactly 1/2.4)
+    np.testing.assert_allclose(srgb_transfer_oetf(r.composite(scene), np.float64), got, atol=2e-5)
+
+
+def test_background_gets_no_fog():
+    """three.js draws scene.background as the clear colour or a mesh with fog: false."""
+    for p in (ThreeFogParams(mode="FogExp2", density=1.0), ThreeFogParams(mode="Fog", near=0.0, far=1.0)):
+        for out in ("linear", "canvas"):
+            fog = ThreeJSFog(dataclasses.replace(p, output=out))
+            sky = np.array([[0.6, 0.0, -0.8], [0.0, -0.6, -0.8]]) * SKY_DISTANCE
+            r = fog.evaluate(np.zeros(3), sky, "float64")
+            assert np.all(r.transmittance == 1.0) and np.all(r.inscatter == 0.0)
+            near = fog.evaluate(np.zeros(3), sky * 0.999, "float64")
+            assert np.all(near.transmittance == 0.0)
+    with pytest.raises(ParameterError, match="output"):
+        ThreeFogParams(output="srgb")
