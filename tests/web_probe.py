@@ -233,3 +233,75 @@ def driver_or_skip(*packages: str):
         return start(200, 200, webgl=True)
     except Exception as e:  # selenium's SessionNotCreatedException, a missing library
         pytest.skip(f"Chromium cannot start: {type(e).__name__}: {str(e).splitlines()[0]}")
+
+
+def _three_mode_setups(seed: int, names: tuple[str, str, str]) -> list[dict]:
+    """16 set-ups cycling linear (start in [0, 5] m, end - start in [1, 60] m), exp (density in
+    [0.005, 1] 1/m) and exp2 (density in [0.01, 1] 1/m), with random fog colours in [0, 1]."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for i, color in enumerate(_fog_colours(seed + 1, 16)):
+        mode = names[i % 3]
+        if i % 3 == 0:
+            start = float(rng.uniform(0.0, 5.0))
+            end = start + _log_uniform(rng, 1, 60)
+            out.append({"mode": mode, "color": color, "start": start, "end": end})
+        else:
+            lo = 0.005 if i % 3 == 1 else 0.01
+            out.append({"mode": mode, "color": color, "density": _log_uniform(rng, lo, 1.0)})
+    return out
+
+
+def babylon_setups() -> list[dict]:
+    return _three_mode_setups(11, ("LINEAR", "EXP", "EXP2"))
+
+
+def babylon_model(fog: dict, output: str) -> Any:
+    from fogref.models.babylon import BabylonFog, BabylonFogParams
+
+    return BabylonFog(
+        BabylonFogParams(
+            fogMode=fog["mode"],
+            fogColor=tuple(fog["color"]),
+            fogDensity=fog.get("density", 0.1),
+            fogStart=fog.get("start", 0.0),
+            fogEnd=fog.get("end", 1000.0),
+        )
+    )
+
+
+def playcanvas_setups() -> list[dict]:
+    MODES = ("linear", "exp", "exp2")
+    return [{("type" if k == "mode" else k): v for k, v in s.items()} for s in _three_mode_setups(21, MODES)]
+
+
+def playcanvas_model(fog: dict, output: str) -> Any:
+    from fogref.models.playcanvas import PlayCanvasFog, PlayCanvasFogParams
+
+    return PlayCanvasFog(
+        PlayCanvasFogParams(
+            type=fog["type"],
+            color=tuple(fog["color"]),
+            density=fog.get("density", 0.0),
+            start=fog.get("start", 1.0),
+            end=fog.get("end", 1000.0),
+            nearClip=NEAR,
+            farClip=FAR,
+        )
+    )
+
+
+def _playcanvas_canvas(res: Any, scene: np.ndarray) -> np.ndarray:
+    from fogref.models.playcanvas import gamma_correct_output
+
+    return gamma_correct_output(res.composite(scene.astype(np.float32)))
+
+
+BABYLON = Engine(
+    "babylon",
+    "@babylonjs/core",
+    babylon_setups,
+    babylon_model,
+    lambda res, scene: np.clip(res.composite(scene.astype(np.float32)), 0.0, 1.0),
+)
+PLAYCANVAS = Engine("playcanvas", "playcanvas", playcanvas_setups, playcanvas_model, _playcanvas_canvas)

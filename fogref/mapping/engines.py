@@ -32,18 +32,22 @@ from fogref.models.hdrp import (
 from fogref.models.unity_builtin import UnityBuiltinFog, medium_to_unity
 
 if TYPE_CHECKING:
+    from fogref.models.babylon import BabylonFog
     from fogref.models.bevy import BevyDistanceFog
     from fogref.models.godot import GodotFog
+    from fogref.models.playcanvas import PlayCanvasFog
     from fogref.models.threejs import ThreeJSFog
 
 __all__ = [
     "altitude_from_physical",
+    "babylon_from_physical",
     "bevy_from_physical",
     "box_from_physical",
     "filament_from_physical",
     "fixed_lobe_amplitude",
     "godot_from_physical",
     "hdrp_from_physical",
+    "playcanvas_from_physical",
     "threejs_from_physical",
     "unity_from_physical",
 ]
@@ -447,3 +451,54 @@ def threejs_from_physical(ps: PhysicalScene) -> ThreeJSFog:
     _require_space_filling(ps, "three.js", "three.js fog fills all space (no bounds)")
     sigma = _grey_extinction_at_camera(ps, "three.js")
     return ThreeJSFog(ThreeFogParams(mode="FogExp2", density=sigma, color=ps.sky_colour()))
+
+
+@register_mapping("babylon")
+def babylon_from_physical(ps: PhysicalScene) -> BabylonFog:
+    """The Babylon.js fog that best represents a physical scene: ``FOGMODE_EXP`` on the distance.
+
+    Profile "homogeneous": exact (``fogDensity = sigma_t / ln(2.71828)`` [1/m], inverting the
+    shader's ``E``; :func:`~fogref.models.babylon.babylon_to_medium`).  Height profiles have no
+    counterpart (no height term); the nearest choice is the extinction at the camera, exact for
+    horizontal rays.  ``fogColor = albedo * sky radiance`` (linear; Babylon's
+    ``StandardMaterial`` writes it to the canvas unconverted).  Raises ParameterError naming
+    'profile' for "box" or bounded fog, 'sigma_t' for a coloured extinction.
+
+    Examples
+    --------
+    >>> from fogref.media import ExpLayer, FogMedium
+    >>> ps = PhysicalScene(FogMedium(sigma_t=0.01, layers=(ExpLayer(1.0, 0.0, 0.0),)))
+    >>> round(babylon_from_physical(ps).params.fogDensity, 9)
+    0.010000007
+    """
+    from fogref.models.babylon import BabylonFog, BabylonFogParams, E
+
+    _require_space_filling(ps, "Babylon.js", "Babylon.js fog fills all space (no bounds)")
+    sigma = _grey_extinction_at_camera(ps, "Babylon.js")
+    density = sigma / math.log(E)
+    return BabylonFog(BabylonFogParams(fogMode="EXP", fogDensity=density, fogColor=ps.sky_colour()))
+
+
+@register_mapping("playcanvas")
+def playcanvas_from_physical(ps: PhysicalScene) -> PlayCanvasFog:
+    """The PlayCanvas fog nearest to a physical scene: ``FOG_EXP``, **never exact**.
+
+    ``density = sigma_t rho(camera)`` [1/m]; PlayCanvas fogs ``far (z - near)/(far - near)`` of
+    the eye depth z (camera clip planes at PlayCanvas's defaults, 0.1 and 1000 m), not the
+    distance, and has no height term.  ``color = (albedo * sky radiance)^(1/2.2)``: the engine's
+    gamma-encoded ``scene.fog.color``, which it raises to 2.2.  Raises ParameterError naming
+    'profile' for "box" or bounded fog, 'sigma_t' for a coloured extinction.
+
+    Examples
+    --------
+    >>> from fogref.media import ExpLayer, FogMedium
+    >>> ps = PhysicalScene(FogMedium(sigma_t=0.01, layers=(ExpLayer(1.0, 0.0, 0.0),)))
+    >>> playcanvas_from_physical(ps).params.density
+    0.01
+    """
+    from fogref.models.playcanvas import PlayCanvasFog, PlayCanvasFogParams
+
+    _require_space_filling(ps, "PlayCanvas", "PlayCanvas fog fills all space (no bounds)")
+    sigma = _grey_extinction_at_camera(ps, "PlayCanvas")
+    color = tuple(float(c) ** (1 / 2.2) for c in ps.sky_colour())
+    return PlayCanvasFog(PlayCanvasFogParams(type="exp", density=sigma, color=color))

@@ -377,7 +377,7 @@ def fit_model(
     ----------
     model : str or type
         A registry name ("ue4", "unity", "hdrp", "filament", "altitude", "box", "godot", "bevy",
-        "threejs"), ``module.path:Class`` or a model class.
+        "threejs", "babylon", "playcanvas"), ``module.path:Class`` or a model class.
     scene : PhysicalScene or dict
         The physical fog (an EXR's ``fogref.params`` dict or a scene; :func:`fogref.fit_model`
         also reads a scene XML path).

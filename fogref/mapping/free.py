@@ -42,6 +42,7 @@ from fogref.errors import FogrefError, ParameterError
 if TYPE_CHECKING:
     from fogref.mapping.physical import PhysicalScene
     from fogref.media import FogMedium
+    from fogref.models.babylon import BabylonFogParams
     from fogref.models.bevy import BevyFogParams
     from fogref.models.box import BoxFogParams
     from fogref.models.filament import FilamentFogParams
@@ -154,6 +155,12 @@ def _filament_exact(p: FilamentFogParams) -> FogMedium | None:
 
     plain = p.distance == 0 and math.isinf(p.cutOffDistance) and p.maximumOpacity == 1
     return filament_to_medium(p) if plain else None
+
+
+def _babylon_exact(p: BabylonFogParams) -> FogMedium | None:
+    from fogref.models.babylon import babylon_to_medium
+
+    return babylon_to_medium(p) if p.fogMode == "EXP" else None
 
 
 def _box_exact(p: BoxFogParams) -> FogMedium | None:
@@ -274,6 +281,17 @@ def _builtin_specs() -> dict[str, FitSpec]:
             free=(Free("density", 1e-8, 10.0, log=True), *rgb_free("color")),
             start={"mode": "FogExp2"},
             note="exp(-(density depth)^2) instead of exp(-tau); eye depth, not distance; no sun",
+        ),
+        "babylon": FitSpec(
+            free=(Free("fogDensity", 1e-8, 10.0, log=True), *rgb_free("fogColor")),
+            start={"fogMode": "EXP"},
+            exact_medium=_try(_babylon_exact),
+            note="no height term; no sun",
+        ),
+        "playcanvas": FitSpec(
+            free=(Free("density", 1e-8, 10.0, log=True), *rgb_free("color")),
+            start={"type": "exp"},
+            note="remapped eye depth far (z - near)/(far - near), not distance; no height term; no sun",
         ),
     }
 

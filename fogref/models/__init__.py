@@ -12,6 +12,8 @@ registry name   class                                          source
 ``godot``       :class:`~fogref.models.godot.GodotFog`                 Godot scene_forward_clustered.glsl
 ``bevy``        :class:`~fogref.models.bevy.BevyDistanceFog`           Bevy fog.wgsl
 ``threejs``     :class:`~fogref.models.threejs.ThreeJSFog`             three.js fog_fragment.glsl.js
+``babylon``     :class:`~fogref.models.babylon.BabylonFog`             Babylon.js fogFragmentDeclaration.fx
+``playcanvas``  :class:`~fogref.models.playcanvas.PlayCanvasFog`       PlayCanvas fog chunk (fogPS)
 ==============  =============================================  ==========================
 
 Every model follows :class:`~fogref.models.base.FogModel`:
@@ -27,11 +29,13 @@ group ``fogref.models``; an unknown name gets a FogrefError with a "did you mean
 
 from fogref.models import (  # noqa: F401  (registration)
     altitude,
+    babylon,
     bevy,
     box,
     filament,
     godot,
     hdrp,
+    playcanvas,
     threejs,
     ue4,
     unity_builtin,

@@ -17,6 +17,8 @@ from fogref.errors import ParameterError
 from fogref.models.base import as_points
 
 LN2 = 0.6931471805599453
+#: Relative tolerance of :func:`background`: ``camera + view * SKY_DISTANCE`` lands a few ulps short.
+SKY_TOLERANCE = 1e-9
 
 
 def dtype_of(precision: str) -> Any:
@@ -80,3 +82,17 @@ def unit_direction(value: Any, name: str, source: str) -> tuple:
     if w.shape != (3,) or not (math.isfinite(n) and n > 0):
         raise ParameterError(source, name, "expected a non-zero finite 3-vector")
     return tuple(float(x) for x in w / n)
+
+
+def background(cam: Any, wp: Any, sky_distance: float) -> Any:
+    """(...,) bool: the pixels that show the background, at least ``sky_distance`` [m] from ``cam``.
+
+    For engines that draw their background (clear colour, sky) without fog; fogref puts the sky
+    at :data:`~fogref.models.base.SKY_DISTANCE` (to :data:`SKY_TOLERANCE`, relative).
+
+    >>> background(np.zeros(3), np.array([[0.0, 0.6, -0.8], [0.0, 0.0, -5.0]]) * 1e5, 1e5).tolist()
+    [True, True]
+    >>> background(np.zeros(3), np.array([[0.0, 0.0, -5.0]]), 1e5).tolist()
+    [False]
+    """
+    return view_ray(cam, wp, np.float64)[1] >= sky_distance * (1.0 - SKY_TOLERANCE)

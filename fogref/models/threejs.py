@@ -42,7 +42,7 @@ Output (``output``): where the frame goes decides where the fog is blended.  In
 
 Background: ``scene.background`` is the clear colour or a mesh drawn with ``fog: false``
 (``src/renderers/webgl/WebGLBackground.js``): pixels at distance >= ``sky_distance`` (fogref
-puts the sky at :data:`~fogref.models.base.SKY_DISTANCE`; to :data:`SKY_TOLERANCE`) get no fog.
+puts the sky at :data:`~fogref.models.base.SKY_DISTANCE`) get no fog.
 
 Physical counterpart: **none exact**.  three.js has no height term, no sun and no
 ``exp`` (Beer–Lambert) mode: ``FogExp2`` is ``exp(-(density z)^2)`` on the eye depth.
@@ -64,13 +64,11 @@ import numpy as np
 
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, rgb
-from fogref.models._num import dtype_of, grey, split, view_ray
+from fogref.models._num import background, dtype_of, grey, split
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
 MODES = ("Fog", "FogExp2")
 OUTPUTS = ("linear", "canvas")
-#: Relative tolerance of the background rule: ``camera + view * SKY_DISTANCE`` lands a few ulps short.
-SKY_TOLERANCE = 1e-9
 
 
 @dataclass(frozen=True)
@@ -243,8 +241,7 @@ class ThreeJSFog:
             else:
                 factor = glsl_smoothstep(p.near, p.far, z, dt)
             factor = np.where(np.isfinite(factor), factor, dt(1.0)).astype(dt)
-            background = view_ray(cam, wp, np.float64)[1] >= p.sky_distance * (1.0 - SKY_TOLERANCE)
-            factor = np.where(background, dt(0.0), factor).astype(dt)
+            factor = np.where(background(cam, wp, p.sky_distance), dt(0.0), factor).astype(dt)
         color = np.asarray(p.color, dtype=dt)
         inscatter, transmittance = color * factor[..., None], grey(dt(1.0) - factor, dt)
         if p.output == "linear":
