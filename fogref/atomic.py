@@ -2,6 +2,10 @@
 
 Each writer writes a temporary file in the destination folder, then renames it
 over the destination (``os.replace``, atomic on POSIX within one file system).
+Only a regular file (or a new name) is replaced so: a device (``/dev/null``,
+``/dev/stdout``), a FIFO, or ``-`` (standard output) is written in place, and a
+failed write there (``/dev/full``: no space left) is a one-line
+:class:`~fogref.errors.FogrefError`.
 Every fogref output goes through :func:`atomic_write`: EXRs
 (:func:`fogref.exrio.write_exr`), render checkpoints and previews, report text
 and figures.  Before any work, a command compares its outputs with its inputs
@@ -28,6 +32,9 @@ OSError: disk full
 from __future__ import annotations
 
 import os
+import shutil
+import stat
+import sys
 import tempfile
 from pathlib import Path
 
@@ -42,6 +49,69 @@ def _file_mode(path: Path) -> int:
         mask = os.umask(0)
         os.umask(mask)
         return 0o666 & ~mask
+
+
+def is_stream(path) -> bool:
+    """True for ``-`` (standard output) and for an existing path that is not a regular file nor a
+    folder (a character device such as ``/dev/null``, a FIFO, a socket): written in place, never
+    replaced.
+
+    >>> is_stream("-"), is_stream("/dev/null"), is_stream("no/such/file.json"), is_stream("/")
+    (True, True, False, False)
+    """
+    if str(path) == "-":
+        return True
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return False
+    return not (stat.S_ISREG(mode) or stat.S_ISDIR(mode))
+
+
+def check_output_file(path, what: str = "output") -> None:
+    """A one-line :class:`~fogref.errors.FogrefError` if ``path`` cannot be an output file: an existing
+    folder, or under an existing path that is not a folder.  Call it before any work.
+
+    >>> check_output_file("/tmp")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.FogrefError: output: /tmp is a folder; give a file name
+    >>> check_output_file("-"), check_output_file("/dev/null")
+    (None, None)
+    """
+    p = Path(path)
+    if is_stream(p):
+        return
+    if p.is_dir():
+        raise FogrefError(f"{what}: {p} is a folder; give a file name")
+    for parent in p.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise FogrefError(f"{what}: {p}: {parent} is not a folder")
+            break
+
+
+def _write_stream(path, write) -> None:
+    """``write`` a temporary file, then copy it into the stream ``path`` (``-``: standard output);
+    a failed write is a one-line FogrefError naming ``path`` and the reason."""
+    fd, tmp = tempfile.mkstemp(suffix=".tmp" + Path(str(path)).suffix)
+    os.close(fd)
+    try:
+        write(tmp)
+        with open(tmp, "rb") as src:
+            if str(path) == "-":
+                sys.stdout.flush()
+                shutil.copyfileobj(src, sys.stdout.buffer)
+                sys.stdout.buffer.flush()
+            else:
+                with open(path, "wb") as dst:
+                    shutil.copyfileobj(src, dst)
+    except OSError as e:
+        if isinstance(e, BrokenPipeError):
+            raise
+        raise FogrefError(f"{path}: could not write: {e.strerror or e}") from e
+    finally:
+        os.unlink(tmp)
 
 
 def atomic_write(path, write) -> Path:
@@ -64,8 +134,12 @@ def atomic_write(path, write) -> Path:
     Notes
     -----
     If ``write`` raises (or is interrupted), the temporary file is removed, the
-    exception propagates and ``path`` keeps its previous content, if any.
+    exception propagates and ``path`` keeps its previous content, if any.  A stream
+    (:func:`is_stream`: ``-``, a device, a FIFO) is written in place, not replaced.
     """
+    if is_stream(path):
+        _write_stream(path, write)
+        return Path(path)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd = tmp = None

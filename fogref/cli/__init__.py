@@ -36,7 +36,7 @@ import importlib
 import sys
 
 from fogref._version import __version__
-from fogref.cli.spec import Parser, UsageError, add_options, parse_options
+from fogref.cli.spec import Parser, UsageError, add_options, check_paths, parse_options
 from fogref.errors import FogrefError, did_you_mean
 
 __all__ = ["COMMANDS", "build_parser", "main", "parse"]
@@ -131,6 +131,7 @@ def main(argv=None) -> int:
 def _run(argv) -> int:
     try:
         module, opts, given = parse(argv)
+        check_paths(opts, f"fogref {module.NAME}")
         return module.run(opts, given)
     except FogrefError as e:
         print(f"fogref: error: {e}", file=sys.stderr)

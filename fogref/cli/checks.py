@@ -147,10 +147,16 @@ class Choice(Check):
 
 @dataclasses.dataclass(frozen=True)
 class PathArg(Check):
-    """A path (:func:`fogref.params.path`); with ``must_exist`` an existing file or folder."""
+    """A path (:func:`fogref.params.path`); with ``must_exist`` an existing file or folder.
+
+    ``role``: ``"input"`` (a file the command reads; implied by ``must_exist``) or ``"output"`` (a
+    file it writes): before any work, :func:`fogref.cli.spec.check_paths` refuses an output that
+    is a folder or one of the inputs.
+    """
 
     must_exist: bool = False
     kind: str = "file"
+    role: str = ""
 
     def parse(self, raw, name, source):
         return str(params.path(raw, name, source=source, must_exist=self.must_exist, kind=self.kind))

@@ -76,7 +76,10 @@ class DistanceBands(Check):
 @dataclass
 class Options:
     exr: str = option(
-        help="ground-truth EXR written by fogref render", positional=True, check=PathArg(), metavar="EXR"
+        help="ground-truth EXR written by fogref render",
+        positional=True,
+        check=PathArg(role="input"),
+        metavar="EXR",
     )
     out: str | None = option(
         None, "report folder", check=PathArg(), default_text="out/compare/<EXR stem>-<model or image stem>"
@@ -134,7 +137,7 @@ class Options:
     transmittance: str | None = option(
         None,
         "the engine's fog transmittance image",
-        check=PathArg(),
+        check=PathArg(role="input"),
         metavar="FILE",
         group=IMAGE_GROUP,
         api=IMAGES,
@@ -142,7 +145,7 @@ class Options:
     inscatter: str | None = option(
         None,
         "the engine's fog inscatter image",
-        check=PathArg(),
+        check=PathArg(role="input"),
         metavar="FILE",
         group=IMAGE_GROUP,
         api=IMAGES,
@@ -150,7 +153,7 @@ class Options:
     fog_colour: str | None = option(
         None,
         "the engine's fog colour C (final = lerp(scene, C, 1 - T)); needs --transmittance",
-        check=PathArg(),
+        check=PathArg(role="input"),
         metavar="FILE",
         group=IMAGE_GROUP,
         api=IMAGES,
@@ -206,7 +209,7 @@ class Options:
     json: str | None = option(
         None,
         "write every row (estimate, interval, tolerance, verdict), the verdict and the exit code",
-        check=PathArg(),
+        check=PathArg(role="output"),
         metavar="FILE",
         group=GATE_GROUP,
     )
@@ -214,7 +217,7 @@ class Options:
         None,
         "write JUnit XML: a testcase per row with a tolerance (failure: fail and "
         "inconclusive; skipped: no pixels, or inconclusive with --inconclusive pass)",
-        check=PathArg(),
+        check=PathArg(role="output"),
         metavar="FILE",
         group=GATE_GROUP,
     )
@@ -276,6 +279,7 @@ def _refuse_outputs_over_inputs(o: Options) -> None:
     """A ParameterError (exit 2) before any work when a file the run writes
     (the report's files and figures, ``--json``, ``--junit``) resolves to an input (the truth, an
     engine image) or two outputs to the same file (:func:`fogref.compare.report.refuse_output_over_input`)."""
+    from fogref.atomic import check_output_file
     from fogref.compare.report import refuse_output_over_input, report_paths
 
     inputs = [
@@ -285,7 +289,9 @@ def _refuse_outputs_over_inputs(o: Options) -> None:
         ("--inscatter", o.inscatter),
         ("--fog-colour", o.fog_colour),
     ]
-    report = [("--out", p) for p in report_paths(_out_dir(o))]
+    report = [("--out", p) for p in [*report_paths(_out_dir(o)), _out_dir(o) / "report.html"]]
+    for _, p in report:
+        check_output_file(p, f"{SOURCE}: --out")
     gate = [(n, p) for n, p in (("--json", o.json), ("--junit", o.junit)) if p]
     refuse_output_over_input(report + gate, inputs, SOURCE)
     # --json/--junit must not replace a report file nor each other

@@ -4,8 +4,10 @@ Each image is checked (:func:`fogref.compare.check.check`) and reported on its o
 ``--image`` run would (``<out>/<image stem>/``: ``index.md``, ``report.html``, ``metrics.json``,
 ...), and the batch gathers one row per image, with every check row's estimate, interval
 and verdict and the descriptive metrics of ``final``/``all``, into ``<out>/batch.csv``,
-``<out>/batch.json`` and ``<out>/report.html``.  Exit code: the worst image's (1 if any fails,
-else 3 if any is inconclusive, mapped by ``--inconclusive``, else 0).
+``<out>/batch.json`` and ``<out>/report.html``.  An image that cannot be checked (unreadable, the
+wrong resolution) is a row with its error (verdict ``error``), and the batch goes on with the
+others.  Exit code: the worst image's (2 if any is in error, else 1 if any fails, else 3 if any
+is inconclusive, mapped by ``--inconclusive``, else 0).
 """
 
 from __future__ import annotations
@@ -37,7 +39,9 @@ DESCRIPTIVE = (
 
 class ImageList(Check):
     """``--image FILE [FILE ...]``: one or more images, a pattern (``'renders/*.exr'``) expanded
-    in sorted order; one image gives its path (the single-image mode), several a tuple.
+    in sorted order to the image files it matches (suffix of
+    :data:`fogref.compare.foreign.IMAGE_SUFFIXES`: not the folders, tables and pages of an earlier
+    batch); one image gives its path (the single-image mode), several a tuple.
 
     >>> ImageList().parse(["a.exr"], "--image", "demo")
     'a.exr'
@@ -46,15 +50,23 @@ class ImageList(Check):
     """
 
     metavar = "FILE"
+    role = "input"  # the files a command reads (fogref.cli.spec.check_paths)
 
     def parse(self, raw, name, source):
+        from fogref.compare.foreign import IMAGE_SUFFIXES
+
         raw = [raw] if isinstance(raw, str) else list(raw)
         out: list[str] = []
         for r in raw:
             if any(c in r for c in "*?["):
-                hits = sorted(glob.glob(r))
+                hits = sorted(
+                    h for h in glob.glob(r) if Path(h).is_file() and Path(h).suffix.lower() in IMAGE_SUFFIXES
+                )
                 if not hits:
-                    raise FogrefError(f"{source}: parameter '{name}': the pattern '{r}' matches no file")
+                    raise FogrefError(
+                        f"{source}: parameter '{name}': the pattern '{r}' matches no image file "
+                        f"({', '.join(IMAGE_SUFFIXES)})"
+                    )
                 out.extend(hits)
             else:
                 out.append(r)
@@ -78,9 +90,12 @@ def batch_rows(results) -> tuple[list[dict], list[str]]:
     """Table rows (one per image) and columns from ``(image, folder name, CheckResult, report)``
     tuples: the verdict, each check row's ``estimate``/``low``/``high``/``verdict`` under
     ``part/region:metric``, and :data:`DESCRIPTIVE` of ``final``/``all``."""
-    rows, cols = [], ["image", "report", "verdict"]
+    rows, cols = [], ["image", "report", "verdict", "error"]
     for image, name, result, report in results:
-        row = {"image": image, "report": name, "verdict": result.verdict}
+        if isinstance(result, Exception):
+            rows.append({"image": image, "report": "", "verdict": "error", "error": str(result)})
+            continue
+        row = {"image": image, "report": name, "verdict": result.verdict, "error": ""}
         for r in result.rows:
             key = f"{r.part}/{r.region}:{r.metric}"
             for k, v in (("", r.estimate), (".low", r.low), (".high", r.high), (".verdict", r.verdict)):
@@ -117,9 +132,16 @@ def run_batch(o, given, default_out) -> int:
     out = Path(o.out) if o.out else Path(default_out)
     results = []
     for image, name in zip(o.image, _stem_names(o.image)):
-        imgs = load_engine_images(
-            image, encoding=o.encoding, exposure=o.exposure, shape=truth.shape, truth_name=str(o.exr)
-        )
+        try:
+            imgs = load_engine_images(
+                image, encoding=o.encoding, exposure=o.exposure, shape=truth.shape, truth_name=str(o.exr)
+            )
+        except (FogrefError, OSError) as e:  # this image only: the others are still checked
+            print(
+                f"fogref compare: error: {'' if str(image) in str(e) else f'{image}: '}{e}", file=sys.stderr
+            )
+            results.append((image, name, e, {}))
+            continue
         result = check(truth, imgs, **options)
         report = compare_images(truth, imgs, out / name, figures=not o.no_figures, check=result)
         write_compare_html(out / name, truth)
@@ -133,8 +155,10 @@ def run_batch(o, given, default_out) -> int:
     w.writeheader()
     w.writerows(rows)
     write_text_atomic(out / "batch.csv", buf.getvalue())
-    codes = [exit_code(r.verdict, o.inconclusive) for _, _, r, _ in results]
-    code = 1 if 1 in codes else 3 if 3 in codes else 0
+    codes = [
+        2 if isinstance(r, Exception) else exit_code(r.verdict, o.inconclusive) for _, _, r, _ in results
+    ]
+    code = next((c for c in (2, 1, 3) if c in codes), 0)
     write_text_atomic(
         out / "batch.json",
         json.dumps(

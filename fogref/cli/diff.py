@@ -56,7 +56,10 @@ class Options:
         check=Choice(("auto", "linear", "srgb")),
     )
     json: str | None = option(
-        None, "write the verdict, the rows and the exit code as JSON", check=PathArg(), metavar="FILE"
+        None,
+        "write the verdict, the rows and the exit code as JSON",
+        check=PathArg(role="output"),
+        metavar="FILE",
     )
     out: str | None = option(
         None,
@@ -71,6 +74,12 @@ def run(o: Options, given=frozenset()) -> int:
     from fogref.atomic import write_text_atomic
     from fogref.compare.diff import diff, load_side
 
+    if o.out:
+        from fogref.atomic import check_output_file, refuse_overwriting_inputs
+
+        page = Path(o.out) / "report.html"
+        check_output_file(page, "fogref diff: --out")
+        refuse_overwriting_inputs([(page, "report")], [(o.a, "A"), (o.b, "B")], "fogref diff: --out")
     a, b = load_side(o.a, o.encoding), load_side(o.b, o.encoding)
     result = diff(a, b, confidence=o.confidence, tolerance=o.tolerance, names=(o.a, o.b))
     print("\n".join(result.lines()))

@@ -92,12 +92,16 @@ class Options:
         "Unreal too through the generic fit (every parameter with its uncertainty)", group=MODEL_GROUP
     )
     scene: str | None = option(
-        None, "fogref XML scene (fog, sun, sky, camera)", check=PathArg(), metavar="XML", group=SOURCE_GROUP
+        None,
+        "fogref XML scene (fog, sun, sky, camera)",
+        check=PathArg(role="input"),
+        metavar="XML",
+        group=SOURCE_GROUP,
     )
     exr: str | None = option(
         None,
         "ground-truth EXR (its fogref.params header)",
-        check=PathArg(),
+        check=PathArg(role="input"),
         metavar="EXR",
         group=SOURCE_GROUP,
     )

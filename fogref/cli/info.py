@@ -23,7 +23,9 @@ EPILOG = "exit codes: 0 described, 2 usage or input error"
 
 @dataclass
 class Options:
-    exr: str = option(help="a ground-truth EXR (or any EXR)", positional=True, check=PathArg(), metavar="EXR")
+    exr: str = option(
+        help="a ground-truth EXR (or any EXR)", positional=True, check=PathArg(role="input"), metavar="EXR"
+    )
     json: bool = switch("print everything as one JSON object (camera included)")
 
 

@@ -31,13 +31,13 @@ class Options:
     scene: str = option(
         help="Mitsuba XML scene with the fogpath integrator and a heightfog medium",
         positional=True,
-        check=PathArg(),
+        check=PathArg(role="input"),
         metavar="SCENE",
     )
     out: str = option(
         help="output EXR path (a PNG preview goes beside it unless --no-png)",
         short="-o",
-        check=PathArg(),
+        check=PathArg(role="output"),
         metavar="X.exr",
     )
     spp: int = option(64, "samples per pixel", check=Integer(1, 1 << 20), api=API)

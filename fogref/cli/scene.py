@@ -72,7 +72,7 @@ def _ue_option(key: str) -> str:
 
 @dataclass
 class _Options:
-    out: str = option(help="scene file to write (.xml)", check=PathArg(), metavar="S.xml")
+    out: str = option(help="scene file to write (.xml)", check=PathArg(role="output"), metavar="S.xml")
     force: bool = switch("replace an existing --out", api=WRITE, api_name="overwrite")
     geometry: str = option(
         "plane",

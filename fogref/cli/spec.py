@@ -36,13 +36,24 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 from dataclasses import MISSING, field
 
 from fogref import params
-from fogref.cli.checks import Check, Text
-from fogref.errors import FogrefError
+from fogref.cli.checks import Check, PathArg, Text
+from fogref.errors import FogrefError, did_you_mean
 
-__all__ = ["Parser", "UsageError", "add_options", "option", "parse_options", "refuse", "switch", "toggle"]
+__all__ = [
+    "Parser",
+    "UsageError",
+    "add_options",
+    "check_paths",
+    "option",
+    "parse_options",
+    "refuse",
+    "switch",
+    "toggle",
+]
 
 
 class UsageError(FogrefError):
@@ -54,7 +65,32 @@ class Parser(argparse.ArgumentParser):
     the usage and exiting, so that fogref's ``main`` prints them as one line."""
 
     def error(self, message):
-        raise UsageError(f"{self.prog}: {message} (see {self.prog} --help)")
+        raise UsageError(f"{self.prog}: {_suggest(self, message)} (see {self.prog} --help)")
+
+
+def _suggest(parser: argparse.ArgumentParser, message: str) -> str:
+    """argparse's ``unrecognized arguments: --from-scne`` with a did-you-mean for each unknown option.
+
+    >>> p = Parser(prog="demo")
+    >>> _ = p.add_argument("--from-scene", action="store_true")
+    >>> _suggest(p, "unrecognized arguments: --from-scne x")
+    "unrecognized arguments: --from-scne x; did you mean '--from-scene'?"
+    """
+    head = "unrecognized arguments: "
+    if not message.startswith(head):
+        return message
+    flags, todo = [], [parser]
+    while todo:  # this parser's options and its subcommands'
+        for a in todo.pop()._actions:
+            flags += a.option_strings
+            if isinstance(a, argparse._SubParsersAction):
+                todo += list(a.choices.values())
+    for word in message[len(head) :].split():
+        if word.startswith("--"):
+            hint = did_you_mean(word.partition("=")[0], flags)
+            if hint:
+                return message + hint
+    return message
 
 
 # --------------------------------------------------------------------------- fields
@@ -320,3 +356,36 @@ def refuse(spec, given: set, these, those, source: str, why: str = "") -> None:
         raise UsageError(
             f"{source}: {', '.join(b)} does not apply with {', '.join(a)}" + (f" ({why})" if why else "")
         )
+
+
+def _paths(opts, role: str) -> list[tuple[str, str]]:
+    """``(flag, path)`` of every option of ``opts`` whose check has the ``role`` ("input", "output")."""
+    out = []
+    for f in dataclasses.fields(opts):
+        chk, value = meta(f)["check"], getattr(opts, f.name)
+        r = getattr(chk, "role", "")
+        if isinstance(chk, PathArg) and chk.must_exist and chk.kind == "file":
+            r = r or "input"
+        if r != role or value is None:
+            continue
+        for v in value if isinstance(value, (tuple, list)) else (value,):
+            out.append((flag_of(f), str(v)))
+    return out
+
+
+def check_paths(opts, source: str) -> None:
+    """Before any work: a one-line error if an output file option of ``opts`` (``PathArg(role=
+    "output")``: ``--json``, ``--junit``, ``--out S.xml``...) is a folder, or would overwrite an
+    input file option (``PathArg(role="input")``: the truth, the images, the scene), or another
+    output (:func:`fogref.atomic.refuse_overwriting_inputs`, the one check of every command)."""
+    from fogref.atomic import check_output_file, is_stream, refuse_overwriting_inputs
+
+    outputs = _paths(opts, "output")
+    for flag, p in outputs:
+        check_output_file(p, f"{source}: {flag}")
+    inputs = [(q, f"input {n}") for n, q in _paths(opts, "input")]
+    for i, (flag, p) in enumerate(outputs):
+        refuse_overwriting_inputs([(p, "output")], inputs, f"{source}: {flag}")
+        for other, q in outputs[:i]:
+            if not is_stream(p) and os.path.realpath(p) == os.path.realpath(q):
+                raise UsageError(f"{source}: {flag} and {other} name the same file {p}; give two files")

@@ -25,7 +25,9 @@ UNREAL = "Unreal settings of the study's model"
 
 @dataclass
 class Options:
-    exr: str = option("out/valley.exr", "ground-truth EXR", positional=True, check=PathArg(), metavar="EXR")
+    exr: str = option(
+        "out/valley.exr", "ground-truth EXR", positional=True, check=PathArg(role="input"), metavar="EXR"
+    )
     out: str = option("out/unreal_study", "report folder", check=PathArg(), api=STUDY, api_name="out_dir")
     renders: str = option(
         "out/study",

@@ -31,7 +31,9 @@ RUN = "fogref.study.sweep:run_sweep"
 
 @dataclass
 class Options:
-    sweep: str = option(help="the sweep file (TOML)", positional=True, check=PathArg(), metavar="SWEEP.toml")
+    sweep: str = option(
+        help="the sweep file (TOML)", positional=True, check=PathArg(role="input"), metavar="SWEEP.toml"
+    )
     scheduler: str | None = option(
         None,
         "a running Dask scheduler (tcp://HOST:8786)",

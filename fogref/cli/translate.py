@@ -45,7 +45,7 @@ class Options:
     scene: str = option(
         "scenes/valley.xml",
         "reference scene (camera, albedo, sun azimuth, light)",
-        check=PathArg(),
+        check=PathArg(role="input"),
         metavar="XML",
         api=API,
     )

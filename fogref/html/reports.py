@@ -232,6 +232,8 @@ def write_batch_html(out_dir, rows: list[dict], truth_path: str, columns) -> Pat
         + "".join(
             f'<li><a href="{esc(r["report"])}/report.html">{esc(r["image"])}</a>: '
             f"{verdict_badge(str(r.get('verdict')))}</li>"
+            if r.get("report")
+            else f"<li>{esc(r['image'])}: {verdict_badge('error')} {esc(str(r.get('error')))}</li>"
             for r in rows
         )
         + "</ul>",
