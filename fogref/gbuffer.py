@@ -262,7 +262,7 @@ def moments_to_channels(
     return out
 
 
-@dataclass
+@dataclass(repr=False)
 class Truth:
     """One ground truth, as every part of fogref reads it.  Arrays are float64, ``(H, W, 3)``
     for the parts (``transmittance`` is the ``T`` group), ``(H, W)`` for scalars.
@@ -298,6 +298,23 @@ class Truth:
     def __post_init__(self) -> None:
         if self.corr is None:  # a truth built in memory without correlations: its channels' noise is one
             self.corr = {k: np.ones(v.shape) for k, v in self.stderr.items()}
+
+    def __repr__(self) -> str:
+        """One line: the file, the size, the samples and the parts (never the arrays).
+
+        >>> from fogref.compare.synthetic import synthetic_truth
+        >>> from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+        >>> synthetic_truth(UE4ExponentialHeightFog(UE4FogParams()), shape=(9, 16))
+        Truth('<synthetic truth, seed 0>', 16x9 px, 0 spp, seed 0, centre, 64 hit / 80 sky px, no sun)
+        """
+        h, w = self.shape
+        n_hit = int(self.hit.sum())
+        sun = "no sun" if self.sun_direction is None else "sun (%.3g, %.3g, %.3g)" % tuple(self.sun_direction)
+        seed, pixel_filter = self.attrs.get("fogref.seed", "?"), self.attrs.get("fogref.pixel_filter", "?")
+        return (
+            f"Truth({str(self.path)!r}, {w}x{h} px, {self.spp} spp, seed {seed}, {pixel_filter}, "
+            f"{n_hit} hit / {h * w - n_hit} sky px, {sun})"
+        )
 
     def _repr_html_(self) -> str:
         """Jupyter's display (:func:`fogref.html.inline.truth_html`): part thumbnails, provenance."""

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import tiny_inputs_scene as tiny
+from terminal_signals import sigint_raises
 
 from fogref.exrio import read_exr
 
@@ -87,31 +88,33 @@ def test_an_interruption_at_every_line_of_the_pass_loop_resumes_bitwise(tmp_path
     monkeypatch.setattr(S, "load_scene", lambda *a, **k: loaded)  # the same scene every run: faster
     out, ckpt = tmp_path / "run" / "x.exr", tmp_path / "run" / "x.exr.partial.npz"
     points, interrupted, verified = 0, 0, {}
-    previous = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
-    for n in range(1, 2000):
-        inject = _InjectAt(n, how)
-        sys.settrace(inject)
-        try:
-            R.render(scene, out, checkpoint_seconds=0, **kw)
-        except KeyboardInterrupt:
-            interrupted += 1
-        finally:
-            sys.settrace(None)
-            signal.signal(signal.SIGINT, previous[0])
-            signal.signal(signal.SIGTERM, previous[1])
-        if inject.fired is None:  # ran to the end: every line has had its turn
-            break
-        points += 1
-        left = sorted(p.name for p in out.parent.iterdir())
-        assert set(left) <= {"x.exr.partial.npz"}, f"interrupted at {inject.fired}: left {left}"
-        state = hashlib.sha256(ckpt.read_bytes()).hexdigest() if ckpt.exists() else None
-        if state not in verified:  # the rerun from this state (a checkpoint's bytes, or none)
-            R.render(scene, out, checkpoint_seconds=0, **kw)  # resumes, or starts over
-            verified[state] = _equal(_pixels(out), ref)
-            assert sorted(p.name for p in out.parent.iterdir()) == ["x.exr"]
-            out.unlink()
-        assert verified[state], f"interrupted at {inject.fired} (line event {n}): the resumed truth differs"
-        ckpt.unlink(missing_ok=True)
+    with sigint_raises():  # as in a terminal, even when the suite runs in the background
+        previous = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
+        for n in range(1, 2000):
+            inject = _InjectAt(n, how)
+            sys.settrace(inject)
+            try:
+                R.render(scene, out, checkpoint_seconds=0, **kw)
+            except KeyboardInterrupt:
+                interrupted += 1
+            finally:
+                sys.settrace(None)
+                signal.signal(signal.SIGINT, previous[0])
+                signal.signal(signal.SIGTERM, previous[1])
+            if inject.fired is None:  # ran to the end: every line has had its turn
+                break
+            points += 1
+            left = sorted(p.name for p in out.parent.iterdir())
+            assert set(left) <= {"x.exr.partial.npz"}, f"interrupted at {inject.fired}: left {left}"
+            state = hashlib.sha256(ckpt.read_bytes()).hexdigest() if ckpt.exists() else None
+            if state not in verified:  # the rerun from this state (a checkpoint's bytes, or none)
+                R.render(scene, out, checkpoint_seconds=0, **kw)  # resumes, or starts over
+                verified[state] = _equal(_pixels(out), ref)
+                assert sorted(p.name for p in out.parent.iterdir()) == ["x.exr"]
+                out.unlink()
+            why = f"interrupted at {inject.fired} (line event {n}): the resumed truth differs"
+            assert verified[state], why
+            ckpt.unlink(missing_ok=True)
     assert points > 50 and interrupted > 30 and len(verified) >= 3, (points, interrupted, len(verified))
     assert not ckpt.exists()
 

@@ -102,6 +102,16 @@ def test_diff_images_and_usage(truths, tmp_path, capsys):
 def test_compare_writes_report_html(truths, tmp_path, capsys):
     out = tmp_path / "cmp"
     main(["compare", str(truths["s0"]), "--model", "ue4", "--from-scene", "--out", str(out), "--no-figures"])
+    # what --help says --no-figures writes: these files, no PNG, and the page without its plots
+    written = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
+    assert written == ["check.json", "errors.exr", "index.md", "metrics.json", "report.html"]
+    assert "data:image/png" not in (out / "report.html").read_text()
+    capsys.readouterr()
+    with pytest.raises(SystemExit):
+        main(["compare", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    said = help_text[help_text.index("--no-figures no figures") :][:300]
+    assert all(name in said for name in written) and "no PNGs" in said, said
     html = (out / "report.html").read_text()
     assert "http://" not in html and "https://" not in html
     d = _data(html)

@@ -9,6 +9,7 @@ import time
 
 import numpy as np
 import pytest
+from terminal_signals import sigint_default
 
 import fogref.render.checkpoint as C
 from conftest import ROOT, SCENES
@@ -182,6 +183,10 @@ def test_leftover_temporary_checkpoint_is_removed(tmp_path, mitsuba):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["x.exr"]
 
 
+#: wall-clock limit [s] of a wait, for a hang only: generous on a loaded machine
+HANG_S = 900
+
+
 def test_ctrl_c_stops_cleanly_and_the_rerun_resumes(tmp_path, mitsuba):
     """SIGINT to `fogref render`: exit 130, a one-line message (no traceback), a
     checkpoint; the same command then finishes from it."""
@@ -196,13 +201,23 @@ def test_ctrl_c_stops_cleanly_and_the_rerun_resumes(tmp_path, mitsuba):
         "4096",
         "--quiet",
         "--no-png",
+        "--checkpoint-seconds",
+        "0",
         "--out",
         str(out),
-    ]  # 320x180: ~36 spp per pass, a second or two each
-    p = subprocess.Popen(cmd, cwd=ROOT, stderr=subprocess.PIPE, text=True)
-    time.sleep(12)
-    p.send_signal(signal.SIGINT)
-    err = p.communicate(timeout=120)[1]
+    ]  # 320x180: ~36 spp per pass, a second or two each; a checkpoint after every pass
+    # stderr to a file: a pipe nobody reads while we wait could fill and block the render
+    with open(tmp_path / "err.txt", "w+") as log:
+        p = subprocess.Popen(cmd, cwd=ROOT, stderr=log, text=True, preexec_fn=sigint_default)
+        # the event: the first checkpoint, so the pass loop runs; the clock only catches a hang
+        deadline = time.monotonic() + HANG_S
+        while p.poll() is None and not (tmp_path / "x.exr.partial.npz").exists():
+            assert time.monotonic() < deadline, f"no pass finished in {HANG_S} s: a hang"
+            time.sleep(0.1)
+        p.send_signal(signal.SIGINT)
+        p.wait(timeout=HANG_S)  # a hang only
+        log.seek(0)
+        err = log.read()
     assert p.returncode == 130, err
     assert "Traceback" not in err and "interrupted" in err
     assert (tmp_path / "x.exr.partial.npz").exists() and not out.exists()

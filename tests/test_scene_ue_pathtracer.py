@@ -81,3 +81,24 @@ def test_refusals_are_one_line(tmp_path, capsys, extra, words):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and all(w in err for w in words), err
     assert not out.exists()
+
+
+def test_every_value_of_the_path_traced_fog_is_a_default_that_set_changes(tmp_path, capsys):
+    """The fog's values are ``$default``s (``fogref scene --help``: every value becomes one): the scene
+    renders with ``--set g=0.9`` and each fog value it was written with, and says so in the header."""
+    import xml.etree.ElementTree as ET
+
+    from fogref.gbuffer import load_truth
+
+    xml, exr = tmp_path / "pt.xml", tmp_path / "pt.exr"
+    assert main(["scene", "--out", str(xml), "--ue-pathtracer", *UE, *PT, "--res", "8", "--resy", "6"]) == 0
+    medium = next(m for m in ET.parse(xml).getroot().iter("medium"))
+    values = {e.get("name"): e.get("value") for e in medium if e.get("name") != "profile"}
+    assert values and all(v.startswith("$") for v in values.values()), values
+    sets = {"g": "0.9", "fog_clamp": "2", "fog_radius": "20", "albedo": "0.5, 0.5, 0.5", "falloff": "0.05"}
+    args = ["render", str(xml), "--spp", "1", "--quiet", "--no-png", "--out", str(exr)]
+    given = [x for k, v in sets.items() for x in ("--set", f"{k}={v}")]
+    assert main([*args, *given]) == 0, capsys.readouterr()
+    med = load_truth(exr).params["medium"]
+    assert (med["g"], med["clamp"], med["radius"], med["albedo"]) == (0.9, 2.0, 20.0, [0.5] * 3)
+    assert med["falloff"] == 0.05

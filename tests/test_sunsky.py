@@ -404,3 +404,67 @@ def test_disk_sun_single_scattering_matches_the_disk_closed_form(mi, sun_samplin
     # 1e-4 across a 0.27 deg disk, and a float32 cos near 1 is good to 6e-8): -1.1e-3 measured
     assert np.all(np.abs(got.mean(0) - ref) < 4 * se + 2e-3 * ref), (got.mean(0), ref, se)
     assert np.all(delta.mean(0) > ref * 1.05)
+
+
+def _sun_disk_of_stock_sunsky(mi, w, place_time: dict) -> tuple[float, float]:
+    """Stock Mitsuba's own sunsky (its sun alone, fogref's y-up rotation, ``place_time`` over its
+    defaults): its radiance [W/(m^2 sr), G] along ``w`` and its largest 0.3 deg from ``w`` (the
+    disk's radius is 0.268 deg)."""
+    from fogref.media.sky import eval_emitter
+
+    em = mi.load_dict(
+        {
+            "type": "sunsky",
+            "sky_scale": 0.0,
+            "to_world": mi.ScalarTransform4f().rotate([1, 0, 0], -90),
+            **place_time,
+        }
+    )
+    w = np.asarray(w, dtype=np.float64)
+    t1 = np.cross(w, [1.0, 0.0, 0.0])
+    t1 /= np.linalg.norm(t1)
+    t2 = np.cross(w, t1)
+    a = math.radians(0.3)
+    ring = [
+        math.cos(a) * w + math.sin(a) * (math.cos(p) * t1 + math.sin(p) * t2)
+        for p in np.arange(16) / 8 * math.pi
+    ]
+    L = eval_emitter(em, np.array([w, *ring]))[:, 1]
+    return float(L[0]), float(L[1:].max())
+
+
+@pytest.mark.parametrize(
+    "place_time",
+    [{}, {"latitude": 48.85, "longitude": 2.35, "timezone": 1, "hour": 9.5, "month": 3, "day": 21}],
+    ids=["mitsuba's defaults", "paris, a march morning"],
+)
+def test_a_sunsky_without_sun_direction_takes_the_sun_mitsuba_gives_it(mi, tmp_path, place_time):
+    """A Mitsuba user's sunsky with no sun_direction (and no sun_elevation/sun_azimuth defaults) is
+    valid: its sun stands where stock Mitsuba's sunsky of the same place and time puts its disk
+    (Mitsuba's radiance along fogref's direction is the disk's, and 0 at 0.3 deg from it)."""
+    import xml.etree.ElementTree as ET
+
+    from fogref.render.scene import load_scene
+
+    root = ET.parse(_sunsky_scene(tmp_path)).getroot()
+    for d in [d for d in root.findall("default") if d.get("name") in ("sun_elevation", "sun_azimuth")]:
+        root.remove(d)
+    sky = next(e for e in root.iter("emitter") if e.get("type") == "sunsky")
+    for name, value in place_time.items():
+        tag = "integer" if name in ("month", "day") else "float"
+        ET.SubElement(sky, tag, name=name, value=str(value))
+    path = tmp_path / "user.xml"
+    ET.ElementTree(root).write(path)
+    _, desc = load_scene(path)
+    w = desc["sun"]["direction"]
+    assert desc["sky"]["sun_direction"] == w and abs(np.linalg.norm(w) - 1) < 1e-12
+    centre, ring = _sun_disk_of_stock_sunsky(mi, w, place_time)
+    assert centre > 1e3 and ring == 0.0, (centre, ring)
+    # the place and time matter: Paris in March at 9:30 is not Tokyo in July at 15:00
+    default_w = np.asarray(desc["sun"]["direction"] if not place_time else _default_sun(mi))
+    assert (np.degrees(np.arccos(np.clip(np.dot(w, default_w), -1, 1))) > 10) == bool(place_time)
+
+
+def _default_sun(mi) -> list:
+    em = mi.load_dict({"type": "sunsky", "to_world": mi.ScalarTransform4f().rotate([1, 0, 0], -90)})
+    return list(np.asarray(mi.traverse(em)["sun_direction"], dtype=np.float64).ravel())

@@ -85,7 +85,8 @@ class Options:
         None, "report folder", check=PathArg(), default_text="out/compare/<EXR stem>-<model or image stem>"
     )
     no_figures: bool = switch(
-        "write only metrics.json, check.json, errors.exr and index.md (no PNGs; faster, for CI)",
+        "no figures: write only metrics.json, check.json, errors.exr, index.md and report.html, the "
+        "viewer without its plots (no PNGs; faster, for CI)",
         api=COMPARE,
         api_name="figures",
         negates=True,

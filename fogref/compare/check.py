@@ -56,7 +56,7 @@ from fogref.compare.intervals import (
 from fogref.compare.paths import refuse_output_over_input
 from fogref.compare.regions import region_masks
 from fogref.compare.results import CheckResult, Row
-from fogref.compare.tolerances import metric_verdict, tolerance_table
+from fogref.compare.tolerances import metric_verdict, tolerance_table, user_set
 from fogref.errors import FogrefError
 from fogref.gbuffer import Truth
 from fogref.models.base import SKY_DISTANCE as DEFAULT_SKY_DISTANCE
@@ -312,6 +312,7 @@ def assert_fog_matches(
     >>> assert_fog_matches(truth, model).verdict
     'pass'
     """
+    __tracebackhide__ = True  # pytest shows the caller's line and the message, not this body
     if inconclusive not in ("fail", "pass", "skip"):
         raise FogrefError(f"inconclusive: {inconclusive!r} must be 'fail', 'pass' or 'skip'")
     if errors_dir is not None:
@@ -333,15 +334,28 @@ def assert_fog_matches(
     out = Path(errors_dir) if errors_dir is not None else _default_errors_dir(result)
     result.write(out)
     rows = failed + (undecided if inconclusive == "fail" else [])
+    named = user_set(tolerances)
+    set_here = [bool({(r.part, None, r.metric), (r.part, r.region, r.metric)} & named) for r in rows]
+    yours = [r for r, s in zip(rows, set_here) if s]
+    defaults = [r for r, s in zip(rows, set_here) if not s]
     lines = [
         f"fog does not match the truth: {result.candidate} vs {result.truth}",
         f"{len(failed)} row(s) fail, {len(undecided)} inconclusive, at {result.confidence:.0%} confidence "
         f"({result.method_text}):",
     ]
-    for r in rows[:12]:
-        lines.append("  " + r.describe() + _how_much(r))
-    if len(rows) > 12:
-        lines.append(f"  ... and {len(rows) - 12} more (check.json)")
+    for title, group in (
+        ("against the tolerances you set", yours),
+        (
+            "against fogref's default tolerances, which you did not set (DEFAULT_TOLERANCES in "
+            "fogref.compare.tolerances; set a part's metric to None to only report it)",
+            defaults,
+        ),
+    ):
+        if group:
+            lines.append(f"{len(group)} {title}:")
+            lines += ["  " + r.describe() + _how_much(r) for r in group[:12]]
+            if len(group) > 12:
+                lines.append(f"  ... and {len(group) - 12} more (check.json)")
     if undecided and inconclusive == "fail":
         lines.append(
             "inconclusive: the interval straddles the tolerance; render the truth with more samples "

@@ -79,6 +79,22 @@ def tolerance_table(tolerances, regions=None) -> dict:
     return table
 
 
+def user_set(tolerances) -> set:
+    """The ``(part, region | None, metric)`` whose tolerance ``tolerances`` names; every other
+    tolerance of :func:`tolerance_table` is one of :data:`DEFAULT_TOLERANCES`.  ``tolerances`` has
+    passed :func:`tolerance_table`.
+
+    >>> sorted(user_set({"T": 0.001, "inscatter/sky": {"rel_bias": None}}), key=str)
+    [('T', None, 'rel_rmse'), ('inscatter', 'sky', 'rel_bias')]
+    """
+    named = set()
+    for key, value in (tolerances or {}).items():
+        part, _, region = str(key).partition("/")
+        for metric in value if isinstance(value, dict) else ("rel_rmse",):
+            named.add((part, region or None, metric))
+    return named
+
+
 def _short(x) -> str:
     text = repr(x)
     return text if len(text) <= 40 else text[:37] + "..."

@@ -295,6 +295,16 @@ def _tag(name: str, value: Any) -> tuple[str, str]:
     return "float", repr(float(value))
 
 
+#: The ``<default>`` of each fog parameter in a scene :func:`rewrite_scene` writes (the others keep
+#: their own name): the scene vocabulary's (:mod:`fogref.render.scene_defaults`) and two of its own.
+DEFAULT_NAMES = {
+    "height": "fog_height",
+    "center": "camera_origin",
+    "clamp": "fog_clamp",
+    "radius": "fog_radius",
+}
+
+
 def rewrite_scene(
     src: str | Path,
     dst: str | Path,
@@ -310,9 +320,12 @@ def rewrite_scene(
     ``camera`` [m, y-up]: the cylinder's centre; default the scene's ``$camera_origin``
     ``<default>`` (the ``center`` is then written as ``$camera_origin``, so
     ``fogref render --set camera_origin=...`` moves the cylinder with the camera,
-    as Unreal does).  The medium's ``phase`` child, if any, is kept.
+    as Unreal does).  The medium's ``phase`` child, if any, is kept.  With that default, every
+    other value of the fog becomes a ``<default>`` too (:data:`DEFAULT_NAMES`: the scene
+    vocabulary's names, and ``fog_clamp``, ``fog_radius``), so ``--set g=0.9`` changes it; the
+    scene's comments are kept.
     """
-    tree = ET.parse(src)
+    tree = ET.parse(src, parser=ET.XMLParser(target=ET.TreeBuilder(insert_comments=True)))
     root = tree.getroot()
     med = next((m for m in root.iter("medium") if m.get("type") == "heightfog"), None)
     if med is None:
@@ -329,10 +342,19 @@ def rewrite_scene(
         params = pathtracer_fog_params(ue, pt, camera)
     for child in [c for c in med if c.get("name") is not None and c.tag != "phase"]:
         med.remove(child)
+    defaults = {e.get("name"): e for e in root.findall("default")}
+    at = max((i + 1 for i, e in enumerate(root) if e.tag == "default"), default=0)
     for k, v in params.items():
         tag, text = _tag(k, v)
-        if k == "center" and follow:
-            text = "$camera_origin"
+        if follow and k != "profile":
+            name = DEFAULT_NAMES.get(k, k)
+            if k != "center":  # the camera's own default
+                if name not in defaults:
+                    defaults[name] = ET.Element("default", name=name)
+                    root.insert(at, defaults[name])
+                    at += 1
+                defaults[name].set("value", text)
+            text = f"${name}"
         ET.SubElement(med, tag, name=k, value=text)
     ET.indent(tree, space="    ")
     tree.write(dst, encoding="unicode", xml_declaration=True)

@@ -45,6 +45,7 @@ __all__ = [
     "Z_UP_TO_Y_UP",
     "lower_sunsky",
     "sky_radiance",
+    "sun_from_time_and_place",
     "sun_irradiance",
     "sunsky_dict",
     "sunsky_from_element",
@@ -52,7 +53,7 @@ __all__ = [
 
 #: The sunsky's ``to_world`` in fogref scenes: a rotation of -90 deg about +x (z-up -> y-up).
 Z_UP_TO_Y_UP = (("x", -90.0),)
-#: sunsky parameters that fix the sun by date and place: fogref needs a direction.
+#: sunsky parameters that fix the sun by date and place (where it has no ``sun_direction``).
 _TIME_PLACE = ("latitude", "longitude", "timezone", "year", "month", "day", "hour", "minute", "second")
 
 
@@ -94,37 +95,57 @@ def _float_param(el: ET.Element, name: str, defaults: dict, default: float, sour
     return P.number(substitute(c.get("value", ""), defaults), name, source=source)
 
 
+def sun_from_time_and_place(el: ET.Element, defaults: dict, source: str) -> list[float]:
+    """The unit world direction toward the sun [y-up] that Mitsuba's ``sunsky`` computes from the
+    place and time of ``el`` (its ``latitude`` ... ``second``, Mitsuba's defaults for the rest), in
+    fogref's frame (``to_world`` :data:`Z_UP_TO_Y_UP`): read from the loaded emitter itself.  A
+    value Mitsuba refuses is a one-line FogrefError naming ``source``.  Needs the variant set."""
+    import mitsuba as mi
+
+    probe = ET.Element("emitter", type="sunsky", version="3.0.0")
+    for c in el:
+        if c.get("name") in _TIME_PLACE:
+            probe.append(
+                ET.Element(c.tag, name=c.get("name", ""), value=substitute(c.get("value", ""), defaults))
+            )
+    tw = ET.SubElement(probe, "transform", name="to_world")
+    for axis, angle in Z_UP_TO_Y_UP:
+        ET.SubElement(tw, "rotate", {axis: "1", "angle": repr(angle)})
+    try:
+        emitter = mi.load_string(ET.tostring(probe, encoding="unicode"), parallel=False)
+    except RuntimeError as e:
+        why = str(e).strip().splitlines()[-1] if str(e).strip() else type(e).__name__
+        raise FogrefError(f"{source}: its place and time: {why}") from None
+    return [float(x) for x in np.asarray(mi.traverse(emitter)["sun_direction"], dtype=np.float64).ravel()]
+
+
 def sunsky_from_element(el: ET.Element, defaults: dict, source: str) -> dict:
     """The :func:`sunsky_dict` of a scene's ``<emitter type="sunsky">`` (``$default``s resolved).
 
-    The sun's direction is its ``sun_direction`` vector, else the scene's ``$sun_elevation`` and
-    ``$sun_azimuth`` (:func:`fogref.render.sun.sun_direction_from_angles`); a sun fixed by date
-    and place is refused.  Its ``to_world`` must be fogref's z-up -> y-up rotation (or absent,
-    then it is added)."""
+    The sun's direction is its ``sun_direction`` vector; else, where the emitter gives a place or a
+    time (``latitude`` ... ``second``) or the scene has no ``$sun_elevation`` and ``$sun_azimuth``,
+    the direction Mitsuba's own sunsky takes from them and its defaults (latitude 35.6894,
+    longitude 139.692, timezone 9, 2010-07-10 15:00: :func:`sun_from_time_and_place`); else the
+    scene's ``$sun_elevation`` and ``$sun_azimuth``
+    (:func:`fogref.render.sun.sun_direction_from_angles`).  Its ``to_world`` must be fogref's
+    z-up -> y-up rotation (or absent, then it is added)."""
     src = f"{source}: sunsky"
-    for c in el:
-        if c.get("name") in _TIME_PLACE:
-            raise FogrefError(
-                f"{src}: '{c.get('name')}': fogref needs the sun's direction, not a date and place: give "
-                f"sun_direction, or the scene's sun_elevation and sun_azimuth defaults"
-            )
     v = el.find("vector[@name='sun_direction']")
+    by_time = any(c.get("name") in _TIME_PLACE for c in el)
     if v is not None:
         text = substitute(v.get("value", ""), defaults)
         if text:
             w = list(P.vector(text, "sun_direction", source=src))
         else:
             w = [P.number(substitute(v.get(c, "0"), defaults), c, source=src) for c in "xyz"]
-    elif "sun_elevation" in defaults and "sun_azimuth" in defaults:
+    elif by_time or not ("sun_elevation" in defaults and "sun_azimuth" in defaults):
+        w = sun_from_time_and_place(el, defaults, src)
+    else:
         w = list(
             sun_direction_from_angles(
                 P.number(defaults["sun_elevation"], "sun_elevation", source=src),
                 P.number(defaults["sun_azimuth"], "sun_azimuth", source=src),
             )
-        )
-    else:
-        raise FogrefError(
-            f"{src}: no sun direction (sun_direction, or sun_elevation and sun_azimuth defaults)"
         )
     n = math.sqrt(sum(x * x for x in w))
     if not math.isfinite(n) or n == 0:
@@ -179,7 +200,7 @@ def lower_sunsky(root: ET.Element, defaults: dict, source) -> dict | None:
     desc = sunsky_dict(**d)
     E = sun_irradiance(desc)
     for c in list(el):
-        if c.get("name") in ("sun_direction", "sun_scale", "to_world"):
+        if c.get("name") in ("sun_direction", "sun_scale", "to_world", *_TIME_PLACE):
             el.remove(c)
     ET.SubElement(
         el, "vector", name="sun_direction", value=", ".join(repr(float(x)) for x in d["sun_direction"])
