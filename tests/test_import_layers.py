@@ -52,13 +52,14 @@ FLOORS: list[tuple[str, tuple[str, ...]]] = [
         ),
     ),  # scene XML writer (no Mitsuba)
     ("compare", ("fogref.compare",)),
+    ("engines", ("fogref.engines",)),  # real engines in headless Chromium (selenium), lazily
     ("study", ("fogref.study",)),
     ("html", ("fogref.html",)),  # self-contained HTML reports (fogref.html)
     # entry points: the command line, the pytest plugin and the facade (fogref.set_variant)
     ("cli", ("fogref.cli", "fogref.pytest_plugin", "fogref.info", "fogref")),
 ]
 #: floors that must not import Mitsuba or Dr.Jit at module level
-NO_MITSUBA_AT_IMPORT = {"base", "media", "gbuffer", "models", "mapping", "compare", "study", "cli"}
+NO_MITSUBA_AT_IMPORT = {"base", "media", "gbuffer", "models", "mapping", "compare", "engines", "study", "cli"}
 
 
 def _modules() -> dict[str, tuple[Path, bool]]:

@@ -13,6 +13,7 @@ fit         fit Unreal's fog colours and exponent to a physical fog (JSON)     :
 translate   carry one engine's fog settings to another's through the truth     :mod:`~.translate`
 scene       write a scene XML from fog, sun, sky, camera and geometry          :mod:`~.scene`
 sweep       run a declarative error study (SWEEP.toml) on Dask                 :mod:`~.sweep`
+engine      render a truth's view with a real engine (three.js, Chromium)      :mod:`~.engine`
 ==========  =================================================================  =====================
 
 Each command's options are declared once, as the dataclass ``Options`` of its module
@@ -44,7 +45,7 @@ __all__ = ["COMMANDS", "build_parser", "main", "parse"]
 #: The commands, in the order ``fogref --help`` lists them, and the module of each.
 COMMANDS = {
     name: f"fogref.cli.{name}"
-    for name in ("render", "info", "compare", "diff", "study", "fit", "translate", "scene", "sweep")
+    for name in ("render", "info", "compare", "diff", "study", "fit", "translate", "scene", "sweep", "engine")
 }
 
 DESCRIPTION = (

@@ -1,11 +1,13 @@
-"""``fogref compare EXR (--model NAME | --image FILE ...)``: check a fog against a truth, gate CI.
+"""``fogref compare EXR (--model NAME | --image FILE ... | --engine NAME)``: check a fog, gate CI.
 
-Two modes: a fog model (``--model``, with ``--param``, ``--from-scene``, ``--precision``,
-``--sky-distance``) or an engine's images (``--image``/``--transmittance``/``--inscatter``/
-``--fog-colour``, with ``--encoding`` and ``--exposure``).  An option of the other mode is
-refused, not ignored.  The verdict is :func:`fogref.compare.check.check`'s (the checker of
-``assert_fog_matches``); exit codes: 0 pass, 1 fail, 2 usage or input error, 3 inconclusive
-(:mod:`fogref.compare.gate`).
+Three modes: a fog model (``--model``, with ``--param``, ``--from-scene``, ``--precision``,
+``--sky-distance``), an engine's images (``--image``/``--transmittance``/``--inscatter``/
+``--fog-colour``, with ``--encoding`` and ``--exposure``), or a real engine rendered here
+(``--engine``, with ``--param``, ``--from-scene``, ``--engine-output``, ``--scene``: its images,
+written under ``OUT/engine``, are then checked as ``--image`` checks an engine's images).  An
+option of another mode is refused, not ignored.  The verdict is
+:func:`fogref.compare.check.check`'s (the checker of ``assert_fog_matches``); exit codes: 0 pass,
+1 fail, 2 usage or input error, 3 inconclusive (:mod:`fogref.compare.gate`).
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from pathlib import Path
 from fogref.cli.checks import Assignments, Check, Choice, Number, PathArg
 from fogref.cli.compare_batch import ImageList
 from fogref.cli.spec import UsageError, option, refuse, switch
+from fogref.engines import ENGINES
 
 NAME = "compare"
 SOURCE = "fogref compare"
@@ -41,10 +44,13 @@ IMAGES = "fogref.compare.foreign:load_engine_images"
 ENCODINGS = ("auto", "linear", "srgb")
 MODEL_GROUP = "a fog model"
 IMAGE_GROUP = "an engine's images (instead of --model)"
+ENGINE_GROUP = "a real engine rendered here (instead of --model or --image; with --param, --from-scene)"
 GATE_GROUP = "verdict (fogref.compare.check.check, as assert_fog_matches)"
 #: the options of each mode (field names)
 MODEL_ONLY = ("model", "param", "from_scene", "precision", "sky_distance")
 IMAGE_ONLY = ("image", "transmittance", "inscatter", "fog_colour", "encoding", "exposure")
+ENGINE_ONLY = ("engine", "engine_output", "scene")
+ENGINE_RENDER = "fogref.engines.render:render_and_write"
 
 
 class Tolerances(Check):
@@ -175,6 +181,27 @@ class Options:
         group=IMAGE_GROUP,
         api=IMAGES,
     )
+    engine: str | None = option(
+        None,
+        "render the truth's view with this engine (its scene file; fog from --from-scene and --param) "
+        "and check its images",
+        check=Choice(tuple(ENGINES)),
+        group=ENGINE_GROUP,
+    )
+    engine_output: str = option(
+        "linear",
+        "which images of the engine to check: linear (its float render target: final, T, inscatter) "
+        "or canvas (the 8-bit sRGB canvas it ships)",
+        check=Choice(("linear", "canvas")),
+        group=ENGINE_GROUP,
+    )
+    scene: str | None = option(
+        None,
+        "the truth's scene file, where its header's fogref.scene is not",
+        check=PathArg(must_exist=True),
+        metavar="FILE",
+        group=ENGINE_GROUP,
+    )
     tolerance: dict | None = option(
         None,
         "tolerance of a row: METRIC rel_rmse (default), rel_bias, rmse or bias; "
@@ -252,15 +279,28 @@ def _print_metrics(name, exr, final: dict) -> None:
 
 
 def check_modes(o: Options, given) -> bool:
-    """True for the images mode, False for a model; UsageError for both, neither, or an option of
-    the other mode (refused, not ignored)."""
+    """True for the images mode, False for a model or an engine; UsageError for several, none, or an
+    option of another mode (refused, not ignored)."""
     images = any(n in given for n in IMAGE_ONLY[:4])
-    if images and o.model:
+    if sum((images, bool(o.model), bool(o.engine))) > 1:
         raise UsageError(
-            "give --model or the engine's images (--image/--transmittance/--inscatter), not both"
+            "give one of --model, the engine's images (--image/--transmittance/--inscatter) or --engine"
         )
-    if not images and not o.model:
-        raise UsageError("give --model NAME (or module.path:Class) or an engine's image with --image FILE")
+    if not images and not o.model and not o.engine:
+        raise UsageError(
+            "give --model NAME (or module.path:Class), an engine's image with --image FILE, or --engine NAME"
+        )
+    if o.engine:
+        refuse(
+            Options,
+            given,
+            ("engine",),
+            IMAGE_ONLY + ("precision", "sky_distance"),
+            SOURCE,
+            "not an engine's option",
+        )
+        return False
+    refuse(Options, given, IMAGE_ONLY[:4] + ("model",), ENGINE_ONLY, SOURCE, "options of --engine")
     if images:
         refuse(Options, given, IMAGE_ONLY[:4], MODEL_ONLY, SOURCE, "options of a --model comparison")
     else:
@@ -272,7 +312,7 @@ def _out_dir(o: Options) -> Path:
     """The report folder: ``--out``, else :func:`default_out_dir` of the model or the first image."""
     if o.out:
         return Path(o.out)
-    name = o.model or Path(o.image or o.inscatter or o.transmittance or o.fog_colour).stem
+    name = o.model or o.engine or Path(o.image or o.inscatter or o.transmittance or o.fog_colour).stem
     return default_out_dir(o.exr, name)
 
 
@@ -300,6 +340,31 @@ def _refuse_outputs_over_inputs(o: Options) -> None:
     refuse_output_over_input(gate, report, SOURCE, what="output")
 
 
+def _engine_images(o: Options, truth):
+    """Render the truth's view with ``--engine`` into ``OUT/engine`` and read back the images of
+    ``--engine-output``; returns ``(EngineImages, the engine's record)``."""
+    from fogref.cli.engine import engine_model
+    from fogref.compare.foreign import load_engine_images
+    from fogref.engines.render import render_and_write
+    from fogref.engines.view import view_from_truth
+
+    view = view_from_truth(truth, o.scene)
+    model = engine_model(o.engine, o.param, truth.params if o.from_scene else None)
+    inputs = [(o.exr, "EXR"), (view.source, "scene")]
+    _, paths, record = render_and_write(view, model, _out_dir(o) / "engine", o.engine, truth, inputs)
+    if o.engine_output == "canvas":
+        imgs = load_engine_images(paths["canvas"], shape=truth.shape, truth_name=str(o.exr))
+    else:
+        imgs = load_engine_images(
+            paths["final"],
+            paths.get("transmittance"),
+            paths.get("inscatter"),
+            shape=truth.shape,
+            truth_name=str(o.exr),
+        )
+    return imgs, record
+
+
 def run(o: Options, given=frozenset()) -> int:
     """Check the candidate, write the report, return the exit code (see :data:`EPILOG`).
 
@@ -322,7 +387,17 @@ def run(o: Options, given=frozenset()) -> int:
     _refuse_outputs_over_inputs(o)
     truth = load_truth(o.exr)
     extra = {}
-    if images:
+    if o.engine:
+        imgs, extra["engine"] = _engine_images(o, truth)
+        out = _out_dir(o)
+        result = check(truth, imgs, **options)
+        report = compare_images(
+            truth, imgs, out, figures=not o.no_figures, check=result, engine=extra["engine"]
+        )
+        extra["encodings"] = report["images"]["encodings"]
+        for line in extra["engine"]["summary"]:
+            print(line)
+    elif images:
         imgs = load_engine_images(
             o.image,
             o.transmittance,

@@ -214,11 +214,15 @@ def compare(
     )
 
 
-def compare_images(truth, images, out_dir, *, figures: bool = True, check=None, **options) -> dict:
+def compare_images(
+    truth, images, out_dir, *, figures: bool = True, check=None, engine: dict | None = None, **options
+) -> dict:
     """The report of :func:`compare` for an engine's images (:func:`image_parts`) instead of a model.
 
     ``images``: :class:`fogref.compare.foreign.EngineImages`; ``check``: the
-    :class:`~fogref.compare.check.CheckResult` of the same images; ``options``:
+    :class:`~fogref.compare.check.CheckResult` of the same images; ``engine``: the record of a
+    real engine that rendered them (``fogref.engines.render.EngineRender.record`` with its
+    ``summary`` lines), shown in ``index.md`` and kept in ``metrics.json``; ``options``:
     ``relmse_eps``, ``flip_ppd``, ``distance_bins``, ``angle_step_deg`` as :func:`compare`.
     Returns what ``metrics.json`` holds.
     """
@@ -235,6 +239,7 @@ def compare_images(truth, images, out_dir, *, figures: bool = True, check=None, 
             "encoding_option": getattr(images, "encoding_option", None),
             "exposure": float(getattr(images, "exposure", 1.0)),
         },
+        **({"engine": engine} if engine else {}),
     }
     return write_report(
         truth,

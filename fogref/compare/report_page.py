@@ -149,6 +149,13 @@ def _candidate_lines(report: dict) -> list[str]:
                 else "give the engine's transmittance and inscatter for the fair comparison (`composite`)"
             )
         )
+    engine = report.get("engine")
+    if engine:
+        lines.append(
+            f"- rendered by {engine['engine']} {engine['version']} in {engine['browser']} "
+            f"({engine['webgl_renderer']}), fog settings `{json.dumps(engine['fog_settings'])}`"
+        )
+        lines += [f"- {line}" for line in engine.get("summary", [])]
     return lines
 
 

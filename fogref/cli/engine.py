@@ -1,0 +1,116 @@
+"""``fogref engine render TRUTH_OR_SCENE --engine threejs --out DIR``: the real engine's images of a view.
+
+The view (camera, geometry, sun, sky, resolution) is the truth's (its scene file, checked
+against its header) or the scene's (with ``--set``); the fog settings are the engine's
+defaults, or with ``--from-scene`` the mapping of the scene's fog (:mod:`fogref.mapping`),
+and ``--param`` values override either.  Writes the files of
+:data:`fogref.engines.render.FILES`, ready for ``fogref compare TRUTH --image DIR/final.exr
+--transmittance DIR/T.exr --inscatter DIR/inscatter.exr`` or ``--image DIR/canvas.png``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from fogref.cli.checks import Assignments, Choice, Number, PathArg
+from fogref.cli.spec import option, refuse, switch
+from fogref.engines import ENGINES
+
+NAME = "engine"
+SOURCE = "fogref engine"
+HELP = "render a truth's or a scene's view with a real engine (three.js in headless Chromium)"
+DESCRIPTION = (
+    "Render the view of a ground-truth EXR (its scene file) or of a scene XML with a real engine "
+    "(three.js from node_modules, in headless Chromium with SwiftShader WebGL): its linear float "
+    "render target (final.exr with distance and hit channels, T.exr, inscatter.exr, surface.exr), "
+    "its 8-bit sRGB canvas (canvas.png) and engine.json (version, fog settings, the difference "
+    "from fogref's port of the engine, the camera against the truth's)."
+)
+API = "fogref.engines.render:render_and_write"
+
+
+@dataclass
+class Options:
+    action: str = option(help="what to do", positional=True, check=Choice(("render",)), metavar="ACTION")
+    input: str = option(
+        help="ground-truth EXR (fogref render) or scene XML",
+        positional=True,
+        check=PathArg(must_exist=True),
+        metavar="TRUTH_OR_SCENE",
+    )
+    out: str = option(help="folder for the engine's images", check=PathArg(), metavar="DIR")
+    engine: str = option("threejs", "the engine", check=Choice(tuple(ENGINES)), api=API)
+    param: dict | None = option(
+        None,
+        "set an engine fog setting, in the engine model's names (fogref.models; VALUE parsed as JSON "
+        "when possible; each KEY once)",
+        repeat=True,
+        check=Assignments(),
+        metavar="KEY=VALUE",
+    )
+    from_scene: bool = switch(
+        "the fog settings from the scene's fog (fogref.mapping); --param values then override"
+    )
+    overrides: dict | None = option(
+        None,
+        "set a scene XML $default (a scene input only), e.g. --set res=32",
+        flag="--set",
+        repeat=True,
+        check=Assignments(),
+    )
+    scene: str | None = option(
+        None,
+        "the truth's scene file, where its header's fogref.scene is not (a truth input only)",
+        check=PathArg(must_exist=True),
+        metavar="FILE",
+    )
+    timeout: float = option(
+        300.0,
+        "seconds before a page that does not answer is called hung",
+        check=Number(0.0, lo_open=True, unit="s"),
+        api=API,
+    )
+
+
+def is_truth(path) -> bool:
+    """True for an EXR (a truth), False for anything else (a scene XML)."""
+    return Path(path).suffix.lower() == ".exr"
+
+
+def engine_model(engine: str, param: dict | None, scene_params: dict | None):
+    """The engine's fogref model (fog settings): its defaults or ``scene_params``' mapping, with ``param``."""
+    from fogref.engines import engine_module
+    from fogref.mapping.build import build_model, parse_param_assignments
+
+    assignments = [f"{k}={v}" for k, v in (param or {}).items()]
+    return build_model(engine_module(engine).MODEL, parse_param_assignments(assignments), scene_params)
+
+
+def run(o: Options, given=frozenset()) -> int:
+    """Render, write, print one line per finding; 0 on success."""
+    from fogref.engines.render import render_and_write
+    from fogref.engines.view import view_from_scene, view_from_truth
+
+    truth = None
+    if is_truth(o.input):
+        refuse(
+            Options, given, ("input",), ("overrides",), SOURCE, "a truth's view is its own; render a scene"
+        )
+        from fogref.gbuffer import load_truth
+
+        truth = load_truth(o.input)
+        view = view_from_truth(truth, o.scene)
+    else:
+        refuse(Options, given, ("input",), ("scene",), SOURCE, "--scene names a truth's scene")
+        view = view_from_scene(o.input, o.overrides)
+    model = engine_model(o.engine, o.param, view.params if o.from_scene else None)
+    inputs = [(o.input, "input")] + ([(view.source, "scene")] if truth is not None else [])
+    r, paths, record = render_and_write(view, model, o.out, o.engine, truth, inputs, o.timeout)
+    H, W = view.shape
+    print(f"{o.engine} {r.version} in Chromium {r.browser} ({r.renderer}): {W}x{H} px in {r.seconds:.1f} s")
+    for line in record["summary"]:
+        print(line)
+    for role, p in paths.items():
+        print(f"{role}: {p}")
+    return 0
