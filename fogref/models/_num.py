@@ -80,3 +80,31 @@ def unit_direction(value: Any, name: str, source: str) -> tuple:
     if w.shape != (3,) or not (math.isfinite(n) and n > 0):
         raise ParameterError(source, name, "expected a non-zero finite 3-vector")
     return tuple(float(x) for x in w / n)
+
+
+def sky_pixels(cam: Any, wp: Any, hit: Any, sky_distance: float) -> Any:
+    """(...,) bool: the pixels that see the sky (the background), which engines shade apart.
+
+    ``hit``: the truth's own mask ((...,) bool, True where the pixel sees a surface, as
+    :func:`fogref.compare.candidate.evaluate_model` passes it); it decides when given.
+    ``hit=None``: a pixel is sky where its float64 distance ``|wp - cam|`` [m] is at least
+    ``sky_distance (1 - 1e-9)`` (points built as ``camera + view * sky_distance`` in float64,
+    never a distance rounded to float32).
+
+    >>> cam = np.zeros(3)
+    >>> wp = np.array([[0.0, 0.0, 5.0], [1e5 / 17**0.5, 0.0, 4e5 / 17**0.5]])
+    >>> sky_pixels(cam, wp, None, 1e5).tolist()
+    [False, True]
+    >>> sky_pixels(cam, wp, np.array([True, False]), 1e5).tolist()
+    [False, True]
+    """
+    if hit is not None:
+        h = np.asarray(hit)
+        if h.dtype != bool or h.shape != wp.shape[:-1]:
+            raise ParameterError(
+                "<model>", "hit", f"expected a bool mask of shape {wp.shape[:-1]}, got {h.dtype} {h.shape}"
+            )
+        return ~h
+    with np.errstate(all="ignore"):
+        d = np.sqrt(np.sum((wp - cam) ** 2, axis=-1))
+    return d >= sky_distance * (1.0 - 1e-9)
