@@ -12,6 +12,7 @@ registry name   class                                          source
 ``godot``       :class:`~fogref.models.godot.GodotFog`                 Godot scene_forward_clustered.glsl
 ``bevy``        :class:`~fogref.models.bevy.BevyDistanceFog`           Bevy fog.wgsl
 ``threejs``     :class:`~fogref.models.threejs.ThreeJSFog`             three.js fog_fragment.glsl.js
+``ue5_lfv``     :class:`~fogref.models.ue_local_fog_volume.UELocalFogVolume`  LocalFogVolumeCommon.ush
 ==============  =============================================  ==========================
 
 Every model follows :class:`~fogref.models.base.FogModel`:
@@ -34,6 +35,7 @@ from fogref.models import (  # noqa: F401  (registration)
     hdrp,
     threejs,
     ue4,
+    ue_local_fog_volume,
     unity_builtin,
 )
 from fogref.models.altitude import AltitudeFog, AltitudeFogParams
