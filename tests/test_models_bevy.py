@@ -135,8 +135,8 @@ def test_mapping_exact_for_coloured_homogeneous_fog_and_lobe():
     cam = np.array([0.0, 2.0, 0.0])
     d = rng.normal(size=(200, 3))
     d /= np.linalg.norm(d, axis=1, keepdims=True)
-    L = np.concatenate([10 ** rng.uniform(-2, 4, 199), [1e5]])
-    T = fog.evaluate(cam, cam + d * L[:, None], "float64").transmittance
+    L = np.concatenate([10 ** rng.uniform(-2, 4, 199), [1e5]])  # a mesh 100 km away
+    T = fog.evaluate(cam, cam + d * L[:, None], "float64", hit=np.ones(200, bool)).transmittance
     ref = np.stack(med.transmittance(NP, tuple(np.full(200, c) for c in cam), tuple(d.T), L), -1)
     np.testing.assert_allclose(T, ref, rtol=1e-12, atol=1e-300)
     # no sun: no lobe
@@ -179,3 +179,29 @@ def test_extremes_are_finite():
             r = BevyDistanceFog(p).evaluate(np.zeros(3), wp, prec)
             assert np.all(np.isfinite(r.transmittance)) and np.all(np.isfinite(r.inscatter))
             assert np.all((r.transmittance >= 0) & (r.transmittance <= 1)) and np.all(r.inscatter >= 0)
+
+
+@pytest.mark.parametrize("mode", ["Linear", "Exponential", "ExponentialSquared", "Atmospheric"])
+def test_skybox_is_not_fogged(mode):
+    """bevy_core_pipeline skybox.wgsl returns the cube map's sample: no fog on the background,
+    whether the truth's hit mask says so or (without it) the point lies at SKY_DISTANCE."""
+    from fogref.models import SKY_DISTANCE
+
+    p = BevyFogParams(
+        falloff=mode,
+        density=0.01,
+        extinction=(0.01, 0.02, 0.03),
+        inscattering=(0.01, 0.02, 0.03),
+        directional_light_color=(1.0, 0.9, 0.8, 1.0),
+        light_direction=(1.0, 0.0, 4.0),
+    )
+    d = np.array([[1.0, 0.0, 4.0], [0.0, 1.0, 0.0]]) / np.array([[math.sqrt(17.0)], [1.0]])
+    cam = np.array([0.0, 2.0, 0.0])
+    wp = cam + d * SKY_DISTANCE
+    for kw in ({"hit": np.array([False, False])}, {}):
+        for prec in ("float32", "float64"):
+            r = BevyDistanceFog(p).evaluate(cam, wp, prec, **kw)
+            assert np.all(r.transmittance == 1.0) and np.all(r.inscatter == 0.0)
+    # the same points as meshes are fogged (saturated at 100 km)
+    r = BevyDistanceFog(p).evaluate(cam, wp, "float64", hit=np.array([True, True]))
+    assert np.all(r.transmittance < 1e-6) and np.all(r.inscatter > 0.1)

@@ -15,26 +15,27 @@ from fogref.models.godot import GodotFog, GodotFogParams, godot_to_medium
 f32 = np.float32
 
 
-def fog_process(u, cam, wp, frag):
-    """godotengine/godot scene_forward_clustered.glsl fog_process + mix(frag, fog.rgb, fog.a), and
-    sky.glsl for sky pixels, with the CPU side of render_scene_data_rd.cpp; float32, one pixel."""
+def fog_process(u, cam, wp, frag, sky=False):
+    """godotengine/godot scene_forward_clustered.glsl (000ae031) fog_process, packHalf2x16 of
+    fog.rg and fog.ba, then mix(frag, fog.rgb, fog.a); sky.glsl (0095d7d0) for sky pixels; the CPU
+    side of render_scene_data_rd.cpp; float32, one pixel."""
     vertex = (np.asarray(wp) - np.asarray(cam)).astype(f32)  # view space: same length, same dots
     length = np.sqrt(np.sum(vertex * vertex))
     fog_light_color = np.asarray(u["fog_light_color"], f32) * f32(u["fog_light_energy"])
     frag = np.asarray(frag, f32)
     sun = np.asarray(u["sun_direction"], f32)
 
-    def sun_scatter(fog_color):
+    def sun_scatter(fog_color, scale=1.0):
         if u["fog_sun_scatter"] > 0.001:
             view = vertex / length
             cos = f32(view[0] * sun[0] + view[1] * sun[1] + view[2] * sun[2])
-            light_amount = np.power(max(cos, f32(0.0)), f32(8.0))
+            light_amount = np.power(max(cos, f32(0.0)), f32(8.0)) * f32(scale)
             fog_color = fog_color + np.asarray(u["sun_color"], f32) * light_amount * f32(u["fog_sun_scatter"])
         return fog_color
 
-    if length >= f32(u["sky_distance"]):  # sky.glsl
+    if sky:  # sky.glsl: M_PI = 3.14159265359 on the sun scatter
         fog_color = fog_light_color + (frag - fog_light_color) * f32(u["fog_aerial_perspective"])
-        fog_color = sun_scatter(fog_color)
+        fog_color = sun_scatter(fog_color, f32(3.14159265359))
         a = f32(1.0) * f32(u["fog_sky_affect"])
         return frag + (fog_color - frag) * a
     fog_color = fog_light_color
@@ -50,11 +51,13 @@ def fog_process(u, cam, wp, frag):
         fog_amount = np.power(fog_z, f32(u["fog_depth_curve"])) * f32(u["fog_density"])
     else:
         fog_amount = f32(1.0) - np.exp(min(f32(0.0), -length * f32(u["fog_density"])))
-    if u["fog_height_density"] != 0:
+    if abs(f32(u["fog_height_density"])) >= f32(0.0001):
         y = f32(cam[1]) + vertex[1]  # (inv_view_matrix * vertex).y
         y_dist = y - f32(u["fog_height"])
         vfog_amount = f32(1.0) - np.exp(min(f32(0.0), y_dist * f32(u["fog_height_density"])))
         fog_amount = max(vfog_amount, fog_amount)
+    fog_color = np.float16(fog_color).astype(f32)  # packHalf2x16 / unpackHalf2x16
+    fog_amount = f32(np.float16(fog_amount))
     return frag + (fog_color - frag) * fog_amount
 
 
@@ -103,11 +106,13 @@ def test_float32_matches_fog_process(mode, height_density):
     L = 10 ** rng.uniform(-1, 3.5, (300, 1))
     L[-30:] = SKY_DISTANCE  # sky pixels
     wp = cam + d * L
+    hit = np.arange(300) < 270
     scene = rng.uniform(0, 2, (300, 3))
-    out = GodotFog(p).evaluate(cam, wp, "float32").composite(scene.astype(f32))
+    out = GodotFog(p).evaluate(cam, wp, "float32", hit=hit).composite(scene.astype(f32))
     assert out.dtype == np.float32
     for i in range(300):
-        np.testing.assert_allclose(out[i], fog_process(u, cam, wp[i], scene[i]), rtol=3e-6, atol=3e-6)
+        ref = fog_process(u, cam, wp[i], scene[i], sky=not hit[i])
+        np.testing.assert_allclose(out[i], ref, rtol=3e-6, atol=3e-6)
 
 
 def test_exponential_is_homogeneous_medium_and_height_fog_is_not():
@@ -244,3 +249,59 @@ def test_extremes_are_finite():
                 r = GodotFog(p).evaluate(cam, wp, prec)
                 assert np.all(np.isfinite(r.transmittance)) and np.all(np.isfinite(r.inscatter))
                 assert np.all((r.transmittance >= 0) & (r.transmittance <= 1)) and np.all(r.inscatter >= 0)
+
+
+def test_height_fog_needs_height_density_of_at_least_1e_4():
+    """Godot skips height fog where |fog_height_density| < 0.0001 (fogref used to apply it)."""
+    pt = np.array([[0.0, -100.0, 0.0]])
+    for prec in ("float32", "float64"):
+        weak = GodotFogParams(fog_density=0.0, fog_height=0.0, fog_height_density=5e-5)
+        assert GodotFog(weak).evaluate(np.zeros(3), pt, prec).transmittance[0, 0] == 1.0
+        strong = GodotFogParams(fog_density=0.0, fog_height=0.0, fog_height_density=-1e-4)  # fog above
+        T = GodotFog(strong).evaluate(np.zeros(3), -pt, prec).transmittance[0, 0]
+        assert T == pytest.approx(math.exp(-0.01), abs=3e-4)  # 3e-4: the half float of fog.a
+
+
+def test_sky_is_decided_by_the_hit_mask_not_a_float32_distance():
+    """normalize(1, 0, 4) * 1e5 has a float32 length just under 1e5: still sky (T = 0 in depth
+    mode with sky affect 1), with the truth's hit mask and without it."""
+    d = np.array([1.0, 0.0, 4.0]) / math.sqrt(17.0)
+    wp = (d * SKY_DISTANCE)[None]
+    v = wp.astype(f32)
+    assert np.sqrt(np.sum(v * v)) < f32(SKY_DISTANCE)  # the rounding that misled the old rule
+    fog = GodotFog(GodotFogParams(fog_mode="depth", fog_density=0.5))
+    for kw in ({"hit": np.array([False])}, {}):
+        for prec in ("float32", "float64"):
+            assert fog.evaluate(np.zeros(3), wp, prec, **kw).transmittance[0, 0] == 0.0
+    # the same point is geometry when the truth says the pixel hit a surface
+    T = fog.evaluate(np.zeros(3), wp, "float64", hit=np.array([True])).transmittance[0, 0]
+    assert T == pytest.approx(0.5)
+    with pytest.raises(ParameterError, match="hit"):
+        fog.evaluate(np.zeros(3), wp, "float64", hit=np.array([1.0]))
+
+
+def test_sky_sun_glow_is_pi_times_the_scene_glow():
+    sun = (0.0, 0.6, 0.8)
+    p = GodotFogParams(
+        fog_density=0.01,
+        fog_sun_scatter=0.5,
+        sun_color=(2.0, 1.0, 0.5),
+        sun_direction=sun,
+        fog_light_color=(0.0, 0.0, 0.0),
+    )
+    wp = np.array([sun]) * SKY_DISTANCE
+    r = GodotFog(p).evaluate(np.zeros(3), wp, "float64", hit=np.array([False]))
+    np.testing.assert_allclose(r.inscatter[0], math.pi * 0.5 * np.array([2.0, 1.0, 0.5]), rtol=1e-12)
+
+
+def test_half_float_storage_moves_transmittance_by_at_most_2p4e_4():
+    rng = np.random.default_rng(7)
+    d = rng.normal(size=(4000, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    wp = d * 10 ** rng.uniform(-1, 3.5, (4000, 1))
+    fog = GodotFog(GodotFogParams(fog_density=0.004, fog_height=5.0, fog_height_density=0.03))
+    t32 = fog.evaluate(np.zeros(3), wp, "float32").transmittance[:, 0].astype(float)
+    t64 = fog.evaluate(np.zeros(3), wp, "float64").transmittance[:, 0]
+    err = np.abs(t32 - t64)
+    assert err.max() <= 2.45e-4  # half of a half-float ulp at [0.5, 1): 2^-12
+    assert err.max() > 1e-4  # the rounding is there (float32 alone stays below 1e-6)

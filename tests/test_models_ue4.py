@@ -35,11 +35,17 @@ def unreal_shader_fog(
     dir_color=(0, 0, 0),
     dir_exp=4.0,
     dir_start=0.0,
+    vfog=None,
 ):
     """Independent float32 transcription of UE 4.22's ``GetExponentialHeightFog``
     (``Engine/Shaders/Private/HeightFogCommon.ush``, ported y-up) with the uniforms
     that ``InitFogConstants`` (``Engine/Source/Runtime/Renderer/Private/FogRendering.cpp``)
-    sets, in centimetres.  One pixel."""
+    sets, in centimetres.  One pixel.  ``vfog`` (dict: g, albedo, emissive, ambient, illuminance):
+    UE 5.8's PROJECT_EXPFOG_MATCHES_VFOG, sky-atmosphere branch (unicorn2022/UE5.8.0 5d9a05c)."""
+    if vfog is not None:  # InitFogConstants with bExpFogMatchesVolumetricFog
+        dir_start = 0.0
+        albedo = np.asarray(vfog["albedo"], f32)
+        color = np.asarray(vfog["emissive"], f32) + np.asarray(vfog["ambient"], f32) * albedo
     cam = (np.asarray(cam_m, np.float64) * 100).astype(f32)
     rel = ((np.asarray(wp_m, np.float64) - np.asarray(cam_m, np.float64)) * 100).astype(f32)
     d0, fa0 = f32(D) / f32(1000), f32(f) / f32(1000)
@@ -79,13 +85,23 @@ def unreal_shader_fog(
     shared = CalculateLineIntegralShared(P[1], ray_dy, ro) + CalculateLineIntegralShared(P2[1], ray_dy, ro2)
     integral = shared * ray_len
     dir_insc = np.zeros(3, f32)
-    if light is not None:
+    if light is not None and vfog is not None:
+        G = f32(vfog["g"])
+        cos_theta = f32(np.dot(-normd, np.asarray(light, f32)))  # dot(-CameraToReceiverNormalized, L)
+        phase = (f32(1) - G * G) / (
+            f32(4) * f32(math.pi) * np.power(f32(1) + G * G + f32(2) * G * cos_theta, f32(1.5))
+        )
+        lobe = (f32(0) + np.asarray(vfog["illuminance"], f32)) * phase
+    elif light is not None:
         lobe = np.asarray(dir_color, f32) * np.power(
             np.clip(f32(np.dot(normd, np.asarray(light, f32))), 0, 1), f32(dir_exp)
         )
+    if light is not None:
         dint = shared * max(ray_len - f32(dir_start), f32(0))
         dff = np.clip(np.exp2(-dint), 0, 1)
         dir_insc = lobe * (f32(1) - dff)
+        if vfog is not None:
+            dir_insc = dir_insc * albedo
     factor = max(np.clip(np.exp2(-integral), 0, 1), MinFogOpacity)
     if P3[3] > 0 and length > P3[3]:
         factor = f32(1)
@@ -246,3 +262,128 @@ def test_registry_and_end_distance():
     p = UE4FogParams(FogDensity=0.1, FogHeightFalloff=0.0, EndDistance=100000.0)
     T = UE4ExponentialHeightFog(p).evaluate(cam, wp, "float64").transmittance[:, 0]
     assert T[0] < 1 and T[1] == pytest.approx(T[0] ** 2, rel=1e-9)  # fog stops at 1 km
+
+
+VFOG = dict(
+    g=0.6,
+    albedo=(0.9, 0.8, 0.7),
+    emissive=(0.01, 0.02, 0.03),
+    ambient=(0.2, 0.3, 0.5),
+    illuminance=(3.2, 2.9, 2.4),
+)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_exp_fog_matches_volumetric_fog_matches_shader_transcription(seed):
+    rng = np.random.default_rng(10 + seed)
+    sun = np.array([0.4, 0.2, -0.6])
+    sun /= np.linalg.norm(sun)
+    kw = dict(
+        D=rng.uniform(0.005, 0.2),
+        f=rng.uniform(0.0, 1.0),
+        H=rng.uniform(-500, 500),
+        D2=rng.uniform(0, 0.1),
+        f2=rng.uniform(0, 2.0),
+        H2=rng.uniform(-2000, 2000),
+        color=(0.4, 0.5, 0.9),
+        max_opacity=rng.uniform(0.5, 1.0),
+        start=[0.0, 3000.0][seed],
+        cutoff=[200000.0, 0.0][seed],
+        light=sun,
+        dir_color=(1.0, 0.8, 0.5),
+        dir_exp=8.0,
+        dir_start=5000.0,
+    )
+    params = UE4FogParams(
+        FogDensity=kw["D"],
+        FogHeightFalloff=kw["f"],
+        FogHeight=kw["H"],
+        SecondFogData=SecondFogData(kw["D2"], kw["f2"], kw["H2"] - kw["H"]),
+        FogInscatteringColor=kw["color"],
+        FogMaxOpacity=kw["max_opacity"],
+        StartDistance=kw["start"],
+        FogCutoffDistance=kw["cutoff"],
+        DirectionalInscatteringExponent=kw["dir_exp"],
+        DirectionalInscatteringStartDistance=kw["dir_start"],
+        DirectionalInscatteringColor=kw["dir_color"],
+        ExpFogMatchesVolumetricFog=True,
+        VolumetricFogScatteringDistribution=VFOG["g"],
+        VolumetricFogAlbedo=VFOG["albedo"],
+        VolumetricFogEmissive=VFOG["emissive"],
+        SkyAtmosphereAmbient=VFOG["ambient"],
+        AtmosphereLightIlluminance=VFOG["illuminance"],
+    ).with_sun(sun)
+    cam = np.array([3.0, rng.uniform(-2, 20), -7.0])
+    wp = _rays(rng, 64, cam)
+    wp[:8] = cam + sun * 10 ** rng.uniform(1, 4, (8, 1))  # into the forward peak
+    res = UE4ExponentialHeightFog(params).evaluate(cam, wp, "float32")
+    for i in range(len(wp)):
+        col, fac = unreal_shader_fog(cam, wp[i], **kw, vfog=VFOG)
+        np.testing.assert_allclose(res.transmittance[i], fac, rtol=2e-5, atol=1e-6)
+        np.testing.assert_allclose(res.inscatter[i], col, rtol=2e-5, atol=1e-6)
+    # the cosine lobe and its colour are unused in this mode, as in the engine
+    off = UE4ExponentialHeightFog(replace_fields(params, DirectionalInscatteringColor=(9.0, 9.0, 9.0)))
+    np.testing.assert_array_equal(off.evaluate(cam, wp, "float32").inscatter, res.inscatter)
+
+
+def replace_fields(params, **kw):
+    import dataclasses
+
+    return dataclasses.replace(params, **kw)
+
+
+def test_exp_fog_matches_volumetric_fog_is_unattenuated_single_scattering():
+    """float64, one layer: inscatter = albedo (E p_HG(d . w) + L_sky) (1 - T), T the exact medium's
+    (the closed form of an unattenuated sun and a uniform sky), p_HG from fogref.media."""
+    from fogref.media import hg_phase
+
+    sun = np.array([0.3, 0.25, 0.9])
+    sun /= np.linalg.norm(sun)
+    params = UE4FogParams(
+        FogDensity=0.05,
+        FogHeightFalloff=0.3,
+        FogHeight=50.0,
+        ExpFogMatchesVolumetricFog=True,
+        VolumetricFogScatteringDistribution=-0.4,
+        VolumetricFogAlbedo=(0.9, 0.8, 0.7),
+        SkyAtmosphereAmbient=(0.2, 0.3, 0.5),
+        AtmosphereLightIlluminance=(3.2, 2.9, 2.4),
+    ).with_sun(sun)
+    rng = np.random.default_rng(4)
+    cam = np.array([0.0, 3.0, 0.0])
+    wp = _rays(rng, 200, cam)
+    r = UE4ExponentialHeightFog(params).evaluate(cam, wp, "float64")
+    T = _exact_T(params, cam, wp)[:, None]
+    np.testing.assert_allclose(r.transmittance, np.repeat(T, 3, axis=1), rtol=1e-9, atol=1e-15)
+    d = (wp - cam) / np.linalg.norm(wp - cam, axis=1, keepdims=True)
+    p = hg_phase(NP, d @ sun, -0.4)[:, None]
+    expected = np.array([0.9, 0.8, 0.7]) * (np.array([3.2, 2.9, 2.4]) * p + [0.2, 0.3, 0.5]) * (1 - T)
+    np.testing.assert_allclose(r.inscatter, expected, rtol=1e-9, atol=1e-15)
+
+
+def test_exp_fog_matches_volumetric_fog_bad_input():
+    from fogref.errors import ParameterError
+
+    for kw, name in (
+        (
+            dict(ExpFogMatchesVolumetricFog=True, VolumetricFogScatteringDistribution=0.995),
+            "VolumetricFogScatteringDistribution",
+        ),
+        (dict(ExpFogMatchesVolumetricFog=True, VolumetricFogAlbedo=(1.2, 1.0, 1.0)), "VolumetricFogAlbedo"),
+        (dict(ExpFogMatchesVolumetricFog="yes"), "ExpFogMatchesVolumetricFog"),
+        (dict(SkyAtmosphereAmbient=(0.1, 0.1, 0.1)), "SkyAtmosphereAmbient"),
+    ):
+        with pytest.raises(ParameterError, match=name):
+            UE4FogParams(**kw)
+
+
+def test_end_distance_applies_to_the_horizontal_distance():
+    """HeightFogCommon.ush (UE 5.8): CameraToReceiver *= End / sqrt(max(1, |xy|^2)) where |xy| > End;
+    homogeneous fog: T = exp(-sigma * the scaled length), sigma = 100 (ln 2)^2 D / 1000 per metre."""
+    sigma = 100 * math.log(2) ** 2 * 0.1 / 1000
+    p = UE4FogParams(FogDensity=0.1, FogHeightFalloff=0.0, EndDistance=100000.0)  # 1 km
+    cam = np.zeros(3)
+    wp = np.array([[500.0, 2000.0, 0.0], [3000.0, 4000.0, 0.0]])  # |xy| (Unreal) = 500 m, 3000 m
+    T = UE4ExponentialHeightFog(p).evaluate(cam, wp, "float64").transmittance[:, 0]
+    lengths = [math.hypot(500.0, 2000.0), math.hypot(3000.0, 4000.0) / 3.0]  # the 2nd scaled to |xy| = 1 km
+    assert T == pytest.approx([math.exp(-sigma * x) for x in lengths], rel=1e-9)

@@ -14,6 +14,7 @@ registry name   class                                          source
 ``threejs``     :class:`~fogref.models.threejs.ThreeJSFog`             three.js fog_fragment.glsl.js
 ``babylon``     :class:`~fogref.models.babylon.BabylonFog`             Babylon.js fogFragmentDeclaration.fx
 ``playcanvas``  :class:`~fogref.models.playcanvas.PlayCanvasFog`       PlayCanvas fog chunk (fogPS)
+``ue5_lfv``     :class:`~fogref.models.ue_local_fog_volume.UELocalFogVolume`  LocalFogVolumeCommon.ush
 ==============  =============================================  ==========================
 
 Every model follows :class:`~fogref.models.base.FogModel`:
@@ -38,6 +39,7 @@ from fogref.models import (  # noqa: F401  (registration)
     playcanvas,
     threejs,
     ue4,
+    ue_local_fog_volume,
     unity_builtin,
 )
 from fogref.models.altitude import AltitudeFog, AltitudeFogParams

@@ -96,3 +96,31 @@ def background(cam: Any, wp: Any, sky_distance: float) -> Any:
     [False]
     """
     return view_ray(cam, wp, np.float64)[1] >= sky_distance * (1.0 - SKY_TOLERANCE)
+
+
+def sky_pixels(cam: Any, wp: Any, hit: Any, sky_distance: float) -> Any:
+    """(...,) bool: the pixels that see the sky (the background), which engines shade apart.
+
+    ``hit``: the truth's own mask ((...,) bool, True where the pixel sees a surface, as
+    :func:`fogref.compare.candidate.evaluate_model` passes it); it decides when given.
+    ``hit=None``: a pixel is sky where its float64 distance ``|wp - cam|`` [m] is at least
+    ``sky_distance (1 - 1e-9)`` (points built as ``camera + view * sky_distance`` in float64,
+    never a distance rounded to float32).
+
+    >>> cam = np.zeros(3)
+    >>> wp = np.array([[0.0, 0.0, 5.0], [1e5 / 17**0.5, 0.0, 4e5 / 17**0.5]])
+    >>> sky_pixels(cam, wp, None, 1e5).tolist()
+    [False, True]
+    >>> sky_pixels(cam, wp, np.array([True, False]), 1e5).tolist()
+    [False, True]
+    """
+    if hit is not None:
+        h = np.asarray(hit)
+        if h.dtype != bool or h.shape != wp.shape[:-1]:
+            raise ParameterError(
+                "<model>", "hit", f"expected a bool mask of shape {wp.shape[:-1]}, got {h.dtype} {h.shape}"
+            )
+        return ~h
+    with np.errstate(all="ignore"):
+        d = np.sqrt(np.sum((wp - cam) ** 2, axis=-1))
+    return d >= sky_distance * (1.0 - 1e-9)

@@ -1,17 +1,25 @@
 """Bevy ``DistanceFog``: ``FogFalloff::{Linear, Exponential, ExponentialSquared, Atmospheric}``.
 
-Source (verified against the repository ``bevyengine/bevy``):
+Follows Bevy's ``DistanceFog`` (the name since Bevy 0.15; ``bevyengine/bevy``) and reproduces
+the **linear** HDR colour the PBR fragment shader writes before tonemapping:
 
-* ``crates/bevy_pbr/src/render/fog.wgsl`` (``scattering_adjusted_fog_color``, ``linear_fog``,
-  ``exponential_fog``, ``exponential_squared_fog``, ``atmospheric_fog``);
-* ``crates/bevy_pbr/src/render/pbr_functions.wgsl`` (``apply_fog``: ``distance =
-  length(world - camera)``; the directional lobe ``scattering += pow(max(dot(v, l), 0),
+* ``crates/bevy_pbr/src/render/fog.wgsl`` (commit c75754ebce7bfd43c6bbd62f0000483c0141d740;
+  ``scattering_adjusted_fog_color``, ``linear_fog``, ``exponential_fog``,
+  ``exponential_squared_fog``, ``atmospheric_fog``);
+* ``crates/bevy_pbr/src/render/pbr_functions.wgsl`` (commit
+  5b608baeafd4b2204ade9fe53ec0c5db8c189dac; ``apply_fog``: ``distance = length(world -
+  camera)``; the directional lobe ``scattering += pow(max(dot(v, l), 0),
   directional_light_exponent) * light.color.rgb * view.exposure`` over the directional
   lights, ``v`` the unit view vector, ``l`` = ``direction_to_light``, only when
-  ``directional_light_color.a > 0``);
+  ``directional_light_color.a > 0``), called by the mesh fragment shaders only (``if
+  (fog.mode != FOG_MODE_OFF && (material.flags & STANDARD_MATERIAL_FLAGS_FOG_ENABLED_BIT) !=
+  0u)`` in ``pbr.wgsl``);
 * ``crates/bevy_pbr/src/render/fog.rs`` (``prepare_fog``: ``be = (start, end, 0)`` for
   Linear, ``(density, 0, 0)`` for Exponential and ExponentialSquared, ``be = extinction``
-  and ``bi = inscattering`` for Atmospheric; colours as ``LinearRgba``).
+  and ``bi = inscattering`` for Atmospheric; colours as ``LinearRgba``);
+* ``crates/bevy_core_pipeline/src/skybox/skybox.wgsl`` (commit
+  002c68066a98faf210ce337539a6c107bf9cad0f): ``skybox_fragment`` returns the cube map's
+  sample and nothing else: **the skybox (and the clear colour) is not fogged**.
 
 The fog colour (``scattering_adjusted_fog_color``): ``c = base_color.rgb + scattering *
 directional_light_color.rgb * directional_light_color.a`` (alpha ``a = base_color.a``).
@@ -23,7 +31,10 @@ Then, with ``d`` the distance [m]:
 * Atmospheric (per RGB channel): ``E = 1 - 1/exp(d extinction)``, ``I = 1 - 1/exp(d
   inscattering)``, ``out = input (1 - E a) + c I a``.
 
-So ``transmittance = 1 - f`` (grey) or ``1 - E a`` (RGB), ``inscatter = c f`` or ``c I a``.
+So ``transmittance = 1 - f`` (grey) or ``1 - E a`` (RGB), ``inscatter = c f`` or ``c I a``
+on meshes; on the background (sky pixels: the truth's ``hit`` mask is False, or without it a
+float64 distance of at least :data:`~fogref.models.base.SKY_DISTANCE`, see
+:func:`~fogref.models._num.sky_pixels`) ``transmittance = 1`` and ``inscatter = 0``.
 
 Units: Bevy is y-up, right-handed, **metres** by convention, the same frame as fogref.
 ``density``, ``extinction``, ``inscattering`` [1/m]; ``start``/``end`` [m].  The light's
@@ -51,8 +62,8 @@ import numpy as np
 
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, rgb
-from fogref.models._num import dtype_of, grey, split, unit_direction, view_ray
-from fogref.models.base import FogResult, register
+from fogref.models._num import dtype_of, grey, sky_pixels, split, unit_direction, view_ray
+from fogref.models.base import SKY_DISTANCE, FogResult, register
 
 FALLOFFS = ("Linear", "Exponential", "ExponentialSquared", "Atmospheric")
 
@@ -145,12 +156,14 @@ class BevyDistanceFog:
     def __init__(self, params: BevyFogParams | None = None):
         self.params = params or BevyFogParams()
 
-    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
-        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
+    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32", hit: Any = None) -> FogResult:
+        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres; ``hit`` (...,) bool,
+        False on the pixels that see the sky (the skybox: no fog)."""
         dt = dtype_of(precision)
         p = self.params
         cam, wp = split(camera, world_pos)
         v, d = view_ray(cam, wp, dt)
+        sky = sky_pixels(cam, wp, hit, SKY_DISTANCE)
         with np.errstate(all="ignore"):
             base = np.asarray(p.color[:3], dtype=dt)
             a = dt(p.color[3])
@@ -183,6 +196,8 @@ class BevyDistanceFog:
                 f = a * f
                 trans = grey(t, dt)
                 insc = color * f[..., None]
+            trans = np.where(sky[..., None], dt(1.0), trans)
+            insc = np.where(sky[..., None], dt(0.0), insc)
         return FogResult(inscatter=insc.astype(dt), transmittance=trans.astype(dt))
 
     def to_medium(self, **kw: Any) -> FogMedium:

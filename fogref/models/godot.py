@@ -1,9 +1,13 @@
 """Godot 4 environment fog (``Environment.fog_*``, the non-volumetric "fixed" fog).
 
-Source (verified against the repository ``godotengine/godot``):
+Follows Godot 4.6 (``godotengine/godot``; its ``version.py`` at commit 001aa128 reads 4.6.2) and
+reproduces the **linear** HDR colour the scene shader writes before tonemapping:
 
-* ``servers/rendering/renderer_rd/shaders/forward_clustered/scene_forward_clustered.glsl``,
-  ``fog_process(vertex)`` (``vertex``: the view-space position) and its use
+* ``servers/rendering/renderer_rd/shaders/forward_clustered/scene_forward_clustered.glsl``
+  (commit 000ae031b1c3ab6437707522aa9e1070ee129cec; ``forward_mobile/scene_forward_mobile.glsl``
+  at dbd17baab5bd2fc371cefaaf255a27941d756eab has the same ``fog_process``):
+  ``fog = fog_process(vertex)`` (``vertex``: the view-space position), packed with
+  ``packHalf2x16(fog.rg)``, ``packHalf2x16(fog.ba)`` and unpacked before
   ``frag_color.rgb = mix(frag_color.rgb, fog.rgb, fog.a)``::
 
       fog_color = fog_light_color;
@@ -14,18 +18,19 @@ Source (verified against the repository ``godotengine/godot``):
       if (depth fog) fog_amount = pow(smoothstep(fog_depth_begin, fog_depth_end, length(vertex)),
                                       fog_depth_curve) * fog_density;
       else           fog_amount = 1 - exp(min(0.0, -length(vertex) * fog_density));
-      if (height fog) fog_amount = max(1.0 - exp(min(0.0, (y - fog_height) * fog_height_density)),
-                                       fog_amount);
+      if (abs(fog_height_density) >= 0.0001)
+          fog_amount = max(1.0 - exp(min(0.0, (y - fog_height) * fog_height_density)), fog_amount);
 
   (``y``: the world height of the shaded point);
 * ``servers/rendering/renderer_rd/storage_rd/render_scene_data_rd.cpp`` (CPU):
   ``fog_light_color = srgb_to_linear(color) * fog_light_energy``; ``fog_depth_end = end > 0 ?
   end : z_far``; ``fog_depth_begin = min(begin, fog_depth_end - 0.001)``;
-* ``servers/rendering/renderer_rd/shaders/environment/sky.glsl``: sky pixels are fogged by
-  the sky shader instead, ``fog_process(view, sky_color)`` returns ``(mix(fog_light_color,
-  sky_color, fog_aerial_perspective) + sun scatter, 1.0)`` and ``frag_color.rgb =
-  mix(frag_color.rgb, fog.rgb, fog.a * fog_sky_affect)`` (some 4.x releases also multiply
-  the sky's sun scatter by pi; not modelled).
+* ``servers/rendering/renderer_rd/shaders/environment/sky.glsl`` (commit
+  0095d7d0c0c910f6d5800215e720bc54bb74f002): sky pixels are fogged by the sky shader instead,
+  in float32 without half packing: ``fog_process(view, sky_color)`` returns
+  ``(mix(fog_light_color, sky_color, fog_aerial_perspective) + sun scatter, 1.0)``, its sun
+  scatter ``pow(max(dot(view, l), 0.0), 8.0) * M_PI`` (pi times the scene shader's), and
+  ``frag_color.rgb = mix(frag_color.rgb, fog.rgb, fog.a * fog_sky_affect)``.
 
 Units: Godot is y-up, **metres**, the same frame as fogref.  ``fog_density`` [1/m]
 (exponential mode; in depth mode it is the maximum opacity, in [0, 1]),
@@ -38,11 +43,13 @@ aerial perspective samples (fogref's skies are constant, so the blurred radiance
 that constant).
 
 Result: scene pixels ``transmittance = 1 - fog_amount`` (grey), ``inscatter = fog_color *
-fog_amount``.  Sky pixels (distance >= ``sky_distance``; fogref's compare puts them at
-:data:`~fogref.models.base.SKY_DISTANCE`): ``s = fog_sky_affect``,
-``transmittance = 1 - s (1 - fog_aerial_perspective)`` and ``inscatter = s ((1 -
-fog_aerial_perspective) fog_light_color + sun scatter)``: the sky's own colour stands in
-for ``sky_color``.
+fog_amount``; at ``precision="float32"`` both ``fog_color`` and ``fog_amount`` pass through
+half floats first (:func:`half_round`: up to 2.4e-4 on the transmittance, 2^-11 relative on
+the inscatter); ``"float64"`` leaves that rounding out.  Sky pixels (the truth's ``hit`` mask
+is False, or without it a float64 distance of at least ``sky_distance``, see
+:func:`~fogref.models._num.sky_pixels`): ``s = fog_sky_affect``, ``transmittance = 1 - s (1 -
+fog_aerial_perspective)`` and ``inscatter = s ((1 - fog_aerial_perspective) fog_light_color +
+pi * sun scatter)``: the sky's own colour stands in for ``sky_color``.
 
 Physical counterpart: the exponential mode without height fog is exactly a homogeneous
 medium, ``sigma_t = fog_density`` [1/m].  Godot's height fog is **not** an optical
@@ -50,7 +57,8 @@ depth: it depends only on the end point's height and is combined with ``max``, s
 exponential height profile has no exact counterpart (see
 :func:`fogref.mapping.engines.godot_from_physical`).  The depth mode has none either.
 Robustness (deviations): the lobe normalises ``vertex`` with ``length`` floored at 1e-30
-(the shader's ``normalize(0)`` is NaN at the camera).
+(the shader's ``normalize(0)`` is NaN at the camera); a fog colour beyond the largest half
+float (65504) is clamped to it (``packHalf2x16`` of it is implementation-defined).
 """
 
 from __future__ import annotations
@@ -63,7 +71,7 @@ import numpy as np
 
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, rgb
-from fogref.models._num import dtype_of, grey, split, unit_direction, view_ray
+from fogref.models._num import dtype_of, grey, sky_pixels, split, unit_direction, view_ray
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
 MODES = ("exponential", "depth")
@@ -73,6 +81,25 @@ DEFAULT_FOG_LIGHT_COLOR = (0.231082, 0.266417, 0.327964)
 SUN_SCATTER_EXPONENT = 8.0
 #: ``fog_sun_scatter`` at or below this adds nothing (Godot's test ``fog_sun_scatter > 0.001``).
 SUN_SCATTER_MIN = 0.001
+#: ``|fog_height_density|`` below this adds no height fog (Godot's test ``abs(...) >= 0.0001``).
+HEIGHT_DENSITY_MIN = 0.0001
+#: The largest finite half float: ``packHalf2x16`` of a larger fog colour is clamped here.
+HALF_MAX = 65504.0
+
+
+def half_round(x: Any) -> Any:
+    """``unpackHalf2x16(packHalf2x16(x))`` in float32: round to the nearest half float
+    (IEEE binary16, round to nearest even), magnitudes clamped to :data:`HALF_MAX`.
+
+    Examples
+    --------
+    >>> float(half_round(np.float32(0.1)))
+    0.0999755859375
+    >>> float(half_round(np.float32(1e6)))
+    65504.0
+    """
+    x = np.clip(np.asarray(x, dtype=np.float32), -HALF_MAX, HALF_MAX)
+    return x.astype(np.float16).astype(np.float32)
 
 
 def srgb_to_linear(c: Any) -> tuple:
@@ -179,12 +206,14 @@ class GodotFog:
     def __init__(self, params: GodotFogParams | None = None):
         self.params = params or GodotFogParams()
 
-    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
-        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
+    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32", hit: Any = None) -> FogResult:
+        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres; ``hit`` (..., ) bool,
+        False on the pixels that see the sky (see :func:`~fogref.models._num.sky_pixels`)."""
         dt = dtype_of(precision)
         p = self.params
         cam, wp = split(camera, world_pos)
         v, d = view_ray(cam, wp, dt)
+        sky = sky_pixels(cam, wp, hit, p.sky_distance)
         with np.errstate(all="ignore"):
             light = np.asarray(p.fog_light_color, dtype=dt) * dt(p.fog_light_energy)
             ap = dt(p.fog_aerial_perspective)
@@ -205,19 +234,20 @@ class GodotFog:
                 amount = np.power(fog_z, dt(p.fog_depth_curve)) * dt(p.fog_density)
             else:
                 amount = dt(1.0) - np.exp(np.minimum(dt(0.0), -d * dt(p.fog_density)))
-            if p.fog_height_density != 0.0:
+            if abs(np.float32(p.fog_height_density)) >= np.float32(HEIGHT_DENSITY_MIN):
                 y = dt(cam[1]) + v[..., 1]
                 y_dist = y - dt(p.fog_height)
                 vfog = dt(1.0) - np.exp(np.minimum(dt(0.0), y_dist * dt(p.fog_height_density)))
                 amount = np.maximum(vfog, amount)
             amount = np.where(np.isfinite(amount), amount, dt(1.0)).astype(dt)
+            if dt is np.float32:  # packHalf2x16 / unpackHalf2x16 between fog_process and the blend
+                fog_color, amount = half_round(fog_color), half_round(amount)
             trans = dt(1.0) - amount
             insc = fog_color * amount[..., None]
-            sky = d >= dt(p.sky_distance)
             if np.any(sky):
                 s = dt(p.fog_sky_affect)
                 t_sky = dt(1.0) - s * (dt(1.0) - ap)
-                i_sky = s * (light * (dt(1.0) - ap) + scatter)
+                i_sky = s * (light * (dt(1.0) - ap) + scatter * dt(math.pi))
                 trans = np.where(sky, t_sky, trans)
                 insc = np.where(sky[..., None], i_sky, insc)
         return FogResult(inscatter=insc.astype(dt), transmittance=grey(trans, dt))

@@ -1,10 +1,19 @@
-"""Unreal Engine Exponential Height Fog (UE4.22–4.27; UE5's EndDistance option).
+"""Unreal Engine Exponential Height Fog (UE 4.22 to 5.8), with UE 5's EndDistance and the
+``r.SupportExpFogMatchesVolumetricFog`` mode.
 
-Source: ``Engine/Shaders/Private/HeightFogCommon.ush`` (``GetExponentialHeightFog``,
-``CalculateLineIntegralShared``) and ``Engine/Source/Runtime/Renderer/Private/
-FogRendering.cpp`` (``InitFogConstants``, ``SetupFogUniformParameters``), ported
-to y-up.  The physical scene -> Unreal mapping and colour fit live in
-:mod:`fogref.mapping.unreal`.
+Reproduces the **linear** HDR fog the height-fog pass blends into scene colour (before
+tonemapping).  Sources, read in the public mirror of UE 5.8.0 ``unicorn2022/UE5.8.0`` at commit
+5d9a05c15b1f8c6d7b3354b360677ce30d688149, ported to y-up:
+
+* ``Engine/Shaders/Private/HeightFogCommon.ush``: ``GetExponentialHeightFog``,
+  ``CalculateLineIntegralShared``, and the ``PROJECT_EXPFOG_MATCHES_VFOG`` lines;
+* ``Engine/Source/Runtime/Renderer/Private/FogRendering.cpp``: ``InitFogConstants`` (the
+  uniforms, and what ``bExpFogMatchesVolumetricFog`` replaces on the CPU);
+* ``Engine/Shaders/Private/ParticipatingMediaCommon.ush``: ``HenyeyGreensteinPhase``.
+
+The default mode is the shader without a sky atmosphere (its ``#else`` branch), the same as
+UE 4.22 to 4.27 apart from UE 5's EndDistance.  The physical scene -> Unreal mapping and colour
+fit live in :mod:`fogref.mapping.unreal`.
 
 Units: Unreal is **z-up, centimetres**; fogref is **y-up, metres**.  Positions are
 converted internally by ``(x, y, z)_ue = 100 * (x, z, y)_fogref`` (this swap also
@@ -19,19 +28,46 @@ i.e. per metre ``a = 100 (ln 2)^2 D/1000`` and ``b = 100 ln 2 f/1000`` (one fact
 ln 2 turns the exp2 of the line integral into exp, the other comes from
 integrating 2^(-x)).  See :func:`ue4_to_medium` / :func:`medium_to_ue4`.
 
+**Base 2, and the path tracer's 0.5.**  The shader integrates the density in base 2
+(``CalculateLineIntegralShared``: ``(1 - exp2(-F)) / F``, Taylor ``ln 2 - ln^2 2 F / 2``) and
+attenuates with ``exp2``, so the raster fog's extinction is ``(ln 2)^2 D/1000 = 0.4805 D/1000``
+per cm.  Unreal's path tracer (``PathTracing.cpp``, ``MatchHeightFogFactor = .5``, "See
+VolumetricFog.usf", whose ``GlobalDensity *= 0.5`` has the same origin) uses ``0.5 D/1000``:
+``0.5 / (ln 2)^2 = 1.0407`` times the raster fog's optical depth, about 4 % more
+(:mod:`fogref.media.ue_pathtracer`).
+
 Compositing rule (``FogRendering.cpp`` blend ``One, SourceAlpha``):
 ``final = scene * ExpFogFactor + FogColor``, so ``transmittance = ExpFogFactor``
 (grey) and ``inscatter = FogInscatteringColor * (1 - ExpFogFactor) +
 DirectionalInscattering``.
+
+**ExpFogMatchesVolumetricFog** (``r.SupportExpFogMatchesVolumetricFog``, UE >= 5.5: the
+volumetric fog's g and albedo reach the fog uniforms from 5.5).  The CPU sets the directional
+start distance to 0, ``ExponentialFogColor = VolumetricFogEmissive``, ``VolumetricFogAlbedo``
+and ``DirectionalInscatteringColor = Black`` ("directional scattering is only impacted by the
+atmospheric light"); the shader's sky-atmosphere branch (``r.SupportSkyAtmosphereAffectsHeightFog``,
+on by default; without it the black colour leaves no directional light) then computes::
+
+    InscatteringColor      = VolumetricFogEmissive + SkyAtmosphereAmbient * VolumetricFogAlbedo
+    DirectionalInscattering = AtmosphereLightIlluminance
+                              * HenyeyGreensteinPhase(g, dot(-CameraToReceiverNormalized, L))
+                              * (1 - saturate(exp2(-shared * RayLength))) * VolumetricFogAlbedo
+
+(``L`` toward the sun, ``g = VolumetricFogScatteringDistribution``).  With ``E`` the sun's
+illuminance, this is ``albedo p_HG E (1 - T)``: the single scattering of an unattenuated sun
+with the true phase function, and ``albedo L_sky (1 - T)`` for a uniform sky.
+FogInscatteringColor, DirectionalInscatteringColor, DirectionalInscatteringExponent and
+DirectionalInscatteringStartDistance are then unused, as in the engine.
 
 ``precision="float32"`` follows the shader line by line in float32 (CPU set-up in
 float32 too): observer-height clamp, the ``[-125, 126]`` clamp of the collapsed
 exponent, ``max(-127, ...)``, the Taylor branch below ``|Falloff| <= FLT_EPSILON2
 = 0.01``, ``saturate``, ``exp2``.  ``precision="float64"`` keeps every engine rule
 (clamps, start distance, max opacity, cutoff) but computes in float64 and
-replaces the Taylor branch by the exact ``(1 - 2^-F)/F``.  Deviation for
-robustness, as in UE5: ``rsqrt(max(|v|^2, 1e-8))`` so a pixel at the camera gives
-no NaN.
+replaces the Taylor branch by the exact ``(1 - 2^-F)/F``.  EndDistance (UE 5): where the
+receiver's horizontal distance exceeds it, ``CameraToReceiver`` is scaled by ``EndDistance /
+sqrt(max(1, |xy|^2))`` before anything else.  Deviation for robustness, as in UE5:
+``rsqrt(max(|v|^2, 1e-8))`` so a pixel at the camera gives no NaN.
 
 Example:
     >>> import numpy as np
@@ -104,9 +140,28 @@ class UE4FogParams:
     (``-SunLight->GetDirection()``), or None when there is no atmosphere sun
     light (directional inscattering off).  SunLuminance: the sun light colour's
     luminance, which multiplies DirectionalInscatteringColor on the CPU.
-    EndDistance (UE5, cm, 0 = off): fog is integrated only up to this distance.
+    EndDistance (UE5, cm, 0 = off): a receiver farther than this horizontally is moved back
+    along its view ray to that horizontal distance.
     FogCutoffDistance (cm, 0 = off): pixels farther than this get no fog.
     DirectionalInscatteringExponent is clamped to [1e-6, 1000] as the engine does.
+
+    ExpFogMatchesVolumetricFog: the project setting ``r.SupportExpFogMatchesVolumetricFog``
+    (UE >= 5.5; see the module doc); only then are the next five read.
+    VolumetricFogScatteringDistribution: the HG g in [-0.99, 0.99] (``SceneCore.cpp``'s clamp).
+    VolumetricFogAlbedo, VolumetricFogEmissive: linear RGB (the albedo in [0, 1]).
+    AtmosphereLightIlluminance: linear RGB, the sun's ``SkyAtmosphereHeightFogContribution *
+    AtmosphereLightIlluminanceOnGroundPostTransmittance[0]`` (scene radiance units x sr).
+    SkyAtmosphereAmbient: linear RGB, ``SkyAtmosphereAmbientContributionColorScale *
+    SkyAtmosphereHeightFogContribution *`` the distant sky light colour.
+
+    Examples
+    --------
+    >>> UE4FogParams(ExpFogMatchesVolumetricFog=True).VolumetricFogScatteringDistribution
+    0.2
+    >>> UE4FogParams(AtmosphereLightIlluminance=(1.0, 1.0, 1.0))
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: <UE4FogParams>: parameter 'AtmosphereLightIlluminance': read only with ...
     """
 
     FogDensity: float = 0.02
@@ -123,6 +178,12 @@ class UE4FogParams:
     DirectionalInscatteringColor: tuple = (0.25, 0.25, 0.125)
     InscatteringLightDirection: tuple | None = None
     SunLuminance: float = 1.0
+    ExpFogMatchesVolumetricFog: bool = False
+    VolumetricFogScatteringDistribution: float = 0.2
+    VolumetricFogAlbedo: tuple = (1.0, 1.0, 1.0)
+    VolumetricFogEmissive: tuple = (0.0, 0.0, 0.0)
+    AtmosphereLightIlluminance: tuple = (0.0, 0.0, 0.0)
+    SkyAtmosphereAmbient: tuple = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         _validate(self)
@@ -159,11 +220,20 @@ RANGES = {
     "DirectionalInscatteringExponent": (0.0, math.inf, ""),
     "DirectionalInscatteringStartDistance": (0.0, math.inf, "cm"),
     "SunLuminance": (0.0, math.inf, ""),
+    "VolumetricFogScatteringDistribution": (-0.99, 0.99, ""),
 }
 #: Parameters whose lower end is open (must be > lo).
 OPEN_LOW = ("DirectionalInscatteringExponent",)
 #: Colours: each of R, G, B finite and >= 0 (linear, the scene's radiance units).
-COLOURS = ("FogInscatteringColor", "DirectionalInscatteringColor")
+COLOURS = (
+    "FogInscatteringColor",
+    "DirectionalInscatteringColor",
+    "VolumetricFogEmissive",
+    "AtmosphereLightIlluminance",
+    "SkyAtmosphereAmbient",
+)
+#: Read only by the ExpFogMatchesVolumetricFog mode (refused when non-zero without it).
+MATCH_ONLY = ("AtmosphereLightIlluminance", "SkyAtmosphereAmbient")
 
 
 def _validate(p: "UE4FogParams") -> None:
@@ -174,6 +244,23 @@ def _validate(p: "UE4FogParams") -> None:
         object.__setattr__(p, name, x)
     for name in COLOURS:
         object.__setattr__(p, name, valid_rgb(getattr(p, name), name, source=src, lo=0.0))
+    object.__setattr__(
+        p,
+        "VolumetricFogAlbedo",
+        valid_rgb(p.VolumetricFogAlbedo, "VolumetricFogAlbedo", source=src, lo=0.0, hi=1.0),
+    )
+    if not isinstance(p.ExpFogMatchesVolumetricFog, bool):
+        raise ParameterError(
+            src, "ExpFogMatchesVolumetricFog", f"expected true or false, got {p.ExpFogMatchesVolumetricFog!r}"
+        )
+    for name in MATCH_ONLY:
+        if not p.ExpFogMatchesVolumetricFog and any(getattr(p, name)):
+            raise ParameterError(
+                src,
+                name,
+                "read only with ExpFogMatchesVolumetricFog=True (the default mode is the shader "
+                "without a sky atmosphere)",
+            )
     if isinstance(p.SecondFogData, dict):
         try:
             object.__setattr__(p, "SecondFogData", SecondFogData(**p.SecondFogData))
@@ -223,17 +310,40 @@ def fog_constants(p: UE4FogParams, camera_z_cm: float, dt: Any = np.float32) -> 
         else f(-1.0)
     )
     light_dir = p.InscatteringLightDirection or (0.0, 0.0, 0.0)
+    color = tuple(f(c) for c in p.FogInscatteringColor)
+    dir_color = tuple(f(c) * f(p.SunLuminance) for c in p.DirectionalInscatteringColor)
+    match = p.ExpFogMatchesVolumetricFog
+    if match:  # InitFogConstants, then the shader's PROJECT_EXPFOG_MATCHES_VFOG lines
+        light_w = f(0.0) if p.InscatteringLightDirection is not None else f(-1.0)
+        color = tuple(
+            f(e) + f(s) * f(a)
+            for e, s, a in zip(p.VolumetricFogEmissive, p.SkyAtmosphereAmbient, p.VolumetricFogAlbedo)
+        )
+        dir_color = tuple(f(0.0) + f(c) for c in p.AtmosphereLightIlluminance)
     return dict(
         P=(f(collapsed[0]), fall[0], max_obs, f(p.StartDistance)),
         P2=(f(collapsed[1]), fall[1], dens[1], height[1]),
         P3=(dens[0], height[0], f(0.0), f(p.FogCutoffDistance)),
-        color=tuple(f(c) for c in p.FogInscatteringColor),
+        color=color,
         min_opacity=f(1.0) - f(p.FogMaxOpacity),
         light=(f(light_dir[0]), f(light_dir[1]), f(light_dir[2]), light_w),
-        dir_color=tuple(f(c) * f(p.SunLuminance) for c in p.DirectionalInscatteringColor),
+        dir_color=dir_color,
         dir_exponent=f(np.clip(f(p.DirectionalInscatteringExponent), f(0.000001), f(1000.0))),
         end_distance=f(p.EndDistance),
+        match=match,
+        phase_g=f(p.VolumetricFogScatteringDistribution),
+        albedo=tuple(f(a) for a in p.VolumetricFogAlbedo),
     )
+
+
+def _hg_shader(g: Any, cos_theta: Any, dt: Any) -> Any:
+    """``HenyeyGreensteinPhase(G, CosTheta)`` of ``ParticipatingMediaCommon.ush`` in ``dt``
+    arithmetic [1/sr]: ``(1 - G^2) / (4 PI pow(1 + G^2 + 2 G CosTheta, 1.5))``, PBRT's sign
+    (forward scattering at ``CosTheta = -1``).  The phase function itself is
+    :func:`fogref.media.hg_phase` (``cos_theta`` there is ``-CosTheta`` here)."""
+    g = dt(g)
+    denom = dt(1.0) + g * g + dt(2.0) * g * cos_theta
+    return (dt(1.0) - g * g) / (dt(4.0) * dt(math.pi) * np.power(denom, dt(1.5)))
 
 
 def _line_integral_shared(falloff: Any, ray_dir_z: Any, origin_terms: Any, dt: Any, exact: bool) -> Any:
@@ -257,6 +367,11 @@ def shade(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt: Any, exact: bool) ->
     rel = np.asarray(rel_cm, dtype=dt)
     min_opacity = C["min_opacity"]
     obs_z = min(dt(cam_z_cm), P[2])
+    end = C["end_distance"]
+    if end > 0:  # EndDistance: on the receiver's horizontal distance, before the observer clamp
+        xy_sqr = rel[..., 0] * rel[..., 0] + rel[..., 1] * rel[..., 1]
+        scale = np.where(xy_sqr > end * end, end / np.sqrt(np.maximum(dt(1.0), xy_sqr)), dt(1.0))
+        rel = rel * scale[..., None]
     cx, cy = rel[..., 0], rel[..., 1]
     cz = rel[..., 2] + (dt(cam_z_cm) - obs_z)
     len_sqr = cx * cx + cy * cy + cz * cz
@@ -266,12 +381,6 @@ def shade(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt: Any, exact: bool) ->
 
     ray_length = length
     ray_dir_z = cz
-    # UE5 EndDistance (reconstructed): integrate the fog only up to EndDistance.
-    end = C["end_distance"]
-    if end > 0:
-        scale = np.minimum(dt(1.0), end * len_inv)
-        ray_length = ray_length * scale
-        ray_dir_z = ray_dir_z * scale
     ro = np.broadcast_to(P[0], length.shape)
     ro2 = np.broadcast_to(P2[0], length.shape)
     exclude = P[3]
@@ -279,7 +388,7 @@ def shade(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt: Any, exact: bool) ->
         t = exclude * len_inv
         cam_to_excl_z = t * cz
         excl_z = obs_z + cam_to_excl_z
-        ray_length = (dt(1.0) - t) * ray_length if end <= 0 else ray_length - exclude
+        ray_length = (dt(1.0) - t) * ray_length
         ray_dir_z = ray_dir_z - cam_to_excl_z
         expo = np.maximum(dt(-127.0), P[1] * (excl_z - P3[1]))
         ro = P3[0] * np.exp2(-expo)
@@ -297,12 +406,17 @@ def shade(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt: Any, exact: bool) ->
     light = C["light"]
     dir_inscatter = None
     if light[3] >= 0:
-        cos = saturate(nx * light[0] + ny * light[1] + nz * light[2])
-        lobe = np.power(cos, C["dir_exponent"])
+        if C["match"]:  # HG of the volumetric fog's g at dot(-CameraToReceiverNormalized, L)
+            lobe = _hg_shader(C["phase_g"], -(nx * light[0] + ny * light[1] + nz * light[2]), dt)
+        else:
+            cos = saturate(nx * light[0] + ny * light[1] + nz * light[2])
+            lobe = np.power(cos, C["dir_exponent"])
         dir_run = np.maximum(ray_length - light[3], dt(0.0))
         dir_integral = np.where(dir_run > 0, shared * dir_run, dt(0.0))  # no inf * 0 (see above)
         dir_factor = saturate(np.exp2(-dir_integral))
         dir_inscatter = (lobe * (dt(1.0) - dir_factor))[..., None] * np.asarray(C["dir_color"], dtype=dt)
+        if C["match"]:
+            dir_inscatter = dir_inscatter * np.asarray(C["albedo"], dtype=dt)
     factor = np.maximum(saturate(np.exp2(-integral)), min_opacity)
     if P3[3] > 0:
         cut = length > P3[3]
