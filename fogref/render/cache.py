@@ -112,6 +112,7 @@ def render_cached(
         resume=False,
         png=False,
         pixel_filter=pixel_filter,
+        keep_moments=False,
     )
     return path, False
 
