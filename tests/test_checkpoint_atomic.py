@@ -110,8 +110,9 @@ def test_an_interruption_at_every_line_of_the_pass_loop_resumes_bitwise(tmp_path
             if state not in verified:  # the rerun from this state (a checkpoint's bytes, or none)
                 R.render(scene, out, checkpoint_seconds=0, **kw)  # resumes, or starts over
                 verified[state] = _equal(_pixels(out), ref)
-                assert sorted(p.name for p in out.parent.iterdir()) == ["x.exr"]
+                assert sorted(p.name for p in out.parent.iterdir()) == ["x.exr", "x.exr.moments.npz"]
                 out.unlink()
+                R.moments_path(out).unlink()  # the finished truth's sums (the next run is a new one)
             why = f"interrupted at {inject.fired} (line event {n}): the resumed truth differs"
             assert verified[state], why
             ckpt.unlink(missing_ok=True)

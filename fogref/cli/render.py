@@ -18,7 +18,8 @@ HELP = "path-trace a scene to a ground-truth EXR (+ PNG preview)"
 DESCRIPTION = (
     "Path-trace a Mitsuba 3 scene (fogpath integrator, heightfog medium) into a ground-truth EXR "
     "of every G-buffer and fog channel, with a PNG preview beside it.  An interrupted render "
-    "(Ctrl-C) keeps a checkpoint and resumes when the same command is run again."
+    "(Ctrl-C) keeps a checkpoint and resumes when the same command is run again; the same command "
+    "with a larger --spp adds samples to the finished truth."
 )
 EPILOG = "exit codes: 0 written, 2 usage or input error, 130 interrupted (run again to resume)"
 API = "fogref.render.render:render"
@@ -40,7 +41,13 @@ class Options:
         check=PathArg(role="output"),
         metavar="X.exr",
     )
-    spp: int = option(64, "samples per pixel", check=Integer(1, 1 << 20), api=API)
+    spp: int = option(
+        64,
+        "samples per pixel; more than the truth already at --out holds (same scene, files and "
+        "seed): the samples are added to it",
+        check=Integer(1, 1 << 20),
+        api=API,
+    )
     seed: int = option(
         0, "random seed: the same seed gives the same pixels", check=Integer(0, (1 << 31) - 1), api=API
     )
@@ -61,9 +68,19 @@ class Options:
     )
     quiet: bool = switch("no progress bar", api=API, api_name="progress", negates=True)
     no_resume: bool = switch(
-        "start afresh: ignore the checkpoint of an interrupted run", api=API, api_name="resume", negates=True
+        "start afresh: ignore the checkpoint of an interrupted run and the truth at --out",
+        api=API,
+        api_name="resume",
+        negates=True,
     )
     no_png: bool = switch("no PNG preview beside the EXR", api=API, api_name="png", negates=True)
+    no_moments: bool = switch(
+        "do not keep the float64 sums beside the EXR (<out>.moments.npz, 576 bytes per pixel) "
+        "that let a later --spp add samples",
+        api=API,
+        api_name="keep_moments",
+        negates=True,
+    )
     pixel_filter: str = option(
         "centre",
         "centre: every sample through the pixel centre, exact G-buffer and T "
@@ -115,6 +132,7 @@ def run(o: Options, given=frozenset()) -> int:
         progress=not o.quiet,
         resume=not o.no_resume,
         png=not o.no_png,
+        keep_moments=not o.no_moments,
         pixel_filter=o.pixel_filter,
         checkpoint_seconds=o.checkpoint_seconds,
         scheduler=o.scheduler,

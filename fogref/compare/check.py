@@ -39,6 +39,7 @@ import math
 import os
 import re
 import tempfile
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -52,6 +53,7 @@ from fogref.compare.intervals import (
     bootstrap_interval,
     estimates_from_sums,
     noise_sd,
+    spp_to_decide,
 )
 from fogref.compare.paths import refuse_output_over_input
 from fogref.compare.regions import region_masks
@@ -200,9 +202,8 @@ def check(
             sums = block_sums(c, r, v, rv, m, block)
             total = sums.sum(0)
             point = estimates_from_sums(total)
-            sd = noise_sd(
-                c, r, v, rv, m, spp, {"_sq": total[0], "_power": total[1], "_err": total[2], "_ref": total[3]}
-            )
+            sums_point = {"_sq": total[0], "_power": total[1], "_err": total[2], "_ref": total[3]}
+            sd = noise_sd(c, r, v, rv, m, spp, sums_point)
             # a reference indistinguishable from zero by its own noise has no relative error
             zero_ref = abs(float(total[3])) <= z * sd["_ref_sd"] or float(total[1]) <= 0
             if method == "block":
@@ -234,13 +235,13 @@ def check(
                     lo, hi = bootstrap_interval(est, rep, len(sums), alpha)
                 else:
                     lo, hi = est - z * sd[met], est + z * sd[met]
-                if met in SIGNED:
-                    est, lo, hi = (_finite(x) for x in (est, lo, hi))
-                else:  # squared scale -> root scale (monotone); where the low end is 0 the interval
-                    # is one-sided, [0, upper], never of zero width
-                    if lo <= 0 and method == "noise":
-                        hi = max(hi, z_one * sd[met])
-                    est, lo, hi = (math.sqrt(max(x, 0.0)) for x in (est, lo, hi))
+                raw = est
+                est, lo, hi = _own_scale(met, est, lo, hi, z_one * sd[met] if method == "noise" else None)
+                verdict = metric_verdict(met, lo, hi, tol)
+                to_decide = None
+                if verdict == "inconclusive" and method == "noise" and spp >= 1:
+                    sd_args = (c, r, v, rv, m, spp, sums_point)
+                    to_decide = spp_to_decide(partial(_decided_at, met, raw, tol, sd_args, z, z_one), spp)
                 rows.append(
                     Row(
                         part,
@@ -250,9 +251,10 @@ def check(
                         lo,
                         hi,
                         tol,
-                        metric_verdict(met, lo, hi, tol),
+                        verdict,
                         n_px,
                         z=_finite(zval) if zval is not None else None,
+                        spp_to_decide=to_decide,
                     )
                 )
     settings = {
@@ -267,6 +269,26 @@ def check(
         "tolerances": {f"{p}{'/' + r if r else ''}": t for (p, r), t in table.items()},
     }
     return CheckResult(rows, float(confidence), cp.name, str(truth.path), settings, errors, parts=cp)
+
+
+def _decided_at(met: str, raw: float, tol: float, sd_args: tuple, z: float, z_one: float, n: int) -> bool:
+    """Whether the interval of ``met`` around the estimate ``raw`` (squared scale for the RMSEs)
+    decides against ``tol`` when the truth has ``n`` samples per pixel (noise method)."""
+    sd_n = noise_sd(*sd_args, at_spp=n)[met]
+    _, lo, hi = _own_scale(met, raw, raw - z * sd_n, raw + z * sd_n, z_one * sd_n)
+    return metric_verdict(met, lo, hi, tol) != "inconclusive"
+
+
+def _own_scale(met: str, est: float, lo: float, hi: float, floor: float | None) -> tuple:
+    """An estimate and interval on the metric's own scale: the signed metrics as they are (None
+    where not finite), the RMSEs from the squared scale (monotone), where the low end is <= 0
+    one-sided, ``[0, upper]`` with ``upper`` at least ``floor`` (the noise method), never of
+    zero width."""
+    if met in SIGNED:
+        return tuple(_finite(x) for x in (est, lo, hi))
+    if lo <= 0 and floor is not None:
+        hi = max(hi, floor)
+    return tuple(math.sqrt(max(x, 0.0)) for x in (est, lo, hi))
 
 
 def _default_errors_dir(result: CheckResult) -> Path:

@@ -116,7 +116,7 @@ def bootstrap_interval(est: float, reps: np.ndarray, k: int, alpha: float) -> tu
     return est - q * sd, est + q * sd
 
 
-def noise_sd(cand, ref, cov, rcov, mask, spp: int, point: dict) -> dict:
+def noise_sd(cand, ref, cov, rcov, mask, spp: int, point: dict, at_spp: int | None = None) -> dict:
     """Standard deviation of each statistic (squared scale for the RMSEs) due to the truth's noise.
 
     Conditional on the view: the candidate's error pattern is fixed, only the Monte
@@ -125,10 +125,14 @@ def noise_sd(cand, ref, cov, rcov, mask, spp: int, point: dict) -> dict:
     :mod:`fogref.compare.noise`, the one delta method).  The reference power in the
     denominator of ``rel_rmse`` is taken as exact (its relative noise is that of a sum
     over the whole region).
+
+    ``at_spp``: the standard deviations a truth of ``at_spp`` samples per pixel would give with
+    the same error pattern (the noise variances scale as ``spp / at_spp``; needs ``spp`` >= 1).
     """
     e, C, R = (cand - ref)[mask], cov[mask], rcov[mask]
-    _, var_sq = noise.squared_stat(e, C, spp)
-    var_err, var_ref = noise.sum_var(C), noise.sum_var(R)
+    _, var_sq = noise.squared_stat(e, C, spp, at_spp=at_spp)
+    k = spp / at_spp if (at_spp and spp >= 1) else 1.0
+    var_err, var_ref = k * noise.sum_var(C), k * noise.sum_var(R)
     n = 3.0 * float(mask.sum())
     power, err, refsum = (float(point[k]) for k in ("_power", "_err", "_ref"))
     out = {
@@ -139,3 +143,21 @@ def noise_sd(cand, ref, cov, rcov, mask, spp: int, point: dict) -> dict:
     }
     out["rel_bias"] = math.sqrt(noise.ratio_var(err, refsum, var_err, var_ref)) if refsum != 0 else math.nan
     return out
+
+
+def spp_to_decide(decides, spp: int, most: int = 1 << 40) -> int | None:
+    """The smallest sample count above ``spp`` at which ``decides(n)`` (monotone: once true, true
+    for every larger ``n``) holds, by doubling then bisection; None if not even at ``most``.
+
+    >>> spp_to_decide(lambda n: n >= 1000, 16), spp_to_decide(lambda n: False, 16, most=1 << 10)
+    (1000, None)
+    """
+    lo, hi = int(spp), 2 * max(int(spp), 1)
+    while not decides(hi):
+        lo, hi = hi, 2 * hi
+        if hi > most:
+            return None
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        lo, hi = (lo, mid) if decides(mid) else (mid, hi)
+    return hi

@@ -103,7 +103,9 @@ def sum_var(C: np.ndarray, w=None) -> float:
     return max(float(np.einsum("pi,pij,pj->", w, C, w)), 0.0)
 
 
-def squared_stat(e: np.ndarray, C: np.ndarray, spp: int, w=None) -> tuple[float, float]:
+def squared_stat(
+    e: np.ndarray, C: np.ndarray, spp: int, w=None, at_spp: int | None = None
+) -> tuple[float, float]:
     """The debiased weighted square ``Q = Σ w (e² - C_cc)`` and its variance.
 
     Parameters
@@ -112,6 +114,8 @@ def squared_stat(e: np.ndarray, C: np.ndarray, spp: int, w=None) -> tuple[float,
     C : ``(N, 3, 3)`` noise covariance of ``e`` [units²].
     spp : samples per pixel of the truth behind ``C`` (0 or 1: ``C`` taken as exact).
     w : ``(N, 3)`` weights, default 1.
+    at_spp : the variance ``Q`` would have from a truth of ``at_spp`` samples per pixel, its
+        error pattern ``delta`` held (``C`` scaled by ``spp / at_spp``; needs ``spp`` >= 1).
 
     Returns
     -------
@@ -134,8 +138,9 @@ def squared_stat(e: np.ndarray, C: np.ndarray, spp: int, w=None) -> tuple[float,
     lin = 4.0 * np.einsum("pi,pij,pj->", wd, C, wd)
     WC = w[..., :, None] * C
     quad = 2.0 * np.einsum("pij,pji->", WC, WC)
-    extra = 1.0 + (1.0 / (spp - 1) if spp > 1 else 0.0)
-    return Q, max(float(lin + quad * extra), 0.0)
+    k, n = (spp / at_spp, at_spp) if (at_spp and spp >= 1) else (1.0, spp)
+    extra = 1.0 + (1.0 / (n - 1) if n > 1 else 0.0)
+    return Q, max(float(lin * k + quad * k * k * extra), 0.0)
 
 
 def ratio_var(num: float, den: float, var_num: float, var_den: float) -> float:

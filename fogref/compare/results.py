@@ -33,6 +33,11 @@ class Row:
     ``z``: the statistic in standard errors from a perfect candidate's 0 (the squared
     scale for the RMSEs), for coverage and power studies; ``note``: why a verdict is
     what it is, when that is not the interval against the tolerance.
+
+    ``spp_to_decide``: for an inconclusive row (intervals from the truth's per-pixel noise),
+    the truth's sample count per pixel at which the interval would decide it at the current
+    estimate (the noise variances scale as 1/spp, the error pattern held); None otherwise, or
+    when no count would (the estimate sits on the tolerance).
     """
 
     part: str
@@ -46,6 +51,7 @@ class Row:
     pixels: int
     z: float | None = None
     note: str = ""
+    spp_to_decide: int | None = None
 
     @classmethod
     def without_estimate(
@@ -69,6 +75,8 @@ class Row:
         """One line: ``inscatter/sky rel_bias = 0.0498 [0.0471, 0.0524] > tolerance 0.02: fail``;
         a region without pixels says ``no pixels``."""
         note = f"; {self.note}" if self.note else ""
+        if self.spp_to_decide is not None:
+            note += f"; decided at {self.spp_to_decide} spp at this estimate"
         if self.estimate is None:
             verdict = "no pixels" if self.verdict == "empty" else self.verdict
             return f"{self.part}/{self.region} {self.metric}: {verdict} ({self.pixels} px{note})"

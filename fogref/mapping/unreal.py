@@ -11,24 +11,32 @@ the ``"ue4"`` mapping.
 
 from __future__ import annotations
 
-import copy
-import functools
 import math
 import time
 from dataclasses import dataclass, field, replace
-from typing import Callable
 
 import numpy as np
 
+from fogref.mapping.fit_cache import load_fit, store_fit
 from fogref.mapping.physical import PhysicalScene
 from fogref.mapping.registry import register_mapping
-from fogref.mapping.unreal_basis import Basis, base_params, solve_colours, unreal_basis, unreal_inscatter
+from fogref.mapping.unreal_basis import (
+    LOG_N_RANGE,
+    MAX_START_CM,
+    Basis,
+    ColourLoss,
+    base_params,
+    solve_colours,
+    unreal_basis,
+    unreal_inscatter,
+)
 from fogref.mapping.views import Views, fibonacci_directions, physical_single_scattering, sample_views
 from fogref.models.base import SKY_DISTANCE
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams, medium_to_ue4
 
 __all__ = [
     "Basis",
+    "ColourLoss",
     "EXPONENT_RANGE",
     "FIT_DIRECTIONS_MAX",
     "FIT_DIRECTIONS_START",
@@ -50,10 +58,6 @@ __all__ = [
 
 #: Unreal clamps DirectionalInscatteringExponent to this range.
 EXPONENT_RANGE = (1e-6, 1000.0)
-#: Search range of log10(exponent) in the fits.
-LOG_N_RANGE = (-2.0, 3.0)
-#: Upper bound of the fitted DirectionalInscatteringStartDistance [cm] (1 km).
-MAX_START_CM = 1.0e5
 #: :func:`fit_unreal` without views: the first number of Fibonacci directions, doubled
 #: until the fit converges (:data:`FIT_RTOL`), and the most it doubles to.
 FIT_DIRECTIONS_START = 128
@@ -162,8 +166,8 @@ def fit_unreal(
     14.187 at 128 ... 2048 directions (stops at 2048, about 3 s on one core;
     4096 gives 14.189); relative RMSE 0.177.  A Gauss–Legendre product quadrature
     of the same loss agrees within 0.5 % (tests/test_unreal_fit_one.py).  The
-    result of a scene is cached in the process (a sweep's model and budget ask for it
-    more than once); a copy is returned.
+    result is kept on disk (:mod:`fogref.mapping.fit_cache`), so every later call with the same
+    scene and settings, in any process, reads it (``history["from_cache"]``).
 
     Parameters
     ----------
@@ -185,84 +189,32 @@ def fit_unreal(
     rtol : float
         Convergence tolerance of the direction count, in (0, 1).
     """
-    from scipy.optimize import minimize
 
     if views is None:
         if target is not None:
             raise ValueError("fit_unreal: a target needs the views it was computed on")
-        try:
-            hash(pf)
-            fit: Callable[..., FitResult] = _fit_converged
-        except TypeError:  # a scene holding arrays: not cached
-            fit = _fit_converged.__wrapped__
-        return copy.deepcopy(
-            fit(
-                pf,
-                sun_attenuation,
-                fit_start,
-                float(sky_distance),
-                None if exponent is None else float(exponent),
-                float(rtol),
-            )
-        )
+        n_fixed = None if exponent is None else float(exponent)
+        settings = {
+            "fit": "fit_unreal",
+            "sun_attenuation": bool(sun_attenuation),
+            "fit_start": bool(fit_start),
+            "sky_distance": float(sky_distance),
+            "exponent": n_fixed,
+            "rtol": float(rtol),
+        }
+        stored = load_fit(pf, settings)
+        if stored is not None:
+            return _from_record(pf, stored)
+        r = _fit_converged(pf, sun_attenuation, fit_start, float(sky_distance), n_fixed, float(rtol))
+        store_fit(pf, settings, _to_record(r))
+        return r
     if target is None:
         target = physical_single_scattering(pf, views, sun_attenuation=sun_attenuation)
     target = np.asarray(target, dtype=float)
     N = len(views.D)
-    cache: dict = {}
-
-    def sse(log_n: float, start_cm: float) -> tuple[np.ndarray, np.ndarray, float]:
-        log_n = float(np.clip(log_n, *LOG_N_RANGE))
-        start_cm = float(np.clip(start_cm, 0.0, MAX_START_CM)) if fit_start else 0.0
-        key = (round(log_n, 12), round(start_cm, 9))
-        if key not in cache:
-            b = unreal_basis(pf, views, 10.0**log_n, start_cm, sky_distance)
-            cache[key] = solve_colours(b, target)
-        return cache[key]
-
-    # coarse grid, then Nelder–Mead (or 1-D bounded search) from the best point
-    log_ns = [math.log10(exponent)] if exponent is not None else np.linspace(*LOG_N_RANGE, 21)
-    starts = [0.0, 2e3, 1e4, 3e4] if fit_start else [0.0]
-    grid = [(ln, s, sse(ln, s)[2]) for ln in log_ns for s in starts]
-    ln0, s0, _ = min(grid, key=lambda r: r[2])
-    if exponent is None or fit_start:
-        x0 = []
-        if exponent is None:
-            x0.append(ln0)
-        if fit_start:
-            x0.append(s0 / 1e4)
-
-        def f(x: np.ndarray) -> float:
-            i = 0
-            ln = ln0
-            if exponent is None:
-                ln = x[0]
-                i = 1
-            s = x[i] * 1e4 if fit_start else 0.0
-            pen = 0.0
-            if fit_start and s < 0:
-                pen = s * s
-            return sse(ln, max(s, 0.0))[2] * (1.0 + pen)
-
-        res = minimize(
-            f,
-            np.asarray(x0),
-            method="Nelder-Mead",
-            options={
-                "xatol": 1e-4,
-                "fatol": 1e-12 * max(1.0, float(np.sum(target**2))),
-                "maxiter": 400,
-                "initial_simplex": None,
-            },
-        )
-        x = res.x
-        i = 0
-        if exponent is None:
-            ln0 = float(np.clip(x[0], *LOG_N_RANGE))
-            i = 1
-        if fit_start:
-            s0 = float(np.clip(x[i] * 1e4, 0.0, MAX_START_CM))
-    cf, cd, best = sse(ln0, s0)
+    loss = ColourLoss(pf, views, target, sky_distance)
+    ln0, s0 = loss.minimise(None if exponent is None else math.log10(exponent), fit_start)
+    cf, cd, best = solve_colours(unreal_basis(pf, views, 10.0**ln0, s0, sky_distance), target)
     params = base_params(
         pf,
         FogInscatteringColor=tuple(cf),
@@ -280,7 +232,7 @@ def fit_unreal(
         n_views=N,
         sun_attenuation=sun_attenuation,
         fit_start=fit_start,
-        history={"evaluations": len(cache)},
+        history={"model_evaluations": loss.model_evaluations, "colour_solves": loss.colour_solves},
     )
 
 
@@ -298,7 +250,37 @@ def _agree(p: UE4FogParams, q: UE4FogParams, rtol: float) -> bool:
     return (not lobe_on or abs(n_p - n_q) <= rtol * n_q) and abs(s_p - s_q) <= rtol * max(s_q, 1.0e4)
 
 
-@functools.lru_cache(maxsize=64)
+def _to_record(r: FitResult) -> dict:
+    """The fitted values of ``r`` as JSON values (the rest of its parameters follow from the scene)."""
+    p = r.params
+    return {
+        "FogInscatteringColor": list(p.FogInscatteringColor),
+        "DirectionalInscatteringColor": list(p.DirectionalInscatteringColor),
+        "DirectionalInscatteringExponent": p.DirectionalInscatteringExponent,
+        "DirectionalInscatteringStartDistance": p.DirectionalInscatteringStartDistance,
+        "rmse": r.rmse,
+        "rel_rmse": r.rel_rmse,
+        "target_rms": r.target_rms,
+        "n_views": r.n_views,
+        "sun_attenuation": r.sun_attenuation,
+        "fit_start": r.fit_start,
+        "history": r.history,
+    }
+
+
+def _from_record(pf: PhysicalScene, d: dict) -> FitResult:
+    """The :class:`FitResult` of :func:`_to_record`'s ``d`` for the scene ``pf`` it was fitted to."""
+    params = base_params(
+        pf,
+        FogInscatteringColor=tuple(d["FogInscatteringColor"]),
+        DirectionalInscatteringColor=tuple(d["DirectionalInscatteringColor"]),
+        DirectionalInscatteringExponent=d["DirectionalInscatteringExponent"],
+        DirectionalInscatteringStartDistance=d["DirectionalInscatteringStartDistance"],
+    )
+    fields = ("rmse", "rel_rmse", "target_rms", "n_views", "sun_attenuation", "fit_start")
+    return FitResult(params=params, **{k: d[k] for k in fields}, history={**d["history"], "from_cache": True})
+
+
 def _fit_converged(
     pf: PhysicalScene,
     sun_attenuation: bool,

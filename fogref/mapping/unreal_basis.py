@@ -12,6 +12,12 @@ distance, the model is **linear** in the two colours, so each colour channel is 
 images (:func:`unreal_basis`: the model evaluated with unit colours, in float64).
 Density, falloff and height come from the exact mapping
 :func:`fogref.models.ue4.medium_to_ue4` (:func:`base_params`).
+
+Only the exponent and the start distance are nonlinear, and the lobe image factorises:
+``max(cos, 0)^n (1 - T_dir(start))`` is the ``n = 1`` image times ``max(cos, 0)^(n - 1)``.
+:class:`ColourLoss` evaluates the model once per start distance, and each exponent costs a
+power and three dot products; it finds the best ``(n, start)`` by a bounded Brent search over
+``log10 n`` inside a bounded Brent search over the start distance (:meth:`ColourLoss.minimise`).
 """
 
 from __future__ import annotations
@@ -26,7 +32,24 @@ from fogref.mapping.views import Views
 from fogref.models.base import SKY_DISTANCE
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams, medium_to_ue4
 
-__all__ = ["Basis", "base_params", "solve_colours", "unreal_basis", "unreal_inscatter"]
+__all__ = [
+    "Basis",
+    "ColourLoss",
+    "LOG_N_RANGE",
+    "MAX_START_CM",
+    "base_params",
+    "solve_colours",
+    "unreal_basis",
+    "unreal_inscatter",
+]
+
+#: Search range of log10(exponent) in the fits.
+LOG_N_RANGE = (-2.0, 3.0)
+#: Upper bound of the fitted DirectionalInscatteringStartDistance [cm] (1 km).
+MAX_START_CM = 1.0e5
+#: Start distances [cm] :meth:`ColourLoss.minimise` tries before refining between the best
+#: one's neighbours.
+START_GRID_CM = (0.0, 1.0e3, 3.0e3, 1.0e4, 3.0e4, MAX_START_CM)
 
 
 def base_params(pf: PhysicalScene, **kw: Any) -> UE4FogParams:
@@ -95,3 +118,159 @@ def solve_colours(
         cf[c], cd[c] = x
         sse += r * r
     return cf, cd, float(sse)
+
+
+def _nnls2(
+    g00: float, g01: float, g11: float, b0: np.ndarray, b1: np.ndarray, yy: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Two-column non-negative least squares from its normal equations, per channel.
+
+    ``G = [[g00, g01], [g01, g11]] = A^T A``, ``b0``, ``b1`` (3,) ``= A^T y``, ``yy`` (3,) ``= y.y``.
+    The optimum is the best of the four candidates (both columns, one, none) that are
+    feasible.  Returns ``(x0, x1, sse)``, each (3,).
+    """
+    zero = np.zeros_like(b0)
+    cands = [(zero, zero)]
+    if g00 > 0:
+        cands.append((np.maximum(b0, 0.0) / g00, zero))
+    if g11 > 0:
+        cands.append((zero, np.maximum(b1, 0.0) / g11))
+    det = g00 * g11 - g01 * g01
+    if det > 1e-12 * g00 * g11:
+        x0, x1 = (g11 * b0 - g01 * b1) / det, (g00 * b1 - g01 * b0) / det
+        ok = (x0 >= 0) & (x1 >= 0)
+        cands.append((np.where(ok, x0, 0.0), np.where(ok, x1, 0.0)))
+    best = (zero, zero, yy)
+    for x0, x1 in cands:
+        sse = yy - 2.0 * (x0 * b0 + x1 * b1) + g00 * x0 * x0 + 2.0 * g01 * x0 * x1 + g11 * x1 * x1
+        take = sse < best[2]
+        best = (np.where(take, x0, best[0]), np.where(take, x1, best[1]), np.where(take, sse, best[2]))
+    return best[0], best[1], np.maximum(best[2], 0.0)
+
+
+class ColourLoss:
+    """The squared error of the best colours (:func:`solve_colours`) as a function of
+    ``(log10 n, start)``, with Unreal's basis factorised (module doc).
+
+    Parameters
+    ----------
+    pf : PhysicalScene
+    views : Views
+    target : ndarray (N, 3) or (N, 1)
+        The inscatter to match on ``views`` (radiance).
+    sky_distance : float
+        Where the model fogs sky views [m].
+
+    Attributes ``model_evaluations`` and ``colour_solves`` count the work done.  The colours
+    solved here come from the normal equations; :func:`solve_colours` on the model's own basis
+    gives the final ones.
+
+    Examples
+    --------
+    >>> from fogref.media import ExpLayer, FogMedium
+    >>> from fogref.mapping.views import sample_views
+    >>> pf = PhysicalScene(FogMedium(sigma_t=0.01, albedo=1.0, layers=(ExpLayer(1.0, 0.0, 0.0),)),
+    ...                    (1.0, 0.3, 0.0), (1.0, 1.0, 1.0))
+    >>> v = sample_views(pf.camera, n_dirs=64)
+    >>> b = unreal_basis(pf, v, 8.0, 0.0)
+    >>> loss = ColourLoss(pf, v, 0.5 * b.iso[:, None] + 2.0 * b.lobe[:, None])
+    >>> ln, start = loss.minimise(fit_start=False)
+    >>> round(10.0**ln, 4), start
+    (8.0, 0.0)
+    """
+
+    def __init__(
+        self, pf: PhysicalScene, views: Views, target: np.ndarray, sky_distance: float = SKY_DISTANCE
+    ):
+        self.pf, self.views, self.sky_distance = pf, views, float(sky_distance)
+        y = np.broadcast_to(np.asarray(target, dtype=float), (len(views.D), 3))
+        one = unreal_basis(pf, views, 1.0, 0.0, sky_distance)
+        two = unreal_basis(pf, views, 2.0, 0.0, sky_distance)
+        self.model_evaluations = 2
+        self.colour_solves = 0
+        self._lit = one.lobe > 0  # the lobe is 0 elsewhere for every exponent and start
+        # the lit views grouped by direction: max(cos, 0) is a function of the direction
+        _, group = np.unique(views.d[self._lit], axis=0, return_inverse=True)
+        self._group = np.asarray(group).reshape(-1)
+        self._cos = np.zeros(int(self._group.max(initial=-1)) + 1)
+        self._cos[self._group] = two.lobe[self._lit] / one.lobe[self._lit]
+        self._iso_lit, self._y_lit = one.iso[self._lit], y[self._lit]
+        self._g00 = float(one.iso @ one.iso)
+        self._b0 = one.iso @ y
+        self._yy = np.sum(y * y, axis=0)
+        self._sums: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._add_start(0.0, one.lobe[self._lit])
+
+    def _add_start(self, start_cm: float, lobe1: np.ndarray) -> None:
+        """Per direction, the sums over its views of ``iso g``, ``g^2`` and ``g y`` (``g = lobe1 / cos``)."""
+        g = lobe1 / self._cos[self._group]
+        n = len(self._cos)
+
+        def per_direction(w: np.ndarray) -> np.ndarray:
+            return np.bincount(self._group, weights=w, minlength=n)
+
+        ygc = np.stack([per_direction(g * self._y_lit[:, c]) for c in range(3)], axis=-1)
+        self._sums[start_cm] = (per_direction(self._iso_lit * g), per_direction(g * g), ygc)
+
+    def sums(self, start_cm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The per-direction sums of the lobe at ``start_cm`` [cm] (one model evaluation, once)."""
+        if start_cm not in self._sums:
+            b = unreal_basis(self.pf, self.views, 1.0, start_cm, self.sky_distance)
+            self.model_evaluations += 1
+            self._add_start(start_cm, b.lobe[self._lit])
+        return self._sums[start_cm]
+
+    def solve(self, log_n: float, start_cm: float) -> tuple[np.ndarray, np.ndarray, float]:
+        """``(C_fog (3,), C_dir (3,), sse)`` at exponent ``10**log_n`` and ``start_cm`` [cm]."""
+        iso_g, gg, yg = self.sums(start_cm)
+        cn = self._cos ** (10.0**log_n)
+        self.colour_solves += 1
+        cf, cd, sse = _nnls2(self._g00, float(cn @ iso_g), float((cn * cn) @ gg), self._b0, cn @ yg, self._yy)
+        return cf, cd, float(np.sum(sse))
+
+    def best_exponent(self, start_cm: float, log_n: float | None = None) -> tuple[float, float]:
+        """``(log10 n, sse)`` of the best exponent at ``start_cm``: a grid of 21 in
+        :data:`LOG_N_RANGE`, then a bounded Brent search between the best point's neighbours
+        (``xatol`` 1e-6).  ``log_n`` given: that one (clipped to the range)."""
+        from scipy.optimize import minimize_scalar
+
+        if log_n is not None:
+            ln = float(np.clip(log_n, *LOG_N_RANGE))
+            return ln, self.solve(ln, start_cm)[2]
+        grid = np.linspace(*LOG_N_RANGE, 21)
+        values = [self.solve(g, start_cm)[2] for g in grid]
+        k = int(np.argmin(values))
+        res = minimize_scalar(
+            lambda ln: self.solve(ln, start_cm)[2],
+            bounds=(grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]),
+            method="bounded",
+            options={"xatol": 1e-6},
+        )
+        return (float(res.x), float(res.fun)) if res.fun < values[k] else (float(grid[k]), values[k])
+
+    def minimise(self, log_n: float | None = None, fit_start: bool = True) -> tuple[float, float]:
+        """The best ``(log10 n, start [cm])``: for each start distance the best exponent
+        (:meth:`best_exponent`); the start from :data:`START_GRID_CM`, then a bounded Brent
+        search between the best one's neighbours (``xatol`` 1 cm); 0 without ``fit_start``.
+        ``log_n``: a fixed exponent."""
+        from scipy.optimize import minimize_scalar
+
+        memo: dict[float, tuple[float, float]] = {}
+
+        def profile(start: float) -> tuple[float, float]:
+            if start not in memo:
+                memo[start] = self.best_exponent(start, log_n)
+            return memo[start]
+
+        if not fit_start:
+            return profile(0.0)[0], 0.0
+        starts = START_GRID_CM
+        k = int(np.argmin([profile(s)[1] for s in starts]))
+        minimize_scalar(
+            lambda s: profile(float(s))[1],
+            bounds=(starts[max(k - 1, 0)], starts[min(k + 1, len(starts) - 1)]),
+            method="bounded",
+            options={"xatol": 1.0},
+        )
+        start = min(memo, key=lambda s: memo[s][1])
+        return memo[start][0], start

@@ -20,27 +20,19 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from pathlib import Path
 
 import fogref
 from fogref._version import __version__
+from fogref.cache_dir import default_cache_dir, sources_digest
 from fogref.errors import FogrefError
 from fogref.gbuffer import load_truth
 from fogref.render.inputs import inputs_digest
 from fogref.render.render import render
 
 
-def default_cache_dir() -> Path:
-    """``$FOGREF_CACHE``, else ``~/.cache/fogref/truths``."""
-    env = os.environ.get("FOGREF_CACHE")
-    return Path(env) if env else Path.home() / ".cache" / "fogref" / "truths"
-
-
 def _renderer_hash() -> str:
     root = Path(fogref.__file__).resolve().parent
-    files = sorted((root / "media").glob("*.py")) + sorted((root / "render").glob("*.py"))
-    files.append(root / "gbuffer.py")
     plugins = root.parent / "plugins"
     if not plugins.is_dir():
         try:  # an installed fogref without the source tree; the plugins are optional here
@@ -49,13 +41,9 @@ def _renderer_hash() -> str:
             plugins = Path(fogref_plugins.__file__).resolve().parent
         except ImportError:
             plugins = None
-    if plugins is not None:
-        files += sorted(plugins.glob("*.py"))
-    h = hashlib.sha256()
-    for f in files:
-        h.update(f.name.encode())
-        h.update(f.read_bytes())
-    return h.hexdigest()
+    return sources_digest(
+        [root / "media", root / "render", root / "gbuffer.py", *([plugins] if plugins else [])]
+    )
 
 
 def truth_key(scene, spp: int, seed: int, overrides: dict | None = None, pixel_filter: str = "centre") -> str:
@@ -124,6 +112,7 @@ def render_cached(
         resume=False,
         png=False,
         pixel_filter=pixel_filter,
+        keep_moments=False,
     )
     return path, False
 

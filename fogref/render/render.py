@@ -25,6 +25,15 @@ the back end's memory allows, and turns them into means and standard errors.
   written.  A checkpoint that is damaged or inconsistent (unreadable, wrong checksum,
   shape, count, non-finite values, a bounded channel summing past its sample count) is
   renamed aside with a one-line warning, and the render starts over.
+* **Extensible**: the float64 sums of a finished render are kept beside it
+  (``<out>.moments.npz``, :func:`moments_path`; ``keep_moments=False`` does not keep them).
+  Rendering again to the same ``out`` with more samples adds passes to those sums instead of
+  starting over, and says so: passes ``k = len(old passes), ...`` with their own seeds, so the
+  result is bitwise the render whose passes are the old ones followed by the new ones (the
+  merge of the passes on Dask, :mod:`fogref.render.distributed`).  It is refused, with the
+  reason, when the scene or a file it loads changed, or the seed, overrides, resolution, pixel
+  filter, variant or fogref version differ, or the sums are missing; ``resume=False`` renders
+  afresh.  Not more samples than the truth holds: a new render, as before.
 * **Nothing lost**: the output must be a ``.exr`` that is not an existing non-EXR file,
   and no output (the EXR, its PNG preview, the checkpoint) may be the scene or a file
   it loads (:func:`fogref.atomic.refuse_overwriting_inputs`); the folder is checked
@@ -39,6 +48,7 @@ import json
 import os
 import re
 import signal
+import sys
 import time
 from pathlib import Path
 
@@ -65,7 +75,7 @@ _SOURCE = "fogref render"
 _HOST_BYTES_PER_PIXEL = (30 + 42) * 8 * 2 + len(gbuffer.exr_channel_names()) * 4
 
 
-__all__ = ["render", "check_output", "file_sha256", "checkpoint_path", "PIXEL_FILTERS"]
+__all__ = ["render", "check_output", "file_sha256", "checkpoint_path", "moments_path", "PIXEL_FILTERS"]
 
 
 def _physical_memory() -> int:
@@ -79,6 +89,13 @@ def checkpoint_path(out) -> Path:
     """Where :func:`render` keeps the running sums of ``out``: ``<out>.partial.npz``."""
     out = Path(out)
     return out.with_name(out.name + ".partial.npz")
+
+
+def moments_path(out) -> Path:
+    """Where :func:`render` keeps the float64 sums of the finished ``out``: ``<out>.moments.npz``
+    (the checkpoint's format, :mod:`fogref.render.checkpoint`)."""
+    out = Path(out)
+    return out.with_name(out.name + ".moments.npz")
 
 
 def workers_log_path(out) -> Path:
@@ -104,7 +121,7 @@ def check_output(
             f"(the PNG preview is written beside it)"
         )
     outputs = [(out, "EXR")] + ([(out.with_suffix(".png"), "PNG preview")] if png else [])
-    outputs.append((checkpoint_path(out), "checkpoint"))
+    outputs += [(checkpoint_path(out), "checkpoint"), (moments_path(out), "moments")]
     if workers_log:
         outputs.append((workers_log_path(out), "workers' log"))
     refuse_overwriting_inputs(
@@ -213,6 +230,7 @@ def render(
     checkpoint_seconds: float = 60.0,
     scheduler: str | None = None,
     workers: int | None = None,
+    keep_moments: bool = True,
 ) -> Path:
     """Render ``scene_path`` with ``spp`` samples per pixel into the EXR ``out``.
 
@@ -229,6 +247,10 @@ def render(
                   workers (:mod:`fogref.render.distributed`), the same pixels as here.
     workers:      with no ``scheduler``: the passes run on a new LocalCluster of this many
                   single-threaded worker processes [1, 4096] (their output: ``<out>.workers.log``).
+    keep_moments: keep the float64 sums beside the EXR (:func:`moments_path`, 576 bytes per
+                  pixel), so that a later render with more samples adds to them.
+    resume:       resume from a checkpoint, and add samples to an existing truth at ``out``
+                  (the module doc); False: render afresh.
 
     Returns the EXR path.  Raises :class:`FogrefError` (or its ParameterError) for bad input,
     and before any work when an output (the EXR, the PNG, the checkpoint) is the scene or a
@@ -266,23 +288,28 @@ def render(
             f"ground truth; this machine has {_physical_memory() / 2**30:.1f} GiB "
             f"(limit: half)"
         )
-    passes = pass_sizes(W * H, spp, max_lanes(variant))
     scene_sha = file_sha256(scene_path)
-    key = json.dumps(
-        {
-            "inputs_sha256": digest,
-            "overrides": {k: str(v) for k, v in (overrides or {}).items()},
-            "size": [W, H],
-            "spp": spp,
-            "seed": seed,
-            "variant": variant,
-            "passes": passes,
-            "pixel_filter": pixel_filter,
-            "version": __version__,
-            "schema": gbuffer.SCHEMA_VERSION,
-        },
-        sort_keys=True,
-    )
+    fields = {
+        "inputs_sha256": digest,
+        "overrides": {k: str(v) for k, v in (overrides or {}).items()},
+        "size": [W, H],
+        "spp": spp,
+        "seed": seed,
+        "variant": variant,
+        "pixel_filter": pixel_filter,
+        "version": __version__,
+        "schema": gbuffer.SCHEMA_VERSION,
+    }
+    base = _truth_to_extend(out, fields, hashes, scene_path, scene_sha) if resume else None
+    passes = pass_sizes(W * H, spp - (sum(base[0]) if base else 0), max_lanes(variant))
+    if base is not None:
+        passes = base[0] + passes
+        print(
+            f"fogref render: adding {spp - sum(base[0])} spp to the {sum(base[0])} spp of {out} "
+            f"(same scene, files and seed) -> {spp} spp",
+            file=sys.stderr,
+        )
+    key = json.dumps({**fields, "passes": passes}, sort_keys=True)
     ckpt = checkpoint_path(out)
     leftovers = re.compile(f"{temporary_names(ckpt)}|{temporary_names(out)}")
     for stale in out.parent.glob(f"{out.name}.*.tmp*"):  # a writer killed mid-write (SIGKILL)
@@ -291,6 +318,8 @@ def render(
     # the running state, one tuple (sums, squares, passes they hold): replaced in one assignment, so
     # an interruption anywhere sees the sums with their own count; the sums live on the device
     state = checkpoint.resume(ckpt, key, (H, W), passes) if resume else None
+    if state is None and base is not None:
+        state = base[1]
     if state is not None:
         state = (mi.TensorXd(state[0]), mi.TensorXd(state[1]), state[2])
     saved = state[2] if state is not None else 0  # passes in the checkpoint on disk
@@ -370,10 +399,77 @@ def render(
     }
     _exr_threads()
     write_exr(out, channels, attrs)
+    moments = moments_path(out)  # after the EXR: sums without their truth are never left
+    if keep_moments:
+        checkpoint.write_checkpoint(moments, state, key)
+    else:
+        moments.unlink(missing_ok=True)  # they would belong to the truth this one replaced
     if png:
         write_preview(np.stack([channels[c] for c in "RGB"], axis=-1), out.with_suffix(".png"))
     ckpt.unlink(missing_ok=True)
     return out
+
+
+#: What a truth must share with a render that adds samples to it (the key's fields), in words.
+_SAME = {
+    "seed": "seed",
+    "overrides": "overrides (--set)",
+    "size": "resolution",
+    "pixel_filter": "pixel filter",
+    "variant": "Mitsuba variant",
+    "version": "fogref version",
+    "schema": "schema",
+}
+
+
+def _truth_to_extend(out: Path, fields: dict, hashes: dict, scene_path: Path, scene_sha: str):
+    """``(passes, (sums, squares, passes done))`` of the truth at ``out`` when this render adds
+    samples to it; None when there is none or it holds at least ``fields["spp"]`` samples (a new
+    render).  FogrefError naming the reason when it may not be extended.  ``hashes``: the
+    SHA-256 of each file the scene loads now, ``scene_sha`` the scene's."""
+    if not out.is_file():
+        return None
+    from fogref.exrio import read_exr
+
+    try:
+        channels, attrs = read_exr(out)
+        H0, W0 = next(iter(channels.values())).shape
+        old = {
+            "inputs_sha256": attrs["fogref.inputs_sha256"],
+            "overrides": attrs["fogref.overrides"],
+            "spp": int(attrs["fogref.spp"]),
+            "seed": int(attrs["fogref.seed"]),
+            "variant": attrs["fogref.variant"],
+            "passes": [int(p) for p in attrs["fogref.passes"]],
+            "pixel_filter": attrs["fogref.pixel_filter"],
+            "version": attrs["fogref.version"],
+            "schema": int(attrs["fogref.schema"]),
+            "size": [int(W0), int(H0)],
+        }
+    except (FogrefError, KeyError, TypeError, ValueError, StopIteration):
+        return None  # not a fogref truth: a new render (check_output refused a non-EXR)
+    if fields["spp"] <= old["spp"]:
+        return None
+    why = f"fogref render: cannot add samples to {out} ({old['spp']} spp): "
+    fix = "; --no-resume renders it afresh, or give another --out"
+    if old["inputs_sha256"] != fields["inputs_sha256"]:
+        before = attrs.get("fogref.inputs") or {}
+        changed = sorted({*before, *hashes} - {k for k in before if before.get(k) == hashes.get(k)})
+        if attrs.get("fogref.scene_sha256") != scene_sha:
+            changed.insert(0, scene_path.name)
+        files = ", ".join(str(f) for f in changed) or "the list of files it loads"
+        raise FogrefError(f"{why}the scene's files changed since it was rendered ({files}){fix}")
+    for k, what in _SAME.items():
+        if old[k] != fields[k]:
+            raise FogrefError(f"{why}its {what} is {old[k]}, this render's {fields[k]}{fix}")
+    key = json.dumps(old, sort_keys=True)
+    W, H = fields["size"]
+    state = checkpoint.resume(moments_path(out), key, (H, W), old["passes"])
+    if state is None or state[2] != len(old["passes"]):
+        raise FogrefError(
+            f"{why}its float64 sums ({moments_path(out).name}) are missing or are not this truth's{fix}"
+        )
+    return old["passes"], state
 
 
 def _local_passes(integrator, scene, seed: int, pixel_filter: str, passes: list, start: int):

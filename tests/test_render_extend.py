@@ -1,0 +1,65 @@
+"""``fogref render --spp N`` on an existing truth adds samples to it (fogref.render.render, "Extensible").
+
+16 spp extended to 32 must equal, bitwise in every channel, the direct render whose passes are the
+same (16 then 16, seeds of passes 0 and 1): the float64 sums merge exactly, as the passes on Dask
+do.  A different seed, a changed file of the scene, or missing sums are refused with the reason;
+fewer samples than the truth holds is a new render.
+"""
+
+import numpy as np
+import pytest
+import tiny_inputs_scene as tiny
+
+from fogref.errors import FogrefError
+from fogref.exrio import read_exr
+
+pytestmark = pytest.mark.render
+
+
+def sixteen_spp_passes(monkeypatch):
+    """Passes of 16 spp at the tiny scene's 8x6 pixels."""
+    import fogref.render.passes as passes
+
+    monkeypatch.setattr(passes, "MAX_LANES", {"llvm": 16 * 48, "cuda": 16 * 48})
+
+
+def test_extending_16_to_32_spp_equals_the_direct_render_bitwise(tmp_path, mitsuba, monkeypatch, capsys):
+    from fogref.render.render import moments_path, render
+
+    sixteen_spp_passes(monkeypatch)
+    scene = tiny.make(mitsuba, tmp_path / "scene")
+    kw = dict(seed=7, progress=False, png=False)
+    direct = render(scene, tmp_path / "direct.exr", spp=32, **kw)
+    out = render(scene, tmp_path / "x.exr", spp=16, **kw)
+    assert moments_path(out).is_file() and "adding" not in capsys.readouterr().err
+    render(scene, out, spp=32, **kw)
+    err = capsys.readouterr().err
+    assert "adding 16 spp to the 16 spp of" in err and "-> 32 spp" in err
+    (a, attrs), (b, attrs_direct) = read_exr(out), read_exr(direct)
+    assert attrs["fogref.spp"] == 32 and attrs["fogref.passes"] == attrs_direct["fogref.passes"] == [16, 16]
+    assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
+    # fewer samples than it holds: a new render (its own passes), not an extension
+    render(scene, out, spp=8, **kw)
+    assert read_exr(out)[1]["fogref.spp"] == 8 and "adding" not in capsys.readouterr().err
+
+
+def test_another_seed_changed_files_or_missing_sums_are_refused(tmp_path, mitsuba, monkeypatch):
+    from fogref.render.render import moments_path, render
+
+    sixteen_spp_passes(monkeypatch)
+    scene = tiny.make(mitsuba, tmp_path / "scene")
+    kw = dict(progress=False, png=False)
+    out = render(scene, tmp_path / "x.exr", spp=16, seed=1, **kw)
+    before = out.read_bytes()
+    with pytest.raises(FogrefError, match=r"cannot add samples .*its seed is 1, this render's 2"):
+        render(scene, out, spp=32, seed=2, **kw)
+    tiny.write_texture(mitsuba, scene.parent / "tex.png", grey=120)
+    with pytest.raises(FogrefError, match=r"the scene's files changed since it was rendered \(tex.png\)"):
+        render(scene, out, spp=32, seed=1, **kw)
+    assert out.read_bytes() == before  # refused: nothing written
+    tiny.write_texture(mitsuba, scene.parent / "tex.png")  # as it was
+    moments_path(out).unlink()
+    with pytest.raises(FogrefError, match=r"float64 sums \(x.exr.moments.npz\) are missing"):
+        render(scene, out, spp=32, seed=1, **kw)
+    render(scene, out, spp=32, seed=2, resume=False, **kw)  # afresh over it
+    assert read_exr(out)[1]["fogref.seed"] == 2
