@@ -54,6 +54,7 @@ _LAZY = {
     "build_model": "fogref.mapping.build",
     "fit_model": "fogref.study.fit",
     "translate": "fogref.study.fit",
+    "scene_path": "fogref.shipped_scenes",
 }
 
 __all__ = ["__version__", "ensure_llvm", *_LAZY]

@@ -33,6 +33,7 @@ FLOORS: list[tuple[str, tuple[str, ...]]] = [
             "fogref.atomic",
             "fogref._llvm",
             "fogref.cluster",
+            "fogref.shipped_scenes",
         ),
     ),
     ("media", ("fogref.media",)),  # physics: numpy, Dr.Jit only lazily

@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from fogref.cli.checks import Number, PathArg
+from fogref.cli.checks import Number, PathArg, SceneArg
 from fogref.cli.spec import option, switch
 from fogref.study.unreal import run_study
 
@@ -26,7 +26,7 @@ UNREAL = "Unreal settings of the study's model"
 @dataclass
 class Options:
     exr: str = option("out/valley.exr", "ground-truth EXR", positional=True, check=PathArg(), metavar="EXR")
-    out: str = option("out/unreal_study", "report folder", check=PathArg(), api=STUDY, api_name="out_dir")
+    out: str = option("out/unreal_study", "report folder", check=SceneArg(), api=STUDY, api_name="out_dir")
     renders: str = option(
         "out/study",
         "cache folder of the budget's extra renders",

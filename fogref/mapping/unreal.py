@@ -25,6 +25,7 @@ from fogref.mapping.registry import register_mapping
 from fogref.mapping.unreal_basis import Basis, base_params, solve_colours, unreal_basis, unreal_inscatter
 from fogref.mapping.views import Views, fibonacci_directions, physical_single_scattering, sample_views
 from fogref.models.base import SKY_DISTANCE
+from fogref.models.terms import annotate, unreal_field
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams, medium_to_ue4
 
 __all__ = [
@@ -111,6 +112,9 @@ class FitResult:
                 },
             },
             "unreal_editor": self.editor_properties(),
+            "unreal_editor_units": {
+                k: annotate("ue4", unreal_field(k), v) for k, v in self.editor_properties().items()
+            },
             "error": {
                 "rmse": self.rmse,
                 "rel_rmse": self.rel_rmse,

@@ -21,6 +21,7 @@ from fogref.mapping import PhysicalScene, lobe_fit
 from fogref.media import NP, hg_phase
 from fogref.render.scene import describe_scene
 from fogref.render.scene_defaults import parse_scene, resolve, substitute
+from fogref.shipped_scenes import SCENES_DIR, resolve_scene
 
 
 def physical_from_scene(path, camera=None) -> PhysicalScene:
@@ -139,14 +140,15 @@ def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -
     return doc
 
 
-#: The reference scene of :func:`fit_model` and :func:`translate` without one.
-DEFAULT_SCENE = "scenes/valley.xml"
+#: The reference scene of :func:`fit_model` and :func:`translate` without one (shipped with fogref).
+DEFAULT_SCENE = SCENES_DIR / "valley.xml"
 
 
 def _physical(scene, camera=None) -> PhysicalScene:
     if scene is None:
         scene = DEFAULT_SCENE
     if isinstance(scene, (str, Path)):
+        scene = resolve_scene(scene)
         if not Path(scene).is_file():
             raise FogrefError(f"{scene}: no such scene file")
         return physical_from_scene(scene, camera=camera)
@@ -164,10 +166,21 @@ def fit_model(name, scene=None, views=None, sun_elevations=None, **kw):
     return fit(name, _physical(scene), views=views, sun_elevations=sun_elevations, **kw)
 
 
-def translate(source, target, params: dict | None = None, scene=DEFAULT_SCENE, **kw):
-    """``fogref.translate``: :func:`fogref.mapping.translate.translate` with a scene XML path
-    (default :data:`DEFAULT_SCENE`), dict or scene as the reference.  Returns a
-    :class:`fogref.mapping.translate.Translation`."""
+def translate(source, target, params: dict | None = None, scene=None, **kw):
+    """``fogref.translate``: :func:`fogref.mapping.translate.translate` with a scene XML path, a
+    shipped scene's name, dict or scene as the reference.  Returns a
+    :class:`fogref.mapping.translate.Translation`.
+
+    Without ``scene`` the source's settings that are not in ``params`` are the engine's defaults
+    and :data:`DEFAULT_SCENE` is the reference (camera, albedo, sun); with one, they come from
+    that scene's fit (``fill`` overrides either).
+    """
     from fogref.mapping.translate import translate as tr
 
+    kw.setdefault("fill", "defaults" if scene is None else "mapping")
+    if isinstance(scene, (str, Path)):
+        label = str(scene)
+    else:
+        label = f"the default scene {DEFAULT_SCENE.name}" if scene is None else "the reference scene"
+    kw.setdefault("scene_label", label)
     return tr(source, target, params, _physical(scene), **kw)
