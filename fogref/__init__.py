@@ -55,6 +55,7 @@ _LAZY = {
     "fit_model": "fogref.study.fit",
     "translate": "fogref.study.fit",
     "scene_path": "fogref.shipped_scenes",
+    "export_engine": "fogref.study.export",
 }
 
 __all__ = ["__version__", "ensure_llvm", *_LAZY]

@@ -12,6 +12,7 @@ the ``"ue4"`` mapping.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import functools
 import math
 import time
@@ -111,6 +112,7 @@ class FitResult:
                     "FogHeightOffset_cm": p.SecondFogData.FogHeightOffset,
                 },
             },
+            "settings": dataclasses.asdict(p),
             "unreal_editor": self.editor_properties(),
             "unreal_editor_units": {
                 k: annotate("ue4", unreal_field(k), v) for k, v in self.editor_properties().items()
