@@ -54,6 +54,8 @@ _LAZY = {
     "build_model": "fogref.mapping.build",
     "fit_model": "fogref.study.fit",
     "translate": "fogref.study.fit",
+    "scene_path": "fogref.shipped_scenes",
+    "export_engine": "fogref.study.export",
 }
 
 __all__ = ["__version__", "ensure_llvm", *_LAZY]

@@ -23,7 +23,7 @@ import numpy as np
 from fogref.errors import FogrefError
 from fogref.exrio import read_exr
 from fogref.gbuffer import truth_from_channels
-from fogref.models.ue4 import direction_to_unreal, world_to_unreal
+from fogref.models.ue4 import direction_to_unreal, unreal_rotator, world_to_unreal
 
 
 def _groups(names) -> list[str]:
@@ -105,12 +105,6 @@ def unreal_camera(camera: dict) -> dict:
     """
     origin = world_to_unreal(camera["origin"])
     fwd, up, right = (np.array(direction_to_unreal(camera[k])) for k in ("forward", "up", "right"))
-    pitch = math.degrees(math.asin(max(-1.0, min(1.0, fwd[2]))))
-    yaw = math.degrees(math.atan2(fwd[1], fwd[0]))
-    cy, sy = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
-    cp, sp = math.cos(math.radians(pitch)), math.sin(math.radians(pitch))
-    y0, z0 = np.array([-sy, cy, 0.0]), np.array([-sp * cy, -sp * sy, cp])  # the axes at roll 0
-    roll = math.degrees(math.atan2(up @ y0, up @ z0))
     to_world = np.eye(4)
     to_world[:3, 0], to_world[:3, 1], to_world[:3, 2], to_world[:3, 3] = fwd, right, up, origin
     clip = {k: (None if camera.get(k) is None else camera[k] * 100.0) for k in ("near_clip", "far_clip")}
@@ -120,7 +114,7 @@ def unreal_camera(camera: dict) -> dict:
         "forward": fwd.tolist(),
         "right": right.tolist(),
         "up": up.tolist(),
-        "rotation": {"pitch": pitch, "yaw": yaw, "roll": roll},
+        "rotation": unreal_rotator(fwd, up),
         "fov_deg": camera["fov_deg"],
         "fov_axis": camera["fov_axis"],
         "to_world": to_world.tolist(),

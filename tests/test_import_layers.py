@@ -34,6 +34,7 @@ FLOORS: list[tuple[str, tuple[str, ...]]] = [
             "fogref._llvm",
             "fogref.cluster",
             "fogref.cache_dir",
+            "fogref.shipped_scenes",
         ),
     ),
     ("media", ("fogref.media",)),  # physics: numpy, Dr.Jit only lazily

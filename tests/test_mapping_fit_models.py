@@ -182,6 +182,10 @@ def test_translate_cli_runs_and_refuses_bad_input(capsys):
                 "threejs",
                 "--param",
                 "fogDensity=0.003",
+                "--param",
+                "fogMode=exp",
+                "--param",
+                "fog_coordinate=distance",
                 "--directions",
                 "24",
             ]

@@ -11,6 +11,7 @@ diff        two truths or images: equal within noise? exit 0 equal, 1 differ   :
 study       the Unreal study: fit, compare, error budget, README               :mod:`~.study`
 fit         fit Unreal's fog colours and exponent to a physical fog (JSON)     :mod:`~.fit`
 translate   carry one engine's fog settings to another's through the truth     :mod:`~.translate`
+export      paste-ready fog, camera and sun for an engine (UE Python, .tres)   :mod:`~.export`
 scene       write a scene XML from fog, sun, sky, camera and geometry          :mod:`~.scene`
 sweep       run a declarative error study (SWEEP.toml) on Dask                 :mod:`~.sweep`
 engine      render a truth's view with a real engine (three.js, Chromium)      :mod:`~.engine`
@@ -45,7 +46,19 @@ __all__ = ["COMMANDS", "build_parser", "main", "parse"]
 #: The commands, in the order ``fogref --help`` lists them, and the module of each.
 COMMANDS = {
     name: f"fogref.cli.{name}"
-    for name in ("render", "info", "compare", "diff", "study", "fit", "translate", "scene", "sweep", "engine")
+    for name in (
+        "render",
+        "info",
+        "compare",
+        "diff",
+        "study",
+        "fit",
+        "translate",
+        "export",
+        "scene",
+        "sweep",
+        "engine",
+    )
 }
 
 DESCRIPTION = (

@@ -30,6 +30,7 @@ __all__ = [
     "Number",
     "PathArg",
     "RGB",
+    "SceneArg",
     "Text",
     "Vector",
 ]
@@ -160,6 +161,22 @@ class PathArg(Check):
 
     def parse(self, raw, name, source):
         return str(params.path(raw, name, source=source, must_exist=self.must_exist, kind=self.kind))
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneArg(PathArg):
+    """A scene: a path, or the bare name of a shipped scene (:func:`fogref.shipped_scenes.resolve_scene`).
+
+    >>> SceneArg().parse("valley", "--scene", "fogref fit").endswith("valley.xml")
+    True
+    """
+
+    role: str = "input"
+
+    def parse(self, raw, name, source):
+        from fogref.shipped_scenes import resolve_scene
+
+        return str(resolve_scene(super().parse(raw, name, source)))
 
 
 class Assignments(Check):

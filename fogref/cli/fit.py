@@ -17,8 +17,9 @@ import sys
 from dataclasses import dataclass
 
 from fogref import params
-from fogref.cli.checks import RGB, Assignments, Integer, Number, PathArg, Text, Vector
+from fogref.cli.checks import RGB, Assignments, Integer, Number, PathArg, SceneArg, Text, Vector
 from fogref.cli.spec import UsageError, option, switch
+from fogref.models.terms import note, unreal_field
 
 NAME = "fit"
 SOURCE = "fogref fit"
@@ -93,8 +94,8 @@ class Options:
     )
     scene: str | None = option(
         None,
-        "fogref XML scene (fog, sun, sky, camera)",
-        check=PathArg(role="input"),
+        "fogref XML scene (fog, sun, sky, camera), or a shipped scene's name (valley, open_plane, ...)",
+        check=SceneArg(),
         metavar="XML",
         group=SOURCE_GROUP,
     )
@@ -292,7 +293,8 @@ def run_generic(o: Options, pf) -> int:
     )
     for k, v in r.values.items():
         sp = f"  spread {r.spread[k]:.2g}" if r.spread else ""
-        print(f"  {k:42s} {v:.6g} ± {r.uncertainty[k]:.2g}{sp}", file=sys.stderr)
+        unit = note(r.model, k, v)
+        print(f"  {k:42s} {v:.6g} ± {r.uncertainty[k]:.2g}{sp}  {unit}".rstrip(), file=sys.stderr)
     print(
         f"  (inscatter relative RMSE over {r.n_views} views: {r.rel_rmse:.3f}; transmittance RMSE "
         f"{r.rmse_T:.3f})",
@@ -326,10 +328,11 @@ def run(o: Options, given=frozenset()) -> int:
     print(json.dumps(doc, indent=2))
     print("Unreal Exponential Height Fog (details panel):", file=sys.stderr)
     for k, v in r.editor_properties().items():
+        unit = note("ue4", unreal_field(k), v)
         if isinstance(v, list):
             v = "(R=%.4g, G=%.4g, B=%.4g)" % tuple(v)
         elif isinstance(v, float):
             v = f"{v:.6g}"
-        print(f"  {k:42s} {v}", file=sys.stderr)
+        print(f"  {k:42s} {v}  {unit}".rstrip(), file=sys.stderr)
     print(f"  (inscatter relative RMSE over {r.n_views} views: {r.rel_rmse:.3f})", file=sys.stderr)
     return 0

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from fogref.cli.checks import Address, Assignments, Choice, Integer, Number, PathArg
+from fogref.cli.checks import Address, Assignments, Choice, Integer, Number, PathArg, SceneArg
 from fogref.cli.spec import option, refuse, switch
 from fogref.render.variant import VARIANTS
 
@@ -30,9 +30,10 @@ PIXEL_FILTERS = ("centre", "box")
 @dataclass
 class Options:
     scene: str = option(
-        help="Mitsuba XML scene with the fogpath integrator and a heightfog medium",
+        help="Mitsuba XML scene with the fogpath integrator and a heightfog medium, or a shipped "
+        "scene's name (valley, open_plane, ...)",
         positional=True,
-        check=PathArg(role="input"),
+        check=SceneArg(),
         metavar="SCENE",
     )
     out: str = option(

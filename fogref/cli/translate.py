@@ -2,7 +2,9 @@
 
 :func:`fogref.mapping.translate.translate`: the source's settings -> its physical fog (the exact
 extinction mapping where one exists, else fitted; the light fitted) -> the target's best fit.
-JSON on stdout; the target's settings and the error no setting can remove on stderr.
+JSON on stdout; on stderr the source settings fogref filled in (each with where it took it
+from: the engine's defaults without ``--scene``, that scene's fit with it), the target's settings
+with their units and colour spaces, and the error no setting can remove.
 """
 
 from __future__ import annotations
@@ -11,8 +13,9 @@ import json
 import sys
 from dataclasses import dataclass
 
-from fogref.cli.checks import Assignments, Integer, Number, PathArg, Text
+from fogref.cli.checks import Assignments, Integer, Number, SceneArg, Text
 from fogref.cli.spec import option
+from fogref.models.terms import describe, note
 
 NAME = "translate"
 SOURCE = "fogref translate"
@@ -42,12 +45,15 @@ class Options:
         check=Assignments(),
         metavar="KEY=VALUE",
     )
-    scene: str = option(
-        "scenes/valley.xml",
-        "reference scene (camera, albedo, sun azimuth, light)",
-        check=PathArg(role="input"),
+    scene: str | None = option(
+        None,
+        "reference scene (camera, albedo, sun, light); the source settings not given then come "
+        "from its fit (a path or a shipped scene's name)",
+        check=SceneArg(),
         metavar="XML",
         api=API,
+        default_text="the shipped valley scene for camera, albedo and sun; the engine's defaults "
+        "for the settings not given",
     )
     sun_elevation: list | None = option(
         None,
@@ -70,9 +76,15 @@ def run(o: Options, given=frozenset()) -> int:
     t = translate(o.source, o.target, params, o.scene, views=o.directions, sun_elevations=o.sun_elevation)
     print(json.dumps(t.to_dict(), indent=2))
     r = t.target
+    print(f"{t.source} settings not given, filled in:", file=sys.stderr)
+    for origin in dict.fromkeys(d["from"] for d in t.filled.values()):
+        print(f"  from {origin}:", file=sys.stderr)
+        for k, d in t.filled.items():
+            if d["from"] == origin:
+                print(f"    {k:40s} {describe(t.source, k, d['value'])}", file=sys.stderr)
     print(f"{t.source} -> {r.model} (physical extinction: {t.physical['extinction']}):", file=sys.stderr)
     for k, v in r.values.items():
-        print(f"  {k:42s} {v:.6g} ± {r.uncertainty[k]:.2g}", file=sys.stderr)
+        print(f"  {k:42s} {v:.6g} ± {r.uncertainty[k]:.2g}  {note(r.model, k, v)}".rstrip(), file=sys.stderr)
     print(
         f"  residual (inscatter relative RMSE): vs the physical fog {t.residual_vs_truth:.3f}, vs the "
         f"source {t.residual_vs_source:.3f}; physical fog vs source {t.source_vs_physical:.3f}",

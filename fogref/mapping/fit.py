@@ -65,6 +65,7 @@ from fogref.mapping.unreal import (
     sample_views,
 )
 from fogref.models.base import SKY_DISTANCE, FogModel
+from fogref.models.terms import annotate
 
 __all__ = [
     "FIT_DIRECTIONS_MAX_GENERIC",
@@ -100,10 +101,15 @@ def _label(cls: type) -> str:
 
 
 def start_params(
-    cls: type, pf: PhysicalScene, spec: FitSpec | None = None, overrides: dict[str, Any] | None = None
+    cls: type,
+    pf: PhysicalScene,
+    spec: FitSpec | None = None,
+    overrides: dict[str, Any] | None = None,
+    use_mapping: bool = True,
 ) -> tuple[Any, str]:
     """The parameters the fit starts from: the physical mapping of ``pf`` where the model has
-    one for it, else the model's defaults; then ``spec.start`` and ``overrides``.
+    one for it (and ``use_mapping``), else the model's defaults; then ``spec.start`` and
+    ``overrides``.
 
     Returns ``(params, source)`` with source "mapping" or "defaults".
     """
@@ -112,10 +118,10 @@ def start_params(
     spec = spec or fit_spec(cls)
     params: Any = None  # the model's Params dataclass
     source = "defaults"
-    if spec.initial is not None:
+    if spec.initial is not None and use_mapping:
         params = spec.initial(pf)
         source = "mapping" if params is not None else source
-    if params is None and has_mapping(cls):
+    if params is None and use_mapping and has_mapping(cls):
         try:
             model: Any = from_physical(cls, pf)  # a model instance; its settings are .params
             params, source = model.params, "mapping"
@@ -314,6 +320,7 @@ class ModelFit:
             "parameters": {
                 k: {
                     "value": v,
+                    **annotate(self.model, k, v),
                     "uncertainty": self.uncertainty[k],
                     **({"spread": self.spread[k]} if self.spread else {}),
                     **({"at_bound": True} if self.at_bound.get(k) else {}),
@@ -321,6 +328,9 @@ class ModelFit:
                 for k, v in self.values.items()
             },
             "settings": _jsonable(_param_dict(self.params)),
+            "settings_units": {
+                k: a for k, v in _param_dict(self.params).items() if (a := annotate(self.model, k, v))
+            },
             "error": {
                 "rmse": self.rmse,
                 "rel_rmse": self.rel_rmse,

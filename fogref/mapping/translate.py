@@ -2,8 +2,12 @@
 
 :func:`translate` goes source settings -> physical fog -> target settings:
 
-1. The source model is built from the reference scene's mapping (:func:`fogref.mapping.fit.start_params`)
-   with the user's settings on top, and evaluated on the views (its light follows each sun).
+1. The source model is built from the user's settings; every setting not given comes either from
+   the reference scene's physical mapping (``fill="mapping"``: :func:`fogref.mapping.fit.start_params`,
+   the fit of that scene) or from the engine's own defaults (``fill="defaults"``: the model's
+   ``Params()``, :data:`fogref.models.terms.DEFAULTS_FROM` cites each engine's source), and is
+   reported with where it came from (:attr:`Translation.filled`).  The model is evaluated on the
+   views; its light follows each sun.
 2. Its physical fog: the scene's albedo, camera and sun direction, with
 
    * the extinction of the **exact mapping** where the source's settings have one
@@ -36,7 +40,7 @@ Examples
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any, Iterable, Sequence
 
 import numpy as np
@@ -48,6 +52,7 @@ from fogref.mapping.fit import (
     ModelFit,
     Target,
     _evaluate,
+    _param_dict,
     fit_model,
     fit_to_targets,
     model_class,
@@ -192,9 +197,61 @@ def physical_of_model(
     return fit, info
 
 
+#: ``fill`` of :func:`translate`: where the source's settings that were not given come from.
+FILLS = ("mapping", "defaults")
+
+
+def source_settings(
+    cls: type, pf: PhysicalScene, spec: FitSpec, params: dict[str, Any] | None, fill: str, scene_label: str
+) -> tuple[Any, dict[str, dict[str, Any]]]:
+    """The source's settings and, for each setting not in ``params``, ``{"value", "from"}``.
+
+    ``fill="mapping"``: the physical mapping of the reference scene (its fit); ``"defaults"``: the
+    model's ``Params()`` defaults, which are the engine's (cited by
+    :data:`fogref.models.terms.DEFAULTS_FROM`).  A setting the sun sets (its direction) says so.
+    """
+    given = dict(params or {})
+    name = _name(cls)
+    if fill == "mapping":
+        p, how = start_params(cls, pf, spec, given)
+        origin = (
+            f"the fit of {scene_label} (fogref.mapping's physical mapping)"
+            if how == "mapping"
+            else f"{_defaults_from(name)}, then the fit's start settings"
+        )
+    elif fill == "defaults":
+        p, _ = start_params(cls, pf, FitSpec(free=spec.free), given, use_mapping=False)
+        origin = _defaults_from(name)
+    else:
+        raise ParameterError("translate", "fill", f"{fill!r} is not one of {', '.join(FILLS)}")
+    sunlit = _param_dict(spec.sun(p, pf.sun_direction)) if spec.sun is not None else {}
+    filled = {}
+    for k, v in _param_dict(p).items():
+        if k in given:
+            continue
+        moved = k in sunlit and sunlit[k] != v
+        filled[k] = {
+            "value": sunlit[k] if moved else v,
+            "from": f"the sun of {scene_label}" if moved else origin,
+        }
+    return p, filled
+
+
+def _name(cls: type) -> str:
+    return getattr(cls, "name", None) or cls.__name__
+
+
+def _defaults_from(name: str) -> str:
+    from fogref.models.terms import DEFAULTS_FROM
+
+    where = DEFAULTS_FROM.get(name)
+    return f"the default of {where}" if where else f"the default of {name}'s Params"
+
+
 @dataclass
 class Translation:
-    """Result of :func:`translate`."""
+    """Result of :func:`translate`.  ``filled``: each source setting that was not given, with its
+    value and where it came from (:func:`source_settings`); ``reference``: the reference scene."""
 
     source: str
     source_settings: dict
@@ -203,12 +260,26 @@ class Translation:
     residual_vs_truth: float  #: relative RMSE of the best target fit vs the physical fog's inscatter
     residual_vs_source: float  #: relative RMSE of the best target fit vs the source model's inscatter
     source_vs_physical: float  #: relative RMSE of the physical fog vs the source model's inscatter
+    filled: dict = field(default_factory=dict)
+    reference: str = ""
 
     def to_dict(self) -> dict:
         from fogref.mapping.fit import _jsonable
+        from fogref.models.terms import annotate
 
         return {
-            "source": {"model": self.source, "settings": _jsonable(self.source_settings)},
+            "source": {
+                "model": self.source,
+                "settings": _jsonable(self.source_settings),
+                "units": {
+                    k: a for k, v in self.source_settings.items() if (a := annotate(self.source, k, v))
+                },
+                "not_given": {
+                    k: {"value": _jsonable({"v": d["value"]})["v"], "from": d["from"]}
+                    for k, d in self.filled.items()
+                },
+                "reference_scene": self.reference,
+            },
             "physical": self.physical,
             "target": self.target.to_dict(),
             "residual": {
@@ -229,6 +300,8 @@ def translate(
     views: int | Views | None = None,
     sun_elevations: Iterable[float] | None = None,
     target_params: dict[str, Any] | None = None,
+    fill: str = "mapping",
+    scene_label: str = "the reference scene",
 ) -> Translation:
     """Carry ``source``'s settings (``params``, its own names) to ``target`` through the physical fog.
 
@@ -247,6 +320,11 @@ def translate(
         Sun elevations [degrees] fitted together (default the scene's sun).
     target_params : dict, optional
         Fixed settings of the target (e.g. a mode).
+    fill : {"mapping", "defaults"}
+        Where the source's settings not in ``params`` come from: the reference scene's physical
+        mapping (its fit) or the engine's defaults (:func:`source_settings`).
+    scene_label : str
+        The reference scene's name in :attr:`Translation.filled`.
     """
     if scene is None:
         raise FogrefError("translate: a reference scene is needed (fogref.translate defaults to the valley)")
@@ -254,7 +332,7 @@ def translate(
     src_cls = model_class(source)
     tgt_cls = model_class(target)
     src_spec = fit_spec(src_cls)
-    src_params, _ = start_params(src_cls, pf, src_spec, params)
+    src_params, filled = source_settings(src_cls, pf, src_spec, params, fill, scene_label)
     if views is None:
         views = TRANSLATE_DIRECTIONS
     if not isinstance(views, Views):
@@ -298,8 +376,6 @@ def translate(
         "uncertainty": {k: v for k, v in phys["uncertainty"].items()},
         "rel_rmse_vs_source": phys["rel_rmse"],
     }
-    from fogref.mapping.fit import _param_dict
-
     return Translation(
         source=getattr(src_cls, "name", str(source)),
         source_settings=_param_dict(src_params),
@@ -308,4 +384,6 @@ def translate(
         residual_vs_truth=tfit.rel_rmse,
         residual_vs_source=vs_source,
         source_vs_physical=phys["rel_rmse"],
+        filled=filled,
+        reference=scene_label,
     )

@@ -11,6 +11,7 @@ the ``"ue4"`` mapping.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field, replace
@@ -32,6 +33,7 @@ from fogref.mapping.unreal_basis import (
 )
 from fogref.mapping.views import Views, fibonacci_directions, physical_single_scattering, sample_views
 from fogref.models.base import SKY_DISTANCE
+from fogref.models.terms import annotate, unreal_field
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams, medium_to_ue4
 
 __all__ = [
@@ -114,7 +116,11 @@ class FitResult:
                     "FogHeightOffset_cm": p.SecondFogData.FogHeightOffset,
                 },
             },
+            "settings": dataclasses.asdict(p),
             "unreal_editor": self.editor_properties(),
+            "unreal_editor_units": {
+                k: annotate("ue4", unreal_field(k), v) for k, v in self.editor_properties().items()
+            },
             "error": {
                 "rmse": self.rmse,
                 "rel_rmse": self.rel_rmse,

@@ -114,6 +114,26 @@ def direction_to_unreal(w: Any) -> tuple:
     return tuple(float(x) for x in v / np.linalg.norm(v))
 
 
+def unreal_rotator(forward: Any, up: Any = (0.0, 0.0, 1.0)) -> dict:
+    """The FRotator ``{pitch, yaw, roll}`` [deg] whose X axis is ``forward`` and whose Z axis is
+    nearest ``up`` (FRotationMatrix), both unit vectors in **Unreal's** frame (z-up).
+
+    Examples
+    --------
+    >>> r = unreal_rotator((0.0, 0.0, -1.0), (1.0, 0.0, 0.0))
+    >>> round(r["pitch"], 6), round(r["yaw"], 6), round(r["roll"], 6)
+    (-90.0, 0.0, 0.0)
+    """
+    fwd, up = np.asarray(forward, dtype=np.float64), np.asarray(up, dtype=np.float64)
+    pitch = math.degrees(math.asin(max(-1.0, min(1.0, float(fwd[2])))))
+    yaw = math.degrees(math.atan2(fwd[1], fwd[0]))
+    cy, sy = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
+    cp, sp = math.cos(math.radians(pitch)), math.sin(math.radians(pitch))
+    y0, z0 = np.array([-sy, cy, 0.0]), np.array([-sp * cy, -sp * sy, cp])  # the axes at roll 0
+    roll = math.degrees(math.atan2(float(up @ y0), float(up @ z0)))
+    return {"pitch": pitch, "yaw": yaw, "roll": roll}
+
+
 @dataclass(frozen=True)
 class SecondFogData:
     """UExponentialHeightFogComponent::SecondFogData (editor units)."""

@@ -29,6 +29,7 @@ from fogref.errors import FogrefError
 from fogref.gbuffer import load_truth
 from fogref.render.inputs import inputs_digest
 from fogref.render.render import render
+from fogref.shipped_scenes import resolve_scene
 
 
 def _renderer_hash() -> str:
@@ -131,8 +132,9 @@ def cached_truth(
 
     Parameters
     ----------
-    scene : path
-        A fogref XML scene.
+    scene : path or str
+        A fogref XML scene, or the name of a shipped one (``"valley"``,
+        :func:`fogref.shipped_scenes.resolve_scene`).
     res : (int, int) or None
         ``(width, height)`` [px], set as the overrides ``res`` and ``resy``; None keeps the
         scene's own.
@@ -159,5 +161,5 @@ def cached_truth(
         if w < 1 or h < 1:
             raise FogrefError(f"res: {tuple(res)} must be (width, height) >= 1 px")
         over.update({"res": w, "resy": h})
-    path, _ = render_cached(scene, spp, seed, over, cache_dir, variant, pixel_filter)
+    path, _ = render_cached(resolve_scene(scene), spp, seed, over, cache_dir, variant, pixel_filter)
     return load_truth(path)

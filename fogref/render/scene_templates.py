@@ -31,6 +31,7 @@ from pathlib import Path
 from fogref.errors import ParameterError
 from fogref.mapping.fog_input import SOURCE, _fmt
 from fogref.render.scene_defaults import parse_scene
+from fogref.shipped_scenes import SCENES_DIR
 
 __all__ = [
     "GROUND_SIZE",
@@ -61,7 +62,7 @@ MESH_UP = ("y", "z", "unreal")
 #: Default half-size [m] of the ground plane of the plane and mesh templates (the valley keeps its file's).
 GROUND_SIZE = {"plane": 1.0e5, "mesh": 1.0e5}
 #: The shipped scene whose geometry the "valley" template copies.
-VALLEY_SCENE = Path(__file__).resolve().parents[2] / "scenes" / "valley.xml"
+VALLEY_SCENE = SCENES_DIR / "valley.xml"
 
 
 @dataclass(frozen=True)
@@ -170,7 +171,7 @@ def _valley_root() -> ET.Element:
             SOURCE,
             "geometry (--geometry)",
             f"the valley template reads {VALLEY_SCENE}, which is missing "
-            "(a source checkout of fogref ships it)",
+            "(fogref installs it with the package: reinstall fogref)",
         )
     return parse_scene(VALLEY_SCENE, comments=True)
 

@@ -21,6 +21,7 @@ from fogref.mapping import PhysicalScene, lobe_fit
 from fogref.media import NP, hg_phase
 from fogref.render.scene import describe_scene
 from fogref.render.scene_defaults import parse_scene, resolve, substitute
+from fogref.shipped_scenes import SCENES_DIR, resolve_scene
 
 
 def physical_from_scene(path, camera=None) -> PhysicalScene:
@@ -30,19 +31,51 @@ def physical_from_scene(path, camera=None) -> PhysicalScene:
     if desc["medium"] is None:
         raise FogrefError(f'{path}: no <medium type="heightfog"> in the scene')
     if camera is None:
-        camera = (desc.get("camera") or {}).get("origin") or _lookat_origin(path)
+        camera = (desc.get("camera") or {}).get("origin") or (lookat_camera(path) or {}).get("origin")
     return PhysicalScene.from_params(desc, camera)
 
 
-def _lookat_origin(path):
-    """The first sensor's ``lookat`` origin [m], with the scene's ``$defaults`` substituted."""
+def lookat_camera(path) -> dict | None:
+    """The first sensor of a fogref XML file with a ``lookat``, read without Mitsuba, its
+    ``$defaults`` substituted: ``origin``, ``target``, ``up`` [m, fogref frame], the horizontal
+    field of view ``fov_deg`` [deg] (a ``fov_axis`` "y" is converted) and ``resolution``
+    ``[W, H]`` [px].  None without such a sensor.
+
+    >>> from fogref.shipped_scenes import scene_path
+    >>> c = lookat_camera(scene_path("valley"))
+    >>> c["origin"], c["fov_deg"], c["resolution"]
+    ((0.0, 2.0, 0.0), 70.0, (320, 180))
+    """
+
     root = parse_scene(path)
     defaults = resolve(root, source=path)
+
+    def value(el, kind, name, default):
+        node = el.find(f"{kind}[@name='{name}']")
+        return substitute(node.get("value"), defaults) if node is not None else default
+
+    def vec(text):
+        return tuple(float(x) for x in text.replace(",", " ").split())
+
     for s in root.iter("sensor"):
         la = s.find(".//lookat")
-        if la is not None and la.get("origin"):
-            origin = substitute(la.get("origin"), defaults)
-            return tuple(float(x) for x in origin.replace(",", " ").split())
+        if la is None or not la.get("origin"):
+            continue
+        film = s.find("film")
+        res = (
+            int(value(film, "integer", "width", 768)) if film is not None else 768,
+            int(value(film, "integer", "height", 576)) if film is not None else 576,
+        )
+        fov = float(value(s, "float", "fov", 45.0))
+        if value(s, "string", "fov_axis", "x") == "y":
+            fov = math.degrees(2 * math.atan(math.tan(math.radians(fov) / 2) * res[0] / res[1]))
+        return {
+            "origin": vec(substitute(la.get("origin"), defaults)),
+            "target": vec(substitute(la.get("target", "0, 0, 1"), defaults)),
+            "up": vec(substitute(la.get("up", "0, 1, 0"), defaults)),
+            "fov_deg": fov,
+            "resolution": res,
+        }
     return None
 
 
@@ -139,14 +172,15 @@ def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -
     return doc
 
 
-#: The reference scene of :func:`fit_model` and :func:`translate` without one.
-DEFAULT_SCENE = "scenes/valley.xml"
+#: The reference scene of :func:`fit_model` and :func:`translate` without one (shipped with fogref).
+DEFAULT_SCENE = SCENES_DIR / "valley.xml"
 
 
 def _physical(scene, camera=None) -> PhysicalScene:
     if scene is None:
         scene = DEFAULT_SCENE
     if isinstance(scene, (str, Path)):
+        scene = resolve_scene(scene)
         if not Path(scene).is_file():
             raise FogrefError(f"{scene}: no such scene file")
         return physical_from_scene(scene, camera=camera)
@@ -164,10 +198,21 @@ def fit_model(name, scene=None, views=None, sun_elevations=None, **kw):
     return fit(name, _physical(scene), views=views, sun_elevations=sun_elevations, **kw)
 
 
-def translate(source, target, params: dict | None = None, scene=DEFAULT_SCENE, **kw):
-    """``fogref.translate``: :func:`fogref.mapping.translate.translate` with a scene XML path
-    (default :data:`DEFAULT_SCENE`), dict or scene as the reference.  Returns a
-    :class:`fogref.mapping.translate.Translation`."""
+def translate(source, target, params: dict | None = None, scene=None, **kw):
+    """``fogref.translate``: :func:`fogref.mapping.translate.translate` with a scene XML path, a
+    shipped scene's name, dict or scene as the reference.  Returns a
+    :class:`fogref.mapping.translate.Translation`.
+
+    Without ``scene`` the source's settings that are not in ``params`` are the engine's defaults
+    and :data:`DEFAULT_SCENE` is the reference (camera, albedo, sun); with one, they come from
+    that scene's fit (``fill`` overrides either).
+    """
     from fogref.mapping.translate import translate as tr
 
+    kw.setdefault("fill", "defaults" if scene is None else "mapping")
+    if isinstance(scene, (str, Path)):
+        label = str(scene)
+    else:
+        label = f"the default scene {DEFAULT_SCENE.name}" if scene is None else "the reference scene"
+    kw.setdefault("scene_label", label)
     return tr(source, target, params, _physical(scene), **kw)
