@@ -89,9 +89,14 @@ def engine_model(engine: str, param: dict | None, scene_params: dict | None):
 
 def run(o: Options, given=frozenset()) -> int:
     """Render, write, print one line per finding; 0 on success."""
-    from fogref.engines.render import render_and_write
+    from fogref.atomic import refuse_overwriting_inputs
+    from fogref.engines.render import output_paths, render_and_write
     from fogref.engines.view import view_from_scene, view_from_truth
 
+    outputs = [(p, f"engine {k} file") for k, p in output_paths(o.out).items()]
+    refuse_overwriting_inputs(
+        outputs, [(o.input, "input")] + ([(o.scene, "scene")] if o.scene else []), "--out"
+    )
     truth = None
     if is_truth(o.input):
         refuse(
