@@ -27,6 +27,7 @@ DESCRIPTION = (
     "its 8-bit sRGB canvas (canvas.png) and engine.json (version, fog settings, the difference "
     "from fogref's port of the engine, the camera against the truth's)."
 )
+EPILOG = "exit codes: 0 written, 2 usage or input error (also: no Chromium or chromedriver, no node_modules)"
 API = "fogref.engines.render:render_and_write"
 
 
