@@ -51,24 +51,25 @@ def valley(chromium):
     return view, model, render_engine(view, model, timeout=120)
 
 
-@pytest.mark.render
-def test_engine_camera_is_the_truths(chromium, tmp_path):
-    from fogref.engines.render import render_engine, truth_agreement
-    from fogref.engines.view import view_from_truth
+@pytest.fixture(scope="module")
+def plane_truth(chromium, tmp_path_factory):
+    """The open plane at 16x9, 2 spp, with a grey extinction (so that the three.js mapping applies)."""
     from fogref.gbuffer import load_truth
     from fogref.render.render import render
 
-    overrides = {"res": 16, "resy": 9}
-    truth = load_truth(
-        render(
-            SCENES / "open_plane.xml",
-            tmp_path / "plane.exr",
-            spp=1,
-            overrides=overrides,
-            progress=False,
-            png=False,
-        )
+    overrides = {"res": 16, "resy": 9, "sigma_t": "0.002"}
+    out = tmp_path_factory.mktemp("plane") / "plane.exr"
+    return load_truth(
+        render(SCENES / "open_plane.xml", out, spp=2, overrides=overrides, progress=False, png=False)
     )
+
+
+@pytest.mark.render
+def test_engine_camera_is_the_truths(plane_truth):
+    from fogref.engines.render import render_engine, truth_agreement
+    from fogref.engines.view import view_from_truth
+
+    truth = plane_truth
     r = render_engine(view_from_truth(truth), None, timeout=120)
     a = truth_agreement(r, truth)
     assert a["hit_mismatch_pixels"] == 0
@@ -126,6 +127,29 @@ def test_engine_render_command_writes_images_compare_reads(chromium, tmp_path, c
     assert attrs["fogref.engine"]["version"] == "0.187.0"
     canvas = load_engine_images(out / "canvas.png", shape=(9, 16))
     assert canvas.encodings["final"] == "srgb"
+
+
+@pytest.mark.render
+def test_compare_engine_is_compare_image_of_its_files(plane_truth, tmp_path, capsys):
+    """``compare --engine`` renders the engine and checks it exactly as ``--image`` checks its files."""
+    import json
+
+    truth = str(plane_truth.path)
+    out = tmp_path / "cmp"
+    code = main(["compare", truth, "--engine", "threejs", "--from-scene", "--out", str(out), "--no-figures"])
+    assert code in (0, 1, 3)
+    assert "port vs engine" in capsys.readouterr().out
+    e = out / "engine"
+    code2 = main(
+        ["compare", truth, "--image", str(e / "final.exr"), "--transmittance", str(e / "T.exr")]
+        + ["--inscatter", str(e / "inscatter.exr"), "--out", str(tmp_path / "img"), "--no-figures"]
+    )
+    assert code2 == code
+    rows = json.loads((out / "check.json").read_text())
+    assert rows == json.loads((tmp_path / "img" / "check.json").read_text())
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["engine"]["port_vs_engine"]["at_quantisation"]
+    assert "port vs engine" in (out / "index.md").read_text()
 
 
 def _fogref(*args, env=None):
