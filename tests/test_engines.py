@@ -202,3 +202,16 @@ def test_engine_output_never_replaces_an_input(tmp_path):
     r = _fogref("engine", "render", str(scene), "--out", str(tmp_path))
     assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
     assert "would overwrite" in r.stderr and scene.read_text() == (SCENES / "valley.xml").read_text()
+
+
+def test_unsupported_shape_is_one_line(tmp_path):
+    text = (SCENES / "open_plane.xml").read_text()
+    disk = '<shape type="disk" id="pond"><ref id="g"/></shape>\n</scene>'
+    scene = tmp_path / "pond.xml"
+    scene.write_text(text.replace("</scene>", disk))
+    r = _fogref(
+        "engine", "render", str(scene), "--set", "res=16", "--set", "resy=9", "--out", str(tmp_path / "o")
+    )
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert "shape 'pond'" in r.stderr and "rectangles and spheres" in r.stderr, r.stderr
+    assert not (tmp_path / "o").exists()

@@ -18,11 +18,10 @@ file               what (linear RGB unless said)
 ``engine.json``    engine and version, browser, fog settings, camera, notes, the port's difference
 =================  ===========================================================================
 
-The camera's far plane is twice the farthest vertex; its near plane half the nearest vertex (at
-least the scene's ``near_clip``): a rasteriser clips triangles at the near plane, and clipped corners
-at a tiny ``w`` made SwiftShader's interpolated view positions wrong by 0.2 % on a ground plane
-with the truth's 0.01 m (``fogref.engines.view`` keeps every triangle edge within 0.25 of its
-distance, so no surface is nearer than the near plane).
+The camera's far plane is twice the farthest vertex, its near plane half the nearest vertex (at
+least the scene's ``near_clip``), so that nothing drawn is clipped and the depth buffer's
+precision is not spent in front of the nearest surface (``fogref.engines.view`` keeps every
+triangle edge within 0.5 of its distance, so no surface is nearer than half its nearest vertex).
 """
 
 from __future__ import annotations
