@@ -16,6 +16,7 @@ from pathlib import Path
 from fogref.cli.checks import Assignments, Choice, Number, PathArg
 from fogref.cli.spec import option, refuse, switch
 from fogref.engines import ENGINES
+from fogref.errors import FogrefError
 
 NAME = "engine"
 SOURCE = "fogref engine"
@@ -80,12 +81,21 @@ def is_truth(path) -> bool:
 
 
 def engine_model(engine: str, param: dict | None, scene_params: dict | None):
-    """The engine's fogref model (fog settings): its defaults or ``scene_params``' mapping, with ``param``."""
+    """The engine's fogref model (fog settings): its defaults or ``scene_params``' mapping, with ``param``.
+
+    A scene the mapping refuses gets its one-line error with the way out (``--param``)."""
     from fogref.engines import engine_module
     from fogref.mapping.build import build_model, parse_param_assignments
 
     assignments = [f"{k}={v}" for k, v in (param or {}).items()]
-    return build_model(engine_module(engine).MODEL, parse_param_assignments(assignments), scene_params)
+    try:
+        return build_model(engine_module(engine).MODEL, parse_param_assignments(assignments), scene_params)
+    except FogrefError as e:
+        if scene_params is None:
+            raise
+        raise FogrefError(
+            f"{e}; give {engine}'s fog settings with --param KEY=VALUE instead of --from-scene"
+        ) from None
 
 
 def run(o: Options, given=frozenset()) -> int:
