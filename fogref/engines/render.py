@@ -81,6 +81,7 @@ class EngineRender:
     renderer: str = ""
     target: str = ""
     output_colour_space: str = ""
+    tone_mapping: str = ""
     seconds: float = 0.0
     notes: list[str] = field(default_factory=list)
 
@@ -93,6 +94,7 @@ class EngineRender:
             "webgl_renderer": self.renderer,
             "render_target": self.target,
             "canvas_colour_space": self.output_colour_space,
+            "canvas_tone_mapping": self.tone_mapping,
             "fog_settings": self.settings,
             "camera": {k: self.camera.get(k) for k in ("origin", "forward", "up", "fov_deg", "resolution")},
             "seconds": round(self.seconds, 3),
@@ -205,6 +207,7 @@ def render_engine(
         renderer=str(out.get("renderer", "")),
         target=str(out.get("target_type", "")),
         output_colour_space=str(out.get("output_colour_space", "")),
+        tone_mapping=str(out.get("tone_mapping", "")),
         seconds=seconds,
         notes=list(view.notes),
     )
