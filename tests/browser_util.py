@@ -1,36 +1,21 @@
 """A headless Chromium (Debian's ``chromium`` + ``chromium-driver``) driven by selenium, for the
-HTML report tests and ``scripts/make_html_examples.py``.  Nothing is downloaded: the browser and
+HTML report tests and ``scripts/make_html_examples.py`` (the engines' driver is
+:mod:`fogref.engines.browser`).  Nothing is downloaded: the browser and
 driver are the system's (``scripts/setup.sh`` installs them where it can)."""
 
 from __future__ import annotations
 
 import json
-import shutil
 import time
 from pathlib import Path
 
-BROWSERS = ("chromium", "chromium-browser", "google-chrome")
-DRIVERS = ("chromedriver",)
-
 
 def find_browser() -> tuple[str | None, str | None, str]:
-    """``(browser, driver, why not)``: the binaries, or None and the reason they are missing."""
-    try:
-        import selenium  # noqa: F401
-    except ImportError:
-        return None, None, "selenium is not installed (pip install -e '.[test]')"
-    b = next((shutil.which(n) for n in BROWSERS if shutil.which(n)), None)
-    d = next((shutil.which(n) for n in DRIVERS if shutil.which(n)), None)
-    if not b or not d:
-        return (
-            b,
-            d,
-            (
-                "no chromium/chromedriver on PATH (apt-get install chromium chromium-driver; "
-                "scripts/setup.sh does it where it runs as root)"
-            ),
-        )
-    return b, d, ""
+    """``(browser, driver, why not)``: the binaries, or None and the reason they are missing
+    (:func:`fogref.engines.browser.find_chromium`, the one search)."""
+    from fogref.engines.browser import find_chromium
+
+    return find_chromium()
 
 
 def start(width: int = 1400, height: int = 1100, webgl: bool = False):

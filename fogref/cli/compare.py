@@ -284,7 +284,8 @@ def check_modes(o: Options, given) -> bool:
     images = any(n in given for n in IMAGE_ONLY[:4])
     if sum((images, bool(o.model), bool(o.engine))) > 1:
         raise UsageError(
-            "give one of --model, the engine's images (--image/--transmittance/--inscatter) or --engine"
+            "give --model, the engine's images (--image/--transmittance/--inscatter) or --engine: "
+            "one, not both"
         )
     if not images and not o.model and not o.engine:
         raise UsageError(

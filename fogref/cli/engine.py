@@ -16,6 +16,7 @@ from pathlib import Path
 from fogref.cli.checks import Assignments, Choice, Number, PathArg
 from fogref.cli.spec import option, refuse, switch
 from fogref.engines import ENGINES
+from fogref.errors import FogrefError
 
 NAME = "engine"
 SOURCE = "fogref engine"
@@ -27,6 +28,7 @@ DESCRIPTION = (
     "its 8-bit sRGB canvas (canvas.png) and engine.json (version, fog settings, the difference "
     "from fogref's port of the engine, the camera against the truth's)."
 )
+EPILOG = "exit codes: 0 written, 2 usage or input error (also: no Chromium or chromedriver, no node_modules)"
 API = "fogref.engines.render:render_and_write"
 
 
@@ -79,19 +81,33 @@ def is_truth(path) -> bool:
 
 
 def engine_model(engine: str, param: dict | None, scene_params: dict | None):
-    """The engine's fogref model (fog settings): its defaults or ``scene_params``' mapping, with ``param``."""
+    """The engine's fogref model (fog settings): its defaults or ``scene_params``' mapping, with ``param``.
+
+    A scene the mapping refuses gets its one-line error with the way out (``--param``)."""
     from fogref.engines import engine_module
     from fogref.mapping.build import build_model, parse_param_assignments
 
     assignments = [f"{k}={v}" for k, v in (param or {}).items()]
-    return build_model(engine_module(engine).MODEL, parse_param_assignments(assignments), scene_params)
+    try:
+        return build_model(engine_module(engine).MODEL, parse_param_assignments(assignments), scene_params)
+    except FogrefError as e:
+        if scene_params is None:
+            raise
+        raise FogrefError(
+            f"{e}; give {engine}'s fog settings with --param KEY=VALUE instead of --from-scene"
+        ) from None
 
 
 def run(o: Options, given=frozenset()) -> int:
     """Render, write, print one line per finding; 0 on success."""
-    from fogref.engines.render import render_and_write
+    from fogref.atomic import refuse_overwriting_inputs
+    from fogref.engines.render import output_paths, render_and_write
     from fogref.engines.view import view_from_scene, view_from_truth
 
+    outputs = [(p, f"engine {k} file") for k, p in output_paths(o.out).items()]
+    refuse_overwriting_inputs(
+        outputs, [(o.input, "input")] + ([(o.scene, "scene")] if o.scene else []), "--out"
+    )
     truth = None
     if is_truth(o.input):
         refuse(

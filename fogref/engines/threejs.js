@@ -191,7 +191,7 @@ window.fogrefRender = function (spec) {
   gl.readPixels(0, 0, W, H, gl.RGBA, gl.UNSIGNED_BYTE, bytes);
   out.canvas = arrayToB64(bytes);
   out.output_colour_space = renderer.outputColorSpace;
-  out.tone_mapping = renderer.toneMapping;
+  out.tone_mapping = renderer.toneMapping === THREE.NoToneMapping ? "NoToneMapping" : String(renderer.toneMapping);
   out.renderer = gl.getParameter(gl.RENDERER);
   rt.dispose();
   renderer.dispose();

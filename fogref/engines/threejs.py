@@ -7,6 +7,8 @@ fog) and as a ``HemisphereLight`` of sky colour ``pi L`` and ground colour 0 (ir
 ``pi L (1 + n_y) / 2``: the unoccluded sky above the horizon), no shadows, and
 ``scene.fog`` = ``FogExp2``/``Fog`` from the settings of fogref's three.js model
 (:mod:`fogref.models.threejs`, mapped by ``fogref.mapping.engines.threejs_from_physical``).
+Without fog, on the open plane, this lighting gives the truth's image to 2.1e-7 relative
+(``tests/test_engines.py``).
 
 The canvas: three.js r187's material shaders run ``colorspace_fragment`` (linear -> sRGB,
 ``sRGBTransferOETF`` in ``src/renderers/shaders/ShaderChunk/colorspace_pars_fragment.glsl.js``,

@@ -6,7 +6,8 @@ exactly the truth's) and :func:`view_from_truth` reads the scene a truth was ren
 (header ``fogref.scene`` and ``fogref.overrides``), refusing a scene whose fog, sun, sky or
 camera no longer match the truth's header.  Shapes become world-space triangles
 (:class:`Triangles`): meshes as Mitsuba holds them, a ``rectangle`` as two triangles, a
-``sphere`` tessellated (:data:`SPHERE_SEGMENTS`); other shape types and area lights are refused.
+``sphere`` tessellated (:data:`SPHERE_SEGMENTS`), then every edge split until it is short against
+its distance from the camera (:data:`EDGE_RATIO`); other shape types and area lights are refused.
 
 Units: metres, y-up, right-handed (three.js's frame too).  Colours: linear RGB.
 """
@@ -32,7 +33,8 @@ SPHERE_SEGMENTS = (96, 48)
 #: A rasteriser interpolates across a triangle from its clipped, sub-pixel-snapped corners: on
 #: the 1e5 m ground plane of ``scenes/open_plane.xml`` drawn as two triangles, the view distance
 #: SwiftShader interpolated (what three.js's fog sees) was off by a factor of up to 4e4; with edges
-#: within 0.5 of their distance, by 0.1-0.3 % (median) and 3 % at most at 16x9 (0.25 did no better).
+#: within 0.5 of their distance (1796 triangles), by 0.1-0.3 % (median) and 3 % at most at 16x9
+#: (0.25 did no better).
 EDGE_RATIO = 0.5
 #: Most triangles one mesh may be subdivided into.
 MAX_TRIANGLES = 400_000
@@ -128,69 +130,49 @@ def _sphere(to_world: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return pos, nrm / np.linalg.norm(nrm, axis=-1, keepdims=True), tri
 
 
-def _breakpoints(centre: float, height: float, unit: float) -> np.ndarray:
-    """Grid lines in [-1, 1] (local units of ``unit`` metres each) growing geometrically away
-    from ``centre``: each cell at most :data:`EDGE_RATIO` times its distance ``>= height`` [m]."""
-    xs = [0.0]
-    while xs[-1] < 2.0 * unit + abs(centre) * unit:
-        xs.append(xs[-1] + 0.5 * EDGE_RATIO * max(height, xs[-1]))  # the cells' diagonals too
-    d = np.asarray(xs) / unit
-    pts = np.concatenate([centre - d, centre + d, [-1.0, 1.0]])
-    return np.unique(pts[(pts >= -1.0) & (pts <= 1.0)])
-
-
-def _rectangle(m: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Mitsuba's ``rectangle`` (local [-1, 1]^2 at z = 0, normal +z) as a grid graded around the
-    camera's foot on it (crack-free: neighbouring cells share their corners)."""
-    A = m[:3, :3]
-    n = np.linalg.inv(A).T @ np.array([0.0, 0.0, 1.0])
-    n /= np.linalg.norm(n)
-    q = np.linalg.solve(A, origin - m[:3, 3])
-    height = max(abs(float(n @ (origin - m[:3, 3]))), 1e-3)
-    us = _breakpoints(float(q[0]), height, float(np.linalg.norm(A[:, 0])))
-    vs = _breakpoints(float(q[1]), height, float(np.linalg.norm(A[:, 1])))
-    U, V = np.meshgrid(us, vs, indexing="ij")
-    local = np.stack([U, V, np.zeros_like(U)], -1).reshape(-1, 3)
-    pos = local @ A.T + m[:3, 3]
-    k = np.arange(len(us) - 1)[:, None] * len(vs) + np.arange(len(vs) - 1)[None, :]
-    a, b, c, d = k, k + len(vs), k + len(vs) + 1, k + 1
-    tri = np.concatenate([np.stack([a, b, c], -1), np.stack([a, c, d], -1)]).reshape(-1, 3)
-    return pos, np.repeat(n[None], len(pos), 0), tri
-
-
 def _subdivide(pos: np.ndarray, nrm: np.ndarray | None, tri: np.ndarray, origin: np.ndarray) -> tuple:
-    """Split every triangle in four (edge midpoints) until each edge is within :data:`EDGE_RATIO`
-    of its distance from ``origin`` or the mesh would pass :data:`MAX_TRIANGLES`.  Midpoints are
-    ``(a + b) / 2`` of the same two corners on both sides of an edge, so no crack opens.
-    Returns ``(pos, nrm, tri, done)``."""
+    """Split every edge longer than :data:`EDGE_RATIO` times the distance of its nearer end from
+    ``origin`` at its midpoint, and each triangle into 2, 3 or 4 accordingly, until no edge is that
+    long or the mesh would pass :data:`MAX_TRIANGLES`.  Whether an edge splits, and where, depends
+    on its two corners alone (``(a + b) / 2``), so both triangles of an edge agree and no crack
+    opens.  Returns ``(pos, nrm, tri, done)``."""
     while True:
-        c = pos[tri]  # (M, 3 corners, 3)
-        edge = np.linalg.norm(c - np.roll(c, 1, axis=1), axis=-1).max(axis=1)
-        dist = np.linalg.norm(c - origin, axis=-1).min(axis=1)
-        if not np.any(edge > EDGE_RATIO * dist):
-            return pos, nrm, tri, True
-        if 4 * len(tri) > MAX_TRIANGLES:
-            return pos, nrm, tri, False
-        m = len(tri)
+        c = pos[tri]  # (M, 3 corners, 3); edge k runs from corner k to corner k + 1
+        nxt = np.roll(c, -1, axis=1)
+        dist = np.linalg.norm(c - origin, axis=-1)
+        near = np.minimum(dist, np.roll(dist, -1, axis=1))
+        split = np.linalg.norm(nxt - c, axis=-1) > EDGE_RATIO * near
+        count = split.sum(axis=1)
+        if not count.any() or len(tri) + 3 * int(count.sum()) > MAX_TRIANGLES:
+            used, tri = np.unique(tri, return_inverse=True)  # drop the midpoints no triangle uses
+            return pos[used], None if nrm is None else nrm[used], tri.reshape(-1, 3), not count.any()
+        # rotate each triangle so that its split edges come first (one: edge 0; two: edges 0, 1)
+        first = np.where(count == 1, np.argmax(split, axis=1), (np.argmin(split, axis=1) + 1) % 3)
+        first = np.where(count == 3, 0, first)
+        rows = np.arange(len(tri))[:, None]
+        tri = tri[rows, (first[:, None] + np.arange(3)) % 3]
+        c = pos[tri]
         mids = (c + np.roll(c, -1, axis=1)) * 0.5  # ab, bc, ca
-        base = len(pos)
+        ids = len(pos) + np.arange(3 * len(tri)).reshape(-1, 3)
         pos = np.concatenate([pos, mids.reshape(-1, 3)])
         if nrm is not None:
-            nc = nrm[tri]
-            nm = nc + np.roll(nc, -1, axis=1)
+            nm = nrm[tri] + np.roll(nrm[tri], -1, axis=1)
             nm /= np.maximum(np.linalg.norm(nm, axis=-1, keepdims=True), 1e-30)
             nrm = np.concatenate([nrm, nm.reshape(-1, 3)])
-        ab, bc, ca = (base + 3 * np.arange(m) + i for i in range(3))
-        a, b, cc = tri[:, 0], tri[:, 1], tri[:, 2]
-        tri = np.concatenate(
-            [np.stack(t, -1) for t in ((a, ab, ca), (ab, b, bc), (ca, bc, cc), (ab, bc, ca))]
-        )
+        a, b, cc = tri.T
+        ab, bc, ca = ids.T
+        out = [tri[count == 0]]
+        one, two, three = count == 1, count == 2, count == 3
+        out += [np.stack(t, -1)[one] for t in ((a, ab, cc), (ab, b, cc))]
+        out += [np.stack(t, -1)[two] for t in ((ab, b, bc), (a, ab, bc), (a, bc, cc))]
+        out += [np.stack(t, -1)[three] for t in ((a, ab, ca), (ab, b, bc), (ca, bc, cc), (ab, bc, ca))]
+        tri = np.concatenate(out)
 
 
 def _triangles(shape, source: str, origin: np.ndarray, notes: list) -> Triangles:
     import mitsuba as mi
 
-    what = shape.id() or str(mi.ShapeType(shape.shape_type()))
+    what = shape.id() or mi.ShapeType(shape.shape_type()).name.lower()
     if shape.is_emitter():
         raise FogrefError(
             f"{source}: shape '{what}' is an area light; the engine renderer draws only the sun and sky"
@@ -208,7 +190,14 @@ def _triangles(shape, source: str, origin: np.ndarray, notes: list) -> Triangles
         nrm = vn if vn is not None and vn.shape == pos.shape else None
     elif kind in (mi.ShapeType.Rectangle, mi.ShapeType.Sphere):
         m = np.asarray(p["to_world"].matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
-        pos, nrm, tri = _sphere(m) if kind == mi.ShapeType.Sphere else _rectangle(m, origin)
+        if kind == mi.ShapeType.Sphere:
+            pos, nrm, tri = _sphere(m)
+        else:  # Mitsuba's rectangle: local [-1, 1]^2 at z = 0, normal +z
+            local = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], dtype=np.float64)
+            pos = local @ m[:3, :3].T + m[:3, 3]
+            n = np.linalg.inv(m[:3, :3]).T @ np.array([0.0, 0.0, 1.0])
+            nrm = np.repeat((n / np.linalg.norm(n))[None], 4, 0)
+            tri = np.array([[0, 1, 2], [0, 2, 3]])
     else:
         raise FogrefError(
             f"{source}: shape '{what}' ({kind}): the engine renderer draws meshes (obj, ply, cube), "
