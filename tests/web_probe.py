@@ -16,6 +16,7 @@ tiles), in the frame of the fogref models (y up, camera at the origin looking do
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,6 +42,11 @@ def node_modules_missing(*packages: str) -> str:
     """Why the engine pages cannot load (``npm ci`` has not run), or ''."""
     missing = [p for p in packages if not (ROOT / "node_modules" / p / "package.json").is_file()]
     return f"node_modules lacks {', '.join(missing)} (bash scripts/setup.sh runs npm ci)" if missing else ""
+
+
+def npm_version(package: str) -> str:
+    """The installed version of an npm package (``node_modules/<package>/package.json``)."""
+    return json.loads((ROOT / "node_modules" / package / "package.json").read_text())["version"]
 
 
 def layout(seed: int) -> dict:
@@ -131,7 +137,8 @@ class Engine:
     ``setups()``: the fog set-ups (each a dict the page takes as ``cfg["fog"]``); ``model(fog,
     output)``: the fogref model of one set-up for ``output`` "linear" or "canvas";
     ``canvas(result, scene)``: the canvas value in [0, 1] (before the 8-bit rounding) that the
-    port predicts, from the model's result and the linear scene colour.
+    port predicts, from the model's result and the linear scene colour.  ``outputs``: the
+    read-backs the page offers; ``background``: whether the background tiles are compared.
     """
 
     name: str
@@ -139,6 +146,8 @@ class Engine:
     setups: Callable[[], list[dict]]
     model: Callable[[dict, str], Any]
     canvas: Callable[[Any, np.ndarray], np.ndarray]
+    outputs: tuple[str, ...] = ("linear", "canvas")
+    background: bool = True
 
 
 def measure(drv, engine: Engine) -> dict:
@@ -147,18 +156,19 @@ def measure(drv, engine: Engine) -> dict:
     Returns ``{"version", "pixels", "linear", "canvas", "linear_at", "canvas_at", "info"}``:
     ``linear`` the largest |engine - port| over all probe pixels and channels of the float32
     target (linear RGB, the scene's units), ``canvas`` the largest |engine - round(255 port)| in
-    8-bit steps of the canvas (the engine's output encoding), and where each happened.
+    8-bit steps of the canvas (the engine's output encoding), and where each happened (-1: not
+    read back).
     """
-    mask = probe_mask()
     worst = {"linear": (-1.0, None), "canvas": (-1.0, None)}
     pixels, info = 0, {}
     for i, fog in enumerate(engine.setups()):
         lay = layout(i)
         background = np.random.default_rng(1000 + i).uniform(0.0, 1.0, 3)
         pts, col, bg = pixel_points(lay)
+        mask = probe_mask() & (engine.background | ~bg)
         scene = np.where(bg[..., None], background, col)[mask]
         cfg = {"fog": fog, "background": [float(b) for b in background], "quads": lay["quads"]}
-        for out in ("linear", "canvas"):
+        for out in engine.outputs:
             px, info = render(drv, engine.name, {**cfg, "output": out})
             res = engine.model(fog, out).evaluate(np.zeros(3), pts[mask], "float32")
             got = px[mask][:, :3].astype(np.float64)
@@ -305,3 +315,41 @@ BABYLON = Engine(
     lambda res, scene: np.clip(res.composite(scene.astype(np.float32)), 0.0, 1.0),
 )
 PLAYCANVAS = Engine("playcanvas", "playcanvas", playcanvas_setups, playcanvas_model, _playcanvas_canvas)
+
+
+def filament_setups() -> list[dict]:
+    """16 ``View.FogOptions``: density in [0.01, 0.5] 1/m, heightFalloff 0 or in [0.05, 1] 1/m,
+    height in [-5, 5] m, distance in [0, 3] m, maximumOpacity 1 or in [0.5, 1], random colours;
+    no sun term (``inScatteringSize`` < 0), no cut-off."""
+    rng = np.random.default_rng(31)
+    out = []
+    for i, color in enumerate(_fog_colours(32, 16)):
+        out.append(
+            {
+                "color": color,
+                "density": _log_uniform(rng, 0.01, 0.5),
+                "heightFalloff": 0.0 if i % 4 == 0 else _log_uniform(rng, 0.05, 1.0),
+                "height": float(rng.uniform(-5.0, 5.0)),
+                "distance": float(rng.uniform(0.0, 3.0)),
+                "maximumOpacity": 1.0 if i % 2 else float(rng.uniform(0.5, 1.0)),
+                "inScatteringSize": -1.0,
+            }
+        )
+    return out
+
+
+def filament_model(fog: dict, output: str) -> Any:
+    from fogref.models.filament import FilamentFog, FilamentFogParams
+
+    return FilamentFog(FilamentFogParams(**{**fog, "color": tuple(fog["color"])}))
+
+
+FILAMENT = Engine(
+    "filament",
+    "filament",
+    filament_setups,
+    filament_model,
+    lambda res, scene: np.clip(res.composite(scene.astype(np.float32)), 0.0, 1.0),
+    outputs=("canvas",),
+    background=False,
+)

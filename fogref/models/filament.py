@@ -1,8 +1,13 @@
 """Google Filament height fog (``View::FogOptions``).
 
 Source: Filament ``shaders/src/fog.fs`` (the "Real-time Atmospheric Effects in
-Games (Carsten Wenzel)" version, ``exp`` based) and ``PerViewUniforms::prepareFog``
-(CPU: ``fogDensity = density * exp(-heightFalloff * (camera.y - height))``).
+Games (Carsten Wenzel)" version, ``exp`` based; ``surface_fog.fs`` in newer releases) and
+``PerViewUniforms::prepareFog`` (CPU: ``fogDensity = density * exp(-heightFalloff * (camera.y -
+height))``).  Held to Filament 1.53.4's web build (npm ``filament`` 1.53.4, tag ``v1.53.4``)
+in headless Chromium by ``tests/test_web_filament.py``: unlit quads, post-processing off, the
+8-bit canvas within 1/255.  The shader scales the fog colour by ``iblLuminance`` (the
+indirect light's intensity times the camera's exposure): ``color`` here is
+``FogOptions.color`` times that (the test sets both to 1).
 
 Units: Filament is y-up **metres** (same as fogref) and uses **exp** (not exp2):
 density [1/m], heightFalloff [1/m], so the medium is exactly
