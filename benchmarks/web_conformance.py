@@ -47,6 +47,7 @@ def main() -> None:
     out = ap.parse_args().out
     chromium = subprocess.run(["chromium", "--version"], capture_output=True, text=True).stdout.strip()
     drv = browser_util.start(200, 200, webgl=True)
+    drv.set_script_timeout(wp.HANG_S)
     results = {}
     try:
         for engine, *_ in ENGINES:

@@ -36,6 +36,9 @@ NEAR, FAR = 0.1, 500.0  # the camera's clip planes [m]
 BACKGROUND_TILES = (0, 9, 36, 63)  # tile index = row * 8 + column, rows from the bottom
 PROBE = slice(2, 6)  # pixels of a tile that are compared (the quad covers 1..6)
 DEPTHS = (0.3, 60.0)  # the quads' depths [m], log-uniform
+#: Wall-clock limit [s] of a page load or a probe, for hangs only: on the shared 2-core machine a
+#: page loads in < 5 s (Babylon's ~2000 ES modules) and a probe renders in < 2 s.
+HANG_S = 300.0
 
 
 def node_modules_missing(*packages: str) -> str:
@@ -115,7 +118,7 @@ def render(drv, engine: str, cfg: dict) -> tuple[np.ndarray, dict]:
     bottom; float32 for ``output="linear"``, uint8 for ``"canvas"``) and the page's ``info``."""
     page = WEB / f"{engine}.html"
     if drv.current_url != page.as_uri():
-        load(drv, page)
+        load(drv, page, timeout=HANG_S)
     cfg = {"width": SIZE, "height": SIZE, "fov_deg": FOV_DEG, "near": NEAR, "far": FAR, **cfg}
     res = drv.execute_async_script(
         "const done = arguments[arguments.length - 1];"
@@ -240,9 +243,11 @@ def driver_or_skip(*packages: str):
     if why:
         pytest.skip(why)
     try:
-        return start(200, 200, webgl=True)
+        drv = start(200, 200, webgl=True)
     except Exception as e:  # selenium's SessionNotCreatedException, a missing library
-        pytest.skip(f"Chromium cannot start: {type(e).__name__}: {str(e).splitlines()[0]}")
+        pytest.skip(f"Chromium cannot start: {type(e).__name__}: {(str(e).splitlines() or [''])[0]}")
+    drv.set_script_timeout(HANG_S)
+    return drv
 
 
 def _three_mode_setups(seed: int, names: tuple[str, str, str]) -> list[dict]:
