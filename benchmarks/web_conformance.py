@@ -31,7 +31,7 @@ ENGINES = (
     (wp.THREEJS, "three.js", "threejs", "r187", "eye depth"),
     (wp.BABYLON, "Babylon.js", "babylon", "9.35.0", "distance"),
     (wp.PLAYCANVAS, "PlayCanvas", "playcanvas", "v2.23.3", "far (z - near)/(far - near)"),
-    (wp.FILAMENT, "Filament", "filament", "v1.53.4", "distance, height fog"),
+    (wp.FILAMENT, "Filament", "filament", "v1.53.4", "distance; height fog, sun term"),
 )
 CANVAS = {
     "threejs": "sRGB (outputColorSpace), NoToneMapping; fog blended after the encoding",

@@ -324,28 +324,43 @@ PLAYCANVAS = Engine("playcanvas", "playcanvas", playcanvas_setups, playcanvas_mo
 
 def filament_setups() -> list[dict]:
     """16 ``View.FogOptions``: density in [0.01, 0.5] 1/m, heightFalloff 0 or in [0.05, 1] 1/m,
-    height in [-5, 5] m, distance in [0, 3] m, maximumOpacity 1 or in [0.5, 1], random colours;
-    no sun term (``inScatteringSize`` < 0), no cut-off."""
+    height in [-5, 5] m, distance in [0, 3] m, maximumOpacity 1 or in [0.5, 1], random colours,
+    no cut-off; every other one with a sun term (a directional light toward the view, linear
+    colour in [0, 1], intensity in [0.2, 1] at exposure 1; inScatteringSize in [2, 30],
+    inScatteringStart in [0, 5] m)."""
     rng = np.random.default_rng(31)
     out = []
     for i, color in enumerate(_fog_colours(32, 16)):
-        out.append(
-            {
-                "color": color,
-                "density": _log_uniform(rng, 0.01, 0.5),
-                "heightFalloff": 0.0 if i % 4 == 0 else _log_uniform(rng, 0.05, 1.0),
-                "height": float(rng.uniform(-5.0, 5.0)),
-                "distance": float(rng.uniform(0.0, 3.0)),
-                "maximumOpacity": 1.0 if i % 2 else float(rng.uniform(0.5, 1.0)),
-                "inScatteringSize": -1.0,
+        fog = {
+            "color": color,
+            "density": _log_uniform(rng, 0.01, 0.5),
+            "heightFalloff": 0.0 if i % 4 == 0 else _log_uniform(rng, 0.05, 1.0),
+            "height": float(rng.uniform(-5.0, 5.0)),
+            "distance": float(rng.uniform(0.0, 3.0)),
+            "maximumOpacity": 1.0 if i % 2 else float(rng.uniform(0.5, 1.0)),
+            "inScatteringSize": -1.0,
+        }
+        if i % 2:
+            toward = np.array([*rng.uniform(-0.5, 0.5, 2), -1.0])
+            fog["inScatteringSize"] = float(rng.uniform(2.0, 30.0))
+            fog["inScatteringStart"] = float(rng.uniform(0.0, 5.0))
+            fog["sun"] = {
+                "direction": (-toward / np.linalg.norm(toward)).tolist(),  # where the light travels
+                "color": rng.uniform(0.0, 1.0, 3).tolist(),
+                "intensity": float(rng.uniform(0.2, 1.0)),
             }
-        )
+        out.append(fog)
     return out
 
 
 def filament_model(fog: dict, output: str) -> Any:
     from fogref.models.filament import FilamentFog, FilamentFogParams
 
+    fog = dict(fog)
+    sun = fog.pop("sun", None)
+    if sun:  # FogParams: lightDirection toward the sun, lightColorIntensity (colour, intensity x exposure)
+        fog["lightDirection"] = tuple(-np.asarray(sun["direction"]))
+        fog["lightColorIntensity"] = (*sun["color"], sun["intensity"])
     return FilamentFog(FilamentFogParams(**{**fog, "color": tuple(fog["color"])}))
 
 

@@ -6,7 +6,7 @@ Atmospheric Effects in Games (Carsten Wenzel)" version, ``exp`` based) and
 height), density exp(-heightFalloff (camera.y - height)))``); the same GLSL is in the
 1.53.4 web build's ``filament.wasm`` (gltfio's ubershaders).  Held to that web build (npm
 ``filament`` 1.53.4) in headless Chromium by ``tests/test_web_filament.py``: unlit quads,
-post-processing off, the 8-bit canvas within 1/255.  The shader scales the fog colour by
+post-processing off, sun term on, the 8-bit canvas within 1/255.  The shader scales the fog colour by
 ``iblLuminance`` (the indirect light's intensity times the camera's exposure): ``color`` here
 is ``FogOptions.color`` times that (the test sets both to 1).
 
