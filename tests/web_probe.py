@@ -179,7 +179,7 @@ def measure(drv, engine: Engine) -> dict:
                 want = np.asarray(res.composite(scene.astype(np.float32)), np.float64)
             else:
                 want = np.round(255.0 * np.asarray(engine.canvas(res, scene), np.float64))
-            diff = np.abs(got - want)
+            diff = np.where(np.isnan(got - want), np.inf, np.abs(got - want))  # NaN: fail, loudly
             k = int(np.argmax(diff.max(axis=-1)))
             if diff[k].max() > worst[out][0]:
                 where = {
