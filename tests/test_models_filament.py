@@ -1,4 +1,4 @@
-"""Filament fog: fog.fs transcription and the exponential medium (exp, not exp2)."""
+"""Filament fog: a surface_fog.fs (1.53.4) transcription and the exponential medium (exp, not exp2)."""
 
 import math
 
@@ -12,14 +12,16 @@ f32 = np.float32
 
 
 def filament_fog_fs(cam, wp, o, scene):
-    """fog.fs (Wenzel version) + prepareFog, float32, one pixel."""
-    fogDensity = f32(o["density"]) * np.exp(f32(-o["heightFalloff"]) * (f32(cam[1]) - f32(o["height"])))
+    """surface_fog.fs (Filament 1.53.4, the GLSL in its filament.wasm) + prepareFog, float32, one pixel."""
+    y = f32(-o["heightFalloff"]) * (f32(cam[1]) - f32(o["height"]))
+    density = (f32(o["density"]), y, f32(o["density"]) * np.exp(y))  # frameUniforms.fogDensity
     view = (np.asarray(wp) - np.asarray(cam)).astype(f32)
     falloff = f32(o["heightFalloff"])
-    fi = fogDensity
+    fi = density[2]  # fogOpticalPathAtOneMeter
     h = falloff * view[1]
-    if abs(h) > f32(0.01):
-        fi = fi * ((f32(1) - np.exp(-h)) / h)
+    if abs(h) > f32(0.00125):
+        with np.errstate(over="ignore"):  # exp overflows far below the camera: inf, as on the GPU
+            fi = (density[2] - density[0] * np.exp(density[1] - h)) / h
     d = np.sqrt(np.sum(view * view))
     fogIntegral = fi * max(d - f32(o["distance"]), f32(0))
     fogOpacity = min(f32(1) - np.exp(-fogIntegral), f32(o["maximumOpacity"]))

@@ -150,3 +150,17 @@ def test_background_gets_no_fog():
             assert np.all(near.transmittance == 0.0)
     with pytest.raises(ParameterError, match="output"):
         ThreeFogParams(output="srgb")
+
+
+def test_canvas_reproduces_a_measured_threejs_pixel():
+    """A pixel the real three.js 0.187.0 drew on its sRGB canvas (headless Chromium, SwiftShader):
+    FogExp2 density 0.3287 at depth 3.404 m, fog colour (0.630, 0.026, 0.039), MeshBasicMaterial
+    colour (0.137, 0.942, 0.128), both linear: the canvas shows (178, 103, 68).  The linear blend,
+    encoded, would give (186, 146, 72)."""
+    p = ThreeFogParams(mode="FogExp2", density=0.3287, color=(0.630, 0.026, 0.039), output="canvas")
+    scene = np.array([[0.137, 0.942, 0.128]])
+    r = ThreeJSFog(p).evaluate(np.zeros(3), [[0.0, 0.0, -3.404]])
+    assert np.round(255 * r.display(scene)).tolist() == [[178.0, 103.0, 68.0]]
+    linear = ThreeJSFog(dataclasses.replace(p, output="linear")).evaluate(np.zeros(3), [[0.0, 0.0, -3.404]])
+    encoded = srgb_transfer_oetf(linear.composite(scene.astype(f32)), f32)
+    assert np.round(255 * encoded).tolist() == [[186.0, 146.0, 72.0]]

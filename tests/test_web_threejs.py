@@ -37,8 +37,8 @@ def test_port_matches_threejs(driver):
     assert r["version"] == "187" and r["info"]["outputColorSpace"] == "srgb"
     assert r["info"]["toneMapping"] == 0  # NoToneMapping
     assert r["pixels"] == 16 * 1024
-    assert r["linear"] <= LINEAR_TOL, r["linear_at"]
-    assert r["canvas"] <= CANVAS_TOL, r["canvas_at"]
+    assert 0 <= r["linear"] <= LINEAR_TOL, r["linear_at"]
+    assert 0 <= r["canvas"] <= CANVAS_TOL, r["canvas_at"]
 
 
 def test_linear_blend_misses_the_canvas(driver):

@@ -16,6 +16,7 @@ tiles), in the frame of the fogref models (y up, camera at the origin looking do
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,12 +36,20 @@ NEAR, FAR = 0.1, 500.0  # the camera's clip planes [m]
 BACKGROUND_TILES = (0, 9, 36, 63)  # tile index = row * 8 + column, rows from the bottom
 PROBE = slice(2, 6)  # pixels of a tile that are compared (the quad covers 1..6)
 DEPTHS = (0.3, 60.0)  # the quads' depths [m], log-uniform
+#: Wall-clock limit [s] of a page load or a probe, for hangs only: on the shared 2-core machine a
+#: page loads in < 5 s (Babylon's ~2000 ES modules) and a probe renders in < 2 s.
+HANG_S = 300.0
 
 
 def node_modules_missing(*packages: str) -> str:
     """Why the engine pages cannot load (``npm ci`` has not run), or ''."""
     missing = [p for p in packages if not (ROOT / "node_modules" / p / "package.json").is_file()]
     return f"node_modules lacks {', '.join(missing)} (bash scripts/setup.sh runs npm ci)" if missing else ""
+
+
+def npm_version(package: str) -> str:
+    """The installed version of an npm package (``node_modules/<package>/package.json``)."""
+    return json.loads((ROOT / "node_modules" / package / "package.json").read_text())["version"]
 
 
 def layout(seed: int) -> dict:
@@ -109,7 +118,7 @@ def render(drv, engine: str, cfg: dict) -> tuple[np.ndarray, dict]:
     bottom; float32 for ``output="linear"``, uint8 for ``"canvas"``) and the page's ``info``."""
     page = WEB / f"{engine}.html"
     if drv.current_url != page.as_uri():
-        load(drv, page)
+        load(drv, page, timeout=HANG_S)
     cfg = {"width": SIZE, "height": SIZE, "fov_deg": FOV_DEG, "near": NEAR, "far": FAR, **cfg}
     res = drv.execute_async_script(
         "const done = arguments[arguments.length - 1];"
@@ -131,7 +140,8 @@ class Engine:
     ``setups()``: the fog set-ups (each a dict the page takes as ``cfg["fog"]``); ``model(fog,
     output)``: the fogref model of one set-up for ``output`` "linear" or "canvas";
     ``canvas(result, scene)``: the canvas value in [0, 1] (before the 8-bit rounding) that the
-    port predicts, from the model's result and the linear scene colour.
+    port predicts, from the model's result and the linear scene colour.  ``outputs``: the
+    read-backs the page offers; ``background``: whether the background tiles are compared.
     """
 
     name: str
@@ -139,6 +149,8 @@ class Engine:
     setups: Callable[[], list[dict]]
     model: Callable[[dict, str], Any]
     canvas: Callable[[Any, np.ndarray], np.ndarray]
+    outputs: tuple[str, ...] = ("linear", "canvas")
+    background: bool = True
 
 
 def measure(drv, engine: Engine) -> dict:
@@ -147,18 +159,19 @@ def measure(drv, engine: Engine) -> dict:
     Returns ``{"version", "pixels", "linear", "canvas", "linear_at", "canvas_at", "info"}``:
     ``linear`` the largest |engine - port| over all probe pixels and channels of the float32
     target (linear RGB, the scene's units), ``canvas`` the largest |engine - round(255 port)| in
-    8-bit steps of the canvas (the engine's output encoding), and where each happened.
+    8-bit steps of the canvas (the engine's output encoding), and where each happened (-1: not
+    read back).
     """
-    mask = probe_mask()
     worst = {"linear": (-1.0, None), "canvas": (-1.0, None)}
     pixels, info = 0, {}
     for i, fog in enumerate(engine.setups()):
         lay = layout(i)
         background = np.random.default_rng(1000 + i).uniform(0.0, 1.0, 3)
         pts, col, bg = pixel_points(lay)
+        mask = probe_mask() & (engine.background | ~bg)
         scene = np.where(bg[..., None], background, col)[mask]
         cfg = {"fog": fog, "background": [float(b) for b in background], "quads": lay["quads"]}
-        for out in ("linear", "canvas"):
+        for out in engine.outputs:
             px, info = render(drv, engine.name, {**cfg, "output": out})
             res = engine.model(fog, out).evaluate(np.zeros(3), pts[mask], "float32")
             got = px[mask][:, :3].astype(np.float64)
@@ -166,7 +179,7 @@ def measure(drv, engine: Engine) -> dict:
                 want = np.asarray(res.composite(scene.astype(np.float32)), np.float64)
             else:
                 want = np.round(255.0 * np.asarray(engine.canvas(res, scene), np.float64))
-            diff = np.abs(got - want)
+            diff = np.where(np.isnan(got - want), np.inf, np.abs(got - want))  # NaN: fail, loudly
             k = int(np.argmax(diff.max(axis=-1)))
             if diff[k].max() > worst[out][0]:
                 where = {
@@ -230,9 +243,11 @@ def driver_or_skip(*packages: str):
     if why:
         pytest.skip(why)
     try:
-        return start(200, 200, webgl=True)
+        drv = start(200, 200, webgl=True)
     except Exception as e:  # selenium's SessionNotCreatedException, a missing library
-        pytest.skip(f"Chromium cannot start: {type(e).__name__}: {str(e).splitlines()[0]}")
+        pytest.skip(f"Chromium cannot start: {type(e).__name__}: {(str(e).splitlines() or [''])[0]}")
+    drv.set_script_timeout(HANG_S)
+    return drv
 
 
 def _three_mode_setups(seed: int, names: tuple[str, str, str]) -> list[dict]:
@@ -305,3 +320,56 @@ BABYLON = Engine(
     lambda res, scene: np.clip(res.composite(scene.astype(np.float32)), 0.0, 1.0),
 )
 PLAYCANVAS = Engine("playcanvas", "playcanvas", playcanvas_setups, playcanvas_model, _playcanvas_canvas)
+
+
+def filament_setups() -> list[dict]:
+    """16 ``View.FogOptions``: density in [0.01, 0.5] 1/m, heightFalloff 0 or in [0.05, 1] 1/m,
+    height in [-5, 5] m, distance in [0, 3] m, maximumOpacity 1 or in [0.5, 1], random colours,
+    no cut-off; every other one with a sun term (a directional light toward the view, linear
+    colour in [0, 1], intensity in [0.2, 1] at exposure 1; inScatteringSize in [2, 30],
+    inScatteringStart in [0, 5] m)."""
+    rng = np.random.default_rng(31)
+    out = []
+    for i, color in enumerate(_fog_colours(32, 16)):
+        fog = {
+            "color": color,
+            "density": _log_uniform(rng, 0.01, 0.5),
+            "heightFalloff": 0.0 if i % 4 == 0 else _log_uniform(rng, 0.05, 1.0),
+            "height": float(rng.uniform(-5.0, 5.0)),
+            "distance": float(rng.uniform(0.0, 3.0)),
+            "maximumOpacity": 1.0 if i % 2 else float(rng.uniform(0.5, 1.0)),
+            "inScatteringSize": -1.0,
+        }
+        if i % 2:
+            toward = np.array([*rng.uniform(-0.5, 0.5, 2), -1.0])
+            fog["inScatteringSize"] = float(rng.uniform(2.0, 30.0))
+            fog["inScatteringStart"] = float(rng.uniform(0.0, 5.0))
+            fog["sun"] = {
+                "direction": (-toward / np.linalg.norm(toward)).tolist(),  # where the light travels
+                "color": rng.uniform(0.0, 1.0, 3).tolist(),
+                "intensity": float(rng.uniform(0.2, 1.0)),
+            }
+        out.append(fog)
+    return out
+
+
+def filament_model(fog: dict, output: str) -> Any:
+    from fogref.models.filament import FilamentFog, FilamentFogParams
+
+    fog = dict(fog)
+    sun = fog.pop("sun", None)
+    if sun:  # FogParams: lightDirection toward the sun, lightColorIntensity (colour, intensity x exposure)
+        fog["lightDirection"] = tuple(-np.asarray(sun["direction"]))
+        fog["lightColorIntensity"] = (*sun["color"], sun["intensity"])
+    return FilamentFog(FilamentFogParams(**{**fog, "color": tuple(fog["color"])}))
+
+
+FILAMENT = Engine(
+    "filament",
+    "filament",
+    filament_setups,
+    filament_model,
+    lambda res, scene: np.clip(res.composite(scene.astype(np.float32)), 0.0, 1.0),
+    outputs=("canvas",),
+    background=False,
+)

@@ -1,15 +1,23 @@
 """Google Filament height fog (``View::FogOptions``).
 
-Source: Filament ``shaders/src/fog.fs`` (the "Real-time Atmospheric Effects in
-Games (Carsten Wenzel)" version, ``exp`` based) and ``PerViewUniforms::prepareFog``
-(CPU: ``fogDensity = density * exp(-heightFalloff * (camera.y - height))``).
+Follows Filament 1.53.4 (tag ``v1.53.4``): ``shaders/src/surface_fog.fs`` (the "Real-time
+Atmospheric Effects in Games (Carsten Wenzel)" version, ``exp`` based) and
+``PerViewUniforms::prepareFog`` (CPU: ``fogDensity = (density, -heightFalloff (camera.y -
+height), density exp(-heightFalloff (camera.y - height)))``); the same GLSL is in the
+1.53.4 web build's ``filament.wasm`` (gltfio's ubershaders).  Held to that web build (npm
+``filament`` 1.53.4) in headless Chromium by ``tests/test_web_filament.py``: unlit quads,
+post-processing off, sun term on, the 8-bit canvas within 1/255.  The shader scales the fog colour by
+``iblLuminance`` (the indirect light's intensity times the camera's exposure): ``color`` here
+is ``FogOptions.color`` times that (the test sets both to 1).
 
 Units: Filament is y-up **metres** (same as fogref) and uses **exp** (not exp2):
 density [1/m], heightFalloff [1/m], so the medium is exactly
 ``sigma_t(y) = density * exp(-heightFalloff * (y - height))`` [1/m] (one
 :class:`~fogref.media.ExpLayer`).  Shader: ``h = falloff * view.y`` (view =
-world - camera, unnormalised), line integral ``A (1 - exp(-h))/h`` if
-``|h| > 0.01`` else ``A`` (zeroth-order branch: up to 0.5 % low), times
+world - camera, unnormalised), line integral ``(A - density exp(y - h))/h = A (1 - exp(-h))/h``
+(``A = density exp(y)``, ``y = -heightFalloff (camera.y - height)``) if ``|h| > 0.00125``
+else ``A`` (zeroth-order branch: up to 0.06 % low; releases before ``surface_fog.fs`` had
+``A (1 - exp(-h))/h`` with 0.01, up to 0.5 %), times
 ``max(d - distance, 0)``; note that the start distance only shortens the ray, the
 density is still averaged from the camera (unlike Unreal).
 
@@ -22,7 +30,7 @@ pixels farther than it get no fog.  Robustness (deviations): ``d`` is floored at
 1e-30 in the sun term (the shader divides 0/0 at the camera), the density at the
 camera is capped at the largest float, and where the shader's line integral is
 not finite (``0 * inf`` far above the fog looking down) the log-form closed
-form is used; float64 always uses that closed form (no 0.01 branch).
+form is used; float64 always uses that closed form (no 0.00125 branch).
 """
 
 from __future__ import annotations
@@ -97,7 +105,8 @@ class FilamentFog:
         cam, wp = split(camera, world_pos)
         # CPU: density at the viewer's height
         with np.errstate(all="ignore"):
-            A = dt(q.density) * np.exp(dt(-q.heightFalloff) * (dt(cam[1]) - dt(q.height)))
+            y = dt(-q.heightFalloff) * (dt(cam[1]) - dt(q.height))
+            A = dt(q.density) * np.exp(y)
             A = min(A, dt(np.finfo(dt).max))  # robustness: no inf density
         falloff = dt(q.heightFalloff)
         with np.errstate(all="ignore"):
@@ -121,7 +130,7 @@ class FilamentFog:
             if dt is np.float64:
                 fi = robust(h)
             else:
-                fi = np.where(np.abs(h) > dt(0.01), A * ((dt(1.0) - np.exp(-h)) / h), A)
+                fi = np.where(np.abs(h) > dt(0.00125), (A - dt(q.density) * np.exp(y - h)) / h, A)
                 bad = ~np.isfinite(fi)
                 if np.any(bad):
                     fi[bad] = np.minimum(robust(h[bad]), np.finfo(dt).max).astype(dt)
