@@ -84,27 +84,13 @@ def unit_direction(value: Any, name: str, source: str) -> tuple:
     return tuple(float(x) for x in w / n)
 
 
-def background(cam: Any, wp: Any, sky_distance: float) -> Any:
-    """(...,) bool: the pixels that show the background, at least ``sky_distance`` [m] from ``cam``.
-
-    For engines that draw their background (clear colour, sky) without fog; fogref puts the sky
-    at :data:`~fogref.models.base.SKY_DISTANCE` (to :data:`SKY_TOLERANCE`, relative).
-
-    >>> background(np.zeros(3), np.array([[0.0, 0.6, -0.8], [0.0, 0.0, -5.0]]) * 1e5, 1e5).tolist()
-    [True, True]
-    >>> background(np.zeros(3), np.array([[0.0, 0.0, -5.0]]), 1e5).tolist()
-    [False]
-    """
-    return view_ray(cam, wp, np.float64)[1] >= sky_distance * (1.0 - SKY_TOLERANCE)
-
-
 def sky_pixels(cam: Any, wp: Any, hit: Any, sky_distance: float) -> Any:
     """(...,) bool: the pixels that see the sky (the background), which engines shade apart.
 
     ``hit``: the truth's own mask ((...,) bool, True where the pixel sees a surface, as
     :func:`fogref.compare.candidate.evaluate_model` passes it); it decides when given.
     ``hit=None``: a pixel is sky where its float64 distance ``|wp - cam|`` [m] is at least
-    ``sky_distance (1 - 1e-9)`` (points built as ``camera + view * sky_distance`` in float64,
+    ``sky_distance (1 - SKY_TOLERANCE)`` (points built as ``camera + view * sky_distance`` in float64,
     never a distance rounded to float32).
 
     >>> cam = np.zeros(3)
@@ -123,4 +109,4 @@ def sky_pixels(cam: Any, wp: Any, hit: Any, sky_distance: float) -> Any:
         return ~h
     with np.errstate(all="ignore"):
         d = np.sqrt(np.sum((wp - cam) ** 2, axis=-1))
-    return d >= sky_distance * (1.0 - 1e-9)
+    return d >= sky_distance * (1.0 - SKY_TOLERANCE)

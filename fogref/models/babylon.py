@@ -56,7 +56,7 @@ import numpy as np
 from fogref import params as valid
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium
-from fogref.models._num import background, dtype_of, grey, split, view_ray
+from fogref.models._num import dtype_of, grey, sky_pixels, split, view_ray
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
 MODES = ("LINEAR", "EXP", "EXP2")
@@ -136,13 +136,15 @@ class BabylonFog:
     def __init__(self, params: BabylonFogParams | None = None) -> None:
         self.params = params or BabylonFogParams()
 
-    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
-        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
+    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32", hit: Any = None) -> FogResult:
+        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres; ``hit`` (...,) bool,
+        False on the pixels that see the background (drawn without fog), else decided by distance
+        (:func:`~fogref.models._num.sky_pixels`)."""
         dt = dtype_of(precision)
         p = self.params
         cam, wp = split(camera, world_pos)
         coeff = calc_fog_factor(p, view_ray(cam, wp, dt)[1], dt)
-        coeff = np.where(background(cam, wp, p.sky_distance), dt(1.0), coeff).astype(dt)
+        coeff = np.where(sky_pixels(cam, wp, hit, p.sky_distance), dt(1.0), coeff).astype(dt)
         color = np.asarray(p.fogColor, dtype=dt)
         return FogResult(inscatter=color * (dt(1.0) - coeff)[..., None], transmittance=grey(coeff, dt))
 

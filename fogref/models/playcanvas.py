@@ -50,7 +50,7 @@ import numpy as np
 
 from fogref import params as valid
 from fogref.errors import ParameterError
-from fogref.models._num import background, dtype_of, grey, split, unit_direction
+from fogref.models._num import dtype_of, grey, sky_pixels, split, unit_direction
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
 TYPES = ("linear", "exp", "exp2")
@@ -142,8 +142,10 @@ class PlayCanvasFog:
         n, fa = dt(self.params.nearClip), dt(self.params.farClip)
         return fa * (z - n) / (fa - n)
 
-    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
-        """Fog of each pixel (linear): camera (3,), world_pos (..., 3) in metres."""
+    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32", hit: Any = None) -> FogResult:
+        """Fog of each pixel (linear): camera (3,), world_pos (..., 3) in metres; ``hit`` (...,) bool,
+        False on the pixels that see the background (drawn without fog), else decided by distance
+        (:func:`~fogref.models._num.sky_pixels`)."""
         dt = dtype_of(precision)
         p = self.params
         cam, wp = split(camera, world_pos)
@@ -156,6 +158,6 @@ class PlayCanvasFog:
             else:
                 f = np.exp(-d * d * dt(p.density) * dt(p.density))
             f = np.clip(np.where(np.isnan(f), dt(1.0), f), dt(0.0), dt(1.0))  # NaN: 0 * inf, no fog
-        f = np.where(background(cam, wp, p.sky_distance), dt(1.0), f).astype(dt)
+        f = np.where(sky_pixels(cam, wp, hit, p.sky_distance), dt(1.0), f).astype(dt)
         color = np.asarray([c**2.2 for c in p.color], dtype=dt)  # Color.linear on the CPU (float64)
         return FogResult(inscatter=color * (dt(1.0) - f)[..., None], transmittance=grey(f, dt))

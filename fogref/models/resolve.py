@@ -43,7 +43,7 @@ Examples
 >>> resolve_model("eu4")
 Traceback (most recent call last):
 ...
-fogref.errors.FogrefError: unknown fog model 'eu4'; did you mean 'ue4'? (built-in: altitude, bevy, box, ...)
+fogref.errors.FogrefError: unknown fog model 'eu4'; did you mean 'ue4'? (built-in: ...)
 """
 
 from __future__ import annotations

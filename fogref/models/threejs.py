@@ -64,7 +64,7 @@ import numpy as np
 
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, rgb
-from fogref.models._num import background, dtype_of, grey, split
+from fogref.models._num import dtype_of, grey, sky_pixels, split
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
 MODES = ("Fog", "FogExp2")
@@ -209,7 +209,7 @@ class ThreeJSFog:
     >>> r = fog.evaluate([0.0, 0.0, 0.0], [[0.0, 0.0, -100.0]], "float64")
     >>> round(float(r.transmittance[0, 0]), 6)     # exp(-(0.01 * 100)^2)
     0.367879
-    >>> float(fog.evaluate([0.0, 0.0, 0.0], [[0.0, 0.0, -1e5]]).transmittance[0, 0])  # background
+    >>> float(fog.evaluate([0.0, 0.0, 0.0], [[0.0, 0.0, -1e5]]).transmittance[0, 0])  # background: no fog
     1.0
     """
 
@@ -225,8 +225,10 @@ class ThreeJSFog:
         f = np.asarray(self.params.camera_forward, dtype=dt)
         return v[..., 0] * f[0] + v[..., 1] * f[1] + v[..., 2] * f[2]
 
-    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
-        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres.
+    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32", hit: Any = None) -> FogResult:
+        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres; ``hit`` (...,) bool,
+        False on the pixels that see the background (drawn without fog), else decided by distance
+        (:func:`~fogref.models._num.sky_pixels`).
 
         A :class:`CanvasBlend` for ``output="canvas"``, a :class:`FogResult` otherwise.
         """
@@ -241,7 +243,7 @@ class ThreeJSFog:
             else:
                 factor = glsl_smoothstep(p.near, p.far, z, dt)
             factor = np.where(np.isfinite(factor), factor, dt(1.0)).astype(dt)
-            factor = np.where(background(cam, wp, p.sky_distance), dt(0.0), factor).astype(dt)
+            factor = np.where(sky_pixels(cam, wp, hit, p.sky_distance), dt(0.0), factor).astype(dt)
         color = np.asarray(p.color, dtype=dt)
         inscatter, transmittance = color * factor[..., None], grey(dt(1.0) - factor, dt)
         if p.output == "linear":
