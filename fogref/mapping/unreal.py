@@ -192,7 +192,6 @@ def fit_unreal(
     rtol : float
         Convergence tolerance of the direction count, in (0, 1).
     """
-
     if views is None:
         if target is not None:
             raise ValueError("fit_unreal: a target needs the views it was computed on")
