@@ -217,3 +217,30 @@ def test_study_and_sweep_pages_from_committed_data(tmp_path):
     html = write_sweep_html(sweep).read_text()
     assert html.count("data:image/png") == len(list((sweep / "plots").glob("*.png"))) > 0
     assert html.count("<tr") == 48 + 1 and "sun_elevation" in html
+
+
+def test_the_study_page_explains_its_budget_with_numbers_rounded_to_their_noise(tmp_path):
+    """The budget on the study page is for a reader, from the committed study: the total with its
+    noise, the Shapley shares with how to read them (a negative share, a share over 100 %), each
+    share rounded to its noise, and none of budget.json's raw keys or 17-digit floats."""
+    import re
+    import shutil
+
+    from conftest import ROOT
+    from fogref.html.reports import write_study_html
+
+    study = tmp_path / "study"
+    study.mkdir()
+    for rel in ("summary.json", "budget.json", "budget.png"):
+        shutil.copy(ROOT / "reports/unreal_study" / rel, study / rel)
+    html = write_study_html(study).read_text()
+    text = re.sub(r"\s+", " ", re.sub(r"<[^>]+>", " ", html[html.index("Error budget") :]))
+    assert "RMSE 0.14475 ± 0.00007" in text  # 0.14475013716728694 ± 6.98e-05
+    assert "A negative share: the effect cancels part of the other effects' error" in text
+    assert "can exceed 100 % or fall below −100 %" in text
+    # 1.0149 ± 0.0635 and -1.1478 ± 0.152 as fractions of the squared error
+    assert "[e] geometric shadows (sun) 101 ± 6 % adds error" in text
+    assert "[a/b] colours/exponent re-fitted to the attenuated target -115 ± 15 % cancels part" in text
+    for raw in ("total_sq", "share_sum", "share_noise", "rmse_vs_truth_after", "phi"):
+        assert raw not in text, raw
+    assert not re.search(r"\d\.\d{9,}", text), re.search(r".{40}\d\.\d{9,}.{20}", text)
