@@ -244,3 +244,32 @@ def test_the_study_page_explains_its_budget_with_numbers_rounded_to_their_noise(
     for raw in ("total_sq", "share_sum", "share_noise", "rmse_vs_truth_after", "phi"):
         assert raw not in text, raw
     assert not re.search(r"\d\.\d{9,}", text), re.search(r".{40}\d\.\d{9,}.{20}", text)
+
+
+def test_a_large_truth_is_shown_as_block_means_so_the_page_stays_small(monkeypatch):
+    """Above MAX_PIXELS the viewer embeds k x k block means (and their standard errors, from the
+    pixels' independent noise), says so on the page, and the page is no larger than one of a truth
+    of the shown size: here a 64x36 truth with the limit at 16x9 is shown at 16x9 (k = 4)."""
+    import fogref.html.viewer as V
+    from fogref.compare.synthetic import synthetic_truth
+    from fogref.html.page import page
+    from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+
+    model = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
+    small = page("t", [], V.viewer_data(synthetic_truth(model, shape=(9, 16), noise=0.05)))
+    monkeypatch.setattr(V, "MAX_PIXELS", 16 * 9)
+    t = synthetic_truth(model, shape=(36, 65), noise=0.05)  # one column more: left out
+    d = V.viewer_data(t)
+    assert (d["width"], d["height"], d["scale"], d["full_size"]) == (16, 9, 4, [65, 36])
+    final = next(layer for layer in d["layers"] if layer["part"] == "final")
+    blocks = t.final[:, :64].reshape(9, 4, 16, 4, 3).mean(axis=(1, 3))
+    assert np.array_equal(decode_half(final["truth"]), blocks.astype(np.float16).astype(np.float64))
+    se = np.sqrt((t.stderr["final"][:, :64] ** 2).reshape(9, 4, 16, 4, 3).sum(axis=(1, 3))) / 16
+    assert np.array_equal(decode_half(final["stderr"]), se.astype(np.float16).astype(np.float64))
+    html = page("t", [], d)
+    assert (
+        "The image is 65×36 px" in html
+        and "mean of 4×4 pixels" in html
+        and "last 0 rows and 1 columns" in html
+    )
+    assert len(html) < 1.25 * len(small), (len(html), len(small))
