@@ -17,6 +17,7 @@ from fogref.gbuffer import Truth
 from fogref.html.inline import check_rows_html, esc, fmt, fmt_noise, table_html
 from fogref.html.page import figure, verdict_badge, write_page
 from fogref.html.viewer import viewer_data
+from fogref.study.budget.report import validation_paragraphs
 from fogref.study.plot_units import HEADLINE_METRICS
 
 #: Columns of the descriptive metric table: (metrics.json key, heading, with its ± stderr).
@@ -286,6 +287,9 @@ def _budget_html(budget: dict) -> str:
             )
             + "</div>",
         ]
+    checks = validation_paragraphs(budget)
+    if checks:
+        out += ["<h3>How the budget was checked</h3>", *(f"<p>{esc(t)}</p>" for t in checks)]
     what_if = budget.get("what_if") or []
     if what_if:
         out += [

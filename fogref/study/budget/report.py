@@ -19,6 +19,32 @@ def _floor(s: dict) -> str:
     return f"{s['rmse_noise_floor']:.2g}" + (" (below the noise)" if s["below_noise"] else "")
 
 
+def validation_paragraphs(result: dict) -> list[str]:
+    """How the budget's 'shadows' step was checked (the pixel footprint, the closed form on an open
+    plane), one paragraph each (Markdown: code in backticks); empty when the result has neither."""
+    out = []
+    fc = result.get("footprint")
+    if fc:
+        out.append(
+            f"Pixel footprint: {100 * fc['pixel_fraction']:.2g} % of the pixels straddle an edge "
+            "(their "
+            f"closed-form T differs from the EXR's by more than {fc['tolerance']}); they hold "
+            f"{100 * fc['share_of_step_sq']:.2g} % of the squared '{fc['step']}' step, so that step is "
+            "not an artefact of per-pixel (G-buffer) evaluation."
+        )
+    oc = result.get("open_plane_check")
+    if oc:
+        out.append(
+            f"Closed-form check on `{oc['scene']}` (no occluders, {oc['resolution'][0]}×"
+            f"{oc['resolution'][1]}, {oc['spp']} spp): the 'shadows' step there is RMSE "
+            f"{oc['shadows_rmse']:.3g} against an expected pure-noise level of {oc['noise_rmse']:.3g} "
+            f"(mean {oc['shadows_mean']:+.2g} vs single-scattering RMS {oc['single_rms']:.3g}): "
+            "the closed-form sun "
+            "single scattering matches the path tracer where nothing casts shadows."
+        )
+    return out
+
+
 def markdown(result: dict, title: str = "Error budget of Unreal's exponential height fog") -> str:
     """The budget table as Markdown."""
     t = result["total"]
@@ -93,27 +119,8 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
             "0; StartDistance 0, FogMaxOpacity 1 and FogCutoffDistance 0 are the editor defaults); the "
             "*What if* table below measures them switched on.",
         ]
-    fc = result.get("footprint")
-    if fc:
-        lines += [
-            "",
-            f"Pixel footprint: {100 * fc['pixel_fraction']:.2g} % of the pixels straddle an edge "
-            "(their "
-            f"closed-form T differs from the EXR's by more than {fc['tolerance']}); they hold "
-            f"{100 * fc['share_of_step_sq']:.2g} % of the squared '{fc['step']}' step, so that step is "
-            "not an artefact of per-pixel (G-buffer) evaluation.",
-        ]
-    oc = result.get("open_plane_check")
-    if oc:
-        lines += [
-            "",
-            f"Closed-form check on `{oc['scene']}` (no occluders, {oc['resolution'][0]}×"
-            f"{oc['resolution'][1]}, {oc['spp']} spp): the 'shadows' step there is RMSE "
-            f"{oc['shadows_rmse']:.3g} against an expected pure-noise level of {oc['noise_rmse']:.3g} "
-            f"(mean {oc['shadows_mean']:+.2g} vs single-scattering RMS {oc['single_rms']:.3g}): "
-            "the closed-form sun "
-            "single scattering matches the path tracer where nothing casts shadows.",
-        ]
+    for text in validation_paragraphs(result):
+        lines += ["", text]
     if result.get("what_if"):
         lines += [
             "",
