@@ -161,8 +161,8 @@ class FogPathBase(mi.SamplingIntegrator):
         delta sun or no sun (trace-time: such scenes trace no code for it).  In the disk:
         ``|d - w|^2 <= 2 (1 - cos theta_max)``, the chord, free of the cancellation of ``1 - d.w``
         in float32."""
-        sun = self._scene_sun(scene)
-        if self.sun_one_minus_cos is None or sun is None:
+        sun = None if self.sun_one_minus_cos is None else self._scene_sun(scene)
+        if sun is None:
             return None
         w_sun, E_sun = sun
         omega = 2.0 * math.pi * self.sun_one_minus_cos
