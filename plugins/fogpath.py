@@ -112,7 +112,8 @@ class FogPathIntegrator(FogPathCameraRay):
          estimation (uniform cone, pdf ``1 / (2 pi (1 - cos theta_max))``, radiance
          ``E / Omega``; along camera rays, ``sun_sampling``'s exact sampler aims at a point of
          the disk drawn per sample when the whole disk is above the horizon, else next-event
-         estimation covers it).  The disk is not drawn where a camera ray sees it. Default: 0.
+         estimation covers it).  A camera ray that reaches the sky through the disk sees its
+         radiance ``E / Omega``, attenuated by the fog as the sky is. Default: 0.
      * - sky_at_surfaces
        - string
        - How a ``constant`` sky lights surfaces: ``mis`` (next-event estimation and the
@@ -397,6 +398,10 @@ class FogPathIntegrator(FogPathCameraRay):
                     em_pdf = dr.select(from_surface, dr.select(escaped, 0.0, other), em_pdf)
                 Le = β * mis_weight(prev_pdf, dr.select(prev_delta, 0.0, em_pdf)) * ds.emitter.eval(si, em)
                 split = split.add(dr.select(em, Le, 0.0), medium_first, depth == 1)
+            seen = escaped & (depth == 0)
+            disk = None if self.hide_emitters else self._sun_disk_seen(scene, ops, ray, seen)
+            if disk is not None:  # the sun disk a camera ray sees (next-event estimation has the rest)
+                split = split.add(β * disk, medium_first, mi.Bool(False))
             active &= ~escaped & (depth + 1 < self.max_depth)  # max_depth = 2: single scattering
 
             # ---------------- medium vertex: light sample, phase sample ----------------

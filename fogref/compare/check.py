@@ -267,6 +267,8 @@ def check(
         "precision": precision,
         "sky_distance_m": sky_distance,
         "tolerances": {f"{p}{'/' + r if r else ''}": t for (p, r), t in table.items()},
+        # which of them the caller set; the others are DEFAULT_TOLERANCES
+        "tolerances_set": sorted(f"{p}{'/' + r if r else ''}:{m}" for p, r, m in user_set(tolerances)),
     }
     return CheckResult(rows, float(confidence), cp.name, str(truth.path), settings, errors, parts=cp)
 

@@ -131,6 +131,30 @@ def fmt(v, digits: int = 4) -> str:
     return str(v)
 
 
+def fmt_noise(v, noise, unit: str = "", max_decimals: int = 6) -> str:
+    """``v ± noise`` rounded to the noise: the noise to one significant digit (two when it starts
+    with 1), the value to the same decimal place (at most ``max_decimals``); a zero or missing noise
+    gives ``v`` to 4 significant digits.
+
+    >>> fmt_noise(101.49, 6.35, " %"), fmt_noise(-114.8, 15.2, " %"), fmt_noise(-1e-14, 7e-15, " %", 1)
+    ('101 ± 6 %', '-115 ± 15 %', '0.0 ± 7e-15 %')
+    >>> fmt_noise(0.144750137, 6.98e-05)
+    '0.14475 ± 7e-05'
+    """
+    if v is None or not np.isfinite(v):
+        return "—"
+    if noise is None or not np.isfinite(noise) or noise <= 0:
+        return f"{fmt(float(v))}{unit}"
+    exp = int(np.floor(np.log10(noise)))
+    digits = 2 if f"{noise:.1e}".startswith("1") else 1
+    decimals = min(max(0, digits - 1 - exp), max_decimals)
+    text = f"{float(v):.{decimals}f}"
+    if float(text) == 0:
+        text = text.lstrip("-")
+    shown = f"{noise:.{digits}g}" if decimals == max_decimals else f"{noise:.{decimals}f}"
+    return f"{text} ± {shown}{unit}"
+
+
 def table_html(header, rows, classes=None) -> str:
     """An HTML table; ``rows``: sequences of cells (formatted with :func:`fmt`, escaped);
     ``classes``: one CSS class per row (e.g. its verdict), or None."""
