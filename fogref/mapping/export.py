@@ -406,7 +406,10 @@ def _godot(p: Any, cam: Camera, sun: Sun, source: str) -> dict[str, str]:
         "[gd_scene load_steps=2 format=3]",
         "",
         _header(
-            ";", "godot", source, ["The camera, the sun and the environment of fogref_environment.tres."]
+            ";",
+            "godot",
+            source,
+            ["The camera, the sun and res://fogref_environment.tres (save the .tres there)."],
         ).rstrip("\n"),
         "",
         '[ext_resource type="Environment" path="res://fogref_environment.tres" id="1"]',
