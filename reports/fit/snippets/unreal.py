@@ -23,9 +23,12 @@ def set_first(obj, names, value, required=True):
     return None
 
 
-actors = unreal.get_editor_subsystem(unreal.EditorActorSubsystem)
+try:  # UE 5
+    spawn = unreal.get_editor_subsystem(unreal.EditorActorSubsystem).spawn_actor_from_class
+except AttributeError:  # UE 4.26-4.27
+    spawn = unreal.EditorLevelLibrary.spawn_actor_from_class
 
-fog_actor = actors.spawn_actor_from_class(
+fog_actor = spawn(
     unreal.ExponentialHeightFog, unreal.Vector(0.0, 0.0, 0.0)
 )
 fog = fog_actor.get_component_by_class(unreal.ExponentialHeightFogComponent)
@@ -40,7 +43,7 @@ set_first(fog, ['fog_inscattering_color', 'fog_inscattering_luminance'], unreal.
 set_first(fog, ['directional_inscattering_color', 'directional_inscattering_luminance'], unreal.LinearColor(0.417106913, 0.376000237, 0.306926892, 1.0))
 
 # the sun: its X axis is the direction the light travels; intensity in lux
-sun_actor = actors.spawn_actor_from_class(
+sun_actor = spawn(
     unreal.DirectionalLight, unreal.Vector(0.0, 0.0, 0.0), unreal.Rotator(roll=0.0, pitch=-8.0, yaw=-113.821511)
 )
 sun = sun_actor.get_component_by_class(unreal.DirectionalLightComponent)
@@ -49,7 +52,7 @@ sun.set_editor_property('light_color', unreal.Color(r=255, g=244, b=225, a=255))
 set_first(sun, ['atmosphere_sun_light', 'used_as_atmosphere_sun_light'], True, required=False)
 
 # the camera: horizontal field of view [deg]
-camera_actor = actors.spawn_actor_from_class(
+camera_actor = spawn(
     unreal.CameraActor, unreal.Vector(0.0, 0.0, 200.0), unreal.Rotator(roll=7.1396776e-16, pitch=19.0921554, yaw=81.4692344)
 )
 camera = camera_actor.get_component_by_class(unreal.CameraComponent)
