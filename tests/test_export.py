@@ -347,3 +347,22 @@ def test_export_refuses_bad_input(tmp_path, capsys):
     assert "no fit of 'bevy' at 45 deg" in capsys.readouterr().err
     assert main(["export", "--engine", "unreal", "--json", str(TABLE), "--out", str(TABLE)]) == 2
     assert "is an input" in capsys.readouterr().err
+
+
+def test_the_committed_snippets_are_the_exports_of_the_committed_fit_table(monkeypatch):
+    """reports/fit/snippets/ never goes stale: each file is what `fogref export` writes from
+    reports/fit/engines.json today (scripts/fit_table.py --from-json rewrites them)."""
+    import importlib.util
+
+    from fogref.study.export import export_engine
+
+    spec = importlib.util.spec_from_file_location("fit_table", ROOT / "scripts" / "fit_table.py")
+    fit_table = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(fit_table)
+    monkeypatch.chdir(ROOT)
+    scene = json.loads(TABLE.read_text())["scene"]
+    for engine, names in fit_table.SNIPPET_FILES.items():
+        files = export_engine(engine, json_path=Path("reports/fit/engines.json"), scene=scene)
+        for suffix, name in names.items():
+            committed = (ROOT / "reports" / "fit" / "snippets" / name).read_text()
+            assert files[suffix] == committed, f"reports/fit/snippets/{name} is stale"
