@@ -366,3 +366,26 @@ def test_the_committed_snippets_are_the_exports_of_the_committed_fit_table(monke
         for suffix, name in names.items():
             committed = (ROOT / "reports" / "fit" / "snippets" / name).read_text()
             assert files[suffix] == committed, f"reports/fit/snippets/{name} is stale"
+
+
+def test_export_reads_fit_and_translate_json(tmp_path, capsys):
+    """The JSON of `fogref fit` (Unreal's own) and of `fogref translate` are export's input too."""
+    assert main(["fit", "--directions", "16", "--no-start-distance"]) == 0
+    fit = tmp_path / "fit.json"
+    fit.write_text(capsys.readouterr().out)
+    assert main(["export", "--engine", "unreal", "--json", str(fit)]) == 0
+    text = capsys.readouterr().out
+    ast.parse(text)
+    s = json.loads(fit.read_text())["settings"]
+    n = float(re.search(rf'\["directional_inscattering_exponent"\], ({NUM})\)', text).group(1))
+    assert n == pytest.approx(s["DirectionalInscatteringExponent"], rel=1e-8)
+    argv = ["translate", "--from", "unity", "--to", "threejs", "--param", "fogDensity=0.003"]
+    assert main([*argv, "--directions", "16"]) == 0
+    tr = tmp_path / "translate.json"
+    tr.write_text(capsys.readouterr().out)
+    assert main(["export", "--engine", "threejs", "--json", str(tr)]) == 0
+    text = capsys.readouterr().out
+    density = float(re.search(rf"new THREE.FogExp2\(fogColor, ({NUM})\)", text).group(1))
+    assert density == pytest.approx(json.loads(tr.read_text())["target"]["settings"]["density"], rel=1e-8)
+    assert main(["export", "--engine", "bevy", "--json", str(tr)]) == 2
+    assert "translates to 'threejs', not 'bevy'" in capsys.readouterr().err
