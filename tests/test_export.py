@@ -315,6 +315,9 @@ def test_unity_csharp_is_balanced_and_holds_the_fit_left_handed(tmp_path, engine
     )
     np.testing.assert_allclose([float(x) for x in look.groups()], f * [1, 1, -1], atol=1e-8)
     w, E = _sun()
+    lux = float(re.search(rf"sun.intensity = ({NUM})f", text).group(1))
+    # HDRP: lux; the built-in Standard BRDF leaves out the diffuse 1/pi (UnityStandardBRDF.cginc)
+    assert lux * (math.pi if engine == "unity" else 1.0) == pytest.approx(E.max(), rel=1e-8)
     sun = re.search(
         rf"sun.transform.rotation = Quaternion.LookRotation\(new Vector3\(({NUM})f, ({NUM})f, ({NUM})f\)",
         text,

@@ -16,7 +16,8 @@ bevy        ``bevy``      Rust: a system spawning Camera3d + DistanceFog + Expos
                           DirectionalLight (Bevy 0.15+; y-up, right-handed, metres)
 threejs     ``threejs``   JavaScript (ES module): ``scene.fog``, a DirectionalLight, the camera
 unity       ``unity``     C#: RenderSettings fog, the camera and the sun (y-up, **left-handed**:
-                          ``z -> -z``)
+                          ``z -> -z``; the light's intensity is the irradiance / pi, since the
+                          built-in Standard BRDF leaves out the diffuse 1/pi)
 hdrp        ``hdrp``      C#: the Fog volume override, the camera and the sun (as unity)
 filament    ``filament``  JavaScript: ``view.setFogOptions``, a SUN light, the camera
 ==========  ============  =====================================================================
@@ -563,7 +564,11 @@ def _unity_colour_gamma(c: Any) -> str:
 
 def _unity_common(cam: Camera, sun: Sun, lux: bool) -> list[str]:
     colour, intensity = light_split(sun.irradiance)
-    unit = "lux (HDRP)" if lux else "Unity's built-in units: colour x intensity = the irradiance"
+    if lux:
+        unit = "lux (HDRP)"
+    else:  # UnityStandardBRDF.cginc leaves out the diffuse 1/pi: the light carries it
+        intensity /= math.pi
+        unit = "built-in pipeline: irradiance / pi (its Standard BRDF leaves out the diffuse 1/pi)"
     return [
         "        camera.transform.position = " + _unity_vec(cam.origin) + ";",
         "        camera.transform.rotation = Quaternion.LookRotation("

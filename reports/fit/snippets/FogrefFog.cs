@@ -24,6 +24,6 @@ public static class FogrefFog
         sun.type = LightType.Directional;
         sun.transform.rotation = Quaternion.LookRotation(new Vector3(-0.39995816f, -0.139173101f, 0.905905248f));
         sun.color = new Color(1.0f, 0.90625f, 0.75f).gamma;  // linear -> Unity's sRGB Color
-        sun.intensity = 3.2f;  // Unity's built-in units: colour x intensity = the irradiance
+        sun.intensity = 1.01859164f;  // built-in pipeline: irradiance / pi (its Standard BRDF leaves out the diffuse 1/pi)
     }
 }
