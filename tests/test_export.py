@@ -142,7 +142,8 @@ def test_godot_resources_parse_and_hold_the_fit_in_srgb(tmp_path):
     scene = dict(_godot_file(tres.with_suffix(".tscn").read_text()))
     sun = scene['[node name="Sun" type="DirectionalLight3D" parent="."]']
     w, E = _sun()
-    light = _linear(_nums(sun["light_color"])[:3]) * float(sun["light_energy"])
+    # Godot's shader light: linear colour x light_energy x pi (light_storage.cpp, no physical units)
+    light = _linear(_nums(sun["light_color"])[:3]) * float(sun["light_energy"]) * math.pi
     np.testing.assert_allclose(light, E, rtol=1e-7)  # the light is the sun
     z = np.array(_nums(sun["transform"])[:9]).reshape(3, 3)[:, 2]
     np.testing.assert_allclose(z, w, atol=1e-8)  # it shines along -Z, away from the sun

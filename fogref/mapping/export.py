@@ -36,9 +36,11 @@ that the engine's product equals the fit:
   ``DirectionalInscatteringColor * SunLuminance / Y(light)``.
 * Bevy multiplies ``directional_light_color`` by the light's colour times illuminance times
   exposure: written ``directional_light_color * light_color / E`` per channel.
-* Godot's lobe is the light's linear colour times ``light_energy`` times ``fog_sun_scatter``:
-  the light is the sun (E) and ``fog_sun_scatter`` is the least-squares scale
-  ``s = (sun_color . E) / (E . E)``; the snippet states how far ``s E`` is from ``sun_color``.
+* Godot's lobe is the shader's light (linear colour times ``light_energy`` times pi: Godot
+  multiplies the energy by pi without physical light units, ``light_storage.cpp``) times
+  ``fog_sun_scatter``: the shader's light is the sun (``light_energy = max(E) / pi``) and
+  ``fog_sun_scatter`` is the least-squares scale ``s = (sun_color . E) / (E . E)``; the snippet
+  states how far ``s E`` is from ``sun_color``.
 * Filament's lobe is the sun light's colour times intensity with no scale of its own: the light
   is written as the fitted ``lightColorIntensity`` (the fog as fitted) and the snippet states
   the physical sun's irradiance beside it.
@@ -365,8 +367,8 @@ def godot_plan(p: Any, cam: Camera, sun: Sun) -> dict:
         "fog_sun_scatter": p.fog_sun_scatter * s,
         "sun_lobe_relative_error": float(np.linalg.norm(lobe - target)) / denom if denom > 0 else 0.0,
         "light_color_srgb": linear_to_srgb(colour),
-        "light_energy": energy,
-        "light_intensity_lux": luminance(E),
+        "light_energy": energy / math.pi,
+        "light_intensity_lux": energy,
         "light_z": sun.w,
         "camera_x": cam.right,
         "camera_y": cam.true_up,
@@ -379,10 +381,11 @@ def _godot(p: Any, cam: Camera, sun: Sun, source: str) -> dict[str, str]:
     head = [
         "Godot 4 (y-up, right-handed, metres, like fogref; cameras and lights look along -Z).",
         "Colours are sRGB, as the inspector shows them and .tres files store them.",
-        "The sun lobe is the light's colour x energy x fog_sun_scatter: fog_sun_scatter scales the",
+        "The shader's light is light_color (linear) x light_energy x pi (light_storage.cpp) = the sun's",
+        "irradiance.  The sun lobe is that light x fog_sun_scatter: fog_sun_scatter scales the",
         f"sun (E) to the fitted sun_color, whose direction differs from E's by "
         f"{q['sun_lobe_relative_error']:.3g} (relative).",
-        f"With physical light units, light_intensity_lux = {q['light_intensity_lux']:.6g}.",
+        f"With physical light units: light_energy = 1, light_intensity_lux = {q['light_intensity_lux']:.6g}.",
     ]
     depth = p.fog_mode == "depth"
     env = [
@@ -433,7 +436,6 @@ def _godot(p: Any, cam: Camera, sun: Sun, source: str) -> dict[str, str]:
         f"transform = {_basis_text(lx, ly, q['light_z'], (0.0, 0.0, 0.0))}",
         f"light_color = Color({_fs(q['light_color_srgb'])}, 1.0)",
         f"light_energy = {_f(q['light_energy'])}",
-        f"light_intensity_lux = {_f(q['light_intensity_lux'])}",
     ]
     return {".tres": "\n".join(env) + "\n", ".tscn": "\n".join(tscn) + "\n"}
 
