@@ -163,7 +163,7 @@ TERMS: dict[str, dict[str, Term]] = {
         "sun_direction": _DIR,
         "sun_color": Term(
             "linear RGB: the DirectionalLight3D's light_color (sRGB in the inspector) linearised, "
-            "times its light_energy"
+            "times its light_energy times pi (light_storage.cpp, without physical light units)"
         ),
         "sky_color": Term("linear RGB, scene radiance units", "linear"),
         "sky_distance": _M,
