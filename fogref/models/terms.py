@@ -161,10 +161,7 @@ TERMS: dict[str, dict[str, Term]] = {
         "fog_depth_end": _M,
         "z_far": _M,
         "sun_direction": _DIR,
-        "sun_color": Term(
-            "linear RGB: the DirectionalLight3D's light_color (sRGB in the inspector) linearised, "
-            "times its light_energy times pi (light_storage.cpp, without physical light units)"
-        ),
+        "sun_color": Term("linear RGB, the shader's light: linearised light_color x light_energy x pi"),
         "sky_color": Term("linear RGB, scene radiance units", "linear"),
         "sky_distance": _M,
     },
