@@ -74,7 +74,7 @@ class Options:
     )
     param: dict | None = option(
         None,
-        "fix a model setting (VALUE parsed as JSON when possible)",
+        "fix a model setting in the engine's units; a colour is linear RGB (VALUE: JSON if it parses)",
         repeat=True,
         check=Assignments(),
         metavar="KEY=VALUE",
@@ -152,7 +152,7 @@ class Options:
     )
     sun_irradiance: tuple | None = option(
         None,
-        "sun irradiance",
+        "sun irradiance (linear RGB)",
         check=RGB(0.0),
         nargs=3,
         metavar=("R", "G", "B"),
@@ -161,7 +161,7 @@ class Options:
     )
     sky: tuple | None = option(
         None,
-        "uniform sky radiance",
+        "uniform sky radiance (linear RGB)",
         check=RGB(0.0),
         nargs=3,
         metavar=("R", "G", "B"),

@@ -273,7 +273,7 @@ class _Options:
     )
     sun_irradiance: tuple = option(
         (3.2, 2.9, 2.4),
-        f"sun irradiance, grey or RGB, {_range(RANGES, 'sun_irradiance')}",
+        f"sun irradiance, grey or linear RGB, {_range(RANGES, 'sun_irradiance')}",
         check=Text(),
         metavar="E|R,G,B",
         group=LIGHT,
@@ -281,7 +281,7 @@ class _Options:
     )
     sky_radiance: tuple | None = option(
         (0.2, 0.3, 0.5),
-        f"uniform sky radiance, grey or RGB, {_range(RANGES, 'sky_radiance')}, or none (black)",
+        f"uniform sky radiance, grey or linear RGB, {_range(RANGES, 'sky_radiance')}, or none (black)",
         check=Text(),
         metavar="L|R,G,B|none",
         group=LIGHT,
@@ -353,7 +353,8 @@ _IGNORED_FIELDS = [
         option(
             None,
             f"{key}: no physical counterpart, ignored with a note ({why}); "
-            f"{_range(UNREAL_IGNORED_RANGES, key)}",
+            f"{_range(UNREAL_IGNORED_RANGES, key)}"
+            + ("; linear RGB, as Unreal's FLinearColor" if kind == "rgb" else ""),
             flag=opt,
             check=Number() if kind == "number" else Text(),
             metavar="R,G,B" if kind == "rgb" else None,

@@ -17,6 +17,7 @@ from fogref.gbuffer import Truth
 from fogref.html.inline import check_rows_html, esc, fmt, fmt_noise, table_html
 from fogref.html.page import figure, verdict_badge, write_page
 from fogref.html.viewer import viewer_data
+from fogref.models.terms import note, unreal_field
 from fogref.study.budget.report import validation_paragraphs
 from fogref.study.plot_units import HEADLINE_METRICS
 
@@ -69,6 +70,19 @@ def compare_sections(report: dict, folder: Path) -> list[str]:
         f"{report['image']['width']}×{report['image']['height']} px.</p>"
     ]
     s += [f'<p class="fr-note">warning: {esc(w)}</p>' for w in report.get("warnings", [])]
+    params = (report.get("model") or {}).get("parameters")
+    if isinstance(params, dict):
+        name = report["model"]["name"]
+        s += [
+            "<h2>Model parameters</h2>",
+            table_html(
+                ["parameter", "value", "unit or colour space"],
+                [
+                    [k, json.dumps(v) if isinstance(v, (list, dict)) else v, note(name, k, v)]
+                    for k, v in params.items()
+                ],
+            ),
+        ]
     if check:
         s += [
             "<h2>Check</h2>",
@@ -165,13 +179,16 @@ def write_study_html(study_dir, truth=None) -> Path:
             f"<p>truth <code>{esc(prov.get('truth'))}</code> of <code>{esc(prov.get('scene'))}</code>, "
             f"{esc(prov.get('spp'))} spp, seed {esc(prov.get('seed'))}.</p>"
         ]
-    fit = summary.get("fit", {}).get("unreal") or {}
+    fit = summary.get("fit", {}).get("unreal_editor") or {}
     if fit:
         s += [
             "<h2>Fit (Unreal's fog parameters)</h2>",
             table_html(
-                ["parameter", "value"],
-                [[k, json.dumps(v) if isinstance(v, (list, dict)) else v] for k, v in fit.items()],
+                ["property", "value", "unit or colour space"],
+                [
+                    [k, json.dumps(v) if isinstance(v, (list, dict)) else v, note("ue4", unreal_field(k), v)]
+                    for k, v in fit.items()
+                ],
             ),
         ]
     budget = folder / "budget.json"

@@ -37,7 +37,8 @@ Units: Godot is y-up, **metres**, the same frame as fogref.  ``fog_density`` [1/
 ``fog_height`` [m], ``fog_height_density`` [1/m] (> 0: fog below ``fog_height``; < 0:
 above).  Colours: ``fog_light_color`` is *linear* RGB here (Godot converts the
 editor's sRGB colour on the CPU: pass ``srgb_to_linear(c)``; the default is Godot's
-default colour converted); ``sun_color`` = the light's linear colour times its energy;
+default colour converted); ``sun_color`` = the light's linear colour times its energy as the
+shader gets it (``light_energy * pi`` without physical light units, ``light_storage.cpp``);
 ``sun_direction`` points **toward** the sun; ``sky_color`` is the sky radiance the
 aerial perspective samples (fogref's skies are constant, so the blurred radiance map is
 that constant).

@@ -161,10 +161,7 @@ TERMS: dict[str, dict[str, Term]] = {
         "fog_depth_end": _M,
         "z_far": _M,
         "sun_direction": _DIR,
-        "sun_color": Term(
-            "linear RGB: the DirectionalLight3D's light_color (sRGB in the inspector) linearised, "
-            "times its light_energy"
-        ),
+        "sun_color": Term("linear RGB, the shader's light: linearised light_color x light_energy x pi"),
         "sky_color": Term("linear RGB, scene radiance units", "linear"),
         "sky_distance": _M,
     },
@@ -195,16 +192,17 @@ TERMS: dict[str, dict[str, Term]] = {
 DEFAULTS_FROM: dict[str, str] = {
     "ue4": "Unreal's UExponentialHeightFogComponent constructor "
     "(Engine/Source/Runtime/Engine/Private/Components/ExponentialHeightFogComponent.cpp)",
-    "unity": "Unity's Lighting window fog defaults (RenderSettings: Exp2, density 0.01, start 0 m, "
-    "end 300 m)",
+    "unity": "Unity's Lighting window fog defaults (Unity Manual, Lighting window: Exponential Squared, "
+    "density 0.01, start 0 m, end 300 m, colour (0.5, 0.5, 0.5) sRGB)",
     "hdrp": "HDRP's Fog volume component (com.unity.render-pipelines.high-definition, "
-    "Runtime/Lighting/AtmosphericScattering/Fog.cs)",
+    "Runtime/Lighting/AtmosphericScattering/Fog.cs; fogref models its Constant Color mode)",
     "filament": "Filament's View::FogOptions (filament/include/filament/Options.h)",
     "altitude": "the altitude-fog shader's material defaults",
     "box": "the box-fog shader's material defaults",
     "godot": "Godot 4's Environment (scene/resources/environment.h) and Camera3D's far plane",
     "bevy": "Bevy's DistanceFog::default() (crates/bevy_pbr/src/fog.rs)",
-    "threejs": "three.js's Fog and FogExp2 constructors (src/scenes/Fog.js, src/scenes/FogExp2.js)",
+    "threejs": "three.js's Fog and FogExp2 constructors (src/scenes/Fog.js, src/scenes/FogExp2.js; "
+    "their colour has no default, fogref's is white)",
 }
 
 #: registry name -> the engine's name in prose.
