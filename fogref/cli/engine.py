@@ -20,13 +20,14 @@ from fogref.errors import FogrefError
 
 NAME = "engine"
 SOURCE = "fogref engine"
-HELP = "render a truth's or a scene's view with a real engine (three.js in headless Chromium)"
+HELP = "render a truth's or a scene's view with a real engine (three.js, Babylon.js in headless Chromium)"
 DESCRIPTION = (
     "Render the view of a ground-truth EXR (its scene file) or of a scene XML with a real engine "
-    "(three.js from node_modules, in headless Chromium with SwiftShader WebGL): its linear float "
-    "render target (final.exr with distance and hit channels, T.exr, inscatter.exr, surface.exr), "
-    "its 8-bit sRGB canvas (canvas.png) and engine.json (version, fog settings, the difference "
-    "from fogref's port of the engine, the camera against the truth's)."
+    "(three.js or Babylon.js from node_modules, in headless Chromium with SwiftShader WebGL): its "
+    "linear float render target (final.exr with distance and hit channels, T.exr, inscatter.exr, "
+    "surface.exr), its 8-bit canvas as the engine ships it (canvas.png) and engine.json (version, "
+    "fog settings and where each came from, the difference from fogref's port of the engine, the "
+    "camera against the truth's)."
 )
 EPILOG = "exit codes: 0 written, 2 usage or input error (also: no Chromium or chromedriver, no node_modules)"
 API = "fogref.engines.render:render_and_write"

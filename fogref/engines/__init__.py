@@ -1,7 +1,7 @@
 """Real engines in the loop: render the truth's view with an engine itself, in headless Chromium.
 
 fogref's ports (:mod:`fogref.models`) are transcriptions of the engines' shaders; this floor
-renders the same view with the engine (three.js from npm, ``package.json``) and reads its
+renders the same view with the engine (three.js, Babylon.js from npm, ``package.json``) and reads its
 pixels back, so a port can be held to its engine and the engine to the truth.
 
 ================  =====================================================================
@@ -12,6 +12,7 @@ module            what
 ``render``        render an engine, read back its images, write them for ``compare``
 ``port``          the engine against fogref's port of it, on the engine's own depth
 ``threejs``       three.js: its page (``threejs.js``), its fog settings, its canvas
+``babylon``       Babylon.js: its page (``babylon.js``), its fog settings, its canvas
 ================  =====================================================================
 
 **An engine is one page and one mapping.**  Its module (registered in :data:`ENGINES`)
@@ -19,7 +20,9 @@ gives ``MODEL`` (the fogref model whose mapping, ``fogref.mapping``, gives the e
 settings and whose port is compared), ``PAGE`` (an ES module), ``IMPORTS`` (bare import
 name -> path under ``node_modules``), ``PACKAGE`` (its npm name), ``settings(model)`` (the
 fog settings the page takes, JSON) and ``canvas_port(surface, model, fog_factor)`` (the
-canvas the port predicts, 8-bit).  The page sets ``window.fogrefRender(spec)`` and then
+canvas the port predicts, 8-bit), ``port(model, camera)`` (the port for that camera) and
+optionally ``FOG_COORDINATE`` (``"depth"``, the default, or ``"distance"``: what the engine's
+fog reads, see :mod:`fogref.engines.port`).  The page sets ``window.fogrefRender(spec)`` and then
 ``data-ready`` on ``<body>``.  ``spec``: ``width``, ``height`` [px]; ``camera`` (``origin``
 [m], unit ``forward``, ``up``, ``right``, ``fov_y_deg``, ``near``, ``far`` [m]); ``shapes``
 (base64 float32 world ``positions`` and ``normals`` or null, uint32 ``indices``, linear
@@ -35,7 +38,7 @@ Importing this package does no work; nothing starts until :func:`fogref.engines.
 Examples
 --------
 >>> sorted(ENGINES)
-['threejs']
+['babylon', 'threejs']
 >>> engine_module("threejs").MODEL
 'threejs'
 >>> engine_module("three")
@@ -54,7 +57,7 @@ from fogref.errors import ParameterError, did_you_mean
 __all__ = ["ENGINES", "engine_module"]
 
 #: engine name -> the module that holds its page and mapping
-ENGINES = {"threejs": "fogref.engines.threejs"}
+ENGINES = {"threejs": "fogref.engines.threejs", "babylon": "fogref.engines.babylon"}
 
 
 def engine_module(name: str, source: str = "fogref") -> ModuleType:
