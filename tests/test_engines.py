@@ -1,22 +1,22 @@
 """The real engines in the loop (fogref.engines): their camera is fogref's, their fog is the port's.
 
 Each test that renders starts Debian's headless Chromium with an engine from node_modules (a few
-seconds); they skip, saying why, only where Chromium cannot start.  The engines: three.js and
-Babylon.js (``ENGINES``, every engine of :data:`fogref.engines.ENGINES`).  References:
+seconds); they skip, saying why, only where Chromium cannot start.  The engines: three.js,
+Babylon.js and PlayCanvas (every engine of :data:`fogref.engines.ENGINES`).  References:
 
 * camera: the truth's G-buffer distance of the open plane (Mitsuba's pixel-centre rays, float32)
   against the engine's distance along the ray through each pixel centre.  Measured: 4.1e-7
   relative at most (float32); the bound 1e-5 detects a camera off by 0.001 deg in pitch or a
   field of view off by 1e-4 relative (each moves a 16x9 view's plane distances by >= 1e-4).
-* fog: the port (fogref.models.threejs, .babylon) on the fog coordinate the engine's fog
-  interpolated (eye depth, distance), over the engine's own unfogged surface, against the
-  engine's linear image: measured 7.5e-8 (three.js), 1.2e-7 (Babylon) (float32); the level is
-  1e-6 relative.  A density 1 % off gives 2.8e-3 here: the test can fail.
-* canvas: the port through the engine's canvas transform (three.js: sRGB transfer; Babylon: none)
-  and 8 bits: 0 code values measured, the level 1; an sRGB-encoded linear blend instead differs
-  by 17 (three.js) and 74 (Babylon) code values on the valley.
+* fog: the port (fogref.models.threejs, .babylon, .playcanvas) on the fog coordinate the
+  engine's fog interpolated (eye depth, distance), over the engine's own unfogged surface,
+  against the engine's linear image: measured 7.5e-8 (three.js), 1.2e-7 (Babylon, PlayCanvas)
+  (float32); the level is 1e-6 relative.  A density 1 % off gives 2.8e-3 here: the test can fail.
+* canvas: the port through the engine's canvas transform (three.js: sRGB transfer; Babylon: none;
+  PlayCanvas: a 2.2 power) and 8 bits: 0 code values measured, the level 1; an sRGB-encoded
+  linear blend instead differs by 17 (three.js) and 74 (Babylon) code values on the valley.
 * lighting: without fog, on the open plane, the engine's image is the truth's (exact per sample
-  there): 2.1e-7 (three.js), 7.0e-8 (Babylon) relative measured.
+  there): 2.1e-7 (three.js), 7.0e-8 (Babylon, PlayCanvas) relative measured.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from fogref.engines import ENGINES
 from fogref.engines.browser import Browser, EngineUnavailable, find_chromium
 
 #: engine -> its model's density parameter (a 1 % change must be seen)
-DENSITY = {"threejs": "density", "babylon": "fogDensity"}
+DENSITY = {"threejs": "density", "babylon": "fogDensity", "playcanvas": "density"}
 assert set(DENSITY) == set(ENGINES)
 
 
@@ -52,13 +52,12 @@ def chromium():
 @pytest.fixture(scope="module", params=sorted(ENGINES))
 def valley(chromium, request):
     """The valley at 32x18, its fog mapped from the scene, rendered by each engine."""
-    from fogref.engines import engine_module
+    from fogref.cli.engine import engine_model
     from fogref.engines.render import render_engine
     from fogref.engines.view import view_from_scene
-    from fogref.mapping.build import build_model
 
     view = view_from_scene(SCENES / "valley.xml", {"res": "32", "resy": "18"})
-    model = build_model(engine_module(request.param).MODEL, None, view.params)
+    model, _ = engine_model(request.param, None, view.params, view)
     return view, model, render_engine(view, model, request.param, timeout=120)
 
 
@@ -97,9 +96,10 @@ def test_fog_settings_arrive(valley):
     assert p["pixels"] > 100
     assert p["at_quantisation"], p["summary"]
     assert p["linear_max_relative"] <= 1e-6 and p["canvas_max"] <= 1
-    # neither canvas is the sRGB encoding of the linear image: three.js blends its fog in sRGB,
-    # Babylon writes linear values unconverted
-    assert p["linear_blend_canvas_max"] >= 5
+    # three.js blends its fog in sRGB, Babylon writes linear values unconverted: neither canvas is
+    # the sRGB encoding of the linear image (PlayCanvas's 2.2 power is within 2 code values of it)
+    if r.engine != "playcanvas":
+        assert p["linear_blend_canvas_max"] >= 5
     # the comparison can fail: the port with 1 % more density is not the engine
     key = DENSITY[r.engine]
     off = type(model)(dataclasses.replace(model.params, **{key: getattr(model.params, key) * 1.01}))
@@ -139,6 +139,19 @@ def test_engine_render_command_writes_images_compare_reads(chromium, tmp_path, c
     channels, attrs = read_exr(out / "final.exr")
     assert {"R", "G", "B", "distance", "hit"} <= set(channels)
     assert attrs["fogref.engine"]["version"] == "0.187.0"
+    # the fog settings are the ones `compare --model threejs --from-scene` evaluates, and say so
+    import json
+
+    from fogref.engines.threejs import settings
+    from fogref.engines.view import view_from_scene
+    from fogref.mapping.build import build_model
+
+    record = json.loads((out / "engine.json").read_text())
+    params = view_from_scene(SCENES / "valley.xml", {"res": "16", "resy": "9"}).params
+    model = build_model("threejs", None, params)
+    assert record["fog_settings"] == settings(model)
+    assert record["fog_settings_source"]["density"].endswith("threejs_from_physical (--from-scene)")
+    assert set(record["fog_settings_source"]) >= {"mode", "density", "color", "camera_forward"}
     canvas = load_engine_images(out / "canvas.png", shape=(9, 16))
     assert canvas.encodings["final"] == "srgb"
 
@@ -267,8 +280,9 @@ def test_meshes_the_scene_loads_are_drawn(chromium, tmp_path):
 def test_engine_lighting_is_the_truths_without_fog(chromium, tmp_path, engine):
     """On the fog-free open plane the truth is exact per sample (delta sun by next-event estimation,
     constant sky by the cosine-weighted BSDF sample: stderr 0), and the engine's sun
-    (three.js: DirectionalLight of colour E; Babylon: E / pi), sky (a hemisphere light, the
-    background L) and Lambert material give the same image: 2.1e-7 (three.js), 7.0e-8 (Babylon)
+    (three.js: DirectionalLight of colour E; Babylon, PlayCanvas: E / pi), sky (a hemisphere
+    light; PlayCanvas: its ambient light, the sky's on this horizontal ground; the background L)
+    and Lambert material give the same image: 2.1e-7 (three.js), 7.0e-8 (Babylon, PlayCanvas)
     relative measured (float32); the tolerance 1e-5 fails a sun or sky off by more than 0.001 %
     (a factor pi, the usual slip, is 200 %)."""
     from fogref.engines.render import render_engine
@@ -291,3 +305,21 @@ def test_engine_lighting_is_the_truths_without_fog(chromium, tmp_path, engine):
     r = render_engine(view_from_truth(truth), None, engine, timeout=120)
     assert np.array_equal(r.hit, truth.hit) and r.hit.any() and (~r.hit).any()
     np.testing.assert_allclose(r.final, truth.final, rtol=1e-5, atol=0)
+
+
+def test_engine_settings_say_where_they_came_from():
+    """PlayCanvas's fog reads its camera's clip planes: ``fogref engine`` sets them from the view
+    (nothing clipped) unless ``--param`` gives them, and says where each setting came from."""
+    from fogref.cli.engine import engine_model
+    from fogref.engines.view import view_from_scene
+
+    view = view_from_scene(SCENES / "open_plane.xml", {"res": "16", "resy": "9"})
+    model, src = engine_model("playcanvas", {"density": 0.01}, None, view)
+    assert (model.params.nearClip, model.params.farClip) == view.clip_planes()
+    assert src["nearClip"].startswith("the view") and src["farClip"].startswith("the view")
+    assert src["density"] == "--param" and src["type"].startswith("the model's default")
+    model, src = engine_model("playcanvas", {"farClip": 50.0}, None, view)
+    assert model.params.farClip == 50.0 and src["farClip"] == "--param"
+    assert model.params.nearClip == view.clip_planes()[0]
+    model, src = engine_model("threejs", None, None, view)  # three.js's fog has no clip planes
+    assert not any(v.startswith("the view") for v in src.values())
