@@ -142,8 +142,9 @@ def main(argv=None) -> int:
         "horizontal ground; no shadows), which is not the fog's error. The engines draw their "
         "background without fog, so on `sky` their transmittance is 1 and their inscatter 0. "
         "Filament (npm `filament`, WebAssembly) is not in the loop: its `Engine.createMaterial` takes "
-        "materials compiled by Filament's `matc` tool (`.filamat`), which the package does not ship "
-        "(its only built-in materials are gltfio's, reached through a glTF asset).",
+        "only materials compiled ahead of time by Filament's `matc` (`.filamat`), which the package "
+        "does not ship, and its only built-in materials are gltfio's lit ubershaders; so the page "
+        "cannot write the depth pass both checks (port vs engine, camera vs truth) read.",
         "",
         f"Made by `{command}` in {time.perf_counter() - t0:.0f} s.",
         "",
