@@ -14,7 +14,7 @@ file               what (linear RGB unless said)
 ``T.exr``          the engine's fog transmittance ``1 - f`` (grey): ``--transmittance``
 ``inscatter.exr``  what its fog adds, ``C f``: ``--inscatter``
 ``surface.exr``    the engine's image without fog (its own surface shading)
-``canvas.png``     the canvas as the engine ships it (8-bit sRGB): ``--image`` (read as sRGB)
+``canvas.png``     the canvas as the engine ships it (8 bits): ``--image`` (read as sRGB)
 ``engine.json``    engine and version, browser, fog settings, camera, notes, the port's difference
 =================  ===========================================================================
 
