@@ -115,7 +115,7 @@ def engine_model(engine: str, param: dict | None, scene_params: dict | None, vie
     else:
         fn = MAPPINGS.get(mod.MODEL)
         where = f"{fn.__module__}.{fn.__name__}" if fn is not None else f"{mod.MODEL}.from_physical"
-        start = f"the scene's fog through {where} (--from-scene)"
+        start = f"the scene (its fog, sky, camera) through {where} (--from-scene)"
     sources = {}
     for k in current_parameters(model):
         if k in given:
