@@ -16,7 +16,7 @@ import itertools
 import numpy as np
 
 from fogref.gbuffer import Truth
-from fogref.media import NP, hg_phase, single_scatter_sun
+from fogref.media import NP, single_scatter_sun
 from fogref.media.single_scatter import single_scatter_sky
 
 #: Step keys, effect letters (docs/design.md, "Error budget") and labels, in chain order (step k = 1..9).
@@ -59,7 +59,7 @@ def closed_forms(truth: Truth, pf) -> dict:
     sun_att = np.stack(single_scatter_sun(NP, m, o, d, D, w, tuple(E)), -1)
     if w[1] > 0:
         cos = d[0] * w[0] + d[1] * w[1] + d[2] * w[2]
-        sun_noatt = alb * E * hg_phase(NP, cos, m.g)[:, None] * (1.0 - T)
+        sun_noatt = alb * E * m.phase_value(NP, cos)[:, None] * (1.0 - T)
     else:
         sun_noatt = np.zeros_like(T)
     sky = np.stack(single_scatter_sky(NP, m, o, d, D, pf.sky_radiance or (0.0, 0.0, 0.0)), -1)
