@@ -36,7 +36,7 @@ from fogref.media.phase import TabulatedPhase
 
 
 def _floats(props, name: str, src: str) -> tuple:
-    if not props.has_property(name):
+    if name not in props:
         raise ParameterError(src, name, "required (comma-separated numbers)")
     try:
         return tuple(float(x) for x in str(props[name]).replace(",", " ").split())
@@ -50,7 +50,7 @@ class TabulatedPhaseFunction(mi.PhaseFunction):
     def __init__(self, props):
         mi.PhaseFunction.__init__(self, props)
         src = f"fogtabphase '{props.id()}'" if props.id() else "fogtabphase"
-        label = str(props["label"]) if props.has_property("label") else "tabulated"
+        label = str(props["label"]) if "label" in props else "tabulated"
         self.table = TabulatedPhase(
             _floats(props, "cosines", src), _floats(props, "values", src), label=label, source=src
         )

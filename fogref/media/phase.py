@@ -162,6 +162,20 @@ class TabulatedPhase:
         """The phase function [1/sr] at ``cos_theta`` (clamped to [-1, 1])."""
         return ops.interp(cos_theta, self.cosines, self.values)
 
+    def as_params(self) -> dict:
+        """The ``fogtabphase`` plugin's parameters (strings, as in a scene's XML); the values
+        keep 9 significant digits, the cosines are exact.
+
+        >>> TabulatedPhase((-1.0, 1.0), (1.0, 1.0), label="iso").as_params()["values"]
+        '0.0795774715, 0.0795774715'
+        """
+        return {
+            "type": "fogtabphase",
+            "cosines": ", ".join(repr(float(c)) for c in self.cosines),
+            "values": ", ".join(f"{v:.9g}" for v in self.values),
+            "label": self.label,
+        }
+
     @classmethod
     def from_function(
         cls, fn: Any, cosines: Any = None, label: str = "tabulated", source: str = "<TabulatedPhase>"
