@@ -71,6 +71,12 @@ def medium_from_params(params: dict, src: str = "<params>") -> FogMedium:
         phase = phase_from_params(phase, src)
     elif phase is not None and not isinstance(phase, TabulatedPhase):
         raise ParameterError(src, "phase", "expected a fogtabphase's cosines and values")
+    if phase is not None and params.get("g") is not None and abs(g - phase.mean_cosine) > 1e-3:
+        raise ParameterError(
+            src,
+            "g",
+            f"{g} with a tabulated phase, whose mean cosine is {phase.mean_cosine:.6g}: give that or no g",
+        )
     layers = entry.parse(params, src)
     lo, hi = (
         rgb(params[k], k, src) if params.get(k) is not None else None for k in ("bounds_min", "bounds_max")
