@@ -122,6 +122,9 @@ def test_droplet_scene_renders(tmp_path, capsys, mitsuba):
     truth = load_truth(exr)
     assert truth.params["medium"]["phase"]["label"] == "mie radiation fog"
     assert np.isfinite(truth.final).all() and truth.final.mean() > 0
+    assert main(["info", str(exr)]) == 0  # the table is summarised, not printed
+    info = capsys.readouterr().out
+    assert '"phase": "fogtabphase \'mie radiation fog\', 752 cosines"' in info and len(info) < 20000
 
 
 def test_hg_only_closed_forms_refuse_a_tabulated_phase():
