@@ -159,7 +159,7 @@ def droplet_optics(
     >>> d = GammaDroplets(3.0, 1 / 9)
     >>> o = droplet_optics(d, (549.1,), cosines=(-1.0, 0.0, 1.0))
     >>> round(o.cross_section[0] / (math.pi * d.moment(2)), 3)   # the mean Q_ext
-    2.212
+    2.206
     """
     mu = tuple(float(c) for c in (phase_cosines() if cosines is None else cosines))
     mean_area = math.pi * droplets.moment(2.0)

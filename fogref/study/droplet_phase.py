@@ -46,7 +46,7 @@ def substitute_phase(g: float, kind: str) -> Callable[[np.ndarray], np.ndarray]:
 
     >>> p = substitute_phase(0.8, "lobe")
     >>> round(float(p(np.array([1.0]))[0]) / float(substitute_phase(0.8, "hg")(np.array([1.0]))[0]), 2)
-    0.07
+    0.82
     """
     if kind == "hg":
         return lambda c: hg_phase(NP, c, float(g))
