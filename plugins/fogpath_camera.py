@@ -89,6 +89,8 @@ class FogPathCameraRay(FogPathBase):
         if self.sky_cv == "off" or fog is None or not fog.scatters or self.max_depth < 2:
             return None
         sky = self._constant_sky(scene)
+        if sky is not None:
+            fog.require_hg("fogpath's sky_cv")
         if sky is None or abs(fog.g) > 0.95:  # > 0.95: the lobe's table would need more nodes
             return None
         pdf_sel, _ = self._sky_selection(scene)

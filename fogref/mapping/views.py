@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from fogref.mapping.physical import PhysicalScene
-from fogref.media import NP, hg_phase, single_scatter_sun
+from fogref.media import NP, single_scatter_sun
 from fogref.media.single_scatter import single_scatter_sky
 from fogref.media.single_scatter_nonuniform import single_scatter_sky_projected, sky_phase_projection
 from fogref.models.base import SKY_DISTANCE
@@ -104,7 +104,7 @@ def physical_single_scattering(
             out += np.stack(single_scatter_sun(NP, m, o, d, D, w, pf.sun_irradiance), axis=-1)
         elif w[1] > 0:
             cos = d[0] * w[0] + d[1] * w[1] + d[2] * w[2]
-            p = hg_phase(NP, cos, m.g)
+            p = m.phase_value(NP, cos)
             T = np.stack(m.transmittance(NP, o, d, D), axis=-1)
             out += (np.asarray(m.albedo) * np.asarray(pf.sun_irradiance)) * p[:, None] * (1.0 - T)
     if sky and pf.sky_model is not None:
@@ -133,6 +133,7 @@ def sky_projection(pf: PhysicalScene, d: np.ndarray, sky: Any = None) -> np.ndar
         else:
             L = np.asarray(pf.sky_radiance, dtype=np.float64)
             sky = lambda w: np.broadcast_to(L, (len(w), 3))  # noqa: E731
+    pf.medium.require_hg("the sky's projection onto the phase function")
     d = np.asarray(d, dtype=np.float64)
     uniq, inv = np.unique(d, axis=0, return_inverse=True)
     return sky_phase_projection(sky, float(pf.medium.g), uniq)[np.asarray(inv).reshape(-1)]

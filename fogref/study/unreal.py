@@ -286,7 +286,11 @@ def run_study(
     engine = B.unreal_engine(lobe.params, model_params)
     parts_a = B.shapley_parts(truth, sa.single, pf, engine)
     parts_b = B.shapley_parts(tb, sb.single, pf, engine)
-    for key, effects in (("shapley", B.EFFECTS), ("shapley_colours_in_lobe", B.EFFECTS_COLOURS_IN_LOBE)):
+    with_phase = B.phase_effect(pf)  # droplet fogs: their phase vs HG(g)
+    for key, effects in (
+        ("shapley", B.EFFECTS + with_phase),
+        ("shapley_colours_in_lobe", B.EFFECTS_COLOURS_IN_LOBE + with_phase),
+    ):
         res[key] = B.add_shapley_seed_noise(
             B.shapley_budget(parts_a, valid, effects), B.shapley_budget(parts_b, valid, effects, resamples=0)
         )
