@@ -169,3 +169,169 @@ def test_option_typo_has_a_did_you_mean(truth_exr, capsys):
     _cli_error(
         capsys, ["compare", truth_exr, "--model", "ue4", "--from-scne"], "did you mean '--from-scene'?"
     )
+
+
+# ---------------------------------------------------------------- render on a cluster: no hang
+
+
+SCENE = __import__("pathlib").Path(__file__).resolve().parents[1] / "scenes" / "valley.xml"
+
+
+@pytest.fixture
+def workerless_scheduler():
+    """A running Dask scheduler with no worker (in this process)."""
+    distributed = pytest.importorskip("dask.distributed")
+    import logging
+
+    with distributed.LocalCluster(
+        n_workers=0, processes=False, dashboard_address=None, silence_logs=logging.CRITICAL
+    ) as c:
+        yield c.scheduler_address
+
+
+def test_a_scheduler_without_workers_says_it_waits_then_times_out(workerless_scheduler, tmp_path, capsys):
+    import time
+
+    from fogref import cluster
+    from fogref.errors import ParameterError
+
+    t0 = time.monotonic()
+    with pytest.raises(
+        ParameterError, match=r"'--scheduler': no worker joined .* in 2 s \(--worker-timeout\)"
+    ):
+        cluster.connect(workerless_scheduler, None, tmp_path / "log", "fogref render", worker_timeout=2)
+    assert time.monotonic() - t0 < 60  # generous: only a hang reaches it
+    assert "waiting for a worker to join the scheduler" in capsys.readouterr().err
+
+
+@pytest.mark.render
+def test_render_on_a_scheduler_without_workers_is_one_error_line(workerless_scheduler, tmp_path, capsys):
+    out = tmp_path / "x.exr"
+    args = ["render", SCENE, "--out", out, "--quiet", "--set", "res=8", "--set", "resy=4", "--spp", "1"]
+    assert main([str(a) for a in [*args, "--scheduler", workerless_scheduler, "--worker-timeout", "1"]]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 2 and "Traceback" not in lines[1], lines
+    assert (
+        "waiting for a worker to join the scheduler" in lines[0]
+        and "(up to 1 s, --worker-timeout)" in lines[0]
+    )
+    assert lines[1].startswith("fogref: error:") and "no worker joined" in lines[1]
+    assert not out.exists()
+    _cli_error(capsys, [*args, "--worker-timeout", "1"], "--worker-timeout applies only with --scheduler")
+
+
+def test_more_workers_than_cores_is_a_warning(monkeypatch, tmp_path, capsys):
+    import dask.distributed
+
+    from fogref import cluster
+
+    class Started(Exception):
+        pass
+
+    def fake(**kw):
+        raise Started(kw["n_workers"])
+
+    monkeypatch.setattr(dask.distributed, "LocalCluster", fake)
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    with pytest.raises(Started):
+        cluster.connect(None, 1000, tmp_path / "log", "fogref render")
+    assert "warning: --workers 1000 on 2 cores" in capsys.readouterr().err
+
+
+@pytest.mark.render
+def test_sigterm_while_the_cluster_starts_stops_the_render_at_once(monkeypatch, tmp_path):
+    """A LocalCluster starting many workers on a loaded machine takes minutes: a signal then ends it
+    (KeyboardInterrupt, exit 130 through the CLI) instead of waiting for the start."""
+    import signal
+    import time
+
+    from fogref import cluster
+    from fogref.render.render import render
+
+    def slow_start(*args, **kw):
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(120)  # a start that would take two minutes
+        raise AssertionError("the signal did not end the start")
+
+    monkeypatch.setattr(cluster, "connect", slow_start)
+    t0 = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        render(SCENE, tmp_path / "x.exr", spp=1, overrides={"res": 8, "resy": 4}, progress=False, workers=2)
+    assert time.monotonic() - t0 < 100
+
+
+# ---------------------------------------------------------------- API doors
+
+
+@pytest.mark.parametrize(
+    "files, needle",
+    [
+        ({}, "results.csv: no such file"),
+        ({"results.csv": "a,b\n1,2\n", "sweep.json": "[1, 2]"}, "sweep.json: holds a list, not the sweep's"),
+        ({"results.csv": "a,b\n1,2\n", "sweep.json": "{oops"}, "sweep.json: not readable JSON"),
+        ({"results.csv": ""}, "results.csv: not a readable table"),
+    ],
+)
+def test_sweep_table_of_a_bad_folder_is_one_line(tmp_path, files, needle):
+    from fogref.errors import FogrefError
+    from fogref.html.notebook import sweep_table
+
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    with pytest.raises(FogrefError) as e:
+        sweep_table(tmp_path)
+    assert needle in str(e.value) and "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize("res", [(16.7, 9), (16, 0), "16x9", (16,)])
+def test_cached_truth_refuses_a_non_integer_resolution(tmp_path, res):
+    from fogref.errors import ParameterError
+    from fogref.render.cache import cached_truth
+
+    with pytest.raises(ParameterError, match="cached_truth: parameter 'res'"):
+        cached_truth(SCENE, res=res, cache_dir=tmp_path)
+    assert not list(tmp_path.iterdir())
+
+
+# ---------------------------------------------------------------- engine models, fit and translate
+
+
+@pytest.mark.parametrize(
+    "model, param, needle",
+    [
+        ("bevy", {"color": [-1, 0.5, 0.5, 1]}, "'color': (-1, 0.5, 0.5) is outside"),
+        ("bevy", {"directional_light_color": [0.5, -2, 0.5, 1]}, "'directional_light_color'"),
+        ("bevy", {"color": [1, 1, 1, 2]}, "'color alpha': 2 is outside [0, 1]"),
+        ("threejs", {"color": [0.2, -0.1, 0.3]}, "'color': (0.2, -0.1, 0.3) is outside"),
+        ("godot", {"fog_mode": "depth", "z_far": 0}, "'z_far': 0 is outside (0, inf)"),
+        ("godot", {"fog_density": "nan"}, "'fog_density': nan is not finite"),
+        ("bevy", {"density": "abc"}, "'density': 'abc' does not parse as a number"),
+    ],
+)
+def test_engine_model_settings_out_of_range_refused(model, param, needle):
+    from fogref.errors import ParameterError
+    from fogref.mapping.build import build_model
+
+    with pytest.raises(ParameterError) as e:
+        build_model(model, param)
+    assert needle in str(e.value), str(e.value)
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["--from", "godot", "--param", "fog_density=nan"], "'fog_density': nan is not finite"),
+        (
+            ["--from", "godot", "--param", "fog_density=1e300"],
+            "the fog is opaque",
+        ),
+        (
+            ["--from", "bevy", "--param", 'falloff="Exponential"', "--param", "density=1e300"],
+            "the fog is opaque",
+        ),
+        (["--from", "threejs", "--param", "density=1e300"], "the fog is opaque"),
+    ],
+)
+def test_translate_of_settings_out_of_range_is_one_line(capsys, args, needle):
+    err = _cli_error(capsys, ["translate", *args, "--to", "ue4", "--directions", "8"], needle)
+    assert "cannot set [" not in err  # names the one parameter, not every parameter

@@ -136,6 +136,8 @@ def start_params(
         raise FogrefError(f"model '{_label(cls)}': no parameter '{bad[0]}'{did_you_mean(bad[0], names)}")
     try:
         return replace(params, **kw), source
+    except ParameterError:  # names the parameter, its value and its range already
+        raise
     except (TypeError, ValueError) as e:
         raise FogrefError(f"model '{_label(cls)}': cannot set {sorted(kw)}: {e}") from e
 

@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from fogref import params as P
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, rgb
 from fogref.models._num import dtype_of, grey, split
@@ -76,14 +77,11 @@ class ThreeFogParams:
         src = "<ThreeFogParams>"
         if self.mode not in MODES:
             raise ParameterError(src, "mode", f"expected one of {MODES}, got {self.mode!r}")
-        if not (math.isfinite(self.density) and self.density >= 0):
-            raise ParameterError(src, "density", f"value {self.density} must be finite and >= 0")
-        for name in ("near", "far"):
-            if not math.isfinite(getattr(self, name)):
-                raise ParameterError(src, name, "must be finite")
+        for name, lo in (("density", 0.0), ("near", -math.inf), ("far", -math.inf)):
+            object.__setattr__(self, name, P.number(getattr(self, name), name, source=src, lo=lo))
         if self.mode == "Fog" and not self.far > self.near:
             raise ParameterError(src, "far", f"must be greater than near ({self.far} <= {self.near})")
-        object.__setattr__(self, "color", rgb(self.color, "color", src))
+        object.__setattr__(self, "color", rgb(self.color, "color", src, lo=0.0))  # linear RGB >= 0
         f = np.asarray(self.camera_forward, dtype=np.float64)
         n = float(np.linalg.norm(f))
         if f.shape != (3,) or not (math.isfinite(n) and n > 0):
