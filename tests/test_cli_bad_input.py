@@ -335,3 +335,37 @@ def test_engine_model_settings_out_of_range_refused(model, param, needle):
 def test_translate_of_settings_out_of_range_is_one_line(capsys, args, needle):
     err = _cli_error(capsys, ["translate", *args, "--to", "ue4", "--directions", "8"], needle)
     assert "cannot set [" not in err  # names the one parameter, not every parameter
+
+
+# ---------------------------------------------------------------- fogref scene
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["--sky", "constant", "--turbidity", "5"], "--turbidity applies only with --sky sunsky"),
+        (["--turbidity", "5"], "--turbidity applies only with --sky sunsky"),
+        (["--sky", "sunsky", "--sky-radiance", "0.5"], "--sky-radiance does not apply with --sky sunsky"),
+        (["--sky", "sunsky", "--sun-irradiance", "5"], "--sun-irradiance does not apply with --sky sunsky"),
+        (
+            ["--ue-fog-density", "0.02", "--ue-pathtracer", "--ue-volumetric-fog-distance", "1e300"],
+            "'--ue-volumetric-fog-distance': 1e+300 is outside [0.1, 1000000000] cm",
+        ),
+        (
+            ["--ue-fog-density", "0.02", "--ue-pathtracer", "--ue-volumetric-fog-distance", "1e-30"],
+            "'--ue-volumetric-fog-distance': 1e-30 is outside [0.1, 1000000000] cm",
+        ),
+    ],
+)
+def test_scene_options_that_do_not_apply_or_out_of_range_are_refused(tmp_path, capsys, args, needle):
+    out = tmp_path / "s.xml"
+    _cli_error(capsys, ["scene", "--out", out, *args], needle)
+    assert not out.exists()
+
+
+def test_sunsky_with_the_sun_below_the_horizon_is_a_note(tmp_path, capsys):
+    out = tmp_path / "s.xml"
+    assert main(["scene", "--out", str(out), "--sky", "sunsky", "--sun-elevation", "-10"]) == 0
+    err = capsys.readouterr().err
+    assert "note: the sun is 10.0 deg below the horizon" in err and "the truth is black" in err
+    assert "the sun is 10.0 deg below the horizon" in out.read_text()  # the note is in the scene too
