@@ -369,3 +369,44 @@ def test_sunsky_with_the_sun_below_the_horizon_is_a_note(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "note: the sun is 10.0 deg below the horizon" in err and "the truth is black" in err
     assert "the sun is 10.0 deg below the horizon" in out.read_text()  # the note is in the scene too
+
+
+# ---------------------------------------------------------------- the HTML viewer in physical units
+
+
+@pytest.mark.parametrize("scale", [5.4e5, 1e29, 1e-13])
+def test_viewer_in_physical_units_reads_out_the_radiance_and_its_exposure(tmp_path, scale):
+    """A sun of 1e6 and a sky of 1e5 give radiances near 5e5; 1e29 and 1e-13 are the extremes.  The page
+    reads out every part to half precision (relative 2^-11) and sets its exposure from the unclipped
+    truth.  Run in a subprocess: a native library (FLIP) used to exit() the process for 1e-13."""
+    import re
+    import subprocess
+    import sys
+
+    from fogref.compare.tonemap import exposure_for
+    from fogref.gbuffer import load_truth
+    from fogref.html.inline import decode_half
+
+    s = repr(scale)
+    fog = UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2, FogInscatteringColor=(scale,) * 3)
+    light = {"surface_radiance": (scale,) * 3, "sky_radiance": (scale,) * 3}
+    exr, out = tmp_path / "truth.exr", tmp_path / "r"
+    write_truth_exr(synthetic_truth(UE4ExponentialHeightFog(fog), shape=SHAPE, **light), exr)
+    args = ["compare", exr, "--model", "ue4", "--param", "FogDensity=0.02", "--param", "FogHeightFalloff=0.2"]
+    args += ["--param", f"FogInscatteringColor=[{s},{s},{s}]", "--out", out, "--no-figures"]
+    run = subprocess.run(
+        [sys.executable, "-m", "fogref.cli", *map(str, args)], capture_output=True, text=True, timeout=600
+    )
+    assert run.returncode == 0, (run.returncode, run.stderr[-2000:])
+    page = (out / "report.html").read_text()
+    data = json.loads(
+        re.search(r'<script type="application/json" id="fr-data">(.*?)</script>', page).group(1)
+    )
+    truth = load_truth(exr)
+    layers = {L["part"]: L for L in data["layers"]}
+    for part in ("final", "inscatter", "surface"):
+        ref = getattr(truth, part)
+        shown = decode_half(layers[part]["truth"])
+        assert np.allclose(shown, ref, rtol=2.0**-10, atol=0), (part, shown.max(), ref.max())
+        assert layers[part]["exposure"] == pytest.approx(exposure_for(ref), rel=1e-12)
+    assert shown.max() == pytest.approx(truth.surface.max(), rel=2.0**-10)
