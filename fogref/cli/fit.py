@@ -300,6 +300,13 @@ def run_generic(o: Options, pf) -> int:
         f"{r.rmse_T:.3f})",
         file=sys.stderr,
     )
+    if r.ill_posed:
+        print(
+            f"fogref fit: warning: {r.model}: {', '.join(r.ill_posed)} not determined by the {r.n_dirs} "
+            "directions (uncertainty larger than the value): the fit is ill-posed there; give more "
+            "--directions (or leave it out: the count then converges)",
+            file=sys.stderr,
+        )
     return 0
 
 

@@ -237,7 +237,7 @@ class _Options:
     )
     ue_volumetric_fog_distance: float | None = option(
         None,
-        "VolumetricFogDistance: the cylinder's radius [cm], > 0",
+        "VolumetricFogDistance: the cylinder's radius [cm], [0.1, 1e9]",
         check=Number(),
         group=PT,
         default_text="6000",
@@ -442,6 +442,7 @@ def run(a, given=frozenset()) -> int:
         raise UsageError(
             f"{SOURCE}: --phase, --contrast and --grey-extinction need --visibility or --droplets"
         )
+    _refuse_sky_options(a, given)
     sky = a.sky_radiance
     if isinstance(sky, str) and sky.strip().lower() == "none":
         sky = None
@@ -525,6 +526,19 @@ def _droplet_fog(a, phys: dict, ue: dict) -> tuple:
     )
     phys["sigma_t"] = list(df.sigma_t)
     return list(df.albedo), df.g, df.phase, df.notes
+
+
+def _refuse_sky_options(a, given) -> None:
+    """UsageError for a light option the chosen ``--sky`` does not use (refused, not ignored)."""
+    if a.sky == "constant" and "turbidity" in given:
+        raise UsageError(f"{SOURCE}: --turbidity applies only with --sky sunsky (the constant sky has none)")
+    if a.sky == "sunsky":
+        unused = [f"--{n.replace('_', '-')}" for n in ("sky_radiance", "sun_irradiance") if n in given]
+        if unused:
+            raise UsageError(
+                f"{SOURCE}: {', '.join(unused)} does not apply with --sky sunsky (Mitsuba's sunsky gives "
+                "the sun's and the sky's radiance from --turbidity and the sun's elevation)"
+            )
 
 
 def _pathtracer_settings(given: dict, phys: dict, a) -> object:

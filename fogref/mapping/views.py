@@ -33,6 +33,7 @@ __all__ = [
     "Views",
     "fibonacci_directions",
     "physical_single_scattering",
+    "rotated_views",
     "sample_views",
     "sky_projection",
 ]
@@ -81,6 +82,19 @@ def sample_views(
     d_all = np.concatenate([d_all, up])
     D_all = np.concatenate([D_all, np.full(len(up), np.inf)])
     return Views(np.asarray(camera, dtype=float), d_all, D_all)
+
+
+def rotated_views(views: Views, angle: float) -> Views:
+    """``views`` turned by ``angle`` [rad] about the vertical (y) axis through the camera: the same
+    directions' pattern, another sampling of the sphere (sky views stay sky views).
+
+    >>> v = rotated_views(Views(np.zeros(3), np.array([[1.0, 0.0, 0.0]]), np.array([10.0])), math.pi / 2)
+    >>> np.round(v.d, 12).tolist(), v.D.tolist()
+    ([[0.0, 0.0, -1.0]], [10.0])
+    """
+    c, s = math.cos(angle), math.sin(angle)
+    R = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    return Views(views.camera, views.d @ R.T, views.D)
 
 
 def physical_single_scattering(

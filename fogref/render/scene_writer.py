@@ -362,6 +362,11 @@ def write_scene(
     defaults = scene_defaults(fogp, cam, depth, el, az, sun, sky, geo.kind, reflectance=refl)
     if sky_kind == "sunsky":
         defaults["turbidity"] = _fmt(_check(turbidity, "turbidity", RANGES["turbidity"]))
+        if el < 0:
+            notes.append(
+                f"the sun is {_fmt(-el)} deg below the horizon: Mitsuba's sunsky then gives no light "
+                "(no sun, a black sky): the truth is black"
+            )
         if sun_angular_diameter is None:
             sun_angular_diameter = 0.0
     if sun_angular_diameter is not None:
