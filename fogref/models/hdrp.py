@@ -1,11 +1,15 @@
 """Unity HDRP height fog (Fog volume override, non-volumetric path).
 
-Source: HDRP ``Fog.cs`` (``UpdateShaderVariablesGlobalCB``),
+Reproduces the **linear** HDR fog of HDRP's opaque atmospheric-scattering pass (pre-exposed
+colour, before tonemapping).  Source: HDRP ``Fog.cs`` (``UpdateShaderVariablesGlobalCB``),
 ``VolumeRendering.cs`` (``ScaleHeightFromLayerDepth``, ``ExtinctionFromMeanFreePath``)
-and ``AtmosphericScattering.hlsl`` (``OpticalDepthHeightFog``,
-``EvaluateAtmosphericScattering``) in the High Definition Render Pipeline package
-(``com.unity.render-pipelines.high-definition``); the Fog volume override's
-parameter list in Unity's HDRP manual.
+and ``Runtime/Lighting/AtmosphericScattering/AtmosphericScattering.hlsl``
+(``OpticalDepthHeightFog``, ``EvaluateAtmosphericScattering``: the fallback fog
+``GetFogColor * exposure * albedo * (1 - exp(-od))``, read in ``Unity-Technologies/Graphics``
+at commit 0119fcbd7e6704145be47f88b843e757cc9a81d7) in the High Definition Render Pipeline
+package (``com.unity.render-pipelines.high-definition``); the Fog volume override's
+parameter list in Unity's HDRP manual.  ``maxFogDistance`` (``_MaxFogDistance``) is pushed
+by later versions of ``Fog.cs``; that commit's shader does not read it.
 
 Units: HDRP is y-up **metres** (same as fogref), and uses **exp** (not exp2).
 CPU set-up: ``extinction = 1 / meanFreePath`` (the "Fog Attenuation Distance" is

@@ -1,7 +1,11 @@
 """Unity built-in render pipeline fog: Linear, Exp and Exp2 (forward fog).
 
-Source: ``UnityCG.cginc`` (``UNITY_CALC_FOG_FACTOR_RAW``,
-``UNITY_Z_0_FAR_FROM_CLIPSPACE``) and ``UnityShaderVariables.cginc``
+Follows Unity 2019.4's built-in shaders and reproduces the colour the forward shader writes in
+a project with the **Linear** colour space (a Gamma-space project blends in sRGB; not modelled).
+Source: ``CGIncludes/UnityCG.cginc`` (``UNITY_CALC_FOG_FACTOR_RAW``,
+``UNITY_Z_0_FAR_FROM_CLIPSPACE``, ``UNITY_FOG_LERP_COLOR``), read in the unofficial mirror of
+Unity's built-in shaders ``TwoTailsGames/Unity-Built-in-Shaders`` (README: 2019.4.1) at commit
+09db4ee6ce064d3de5364341de62fc7165bb7e75, and ``UnityShaderVariables.cginc``
 (``unity_FogParams``); J. Flick, Catlike Coding, "Rendering 14: Fog"
 (https://catlikecoding.com/unity/tutorials/rendering/part-14/).
 
