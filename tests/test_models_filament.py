@@ -12,20 +12,15 @@ f32 = np.float32
 
 
 def filament_fog_fs(cam, wp, o, scene):
-    """google/filament shaders/src/surface_fog.fs (18c129d) fog() + ColorPassDescriptorSet.cpp
-    (08daaf1) prepareFog, float32, one pixel."""
-    density_y = f32(-(o["heightFalloff"] * (cam[1] - o["height"])))
-    fogDensity = (f32(o["density"]), density_y, f32(o["density"]) * np.exp(density_y))
+    """fog.fs (Wenzel version) + prepareFog, float32, one pixel."""
+    fogDensity = f32(o["density"]) * np.exp(f32(-o["heightFalloff"]) * (f32(cam[1]) - f32(o["height"])))
     view = (np.asarray(wp) - np.asarray(cam)).astype(f32)
-    d = np.sqrt(np.sum(view * view))
-    if d < f32(o["distance"]):  # early exit for an object "in front" of the fog
-        return np.asarray(scene, f32)
     falloff = f32(o["heightFalloff"])
-    fi = fogDensity[2]
-    fh = falloff * view[1]
-    if abs(fh) > f32(0.00125):
-        with np.errstate(over="ignore"):  # exp overflows looking far down: fi = inf, as on the GPU
-            fi = (fogDensity[2] - fogDensity[0] * np.exp(fogDensity[1] - fh)) / fh
+    fi = fogDensity
+    h = falloff * view[1]
+    if abs(h) > f32(0.01):
+        fi = fi * ((f32(1) - np.exp(-h)) / h)
+    d = np.sqrt(np.sum(view * view))
     fogIntegral = fi * max(d - f32(o["distance"]), f32(0))
     fogOpacity = min(f32(1) - np.exp(-fogIntegral), f32(o["maximumOpacity"]))
     fogColor = np.asarray(o["color"], f32) * fogOpacity
@@ -33,7 +28,7 @@ def filament_fog_fs(cam, wp, o, scene):
         insc = fi * max(d - f32(o["inScatteringStart"]), f32(0))
         inscOpacity = f32(1) - np.exp(-insc)
         sunColor = np.asarray(o["sun"], f32)
-        sunAmount = max(f32(np.dot(view / d, np.asarray(o["l"], f32))), f32(0))
+        sunAmount = max(f32(np.dot(view, np.asarray(o["l"], f32))) / d, f32(0))
         fogColor = fogColor + sunColor * (np.power(sunAmount, f32(o["inScatteringSize"])) * inscOpacity)
     return np.asarray(scene, f32) * (f32(1) - fogOpacity) + fogColor
 

@@ -1,32 +1,24 @@
 """Google Filament height fog (``View::FogOptions``).
 
-Follows Filament's current fog (``google/filament``) and reproduces the **linear** colour its
-material shader writes before tonemapping:
-
-* ``shaders/src/surface_fog.fs`` (commit 18c129d295148131bdc1807f43d4f1d98b878dfb), ``fog()``:
-  the "Real-time Atmospheric Effects in Games (Carsten Wenzel)" version, ``exp`` based;
-* ``filament/src/ds/ColorPassDescriptorSet.cpp`` (commit
-  08daaf1b3599931a58be0bcd0826fe58b7e7eead), ``prepareFog``: ``fogDensity = (density,
-  -heightFalloff (camera.y - height), density exp(.y))``, ``heightFalloff = max(0, f)``.
+Source: Filament ``shaders/src/fog.fs`` (the "Real-time Atmospheric Effects in
+Games (Carsten Wenzel)" version, ``exp`` based) and ``PerViewUniforms::prepareFog``
+(CPU: ``fogDensity = density * exp(-heightFalloff * (camera.y - height))``).
 
 Units: Filament is y-up **metres** (same as fogref) and uses **exp** (not exp2):
 density [1/m], heightFalloff [1/m], so the medium is exactly
 ``sigma_t(y) = density * exp(-heightFalloff * (y - height))`` [1/m] (one
-:class:`~fogref.media.ExpLayer`).  Shader: ``fh = falloff * view.y`` (view =
-world - camera, unnormalised), the optical path at one metre
-``(fogDensity.z - fogDensity.x exp(fogDensity.y - fh)) / fh`` if ``|fh| > 0.00125`` else
-``fogDensity.z`` (its value at 0: at most 0.06 % off), times ``max(d - distance, 0)``; a
-fragment closer than ``distance`` gets no fog at all (early exit), and the start distance only
-shortens the ray, the density is still averaged from the camera (unlike Unreal).
+:class:`~fogref.media.ExpLayer`).  Shader: ``h = falloff * view.y`` (view =
+world - camera, unnormalised), line integral ``A (1 - exp(-h))/h`` if
+``|h| > 0.01`` else ``A`` (zeroth-order branch: up to 0.5 % low), times
+``max(d - distance, 0)``; note that the start distance only shortens the ray, the
+density is still averaged from the camera (unlike Unreal).
 
 Compositing: ``opacity = min(1 - exp(-integral), maximumOpacity)``,
 ``final = scene * (1 - opacity) + color * opacity + sun term``, with the sun term
 ``sunColor * pow(max(dot(view, l)/d, 0), inScatteringSize) * (1 - exp(-insc))``
 when ``inScatteringSize > 0`` (``insc`` uses ``inScatteringStart``).  So
-``transmittance = 1 - opacity`` (grey).  ``cutOffDistance``: pixels farther than it get no
-fog.  ``color`` here is the shader's ``fogColor * iblLuminance`` (the IBL intensity times the
-exposure); the colour from the IBL or a sky texture (``fogColorFromIbl``, ``skyColor``) and a
-fog transform other than the identity are not modelled.  Robustness (deviations): ``d`` is floored at
+``transmittance = 1 - opacity`` (grey).  ``cutOffDistance`` (newer versions):
+pixels farther than it get no fog.  Robustness (deviations): ``d`` is floored at
 1e-30 in the sun term (the shader divides 0/0 at the camera), the density at the
 camera is capped at the largest float, and where the shader's line integral is
 not finite (``0 * inf`` far above the fog looking down) the log-form closed
@@ -47,9 +39,6 @@ from fogref.media import NP, ExpLayer, FogMedium
 from fogref.media.closed_form import phi
 from fogref.models._num import dtype_of, grey, split
 from fogref.models.base import FogResult, register
-
-#: surface_fog.fs: below ``|falloff * view.y|`` of this the line integral is its value at 0.
-FH_THRESHOLD = 0.00125
 
 
 @dataclass(frozen=True)
@@ -106,6 +95,10 @@ class FilamentFog:
         dt = dtype_of(precision)
         q = self.params
         cam, wp = split(camera, world_pos)
+        # CPU: density at the viewer's height
+        with np.errstate(all="ignore"):
+            A = dt(q.density) * np.exp(dt(-q.heightFalloff) * (dt(cam[1]) - dt(q.height)))
+            A = min(A, dt(np.finfo(dt).max))  # robustness: no inf density
         falloff = dt(q.heightFalloff)
         with np.errstate(all="ignore"):
             view = (wp - cam).astype(dt)
@@ -127,15 +120,8 @@ class FilamentFog:
 
             if dt is np.float64:
                 fi = robust(h)
-            else:  # fogDensity = (density, -falloff (camera.y - height), density exp(.y)) on the CPU
-                dens_y = dt(-(q.heightFalloff * (cam[1] - q.height)))
-                dens_z = dt(q.density) * np.exp(dens_y)
-                dens_z = min(dens_z, dt(np.finfo(dt).max))  # robustness: no inf density
-                fi = np.where(
-                    np.abs(h) > dt(FH_THRESHOLD),
-                    (dens_z - dt(q.density) * np.exp(dens_y - h)) / h,
-                    dens_z,
-                )
+            else:
+                fi = np.where(np.abs(h) > dt(0.01), A * ((dt(1.0) - np.exp(-h)) / h), A)
                 bad = ~np.isfinite(fi)
                 if np.any(bad):
                     fi[bad] = np.minimum(robust(h[bad]), np.finfo(dt).max).astype(dt)
@@ -164,10 +150,8 @@ class FilamentFog:
                 fog_color = (
                     fog_color + sun * (np.power(amount, dt(q.inScatteringSize)) * insc_opacity)[..., None]
                 )
-            cut = d < dt(q.distance)  # early exit: a fragment in front of the fog start is not fogged
             if math.isfinite(q.cutOffDistance):
-                cut = cut | (d > dt(q.cutOffDistance))
-            if np.any(cut):
+                cut = d > dt(q.cutOffDistance)
                 trans = np.where(cut, dt(1.0), trans)
                 fog_color = np.where(cut[..., None], dt(0.0), fog_color)
         return FogResult(inscatter=fog_color.astype(dt), transmittance=grey(trans, dt))
