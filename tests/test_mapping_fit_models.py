@@ -34,7 +34,10 @@ def _valley():
     "model,field", [("unity", "fogDensity"), ("godot", "fog_density"), ("threejs", None)]
 )
 def test_exact_models_recover_the_density_without_noise(model, field):
-    r = fit_model(model, _homogeneous(), views=64)
+    pf = _homogeneous()
+    # Unity's skybox is not fogged: its fog equals the medium on meshes only, so no sky views
+    views = sample_views(pf.camera, n_dirs=64, sky_min_dy=1.0) if model == "unity" else 64
+    r = fit_model(model, pf, views=views)
     if field is None:  # three.js FogExp2 is never exact: a real residual remains
         assert r.rel_rmse > 0.01
         return
@@ -51,8 +54,8 @@ def test_density_equals_sigma_t_within_its_uncertainty_on_a_noisy_target(model, 
     and its stated sigma must be of the right size (the covariance formula s^2 (J^T J)^-1)."""
     cls = model_class(model)
     pf = _homogeneous()
-    # Bevy's skybox is not fogged: its fog equals the medium on meshes only, so no sky views
-    sky_min_dy = 1.0 if model == "bevy" else 0.0
+    # Bevy's and Unity's skyboxes are not fogged: their fog equals the medium on meshes only
+    sky_min_dy = 1.0 if model in ("bevy", "unity") else 0.0
     targets = physical_targets(pf, sample_views(pf.camera, n_dirs=96, sky_min_dy=sky_min_dy))
     rng = np.random.default_rng(3)
     for t in targets:
@@ -125,7 +128,10 @@ def test_unknown_model_gets_did_you_mean():
 
 
 def test_translate_unity_to_unity_is_identity():
-    t = translate("unity", "unity", {"fogDensity": 0.003}, _homogeneous(), views=48)
+    pf = _homogeneous()  # meshes only: Unity's skybox is not fogged
+    t = translate(
+        "unity", "unity", {"fogDensity": 0.003}, pf, views=sample_views(pf.camera, 48, sky_min_dy=1.0)
+    )
     assert t.physical["extinction"] == "exact"
     assert t.target.values["fogDensity"] == pytest.approx(0.003, rel=1e-5)
     assert t.residual_vs_source < 1e-4

@@ -305,3 +305,21 @@ def test_half_float_storage_moves_transmittance_by_at_most_2p4e_4():
     err = np.abs(t32 - t64)
     assert err.max() <= 2.45e-4  # half of a half-float ulp at [0.5, 1): 2^-12
     assert err.max() > 1e-4  # the rounding is there (float32 alone stays below 1e-6)
+
+
+def test_compare_passes_the_truths_hit_mask():
+    """evaluate_model gives the model the truth's hit mask: sky pixels are the sky shader's even
+    when fogged at a short sky distance (50 m) where no distance rule would call them sky."""
+    from fogref.compare.candidate import evaluate_model
+    from fogref.compare.synthetic import synthetic_truth
+
+    fog = GodotFog(
+        GodotFogParams(fog_mode="depth", fog_density=0.5, fog_depth_begin=10.0, fog_depth_end=20.0)
+    )
+    truth = synthetic_truth(fog, shape=(9, 16))
+    parts = evaluate_model(truth, fog, "float64", sky_distance=50.0)
+    sky, hit = ~truth.hit, truth.hit
+    assert sky.any() and hit.any()
+    assert np.all(parts["T"][sky] == 0.0)  # sky.glsl: 1 - fog_sky_affect
+    geometry = fog.evaluate(truth.camera, truth.world_positions(50.0), "float64").transmittance
+    assert np.all(geometry[sky] == 0.5)  # the same points as geometry: depth fog at 50 m

@@ -48,18 +48,17 @@ def test_float32_matches_transcription():
                 (f32(1) / H, H),
                 v[1] / dist,
                 f32(cam[1]),
-                min(dist, f32(400.0)),
+                dist,  # a surface: its whole distance (maxFogDistance is the sky's)
             )
             assert od[i] == pytest.approx(ref, rel=2e-5, abs=1e-7)
 
 
-def _quad(cam, wp, ext, base, H, maxd):
+def _quad(cam, wp, ext, base, H):
     mpmath.mp.dps = 30
     c = [mpmath.mpf(float(x)) for x in cam]
     w = [mpmath.mpf(float(x)) for x in wp]
     L = mpmath.sqrt(sum((a - b) ** 2 for a, b in zip(w, c)))
     dy = (w[1] - c[1]) / L
-    L = min(L, maxd)
     f = lambda s: ext * mpmath.exp(-max(c[1] + s * dy - base, 0) / H)
     pts = [0, L]
     if dy != 0 and 0 < (base - c[1]) / dy < L:
@@ -82,9 +81,9 @@ def test_float64_against_mpmath_and_medium():
         L = rng.uniform(1, 1500, 8)
         wp = cam + d * L[:, None]
         od = fog.optical_depth(cam, wp, "float64")
-        tau = m.optical_depth(NP, tuple(cam), tuple(d.T), np.minimum(L, 1000.0)) * m.sigma_t[0]
+        tau = m.optical_depth(NP, tuple(cam), tuple(d.T), L) * m.sigma_t[0]
         for i in range(8):
-            q = _quad(cam, wp[i], 1 / 90.0, -3.0, H, 1000.0)
+            q = _quad(cam, wp[i], 1 / 90.0, -3.0, H)
             assert od[i] == pytest.approx(q, rel=1e-9)
             assert tau[i] == pytest.approx(q, rel=1e-9)
 
@@ -113,3 +112,19 @@ def test_extremes_are_finite():
         for prec in ("float32", "float64"):
             r = fog.evaluate(cam, wp, prec)
             assert np.all(np.isfinite(r.transmittance)) and np.all(np.isfinite(r.inscatter))
+
+
+def test_sky_pixels_are_fogged_over_max_fog_distance_surfaces_over_their_distance():
+    """OpaqueAtmosphericScattering.shader: a far-plane pixel sits at camera - V * _MaxFogDistance;
+    a surface farther than maxFogDistance is fogged over its whole distance (homogeneous fog)."""
+    p = HDRPFogParams(meanFreePath=500.0, baseHeight=1e4, maximumHeight=1e4 + 10.0, maxFogDistance=300.0)
+    cam = np.zeros(3)
+    wp = np.array([[1000.0, 0.0, 0.0], [1000.0, 0.0, 0.0]])
+    for prec in ("float32", "float64"):
+        T = HDRPFog(p).evaluate(cam, wp, prec, hit=np.array([True, False])).transmittance[:, 0]
+        assert T == pytest.approx([math.exp(-1000.0 / 500.0), math.exp(-300.0 / 500.0)], rel=2e-6)
+    # without the truth's mask, a point at SKY_DISTANCE is sky
+    from fogref.models import SKY_DISTANCE
+
+    T = HDRPFog(p).evaluate(cam, np.array([[SKY_DISTANCE, 0.0, 0.0]]), "float64").transmittance[0, 0]
+    assert T == pytest.approx(math.exp(-300.0 / 500.0), rel=1e-12)

@@ -335,7 +335,7 @@ def model_errors(name, prec, sigma, b, h, cam, wps):
     fog = make(name, sigma, b, h)
     out = []
     if name == "hdrp":
-        od = fog.optical_depth(cam, wps, prec).astype(np.float64)
+        od = fog.optical_depth(cam, wps, prec, hit=np.ones(len(wps), bool)).astype(np.float64)  # surfaces
         q = fog.params
         H = float(q.scale_height(np.float32 if prec == "float32" else np.float64))
         for i, wp in enumerate(wps):

@@ -36,16 +36,27 @@ def unreal_shader_fog(
     dir_exp=4.0,
     dir_start=0.0,
     vfog=None,
+    skyatm=None,
 ):
     """Independent float32 transcription of UE 4.22's ``GetExponentialHeightFog``
     (``Engine/Shaders/Private/HeightFogCommon.ush``, ported y-up) with the uniforms
     that ``InitFogConstants`` (``Engine/Source/Runtime/Renderer/Private/FogRendering.cpp``)
-    sets, in centimetres.  One pixel.  ``vfog`` (dict: g, albedo, emissive, ambient, illuminance):
-    UE 5.8's PROJECT_EXPFOG_MATCHES_VFOG, sky-atmosphere branch (unicorn2022/UE5.8.0 5d9a05c)."""
+    sets, in centimetres.  One pixel.  UE 5.8 (unicorn2022/UE5.8.0 5d9a05c): ``vfog`` (dict: g,
+    albedo, emissive) the PROJECT_EXPFOG_MATCHES_VFOG lines and InitFogConstants'
+    bExpFogMatchesVolumetricFog; ``skyatm`` (dict: ambient, illuminance) the
+    PROJECT_SUPPORT_SKY_ATMOSPHERE_AFFECTS_HEIGHFOG branch."""
+    fog_dir_color = np.asarray(dir_color, f32)
     if vfog is not None:  # InitFogConstants with bExpFogMatchesVolumetricFog
         dir_start = 0.0
         albedo = np.asarray(vfog["albedo"], f32)
-        color = np.asarray(vfog["emissive"], f32) + np.asarray(vfog["ambient"], f32) * albedo
+        color = np.asarray(vfog["emissive"], f32)
+        fog_dir_color = np.zeros(3, f32)  # FLinearColor::Black
+    if skyatm is not None:  # ComputeInscatteringColor: Inscattering += SkyAmbient (* albedo)
+        sky_ambient = np.asarray(skyatm["ambient"], f32)
+        if vfog is not None:
+            sky_ambient = sky_ambient * albedo
+        color = np.asarray(color, f32) + sky_ambient
+        fog_dir_color = fog_dir_color + np.asarray(skyatm["illuminance"], f32)
     cam = (np.asarray(cam_m, np.float64) * 100).astype(f32)
     rel = ((np.asarray(wp_m, np.float64) - np.asarray(cam_m, np.float64)) * 100).astype(f32)
     d0, fa0 = f32(D) / f32(1000), f32(f) / f32(1000)
@@ -91,11 +102,13 @@ def unreal_shader_fog(
         phase = (f32(1) - G * G) / (
             f32(4) * f32(math.pi) * np.power(f32(1) + G * G + f32(2) * G * cos_theta, f32(1.5))
         )
-        lobe = (f32(0) + np.asarray(vfog["illuminance"], f32)) * phase
+        lobe = fog_dir_color * phase
     elif light is not None:
-        lobe = np.asarray(dir_color, f32) * np.power(
+        lobe = fog_dir_color * np.power(
             np.clip(f32(np.dot(normd, np.asarray(light, f32))), 0, 1), f32(dir_exp)
         )
+        if skyatm is not None:
+            lobe = lobe * (f32(1) / (f32(4) * f32(math.pi)))  # UniformPhaseFunction
     if light is not None:
         dint = shared * max(ray_len - f32(dir_start), f32(0))
         dff = np.clip(np.exp2(-dint), 0, 1)
@@ -264,18 +277,15 @@ def test_registry_and_end_distance():
     assert T[0] < 1 and T[1] == pytest.approx(T[0] ** 2, rel=1e-9)  # fog stops at 1 km
 
 
-VFOG = dict(
-    g=0.6,
-    albedo=(0.9, 0.8, 0.7),
-    emissive=(0.01, 0.02, 0.03),
-    ambient=(0.2, 0.3, 0.5),
-    illuminance=(3.2, 2.9, 2.4),
-)
+VFOG = dict(g=0.6, albedo=(0.9, 0.8, 0.7), emissive=(0.01, 0.02, 0.03))
+SKYATM = dict(ambient=(0.2, 0.3, 0.5), illuminance=(3.2, 2.9, 2.4))
 
 
-@pytest.mark.parametrize("seed", [0, 1])
-def test_exp_fog_matches_volumetric_fog_matches_shader_transcription(seed):
-    rng = np.random.default_rng(10 + seed)
+@pytest.mark.parametrize("match,sky", [(True, True), (True, False), (False, True)])
+def test_ue5_project_settings_match_shader_transcription(match, sky):
+    """r.SupportExpFogMatchesVolumetricFog and r.SupportSkyAtmosphereAffectsHeightFog (each
+    combination but the default, which test_float32_matches_shader_transcription covers)."""
+    rng = np.random.default_rng(10 + 2 * match + sky)
     sun = np.array([0.4, 0.2, -0.6])
     sun /= np.linalg.norm(sun)
     kw = dict(
@@ -287,8 +297,8 @@ def test_exp_fog_matches_volumetric_fog_matches_shader_transcription(seed):
         H2=rng.uniform(-2000, 2000),
         color=(0.4, 0.5, 0.9),
         max_opacity=rng.uniform(0.5, 1.0),
-        start=[0.0, 3000.0][seed],
-        cutoff=[200000.0, 0.0][seed],
+        start=3000.0 * sky,
+        cutoff=200000.0 * match,
         light=sun,
         dir_color=(1.0, 0.8, 0.5),
         dir_exp=8.0,
@@ -306,24 +316,29 @@ def test_exp_fog_matches_volumetric_fog_matches_shader_transcription(seed):
         DirectionalInscatteringExponent=kw["dir_exp"],
         DirectionalInscatteringStartDistance=kw["dir_start"],
         DirectionalInscatteringColor=kw["dir_color"],
-        ExpFogMatchesVolumetricFog=True,
+        ExpFogMatchesVolumetricFog=match,
+        SkyAtmosphereAffectsHeightFog=sky,
         VolumetricFogScatteringDistribution=VFOG["g"],
         VolumetricFogAlbedo=VFOG["albedo"],
         VolumetricFogEmissive=VFOG["emissive"],
-        SkyAtmosphereAmbient=VFOG["ambient"],
-        AtmosphereLightIlluminance=VFOG["illuminance"],
+        SkyAtmosphereAmbient=SKYATM["ambient"] if sky else (0.0, 0.0, 0.0),
+        AtmosphereLightIlluminance=SKYATM["illuminance"] if sky else (0.0, 0.0, 0.0),
     ).with_sun(sun)
     cam = np.array([3.0, rng.uniform(-2, 20), -7.0])
     wp = _rays(rng, 64, cam)
     wp[:8] = cam + sun * 10 ** rng.uniform(1, 4, (8, 1))  # into the forward peak
     res = UE4ExponentialHeightFog(params).evaluate(cam, wp, "float32")
     for i in range(len(wp)):
-        col, fac = unreal_shader_fog(cam, wp[i], **kw, vfog=VFOG)
+        col, fac = unreal_shader_fog(
+            cam, wp[i], **kw, vfog=VFOG if match else None, skyatm=SKYATM if sky else None
+        )
         np.testing.assert_allclose(res.transmittance[i], fac, rtol=2e-5, atol=1e-6)
         np.testing.assert_allclose(res.inscatter[i], col, rtol=2e-5, atol=1e-6)
-    # the cosine lobe and its colour are unused in this mode, as in the engine
-    off = UE4ExponentialHeightFog(replace_fields(params, DirectionalInscatteringColor=(9.0, 9.0, 9.0)))
-    np.testing.assert_array_equal(off.evaluate(cam, wp, "float32").inscatter, res.inscatter)
+    if match:  # the cosine lobe and its colour are unused in this mode, as in the engine
+        off = UE4ExponentialHeightFog(replace_fields(params, DirectionalInscatteringColor=(9.0, 9.0, 9.0)))
+        np.testing.assert_array_equal(off.evaluate(cam, wp, "float32").inscatter, res.inscatter)
+    if match and not sky:  # the CPU's black directional colour: only the emissive is left
+        np.testing.assert_allclose(res.inscatter, np.asarray(VFOG["emissive"], f32) * (1 - res.transmittance))
 
 
 def replace_fields(params, **kw):
@@ -344,6 +359,7 @@ def test_exp_fog_matches_volumetric_fog_is_unattenuated_single_scattering():
         FogHeightFalloff=0.3,
         FogHeight=50.0,
         ExpFogMatchesVolumetricFog=True,
+        SkyAtmosphereAffectsHeightFog=True,
         VolumetricFogScatteringDistribution=-0.4,
         VolumetricFogAlbedo=(0.9, 0.8, 0.7),
         SkyAtmosphereAmbient=(0.2, 0.3, 0.5),
@@ -371,7 +387,8 @@ def test_exp_fog_matches_volumetric_fog_bad_input():
         ),
         (dict(ExpFogMatchesVolumetricFog=True, VolumetricFogAlbedo=(1.2, 1.0, 1.0)), "VolumetricFogAlbedo"),
         (dict(ExpFogMatchesVolumetricFog="yes"), "ExpFogMatchesVolumetricFog"),
-        (dict(SkyAtmosphereAmbient=(0.1, 0.1, 0.1)), "SkyAtmosphereAmbient"),
+        (dict(SkyAtmosphereAffectsHeightFog=1), "SkyAtmosphereAffectsHeightFog"),
+        (dict(ExpFogMatchesVolumetricFog=True, SkyAtmosphereAmbient=(0.1, 0.1, 0.1)), "SkyAtmosphereAmbient"),
     ):
         with pytest.raises(ParameterError, match=name):
             UE4FogParams(**kw)

@@ -3,7 +3,10 @@
 Source: the blog post "积分解 Unity 高度雾" ("Integrating Unity height fog in
 closed form", 2018-12-17), a Unity image-effect shader (``integral``,
 ``integralZeroK``, ``GetAltitudeFog`` and the
-final ``lerp(color, _FogColor, saturate(fog * _FogColor.a))``).
+final ``lerp(color, _FogColor, saturate(fog * _FogColor.a))``); a blog post has no version or
+commit: its text and shader were checked against a copy in the public code index (a Jekyll post
+of that title and date; its final line calls the integral ``GetVerticalFog``).  Reproduces the
+colour the image effect writes: linear in a Linear colour-space project.
 
 Units: Unity, y-up **metres** (same as fogref; no conversion).  Density profile
 (dimensionless): ``T(y) = 1`` below ``_FogStart = S``, ``0`` above ``_FogEnd = E``

@@ -1,7 +1,12 @@
 """Box volume fog (a Unity image effect from Jim's GameDev Blog, "体积雾", 2016).
 
 Source: Jim's GameDev Blog, "体积雾" ("Volumetric fog", 2016-04-12), a Unity
-image-effect shader.  Its formula is printed as an image; the text fixes it:
+image-effect shader; a blog post has no version or commit, and the original page is not in the
+searchable index; a page with the same description (``k`` the linear fog density at a point,
+the ray ``ez`` and its intersections a and b with the volume) is
+http://jiangsulong.com/news/1124Y22E2020.html.
+Reproduces the colour the image effect writes: linear in a Linear colour-space project.
+Its formula is printed as an image; the text fixes it:
 the eye ray e→c (c: the G-buffer point) meets the box at
 a (entry) and b (exit); ``t = |ac|`` is the fog in front of c and ``d = |cb|``
 the fog behind it; the fog amount is 0 at ``t = 0``, grows *linearly* in t, and

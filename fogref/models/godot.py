@@ -1,7 +1,8 @@
 """Godot 4 environment fog (``Environment.fog_*``, the non-volumetric "fixed" fog).
 
-Follows Godot 4.6 (``godotengine/godot``; its ``version.py`` at commit 001aa128 reads 4.6.2) and
-reproduces the **linear** HDR colour the scene shader writes before tonemapping:
+Follows Godot 4 as read in ``godotengine/godot`` at the commits below (the repository's
+``version.py`` in the same index, commit 001aa128, reads 4.6.2) and reproduces the **linear**
+HDR colour the scene shader writes before tonemapping:
 
 * ``servers/rendering/renderer_rd/shaders/forward_clustered/scene_forward_clustered.glsl``
   (commit 000ae031b1c3ab6437707522aa9e1070ee129cec; ``forward_mobile/scene_forward_mobile.glsl``

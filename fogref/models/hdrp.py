@@ -1,10 +1,13 @@
 """Unity HDRP height fog (Fog volume override, non-volumetric path).
 
-Source: HDRP ``Fog.cs`` (``UpdateShaderVariablesGlobalCB``),
+Reproduces the **linear** HDR fog of HDRP's opaque atmospheric-scattering pass (pre-exposed
+colour, before tonemapping).  Source: HDRP ``Fog.cs`` (``UpdateShaderVariablesGlobalCB``),
 ``VolumeRendering.cs`` (``ScaleHeightFromLayerDepth``, ``ExtinctionFromMeanFreePath``)
-and ``AtmosphericScattering.hlsl`` (``OpticalDepthHeightFog``,
-``EvaluateAtmosphericScattering``) in the High Definition Render Pipeline package
-(``com.unity.render-pipelines.high-definition``); the Fog volume override's
+and ``Runtime/Lighting/AtmosphericScattering/AtmosphericScattering.hlsl``
+(``OpticalDepthHeightFog``, ``EvaluateAtmosphericScattering``: the fallback fog
+``GetFogColor * exposure * albedo * (1 - exp(-od))``, read in ``Unity-Technologies/Graphics``
+at commit 0119fcbd7e6704145be47f88b843e757cc9a81d7) in the High Definition Render Pipeline
+package (``com.unity.render-pipelines.high-definition``); the Fog volume override's
 parameter list in Unity's HDRP manual.
 
 Units: HDRP is y-up **metres** (same as fogref), and uses **exp** (not exp2).
@@ -21,8 +24,13 @@ homogeneous below the base height, exponential above (:class:`fogref.media.HDRPL
 ``1000 H``); float64 mode drops that clamp (exact closed form with ``phi``).
 
 Compositing: ``T = exp(-od)`` (grey), ``inscatter = fogColor * albedo * (1 - T)``
-(constant "Color" mode; exposure 1), ``final = scene * T + inscatter``.  The ray
-is integrated over ``min(distance, maxFogDistance)``.
+(constant "Color" mode; exposure 1), ``final = scene * T + inscatter``.  A surface's ray is
+integrated over its whole distance; a sky pixel's over ``maxFogDistance``
+(``Runtime/Lighting/AtmosphericScattering/OpaqueAtmosphericScattering.shader``, commit
+1390609ca74ecc860907a6e87759644f944fbada: a pixel at the far plane is put at
+``GetCurrentViewPosition() - V * _MaxFogDistance``; sky pixels as in
+:func:`~fogref.models._num.sky_pixels`).  (HDRP's ray tracing clamps every ray to
+``min(t, _MaxFogDistance)``; that is not the raster pass.)
 """
 
 from __future__ import annotations
@@ -37,15 +45,15 @@ from fogref import params as valid
 from fogref.errors import ParameterError
 from fogref.media import NP, ExpLayer, FogMedium, HDRPLayer
 from fogref.media.closed_form import phi
-from fogref.models._num import dtype_of, grey, split, view_ray
-from fogref.models.base import FogResult, register
+from fogref.models._num import dtype_of, grey, sky_pixels, split, view_ray
+from fogref.models.base import SKY_DISTANCE, FogResult, register
 
 #: VolumeRendering.cs ScaleHeightFromLayerDepth: 1 / ln(1000).
 LAYER_DEPTH_TO_H = 0.144765
 #: fogref.mapping (hdrp_from_physical): base height [m] that makes HDRP's fog homogeneous everywhere below it.
 HOMOGENEOUS_BASE_HEIGHT = 1.0e7
-#: fogref.mapping (hdrp_from_physical): maxFogDistance [m], beyond any sky distance (the physical
-#: ray is not cut).
+#: fogref.mapping (hdrp_from_physical): maxFogDistance [m], the distance over which sky pixels are
+#: fogged: far enough to stand for the physical sky ray's infinite one.
 FROM_PHYSICAL_MAX_FOG_DISTANCE = 1.0e7
 
 
@@ -127,17 +135,21 @@ class HDRPFog:
     def __init__(self, params: HDRPFogParams | None = None) -> None:
         self.params = params or HDRPFogParams()
 
-    def optical_depth(self, camera: Any, world_pos: Any, precision: str = "float32") -> np.ndarray:
-        """Optical depth (dimensionless) of each pixel's ray."""
+    def optical_depth(
+        self, camera: Any, world_pos: Any, precision: str = "float32", hit: Any = None
+    ) -> np.ndarray:
+        """Optical depth (dimensionless) of each pixel's ray; ``hit`` (...,) bool, False on the
+        pixels that see the sky (integrated over ``maxFogDistance``)."""
         dt = dtype_of(precision)
         q = self.params
         cam, wp = split(camera, world_pos)
         H = q.scale_height(dt)
         ext = dt(1.0) / dt(q.meanFreePath)
         v, dist = view_ray(cam, wp, dt)
+        sky = sky_pixels(cam, wp, hit, SKY_DISTANCE)
         with np.errstate(all="ignore"):
             cos_z = np.where(dist > 0, v[..., 1] / np.where(dist > 0, dist, dt(1.0)), dt(0.0))
-            interval = np.minimum(dist, dt(q.maxFogDistance))
+            interval = np.where(sky, dt(q.maxFogDistance), dist)
             od = optical_depth_height_fog(
                 ext,
                 dt(q.baseHeight),
@@ -150,11 +162,12 @@ class HDRPFog:
             )
         return od.astype(dt, copy=False)
 
-    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
-        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
+    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32", hit: Any = None) -> FogResult:
+        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres; ``hit`` as in
+        :meth:`optical_depth`."""
         dt = dtype_of(precision)
         q = self.params
-        T = np.exp(-self.optical_depth(camera, world_pos, precision))
+        T = np.exp(-self.optical_depth(camera, world_pos, precision, hit))
         col = np.asarray(q.color, dtype=dt) * np.asarray(q.albedo, dtype=dt)
         return FogResult(inscatter=col * (dt(1.0) - T)[..., None], transmittance=grey(T, dt))
 

@@ -12,8 +12,17 @@ tonemapping).  Sources, read in the public mirror of UE 5.8.0 ``unicorn2022/UE5.
 * ``Engine/Shaders/Private/ParticipatingMediaCommon.ush``: ``HenyeyGreensteinPhase``.
 
 The default mode is the shader without a sky atmosphere (its ``#else`` branch), the same as
-UE 4.22 to 4.27 apart from UE 5's EndDistance.  The physical scene -> Unreal mapping and colour
-fit live in :mod:`fogref.mapping.unreal`.
+UE 4.22 to 4.27 apart from UE 5's EndDistance.  ``SkyAtmosphereAffectsHeightFog`` is the branch
+that ``r.SupportSkyAtmosphereAffectsHeightFog`` compiles (its default is 1 in UE 5.8's
+``SkyAtmosphereRendering.cpp``, so a default UE 5.8 project renders it)::
+
+    InscatteringColor            = FogInscatteringColor + SkyAtmosphereAmbient
+    DirectionalLightInscattering = (DirectionalInscatteringColor * SunLuminance + AtmosphereLightIlluminance)
+                                   * pow(saturate(dot(CameraToReceiverNormalized, L)), exponent) / (4 pi)
+
+so the same DirectionalInscatteringColor gives a lobe 4 pi times weaker than UE 4's.  The
+physical scene -> Unreal mapping and colour fit live in :mod:`fogref.mapping.unreal` (the
+default mode).
 
 Units: Unreal is **z-up, centimetres**; fogref is **y-up, metres**.  Positions are
 converted internally by ``(x, y, z)_ue = 100 * (x, z, y)_fogref`` (this swap also
@@ -45,8 +54,8 @@ DirectionalInscattering``.
 volumetric fog's g and albedo reach the fog uniforms from 5.5).  The CPU sets the directional
 start distance to 0, ``ExponentialFogColor = VolumetricFogEmissive``, ``VolumetricFogAlbedo``
 and ``DirectionalInscatteringColor = Black`` ("directional scattering is only impacted by the
-atmospheric light"); the shader's sky-atmosphere branch (``r.SupportSkyAtmosphereAffectsHeightFog``,
-on by default; without it the black colour leaves no directional light) then computes::
+atmospheric light"); with ``SkyAtmosphereAffectsHeightFog`` the shader then computes (without
+it the black colour leaves no directional light and no sky ambient)::
 
     InscatteringColor      = VolumetricFogEmissive + SkyAtmosphereAmbient * VolumetricFogAlbedo
     DirectionalInscattering = AtmosphereLightIlluminance
@@ -165,14 +174,16 @@ class UE4FogParams:
     FogCutoffDistance (cm, 0 = off): pixels farther than this get no fog.
     DirectionalInscatteringExponent is clamped to [1e-6, 1000] as the engine does.
 
+    SkyAtmosphereAffectsHeightFog: the project setting ``r.SupportSkyAtmosphereAffectsHeightFog``
+    (on by default in UE 5.8, off here; see the module doc); only then are
+    AtmosphereLightIlluminance (linear RGB, the sun's ``SkyAtmosphereHeightFogContribution *
+    AtmosphereLightIlluminanceOnGroundPostTransmittance[0]``, scene radiance units x sr) and
+    SkyAtmosphereAmbient (linear RGB, ``SkyAtmosphereAmbientContributionColorScale *
+    SkyAtmosphereHeightFogContribution *`` the distant sky light colour) read.
     ExpFogMatchesVolumetricFog: the project setting ``r.SupportExpFogMatchesVolumetricFog``
-    (UE >= 5.5; see the module doc); only then are the next five read.
+    (UE >= 5.5; see the module doc); only then are the next three read.
     VolumetricFogScatteringDistribution: the HG g in [-0.99, 0.99] (``SceneCore.cpp``'s clamp).
     VolumetricFogAlbedo, VolumetricFogEmissive: linear RGB (the albedo in [0, 1]).
-    AtmosphereLightIlluminance: linear RGB, the sun's ``SkyAtmosphereHeightFogContribution *
-    AtmosphereLightIlluminanceOnGroundPostTransmittance[0]`` (scene radiance units x sr).
-    SkyAtmosphereAmbient: linear RGB, ``SkyAtmosphereAmbientContributionColorScale *
-    SkyAtmosphereHeightFogContribution *`` the distant sky light colour.
 
     Examples
     --------
@@ -198,6 +209,7 @@ class UE4FogParams:
     DirectionalInscatteringColor: tuple = (0.25, 0.25, 0.125)
     InscatteringLightDirection: tuple | None = None
     SunLuminance: float = 1.0
+    SkyAtmosphereAffectsHeightFog: bool = False
     ExpFogMatchesVolumetricFog: bool = False
     VolumetricFogScatteringDistribution: float = 0.2
     VolumetricFogAlbedo: tuple = (1.0, 1.0, 1.0)
@@ -252,8 +264,8 @@ COLOURS = (
     "AtmosphereLightIlluminance",
     "SkyAtmosphereAmbient",
 )
-#: Read only by the ExpFogMatchesVolumetricFog mode (refused when non-zero without it).
-MATCH_ONLY = ("AtmosphereLightIlluminance", "SkyAtmosphereAmbient")
+#: Read only with SkyAtmosphereAffectsHeightFog (refused when non-zero without it).
+SKY_ATMOSPHERE_ONLY = ("AtmosphereLightIlluminance", "SkyAtmosphereAmbient")
 
 
 def _validate(p: "UE4FogParams") -> None:
@@ -269,18 +281,12 @@ def _validate(p: "UE4FogParams") -> None:
         "VolumetricFogAlbedo",
         valid_rgb(p.VolumetricFogAlbedo, "VolumetricFogAlbedo", source=src, lo=0.0, hi=1.0),
     )
-    if not isinstance(p.ExpFogMatchesVolumetricFog, bool):
-        raise ParameterError(
-            src, "ExpFogMatchesVolumetricFog", f"expected true or false, got {p.ExpFogMatchesVolumetricFog!r}"
-        )
-    for name in MATCH_ONLY:
-        if not p.ExpFogMatchesVolumetricFog and any(getattr(p, name)):
-            raise ParameterError(
-                src,
-                name,
-                "read only with ExpFogMatchesVolumetricFog=True (the default mode is the shader "
-                "without a sky atmosphere)",
-            )
+    for name in ("SkyAtmosphereAffectsHeightFog", "ExpFogMatchesVolumetricFog"):
+        if not isinstance(getattr(p, name), bool):
+            raise ParameterError(src, name, f"expected true or false, got {getattr(p, name)!r}")
+    for name in SKY_ATMOSPHERE_ONLY:
+        if not p.SkyAtmosphereAffectsHeightFog and any(getattr(p, name)):
+            raise ParameterError(src, name, "read only with SkyAtmosphereAffectsHeightFog=True")
     if isinstance(p.SecondFogData, dict):
         try:
             object.__setattr__(p, "SecondFogData", SecondFogData(**p.SecondFogData))
@@ -332,14 +338,17 @@ def fog_constants(p: UE4FogParams, camera_z_cm: float, dt: Any = np.float32) -> 
     light_dir = p.InscatteringLightDirection or (0.0, 0.0, 0.0)
     color = tuple(f(c) for c in p.FogInscatteringColor)
     dir_color = tuple(f(c) * f(p.SunLuminance) for c in p.DirectionalInscatteringColor)
-    match = p.ExpFogMatchesVolumetricFog
-    if match:  # InitFogConstants, then the shader's PROJECT_EXPFOG_MATCHES_VFOG lines
+    match, sky = p.ExpFogMatchesVolumetricFog, p.SkyAtmosphereAffectsHeightFog
+    if match:  # InitFogConstants: no start distance, the emissive as fog colour, black directional
         light_w = f(0.0) if p.InscatteringLightDirection is not None else f(-1.0)
-        color = tuple(
-            f(e) + f(s) * f(a)
-            for e, s, a in zip(p.VolumetricFogEmissive, p.SkyAtmosphereAmbient, p.VolumetricFogAlbedo)
-        )
-        dir_color = tuple(f(0.0) + f(c) for c in p.AtmosphereLightIlluminance)
+        color = tuple(f(e) for e in p.VolumetricFogEmissive)
+        dir_color = (f(0.0),) * 3
+    if sky:  # PROJECT_SUPPORT_SKY_ATMOSPHERE_AFFECTS_HEIGHFOG: the atmosphere's sky and sun added
+        ambient = [f(s) for s in p.SkyAtmosphereAmbient]
+        if match:
+            ambient = [a * f(b) for a, b in zip(ambient, p.VolumetricFogAlbedo)]
+        color = tuple(c + a for c, a in zip(color, ambient))
+        dir_color = tuple(c + f(e) for c, e in zip(dir_color, p.AtmosphereLightIlluminance))
     return dict(
         P=(f(collapsed[0]), fall[0], max_obs, f(p.StartDistance)),
         P2=(f(collapsed[1]), fall[1], dens[1], height[1]),
@@ -351,6 +360,7 @@ def fog_constants(p: UE4FogParams, camera_z_cm: float, dt: Any = np.float32) -> 
         dir_exponent=f(np.clip(f(p.DirectionalInscatteringExponent), f(0.000001), f(1000.0))),
         end_distance=f(p.EndDistance),
         match=match,
+        sky=sky,
         phase_g=f(p.VolumetricFogScatteringDistribution),
         albedo=tuple(f(a) for a in p.VolumetricFogAlbedo),
     )
@@ -431,6 +441,8 @@ def shade(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt: Any, exact: bool) ->
         else:
             cos = saturate(nx * light[0] + ny * light[1] + nz * light[2])
             lobe = np.power(cos, C["dir_exponent"])
+            if C["sky"]:  # the sky-atmosphere branch: ... * UniformPhaseFunction
+                lobe = lobe * (dt(1.0) / (dt(4.0) * dt(math.pi)))
         dir_run = np.maximum(ray_length - light[3], dt(0.0))
         dir_integral = np.where(dir_run > 0, shared * dir_run, dt(0.0))  # no inf * 0 (see above)
         dir_factor = saturate(np.exp2(-dir_integral))

@@ -1,7 +1,11 @@
 """Unity built-in render pipeline fog: Linear, Exp and Exp2 (forward fog).
 
-Source: ``UnityCG.cginc`` (``UNITY_CALC_FOG_FACTOR_RAW``,
-``UNITY_Z_0_FAR_FROM_CLIPSPACE``) and ``UnityShaderVariables.cginc``
+Follows Unity 2019.4's built-in shaders and reproduces the colour the forward shader writes in
+a project with the **Linear** colour space (a Gamma-space project blends in sRGB; not modelled).
+Source: ``CGIncludes/UnityCG.cginc`` (``UNITY_CALC_FOG_FACTOR_RAW``,
+``UNITY_Z_0_FAR_FROM_CLIPSPACE``, ``UNITY_FOG_LERP_COLOR``), read in the unofficial mirror of
+Unity's built-in shaders ``TwoTailsGames/Unity-Built-in-Shaders`` (README: 2019.4.1) at commit
+09db4ee6ce064d3de5364341de62fc7165bb7e75, and ``UnityShaderVariables.cginc``
 (``unity_FogParams``); J. Flick, Catlike Coding, "Rendering 14: Fog"
 (https://catlikecoding.com/unity/tutorials/rendering/part-14/).
 
@@ -19,7 +23,11 @@ depth ``z_eye = dot(p - camera, camera_forward)``) or ``"distance"``
 (``length(p - camera)``, catlikecoding's FOG_DISTANCE).
 
 Compositing: ``color.rgb = lerp(unity_FogColor.rgb, color.rgb, saturate(f))``,
-i.e. ``transmittance = saturate(f)`` (grey), ``inscatter = fogColor (1 - T)``.
+i.e. ``transmittance = saturate(f)`` (grey), ``inscatter = fogColor (1 - T)``, in the material
+shaders only: the skybox (``DefaultResourcesExtra/Skybox-Procedural.shader`` at the same
+commit) applies no fog, so sky pixels (the truth's ``hit`` mask is False, or without it a float64
+distance of at least :data:`~fogref.models.base.SKY_DISTANCE`, see
+:func:`~fogref.models._num.sky_pixels`) get ``transmittance = 1``, ``inscatter = 0``.
 
 Physical counterpart: Exp fog on *distance* is exactly a homogeneous medium with
 ``sigma_t = density`` [1/m].  Exp2 and Linear have none; :func:`unity_to_medium`
@@ -38,8 +46,8 @@ import numpy as np
 from fogref import params as valid
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium
-from fogref.models._num import LN2, dtype_of, grey, saturate, split
-from fogref.models.base import FogResult, register
+from fogref.models._num import LN2, dtype_of, grey, saturate, sky_pixels, split
+from fogref.models.base import SKY_DISTANCE, FogResult, register
 
 MODES = ("linear", "exp", "exp2")
 
@@ -131,13 +139,17 @@ class UnityBuiltinFog:
         zc = n * (f - z) / (f - n)  # reversed-Z clip-space z
         return np.maximum((dt(1.0) - zc / n) * f, dt(0.0))
 
-    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
-        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres."""
+    def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32", hit: Any = None) -> FogResult:
+        """Fog of each pixel: camera (3,), world_pos (..., 3) in metres; ``hit`` (...,) bool,
+        False on the pixels that see the sky (the skybox: no fog)."""
         dt = dtype_of(precision)
         p = self.params
+        cam, wp = split(camera, world_pos)
+        sky = sky_pixels(cam, wp, hit, SKY_DISTANCE)
         with np.errstate(all="ignore"):
             c = self.fog_coordinate(camera, world_pos, dt)
             factor = saturate(unity_fog_factor(p.fogMode, p.fog_params(dt), c, dt)).astype(dt)
+            factor = np.where(sky, dt(1.0), factor).astype(dt)
         color = np.asarray(p.fogColor, dtype=dt)
         return FogResult(inscatter=color * (dt(1.0) - factor)[..., None], transmittance=grey(factor, dt))
 
