@@ -163,7 +163,8 @@ def _source_targets(
     return out
 
 
-#: A source fog whose transmittance is below this on every view is opaque: nothing to translate.
+#: A source fog whose transmittance is below this on every view of a surface is opaque: nothing
+#: to translate.
 OPAQUE = 1e-9
 
 
@@ -177,7 +178,10 @@ def physical_of_model(
     """
     spec = fit_spec(cls)
     targets = _source_targets(cls, spec, params, pf, views, elevations)
-    if all(float(np.max(t.T)) < OPAQUE for t in targets):
+    # on the views of surfaces: engines that draw the background unfogged (three.js, Bevy, ...)
+    # show T = 1 on the sky whatever the fog
+    surface_T = [np.asarray(t.T)[~t.views.sky] if (~t.views.sky).any() else np.asarray(t.T) for t in targets]
+    if all(float(np.max(T)) < OPAQUE for T in surface_T):
         raise ParameterError(
             f"translate: {getattr(cls, 'name', cls.__name__)}",
             "settings",
