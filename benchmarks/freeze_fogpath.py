@@ -53,6 +53,7 @@ def child(case: str) -> None:
     import numpy as np
 
     from fogref.media import drjit_ops
+    from fogref.media.ops import DrJitOps
     from fogref.render.scene import load_scene
 
     base = common.FogPathBase
@@ -111,12 +112,21 @@ def child(case: str) -> None:
         facts["sel"] = reads["sel"](scene.integrator(), scene)
         for sd in seeds:
             seed_t = sd if case == "as_is" else dr.opaque(mi.UInt32, sd)  # render_moments takes an int
+            sites: set = set()
+            param = DrJitOps._param
+
+            def counted(self, x, caller, slot, _param=param):  # the call sites of Python values
+                sites.add((caller.f_code.co_filename, caller.f_lineno))
+                return _param(self, x, caller, slot)
+
+            DrJitOps._param = counted
             traced, t_traced = timed(body if case != "as_is" else as_is, scene, seed_t, SPP)
+            DrJitOps._param = param
             drjit_ops()._params.clear()  # opaque values made by the traced call are not inputs
             values = None
             if case in ("same_scene", "new_scenes"):
                 values = {k: v for k, v in mi.traverse(scene).items() if dr.is_jit_v(v) and dr.width(v) == 1}
-            row = {"sun_elevation": sun, "seed": sd, "traced_s": t_traced}
+            row = {"sun_elevation": sun, "seed": sd, "traced_s": t_traced, "param_sites": len(sites)}
             try:
                 replay, t_frozen = timed(frozen, scene, seed_t, SPP, values)
             except RuntimeError as e:
@@ -216,13 +226,17 @@ def report(r: dict) -> str:
         f"`hash()` or `id()` (its documentation), and fogpath's integrator and medium are Python "
         f"objects whose values (the fog's parameters, the sun fogpath reads) are Python numbers, "
         f"not traversed.  When the new scene's objects get new ids Dr.Jit records again (no "
-        f"gain); when they reuse the freed scene's ids it replays the old recording, whose fog "
+        f"gain); when they reuse ids a recording saw (Python reuses a freed object's id) it "
+        f"replays that recording, whose fog "
         f"and sun values are constants of that recording.  In this run "
         f"{len(wrong)} of {len(calls)} new-scene calls replayed with pixels that differ from "
         f"the traced render ({len(replays)} replays were correct).  Freezing a sweep's "
         f"configurations needs every value the trace reads (the fog's parameters and what is "
         f"derived from them in Python, the sun, the sky, the pdfs) to be a Dr.Jit input of the "
-        f"frozen function, not a Python number.",
+        f"frozen function, not a Python number: on this scene the traced pass takes Python "
+        f"values at {calls[0].get('param_sites', '?')} `ops.param` call sites (fogpath, the media's "
+        f"closed forms, the sun's single-scattering sampler), each computed there from the fog "
+        f"object's fields.",
     ]
     return "\n".join(md) + "\n"
 
