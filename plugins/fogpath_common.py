@@ -31,6 +31,12 @@ from fogref.render.passes import max_lanes, pass_seed, pass_sizes
 #: The integrator's AOVs (after R,G,B): the per-sample groups of the schema.
 AOV_NAMES = gbuffer.sample_channel_names()
 
+#: Dr.Jit's ``OptimizeLoops`` while fogpath traces a pass.  On, Dr.Jit traces every symbolic
+#: loop body twice to drop loop-invariant state; off, once.  Off: about 20 ms less host time
+#: per pass, pixels bitwise equal and execution time unchanged within noise
+#: (``reports/benchmarks/host_time.md``).
+OPTIMIZE_LOOPS = False
+
 
 class _Opaque:
     """Hides a Python object (e.g. a dataclass) from Dr.Jit's loop-state traversal."""
@@ -257,7 +263,8 @@ class FogPathBase(mi.SamplingIntegrator):
         make_scene_values_opaque(scene)  # one kernel for every value of the scene's parameters
         self._memo = (scene, {})  # the scene values read while tracing: once (_read_once)
         try:
-            return self._render_moments(scene, sensor, seed, spp, pixel_exact, squares)
+            with dr.scoped_set_flag(dr.JitFlag.OptimizeLoops, OPTIMIZE_LOOPS):
+                return self._render_moments(scene, sensor, seed, spp, pixel_exact, squares)
         finally:
             self._memo = None
 

@@ -1,4 +1,4 @@
-"""fogpath reads the scene's values (the constant sky, its selection pdf, the sun) once per render.
+"""fogpath's host-side cuts keep the pixels: scene values read once per render, loops traced once.
 
 Reading an evaluated Dr.Jit value from Python (``str`` of an emitter, ``float`` of the sun's
 transform) waits on the device; fogpath used to read them at every call site while tracing
@@ -9,7 +9,10 @@ what it read for the call (``FogPathBase._read_once``).
   later render of another scene reads its own values): fails if a call site reads past the
   memo, or if the memo outlives the call;
 * the pixels are bitwise those of reading at every call site, at two sun elevations: fails on
-  any value the memo changes or mixes up between scenes.
+  any value the memo changes or mixes up between scenes;
+* the pixels are bitwise those of Dr.Jit's ``OptimizeLoops`` on (every symbolic loop body traced
+  twice, loop-invariant state dropped), which ``render_moments`` turns off while it traces
+  (``OPTIMIZE_LOOPS``): fails on any pixel the unoptimised loops change.
 """
 
 from collections import Counter
@@ -58,3 +61,14 @@ def test_reading_once_keeps_the_pixels(mitsuba, monkeypatch):
     for sun in scenes:
         assert np.array_equal(once[sun], every[sun]), f"sun elevation {sun}: pixels changed"
     assert not np.array_equal(once["20"], once["40"]), "the sun's elevation did not change the render"
+
+
+def test_loops_traced_once_keep_the_pixels(mitsuba, monkeypatch):
+    import fogref_plugins.fogpath_common as common
+
+    assert common.OPTIMIZE_LOOPS is False
+    scene = mitsuba.load_file(VALLEY, **TINY, sun_elevation="30")
+    once = _sums(scene, seed=4)
+    monkeypatch.setattr(common, "OPTIMIZE_LOOPS", True)
+    twice = _sums(scene, seed=4)
+    assert np.array_equal(once, twice), "OptimizeLoops changed the pixels"
