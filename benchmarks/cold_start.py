@@ -18,7 +18,8 @@ of a previous run (``warm``: the caches that run left), timing the phases of
 * ``channels``: means and errors on the device and the one host copy;
 * ``exr``: writing the EXR.
 
-The command-line total (``fogref render ... --quiet --no-png``, cold and warm) is timed too.
+The command-line total (``fogref render ... --quiet --no-png``, cold and warm) is timed too, and
+what its start-up imports cost (``python -X importtime``, cumulative per package).
 
     .venv/bin/python benchmarks/cold_start.py [--repeats 2]
 
@@ -130,6 +131,33 @@ def _run_cli(home: Path, out: Path) -> float:
     return time.perf_counter() - t0
 
 
+#: Imports whose cumulative time ``python -X importtime`` reports (a module counts where it is
+#: first imported: ``fogref.models`` inside ``fogref.mapping``, for instance).
+IMPORTS = ("fogref.render.render", "numpy", "fogref.mapping", "fogref.models", "fogref.gbuffer")
+IMPORTS += ("drjit", "mitsuba", "mitsuba.llvm_ad_rgb", "fogref_plugins.fogpath")
+
+
+def _import_times(home: Path) -> dict:
+    """Cumulative import time [s] of :data:`IMPORTS` in a fresh process that imports the render
+    driver and sets the variant (Mitsuba, Dr.Jit, the plugins), as ``fogref render --quiet``
+    does, from ``python -X importtime``; ``all`` is the sum of the top-level imports."""
+    code = "import fogref.render.render; from fogref.render.variant import set_variant; set_variant(None)"
+    env = {**os.environ, "HOME": str(home)}
+    r = subprocess.run(
+        [sys.executable, "-X", "importtime", "-c", code], env=env, capture_output=True, text=True, check=True
+    )
+    out: dict = {"all": 0.0}
+    for line in r.stderr.splitlines():
+        if not line.startswith("import time:") or "cumulative" in line:
+            continue
+        _, cumulative, name = line.split("|")
+        seconds = int(cumulative) / 1e6
+        if not name.startswith("  "):  # top level: counted once
+            out["all"] += seconds
+        out.setdefault(name.strip(), seconds)
+    return {k: out.get(k, 0.0) for k in ("all", *IMPORTS)}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--repeats", type=int, default=2)
@@ -138,7 +166,7 @@ def main() -> None:
     if args.child:
         child(float(args.child[0]), args.child[1])
         return
-    runs: dict = {"cold": [], "warm": [], "cli_cold": [], "cli_warm": []}
+    runs: dict = {"cold": [], "warm": [], "cli_cold": [], "cli_warm": [], "imports": []}
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(args.repeats):
             home = Path(tmp) / f"home{i}"
@@ -149,6 +177,7 @@ def main() -> None:
             cli_home.mkdir()
             runs["cli_cold"].append(_run_cli(cli_home, Path(tmp) / f"cc{i}.exr"))
             runs["cli_warm"].append(_run_cli(cli_home, Path(tmp) / f"cw{i}.exr"))
+            runs["imports"].append(_import_times(cli_home))
             cold, warm = runs["cold"][-1]["total"], runs["warm"][-1]["total"]
             cli = f"CLI {runs['cli_cold'][-1]:.2f} / {runs['cli_warm'][-1]:.2f} s"
             print(f"repeat {i}: cold {cold:.2f} s, warm {warm:.2f} s, {cli}", file=sys.stderr)
@@ -175,6 +204,10 @@ def main() -> None:
         for p in (*PHASES, "total")
     ]
     cli = {w: statistics.median(runs[f"cli_{w}"]) for w in ("cold", "warm")}
+    imports = {k: statistics.median(r[k] for r in runs["imports"]) for k in runs["imports"][0]}
+    result["imports"] = imports
+    (out / "cold_start.json").write_text(json.dumps(result, indent=1) + "\n")
+    import_rows = "\n".join(f"| `{k}` | {v:.3f} |" for k, v in imports.items() if k != "all")
     md = f"""# Cold start of a CI render: where the seconds go
 
 `benchmarks/cold_start.py`: `scenes/valley.xml` at 32x18, {SPP} spp, seed 0, each run a fresh
@@ -194,6 +227,15 @@ pass's wall time less code generation, compilation and execution (Python running
 
 `fogref render` on the command line, same image, `--quiet --no-png --no-resume`: {cli["cold"]:.2f} s
 cold, {cli["warm"]:.2f} s warm (median wall time of the whole process).
+
+Where a warm command line's start-up goes: `python -X importtime` of what `fogref render`
+imports with `--quiet` (the render driver, `set_variant`) in a fresh, warm process, cumulative seconds,
+median of {args.repeats}; {imports["all"]:.2f} s in all (a module counts where it is first
+imported):
+
+| import | cumulative [s] |
+|---|---:|
+{import_rows}
 
 What a CI keeps between runs decides most of the difference: `~/.drjit` (Dr.Jit's kernel
 cache) removes the `backend` (LLVM compilation) row, and `~/.cache/fogref` the `dr.syntax`

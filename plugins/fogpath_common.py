@@ -4,7 +4,8 @@
 subclass (:class:`fogref_plugins.fogpath.FogPathIntegrator`) and gives it:
 
 * the scene facts the estimator reads at trace time: the sensor's fog, the kinds of
-  light, the sun (:meth:`FogPathBase._scene_fog`, ``_scene_lights``, ``_scene_sun``);
+  light, the sun (:meth:`FogPathBase._scene_fog`, ``_scene_lights``, ``_scene_sun``), the
+  values among them read once per render;
 * opaque scene values (:func:`make_scene_values_opaque`), so that kernels are reused
   across scenes that differ only in a value;
 * the parts of the schema a contribution feeds (:class:`Split`) and the per-sample
@@ -29,6 +30,12 @@ from fogref.render.passes import max_lanes, pass_seed, pass_sizes
 
 #: The integrator's AOVs (after R,G,B): the per-sample groups of the schema.
 AOV_NAMES = gbuffer.sample_channel_names()
+
+#: Dr.Jit's ``OptimizeLoops`` while fogpath traces a pass.  On, Dr.Jit traces every symbolic
+#: loop body twice to drop loop-invariant state; off, once.  Off: about 20 ms less host time
+#: per pass, pixels bitwise equal and execution time unchanged within noise
+#: (``reports/benchmarks/host_time.md``).
+OPTIMIZE_LOOPS = False
 
 
 class _Opaque:
@@ -116,10 +123,25 @@ class FogPathBase(mi.SamplingIntegrator):
         delta = [mi.has_flag(e.flags(), mi.EmitterFlags.Delta) for e in scene.emitters()]
         return any(delta), not all(delta)
 
-    @staticmethod
-    def _constant_sky(scene):
+    def _read_once(self, scene, name, read):
+        """``read()``, read once per :meth:`render_moments` call and scene: the scene values
+        fogpath reads while tracing (``str`` and ``float`` of evaluated variables, each a
+        wait on the device) are read once per render instead of at every call site.
+        Outside ``render_moments`` (``sample`` called directly) every call reads."""
+        memo = getattr(self, "_memo", None)
+        if memo is None or memo[0] is not scene:
+            return read()
+        if name not in memo[1]:
+            memo[1][name] = read()
+        return memo[1][name]
+
+    def _constant_sky(self, scene):
         """The scene's ``constant`` sky emitter when it is the only non-delta infinite
         emitter, else None (trace-time)."""
+        return self._read_once(scene, "sky", lambda: self._read_constant_sky(scene))
+
+    @staticmethod
+    def _read_constant_sky(scene):
         smooth_inf = [
             e
             for e in scene.emitters()
@@ -133,15 +155,21 @@ class FogPathBase(mi.SamplingIntegrator):
     def _sky_selection(self, scene):
         """(the constant sky's probability of being chosen by ``scene.sample_emitter``, the
         summed probability of the emitters before it): trace-time floats."""
+        return self._read_once(scene, "sky_selection", lambda: self._read_sky_selection(scene))
+
+    def _read_sky_selection(self, scene):
         sky = self._constant_sky(scene)
         probs = [float(scene.pdf_emitter(i)[0]) for i in range(len(scene.emitters()))]
         j = next(i for i, e in enumerate(scene.emitters()) if e is sky)
         return probs[j], sum(probs[:j])
 
-    @staticmethod
-    def _scene_sun(scene):
+    def _scene_sun(self, scene):
         """(direction toward the sun, RGB irradiance) of the only delta directional
         emitter, or None (trace-time, Python floats)."""
+        return self._read_once(scene, "sun", lambda: self._read_scene_sun(scene))
+
+    @staticmethod
+    def _read_scene_sun(scene):
         delta = [e for e in scene.emitters() if mi.has_flag(e.flags(), mi.EmitterFlags.Delta)]
         if len(delta) != 1:
             return None
@@ -233,6 +261,14 @@ class FogPathBase(mi.SamplingIntegrator):
         """
         pixel_exact = self.pixel_exact if pixel_exact is None else bool(pixel_exact)
         make_scene_values_opaque(scene)  # one kernel for every value of the scene's parameters
+        self._memo = (scene, {})  # the scene values read while tracing: once (_read_once)
+        try:
+            with dr.scoped_set_flag(dr.JitFlag.OptimizeLoops, OPTIMIZE_LOOPS):
+                return self._render_moments(scene, sensor, seed, spp, pixel_exact, squares)
+        finally:
+            self._memo = None
+
+    def _render_moments(self, scene, sensor, seed, spp, pixel_exact, squares):
         sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
         if not str(sensor).startswith("PerspectiveCamera"):
             raise ValueError(
