@@ -80,7 +80,9 @@ def test_header_records_everything(rendered):
 
 def test_no_temporary_files_left_and_plain_file_mode(rendered):
     d, _, _ = rendered
-    assert sorted(p.name for p in d.iterdir()) == ["a.exr", "a.png", "b.exr", "b.png"]
+    # each truth, its preview and its float64 sums (kept so that more samples can be added)
+    want = ["a.exr", "a.exr.moments.npz", "a.png", "b.exr", "b.exr.moments.npz", "b.png"]
+    assert sorted(p.name for p in d.iterdir()) == want
     umask = os.umask(0)
     os.umask(umask)
     assert (d / "a.exr").stat().st_mode & 0o777 == 0o666 & ~umask  # not mkstemp's 0600
@@ -180,7 +182,7 @@ def test_leftover_temporary_checkpoint_is_removed(tmp_path, mitsuba):
     stale = tmp_path / "x.exr.partial.npz.abc123.tmp.npz"
     stale.write_bytes(b"partial")
     render(SCENES / "valley.xml", tmp_path / "x.exr", spp=1, overrides=SMALL, progress=False, png=False)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.exr"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.exr", "x.exr.moments.npz"]
 
 
 #: wall-clock limit [s] of a wait, for a hang only: generous on a loaded machine
