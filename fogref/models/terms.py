@@ -105,6 +105,7 @@ TERMS: dict[str, dict[str, Term]] = {
         "InscatteringLightDirection": Term("unit vector toward the sun, Unreal frame (z-up)"),
         "SunLuminance": Term("lux (the sun light's luminance)"),
         "ExpFogMatchesVolumetricFog": _MODE,
+        "SkyAtmosphereAffectsHeightFog": _MODE,
         "VolumetricFogScatteringDistribution": Term("1 (the Henyey-Greenstein g)"),
         "VolumetricFogAlbedo": Term("linear RGB, 0..1", "linear"),
         "VolumetricFogEmissive": _LIN,

@@ -12,10 +12,10 @@ public static class FogrefFog
     {
         RenderSettings.fog = true;
         RenderSettings.fogMode = FogMode.Exponential;
-        RenderSettings.fogDensity = 0.00108430707f;
+        RenderSettings.fogDensity = 0.000991306804f;
         RenderSettings.fogStartDistance = 0.0f;
         RenderSettings.fogEndDistance = 300.0f;
-        RenderSettings.fogColor = new Color(0.151009058f, 0.18816455f, 0.264493906f).gamma;
+        RenderSettings.fogColor = new Color(0.160885633f, 0.201674337f, 0.285338802f).gamma;
         camera.transform.position = new Vector3(0.0f, 2.0f, -0.0f);
         camera.transform.rotation = Quaternion.LookRotation(new Vector3(0.140180794f, 0.327088519f, -0.934538627f), new Vector3(-0.0485204591f, 0.944993704f, 0.323469728f));
         camera.fieldOfView = 42.9956614f;  // vertical [deg]

@@ -14,11 +14,11 @@ public static class FogrefHdrpFog
             fog = profile.Add<Fog>(true);
         fog.enabled.Override(true);
         fog.colorMode.Override(FogColorMode.ConstantColor);
-        fog.color.Override(new Color(0.311830207f, 0.397140476f, 0.571477056f));
+        fog.color.Override(new Color(0.311830208f, 0.397140476f, 0.571477056f));
         fog.albedo.Override(new Color(0.9f, 0.9f, 0.9f));
-        fog.meanFreePath.Override(281.898091f);
-        fog.baseHeight.Override(-90.0955348f);
-        fog.maximumHeight.Override(483.121203f);
+        fog.meanFreePath.Override(281.89809f);
+        fog.baseHeight.Override(-90.0955361f);
+        fog.maximumHeight.Override(483.121206f);
         fog.maxFogDistance.Override(10000000.0f);
         camera.transform.position = new Vector3(0.0f, 2.0f, -0.0f);
         camera.transform.rotation = Quaternion.LookRotation(new Vector3(0.140180794f, 0.327088519f, -0.934538627f), new Vector3(-0.0485204591f, 0.944993704f, 0.323469728f));

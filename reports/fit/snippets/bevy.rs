@@ -21,10 +21,10 @@ pub fn spawn_fogref(mut commands: Commands) {
             .looking_at(Vec3::new(0.15, 2.35, 1.0), Vec3::new(0.0, 1.0, 0.0)),
         Exposure { ev100: -0.263034406 },
         DistanceFog {
-            color: Color::linear_rgba(0.0964907964, 0.13400782, 0.209361735, 1.0),
-            directional_light_color: Color::linear_rgba(0.20376788, 0.207380378, 0.217729562, 1.0),
-            directional_light_exponent: 8.67749008,
-            falloff: FogFalloff::Atmospheric { extinction: Vec3::new(8.36077792e-05, 8.36077792e-05, 8.36077792e-05), inscattering: Vec3::new(0.00218913914, 0.00226905809, 0.0023656387) },
+            color: Color::linear_rgba(0.102061964, 0.142585868, 0.224094462, 1.0),
+            directional_light_color: Color::linear_rgba(0.202045006, 0.205763561, 0.215888452, 1.0),
+            directional_light_exponent: 8.36158344,
+            falloff: FogFalloff::Atmospheric { extinction: Vec3::new(8.41111335e-05, 8.41111335e-05, 8.41111335e-05), inscattering: Vec3::new(0.00206562536, 0.00209898263, 0.00213480954) },
         },
     ));
     commands.spawn((

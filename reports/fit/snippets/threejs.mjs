@@ -6,8 +6,8 @@
 import * as THREE from 'three';
 
 export function applyFogref(scene) {
-  const fogColor = new THREE.Color().setRGB(0.152118391, 0.188222197, 0.262532724, THREE.LinearSRGBColorSpace);
-  scene.fog = new THREE.FogExp2(fogColor, 0.00259463727);
+  const fogColor = new THREE.Color().setRGB(0.160802133, 0.199786046, 0.279933722, THREE.LinearSRGBColorSpace);
+  scene.fog = new THREE.FogExp2(fogColor, 0.00252448998);
 
   const sun = new THREE.DirectionalLight(new THREE.Color().setRGB(1.0, 0.90625, 0.75, THREE.LinearSRGBColorSpace), 3.2);
   sun.position.set(399.95816, 139.173101, 905.905248);  // toward the sun; the target stays at the origin

@@ -38,7 +38,7 @@ set_first(fog, ["fog_max_opacity"], 1.0)
 set_first(fog, ["start_distance"], 0.0)
 set_first(fog, ["fog_cutoff_distance"], 0.0)
 set_first(fog, ["directional_inscattering_exponent"], 12.2281926)
-set_first(fog, ["directional_inscattering_start_distance"], 8.22242976e-44)
+set_first(fog, ["directional_inscattering_start_distance"], 8.63365554e-46)
 set_first(fog, ['fog_inscattering_color', 'fog_inscattering_luminance'], unreal.LinearColor(0.211289948, 0.294623073, 0.462463632, 1.0))
 set_first(fog, ['directional_inscattering_color', 'directional_inscattering_luminance'], unreal.LinearColor(0.417106913, 0.376000237, 0.306926892, 1.0))
 
