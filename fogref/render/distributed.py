@@ -218,7 +218,7 @@ def passes_in_order(
     KeyboardInterrupt is raised (a terminal's Ctrl-C also stops a LocalCluster's workers, so
     no more passes would come).  Closing the generator (an interruption) cancels the passes
     still queued or running.  ``redone`` (a callable) is given each line of
-    :func:`redone_passes`, checked as each pass arrives and at the end.
+    :func:`redone_passes`, checked as each pass arrives (a redone pass arrives after its event).
     """
     from dask.distributed import as_completed
 
