@@ -255,9 +255,33 @@ def main() -> None:
             t_fixed, t_p * (3840 * 2160) / lanes, transfer_bytes(3840, 2160) * t_d / b, 1024
         ),
     }
+    previous = out / "render_distributed.json"
+    result["history"] = _history(result, json.loads(previous.read_text()) if previous.exists() else None)
     (out / "render_distributed.json").write_text(json.dumps(result, indent=1) + "\n")
     (out / "render_distributed.md").write_text(_report(result))
     print(out / "render_distributed.md")
+
+
+def _summary(r: dict) -> dict:
+    """One run's efficiency per worker count and the load average (1 min) over its runs."""
+    ns = r.get("workers", [1, 2])
+    t1 = r["workers_1"]["steady_median_s"]
+    loads = [x for k in ["one_process"] + [f"workers_{n}" for n in ns] for x in r[k]["load_average"]]
+    return {
+        "efficiency": {str(n): t1 / (n * r[f"workers_{n}"]["steady_median_s"]) for n in ns},
+        "load_average": [min(loads), max(loads)],
+        "passes": len(r["passes"]),
+    }
+
+
+def _history(r: dict, previous: dict | None) -> list:
+    """The summaries of the earlier runs of the same case (resolution, spp, passes, workers), then
+    this run's: the spread between runs is the load's, on a shared machine."""
+    same = ("res", "spp", "passes", "workers")
+    old = []
+    if previous is not None and all(previous.get(k) == r.get(k) for k in same):
+        old = previous.get("history") or [_summary(previous)]
+    return old + [_summary(r)]
 
 
 def _efficiency_row(r: dict, n: int) -> str:
@@ -324,10 +348,26 @@ each from the steady minima and maxima):
 |---:|---:|---:|
 {chr(10).join(_efficiency_row(r, n) for n in ns)}
 
-{r["machine"]["cpus"]} cores shared with the driver and with other users, at the load average
-(1 min) in the table: more than {r["machine"]["cpus"]} single-thread workers, or any worker while
-the load exceeds the cores, share cores, so these are lower bounds of what N machines give.  The
-work per pass does not grow with the workers: a pass's CPU time on 1 worker / on each of N
+Every run of this case on this machine (the table above is the last; the spread is the other
+users' load as much as fogref's):
+
+| run | load average (1 min) | {" | ".join(f"efficiency N = {n}" for n in ns)} |
+|---:|---:|{"---:|" * len(ns)}
+{
+        chr(10).join(
+            f"| {i + 1} | {h['load_average'][0]:.1f}-{h['load_average'][1]:.1f} | "
+            + " | ".join(f"{h['efficiency'][str(n)]:.2f}" for n in ns)
+            + " |"
+            for i, h in enumerate(r.get("history", [_summary(r)]))
+        )
+    }
+
+{r["machine"]["cpus"]} cores shared with the driver and with other users: more than
+{r["machine"]["cpus"]} single-thread workers share cores, and with the load average above the cores
+no way of rendering gets its cores, the 1-worker reference included, so the efficiencies measure
+the load as much as fogref (neither a lower nor an upper bound of what N machines give).  The
+load-free measure is the CPU time: the work per pass does not grow with the workers: a pass's
+CPU time on 1 worker / on each of N
 workers = {
         ", ".join(
             f"{r['workers_1']['pass_cpu_median_s'] / r[f'workers_{n}']['pass_cpu_median_s']:.2f} (N = {n})"
