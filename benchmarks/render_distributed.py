@@ -1,18 +1,19 @@
-"""Distributed render scaling: one truth's passes on 1 and 2 single-thread Dask workers.
+"""Distributed render scaling: one truth's passes on 1, 2 and N single-thread Dask workers.
 
-The default scene (``scenes/valley.xml``) at ``--res`` (160x90) and ``--spp`` (64), split into
-``--passes`` (8) equal passes (``MAX_LANES`` set to pixels x spp / passes in this driver: at
-this size the default would make one pass), rendered by :func:`fogref.render.render.render`:
+The default scene (``scenes/valley.xml``) at ``--res`` (160x90) and ``--spp`` (64), in the
+passes of the real split (:func:`fogref.render.passes.pass_sizes` under ``MAX_LANES``: 4 passes
+of 16 spp at the defaults), or in ``--passes`` equal passes (``MAX_LANES`` set to pixels x spp
+/ passes in this driver), rendered by :func:`fogref.render.render.render`:
 
 * ``one process``: in this process, Dr.Jit on one thread;
 * ``N workers``: on a LocalCluster of N worker processes (``processes=True``, one Dask thread,
-  Dr.Jit on one thread each), N = 1, 2, started fresh for each N.
+  Dr.Jit on one thread each), N in ``--workers`` (1,2,4), started fresh for each N.
 
 Each way renders once first (``first``: on fresh workers it includes tracing and compiling the
 kernels, or loading them from Dr.Jit's disk cache), then ``--repeats`` (3) times (``steady``:
 median and range).  Compile time = first - median steady.  Every render's pixels are compared
-bitwise with the one-process render.  Efficiency of 2 workers = T(1 worker) / (2 T(2 workers)),
-steady medians.
+bitwise with the one-process render.  Efficiency of N workers = T(1 worker) / (N T(N workers)),
+steady medians; the load average (1 min) before and after each way is in the report.
 
 The model for N machines uses the measured per-pass time on a worker ``t_p`` (the median of the
 workers' own pass times, steady), the bytes of float64 moments a pass sends back ``b``
@@ -24,7 +25,8 @@ The driver receives and merges the passes one after another, so with P passes on
 
 and the efficiency is T(1) / (N T(N)).
 
-    .venv/bin/python benchmarks/render_distributed.py [--res 160x90] [--spp 64] [--passes 8]
+    .venv/bin/python benchmarks/render_distributed.py [--res 160x90] [--spp 64] [--passes P]
+        [--workers 1,2,4]
 
 Each way starts in a fresh ``$HOME`` (no Dr.Jit kernel cache): ``first`` includes the whole
 compile; ``--warm`` keeps the user's ``$HOME`` (kernels loaded from the disk cache).
@@ -162,7 +164,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--res", default="160x90")
     ap.add_argument("--spp", type=int, default=64)
-    ap.add_argument("--passes", type=int, default=8)
+    ap.add_argument("--passes", type=int, default=None, help="default: the real split")
+    ap.add_argument("--workers", default="1,2,4", help="worker counts, comma-separated; 1 first")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--report-only", action="store_true", help="rewrite the .md from the .json")
     ap.add_argument("--warm", action="store_true", help="keep $HOME (Dr.Jit's kernel cache) as it is")
@@ -181,10 +184,14 @@ def main() -> None:
     import fogref.render.passes as P
     from fogref.render.distributed import transfer_bytes
 
-    lanes = w * h * (args.spp // args.passes)
-    P.MAX_LANES = {"llvm": lanes, "cuda": lanes}
+    ns = [int(n) for n in args.workers.split(",")]
+    assert ns[0] == 1, "--workers: the first count must be 1 (the efficiency's reference)"
+    if args.passes:
+        lanes = w * h * (args.spp // args.passes)
+        P.MAX_LANES = {"llvm": lanes, "cuda": lanes}
     sizes = P.pass_sizes(w * h, args.spp, P.max_lanes("llvm_ad_rgb"))
-    assert len(sizes) == args.passes, sizes
+    assert not args.passes or len(sizes) == args.passes, sizes
+    lanes = w * h * sizes[0]
     homes = tempfile.TemporaryDirectory()
     if not args.warm:  # a fresh $HOME for this process: no Dr.Jit kernel cache, no fogref syntax cache
         os.environ["HOME"] = tempfile.mkdtemp(dir=homes.name)
@@ -195,6 +202,9 @@ def main() -> None:
         "res": [w, h],
         "spp": args.spp,
         "passes": sizes,
+        "max_lanes": P.max_lanes("llvm_ad_rgb"),
+        "split": "--passes" if args.passes else "real",
+        "workers": ns,
         "repeats": args.repeats,
         "machine": {
             "cpus": os.cpu_count(),
@@ -206,7 +216,7 @@ def main() -> None:
         tmp = Path(tmp)
         print("one process", file=sys.stderr)
         result["one_process"], reference = _series(args, tmp, "one", None)
-        for n in (1, 2):
+        for n in ns:
             print(f"{n} worker(s)", file=sys.stderr)
             if not args.warm:  # the workers inherit a fresh $HOME: they compile their kernels
                 os.environ["HOME"] = tempfile.mkdtemp(dir=homes.name)
@@ -227,8 +237,8 @@ def main() -> None:
                 r["cluster_start_s"] = start
             result[f"workers_{n}"] = r
         result["merge_bytes_per_s"] = _merge_rate(w, h)
-    t1, t2 = result["workers_1"]["steady_median_s"], result["workers_2"]["steady_median_s"]
-    result["efficiency_2"] = t1 / (2 * t2)
+    t1 = result["workers_1"]["steady_median_s"]
+    result["efficiency"] = {str(n): t1 / (n * result[f"workers_{n}"]["steady_median_s"]) for n in ns}
     b = transfer_bytes(w, h)
     t_p = result["workers_1"]["pass_cpu_median_s"]  # on a dedicated core: its CPU time
     t_d = b / NETWORK + b / result["merge_bytes_per_s"]
@@ -245,16 +255,51 @@ def main() -> None:
             t_fixed, t_p * (3840 * 2160) / lanes, transfer_bytes(3840, 2160) * t_d / b, 1024
         ),
     }
+    previous = out / "render_distributed.json"
+    result["history"] = _history(result, json.loads(previous.read_text()) if previous.exists() else None)
     (out / "render_distributed.json").write_text(json.dumps(result, indent=1) + "\n")
     (out / "render_distributed.md").write_text(_report(result))
     print(out / "render_distributed.md")
+
+
+def _summary(r: dict) -> dict:
+    """One run's efficiency per worker count and the load average (1 min) over its runs."""
+    ns = r.get("workers", [1, 2])
+    t1 = r["workers_1"]["steady_median_s"]
+    loads = [x for k in ["one_process"] + [f"workers_{n}" for n in ns] for x in r[k]["load_average"]]
+    return {
+        "efficiency": {str(n): t1 / (n * r[f"workers_{n}"]["steady_median_s"]) for n in ns},
+        "load_average": [min(loads), max(loads)],
+        "passes": len(r["passes"]),
+    }
+
+
+def _history(r: dict, previous: dict | None) -> list:
+    """The summaries of the earlier runs of the same case (resolution, spp, passes, workers), then
+    this run's: the spread between runs is the load's, on a shared machine."""
+    same = ("res", "spp", "passes", "workers")
+    old = []
+    if previous is not None and all(previous.get(k) == r.get(k) for k in same):
+        old = previous.get("history") or [_summary(previous)]
+    return old + [_summary(r)]
+
+
+def _efficiency_row(r: dict, n: int) -> str:
+    """A row of the efficiency table: the median's, and the range from the steady extremes."""
+    one, x = r["workers_1"], r[f"workers_{n}"]
+    e = one["steady_median_s"] / (n * x["steady_median_s"])
+    lo, hi = one["steady_min_s"] / (n * x["steady_max_s"]), one["steady_max_s"] / (n * x["steady_min_s"])
+    return f"| {n} | {e:.2f} | {lo:.2f}-{hi:.2f} |"
 
 
 def _report(r: dict) -> str:
     w, h = r["res"]
     m = r["model"]
     rows = []
-    for name, key in (("one process", "one_process"), ("1 worker", "workers_1"), ("2 workers", "workers_2")):
+    ns = r.get("workers", [1, 2])
+    ways = [("one process", "one_process")]
+    ways += [(f"{n} worker{'s' if n > 1 else ''}", f"workers_{n}") for n in ns]
+    for name, key in ways:
         x = r[key]
         rows.append(
             f"| {name} | {x['first_s']:.2f} | {x['steady_median_s']:.2f} "
@@ -273,7 +318,11 @@ def _report(r: dict) -> str:
     return f"""# Distributed render: one truth's passes on Dask workers
 
 `benchmarks/render_distributed.py`: `scenes/valley.xml` at {w}x{h}, {r["spp"]} spp in {len(r["passes"])}
-passes of {r["passes"][0]} spp, seed 0, on a {r["machine"]["cpus"]}-core machine shared with other work
+passes of {r["passes"][0]} spp ({
+        f"the real split, at most {r['max_lanes']} lanes per pass"
+        if r.get("split") == "real"
+        else "`MAX_LANES` set for `--passes`"
+    }), seed 0, on a {r["machine"]["cpus"]}-core machine shared with other work
 ({r["machine"]["platform"]}, Python {r["machine"]["python"]}).  Workers: LocalCluster processes, one
 Dask thread and one Dr.Jit thread each; the one-process render also on one Dr.Jit thread.  Times
 are whole `fogref.render.render.render` calls (scene load in the driver, passes, merge, EXR
@@ -289,15 +338,42 @@ compiling the kernels, {
 |---|---:|---:|---:|---:|---:|---:|---|
 {chr(10).join(rows)}
 
-Cluster start: {r["workers_1"]["cluster_start_s"]:.1f} s (1 worker), {r["workers_2"]["cluster_start_s"]:.1f} s
-(2 workers), not in the times above.
+Cluster start: {", ".join(f"{r[f'workers_{n}']['cluster_start_s']:.1f} s ({n})" for n in ns)} (workers),
+not in the times above.
 
-**Efficiency of 2 single-thread workers against 1: {r["efficiency_2"]:.2f}**
-(T1 / (2 T2), steady medians; 2 cores shared with the driver and with other users, at the load
-average in the table, so this is a lower bound of what two machines give).  The work per pass does
-not grow with the workers: a pass's CPU time on 1 worker / on each of 2 workers =
-{r["workers_1"]["pass_cpu_median_s"] / r["workers_2"]["pass_cpu_median_s"]:.2f}; the wall time per
-pass grows with the contention for the 2 cores.
+**Efficiency of N single-thread workers against 1** (T1 / (N TN), steady medians; the range of
+each from the steady minima and maxima):
+
+| workers N | efficiency | range |
+|---:|---:|---:|
+{chr(10).join(_efficiency_row(r, n) for n in ns)}
+
+Every run of this case on this machine (the table above is the last; the spread is the other
+users' load as much as fogref's):
+
+| run | load average (1 min) | {" | ".join(f"efficiency N = {n}" for n in ns)} |
+|---:|---:|{"---:|" * len(ns)}
+{
+        chr(10).join(
+            f"| {i + 1} | {h['load_average'][0]:.1f}-{h['load_average'][1]:.1f} | "
+            + " | ".join(f"{h['efficiency'][str(n)]:.2f}" for n in ns)
+            + " |"
+            for i, h in enumerate(r.get("history", [_summary(r)]))
+        )
+    }
+
+{r["machine"]["cpus"]} cores shared with the driver and with other users: more than
+{r["machine"]["cpus"]} single-thread workers share cores, and with the load average above the cores
+no way of rendering gets its cores, the 1-worker reference included, so the efficiencies measure
+the load as much as fogref (neither a lower nor an upper bound of what N machines give).  The
+load-free measure is the CPU time: the work per pass does not grow with the workers: a pass's
+CPU time on 1 worker / on each of N
+workers = {
+        ", ".join(
+            f"{r['workers_1']['pass_cpu_median_s'] / r[f'workers_{n}']['pass_cpu_median_s']:.2f} (N = {n})"
+            for n in ns[1:]
+        )
+    }; the wall time per pass grows with the contention for the cores.
 
 ## Model for N machines
 

@@ -6,7 +6,10 @@ cluster (``processes=True``, one thread per worker, not a mock) the same render 
 same pixels bit for bit: on two workers, after a worker is SIGKILLed mid-render (its passes
 are redone), and after an interruption resumed from the checkpoint on another worker count or
 in one process.  Smallest error detected: any pass missing, counted twice, mis-seeded or
-merged out of order changes some float32 pixel value (the comparison is exact).
+merged out of order changes some float32 pixel value (the comparison is exact).  The split
+itself (how many passes, so how many workers can share a render) is checked at the real
+``MAX_LANES``; a render of fewer passes than workers says so, and a lost worker's redone
+passes are named on stderr and in ``<out>.workers.log``.
 """
 
 import logging
@@ -89,7 +92,35 @@ def _loaded_scenes() -> dict:
     return {os.getpid(): sorted(id(scene) for scene, _ in D._LOADED.values())}
 
 
-def test_two_workers_give_the_one_process_pixels_bitwise(tmp_path, one_spp_passes, cluster, reference):
+def test_the_split_lets_workers_share_a_render_and_never_depends_on_them():
+    """At the CPU's real ``MAX_LANES``: 320x180 at 72 spp is 18 passes of 4 spp, each filling more
+    than 3/4 of a pass (up to 18 workers get one each), 48x27 at 32 spp is one pass; the split has
+    no worker argument."""
+    import inspect
+
+    from fogref.render.passes import max_lanes, pass_sizes
+
+    lanes = max_lanes("llvm_ad_rgb")
+    big = pass_sizes(320 * 180, 72, lanes)
+    assert big == [4] * 18
+    assert all(3 * lanes // 4 < 320 * 180 * p <= lanes for p in big), big
+    assert pass_sizes(48 * 27, 32, lanes) == [32]
+    assert list(inspect.signature(pass_sizes).parameters) == ["n_pixels", "spp", "max_lanes"]
+
+
+def test_a_render_too_small_for_the_workers_says_so(tmp_path, capsys, cluster):
+    """16x9 at 8 spp is one pass at the real ``MAX_LANES``: one line with the samples, passes and workers."""
+    _render(tmp_path / "small.exr", scheduler=cluster.scheduler_address)
+    err = [line for line in capsys.readouterr().err.splitlines() if "too small" in line]
+    assert err == [
+        "fogref render: 1152 samples make 1 pass (up to 262144 samples each) for 2 workers: "
+        "1 worker idle, too small to gain from more than 1"
+    ]
+
+
+def test_two_workers_give_the_one_process_pixels_bitwise(
+    tmp_path, capsys, one_spp_passes, cluster, reference
+):
     """...and each worker loads the scene once: a second render (another seed) reuses it, with the
     kernels compiled for it."""
     import fogref.render.distributed as D
@@ -116,6 +147,8 @@ def test_two_workers_give_the_one_process_pixels_bitwise(tmp_path, one_spp_passe
     assert len({pid for _, pid in seen}) == 2, "the passes did not run on both workers"
     assert os.getpid() not in {pid for _, pid in seen}
     assert not (tmp_path / "two.exr.partial.npz").exists()
+    err = capsys.readouterr().err
+    assert "too small" not in err and "redone" not in err, err  # 8 passes on 2 workers, none lost
 
 
 def _arm(marker: str, disarm: bool = False):
@@ -148,9 +181,12 @@ def _arm(marker: str, disarm: bool = False):
     return os.getpid()
 
 
-def test_a_worker_killed_mid_render_has_its_passes_redone(tmp_path, one_spp_passes, cluster, reference):
+def test_a_worker_killed_mid_render_has_its_passes_redone(
+    tmp_path, capsys, one_spp_passes, cluster, reference
+):
     """A worker SIGKILLs itself as its second pass starts (its first pass done, the second in flight);
-    the scheduler reruns its passes on the other worker (or the one the nanny restarts)."""
+    the scheduler reruns its passes on the other worker (or the one the nanny restarts), and the
+    render names them: one line each on stderr, the same in ``<out>.workers.log``."""
     from unittest import mock
 
     import fogref.render.distributed as D
@@ -173,6 +209,11 @@ def test_a_worker_killed_mid_render_has_its_passes_redone(tmp_path, one_spp_pass
     _assert_equal(_pixels(tmp_path / "killed.exr"), reference)
     with pytest.raises(OSError):
         os.kill(pid, 0)  # the worker is gone: its passes were rendered elsewhere
+    said = [line for line in capsys.readouterr().err.splitlines() if " lost: pass " in line]
+    assert f"pass {k} of {SPP} redone (it was running there)" in "\n".join(said), said
+    assert all(line.startswith("fogref render: worker tcp://") for line in said), said
+    logged = (tmp_path / "killed.exr.workers.log").read_text().splitlines()
+    assert logged == said
 
 
 def _interrupt_after(n: int, real):

@@ -20,6 +20,12 @@ of the same instruction set: the LLVM back end compiles for the host CPU).
 * **Same inputs everywhere**: a worker renders only if the digest of the scene and of every
   file it loads (:func:`fogref.render.inputs.inputs_digest`), read on the worker, is the
   driver's; workers on other machines need the scene at the same path (a shared file system).
+* **A lost worker is named**: each pass that the scheduler reruns because its worker died
+  (running there, or its result lost with it) is reported in one line (:func:`redone_passes`,
+  from the scheduler's ``remove-worker`` events).
+* **Too small to share is said**: a render of fewer passes than workers leaves workers idle
+  (:func:`split_note`); the passes are never split by the worker count, which would change
+  the pixels (:mod:`fogref.render.passes`).
 * **Bounded memory**: at most ``window`` passes are submitted ahead of the next pass to merge,
   so the driver holds at most that many passes' sums that arrived early.
 
@@ -37,7 +43,15 @@ from pathlib import Path
 
 from fogref.errors import FogrefError
 
-__all__ = ["PassFailed", "job", "render_pass", "passes_in_order", "transfer_bytes"]
+__all__ = [
+    "PassFailed",
+    "job",
+    "render_pass",
+    "passes_in_order",
+    "redone_passes",
+    "split_note",
+    "transfer_bytes",
+]
 
 #: Scenes loaded by this worker process: ``(inputs digest, variant, overrides, threads)`` ->
 #: ``(scene, integrator)``.  The last few renders' scenes only (:data:`_KEEP`).
@@ -135,8 +149,65 @@ def transfer_bytes(width: int, height: int) -> int:
     return width * height * (30 + 42) * 8
 
 
+def split_note(
+    samples: int, passes: int, workers: int, lanes: int, source: str = "fogref render"
+) -> str | None:
+    """The line saying that a render of ``samples`` samples (pixels x spp) in ``passes`` passes of
+    at most ``lanes`` samples is too small to gain from ``workers`` workers (fewer passes than
+    workers: one worker renders a pass); None when every worker has a pass.
+
+    >>> print(split_note(41472, 1, 2, 1 << 18))  # doctest: +NORMALIZE_WHITESPACE
+    fogref render: 41472 samples make 1 pass (up to 262144 samples each) for 2 workers:
+    1 worker idle, too small to gain from more than 1
+    >>> split_note(4147200, 16, 2, 1 << 18) is None
+    True
+    """
+    if passes >= workers:
+        return None
+    idle = workers - passes
+    return (
+        f"{source}: {samples} samples make {passes} pass{'es' if passes > 1 else ''} (up to {lanes} "
+        f"samples each) for {workers} workers: {idle} worker{'s' if idle > 1 else ''} idle, too small "
+        f"to gain from more than {passes}"
+    )
+
+
+def redone_passes(events, tag: str, n_passes: int, seen: set) -> list[str]:
+    """One line per pass of the render ``tag`` that a lost worker makes the scheduler redo, from
+    the scheduler's ``"all"`` events (``client.get_events("all")``: ``(time, msg)`` pairs); events
+    in ``seen`` (updated) are skipped.
+
+    >>> ev = [(1.0, {"action": "remove-worker", "worker": "tcp://h:1", "expected": False,
+    ...        "processing-tasks": {"fogref-render-ab-3"}, "lost-computed-tasks": {"fogref-render-ab-1"}})]
+    >>> for line in redone_passes(ev, "ab", 8, set()): print(line)
+    worker tcp://h:1 lost: pass 1 of 8 redone (its result was lost with the worker)
+    worker tcp://h:1 lost: pass 3 of 8 redone (it was running there)
+    """
+    lines = []
+    prefix = f"fogref-render-{tag}-"
+    for t, msg in events:
+        event = (t, msg.get("worker")) if isinstance(msg, dict) else None
+        if event is None or msg.get("action") != "remove-worker" or event in seen:
+            continue
+        seen.add(event)
+        why = {
+            **{k: "its result was lost with the worker" for k in msg.get("lost-computed-tasks") or ()},
+            **{k: "it was running there" for k in msg.get("processing-tasks") or ()},
+        }
+        ours = sorted((int(k[len(prefix) :]), w) for k, w in why.items() if str(k).startswith(prefix))
+        lines += [f"worker {msg.get('worker')} lost: pass {k} of {n_passes} redone ({w})" for k, w in ours]
+    return lines
+
+
 def passes_in_order(
-    client, j: dict, passes: list[int], start: int, retries: int = 2, window: int | None = None, stop=None
+    client,
+    j: dict,
+    passes: list[int],
+    start: int,
+    retries: int = 2,
+    window: int | None = None,
+    stop=None,
+    redone=None,
 ):
     """Run passes ``start..len(passes)-1`` on ``client``'s workers; yield their results in pass order.
 
@@ -146,7 +217,8 @@ def passes_in_order(
     callable, e.g. "Ctrl-C was pressed") is polled every 50 ms while waiting: when true,
     KeyboardInterrupt is raised (a terminal's Ctrl-C also stops a LocalCluster's workers, so
     no more passes would come).  Closing the generator (an interruption) cancels the passes
-    still queued or running.
+    still queued or running.  ``redone`` (a callable) is given each line of
+    :func:`redone_passes`, checked as each pass arrives (a redone pass arrives after its event).
     """
     from dask.distributed import as_completed
 
@@ -157,6 +229,18 @@ def passes_in_order(
     futures = {}
     arrived: dict[int, dict] = {}
     nxt, merge = start, start
+    seen: set = set()
+
+    def report_redone():
+        if redone is None:
+            return
+        try:
+            events = client.get_events("all")
+        except Exception:  # noqa: BLE001 - a scheduler that keeps no events: nothing to report
+            return
+        for line in redone_passes(events, tag, len(passes), seen):
+            redone(line)
+
     try:
         while merge < len(passes):
             while nxt < len(passes) and nxt - merge < window:
@@ -187,6 +271,7 @@ def passes_in_order(
                 raise PassFailed(
                     f"pass {k} of {len(passes)} failed on the cluster: {type(e).__name__}: {detail}"
                 ) from None
+            report_redone()
             while merge in arrived:
                 yield arrived.pop(merge)
                 merge += 1

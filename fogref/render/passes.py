@@ -6,15 +6,25 @@ lanes (pixels x samples): about 50 float32 values each.  The render driver
 (:mod:`fogref.render.render`) and ``mi.render`` with fogpath both split the samples
 with :func:`pass_sizes` under :data:`MAX_LANES` and seed pass ``k`` with
 :func:`pass_seed`, so that neither needs memory for every sample at once.
+
+**The passes define the pixels**: pass ``k`` draws its ``passes[k]`` samples per pixel from
+the seed ``pass_seed(seed, k)``, and its float64 sums are added to the running sums in pass
+order, so another split of the same ``spp`` gives other (equally valid) pixels.  The split
+is therefore a function of the pixels, the spp and the back end only, never of the workers
+that render it; a render is bitwise reproducible per split, which the truth records
+(``fogref.passes``).  :data:`MAX_LANES` on the CPU is also what lets Dask workers share a
+render (:mod:`fogref.render.distributed`): a render of ``P`` pixels and ``spp`` samples has
+``ceil(spp / floor(MAX_LANES / P))`` passes (``spp`` when a pixel row of samples fills a pass).
 """
 
 from __future__ import annotations
 
 import hashlib
 
-#: Lanes (pixels x samples) per pass, by back end: ~0.4 GB of outputs per pass on the
-#: CPU, ~6.6 GB on a GPU.
-MAX_LANES = {"llvm": 1 << 21, "cuda": 1 << 25}
+#: Lanes (pixels x samples) per pass, by back end: ~50 MB of outputs per pass on the CPU
+#: (2^18 lanes: a 320x180, 72 spp render is 18 passes of 4 spp, so up to 18 workers share it; a pass
+#: of 230400 lanes is ~0.25 s of one core on scenes/valley.xml), ~6.6 GB on a GPU.
+MAX_LANES = {"llvm": 1 << 18, "cuda": 1 << 25}
 
 
 def max_lanes(variant: str) -> int:

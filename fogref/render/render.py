@@ -98,8 +98,8 @@ def moments_path(out) -> Path:
 
 
 def workers_log_path(out) -> Path:
-    """Where a LocalCluster's workers write their own output while rendering ``out``:
-    ``<out>.workers.log``."""
+    """Where a LocalCluster's workers write their own output while rendering ``out``, and where a
+    render on any cluster names the passes redone because a worker was lost: ``<out>.workers.log``."""
     out = Path(out)
     return out.with_name(out.name + ".workers.log")
 
@@ -219,7 +219,7 @@ def render(
     on_cluster = scheduler is not None or workers is not None
     scene_path, out = Path(scene_path), Path(out)
     inputs = scene_inputs(scene_path, overrides)
-    check_output(out, scene_path, png, inputs, workers_log=on_cluster and scheduler is None)
+    check_output(out, scene_path, png, inputs, workers_log=on_cluster)
     hashes: dict = {}  # before the scene is loaded: what its pixels will see
     digest = inputs_digest(scene_path, overrides, inputs, record=hashes)
 
@@ -287,7 +287,7 @@ def render(
         if on_cluster:  # the passes' sums come from Dask workers, in pass order
             j = (scene_path, overrides, digest, variant, seed, pixel_filter)
             source = _cluster_passes(
-                closing, (scheduler, workers, worker_timeout), out, j, passes, saved, stop
+                closing, (scheduler, workers, worker_timeout), out, j, passes, saved, stop, W * H
             )
         else:
             source = _local_passes(integrator, scene, seed, pixel_filter, passes, saved)
@@ -434,14 +434,18 @@ def _local_passes(integrator, scene, seed: int, pixel_filter: str, passes: list,
         yield k, s, q, time.perf_counter() - ts
 
 
-def _cluster_passes(closing, where: tuple, out, render_args: tuple, passes: list, start: int, stop):
+def _cluster_passes(
+    closing, where: tuple, out, render_args: tuple, passes: list, start: int, stop, pixels: int
+):
     """Passes ``start..`` rendered on Dask workers (:mod:`fogref.render.distributed`): ``(k, sums,
     squares, seconds)`` in pass order; ``stop`` (a :class:`fogref.cluster.Interrupt`) requested ends
     the wait, and a signal while the cluster starts or while its first worker is awaited ends the
     start at once.  ``where``: the scheduler, the LocalCluster's workers, the seconds to wait for a
     worker.  ``render_args``: the scene, overrides, inputs digest, variant, seed and pixel filter.
     The cluster (a new LocalCluster of ``workers``, or the one of ``scheduler``) is closed when
-    ``closing`` (an ExitStack) ends."""
+    ``closing`` (an ExitStack) ends.  Fewer passes than workers is said on stderr
+    (:func:`fogref.render.distributed.split_note`, ``pixels`` per sample of a pass); each pass
+    redone because its worker was lost, on stderr and in ``<out>.workers.log``."""
     from fogref.render import distributed
 
     if start >= len(passes):
@@ -451,8 +455,21 @@ def _cluster_passes(closing, where: tuple, out, render_args: tuple, passes: list
     with stop.urgent():
         client, local, threads = cluster.connect(scheduler, workers, log, _SOURCE, worker_timeout)
     closing.callback(cluster.stop, client, local, log)
+    n_workers = len(client.scheduler_info().get("workers", {}))
+    left = passes[start:]
+    lanes = max_lanes(render_args[3])
+    note = distributed.split_note(pixels * sum(left), len(left), n_workers, lanes, _SOURCE)
+    if note:
+        print(note, file=sys.stderr, flush=True)
+
+    def redone(line: str) -> None:
+        print(f"{_SOURCE}: {line}", file=sys.stderr, flush=True)
+        with open(log, "a", encoding="utf-8") as f:
+            f.write(f"{_SOURCE}: {line}\n")
+
     j = distributed.job(*render_args, threads)
-    for r in distributed.passes_in_order(client, j, passes, start, stop=lambda: stop.requested):
+    source = distributed.passes_in_order(client, j, passes, start, stop=lambda: stop.requested, redone=redone)
+    for r in source:
         yield r["k"], r["sums"], r["squares"], r["seconds"]
 
 
