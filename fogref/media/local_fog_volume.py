@@ -177,12 +177,19 @@ class LocalFogVolume:
 
     def sample(self, ops: Ops, o: Any, d: Any, s: Real, iterations: int = SAMPLE_ITERATIONS) -> Real:
         """Distance [m] where the shape optical depth from ``o`` reaches ``s >= 0``;
-        ``ops.largest`` when the ray leaves the sphere first."""
+        ``ops.largest`` when the ray leaves the sphere first.
+
+        Newton steps on :meth:`optical_depth` inside a bracket that starts as the chord, a
+        bisection whenever a step would leave it.  Where ``s`` is tiny and the density is 0 at
+        the chord's start (a ray from outside), each step near the root halves the error until
+        the quadratic convergence sets in: ``iterations = 64`` leave a round trip
+        ``|depth(sample(s)) - s|`` below 1e-14 of the ray's total depth for ``s`` down to 1e-30
+        of it (float64)."""
         with ops.errstate():
             chord = self.chord(ops, o, d)
             total = self._depth(ops, o, d, ops.largest, chord)
-            lo = ops.maximum(chord[0], 0.0)
-            hi = ops.maximum(chord[1], lo)
+            start = ops.maximum(chord[0], 0.0)
+            lo, hi = start, ops.maximum(chord[1], start)
             t = 0.5 * (lo + hi)
             for _ in range(iterations):
                 f = self._depth(ops, o, d, t, chord) - s
@@ -191,6 +198,7 @@ class LocalFogVolume:
                 p = [o[a] + t * d[a] for a in range(3)]
                 rho = self.rho(ops, p)
                 step = t - f / ops.where(rho > 0.0, rho, 1.0)
-                newton_ok = (rho > 0.0) & (step > lo) & (step < hi)
+                newton_ok = (rho > 0.0) & (step >= lo) & (step <= hi)
                 t = ops.where(newton_ok, step, 0.5 * (lo + hi))
+            t = ops.where(s > 0.0, t, start)
             return ops.where(s < total, t, ops.largest)
