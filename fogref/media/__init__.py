@@ -4,6 +4,7 @@
 * :mod:`~fogref.media.medium`        :class:`FogMedium`, :class:`ExpLayer` (exponential, homogeneous, box)
 * :mod:`~fogref.media.profiles`      :class:`HDRPLayer`, :class:`PowerLawLayer`
 * :mod:`~fogref.media.ue_pathtracer` :class:`UEPathTracerLayer`, :class:`Cylinder` (Unreal's path-traced fog)
+* :mod:`~fogref.media.local_fog_volume` :class:`LocalFogVolume` (a sphere of fog, closed form)
 * :mod:`~fogref.media.params`        :func:`medium_from_params` (the ``heightfog`` XML parameters)
 * :mod:`~fogref.media.closed_form`   optical depth, free flight, ``phi``/``psi``, HG phase
 * :mod:`~fogref.media.single_scatter` closed-form and sampled sun single scattering
@@ -14,6 +15,7 @@
 """
 
 from fogref.media.closed_form import TAU_MAX, hg_phase, phi, psi
+from fogref.media.local_fog_volume import LocalFogVolume
 from fogref.media.medium import Box, ExpLayer, FogMedium
 from fogref.media.ops import NP, drjit_ops
 from fogref.media.params import medium_from_params
@@ -32,6 +34,7 @@ __all__ = [
     "FogMedium",
     "HDRPLayer",
     "HeightProfile",
+    "LocalFogVolume",
     "PowerLawLayer",
     "drjit_ops",
     "hg_phase",
