@@ -25,7 +25,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from fogref.compare.regions import region_masks
-from fogref.compare.tonemap import exposure_for
+from fogref.display import exposure_for
 from fogref.exrio import read_exr
 from fogref.html.inline import encode_half, encode_mask
 
