@@ -1,7 +1,7 @@
 """``mi.render`` with fogpath renders in passes, as the driver does.
 
 Each pass holds every sample's outputs in memory, so ``mi.render`` splits the samples
-with :func:`fogref.render.passes.pass_sizes` under ``MAX_LANES`` (here shrunk so that a
+with :func:`fogref_plugins.passes.pass_sizes` under ``MAX_LANES`` (here shrunk so that a
 12x8 image needs two passes).  Smallest error detected: any pass missing, counted twice,
 mis-seeded or mis-weighted changes the mean by a whole pass's share (~50 %), far above
 float32 rounding (1e-6 relative, the tolerance).
@@ -27,7 +27,7 @@ def test_one_pass_is_one_render_moments_call(mitsuba):
 
 
 def test_mi_render_splits_into_seeded_passes(mitsuba, monkeypatch):
-    import fogref.render.passes as passes
+    import fogref_plugins.passes as passes
 
     mi = mitsuba
     monkeypatch.setattr(passes, "MAX_LANES", {"llvm": RES[0] * RES[1] * 4, "cuda": RES[0] * RES[1] * 4})
