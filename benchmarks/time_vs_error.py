@@ -442,9 +442,10 @@ def summary_md(res, args) -> str:
         "1-spp time).  Noise-only: the same ratio with the method's bias removed from its error.\n"
     )
     L += [
-        "## Issue 11: before and after, side by side in this run\n",
-        "`fogpath_before` = fogpath with one sun sample, sun sampling only in unbounded one-layer fog and no "
-        "sky control variate (`benchmarks/_scenes.py: BEFORE_ISSUE_11`); `fogpath` = today's defaults; "
+        "## fogpath without and with its variance reduction, side by side in this run\n",
+        "`fogpath_before` = fogpath with one sun sample, sun sampling only in unbounded one-layer fog, no "
+        "forced splitting, MIS for the sky at surfaces and one sun-sampled segment "
+        "(`benchmarks/_scenes.py: FOGPATH_BEFORE`); `fogpath` = today's defaults; "
         "`fogpath_split` / `fogpath_nosplit` = today's defaults with forced splitting on the camera ray "
         "switched to the other setting (`forced_split`). "
         "Ratios at the top of the ladder (equal-error time ratio; > 1: the second is faster).\n",
