@@ -28,7 +28,7 @@ Scenes (96x54 by default):
 Methods (``METHODS``):
 
 ``fogpath``      fogref's integrator with the ``heightfog`` medium (analytic free flight).
-``fogpath_prev`` fogpath as it was before issue 22 (``sky_at_surfaces = "mis"``,
+``fogpath_prev`` fogpath with the earlier sky and sun defaults (``sky_at_surfaces = "mis"``,
                  ``sun_sampling_rays = 1``), measured beside today's defaults.
 ``volpath_hf``   stock ``volpath`` with the ``heightfog`` medium (delta tracking
                  against heightfog's tight per-ray majorant).

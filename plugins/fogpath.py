@@ -45,7 +45,7 @@ from fogref.media import drjit_ops
 from .fogpath_camera import FogPathCameraRay
 from .fogpath_common import AOV_NAMES, Split, spectrum
 
-#: ``forced_split``'s default (see ``reports/benchmarks/variance_reduction_issue11.md``)
+#: ``forced_split``'s default (see ``reports/benchmarks/variance_reduction_changes.md``)
 FORCED_SPLIT_DEFAULT = True
 #: ``sun_sampling_rays``'s default (see ``reports/benchmarks/summary.md``)
 SUN_SAMPLING_RAYS_DEFAULT = 2

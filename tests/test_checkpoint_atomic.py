@@ -1,4 +1,4 @@
-"""The render checkpoint is one atomic record (issue 17, item 2).
+"""The render checkpoint is one atomic record.
 
 * An interruption at any line of the pass loop, or of the functions it calls in
   ``fogref/render/render.py``, ``fogref/render/checkpoint.py`` and ``fogref/atomic.py``

@@ -1,4 +1,4 @@
-"""One truth's passes on a real two-worker Dask LocalCluster (issue 22, part 1).
+"""One truth's passes on a real two-worker Dask LocalCluster.
 
 The default scene at 16x9 pixels and 8 spp, in 8 passes of 1 spp (``MAX_LANES`` shrunk as in
 ``tests/test_render_passes.py``), rendered once in this process: the reference.  On the

@@ -273,7 +273,7 @@ def filament_from_physical(ps: PhysicalScene) -> FilamentFog:
     return FilamentFog(medium_to_filament(ps.medium, **kw))
 
 
-# -- Godot, Bevy, three.js (issue 19) ------------------------------------------------
+# -- Godot, Bevy, three.js -----------------------------------------------------------
 
 
 def _density_at_camera(ps: PhysicalScene) -> float:
