@@ -8,6 +8,7 @@ float32 rounding (1e-6 relative, the tolerance).
 """
 
 import numpy as np
+import pytest
 from render_scenes import base_scene, heightfog
 
 RES = (12, 8)
@@ -17,6 +18,7 @@ def _scene(mi):
     return mi.load_dict(base_scene(mi, {"type": "fogpath", "max_depth": 4}, heightfog(mi), res=RES))
 
 
+@pytest.mark.render
 def test_one_pass_is_one_render_moments_call(mitsuba):
     mi = mitsuba
     scene = _scene(mi)
@@ -26,6 +28,7 @@ def test_one_pass_is_one_render_moments_call(mitsuba):
     np.testing.assert_allclose(img, np.array(sums) / 4, rtol=1e-6, atol=1e-7)
 
 
+@pytest.mark.render
 def test_mi_render_splits_into_seeded_passes(mitsuba, monkeypatch):
     import fogref_plugins.passes as passes
 

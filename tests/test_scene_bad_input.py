@@ -104,6 +104,7 @@ def _valley_with(tmp_path, name: str, edit) -> str:
     return p
 
 
+@pytest.mark.render
 def test_a_scenes_own_default_out_of_range_is_refused(tmp_path, capsys):
     bad = _valley_with(
         tmp_path,
@@ -367,6 +368,7 @@ def _face_normals(xml) -> list:
     return [b.get("value") for b in booleans if b.get("name") == "face_normals"]
 
 
+@pytest.mark.render
 def test_mesh_without_normals_renders_flat_faces_cli(tmp_path, capsys):
     box = _box_obj(tmp_path / "box.obj")
     scene = tmp_path / "box.xml"
@@ -378,6 +380,7 @@ def test_mesh_without_normals_renders_flat_faces_cli(tmp_path, capsys):
     assert rc == 0 and _face_spread(tmp_path / "b.exr") < 1e-6
 
 
+@pytest.mark.render
 def test_mesh_without_normals_renders_flat_faces_api(tmp_path):
     from fogref.render.scene_writer import write_scene
 

@@ -4,6 +4,7 @@ split, and a render split on a tiny image."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from fogref.mapping.unreal import sample_views
 from fogref.mapping.unreal_pathtracer import UEPathTracerSettings, exact_medium
@@ -77,6 +78,7 @@ def test_closed_form_split_sees_the_cylinder_and_the_clamp():
     assert clamp["opacity_rel_max"] > 0.01  # clamp height = fog height 30 m, above the camera
 
 
+@pytest.mark.render
 def test_render_split_on_a_tiny_image(mitsuba, tmp_path):
     ue = UE4FogParams(FogDensity=0.05, FogHeightFalloff=2.0, FogHeight=2000.0)
     out = render_split(
