@@ -21,7 +21,18 @@ from pathlib import Path
 from fogref import params as P
 from fogref.errors import ParameterError
 
-__all__ = ["ADDRESS", "check_scheduler", "check_workers", "connect", "stderr_to", "stop", "main_thread"]
+__all__ = [
+    "ADDRESS",
+    "WORKER_TIMEOUT",
+    "check_worker_timeout",
+    "Interrupt",
+    "check_scheduler",
+    "check_workers",
+    "connect",
+    "main_thread",
+    "stderr_to",
+    "stop",
+]
 
 #: A Dask scheduler address: ``tcp://HOST:PORT`` (or another Dask protocol: tls, inproc, ucx, ws, wss),
 #: or ``HOST:PORT``.
@@ -61,6 +72,74 @@ def check_workers(n_workers, source: str) -> int | None:
     return P.integer(n_workers, "--workers", source=source, lo=1, hi=4096)
 
 
+class Interrupt:
+    """Ctrl-C and SIGTERM while rendering.
+
+    The first one sets :attr:`requested` (a render stops after the current pass, checkpointed;
+    a sweep after the configurations running); a second one raises KeyboardInterrupt now, except
+    inside :meth:`deferred` (a checkpoint write), where it waits until the block ends; inside
+    :meth:`urgent` (a cluster starting) the first one raises at once.  :attr:`requested` stays
+    set, so a caller that sees its work end normally still knows that it was interrupted.
+    Outside the main thread signals are left alone.
+    """
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self):
+        self.requested = False
+        self._pending = False
+        self._deferring = 0
+        self._urgent = 0
+        self._previous = {}
+
+    def __enter__(self):
+        for s in self.SIGNALS:
+            try:
+                self._previous[s] = signal.signal(s, self._handle)
+            except ValueError:  # not the main thread: leave signals alone
+                break
+        return self
+
+    def _handle(self, signum, frame):
+        if not self.requested and not self._urgent:
+            self.requested = True
+        elif self._deferring:
+            self._pending = True
+        else:
+            self.requested = True
+            raise KeyboardInterrupt
+
+    @contextlib.contextmanager
+    def deferred(self):
+        """A block that a second signal does not cut: it is raised when the block ends."""
+        self._deferring += 1
+        try:
+            yield
+        finally:
+            self._deferring -= 1
+        if self._pending and not self._deferring:
+            self._pending = False
+            raise KeyboardInterrupt
+
+    @contextlib.contextmanager
+    def urgent(self):
+        """A block that the first signal interrupts at once (a LocalCluster starting its workers,
+        a wait for a scheduler's workers): KeyboardInterrupt, also when it came just before."""
+        if self.requested:
+            raise KeyboardInterrupt
+        self._urgent += 1
+        try:
+            yield
+        finally:
+            self._urgent -= 1
+
+    def __exit__(self, *exc):
+        for s, previous in self._previous.items():
+            if previous is not None:  # None: a handler installed outside Python, which cannot be restored
+                signal.signal(s, previous)
+        return False
+
+
 @contextlib.contextmanager
 def stderr_to(log: Path):
     """Send file descriptor 2 (this process and the processes it starts meanwhile) to ``log``."""
@@ -78,24 +157,79 @@ def stderr_to(log: Path):
         os.close(fd)
 
 
-def connect(scheduler: str | None, n_workers: int | None, log: Path, source: str):
+#: Seconds to wait for a running scheduler's first worker (``--worker-timeout``).
+WORKER_TIMEOUT = 600.0
+
+
+def check_worker_timeout(seconds, source: str) -> float:
+    """``seconds`` to wait for a scheduler's first worker, in (0, 1e6] s, else a one-line ParameterError.
+
+    >>> check_worker_timeout(30, "fogref render")
+    30.0
+    """
+    return P.number(seconds, "--worker-timeout", source=source, lo=0.0, hi=1e6, lo_open=True, unit="s")
+
+
+def _wait_for_a_worker(client, scheduler: str, timeout: float, source: str) -> None:
+    """Return once ``client``'s scheduler has a worker; say that it waits (stderr) when it has none
+    yet; a one-line ParameterError after ``timeout`` seconds without one."""
+    try:
+        client.wait_for_workers(1, timeout=0.5)
+        return
+    except TimeoutError:
+        pass
+    print(
+        f"{source}: waiting for a worker to join the scheduler {scheduler} (up to {timeout:g} s, "
+        "--worker-timeout)",
+        file=sys.stderr,
+        flush=True,
+    )
+    try:
+        client.wait_for_workers(1, timeout=timeout)
+    except TimeoutError:
+        with contextlib.suppress(Exception):
+            client.close(timeout=10)
+        raise ParameterError(
+            source,
+            "--scheduler",
+            f"no worker joined {scheduler} in {timeout:g} s (--worker-timeout); start workers with "
+            f"'dask worker {scheduler}'",
+        ) from None
+
+
+def connect(
+    scheduler: str | None,
+    n_workers: int | None,
+    log: Path,
+    source: str,
+    worker_timeout: float = WORKER_TIMEOUT,
+):
     """A Dask client: on ``scheduler`` (an address) or on a new LocalCluster of ``n_workers``
     (default: one per core) single-threaded worker processes whose output goes to ``log``.
 
     Returns ``(client, cluster or None, Dr.Jit threads per worker or None)``: cores / workers
     on a LocalCluster, None (Dr.Jit's own default) on an existing cluster.  An unreachable
-    scheduler is a one-line ParameterError naming ``source``.
+    scheduler, or one that has no worker after ``worker_timeout`` seconds, is a one-line
+    ParameterError naming ``source``.  More workers than cores is a warning (stderr).
     """
     from dask.distributed import Client, LocalCluster
 
     if scheduler:
         try:
-            return Client(scheduler, timeout="30s"), None, None
+            client = Client(scheduler, timeout="30s")
         except (OSError, ValueError, TypeError) as e:
             why = str(e).splitlines()[0] if str(e) else type(e).__name__
             raise ParameterError(source, "--scheduler", f"cannot connect to {scheduler} ({why})") from None
+        _wait_for_a_worker(client, scheduler, worker_timeout, source)
+        return client, None, None
     cores = os.cpu_count() or 1
     n = n_workers or cores
+    if n > cores:
+        print(
+            f"{source}: warning: --workers {n} on {cores} cores: the workers share the cores (no faster "
+            f"than {cores}), and starting them takes a while",
+            file=sys.stderr,
+        )
     # the workers' own "Compute Failed" logs are silenced: the callers report failures themselves
     with stderr_to(log):
         cluster = LocalCluster(

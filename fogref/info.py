@@ -233,6 +233,10 @@ def describe(path) -> str:
     if d["parameters"]:
         lines.append("parameters:")
         for k, v in d["parameters"].items():
+            if isinstance(v, dict) and isinstance(v.get("phase"), dict):  # a phase table: its name and size
+                ph = v["phase"]
+                nodes = len(str(ph.get("cosines", "")).split(","))
+                v = {**v, "phase": f"{ph.get('type')} '{ph.get('label')}', {nodes} cosines"}
             lines.append(f"  {k}: {json.dumps(v)}")
     if d["camera"]:
         lines += _camera_lines(d["camera"], d["camera_unreal"])

@@ -4,7 +4,7 @@ Installed with fogref (entry point ``pytest11``), so any project that depends on
 fogref has it::
 
     def test_my_fog(fogref_truth):
-        truth = fogref_truth("scenes/valley.xml", res=(32, 18), spp=64)
+        truth = fogref_truth("valley", res=(32, 18), spp=64)  # a shipped scene, or a path
         assert_fog_matches(truth, MyFog(...), tolerances={"inscatter": 0.05})
 
 * fixture ``fogref_truth``: a factory ``(scene, res=(32, 18), spp=16, seed=0,
@@ -15,7 +15,7 @@ fogref has it::
   scene and every file it loads (meshes, envmaps, textures, included XML:
   :func:`fogref.render.inputs.inputs_digest`), so an edited mesh means a fresh render.
   A relative scene path is looked up in the working directory, then under pytest's
-  root directory.
+  root directory; a bare name (``"valley"``) is a shipped scene (:func:`fogref.scene_path`).
 * :func:`assert_fog_matches` (re-exported from :mod:`fogref.compare.check`): runs
   ``check`` and fails with the part, region, estimate, interval, tolerance,
   confidence and the folder of the error maps.

@@ -34,7 +34,10 @@ floor           float      lowest height the majorant considers [m] (stock     s
                            ``reference_height`` (scenes put it at ground level).
 ==============  =========  ==================================================  ========
 
-A ``<phase>`` child overrides ``g``.
+A ``<phase>`` child replaces ``g``: an ``hg`` (its ``g``, which the physics then uses) or a
+``fogtabphase`` (a tabulated phase function, e.g. a droplet fog's Mie phase:
+``plugins/tab_phase.py``); other phase plugins are refused, since fogpath's closed forms
+evaluate the phase function themselves.
 """
 
 from __future__ import annotations
@@ -42,9 +45,12 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
+from fogref.errors import ParameterError
 from fogref.media import drjit_ops
 from fogref.media.params import medium_from_params
 from fogref.media.protocol import check_range
+
+from .tab_phase import TabulatedPhaseFunction
 
 
 def _props_to_dict(props) -> dict:
@@ -69,8 +75,17 @@ class HeightFogMedium(mi.Medium):
 
     def __init__(self, props):
         params = _props_to_dict(props)
-        has_phase = any(isinstance(props[k], mi.PhaseFunction) for k in props.keys())
         src = f"heightfog '{props.id()}'" if props.id() else "heightfog"
+        children = [props[k] for k in props.keys() if isinstance(props[k], mi.PhaseFunction)]
+        has_phase = bool(children)
+        for child in children:
+            if isinstance(child, TabulatedPhaseFunction):
+                params["phase"] = child.table
+            elif "g" in mi.traverse(child).keys() and str(child).startswith("HGPhaseFunction"):
+                params["g"] = float(mi.traverse(child)["g"][0])
+            else:
+                kind = str(child).split("[")[0]
+                raise ParameterError(src, "phase", f"{kind}: heightfog takes hg or fogtabphase")
         self.fog = medium_from_params(params, src)
         if not has_phase:
             props["phase"] = mi.load_dict({"type": "hg", "g": self.fog.g}, parallel=False)

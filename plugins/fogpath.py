@@ -38,7 +38,6 @@ import mitsuba as mi
 from mitsuba.python.ad.integrators.common import mis_weight  # the module set_variant loaded (not a 2nd copy)
 
 from fogref import params
-from fogref.errors import ParameterError
 from fogref.mapping.fog_input import MAX_DEPTH
 from fogref.media import drjit_ops
 
@@ -65,6 +64,10 @@ class FogPathIntegrator(FogPathCameraRay):
      * - rr_depth
        - int
        - Depth where Russian roulette starts. Default: 5.
+     * - hide_emitters
+       - bool
+       - Camera rays that escape see black instead of the sky and the sun disk. Unlike stock
+         ``path``/``volpath``, an area light seen directly stays visible. Default: false.
      * - aovs
        - bool
        - Write the per-sample parts and G-buffer of :mod:`fogref.gbuffer` after
@@ -92,7 +95,8 @@ class FogPathIntegrator(FogPathCameraRay):
          estimation (uniform cone, pdf ``1 / (2 pi (1 - cos theta_max))``, radiance
          ``E / Omega``; along camera rays, ``sun_sampling``'s exact sampler aims at a point of
          the disk drawn per sample when the whole disk is above the horizon, else next-event
-         estimation covers it).  The disk is not drawn where a camera ray sees it. Default: 0.
+         estimation covers it).  A camera ray that reaches the sky through the disk sees its
+         radiance ``E / Omega``, attenuated by the fog as the sky is. Default: 0.
      * - sky_at_surfaces
        - string
        - How a ``constant`` sky lights surfaces: ``mis`` (next-event estimation and the
@@ -119,10 +123,7 @@ class FogPathIntegrator(FogPathCameraRay):
         self.rr_depth = params.integer(
             props.get("rr_depth", 5), "rr_depth", source="fogpath", lo=1, hi=2**31 - 1
         )
-        if props.get("hide_emitters", False):  # Mitsuba's integrator base reads it too: refuse, not ignore
-            raise ParameterError(
-                "fogpath", "hide_emitters", "only false: the truth's parts include emitters seen directly"
-            )
+        self.hide_emitters = bool(props.get("hide_emitters", False))
         self.sun_sampling = bool(props.get("sun_sampling", True))
         self.sun_sampling_rays = params.integer(
             props.get("sun_sampling_rays", SUN_SAMPLING_RAYS_DEFAULT),
@@ -351,6 +352,8 @@ class FogPathIntegrator(FogPathCameraRay):
             # ---------------- emission found by the last sampled direction ----------------
             if dr.hint(has_smooth, mode="scalar"):
                 em = is_surface | escaped
+                if dr.hint(self.hide_emitters, mode="scalar"):
+                    em &= ~((depth == 0) & escaped)
                 ds = mi.DirectionSample3f(scene, si=si, ref=prev_it)
                 em_pdf = scene.pdf_emitter_direction(prev_it, ds, em & ~prev_delta)
                 if dr.hint(self._sky_by_bsdf(scene), mode="scalar"):  # from a surface: the sky at weight 1,
@@ -360,6 +363,10 @@ class FogPathIntegrator(FogPathCameraRay):
                     em_pdf = dr.select(from_surface, dr.select(escaped, 0.0, other), em_pdf)
                 Le = β * mis_weight(prev_pdf, dr.select(prev_delta, 0.0, em_pdf)) * ds.emitter.eval(si, em)
                 split = split.add(dr.select(em, Le, 0.0), medium_first, depth == 1)
+            seen = escaped & (depth == 0)
+            disk = None if self.hide_emitters else self._sun_disk_seen(scene, ops, ray, seen)
+            if disk is not None:  # the sun disk a camera ray sees (next-event estimation has the rest)
+                split = split.add(β * disk, medium_first, mi.Bool(False))
             active &= ~escaped & (depth + 1 < self.max_depth)  # max_depth = 2: single scattering
 
             # ---------------- medium vertex: light sample, phase sample ----------------

@@ -159,9 +159,12 @@ class FogPathCameraRay(FogPathBase):
         hit, split = si.is_valid(), Split()
         T = self._transmittance(fog, ops, ray.o, ray.d, D)
         if has_smooth:
-            em = mi.Bool(active)
+            em = active & (hit if self.hide_emitters else mi.Bool(True))
             ds = mi.DirectionSample3f(scene, si=si, ref=dr.zeros(mi.Interaction3f))
             split = split.add(dr.select(em, ds.emitter.eval(si, em), 0.0), mi.Bool(False), mi.Bool(False))
+        disk = None if self.hide_emitters else self._sun_disk_seen(scene, ops, ray, active & ~hit)
+        if disk is not None:  # the sun disk the camera ray sees
+            split = split.add(disk, mi.Bool(False), mi.Bool(False))
         surf, bsdf = active & hit, si.bsdf(ray)
         smooth = surf & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
         Ls, _ = self._direct(scene, fog, ops, sampler, si, bsdf_ctx, bsdf, smooth, has_smooth)

@@ -19,6 +19,8 @@ The subclass sets ``aovs`` (bool: write :data:`AOV_NAMES` after R,G,B) and
 
 from __future__ import annotations
 
+import math
+
 import drjit as dr
 import mitsuba as mi
 from fogref_plugins.passes import max_lanes, pass_seed, pass_sizes
@@ -152,6 +154,21 @@ class FogPathBase(mi.SamplingIntegrator):
         E = p["irradiance.value"]
         E = [float(E[i][0]) for i in range(3)] if len(E) == 3 else [float(E[0][0])] * 3
         return [x / n for x in w], E
+
+    def _sun_disk_seen(self, scene, ops, ray, seen):
+        """The sun disk's radiance ``E / Omega`` on the lanes ``seen`` (rays that escape to the sky
+        unscattered from the camera) whose direction lies in the disk, 0 on the others; None for a
+        delta sun or no sun (trace-time: such scenes trace no code for it).  In the disk:
+        ``|d - w|^2 <= 2 (1 - cos theta_max)``, the chord, free of the cancellation of ``1 - d.w``
+        in float32."""
+        sun = None if self.sun_one_minus_cos is None else self._scene_sun(scene)
+        if sun is None:
+            return None
+        w_sun, E_sun = sun
+        omega = 2.0 * math.pi * self.sun_one_minus_cos
+        to_sun = mi.Vector3f(*ops.params(w_sun))
+        inside = seen & (dr.squared_norm(ray.d - to_sun) <= ops.param(2.0 * self.sun_one_minus_cos))
+        return dr.select(inside, mi.Spectrum(*ops.params([e / omega for e in E_sun])), 0.0)
 
     # ------------------------------------------------------------- interactions
     @staticmethod

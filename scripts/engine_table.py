@@ -1,15 +1,17 @@
-"""Write reports/engines/README.md: the truth against the real three.js, linear and canvas.
+"""Write reports/engines/README.md: the truth against every real engine, linear and canvas.
 
 Usage: ``.venv/bin/python scripts/engine_table.py [--res 96 --resy 54 --spp 64 --out reports/engines]``
 
 For the default scene (``scenes/valley.xml``) and the open plane (``scenes/open_plane.xml``):
-a ground truth (``fogref.cached_truth``, seed 0, pixel-exact), then three.js from
-``node_modules`` in headless Chromium renders the truth's view (``fogref.engines``), and
-``fogref.compare.check`` compares the engine's linear float render target (final, T,
-inscatter; ``composite`` is its fog over the truth's surface) and its 8-bit sRGB canvas with the
-truth, as ``fogref compare TRUTH --engine threejs [--engine-output canvas]`` does.  The
-engine's images and ``engine.json`` go to ``out/engines/<scene>/`` (git-ignored).  A few minutes
-on two cores (the truths are cached after the first run).
+a ground truth (``fogref.cached_truth``, seed 0, pixel-exact), then each engine of
+``fogref.engines.ENGINES`` (three.js, Babylon.js, PlayCanvas from ``node_modules``, in headless
+Chromium) renders the truth's view with its fog mapped from the scene (``fogref.cli.engine.
+engine_model``, as ``--from-scene``), and ``fogref.compare.check`` compares the engine's linear
+float render target (final, T, inscatter; ``composite`` is its fog over the truth's surface) and
+its 8-bit canvas with the truth, as ``fogref compare TRUTH --engine NAME --from-scene
+[--engine-output canvas]`` does.  The engine's images and ``engine.json`` go to
+``out/engines/<engine>/<scene>/`` (git-ignored).  A few minutes on two cores (the truths are
+cached after the first run).
 """
 
 from __future__ import annotations
@@ -21,18 +23,14 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-#: scene name -> (file, fog settings: None = the scene's mapping, else --param values, and why)
+#: scene name -> (file, the medium's sigma_t to map instead of the scene's (None: its own), why)
 SCENES = {
-    "valley": (
-        "scenes/valley.xml",
-        None,
-        "mapped from the scene (`--from-scene`: FogExp2, density = σt at the camera)",
-    ),
+    "valley": ("scenes/valley.xml", None, "mapped from the scene (`--from-scene`)"),
     "open_plane": (
         "scenes/open_plane.xml",
-        {"mode": "FogExp2", "density": 0.002 * 0.9704455335485082, "color": [0.18, 0.27, 0.45]},
-        "`--param`: the mapping refuses the scene's coloured σt (0.0015, 0.002, 0.0025)/m; FogExp2 with the "
-        "green channel's σt at the camera (0.002 exp(-0.01·3)) and colour albedo × sky",
+        0.002,
+        "mapped from the scene with its green channel's σt, 0.002/m (the mappings refuse the scene's "
+        "coloured σt (0.0015, 0.002, 0.0025)/m; `--param` gives the same settings)",
     ),
 }
 ROWS = {
@@ -68,6 +66,7 @@ def main(argv=None) -> int:
     from fogref.cli.engine import engine_model
     from fogref.compare.check import check
     from fogref.compare.foreign import load_engine_images
+    from fogref.engines import ENGINES
     from fogref.engines.render import render_and_write
     from fogref.engines.view import view_from_truth
 
@@ -76,56 +75,76 @@ def main(argv=None) -> int:
     )
     lines, record = [], {}
     t0 = time.perf_counter()
-    for name, (scene, params, how) in SCENES.items():
-        truth = fogref.cached_truth(ROOT / scene, res=(a.res, a.resy), spp=a.spp, seed=0)
-        view = view_from_truth(truth)
-        model = engine_model("threejs", params, truth.params if params is None else None)
-        r, paths, rec = render_and_write(
-            view, model, Path(a.work) / name, "threejs", truth, [(truth.path, "truth")]
-        )
-        shape = truth.shape
-        results = {
-            "linear": check(
+    for engine in ENGINES:
+        for name, (scene, sigma_t, how) in SCENES.items():
+            truth = fogref.cached_truth(ROOT / scene, res=(a.res, a.resy), spp=a.spp, seed=0)
+            view = view_from_truth(truth)
+            params = json.loads(json.dumps(truth.params))
+            if sigma_t is not None:
+                params["medium"]["sigma_t"] = sigma_t
+            model, sources = engine_model(engine, None, params, view)
+            r, paths, rec = render_and_write(
+                view,
+                model,
+                Path(a.work) / engine / name,
+                engine,
                 truth,
-                load_engine_images(paths["final"], paths["transmittance"], paths["inscatter"], shape=shape),
-            ),
-            "canvas": check(truth, load_engine_images(paths["canvas"], shape=shape)),
-        }
-        record[name] = {"engine": rec, "rows": {k: v.to_dict() for k, v in results.items()}}
-        lines += [
-            f"### `{scene}` ({a.res}×{a.resy} px, {a.spp} spp, seed 0)",
-            "",
-            f"three.js fog: {how}; settings `{json.dumps(rec['fog_settings'])}`.",
-            "",
-            *[f"- {s}" for s in rec["summary"]],
-            "",
-            "| output | part | region | rel. RMSE [99 %] | rel. bias [99 %] |",
-            "|---|---|---|---|---|",
-        ]
-        for out, rows in ROWS.items():
-            for part, region in rows:
-                res = results[out]
-                lines.append(
-                    f"| {out} | {part} | {region} | {_cell(res.row(part, region, 'rel_rmse'))} "
-                    f"| {_cell(res.row(part, region, 'rel_bias'), '+')} |"
-                )
-        lines.append("")
-        print(f"{name}: done ({time.perf_counter() - t0:.0f} s)", file=sys.stderr)
-    first = next(iter(record.values()))["engine"]
+                [(truth.path, "truth")],
+                sources=sources,
+            )
+            shape = truth.shape
+            finals = [paths["final"], paths["transmittance"], paths["inscatter"]]
+            results = {
+                "linear": check(truth, load_engine_images(*finals, shape=shape)),
+                "canvas": check(truth, load_engine_images(paths["canvas"], shape=shape)),
+            }
+            record.setdefault(engine, {})[name] = {
+                "engine": rec,
+                "rows": {k: v.to_dict() for k, v in results.items()},
+            }
+            lines += [
+                f"### {engine} {r.version}: `{scene}` ({a.res}×{a.resy} px, {a.spp} spp, seed 0)",
+                "",
+                f"`fogref compare TRUTH --engine {engine} --from-scene`; fog {how}; settings "
+                f"`{json.dumps(rec['fog_settings'])}`; canvas: {rec['canvas_colour_space']}, tone "
+                f"mapping {rec['canvas_tone_mapping']}.",
+                "",
+                *[f"- {s}" for s in rec["summary"]],
+                "",
+                "| output | part | region | rel. RMSE [99 %] | rel. bias [99 %] |",
+                "|---|---|---|---|---|",
+            ]
+            for out, rows in ROWS.items():
+                for part, region in rows:
+                    res = results[out]
+                    lines.append(
+                        f"| {out} | {part} | {region} | {_cell(res.row(part, region, 'rel_rmse'))} "
+                        f"| {_cell(res.row(part, region, 'rel_bias'), '+')} |"
+                    )
+            lines.append("")
+            print(f"{engine} {name}: done ({time.perf_counter() - t0:.0f} s)", file=sys.stderr)
+    versions = ", ".join(f"{e} {v['valley']['engine']['version']}" for e, v in record.items())
+    first = next(iter(record.values()))["valley"]["engine"]
     head = [
-        "# The truth against the real three.js",
+        "# The truth against the real engines",
         "",
-        f"three.js {first['version']} (npm `three`, `package.json`) in headless {first['browser']} with "
-        f"SwiftShader WebGL 2 (`{first['webgl_renderer']}`), driven by selenium (`fogref.engines`). Each row "
-        "compares one part of the engine's images with the truth: `linear` is its float32 render target "
-        "(final image, and its fog's transmittance `T` and inscatter from passes with black materials; "
+        f"{versions} (npm, `package.json`) in headless {first['browser']} with SwiftShader WebGL 2 "
+        f"(`{first['webgl_renderer']}`), driven by selenium (`fogref.engines`). Each row compares one "
+        "part of an engine's images with the truth: `linear` is its float32 render target (final "
+        "image, and its fog's transmittance `T` and inscatter from passes with black materials; "
         "`composite` puts that fog over the truth's own surface radiance, so only the fog differs), "
-        "`canvas` the 8-bit sRGB canvas three.js ships (default output colour space and tone mapping; "
-        "its fog is blended in sRGB). Metrics: relative RMSE and relative bias against the truth, with "
-        "99 % intervals from the truth's noise (`fogref.compare.check`); `final` also carries the "
-        "engine's own surface shading (Lambert under a directional sun and a hemisphere sky, no "
-        "shadows), which is not the fog's error. three.js draws its background without fog, so on "
-        "`sky` its transmittance is 1 and its inscatter 0.",
+        "`canvas` the 8-bit canvas the engine ships with its defaults (three.js: sRGB output, its fog "
+        "blended in sRGB; Babylon.js: the linear values unconverted; PlayCanvas: a 2.2 power), read "
+        "as sRGB. Metrics: relative RMSE and relative bias against the truth, with 99 % intervals "
+        "from the truth's noise (`fogref.compare.check`); `final` also carries the engine's own "
+        "surface shading (Lambert under a directional sun and a sky light: three.js's and Babylon's "
+        "hemisphere lights are the truth's sky, PlayCanvas's uniform ambient light is it only on "
+        "horizontal ground; no shadows), which is not the fog's error. The engines draw their "
+        "background without fog, so on `sky` their transmittance is 1 and their inscatter 0. "
+        "Filament (npm `filament`, WebAssembly) is not in the loop: its `Engine.createMaterial` takes "
+        "only materials compiled ahead of time by Filament's `matc` (`.filamat`), which the package "
+        "does not ship, and its only built-in materials are gltfio's lit ubershaders; so the page "
+        "cannot write the depth pass both checks (port vs engine, camera vs truth) read.",
         "",
         f"Made by `{command}` in {time.perf_counter() - t0:.0f} s.",
         "",

@@ -1,6 +1,9 @@
-"""Write reports/fit/engines.md and engines.json: every engine's best fit to the physical fog.
+"""Write reports/fit/engines.md and engines.json: every engine's best fit to the physical fog, and
+each engine's paste-ready settings of that fit (``fogref export``) under ``snippets/``.
 
-Usage: ``.venv/bin/python scripts/fit_table.py [--scene scenes/valley.xml] [--out reports/fit]``
+Usage: ``.venv/bin/python scripts/fit_table.py [--scene scenes/valley.xml] [--out reports/fit]``;
+``--from-json`` rewrites engines.md and the snippets from the committed ``engines.json`` without
+fitting again.
 
 For each built-in model, :func:`fogref.fit_model` on the scene's fog with the sun at the scene's
 own elevation and at 30 and 60 degrees (the scene's azimuth), each elevation fitted on its own;
@@ -27,7 +30,17 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scene", default="scenes/valley.xml")
     ap.add_argument("--out", default="out/fit")
+    ap.add_argument(
+        "--from-json", action="store_true", help="rewrite engines.md and the snippets from OUT/engines.json"
+    )
     a = ap.parse_args(argv)
+    if a.from_json:
+        from fogref.atomic import write_text_atomic
+
+        table = Path(a.out) / "engines.json"
+        write_text_atomic(Path(a.out) / "engines.md", markdown(json.loads(table.read_text())))
+        write_snippets(table, Path(a.out) / "snippets")
+        return 0
     from fogref.atomic import write_text_atomic as write_text
     from fogref.mapping.fit import sun_elevation
     from fogref.study.fit import _physical, fit_model, translate
@@ -68,10 +81,40 @@ def main(argv=None) -> int:
     }
     write_text(out / "engines.json", json.dumps(doc, indent=2) + "\n")
     write_text(out / "engines.md", markdown(doc))
+    write_snippets(out / "engines.json", out / "snippets")
     return 0
 
 
+#: engine -> file names of its snippets under OUT/snippets/, by the suffix export gives.
+SNIPPET_FILES = {
+    "unreal": {".py": "unreal.py"},
+    "godot": {".tres": "fogref_environment.tres", ".tscn": "fogref.tscn"},
+    "bevy": {".rs": "bevy.rs"},
+    "threejs": {".mjs": "threejs.mjs"},
+    "unity": {".cs": "FogrefFog.cs"},
+    "hdrp": {".cs": "FogrefHdrpFog.cs"},
+    "filament": {".mjs": "filament.mjs"},
+}
+
+
+def write_snippets(table: Path, folder: Path) -> None:
+    """Each engine's ``fogref export`` of its fit at the table's first sun elevation (the scene's own),
+    with the table's scene's camera and sun."""
+    from fogref.atomic import write_text_atomic as write_text
+    from fogref.study.export import export_engine
+
+    doc = json.loads(table.read_text())
+    folder.mkdir(parents=True, exist_ok=True)
+    for engine, names in SNIPPET_FILES.items():
+        files = export_engine(engine, json_path=table, scene=doc["scene"])
+        for suffix, text in files.items():
+            write_text(folder / names[suffix], text)
+        print(f"{engine}: {', '.join(names.values())}", file=sys.stderr)
+
+
 def markdown(doc: dict) -> str:
+    from fogref.models.terms import with_unit
+
     el = doc["sun_elevations_deg"]
     by = {}
     for r in doc["fits"]:
@@ -130,7 +173,18 @@ def markdown(doc: dict) -> str:
                 f"| {t['target']['model']} | {r['target_vs_truth_rel_rmse']:.3f} | "
                 f"{r['target_vs_source_rel_rmse']:.3f} | {r['physical_vs_source_rel_rmse']:.3f} |"
             )
-    lines += ["", "## Best-fit parameters", ""]
+    lines += [
+        "",
+        "## Best-fit parameters",
+        "",
+        "In brackets, each parameter's unit in the engine; a colour is linear (fogref's value, the "
+        "shader's) and the bracket says what the engine's UI shows (sRGB for Godot's and Unity's "
+        "colour pickers; `fogref.models.terms`).  Paste-ready settings of the first column's fits, "
+        "with the scene's camera and sun, in each engine's units and axes (`fogref export`): "
+        + ", ".join(f"[{n}](snippets/{n})" for names in SNIPPET_FILES.values() for n in names.values())
+        + ".",
+        "",
+    ]
     for m, rs in by.items():
         lines += [
             f"### {m}",
@@ -145,7 +199,8 @@ def markdown(doc: dict) -> str:
                 cells.append(
                     f"{p['value']:.4g} ± {p['uncertainty']:.2g}" + (" (bound)" if p.get("at_bound") else "")
                 )
-            lines.append(f"| `{k}` | " + " | ".join(cells) + " |")
+            name, _, unit = with_unit(m, k).partition(" ")
+            lines.append(f"| `{name}` {unit} | " + " | ".join(cells) + " |")
         conv = ", ".join("yes" if r["fit"].get("directions_converged") else "no" for r in rs)
         lines += [
             "",

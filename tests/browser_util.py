@@ -52,11 +52,12 @@ def start(width: int = 1400, height: int = 1100, webgl: bool = False):
     return webdriver.Chrome(service=Service(driver), options=o)
 
 
-def load(drv, path, timeout: float = 30.0) -> None:
-    """Open ``path`` (file://) and wait until the page's script has decoded its data."""
+def load(drv, path, timeout: float = 300.0) -> None:
+    """Open ``path`` (file://) and wait until the page's script has decoded its data (the event;
+    ``timeout`` [s] only catches a hang, generous for a loaded machine)."""
     drv.get(Path(path).resolve().as_uri())
-    t0 = time.time()
-    while time.time() - t0 < timeout:
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
         if drv.execute_script("return document.body && document.body.getAttribute('data-ready')"):
             return
         time.sleep(0.05)

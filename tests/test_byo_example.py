@@ -9,7 +9,7 @@ import fogref
 
 
 def test_fog_matches_truth(fogref_truth):
-    truth = fogref_truth("scenes/valley.xml", res=(32, 18), spp=64, seed=0)  # rendered once, cached
+    truth = fogref_truth(fogref.scene_path("valley"), res=(32, 18), spp=64, seed=0)  # rendered once, cached
     model = fogref.build_model("ue4", scene_params=truth.params)  # yours: "my_pkg.fog:MyFog"
     fogref.assert_fog_matches(
         truth,

@@ -85,6 +85,10 @@ def test_the_message_splits_the_tolerances_the_user_set_from_the_defaults(tmp_pa
     assert int(re.search(r"(\d+) against fogref's default tolerances", message)[1]) >= 15, message
     assert any(ln.startswith("  inscatter/") for ln in default_rows), message
     assert not any(ln.startswith("  inscatter/") for ln in mine_rows)
+    # check.json says which tolerances the caller set
+    import json
+
+    assert json.loads((tmp_path / "check.json").read_text())["settings"]["tolerances_set"] == ["T:rel_rmse"]
 
 
 def test_a_truths_repr_is_one_short_line():

@@ -26,7 +26,7 @@ from fogref.exrio import read_exr
 pytestmark = pytest.mark.render
 ROOT = Path(__file__).resolve().parents[1]
 TRACED = {str(ROOT / "fogref" / "render" / f) for f in ("render.py", "checkpoint.py")} | {
-    str(ROOT / "fogref" / "atomic.py")
+    str(ROOT / "fogref" / f) for f in ("atomic.py", "cluster.py")
 }
 SPP = 3  # three passes of 1 spp (tiny.one_spp_passes)
 
@@ -40,14 +40,14 @@ def _equal(a: dict, b: dict) -> bool:
 
 
 def _is_interrupt(frame) -> bool:
-    """The frame is a method of the driver's signal handling (``fogref.render.render._Interrupt``)."""
-    return type(frame.f_locals.get("self")).__name__ == "_Interrupt"
+    """The frame is a method of the driver's signal handling (``fogref.cluster.Interrupt``)."""
+    return type(frame.f_locals.get("self")).__name__ == "Interrupt"
 
 
 class _InjectAt:
     """A trace function that interrupts the n-th line executed in TRACED files while the pass loop
-    runs: from the driver's installing its signal handlers (``_Interrupt.__enter__``) to its
-    restoring them (``_Interrupt.__exit__`` returns)."""
+    runs: from the driver's installing its signal handlers (``Interrupt.__enter__``) to its
+    restoring them (``Interrupt.__exit__`` returns)."""
 
     def __init__(self, n: int, how: str):
         self.n, self.how, self.count, self.armed, self.fired = n, how, 0, None, None

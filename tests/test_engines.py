@@ -1,17 +1,22 @@
-"""The real three.js in the loop (fogref.engines): its camera is fogref's, its fog is the port's.
+"""The real engines in the loop (fogref.engines): their camera is fogref's, their fog is the port's.
 
-Each test that renders starts Debian's headless Chromium with three.js from node_modules (a few
-seconds); they skip, saying why, only where Chromium cannot start.  References:
+Each test that renders starts Debian's headless Chromium with an engine from node_modules (a few
+seconds); they skip, saying why, only where Chromium cannot start.  The engines: three.js,
+Babylon.js and PlayCanvas (every engine of :data:`fogref.engines.ENGINES`).  References:
 
 * camera: the truth's G-buffer distance of the open plane (Mitsuba's pixel-centre rays, float32)
   against the engine's distance along the ray through each pixel centre.  Measured: 4.1e-7
   relative at most (float32); the bound 1e-5 detects a camera off by 0.001 deg in pitch or a
   field of view off by 1e-4 relative (each moves a 16x9 view's plane distances by >= 1e-4).
-* fog: the port (fogref.models.threejs) on the eye depth the engine's fog interpolated, over the
-  engine's own unfogged surface, against the engine's linear image: measured 7.5e-8 (float32);
-  the level is 1e-6 relative.  A density 1 % off gives 2.8e-3 here: the test can fail.
-* canvas: the port through three.js's sRGB transfer and 8 bits: 0 code values measured, the
-  level 1; a linear blend instead differs by 17 code values on the valley.
+* fog: the port (fogref.models.threejs, .babylon, .playcanvas) on the fog coordinate the
+  engine's fog interpolated (eye depth, distance), over the engine's own unfogged surface,
+  against the engine's linear image: measured 7.5e-8 (three.js), 1.2e-7 (Babylon, PlayCanvas)
+  (float32); the level is 1e-6 relative.  A density 1 % off gives 2.8e-3 here: the test can fail.
+* canvas: the port through the engine's canvas transform (three.js: sRGB transfer; Babylon: none;
+  PlayCanvas: a 2.2 power) and 8 bits: 0 code values measured, the level 1; an sRGB-encoded
+  linear blend instead differs by 17 (three.js) and 74 (Babylon) code values on the valley.
+* lighting: without fog, on the open plane, the engine's image is the truth's (exact per sample
+  there): 2.1e-7 (three.js), 7.0e-8 (Babylon, PlayCanvas) relative measured.
 """
 
 from __future__ import annotations
@@ -25,7 +30,12 @@ import pytest
 
 from conftest import ROOT, SCENES
 from fogref.cli import main
+from fogref.engines import ENGINES
 from fogref.engines.browser import Browser, EngineUnavailable, find_chromium
+
+#: engine -> its model's density parameter (a 1 % change must be seen)
+DENSITY = {"threejs": "density", "babylon": "fogDensity", "playcanvas": "density"}
+assert set(DENSITY) == set(ENGINES)
 
 
 @pytest.fixture(scope="module")
@@ -39,16 +49,16 @@ def chromium():
         pytest.skip(str(e))
 
 
-@pytest.fixture(scope="module")
-def valley(chromium):
-    """The valley at 32x18, its fog mapped from the scene (FogExp2), rendered by three.js."""
+@pytest.fixture(scope="module", params=sorted(ENGINES))
+def valley(chromium, request):
+    """The valley at 32x18, its fog mapped from the scene, rendered by each engine."""
+    from fogref.cli.engine import engine_model
     from fogref.engines.render import render_engine
     from fogref.engines.view import view_from_scene
-    from fogref.mapping.build import build_model
 
     view = view_from_scene(SCENES / "valley.xml", {"res": "32", "resy": "18"})
-    model = build_model("threejs", None, view.params)
-    return view, model, render_engine(view, model, timeout=120)
+    model, _ = engine_model(request.param, None, view.params, view)
+    return view, model, render_engine(view, model, request.param, timeout=120)
 
 
 @pytest.fixture(scope="module")
@@ -65,12 +75,13 @@ def plane_truth(chromium, tmp_path_factory):
 
 
 @pytest.mark.render
-def test_engine_camera_is_the_truths(plane_truth):
+@pytest.mark.parametrize("engine", sorted(ENGINES))
+def test_engine_camera_is_the_truths(plane_truth, engine):
     from fogref.engines.render import render_engine, truth_agreement
     from fogref.engines.view import view_from_truth
 
     truth = plane_truth
-    r = render_engine(view_from_truth(truth), None, timeout=120)
+    r = render_engine(view_from_truth(truth), None, engine, timeout=120)
     a = truth_agreement(r, truth)
     assert a["hit_mismatch_pixels"] == 0
     assert 0 < r.hit.sum() < r.hit.size  # ground and sky both in view
@@ -85,10 +96,13 @@ def test_fog_settings_arrive(valley):
     assert p["pixels"] > 100
     assert p["at_quantisation"], p["summary"]
     assert p["linear_max_relative"] <= 1e-6 and p["canvas_max"] <= 1
-    # three.js blends its canvas fog in sRGB: a linear blend is visibly different
-    assert p["linear_blend_canvas_max"] >= 5
+    # three.js blends its fog in sRGB, Babylon writes linear values unconverted: neither canvas is
+    # the sRGB encoding of the linear image (PlayCanvas's 2.2 power is within 2 code values of it)
+    if r.engine != "playcanvas":
+        assert p["linear_blend_canvas_max"] >= 5
     # the comparison can fail: the port with 1 % more density is not the engine
-    off = type(model)(dataclasses.replace(model.params, density=model.params.density * 1.01))
+    key = DENSITY[r.engine]
+    off = type(model)(dataclasses.replace(model.params, **{key: getattr(model.params, key) * 1.01}))
     q = port_vs_engine(r, off)
     assert not q["at_quantisation"] and q["linear_max"] > 1e-5
 
@@ -125,6 +139,19 @@ def test_engine_render_command_writes_images_compare_reads(chromium, tmp_path, c
     channels, attrs = read_exr(out / "final.exr")
     assert {"R", "G", "B", "distance", "hit"} <= set(channels)
     assert attrs["fogref.engine"]["version"] == "0.187.0"
+    # the fog settings are the ones `compare --model threejs --from-scene` evaluates, and say so
+    import json
+
+    from fogref.engines.threejs import settings
+    from fogref.engines.view import view_from_scene
+    from fogref.mapping.build import build_model
+
+    record = json.loads((out / "engine.json").read_text())
+    params = view_from_scene(SCENES / "valley.xml", {"res": "16", "resy": "9"}).params
+    model = build_model("threejs", None, params)
+    assert record["fog_settings"] == settings(model)
+    assert record["fog_settings_source"]["density"].endswith("threejs_from_physical (--from-scene)")
+    assert set(record["fog_settings_source"]) >= {"mode", "density", "color", "camera_forward"}
     canvas = load_engine_images(out / "canvas.png", shape=(9, 16))
     assert canvas.encodings["final"] == "srgb"
 
@@ -249,12 +276,15 @@ def test_meshes_the_scene_loads_are_drawn(chromium, tmp_path):
 
 
 @pytest.mark.render
-def test_engine_lighting_is_the_truths_without_fog(chromium, tmp_path):
+@pytest.mark.parametrize("engine", sorted(ENGINES))
+def test_engine_lighting_is_the_truths_without_fog(chromium, tmp_path, engine):
     """On the fog-free open plane the truth is exact per sample (delta sun by next-event estimation,
     constant sky by the cosine-weighted BSDF sample: stderr 0), and the engine's sun
-    (DirectionalLight of colour E), sky (HemisphereLight pi L, background L) and Lambert material
-    give the same image: 2.1e-7 relative measured (float32); the tolerance 1e-5 fails a sun or
-    sky off by more than 0.001 % (a factor pi, the usual slip, is 200 %)."""
+    (three.js: DirectionalLight of colour E; Babylon, PlayCanvas: E / pi), sky (a hemisphere
+    light; PlayCanvas: its ambient light, the sky's on this horizontal ground; the background L)
+    and Lambert material give the same image: 2.1e-7 (three.js), 7.0e-8 (Babylon, PlayCanvas)
+    relative measured (float32); the tolerance 1e-5 fails a sun or sky off by more than 0.001 %
+    (a factor pi, the usual slip, is 200 %)."""
     from fogref.engines.render import render_engine
     from fogref.engines.view import view_from_truth
     from fogref.gbuffer import load_truth
@@ -272,6 +302,24 @@ def test_engine_lighting_is_the_truths_without_fog(chromium, tmp_path):
         )
     )
     assert truth.stderr["final"].max() == 0.0
-    r = render_engine(view_from_truth(truth), None, timeout=120)
+    r = render_engine(view_from_truth(truth), None, engine, timeout=120)
     assert np.array_equal(r.hit, truth.hit) and r.hit.any() and (~r.hit).any()
     np.testing.assert_allclose(r.final, truth.final, rtol=1e-5, atol=0)
+
+
+def test_engine_settings_say_where_they_came_from():
+    """PlayCanvas's fog reads its camera's clip planes: ``fogref engine`` sets them from the view
+    (nothing clipped) unless ``--param`` gives them, and says where each setting came from."""
+    from fogref.cli.engine import engine_model
+    from fogref.engines.view import view_from_scene
+
+    view = view_from_scene(SCENES / "open_plane.xml", {"res": "16", "resy": "9"})
+    model, src = engine_model("playcanvas", {"density": 0.01}, None, view)
+    assert (model.params.nearClip, model.params.farClip) == view.clip_planes()
+    assert src["nearClip"].startswith("the view") and src["farClip"].startswith("the view")
+    assert src["density"] == "--param" and src["type"].startswith("the model's default")
+    model, src = engine_model("playcanvas", {"farClip": 50.0}, None, view)
+    assert model.params.farClip == 50.0 and src["farClip"] == "--param"
+    assert model.params.nearClip == view.clip_planes()[0]
+    model, src = engine_model("threejs", None, None, view)  # three.js's fog has no clip planes
+    assert not any(v.startswith("the view") for v in src.values())

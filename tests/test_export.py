@@ -142,7 +142,8 @@ def test_godot_resources_parse_and_hold_the_fit_in_srgb(tmp_path):
     scene = dict(_godot_file(tres.with_suffix(".tscn").read_text()))
     sun = scene['[node name="Sun" type="DirectionalLight3D" parent="."]']
     w, E = _sun()
-    light = _linear(_nums(sun["light_color"])[:3]) * float(sun["light_energy"])
+    # Godot's shader light: linear colour x light_energy x pi (light_storage.cpp, no physical units)
+    light = _linear(_nums(sun["light_color"])[:3]) * float(sun["light_energy"]) * math.pi
     np.testing.assert_allclose(light, E, rtol=1e-7)  # the light is the sun
     z = np.array(_nums(sun["transform"])[:9]).reshape(3, 3)[:, 2]
     np.testing.assert_allclose(z, w, atol=1e-8)  # it shines along -Z, away from the sun
@@ -315,6 +316,9 @@ def test_unity_csharp_is_balanced_and_holds_the_fit_left_handed(tmp_path, engine
     )
     np.testing.assert_allclose([float(x) for x in look.groups()], f * [1, 1, -1], atol=1e-8)
     w, E = _sun()
+    lux = float(re.search(rf"sun.intensity = ({NUM})f", text).group(1))
+    # HDRP: lux; the built-in Standard BRDF leaves out the diffuse 1/pi (UnityStandardBRDF.cginc)
+    assert lux * (math.pi if engine == "unity" else 1.0) == pytest.approx(E.max(), rel=1e-8)
     sun = re.search(
         rf"sun.transform.rotation = Quaternion.LookRotation\(new Vector3\(({NUM})f, ({NUM})f, ({NUM})f\)",
         text,
@@ -347,3 +351,45 @@ def test_export_refuses_bad_input(tmp_path, capsys):
     assert "no fit of 'bevy' at 45 deg" in capsys.readouterr().err
     assert main(["export", "--engine", "unreal", "--json", str(TABLE), "--out", str(TABLE)]) == 2
     assert "is an input" in capsys.readouterr().err
+
+
+def test_the_committed_snippets_are_the_exports_of_the_committed_fit_table(monkeypatch):
+    """reports/fit/snippets/ never goes stale: each file is what `fogref export` writes from
+    reports/fit/engines.json today (scripts/fit_table.py --from-json rewrites them)."""
+    import importlib.util
+
+    from fogref.study.export import export_engine
+
+    spec = importlib.util.spec_from_file_location("fit_table", ROOT / "scripts" / "fit_table.py")
+    fit_table = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(fit_table)
+    monkeypatch.chdir(ROOT)
+    scene = json.loads(TABLE.read_text())["scene"]
+    for engine, names in fit_table.SNIPPET_FILES.items():
+        files = export_engine(engine, json_path=Path("reports/fit/engines.json"), scene=scene)
+        for suffix, name in names.items():
+            committed = (ROOT / "reports" / "fit" / "snippets" / name).read_text()
+            assert files[suffix] == committed, f"reports/fit/snippets/{name} is stale"
+
+
+def test_export_reads_fit_and_translate_json(tmp_path, capsys):
+    """The JSON of `fogref fit` (Unreal's own) and of `fogref translate` are export's input too."""
+    assert main(["fit", "--directions", "16", "--no-start-distance"]) == 0
+    fit = tmp_path / "fit.json"
+    fit.write_text(capsys.readouterr().out)
+    assert main(["export", "--engine", "unreal", "--json", str(fit)]) == 0
+    text = capsys.readouterr().out
+    ast.parse(text)
+    s = json.loads(fit.read_text())["settings"]
+    n = float(re.search(rf'\["directional_inscattering_exponent"\], ({NUM})\)', text).group(1))
+    assert n == pytest.approx(s["DirectionalInscatteringExponent"], rel=1e-8)
+    argv = ["translate", "--from", "unity", "--to", "threejs", "--param", "fogDensity=0.003"]
+    assert main([*argv, "--directions", "16"]) == 0
+    tr = tmp_path / "translate.json"
+    tr.write_text(capsys.readouterr().out)
+    assert main(["export", "--engine", "threejs", "--json", str(tr)]) == 0
+    text = capsys.readouterr().out
+    density = float(re.search(rf"new THREE.FogExp2\(fogColor, ({NUM})\)", text).group(1))
+    assert density == pytest.approx(json.loads(tr.read_text())["target"]["settings"]["density"], rel=1e-8)
+    assert main(["export", "--engine", "bevy", "--json", str(tr)]) == 2
+    assert "translates to 'threejs', not 'bevy'" in capsys.readouterr().err

@@ -72,6 +72,10 @@ def _pixel(drv, x, y) -> list[int]:
     )
 
 
+#: wall-clock limit [s] of a wait for the page, for a hang only (a loaded machine is slow)
+HANG_S = 300
+
+
 def _rendered(drv) -> int:
     return int(drv.execute_script("return +document.body.getAttribute('data-rendered')"))
 
@@ -217,8 +221,11 @@ def test_flicker_swipe_and_false_colours(driver, tiny_report):
     truth, error = decode_half(layer["truth"]), decode_half(layer["error"])
     n = _rendered(driver)
     Select(driver.find_element("id", "fr-mode")).select_by_value("flicker")
-    time.sleep(2.0)
-    assert _rendered(driver) >= n + 3  # a frame every 0.6 s
+    # the event: three more frames (one every 0.6 s); the clock only catches a page that stopped
+    deadline = time.monotonic() + HANG_S
+    while _rendered(driver) < n + 3:
+        assert time.monotonic() < deadline, f"flicker drew {_rendered(driver) - n} frames in {HANG_S} s"
+        time.sleep(0.1)
     Select(driver.find_element("id", "fr-mode")).select_by_value("swipe")
     Select(driver.find_element("id", "fr-b")).select_by_value("error")
     w = int(driver.execute_script("return document.getElementById('fr-canvas').width"))

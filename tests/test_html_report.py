@@ -223,3 +223,59 @@ def test_study_and_sweep_pages_from_committed_data(tmp_path):
     html = write_sweep_html(sweep).read_text()
     assert html.count("data:image/png") == len(list((sweep / "plots").glob("*.png"))) > 0
     assert html.count("<tr") == 48 + 1 and "sun_elevation" in html
+
+
+def test_the_study_page_explains_its_budget_with_numbers_rounded_to_their_noise(tmp_path):
+    """The budget on the study page is for a reader, from the committed study: the total with its
+    noise, the Shapley shares with how to read them (a negative share, a share over 100 %), each
+    share rounded to its noise, and none of budget.json's raw keys or 17-digit floats."""
+    import re
+    import shutil
+
+    from conftest import ROOT
+    from fogref.html.reports import write_study_html
+
+    study = tmp_path / "study"
+    study.mkdir()
+    for rel in ("summary.json", "budget.json", "budget.png"):
+        shutil.copy(ROOT / "reports/unreal_study" / rel, study / rel)
+    html = write_study_html(study).read_text()
+    text = re.sub(r"\s+", " ", re.sub(r"<[^>]+>", " ", html[html.index("Error budget") :]))
+    assert "RMSE 0.14475 ± 0.00007" in text  # 0.14475013716728694 ± 6.98e-05
+    assert "A negative share: the effect cancels part of the other effects' error" in text
+    assert "can exceed 100 % or fall below −100 %" in text and "How the budget was checked" in text
+    # 1.0149 ± 0.0635 and -1.1478 ± 0.152 as fractions of the squared error
+    assert "[e] geometric shadows (sun) 101 ± 6 % adds error" in text
+    assert "[a/b] colours/exponent re-fitted to the attenuated target -115 ± 15 % cancels part" in text
+    for raw in ("total_sq", "share_sum", "share_noise", "rmse_vs_truth_after", "phi"):
+        assert raw not in text, raw
+    assert not re.search(r"\d\.\d{9,}", text), re.search(r".{40}\d\.\d{9,}.{20}", text)
+
+
+def test_a_large_truth_is_shown_as_block_means_so_the_page_stays_small(monkeypatch):
+    """Above MAX_PIXELS the viewer embeds k x k block means (and their standard errors, from the
+    pixels' independent noise), says so on the page, and the page is no larger than one of a truth
+    of the shown size: here a 64x36 truth with the limit at 16x9 is shown at 16x9 (k = 4)."""
+    import fogref.html.viewer as V
+    from fogref.compare.synthetic import synthetic_truth
+    from fogref.html.page import page
+    from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+
+    model = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
+    small = page("t", [], V.viewer_data(synthetic_truth(model, shape=(9, 16), noise=0.05)))
+    monkeypatch.setattr(V, "MAX_PIXELS", 16 * 9)
+    t = synthetic_truth(model, shape=(36, 65), noise=0.05)  # one column more: left out
+    d = V.viewer_data(t)
+    assert (d["width"], d["height"], d["scale"], d["full_size"]) == (16, 9, 4, [65, 36])
+    final = next(layer for layer in d["layers"] if layer["part"] == "final")
+    blocks = t.final[:, :64].reshape(9, 4, 16, 4, 3).mean(axis=(1, 3))
+    assert np.array_equal(decode_half(final["truth"]), blocks.astype(np.float16).astype(np.float64))
+    se = np.sqrt((t.stderr["final"][:, :64] ** 2).reshape(9, 4, 16, 4, 3).sum(axis=(1, 3))) / 16
+    assert np.array_equal(decode_half(final["stderr"]), se.astype(np.float16).astype(np.float64))
+    html = page("t", [], d)
+    assert (
+        "The image is 65×36 px" in html
+        and "mean of 4×4 pixels" in html
+        and "last 0 rows and 1 columns" in html
+    )
+    assert len(html) < 1.25 * len(small), (len(html), len(small))

@@ -365,3 +365,51 @@ def test_physical_scene_parser():
     p["sun"]["direction"] = [0.0, 0.0, 0.0]
     with pytest.raises(ParameterError, match="direction"):
         PhysicalScene.from_params(p)
+
+
+# -- the scene's view direction ------------------------------------------------------
+
+#: the valley's camera (its sensor's lookat, normalised): forward, and an orthonormal up, right
+FORWARD = np.array([0.1401808, 0.3270885, 0.9345386]) / np.linalg.norm([0.1401808, 0.3270885, 0.9345386])
+RIGHT = np.cross(FORWARD, [0.0, 1.0, 0.0]) / np.linalg.norm(np.cross(FORWARD, [0.0, 1.0, 0.0]))
+UP = np.cross(RIGHT, FORWARD)
+
+
+@pytest.mark.parametrize(
+    "name, param",
+    [("threejs", {}), ("playcanvas", {}), ("unity", {"fog_coordinate": "depth"})],
+)
+def test_eye_depth_is_along_the_scenes_camera(name, param):
+    """The models that fog the eye depth take their depth axis from the scene's camera: points
+    ``camera + z forward + a right + b up`` have eye depth ``z`` (float64 rounding, 1e-9 m
+    tolerance); with the default -z axis the valley's eye depths would be negative."""
+    params = copy.deepcopy(VALLEY)
+    params["camera"]["forward"] = (3.0 * FORWARD).tolist()  # not normalised: the parser does it
+    model = build_model(name, param, params)
+    rng = np.random.default_rng(1)
+    z = np.geomspace(1.0, 2.0e4, 64)
+    a, b = (rng.uniform(-0.5, 0.5, 64) * z for _ in range(2))
+    pts = CAMERA + z[:, None] * FORWARD + a[:, None] * RIGHT + b[:, None] * UP
+    if name == "threejs":
+        depth = model.fog_depth(CAMERA, pts)
+    elif name == "playcanvas":
+        n, f = model.params.nearClip, model.params.farClip
+        depth = model.fog_depth(CAMERA, pts) * (f - n) / f + n  # undo far (z - near) / (far - near)
+    else:
+        depth = model.fog_coordinate(CAMERA, pts)
+    np.testing.assert_allclose(depth, z, rtol=0, atol=1e-9 * z.max())
+    assert PhysicalScene.from_params(VALLEY).camera_forward is None  # no view direction: the default
+    assert build_model(name, param, VALLEY).params.camera_forward == (0.0, 0.0, -1.0)
+
+
+def test_scene_file_gives_its_view_direction():
+    """``physical_from_scene`` (no Mitsuba) reads the sensor's lookat: forward = target - origin."""
+    from fogref.shipped_scenes import scene_path
+    from fogref.study.fit import lookat_camera, physical_from_scene
+
+    c = lookat_camera(scene_path("valley"))
+    want = np.subtract(c["target"], c["origin"])
+    np.testing.assert_allclose(
+        physical_from_scene(scene_path("valley")).camera_forward, want / np.linalg.norm(want)
+    )
+    np.testing.assert_allclose(want / np.linalg.norm(want), FORWARD, atol=1e-7)

@@ -67,6 +67,14 @@ CASES = {
         dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065]),
         56,
     ),
+    # a droplet fog's tabulated Mie phase (fogtabphase: its sampling, eval and MIS weights
+    # at every bounce)
+    "box, camera inside, Mie phase": ([0, 3, -10], dict(falloff=0.0, phase="mie", **BOX), 40),
+    "forced split, unbounded exponential, RGB, Mie phase": (
+        [0, 3, -10],
+        dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], phase="mie"),
+        56,
+    ),
 }
 #: cases with white occluders above the horizon (cube, roof)
 OCCLUDED_ON = {k: dict(occluders=True) for k in CASES if "occluders" in k}
@@ -79,6 +87,11 @@ def furnace(mi, origin, fog, occluders=False, **integrator):
     Unbounded fog (no ``bounds_min``) gets a two-sided ground 2000 km wide instead of 400 m."""
     T = mi.ScalarTransform4f()
     medium = {"type": "heightfog", "sigma_t": 0.05, "albedo": 1.0, "g": 0.5, **fog}
+    if medium.get("phase") == "mie":  # the radiation fog's Mie phase (g: its mean cosine)
+        from fogref.mapping.droplet_fog import droplet_fog
+
+        table = droplet_fog(None, "radiation").phase
+        medium.update(phase=table.as_params(), g=table.mean_cosine)
     for k in ("bounds_min", "bounds_max"):
         if k in medium:
             medium[k] = mi.ScalarPoint3f(*medium[k])

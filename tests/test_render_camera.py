@@ -166,3 +166,37 @@ def test_surface_stays_bounded_where_the_fog_is_opaque(tmp_path, mitsuba):
         / d.size
     )
     assert abs(d.mean()) < 4 * se, (d.mean(), se)
+
+
+@pytest.mark.parametrize(
+    "origin, target",
+    [((0, 3, -13), (0, 0, -10)), ((300, 20, 200), (340, 0, 260))],
+    ids=["near the origin", "300 m out"],
+)
+def test_the_written_ground_is_the_plane_y0_to_float32_rounding(tmp_path, mitsuba, origin, target):
+    """``fogref scene --geometry plane``'s ground against the analytic plane y = 0, hit by the same
+    (stored, float32) camera rays in float64.  Error analysis: Mitsuba's float32 hit point on a
+    rectangle carries rounding of the order of u = 2^-24 times the magnitudes it is computed from:
+    the rectangle's half-size h and centre c, the ray's origin o and length t; 8 u (h + |c| + |o| +
+    t) bounds it.  A ground whose shapes are no larger than their distance from the origin
+    allows (h + |c| <= 7 max(|x|, |z|, 8 m) at the point: 8 m tiles at the centre, rings 4 times
+    wider) keeps it at float32 rounding of the point itself.  One 1e5 m rectangle missed the plane
+    by up to 2.5 cm (P.Z took 9 values over 17.7 mm along one image row that has one depth)."""
+    from fogref.render.render import render
+    from fogref.render.scene_writer import write_scene
+
+    W, H = 32, 18
+    xml = tmp_path / "p.xml"
+    write_scene(xml, geometry="plane", camera_origin=origin, camera_target=target, fov=30, res=W, resy=H)
+    t = load_truth(render(xml, tmp_path / "p.exr", spp=1, progress=False, png=False))
+    o = np.asarray(origin, dtype=np.float64)
+    d = t.view.astype(np.float64)
+    assert t.hit.all()  # every pixel looks down at the ground
+    s = -o[1] / d[..., 1]
+    exact = o + s[..., None] * d
+    size = np.maximum(np.maximum(np.abs(exact[..., 0]), np.abs(exact[..., 2])), 8.0)
+    bound = 8 * 2.0**-24 * (7 * size + np.linalg.norm(o) + s)
+    err = np.linalg.norm(t.position - exact, axis=-1)
+    assert (err <= bound).all(), (err.max(), bound[np.unravel_index(np.argmax(err / bound), err.shape)])
+    if origin[0] == target[0]:  # a row that has one depth: P.Z spreads by rounding (it was 17.7 mm)
+        assert np.ptp(t.position[H // 2, :, 2]) <= 2 * bound[H // 2].max()

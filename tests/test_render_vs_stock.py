@@ -19,7 +19,18 @@ PROFILES = {
     "two-layer": {"density2": 0.5, "falloff2": 0.01, "height2": 10.0},
     "hdrp": {"profile": "hdrp", "base_height": 5.0, "falloff": 0.08},
     "powerlaw": {"profile": "powerlaw", "start": 2.0, "end": 30.0, "power": 2.0},
+    # the radiation fog's tabulated Mie phase (fogtabphase), which stock volpath samples too
+    "exponential, Mie phase": {"phase": "mie"},
 }
+
+
+def _medium(mi, kw):
+    if kw.get("phase") == "mie":
+        from fogref.mapping.droplet_fog import droplet_fog
+
+        table = droplet_fog(None, "radiation").phase
+        kw = dict(kw, phase=table.as_params(), g=table.mean_cosine)
+    return heightfog(mi, **kw)
 
 
 @pytest.mark.parametrize("profile", list(PROFILES), ids=list(PROFILES))
@@ -28,12 +39,8 @@ def test_fogpath_matches_volpath_with_heightfog(mitsuba, profile):
     volpath's delta tracking against the plugin's per-ray majorant."""
     mi = mitsuba
     kw = PROFILES[profile]
-    a = mi.load_dict(
-        base_scene(mi, {"type": "fogpath", "max_depth": 8, "rr_depth": 100}, heightfog(mi, **kw))
-    )
-    b = mi.load_dict(
-        base_scene(mi, {"type": "volpath", "max_depth": 8, "rr_depth": 100}, heightfog(mi, **kw))
-    )
+    a = mi.load_dict(base_scene(mi, {"type": "fogpath", "max_depth": 8, "rr_depth": 100}, _medium(mi, kw)))
+    b = mi.load_dict(base_scene(mi, {"type": "volpath", "max_depth": 8, "rr_depth": 100}, _medium(mi, kw)))
     ra, rb = render_runs(mi, a, RUNS, SPP), render_runs(mi, b, RUNS, SPP, seed0=STOCK_SEED0)
     assert np.isfinite(np.stack(ra)).all() and np.isfinite(np.stack(rb)).all()
     assert_agree(ra, rb, block=4, alpha=ALPHA, what=f"fogpath vs volpath+heightfog ({profile})")

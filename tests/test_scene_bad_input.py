@@ -165,7 +165,6 @@ LITERAL = (
         ('<integer name="rr_depth" value="-3"/>', "70", ["Mitsuba could not load", "fogpath", "'rr_depth'"]),
         ('<integer name="sun_sampling_rays" value="3"/>', "70", ["fogpath", "'sun_sampling_rays'", "[1, 2]"]),
         ('<string name="sky_at_surfaces" value="cos"/>', "70", ["fogpath", "'sky_at_surfaces'", "mis, bsdf"]),
-        ('<boolean name="hide_emitters" value="true"/>', "70", ["fogpath", "'hide_emitters'", "only false"]),
         ('<integer name="sun_samples" value="4"/>', "70", ["fogpath", "unreferenced", "sun_samples"]),
         ('<string name="sky_cv" value="all"/>', "70", ["fogpath", "unreferenced", "sky_cv"]),
     ],

@@ -415,3 +415,23 @@ def test_ctrl_c_stops_the_local_cluster_in_one_line_and_logs_the_workers(tmp_pat
     assert len(lines) == 1 and "Traceback" not in err, err
     assert "interrupted" in lines[0] and "cluster is stopped" in lines[0] and str(log) in lines[0]
     assert log.is_file()
+
+
+def test_a_ctrl_c_that_a_library_swallowed_still_ends_the_sweep_interrupted(
+    tmp_path, inprocess_cluster, monkeypatch
+):
+    """The signal is remembered: a sweep whose configurations all finish after a Ctrl-C whose
+    KeyboardInterrupt was caught inside a library (Dask, tqdm) still ends interrupted (exit 130)."""
+    p = _toml(tmp_path, MODELS + TINY + "[outputs]\nplots = false\n")
+
+    def run_swallowing(*args):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(5)
+        except KeyboardInterrupt:  # a library's own handling
+            pass
+        return 0
+
+    monkeypatch.setattr(S.run, "_run", run_swallowing)
+    with pytest.raises(KeyboardInterrupt, match="interrupted with 0 of 1 configurations done"):
+        S.run_sweep(p, scheduler=inprocess_cluster.scheduler_address, progress=False)

@@ -14,7 +14,7 @@ translate   carry one engine's fog settings to another's through the truth     :
 export      paste-ready fog, camera and sun for an engine (UE Python, .tres)   :mod:`~.export`
 scene       write a scene XML from fog, sun, sky, camera and geometry          :mod:`~.scene`
 sweep       run a declarative error study (SWEEP.toml) on Dask                 :mod:`~.sweep`
-engine      render a truth's view with a real engine (three.js, Chromium)      :mod:`~.engine`
+engine      render a truth's view with a real web engine (Chromium)            :mod:`~.engine`
 ==========  =================================================================  =====================
 
 Each command's options are declared once, as the dataclass ``Options`` of its module

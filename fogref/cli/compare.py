@@ -350,9 +350,11 @@ def _engine_images(o: Options, truth):
     from fogref.engines.view import view_from_truth
 
     view = view_from_truth(truth, o.scene)
-    model = engine_model(o.engine, o.param, truth.params if o.from_scene else None)
+    model, sources = engine_model(o.engine, o.param, truth.params if o.from_scene else None, view)
     inputs = [(o.exr, "EXR"), (view.source, "scene")]
-    _, paths, record = render_and_write(view, model, _out_dir(o) / "engine", o.engine, truth, inputs)
+    _, paths, record = render_and_write(
+        view, model, _out_dir(o) / "engine", o.engine, truth, inputs, sources=sources
+    )
     if o.engine_output == "canvas":
         imgs = load_engine_images(paths["canvas"], shape=truth.shape, truth_name=str(o.exr))
     else:

@@ -64,8 +64,8 @@ class ImageList(Check):
                 )
                 if not hits:
                     raise FogrefError(
-                        f"{source}: parameter '{name}': the pattern '{r}' matches no image file "
-                        f"({', '.join(IMAGE_SUFFIXES)})"
+                        f"{source}: parameter '{name}': the pattern '{r}' matches no file "
+                        f"of an image type ({', '.join(IMAGE_SUFFIXES)})"
                     )
                 out.extend(hits)
             else:

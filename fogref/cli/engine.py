@@ -2,8 +2,10 @@
 
 The view (camera, geometry, sun, sky, resolution) is the truth's (its scene file, checked
 against its header) or the scene's (with ``--set``); the fog settings are the engine's
-defaults, or with ``--from-scene`` the mapping of the scene's fog (:mod:`fogref.mapping`),
-and ``--param`` values override either.  Writes the files of
+defaults, or with ``--from-scene`` the mapping of the scene's fog (:mod:`fogref.mapping`, the
+settings ``fogref compare --model NAME --from-scene`` evaluates), then the settings the view
+fixes (PlayCanvas's clip planes), and ``--param`` values override any of them; ``engine.json``
+says where each came from (``fog_settings_source``).  Writes the files of
 :data:`fogref.engines.render.FILES`, ready for ``fogref compare TRUTH --image DIR/final.exr
 --transmittance DIR/T.exr --inscatter DIR/inscatter.exr`` or ``--image DIR/canvas.png``.
 """
@@ -20,13 +22,14 @@ from fogref.errors import FogrefError
 
 NAME = "engine"
 SOURCE = "fogref engine"
-HELP = "render a truth's or a scene's view with a real engine (three.js in headless Chromium)"
+HELP = "render a truth's or a scene's view with a real web engine (three.js, Babylon.js, PlayCanvas)"
 DESCRIPTION = (
     "Render the view of a ground-truth EXR (its scene file) or of a scene XML with a real engine "
-    "(three.js from node_modules, in headless Chromium with SwiftShader WebGL): its linear float "
-    "render target (final.exr with distance and hit channels, T.exr, inscatter.exr, surface.exr), "
-    "its 8-bit sRGB canvas (canvas.png) and engine.json (version, fog settings, the difference "
-    "from fogref's port of the engine, the camera against the truth's)."
+    "(three.js, Babylon.js or PlayCanvas from node_modules, in headless Chromium, SwiftShader WebGL): its "
+    "linear float render target (final.exr with distance and hit channels, T.exr, inscatter.exr, "
+    "surface.exr), its 8-bit canvas as the engine ships it (canvas.png) and engine.json (version, "
+    "fog settings and where each came from, the difference from fogref's port of the engine, the "
+    "camera against the truth's)."
 )
 EPILOG = "exit codes: 0 written, 2 usage or input error (also: no Chromium or chromedriver, no node_modules)"
 API = "fogref.engines.render:render_and_write"
@@ -80,22 +83,50 @@ def is_truth(path) -> bool:
     return Path(path).suffix.lower() == ".exr"
 
 
-def engine_model(engine: str, param: dict | None, scene_params: dict | None):
-    """The engine's fogref model (fog settings): its defaults or ``scene_params``' mapping, with ``param``.
+def engine_model(engine: str, param: dict | None, scene_params: dict | None, view=None):
+    """The engine's fogref model (fog settings) and where each setting came from.
 
-    A scene the mapping refuses gets its one-line error with the way out (``--param``)."""
+    The settings start from the model's defaults, or with ``scene_params`` from the registered
+    mapping of the scene's fog (:func:`fogref.mapping.build.build_model`, as ``fogref compare
+    --model NAME --from-scene`` builds it); then the settings a ``view``
+    (:class:`~fogref.engines.view.EngineView`) fixes for the engine (its module's
+    ``view_settings(near, far)``: PlayCanvas's clip planes); then ``param``.  Returns ``(model,
+    sources)``, ``sources``: setting name -> where it came from.  A scene the mapping refuses
+    gets its one-line error with the way out (``--param``)."""
     from fogref.engines import engine_module
-    from fogref.mapping.build import build_model, parse_param_assignments
+    from fogref.mapping.build import build_model, current_parameters, parse_param_assignments
+    from fogref.mapping.registry import MAPPINGS
 
-    assignments = [f"{k}={v}" for k, v in (param or {}).items()]
+    mod = engine_module(engine)
+    given = parse_param_assignments([f"{k}={v}" for k, v in (param or {}).items()])
+    fixed = {}
+    if view is not None and hasattr(mod, "view_settings"):
+        fixed = {k: v for k, v in mod.view_settings(*view.clip_planes()).items() if k not in given}
     try:
-        return build_model(engine_module(engine).MODEL, parse_param_assignments(assignments), scene_params)
+        model = build_model(mod.MODEL, {**fixed, **given}, scene_params)
     except FogrefError as e:
         if scene_params is None:
             raise
         raise FogrefError(
             f"{e}; give {engine}'s fog settings with --param KEY=VALUE instead of --from-scene"
         ) from None
+    if scene_params is None:
+        start = "the model's default (fogref.models)"
+    else:
+        fn = MAPPINGS.get(mod.MODEL)
+        where = f"{fn.__module__}.{fn.__name__}" if fn is not None else f"{mod.MODEL}.from_physical"
+        start = f"the scene (its fog, sky, camera) through {where} (--from-scene)"
+    sources = {}
+    for k in current_parameters(model):
+        if k in given:
+            sources[k] = "--param"
+        elif k in fixed:
+            sources[k] = (
+                "the view: the engine camera's clip planes (fogref.engines.view.EngineView.clip_planes)"
+            )
+        else:
+            sources[k] = start
+    return model, sources
 
 
 def run(o: Options, given=frozenset()) -> int:
@@ -120,9 +151,10 @@ def run(o: Options, given=frozenset()) -> int:
     else:
         refuse(Options, given, ("input",), ("scene",), SOURCE, "--scene names a truth's scene")
         view = view_from_scene(o.input, o.overrides)
-    model = engine_model(o.engine, o.param, view.params if o.from_scene else None)
+    scene_params = (truth.params if truth is not None else view.params) if o.from_scene else None
+    model, sources = engine_model(o.engine, o.param, scene_params, view)
     inputs = [(o.input, "input")] + ([(view.source, "scene")] if truth is not None else [])
-    r, paths, record = render_and_write(view, model, o.out, o.engine, truth, inputs, o.timeout)
+    r, paths, record = render_and_write(view, model, o.out, o.engine, truth, inputs, o.timeout, sources)
     H, W = view.shape
     print(f"{o.engine} {r.version} in Chromium {r.browser} ({r.renderer}): {W}x{H} px in {r.seconds:.1f} s")
     for line in record["summary"]:

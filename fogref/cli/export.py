@@ -53,7 +53,7 @@ class Options:
     )
     param: dict | None = option(
         None,
-        "a setting in the engine model's names (VALUE parsed as JSON when possible)",
+        "a setting in the engine model's names and units; a colour is linear RGB (VALUE parsed as JSON)",
         repeat=True,
         check=Assignments(),
         metavar="KEY=VALUE",

@@ -74,7 +74,7 @@ class Options:
     )
     param: dict | None = option(
         None,
-        "fix a model setting (VALUE parsed as JSON when possible)",
+        "fix a model setting in the engine's units; a colour is linear RGB (VALUE: JSON if it parses)",
         repeat=True,
         check=Assignments(),
         metavar="KEY=VALUE",
@@ -152,7 +152,7 @@ class Options:
     )
     sun_irradiance: tuple | None = option(
         None,
-        "sun irradiance",
+        "sun irradiance (linear RGB)",
         check=RGB(0.0),
         nargs=3,
         metavar=("R", "G", "B"),
@@ -161,7 +161,7 @@ class Options:
     )
     sky: tuple | None = option(
         None,
-        "uniform sky radiance",
+        "uniform sky radiance (linear RGB)",
         check=RGB(0.0),
         nargs=3,
         metavar=("R", "G", "B"),
@@ -300,6 +300,13 @@ def run_generic(o: Options, pf) -> int:
         f"{r.rmse_T:.3f})",
         file=sys.stderr,
     )
+    if r.ill_posed:
+        print(
+            f"fogref fit: warning: {r.model}: {', '.join(r.ill_posed)} not determined by the {r.n_dirs} "
+            "directions (uncertainty larger than the value): the fit is ill-posed there; give more "
+            "--directions (or leave it out: the count then converges)",
+            file=sys.stderr,
+        )
     return 0
 
 

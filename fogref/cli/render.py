@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from fogref.cli.checks import Address, Assignments, Choice, Integer, Number, PathArg, SceneArg
-from fogref.cli.spec import option, refuse, switch
+from fogref.cli.spec import UsageError, option, refuse, switch
 from fogref.render.variant import VARIANTS
 
 NAME = "render"
@@ -113,6 +113,13 @@ class Options:
         metavar="N",
         default_text="none: this process",
     )
+    worker_timeout: float = option(
+        600.0,
+        "with --scheduler: seconds to wait for its first worker (it says that it waits), then an error",
+        check=Number(0.0, 1e6, lo_open=True, unit="s"),
+        metavar="S",
+        api=API,
+    )
 
 
 def run(o: Options, given=frozenset()) -> int:
@@ -123,6 +130,8 @@ def run(o: Options, given=frozenset()) -> int:
     refuse(
         Options, given, ("scheduler",), ("workers",), SOURCE, "the workers of a running scheduler are its own"
     )
+    if "worker_timeout" in given and "scheduler" not in given:
+        raise UsageError(f"{SOURCE}: --worker-timeout applies only with --scheduler")
     path = render(
         o.scene,
         o.out,
@@ -138,6 +147,7 @@ def run(o: Options, given=frozenset()) -> int:
         checkpoint_seconds=o.checkpoint_seconds,
         scheduler=o.scheduler,
         workers=o.workers,
+        worker_timeout=o.worker_timeout,
     )
     print(path)
     return 0

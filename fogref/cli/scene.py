@@ -12,6 +12,8 @@ from dataclasses import dataclass, make_dataclass
 
 from fogref.cli.checks import Choice, Integer, Number, PathArg, Text
 from fogref.cli.spec import UsageError, option, switch, toggle
+from fogref.mapping.droplet_fog import PHASES
+from fogref.media.droplets import DROPLET_PRESETS
 from fogref.render.scene_writer import (
     MESH_UP,
     PHYSICAL,
@@ -53,6 +55,10 @@ PT_OPTIONS = {
     "--ue-volumetric-fog-scattering-distribution": "VolumetricFogScatteringDistribution",
     "--ue-fog-density-clamp": "FogDensityClamp",
 }
+DROPS = (
+    "fog from visibility and droplets (replace --sigma-t, --albedo and --g; the droplets' Mie optics: "
+    "fogref/mapping/droplet_fog.py)"
+)
 LIGHT = "sun and sky"
 CAMERA = "camera (y-up, metres)"
 
@@ -174,6 +180,39 @@ class _Options:
     bounds_max: str | None = option(
         None, "fog box: upper corner [m]", check=Text(), metavar="X,Y,Z", group=PHYS
     )
+    visibility: float | None = option(
+        None,
+        "meteorological optical range at --height: the green channel's extinction is -ln(contrast) / V",
+        check=Number(0.0, 1e6, lo_open=True, unit="m"),
+        group=DROPS,
+    )
+    contrast: float = option(
+        0.02,
+        "the visibility's contrast threshold: 0.02 (Koschmieder, Bevy: 3.912/V) or 0.05 (WMO: 2.996/V)",
+        check=Number(0.0, 1.0, lo_open=True, hi_open=True),
+        group=DROPS,
+    )
+    droplets: str | None = option(
+        None,
+        "droplet size distribution: radiation or advection fog (Shettle & Fenn 1979); without "
+        "--visibility their own droplet number sets it (Mie optics: about 1 s of CPU for radiation "
+        "fog, 25 s for advection fog's larger drops)",
+        check=Choice(tuple(sorted(DROPLET_PRESETS))),
+        group=DROPS,
+    )
+    phase: str | None = option(
+        None,
+        "phase function: mie (the droplets'), approx-mie (Jendersie & d'Eon's fit) or hg (of the Mie "
+        "mean cosine)",
+        check=Choice(PHASES),
+        group=DROPS,
+        default_text="mie with --droplets, else hg of --g",
+    )
+    grey_extinction: bool = switch(
+        "the green channel's extinction for R, G and B (engines with grey extinction need it; droplet "
+        "extinction is grey within about 2 %)",
+        group=DROPS,
+    )
     ue_fog_density: float | None = option(None, "Fog Density", check=Number(), group=UE, default_text="0.02")
     ue_fog_height_falloff: float | None = option(
         None, "Fog Height Falloff", check=Number(), group=UE, default_text="0.2"
@@ -198,7 +237,7 @@ class _Options:
     )
     ue_volumetric_fog_distance: float | None = option(
         None,
-        "VolumetricFogDistance: the cylinder's radius [cm], > 0",
+        "VolumetricFogDistance: the cylinder's radius [cm], [0.1, 1e9]",
         check=Number(),
         group=PT,
         default_text="6000",
@@ -273,7 +312,7 @@ class _Options:
     )
     sun_irradiance: tuple = option(
         (3.2, 2.9, 2.4),
-        f"sun irradiance, grey or RGB, {_range(RANGES, 'sun_irradiance')}",
+        f"sun irradiance, grey or linear RGB, {_range(RANGES, 'sun_irradiance')}",
         check=Text(),
         metavar="E|R,G,B",
         group=LIGHT,
@@ -281,7 +320,7 @@ class _Options:
     )
     sky_radiance: tuple | None = option(
         (0.2, 0.3, 0.5),
-        f"uniform sky radiance, grey or RGB, {_range(RANGES, 'sky_radiance')}, or none (black)",
+        f"uniform sky radiance, grey or linear RGB, {_range(RANGES, 'sky_radiance')}, or none (black)",
         check=Text(),
         metavar="L|R,G,B|none",
         group=LIGHT,
@@ -353,7 +392,8 @@ _IGNORED_FIELDS = [
         option(
             None,
             f"{key}: no physical counterpart, ignored with a note ({why}); "
-            f"{_range(UNREAL_IGNORED_RANGES, key)}",
+            f"{_range(UNREAL_IGNORED_RANGES, key)}"
+            + ("; linear RGB, as Unreal's FLinearColor" if kind == "rgb" else ""),
             flag=opt,
             check=Number() if kind == "number" else Text(),
             metavar="R,G,B" if kind == "rgb" else None,
@@ -395,6 +435,14 @@ def run(a, given=frozenset()) -> int:
         pt = _pathtracer_settings(pt_given, phys, a)
     elif pt_given:
         raise UsageError(f"{SOURCE}: {', '.join(pt_given)}: only with --ue-pathtracer (the path-traced fog)")
+    albedo, g, phase, fog_notes = a.albedo, a.g, None, ()
+    if a.visibility is not None or a.droplets is not None:
+        albedo, g, phase, fog_notes = _droplet_fog(a, phys, ue)
+    elif a.phase is not None or a.grey_extinction or "contrast" in given:
+        raise UsageError(
+            f"{SOURCE}: --phase, --contrast and --grey-extinction need --visibility or --droplets"
+        )
+    _refuse_sky_options(a, given)
     sky = a.sky_radiance
     if isinstance(sky, str) and sky.strip().lower() == "none":
         sky = None
@@ -408,8 +456,10 @@ def run(a, given=frozenset()) -> int:
         a.out,
         fog=phys if not ue else None,
         unreal=ue or None,
-        albedo=a.albedo,
-        g=a.g,
+        albedo=albedo,
+        g=g,
+        phase=phase,
+        notes=fog_notes,
         sun_elevation=a.sun_elevation,
         sun_azimuth=a.sun_azimuth,
         sun_irradiance=a.sun_irradiance,
@@ -445,6 +495,50 @@ def run(a, given=frozenset()) -> int:
             note(f"Unreal's path tracer does not use {', '.join(dropped)} (raster-only values)")
     print(r.path)
     return 0
+
+
+def _droplet_fog(a, phys: dict, ue: dict) -> tuple:
+    """``phys['sigma_t']`` set from --visibility/--droplets (refused beside --sigma-t, Unreal
+    values, and --albedo/--g with droplets); returns (albedo, g, phase, notes)."""
+    from fogref.mapping.droplet_fog import droplet_fog
+
+    clash = ["--sigma-t"] if "sigma_t" in phys else []
+    clash += sorted(_ue_option(k) for k in _flat_unreal(ue)) + (
+        ["--ue-pathtracer"] if a.ue_pathtracer else []
+    )
+    if a.droplets is not None:
+        clash += [opt for opt, v in (("--albedo", a.albedo), ("--g", a.g)) if v is not None]
+    if clash:
+        raise UsageError(
+            f"{SOURCE}: --visibility/--droplets set the fog's extinction"
+            + (", albedo and phase" if a.droplets else "")
+            + f"; not with {', '.join(clash)}"
+        )
+    df = droplet_fog(
+        a.visibility,
+        a.droplets,
+        contrast=a.contrast,
+        phase=a.phase,
+        grey=a.grey_extinction,
+        g=0.6 if a.g is None else a.g,
+        albedo=0.9 if a.albedo is None else a.albedo,
+        src=SOURCE,
+    )
+    phys["sigma_t"] = list(df.sigma_t)
+    return list(df.albedo), df.g, df.phase, df.notes
+
+
+def _refuse_sky_options(a, given) -> None:
+    """UsageError for a light option the chosen ``--sky`` does not use (refused, not ignored)."""
+    if a.sky == "constant" and "turbidity" in given:
+        raise UsageError(f"{SOURCE}: --turbidity applies only with --sky sunsky (the constant sky has none)")
+    if a.sky == "sunsky":
+        unused = [f"--{n.replace('_', '-')}" for n in ("sky_radiance", "sun_irradiance") if n in given]
+        if unused:
+            raise UsageError(
+                f"{SOURCE}: {', '.join(unused)} does not apply with --sky sunsky (Mitsuba's sunsky gives "
+                "the sun's and the sky's radiance from --turbidity and the sun's elevation)"
+            )
 
 
 def _pathtracer_settings(given: dict, phys: dict, a) -> object:

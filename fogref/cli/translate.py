@@ -40,7 +40,7 @@ class Options:
     target: str = option(help="target model", flag="--to", check=Text(), metavar="NAME")
     param: dict | None = option(
         None,
-        "a source setting (VALUE parsed as JSON when possible)",
+        "a source setting in the engine's units; a colour is linear RGB (VALUE parsed as JSON when possible)",
         repeat=True,
         check=Assignments(),
         metavar="KEY=VALUE",

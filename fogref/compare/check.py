@@ -267,6 +267,8 @@ def check(
         "precision": precision,
         "sky_distance_m": sky_distance,
         "tolerances": {f"{p}{'/' + r if r else ''}": t for (p, r), t in table.items()},
+        # which of them the caller set; the others are DEFAULT_TOLERANCES
+        "tolerances_set": sorted(f"{p}{'/' + r if r else ''}:{m}" for p, r, m in user_set(tolerances)),
     }
     return CheckResult(rows, float(confidence), cp.name, str(truth.path), settings, errors, parts=cp)
 
@@ -319,7 +321,8 @@ def assert_fog_matches(
     ----------
     inconclusive : str
         What an inconclusive row does: ``"fail"`` (default: an unproven match is not
-        a match; raise the sample count, see ``reports/check_power/power.md``),
+        a match; raise the sample count or the pixels: the interval narrows about as
+        ``1/sqrt(spp * pixels)``; fogref's repository measures it in ``reports/check_power/``),
         ``"pass"``, or ``"skip"`` (``pytest.skip``).
     errors_dir : path, optional
         Where the maps go; default ``$FOGREF_ERRORS_DIR/<truth>-<candidate>``, else a
@@ -381,7 +384,8 @@ def assert_fog_matches(
     if undecided and inconclusive == "fail":
         lines.append(
             "inconclusive: the interval straddles the tolerance; render the truth with more samples "
-            "or pixels (reports/check_power/power.md), or pass inconclusive='pass'"
+            "or pixels (the interval narrows about as 1/sqrt(spp x pixels); help(fogref.check)), or pass "
+            "inconclusive='pass'"
         )
     lines.append(
         f"error maps: {out / 'errors.exr'} (signed candidate - truth per part); rows: {out / 'check.json'}"

@@ -15,6 +15,7 @@ FLIP             HDR-FLIP (Andersson et al. 2021) via ``flip_evaluator``,
 
 from __future__ import annotations
 
+import math
 import os
 
 import numpy as np
@@ -28,6 +29,9 @@ FLIP_PPD = 67.0
 FLIP_CEILING_FACTOR = 1e4
 #: Widest HDR-FLIP exposure range [stops] before it is narrowed (see :func:`flip_map`).
 FLIP_MAX_STOPS = 20
+#: A reference whose largest luminance is outside [FLIP_DIMMEST, FLIP_BRIGHTEST] is scaled by a power of
+#: two before FLIP (see :func:`flip_map`): FLIP exits the process below float32's epsilon.
+FLIP_DIMMEST, FLIP_BRIGHTEST = 2.0**-16, 2.0**32
 
 _FLT_MAX = float(np.finfo(np.float32).max)
 
@@ -133,7 +137,13 @@ def flip_map(reference, test, ppd: float = FLIP_PPD) -> tuple[np.ndarray, dict]:
       saturate but the bulk of the image is examined as usual;
     * the reference has no positive luminance (``flip_evaluator`` then *exits the
       process*): the range is pinned to ``start = stop = log2(1 / max test
-      luminance)``, or the map is all zero when the test is black too.
+      luminance)``, or the map is all zero when the test is black too;
+    * the reference's largest luminance is below ``FLIP_DIMMEST`` (FLIP floors the median
+      at float32's epsilon, so its start exposure would pass its stop and it *exits the
+      process*) or above ``FLIP_BRIGHTEST`` (near float32's range): both images are first
+      multiplied by the power of two (``prescale`` in the parameters returned) that brings
+      that luminance to [1, 2); FLIP's exposures are relative to the image, so its map is
+      what it is for the unscaled images.
 
     ``ppd`` must be > 0 (``flip_evaluator`` exits the process otherwise).
     """
@@ -148,6 +158,11 @@ def flip_map(reference, test, ppd: float = FLIP_PPD) -> tuple[np.ndarray, dict]:
     ceiling = FLIP_CEILING_FACTOR * r_max if r_max > 0 else 1e30
     r, x = np.minimum(r, ceiling), np.minimum(x, ceiling)
     params: dict = {"ppd": float(ppd)}
+    y_max = float(luminance(r).max(initial=0.0))
+    outside = 0.0 < y_max < FLIP_DIMMEST or y_max > FLIP_BRIGHTEST
+    prescale = 2.0 ** -math.floor(math.log2(y_max)) if outside else 1.0
+    if prescale != 1.0:  # FLIP floors the median at float32's epsilon: its start would pass its stop
+        r, x = r * prescale, x * prescale
     span = flip_exposure_range(r)
     if span is None:
         y_test = float(luminance(x).max(initial=0.0))
@@ -163,6 +178,7 @@ def flip_map(reference, test, ppd: float = FLIP_PPD) -> tuple[np.ndarray, dict]:
         r.astype(np.float32), x.astype(np.float32), "HDR", applyMagma=False, parameters=params
     )
     err = np.asarray(err, dtype=np.float64).reshape(r.shape[:2])
-    return np.clip(err, 0.0, 1.0), {
-        k: (float(v) if isinstance(v, (int, float)) else v) for k, v in used.items()
-    }
+    used = {k: (float(v) if isinstance(v, (int, float)) else v) for k, v in used.items()}
+    if prescale != 1.0:
+        used["prescale"] = prescale
+    return np.clip(err, 0.0, 1.0), used

@@ -77,6 +77,7 @@ from fogref.compare.report_parts import (
     check_sky_distance,
     evaluate_parts,
     image_parts,
+    model_units,
     parts_from_check,
     truth_provenance,
 )
@@ -195,7 +196,11 @@ def compare(
         parts = evaluate_parts(truth, model, precision, sky_distance)
     header = {
         "candidate": {"kind": "model", "name": _model_name(model)},
-        "model": {"name": _model_name(model), "parameters": _model_description(model)},
+        "model": {
+            "name": _model_name(model),
+            "parameters": _model_description(model),
+            "units": model_units(model),
+        },
         "precision": precision,
         "sky_distance_m": float(sky_distance),
     }

@@ -11,6 +11,7 @@ import json
 from pathlib import Path
 
 from fogref.compare.report_parts import REGIONS
+from fogref.models.terms import describe
 
 ERRORS_EXR_LAYOUT = """\
 <part>.reference.R,G,B   the reference part
@@ -124,11 +125,14 @@ def check_table_markdown(result) -> list[str]:
 
 def _candidate_lines(report: dict) -> list[str]:
     if "model" in report:
+        name, params = report["model"]["name"], report["model"]["parameters"]
+        shown = (
+            "; ".join(f"`{k}` {describe(name, k, v)}" for k, v in params.items())
+            if isinstance(params, dict)
+            else f"`{json.dumps(params)}`"
+        )
         return [
-            (
-                f"- model: `{report['model']['name']}`, precision `{report['precision']}`, "
-                f"parameters `{json.dumps(report['model']['parameters'])}`"
-            ),
+            f"- model: `{name}`, precision `{report['precision']}`, parameters: {shown}",
             f"- sky pixels fogged at {report['sky_distance_m']:.6g} m; composited over the truth's "
             "`surface.*`",
         ]

@@ -23,6 +23,7 @@ from fogref.compare.candidate import candidate_parts, evaluate_model, fog_parts
 from fogref.errors import FogrefError
 from fogref.gbuffer import Truth
 from fogref.mapping.build import current_parameters
+from fogref.models.terms import annotate
 from fogref.params import number as valid_number
 
 #: Distance [m] at which the model fogs sky pixels (a stand-in for infinity).
@@ -51,6 +52,16 @@ def _model_description(model) -> dict | str:
         return _json_safe(current_parameters(model))
     except (TypeError, AttributeError, ValueError, FogrefError):
         return repr(model)
+
+
+def model_units(model) -> dict:
+    """Each parameter's unit and colour space (:func:`fogref.models.terms.annotate`), where fogref
+    knows them."""
+    params = _model_description(model)
+    if not isinstance(params, dict):
+        return {}
+    name = _model_name(model)
+    return {k: a for k, v in params.items() if (a := annotate(name, k, v))}
 
 
 def check_sky_distance(value, option: str = "sky_distance") -> float:

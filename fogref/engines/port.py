@@ -1,11 +1,12 @@
 """The engine against fogref's port of it, on the same inputs: the engine's depth and surface.
 
-The port (:mod:`fogref.models`) is evaluated at the points whose eye depth is the one the
-engine's fog saw (``fog_depth``, interpolated by the rasteriser), composited over the engine's
-own unfogged surface (``surface * T + inscatter``) and compared with the engine's linear image,
-and -- through the engine's canvas transform (its module's ``canvas_port``) -- with the 8-bit
-canvas.  Only the
-pixels the engine drew a surface on are compared (three.js draws its background without fog;
+The port (:mod:`fogref.models`) is evaluated at the points whose fog coordinate is the one the
+engine's fog saw, interpolated by the rasteriser: the eye depth (``fog_depth``), or the distance
+(``fog_distance``) for an engine module whose ``FOG_COORDINATE`` is ``"distance"``; composited
+over the engine's own unfogged surface (``surface * T + inscatter``) and compared with the
+engine's linear image, and -- through the engine's canvas transform (its module's
+``canvas_port``) -- with the 8-bit canvas.  Only the pixels the engine drew a surface on are
+compared (three.js and Babylon.js draw their background without fog;
 ``sky_pixels`` counts the others).
 
 The verdict ``at_quantisation`` is True when the linear difference is within
@@ -56,8 +57,11 @@ def port_vs_engine(r: Any, model: Any, view_dirs: np.ndarray | None = None) -> d
     dirs = pixel_directions(r.camera) if view_dirs is None else np.asarray(view_dirs, dtype=np.float64)
     cam = np.asarray(r.camera["origin"], dtype=np.float64)
     hit = r.hit
-    along = dirs @ np.asarray(r.camera["forward"], dtype=np.float64)
-    pos = cam + dirs * (r.fog_depth / np.where(hit, along, 1.0))[..., None]
+    if getattr(mod, "FOG_COORDINATE", "depth") == "distance":
+        pos = cam + dirs * r.fog_distance[..., None]
+    else:
+        along = dirs @ np.asarray(r.camera["forward"], dtype=np.float64)
+        pos = cam + dirs * (r.fog_depth / np.where(hit, along, 1.0))[..., None]
     res = port.evaluate(cam, pos[hit], "float32")
     T = np.broadcast_to(np.asarray(res.transmittance, dtype=np.float64), (int(hit.sum()), 3))
     L = np.broadcast_to(np.asarray(res.inscatter, dtype=np.float64), (int(hit.sum()), 3))

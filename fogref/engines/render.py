@@ -14,14 +14,16 @@ file               what (linear RGB unless said)
 ``T.exr``          the engine's fog transmittance ``1 - f`` (grey): ``--transmittance``
 ``inscatter.exr``  what its fog adds, ``C f``: ``--inscatter``
 ``surface.exr``    the engine's image without fog (its own surface shading)
-``canvas.png``     the canvas as the engine ships it (8-bit sRGB): ``--image`` (read as sRGB)
+``canvas.png``     the canvas as the engine ships it (8 bits): ``--image`` (read as sRGB)
 ``engine.json``    engine and version, browser, fog settings, camera, notes, the port's difference
 =================  ===========================================================================
 
-The camera's far plane is twice the farthest vertex, its near plane half the nearest vertex (at
-least the scene's ``near_clip``), so that nothing drawn is clipped and the depth buffer's
-precision is not spent in front of the nearest surface (``fogref.engines.view`` keeps every
-triangle edge within 0.5 of its distance, so no surface is nearer than half its nearest vertex).
+The camera's clip planes are :meth:`~fogref.engines.view.EngineView.clip_planes`: the far plane
+twice the farthest vertex, the near plane half the nearest vertex (at least the scene's
+``near_clip``), so that nothing drawn is clipped (``fogref.engines.view`` keeps every triangle
+edge within 0.5 of its distance, so no surface is nearer than half its nearest vertex).  An
+engine whose fog reads its clip planes (PlayCanvas) takes them from its fog settings, which
+``fogref engine`` sets to these unless ``--param`` gives them.
 """
 
 from __future__ import annotations
@@ -121,7 +123,7 @@ def spec_of(view: EngineView, fog: dict | None) -> dict:
     ps = PhysicalScene.from_params(view.params)
     H, W = view.shape
     c = view.camera
-    nearest, farthest = view.extent()
+    near, far = view.clip_planes()
     return {
         "width": W,
         "height": H,
@@ -131,8 +133,8 @@ def spec_of(view: EngineView, fog: dict | None) -> dict:
             "up": list(c["up"]),
             "right": list(c["right"]),
             "fov_y_deg": float(c["fov_y_deg"]),
-            "near": max(float(c.get("near_clip") or 0.01), 0.5 * nearest),
-            "far": 2.0 * farthest,
+            "near": near,
+            "far": far,
         },
         "shapes": [
             {
@@ -285,8 +287,10 @@ def render_and_write(
     truth: Any = None,
     inputs=(),
     timeout: float = 300.0,
+    sources: dict | None = None,
 ) -> tuple[EngineRender, dict[str, Path], dict]:
-    """Render ``view`` with ``engine`` (fog from ``model``, None: none), compare it with its port
+    """Render ``view`` with ``engine`` (fog from ``model``, None: none; ``sources``: where each of
+    its settings came from, written as ``fog_settings_source``), compare it with its port
     (:func:`fogref.engines.port.port_vs_engine`) and, given a ``truth``, its camera with the
     truth's (:func:`truth_agreement`); write everything into ``out_dir``.  Outputs that would
     replace one of ``inputs`` are refused before the engine starts.
@@ -301,6 +305,8 @@ def render_and_write(
     )
     r = render_engine(view, model, engine, timeout=timeout)
     extra: dict = {"summary": []}
+    if sources is not None:
+        extra["fog_settings_source"] = sources
     if model is not None:
         extra["port_vs_engine"] = port_vs_engine(r, model, None if truth is None else truth.view)
         extra["summary"].append(extra["port_vs_engine"]["summary"])

@@ -81,6 +81,13 @@ class EngineView:
             return 1.0, 1.0
         return float(min(x.min() for x in d)), float(max(x.max() for x in d))
 
+    def clip_planes(self) -> tuple[float, float]:
+        """The engine camera's ``(near, far)`` [m]: half the nearest vertex's distance (at least the
+        scene's ``near_clip``, else 0.01 m) and twice the farthest's, so that nothing in view is
+        clipped and the depth buffer's precision is not spent in front of the nearest surface."""
+        nearest, farthest = self.extent()
+        return max(float(self.camera.get("near_clip") or 0.01), 0.5 * nearest), 2.0 * farthest
+
 
 def pixel_directions(camera: dict) -> np.ndarray:
     """``(H, W, 3)`` unit directions [world, y-up] through the pixel centres of ``camera``

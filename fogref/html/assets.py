@@ -65,8 +65,8 @@ function decode(enc) {
   if (!enc) return Promise.resolve(null);
   return inflate(enc.data).then(function (raw) {
     if (enc.encoding === "u8-deflate") return {shape: enc.shape, data: raw};
-    var n = raw.length / 2, out = new Float32Array(n);
-    for (var i = 0; i < n; i++) out[i] = H2F[raw[i] | (raw[n + i] << 8)];
+    var n = raw.length / 2, out = new Float32Array(n), sc = enc.scale || 1;  // fogref.html.inline.encode_half
+    for (var i = 0; i < n; i++) out[i] = H2F[raw[i] | (raw[n + i] << 8)] * sc;
     return {shape: enc.shape, data: out};
   });
 }

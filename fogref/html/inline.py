@@ -6,8 +6,11 @@ byte-shuffled (all low bytes, then all high bytes: what makes them compress) and
 zlib-deflated, then base64-encoded.  The page's JavaScript inflates them with the
 browser's own ``DecompressionStream("deflate")`` (no library, no network) and decodes the
 half floats exactly, so exposure changes in the viewer act on the linear values, not on
-a re-tone-mapped 8-bit picture.  Values outside the half range are clamped to ±65504;
-non-finite values are stored as 0.
+a re-tone-mapped 8-bit picture.  An image whose largest magnitude is outside
+[2^-6, 2^14] (radiance in photometric units, 1e5 and more; or 1e-13) is stored divided by
+a power of two, ``scale``, that brings it to [1024, 2048), and decoded times ``scale``
+(exactly: a power of two), so no value is clipped at the half range (±65504) or lost
+below it; non-finite values are stored as 0.
 
 Examples
 --------
@@ -18,6 +21,9 @@ Examples
 ([1, 1, 3], 'f16-shuffle-deflate')
 >>> decode_half(enc).tolist()
 [[[0.0, 0.5, 2.0]]]
+>>> sun = encode_half(np.array([[[5.4e5, 1.0e5, 3.0]]]))        # beyond the half range: scaled
+>>> sun["scale"], decode_half(sun).tolist()
+(512.0, [[[540160.0, 99968.0, 3.0]]])
 >>> decode_mask(encode_mask(np.array([[True, False]]))).tolist()
 [[1, 0]]
 >>> table_html(["a", "b"], [[1, "x<y"]]).split("<tbody>")[1]
@@ -29,6 +35,7 @@ from __future__ import annotations
 import base64
 import html
 import io
+import math
 import zlib
 
 import numpy as np
@@ -43,19 +50,26 @@ ENCODING = "f16-shuffle-deflate"
 def encode_half(image) -> dict:
     """``{"shape": [H, W, C], "encoding", "data": base64}`` of a float image ``(H, W)`` or ``(H, W, C)``.
 
-    Domain: any real array (non-finite values -> 0; beyond ±65504 clamped).  The decoded values
-    are the array rounded to half precision (:func:`decode_half`).
+    Domain: any real array (non-finite values -> 0).  ``scale`` (a power of two, 1 for a largest
+    magnitude in [2^-6, 2^14]) divides the array before it is rounded to half precision; the
+    decoded values (:func:`decode_half`) are the array to a relative 2^-11.
     """
     a = np.asarray(image, dtype=np.float64)
     if a.ndim == 2:
         a = a[..., None]
-    a = np.clip(np.where(np.isfinite(a), a, 0.0), -HALF_MAX, HALF_MAX).astype("<f2")
-    raw = np.ascontiguousarray(a).reshape(-1).view(np.uint8).reshape(-1, 2).T.tobytes()
-    return {
-        "shape": [int(s) for s in a.shape],
+    a = np.where(np.isfinite(a), a, 0.0)
+    top = float(np.abs(a).max(initial=0.0))
+    scale = 1.0 if (top == 0.0 or 2.0**-6 <= top <= 2.0**14) else 2.0 ** (math.floor(math.log2(top)) - 10)
+    h = np.clip(a / scale, -HALF_MAX, HALF_MAX).astype("<f2")
+    raw = np.ascontiguousarray(h).reshape(-1).view(np.uint8).reshape(-1, 2).T.tobytes()
+    out = {
+        "shape": [int(s) for s in h.shape],
         "encoding": ENCODING,
         "data": base64.b64encode(zlib.compress(raw, 9)).decode("ascii"),
     }
+    if scale != 1.0:
+        out["scale"] = scale
+    return out
 
 
 def decode_half(enc: dict) -> np.ndarray:
@@ -63,7 +77,7 @@ def decode_half(enc: dict) -> np.ndarray:
     raw = np.frombuffer(zlib.decompress(base64.b64decode(enc["data"])), np.uint8)
     n = raw.size // 2
     pairs = np.stack([raw[:n], raw[n:]], -1).reshape(-1)
-    return pairs.view("<f2").astype(np.float64).reshape(enc["shape"])
+    return pairs.view("<f2").astype(np.float64).reshape(enc["shape"]) * float(enc.get("scale", 1.0))
 
 
 def encode_mask(mask) -> dict:
@@ -129,6 +143,30 @@ def fmt(v, digits: int = 4) -> str:
     if isinstance(v, (float, np.floating)):
         return f"{float(v):.{digits}g}" if np.isfinite(v) else "—"
     return str(v)
+
+
+def fmt_noise(v, noise, unit: str = "", max_decimals: int = 6) -> str:
+    """``v ± noise`` rounded to the noise: the noise to one significant digit (two when it starts
+    with 1), the value to the same decimal place (at most ``max_decimals``); a zero or missing noise
+    gives ``v`` to 4 significant digits.
+
+    >>> fmt_noise(101.49, 6.35, " %"), fmt_noise(-114.8, 15.2, " %"), fmt_noise(-1e-14, 7e-15, " %", 1)
+    ('101 ± 6 %', '-115 ± 15 %', '0.0 ± 7e-15 %')
+    >>> fmt_noise(0.144750137, 6.98e-05)
+    '0.14475 ± 7e-05'
+    """
+    if v is None or not np.isfinite(v):
+        return "—"
+    if noise is None or not np.isfinite(noise) or noise <= 0:
+        return f"{fmt(float(v))}{unit}"
+    exp = int(np.floor(np.log10(noise)))
+    digits = 2 if f"{noise:.1e}".startswith("1") else 1
+    decimals = min(max(0, digits - 1 - exp), max_decimals)
+    text = f"{float(v):.{decimals}f}"
+    if float(text) == 0:
+        text = text.lstrip("-")
+    shown = f"{noise:.{digits}g}" if decimals == max_decimals else f"{noise:.{decimals}f}"
+    return f"{text} ± {shown}{unit}"
 
 
 def table_html(header, rows, classes=None) -> str:

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fogref.compare.results import CheckResult
+from fogref.errors import FogrefError
 from fogref.gbuffer import Truth
 from fogref.html.inline import NOTEBOOK_CSS, check_html, esc, png_data_uri, table_html, truth_html
 from fogref.study.plot_units import HEADLINE_METRICS
@@ -70,11 +71,40 @@ class SweepTable:
 
 
 def sweep_table(folder, table: str = "results") -> SweepTable:
-    """The :class:`SweepTable` of a sweep's output folder (``results.csv``, ``sweep.json``, ``plots/``)."""
+    """The :class:`SweepTable` of a sweep's output folder (``results.csv``, ``sweep.json``, ``plots/``).
+
+    A missing folder or table, or a ``sweep.json`` that is not a JSON object, is a one-line
+    :class:`~fogref.errors.FogrefError` naming the file.
+
+    >>> sweep_table("no/such/sweep")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.FogrefError: no/such/sweep/results.csv: no such file (a sweep's output folder ...
+    """
     import pandas as pd
 
     folder = Path(folder)
-    info = json.loads((folder / "sweep.json").read_text()) if (folder / "sweep.json").is_file() else {}
+    csv = folder / f"{table}.csv"
+    if not csv.is_file():
+        raise FogrefError(
+            f"{csv}: no such file (a sweep's output folder holds {table}.csv; run fogref sweep)"
+        )
+    info = {}
+    if (folder / "sweep.json").is_file():
+        try:
+            info = json.loads((folder / "sweep.json").read_text(encoding="utf-8"))
+        except (ValueError, OSError) as e:
+            raise FogrefError(f"{folder / 'sweep.json'}: not readable JSON ({e})") from None
+        if not isinstance(info, dict):
+            raise FogrefError(
+                f"{folder / 'sweep.json'}: holds a {type(info).__name__}, not the sweep's JSON object"
+            )
     params = list(info.get("parameters") or {})
     plots = sorted((folder / "plots").glob("*.png")) if (folder / "plots").is_dir() else []
-    return SweepTable(pd.read_csv(folder / f"{table}.csv"), params, plots, folder)
+    try:
+        frame = pd.read_csv(csv)
+    except (ValueError, OSError) as e:  # pandas' EmptyDataError and ParserError are ValueErrors
+        raise FogrefError(
+            f"{csv}: not a readable table ({str(e).splitlines()[0] if str(e) else e})"
+        ) from None
+    return SweepTable(frame, params, plots, folder)

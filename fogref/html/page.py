@@ -81,11 +81,26 @@ def page(title: str, sections: list[str], viewer: dict | None = None) -> str:
         '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
         f'<meta name="viewport" content="width=device-width"><title>{esc(title)}</title>'
         f"<style>{CSS}</style></head><body>\n<h1>{esc(title)}</h1>\n"
-        + (VIEWER_HTML if viewer is not None else "")
+        + (VIEWER_HTML + _scale_note(viewer) if viewer is not None else "")
         + "\n".join(sections)
         + "\n"
         + data
         + f"\n<script>{JS}</script>\n</body></html>\n"
+    )
+
+
+def _scale_note(viewer: dict) -> str:
+    """What the viewer shows of a large image (:func:`fogref.html.viewer.block_scale`)."""
+    k = int(viewer.get("scale", 1))
+    if k == 1:
+        return ""
+    (W, H), w, h = viewer["full_size"], viewer["width"], viewer["height"]
+    return (
+        f'<p class="fr-note">The image is {W}×{H} px; to keep this page small the viewer shows '
+        f"{w}×{h}: each of its pixels is the mean of {k}×{k} pixels, its ± the standard error of "
+        f"that mean, its regions those of the block's centre pixel, a block compared where all its "
+        f"pixels are; the last {H - h * k} rows and {W - w * k} columns are left out. The tables and "
+        "figures use every pixel.</p>\n"
     )
 
 

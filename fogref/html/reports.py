@@ -14,9 +14,11 @@ import json
 from pathlib import Path
 
 from fogref.gbuffer import Truth
-from fogref.html.inline import check_rows_html, esc, fmt, table_html
+from fogref.html.inline import check_rows_html, esc, fmt, fmt_noise, table_html
 from fogref.html.page import figure, verdict_badge, write_page
 from fogref.html.viewer import viewer_data
+from fogref.models.terms import note, unreal_field
+from fogref.study.budget.report import validation_paragraphs
 from fogref.study.plot_units import HEADLINE_METRICS
 
 #: Columns of the descriptive metric table: (metrics.json key, heading, with its ± stderr).
@@ -68,6 +70,19 @@ def compare_sections(report: dict, folder: Path) -> list[str]:
         f"{report['image']['width']}×{report['image']['height']} px.</p>"
     ]
     s += [f'<p class="fr-note">warning: {esc(w)}</p>' for w in report.get("warnings", [])]
+    params = (report.get("model") or {}).get("parameters")
+    if isinstance(params, dict):
+        name = report["model"]["name"]
+        s += [
+            "<h2>Model parameters</h2>",
+            table_html(
+                ["parameter", "value", "unit or colour space"],
+                [
+                    [k, json.dumps(v) if isinstance(v, (list, dict)) else v, note(name, k, v)]
+                    for k, v in params.items()
+                ],
+            ),
+        ]
     if check:
         s += [
             "<h2>Check</h2>",
@@ -164,13 +179,16 @@ def write_study_html(study_dir, truth=None) -> Path:
             f"<p>truth <code>{esc(prov.get('truth'))}</code> of <code>{esc(prov.get('scene'))}</code>, "
             f"{esc(prov.get('spp'))} spp, seed {esc(prov.get('seed'))}.</p>"
         ]
-    fit = summary.get("fit", {}).get("unreal") or {}
+    fit = summary.get("fit", {}).get("unreal_editor") or {}
     if fit:
         s += [
             "<h2>Fit (Unreal's fog parameters)</h2>",
             table_html(
-                ["parameter", "value"],
-                [[k, json.dumps(v) if isinstance(v, (list, dict)) else v] for k, v in fit.items()],
+                ["property", "value", "unit or colour space"],
+                [
+                    [k, json.dumps(v) if isinstance(v, (list, dict)) else v, note("ue4", unreal_field(k), v)]
+                    for k, v in fit.items()
+                ],
             ),
         ]
     budget = folder / "budget.json"
@@ -186,29 +204,122 @@ def write_study_html(study_dir, truth=None) -> Path:
     return write_page(folder / "report.html", "fogref study: Unreal's fog against the ground truth", s, data)
 
 
-def _budget_html(budget) -> str:
-    """The error budget as a table: every list of flat dicts in ``budget.json`` becomes a table."""
-    out = []
+#: How to read a Shapley share, for the study page.
+SHARES_EXPLAINED = (
+    "<p>Each effect's <b>share</b> is the part of the squared error (RMSE²) it is responsible for. "
+    "The model is evaluated with every combination of the effects switched to the engine's side, "
+    "and an effect's share is its average contribution over all of them (its Shapley value), so "
+    "no order of the effects is privileged; the shares add up to 100 %.</p>"
+    "<ul><li>A <b>positive</b> share: the effect adds error. Fixing it in the engine removes about "
+    "that part of the squared error.</li>"
+    "<li>A <b>negative</b> share: the effect cancels part of the other effects' error. On its own "
+    "it would make the image worse, but here it compensates: fixing the effects with positive "
+    "shares without it leaves a larger error than fixing them together with it.</li>"
+    "<li>Because effects cancel, one share can exceed 100 % or fall below −100 %: "
+    "+102 %, +86 % and −115 % mean that two effects each cost about the whole error, and a third "
+    "hides more than the whole error.</li></ul>"
+    "<p>± is the share's Monte Carlo noise (bootstrap over pixel blocks); every value is rounded "
+    "to it. A share within twice its noise of 0 is no measurable effect.</p>"
+)
 
-    def walk(obj, path):
-        if isinstance(obj, list) and obj and all(isinstance(x, dict) for x in obj):
-            keys = [k for k in obj[0] if not isinstance(obj[0][k], (dict, list))]
+
+def _reading(share: float, noise: float) -> str:
+    if abs(share) < 5e-4:
+        return "none (below 0.05 %)"
+    if share - 2 * noise > 0:
+        return "adds error"
+    if share + 2 * noise < 0:
+        return "cancels part of the others"
+    return "no measurable effect"
+
+
+def _shapley_table(sh: dict) -> str:
+    rows = sorted(sh["effects"], key=lambda r: -r["share"])
+    return table_html(
+        ["effect", "share of the squared error", "reading"],
+        [
+            [
+                f"[{r['effect']}] {r['label']}",
+                "0 %"
+                if abs(r["share"]) < 5e-4
+                else fmt_noise(100 * r["share"], 100 * r["share_noise"], " %", 1),
+                _reading(r["share"], r["share_noise"]),
+            ]
+            for r in rows
+        ],
+    )
+
+
+def _budget_html(budget: dict) -> str:
+    """The error budget (``budget.json``) for a reader: the total error, the Shapley shares and
+    how to read them, the telescoping chain and the what-if variants, each number rounded to its
+    noise (``budget.md`` has the same, with every digit)."""
+    t = budget.get("total", {})
+    rmse = t.get("rmse", {})
+    out = [
+        f"<p>Total error of Unreal's fog against the truth (linear radiance): <b>RMSE "
+        f"{fmt_noise(rmse.get('all'), t.get('rmse_stderr'))}</b>, {fmt(rmse.get('surface'), 3)} on "
+        f"surface pixels and {fmt(rmse.get('sky'), 3)} on sky pixels; the truth's RMS is "
+        f"{fmt(t.get('truth_rms'), 3)}, and the truth's own noise alone would give an RMSE of "
+        f"{fmt(t.get('rmse_noise_floor'), 2)}.</p>"
+    ]
+    sh = budget.get("shapley")
+    if sh:
+        top = next((r for r in sh["effects"] if r["key"] == sh.get("largest")), None)
+        out += ["<h3>What each effect costs (Shapley shares)</h3>"]
+        if top is not None:
             out.append(
-                f"<h3>{esc(path or 'budget')}</h3>"
-                + '<div class="fr-wide">'
-                + table_html(keys, [[x.get(k) for k in keys] for x in obj])
-                + "</div>"
+                f"<p>Largest: <b>[{esc(top['effect'])}] {esc(top['label'])}</b>, "
+                f"{esc(fmt_noise(100 * top['share'], 100 * top['share_noise'], ' %', 1))} of the squared "
+                "error.</p>"
             )
-        elif isinstance(obj, dict):
-            flat = {k: v for k, v in obj.items() if not isinstance(v, (dict, list))}
-            if flat and path:
-                out.append(f"<h3>{esc(path)}</h3>" + table_html(["quantity", "value"], list(flat.items())))
-            for k, v in obj.items():
-                if isinstance(v, (dict, list)):
-                    walk(v, f"{path}.{k}" if path else k)
-
-    walk(budget, "")
-    return "\n".join(out[:20]) or "<p>(no table)</p>"
+        out += [SHARES_EXPLAINED, '<div class="fr-wide">' + _shapley_table(sh) + "</div>"]
+    folded = budget.get("shapley_colours_in_lobe")
+    if folded:
+        out += [
+            "<h3>The same, with the colour re-fit counted as part of the lobe</h3>",
+            '<div class="fr-wide">' + _shapley_table(folded) + "</div>",
+        ]
+    steps = budget.get("steps") or []
+    if steps:
+        out += [
+            "<h3>One effect at a time (telescoping chain)</h3>",
+            "<p>Going from the truth to Unreal's fog, one effect switched at each step: the RMSE of "
+            "the step's change to the image and its share of the squared error (in this order; the "
+            "Shapley shares above do not depend on one).</p>",
+            '<div class="fr-wide">'
+            + table_html(
+                ["effect", "RMSE of the step", "share of the squared error", "RMSE after the step"],
+                [
+                    [
+                        f"[{st['effect']}] {st['label']}",
+                        fmt_noise(st["rmse"]["all"], st.get("rmse_stderr")),
+                        fmt_noise(100 * st["share"], 100 * (st.get("noise") or {}).get("share", 0.0), " %", 1)
+                        if (st.get("noise") or {}).get("share")
+                        else f"{100 * st['share']:+.1f} %",
+                        fmt(st.get("rmse_vs_truth_after"), 4),
+                    ]
+                    for st in steps
+                ],
+            )
+            + "</div>",
+        ]
+    checks = validation_paragraphs(budget)
+    if checks:
+        out += ["<h3>How the budget was checked</h3>", *(f"<p>{esc(t)}</p>" for t in checks)]
+    what_if = budget.get("what_if") or []
+    if what_if:
+        out += [
+            "<h3>What if (one engine setting changed)</h3>",
+            table_html(
+                ["variant", "RMSE", "change of the RMSE"],
+                [
+                    [w["variant"], fmt_noise(w["rmse"], w.get("rmse_stderr")), f"{w['delta_rmse']:+.2g}"]
+                    for w in what_if
+                ],
+            ),
+        ]
+    return "\n".join(out)
 
 
 def write_batch_html(out_dir, rows: list[dict], truth_path: str, columns) -> Path:

@@ -14,6 +14,15 @@ Without the truth (a committed report whose truth is not at hand) the compared p
 references come from ``errors.exr`` and the noise stands in for the standard error.
 Regions: :func:`fogref.compare.regions.region_masks` (``surface``, ``sky``, distance bands),
 one bit each.
+
+**Size.** A page embeds about 65 bytes per pixel (the 7 parts, their standard errors and 4
+errors of a compare page).  Above :data:`MAX_PIXELS` the viewer shows block means instead: each
+of its pixels is the mean of ``scale x scale`` pixels (the smallest integer ``scale`` that brings
+the image to at most :data:`MAX_PIXELS`), its standard error ``sqrt(sum se^2) / scale^2`` (the
+pixels' noise is independent), a block compared where all its pixels are, its regions those of
+its centre pixel; the last ``H mod scale`` rows and ``W mod scale`` columns are left out.  The
+page says so; the metrics, tables and figures use every pixel.  So a page stays under about
+10 MB for any truth (a 1920x1080 compare page: ``docs/reports.md``).
 """
 
 from __future__ import annotations
@@ -44,6 +53,45 @@ REPORT_TO_TRUTH = {
 #: The exposure a truth part borrows (single and multiple: the inscatter's, so that they compare).
 EXPOSURE_FROM = {"single": "inscatter", "multiple": "inscatter"}
 UNITS_RADIANCE = "radiance (the scene's units)"
+#: The most pixels the viewer embeds (480 x 270); larger images are shown as block means.
+MAX_PIXELS = 480 * 270
+
+
+def block_scale(shape) -> int:
+    """The side of the pixel blocks the viewer averages for an image of ``shape`` ``(H, W)``: 1 up
+    to :data:`MAX_PIXELS` pixels, else the smallest integer that brings it under.
+
+    >>> block_scale((180, 320)), block_scale((1080, 1920)), block_scale((2160, 3840))
+    (1, 4, 8)
+    """
+    h, w = int(shape[0]), int(shape[1])
+    k = 1
+    while (h // k) * (w // k) > MAX_PIXELS:
+        k += 1
+    return k
+
+
+def block_mean(a, k: int) -> np.ndarray:
+    """``(H // k, W // k, ...)`` means of the ``k x k`` blocks of ``a`` ``(H, W, ...)``.
+
+    >>> block_mean(np.arange(16.0).reshape(4, 4), 2).tolist()
+    [[2.5, 4.5], [10.5, 12.5]]
+    """
+    a = np.asarray(a, np.float64)
+    if k == 1:
+        return a
+    h, w = a.shape[0] // k, a.shape[1] // k
+    return a[: h * k, : w * k].reshape(h, k, w, k, *a.shape[2:]).mean(axis=(1, 3))
+
+
+def block_stderr(se, k: int) -> np.ndarray:
+    """The standard error of :func:`block_mean` from the pixels' ``se`` (independent noise):
+    ``sqrt(sum se^2) / k^2``, i.e. ``sqrt(block_mean(se^2) / k^2)``.
+
+    >>> float(block_stderr(np.full((2, 2), 0.4), 2)[0, 0])
+    0.2
+    """
+    return np.sqrt(block_mean(np.square(np.asarray(se, np.float64)), k)) / k
 
 
 def _units(part: str) -> str:
@@ -108,6 +156,9 @@ def viewer_data(
         geo = SimpleNamespace(shape=shape, hit=hit, sky=~hit, distance=np.asarray(ch["distance"], np.float64))
     else:
         raise ValueError("viewer_data needs a truth or a report folder")
+    k = block_scale(shape)
+    mean = lambda a: block_mean(a, k)  # noqa: E731
+    se = lambda a: block_stderr(a, k)  # noqa: E731
     layers, exposures = [], {}
 
     def exposure(part, img):
@@ -124,8 +175,8 @@ def viewer_data(
             "part": name,
             "units": _units(name),
             "exposure": exposure(src or name, ex_img),
-            "truth": encode_half(truth_img),
-            "stderr": encode_half(std) if std is not None else None,
+            "truth": encode_half(mean(truth_img)),
+            "stderr": encode_half(se(std)) if std is not None else None,
             "error": None,
             "valid": None,
             "noise": None,
@@ -136,7 +187,9 @@ def viewer_data(
             err, valid = _rgb(ch, f"{rpart}.error"), np.asarray(ch[f"{rpart}.valid"]) > 0.5
             # the error's noise (mean over RGB): embedded only where the truth's stderr is not (a model's
             # or engine's error has the truth's noise plus a rounding floor of 4 ulp)
-            noise = None if std is not None else encode_half(ch[f"{rpart}.noise"])
+            noise = None if std is not None else encode_half(se(ch[f"{rpart}.noise"]))
+            if k > 1:
+                err, valid = mean(np.where(valid[..., None], err, 0.0)), mean(valid) == 1.0
             layer.update(
                 error=encode_half(err),
                 valid=encode_mask(valid),
@@ -163,11 +216,14 @@ def viewer_data(
     for i, m in enumerate(regions.values()):
         bits |= np.asarray(m, bool).astype(np.uint8) << i
     h, w = shape
+    c = k // 2
     return {
-        "width": int(w),
-        "height": int(h),
+        "width": int(w // k),
+        "height": int(h // k),
+        "scale": k,
+        "full_size": [int(w), int(h)],
         "title": title,
         "layers": layers,
         "regions": list(regions),
-        "region_bits": encode_mask(bits),
+        "region_bits": encode_mask(bits[c::k, c::k][: h // k, : w // k]),
     }

@@ -14,6 +14,7 @@ Layering: ``fogref.media`` (physics) <- ``fogref.models`` (pure shader ports) <-
 * :mod:`~fogref.mapping.free`      each model's free parameters and bounds (:data:`FIT_SPECS`)
 * :mod:`~fogref.mapping.fit`       any model fitted to the physical fog, with uncertainties
 * :mod:`~fogref.mapping.translate` one engine's settings to another's through the physical fog
+* :mod:`~fogref.mapping.droplet_fog` visibility and droplets -> heightfog parameters (Mie phase)
 
 Examples
 --------

@@ -11,6 +11,7 @@ it cannot.  Colours follow the convention of :mod:`fogref.mapping.physical`
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -57,7 +58,8 @@ __all__ = [
 def unity_from_physical(ps: PhysicalScene) -> UnityBuiltinFog:
     """The Unity built-in fog that best represents a physical scene.
 
-    Always Exp fog on distance.  Profile "homogeneous": exact
+    Always Exp fog on distance (``camera_forward``, for a ``--param fog_coordinate=depth``, is the
+    scene's view direction where it names one).  Profile "homogeneous": exact
     (:func:`~fogref.models.unity_builtin.medium_to_unity`, ``fogDensity =
     sigma_t`` [1/m]).  Height profiles ("exponential", "hdrp", "powerlaw") have no
     exact counterpart (Unity's fog does not depend on height); the nearest choice
@@ -82,7 +84,7 @@ def unity_from_physical(ps: PhysicalScene) -> UnityBuiltinFog:
         m = FogMedium(
             sigma_t=sigma * rho, albedo=m.albedo, g=m.g, layers=(ExpLayer(1.0, 0.0, 0.0),), source=ps.source
         )
-    return UnityBuiltinFog(medium_to_unity(m, fogColor=ps.sky_colour()))
+    return UnityBuiltinFog(replace(medium_to_unity(m, fogColor=ps.sky_colour()), **_view_axis(ps)))
 
 
 @register_mapping("altitude")
@@ -276,6 +278,12 @@ def filament_from_physical(ps: PhysicalScene) -> FilamentFog:
 # -- Godot, Bevy, three.js -----------------------------------------------------------
 
 
+def _view_axis(ps: PhysicalScene) -> dict:
+    """``{"camera_forward": ...}``: the scene's view direction for the models that fog the eye
+    depth along it, or ``{}`` (their default, -z) where the scene names none."""
+    return {} if ps.camera_forward is None else {"camera_forward": tuple(ps.camera_forward)}
+
+
 def _density_at_camera(ps: PhysicalScene) -> float:
     """``rho(camera)``: the medium's relative density at the camera (1 for a homogeneous fog)."""
     m = ps.medium
@@ -434,8 +442,9 @@ def threejs_from_physical(ps: PhysicalScene) -> ThreeJSFog:
     ``density = sigma_t rho(camera)`` [1/m] has the physical transmittance ``exp(-1)`` at the
     depth ``1/density`` on the camera axis (:func:`~fogref.models.threejs.threejs_sigma`),
     too little fog nearer and too much farther (exp² against exp), and it fogs the eye
-    depth, not the distance; the physical scene has no view direction, so
-    ``camera_forward`` keeps its default (-z).  ``color = albedo * sky radiance``.  Raises
+    depth, not the distance: ``camera_forward`` is the scene's view direction
+    (:attr:`~fogref.mapping.physical.PhysicalScene.camera_forward`; -z where it names none).
+    ``color = albedo * sky radiance``.  Raises
     ParameterError naming 'profile' for "box" or bounded fog, 'sigma_t' for a coloured
     extinction.
 
@@ -450,7 +459,7 @@ def threejs_from_physical(ps: PhysicalScene) -> ThreeJSFog:
 
     _require_space_filling(ps, "three.js", "three.js fog fills all space (no bounds)")
     sigma = _grey_extinction_at_camera(ps, "three.js")
-    return ThreeJSFog(ThreeFogParams(mode="FogExp2", density=sigma, color=ps.sky_colour()))
+    return ThreeJSFog(ThreeFogParams(mode="FogExp2", density=sigma, color=ps.sky_colour(), **_view_axis(ps)))
 
 
 @register_mapping("babylon")
@@ -484,7 +493,8 @@ def playcanvas_from_physical(ps: PhysicalScene) -> PlayCanvasFog:
     """The PlayCanvas fog nearest to a physical scene: ``FOG_EXP``, **never exact**.
 
     ``density = sigma_t rho(camera)`` [1/m]; PlayCanvas fogs ``far (z - near)/(far - near)`` of
-    the eye depth z (camera clip planes at PlayCanvas's defaults, 0.1 and 1000 m), not the
+    the eye depth z (camera clip planes at PlayCanvas's defaults, 0.1 and 1000 m; the depth axis
+    ``camera_forward`` is the scene's view direction, -z where it names none), not the
     distance, and has no height term.  ``color = (albedo * sky radiance)^(1/2.2)``: the engine's
     gamma-encoded ``scene.fog.color``, which it raises to 2.2.  Raises ParameterError naming
     'profile' for "box" or bounded fog, 'sigma_t' for a coloured extinction.
@@ -501,4 +511,4 @@ def playcanvas_from_physical(ps: PhysicalScene) -> PlayCanvasFog:
     _require_space_filling(ps, "PlayCanvas", "PlayCanvas fog fills all space (no bounds)")
     sigma = _grey_extinction_at_camera(ps, "PlayCanvas")
     color = tuple(float(c) ** (1 / 2.2) for c in ps.sky_colour())
-    return PlayCanvasFog(PlayCanvasFogParams(type="exp", density=sigma, color=color))
+    return PlayCanvasFog(PlayCanvasFogParams(type="exp", density=sigma, color=color, **_view_axis(ps)))

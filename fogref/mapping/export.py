@@ -16,7 +16,8 @@ bevy        ``bevy``      Rust: a system spawning Camera3d + DistanceFog + Expos
                           DirectionalLight (Bevy 0.15+; y-up, right-handed, metres)
 threejs     ``threejs``   JavaScript (ES module): ``scene.fog``, a DirectionalLight, the camera
 unity       ``unity``     C#: RenderSettings fog, the camera and the sun (y-up, **left-handed**:
-                          ``z -> -z``)
+                          ``z -> -z``; the light's intensity is the irradiance / pi, since the
+                          built-in Standard BRDF leaves out the diffuse 1/pi)
 hdrp        ``hdrp``      C#: the Fog volume override, the camera and the sun (as unity)
 filament    ``filament``  JavaScript: ``view.setFogOptions``, a SUN light, the camera
 ==========  ============  =====================================================================
@@ -35,9 +36,11 @@ that the engine's product equals the fit:
   ``DirectionalInscatteringColor * SunLuminance / Y(light)``.
 * Bevy multiplies ``directional_light_color`` by the light's colour times illuminance times
   exposure: written ``directional_light_color * light_color / E`` per channel.
-* Godot's lobe is the light's linear colour times ``light_energy`` times ``fog_sun_scatter``:
-  the light is the sun (E) and ``fog_sun_scatter`` is the least-squares scale
-  ``s = (sun_color . E) / (E . E)``; the snippet states how far ``s E`` is from ``sun_color``.
+* Godot's lobe is the shader's light (linear colour times ``light_energy`` times pi: Godot
+  multiplies the energy by pi without physical light units, ``light_storage.cpp``) times
+  ``fog_sun_scatter``: the shader's light is the sun (``light_energy = max(E) / pi``) and
+  ``fog_sun_scatter`` is the least-squares scale ``s = (sun_color . E) / (E . E)``; the snippet
+  states how far ``s E`` is from ``sun_color``.
 * Filament's lobe is the sun light's colour times intensity with no scale of its own: the light
   is written as the fitted ``lightColorIntensity`` (the fog as fitted) and the snippet states
   the physical sun's irradiance beside it.
@@ -272,9 +275,12 @@ def _unreal(p: Any, cam: Camera, sun: Sun, source: str) -> dict[str, str]:
         "    return None",
         "",
         "",
-        "actors = unreal.get_editor_subsystem(unreal.EditorActorSubsystem)",
+        "try:  # UE 5",
+        "    spawn = unreal.get_editor_subsystem(unreal.EditorActorSubsystem).spawn_actor_from_class",
+        "except AttributeError:  # UE 4.26-4.27",
+        "    spawn = unreal.EditorLevelLibrary.spawn_actor_from_class",
         "",
-        "fog_actor = actors.spawn_actor_from_class(",
+        "fog_actor = spawn(",
         f"    unreal.ExponentialHeightFog, unreal.Vector({_fs(q['fog_location_cm'])})",
         ")",
         "fog = fog_actor.get_component_by_class(unreal.ExponentialHeightFogComponent)",
@@ -299,7 +305,7 @@ def _unreal(p: Any, cam: Camera, sun: Sun, source: str) -> dict[str, str]:
     lines += [
         "",
         "# the sun: its X axis is the direction the light travels; intensity in lux",
-        "sun_actor = actors.spawn_actor_from_class(",
+        "sun_actor = spawn(",
         f"    unreal.DirectionalLight, unreal.Vector(0.0, 0.0, 0.0), {rot(q['sun_rotation'])}",
         ")",
         "sun = sun_actor.get_component_by_class(unreal.DirectionalLightComponent)",
@@ -308,7 +314,7 @@ def _unreal(p: Any, cam: Camera, sun: Sun, source: str) -> dict[str, str]:
         "set_first(sun, ['atmosphere_sun_light', 'used_as_atmosphere_sun_light'], True, required=False)",
         "",
         "# the camera: horizontal field of view [deg]",
-        "camera_actor = actors.spawn_actor_from_class(",
+        "camera_actor = spawn(",
         f"    unreal.CameraActor, unreal.Vector({_fs(q['camera_location_cm'])}), {rot(q['camera_rotation'])}",
         ")",
         "camera = camera_actor.get_component_by_class(unreal.CameraComponent)",
@@ -352,8 +358,8 @@ def godot_plan(p: Any, cam: Camera, sun: Sun) -> dict:
         "fog_sun_scatter": p.fog_sun_scatter * s,
         "sun_lobe_relative_error": float(np.linalg.norm(lobe - target)) / denom if denom > 0 else 0.0,
         "light_color_srgb": linear_to_srgb(colour),
-        "light_energy": energy,
-        "light_intensity_lux": luminance(E),
+        "light_energy": energy / math.pi,
+        "light_intensity_lux": energy,
         "light_z": sun.w,
         "camera_x": cam.right,
         "camera_y": cam.true_up,
@@ -366,10 +372,11 @@ def _godot(p: Any, cam: Camera, sun: Sun, source: str) -> dict[str, str]:
     head = [
         "Godot 4 (y-up, right-handed, metres, like fogref; cameras and lights look along -Z).",
         "Colours are sRGB, as the inspector shows them and .tres files store them.",
-        "The sun lobe is the light's colour x energy x fog_sun_scatter: fog_sun_scatter scales the",
+        "The shader's light is light_color (linear) x light_energy x pi (light_storage.cpp) = the sun's",
+        "irradiance.  The sun lobe is that light x fog_sun_scatter: fog_sun_scatter scales the",
         f"sun (E) to the fitted sun_color, whose direction differs from E's by "
         f"{q['sun_lobe_relative_error']:.3g} (relative).",
-        f"With physical light units, light_intensity_lux = {q['light_intensity_lux']:.6g}.",
+        f"With physical light units: light_energy = 1, light_intensity_lux = {q['light_intensity_lux']:.6g}.",
     ]
     depth = p.fog_mode == "depth"
     env = [
@@ -397,7 +404,10 @@ def _godot(p: Any, cam: Camera, sun: Sun, source: str) -> dict[str, str]:
         "[gd_scene load_steps=2 format=3]",
         "",
         _header(
-            ";", "godot", source, ["The camera, the sun and the environment of fogref_environment.tres."]
+            ";",
+            "godot",
+            source,
+            ["The camera, the sun and res://fogref_environment.tres (save the .tres there)."],
         ).rstrip("\n"),
         "",
         '[ext_resource type="Environment" path="res://fogref_environment.tres" id="1"]',
@@ -417,7 +427,6 @@ def _godot(p: Any, cam: Camera, sun: Sun, source: str) -> dict[str, str]:
         f"transform = {_basis_text(lx, ly, q['light_z'], (0.0, 0.0, 0.0))}",
         f"light_color = Color({_fs(q['light_color_srgb'])}, 1.0)",
         f"light_energy = {_f(q['light_energy'])}",
-        f"light_intensity_lux = {_f(q['light_intensity_lux'])}",
     ]
     return {".tres": "\n".join(env) + "\n", ".tscn": "\n".join(tscn) + "\n"}
 
@@ -548,7 +557,11 @@ def _unity_colour_gamma(c: Any) -> str:
 
 def _unity_common(cam: Camera, sun: Sun, lux: bool) -> list[str]:
     colour, intensity = light_split(sun.irradiance)
-    unit = "lux (HDRP)" if lux else "Unity's built-in units: colour x intensity = the irradiance"
+    if lux:
+        unit = "lux (HDRP)"
+    else:  # UnityStandardBRDF.cginc leaves out the diffuse 1/pi: the light carries it
+        intensity /= math.pi
+        unit = "built-in pipeline: irradiance / pi (its Standard BRDF leaves out the diffuse 1/pi)"
     return [
         "        camera.transform.position = " + _unity_vec(cam.origin) + ";",
         "        camera.transform.rotation = Quaternion.LookRotation("

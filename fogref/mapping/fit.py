@@ -19,14 +19,18 @@ as log10.
 
 Uncertainty of each fitted parameter, two numbers:
 
-* ``uncertainty``: from the Jacobian ``J`` at the optimum, ``cov = s^2 (J^T J)^+`` with
-  ``s^2 = SSE / (m - p)`` (m residuals, p parameters; ``+``: the pseudo-inverse, so a
-  direction the views do not constrain gets 0 and the flag ``at_bound`` or a rank
-  deficit, ``rank``), mapped through ``d value / d log10 value = ln(10) value`` for log
-  parameters.  It treats the model's misfit as noise: it measures how sharply the views
-  pin the parameter, and shrinks as ``1/sqrt(views)``.
+* ``uncertainty``: from the Jacobian ``J`` at the optimum, ``cov = s^2 (J^T J)^-1`` with
+  ``s^2 = SSE / (m - p)`` (m residuals, p parameters; through the SVD of ``J`` with unit
+  columns, so a direction the views barely constrain gets the large uncertainty it has;
+  :attr:`ModelFit.ill_posed` lists the parameters whose uncertainty exceeds their value),
+  mapped through ``d value / d log10 value = ln(10) value`` for log parameters.  It treats
+  the model's misfit as noise: it measures how sharply the views pin the parameter, and
+  shrinks as ``1/sqrt(views)``.
 * ``spread``: ``|value(2N) - value(N)|`` between the last two direction counts of the
-  convergence check (the quadrature's own error).
+  convergence check (the quadrature's own error); with a fixed direction count, the largest
+  ``|value(N turned) - value(N)|`` over two refits on the same directions turned about the
+  vertical (:data:`RESAMPLE_TURNS`, :func:`~fogref.mapping.views.rotated_views`): the error of
+  sampling the sphere with few directions, which the Jacobian does not see.
 
 Direction count: without ``views``, ``FIT_DIRECTIONS_START`` (128) directions, doubled until
 every parameter changes by at most ``max(rtol |value|, uncertainty)`` (default ``rtol``
@@ -64,6 +68,7 @@ from fogref.mapping.unreal import (
     Views,
     sample_views,
 )
+from fogref.mapping.views import rotated_views
 from fogref.models.base import SKY_DISTANCE, FogModel
 from fogref.models.terms import annotate
 
@@ -82,6 +87,9 @@ __all__ = [
 
 #: The most directions :func:`fit_model` doubles to (each fit has up to ~15 parameters).
 FIT_DIRECTIONS_MAX_GENERIC = 4096
+#: With a fixed direction count, the refits that give the spread turn the directions about the vertical
+#: by a third and two thirds of the golden angle [rad] (between the Fibonacci spiral's azimuths).
+RESAMPLE_TURNS = tuple(k / 3 * math.pi * (3.0 - math.sqrt(5.0)) for k in (1, 2))
 
 
 def model_class(model: str | type) -> type:
@@ -142,6 +150,8 @@ def start_params(
         raise FogrefError(f"model '{_label(cls)}': no parameter '{bad[0]}'{did_you_mean(bad[0], names)}")
     try:
         return replace(params, **kw), source
+    except ParameterError:  # names the parameter, its value and its range already
+        raise
     except (TypeError, ValueError) as e:
         raise FogrefError(f"model '{_label(cls)}': cannot set {sorted(kw)}: {e}") from e
 
@@ -189,6 +199,22 @@ def _evaluate(cls: type, params: Any, view_sets: Iterable[Views]) -> list[tuple[
         T = np.broadcast_to(np.asarray(r.transmittance, float), (len(views.D), 3))
         out.append((L, T))
     return out
+
+
+def _jacobian_sigma(J: np.ndarray, s2: float) -> np.ndarray:
+    """Standard errors ``sqrt(diag(s2 (J^T J)^-1))`` of the parameters, through the SVD of ``J`` with its
+    columns scaled to unit norm: a parameter the views barely constrain (a near-zero column, or a
+    combination of parameters with a near-zero singular value) gets the large error it has, not the 0
+    of a truncated pseudo-inverse.  Singular values and column norms are floored at float64's epsilon
+    of the largest, so the errors stay finite."""
+    if J.size == 0:
+        return np.zeros(J.shape[1])
+    eps = np.finfo(float).eps
+    norms = np.linalg.norm(J, axis=0)
+    norms = np.maximum(norms, eps * max(float(norms.max()), eps))
+    _, S, Vt = np.linalg.svd(J / norms, full_matrices=False)
+    S = np.maximum(S, eps * max(float(S[0]), eps))
+    return np.sqrt(s2 * np.sum((Vt.T / S) ** 2, axis=1)) / norms
 
 
 def fit_to_targets(
@@ -257,8 +283,7 @@ def fit_to_targets(
     J = np.asarray(res.jac, float)
     m, p = r.size, len(free)
     s2 = float(r @ r) / max(m - p, 1)
-    cov = s2 * np.linalg.pinv(J.T @ J)
-    sig_int = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    sig_int = _jacobian_sigma(J, s2)
     values = {f.name: float(_to_value(f, xi)) for f, xi in zip(free, x)}
     unc = {
         f.name: float(math.log(10.0) * values[f.name] * si) if f.log else float(si)
@@ -308,6 +333,12 @@ class ModelFit:
     note: str = ""
     history: dict = field(default_factory=dict)
 
+    @property
+    def ill_posed(self) -> list[str]:
+        """The parameters the views do not determine: uncertainty (or spread) larger than the value."""
+        spread = self.spread or {}
+        return [k for k, v in self.values.items() if max(self.uncertainty[k], spread.get(k, 0.0)) > abs(v)]
+
     def instance(self) -> FogModel:
         """The fitted model (the scene's own sun)."""
         from fogref.mapping.build import build_model
@@ -342,8 +373,10 @@ class ModelFit:
                 "n_dirs": self.n_dirs,
                 "sun_elevations_deg": self.sun_elevations,
                 "start": self.start,
-                "uncertainty": "Jacobian at the optimum, cov = s^2 (J^T J)^+, s^2 = SSE/(m - p)",
-                "spread": "|value(2N) - value(N)| between the last two direction counts",
+                "uncertainty": "Jacobian at the optimum, cov = s^2 (J^T J)^-1, s^2 = SSE/(m - p)",
+                "ill_posed": self.ill_posed,
+                "spread": "|value(2N) - value(N)| between the last two direction counts, or with a "
+                "fixed count |value(N turned about the vertical) - value(N)|",
                 "loss": "sum of squared inscatter errors (RGB) + (w s)^2 sum of squared "
                 "transmittance "
                 "errors, s = RMS physical inscatter; model float64",
@@ -433,6 +466,8 @@ def fit_model(
         if not 8 <= n <= 100_000:
             raise ParameterError("fit_model", "views", f"{views} directions outside [8, 100000]")
         r = one(sample_views(pf.camera, n_dirs=n))
+        turned = [one(rotated_views(sample_views(pf.camera, n_dirs=n), a), r["x"]) for a in RESAMPLE_TURNS]
+        spread = {k: max(abs(t["values"][k] - v) for t in turned) for k, v in r["values"].items()}
     else:
         n = FIT_DIRECTIONS_START
         prev = one(sample_views(pf.camera, n_dirs=n))

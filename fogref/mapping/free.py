@@ -96,10 +96,17 @@ class FitSpec:
 
 
 def _try(fn: Callable[[_P], _R]) -> Callable[[_P], _R | None]:
+    """``fn``, None where these settings have no exact medium; an extinction outside the truth's range
+    (``FogMedium``'s ``sigma_t`` in [0, 1e2] 1/m) stays an error: no fit stands in for it."""
+
     def wrapped(p: _P) -> _R | None:
         try:
             return fn(p)
-        except (ParameterError, ValueError):
+        except ParameterError as e:
+            if e.name == "sigma_t":
+                raise
+            return None
+        except ValueError:
             return None
 
     return wrapped

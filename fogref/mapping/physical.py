@@ -78,6 +78,10 @@ class PhysicalScene:
         RGB radiance of a uniform sky (E's unit per sr); None or 0: no sky.
     camera : 3 floats
         Camera origin [m].
+    camera_forward : 3 floats, optional
+        The camera's unit view direction (fogref frame), normalised here: the depth axis of the
+        models that fog the eye depth (three.js, PlayCanvas, Unity's "depth").  None: the scene
+        names no view direction (those models keep their default, -z).
     profile : str, optional
         The medium's XML ``profile`` name (named in error messages and checked by
         the mappings); inferred from the layers when not given.
@@ -107,6 +111,8 @@ class PhysicalScene:
     sky_model: Any = None
     #: The sun's angular diameter [deg] (0: a delta).
     sun_angular_diameter: float = 0.0
+    #: The camera's unit view direction (3 floats), or None where the scene names none.
+    camera_forward: Any = None
 
     def __post_init__(self) -> None:
         src: str = self.source or getattr(self.medium, "source", "<PhysicalScene>")
@@ -122,6 +128,14 @@ class PhysicalScene:
         sky = (0.0, 0.0, 0.0) if self.sky_radiance is None else self.sky_radiance
         object.__setattr__(self, "sky_radiance", rgb(sky, "radiance", src, 0.0))
         object.__setattr__(self, "camera", rgb(self.camera, "origin", src))
+        if self.camera_forward is not None:
+            f = np.asarray(rgb(self.camera_forward, "forward", src), dtype=np.float64)
+            n = float(np.linalg.norm(f))
+            if not np.isfinite(n) or n == 0:
+                raise ParameterError(
+                    src, "forward", f"camera forward {tuple(self.camera_forward)} is not a direction"
+                )
+            object.__setattr__(self, "camera_forward", tuple(float(x) for x in f / n))
         if self.profile is None:
             object.__setattr__(self, "profile", _infer_profile(self.medium))
         if self.sky_model is not None:
@@ -136,7 +150,7 @@ class PhysicalScene:
         ----------
         params : dict
             Needs ``"medium"``; ``"sun"``, ``"sky"``, ``"camera"`` are optional
-            (no sun, no sky, camera at (0, 2, 0) m).
+            (no sun, no sky, camera at (0, 2, 0) m; ``camera["forward"]``: the view direction).
         camera : 3 floats, optional
             Overrides the camera origin [m].
 
@@ -150,8 +164,8 @@ class PhysicalScene:
         --------
         >>> ps = PhysicalScene.from_params({"scene": "doc.xml", "medium": {"sigma_t": 0.01, "falloff": 0.02},
         ...                                 "sky": {"type": "constant", "radiance": 0.5}})
-        >>> ps.has_sun, ps.sky_radiance, ps.camera, ps.source
-        (False, (0.5, 0.5, 0.5), (0.0, 2.0, 0.0), 'doc.xml: medium')
+        >>> ps.has_sun, ps.sky_radiance, ps.camera, ps.camera_forward, ps.source
+        (False, (0.5, 0.5, 0.5), (0.0, 2.0, 0.0), None, 'doc.xml: medium')
         """
         if not isinstance(params, dict) or not isinstance(params.get("medium"), dict):
             raise ParameterError("<fogref.params>", "medium", "no heightfog medium in the scene parameters")
@@ -170,9 +184,11 @@ class PhysicalScene:
         radiance = rgb(sky.get("radiance", 0.0), "radiance", f"{scene}: sky", 0.0) if sky else None
         model = dict(sky) if sky.get("type") == "sunsky" else None
         size = float((sun or {}).get("angular_diameter", 0.0) or 0.0)
+        view = params.get("camera") or {}
         if camera is None:
-            camera = (params.get("camera") or {}).get("origin", DEFAULT_CAMERA)
+            camera = view.get("origin", DEFAULT_CAMERA)
         camera = rgb(camera, "origin", f"{scene}: camera")
+        forward = view.get("forward")
         return cls(
             medium,
             direction,
@@ -183,6 +199,7 @@ class PhysicalScene:
             source=src,
             sky_model=model,
             sun_angular_diameter=size,
+            camera_forward=None if forward is None else rgb(forward, "forward", f"{scene}: camera"),
         )
 
     # -- what the mappings ask --------------------------------------------------

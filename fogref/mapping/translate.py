@@ -163,6 +163,10 @@ def _source_targets(
     return out
 
 
+#: A source fog whose transmittance is below this on every view is opaque: nothing to translate.
+OPAQUE = 1e-9
+
+
 def physical_of_model(
     cls: type, params: Any, pf: PhysicalScene, views: Views, elevations: Sequence[float] | None = None
 ) -> tuple[dict[str, Any], dict[str, str]]:
@@ -173,6 +177,13 @@ def physical_of_model(
     """
     spec = fit_spec(cls)
     targets = _source_targets(cls, spec, params, pf, views, elevations)
+    if all(float(np.max(t.T)) < OPAQUE for t in targets):
+        raise ParameterError(
+            f"translate: {getattr(cls, 'name', cls.__name__)}",
+            "settings",
+            f"the fog is opaque (transmittance < {OPAQUE:g}) on every view: no extinction can be "
+            "recovered from it; give a thinner fog",
+        )
     medium = spec.exact_medium(params) if spec.exact_medium is not None else None
     if medium is not None and max(medium.sigma_t) <= 0:
         medium = None

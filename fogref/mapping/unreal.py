@@ -3,8 +3,10 @@
 :func:`fit_unreal` matches Unreal's inscatter (:mod:`fogref.mapping.unreal_basis`: linear in
 its two colours, solved by non-negative least squares) to the closed-form physical single
 scattering of sun and sky over sample views from the camera (:mod:`fogref.mapping.views`).
-The exponent ``n`` and the start distance are found by scipy (a grid, then Nelder–Mead on
-``(log10 n, start)``); density, falloff and height come from the exact mapping
+The exponent ``n`` and the start distance are found by bounded Brent searches, over ``log10 n``
+inside one over the start (:class:`~fogref.mapping.unreal_basis.ColourLoss`: one model
+evaluation per start distance, the colours in closed form); density, falloff and height come
+from the exact mapping
 :func:`fogref.models.ue4.medium_to_ue4`.  :func:`ue4_from_physical` registers the result as
 the ``"ue4"`` mapping.
 """
@@ -169,8 +171,9 @@ def fit_unreal(
     exponent, colours, start and relative RMSE (``"convergence"``), the count used
     (``"n_dirs"``) and the wall time (``"fit_seconds"``).  Measured on
     scenes/valley.xml (g = 0.6, sun 8° high): exponent 10.84, 15.91, 14.33, 14.23,
-    14.187 at 128 ... 2048 directions (stops at 2048, about 3 s on one core;
-    4096 gives 14.189); relative RMSE 0.177.  A Gauss–Legendre product quadrature
+    14.187 at 128 ... 2048 directions (stops at 2048; 4096 gives 14.189); relative RMSE
+    0.177; about 0.5 s at a load average of 5 on 2 cores, 1.8 s at 15-190
+    (``reports/benchmarks/fit.md``).  A Gauss–Legendre product quadrature
     of the same loss agrees within 0.5 % (tests/test_unreal_fit_one.py).  The
     result is kept on disk (:mod:`fogref.mapping.fit_cache`), so every later call with the same
     scene and settings, in any process, reads it (``history["from_cache"]``).
@@ -195,7 +198,6 @@ def fit_unreal(
     rtol : float
         Convergence tolerance of the direction count, in (0, 1).
     """
-
     if views is None:
         if target is not None:
             raise ValueError("fit_unreal: a target needs the views it was computed on")
@@ -345,8 +347,8 @@ def ue4_from_physical(ps: PhysicalScene) -> UE4ExponentialHeightFog:
     DirectionalInscatteringColor, DirectionalInscatteringExponent and
     DirectionalInscatteringStartDistance come from :func:`fit_unreal`
     (closed-form sun + sky single scattering, sun attenuation included; the
-    direction count chosen by its convergence criterion, about 3 s on one core,
-    cached per scene); the light direction is the scene's sun
+    direction count chosen by its convergence criterion, about 0.5 s on a lightly loaded core,
+    kept on disk per scene, :mod:`fogref.mapping.fit_cache`); the light direction is the scene's sun
     (:meth:`~fogref.models.ue4.UE4FogParams.with_sun`).  Without a sun: no
     directional inscattering and FogInscatteringColor = albedo * sky radiance.
     Other fields: start distances 0, max opacity 1, no cutoff.

@@ -33,7 +33,7 @@ from typing import Any
 from fogref import params as P
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, medium_from_params, rgb
-from fogref.media.ue_pathtracer import DENSITY_CLAMP_DEFAULT, DENSITY_CLAMP_RANGE
+from fogref.media.ue_pathtracer import DENSITY_CLAMP_DEFAULT, DENSITY_CLAMP_RANGE, RADIUS_RANGE
 from fogref.models.ue4 import UE4FogParams
 
 __all__ = [
@@ -368,7 +368,8 @@ def rewrite_scene(
 #: ``r.PathTracing.FogDensityClamp`` in ``DENSITY_CLAMP_RANGE`` ([PT] clamps to it), albedo a
 #: linear RGB in [0, 1] (from the editor's FColor, [SC]).
 SETTING_RANGES: dict[str, tuple[float, float, bool, str]] = {
-    "VolumetricFogDistance": (0.0, math.inf, True, "cm"),
+    # the medium's cylinder radius range, in cm: a scene written is a scene fogref render takes
+    "VolumetricFogDistance": (RADIUS_RANGE[0] * CM_PER_M, RADIUS_RANGE[1] * CM_PER_M, False, "cm"),
     "VolumetricFogExtinctionScale": (0.0, math.inf, False, ""),
     "VolumetricFogScatteringDistribution": (G_RANGE[0], G_RANGE[1], False, ""),
     "FogDensityClamp": (DENSITY_CLAMP_RANGE[0], DENSITY_CLAMP_RANGE[1], False, ""),

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from fogref.mapping.physical import PhysicalScene
-from fogref.media import NP, hg_phase, single_scatter_sun
+from fogref.media import NP, single_scatter_sun
 from fogref.media.single_scatter import single_scatter_sky
 from fogref.media.single_scatter_nonuniform import single_scatter_sky_projected, sky_phase_projection
 from fogref.models.base import SKY_DISTANCE
@@ -33,6 +33,7 @@ __all__ = [
     "Views",
     "fibonacci_directions",
     "physical_single_scattering",
+    "rotated_views",
     "sample_views",
     "sky_projection",
 ]
@@ -83,6 +84,19 @@ def sample_views(
     return Views(np.asarray(camera, dtype=float), d_all, D_all)
 
 
+def rotated_views(views: Views, angle: float) -> Views:
+    """``views`` turned by ``angle`` [rad] about the vertical (y) axis through the camera: the same
+    directions' pattern, another sampling of the sphere (sky views stay sky views).
+
+    >>> v = rotated_views(Views(np.zeros(3), np.array([[1.0, 0.0, 0.0]]), np.array([10.0])), math.pi / 2)
+    >>> np.round(v.d, 12).tolist(), v.D.tolist()
+    ([[0.0, 0.0, -1.0]], [10.0])
+    """
+    c, s = math.cos(angle), math.sin(angle)
+    R = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    return Views(views.camera, views.d @ R.T, views.D)
+
+
 def physical_single_scattering(
     pf: PhysicalScene, views: Views, sun_attenuation: bool = True, sky: bool = True, sun: bool = True
 ) -> np.ndarray:
@@ -104,7 +118,7 @@ def physical_single_scattering(
             out += np.stack(single_scatter_sun(NP, m, o, d, D, w, pf.sun_irradiance), axis=-1)
         elif w[1] > 0:
             cos = d[0] * w[0] + d[1] * w[1] + d[2] * w[2]
-            p = hg_phase(NP, cos, m.g)
+            p = m.phase_value(NP, cos)
             T = np.stack(m.transmittance(NP, o, d, D), axis=-1)
             out += (np.asarray(m.albedo) * np.asarray(pf.sun_irradiance)) * p[:, None] * (1.0 - T)
     if sky and pf.sky_model is not None:
@@ -133,6 +147,7 @@ def sky_projection(pf: PhysicalScene, d: np.ndarray, sky: Any = None) -> np.ndar
         else:
             L = np.asarray(pf.sky_radiance, dtype=np.float64)
             sky = lambda w: np.broadcast_to(L, (len(w), 3))  # noqa: E731
+    pf.medium.require_hg("the sky's projection onto the phase function")
     d = np.asarray(d, dtype=np.float64)
     uniq, inv = np.unique(d, axis=0, return_inverse=True)
     return sky_phase_projection(sky, float(pf.medium.g), uniq)[np.asarray(inv).reshape(-1)]

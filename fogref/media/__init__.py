@@ -7,6 +7,10 @@
 * :mod:`~fogref.media.params`        :func:`medium_from_params` (the ``heightfog`` XML parameters)
 * :mod:`~fogref.media.closed_form`   optical depth, free flight, ``phi``/``psi``, HG phase
 * :mod:`~fogref.media.single_scatter` closed-form and sampled sun single scattering
+* :mod:`~fogref.media.phase`         tabulated, Draine and approximate-Mie phase functions
+* :mod:`~fogref.media.visibility`    visibility (meteorological optical range) <-> extinction
+* :mod:`~fogref.media.droplets`      fog droplet size distributions (gamma; radiation, advection fog)
+* :mod:`~fogref.media.mie`           the droplets' Mie optics per RGB channel (miepython)
 """
 
 from fogref.media.closed_form import TAU_MAX, hg_phase, phi, psi

@@ -224,11 +224,15 @@ class Box:
 
 @dataclass(frozen=True)
 class FogMedium:
-    """Exponential height fog with RGB extinction and albedo and an HG phase.
+    """Exponential height fog with RGB extinction and albedo and a phase function.
 
     sigma_t: RGB extinction at each layer's reference height [1/m], 0 to 1e2.
     albedo:  RGB single-scattering albedo, 0 to 1.
-    g:       Henyey–Greenstein asymmetry, -0.999 to 0.999.
+    g:       Henyey–Greenstein asymmetry, -0.999 to 0.999; with ``phase``, replaced by
+             its mean cosine (the HG that engines' lobes are fitted to).
+    phase:   None (Henyey–Greenstein with ``g``) or a
+             :class:`~fogref.media.phase.TabulatedPhase` (droplets' Mie phase, approximate
+             Mie): :meth:`phase_value` evaluates either.
     layers:  1 to 4 :class:`~fogref.media.protocol.HeightProfile` layers; empty
              layers are dropped (one is kept if all are empty).
     bounds:  optional :class:`Box` (or another convex bounds object with the same
@@ -250,9 +254,12 @@ class FogMedium:
     layers: tuple = (ExpLayer(),)
     bounds: Any = None
     source: str = field(default="<FogMedium>", compare=False, repr=False)
+    phase: Any = None
 
     def __post_init__(self) -> None:
         src = self.source
+        if self.phase is not None:
+            object.__setattr__(self, "g", max(-0.999, min(0.999, self.phase.mean_cosine)))
         object.__setattr__(self, "sigma_t", rgb(self.sigma_t, "sigma_t", src, 0.0, 1e2))
         object.__setattr__(self, "albedo", rgb(self.albedo, "albedo", src, 0.0, 1.0))
         if not (-0.999 <= float(self.g) <= 0.999):
@@ -267,6 +274,24 @@ class FogMedium:
         object.__setattr__(self, "layers", kept or layers[:1])
         if self.bounds is not None:
             object.__setattr__(self, "bounds", self.bounds.validate(src))
+
+    # -- the phase function ----------------------------------------------------
+    def phase_value(self, ops: Any, cos_theta: Any) -> Any:
+        """The phase function [1/sr] at ``cos_theta = dot(d, w)`` (``d`` along the ray, ``w``
+        toward the light; see :func:`~fogref.media.closed_form.hg_phase`)."""
+        if self.phase is None:
+            return cf.hg_phase(ops, cos_theta, self.g)
+        return self.phase.eval(ops, cos_theta)
+
+    def require_hg(self, who: str) -> None:
+        """ParameterError naming 'phase' unless the phase is Henyey–Greenstein (``who``: the
+        closed form or estimator that assumes it)."""
+        if self.phase is not None:
+            raise ParameterError(
+                self.source,
+                "phase",
+                f"{who} assumes a Henyey-Greenstein phase; the fog's is '{self.phase.label}'",
+            )
 
     # -- what the scene needs (trace-time specialisation) ---------------------
     @property

@@ -76,6 +76,12 @@ class NumpyOps:
     def errstate() -> np.errstate:
         return np.errstate(all="ignore")
 
+    @staticmethod
+    def interp(x: Real, xp: tuple, fp: tuple) -> Real:
+        """Linear interpolation of the table ``(xp, fp)`` (``xp`` increasing) at ``x``,
+        clamped to the table's ends."""
+        return np.interp(x, xp, fp)
+
 
 class _NullContext:
     def __enter__(self) -> _NullContext:
@@ -204,6 +210,26 @@ class DrJitOps:
 
     def errstate(self) -> _NullContext:
         return _NullContext()
+
+    def interp(self, x: Real, xp: tuple, fp: tuple) -> Real:
+        """Linear interpolation of the table ``(xp, fp)`` (``xp`` increasing, Python
+        numbers) at ``x``, clamped to the table's ends: the interval by binary search
+        (as Mitsuba's ``IrregularContinuousDistribution``), the tables uploaded once."""
+        dr, n = self.dr, len(xp)
+        xs, fs = self._table(xp), self._table(fp)
+        x = dr.clip(self._f(x), xp[0], xp[-1])
+        i = dr.binary_search(1, n - 1, lambda j: dr.gather(self.Float, xs, j) <= x) - 1
+        i = dr.clip(i, 0, n - 2)
+        x0, x1 = dr.gather(self.Float, xs, i), dr.gather(self.Float, xs, i + 1)
+        f0, f1 = dr.gather(self.Float, fs, i), dr.gather(self.Float, fs, i + 1)
+        return dr.lerp(f0, f1, (x - x0) / (x1 - x0))
+
+    def _table(self, values: tuple) -> Real:
+        key = ("table", len(values), hash(values))
+        arr = self._params.get(key)
+        if arr is None:
+            arr = self._params[key] = self.Float(np.asarray(values, dtype=np.float64))
+        return arr
 
 
 #: Either back end, as the physics receives it (``ops`` arguments).

@@ -10,11 +10,14 @@ names and their own parameters come from the profile registry
 
 from __future__ import annotations
 
+from typing import Any
+
 from fogref.errors import ParameterError
 from fogref.media.medium import Box, FogMedium
+from fogref.media.phase import TabulatedPhase
 from fogref.media.protocol import PROFILES, number, profile_entry, rgb
 
-__all__ = ["PROFILES", "medium_from_params"]
+__all__ = ["PROFILES", "medium_from_params", "phase_from_params"]
 
 
 def medium_from_params(params: dict, src: str = "<params>") -> FogMedium:
@@ -26,7 +29,10 @@ def medium_from_params(params: dict, src: str = "<params>") -> FogMedium:
         ``profile`` (a registered name, default "exponential"), ``sigma_t`` (RGB,
         1/m, 0..1e2, default 0.01), ``albedo`` (RGB, 0..1, default 0.9), ``g``
         (-0.999..0.999, default 0), the profile's own parameters (see its
-        ``from_params``) and optional ``bounds_min``/``bounds_max`` (points, m).
+        ``from_params``), optional ``bounds_min``/``bounds_max`` (points, m) and an
+        optional ``phase``: a :class:`~fogref.media.phase.TabulatedPhase` or the dict of a
+        ``fogtabphase`` (``cosines``, ``values``: comma-separated, ``label``), which
+        replaces the HG of ``g``.
         Numbers may be given as strings, RGB values as one number, 3 numbers or
         an XML string ``"r, g, b"``.
     src : str
@@ -60,6 +66,17 @@ def medium_from_params(params: dict, src: str = "<params>") -> FogMedium:
         rgb(params["albedo"], "albedo", src, 0.0, 1.0) if params.get("albedo") is not None else (0.9,) * 3
     )
     g = number(params, "g", 0.0, src, -0.999, 0.999)
+    phase = params.get("phase")
+    if isinstance(phase, dict):
+        phase = phase_from_params(phase, src)
+    elif phase is not None and not isinstance(phase, TabulatedPhase):
+        raise ParameterError(src, "phase", "expected a fogtabphase's cosines and values")
+    if phase is not None and params.get("g") is not None and abs(g - phase.mean_cosine) > 1e-3:
+        raise ParameterError(
+            src,
+            "g",
+            f"{g} with a tabulated phase, whose mean cosine is {phase.mean_cosine:.6g}: give that or no g",
+        )
     layers = entry.parse(params, src)
     lo, hi = (
         rgb(params[k], k, src) if params.get(k) is not None else None for k in ("bounds_min", "bounds_max")
@@ -75,4 +92,29 @@ def medium_from_params(params: dict, src: str = "<params>") -> FogMedium:
                 src, "bounds_min", f"profile '{name}' has its own bounds; give no bounds_min/max"
             )
         bounds = entry.parse_bounds(params, src)
-    return FogMedium(sigma_t=sigma_t, albedo=albedo, g=g, layers=tuple(layers), bounds=bounds, source=src)
+    return FogMedium(
+        sigma_t=sigma_t, albedo=albedo, g=g, layers=tuple(layers), bounds=bounds, source=src, phase=phase
+    )
+
+
+def phase_from_params(params: dict, src: str = "<params>") -> TabulatedPhase:
+    """The :class:`~fogref.media.phase.TabulatedPhase` of a ``fogtabphase``'s parameters:
+    ``cosines`` and ``values`` (comma-separated strings or sequences of numbers), ``label``.
+
+    >>> phase_from_params({"cosines": "-1, 1", "values": "1, 1"}).values[0] * 4 * 3.141592653589793
+    1.0
+    >>> phase_from_params({"cosines": "-1, x", "values": "1, 1"}, "<doc>")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: <doc>: parameter 'phase.cosines': must be comma-separated numbers
+    """
+    out: dict[str, tuple] = {}
+    for name in ("cosines", "values"):
+        v: Any = params.get(name)
+        try:
+            out[name] = tuple(float(x) for x in (v.replace(",", " ").split() if isinstance(v, str) else v))
+        except (TypeError, ValueError, AttributeError):
+            raise ParameterError(src, f"phase.{name}", "must be comma-separated numbers") from None
+    return TabulatedPhase(
+        out["cosines"], out["values"], label=str(params.get("label", "tabulated")), source=src
+    )

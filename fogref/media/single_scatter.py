@@ -72,7 +72,7 @@ def single_scatter_sun(
         return (zero, zero, zero)
     w_ = tuple(w) if per_sample else ops.params(w)
     cos_theta = d[0] * w_[0] + d[1] * w_[1] + d[2] * w_[2]
-    phase = cf.hg_phase(ops, cos_theta, medium.g)
+    phase = medium.phase_value(ops, cos_theta)
     if tau is None:
         tau = medium.optical_depth(ops, o, d, D)
     tau_sun_o = medium.sun_optical_depth(ops, o, w_)
@@ -258,7 +258,7 @@ def sample_sun_single_scatter_mixture(
     tau = medium._layers_depth(ops, oy, dy, t_rel)
     p = tuple(o[i] + t * d[i] for i in range(3))
     tau_sun = medium.sun_optical_depth(ops, p, w_)
-    phase = cf.hg_phase(ops, d[0] * w_[0] + d[1] * w_[1] + d[2] * w_[2], medium.g)
+    phase = medium.phase_value(ops, d[0] * w_[0] + d[1] * w_[1] + d[2] * w_[2])
     weights = []
     alb_e = [alb * e for alb, e in zip(medium.albedo, E)]
     for s, ae, s_p, log_s, ae_p in zip(sig, alb_e, sig_p, log_sig, ops.params(alb_e)):

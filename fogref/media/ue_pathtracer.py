@@ -87,6 +87,7 @@ __all__ = [
     "DENSITY_CLAMP_DEFAULT",
     "DENSITY_CLAMP_RANGE",
     "DENSITY_EPSILON_PER_CM",
+    "RADIUS_RANGE",
     "Cylinder",
     "UEPathTracerLayer",
     "bounds_from_params",
@@ -97,6 +98,8 @@ __all__ = [
 DENSITY_CLAMP_DEFAULT = 8.0
 #: [PT] clamps the console variable to this range.
 DENSITY_CLAMP_RANGE = (1.0, 256.0)
+#: The fog cylinder's radius [m] (``VolumetricFogDistance`` / 100): what a scene may hold.
+RADIUS_RANGE = (1e-3, 1e7)
 #: [PT]'s ``DensityEpsilon`` [1/cm]: the density at which the cylinder's top is put.
 DENSITY_EPSILON_PER_CM = 1.0e-6
 _CM_PER_M = 100.0
@@ -247,7 +250,7 @@ class Cylinder:
         for name, lo, hi in (
             ("center_x", -1e7, 1e7),
             ("center_z", -1e7, 1e7),
-            ("radius", 1e-3, 1e7),
+            ("radius", *RADIUS_RANGE),
             ("y_min", -2e7, 2e7),
             ("y_max", -2e7, 2e7),
         ):

@@ -60,6 +60,7 @@ from typing import Any
 
 import numpy as np
 
+from fogref import params as P
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, rgb
 from fogref.models._num import dtype_of, grey, sky_pixels, split, unit_direction, view_ray
@@ -108,27 +109,22 @@ class BevyFogParams:
         src = "<BevyFogParams>"
         if self.falloff not in FALLOFFS:
             raise ParameterError(src, "falloff", f"expected one of {FALLOFFS}, got {self.falloff!r}")
-        if not (math.isfinite(self.density) and self.density >= 0):
-            raise ParameterError(src, "density", f"value {self.density} must be finite and >= 0")
-        for name in ("start", "end", "directional_light_exponent"):
-            if not math.isfinite(getattr(self, name)):
-                raise ParameterError(src, name, "must be finite")
-        if self.directional_light_exponent < 0:
-            raise ParameterError(src, "directional_light_exponent", "must be >= 0")
+        for name, lo in (("density", 0.0), ("start", -math.inf), ("end", -math.inf)):
+            object.__setattr__(self, name, P.number(getattr(self, name), name, source=src, lo=lo))
+        e = P.number(self.directional_light_exponent, "directional_light_exponent", source=src, lo=0.0)
+        object.__setattr__(self, "directional_light_exponent", e)
         if self.falloff == "Linear" and not self.end > self.start:
             raise ParameterError(src, "end", f"must be greater than start ({self.end} <= {self.start})")
         for name in ("extinction", "inscattering"):
             object.__setattr__(self, name, rgb(getattr(self, name), name, src, lo=0.0))
         object.__setattr__(self, "light_color", rgb(self.light_color, "light_color", src, lo=0.0))
-        for name in ("color", "directional_light_color"):
-            v = tuple(float(x) for x in getattr(self, name))
-            if len(v) == 3:
-                v = (*v, 1.0)
-            if len(v) != 4 or not all(math.isfinite(x) for x in v):
-                raise ParameterError(src, name, "expected finite (r, g, b, a)")
-            if not 0.0 <= v[3] <= 1.0:
-                raise ParameterError(src, name, f"alpha {v[3]} outside [0, 1]")
-            object.__setattr__(self, name, v)
+        for name in ("color", "directional_light_color"):  # linear RGBA: RGB >= 0, alpha in [0, 1]
+            v = getattr(self, name)
+            if isinstance(v, (str, bytes)) or not hasattr(v, "__len__") or len(v) not in (3, 4):
+                raise ParameterError(src, name, f"expected (r, g, b) or (r, g, b, a), got {v!r}")
+            c = rgb(tuple(v[:3]), name, src, lo=0.0)
+            a = P.number(v[3], f"{name} alpha", source=src, lo=0.0, hi=1.0) if len(v) == 4 else 1.0
+            object.__setattr__(self, name, (*c, a))
         object.__setattr__(
             self, "light_direction", unit_direction(self.light_direction, "light_direction", src)
         )

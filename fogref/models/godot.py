@@ -37,7 +37,8 @@ Units: Godot is y-up, **metres**, the same frame as fogref.  ``fog_density`` [1/
 ``fog_height`` [m], ``fog_height_density`` [1/m] (> 0: fog below ``fog_height``; < 0:
 above).  Colours: ``fog_light_color`` is *linear* RGB here (Godot converts the
 editor's sRGB colour on the CPU: pass ``srgb_to_linear(c)``; the default is Godot's
-default colour converted); ``sun_color`` = the light's linear colour times its energy;
+default colour converted); ``sun_color`` = the light's linear colour times its energy as the
+shader gets it (``light_energy * pi`` without physical light units, ``light_storage.cpp``);
 ``sun_direction`` points **toward** the sun; ``sky_color`` is the sky radiance the
 aerial perspective samples (fogref's skies are constant, so the blurred radiance map is
 that constant).
@@ -69,6 +70,7 @@ from typing import Any
 
 import numpy as np
 
+from fogref import params as P
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, rgb
 from fogref.models._num import dtype_of, glsl_smoothstep, grey, sky_pixels, split, unit_direction, view_ray
@@ -152,24 +154,23 @@ class GodotFogParams:
         src = "<GodotFogParams>"
         if self.fog_mode not in MODES:
             raise ParameterError(src, "fog_mode", f"expected one of {MODES}, got {self.fog_mode!r}")
-        for name in (
-            "fog_light_energy",
-            "fog_sun_scatter",
-            "fog_density",
-            "fog_depth_curve",
-            "z_far",
-            "sky_distance",
-        ):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
-                raise ParameterError(src, name, f"value {v} must be finite and >= 0")
-        for name in ("fog_aerial_perspective", "fog_sky_affect"):
-            v = getattr(self, name)
-            if not 0.0 <= v <= 1.0:
-                raise ParameterError(src, name, f"value {v} outside [0, 1]")
-        for name in ("fog_height", "fog_height_density", "fog_depth_begin", "fog_depth_end"):
-            if not math.isfinite(getattr(self, name)):
-                raise ParameterError(src, name, "must be finite")
+        ranges = {  # (lo, hi, lo open): every number finite (fogref.params.number)
+            "fog_light_energy": (0.0, math.inf, False),
+            "fog_sun_scatter": (0.0, math.inf, False),
+            "fog_density": (0.0, math.inf, False),
+            "fog_depth_curve": (0.0, math.inf, False),
+            "z_far": (0.0, math.inf, True),  # the far plane divides the depth: > 0
+            "sky_distance": (0.0, math.inf, False),
+            "fog_aerial_perspective": (0.0, 1.0, False),
+            "fog_sky_affect": (0.0, 1.0, False),
+            "fog_height": (-math.inf, math.inf, False),
+            "fog_height_density": (-math.inf, math.inf, False),
+            "fog_depth_begin": (-math.inf, math.inf, False),
+            "fog_depth_end": (-math.inf, math.inf, False),
+        }
+        for name, (lo, hi, lo_open) in ranges.items():
+            v = P.number(getattr(self, name), name, source=src, lo=lo, hi=hi, lo_open=lo_open)
+            object.__setattr__(self, name, v)
         if self.fog_mode == "depth" and self.fog_density > 1.0:
             raise ParameterError(src, "fog_density", f"depth mode: {self.fog_density} outside [0, 1]")
         for name in ("fog_light_color", "sun_color", "sky_color"):

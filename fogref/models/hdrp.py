@@ -51,13 +51,15 @@ FROM_PHYSICAL_MAX_FOG_DISTANCE = 1.0e7
 
 @dataclass(frozen=True)
 class HDRPFogParams:
-    """HDRP Fog override (metres).  meanFreePath = "Fog Attenuation Distance"."""
+    """HDRP Fog override (metres).  meanFreePath = "Fog Attenuation Distance".  Defaults are
+    ``Fog.cs``'s (``color = Color.grey``, passed to the shader as it is: linear); fogref models the
+    Constant Color mode (HDRP's default mode is Sky Color)."""
 
     meanFreePath: float = 400.0
     baseHeight: float = 0.0
     maximumHeight: float = 50.0
     albedo: tuple = (1.0, 1.0, 1.0)
-    color: tuple = (0.5, 0.6, 0.7)
+    color: tuple = (0.5, 0.5, 0.5)
     maxFogDistance: float = 5000.0
 
     def __post_init__(self) -> None:

@@ -23,6 +23,10 @@ The colour spaces, from each engine's source:
   (``cb._FogColor = new Color(fogColor.r, fogColor.g, fogColor.b, 0.0f)``): linear.
 * Filament: ``View::FogOptions::color`` is a ``LinearColor``.
 * Bevy: ``Color`` is an enum; fogref writes ``Color::linear_rgba`` (``Color::srgb`` would be sRGB).
+* PlayCanvas: ``scene.fogColor`` is raised to the power 2.2 on the CPU before the shader
+  (``"gamma 2.2"``).
+* Babylon.js: ``scene.fogColor`` goes to the StandardMaterial shader as given: what you type is
+  the shader's value.
 * three.js (r152+, ``ColorManagement.enabled``): ``Color.setRGB(r, g, b, LinearSRGBColorSpace)``
   takes linear values; a hex ``0xRRGGBB`` is sRGB.
 
@@ -100,6 +104,29 @@ TERMS: dict[str, dict[str, Term]] = {
         ),
         "InscatteringLightDirection": Term("unit vector toward the sun, Unreal frame (z-up)"),
         "SunLuminance": Term("lux (the sun light's luminance)"),
+        "ExpFogMatchesVolumetricFog": _MODE,
+        "VolumetricFogScatteringDistribution": Term("1 (the Henyey-Greenstein g)"),
+        "VolumetricFogAlbedo": Term("linear RGB, 0..1", "linear"),
+        "VolumetricFogEmissive": _LIN,
+        "AtmosphereLightIlluminance": Term("linear RGB, scene radiance units x sr", "linear"),
+        "SkyAtmosphereAmbient": _LIN,
+    },
+    "ue5_lfv": {
+        "Location": Term("cm, Unreal frame (z-up)"),
+        "FogUniformScale": Term("cm (the radius)"),
+        "RadialFogExtinction": _PER_M,
+        "HeightFogExtinction": _PER_M,
+        "HeightFogFalloff": Term("editor value; the shader's falloff is max(value, 1)/100 per unit radius"),
+        "HeightFogOffset": Term("unit-sphere units"),
+        "FogAlbedo": Term("linear RGB, 0..1", "linear"),
+        "FogPhaseG": Term("1 (the Henyey-Greenstein g)"),
+        "FogEmissive": _LIN,
+        "FogStartDistance": Term("cm"),
+        "GlobalStartDistance": Term("cm"),
+        "DirectionalLightDirection": Term("unit vector toward the sun, Unreal frame (z-up)"),
+        "DirectionalLightColor": Term("linear RGB illuminance, scene radiance units x sr", "linear"),
+        "SkyLighting": _LIN,
+        "HeightFog": Term("the Exponential Height Fog behind the volume (ue4's parameters)"),
     },
     "unity": {
         "fogMode": _MODE,
@@ -161,10 +188,7 @@ TERMS: dict[str, dict[str, Term]] = {
         "fog_depth_end": _M,
         "z_far": _M,
         "sun_direction": _DIR,
-        "sun_color": Term(
-            "linear RGB: the DirectionalLight3D's light_color (sRGB in the inspector) linearised, "
-            "times its light_energy"
-        ),
+        "sun_color": Term("linear RGB, the shader's light: linearised light_color x light_energy x pi"),
         "sky_color": Term("linear RGB, scene radiance units", "linear"),
         "sky_distance": _M,
     },
@@ -188,6 +212,29 @@ TERMS: dict[str, dict[str, Term]] = {
         "far": _M,
         "density": _PER_M,
         "camera_forward": Term("unit view direction, fogref frame (y-up)"),
+        "output": _MODE,
+        "sky_distance": _M,
+    },
+    "babylon": {
+        "fogMode": _MODE,
+        "fogDensity": _PER_M,
+        "fogStart": _M,
+        "fogEnd": _M,
+        # StandardMaterial uses scene.fogColor in the shader as given, with no conversion
+        "fogColor": _LIN,
+        "sky_distance": _M,
+    },
+    "playcanvas": {
+        "type": _MODE,
+        # the engine raises the colour to the power 2.2 on the CPU before the shader
+        "color": Term("linear RGB, scene radiance units", "gamma 2.2"),
+        "density": _PER_M,
+        "start": _M,
+        "end": _M,
+        "nearClip": _M,
+        "farClip": _M,
+        "camera_forward": Term("unit view direction, fogref frame (y-up)"),
+        "sky_distance": _M,
     },
 }
 
@@ -195,16 +242,22 @@ TERMS: dict[str, dict[str, Term]] = {
 DEFAULTS_FROM: dict[str, str] = {
     "ue4": "Unreal's UExponentialHeightFogComponent constructor "
     "(Engine/Source/Runtime/Engine/Private/Components/ExponentialHeightFogComponent.cpp)",
-    "unity": "Unity's Lighting window fog defaults (RenderSettings: Exp2, density 0.01, start 0 m, "
-    "end 300 m)",
+    "unity": "Unity's Lighting window fog defaults (Unity Manual, Lighting window: Exponential Squared, "
+    "density 0.01, start 0 m, end 300 m, colour (0.5, 0.5, 0.5) sRGB)",
     "hdrp": "HDRP's Fog volume component (com.unity.render-pipelines.high-definition, "
-    "Runtime/Lighting/AtmosphericScattering/Fog.cs)",
+    "Runtime/Lighting/AtmosphericScattering/Fog.cs; fogref models its Constant Color mode)",
     "filament": "Filament's View::FogOptions (filament/include/filament/Options.h)",
     "altitude": "the altitude-fog shader's material defaults",
     "box": "the box-fog shader's material defaults",
     "godot": "Godot 4's Environment (scene/resources/environment.h) and Camera3D's far plane",
     "bevy": "Bevy's DistanceFog::default() (crates/bevy_pbr/src/fog.rs)",
-    "threejs": "three.js's Fog and FogExp2 constructors (src/scenes/Fog.js, src/scenes/FogExp2.js)",
+    "ue5_lfv": "Unreal's ULocalFogVolumeComponent defaults "
+    "(Engine/Source/Runtime/Engine/Classes/Components/LocalFogVolumeComponent.h)",
+    "babylon": "Babylon.js's Scene fog defaults (packages/dev/core/src/scene.ts: fogDensity 0.1, "
+    "fogStart 0, fogEnd 1000, fogColor (0.2, 0.2, 0.3))",
+    "playcanvas": "PlayCanvas's Scene fog defaults (src/scene/scene.js and fog-params.js)",
+    "threejs": "three.js's Fog and FogExp2 constructors (src/scenes/Fog.js, src/scenes/FogExp2.js; "
+    "their colour has no default, fogref's is white)",
 }
 
 #: registry name -> the engine's name in prose.
@@ -218,6 +271,9 @@ ENGINE: dict[str, str] = {
     "godot": "Godot 4",
     "bevy": "Bevy",
     "threejs": "three.js",
+    "ue5_lfv": "Unreal (Local Fog Volume)",
+    "babylon": "Babylon.js",
+    "playcanvas": "PlayCanvas",
 }
 
 
@@ -265,9 +321,13 @@ def ui_colour(model: str, name: str, linear: Sequence[float]) -> tuple[float, ..
     """
     t = term(model, name)
     vals = [float(x) for x in linear]
-    if t is None or t.colour != "sRGB":
+    if t is None or t.colour == "linear":
         return tuple(vals)
-    return linear_to_srgb(vals[:3]) + tuple(vals[3:])
+    if t.colour == "gamma 2.2":
+        return tuple(math.copysign(abs(x) ** (1 / 2.2), x) for x in vals[:3]) + tuple(vals[3:])
+    if t.colour == "sRGB":
+        return linear_to_srgb(vals[:3]) + tuple(vals[3:])
+    return tuple(vals)
 
 
 def _num(x: float) -> str:
@@ -294,7 +354,7 @@ def note(model: str, name: str, value: Any = None) -> str:
         return f"linear; the engine shows {t.colour}"
     vals = list(value) if isinstance(value, (list, tuple, np.ndarray)) else [value]
     ui = ", ".join(_num(v) for v in ui_colour(model, name, vals))
-    return "linear; sRGB in the engine: " + (f"({ui})" if channel is None else ui)
+    return f"linear; {t.colour} in the engine: " + (f"({ui})" if channel is None else ui)
 
 
 def describe(model: str, name: str, value: Any) -> str:

@@ -62,6 +62,7 @@ from typing import Any
 
 import numpy as np
 
+from fogref import params as P
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, rgb
 from fogref.models._num import dtype_of, glsl_smoothstep, grey, sky_pixels, split
@@ -108,14 +109,11 @@ class ThreeFogParams:
             raise ParameterError(src, "output", f"expected one of {OUTPUTS}, got {self.output!r}")
         if not (math.isfinite(self.sky_distance) and self.sky_distance > 0):
             raise ParameterError(src, "sky_distance", f"value {self.sky_distance} must be finite and > 0")
-        if not (math.isfinite(self.density) and self.density >= 0):
-            raise ParameterError(src, "density", f"value {self.density} must be finite and >= 0")
-        for name in ("near", "far"):
-            if not math.isfinite(getattr(self, name)):
-                raise ParameterError(src, name, "must be finite")
+        for name, lo in (("density", 0.0), ("near", -math.inf), ("far", -math.inf)):
+            object.__setattr__(self, name, P.number(getattr(self, name), name, source=src, lo=lo))
         if self.mode == "Fog" and not self.far > self.near:
             raise ParameterError(src, "far", f"must be greater than near ({self.far} <= {self.near})")
-        object.__setattr__(self, "color", rgb(self.color, "color", src))
+        object.__setattr__(self, "color", rgb(self.color, "color", src, lo=0.0))  # linear RGB >= 0
         f = np.asarray(self.camera_forward, dtype=np.float64)
         n = float(np.linalg.norm(f))
         if f.shape != (3,) or not (math.isfinite(n) and n > 0):

@@ -44,12 +44,18 @@ from fogref.models.base import FogResult, register
 MODES = ("linear", "exp", "exp2")
 
 
+#: Unity's default fog colour, (0.5, 0.5, 0.5) in the Lighting window (sRGB, as every Unity ``Color``),
+#: as linear RGB (``Color.linear``, the IEC 61966-2-1 curve).
+DEFAULT_FOG_COLOR = (0.21404114, 0.21404114, 0.21404114)
+
+
 @dataclass(frozen=True)
 class UnityFogParams:
     """RenderSettings fog (Lighting window), Unity units (metres).
 
     fogMode: "linear", "exp" or "exp2".  fogDensity [1/m] (Exp, Exp2).
-    fogStartDistance, fogEndDistance [m] (Linear).  fogColor: linear RGB.
+    fogStartDistance, fogEndDistance [m] (Linear).  fogColor: linear RGB (the Lighting window's
+    sRGB colour linearised, as a Linear-colour-space project does).  Defaults are Unity's.
     fog_coordinate: "depth" or "distance".  camera_forward: fogref-frame unit
     view direction (for "depth").  clip_near, clip_far [m]: if given, the depth
     is remapped as UNITY_Z_0_FAR_FROM_CLIPSPACE does on D3D/Metal/Vulkan.
@@ -59,7 +65,7 @@ class UnityFogParams:
     fogDensity: float = 0.01
     fogStartDistance: float = 0.0
     fogEndDistance: float = 300.0
-    fogColor: tuple = (0.5, 0.5, 0.5)
+    fogColor: tuple = DEFAULT_FOG_COLOR
     fog_coordinate: str = "depth"
     camera_forward: tuple = (0.0, 0.0, -1.0)
     clip_near: float | None = None

@@ -23,9 +23,10 @@ import json
 from pathlib import Path
 
 import fogref
+from fogref import params
 from fogref._version import __version__
 from fogref.cache_dir import default_cache_dir, sources_digest
-from fogref.errors import FogrefError
+from fogref.errors import FogrefError, ParameterError
 from fogref.gbuffer import load_truth
 from fogref.render.inputs import inputs_digest
 from fogref.render.render import render
@@ -157,9 +158,9 @@ def cached_truth(
     """
     over = dict(overrides or {})
     if res is not None:
-        w, h = (int(x) for x in res)
-        if w < 1 or h < 1:
-            raise FogrefError(f"res: {tuple(res)} must be (width, height) >= 1 px")
+        if isinstance(res, (str, bytes)) or not hasattr(res, "__len__") or len(res) != 2:
+            raise ParameterError("cached_truth", "res", f"{res!r}: expected (width, height) [px]")
+        w, h = (params.integer(x, "res", source="cached_truth", lo=1, hi=1 << 16, unit="px") for x in res)
         over.update({"res": w, "resy": h})
     path, _ = render_cached(resolve_scene(scene), spp, seed, over, cache_dir, variant, pixel_filter)
     return load_truth(path)

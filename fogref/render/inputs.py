@@ -146,7 +146,7 @@ def _resolve(name: str, folders: list[Path]) -> Path:
     p = Path(name)
     if not p.is_absolute():
         for base in folders:
-            if (base / p).exists():
+            if _names_file(base / p, "exists"):
                 return Path(os.path.abspath(base / p))
     return Path(os.path.abspath(p))
 
@@ -234,7 +234,7 @@ def scene_inputs(scene, overrides: dict | None = None) -> list[SceneInput]:
     w.file(scene, _global_resolver(), 0, top=True)
     for value, kind, plugin, where, is_filename in w.strings:
         p = _resolve(value, w.top_resolver)
-        if is_filename or p.is_file():
+        if is_filename or _names_file(p, "is_file"):
             w.add(p, kind, where, plugin)
     seen, out = set(), []
     for i in w.found:
@@ -242,6 +242,15 @@ def scene_inputs(scene, overrides: dict | None = None) -> list[SceneInput]:
             seen.add(i.path)
             out.append(i)
     return out
+
+
+def _names_file(p: Path, test: str) -> bool:
+    """``p.exists()`` or ``p.is_file()`` (``test``), False for a string no file can be named
+    by (e.g. a phase table's numbers, longer than the system's path limit)."""
+    try:
+        return bool(getattr(p, test)())
+    except OSError:
+        return False
 
 
 def file_sha256(path) -> str:

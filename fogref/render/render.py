@@ -47,7 +47,6 @@ import contextlib
 import json
 import os
 import re
-import signal
 import sys
 import time
 from pathlib import Path
@@ -165,57 +164,6 @@ class _NoBar:
         pass
 
 
-class _Interrupt:
-    """Ctrl-C and SIGTERM while rendering.
-
-    The first one stops the render after the current pass (checkpointed); a second one
-    stops it now, except inside :meth:`deferred` (the checkpoint write), where it waits
-    until the block ends.  Outside the main thread signals are left alone.
-    """
-
-    SIGNALS = (signal.SIGINT, signal.SIGTERM)
-
-    def __init__(self):
-        self.requested = False
-        self._pending = False
-        self._deferring = 0
-        self._previous = {}
-
-    def __enter__(self):
-        for s in self.SIGNALS:
-            try:
-                self._previous[s] = signal.signal(s, self._handle)
-            except ValueError:  # not the main thread: leave signals alone
-                break
-        return self
-
-    def _handle(self, signum, frame):
-        if not self.requested:
-            self.requested = True
-        elif self._deferring:
-            self._pending = True
-        else:
-            raise KeyboardInterrupt
-
-    @contextlib.contextmanager
-    def deferred(self):
-        """A block that a second signal does not cut: it is raised when the block ends."""
-        self._deferring += 1
-        try:
-            yield
-        finally:
-            self._deferring -= 1
-        if self._pending and not self._deferring:
-            self._pending = False
-            raise KeyboardInterrupt
-
-    def __exit__(self, *exc):
-        for s, previous in self._previous.items():
-            if previous is not None:  # None: a handler installed outside Python, which cannot be restored
-                signal.signal(s, previous)
-        return False
-
-
 def render(
     scene_path,
     out,
@@ -231,6 +179,7 @@ def render(
     scheduler: str | None = None,
     workers: int | None = None,
     keep_moments: bool = True,
+    worker_timeout: float = cluster.WORKER_TIMEOUT,
 ) -> Path:
     """Render ``scene_path`` with ``spp`` samples per pixel into the EXR ``out``.
 
@@ -251,6 +200,8 @@ def render(
                   pixel), so that a later render with more samples adds to them.
     resume:       resume from a checkpoint, and add samples to an existing truth at ``out``
                   (the module doc); False: render afresh.
+    worker_timeout: with ``scheduler``: seconds to wait for its first worker, (0, 1e6] (it says
+                  that it waits; then a one-line error).
 
     Returns the EXR path.  Raises :class:`FogrefError` (or its ParameterError) for bad input,
     and before any work when an output (the EXR, the PNG, the checkpoint) is the scene or a
@@ -264,6 +215,7 @@ def render(
         raise FogrefError(f"--pixel-filter: '{pixel_filter}' is not one of {PIXEL_FILTERS}")
     scheduler = cluster.check_scheduler(scheduler, _SOURCE)
     workers = cluster.check_workers(workers, _SOURCE)
+    worker_timeout = cluster.check_worker_timeout(worker_timeout, _SOURCE)
     on_cluster = scheduler is not None or workers is not None
     scene_path, out = Path(scene_path), Path(out)
     inputs = scene_inputs(scene_path, overrides)
@@ -331,11 +283,11 @@ def render(
     else:  # no bar, no tqdm import (a quiet run's start-up skips it)
         bar = _NoBar()
     t0, last_ckpt, timings = time.perf_counter(), time.perf_counter(), []
-    with _Interrupt() as stop, bar, contextlib.ExitStack() as closing:
+    with cluster.Interrupt() as stop, bar, contextlib.ExitStack() as closing:
         if on_cluster:  # the passes' sums come from Dask workers, in pass order
             j = (scene_path, overrides, digest, variant, seed, pixel_filter)
             source = _cluster_passes(
-                closing, scheduler, workers, out, j, passes, saved, lambda: stop.requested
+                closing, (scheduler, workers, worker_timeout), out, j, passes, saved, stop
             )
         else:
             source = _local_passes(integrator, scene, seed, pixel_filter, passes, saved)
@@ -482,21 +434,25 @@ def _local_passes(integrator, scene, seed: int, pixel_filter: str, passes: list,
         yield k, s, q, time.perf_counter() - ts
 
 
-def _cluster_passes(closing, scheduler, workers, out, render_args: tuple, passes: list, start: int, stop):
+def _cluster_passes(closing, where: tuple, out, render_args: tuple, passes: list, start: int, stop):
     """Passes ``start..`` rendered on Dask workers (:mod:`fogref.render.distributed`): ``(k, sums,
-    squares, seconds)`` in pass order; ``stop()`` true (a Ctrl-C) ends the wait.  ``render_args``:
-    the scene, overrides, inputs digest, variant, seed and pixel filter.  The cluster (a new
-    LocalCluster of ``workers``, or the one of ``scheduler``) is closed when ``closing`` (an
-    ExitStack) ends."""
+    squares, seconds)`` in pass order; ``stop`` (a :class:`fogref.cluster.Interrupt`) requested ends
+    the wait, and a signal while the cluster starts or while its first worker is awaited ends the
+    start at once.  ``where``: the scheduler, the LocalCluster's workers, the seconds to wait for a
+    worker.  ``render_args``: the scene, overrides, inputs digest, variant, seed and pixel filter.
+    The cluster (a new LocalCluster of ``workers``, or the one of ``scheduler``) is closed when
+    ``closing`` (an ExitStack) ends."""
     from fogref.render import distributed
 
     if start >= len(passes):
         return
     log = workers_log_path(out)
-    client, local, threads = cluster.connect(scheduler, workers, log, _SOURCE)
+    scheduler, workers, worker_timeout = where
+    with stop.urgent():
+        client, local, threads = cluster.connect(scheduler, workers, log, _SOURCE, worker_timeout)
     closing.callback(cluster.stop, client, local, log)
     j = distributed.job(*render_args, threads)
-    for r in distributed.passes_in_order(client, j, passes, start, stop=stop):
+    for r in distributed.passes_in_order(client, j, passes, start, stop=lambda: stop.requested):
         yield r["k"], r["sums"], r["squares"], r["seconds"]
 
 

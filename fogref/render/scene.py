@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from fogref import params as P
-from fogref.errors import FogrefError
+from fogref.errors import FogrefError, ParameterError
 from fogref.media.params import medium_from_params
 from fogref.render.scene_defaults import RANGES, parse_scene, resolve, substitute
 from fogref.render.sun import sun_direction_from_to_world
@@ -60,6 +60,22 @@ def _params(el, defaults) -> dict:
     return out
 
 
+def _phase_params(med, defaults, src: str) -> dict:
+    """The heightfog's ``<phase>`` child as medium parameters: an ``hg``'s ``g``, a
+    ``fogtabphase``'s table (``{"phase": {...}}``); other phase plugins are refused (the
+    ``heightfog`` plugin's rule)."""
+    out: dict = {}
+    for ph in med.findall("phase"):
+        kind, p = ph.get("type"), _params(ph, defaults)
+        if kind == "hg":
+            out["g"] = p.get("g", 0.8)  # Mitsuba's hg default
+        elif kind == "fogtabphase":
+            out["phase"] = {"type": kind, **p}
+        else:
+            raise ParameterError(src, "phase", f"'{kind}': heightfog takes hg or fogtabphase")
+    return out
+
+
 def describe_scene(path, overrides: dict | None = None) -> dict:
     """Fog, sun, sky and camera of a fogref XML scene, validated, as plain data.
 
@@ -91,6 +107,7 @@ def describe_scene(path, overrides: dict | None = None) -> dict:
     for med in root.iter("medium"):
         if med.get("type") == "heightfog":
             params = _params(med, defaults)
+            params.update(_phase_params(med, defaults, f"{path}: medium"))
             medium_from_params(params, f"{path}: medium '{med.get('id') or med.get('name') or 'heightfog'}'")
             desc["medium"] = params
     for em in root.iter("emitter"):

@@ -47,6 +47,7 @@ __all__ = [
     "diffuse",
     "geometry",
     "ground",
+    "ground_tiles",
     "sub",
     "valley_ground_size",
 ]
@@ -155,13 +156,49 @@ def diffuse(parent, bsdf_id: str, reflectance: str, twosided: bool = False):
     sub(inner, "rgb", name="reflectance", value=reflectance)
 
 
+#: Half-size [m] of the ground's central tile (:func:`ground`).
+GROUND_TILE = 8.0
+#: Each ring of ground tiles is this many times wider than the one inside it.
+GROUND_GROWTH = 4.0
+
+
+def ground_tiles(size: float) -> list[tuple[float, float, float, float]]:
+    """The rectangles ``(cx, cz, hx, hz)`` [m] (centre and half-sizes in x and z) that tile the
+    ground ``[-size, size]^2``: a square of half-size :data:`GROUND_TILE` (or ``size``) at the
+    origin, then square rings, each :data:`GROUND_GROWTH` times wider than the last, of four
+    rectangles each.  A point at ``(x, z)`` lies in a rectangle whose half-sizes are at most
+    ``GROUND_GROWTH * max(|x|, |z|, GROUND_TILE)``.
+
+    >>> ground_tiles(8.0)
+    [(0.0, 0.0, 8.0, 8.0)]
+    >>> len(ground_tiles(1e5)), ground_tiles(32.0)[1]
+    (29, (0.0, 20.0, 32.0, 12.0))
+    """
+    edges = [min(GROUND_TILE, float(size))]
+    while edges[-1] < size:
+        edges.append(min(edges[-1] * GROUND_GROWTH, float(size)))
+    tiles = [(0.0, 0.0, edges[0], edges[0])]
+    for r, R in zip(edges, edges[1:]):
+        mid, half = (r + R) / 2, (R - r) / 2
+        tiles += [(0.0, mid, R, half), (0.0, -mid, R, half), (mid, 0.0, half, r), (-mid, 0.0, half, r)]
+    return tiles
+
+
 def ground(parent, size: float, bsdf_id: str, shape_id: str = "ground"):
-    """A ground rectangle at y = 0 of half-size ``size`` [m]."""
-    s = sub(parent, "shape", type="rectangle", id=shape_id)
-    tw = sub(s, "transform", name="to_world")
-    sub(tw, "rotate", x="1", angle="-90")
-    sub(tw, "scale", value=_fmt(size))
-    sub(s, "ref", id=bsdf_id)
+    """A ground at y = 0 over ``[-size, size]^2`` [m], of the rectangles of :func:`ground_tiles`
+    (ids ``ground``, ``ground_1``, ...).
+
+    One rectangle of half-size 1e5 m put its hit points up to 1 cm off the plane's true
+    intersection (float32 Mitsuba, LLVM): the error scales with the size of the shape that is hit.
+    Tiles keep it at float32 rounding of the hit point's own coordinates."""
+    for k, (cx, cz, hx, hz) in enumerate(ground_tiles(size)):
+        s = sub(parent, "shape", type="rectangle", id=shape_id if k == 0 else f"{shape_id}_{k}")
+        tw = sub(s, "transform", name="to_world")
+        sub(tw, "scale", x=_fmt(hx), y=_fmt(hz), z="1")
+        sub(tw, "rotate", x="1", angle="-90")
+        if cx or cz:
+            sub(tw, "translate", x=_fmt(cx), y="0", z=_fmt(cz))
+        sub(s, "ref", id=bsdf_id)
 
 
 def _valley_root() -> ET.Element:

@@ -41,6 +41,8 @@ from fogref.mapping.fog_input import (
 )
 from fogref.mapping.unreal_editor import UNREAL_IGNORED, UNREAL_IGNORED_RANGES, UNREAL_MAPPED, fog_from_unreal
 from fogref.mapping.unreal_editor import flat_unreal as _flat_unreal
+from fogref.media.params import medium_from_params
+from fogref.media.phase import TabulatedPhase
 from fogref.render.scene_defaults import RANGES, check_camera
 from fogref.render.scene_templates import (
     GROUND_SIZE,
@@ -150,6 +152,8 @@ def write_scene(
     mesh_reflectance=None,
     overwrite: bool = False,
     on_note: Callable[[str], None] | None = None,
+    phase: TabulatedPhase | None = None,
+    notes: tuple = (),
 ) -> SceneWriteResult:
     """Write a fogref scene XML (fogpath + heightfog) from fog, sun, sky, camera and geometry.
 
@@ -217,6 +221,12 @@ def write_scene(
     on_note : callable, optional
         Called with each note (the command line prints them); default: a
         :class:`UserWarning` for each ignored Unreal value.
+    phase : TabulatedPhase, optional
+        A tabulated phase function (e.g. a droplet fog's Mie phase,
+        :func:`fogref.mapping.droplet_fog.droplet_fog`), written as the medium's
+        ``fogtabphase``; ``g`` must then be its mean cosine (within 1e-3).
+    notes : sequence of str
+        More notes for the scene's comments (e.g. where the fog's values come from).
 
     Returns
     -------
@@ -263,7 +273,10 @@ def write_scene(
         fogp, ignored = fog_from_unreal(unreal, **scatter)
     else:
         fogp = fog_from_physical(fog, **scatter)
-    notes = list(ignored)
+    notes = list(ignored) + list(notes)
+    if phase is not None:
+        fogp["phase"] = phase.as_params()
+        medium_from_params(fogp, SOURCE)  # g against the phase's mean cosine
     if unreal is not None:
         notes.append(
             f"Unreal has no albedo or phase function: the fog uses albedo {_text(fogp['albedo'])} "
@@ -349,6 +362,11 @@ def write_scene(
     defaults = scene_defaults(fogp, cam, depth, el, az, sun, sky, geo.kind, reflectance=refl)
     if sky_kind == "sunsky":
         defaults["turbidity"] = _fmt(_check(turbidity, "turbidity", RANGES["turbidity"]))
+        if el < 0:
+            notes.append(
+                f"the sun is {_fmt(-el)} deg below the horizon: Mitsuba's sunsky then gives no light "
+                "(no sun, a black sky): the truth is black"
+            )
         if sun_angular_diameter is None:
             sun_angular_diameter = 0.0
     if sun_angular_diameter is not None:

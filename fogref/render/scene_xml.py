@@ -131,6 +131,12 @@ def _sensor(root, fog: dict) -> None:
         if tag is None:  # grey: one number (like valley.xml); RGB: three (like above_fog.xml)
             tag = "rgb" if isinstance(fog[k], list) else "float"
         sub(med, tag, name="height" if k == "fog_height" else k, value=f"${k}")
+    if "phase" in fog:  # a tabulated phase (fogtabphase): written as is, not a $default
+        phase = fog["phase"]
+        med.append(ET.Comment(f" the phase function: {phase['label']} (g above is its mean cosine) "))
+        el = sub(med, "phase", type=phase["type"])
+        for name in ("label", "cosines", "values"):
+            sub(el, "string", name=name, value=phase[name])
 
 
 def _lights(root, sky) -> None:

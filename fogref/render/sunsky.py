@@ -17,11 +17,11 @@ fogref splits it (:func:`lower_sunsky`, before Mitsuba loads the scene):
   scene's ``sun_scale``; fogpath gives it the size ``sun_angular_diameter`` (its integrator
   parameter; 0: a delta).
 
-So neither is counted twice.  The sun disk is not drawn where a camera ray sees it
-directly (as with the delta sun); every other path counts it once, through next-event
-estimation.  Mitsuba's RGB sun radiance is uniform over the disk (the limb darkening of its
-RGB dataset cancels at these angles: the disk quadrature equals the centre radiance times the
-disk's solid angle to 1e-6); its own next-event weight ``eval / pdf`` uses a float32 solid
+So neither is counted twice.  A camera ray that reaches the sky through a sun with a size sees
+its disk (fogpath adds ``E / Omega`` there; a delta sun is not seen); every other path counts it
+once, through next-event estimation.  Mitsuba's RGB sun radiance is uniform over the disk (the
+limb darkening of its RGB dataset cancels at these angles: the disk quadrature equals the centre
+radiance times the disk's solid angle to 1e-6); its own next-event weight ``eval / pdf`` uses a float32 solid
 angle, 0.2 % below the float64 integral at 0.5358 deg.
 """
 

@@ -8,6 +8,7 @@ Modules (one concept each):
   path-traced truth to Unreal, one effect per step
 * :mod:`~fogref.study.unreal`  the Unreal study: fit + comparison + budget + README
 * :mod:`~fogref.study.sweep`   declarative error studies over many configurations, on Dask
+* :mod:`~fogref.study.droplet_phase` what HG and the engines' lobe cost in droplet fog
 
 The command lines (``fogref fit``, ``fogref study``, ``fogref sweep``) are
 :mod:`fogref.cli.fit`, :mod:`fogref.cli.study` and :mod:`fogref.cli.sweep`.

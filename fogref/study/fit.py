@@ -26,12 +26,16 @@ from fogref.shipped_scenes import SCENES_DIR, resolve_scene
 
 def physical_from_scene(path, camera=None) -> PhysicalScene:
     """The physical scene of a fogref XML file (no Mitsuba needed): fog, sun, sky and
-    the sensor's ``lookat`` origin (``camera`` [m] overrides it)."""
+    the sensor's ``lookat`` origin (``camera`` [m] overrides it) and view direction."""
     desc = describe_scene(path)
     if desc["medium"] is None:
         raise FogrefError(f'{path}: no <medium type="heightfog"> in the scene')
+    look = lookat_camera(path)
+    if not desc.get("camera") and look is not None:
+        forward = np.subtract(look["target"], look["origin"])
+        desc = {**desc, "camera": {"origin": look["origin"], "forward": forward.tolist()}}
     if camera is None:
-        camera = (desc.get("camera") or {}).get("origin") or (lookat_camera(path) or {}).get("origin")
+        camera = (desc.get("camera") or {}).get("origin")
     return PhysicalScene.from_params(desc, camera)
 
 

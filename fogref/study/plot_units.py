@@ -3,8 +3,9 @@
 A metric ``<part>.<region>.<name>`` of a sweep's table is in its part's units: radiance (the
 scene's units) for ``final``, ``inscatter``, ``attenuated_surface`` and ``composite``, 1 for
 ``transmittance``; relative metrics, ΔE2000 and FLIP are dimensionless.  A swept parameter's unit
-is known for the scene's ``$default`` names and Unreal's parameters below, else the label says
-the value is as written in SWEEP.toml.
+is known for the scene's ``$default`` names below and for the built-in models' parameters
+(:mod:`fogref.models.terms`, where a name has one unit across the models), else the label says the
+value is as written in SWEEP.toml.
 
 Examples
 --------
@@ -14,25 +15,24 @@ Examples
 'transmittance.all.rmse [1]'
 >>> parameter_label("sun_elevation"), parameter_label("something")
 ('sun_elevation [degrees]', 'something (as in SWEEP.toml)')
+>>> parameter_label("ue4.StartDistance")
+'ue4.StartDistance [cm]'
 """
 
 from __future__ import annotations
 
-#: Units of swept parameters fogref knows (scene ``$default`` names, Unreal's fog parameters).
+from fogref.models.terms import TERMS
+
+#: Units of the scene ``$default`` names a sweep may vary (a model's parameters: :mod:`fogref.models.terms`).
 PARAMETER_UNITS = {
     "sun_elevation": "degrees",
     "sun_azimuth": "degrees",
     "g": "1, Henyey-Greenstein asymmetry",
-    "FogHeightFalloff": "Unreal's FogHeightFalloff: falloff = 0.0693147 × value [1/m]",
     "falloff": "1/m",
     "density": "1/m",
     "sigma_t": "1/m",
     "albedo": "1",
     "fov": "degrees",
-    "FogDensity": "Unreal's FogDensity",
-    "StartDistance": "cm",
-    "FogCutoffDistance": "cm",
-    "FogMaxOpacity": "1",
     "spp": "samples per pixel",
 }
 DIMENSIONLESS = ("relmse", "rel_", "delta_e2000", "flip")
@@ -66,5 +66,9 @@ def metric_label(metric: str) -> str:
 
 def parameter_label(name: str) -> str:
     """A swept parameter with its unit (a model parameter ``label.name`` by its ``name``)."""
-    unit = PARAMETER_UNITS.get(name) or PARAMETER_UNITS.get(name.rsplit(".", 1)[-1])
+    last = name.rsplit(".", 1)[-1]
+    unit = PARAMETER_UNITS.get(name) or PARAMETER_UNITS.get(last)
+    if not unit:
+        units = {t.unit for m in TERMS.values() if (t := m.get(last)) is not None and t.unit}
+        unit = units.pop() if len(units) == 1 else None
     return f"{name} [{unit}]" if unit else f"{name} (as in SWEEP.toml)"

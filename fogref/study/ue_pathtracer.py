@@ -42,7 +42,7 @@ from fogref.mapping.unreal_pathtracer import (
     pathtracer_medium,
     settings_from,
 )
-from fogref.media import NP, hg_phase, single_scatter_sun
+from fogref.media import NP, single_scatter_sun
 from fogref.models.base import SKY_DISTANCE
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
 
@@ -113,7 +113,7 @@ def sun_single_scatter(medium, views: Views, w, E: float = 1.0, t_cap: float = 2
     wv = tuple(np.full(flat[0].shape, c) for c in w)
     tau_sun = medium.optical_depth(NP, flat, wv, NP.largest)
     cos = d[0] * w[0] + d[1] * w[1] + d[2] * w[2]
-    p = hg_phase(NP, cos, medium.g)
+    p = medium.phase_value(NP, cos)
     f = sig * rho * np.exp(-sig * (tau + tau_sun))
     out = (f.reshape(wt.shape) * wt).sum(axis=(1, 2)) * medium.albedo[0] * p * E
     return np.where(ok & (w[1] > 0), out, 0.0)

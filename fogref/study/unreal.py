@@ -35,9 +35,11 @@ from fogref.errors import FogrefError
 from fogref.gbuffer import Truth, load_truth
 from fogref.mapping import PhysicalScene, fit_unreal
 from fogref.mapping.build import build_model
+from fogref.models.terms import note, unreal_field
 from fogref.render.cache import render_cached
 from fogref.render.render import file_sha256
 from fogref.render.scene_defaults import overrides_used_by as used
+from fogref.shipped_scenes import SCENES_DIR
 from fogref.study import budget as B
 
 #: What-if variants of the engine settings (Unreal units, cm).
@@ -186,7 +188,7 @@ def run_study(
     compare_report: bool = True,
     settings: dict | None = None,
     log=print,
-    open_plane: str | None = "scenes/open_plane.xml",
+    open_plane: str | Path | None = SCENES_DIR / "open_plane.xml",
 ) -> dict:
     """Run the whole study; returns the summary dict (also written as ``summary.json``).
 
@@ -284,7 +286,11 @@ def run_study(
     engine = B.unreal_engine(lobe.params, model_params)
     parts_a = B.shapley_parts(truth, sa.single, pf, engine)
     parts_b = B.shapley_parts(tb, sb.single, pf, engine)
-    for key, effects in (("shapley", B.EFFECTS), ("shapley_colours_in_lobe", B.EFFECTS_COLOURS_IN_LOBE)):
+    with_phase = B.phase_effect(pf)  # droplet fogs: their phase vs HG(g)
+    for key, effects in (
+        ("shapley", B.EFFECTS + with_phase),
+        ("shapley_colours_in_lobe", B.EFFECTS_COLOURS_IN_LOBE + with_phase),
+    ):
         res[key] = B.add_shapley_seed_noise(
             B.shapley_budget(parts_a, valid, effects), B.shapley_budget(parts_b, valid, effects, resamples=0)
         )
@@ -376,11 +382,12 @@ def readme(summary: dict, res: dict) -> str:
         "",
         "## Unreal settings used (derived from the physical fog)",
         "",
-        "| property | value |",
-        "|---|---|",
+        "| property | value | unit or colour space |",
+        "|---|---|---|",
     ]
     for k, v in ed.items():
-        lines.append(f"| {k} | {col(v) if isinstance(v, list) else f'{v:.6g}'} |")
+        unit = note("ue4", unreal_field(k), v) or "1"
+        lines.append(f"| {k} | {col(v) if isinstance(v, list) else f'{v:.6g}'} | {unit} |")
     lines += [
         "",
         "Density, falloff and height: exact mapping (`medium_to_ue4`).  Colours, exponent and "

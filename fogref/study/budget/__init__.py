@@ -15,7 +15,9 @@ of renders, the seed-to-seed difference.  **Second, the telescoping chain** belo
 **Every model** (:func:`run_budget`): the same Shapley game with another model's engine side
 (:func:`model_engine`: its transmittance and inscatter, the sun lobe split off with
 :attr:`fogref.mapping.free.FitSpec.sun_off`), over the effects that apply to it
-(:func:`applicable_effects`: Unreal's start distances and opacity/cutoff are Unreal's own).
+(:func:`applicable_effects`: Unreal's start distances and opacity/cutoff are Unreal's own; a
+droplet fog adds the player "phase" [p], :data:`PHASE`: its phase vs HG(g) in the sun's single
+scattering).
 
 A chain of images ``S_0 .. S_K`` goes from the ground truth (``S_0``, the EXR's
 ``R,G,B``) to what Unreal computes (``S_K``), switching **one** effect at a time.
@@ -75,6 +77,7 @@ from fogref.study.budget.effects import _CONFIG as _CONFIG
 from fogref.study.budget.effects import (
     EFFECTS,
     EFFECTS_COLOURS_IN_LOBE,
+    PHASE,
     RENDERED,
     STEPS,
     closed_forms,
@@ -85,6 +88,7 @@ from fogref.study.budget.engines import (
     UNREAL_ONLY,
     applicable_effects,
     model_engine,
+    phase_effect,
     run_budget,
     unreal_engine,
 )
@@ -104,6 +108,7 @@ __all__ = [
     "BOOTSTRAP_RESAMPLES",
     "EFFECTS",
     "EFFECTS_COLOURS_IN_LOBE",
+    "PHASE",
     "RENDERED",
     "STEPS",
     "UNREAL_ONLY",
@@ -118,6 +123,7 @@ __all__ = [
     "footprint_check",
     "markdown",
     "model_engine",
+    "phase_effect",
     "plot",
     "run_budget",
     "shapley_budget",

@@ -32,6 +32,13 @@ STEPS: tuple[tuple[str, str, str], ...] = (
     ("float32", "h", "float32 shader arithmetic"),
 )
 
+#: The droplets' phase against HG of its mean cosine: a Shapley player of droplet fogs only (a
+#: tabulated phase, :func:`applicable <fogref.study.budget.engines.applicable_effects>`), not a
+#: step of the chain.  It switches the sun's single scattering from the fog's phase to ``HG(g)``
+#: (one factor per camera ray: the sun is a delta); the sky's and multiple scattering keep the
+#: fog's phase, their share stays in "lobe" and "multiple".
+PHASE: tuple[str, str, str] = ("phase", "p", "droplets' phase vs HG(g) (the sun's single scattering)")
+
 #: Steps whose images come from renders (carry Monte Carlo noise).
 RENDERED = ("multiple", "shadows", "sky")
 
@@ -59,7 +66,7 @@ def closed_forms(truth: Truth, pf) -> dict:
     sun_att = np.stack(single_scatter_sun(NP, m, o, d, D, w, tuple(E)), -1)
     if w[1] > 0:
         cos = d[0] * w[0] + d[1] * w[1] + d[2] * w[2]
-        sun_noatt = alb * E * hg_phase(NP, cos, m.g)[:, None] * (1.0 - T)
+        sun_noatt = alb * E * m.phase_value(NP, cos)[:, None] * (1.0 - T)
     else:
         sun_noatt = np.zeros_like(T)
     sky = np.stack(single_scatter_sky(NP, m, o, d, D, pf.sky_radiance or (0.0, 0.0, 0.0)), -1)
@@ -79,6 +86,13 @@ def shapley_parts(truth: Truth, sky_single: np.ndarray, pf, engine, sky_distance
     2^4 configurations of :data:`_CONFIG` (``engine``: e.g. :func:`unreal_engine`).
     """
     cf = closed_forms(truth, pf)
+    ratio = None
+    if pf.medium.phase is not None and pf.sun_direction[1] > 0:  # HG(g) / the droplets' phase
+        _, d, _ = truth.rays()
+        w = pf.sun_direction
+        cos = d[0] * w[0] + d[1] * w[1] + d[2] * w[2]
+        r = hg_phase(NP, cos, pf.medium.g) / pf.medium.phase_value(NP, cos)
+        ratio = r.reshape(*truth.shape, 1)
     eng = {}
     for bits in itertools.product((False, True), repeat=len(_CONFIG)):
         eng[bits] = engine(truth, dict(zip(_CONFIG, bits)), sky_distance)
@@ -92,6 +106,7 @@ def shapley_parts(truth: Truth, sky_single: np.ndarray, pf, engine, sky_distance
         "sun_att": cf["sun_att"],
         "sun_noatt": cf["sun_noatt"],
         "sky_cf": cf["sky"],
+        "phase_ratio": ratio,
         "engine": eng,
     }
 
@@ -108,6 +123,8 @@ def coalition_image(parts: dict, coalition, fixed=()) -> np.ndarray:
       attenuated unless "sun_attenuation" [b] is in;
     * sky: if "lobe": the engine's other inscatter; else the rendered ``sky_single``, or with
       "sky" [c] the closed form ``alpha L_sky (1 - T)``;
+    * phase [p] (droplet fogs, :data:`PHASE`): while the sun is physical, its single
+      scattering times ``HG(g) / p`` per pixel;
     * surface: the truth's ``attenuated_surface`` (with "lobe": ``surface T_engine`` of the
       plain configuration), plus ``surface (T_engine(config) - T_engine(plain))`` for the
       configuration effects (start distances, opacity/cutoff, float32);
@@ -137,5 +154,7 @@ def coalition_image(parts: dict, coalition, fixed=()) -> np.ndarray:
         else:
             sun = parts["sun_render"]
         sky = parts["sky_cf"] if "sky" in C else parts["sky_render"]
+        if "phase" in C and parts.get("phase_ratio") is not None:
+            sun = sun * parts["phase_ratio"]
     img = surf + sun + sky
     return img if "multiple" in C else img + parts["multiple"]

@@ -107,15 +107,21 @@ def model_engine(model, lobe_model=None):
     return engine
 
 
-def applicable_effects(model, lobe_model=None) -> tuple[str, ...]:
+def applicable_effects(model, lobe_model=None, pf=None) -> tuple[str, ...]:
     """The effects of :data:`EFFECTS` that apply to ``model``: all of them for Unreal; without
     Unreal's start distances and opacity/cutoff for the others; without "refit" when there is
-    no separate ``lobe_model``."""
+    no separate ``lobe_model``; with "phase" (:data:`~fogref.study.budget.effects.PHASE`) when
+    the fog of ``pf`` has a tabulated phase (droplets)."""
     name = getattr(model, "name", None)
     out = [k for k in EFFECTS if name == "ue4" or k not in UNREAL_ONLY]
     if lobe_model is None:
         out.remove("refit")
-    return tuple(out)
+    return tuple(out) + phase_effect(pf)
+
+
+def phase_effect(pf) -> tuple[str, ...]:
+    """``("phase",)`` when the fog of ``pf`` has a tabulated phase (droplets), else ``()``."""
+    return ("phase",) if pf is not None and pf.medium.phase is not None else ()
 
 
 def run_budget(
@@ -148,6 +154,7 @@ def run_budget(
         engine = model_engine(model, lobe_model)
     parts = shapley_parts(truth, sky_single, pf, engine, sky_distance)
     valid = truth.surface_valid if valid is None else valid
-    out = shapley_budget(parts, valid, applicable_effects(model, lobe_model), resamples=resamples, seed=seed)
+    effects = applicable_effects(model, lobe_model, pf)
+    out = shapley_budget(parts, valid, effects, resamples=resamples, seed=seed)
     out["model"] = name
     return out

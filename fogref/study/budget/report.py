@@ -19,6 +19,32 @@ def _floor(s: dict) -> str:
     return f"{s['rmse_noise_floor']:.2g}" + (" (below the noise)" if s["below_noise"] else "")
 
 
+def validation_paragraphs(result: dict) -> list[str]:
+    """How the budget's 'shadows' step was checked (the pixel footprint, the closed form on an open
+    plane), one paragraph each (Markdown: code in backticks); empty when the result has neither."""
+    out = []
+    fc = result.get("footprint")
+    if fc:
+        out.append(
+            f"Pixel footprint: {100 * fc['pixel_fraction']:.2g} % of the pixels straddle an edge "
+            "(their "
+            f"closed-form T differs from the EXR's by more than {fc['tolerance']}); they hold "
+            f"{100 * fc['share_of_step_sq']:.2g} % of the squared '{fc['step']}' step, so that step is "
+            "not an artefact of per-pixel (G-buffer) evaluation."
+        )
+    oc = result.get("open_plane_check")
+    if oc:
+        out.append(
+            f"Closed-form check on `{oc['scene']}` (no occluders, {oc['resolution'][0]}×"
+            f"{oc['resolution'][1]}, {oc['spp']} spp): the 'shadows' step there is RMSE "
+            f"{oc['shadows_rmse']:.3g} against an expected pure-noise level of {oc['noise_rmse']:.3g} "
+            f"(mean {oc['shadows_mean']:+.2g} vs single-scattering RMS {oc['single_rms']:.3g}): "
+            "the closed-form sun "
+            "single scattering matches the path tracer where nothing casts shadows."
+        )
+    return out
+
+
 def markdown(result: dict, title: str = "Error budget of Unreal's exponential height fog") -> str:
     """The budget table as Markdown."""
     t = result["total"]
@@ -93,27 +119,8 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
             "0; StartDistance 0, FogMaxOpacity 1 and FogCutoffDistance 0 are the editor defaults); the "
             "*What if* table below measures them switched on.",
         ]
-    fc = result.get("footprint")
-    if fc:
-        lines += [
-            "",
-            f"Pixel footprint: {100 * fc['pixel_fraction']:.2g} % of the pixels straddle an edge "
-            "(their "
-            f"closed-form T differs from the EXR's by more than {fc['tolerance']}); they hold "
-            f"{100 * fc['share_of_step_sq']:.2g} % of the squared '{fc['step']}' step, so that step is "
-            "not an artefact of per-pixel (G-buffer) evaluation.",
-        ]
-    oc = result.get("open_plane_check")
-    if oc:
-        lines += [
-            "",
-            f"Closed-form check on `{oc['scene']}` (no occluders, {oc['resolution'][0]}×"
-            f"{oc['resolution'][1]}, {oc['spp']} spp): the 'shadows' step there is RMSE "
-            f"{oc['shadows_rmse']:.3g} against an expected pure-noise level of {oc['noise_rmse']:.3g} "
-            f"(mean {oc['shadows_mean']:+.2g} vs single-scattering RMS {oc['single_rms']:.3g}): "
-            "the closed-form sun "
-            "single scattering matches the path tracer where nothing casts shadows.",
-        ]
+    for text in validation_paragraphs(result):
+        lines += ["", text]
     if result.get("what_if"):
         lines += [
             "",
@@ -173,9 +180,40 @@ def shapley_markdown(sh: dict, title: str = "## Shapley budget (order-independen
     return "\n".join(lines)
 
 
+def _bar_labels(ax, y, values, errors) -> None:
+    """Label horizontal bars with their value in % beyond the end of the bar and its error bar,
+    widening the axis so that every label lies inside it (none over the tick labels or another
+    axis); a share that rounds to 0.0 % is written "0 %"."""
+    values, errors = np.asarray(values, dtype=float), np.asarray(errors, dtype=float)
+    lo, hi = min(0.0, float((values - errors).min())), max(0.0, float((values + errors).max()))
+    pad = 0.2 * (hi - lo or 1.0)  # room for a label of about 7 characters at this width
+    ax.set_xlim(lo - (pad if (values < 0).any() else 0.05 * pad), hi + pad)
+    for yy, v, e in zip(y, values, errors):
+        right = v >= 0 or abs(v) < 0.05
+        ax.annotate(
+            "0 %" if abs(v) < 0.05 else f"{v:+.1f} %",
+            (v + e if right else v - e, yy),
+            xytext=(3 if right else -3, 0),
+            textcoords="offset points",
+            va="center",
+            ha="left" if right else "right",
+            fontsize=8,
+        )
+
+
 def plot(result: dict, path) -> None:
+    """``budget.png``: :func:`budget_figure` of ``result``."""
+    import matplotlib.pyplot as plt
+
+    fig = budget_figure(result)
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def budget_figure(result: dict):
     """Bar charts: the Shapley shares first (with their noise, when ``result["shapley"]``), then
-    each chain step's RMSE (with noise bars) and its chain share of the total."""
+    each chain step's RMSE (with noise bars) and its chain share of the total; each share labelled
+    beside its bar, inside its axis."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -200,8 +238,7 @@ def plot(result: dict, path) -> None:
         a0.set_xlabel(
             "Shapley share of the squared error [%]\nall coalitions, order-free; bars: bootstrap noise"
         )
-        for yy, v in zip(y, sv):
-            a0.text(v, yy, f" {v:+.1f}%", va="center", ha="left" if v >= 0 else "right", fontsize=8)
+        _bar_labels(a0, y, sv, se)
         a0.grid(axis="x", alpha=0.3)
     else:
         fig, ax = plt.subplots(1, 2, figsize=(14, 4.6), sharey=True)
@@ -213,13 +250,11 @@ def plot(result: dict, path) -> None:
     ax[1].barh(y, share, color=["#c0504d" if v > 0 else "#9bbb59" for v in share])
     ax[1].axvline(0, color="k", lw=0.8)
     ax[1].set_xlabel("chain share of the total squared error [%]\n⟨Δ_k, E⟩/⟨E, E⟩, sums to 100")
-    for yy, v in zip(y, share):
-        ax[1].text(v, yy, f" {v:+.1f}%", va="center", ha="left" if v >= 0 else "right", fontsize=8)
+    _bar_labels(ax[1], y, share, [0.0] * len(share))
     for a in ax:
         a.grid(axis="x", alpha=0.3)
     fig.suptitle(
         f"Unreal exponential height fog: error budget (total RMSE {result['total']['rmse']['all']:.4g})"
     )
     fig.tight_layout()
-    save_figure(fig, path)
-    plt.close(fig)
+    return fig

@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from fogref.study.budget.effects import _CONFIG, EFFECTS, STEPS, coalition_image
+from fogref.study.budget.effects import _CONFIG, EFFECTS, PHASE, STEPS, coalition_image
 
 #: Side of the square pixel blocks of the bootstrap [pixels].
 BOOTSTRAP_BLOCK = 16
@@ -141,7 +141,7 @@ def shapley_budget(
         if tb > 0:
             shares_b.append(pb / tb)
     noise = np.std(np.array(shares_b), axis=0) if shares_b else np.zeros(len(effects))
-    meta = {s[0]: s for s in STEPS}
+    meta = {s[0]: s for s in (*STEPS, PHASE)}
     rows = []
     for i, k in enumerate(effects):
         _, letter, label = meta.get(k, (k, "?", k))

@@ -213,18 +213,24 @@ def run_sweep(
     failed = 0
     if todo:
         log = out / WORKER_LOG
-        client, local, threads = cluster.connect(scheduler, n_workers, log, _SOURCE)
-        threads = drjit_threads or threads
-        try:
-            failed = _run(client, todo, configs, spec, threads, cdir, progress)
-        except KeyboardInterrupt:
-            cluster.stop(client, local, log)
-            done = sum(read_result(cdir / f"{c['id']}.json", c)[0] is not None for c in configs)
-            where = f"; the workers' output is in {log}" if local is not None else ""
-            raise SweepInterrupted(
-                f"fogref sweep: interrupted with {done} of {len(configs)} configurations "
-                f"done; the cluster is stopped{where}; run the same command again to resume"
-            ) from None
+        client = local = None
+        # every Ctrl-C or SIGTERM raises at once and is remembered: one that a library swallowed
+        # while the configurations ran still ends the sweep as interrupted
+        with cluster.Interrupt() as stop, stop.urgent():
+            try:
+                client, local, threads = cluster.connect(scheduler, n_workers, log, _SOURCE)
+                failed = _run(client, todo, configs, spec, drjit_threads or threads, cdir, progress)
+                if stop.requested:
+                    raise KeyboardInterrupt
+            except KeyboardInterrupt:
+                if client is not None:
+                    cluster.stop(client, local, log)
+                done = sum(read_result(cdir / f"{c['id']}.json", c)[0] is not None for c in configs)
+                where = f"; the workers' output is in {log}" if scheduler is None else ""
+                raise SweepInterrupted(
+                    f"fogref sweep: interrupted with {done} of {len(configs)} configurations "
+                    f"done; the cluster is stopped{where}; run the same command again to resume"
+                ) from None
         cluster.stop(client, local, log)
     wall = time.perf_counter() - t0
     info = write_table(spec, configs)

@@ -1,0 +1,210 @@
+// fogref's Babylon.js page: renders one view of a fogref scene with the real Babylon.js and returns
+// its pixels (the page protocol of fogref/engines/__init__.py).  Loaded from file:// by
+// fogref/engines/browser.py, with an import map that points "@babylonjs/core" at node_modules.
+import * as BABYLON from "@babylonjs/core";
+
+const MODES = { LINEAR: BABYLON.Scene.FOGMODE_LINEAR, EXP: BABYLON.Scene.FOGMODE_EXP,
+                EXP2: BABYLON.Scene.FOGMODE_EXP2 };
+
+function b64ToArray(text, Type) {
+  const bin = atob(text);
+  const bytes = new Uint8Array(bin.length);
+  for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
+  return new Type(bytes.buffer);
+}
+
+function arrayToB64(array) {
+  const bytes = new Uint8Array(array.buffer, array.byteOffset, array.byteLength);
+  let out = "";
+  for (let i = 0; i < bytes.length; i += 0x8000) {
+    out += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
+  }
+  return btoa(out);
+}
+
+// The depth pass (as threejs.js's).  G, B: the view position Babylon interpolates across a triangle
+// (as its fog's vFogDistance = (view * worldPos).xyz is interpolated): eye depth and distance.
+// R: the distance along the camera ray through the pixel's centre to the plane of the triangle's
+// three corners (each vertex carries all three).  A: 1 where a surface was drawn.
+BABYLON.Effect.ShadersStore.fogrefDepthVertexShader = `
+  precision highp float;
+  attribute vec3 position;
+  attribute vec3 corner0;
+  attribute vec3 corner1;
+  attribute vec3 corner2;
+  uniform mat4 view;
+  uniform mat4 projection;
+  varying vec3 vView;
+  varying vec3 vC0;
+  varying vec3 vC1;
+  varying vec3 vC2;
+  void main() {
+    vec4 p = view * vec4(position, 1.0);
+    vView = p.xyz;
+    vC0 = (view * vec4(corner0, 1.0)).xyz;
+    vC1 = (view * vec4(corner1, 1.0)).xyz;
+    vC2 = (view * vec4(corner2, 1.0)).xyz;
+    gl_Position = projection * p;
+  }`;
+BABYLON.Effect.ShadersStore.fogrefDepthFragmentShader = `
+  precision highp float;
+  uniform vec2 size;
+  uniform mat4 projection;
+  varying vec3 vView;
+  varying vec3 vC0;
+  varying vec3 vC1;
+  varying vec3 vC2;
+  void main() {
+    vec2 ndc = 2.0 * gl_FragCoord.xy / size - 1.0;
+    vec3 ray = vec3((ndc.x + projection[2][0]) / projection[0][0],
+                    (ndc.y + projection[2][1]) / projection[1][1], -1.0);
+    vec3 n = cross(vC1 - vC0, vC2 - vC0);
+    float t = dot(n, vC0) / dot(n, ray);
+    gl_FragColor = vec4(t * length(ray), -vView.z, length(vView), 1.0);
+  }`;
+
+function colour(rgb) { return new BABYLON.Color3(rgb[0], rgb[1], rgb[2]); }
+
+function lambert(scene, name, rgb) {
+  const m = new BABYLON.StandardMaterial(name, scene);
+  m.diffuseColor = colour(rgb);
+  m.specularColor = new BABYLON.Color3(0, 0, 0);
+  m.emissiveColor = new BABYLON.Color3(0, 0, 0);
+  m.ambientColor = new BABYLON.Color3(0, 0, 0);
+  m.backFaceCulling = false;
+  return m;
+}
+
+async function ready(scene, rt) {
+  await scene.whenReadyAsync();
+  await new Promise((ok) => { const t = () => (rt.isReadyForRendering() ? ok() : setTimeout(t, 5)); t(); });
+}
+
+window.fogrefRender = async function (spec) {
+  const W = spec.width, H = spec.height;
+  const canvas = document.createElement("canvas");
+  canvas.width = W;
+  canvas.height = H;
+  const engine = new BABYLON.Engine(canvas, false, { preserveDrawingBuffer: true, antialias: false }, false);
+  engine.setHardwareScalingLevel(1);
+  const scene = new BABYLON.Scene(engine);
+  scene.useRightHandedSystem = true;
+  scene.ambientColor = new BABYLON.Color3(0, 0, 0);
+  const c = spec.camera;
+  const camera = new BABYLON.FreeCamera("camera", new BABYLON.Vector3(...c.origin), scene);
+  camera.upVector = new BABYLON.Vector3(...c.up);
+  camera.setTarget(new BABYLON.Vector3(c.origin[0] + c.forward[0], c.origin[1] + c.forward[1],
+                                       c.origin[2] + c.forward[2]));
+  camera.fov = c.fov_y_deg * Math.PI / 180;  // vertical (FOVMODE_VERTICAL_FIXED, the default)
+  camera.minZ = c.near;
+  camera.maxZ = c.far;
+  scene.activeCamera = camera;
+
+  const meshes = [], corners = [], materials = [];
+  spec.shapes.forEach((s, i) => {
+    const positions = b64ToArray(s.positions, Float32Array);
+    const indices = b64ToArray(s.indices, Uint32Array);
+    const mesh = new BABYLON.Mesh(`shape${i}`, scene);
+    const vd = new BABYLON.VertexData();
+    vd.positions = positions;
+    vd.indices = indices;
+    if (s.normals) vd.normals = b64ToArray(s.normals, Float32Array);
+    else { vd.normals = []; BABYLON.VertexData.ComputeNormals(positions, indices, vd.normals); }
+    vd.applyToMesh(mesh);
+    const m = lambert(scene, `mat${i}`, s.reflectance);
+    mesh.material = m;
+    materials.push(m);
+    meshes.push(mesh);
+    // each triangle on its own, every vertex carrying the triangle's three corners (the depth pass)
+    const n = indices.length;
+    const p = new Float32Array(3 * n);
+    for (let k = 0; k < n; k++) p.set(positions.subarray(3 * indices[k], 3 * indices[k] + 3), 3 * k);
+    const cs = [new Float32Array(3 * n), new Float32Array(3 * n), new Float32Array(3 * n)];
+    for (let t = 0; t < 3 * n; t += 9) {
+      for (let k = 0; k < 3; k++) for (let v = 0; v < 3; v++) cs[k].set(p.subarray(t + 3 * k, t + 3 * k + 3), t + 3 * v);
+    }
+    const cm = new BABYLON.Mesh(`corners${i}`, scene);
+    cm.setVerticesData(BABYLON.VertexBuffer.PositionKind, p, false, 3);
+    cs.forEach((a, k) => cm.setVerticesData(`corner${k}`, a, false, 3));
+    cm.setIndices(Array.from({ length: n }, (_, k) => k));
+    cm.setEnabled(false);
+    corners.push(cm);
+  });
+  if (spec.sun) {
+    // irradiance E on a plane facing the sun: Babylon's diffuse is max(n.l, 0) * light colour * albedo
+    const w = spec.sun.direction;
+    const sun = new BABYLON.DirectionalLight("sun", new BABYLON.Vector3(-w[0], -w[1], -w[2]), scene);
+    sun.diffuse = colour(spec.sun.irradiance.map((e) => e / Math.PI));
+    sun.specular = new BABYLON.Color3(0, 0, 0);
+    sun.intensity = 1.0;
+  }
+  if (spec.sky) {
+    // a uniform sky of radiance L above the horizon: albedo L (1 + n.y) / 2, a hemispheric light
+    const sky = new BABYLON.HemisphericLight("sky", new BABYLON.Vector3(0, 1, 0), scene);
+    sky.diffuse = colour(spec.sky);
+    sky.groundColor = new BABYLON.Color3(0, 0, 0);
+    sky.specular = new BABYLON.Color3(0, 0, 0);
+    sky.intensity = 1.0;
+  }
+  const skyColour = spec.sky ? new BABYLON.Color4(...spec.sky, 1.0) : new BABYLON.Color4(0, 0, 0, 1.0);
+  const black = new BABYLON.Color4(0, 0, 0, 1.0);
+  const blackMaterial = lambert(scene, "black", [0, 0, 0]);
+  blackMaterial.disableLighting = true;
+  const depthMaterial = new BABYLON.ShaderMaterial("depth", scene, { vertex: "fogrefDepth", fragment: "fogrefDepth" },
+    { attributes: ["position", "corner0", "corner1", "corner2"], uniforms: ["view", "projection", "size"] });
+  depthMaterial.backFaceCulling = false;
+  depthMaterial.setVector2("size", new BABYLON.Vector2(W, H));
+  corners.forEach((m) => { m.material = depthMaterial; });
+
+  const rt = new BABYLON.RenderTargetTexture("rt", { width: W, height: H }, scene, false, true,
+    BABYLON.Constants.TEXTURETYPE_FLOAT, false, BABYLON.Constants.TEXTURE_NEAREST_SAMPLINGMODE, true);
+  rt.activeCamera = camera;
+
+  function setFog(f, rgb) {
+    if (!f) { scene.fogMode = BABYLON.Scene.FOGMODE_NONE; return; }
+    scene.fogMode = MODES[f.mode];
+    scene.fogColor = colour(rgb);
+    scene.fogDensity = f.density;
+    scene.fogStart = f.start;
+    scene.fogEnd = f.end;
+  }
+
+  async function pass(clear, fog, fogColour, material, list) {
+    setFog(fog, fogColour);
+    meshes.forEach((m, i) => { m.material = material || materials[i]; });
+    list.forEach((m) => m.setEnabled(true));
+    rt.renderList = list;
+    rt.clearColor = clear;
+    await ready(scene, rt);
+    rt.render();
+    const px = await rt.readPixels();
+    return arrayToB64(new Float32Array(px.buffer, px.byteOffset, W * H * 4));
+  }
+
+  const f = spec.fog;
+  const out = { version: BABYLON.Engine.Version, target_type: "TEXTURETYPE_FLOAT" };
+  out.final = await pass(skyColour, f, f && f.color, null, meshes);
+  out.surface = await pass(skyColour, null, null, null, meshes);
+  out.fog_factor = f ? await pass(black, f, [1, 1, 1], blackMaterial, meshes) : null;
+  out.inscatter = f ? await pass(black, f, f.color, blackMaterial, meshes) : null;
+  meshes.forEach((m) => m.setEnabled(false));
+  out.depth = await pass(new BABYLON.Color4(0, 0, 0, 0), null, null, null, corners);
+  corners.forEach((m) => m.setEnabled(false));
+  meshes.forEach((m) => m.setEnabled(true));
+  // the canvas as Babylon ships it: its default image processing, 8 bits
+  setFog(f, f && f.color);
+  meshes.forEach((m, i) => { m.material = materials[i]; });
+  scene.clearColor = skyColour;
+  await scene.whenReadyAsync();
+  scene.render();
+  out.canvas = arrayToB64(new Uint8Array(await engine.readPixels(0, 0, W, H, true, false)));
+  const ip = scene.imageProcessingConfiguration;
+  out.output_colour_space = "none (StandardMaterial writes its values unconverted)";
+  out.tone_mapping = ip.toneMappingEnabled ? String(ip.toneMappingType) : "none";
+  const gl = engine._gl;
+  out.renderer = gl ? gl.getParameter(gl.RENDERER) : "";
+  rt.dispose();
+  engine.dispose();
+  return out;
+};
+document.body.setAttribute("data-ready", "1");
