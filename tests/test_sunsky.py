@@ -483,6 +483,7 @@ def _default_sun(mi) -> list:
     return list(np.asarray(mi.traverse(em)["sun_direction"], dtype=np.float64).ravel())
 
 
+@pytest.mark.render
 def test_the_camera_sees_the_sun_disk_through_the_fog(mi, tmp_path):
     """A camera aimed at a sun of 0.53 deg (3 deg field of view, 32x18 px) sees its disk: at the
     pixels whose centre ray lies in the disk, ``surface`` is the sky plus the disk's radiance
