@@ -28,7 +28,7 @@ Scenes (96x54 by default):
 Methods (``METHODS``):
 
 ``fogpath``      fogref's integrator with the ``heightfog`` medium (analytic free flight).
-``fogpath_prev`` fogpath as it was before issue 22 (``sky_at_surfaces = "mis"``,
+``fogpath_prev`` fogpath with the earlier sky and sun defaults (``sky_at_surfaces = "mis"``,
                  ``sun_sampling_rays = 1``), measured beside today's defaults.
 ``volpath_hf``   stock ``volpath`` with the ``heightfog`` medium (delta tracking
                  against heightfog's tight per-ray majorant).
@@ -63,12 +63,14 @@ METHODS = (
     "grid256",
     "homogeneous",
 )
-#: fogpath as it was before issue 11 (one sun sample, sun sampling only in unbounded
-#: one-layer fog, no sky control variate), measured beside today's defaults
-BEFORE_ISSUE_11 = {
+#: fogpath's sun samplers' settings that only ``fogpath_knobs`` (``_fogpath_knobs.py``) reads
+KNOBS = {"sun_sampling_layers", "sun_sampling_mixture", "sun_samples"}
+#: fogpath without its variance reduction (one sun sample, sun sampling only in unbounded
+#: one-layer fog, no forced splitting, MIS for the sky at surfaces, one sun-sampled segment),
+#: measured beside today's defaults
+FOGPATH_BEFORE = {
     "sun_samples": 1,
     "sun_sampling_mixture": False,
-    "sky_cv": "off",
     "forced_split": False,
     "sky_at_surfaces": "mis",
     "sun_sampling_rays": 1,
@@ -250,10 +252,14 @@ def build(
     f = spec["fog"]
     integ = {"type": "fogpath" if method.startswith("fogpath") else "volpath", "max_depth": max_depth}
     if method == "fogpath_before":
-        integ.update(BEFORE_ISSUE_11)
+        integ.update(FOGPATH_BEFORE)
     integ.update(SPLIT.get(method, {}))
     integ.update(VARIANTS.get(method, {}))
     integ.update(integrator_over or {})
+    if integ["type"] == "fogpath" and KNOBS & integ.keys():
+        import _fogpath_knobs  # noqa: F401  (registers fogpath_knobs)
+
+        integ["type"] = "fogpath_knobs"
     extra = {}
     if method.startswith("fogpath") or method == "volpath_hf":
         medium = mi.load_dict(heightfog_dict(mi, spec, **(fog_over or {})))

@@ -1,4 +1,4 @@
-"""Bad-input harness (issue 17): each case through the `fogref` command of a checkout, classified.
+"""Bad-input harness: each case through the `fogref` command of a checkout, classified.
 
 usage: python benchmarks/bad_input.py CHECKOUT LABEL [WORKDIR]
     CHECKOUT: a fogref checkout with its .venv (this one: .); LABEL: the name of the result
@@ -296,7 +296,7 @@ REPORTS.mkdir(parents=True, exist_ok=True)
 json.dump(rows, open(REPORTS / f"{LABEL}.json", "w"), indent=1)
 runs = {p.stem: json.load(open(p)) for p in sorted(REPORTS.glob("*.json"))}
 md = [
-    "# Bad input through the `fogref` command (issue 17)",
+    "# Bad input through the `fogref` command",
     "",
     "Made by `python benchmarks/bad_input.py CHECKOUT LABEL` (one run per checkout). A case is good when",
     "it is refused in one line with exit 2 (or, for the valid controls, accepted).",

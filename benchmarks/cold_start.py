@@ -76,7 +76,7 @@ def child(t_launch: float, out: str) -> None:
     integrator = scene.integrator()
     integrator.aovs = True
     lap("load")
-    from fogref.render.passes import max_lanes, pass_seed, pass_sizes
+    from fogref_plugins.passes import max_lanes, pass_seed, pass_sizes
 
     passes = pass_sizes(32 * 18, SPP, max_lanes(variant))
     dr.set_flag(dr.JitFlag.KernelHistory, True)

@@ -345,7 +345,7 @@ def write_report(res, path_md):
 
     m, a = res["machine"], res["args"]
     L = [
-        "# Blender Cycles as a measured peer (issue 22, part 3)",
+        "# Blender Cycles as a measured peer",
         "",
         f"Written by `benchmarks/cycles_peer.py{' --quick' if a['quick'] else ''}` ({res['date']}, "
         f"{res['wall_min']:.1f} min). An optional benchmark, not a test.",

@@ -179,9 +179,9 @@ def main() -> None:
     w, h = (int(x) for x in args.res.split("x"))
     args.overrides = {"res": w, "resy": h}
 
+    import fogref_plugins.passes as P
     from dask.distributed import Client, LocalCluster
 
-    import fogref.render.passes as P
     from fogref.render.distributed import transfer_bytes
 
     ns = [int(n) for n in args.workers.split(",")]

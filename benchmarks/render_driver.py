@@ -132,9 +132,9 @@ def _run(cmd, env=None):
 class Case:
     def __init__(self, w, h, spp, tmp: Path):
         import mitsuba as mi
+        from fogref_plugins.passes import max_lanes, pass_sizes
 
         import fogref.render.render as R
-        from fogref.render.passes import max_lanes, pass_sizes
         from fogref.render.scene import load_scene
 
         self.w, self.h, self.spp, self.tmp = w, h, spp, tmp
@@ -563,7 +563,7 @@ def main(argv=None):
     doc["machine"] = machine_info()
     doc["kernels"] = path_kernels_per_call()
     log(f"render_moments: {doc['kernels']}")
-    from fogref.render.passes import MAX_LANES
+    from fogref_plugins.passes import MAX_LANES
 
     doc["max_lanes"] = MAX_LANES
     with tempfile.TemporaryDirectory(prefix="fogref-bench-") as tmp:

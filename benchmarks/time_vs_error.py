@@ -46,10 +46,10 @@ LADDER = (1, 4, 16, 64, 256, 1024)
 REPEATS = {1: 5, 4: 5, 16: 5, 64: 3, 256: 2, 1024: 1}
 LABEL = {
     "fogpath": "fogpath (analytic)",
-    "fogpath_before": "fogpath before issue 11",
+    "fogpath_before": "fogpath, earlier sampling (1 sun sample, no split)",
     "fogpath_split": "fogpath, forced splitting on",
     "fogpath_nosplit": "fogpath, forced splitting off",
-    "fogpath_prev": "fogpath before issue 22",
+    "fogpath_prev": "fogpath, MIS sky at surfaces, 1 sun segment",
     "volpath_hf": "volpath + heightfog (delta tracking)",
     "grid64": "volpath + heterogeneous 1x64x1",
     "grid256": "volpath + heterogeneous 1x256x1",
@@ -302,7 +302,7 @@ def run_scene(name, args, rng):
         out["methods"][m]["ns_per_sample_top"] = (
             top["time_median_s"] / (top["spp"] * args.res[0] * args.res[1]) * 1e9
         )
-    # where the variance lives, before and after issue 11 (one sample, per part)
+    # where the variance lives, fogpath_before against fogpath (one sample, per part)
     out["variance_shares"] = {m: variance_shares(scenes[m]) for m in methods if m.startswith("fogpath")}
     # where the time goes (kernel history), fogpath and the slowest stock method
     prof_spp = args.ladder[-2] if len(args.ladder) > 1 else args.ladder[-1]
@@ -442,9 +442,10 @@ def summary_md(res, args) -> str:
         "1-spp time).  Noise-only: the same ratio with the method's bias removed from its error.\n"
     )
     L += [
-        "## Issue 11: before and after, side by side in this run\n",
-        "`fogpath_before` = fogpath with one sun sample, sun sampling only in unbounded one-layer fog and no "
-        "sky control variate (`benchmarks/_scenes.py: BEFORE_ISSUE_11`); `fogpath` = today's defaults; "
+        "## fogpath without and with its variance reduction, side by side in this run\n",
+        "`fogpath_before` = fogpath with one sun sample, sun sampling only in unbounded one-layer fog, no "
+        "forced splitting, MIS for the sky at surfaces and one sun-sampled segment "
+        "(`benchmarks/_scenes.py: FOGPATH_BEFORE`); `fogpath` = today's defaults; "
         "`fogpath_split` / `fogpath_nosplit` = today's defaults with forced splitting on the camera ray "
         "switched to the other setting (`forced_split`). "
         "Ratios at the top of the ladder (equal-error time ratio; > 1: the second is faster).\n",

@@ -28,21 +28,21 @@ def build(name, sun_sampling, res):
     scene, _ = load_scene(ROOT / "scenes" / SCENES[name], {"res": res[0], "resy": res[1]})
     # sun_sampling_layers=4: measure the multi-layer (Newton) variant too; fogpath's
     # default (1) follows this benchmark's verdict on the two-layer scene.
+    import _fogpath_knobs  # noqa: F401  (registers fogpath_knobs)
+
     integ = mi.load_dict(
-        {"type": "fogpath", "max_depth": 16, "sun_sampling": sun_sampling, "sun_sampling_layers": 4}
+        {"type": "fogpath_knobs", "max_depth": 16, "sun_sampling": sun_sampling, "sun_sampling_layers": 4}
     )
     return scene, integ
 
 
-#: issue 11, cumulative: each variant adds one change to the one before
+#: fogpath's variance reductions, cumulative: each variant adds one change to the one before
 CHANGES = {
-    "before": {"sun_samples": 1, "sun_sampling_mixture": False, "sky_cv": "off"},
-    "+mixture": {"sun_samples": 1, "sun_sampling_mixture": True, "sky_cv": "off"},
-    "+2 sun samples": {"sun_samples": 2, "sun_sampling_mixture": True, "sky_cv": "off"},
-    "+sky cv (surface)": {"sun_samples": 2, "sun_sampling_mixture": True, "sky_cv": "surface"},
-    "+sky cv (all)": {"sun_samples": 2, "sun_sampling_mixture": True, "sky_cv": "all"},
-    # forced splitting on the camera ray (both branches at depth 0), on today's defaults (sky cv off)
-    "+forced split": {"sun_samples": 2, "sun_sampling_mixture": True, "sky_cv": "off", "forced_split": True},
+    "before": {"sun_samples": 1, "sun_sampling_mixture": False},
+    "+mixture": {"sun_samples": 1, "sun_sampling_mixture": True},
+    "+2 sun samples": {"sun_samples": 2, "sun_sampling_mixture": True},
+    # forced splitting on the camera ray (both branches at depth 0), on today's defaults
+    "+forced split": {"sun_samples": 2, "sun_sampling_mixture": True, "forced_split": True},
 }
 #: every variant but the last runs with forced splitting off
 for _v in CHANGES.values():
@@ -50,7 +50,7 @@ for _v in CHANGES.values():
 
 
 def changes(out_dir, res=(48, 27), spp=128, reps=2):
-    """Issue 11's changes one at a time, side by side (interleaved) in one run, on the
+    """fogpath's variance reductions one at a time, side by side (interleaved) in one run, on the
     benchmark scenes: per-sample variance of the final image and of inscatter.*, the
     share of each part, the time per render, and the efficiency 1 / (variance x time)."""
     import _scenes as S
@@ -86,24 +86,24 @@ def changes(out_dir, res=(48, 27), spp=128, reps=2):
         )
     d = __import__("pathlib").Path(out_dir)
     d.mkdir(parents=True, exist_ok=True)
-    (d / "variance_reduction_issue11.json").write_text(json.dumps(out, indent=1))
+    (d / "variance_reduction_changes.json").write_text(json.dumps(out, indent=1))
     changes_md(out_dir)
 
 
 def changes_md(out_dir):
-    """variance_reduction_issue11.md from its .json (``--changes-md``: without rerunning)."""
+    """variance_reduction_changes.md from its .json (``--changes-md``: without rerunning)."""
     d = __import__("pathlib").Path(out_dir)
-    out = json.loads((d / "variance_reduction_issue11.json").read_text())
+    out = json.loads((d / "variance_reduction_changes.json").read_text())
     res, spp, reps = out["resolution"], out["spp"], out["repeats"]
     lines = [
-        "# Issue 11: each change's gain (fogpath against itself, side by side in one run)",
+        "# fogpath's variance reductions, each change's gain (fogpath against itself, side by side)",
         "",
         f"Command: `python benchmarks/variance_reduction.py --changes`; {res[0]}x{res[1]}, {spp} spp, "
         f"{reps} interleaved repeats, per-sample variance from fogpath's own second moments (box filter). "
         "Cumulative variants: each adds one change to the row above. Gain = efficiency "
         "1/(variance x time) relative to `before`; the machine is shared (2 cores, other jobs), so times are "
         "noisy and only the side-by-side ratios mean anything. `+forced split` is built on `+2 sun samples` "
-        "(sky cv off, today's other defaults): its own gain is its row over that row (last table).",
+        "(today's other defaults): its own gain is its row over that row (last table).",
         "",
         "| scene | variant | final var/sample | inscatter var/sample | time [s] | gain (final) | gain "
         "(inscatter) | att. surface | single | multiple |",
@@ -134,15 +134,15 @@ def changes_md(out_dir):
                 f"{a['time_s'] / b['time_s']:.2f} | {a['efficiency'] / b['efficiency']:.2f} | "
                 f"{a['efficiency_inscatter'] / b['efficiency_inscatter']:.2f} |"
             )
-    (d / "variance_reduction_issue11.md").write_text("\n".join(lines) + "\n")
+    (d / "variance_reduction_changes.md").write_text("\n".join(lines) + "\n")
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--changes", action="store_true", help="issue 11's changes, one at a time")
+    ap.add_argument("--changes", action="store_true", help="fogpath's variance reductions, one at a time")
     ap.add_argument(
-        "--changes-md", action="store_true", help="rewrite variance_reduction_issue11.md from its .json"
+        "--changes-md", action="store_true", help="rewrite variance_reduction_changes.md from its .json"
     )
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
     a = ap.parse_args()

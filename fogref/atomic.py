@@ -195,6 +195,27 @@ def savez_atomic(path, **arrays) -> Path:
     return atomic_write(path, lambda tmp: np.savez(tmp, **arrays))
 
 
+def set_aside(path, suffix: str) -> Path:
+    """Rename ``path`` to the first unused name of ``<name><suffix>``, ``<name><suffix>1``, ... and
+    return it: a damaged input is kept for inspection, never deleted, and no earlier one is replaced.
+    An ``OSError`` of the rename propagates.
+
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> for text in ("first", "second"):
+    ...     _ = (folder / "r.json").write_text(text)
+    ...     print(set_aside(folder / "r.json", ".bad").name)
+    r.json.bad
+    r.json.bad1
+    """
+    path = Path(path)
+    aside, n = path.with_name(path.name + suffix), 1
+    while aside.exists() or aside.is_symlink():
+        aside, n = path.with_name(f"{path.name}{suffix}{n}"), n + 1
+    os.replace(path, aside)
+    return aside
+
+
 def _entries(items):
     """``(path, label)`` pairs from paths, ``(path, label)`` pairs or objects with ``.path`` and
     ``.label`` (or ``.kind``)."""

@@ -2,9 +2,10 @@
 
 Every picture fogref writes (the render preview, the report's side-by-side images)
 goes through :func:`tone_map`, which computes colour-science's sRGB encoding
-(``colour.cctf_encoding(..., function="sRGB")``, bit for bit; see :func:`srgb_encode`).  Only the choice
-of exposure differs: the render preview maps the mean luminance to 0.18
-(:func:`preview_exposure`); reports map a percentile to white.
+(``colour.cctf_encoding(..., function="sRGB")``, bit for bit; see :func:`srgb_encode`), at one
+exposure rule, :func:`exposure_for`: the 99th percentile of the luminance maps to white (the render
+preview, a truth's thumbnails, the report's side-by-side images and the viewer alike; a
+transmittance is shown at exposure 1).
 
 Examples
 --------
@@ -21,6 +22,18 @@ from fogref.atomic import atomic_write
 
 #: Rec. 709 / sRGB luminance weights of linear R, G, B.
 LUMINANCE_WEIGHTS = np.array([0.2126, 0.7152, 0.0722])
+#: Percentile of the luminance that :func:`exposure_for` maps to white (Y = 1).
+WHITE_PERCENTILE = 99.0
+_FLT_MAX = float(np.finfo(np.float32).max)
+
+
+def luminance(rgb) -> np.ndarray:
+    """Rec. 709 relative luminance ``Y`` of linear RGB ``(..., 3)`` -> ``(...)``; same units.
+
+    >>> float(luminance([1.0, 1.0, 1.0]))
+    1.0
+    """
+    return np.asarray(rgb, dtype=np.float64) @ LUMINANCE_WEIGHTS
 
 
 def srgb_encode(linear) -> np.ndarray:
@@ -45,14 +58,34 @@ def tone_map(linear_rgb, exposure: float) -> np.ndarray:
     return srgb_encode(np.asarray(linear_rgb, dtype=np.float64) * float(exposure))
 
 
-def preview_exposure(linear_rgb) -> float:
-    """Exposure that maps the mean Rec. 709 luminance to 0.18 (1 for a black image).
+def exposure_white(reference, percentile: float = WHITE_PERCENTILE) -> float:
+    """The radiance that the exposure normalisation maps to white (``Y = 1``).
 
-    >>> preview_exposure(np.full((2, 2, 3), 0.36))
-    0.5
+    It is the ``percentile``-th percentile of the reference's Rec.709 luminance over
+    its pixels with positive luminance (falling back to their maximum when the
+    percentile is 0, and to 1 when no pixel is positive).  Always finite and > 0.
+    Units: those of ``reference``.
+
+    >>> exposure_white(np.full((2, 2, 3), 0.36)), exposure_white(np.zeros((2, 2, 3)))
+    (0.36, 1.0)
     """
-    lum = float(np.mean(np.asarray(linear_rgb, dtype=np.float64) @ LUMINANCE_WEIGHTS))
-    return 0.18 / lum if np.isfinite(lum) and lum > 0 else 1.0
+    y = luminance(reference).ravel()
+    y = y[np.isfinite(y) & (y > 0)]
+    if y.size == 0:
+        return 1.0
+    w = float(np.percentile(y, percentile))
+    if not w > 0:
+        w = float(y.max())
+    return min(w, _FLT_MAX)
+
+
+def exposure_for(linear_rgb) -> float:
+    """The exposure of every picture of a radiance: ``1 / exposure_white(linear_rgb)`` [1/image units].
+
+    >>> exposure_for(np.full((2, 2, 3), 0.5))
+    2.0
+    """
+    return 1.0 / exposure_white(linear_rgb)
 
 
 def write_png(display_rgb, path) -> None:
@@ -69,10 +102,10 @@ def write_png(display_rgb, path) -> None:
 
 
 def write_preview(linear_rgb, path, exposure: float | None = None) -> float:
-    """The render's PNG preview: :func:`preview_exposure` (unless given), :func:`tone_map`.
+    """The render's PNG preview: :func:`exposure_for` (unless given), :func:`tone_map`.
 
     Returns the exposure used.
     """
-    exposure = preview_exposure(linear_rgb) if exposure is None else float(exposure)
+    exposure = exposure_for(linear_rgb) if exposure is None else float(exposure)
     write_png(tone_map(linear_rgb, exposure), path)
     return exposure

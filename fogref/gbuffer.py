@@ -32,7 +32,6 @@ import numpy as np
 
 from fogref.errors import FogrefError
 from fogref.exrio import read_exr
-from fogref.html.inline import truth_html
 
 #: Version of the channel layout below; stored in the header as ``fogref.schema``.
 #: 3 added the ``corr.*`` channels; 2 (no correlations) is still read, see :func:`truth_from_channels`.
@@ -315,10 +314,6 @@ class Truth:
             f"Truth({str(self.path)!r}, {w}x{h} px, {self.spp} spp, seed {seed}, {pixel_filter}, "
             f"{n_hit} hit / {h * w - n_hit} sky px, {sun})"
         )
-
-    def _repr_html_(self) -> str:
-        """Jupyter's display (:func:`fogref.html.inline.truth_html`): part thumbnails, provenance."""
-        return truth_html(self)
 
     def noise_cov(self, part: str) -> np.ndarray:
         """``(H, W, 3, 3)`` covariance of the noise of part ``part``'s R, G, B at each pixel

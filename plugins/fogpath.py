@@ -18,7 +18,7 @@ the camera ray's variance reduction in :mod:`fogref_plugins.fogpath_camera`.  It
   Henyey–Greenstein phase; any Mitsuba BSDF; ``max_depth`` and Russian roulette;
 * **the parts of the schema** per sample (:class:`~fogref_plugins.fogpath_common.Split`):
   ``L = attenuated_surface + single + multiple`` exactly.  How the parts, forced
-  splitting and the control variates fit together: ``docs/design.md``, "fogpath".
+  splitting and the sun's sampling fit together: ``docs/design.md``, "fogpath".
 
 Not supported: sensors other than ``perspective``; media attached to shapes
 (the fog fills all space outside surfaces); reconstruction filters other than
@@ -44,7 +44,7 @@ from fogref.media import drjit_ops
 from .fogpath_camera import FogPathCameraRay
 from .fogpath_common import AOV_NAMES, Split, spectrum
 
-#: ``forced_split``'s default (see ``reports/benchmarks/variance_reduction_issue11.md``)
+#: ``forced_split``'s default (see ``reports/benchmarks/variance_reduction_changes.md``)
 FORCED_SPLIT_DEFAULT = True
 #: ``sun_sampling_rays``'s default (see ``reports/benchmarks/summary.md``)
 SUN_SAMPLING_RAYS_DEFAULT = 2
@@ -66,7 +66,8 @@ class FogPathIntegrator(FogPathCameraRay):
        - Depth where Russian roulette starts. Default: 5.
      * - hide_emitters
        - bool
-       - Camera rays that escape see black instead of the sky. Default: false.
+       - Camera rays that escape see black instead of the sky and the sun disk. Unlike stock
+         ``path``/``volpath``, an area light seen directly stays visible. Default: false.
      * - aovs
        - bool
        - Write the per-sample parts and G-buffer of :mod:`fogref.gbuffer` after
@@ -81,30 +82,12 @@ class FogPathIntegrator(FogPathCameraRay):
        - Sample the sun's single scattering along camera rays from its exact integrand
          (zero variance without shadows; the first medium vertex then skips sun NEE), for
          unbounded exponential layers and a sun above the horizon. Default: true.
-     * - sun_sampling_layers
-       - int
-       - Most layers for which the exact sampler is used (more layers: the mixture
-         below). Default: 1.
-     * - sun_sampling_mixture
-       - bool
-       - Where the exact sampler does not apply (fog in a box, more layers), sample
-         the sun's single scattering along camera rays from a closed-form mixture of
-         per-layer integrands, weighted by the exact integrand. Default: true.
      * - sun_sampling_rays
        - int
        - Path segments along which ``sun_sampling`` samples the sun's scattering from its
          integrand: 1 (the camera ray) or 2 (also the segment after the first vertex, one
          sample and shadow ray: the sun's share of double scattering; medium vertices on it
          then skip sun NEE).  Default: ``SUN_SAMPLING_RAYS_DEFAULT``.
-     * - sun_samples
-       - int
-       - Stratified sun samples per camera ray (each one shadow ray). Default: 2.
-     * - sky_cv
-       - string
-       - The uniform (``constant``) sky's single scattering as closed form plus the
-         Monte Carlo difference occluders make: ``off``, ``surface`` (camera rays
-         that end on a surface) or ``all``. Default: ``off`` (see
-         :meth:`_sky_control_variate`).
      * - sun_angular_diameter
        - float
        - The sun's angular diameter [deg], in [0, 10]: 0 is a delta (Mitsuba's ``directional``);
@@ -142,9 +125,6 @@ class FogPathIntegrator(FogPathCameraRay):
         )
         self.hide_emitters = bool(props.get("hide_emitters", False))
         self.sun_sampling = bool(props.get("sun_sampling", True))
-        self.sun_sampling_layers = int(props.get("sun_sampling_layers", 1))
-        self.sun_sampling_mixture = bool(props.get("sun_sampling_mixture", True))
-        self.sun_samples = int(props.get("sun_samples", 2))
         self.sun_sampling_rays = params.integer(
             props.get("sun_sampling_rays", SUN_SAMPLING_RAYS_DEFAULT),
             "sun_sampling_rays",
@@ -152,9 +132,6 @@ class FogPathIntegrator(FogPathCameraRay):
             lo=1,
             hi=2,
         )
-        self.sky_cv = str(props.get("sky_cv", "off"))
-        params.choice(self.sky_cv, "sky_cv", ("off", "surface", "all"), "fogpath")
-        params.integer(self.sun_samples, "sun_samples", source="fogpath", lo=1, hi=64)
         self.forced_split = bool(props.get("forced_split", FORCED_SPLIT_DEFAULT))
         self.sky_at_surfaces = str(props.get("sky_at_surfaces", SKY_AT_SURFACES_DEFAULT))
         params.choice(self.sky_at_surfaces, "sky_at_surfaces", ("mis", "bsdf"), "fogpath")
@@ -212,9 +189,7 @@ class FogPathIntegrator(FogPathCameraRay):
         phase function, else a surface interaction and ``scatter`` its BSDF): emitter
         sample times the closed-form fog transmittance and visibility, times the phase
         function or BSDF, MIS-weighted against it for non-delta emitters.
-        Returns (contribution without the path throughput, is the sample delta, the
-        same sample's value for the sky control variate: a non-delta infinite emitter
-        above the horizon, without transmittance and visibility).  At a surface with
+        Returns (contribution without the path throughput, is the sample delta).  At a surface with
         ``sky_at_surfaces = "bsdf"`` a sample of the constant sky contributes 0: the BSDF
         sample carries the sky alone (:meth:`_sky_by_bsdf`)."""
         in_medium = isinstance(scatter, mi.PhaseFunction)
@@ -245,8 +220,7 @@ class FogPathIntegrator(FogPathCameraRay):
         c = em_w * f
         if has_smooth:  # MIS only matters for emitters a sampled direction can hit
             c *= dr.select(ds.delta, 1.0, mis_weight(ds.pdf, f_pdf))
-        cv = dr.select(active & (ds.pdf != 0) & infinite & ~ds.delta & (ds.d.y > 0), c, 0.0)
-        return dr.select(visible, c * Tr, 0.0), ds.delta, cv
+        return dr.select(visible, c * Tr, 0.0), ds.delta
 
     def _sky_by_bsdf(self, scene):
         """Does the BSDF sample alone carry a constant sky at surfaces (trace-time)?"""
@@ -296,25 +270,18 @@ class FogPathIntegrator(FogPathCameraRay):
         first,
         has_smooth,
         sun_ss,
-        sky_cv,
         sun_sampled=None,
     ):
         """Light sample and phase sample at a medium vertex.  At the first vertex of the
-        camera ray the sun is left out when it is sampled along the camera ray, and the
-        sky control variate's Monte Carlo part (the same light and phase samples,
-        unoccluded and unattenuated, upper hemisphere) is subtracted.
+        camera ray the sun is left out when it is sampled along the camera ray.
         ``sun_sampled``: lanes whose segment's sun scattering was sampled along it (default
         ``first``); their sun NEE is left out.
         Returns (contribution without the throughput, direction, phase weight, its pdf)."""
         mei = self._medium_interaction(ray, p, t)
-        Ld, delta, cv = self._direct(scene, fog, ops, sampler, mei, ctx, phase, med, has_smooth)
+        Ld, delta = self._direct(scene, fog, ops, sampler, mei, ctx, phase, med, has_smooth)
         if sun_ss is not None:  # the sun on this segment is sampled along it
             Ld = dr.select(delta & (first if sun_sampled is None else sun_sampled), 0.0, Ld)
         wo, w, pdf = phase.sample(ctx, mei, sampler.next_1d(med), sampler.next_2d(med), med)
-        if sky_cv is not None:
-            cv_phase = sky_cv["L"] * w * mis_weight(pdf, mi.Float(sky_cv["pdf"]))
-            cv += dr.select(med & (pdf > 0) & (wo.y > 0), cv_phase, 0.0)
-            Ld = dr.select(first & sky_cv["on"], Ld - cv, Ld)
         return Ld, wo, w, pdf
 
     # ----------------------------------------------------------------- sample
@@ -339,7 +306,6 @@ class FogPathIntegrator(FogPathCameraRay):
         D0 = dr.select(si.is_valid(), si.t, ops.largest)
         gbuf = self._gbuffer(fog, ops, ray, si) if self.aovs else None
         sun_ss = self._sun_single_scatter(scene, fog, ops, sampler, ray, D0, active)
-        sky_cv = self._sky_control_variate(scene, fog, ops, ray, D0, si.is_valid())
 
         has_lights = has_delta or has_smooth
         active &= has_lights  # no emitter: nothing to trace beyond the G-buffer
@@ -361,7 +327,6 @@ class FogPathIntegrator(FogPathCameraRay):
                     bsdf_ctx,
                     has_smooth,
                     sun_ss,
-                    sky_cv,
                     active,
                 )
             )
@@ -429,7 +394,6 @@ class FogPathIntegrator(FogPathCameraRay):
                     depth == 0,
                     has_smooth,
                     sun_ss,
-                    sky_cv,
                     (depth <= 1) if ss_next else (depth == 0),
                 )
                 split = split.add(β * Ld, medium_first, depth == 0)
@@ -440,7 +404,7 @@ class FogPathIntegrator(FogPathCameraRay):
             bsdf = si.bsdf(ray)
             if dr.hint(has_lights, mode="scalar"):
                 smooth = surf & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-                Ls, _, _ = self._direct(scene, fog, ops, sampler, si, bsdf_ctx, bsdf, smooth, has_smooth)
+                Ls, _ = self._direct(scene, fog, ops, sampler, si, bsdf_ctx, bsdf, smooth, has_smooth)
                 split = split.add(β * Ls, medium_first, mi.Bool(False))
             bs, w_b = bsdf.sample(bsdf_ctx, si, sampler.next_1d(surf), sampler.next_2d(surf), surf)
             wo[surf], pdf_next[surf], w_next[surf], origin[surf] = si.to_world(bs.wo), bs.pdf, w_b, si.p
@@ -459,9 +423,8 @@ class FogPathIntegrator(FogPathCameraRay):
             active &= ~rr | (sampler.next_1d(rr) < q)
             si = scene.ray_intersect(ray, active)
 
-        for closed in (sun_ss, None if sky_cv is None else sky_cv["closed"]):  # camera-ray estimates
-            if dr.hint(closed is not None, mode="scalar"):
-                split = Split(split.surface, split.single + dr.select(active0, closed, 0.0), split.multiple)
+        if dr.hint(sun_ss is not None, mode="scalar"):  # the camera ray's sampled sun scattering
+            split = Split(split.surface, split.single + dr.select(active0, sun_ss, 0.0), split.multiple)
         return self._outputs(split, β_cam, medium_first, cam, gbuf)
 
     # ------------------------------------------------------------- G-buffer

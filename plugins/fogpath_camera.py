@@ -1,9 +1,9 @@
 """Variance reduction on fogpath's camera ray (depth 0), each switched by a plugin parameter.
 
 * the sun's single scattering along the camera ray, sampled from its exact integrand
-  or a closed-form mixture (``sun_sampling``, ``sun_sampling_mixture``, ``sun_samples``;
+  or a closed-form mixture (``sun_sampling``; :attr:`FogPathCameraRay.sun_sampling_layers`,
+  :attr:`~FogPathCameraRay.sun_sampling_mixture`, :attr:`~FogPathCameraRay.sun_samples`;
   :func:`fogref.media.single_scatter.sun_sampling_mode`);
-* the uniform sky's single scattering as a control variate (``sky_cv``);
 * forced splitting: both branches of the camera ray, the surface and a forced medium
   collision, in every sample (``forced_split``).
 
@@ -21,7 +21,6 @@ import mitsuba as mi
 
 from fogref.media import closed_form as cf
 from fogref.media.single_scatter import (
-    hg_upper_fraction_table,
     sample_sun_single_scatter,
     sample_sun_single_scatter_mixture,
     sun_sampling_mode,
@@ -32,6 +31,16 @@ from .fogpath_common import FogPathBase, Split, spectrum
 
 class FogPathCameraRay(FogPathBase):
     """The camera-ray estimators of fogpath (see module)."""
+
+    #: Most layers for which the sun's exact sampler is used (more layers: the mixture).
+    #: One: for several layers its Newton inversion costs more time than the variance it
+    #: removes (``reports/benchmarks/variance_reduction.md``).
+    sun_sampling_layers: int = 1
+    #: Where the exact sampler does not apply (fog in a box, more layers), sample the sun's
+    #: single scattering from a closed-form mixture of per-layer integrands, weighted exactly.
+    sun_sampling_mixture: bool = True
+    #: Stratified sun samples per camera ray (each one shadow ray).
+    sun_samples: int = 2
 
     def _sun_single_scatter(self, scene, fog, ops, sampler, ray, D, active, samples=None):
         """The sun's single scattering along the ray (the camera ray, or with
@@ -74,37 +83,6 @@ class FogPathCameraRay(FogPathBase):
             vis = active & ~scene.ray_test(mi.Ray3f(ray.o + ray.d * t_ss, to_sun), active)
             total += dr.select(vis, mi.Spectrum(*w_ss), 0.0)
         return total / K
-
-    def _sky_control_variate(self, scene, fog, ops, ray, D, hit):
-        """The uniform sky's single scattering as a control variate (None when it does
-        not apply): ``closed = H(d_y) alpha L_sky (1 - T(D))`` per channel, the exact
-        expectation of the unoccluded, unattenuated upper-hemisphere integrand
-        ``p(w) L_sky [w_y > 0]`` at the first medium vertex (``H``: the share of the
-        phase lobe above the horizon, :func:`hg_upper_fraction_table`); the first
-        vertex subtracts that integrand's estimate from the same samples.
-        ``sky_cv = "surface"`` uses it only on camera rays that end on a surface: on
-        rays that escape, the sky seen through the fog is anti-correlated with the
-        fog's light (a path either scatters or reaches the sky) and the control
-        variate made the final image noisier (``reports/benchmarks/variance_reduction.md``)."""
-        if self.sky_cv == "off" or fog is None or not fog.scatters or self.max_depth < 2:
-            return None
-        sky = self._constant_sky(scene)
-        if sky is not None:
-            fog.require_hg("fogpath's sky_cv")
-        if sky is None or abs(fog.g) > 0.95:  # > 0.95: the lobe's table would need more nodes
-            return None
-        pdf_sel, _ = self._sky_selection(scene)
-        Lv = mi.traverse(sky)["radiance.value"]
-        L = spectrum(ops.params([float(Lv[i][0]) for i in range(3)] if len(Lv) == 3 else [float(Lv[0][0])]))
-        table = hg_upper_fraction_table(float(fog.g))
-        x = (dr.clip(ray.d.y, -1.0, 1.0) + 1.0) * (0.5 * (len(table) - 1))
-        i = mi.UInt32(dr.clip(dr.floor(x), 0, len(table) - 2))
-        tab = mi.Float(table)
-        H = dr.lerp(dr.gather(mi.Float, tab, i), dr.gather(mi.Float, tab, i + 1), x - mi.Float(i))
-        T = self._transmittance(fog, ops, ray.o, ray.d, D)
-        on = mi.Bool(True) if self.sky_cv == "all" else mi.Bool(hit)
-        closed = dr.select(on, H * L * spectrum(ops.params(fog.albedo)) * (1.0 - T), 0.0)
-        return {"closed": closed, "L": L, "pdf": pdf_sel / (4.0 * dr.pi), "on": on}
 
     def _forced_collision(self, fog, ops, sampler, ray, D, active):
         """A medium collision on the camera ray's ``[0, D]`` forced to happen.
@@ -167,7 +145,6 @@ class FogPathCameraRay(FogPathBase):
         bsdf_ctx,
         has_smooth,
         sun_ss,
-        sky_cv,
         active,
     ):
         """Depth 0 with ``forced_split``: the surface branch (light found by the camera
@@ -190,7 +167,7 @@ class FogPathCameraRay(FogPathBase):
             split = split.add(disk, mi.Bool(False), mi.Bool(False))
         surf, bsdf = active & hit, si.bsdf(ray)
         smooth = surf & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-        Ls, _, _ = self._direct(scene, fog, ops, sampler, si, bsdf_ctx, bsdf, smooth, has_smooth)
+        Ls, _ = self._direct(scene, fog, ops, sampler, si, bsdf_ctx, bsdf, smooth, has_smooth)
         split = split.add(Ls, mi.Bool(False), mi.Bool(False))
         direct = mi.Spectrum(split.surface)
         bs, w_b = bsdf.sample(bsdf_ctx, si, sampler.next_1d(surf), sampler.next_2d(surf), surf)
@@ -210,7 +187,6 @@ class FogPathCameraRay(FogPathBase):
             mi.Bool(True),
             has_smooth,
             sun_ss,
-            sky_cv,
         )
         split = split.add(dr.select(med, w_m * Ld, 0.0), mi.Bool(True), mi.Bool(True))
         # q = T / (T + w_medium) >= T: it must not depend on the surface branch's own samples

@@ -12,7 +12,7 @@ subclass (:class:`fogref_plugins.fogpath.FogPathIntegrator`) and gives it:
   outputs in the order of :data:`AOV_NAMES` (``FogPathBase._outputs``);
 * per-pixel moments of every per-sample output (:meth:`FogPathBase.render_moments`),
   what the render driver writes as means and standard errors, and ``mi.render`` in
-  passes of at most :data:`fogref.render.passes.MAX_LANES` lanes.
+  passes of at most :data:`fogref_plugins.passes.MAX_LANES` lanes.
 
 The subclass sets ``aovs`` (bool: write :data:`AOV_NAMES` after R,G,B) and
 ``pixel_exact`` (bool: every sample through the pixel's centre).
@@ -24,9 +24,9 @@ import math
 
 import drjit as dr
 import mitsuba as mi
+from fogref_plugins.passes import max_lanes, pass_seed, pass_sizes
 
 from fogref import gbuffer
-from fogref.render.passes import max_lanes, pass_seed, pass_sizes
 
 #: The integrator's AOVs (after R,G,B): the per-sample groups of the schema.
 AOV_NAMES = gbuffer.sample_channel_names()
@@ -358,7 +358,7 @@ class FogPathBase(mi.SamplingIntegrator):
         The ``surface.*`` AOVs are per-sample means here;
         :func:`fogref.gbuffer.moments_to_channels` turns them into the EXR's ratio estimator.
 
-        In passes of at most :data:`fogref.render.passes.MAX_LANES` lanes, as the render
+        In passes of at most :data:`fogref_plugins.passes.MAX_LANES` lanes, as the render
         driver does (one pass keeps ``seed``; several are seeded with ``pass_seed``):
         each pass holds every sample's outputs in memory, so one call at 1920x1080 and
         1024 spp would otherwise need ~425 GB."""

@@ -2,6 +2,8 @@
 
 from pathlib import Path
 
+import pytest
+
 # --- example start ---
 import fogref
 
@@ -24,6 +26,7 @@ def test_fog_matches_truth(fogref_truth):
 
 
 # --- example end ---
+test_fog_matches_truth = pytest.mark.render(test_fog_matches_truth)  # it renders (outside the docs' copy)
 
 
 def test_the_docs_carry_this_example():

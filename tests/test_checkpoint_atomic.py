@@ -1,4 +1,4 @@
-"""The render checkpoint is one atomic record (issue 17, item 2).
+"""The render checkpoint is one atomic record.
 
 * An interruption at any line of the pass loop, or of the functions it calls in
   ``fogref/render/render.py``, ``fogref/render/checkpoint.py`` and ``fogref/atomic.py``
@@ -214,8 +214,9 @@ DAMAGE = {
 @pytest.fixture(scope="module")
 def interrupted(tmp_path_factory, mitsuba):
     """A checkpoint after 1 of 3 passes, and the uninterrupted truth."""
+    import fogref_plugins.passes as passes
+
     import fogref.render.checkpoint as C
-    import fogref.render.passes as passes
     import fogref.render.render as R
 
     d = tmp_path_factory.mktemp("ckpt")

@@ -383,7 +383,7 @@ def test_viewer_in_physical_units_reads_out_the_radiance_and_its_exposure(tmp_pa
     import subprocess
     import sys
 
-    from fogref.compare.tonemap import exposure_for
+    from fogref.display import exposure_for
     from fogref.gbuffer import load_truth
     from fogref.html.inline import decode_half
 

@@ -1,4 +1,4 @@
-"""Issue 17: every door of compare/check/the models gives a one-line error (exit 2 through the
+"""Every door of compare/check/the models gives a one-line error (exit 2 through the
 CLI) or the right answer; each case through ``fogref.cli.main`` and through the Python API.
 
 Tiny synthetic truths (8x6 px, :func:`fogref.compare.synthetic.synthetic_truth`), no renders.

@@ -1,4 +1,4 @@
-"""fogref.compare.metrics / binning / tonemap: hand-computed values and edge cases."""
+"""fogref.compare.metrics / binning, fogref.display: hand-computed values and edge cases."""
 
 import colour
 import numpy as np
@@ -8,7 +8,8 @@ from fogref.compare import error_maps as E
 from fogref.compare import metrics as M
 from fogref.compare import perceptual as P
 from fogref.compare.binning import angle_edges, binned_errors, log_distance_edges
-from fogref.compare.tonemap import srgb_oetf, tone_map
+from fogref.display import luminance, tone_map
+from fogref.display import srgb_encode as srgb_oetf
 
 
 def _rand(shape=(12, 16, 3), seed=0, scale=1.0):
@@ -72,7 +73,7 @@ def test_delta_e2000_default_white_is_the_reference_p99_luminance():
     r = _rand(seed=1, scale=3.0)
     x = r * 1.2
     w = P.exposure_white(r)
-    y = M.luminance(r).ravel()
+    y = luminance(r).ravel()
     assert w == pytest.approx(np.percentile(y[y > 0], 99))
     np.testing.assert_allclose(P.delta_e2000_map(r, x), P.delta_e2000_map(r, x, white=w))
     # exposure-normalised: scaling both images leaves ΔE unchanged

@@ -229,7 +229,7 @@ NONFINITE = r"transmittance: 4 pixel\(s\) are non-finite \(NaN or inf\), first a
 
 
 def test_nonfinite_model_output_is_refused_as_in_check(tmp_path):
-    # the decision (issue 17): a model's NaN/inf is refused, with the count and the first pixel,
+    # a model's NaN/inf is refused, with the count and the first pixel,
     # by the report as by check(), instead of excluding pixels in one and refusing in the other
     from fogref.compare.check import check
     from fogref.gbuffer import load_truth

@@ -8,6 +8,7 @@ from __future__ import annotations
 import csv
 import json
 import re
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -178,13 +179,18 @@ def test_compare_batch_three_images_one_table(truths, tmp_path, capsys):
 def test_notebook_displays(truths):
     from fogref.compare.check import check
     from fogref.gbuffer import load_truth
-    from fogref.html.notebook import sweep_table
+    from fogref.html.notebook import load_ipython_extension, sweep_table
 
+    shown = {}  # what %load_ext registers with IPython's HTML formatter (type -> function)
+    html_formatter = SimpleNamespace(for_type=shown.__setitem__)
+    load_ipython_extension(
+        SimpleNamespace(display_formatter=SimpleNamespace(formatters={"text/html": html_formatter}))
+    )
     t = load_truth(truths["s0"])
-    html = t._repr_html_()
+    html = shown[type(t)](t)
     assert html.count("data:image/png;base64,") == 6 and "16×9 px" in html
     r = check(t, load_truth(truths["sun30"]))
-    h = r._repr_html_()
+    h = shown[type(r)](r)
     assert r.verdict in h and "v-" in h and h.count("data:image/png") == len(r.errors)
     s = sweep_table("reports/sweeps/unreal_sun_falloff_g")._repr_html_()
     assert "<table" in s and "FogHeightFalloff" in s and "data:image/png" in s

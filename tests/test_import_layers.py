@@ -39,20 +39,12 @@ FLOORS: list[tuple[str, tuple[str, ...]]] = [
     ),
     ("media", ("fogref.media",)),  # physics: numpy, Dr.Jit only lazily
     # the ground-truth schema, its I/O and the one display transform
-    (
-        "gbuffer",
-        ("fogref.gbuffer", "fogref.exrio", "fogref.display", "fogref.html.inline"),
-    ),  # (+ the encodings of HTML and notebook displays)
+    ("gbuffer", ("fogref.gbuffer", "fogref.exrio", "fogref.display")),
     ("models", ("fogref.models",)),  # ports of the engines' shaders
     ("mapping", ("fogref.mapping",)),  # physical scene -> model parameters, fits
-    (
-        "render",
-        (
-            "fogref.render",
-            "fogref_plugins",  # Mitsuba glue and plugins;
-            "fogref.render.scene_writer",
-        ),
-    ),  # scene XML writer (no Mitsuba)
+    # the Mitsuba plugins: the heightfog medium, the fogpath integrator and its passes
+    ("plugins", ("fogref_plugins",)),
+    ("render", ("fogref.render",)),  # Mitsuba glue: variant, scenes, the render driver and cache
     ("compare", ("fogref.compare",)),
     ("engines", ("fogref.engines",)),  # real engines in headless Chromium (selenium), lazily
     ("study", ("fogref.study",)),
@@ -229,7 +221,8 @@ def test_the_checks_see_what_they_look_for():
     assert _cycles({"a": {"b": 1}, "b": {"c": 1}, "c": {"a": 1}, "d": {"a": 1}}) == [["a", "b", "c"]]
     assert _cycles({"a": {"b": 1}, "b": {}}) == []
     assert FLOORS[floor_of("fogref.models.ue4")][0] == "models"
-    assert FLOORS[floor_of("fogref_plugins.fogpath")][0] == "render"
+    assert FLOORS[floor_of("fogref_plugins.fogpath")][0] == "plugins"
+    assert FLOORS[floor_of("fogref.render.render")][0] == "render"
     assert FLOORS[floor_of("fogref")][0] == "cli" and FLOORS[floor_of("fogref.errors")][0] == "base"
     assert "fogref.media" in import_graph()["fogref.models.ue4"]
     assert _resolve("fogref.set_variant") == "fogref.render.variant" and _resolve("fogref") == "fogref"

@@ -57,6 +57,7 @@ def _hashes_and_image(mi, scene):
     return hashes, image
 
 
+@pytest.mark.render
 @pytest.mark.parametrize("change", VALLEY_CHANGES, ids=lambda c: next(iter(c)))
 def test_valley_value_reuses_kernels(mitsuba, change):
     mi = mitsuba
@@ -87,6 +88,7 @@ PROFILE_CASES = [
 ]
 
 
+@pytest.mark.render
 @pytest.mark.parametrize("name,before,after", PROFILE_CASES, ids=[c[0] for c in PROFILE_CASES])
 def test_profile_values_reuse_kernels(mitsuba, name, before, after):
     mi = mitsuba

@@ -85,6 +85,7 @@ def test_converged_fit_reports_spread_and_history():
     assert set(d["parameters"]["density"]) >= {"value", "uncertainty", "spread"}
 
 
+@pytest.mark.slow
 def test_every_builtin_model_has_a_fit_spec_and_fits_the_valley_over_two_suns():
     for name in FIT_SPECS:
         r = fit_model(name, _valley(), views=24, sun_elevations=[10.0, 40.0])

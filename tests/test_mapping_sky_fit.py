@@ -1,4 +1,4 @@
-"""The fits' closed forms with a physical sky (issue 18): a ``sunsky`` projected onto the phase function.
+"""The fits' closed forms with a physical sky: a ``sunsky`` projected onto the phase function.
 
 A uniform sky keeps the closed form it had (``alpha L_sky (1 - T)``, bit for bit); a sunsky's sky
 term is ``alpha S(d) (1 - T)`` with ``S`` its projection onto the HG phase function per view

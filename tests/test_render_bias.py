@@ -29,14 +29,13 @@ CASES = {
         dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], **BOX),
         56,
     ),
-    # the sky control variate (closed form + Monte Carlo difference) with occluders
-    # above the horizon: a white cube in the fog and a white roof over part of it
-    "sky control variate, occluders, exponential, RGB": (
+    # occluders above the horizon: a white cube in the fog and a white roof over part of it
+    "occluders, exponential, RGB": (
         [0, 3, -10],
         dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], **BOX),
         80,
     ),
-    "sky control variate, occluders, homogeneous": ([0, 3, -10], dict(falloff=0.0, **BOX), 88),
+    "occluders, homogeneous": ([0, 3, -10], dict(falloff=0.0, **BOX), 88),
     # forced splitting on the camera ray (fogpath's ``forced_split``): both branches at depth 0
     "forced split, box, camera inside": ([0, 3, -10], dict(falloff=0.0, **BOX), 40),
     "forced split, box, camera outside": ([0, 12, -60], dict(falloff=0.0, **BOX), 40),
@@ -58,7 +57,7 @@ CASES = {
         dict(falloff=0.1, density2=0.5, falloff2=0.01, height2=5.0),
         120,
     ),
-    "forced split, sky control variate, occluders, exponential, RGB": (
+    "forced split, occluders, exponential, RGB": (
         [0, 3, -10],
         dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], **BOX),
         80,
@@ -78,9 +77,7 @@ CASES = {
     ),
 }
 #: cases with white occluders above the horizon (cube, roof)
-#: the occluder cases run the sky control variate on every camera ray (fogpath's
-#: ``sky_cv = "all"``; off by default)
-OCCLUDED_ON = {k: dict(occluders=True, sky_cv="all") for k in CASES if "occluders" in k}
+OCCLUDED_ON = {k: dict(occluders=True) for k in CASES if "occluders" in k}
 #: every case runs with ``forced_split`` set explicitly (on where the case says so)
 OPTIONS = {k: dict(OCCLUDED_ON.get(k, {}), forced_split=k.startswith("forced split")) for k in CASES}
 

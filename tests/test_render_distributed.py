@@ -1,4 +1,4 @@
-"""One truth's passes on a real two-worker Dask LocalCluster (issue 22, part 1).
+"""One truth's passes on a real two-worker Dask LocalCluster.
 
 The default scene at 16x9 pixels and 8 spp, in 8 passes of 1 spp (``MAX_LANES`` shrunk as in
 ``tests/test_render_passes.py``), rendered once in this process: the reference.  On the
@@ -42,7 +42,7 @@ def _assert_equal(a: dict, b: dict) -> None:
 @pytest.fixture
 def one_spp_passes(monkeypatch):
     """Passes of 1 spp at 16x9 (8 passes for 8 spp), in this process (the driver)."""
-    import fogref.render.passes as passes
+    import fogref_plugins.passes as passes
 
     lanes = RES["res"] * RES["resy"]
     monkeypatch.setattr(passes, "MAX_LANES", {"llvm": lanes, "cuda": lanes})
@@ -65,7 +65,8 @@ def cluster():
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory):
     """The one-process render (its own pass sizes set here: a module-scoped fixture)."""
-    import fogref.render.passes as passes
+    import fogref_plugins.passes as passes
+
     from fogref.render.render import render
 
     saved = passes.MAX_LANES

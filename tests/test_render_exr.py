@@ -131,8 +131,9 @@ def _interrupting_savez(R, monkeypatch):
 
 def test_resume_after_interruption_gives_identical_pixels(tmp_path, mitsuba, monkeypatch):
     """Interrupt after the first checkpoint; the rerun resumes and gives the same pixels."""
+    import fogref_plugins.passes as passes
+
     import fogref.render.checkpoint as C
-    import fogref.render.passes as passes
     import fogref.render.render as R
 
     monkeypatch.setattr(passes, "MAX_LANES", {"llvm": 96 * 4, "cuda": 96 * 4})  # 4 spp per pass at 12x8
@@ -155,8 +156,9 @@ def test_resume_after_interruption_gives_identical_pixels(tmp_path, mitsuba, mon
 def test_checkpoint_of_an_edited_scene_is_not_resumed(tmp_path, mitsuba, monkeypatch):
     """The checkpoint key is the scene's content: edit the scene between the
     interruption and the rerun, and the rerun starts over (no mixed image)."""
+    import fogref_plugins.passes as passes
+
     import fogref.render.checkpoint as C
-    import fogref.render.passes as passes
     import fogref.render.render as R
 
     monkeypatch.setattr(passes, "MAX_LANES", {"llvm": 96 * 4, "cuda": 96 * 4})

@@ -18,7 +18,7 @@ pytestmark = pytest.mark.render
 
 def sixteen_spp_passes(monkeypatch):
     """Passes of 16 spp at the tiny scene's 8x6 pixels."""
-    import fogref.render.passes as passes
+    import fogref_plugins.passes as passes
 
     monkeypatch.setattr(passes, "MAX_LANES", {"llvm": 16 * 48, "cuda": 16 * 48})
 

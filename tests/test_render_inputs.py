@@ -1,4 +1,4 @@
-"""Every file a scene loads is in its keys, and no output replaces one (issue 17, items 1 and 3).
+"""Every file a scene loads is in its keys, and no output replaces one.
 
 The tiny scene (tests/tiny_inputs_scene.py) loads an OBJ mesh, an envmap EXR and a bitmap
 texture, two of them through ``$default``s.  An edit of any of them between an interruption

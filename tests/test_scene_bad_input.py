@@ -104,6 +104,7 @@ def _valley_with(tmp_path, name: str, edit) -> str:
     return p
 
 
+@pytest.mark.render
 def test_a_scenes_own_default_out_of_range_is_refused(tmp_path, capsys):
     bad = _valley_with(
         tmp_path,
@@ -164,6 +165,8 @@ LITERAL = (
         ('<integer name="rr_depth" value="-3"/>', "70", ["Mitsuba could not load", "fogpath", "'rr_depth'"]),
         ('<integer name="sun_sampling_rays" value="3"/>', "70", ["fogpath", "'sun_sampling_rays'", "[1, 2]"]),
         ('<string name="sky_at_surfaces" value="cos"/>', "70", ["fogpath", "'sky_at_surfaces'", "mis, bsdf"]),
+        ('<integer name="sun_samples" value="4"/>', "70", ["fogpath", "unreferenced", "sun_samples"]),
+        ('<string name="sky_cv" value="all"/>', "70", ["fogpath", "unreferenced", "sky_cv"]),
     ],
 )
 def test_values_written_in_the_xml_are_one_line_errors(tmp_path, capsys, integ, fov, words):
@@ -364,6 +367,7 @@ def _face_normals(xml) -> list:
     return [b.get("value") for b in booleans if b.get("name") == "face_normals"]
 
 
+@pytest.mark.render
 def test_mesh_without_normals_renders_flat_faces_cli(tmp_path, capsys):
     box = _box_obj(tmp_path / "box.obj")
     scene = tmp_path / "box.xml"
@@ -375,6 +379,7 @@ def test_mesh_without_normals_renders_flat_faces_cli(tmp_path, capsys):
     assert rc == 0 and _face_spread(tmp_path / "b.exr") < 1e-6
 
 
+@pytest.mark.render
 def test_mesh_without_normals_renders_flat_faces_api(tmp_path):
     from fogref.render.scene_writer import write_scene
 

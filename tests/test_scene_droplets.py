@@ -138,33 +138,3 @@ def test_hg_only_closed_forms_refuse_a_tabulated_phase():
         Exception, match="parameter 'phase': the sky's projection .* assumes a Henyey-Greenstein"
     ):
         sky_projection(pf, np.array([[0.0, 0.0, 1.0]]), sky=lambda w: np.ones((len(w), 3)))
-
-
-@pytest.mark.render
-def test_sky_cv_refuses_a_tabulated_phase(tmp_path, capsys, mitsuba):
-    out = tmp_path / "fog.xml"
-    assert cli(capsys, ["scene", "--out", out, "--droplets", "radiation"])[0] == 0
-    xml = out.read_text().replace(
-        '<integer name="max_depth" value="$max_depth" />',
-        '<integer name="max_depth" value="$max_depth" /><string name="sky_cv" value="all" />',
-    )
-    assert "sky_cv" in xml
-    out.write_text(xml)
-    rc, err = cli(
-        capsys,
-        [
-            "render",
-            out,
-            "--spp",
-            1,
-            "--set",
-            "res=4",
-            "--set",
-            "resy=3",
-            "--out",
-            tmp_path / "t.exr",
-            "--quiet",
-            "--no-png",
-        ],
-    )
-    assert rc != 0 and "fogpath's sky_cv assumes a Henyey-Greenstein phase" in err

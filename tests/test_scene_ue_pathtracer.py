@@ -24,6 +24,7 @@ PT = [
 ]  # fmt: skip
 
 
+@pytest.mark.render
 def test_scene_renders_the_path_traced_fog(tmp_path, capsys):
     from fogref.gbuffer import load_truth
 
@@ -83,6 +84,7 @@ def test_refusals_are_one_line(tmp_path, capsys, extra, words):
     assert not out.exists()
 
 
+@pytest.mark.render
 def test_every_value_of_the_path_traced_fog_is_a_default_that_set_changes(tmp_path, capsys):
     """The fog's values are ``$default``s (``fogref scene --help``: every value becomes one): the scene
     renders with ``--set g=0.9`` and each fog value it was written with, and says so in the header."""

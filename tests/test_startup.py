@@ -123,6 +123,7 @@ def test_set_variant_restores_dr_syntax(mitsuba):
     assert dr.syntax is drjit.ast.syntax
 
 
+@pytest.mark.render
 def test_quiet_render_does_not_import_tqdm(tmp_path, mitsuba, monkeypatch):
     from fogref.render.render import render
 

@@ -1,4 +1,4 @@
-"""The budget's sun-less copy of a scene finds the files the original loads (issue 17).
+"""The budget's sun-less copy of a scene finds the files the original loads.
 
 The copy is written in the study's renders folder; before it named a relative mesh, envmap or
 texture relative to that folder, where none of them is, so a scene with its own files could

@@ -4,12 +4,19 @@ split, and a render split on a tiny image."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from fogref.mapping.unreal import sample_views
 from fogref.mapping.unreal_pathtracer import UEPathTracerSettings, exact_medium
 from fogref.media import NP, single_scatter_sun
 from fogref.models.ue4 import UE4FogParams
-from fogref.study.ue_pathtracer import closed_form_split, departure_row, render_split, sun_single_scatter
+from fogref.study.ue_pathtracer import (
+    closed_form_split,
+    departure_row,
+    render_split,
+    split_stats,
+    sun_single_scatter,
+)
 
 SUN = tuple(np.array([0.3, 0.35, 0.88]) / np.linalg.norm([0.3, 0.35, 0.88]))
 
@@ -27,6 +34,25 @@ def test_quadrature_matches_the_closed_form_on_the_exact_fog():
     ref = single_scatter_sun(NP, m, o, d, D, SUN, (1.0, 1.0, 1.0))[0]
     assert ref.max() > 1e-3
     np.testing.assert_allclose(got, ref, rtol=1e-4, atol=1e-7 * ref.max())
+
+
+def test_split_stats_is_the_diagonal_noise_model_written_out():
+    """split_stats (through fogref.compare.noise.squared_stat) against the per-channel formula
+    written here: RMSE, noise floor sqrt(mean var), debiased sqrt(max(mean(d^2) - mean(var), 0));
+    agreement to 1e-12 relative (float64 summation order), on a masked image with differences
+    well above and at the noise."""
+    rng = np.random.default_rng(3)
+    var = rng.uniform(1e-4, 4e-4, (6, 5, 3))
+    mask = rng.uniform(size=(6, 5)) > 0.3
+    for scale in (0.1, 0.0):  # a real difference, then noise alone
+        diff = scale + np.sqrt(var) * rng.standard_normal(var.shape)
+        d, v = diff[mask], var[mask]
+        rmse, floor = np.sqrt(np.mean(d * d)), np.sqrt(np.mean(v))
+        debiased = np.sqrt(max(np.mean(d * d) - np.mean(v), 0.0))
+        s = split_stats(diff, var, mask)
+        np.testing.assert_allclose([s.rmse, s.noise_floor, s.debiased], [rmse, floor, debiased], rtol=1e-12)
+        assert s.below_noise == (rmse <= 2 * floor)
+    assert split_stats(np.ones((2, 2, 3)), np.ones((2, 2, 3)), np.zeros((2, 2), bool)).rmse == 0.0
 
 
 def test_closed_form_split_sees_the_cylinder_and_the_clamp():
@@ -52,6 +78,7 @@ def test_closed_form_split_sees_the_cylinder_and_the_clamp():
     assert clamp["opacity_rel_max"] > 0.01  # clamp height = fog height 30 m, above the camera
 
 
+@pytest.mark.render
 def test_render_split_on_a_tiny_image(mitsuba, tmp_path):
     ue = UE4FogParams(FogDensity=0.05, FogHeightFalloff=2.0, FogHeight=2000.0)
     out = render_split(

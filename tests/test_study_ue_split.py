@@ -26,6 +26,7 @@ def tiny_truth(tmp_path_factory):
     return exr
 
 
+@pytest.mark.render
 def test_split_study_writes_its_section_and_json(tiny_truth, tmp_path):
     out = tmp_path / "study"
     out.mkdir()

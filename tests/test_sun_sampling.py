@@ -181,6 +181,7 @@ def _quadrature(medium, o, d, D, w):
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(MIXTURE), ids=list(MIXTURE))
 def test_mixture_estimator_mean_is_the_integral(name):
     """z-test per ray and channel against the oracle (the closed form for unbounded

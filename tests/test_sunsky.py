@@ -138,6 +138,7 @@ def _load_sunsky_after_python_medium_renders(mi, n, parallel):
     return failed
 
 
+@pytest.mark.render
 def test_serial_loading_avoids_mitsubas_sunsky_race(mi):
     """Mitsuba 3.9.1's parallel scene loading (``load_dict``'s default) can corrupt
     ``sunsky``'s construction after a render in which C++ ``volpath`` called fogref's Python
@@ -149,6 +150,7 @@ def test_serial_loading_avoids_mitsubas_sunsky_race(mi):
     assert _load_sunsky_after_python_medium_renders(mi, 60, parallel=False) == 0
 
 
+@pytest.mark.render
 @pytest.mark.parametrize("diameter", [0.0, 0.5358])
 def test_sun_plus_sky_equals_stock_volpath_with_mitsubas_sunsky(mi, diameter):
     """fogpath (sky with sun_scale 0 + fogref's sun of the disk's irradiance, a delta or the
@@ -229,6 +231,7 @@ def _plane_fog_scene(mi, g, diameter, look):
     return mi.load_dict(d, parallel=False)
 
 
+@pytest.mark.render
 def test_disk_and_delta_suns_in_renders(mi):
     """g = 0.6 over an open plane: equal within noise; g = 0.99 looking at the sun: the disk is
     dimmer at the centre of the image (the delta's peak is spread over the disk)."""
@@ -247,6 +250,7 @@ def test_disk_and_delta_suns_in_renders(mi):
     assert np.all(ca.mean(0) - cb.mean(0) > 6 * se), (ca.mean(0), cb.mean(0), se)
 
 
+@pytest.mark.render
 def test_sunsky_sky_single_scattering_matches_its_projection(mi):
     """The sky's single scattering rendered by fogpath (sunsky sky, sun removed, thin fog in a box)
     against the closed form ``alpha S(v) (1 - T)`` with ``S`` the quadrature of the sky model
@@ -310,6 +314,7 @@ def _shadow_edge_scene(mi, diameter):
     return mi.load_dict(d, parallel=False)
 
 
+@pytest.mark.render
 def test_disk_sun_softens_a_shadow_edge(mi):
     """The penumbra (0.19 m on the ground for a 0.53 deg sun 14 m behind the edge): the columns
     across the edge differ from the delta sun's hard shadow by many standard errors, while the
@@ -368,6 +373,7 @@ def test_a_bad_turbidity_override_is_one_line(mi, tmp_path):
         load_scene(_sunsky_scene(tmp_path), {"turbidity": "11"})
 
 
+@pytest.mark.render
 @pytest.mark.parametrize("sun_sampling", [True, False])
 def test_disk_sun_single_scattering_matches_the_disk_closed_form(mi, sun_sampling):
     """Looking into the sun at g = 0.99 in unbounded fog: fogpath's single scattering (the exact
@@ -477,6 +483,7 @@ def _default_sun(mi) -> list:
     return list(np.asarray(mi.traverse(em)["sun_direction"], dtype=np.float64).ravel())
 
 
+@pytest.mark.render
 def test_the_camera_sees_the_sun_disk_through_the_fog(mi, tmp_path):
     """A camera aimed at a sun of 0.53 deg (3 deg field of view, 32x18 px) sees its disk: at the
     pixels whose centre ray lies in the disk, ``surface`` is the sky plus the disk's radiance

@@ -1,4 +1,4 @@
-"""``fogref sweep``: issue 17's bad-input and fault cases, each a one-line error or correct behaviour.
+"""``fogref sweep``: bad-input and fault cases, each a one-line error or correct behaviour.
 
 Every refusal is a :class:`~fogref.errors.FogrefError` (most a ``ParameterError``) of one line naming
 the sweep file, the key and what is allowed; nothing is built, rendered or written before it.  The
@@ -171,7 +171,8 @@ def test_a_repeated_scene_is_refused(tmp_path):
 
 
 def test_two_labels_of_one_default_never_record_values_the_render_did_not_use(tmp_path):
-    """Issue 17: the table said g = 0.8 and g = 0.3 while both configurations rendered g = 0.5."""
+    """The table names the g each configuration rendered (it once said g = 0.8 and g = 0.3 where both
+    rendered g = 0.5)."""
     body = (
         MODELS + '[design]\nkind = "list"\n[parameters.g]\nvalues = [0.8, 0.3]\n'
         '[parameters.anisotropy]\ntarget = "g"\nvalues = [0.5, 0.5]\n'

@@ -251,6 +251,7 @@ def test_heightfog_params_round_trip():
     assert m.layers == medium_from_params(p, "<dict>").layers
 
 
+@pytest.mark.render
 def test_render_T_matches_closed_form(mitsuba, tmp_path):
     """``fogref render``'s path: the valley rewritten with UE's path-traced fog, rendered by
     fogpath on a tiny image; its T channel (closed form per sample, every sample through

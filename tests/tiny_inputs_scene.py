@@ -83,6 +83,6 @@ def make(mi, folder: Path) -> Path:
 
 def one_spp_passes(monkeypatch) -> None:
     """Passes of 1 spp at 8x6 pixels (MAX_LANES = 48), so that a render can stop between passes."""
-    import fogref.render.passes as passes
+    import fogref_plugins.passes as passes
 
     monkeypatch.setattr(passes, "MAX_LANES", {"llvm": 48, "cuda": 48})

@@ -9,7 +9,6 @@ Modules (one concept each):
 * :mod:`~fogref.compare.foreign`       an engine's images (EXR, PNG, HDR) as a candidate
 * :mod:`~fogref.compare.binning`       errors binned by distance or sun angle
 * :mod:`~fogref.compare.plots`         heatmaps, side-by-side pictures, binned plots
-* :mod:`~fogref.compare.tonemap`       the shared display tone map
 * :mod:`~fogref.compare.gate`          verdicts as exit codes, ``--json``/``--junit`` files
 
 The model is built by :func:`fogref.mapping.build.build_model` (names resolved by

@@ -26,7 +26,8 @@ from fogref.compare.metrics import (
     relative_squared_error_map,
     squared_error_map,
 )
-from fogref.compare.perceptual import FLIP_PPD, delta_e2000_map, exposure_white, flip_map
+from fogref.compare.perceptual import FLIP_PPD, delta_e2000_map, flip_map
+from fogref.display import exposure_white
 
 
 @dataclass

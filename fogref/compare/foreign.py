@@ -378,7 +378,7 @@ def load_engine_images(
     )
 
 
-def compare_images(
+def check_images(
     truth, images: EngineImages, out_dir=None, tolerances=None, *, figures: bool = True, **check_options
 ):
     """Check an engine's images against a truth; optionally write the report.
@@ -413,7 +413,7 @@ def compare_images(
     >>> model = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
     >>> truth = synthetic_truth(model)
     >>> p = evaluate_model(truth, model)
-    >>> r = compare_images(truth, EngineImages(transmittance=p["T"], inscatter=1.05 * p["inscatter"]))
+    >>> r = check_images(truth, EngineImages(transmittance=p["T"], inscatter=1.05 * p["inscatter"]))
     >>> r.row("inscatter", "all", "rel_bias").verdict, r.row("T", "all").verdict
     ('fail', 'pass')
     """

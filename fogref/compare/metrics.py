@@ -41,8 +41,6 @@ from fogref.compare import noise
 
 #: relMSE's stabiliser, in image units squared: ``(x - r)² / (r² + eps)``.
 RELMSE_EPS = 1e-2
-#: Rec.709 / sRGB luminance weights (linear RGB -> Y).
-REC709_LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 #: A metric is "below the noise" within this many standard errors of a perfect model's.
 NOISE_Z = 3.0
 
@@ -67,11 +65,6 @@ def finite_pixels(image) -> np.ndarray:
     [True, False]
     """
     return np.all(np.isfinite(np.asarray(image, dtype=np.float64)), axis=-1)
-
-
-def luminance(rgb) -> np.ndarray:
-    """Rec.709 relative luminance ``Y`` of linear RGB ``(..., 3)`` -> ``(...)``; same units."""
-    return np.asarray(rgb, dtype=np.float64) @ REC709_LUMINANCE
 
 
 def check_pair(reference, test) -> tuple[np.ndarray, np.ndarray]:

@@ -20,10 +20,9 @@ import os
 
 import numpy as np
 
-from fogref.compare.metrics import check_pair, luminance, require_finite
+from fogref.compare.metrics import check_pair, require_finite
+from fogref.display import exposure_white, luminance
 
-#: Percentile of the reference luminance that the ΔE exposure maps to white (Y = 1).
-WHITE_PERCENTILE = 99.0
 #: FLIP's default viewing condition: pixels per degree of visual angle.
 FLIP_PPD = 67.0
 #: FLIP inputs are clipped to this many times the reference's largest finite value.
@@ -38,24 +37,6 @@ _FLT_MAX = float(np.finfo(np.float32).max)
 
 
 # ---------------------------------------------------------------- ΔE2000
-
-
-def exposure_white(reference, percentile: float = WHITE_PERCENTILE) -> float:
-    """The radiance that the exposure normalisation maps to white (``Y = 1``).
-
-    It is the ``percentile``-th percentile of the reference's Rec.709 luminance over
-    its pixels with positive luminance (falling back to their maximum when the
-    percentile is 0, and to 1 when no pixel is positive).  Always finite and > 0.
-    Units: those of ``reference``.
-    """
-    y = luminance(reference).ravel()
-    y = y[np.isfinite(y) & (y > 0)]
-    if y.size == 0:
-        return 1.0
-    w = float(np.percentile(y, percentile))
-    if not w > 0:
-        w = float(y.max())
-    return min(w, _FLT_MAX)
 
 
 def to_display_radiance(image, ceiling: float | None = None) -> np.ndarray:

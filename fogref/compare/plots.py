@@ -13,7 +13,7 @@ import numpy as np
 
 from fogref.atomic import save_figure_atomic
 from fogref.compare.error_maps import ErrorMaps
-from fogref.compare.tonemap import tone_map
+from fogref.display import tone_map
 
 
 def _figure(width_in: float, height_in: float):
@@ -99,7 +99,7 @@ def plot_error_heatmaps(errors: ErrorMaps, part: str, units: str, path) -> Path:
 def plot_side_by_side(reference, model, exposure: float, part: str, units: str, path, valid=None) -> Path:
     """Reference | model | |model − reference|, all through one tone map.
 
-    Tone map: :func:`fogref.compare.tonemap.tone_map` with the shared ``exposure``
+    Tone map: :func:`fogref.display.tone_map` with the shared ``exposure``
     [1/``units``] (exposure, clip to [0, 1], sRGB OETF).  ``valid``: ``(H, W)`` bool;
     pixels outside it (excluded from the metrics) are drawn magenta in the model and
     error panels.

@@ -81,7 +81,7 @@ from fogref.compare.report_parts import (
     parts_from_check,
     truth_provenance,
 )
-from fogref.compare.tonemap import exposure_for
+from fogref.display import exposure_for
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 from fogref.gbuffer import Truth, load_truth

@@ -129,8 +129,7 @@ def image_parts(truth: Truth, images) -> dict:
         out["attenuated_surface"] = _attenuated_surface(
             truth, np.asarray(images.transmittance, dtype=np.float64)
         )
-    order = ("final", "transmittance", "inscatter", "attenuated_surface", "composite")
-    return {p: out[p] for p in order if p in out}
+    return {p: out[p] for p in ALL_PARTS if p in out}
 
 
 def _from_core(cp) -> dict:

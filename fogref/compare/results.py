@@ -13,7 +13,6 @@ from fogref.atomic import write_text_atomic
 from fogref.compare.intervals import SIGNED
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
-from fogref.html.inline import check_html
 
 
 @dataclass
@@ -158,11 +157,6 @@ class CheckResult:
         lines += ["  " + r.describe() for r in self.rows if r.tolerance is not None]
         lines.append(f"verdict: {self.verdict}")
         return "\n".join(lines)
-
-    def _repr_html_(self) -> str:
-        """Jupyter's display: verdict, error thumbnails, rows (:func:`fogref.html.inline.check_html`)."""
-
-        return check_html(self)
 
     def to_dict(self) -> dict:
         """JSON-ready (no NaN): settings, verdict and rows."""

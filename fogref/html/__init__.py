@@ -1,8 +1,8 @@
 """Self-contained HTML reports: one file per report that works from ``file://`` with no network.
 
 * :mod:`~fogref.html.inline`: the encodings a page embeds (half-float images, masks, PNGs as
-  base64) and small HTML pieces; low in the floors, so that ``Truth`` and ``CheckResult`` can
-  show themselves in a notebook (``_repr_html_``) with it;
+  base64) and small HTML pieces, among them the notebook displays of ``Truth`` and
+  ``CheckResult`` (registered by ``%load_ext fogref.html.notebook``);
 * :mod:`~fogref.html.assets`: the viewer's CSS and JavaScript (its tone map is
   :func:`fogref.display.tone_map`, the same formula; ``tests/test_html_browser.py`` checks
   a probe pixel against Python);

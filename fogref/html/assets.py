@@ -7,7 +7,7 @@ The viewer's display transform is fogref's one transform, :func:`fogref.display.
 ``tests/test_html_browser.py`` checks that a probe pixel of the canvas equals Python's value.
 
 Exposure: ``part exposure * 2^stops`` (the part's exposure is the report's:
-:func:`fogref.compare.tonemap.exposure_for`, 1 for the transmittance).  False colour: the
+:func:`fogref.display.exposure_for`, 1 for the transmittance).  False colour: the
 signed error (mean over RGB, candidate - truth) on a diverging blue-white-red map with
 symmetric limits ``±L``; the absolute error (mean over RGB of ``|error|``) on viridis over
 ``[0, L]``; ``L`` is the part's error limit (the 99th percentile of ``|error|``) times

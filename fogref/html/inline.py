@@ -40,7 +40,7 @@ import zlib
 
 import numpy as np
 
-from fogref.display import preview_exposure, tone_map
+from fogref.display import exposure_for, tone_map
 
 #: Largest finite half float.
 HALF_MAX = 65504.0
@@ -242,10 +242,10 @@ def _figures_row(items) -> str:
 
 def truth_html(truth) -> str:
     """A truth's notebook display: thumbnails of ``final``, ``T``, ``inscatter``, ``single``,
-    ``multiple``, ``surface`` (radiance parts at :func:`fogref.display.preview_exposure` of ``final``;
+    ``multiple``, ``surface`` (radiance parts at :func:`fogref.display.exposure_for` of ``final``;
     inscatter, single and multiple share the inscatter's; ``T`` at exposure 1) and its provenance."""
 
-    ex_final, ex_in = preview_exposure(truth.final), preview_exposure(truth.inscatter)
+    ex_final, ex_in = exposure_for(truth.final), exposure_for(truth.inscatter)
     thumbs = [
         (p, thumbnail_uri(img, ex))
         for p, img, ex in (

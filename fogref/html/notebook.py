@@ -1,8 +1,10 @@
 """A sweep's table in a notebook: :func:`sweep_table` gives a :class:`SweepTable` that Jupyter shows
 as HTML (the main columns, the plots as thumbnails, the row count and the failed configurations).
 
-``Truth`` and ``CheckResult`` display themselves (their ``_repr_html_``,
-:func:`fogref.html.inline.truth_html` and :func:`~fogref.html.inline.check_html`).
+``%load_ext fogref.html.notebook`` (:func:`load_ipython_extension`) shows a
+:class:`~fogref.gbuffer.Truth` and a :class:`~fogref.compare.results.CheckResult` as HTML
+(:func:`fogref.html.inline.truth_html`, :func:`~fogref.html.inline.check_html`): the truth and the
+check hold data, this floor draws them.
 
 Examples
 --------
@@ -20,12 +22,24 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from fogref.compare.results import CheckResult
 from fogref.errors import FogrefError
-from fogref.html.inline import NOTEBOOK_CSS, esc, png_data_uri, table_html
+from fogref.gbuffer import Truth
+from fogref.html.inline import NOTEBOOK_CSS, check_html, esc, png_data_uri, table_html, truth_html
 from fogref.study.plot_units import HEADLINE_METRICS
 
 #: Columns shown first (when present), after the swept parameters.
 MAIN_COLUMNS = ("model", "status", *HEADLINE_METRICS)
+
+
+def load_ipython_extension(ipython) -> None:
+    """``%load_ext fogref.html.notebook``: IPython shows a :class:`~fogref.gbuffer.Truth` with
+    :func:`~fogref.html.inline.truth_html` (part thumbnails, provenance) and a
+    :class:`~fogref.compare.results.CheckResult` with :func:`~fogref.html.inline.check_html`
+    (verdict, error thumbnails, rows)."""
+    formatter = ipython.display_formatter.formatters["text/html"]
+    formatter.for_type(Truth, truth_html)
+    formatter.for_type(CheckResult, check_html)
 
 
 @dataclass

@@ -34,12 +34,14 @@ from types import SimpleNamespace
 import numpy as np
 
 from fogref.compare.regions import region_masks
-from fogref.compare.tonemap import exposure_for
+from fogref.display import exposure_for
 from fogref.exrio import read_exr
+from fogref.gbuffer import PARTS
 from fogref.html.inline import encode_half, encode_mask
 
-#: The truth's parts the viewer shows, in order (``T`` is the transmittance).
-TRUTH_PARTS = ("final", "T", "inscatter", "single", "multiple", "surface")
+#: The truth's parts the viewer shows, in the schema's order (``T`` is the transmittance;
+#: ``attenuated_surface`` only beside a report that compares it).
+TRUTH_PARTS = tuple(p for p in PARTS if p != "attenuated_surface")
 #: A report's part name -> the truth's part it is compared with.
 REPORT_TO_TRUTH = {
     "final": "final",

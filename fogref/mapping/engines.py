@@ -275,7 +275,7 @@ def filament_from_physical(ps: PhysicalScene) -> FilamentFog:
     return FilamentFog(medium_to_filament(ps.medium, **kw))
 
 
-# -- Godot, Bevy, three.js (issue 19) ------------------------------------------------
+# -- Godot, Bevy, three.js -----------------------------------------------------------
 
 
 def _view_axis(ps: PhysicalScene) -> dict:

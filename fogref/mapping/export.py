@@ -66,12 +66,12 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from fogref.display import LUMINANCE_WEIGHTS
+from fogref.display import luminance
 from fogref.errors import ParameterError
 from fogref.models.terms import linear_to_srgb
 from fogref.models.ue4 import direction_to_unreal, unreal_rotator, world_to_unreal
 
-__all__ = ["ENGINES", "Camera", "Sun", "export", "light_split", "luminance"]
+__all__ = ["ENGINES", "Camera", "Sun", "export", "light_split"]
 
 #: ``--engine`` name -> the registry name of the model whose settings it writes.
 ENGINES = {
@@ -148,15 +148,6 @@ class Sun:
     def w(self) -> np.ndarray:
         w = np.asarray(self.direction, float)
         return w / np.linalg.norm(w)
-
-
-def luminance(rgb: Any) -> float:
-    """Rec. 709 luminance of linear RGB (:data:`fogref.display.LUMINANCE_WEIGHTS`).
-
-    >>> round(luminance((1.0, 1.0, 1.0)), 12)
-    1.0
-    """
-    return float(np.dot(LUMINANCE_WEIGHTS, np.asarray(rgb, float)[:3]))
 
 
 def light_split(rgb: Any) -> tuple[tuple[float, float, float], float]:

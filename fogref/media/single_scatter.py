@@ -18,7 +18,6 @@ infinite (no sun light) when a layer is constant in height.
 
 from __future__ import annotations
 
-import functools
 import math
 
 from fogref.errors import ParameterError
@@ -336,40 +335,3 @@ def hg_upper_fraction(g: float, mu0: Real) -> Real:
 
     mu0 = np.atleast_1d(np.asarray(mu0, dtype=np.float64))
     return np.array([one(float(m)) for m in mu0])
-
-
-def hg_upper_fraction_fast(g: float, mu0: Real, panels: int = 256, nodes: int = 8) -> Real:
-    """:func:`hg_upper_fraction` by another route (vectorised): the azimuthal integral of
-    the HG lobe in closed form, ``int_0^2pi (A - B cos phi)^-3/2 dphi = 4 E(m) / ((A-B) sqrt(A+B))``,
-    ``m = 2B / (A+B)`` (complete elliptic integral of the second kind), then composite
-    Gauss–Legendre over the height ``y`` of the direction in [0, 1].  Agrees with the
-    adaptive quadrature to 1e-13 for |g| <= 0.95 (``tests/test_sky_control_variate.py``)."""
-    import numpy as np
-    from scipy.special import ellipe
-
-    g = float(g)
-    x, w = np.polynomial.legendre.leggauss(nodes)
-    edges = np.linspace(0.0, 1.0, panels + 1)
-    half = (edges[1:, None] - edges[:-1, None]) / 2
-    y = ((edges[:-1, None] + edges[1:, None]) / 2 + half * x[None]).ravel()
-    wy = (half * w[None]).ravel()
-    mu0 = np.atleast_1d(np.asarray(mu0, dtype=np.float64))[:, None]
-    A = 1.0 + g * g - 2.0 * g * mu0 * y
-    B = np.abs(2.0 * g * np.sqrt(np.maximum(1.0 - mu0**2, 0.0)) * np.sqrt(1.0 - y**2))
-    inner = 4.0 * ellipe(2.0 * B / (A + B)) / ((A - B) * np.sqrt(A + B))
-    return (1.0 - g * g) / (4.0 * math.pi) * (inner * wy).sum(1)
-
-
-@functools.lru_cache(maxsize=16)
-def hg_upper_fraction_table(g: float, n: int = 0) -> Real:
-    """:func:`hg_upper_fraction_fast` on ``n`` equally spaced ``mu0`` in [-1, 1] (tuple),
-    once per ``g`` (``n`` = 0: 2049 nodes for |g| <= 0.9, 8193 above).  Linear
-    interpolation between the nodes is within 1e-6 of the exact value for
-    |g| <= 0.95 (``tests/test_sky_control_variate.py``).  Uses ``H(-mu0) = 1 - H(mu0)``."""
-    import numpy as np
-
-    n = int(n) or (2049 if abs(g) <= 0.9 else 8193)
-    n += 1 - n % 2  # odd: mu0 = 0 is a node
-    mu = np.linspace(-1.0, 1.0, n)
-    half = np.clip(hg_upper_fraction_fast(g, mu[n // 2 :]), 0.0, 1.0)
-    return tuple(float(x) for x in np.concatenate([1.0 - half[1:][::-1], half]))

@@ -43,6 +43,17 @@ def split(camera: Any, world_pos: Any) -> Any:
     return cam, as_points(world_pos)
 
 
+def glsl_smoothstep(e0: Any, e1: Any, x: Any, dt: Any) -> Any:
+    """GLSL ``smoothstep(e0, e1, x)`` in ``dt`` (e1 > e0): ``t = clamp((x - e0)/(e1 - e0), 0, 1)``,
+    ``t^2 (3 - 2 t)``; the edges are rounded to ``dt`` first, as a shader's uniforms are.
+
+    >>> float(glsl_smoothstep(0.0, 2.0, np.float32(0.5), np.float32))
+    0.15625
+    """
+    t = np.minimum(np.maximum((x - dt(e0)) / (dt(e1) - dt(e0)), dt(0.0)), dt(1.0))
+    return t * t * (dt(3.0) - dt(2.0) * t)
+
+
 def grey(x: Any, dt: Any) -> Any:
     """Broadcast a (...,) scalar field to (..., 3) RGB."""
     x = np.asarray(x, dtype=dt)

@@ -74,7 +74,7 @@ import numpy as np
 from fogref import params as P
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, rgb
-from fogref.models._num import dtype_of, grey, sky_pixels, split, unit_direction, view_ray
+from fogref.models._num import dtype_of, glsl_smoothstep, grey, sky_pixels, split, unit_direction, view_ray
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
 MODES = ("exponential", "depth")
@@ -183,12 +183,6 @@ class GodotFogParams:
         end = dt(self.fog_depth_end) if self.fog_depth_end > 0 else dt(self.z_far)
         begin = min(dt(self.fog_depth_begin), dt(end - dt(0.001)))
         return dt(begin), dt(end)
-
-
-def glsl_smoothstep(e0: Any, e1: Any, x: Any, dt: Any) -> Any:
-    """GLSL ``smoothstep(e0, e1, x)`` in ``dt`` (e1 > e0)."""
-    t = np.minimum(np.maximum((x - e0) / (e1 - e0), dt(0.0)), dt(1.0))
-    return t * t * (dt(3.0) - dt(2.0) * t)
 
 
 @register("godot")

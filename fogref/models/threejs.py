@@ -65,7 +65,7 @@ import numpy as np
 from fogref import params as P
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, rgb
-from fogref.models._num import dtype_of, grey, sky_pixels, split
+from fogref.models._num import dtype_of, glsl_smoothstep, grey, sky_pixels, split
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
 MODES = ("Fog", "FogExp2")
@@ -119,12 +119,6 @@ class ThreeFogParams:
         if f.shape != (3,) or not (math.isfinite(n) and n > 0):
             raise ParameterError(src, "camera_forward", "expected a non-zero finite 3-vector")
         object.__setattr__(self, "camera_forward", tuple(float(x) for x in f / n))
-
-
-def glsl_smoothstep(e0: Any, e1: Any, x: Any, dt: Any) -> Any:
-    """GLSL ``smoothstep(e0, e1, x)`` in ``dt`` (e1 > e0)."""
-    t = np.minimum(np.maximum((x - dt(e0)) / (dt(e1) - dt(e0)), dt(0.0)), dt(1.0))
-    return t * t * (dt(3.0) - dt(2.0) * t)
 
 
 def srgb_transfer_oetf(linear: Any, dt: Any) -> Any:

@@ -6,23 +6,22 @@ them (:func:`write_checkpoint`, through :func:`fogref.atomic.savez_atomic`).  :f
 reads one back only when every check passes (:func:`checkpoint_problem`: fields, key, pass
 count, dtype, shape, checksum, finite values, the sums of the [0, 1]-bounded channels within
 the sample count); a checkpoint of other inputs or settings is left to be replaced, and one
-that is damaged is renamed ``<name>.damaged[N]`` with a one-line warning (:func:`set_aside`).
+that is damaged is renamed ``<name>.damaged[N]`` with a one-line warning (:func:`set_aside_checkpoint`).
 The driver (:mod:`fogref.render.render`) defers SIGINT/SIGTERM across the write.
 """
 
 from __future__ import annotations
 
 import hashlib
-import os
 import sys
 from pathlib import Path
 
 import numpy as np
 
 from fogref import gbuffer
-from fogref.atomic import savez_atomic
+from fogref.atomic import savez_atomic, set_aside
 
-__all__ = ["checkpoint_problem", "record_sha256", "resume", "set_aside", "write_checkpoint"]
+__all__ = ["checkpoint_problem", "record_sha256", "resume", "set_aside_checkpoint", "write_checkpoint"]
 
 
 def record_sha256(key: str, done: int, sums: np.ndarray, squares: np.ndarray) -> str:
@@ -100,16 +99,11 @@ def checkpoint_problem(z, key: str, shape: tuple, passes: list):
     return None
 
 
-def set_aside(ckpt: Path, reason: str) -> None:
-    """Rename a checkpoint that can't be resumed to an unused ``<ckpt>.damaged[N]``, with a one-line
-    warning."""
-    aside = ckpt.with_name(ckpt.name + ".damaged")
-    n = 1
-    while aside.exists() or aside.is_symlink():
-        aside, n = ckpt.with_name(f"{ckpt.name}.damaged{n}"), n + 1
+def set_aside_checkpoint(ckpt: Path, reason: str) -> None:
+    """Rename a checkpoint that can't be resumed to an unused ``<ckpt>.damaged[N]``
+    (:func:`fogref.atomic.set_aside`), with a one-line warning."""
     try:
-        os.replace(ckpt, aside)
-        where = f"set aside as {aside}"
+        where = f"set aside as {set_aside(ckpt, '.damaged')}"
     except OSError as e:
         where = f"could not be set aside ({e.strerror}); it will be replaced"
     print(
@@ -122,7 +116,7 @@ def resume(ckpt: Path, key: str, shape: tuple, passes: list):
     """``(sums, squares, passes done)`` from a checkpoint of this render, else None.
 
     A checkpoint of other inputs or settings is left to be replaced; one that can't be
-    read or fails a check (:func:`checkpoint_problem`) is set aside (:func:`set_aside`).
+    read or fails a check (:func:`checkpoint_problem`) is set aside (:func:`set_aside_checkpoint`).
     """
     if not ckpt.exists():
         return None
@@ -135,5 +129,5 @@ def resume(ckpt: Path, key: str, shape: tuple, passes: list):
         detail = (str(e).splitlines() or ["no detail"])[0]
         problem = f"unreadable ({type(e).__name__}: {detail[:80]}{'...' if len(detail) > 80 else ''})"
     if problem != "stale":
-        set_aside(ckpt, problem)
+        set_aside_checkpoint(ckpt, problem)
     return None

@@ -1,7 +1,7 @@
 """One truth's passes on Dask workers (``fogref render --scheduler ADDRESS`` / ``--workers N``).
 
-A render is a sum of independent passes (:mod:`fogref.render.passes`): pass ``k`` draws
-``passes[k]`` samples per pixel with the seed :func:`~fogref.render.passes.pass_seed`
+A render is a sum of independent passes (:mod:`fogref_plugins.passes`): pass ``k`` draws
+``passes[k]`` samples per pixel with the seed :func:`~fogref_plugins.passes.pass_seed`
 ``(seed, k)``.  Here each pass is one Dask task, :func:`render_pass`, which returns the
 pass's float64 per-pixel sums and squares; :func:`passes_in_order` hands them to the render
 driver (:func:`fogref.render.render.render`) in pass order, whatever order they arrive in, and
@@ -121,8 +121,7 @@ def render_pass(j: dict, k: int, spp: int) -> dict:
     on this process includes loading the scene and compiling the kernels) and the process id.
     """
     import numpy as np
-
-    from fogref.render.passes import pass_seed
+    from fogref_plugins.passes import pass_seed
 
     t0, c0 = time.perf_counter(), time.process_time()
     scene, integrator = _worker_scene(j)

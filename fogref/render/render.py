@@ -12,7 +12,7 @@ the back end's memory allows, and turns them into means and standard errors.
   ``(scene, overrides, spp, seed, pixel_filter, variant)`` gives identical pixels.
 * **Cheap**: the running sums stay on the device (Dr.Jit float64, added there after
   every pass; copied to the host only for a checkpoint and once at the end), and the
-  passes are as few and as equal as :data:`fogref.render.passes.MAX_LANES` allows
+  passes are as few and as equal as :data:`fogref_plugins.passes.MAX_LANES` allows
   (``benchmarks/render_driver.py``
   measures the driver against one ``mi.render`` call).
 * **Resumable**: the running sums are checkpointed atomically next to the output
@@ -52,6 +52,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from fogref_plugins.passes import max_lanes, pass_seed, pass_sizes
 
 from fogref import cluster, gbuffer
 from fogref._version import __version__
@@ -63,7 +64,6 @@ from fogref.render import checkpoint
 from fogref.render import scene as scene_reader
 from fogref.render.distributed import PassFailed
 from fogref.render.inputs import file_sha256, inputs_digest, scene_inputs
-from fogref.render.passes import max_lanes, pass_seed, pass_sizes
 from fogref.render.variant import set_variant
 
 PIXEL_FILTERS = ("centre", "box")

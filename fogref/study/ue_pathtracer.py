@@ -34,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from fogref.compare import noise
 from fogref.mapping.unreal import Views, sample_views
 from fogref.mapping.unreal_pathtracer import (
     UEPathTracerSettings,
@@ -224,9 +225,13 @@ def split_stats(diff: np.ndarray, var: np.ndarray, mask: np.ndarray | None = Non
     """
     m = np.ones(diff.shape[:2], bool) if mask is None else mask
     d, v = diff[m], var[m]
-    rmse = float(np.sqrt(np.mean(d * d))) if d.size else 0.0
-    floor = float(np.sqrt(np.mean(v))) if v.size else 0.0
-    return SplitStats(rmse, floor, rmse <= 2.0 * floor, math.sqrt(max(rmse * rmse - floor * floor, 0.0)))
+    if not d.size:
+        return SplitStats(0.0, 0.0, True, 0.0)
+    # the renders give each channel's variance only; Q (the debiased square) reads only C's diagonal
+    q, _ = noise.squared_stat(d, noise.add_diagonal(np.zeros((*v.shape, 3)), v), spp=0)
+    rmse = float(np.sqrt(np.mean(d * d)))
+    floor = float(np.sqrt(np.mean(v)))
+    return SplitStats(rmse, floor, rmse <= 2.0 * floor, math.sqrt(max(q / d.size, 0.0)))
 
 
 def _moments(mi, scene, spp: int, seed: int):

@@ -29,7 +29,7 @@ from fogref.atomic import write_text_atomic
 from fogref.errors import FogrefError
 from fogref.study.sweep.design import build_configs, scene_input_files
 from fogref.study.sweep.spec import SweepSpec, load_sweep
-from fogref.study.sweep.table import plot_files, read_result, set_aside, write_table
+from fogref.study.sweep.table import plot_files, read_result, set_aside_result, write_table
 from fogref.study.sweep.task import run_config
 
 __all__ = ["WORKER_LOG", "SweepInterrupted", "run_sweep"]
@@ -94,7 +94,7 @@ def _todo(configs: list[dict], cdir: Path, retry_failed: bool) -> list[dict]:
         f = cdir / f"{cfg['id']}.json"
         prev, why = read_result(f, cfg)
         if prev is None and why != "missing":
-            set_aside(f, why)
+            set_aside_result(f, why)
         if prev is not None and (prev["status"] != "error" or not retry_failed):
             continue
         todo.append(cfg)

@@ -11,11 +11,11 @@ import json
 import sys
 from pathlib import Path
 
-from fogref.atomic import atomic_write, save_figure_atomic, write_text_atomic
+from fogref.atomic import atomic_write, save_figure_atomic, set_aside, write_text_atomic
 from fogref.study.plot_units import HEADLINE_METRICS, metric_label, parameter_label
 from fogref.study.sweep.spec import SweepSpec
 
-__all__ = ["DEFAULT_PLOT_METRICS", "plot_files", "read_result", "set_aside", "write_table"]
+__all__ = ["DEFAULT_PLOT_METRICS", "plot_files", "read_result", "set_aside_result", "write_table"]
 
 #: Metrics plotted when the sweep's ``[outputs] plot_metrics`` is not given.
 DEFAULT_PLOT_METRICS = HEADLINE_METRICS
@@ -54,11 +54,10 @@ def read_result(path, cfg: dict):
     return (None, why) if why else (result, "")
 
 
-def set_aside(path, why: str) -> Path:
-    """Rename a malformed result file to ``<name>.bad`` (replacing an older one) and warn in one line."""
-    path = Path(path)
-    aside = path.with_name(path.name + ".bad")
-    path.replace(aside)
+def set_aside_result(path, why: str) -> Path:
+    """Rename a malformed result file to an unused ``<name>.bad[N]`` (:func:`fogref.atomic.set_aside`)
+    and warn in one line."""
+    aside = set_aside(path, ".bad")
     print(
         f"fogref sweep: warning: {path}: {why}; set aside as {aside.name}, the configuration runs again",
         file=sys.stderr,
@@ -108,7 +107,7 @@ def write_table(spec: SweepSpec, configs: list[dict]) -> dict:
         if result is not None:
             rows.extend(_rows_of(cfg, result))
         elif why != "missing":
-            set_aside(f, why)
+            set_aside_result(f, why)
     df = pd.DataFrame(rows)
     csv, pq = out / f"{spec.table}.csv", out / f"{spec.table}.parquet"
     write_text_atomic(csv, df.to_csv(index=False))
