@@ -1,7 +1,7 @@
 """Distributed render scaling: one truth's passes on 1, 2 and N single-thread Dask workers.
 
 The default scene (``scenes/valley.xml``) at ``--res`` (160x90) and ``--spp`` (64), in the
-passes of the real split (:func:`fogref.render.passes.pass_sizes` under ``MAX_LANES``: 4 passes
+passes of the real split (:func:`fogref_plugins.passes.pass_sizes` under ``MAX_LANES``: 4 passes
 of 16 spp at the defaults), or in ``--passes`` equal passes (``MAX_LANES`` set to pixels x spp
 / passes in this driver), rendered by :func:`fogref.render.render.render`:
 

@@ -99,7 +99,7 @@ def test_the_split_lets_workers_share_a_render_and_never_depends_on_them():
     no worker argument."""
     import inspect
 
-    from fogref.render.passes import max_lanes, pass_sizes
+    from fogref_plugins.passes import max_lanes, pass_sizes
 
     lanes = max_lanes("llvm_ad_rgb")
     big = pass_sizes(320 * 180, 72, lanes)

@@ -25,7 +25,7 @@ of the same instruction set: the LLVM back end compiles for the host CPU).
   from the scheduler's ``remove-worker`` events).
 * **Too small to share is said**: a render of fewer passes than workers leaves workers idle
   (:func:`split_note`); the passes are never split by the worker count, which would change
-  the pixels (:mod:`fogref.render.passes`).
+  the pixels (:mod:`fogref_plugins.passes`).
 * **Bounded memory**: at most ``window`` passes are submitted ahead of the next pass to merge,
   so the driver holds at most that many passes' sums that arrived early.
 
