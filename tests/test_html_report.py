@@ -52,7 +52,8 @@ def test_half_encoding_round_trip_is_half_rounding():
     assert np.array_equal(got, a.astype(np.float16).astype(np.float64))
     assert np.max(np.abs(got / a - 1)) <= 2.0**-11
     bad = decode_half(encode_half(np.array([[np.nan, np.inf, 1e9]])))
-    assert bad.tolist() == [[[0.0], [0.0], [65504.0]]]
+    assert bad[0, :2].tolist() == [[0.0], [0.0]]  # not finite: 0
+    assert abs(bad[0, 2, 0] / 1e9 - 1) <= 2.0**-11  # beyond the half range: scaled, not clipped
     m = rng.integers(0, 32, size=(4, 6))
     assert np.array_equal(decode_mask(encode_mask(m)), m)
 
