@@ -21,14 +21,14 @@ streams (<= 0.04 % for the Mie phase, where 32 and 64 streams are off by up to 0
 Nakajima-Tanaka correction (128 streams, 1500 moments) gives the Mie radiances within
 0.05 % of these.
 
-Each view: 48 (Mie) or 16 (HG) independent fogpath renders (their own seeds, 8x8
-pixels, 1024 spp); the standard error comes from their spread.  A t-test per view (47
-or 15 degrees of freedom, Bonferroni over the 5 views, family-wise alpha = 1e-3; each view
-must detect a relative error of 10 % with 95 % power: measured 2.8-7.4 % for the Mie phase, whose next-event
-estimates through the diffraction peak are heavy-tailed, 2.0-5.4 % for HG), and a z-test
-at alpha = 1e-3 of the mean relative error over the views, which must detect 3 % with
-95 % power (measured 1.8 % for the Mie phase, 1.3 % for HG).  About 95-160 s (Mie) and
-20 s (HG) on the shared, loaded 2-core machine.
+Each view: 48 (Mie) or 16 (HG) independent fogpath renders (their own seeds, 8x8 pixels,
+1024 spp); the standard error comes from their spread. A t-test per view (47 or 15
+degrees of freedom, Bonferroni over the 5 views, family-wise alpha = 1e-3; each view
+must detect a relative error of 10 % with 95 % power: measured 2.8-7.4 % for the Mie
+phase, whose next-event estimates through the diffraction peak are heavy-tailed, 2.0-5.4
+% for HG), and a z-test at alpha = 1e-3 of the mean relative error over the views, which
+must detect 3 % with 95 % power (measured 1.8 % for the Mie phase, 1.3 % for HG). About
+95-160 s (Mie) and 20 s (HG) on the shared, loaded 2-core machine.
 """
 
 from __future__ import annotations
