@@ -27,7 +27,7 @@ from pathlib import Path
 
 from fogref.errors import ParameterError, did_you_mean
 
-__all__ = ["SCENES_DIR", "resolve_scene", "scene_path", "shipped_scene_names"]
+__all__ = ["SCENES_DIR", "resolve_scene", "scene_label", "scene_path", "shipped_scene_names"]
 
 #: The folder of the shipped scenes, inside the installed package.
 SCENES_DIR = Path(__file__).resolve().parent / "scenes"
@@ -60,3 +60,19 @@ def resolve_scene(value: str | os.PathLike) -> Path:
     if p.is_file() or p.suffix or len(p.parts) != 1 or p.name not in shipped_scene_names():
         return p
     return scene_path(p.name)
+
+
+def scene_label(path: str | os.PathLike) -> str:
+    """How reports name a scene: a shipped scene by its name (the same on every install), any
+    other by its path as given.
+
+    >>> scene_label(scene_path("open_plane")), scene_label("my/scene.xml")
+    ('open_plane (shipped)', 'my/scene.xml')
+    """
+    p = Path(path)
+    try:
+        if p.resolve().parent == SCENES_DIR and p.stem in shipped_scene_names():
+            return f"{p.stem} (shipped)"
+    except OSError:
+        pass
+    return str(path)

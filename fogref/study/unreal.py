@@ -39,7 +39,7 @@ from fogref.models.terms import note, unreal_field
 from fogref.render.cache import render_cached
 from fogref.render.render import file_sha256
 from fogref.render.scene_defaults import overrides_used_by as used
-from fogref.shipped_scenes import SCENES_DIR
+from fogref.shipped_scenes import SCENES_DIR, scene_label
 from fogref.study import budget as B
 
 #: What-if variants of the engine settings (Unreal units, cm).
@@ -162,7 +162,7 @@ def open_plane_check(scene: Path, rdir: Path, log, spp: int = 64, res=(160, 90))
     sh = a.single - sa.single - sun
     sh_b = b.single - sb.single - sun
     return {
-        "scene": str(scene),
+        "scene": scene_label(scene),
         "spp": spp,
         "resolution": list(res),
         "shadows_rmse": float(np.sqrt(np.mean(sh**2))),
