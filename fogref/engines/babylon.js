@@ -2,25 +2,10 @@
 // its pixels (the page protocol of fogref/engines/__init__.py).  Loaded from file:// by
 // fogref/engines/browser.py, with an import map that points "@babylonjs/core" at node_modules.
 import * as BABYLON from "@babylonjs/core";
+import { arrayToB64, b64ToArray } from "./pixels.js";
 
 const MODES = { LINEAR: BABYLON.Scene.FOGMODE_LINEAR, EXP: BABYLON.Scene.FOGMODE_EXP,
                 EXP2: BABYLON.Scene.FOGMODE_EXP2 };
-
-function b64ToArray(text, Type) {
-  const bin = atob(text);
-  const bytes = new Uint8Array(bin.length);
-  for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
-  return new Type(bytes.buffer);
-}
-
-function arrayToB64(array) {
-  const bytes = new Uint8Array(array.buffer, array.byteOffset, array.byteLength);
-  let out = "";
-  for (let i = 0; i < bytes.length; i += 0x8000) {
-    out += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
-  }
-  return btoa(out);
-}
 
 // The depth pass (as threejs.js's).  G, B: the view position Babylon interpolates across a triangle
 // (as its fog's vFogDistance = (view * worldPos).xyz is interpolated): eye depth and distance.

@@ -23,7 +23,6 @@ Examples
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -38,7 +37,6 @@ __all__ = [
     "canvas_port",
     "port",
     "settings",
-    "version",
 ]
 
 MODEL = "babylon"
@@ -47,11 +45,6 @@ PAGE = Path(__file__).with_name("babylon.js")
 IMPORTS = {"@babylonjs/core": "@babylonjs/core/index.js"}
 #: Babylon's fog reads ``length(vFogDistance)``, the interpolated view position's length
 FOG_COORDINATE = "distance"
-
-
-def version(node_modules: Path) -> str:
-    """The installed ``@babylonjs/core`` version (its ``package.json``)."""
-    return str(json.loads((Path(node_modules) / PACKAGE / "package.json").read_text())["version"])
 
 
 def settings(model: Any) -> dict:

@@ -29,7 +29,7 @@ from pathlib import Path
 
 from fogref.errors import FogrefError
 
-__all__ = ["Browser", "EngineUnavailable", "find_chromium", "node_modules_dir"]
+__all__ = ["Browser", "EngineUnavailable", "find_chromium", "node_modules_dir", "package_version"]
 
 BROWSERS = ("chromium", "chromium-browser", "google-chrome")
 DRIVERS = ("chromedriver",)
@@ -72,6 +72,13 @@ def find_chromium() -> tuple[str | None, str | None, str]:
             ),
         )
     return b, d, ""
+
+
+def package_version(node_modules: Path, package: str) -> str:
+    """The installed version of the npm ``package`` (its ``package.json``), e.g. ``"0.187.0"``."""
+    import json
+
+    return str(json.loads((Path(node_modules) / package / "package.json").read_text())["version"])
 
 
 def node_modules_dir(must_exist: bool = True) -> Path:

@@ -4,22 +4,7 @@
 // PlayCanvas takes material, light, ambient and fog colours gamma-encoded (it raises them to 2.2
 // on the CPU): the page hands it c^(1/2.2) for a linear c.
 import * as pc from "playcanvas";
-
-function b64ToArray(text, Type) {
-  const bin = atob(text);
-  const bytes = new Uint8Array(bin.length);
-  for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
-  return new Type(bytes.buffer);
-}
-
-function arrayToB64(array) {
-  const bytes = new Uint8Array(array.buffer, array.byteOffset, array.byteLength);
-  let out = "";
-  for (let i = 0; i < bytes.length; i += 0x8000) {
-    out += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
-  }
-  return btoa(out);
-}
+import { arrayToB64, b64ToArray } from "./pixels.js";
 
 function gamma(c) { return new pc.Color(...c.map((x) => Math.pow(x, 1 / 2.2))); }
 

@@ -25,7 +25,6 @@ Examples
 from __future__ import annotations
 
 import dataclasses
-import json
 from pathlib import Path
 from typing import Any
 
@@ -39,7 +38,6 @@ __all__ = [
     "canvas_port",
     "port",
     "settings",
-    "version",
     "view_settings",
 ]
 
@@ -47,11 +45,6 @@ MODEL = "playcanvas"
 PACKAGE = "playcanvas"
 PAGE = Path(__file__).with_name("playcanvas.js")
 IMPORTS = {"playcanvas": "playcanvas/build/playcanvas.mjs"}
-
-
-def version(node_modules: Path) -> str:
-    """The installed ``playcanvas`` version (its ``package.json``)."""
-    return str(json.loads((Path(node_modules) / PACKAGE / "package.json").read_text())["version"])
 
 
 def settings(model: Any) -> dict:

@@ -39,7 +39,7 @@ import numpy as np
 
 from fogref.atomic import atomic_write, refuse_overwriting_inputs, write_text_atomic
 from fogref.engines import engine_module
-from fogref.engines.browser import Browser, node_modules_dir
+from fogref.engines.browser import Browser, node_modules_dir, package_version
 from fogref.engines.view import EngineView
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
@@ -193,7 +193,7 @@ def render_engine(
             raise FogrefError(f"{engine}: the engine's {name} image has NaN or infinite pixels")
     return EngineRender(
         engine=engine,
-        version=mod.version(nm),
+        version=package_version(nm, mod.PACKAGE),
         final=final,
         surface=surface,
         transmittance=T,

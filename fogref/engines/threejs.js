@@ -2,22 +2,7 @@
 // its pixels (the page protocol of fogref/engines/__init__.py).  Loaded from file:// by
 // fogref/engines/browser.py, with an import map that points "three" at node_modules/three.
 import * as THREE from "three";
-
-function b64ToArray(text, Type) {
-  const bin = atob(text);
-  const bytes = new Uint8Array(bin.length);
-  for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
-  return new Type(bytes.buffer);
-}
-
-function arrayToB64(array) {
-  const bytes = new Uint8Array(array.buffer, array.byteOffset, array.byteLength);
-  let out = "";
-  for (let i = 0; i < bytes.length; i += 0x8000) {
-    out += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
-  }
-  return btoa(out);
-}
+import { arrayToB64, b64ToArray } from "./pixels.js";
 
 function linear(rgb) {
   return new THREE.Color().setRGB(rgb[0], rgb[1], rgb[2], THREE.LinearSRGBColorSpace);

@@ -28,23 +28,17 @@ Examples
 from __future__ import annotations
 
 import dataclasses
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-__all__ = ["IMPORTS", "MODEL", "PACKAGE", "PAGE", "canvas_port", "settings", "srgb_oetf", "version"]
+__all__ = ["IMPORTS", "MODEL", "PACKAGE", "PAGE", "canvas_port", "settings", "srgb_oetf"]
 
 MODEL = "threejs"
 PACKAGE = "three"
 PAGE = Path(__file__).with_name("threejs.js")
 IMPORTS = {"three": "three/build/three.module.js"}
-
-
-def version(node_modules: Path) -> str:
-    """The installed ``three`` version (its ``package.json``)."""
-    return str(json.loads((Path(node_modules) / PACKAGE / "package.json").read_text())["version"])
 
 
 def settings(model: Any) -> dict:
