@@ -33,6 +33,8 @@ from fogref.cli import main
 from fogref.engines import ENGINES
 from fogref.engines.browser import Browser, EngineUnavailable, find_chromium
 
+pytestmark = pytest.mark.browser  # headless Chromium (CONTRIBUTING.md, the tiers)
+
 #: engine -> its model's density parameter (a 1 % change must be seen)
 DENSITY = {"threejs": "density", "babylon": "fogDensity", "playcanvas": "density"}
 assert set(DENSITY) == set(ENGINES)

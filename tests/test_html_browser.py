@@ -21,7 +21,7 @@ from browser_util import console_errors, find_browser, load, requests, screensho
 from conftest import ROOT, SCENES
 
 _, _, WHY = find_browser()
-pytestmark = pytest.mark.skipif(bool(WHY), reason=f"no browser: {WHY}")
+pytestmark = [pytest.mark.browser, pytest.mark.skipif(bool(WHY), reason=f"no browser: {WHY}")]
 LOCAL = ("file:", "data:", "blob:")
 PROBE = (11, 6)  # x, y of the probe pixel (a surface pixel of the 16x9 default scene)
 

@@ -22,6 +22,8 @@ import numpy as np
 import pytest
 import web_probe as wp
 
+pytestmark = pytest.mark.browser  # headless Chromium (CONTRIBUTING.md, the tiers)
+
 LINEAR_TOL = 1e-6  # float32 rounding of length/pow/mix (measured 3.0e-7)
 CANVAS_TOL = 1.0  # 8-bit steps
 

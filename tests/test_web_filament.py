@@ -24,6 +24,8 @@ import web_probe as wp
 
 from fogref.models.filament import FilamentFog
 
+pytestmark = pytest.mark.browser  # headless Chromium (CONTRIBUTING.md, the tiers)
+
 CANVAS_TOL = 1.0  # 8-bit steps
 
 

@@ -24,6 +24,8 @@ import web_probe as wp
 
 from fogref.models.playcanvas import PlayCanvasFog
 
+pytestmark = pytest.mark.browser  # headless Chromium (CONTRIBUTING.md, the tiers)
+
 LINEAR_TOL = 1e-6  # float32 rounding of the depth remap/exp/mix (measured 2.5e-7)
 CANVAS_TOL = 1.0  # 8-bit steps
 

@@ -21,6 +21,8 @@ import web_probe as wp
 
 from fogref.models.threejs import srgb_transfer_oetf
 
+pytestmark = pytest.mark.browser  # headless Chromium (CONTRIBUTING.md, the tiers)
+
 LINEAR_TOL = 1e-6  # linear RGB: float32 rounding of exp/smoothstep/mix (measured 1.9e-7)
 CANVAS_TOL = 1.0  # 8-bit steps
 
