@@ -64,13 +64,14 @@ def main() -> int:
         "white-balanced) for a homogeneous path of green optical depth `tau` (`3.912 d / V`):",
         "the transmittance of a white surface, and the inscatter of an unattenuated D65 sun (grey",
         "phase and albedo). Closed forms in float64: the figures carry no noise; the quadrature",
-        "agrees with scipy's to 1e-6 (`tests/test_study_spectral_rgb.py`).",
+        "agrees with scipy's within 2.4e-6 of the white (`tests/test_study_spectral_rgb.py`).",
         "",
         "Columns: per-channel error relative to the spectral colour's luminance [%], luminance error",
-        "[%], CIEDE2000 (1 is about just noticeable; the unfogged white is L* = 100).",
+        "[%], CIEDE2000 (1 is about just noticeable; the unfogged white is L* = 100, so a colour",
+        "dimmed to near black has a small dE whatever its hue: read the channels there).",
         "",
     ]
-    summary = []
+    head, summary = len(md), []
     for name in FOGS:
         spectrum = fog_spectrum(name)
         e = spectral_error(spectrum, TAUS)
@@ -98,7 +99,7 @@ def main() -> int:
                 f"| {spectrum.label} | {q} | {100 * float(abs(e[f'{q}_rel']).max()):.2f} | "
                 f"{100 * float(abs(e[f'{q}_lum']).max()):.2f} | {float(e[f'{q}_de'].max()):.2f} |"
             )
-    md[13:13] = [
+    md[head:head] = [
         "## Largest error over tau 0.1 to 10 (41 depths, log-spaced)",
         "",
         "| fog | quantity | channel [%] | luminance [%] | dE2000 |",
