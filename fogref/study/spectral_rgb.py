@@ -49,8 +49,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fogref.compare.metrics import luminance
 from fogref.compare.perceptual import delta_e2000_map
+from fogref.display import luminance
 from fogref.errors import ParameterError
 from fogref.media.droplets import GammaDroplets, droplet_preset
 from fogref.media.mie import RGB_WAVELENGTHS_NM, droplet_optics
