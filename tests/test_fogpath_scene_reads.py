@@ -19,6 +19,9 @@ from collections import Counter
 from pathlib import Path
 
 import numpy as np
+import pytest
+
+pytestmark = pytest.mark.render
 
 VALLEY = str(Path(__file__).resolve().parents[1] / "scenes" / "valley.xml")
 TINY = {"res": "8", "resy": "6"}

@@ -70,6 +70,7 @@ by the sweep (region names ``observer_clamp``, ``collapsed_clamp``,
 
 from __future__ import annotations
 
+import inspect
 import json
 import math
 import pathlib
@@ -382,7 +383,9 @@ def model_errors(name, prec, sigma, b, h, cam, wps):
             # float64: PowerLawLayer.depth from the ray's lower end (stable form, no midpoint rule)
             out.append(("exact", err, 16 * eps * altitude_kappa(s_, e_, p_, cam[1], wp[1]), where))
         return out
-    T = fog.evaluate(cam, wps, prec).transmittance[..., 0].astype(np.float64)
+    # every point is a surface (the references fog them; a point 100 km away is not the sky here)
+    hit = {"hit": np.ones(len(wps), bool)} if "hit" in inspect.signature(fog.evaluate).parameters else {}
+    T = fog.evaluate(cam, wps, prec, **hit).transmittance[..., 0].astype(np.float64)
     for i, wp in enumerate(wps):
         where = dict(cam_y=float(cam[1]), wp=[float(x) for x in wp], sigma=sigma, b=b, h=h)
         absolute = 0.0

@@ -42,7 +42,9 @@ Examples
 >>> from fogref.mapping.physical import PhysicalScene
 >>> ps = PhysicalScene(FogMedium(sigma_t=0.01, albedo=0.5, layers=(ExpLayer(1.0, 0.0, 0.0),)),
 ...                    sky_radiance=(1.0, 1.0, 1.0))
->>> r = fit_model("unity", ps, views=64)
+>>> from fogref.mapping.views import sample_views
+>>> meshes = sample_views(ps.camera, n_dirs=64, sky_min_dy=1.0)  # Unity's skybox has no fog
+>>> r = fit_model("unity", ps, views=meshes)
 >>> round(r.values["fogDensity"], 6), r.rel_rmse < 1e-6
 (0.01, True)
 """
