@@ -7,4 +7,5 @@ folder, hence this file.
 
 from setuptools import find_packages, setup
 
-setup(packages=[*find_packages(include=["fogref", "fogref.*"]), "fogref_plugins"])
+# fogref/scenes holds data only (no __init__.py): named here so that its XML files install
+setup(packages=[*find_packages(include=["fogref", "fogref.*"]), "fogref.scenes", "fogref_plugins"])
