@@ -2,7 +2,7 @@
 // its pixels (the page protocol of fogref/engines/__init__.py).  Loaded from file:// by
 // fogref/engines/browser.py, with an import map that points "@babylonjs/core" at node_modules.
 import * as BABYLON from "@babylonjs/core";
-import { arrayToB64, b64ToArray } from "./pixels.js";
+import { arrayToB64, b64ToArray, triangleCorners, unindexed } from "./page_helpers.js";
 
 const MODES = { LINEAR: BABYLON.Scene.FOGMODE_LINEAR, EXP: BABYLON.Scene.FOGMODE_EXP,
                 EXP2: BABYLON.Scene.FOGMODE_EXP2 };
@@ -102,12 +102,8 @@ window.fogrefRender = async function (spec) {
     meshes.push(mesh);
     // each triangle on its own, every vertex carrying the triangle's three corners (the depth pass)
     const n = indices.length;
-    const p = new Float32Array(3 * n);
-    for (let k = 0; k < n; k++) p.set(positions.subarray(3 * indices[k], 3 * indices[k] + 3), 3 * k);
-    const cs = [new Float32Array(3 * n), new Float32Array(3 * n), new Float32Array(3 * n)];
-    for (let t = 0; t < 3 * n; t += 9) {
-      for (let k = 0; k < 3; k++) for (let v = 0; v < 3; v++) cs[k].set(p.subarray(t + 3 * k, t + 3 * k + 3), t + 3 * v);
-    }
+    const p = unindexed(positions, indices);
+    const cs = triangleCorners(p);
     const cm = new BABYLON.Mesh(`corners${i}`, scene);
     cm.setVerticesData(BABYLON.VertexBuffer.PositionKind, p, false, 3);
     cs.forEach((a, k) => cm.setVerticesData(`corner${k}`, a, false, 3));

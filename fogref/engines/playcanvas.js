@@ -4,7 +4,7 @@
 // PlayCanvas takes material, light, ambient and fog colours gamma-encoded (it raises them to 2.2
 // on the CPU): the page hands it c^(1/2.2) for a linear c.
 import * as pc from "playcanvas";
-import { arrayToB64, b64ToArray } from "./pixels.js";
+import { arrayToB64, b64ToArray, triangleCorners, unindexed } from "./page_helpers.js";
 
 function gamma(c) { return new pc.Color(...c.map((x) => Math.pow(x, 1 / 2.2))); }
 
@@ -109,13 +109,8 @@ window.fogrefRender = async function (spec) {
     app.root.addChild(e);
     entities.push(e);
     // each triangle on its own, every vertex carrying the triangle's three corners (the depth pass)
-    const n = indices.length;
-    const p = new Float32Array(3 * n);
-    for (let k = 0; k < n; k++) p.set(positions.subarray(3 * indices[k], 3 * indices[k] + 3), 3 * k);
-    const cs = [new Float32Array(3 * n), new Float32Array(3 * n), new Float32Array(3 * n)];
-    for (let t = 0; t < 3 * n; t += 9) {
-      for (let k = 0; k < 3; k++) for (let v = 0; v < 3; v++) cs[k].set(p.subarray(t + 3 * k, t + 3 * k + 3), t + 3 * v);
-    }
+    const p = unindexed(positions, indices);
+    const cs = triangleCorners(p);
     const cm = new pc.Mesh(device);
     cm.setPositions(p);
     const semantics = [pc.SEMANTIC_ATTR12, pc.SEMANTIC_ATTR13, pc.SEMANTIC_ATTR14];

@@ -2,7 +2,7 @@
 // its pixels (the page protocol of fogref/engines/__init__.py).  Loaded from file:// by
 // fogref/engines/browser.py, with an import map that points "three" at node_modules/three.
 import * as THREE from "three";
-import { arrayToB64, b64ToArray } from "./pixels.js";
+import { arrayToB64, b64ToArray, triangleCorners } from "./page_helpers.js";
 
 function linear(rgb) {
   return new THREE.Color().setRGB(rgb[0], rgb[1], rgb[2], THREE.LinearSRGBColorSpace);
@@ -109,12 +109,7 @@ function cornerScene(scene) {
     if (!o.isMesh) return;
     const g = o.geometry.toNonIndexed();
     const p = g.getAttribute("position").array;
-    const c = [new Float32Array(p.length), new Float32Array(p.length), new Float32Array(p.length)];
-    for (let t = 0; t < p.length; t += 9) {
-      for (let k = 0; k < 3; k++) {
-        for (let v = 0; v < 3; v++) c[k].set(p.subarray(t + 3 * k, t + 3 * k + 3), t + 3 * v);
-      }
-    }
+    const c = triangleCorners(p);
     c.forEach((a, k) => g.setAttribute("corner" + k, new THREE.BufferAttribute(a, 3)));
     out.add(new THREE.Mesh(g, DISTANCE));
   });
