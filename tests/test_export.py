@@ -190,51 +190,24 @@ def test_bevy_rust_is_valid_items_and_holds_the_fit(tmp_path):
     )
     if RUSTC is None:
         pytest.skip("rustc not installed: the values are checked, the Rust grammar is not")
-    # rustc parses every item of the snippet (the macro's `$i:item` matcher) without resolving names
-    crate = tmp_path / "check.rs"
-    crate.write_text("macro_rules! items { ($($i:item)*) => {}; }\nitems! {\n" + text + "\n}\n")
-    run = subprocess.run(
-        [
-            RUSTC,
-            "--edition",
-            "2021",
-            "--crate-type",
-            "lib",
-            "--emit=metadata",
-            "-o",
-            str(tmp_path / "x.rmeta"),
-            str(crate),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    run = rustc_items(text, tmp_path)
     assert run.returncode == 0, run.stderr
+
+
+def rustc_items(text: str, tmp_path) -> subprocess.CompletedProcess:
+    """rustc parses every item of ``text`` (the macro's ``$i:item`` matcher) without resolving names."""
+    crate = tmp_path / "items.rs"
+    crate.write_text("macro_rules! items { ($($i:item)*) => {}; }\nitems! {\n" + text + "\n}\n")
+    out = str(tmp_path / "items.rmeta")
+    cmd = [RUSTC, "--edition", "2021", "--crate-type", "lib", "--emit=metadata", "-o", out, str(crate)]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=300)
 
 
 def test_rusts_item_check_refuses_a_broken_snippet(tmp_path):
     """The grammar check above can fail: a missing brace is refused."""
     if RUSTC is None:
         pytest.skip("rustc not installed")
-    crate = tmp_path / "broken.rs"
-    crate.write_text("macro_rules! items { ($($i:item)*) => {}; }\nitems! {\npub fn f() { let x = (1, ;\n}\n")
-    run = subprocess.run(
-        [
-            RUSTC,
-            "--edition",
-            "2021",
-            "--crate-type",
-            "lib",
-            "--emit=metadata",
-            "-o",
-            str(tmp_path / "y.rmeta"),
-            str(crate),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-    assert run.returncode != 0
+    assert rustc_items("pub fn f() { let x = (1, ;", tmp_path).returncode != 0
 
 
 NODE = shutil.which("node")
