@@ -130,6 +130,24 @@ def _rays(rng, n, cam):
     return cam + d * 10 ** rng.uniform(-1, 4, (n, 1))
 
 
+def ue4_params_of(kw: dict, **extra) -> UE4FogParams:
+    """The ``UE4FogParams`` of a transcription's inputs ``kw`` (heights in cm), plus ``extra`` fields."""
+    return UE4FogParams(
+        FogDensity=kw["D"],
+        FogHeightFalloff=kw["f"],
+        FogHeight=kw["H"],
+        SecondFogData=SecondFogData(kw["D2"], kw["f2"], kw["H2"] - kw["H"]),
+        FogInscatteringColor=kw["color"],
+        FogMaxOpacity=kw["max_opacity"],
+        StartDistance=kw["start"],
+        FogCutoffDistance=kw["cutoff"],
+        DirectionalInscatteringExponent=kw["dir_exp"],
+        DirectionalInscatteringStartDistance=kw["dir_start"],
+        DirectionalInscatteringColor=kw["dir_color"],
+        **extra,
+    )
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_float32_matches_shader_transcription(seed):
     rng = np.random.default_rng(seed)
@@ -152,19 +170,7 @@ def test_float32_matches_shader_transcription(seed):
         dir_exp=rng.uniform(1, 16),
         dir_start=[0.0, 5000.0, 100.0][seed],
     )
-    params = UE4FogParams(
-        FogDensity=kw["D"],
-        FogHeightFalloff=kw["f"],
-        FogHeight=kw["H"],
-        SecondFogData=SecondFogData(kw["D2"], kw["f2"], kw["H2"] - kw["H"]),
-        FogInscatteringColor=kw["color"],
-        FogMaxOpacity=kw["max_opacity"],
-        StartDistance=kw["start"],
-        FogCutoffDistance=kw["cutoff"],
-        DirectionalInscatteringExponent=kw["dir_exp"],
-        DirectionalInscatteringStartDistance=kw["dir_start"],
-        DirectionalInscatteringColor=kw["dir_color"],
-    ).with_sun(sun_y_up)
+    params = ue4_params_of(kw).with_sun(sun_y_up)
     cam = np.array([3.0, rng.uniform(-2, 20), -7.0])
     wp = _rays(rng, 64, cam)
     res = UE4ExponentialHeightFog(params).evaluate(cam, wp, "float32")
@@ -304,18 +310,8 @@ def test_ue5_project_settings_match_shader_transcription(match, sky):
         dir_exp=8.0,
         dir_start=5000.0,
     )
-    params = UE4FogParams(
-        FogDensity=kw["D"],
-        FogHeightFalloff=kw["f"],
-        FogHeight=kw["H"],
-        SecondFogData=SecondFogData(kw["D2"], kw["f2"], kw["H2"] - kw["H"]),
-        FogInscatteringColor=kw["color"],
-        FogMaxOpacity=kw["max_opacity"],
-        StartDistance=kw["start"],
-        FogCutoffDistance=kw["cutoff"],
-        DirectionalInscatteringExponent=kw["dir_exp"],
-        DirectionalInscatteringStartDistance=kw["dir_start"],
-        DirectionalInscatteringColor=kw["dir_color"],
+    params = ue4_params_of(
+        kw,
         ExpFogMatchesVolumetricFog=match,
         SkyAtmosphereAffectsHeightFog=sky,
         VolumetricFogScatteringDistribution=VFOG["g"],
