@@ -18,8 +18,9 @@ import pytest
 from conftest import SCENES
 from fogref.cli import main
 from fogref.errors import FogrefError, ParameterError
+from fogref.mapping.unreal import ue4_to_medium
 from fogref.media.params import medium_from_params
-from fogref.models.ue4 import SecondFogData, UE4FogParams, ue4_to_medium, unreal_to_sigma
+from fogref.models.ue4 import SecondFogData, UE4FogParams, unreal_to_sigma
 from fogref.render import scene_templates
 from fogref.render.scene import describe_scene
 from fogref.render.scene_defaults import OPTIONAL_GROUPS, VOCABULARY, declared, used_names, vocabulary_groups

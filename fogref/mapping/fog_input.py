@@ -25,7 +25,7 @@ from fogref.errors import ParameterError
 from fogref.media.params import medium_from_params
 from fogref.models.ue4 import unreal_to_sigma
 
-__all__ = ["PHYSICAL", "SCATTERING", "SOURCE", "Range", "fog_from_physical"]
+__all__ = ["PHYSICAL", "SCATTERING", "SOURCE", "Range", "check_value", "fog_from_physical", "value_text"]
 
 #: Where messages say a bad value came from.
 SOURCE = "fogref scene"
@@ -128,8 +128,12 @@ SCATTERING = {
 MAX_DEPTH = Range("--max-depth", "depth", -1, _DEPTH_MAX)
 
 
-def _check(value: Any, name: str, rng: Range) -> Any:
-    """``value`` checked against ``rng`` by the writer (messages name ``name (--option)``)."""
+def check_value(value: Any, name: str, rng: Range) -> Any:
+    """``value`` checked against ``rng`` by the writer (messages name ``name (--option)``).
+
+    >>> check_value(0.5, "g", SCATTERING["g"])
+    0.5
+    """
     return rng.check(value, rng.label(name), SOURCE)
 
 
@@ -210,9 +214,9 @@ def fog_from_physical(fog: dict | None = None, *, albedo: Any = 0.9, g: float = 
     for name, rng in PHYSICAL.items():
         v = fog.get(name, defaults.get(name))
         if v is not None:
-            out[name] = _check(v, name, rng)
-    out["albedo"] = _check(albedo, "albedo", SCATTERING["albedo"])
-    out["g"] = _check(g, "g", SCATTERING["g"])
+            out[name] = check_value(v, name, rng)
+    out["albedo"] = check_value(albedo, "albedo", SCATTERING["albedo"])
+    out["g"] = check_value(g, "g", SCATTERING["g"])
     if ("bounds_min" in out) != ("bounds_max" in out):
         missing = "bounds_max" if "bounds_min" in out else "bounds_min"
         raise ParameterError(SOURCE, PHYSICAL[missing].label(missing), "give both bounds or none")
@@ -239,5 +243,14 @@ def _check_medium(fog: dict) -> None:
     medium_from_params(_medium_params(fog), f"{SOURCE}: fog")
 
 
-def _text(v: Any) -> str:
+def value_text(v: Any) -> str:
+    """A number, or a list of numbers comma-separated, as the scene XML writes it (``_fmt``).
+
+    >>> value_text([0.5, 0, 1e-7]), value_text(2)
+    ('0.5, 0.0, 1e-07', '2.0')
+    """
     return _vec(v) if isinstance(v, list) else _fmt(v)
+
+
+#: the private names fogref.render (scene_writer, scene_xml) still imports
+_check, _text = check_value, value_text

@@ -1,7 +1,7 @@
 """Unreal's Exponential Height Fog editor values -> the physical ``heightfog`` of a fogref scene.
 
 :func:`fog_from_unreal` maps FogDensity, FogHeightFalloff, FogHeight and
-SecondFogData exactly (:func:`fogref.models.ue4.ue4_to_medium`: Unreal is z-up,
+SecondFogData exactly (:func:`fogref.mapping.unreal.ue4_to_medium`: Unreal is z-up,
 centimetres; ``sigma_t = 100 (ln 2)^2 FogDensity/1000`` per metre at
 ``FogHeight/100`` m, ``falloff = 100 ln 2 FogHeightFalloff/1000`` per metre; see
 ``docs/design.md`` section 3.1).  The editor values with no physical counterpart
@@ -16,15 +16,9 @@ import difflib
 from typing import Any
 
 from fogref.errors import ParameterError
-from fogref.mapping.fog_input import PHYSICAL, SOURCE, Range, _check, _fmt, _vec, fog_from_physical
-from fogref.models.ue4 import (
-    CM_PER_M,
-    SecondFogData,
-    UE4FogParams,
-    sigma_to_unreal,
-    ue4_to_medium,
-    unreal_to_sigma,
-)
+from fogref.mapping.fog_input import PHYSICAL, SOURCE, Range, check_value, fog_from_physical, value_text
+from fogref.mapping.unreal import ue4_to_medium
+from fogref.models.ue4 import CM_PER_M, SecondFogData, UE4FogParams, sigma_to_unreal, unreal_to_sigma
 
 __all__ = ["UNREAL_IGNORED", "UNREAL_IGNORED_RANGES", "UNREAL_MAPPED", "flat_unreal", "fog_from_unreal"]
 
@@ -110,7 +104,7 @@ def fog_from_unreal(unreal: dict, *, albedo: Any = 0.9, g: float = 0.6) -> tuple
         ``FogHeight`` [cm, Unreal z-up world Z; default 0] and ``SecondFogData``, a
         dict of ``FogDensity`` (default 0: no second layer), ``FogHeightFalloff``
         (default 0.2) and ``FogHeightOffset`` [cm, relative to FogHeight]. These map
-        exactly (:func:`fogref.models.ue4.ue4_to_medium`). The values of
+        exactly (:func:`fogref.mapping.unreal.ue4_to_medium`). The values of
         :data:`UNREAL_IGNORED` (FogInscatteringColor, DirectionalInscatteringExponent,
         ...) have no physical counterpart: they are checked, kept out of the fog
         and reported in the notes.
@@ -168,7 +162,7 @@ def fog_from_unreal(unreal: dict, *, albedo: Any = 0.9, g: float = 0.6) -> tuple
     for key, opt in UNREAL_MAPPED.items():
         lo, hi, unit, default = limits[key]
         raw = _unreal_value(unreal, key)
-        v[key] = _check(default if raw is None else raw, key, Range(opt, "number", lo, hi, unit))
+        v[key] = check_value(default if raw is None else raw, key, Range(opt, "number", lo, hi, unit))
     sfd = unreal.get("SecondFogData") or {}
     extra = sorted(set(sfd) - {"FogDensity", "FogHeightFalloff", "FogHeightOffset"})
     if extra:
@@ -181,9 +175,8 @@ def fog_from_unreal(unreal: dict, *, albedo: Any = 0.9, g: float = 0.6) -> tuple
     for key, (_, _, why) in UNREAL_IGNORED.items():
         if unreal.get(key) is None:
             continue
-        val = _check(unreal[key], key, UNREAL_IGNORED_RANGES[key])
-        shown = _vec(val) if isinstance(val, list) else _fmt(val)
-        notes.append(f"Unreal {key} = {shown} is ignored: {why}")
+        val = check_value(unreal[key], key, UNREAL_IGNORED_RANGES[key])
+        notes.append(f"Unreal {key} = {value_text(val)} is ignored: {why}")
     params = UE4FogParams(
         FogDensity=v["FogDensity"],
         FogHeightFalloff=v["FogHeightFalloff"],

@@ -35,7 +35,8 @@ and FogHeightFalloff ``f`` are divided by 1000 on the CPU; the shader uses
 
 i.e. per metre ``a = 100 (ln 2)^2 D/1000`` and ``b = 100 ln 2 f/1000`` (one factor
 ln 2 turns the exp2 of the line integral into exp, the other comes from
-integrating 2^(-x)).  See :func:`ue4_to_medium` / :func:`medium_to_ue4`.
+integrating 2^(-x)).  See :func:`fogref.mapping.unreal.ue4_to_medium` and its inverse
+:func:`fogref.mapping.unreal_basis.base_params`.
 
 **Base 2, and the path tracer's 0.5.**  The shader integrates the density in base 2
 (``CalculateLineIntegralShared``: ``(1 - exp2(-F)) / F``, Taylor ``ln 2 - ln^2 2 F / 2``) and
@@ -96,7 +97,7 @@ from typing import Any
 import numpy as np
 
 from fogref.errors import ParameterError
-from fogref.media import NP, ExpLayer, FogMedium
+from fogref.media import NP
 from fogref.media.closed_form import phi
 from fogref.models._num import LN2, dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
@@ -481,15 +482,6 @@ class UE4ExponentialHeightFog:
             fog_color, factor = shade(C, cam_z_cm, rel, dt, exact=(dt is np.float64))
         return FogResult(inscatter=fog_color, transmittance=grey(factor, dt))
 
-    @classmethod
-    def from_medium(cls, medium: FogMedium, **kw: Any) -> "UE4ExponentialHeightFog":
-        """The Unreal fog whose extinction equals ``medium``'s (see :func:`medium_to_ue4`)."""
-        return cls(medium_to_ue4(medium, **kw))
-
-    def to_medium(self, **kw: Any) -> FogMedium:
-        """The physical medium of this fog's extinction (see :func:`ue4_to_medium`)."""
-        return ue4_to_medium(self.params, **kw)
-
 
 # -- exact physical mapping -----------------------------------------------------
 def unreal_to_sigma(density: float, falloff: float) -> tuple[float, float]:
@@ -500,54 +492,3 @@ def unreal_to_sigma(density: float, falloff: float) -> tuple[float, float]:
 def sigma_to_unreal(a: float, b: float) -> tuple[float, float]:
     """Inverse of :func:`unreal_to_sigma`."""
     return a * 1000.0 / (CM_PER_M * LN2 * LN2), b * 1000.0 / (CM_PER_M * LN2)
-
-
-def ue4_to_medium(params: UE4FogParams, albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
-    """The physical medium with the same extinction as the Unreal fog.
-
-    ``sigma_t(y) = a_i exp(-b_i (y - h_i))`` per metre for each layer i with
-    density > 0 (see module doc).  Albedo and g are free (Unreal has neither;
-    its FogInscatteringColor stands for ``albedo * L_sky``).
-    """
-    sfd = params.SecondFogData
-    specs = [
-        (params.FogDensity, params.FogHeightFalloff, params.FogHeight),
-        (sfd.FogDensity, sfd.FogHeightFalloff, params.FogHeight + sfd.FogHeightOffset),
-    ]
-    specs = [s for s in specs if s[0] > 0]
-    if not specs:
-        return FogMedium(sigma_t=0.0, albedo=albedo, g=g, layers=(ExpLayer(),), source="<ue4_to_medium>")
-    a0, _ = unreal_to_sigma(specs[0][0], specs[0][1])
-    layers = []
-    for d, f, h in specs:
-        a, b = unreal_to_sigma(d, f)
-        layers.append(ExpLayer(density=a / a0, falloff=b, height=h / CM_PER_M))
-    return FogMedium(sigma_t=a0, albedo=albedo, g=g, layers=tuple(layers), source="<ue4_to_medium>")
-
-
-def medium_to_ue4(medium: FogMedium, base: UE4FogParams | None = None) -> UE4FogParams:
-    """Unreal parameters (density, falloff, height parts) for a 1–2 layer medium.
-
-    The medium must be unbounded, grey (equal sigma_t per channel) and made of
-    at most two :class:`~fogref.media.ExpLayer`.  Other fields come from ``base``.
-    """
-    src = getattr(medium, "source", "<medium>")
-    if medium.bounds is not None:
-        raise ParameterError(src, "bounds", "Unreal's height fog is unbounded")
-    s = (medium.grey_sigma_t("Unreal"),) * 3
-    layers = [L for L in medium.layers if isinstance(L, ExpLayer)]
-    if len(layers) != len(medium.layers) or not 1 <= len(layers) <= 2:
-        raise ParameterError(src, "layers", "need 1 or 2 ExpLayer")
-    vals = []
-    for L in layers:
-        d, f = sigma_to_unreal(s[0] * L.density, L.falloff)
-        vals.append((d, f, L.height * CM_PER_M))
-    base = base or UE4FogParams()
-    second = SecondFogData(FogDensity=0.0, FogHeightFalloff=base.SecondFogData.FogHeightFalloff)
-    if len(vals) == 2:
-        second = SecondFogData(
-            FogDensity=vals[1][0], FogHeightFalloff=vals[1][1], FogHeightOffset=vals[1][2] - vals[0][2]
-        )
-    return replace(
-        base, FogDensity=vals[0][0], FogHeightFalloff=vals[0][1], FogHeight=vals[0][2], SecondFogData=second
-    )
