@@ -22,7 +22,7 @@ import numpy as np
 
 from fogref.errors import FogrefError
 from fogref.exrio import read_exr
-from fogref.gbuffer import truth_from_channels
+from fogref.gbuffer import COMPARED_PARTS, truth_from_channels
 from fogref.models.ue4 import direction_to_unreal, unreal_rotator, world_to_unreal
 
 
@@ -162,7 +162,7 @@ def info(path) -> dict:
         "identity_max_abs": truth.identity_residual(),
     }
     noise = {}
-    for part in ("final", "transmittance", "inscatter", "attenuated_surface", "surface"):
+    for part in (*COMPARED_PARTS, "surface"):
         x, se = truth.part(part), truth.stderr[part]
         ok = np.abs(x) > 1e-12
         rel = np.abs(se[ok]) / np.abs(x[ok]) if ok.any() else np.zeros(1)

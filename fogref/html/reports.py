@@ -13,7 +13,7 @@ import csv
 import json
 from pathlib import Path
 
-from fogref.gbuffer import Truth
+from fogref.gbuffer import Truth, part_attribute
 from fogref.html.inline import check_rows_html, esc, fmt, fmt_noise, table_html
 from fogref.html.page import figure, verdict_badge, write_page
 from fogref.html.viewer import viewer_data
@@ -365,7 +365,7 @@ def write_diff_html(out_dir, result, a, b) -> Path:
     truth = a if isinstance(a, Truth) else b if isinstance(b, Truth) else None
     ch: dict = {}
     for part, e in result.errors.items():
-        name = "transmittance" if part == "T" else part
+        name = part_attribute(part)
         for i, c in enumerate("RGB"):
             ch[f"{name}.error.{c}"] = e[..., i]
         valid = truth.surface_valid if (truth is not None and part == "final") else np.ones(e.shape[:2], bool)

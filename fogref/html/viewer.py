@@ -36,20 +36,14 @@ import numpy as np
 from fogref.compare.regions import region_masks
 from fogref.display import exposure_for
 from fogref.exrio import read_exr
-from fogref.gbuffer import PARTS
+from fogref.gbuffer import COMPARED_PARTS, PARTS, part_attribute, part_group
 from fogref.html.inline import encode_half, encode_mask
 
 #: The truth's parts the viewer shows, in the schema's order (``T`` is the transmittance;
 #: ``attenuated_surface`` only beside a report that compares it).
 TRUTH_PARTS = tuple(p for p in PARTS if p != "attenuated_surface")
 #: A report's part name -> the truth's part it is compared with.
-REPORT_TO_TRUTH = {
-    "final": "final",
-    "transmittance": "T",
-    "inscatter": "inscatter",
-    "attenuated_surface": "attenuated_surface",
-    "composite": "final",
-}
+REPORT_TO_TRUTH = {**{p: part_group(p) for p in COMPARED_PARTS}, "composite": "final"}
 #: The exposure a truth part borrows (single and multiple: the inscatter's, so that they compare).
 EXPOSURE_FROM = {"single": "inscatter", "multiple": "inscatter"}
 UNITS_RADIANCE = "radiance (the scene's units)"
@@ -95,7 +89,7 @@ def block_stderr(se, k: int) -> np.ndarray:
 
 
 def _units(part: str) -> str:
-    return "1 (transmittance)" if part in ("T", "transmittance") else UNITS_RADIANCE
+    return "1 (transmittance)" if part_attribute(part) == "transmittance" else UNITS_RADIANCE
 
 
 def _rgb(ch: dict, prefix: str) -> np.ndarray:
@@ -120,8 +114,7 @@ def error_limit(error, valid=None) -> float:
 
 
 def _truth_part(truth, part: str) -> tuple[np.ndarray, np.ndarray | None]:
-    img = truth.transmittance if part == "T" else getattr(truth, part)
-    return img, truth.stderr.get(part)
+    return truth.part(part), truth.stderr.get(part)
 
 
 def viewer_data(
@@ -162,7 +155,7 @@ def viewer_data(
     layers, exposures = [], {}
 
     def exposure(part, img):
-        if part in ("T", "transmittance"):
+        if part_attribute(part) == "transmittance":
             return 1.0
         if part not in exposures:
             exposures[part] = exposure_for(img)
