@@ -345,9 +345,8 @@ def ue4_from_physical(ps: PhysicalScene) -> UE4ExponentialHeightFog:
 
     Density, falloff, height (and the second layer) are exact
     (:func:`~fogref.mapping.unreal_basis.base_params`, the inverse of :func:`ue4_to_medium`;
-    profiles "exponential" with 1–2
-    layers and "homogeneous", unbounded, grey ``sigma_t``), so the float64
-    transmittance is the physical one.  With a sun, FogInscatteringColor,
+    profiles "exponential" with 1–2 layers and "homogeneous", unbounded, grey ``sigma_t``), so
+    the float64 transmittance is the physical one.  With a sun, FogInscatteringColor,
     DirectionalInscatteringColor, DirectionalInscatteringExponent and
     DirectionalInscatteringStartDistance come from :func:`fit_unreal`
     (closed-form sun + sky single scattering, sun attenuation included; the
