@@ -109,7 +109,7 @@ def error_limit(error, valid=None) -> float:
 
 
 def _truth_part(truth, part: str) -> tuple[np.ndarray, np.ndarray | None]:
-    return truth.part(part), truth.stderr.get(part)
+    return truth.part(part), truth.stderr.get(part_attribute(part))
 
 
 def viewer_data(
