@@ -2,21 +2,24 @@
 
 Each test that renders starts Debian's headless Chromium with an engine from node_modules (a few
 seconds); they skip, saying why, only where Chromium cannot start.  The engines: three.js,
-Babylon.js and PlayCanvas (every engine of :data:`fogref.engines.ENGINES`).  References:
+Babylon.js, PlayCanvas and Filament (every engine of :data:`fogref.engines.ENGINES`).  References:
 
 * camera: the truth's G-buffer distance of the open plane (Mitsuba's pixel-centre rays, float32)
   against the engine's distance along the ray through each pixel centre.  Measured: 4.1e-7
-  relative at most (float32); the bound 1e-5 detects a camera off by 0.001 deg in pitch or a
+  relative at most (float32; Filament 5.6e-7); the bound 1e-5 detects a camera off by 0.001 deg in pitch or a
   field of view off by 1e-4 relative (each moves a 16x9 view's plane distances by >= 1e-4).
-* fog: the port (fogref.models.threejs, .babylon, .playcanvas) on the fog coordinate the
-  engine's fog interpolated (eye depth, distance), over the engine's own unfogged surface,
-  against the engine's linear image: measured 7.5e-8 (three.js), 1.2e-7 (Babylon, PlayCanvas)
-  (float32); the level is 1e-6 relative.  A density 1 % off gives 2.8e-3 here: the test can fail.
-* canvas: the port through the engine's canvas transform (three.js: sRGB transfer; Babylon: none;
-  PlayCanvas: a 2.2 power) and 8 bits: 0 code values measured, the level 1; an sRGB-encoded
-  linear blend instead differs by 17 (three.js) and 74 (Babylon) code values on the valley.
+* fog: the port (fogref.models.threejs, .babylon, .playcanvas, .filament) on the fog coordinate
+  the engine's fog interpolated (eye depth, distance; Filament: its interpolated position), over
+  the engine's own unfogged surface, against the engine's linear image: measured 7.5e-8
+  (three.js), 1.2e-7 (Babylon, PlayCanvas), 8.3e-7 (Filament) (float32); the level is 1e-6
+  relative.  A density 1 % off gives 2.8e-3 (Filament 4.0e-3) here: the test can fail.
+* canvas: the port through the engine's canvas transform (three.js: sRGB transfer; Babylon,
+  Filament: none; PlayCanvas: a 2.2 power) and 8 bits: 0 code values measured, the level 1; an
+  sRGB-encoded linear blend instead differs by 17 (three.js) and 74 (Babylon, Filament) code
+  values on the valley.
 * lighting: without fog, on the open plane, the engine's image is the truth's (exact per sample
-  there): 2.1e-7 (three.js), 7.0e-8 (Babylon, PlayCanvas) relative measured.
+  there): 2.1e-7 (three.js), 7.0e-8 (Babylon, PlayCanvas) relative measured; Filament's unlit
+  vertex colours (fogref's Lambert shading of each vertex) too.
 """
 
 from __future__ import annotations
@@ -36,7 +39,7 @@ from fogref.engines.browser import Browser, EngineUnavailable, find_chromium
 pytestmark = pytest.mark.browser  # headless Chromium (CONTRIBUTING.md, the tiers)
 
 #: engine -> its model's density parameter (a 1 % change must be seen)
-DENSITY = {"threejs": "density", "babylon": "fogDensity", "playcanvas": "density"}
+DENSITY = {"threejs": "density", "babylon": "fogDensity", "playcanvas": "density", "filament": "density"}
 assert set(DENSITY) == set(ENGINES)
 
 
@@ -107,6 +110,28 @@ def test_fog_settings_arrive(valley):
     off = type(model)(dataclasses.replace(model.params, **{key: getattr(model.params, key) * 1.01}))
     q = port_vs_engine(r, off)
     assert not q["at_quantisation"] and q["linear_max"] > 1e-5
+
+
+@pytest.mark.render
+def test_filament_canvas_is_its_port_on_a_truths_view(plane_truth):
+    """Filament on the open plane's truth view (16x9), its fog mapped from the scene with the sun
+    term on: the 8-bit canvas (post-processing off) is the port's linear image clamped and rounded,
+    0 code values measured on all 80 surface pixels (level 1), the linear target 8.3e-8; the port
+    without its sun term misses by 10 code values and fails."""
+    from fogref.cli.engine import engine_model
+    from fogref.engines.port import port_vs_engine
+    from fogref.engines.render import render_engine
+    from fogref.engines.view import view_from_truth
+
+    view = view_from_truth(plane_truth)
+    model, _ = engine_model("filament", None, view.params, view)
+    assert model.params.inScatteringSize > 0
+    r = render_engine(view, model, "filament", timeout=120)
+    p = port_vs_engine(r, model)
+    assert p["pixels"] == 80 and p["canvas_max"] <= 1 and p["at_quantisation"], p["summary"]
+    no_sun = type(model)(dataclasses.replace(model.params, inScatteringSize=-1.0))
+    q = port_vs_engine(r, no_sun)
+    assert q["canvas_max"] > 5 and not q["at_quantisation"], q["summary"]
 
 
 def test_linear_fog_settings_arrive(chromium):
