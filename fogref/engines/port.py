@@ -6,9 +6,9 @@ engine's fog saw, interpolated by the rasteriser: the eye depth (``fog_depth``),
 itself where the page returns it (``fog_position``: Filament, whose fog reads it); composited
 over the engine's own unfogged surface (``surface * T + inscatter``) and compared with the
 engine's linear image, and -- through the engine's canvas transform (its module's
-``canvas_port``, or ``canvas_of`` of the composited image) -- with the 8-bit canvas.  Only the pixels the engine drew a surface on are
-compared (three.js and Babylon.js draw their background without fog;
-``sky_pixels`` counts the others).
+``canvas_port``, or ``canvas_of`` of the composited image) -- with the 8-bit canvas.  Only the
+pixels the engine drew a surface on are compared (three.js and Babylon.js draw their background
+without fog; ``sky_pixels`` counts the others).
 
 The verdict ``at_quantisation`` is True when the linear difference is within
 :data:`LINEAR_LEVEL` (relative to ``max(1, |value|)``: float32 storage and float32 shader
