@@ -12,7 +12,9 @@ Babylon.js, PlayCanvas and Filament (every engine of :data:`fogref.engines.ENGIN
   the engine's fog interpolated (eye depth, distance; Filament: its interpolated position), over
   the engine's own unfogged surface, against the engine's linear image: measured 7.5e-8
   (three.js), 1.2e-7 (Babylon, PlayCanvas), 8.3e-7 (Filament) (float32); the level is 1e-6
-  relative.  A density 1 % off gives 2.8e-3 (Filament 4.0e-3) here: the test can fail.
+  relative (Filament's 6e-5: its shader's line integral cancels for a small height term, see
+  fogref.engines.filament.LINEAR_LEVEL; 2.9e-6 measured at 96x54).  A density 1 % off gives
+  2.8e-3 (Filament 4.0e-3) here: the test can fail.
 * canvas: the port through the engine's canvas transform (three.js: sRGB transfer; Babylon,
   Filament: none; PlayCanvas: a 2.2 power) and 8 bits: 0 code values measured, the level 1; an
   sRGB-encoded linear blend instead differs by 17 (three.js) and 74 (Babylon, Filament) code
@@ -33,7 +35,7 @@ import pytest
 
 from conftest import ROOT, SCENES
 from fogref.cli import main
-from fogref.engines import ENGINES
+from fogref.engines import ENGINES, engine_module
 from fogref.engines.browser import Browser, EngineUnavailable, find_chromium
 
 pytestmark = pytest.mark.browser  # headless Chromium (CONTRIBUTING.md, the tiers)
@@ -100,7 +102,8 @@ def test_fog_settings_arrive(valley):
     p = port_vs_engine(r, model)
     assert p["pixels"] > 100
     assert p["at_quantisation"], p["summary"]
-    assert p["linear_max_relative"] <= 1e-6 and p["canvas_max"] <= 1
+    level = getattr(engine_module(r.engine), "LINEAR_LEVEL", 1e-6)  # Filament's: 6e-5 (its module)
+    assert p["linear_max_relative"] <= level and p["canvas_max"] <= 1
     # three.js blends its fog in sRGB, Babylon writes linear values unconverted: neither canvas is
     # the sRGB encoding of the linear image (PlayCanvas's 2.2 power is within 2 code values of it)
     if r.engine != "playcanvas":

@@ -12,7 +12,8 @@ without fog; ``sky_pixels`` counts the others).
 
 The verdict ``at_quantisation`` is True when the linear difference is within
 :data:`LINEAR_LEVEL` (relative to ``max(1, |value|)``: float32 storage and float32 shader
-arithmetic on eye depths of up to a few km) and the canvas within one 8-bit code value
+arithmetic on eye depths of up to a few km; an engine module's own ``LINEAR_LEVEL`` where its
+shader's arithmetic loses more: Filament's) and the canvas within one 8-bit code value
 (:data:`CANVAS_LEVEL`: the rounding of the last step).
 
 Examples
@@ -97,7 +98,8 @@ def port_vs_engine(r: Any, model: Any, view_dirs: np.ndarray | None = None) -> d
         "linear_blend_canvas_max": int(np.abs(r.canvas[hit].astype(np.int64) - linear_blend).max(initial=0)),
     }
     out["at_quantisation"] = bool(
-        out["linear_max_relative"] <= LINEAR_LEVEL and out["canvas_max"] <= CANVAS_LEVEL
+        out["linear_max_relative"] <= getattr(mod, "LINEAR_LEVEL", LINEAR_LEVEL)
+        and out["canvas_max"] <= CANVAS_LEVEL
     )
     out["summary"] = summary(out)
     return out
