@@ -245,6 +245,7 @@ def test_the_study_page_explains_its_budget_with_numbers_rounded_to_their_noise(
     assert "RMSE 0.14481 ± 0.00007" in text  # 0.144808... ± 7e-05 (reports/unreal_study/budget.json)
     assert "A negative share: the effect cancels part of the other effects' error" in text
     assert "can exceed 100 % or fall below −100 %" in text and "How the budget was checked" in text
+    assert "Port vs engine (ue4): no runnable engine here." in text
     # about 1.02 ± 0.06 and -1.15 ± 0.15 as fractions of the squared error
     assert "[e] geometric shadows (sun) 102 ± 6 % adds error" in text
     assert "[a/b] colours/exponent re-fitted to the attenuated target -115 ± 15 % cancels part" in text

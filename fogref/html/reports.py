@@ -20,7 +20,7 @@ from fogref.html.inline import check_rows_html, esc, fmt, fmt_noise, table_html
 from fogref.html.page import figure, verdict_badge, write_page
 from fogref.html.viewer import viewer_data
 from fogref.models.terms import note, unreal_field
-from fogref.study.budget.report import validation_paragraphs
+from fogref.study.budget.report import port_vs_engine_line, validation_paragraphs
 from fogref.study.plot_units import HEADLINE_METRICS
 
 #: Columns of the descriptive metric table: (metrics.json key, heading, with its ± stderr).
@@ -276,6 +276,7 @@ def _budget_html(budget: dict) -> str:
                 "error.</p>"
             )
         out += [SHARES_EXPLAINED, '<div class="fr-wide">' + _shapley_table(sh) + "</div>"]
+        out.append(f"<p>{esc(port_vs_engine_line('ue4'))}</p>")
     folded = budget.get("shapley_colours_in_lobe")
     if folded:
         out += [
