@@ -1,7 +1,7 @@
 """``fogref scene --out S.xml``: write a scene XML from fog, sun, sky, camera and geometry.
 
 The work, and the checks of every value with its range, is
-:func:`fogref.render.scene_writer.write_scene`; its defaults are the options' defaults.
+:func:`fogref.scene.writer.write_scene`; its defaults are the options' defaults.
 Fog is given either in physical units or as Unreal editor values, not both.
 """
 
@@ -14,7 +14,7 @@ from fogref.cli.checks import Choice, Integer, Number, PathArg, Text
 from fogref.cli.spec import UsageError, option, switch, toggle
 from fogref.mapping.droplet_fog import PHASES
 from fogref.media.droplets import DROPLET_PRESETS
-from fogref.render.scene_writer import (
+from fogref.scene.writer import (
     MESH_UP,
     PHYSICAL,
     RANGES,
@@ -35,7 +35,7 @@ DESCRIPTION = (
     "`fogref render --set` can change.  fogref is y-up, metres; Unreal values are z-up, centimetres."
 )
 EPILOG = "exit codes: 0 written, 2 usage or input error"
-WRITE = "fogref.render.scene_writer:write_scene"
+WRITE = "fogref.scene.writer:write_scene"
 GEOMETRY = "geometry"
 PHYS = "fog in physical units (y-up, metres)"
 UE = (
@@ -403,7 +403,7 @@ _IGNORED_FIELDS = [
     for key, (opt, kind, why) in UNREAL_IGNORED.items()
 ]
 Options = make_dataclass("Options", _IGNORED_FIELDS, bases=(_Options,))
-Options.__doc__ = "The options of ``fogref scene`` (those of :func:`fogref.render.scene_writer.write_scene`)."
+Options.__doc__ = "The options of ``fogref scene`` (those of :func:`fogref.scene.writer.write_scene`)."
 Options.__module__ = __name__
 
 

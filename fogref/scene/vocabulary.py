@@ -1,16 +1,20 @@
-"""The fog a user gives ``fogref scene``, in physical units, and the declared range of each value.
+"""The scene vocabulary: every ``$default`` name of a fogref scene, the declared range of each value,
+and the fog a user gives ``fogref scene`` in physical units.
 
 :class:`Range` is one value's kind (number, angle, integer, path depth, grey-or-RGB,
 point), allowed range and unit, and its check through :mod:`fogref.params` (fogref's
-one validator).  :data:`PHYSICAL` and :data:`SCATTERING` declare the fog's values
-once; the scene vocabulary's table (:data:`fogref.render.scene_defaults.RANGES`) takes
-them from here, so ``fogref scene``, ``fogref render --set`` and a scene's own
-``$default`` values are checked against the same ranges.
+one validator).  :data:`VOCABULARY` is the one set of names every shipped and written
+scene declares; :data:`OPTIONAL_GROUPS` are the names a scene declares only as a whole
+group, where the concept applies (a second fog layer, fog bounds, a sky, a settable
+surface reflectance).  :data:`RANGES` declares the kind, range and unit of each of them
+once (the fog's from :data:`PHYSICAL` and :data:`SCATTERING`), so ``fogref scene``,
+``fogref render --set``, a scene's own ``$default`` values and the mappings are checked
+against the same ranges: a new scene option is one entry here.
 
 :func:`fog_from_physical` validates extinction, falloff, heights, a second layer
 and box bounds (y-up, metres) plus albedo and the Henyey-Greenstein ``g``, and
-returns the ``heightfog`` XML parameters.  ``_fmt`` writes a float as the shortest
-text that reads back to the same float64.
+returns the ``heightfog`` XML parameters.  :func:`float_text` writes a float as the
+shortest text that reads back to the same float64.
 """
 
 from __future__ import annotations
@@ -25,7 +29,23 @@ from fogref.errors import ParameterError
 from fogref.media.params import medium_from_params
 from fogref.models.ue4 import unreal_to_sigma
 
-__all__ = ["PHYSICAL", "SCATTERING", "SOURCE", "Range", "fog_from_physical"]
+__all__ = [
+    "MAX_DEPTH",
+    "OPTIONAL_GROUPS",
+    "PHYSICAL",
+    "RANGES",
+    "SCATTERING",
+    "SOURCE",
+    "VOCABULARY",
+    "Range",
+    "check_option",
+    "float_text",
+    "fog_from_physical",
+    "rgb3",
+    "value_text",
+    "vector_text",
+    "vocabulary_groups",
+]
 
 #: Where messages say a bad value came from.
 SOURCE = "fogref scene"
@@ -127,24 +147,127 @@ SCATTERING = {
 #: Mitsuba's path depth (the vocabulary's ``max_depth``; fogpath refuses 0).
 MAX_DEPTH = Range("--max-depth", "depth", -1, _DEPTH_MAX)
 
+#: The ``$default`` names every fogref scene declares (shipped ``scenes/*.xml`` and
+#: ``fogref scene``'s output): image, path depth, fog, sun, camera.
+VOCABULARY = (
+    "res",
+    "resy",
+    "max_depth",
+    "sigma_t",
+    "albedo",
+    "g",
+    "density",
+    "falloff",
+    "fog_height",
+    "sun_elevation",
+    "sun_azimuth",
+    "sun_irradiance",
+    "camera_origin",
+    "camera_target",
+    "fov",
+)
+#: Names a scene declares only all together, where the concept applies: group -> names.
+OPTIONAL_GROUPS = {
+    "sky": ("sky_radiance",),  # a uniform sky (none: a black sky)
+    "second_layer": ("density2", "falloff2", "height2"),  # a second exponential fog layer
+    "bounds": ("bounds_min", "bounds_max"),  # a box the fog is confined to
+    "surface": ("reflectance",),  # one settable diffuse reflectance for all surfaces
+    "turbidity": ("turbidity",),  # a sunsky's atmosphere (fogref/render/sunsky.py)
+    "sun_size": ("sun_angular_diameter",),  # the sun's angular diameter (0: a delta)
+}
+#: The kind, range and unit of every vocabulary name, each declared once (the fog's in
+#: :data:`PHYSICAL` and :data:`SCATTERING`).  The options are
+#: ``fogref scene``'s.  ``sun_azimuth``: one turn either way; camera points within 1e7 m;
+#: ``fov``: the horizontal field of view of a perspective camera.
+RANGES: dict[str, Range] = {
+    "res": Range("--res", "integer", 1, 65536, "pixels"),
+    "resy": Range("--resy", "integer", 1, 65536, "pixels"),
+    "max_depth": MAX_DEPTH,
+    "sigma_t": PHYSICAL["sigma_t"],
+    "albedo": SCATTERING["albedo"],
+    "g": SCATTERING["g"],
+    "density": PHYSICAL["density"],
+    "falloff": PHYSICAL["falloff"],
+    "fog_height": PHYSICAL["height"],
+    "sun_elevation": Range("--sun-elevation", "angle", -90.0, 90.0, "deg"),
+    "sun_azimuth": Range("--sun-azimuth", "angle", -360.0, 360.0, "deg"),
+    "sun_irradiance": Range("--sun-irradiance", "rgb", 0.0),
+    "camera_origin": Range("--camera-origin", "point", -1e7, 1e7, "m"),
+    "camera_target": Range("--camera-target", "point", -1e7, 1e7, "m"),
+    "fov": Range("--fov", "angle", 0.0, 180.0, "deg", lo_open=True, hi_open=True),
+    "sky_radiance": Range("--sky-radiance", "rgb", 0.0),
+    "density2": PHYSICAL["density2"],
+    "falloff2": PHYSICAL["falloff2"],
+    "height2": PHYSICAL["height2"],
+    "bounds_min": PHYSICAL["bounds_min"],
+    "bounds_max": PHYSICAL["bounds_max"],
+    "reflectance": Range("--ground-reflectance", "rgb", 0.0, 1.0),
+    "turbidity": Range("--turbidity", "number", 1.0, 10.0),
+    "sun_angular_diameter": Range("--sun-angular-diameter", "number", 0.0, 10.0, "deg"),
+}
 
-def _check(value: Any, name: str, rng: Range) -> Any:
-    """``value`` checked against ``rng`` by the writer (messages name ``name (--option)``)."""
+
+def vocabulary_groups(names) -> tuple[list[str], list[str]]:
+    """Check ``names`` (a scene's declared defaults) against the vocabulary.
+
+    Returns ``(wrong, groups)``: the sorted :data:`VOCABULARY` names absent, the
+    absent members of partly declared optional groups and the names outside the
+    vocabulary (empty: the scene speaks the vocabulary); and the optional groups it
+    declares in full.
+
+    >>> vocabulary_groups(set(VOCABULARY) | {"sky_radiance"})
+    ([], ['sky'])
+    >>> vocabulary_groups(set(VOCABULARY) - {"fov"} | {"density2", "sun"})
+    (['falloff2', 'fov', 'height2', 'sun'], [])
+    """
+    names = set(names)
+    wrong = set(VOCABULARY) - names
+    groups = []
+    for group, members in OPTIONAL_GROUPS.items():
+        present = names & set(members)
+        if present == set(members):
+            groups.append(group)
+        elif present:
+            wrong |= set(members) - present
+    known = set(VOCABULARY).union(*OPTIONAL_GROUPS.values())
+    return sorted(wrong | (names - known)), groups
+
+
+def check_option(value: Any, name: str, rng: Range) -> Any:
+    """``value`` checked against ``rng`` by ``fogref scene`` (messages name ``name (--option)``).
+
+    >>> check_option("2", "fov", RANGES["fov"])
+    2.0
+    """
     return rng.check(value, rng.label(name), SOURCE)
 
 
-def _rgb3(v: Any) -> list:
+def rgb3(v: Any) -> list:
+    """A grey value as three; three as they are.
+
+    >>> rgb3(0.5), rgb3([1.0, 2.0, 3.0])
+    ([0.5, 0.5, 0.5], [1.0, 2.0, 3.0])
+    """
     return list(v) if isinstance(v, list) else [v] * 3
 
 
-def _fmt(x: float) -> str:
-    """A float as the shortest text that reads back to the same float64."""
+def float_text(x: float) -> str:
+    """A float as the shortest text that reads back to the same float64 (-0 as 0).
+
+    >>> float_text(-0.0), float_text(2), float_text(0.1)
+    ('0.0', '2.0', '0.1')
+    """
     x = float(x)
     return repr(0.0 if x == 0 else x)
 
 
-def _vec(v: Any) -> str:
-    return ", ".join(_fmt(x) for x in v)
+def vector_text(v: Any) -> str:
+    """Numbers as XML text, comma-separated.
+
+    >>> vector_text([1, 0.5, -0.0])
+    '1.0, 0.5, 0.0'
+    """
+    return ", ".join(float_text(x) for x in v)
 
 
 def fog_from_physical(fog: dict | None = None, *, albedo: Any = 0.9, g: float = 0.6) -> dict:
@@ -210,9 +333,9 @@ def fog_from_physical(fog: dict | None = None, *, albedo: Any = 0.9, g: float = 
     for name, rng in PHYSICAL.items():
         v = fog.get(name, defaults.get(name))
         if v is not None:
-            out[name] = _check(v, name, rng)
-    out["albedo"] = _check(albedo, "albedo", SCATTERING["albedo"])
-    out["g"] = _check(g, "g", SCATTERING["g"])
+            out[name] = check_option(v, name, rng)
+    out["albedo"] = check_option(albedo, "albedo", SCATTERING["albedo"])
+    out["g"] = check_option(g, "g", SCATTERING["g"])
     if ("bounds_min" in out) != ("bounds_max" in out):
         missing = "bounds_max" if "bounds_min" in out else "bounds_min"
         raise ParameterError(SOURCE, PHYSICAL[missing].label(missing), "give both bounds or none")
@@ -239,5 +362,10 @@ def _check_medium(fog: dict) -> None:
     medium_from_params(_medium_params(fog), f"{SOURCE}: fog")
 
 
-def _text(v: Any) -> str:
-    return _vec(v) if isinstance(v, list) else _fmt(v)
+def value_text(v: Any) -> str:
+    """A number or a list of numbers as XML text.
+
+    >>> value_text(0.5), value_text([0.1, 0.2, 0.3])
+    ('0.5', '0.1, 0.2, 0.3')
+    """
+    return vector_text(v) if isinstance(v, list) else float_text(v)

@@ -2,11 +2,11 @@
 
 The scene is built like the shipped ones (``scenes/*.xml``): every fog, sun, sky
 and camera value is a ``<default>`` named in the one vocabulary
-(:data:`fogref.render.scene_defaults.VOCABULARY` and its optional groups), so
+(:data:`fogref.scene.defaults.VOCABULARY` and its optional groups), so
 ``fogref render --set NAME=VALUE`` changes any of them; the ``fogpath`` integrator,
 a ``heightfog`` medium inside the sensor, a box reconstruction filter, a
 ``directional`` sun oriented by ``$sun_elevation`` and ``$sun_azimuth``
-(:mod:`fogref.render.sun`) and a ``constant`` sky.  Built with
+(:mod:`fogref.scene.sun`) and a ``constant`` sky.  Built with
 :mod:`xml.etree.ElementTree`; no Mitsuba.
 """
 
@@ -17,8 +17,8 @@ from pathlib import Path
 
 from fogref._version import __version__
 from fogref.atomic import atomic_write
-from fogref.mapping.fog_input import _fmt, _rgb3, _text, _vec
-from fogref.render.scene_templates import Geometry, add_mesh, add_valley, diffuse, ground, sub
+from fogref.scene.templates import Geometry, add_mesh, add_valley, diffuse, ground, sub
+from fogref.scene.vocabulary import float_text, rgb3, value_text, vector_text
 
 __all__ = ["FOG_DEFAULTS", "comment_text", "scene_defaults", "scene_element", "write_xml"]
 
@@ -40,7 +40,7 @@ FOG_DEFAULTS = (
 #: The default reflectance of the plane and mesh templates' surfaces (the ``surface`` group's
 #: ``$reflectance``; ``fogref scene --ground-reflectance``, ``--mesh-reflectance``).
 DEFAULT_REFLECTANCE = 0.2
-SURFACE_REFLECTANCE = _vec(_rgb3(DEFAULT_REFLECTANCE))
+SURFACE_REFLECTANCE = vector_text(rgb3(DEFAULT_REFLECTANCE))
 
 
 def scene_defaults(
@@ -56,7 +56,7 @@ def scene_defaults(
 ) -> dict[str, str]:
     """The ``<default>`` values (XML text) of a written scene, in declaration order.
 
-    ``fog``: :func:`fogref.mapping.fog_input.fog_from_physical`'s output; ``camera``:
+    ``fog``: :func:`fogref.scene.vocabulary.fog_from_physical`'s output; ``camera``:
     ``res``, ``resy``, ``camera_origin``, ``camera_target``, ``fov``; ``sky_radiance``
     None declares no sky; the plane and mesh templates add ``reflectance`` (grey or RGB in
     [0, 1]; None: :data:`SURFACE_REFLECTANCE`): the plane's ground, or the mesh's surfaces.
@@ -68,21 +68,21 @@ def scene_defaults(
     }
     for k, _ in FOG_DEFAULTS:
         if k in fog:
-            d[k] = _text(fog[k])
+            d[k] = value_text(fog[k])
     d.update(
-        sun_elevation=_fmt(sun_elevation),
-        sun_azimuth=_fmt(sun_azimuth),
-        sun_irradiance=_vec(_rgb3(sun_irradiance)),
+        sun_elevation=float_text(sun_elevation),
+        sun_azimuth=float_text(sun_azimuth),
+        sun_irradiance=vector_text(rgb3(sun_irradiance)),
     )
     if sky_radiance is not None:
-        d["sky_radiance"] = _vec(_rgb3(sky_radiance))
+        d["sky_radiance"] = vector_text(rgb3(sky_radiance))
     d.update(
-        camera_origin=_vec(camera["camera_origin"]),
-        camera_target=_vec(camera["camera_target"]),
-        fov=_fmt(camera["fov"]),
+        camera_origin=vector_text(camera["camera_origin"]),
+        camera_target=vector_text(camera["camera_target"]),
+        fov=float_text(camera["fov"]),
     )
     if geometry_kind != "valley":
-        d["reflectance"] = SURFACE_REFLECTANCE if reflectance is None else _vec(_rgb3(reflectance))
+        d["reflectance"] = SURFACE_REFLECTANCE if reflectance is None else vector_text(rgb3(reflectance))
     return d
 
 
@@ -104,7 +104,7 @@ def _header(root, geo: Geometry, fog_source: str, notes) -> None:
             comment_text(
                 f" Written by fogref scene (fogref {__version__}). Geometry: {geo_text}. Fog from "
                 f"{fog_source}. Units: metres, y up; the sun's elevation is above the horizon and its "
-                "azimuth is from +z toward +x [deg] (fogref/render/sun.py). Every default below can be "
+                "azimuth is from +z toward +x [deg] (fogref/scene/sun.py). Every default below can be "
                 "changed by the set option of fogref render (NAME=VALUE). "
             )
         )
@@ -159,7 +159,7 @@ def _lights(root, sky) -> None:
         return
     sun_el = sub(root, "emitter", type="directional", id="sun")
     tw = sub(sun_el, "transform", name="to_world")
-    tw.append(ET.Comment(" light travels along -w(sun_elevation, sun_azimuth): fogref/render/sun.py "))
+    tw.append(ET.Comment(" light travels along -w(sun_elevation, sun_azimuth): fogref/scene/sun.py "))
     sub(tw, "rotate", x="1", angle="$sun_elevation")
     sub(tw, "rotate", y="1", angle="$sun_azimuth")
     sub(tw, "rotate", y="1", angle="180")
@@ -210,7 +210,7 @@ def scene_element(
         diffuse(root, "surface", "$reflectance", twosided=geo.kind == "mesh")
         own = geo.kind == "mesh" and ground_reflectance is not None
         if own:
-            diffuse(root, "ground_surface", _vec(_rgb3(ground_reflectance)))
+            diffuse(root, "ground_surface", vector_text(rgb3(ground_reflectance)))
         if with_ground:
             ground(root, ground_size, "ground_surface" if own else "surface")
         if geo.kind == "mesh":

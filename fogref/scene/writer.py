@@ -4,16 +4,16 @@ It turns what a user has, fog parameters in physical units **or** Unreal's edito
 values, a sun angle, a sky colour, a camera and a level's geometry, into a Mitsuba 3
 XML scene that ``fogref render`` takes as is, built like the shipped ones
 (``scenes/*.xml``) and declaring the same ``$default`` vocabulary
-(:data:`fogref.render.scene_defaults.VOCABULARY`), so ``fogref render --set
+(:data:`fogref.scene.defaults.VOCABULARY`), so ``fogref render --set
 NAME=VALUE`` changes any fog, sun, sky or camera value.
 
 The concepts live beside it: the physical fog and the declared range of each of its
-values in :mod:`fogref.mapping.fog_input` (checked through :mod:`fogref.params`; the
-scene vocabulary's ranges, :data:`fogref.render.scene_defaults.RANGES`, are the same
+values in :mod:`fogref.scene.vocabulary` (checked through :mod:`fogref.params`; the
+scene vocabulary's ranges, :data:`fogref.scene.defaults.RANGES`, are the same
 declarations that ``fogref render --set`` is checked against), the exact Unreal ->
-physical mapping in :mod:`fogref.mapping.unreal_editor`, the geometry templates (``"plane"``,
+physical mapping in :mod:`fogref.scene.unreal_editor`, the geometry templates (``"plane"``,
 ``"valley"`` read from ``scenes/valley.xml``, ``.obj``/``.ply`` meshes) in
-:mod:`fogref.render.scene_templates` and the XML in :mod:`fogref.render.scene_xml`.
+:mod:`fogref.scene.templates` and the XML in :mod:`fogref.scene.writer_xml`.
 This module checks the sun, sky, camera and geometry arguments and writes the file.
 Units: fogref is **y-up, metres**; Unreal is z-up, centimetres.  Writing needs no Mitsuba.
 """
@@ -28,23 +28,11 @@ from pathlib import Path
 
 from fogref import params
 from fogref.errors import FogrefError, ParameterError
-from fogref.mapping.fog_input import (
-    PHYSICAL,
-    SCATTERING,
-    SOURCE,
-    Range,
-    _check,
-    _fmt,
-    _rgb3,
-    _text,
-    fog_from_physical,
-)
-from fogref.mapping.unreal_editor import UNREAL_IGNORED, UNREAL_IGNORED_RANGES, UNREAL_MAPPED, fog_from_unreal
-from fogref.mapping.unreal_editor import flat_unreal as _flat_unreal
 from fogref.media.params import medium_from_params
 from fogref.media.phase import TabulatedPhase
-from fogref.render.scene_defaults import RANGES, check_camera
-from fogref.render.scene_templates import (
+from fogref.scene.defaults import check_camera
+from fogref.scene.sun import sun_direction_from_angles
+from fogref.scene.templates import (
     GROUND_SIZE,
     MESH_PLUGINS,
     MESH_UP,
@@ -53,9 +41,22 @@ from fogref.render.scene_templates import (
     mesh_files,
     mesh_has_normals,
 )
-from fogref.render.scene_templates import geometry as resolve_geometry
-from fogref.render.scene_xml import DEFAULT_REFLECTANCE, scene_defaults, scene_element, write_xml
-from fogref.render.sun import sun_direction_from_angles
+from fogref.scene.templates import geometry as resolve_geometry
+from fogref.scene.unreal_editor import UNREAL_IGNORED, UNREAL_IGNORED_RANGES, UNREAL_MAPPED, fog_from_unreal
+from fogref.scene.unreal_editor import flat_unreal as _flat_unreal
+from fogref.scene.vocabulary import (
+    PHYSICAL,
+    RANGES,
+    SCATTERING,
+    SOURCE,
+    Range,
+    check_option,
+    float_text,
+    fog_from_physical,
+    rgb3,
+    value_text,
+)
+from fogref.scene.writer_xml import DEFAULT_REFLECTANCE, scene_defaults, scene_element, write_xml
 
 __all__ = [
     "MESH_PLUGINS",
@@ -98,7 +99,7 @@ class SceneWriteResult:
 
 def _camera(origin, target, fov, res, resy) -> dict:
     out = {
-        name: _check(v, name, RANGES[name])
+        name: check_option(v, name, RANGES[name])
         for name, v in (
             ("camera_origin", origin),
             ("camera_target", target),
@@ -175,7 +176,7 @@ def write_scene(
         Henyey-Greenstein asymmetry in [-0.999, 0.999] (default 0.6).
     sun_elevation, sun_azimuth : float
         The sun [deg]: elevation above the horizon in [-90, 90], azimuth from +z toward +x
-        (:func:`fogref.render.sun.sun_direction_from_angles`).
+        (:func:`fogref.scene.sun.sun_direction_from_angles`).
     sun_irradiance : float or 3 floats
         RGB sun irradiance on a plane facing the sun, >= 0 (relative linear units).
     sky_radiance : float, 3 floats or None
@@ -279,21 +280,21 @@ def write_scene(
         medium_from_params(fogp, SOURCE)  # g against the phase's mean cosine
     if unreal is not None:
         notes.append(
-            f"Unreal has no albedo or phase function: the fog uses albedo {_text(fogp['albedo'])} "
-            f"and Henyey-Greenstein g {_fmt(fogp['g'])} (the albedo and g parameters)"
+            f"Unreal has no albedo or phase function: the fog uses albedo {value_text(fogp['albedo'])} "
+            f"and Henyey-Greenstein g {float_text(fogp['g'])} (the albedo and g parameters)"
         )
-    el = _check(sun_elevation, "sun_elevation", RANGES["sun_elevation"])
-    az = _check(sun_azimuth, "sun_azimuth", RANGES["sun_azimuth"])
+    el = check_option(sun_elevation, "sun_elevation", RANGES["sun_elevation"])
+    az = check_option(sun_azimuth, "sun_azimuth", RANGES["sun_azimuth"])
     sun_direction_from_angles(el, az)
-    sun = _check(sun_irradiance, "sun_irradiance", RANGES["sun_irradiance"])
+    sun = check_option(sun_irradiance, "sun_irradiance", RANGES["sun_irradiance"])
     sky_kind = sky
-    sky = None if sky_radiance is None else _check(sky_radiance, "sky_radiance", RANGES["sky_radiance"])
+    sky = None if sky_radiance is None else check_option(sky_radiance, "sky_radiance", RANGES["sky_radiance"])
     cam = _camera(camera_origin, camera_target, fov, res, resy)
-    depth = _check(max_depth, "max_depth", RANGES["max_depth"])
+    depth = check_option(max_depth, "max_depth", RANGES["max_depth"])
     geo = resolve_geometry(geometry)
-    scale = _check(mesh_scale, "mesh_scale", MESH_SCALE)
+    scale = check_option(mesh_scale, "mesh_scale", MESH_SCALE)
     params.choice(mesh_up, "mesh_up (--mesh-up)", MESH_UP, SOURCE)
-    shift = _check(mesh_translate, "mesh_translate", MESH_TRANSLATE)
+    shift = check_option(mesh_translate, "mesh_translate", MESH_TRANSLATE)
     if geo.kind != "mesh":
         given_args = (
             ("mesh_scale", scale != 1.0),
@@ -311,7 +312,7 @@ def write_scene(
     gsize = (
         GROUND_SIZE.get(geo.kind)
         if ground_size is None
-        else _check(ground_size, "ground_size", GROUND_SIZE_RANGE)
+        else check_option(ground_size, "ground_size", GROUND_SIZE_RANGE)
     )
     with_ground = (geo.kind != "mesh") if ground is None else bool(ground)
     if geo.kind == "valley" and not with_ground:
@@ -326,10 +327,12 @@ def write_scene(
     g_refl = (
         None
         if ground_reflectance is None
-        else _check(ground_reflectance, "ground_reflectance", GROUND_REFLECTANCE)
+        else check_option(ground_reflectance, "ground_reflectance", GROUND_REFLECTANCE)
     )
     m_refl = (
-        None if mesh_reflectance is None else _check(mesh_reflectance, "mesh_reflectance", MESH_REFLECTANCE)
+        None
+        if mesh_reflectance is None
+        else check_option(mesh_reflectance, "mesh_reflectance", MESH_REFLECTANCE)
     )
     inputs = mesh_files(geo.mesh) if geo.kind == "mesh" else [VALLEY_SCENE] if geo.kind == "valley" else []
     _check_inputs(out, inputs)
@@ -348,11 +351,11 @@ def write_scene(
     own_ground = (
         geo.kind == "mesh"
         and g_refl is not None
-        and (_rgb3(g_refl) != _rgb3(DEFAULT_REFLECTANCE if m_refl is None else m_refl))
+        and (rgb3(g_refl) != rgb3(DEFAULT_REFLECTANCE if m_refl is None else m_refl))
     )
     if own_ground:
         notes.append(
-            f"the ground's reflectance {_text(g_refl)} is written in its BSDF; "
+            f"the ground's reflectance {value_text(g_refl)} is written in its BSDF; "
             "the reflectance default is the mesh's"
         )
 
@@ -361,17 +364,17 @@ def write_scene(
         sky = None
     defaults = scene_defaults(fogp, cam, depth, el, az, sun, sky, geo.kind, reflectance=refl)
     if sky_kind == "sunsky":
-        defaults["turbidity"] = _fmt(_check(turbidity, "turbidity", RANGES["turbidity"]))
+        defaults["turbidity"] = float_text(check_option(turbidity, "turbidity", RANGES["turbidity"]))
         if el < 0:
             notes.append(
-                f"the sun is {_fmt(-el)} deg below the horizon: Mitsuba's sunsky then gives no light "
+                f"the sun is {float_text(-el)} deg below the horizon: Mitsuba's sunsky then gives no light "
                 "(no sun, a black sky): the truth is black"
             )
         if sun_angular_diameter is None:
             sun_angular_diameter = 0.0
     if sun_angular_diameter is not None:
-        size = _check(sun_angular_diameter, "sun_angular_diameter", RANGES["sun_angular_diameter"])
-        defaults["sun_angular_diameter"] = _fmt(size)
+        size = check_option(sun_angular_diameter, "sun_angular_diameter", RANGES["sun_angular_diameter"])
+        defaults["sun_angular_diameter"] = float_text(size)
     fog_source = (
         "Unreal editor values " + ", ".join(f"{k}={v}" for k, v in _flat_unreal(unreal).items())
         if unreal is not None

@@ -16,7 +16,6 @@ import difflib
 from typing import Any
 
 from fogref.errors import ParameterError
-from fogref.mapping.fog_input import PHYSICAL, SOURCE, Range, _check, _fmt, _vec, fog_from_physical
 from fogref.models.ue4 import (
     CM_PER_M,
     SecondFogData,
@@ -24,6 +23,15 @@ from fogref.models.ue4 import (
     sigma_to_unreal,
     ue4_to_medium,
     unreal_to_sigma,
+)
+from fogref.scene.vocabulary import (
+    PHYSICAL,
+    SOURCE,
+    Range,
+    check_option,
+    float_text,
+    fog_from_physical,
+    vector_text,
 )
 
 __all__ = ["UNREAL_IGNORED", "UNREAL_IGNORED_RANGES", "UNREAL_MAPPED", "flat_unreal", "fog_from_unreal"]
@@ -168,7 +176,7 @@ def fog_from_unreal(unreal: dict, *, albedo: Any = 0.9, g: float = 0.6) -> tuple
     for key, opt in UNREAL_MAPPED.items():
         lo, hi, unit, default = limits[key]
         raw = _unreal_value(unreal, key)
-        v[key] = _check(default if raw is None else raw, key, Range(opt, "number", lo, hi, unit))
+        v[key] = check_option(default if raw is None else raw, key, Range(opt, "number", lo, hi, unit))
     sfd = unreal.get("SecondFogData") or {}
     extra = sorted(set(sfd) - {"FogDensity", "FogHeightFalloff", "FogHeightOffset"})
     if extra:
@@ -181,8 +189,8 @@ def fog_from_unreal(unreal: dict, *, albedo: Any = 0.9, g: float = 0.6) -> tuple
     for key, (_, _, why) in UNREAL_IGNORED.items():
         if unreal.get(key) is None:
             continue
-        val = _check(unreal[key], key, UNREAL_IGNORED_RANGES[key])
-        shown = _vec(val) if isinstance(val, list) else _fmt(val)
+        val = check_option(unreal[key], key, UNREAL_IGNORED_RANGES[key])
+        shown = vector_text(val) if isinstance(val, list) else float_text(val)
         notes.append(f"Unreal {key} = {shown} is ignored: {why}")
     params = UE4FogParams(
         FogDensity=v["FogDensity"],
