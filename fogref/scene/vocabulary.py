@@ -1,5 +1,4 @@
-"""The scene vocabulary: every ``$default`` name of a fogref scene, the declared range of each value,
-and the fog a user gives ``fogref scene`` in physical units.
+"""The scene vocabulary: every ``$default`` name of a fogref scene and the declared range of each value.
 
 :class:`Range` is one value's kind (number, angle, integer, path depth, grey-or-RGB,
 point), allowed range and unit, and its check through :mod:`fogref.params` (fogref's
@@ -9,11 +8,7 @@ group, where the concept applies (a second fog layer, fog bounds, a sky, a setta
 surface reflectance).  :data:`RANGES` declares the kind, range and unit of each of them
 once (the fog's from :data:`PHYSICAL` and :data:`SCATTERING`), so ``fogref scene``,
 ``fogref render --set``, a scene's own ``$default`` values and the mappings are checked
-against the same ranges: a new scene option is one entry here.
-
-:func:`fog_from_physical` validates extinction, falloff, heights, a second layer
-and box bounds (y-up, metres) plus albedo and the Henyey-Greenstein ``g``, and
-returns the ``heightfog`` XML parameters.  :func:`float_text` writes a float as the
+against the same ranges: a new scene option is one entry here.  :func:`float_text` writes a float as the
 shortest text that reads back to the same float64.
 """
 
@@ -26,8 +21,6 @@ from typing import Any
 
 from fogref import params
 from fogref.errors import ParameterError
-from fogref.media.params import medium_from_params
-from fogref.models.ue4 import unreal_to_sigma
 
 __all__ = [
     "MAX_DEPTH",
@@ -40,7 +33,6 @@ __all__ = [
     "Range",
     "check_option",
     "float_text",
-    "fog_from_physical",
     "rgb3",
     "value_text",
     "vector_text",
@@ -268,98 +260,6 @@ def vector_text(v: Any) -> str:
     '1.0, 0.5, 0.0'
     """
     return ", ".join(float_text(x) for x in v)
-
-
-def fog_from_physical(fog: dict | None = None, *, albedo: Any = 0.9, g: float = 0.6) -> dict:
-    """The ``heightfog`` parameters of a fog given in physical units, validated.
-
-    Parameters
-    ----------
-    fog : dict, optional
-        ``sigma_t`` [1/m] (1 grey or 3 RGB values, 0..1e2; extinction at ``height``),
-        ``falloff`` [1/m] (0..1e3), ``height`` [m], ``density`` (relative, default 1),
-        an optional second layer ``density2`` (relative to ``sigma_t``; 0 = none),
-        ``falloff2`` [1/m], ``height2`` [m], and optional box bounds ``bounds_min``,
-        ``bounds_max`` (3 values each [m], both or none). Missing values take the
-        shipped valley's fog (Unreal's FogDensity 0.02, FogHeightFalloff 0.2 at 0 m).
-    albedo : float or 3 floats
-        Single-scattering albedo in [0, 1].
-    g : float
-        Henyey-Greenstein asymmetry in [-0.999, 0.999].
-
-    Returns
-    -------
-    dict
-        XML parameter name -> value (floats, lists of floats): ``sigma_t``, ``albedo``,
-        ``g``, ``density``, ``falloff``, ``fog_height``, ``density2``, ``falloff2``,
-        ``height2`` and, when given, ``bounds_min``, ``bounds_max``.
-
-    Raises
-    ------
-    fogref.errors.ParameterError
-        Naming the parameter, its command-line option and the allowed range.
-
-    Examples
-    --------
-    >>> p = fog_from_physical({"sigma_t": [0.001, 0.002, 0.003], "falloff": 0.05, "height": 10})
-    >>> p["sigma_t"], p["falloff"], p["fog_height"], p["density2"]
-    ([0.001, 0.002, 0.003], 0.05, 10.0, 0.0)
-    >>> fog_from_physical({"falloff": -1})  # doctest: +ELLIPSIS
-    Traceback (most recent call last):
-    ...
-    fogref.errors.ParameterError: fogref scene: parameter 'falloff (--falloff)': -1 is outside [0, 1000] 1/m
-    """
-    if fog is not None and not isinstance(fog, dict):
-        raise ParameterError(SOURCE, "fog", f"expected a dict of physical fog values, got {fog!r}")
-    fog = dict(fog or {})
-    unknown = sorted(set(fog) - set(PHYSICAL) - set(SCATTERING))
-    if unknown:
-        raise ParameterError(
-            SOURCE, unknown[0], f"not a physical fog parameter; known: {', '.join(PHYSICAL)}"
-        )
-    albedo = fog.pop("albedo", albedo)
-    g = fog.pop("g", g)
-    sigma0, falloff0 = unreal_to_sigma(0.02, 0.2)  # the shipped valley's fog
-    defaults = {
-        "sigma_t": sigma0,
-        "density": 1.0,
-        "falloff": falloff0,
-        "height": 0.0,
-        "density2": 0.0,
-        "falloff2": 0.002,
-        "height2": 100.0,
-    }
-    out = {}
-    for name, rng in PHYSICAL.items():
-        v = fog.get(name, defaults.get(name))
-        if v is not None:
-            out[name] = check_option(v, name, rng)
-    out["albedo"] = check_option(albedo, "albedo", SCATTERING["albedo"])
-    out["g"] = check_option(g, "g", SCATTERING["g"])
-    if ("bounds_min" in out) != ("bounds_max" in out):
-        missing = "bounds_max" if "bounds_min" in out else "bounds_min"
-        raise ParameterError(SOURCE, PHYSICAL[missing].label(missing), "give both bounds or none")
-    if "bounds_min" in out and not all(a < b for a, b in zip(out["bounds_min"], out["bounds_max"])):
-        raise ParameterError(
-            SOURCE,
-            PHYSICAL["bounds_max"].label("bounds_max"),
-            f"{out['bounds_max']} must exceed bounds_min {out['bounds_min']} on every axis",
-        )
-    out["fog_height"] = out.pop("height")
-    _check_medium(out)
-    return out
-
-
-def _medium_params(fog: dict) -> dict:
-    """``heightfog`` XML parameter names (``height`` for ``fog_height``)."""
-    p = {k: v for k, v in fog.items() if k != "fog_height"}
-    p["height"] = fog["fog_height"]
-    return p
-
-
-def _check_medium(fog: dict) -> None:
-    """The medium parser that ``fogref render`` uses must accept the values too."""
-    medium_from_params(_medium_params(fog), f"{SOURCE}: fog")
 
 
 def value_text(v: Any) -> str:

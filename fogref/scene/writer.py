@@ -4,15 +4,14 @@ It turns what a user has, fog parameters in physical units **or** Unreal's edito
 values, a sun angle, a sky colour, a camera and a level's geometry, into a Mitsuba 3
 XML scene that ``fogref render`` takes as is, built like the shipped ones
 (``scenes/*.xml``) and declaring the same ``$default`` vocabulary
-(:data:`fogref.scene.defaults.VOCABULARY`), so ``fogref render --set
+(:data:`fogref.scene.vocabulary.VOCABULARY`), so ``fogref render --set
 NAME=VALUE`` changes any fog, sun, sky or camera value.
 
-The concepts live beside it: the physical fog and the declared range of each of its
-values in :mod:`fogref.scene.vocabulary` (checked through :mod:`fogref.params`; the
-scene vocabulary's ranges, :data:`fogref.scene.defaults.RANGES`, are the same
-declarations that ``fogref render --set`` is checked against), the exact Unreal ->
-physical mapping in :mod:`fogref.scene.unreal_editor`, the geometry templates (``"plane"``,
-``"valley"`` read from ``scenes/valley.xml``, ``.obj``/``.ply`` meshes) in
+The concepts live beside it: the declared range of each value in
+:mod:`fogref.scene.vocabulary` (checked through :mod:`fogref.params`; the same
+declarations that ``fogref render --set`` is checked against), the physical fog and the exact
+Unreal -> physical mapping in :mod:`fogref.scene.fog_input`, the geometry templates
+(``"plane"``, ``"valley"`` read from ``scenes/valley.xml``, ``.obj``/``.ply`` meshes) in
 :mod:`fogref.scene.templates` and the XML in :mod:`fogref.scene.writer_xml`.
 This module checks the sun, sky, camera and geometry arguments and writes the file.
 Units: fogref is **y-up, metres**; Unreal is z-up, centimetres.  Writing needs no Mitsuba.
@@ -31,6 +30,14 @@ from fogref.errors import FogrefError, ParameterError
 from fogref.media.params import medium_from_params
 from fogref.media.phase import TabulatedPhase
 from fogref.scene.defaults import check_camera
+from fogref.scene.fog_input import (
+    UNREAL_IGNORED,
+    UNREAL_IGNORED_RANGES,
+    UNREAL_MAPPED,
+    fog_from_physical,
+    fog_from_unreal,
+)
+from fogref.scene.fog_input import flat_unreal as _flat_unreal
 from fogref.scene.sun import sun_direction_from_angles
 from fogref.scene.templates import (
     GROUND_SIZE,
@@ -42,8 +49,6 @@ from fogref.scene.templates import (
     mesh_has_normals,
 )
 from fogref.scene.templates import geometry as resolve_geometry
-from fogref.scene.unreal_editor import UNREAL_IGNORED, UNREAL_IGNORED_RANGES, UNREAL_MAPPED, fog_from_unreal
-from fogref.scene.unreal_editor import flat_unreal as _flat_unreal
 from fogref.scene.vocabulary import (
     PHYSICAL,
     RANGES,
@@ -52,7 +57,6 @@ from fogref.scene.vocabulary import (
     Range,
     check_option,
     float_text,
-    fog_from_physical,
     rgb3,
     value_text,
 )

@@ -2,7 +2,7 @@
 
 The scene is built like the shipped ones (``scenes/*.xml``): every fog, sun, sky
 and camera value is a ``<default>`` named in the one vocabulary
-(:data:`fogref.scene.defaults.VOCABULARY` and its optional groups), so
+(:data:`fogref.scene.vocabulary.VOCABULARY` and its optional groups), so
 ``fogref render --set NAME=VALUE`` changes any of them; the ``fogpath`` integrator,
 a ``heightfog`` medium inside the sensor, a box reconstruction filter, a
 ``directional`` sun oriented by ``$sun_elevation`` and ``$sun_azimuth``
@@ -56,7 +56,7 @@ def scene_defaults(
 ) -> dict[str, str]:
     """The ``<default>`` values (XML text) of a written scene, in declaration order.
 
-    ``fog``: :func:`fogref.scene.vocabulary.fog_from_physical`'s output; ``camera``:
+    ``fog``: :func:`fogref.scene.fog_input.fog_from_physical`'s output; ``camera``:
     ``res``, ``resy``, ``camera_origin``, ``camera_target``, ``fov``; ``sky_radiance``
     None declares no sky; the plane and mesh templates add ``reflectance`` (grey or RGB in
     [0, 1]; None: :data:`SURFACE_REFLECTANCE`): the plane's ground, or the mesh's surfaces.
