@@ -23,9 +23,10 @@ from fogref.models.ue4 import SecondFogData, UE4FogParams, ue4_to_medium, unreal
 from fogref.render.load import describe_scene
 from fogref.scene import templates as scene_templates
 from fogref.scene.defaults import declared, used_names
+from fogref.scene.fog_input import UNREAL_IGNORED, fog_from_unreal
 from fogref.scene.sun import sun_direction_from_angles
 from fogref.scene.vocabulary import OPTIONAL_GROUPS, VOCABULARY, vocabulary_groups
-from fogref.scene.writer import UNREAL_IGNORED, fog_from_unreal, write_scene
+from fogref.scene.writer import write_scene
 
 UE = {
     "FogDensity": 0.05,

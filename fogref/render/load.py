@@ -11,7 +11,6 @@ Mitsuba's sensor (:func:`sensor_camera`: the truth's header).
 from __future__ import annotations
 
 import copy
-import dataclasses
 import math
 import re
 
@@ -24,35 +23,13 @@ from fogref.scene.describe import check_renderable, describe
 from fogref.scene.parsed import ParsedScene, read_scene
 
 
-def _parsed(scene, overrides: dict | None) -> ParsedScene:
-    """``scene`` as a ParsedScene: as it is, or read from a path with ``overrides``."""
-    if isinstance(scene, ParsedScene):
-        if overrides is not None:
-            raise FogrefError(f"{scene.path}: a parsed scene carries its overrides; give them to read_scene")
-        return scene
-    return read_scene(scene, overrides)
-
-
 def describe_scene(scene, overrides: dict | None = None) -> dict:
-    """Fog, sun, sky and integrator of a fogref scene (a path, with ``overrides``, or a
-    :class:`~fogref.scene.parsed.ParsedScene`), validated, as plain data
-    (:func:`fogref.scene.describe.describe`; a ``sunsky`` split by
-    :func:`fogref.render.sunsky.lower_sunsky`, which sets Mitsuba up).
-
-    Raises :class:`~fogref.errors.ParameterError` naming the file and parameter
-    for an out-of-range value (the ``$default``s and ``overrides`` against
-    :data:`~fogref.scene.vocabulary.RANGES`; the fog, the sun's irradiance, the
-    sky's radiance, and the integrator's ``max_depth``, the sensor's ``fov`` and the
-    film's size as written in the XML), :class:`~fogref.errors.FogrefError` for XML
-    that can't be parsed.
+    """:func:`fogref.scene.describe.describe` of a fogref scene (a path, with ``overrides``, or a
+    :class:`~fogref.scene.parsed.ParsedScene`), a ``sunsky`` split by
+    :func:`fogref.render.sunsky.lower_sunsky` (which sets Mitsuba up).  Raises as
+    :func:`~fogref.scene.parsed.read_scene` and :func:`~fogref.scene.describe.describe`.
     """
-    s = _parsed(scene, overrides)
-    return s.desc if s.desc is not None else describe(s, lower_sunsky)
-
-
-def described(scene: ParsedScene) -> ParsedScene:
-    """``scene`` with its description (:func:`describe_scene`) filled in."""
-    return scene if scene.desc is not None else dataclasses.replace(scene, desc=describe(scene, lower_sunsky))
+    return describe(scene if isinstance(scene, ParsedScene) else read_scene(scene, overrides), lower_sunsky)
 
 
 def _mitsuba_reason(e: Exception) -> str:
@@ -79,8 +56,8 @@ def load_scene(scene, overrides: dict | None = None):
     set_variant()
     import mitsuba as mi
 
-    s = described(_parsed(scene, overrides))
-    desc = copy.deepcopy(s.desc)
+    s = scene if isinstance(scene, ParsedScene) else read_scene(scene, overrides)
+    desc = describe_scene(s)
     check_renderable(s.path, s.root)
     lowered = None
     if any(e.get("type") == "sunsky" for e in s.root.iter("emitter")):  # sky and sun split, each once

@@ -75,7 +75,7 @@ _SOURCE = "fogref render"
 _HOST_BYTES_PER_PIXEL = (30 + 42) * 8 * 2 + len(gbuffer.exr_channel_names()) * 4
 
 
-__all__ = ["render", "check_output", "file_sha256", "checkpoint_path", "moments_path", "PIXEL_FILTERS"]
+__all__ = ["render", "check_output", "checkpoint_path", "moments_path", "PIXEL_FILTERS"]
 
 
 def _physical_memory() -> int:

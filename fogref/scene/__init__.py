@@ -1,1 +1,1 @@
-"""The scene XML read once: parse, ``$default``s, vocabulary and ranges, inputs, description, writer, edits."""
+"""The scene XML read once: parse, ``$default``s, vocabulary, inputs, description, writer, edits."""

@@ -4,7 +4,7 @@
 parse), resolves the ``$default``s after the ``--set`` overrides (checked against
 :data:`fogref.scene.vocabulary.RANGES`) and returns a :class:`ParsedScene`; the render
 driver makes one per render and hands it to the cache key, the description
-(:func:`fogref.scene.describe.describe`), the loader (:func:`fogref.render.load.load_scene`)
+(:func:`fogref.render.load.describe_scene`), the loader (:func:`fogref.render.load.load_scene`)
 and the studies, so no one parses the file again.  The files the scene loads and their
 digest (:mod:`fogref.scene.inputs`) are listed from a copy of the same tree on first use.
 
@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import copy
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 
@@ -38,15 +38,14 @@ class ParsedScene:
 
     ``path``: the scene file; ``root``: its parsed XML tree (``$name``s not substituted:
     never modify it, copy it); ``overrides``: the ``--set`` values as given; ``defaults``:
-    every ``$default`` after the overrides (text); ``desc``: the described fog, sun, sky,
-    integrator and camera (:func:`fogref.render.load.describe_scene`), None until described.
+    every ``$default`` after the overrides (text).  Its description is
+    :func:`fogref.render.load.describe_scene` of it (a ``sunsky``'s needs Mitsuba).
     """
 
     path: Path
     root: ET.Element
     overrides: dict
     defaults: dict[str, str]
-    desc: dict | None = field(default=None)
 
     @cached_property
     def inputs(self) -> tuple[SceneInput, ...]:

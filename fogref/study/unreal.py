@@ -53,12 +53,6 @@ WHAT_IF = {
 }
 
 
-def _sha256(path: Path) -> str:
-    """The scene hash as the render driver recorded it (``fogref.scene_sha256``)."""
-
-    return file_sha256(path)
-
-
 def scene_of_truth(truth: Truth, scene: str | None = None) -> Path:
     """The scene file the truth was rendered from, checked against its recorded hash.
 
@@ -85,13 +79,13 @@ def scene_of_truth(truth: Truth, scene: str | None = None) -> Path:
     if not found:
         raise FogrefError(f"{exr}: cannot find the scene it was rendered from ({recorded!r}); pass --scene")
     for c in found:
-        if _sha256(c) == sha:
+        if file_sha256(c) == sha:
             return c
     c = found[0]
     raise FogrefError(
         f"{exr}: the scene file {c} has changed since this truth was rendered (its SHA-256 is now "
-        f"{_sha256(c)}, the truth recorded {sha}). The study re-renders budget steps from the scene as the "
-        "truth recorded it: restore that version (or pass it with --scene), or render the truth again."
+        f"{file_sha256(c)}, the truth recorded {sha}). The study re-renders budget steps from the scene "
+        "as the truth recorded it: restore that version (or pass it with --scene), or render the truth again."
     )
 
 
