@@ -286,6 +286,18 @@ def test_no_mitsuba_or_drjit_at_module_level_below_render():
     assert not bad, "\n".join(bad)
 
 
+def test_the_scene_floor_never_imports_mitsuba():
+    """``fogref.scene`` reads and writes scene XML without Mitsuba or Dr.Jit, inside functions too."""
+    bad = [
+        f"{_where(m, line)}: {m} imports {name}"
+        for m in MODULES
+        if FLOORS[floor_of(m)][0] == "scene"
+        for name, line, _ in imports_of(m)
+        if name.split(".")[0] in ("mitsuba", "drjit", "fogref_plugins")
+    ]
+    assert not bad, "\n".join(bad)
+
+
 def test_the_package_facade_imports_lazily():
     """``fogref/__init__.py`` imports only base modules at module level; set-up is a call."""
     bad = [
