@@ -54,3 +54,13 @@ def test_parsed_scene_resolves_overrides_and_lists_inputs_from_the_same_tree(tmp
     assert [i.kind for i in s.inputs] == ["scene"] and len(s.digest) == 64
     assert len(parses) == 1, parses
     assert s.root.find("default[@name='sun_elevation']").get("value") != "12"  # the tree is not edited
+
+
+def test_a_read_scene_with_other_overrides_is_refused(tmp_path):
+    from fogref.errors import FogrefError
+    from fogref.render.render import render
+    from fogref.scene.parsed import read_scene
+
+    with pytest.raises(FogrefError, match="carries its overrides"):
+        render(read_scene(scene_path("valley")), tmp_path / "t.exr", overrides={"res": 8})
+    assert not (tmp_path / "t.exr").exists()

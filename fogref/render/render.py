@@ -219,6 +219,8 @@ def render(
     workers = cluster.check_workers(workers, _SOURCE)
     worker_timeout = cluster.check_worker_timeout(worker_timeout, _SOURCE)
     on_cluster = scheduler is not None or workers is not None
+    if isinstance(scene_path, ParsedScene) and overrides is not None:
+        raise FogrefError(f"{scene_path.path}: a read scene carries its overrides; give them to read_scene")
     # the one parse of the XML before Mitsuba's own
     parsed = scene_path if isinstance(scene_path, ParsedScene) else read_scene(scene_path, overrides)
     scene_path, overrides, out = parsed.path, parsed.overrides, Path(out)
