@@ -10,7 +10,7 @@ i.e. the CPU clamps, ``max(-127, Falloff)`` and the Taylor branch
 ``ln2 - 0.5 ln2^2 Falloff`` below ``|Falloff| <= 0.01``), in float32 (shader)
 and in float64 with the Taylor branch kept (the formula's own error without
 rounding).  Reference: the exact optical depth of the medium of
-:func:`fogref.mapping.unreal.ue4_to_medium` in mpmath (30 digits).  Compared with
+:func:`fogref.models.ue4.ue4_to_medium` in mpmath (30 digits).  Compared with
 fogref's formulation ``exp_layer_optical_depth`` (numpy float64 and Dr.Jit
 float32).  The shader's dimensionless ``Falloff = FogHeightFalloff * dz`` (cm)
 is the x axis.

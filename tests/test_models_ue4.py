@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from fogref.mapping import PhysicalScene
-from fogref.mapping.unreal import base_params, ue4_to_medium
+from fogref.mapping.unreal import base_params
 from fogref.media import NP
 from fogref.models import get
-from fogref.models.ue4 import SecondFogData, UE4ExponentialHeightFog, UE4FogParams
+from fogref.models.ue4 import SecondFogData, UE4ExponentialHeightFog, UE4FogParams, ue4_to_medium
 
 f32 = np.float32
 

@@ -6,8 +6,8 @@ Layering: ``fogref.media`` (physics) <- ``fogref.models`` (pure shader ports) <-
 * :mod:`~fogref.mapping.physical`  :class:`PhysicalScene`: fog, sun, sky, camera, and its one
   parser (:meth:`PhysicalScene.from_params`, an EXR's ``fogref.params``)
 * :mod:`~fogref.mapping.registry`  :func:`from_physical` and the mapping registry
-* :mod:`~fogref.mapping.unreal`    Unreal's colour/lobe fit (:func:`fit_unreal`) and its mapping, both ways
-  (:func:`ue4_from_physical`, :func:`ue4_to_medium`)
+* :mod:`~fogref.mapping.unreal`    Unreal's colour/lobe fit (:func:`fit_unreal`) and its mapping
+  (:func:`ue4_from_physical`; the other way is :func:`fogref.models.ue4.ue4_to_medium`)
 * :mod:`~fogref.mapping.unreal_basis`  Unreal's inscatter, linear in its two colours, and the colour solve
 * :mod:`~fogref.mapping.views`     sample views from the camera and the physical single scattering on them
 * :mod:`~fogref.mapping.lobe`      the best cosine lobe for an HG phase (:func:`lobe_fit`, :func:`lobe_table`)
@@ -43,7 +43,6 @@ from fogref.mapping.unreal import (
     physical_single_scattering,
     sample_views,
     ue4_from_physical,
-    ue4_to_medium,
     unreal_inscatter,
 )
 from fogref.models.base import SKY_DISTANCE
@@ -72,6 +71,5 @@ __all__ = [
     "register_mapping",
     "sample_views",
     "ue4_from_physical",
-    "ue4_to_medium",
     "unreal_inscatter",
 ]

@@ -11,7 +11,7 @@ whose transmittance the engine's settings give (exact where the engine's fog is
 Beer-Lambert; a documented nearest medium where it is not).  The fit's exact extinction
 (:attr:`fogref.mapping.free.FitSpec.exact_medium`, used by :mod:`fogref.mapping.translate`)
 calls these.  Unreal's pair is :func:`fogref.mapping.unreal.ue4_from_physical` and
-:func:`fogref.mapping.unreal.ue4_to_medium`.
+:func:`fogref.models.ue4.ue4_to_medium`.
 """
 
 from __future__ import annotations

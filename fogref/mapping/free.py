@@ -48,13 +48,13 @@ from fogref.mapping.engines import (
     unity_to_medium,
 )
 from fogref.mapping.physical import PhysicalScene
-from fogref.mapping.unreal import base_params, ue4_to_medium
+from fogref.mapping.unreal import base_params
 from fogref.media import FogMedium
 from fogref.models.babylon import BabylonFogParams
 from fogref.models.bevy import BevyFogParams
 from fogref.models.box import BoxFogParams
 from fogref.models.filament import FilamentFogParams
-from fogref.models.ue4 import UE4FogParams
+from fogref.models.ue4 import UE4FogParams, ue4_to_medium
 from fogref.models.unity_builtin import UnityFogParams
 
 __all__ = ["FIT_SPECS", "FitSpec", "Free", "fit_spec", "rgb_free"]

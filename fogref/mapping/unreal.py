@@ -7,8 +7,9 @@ The exponent ``n`` and the start distance are found by bounded Brent searches, o
 inside one over the start (:class:`~fogref.mapping.unreal_basis.ColourLoss`: one model
 evaluation per start distance, the colours in closed form); density, falloff and height come
 from the exact mapping :func:`~fogref.mapping.unreal_basis.base_params`.
-:func:`ue4_from_physical` registers the result as the ``"ue4"`` mapping; :func:`ue4_to_medium`
-is the other direction (Unreal's settings to the physical medium of the same extinction).
+:func:`ue4_from_physical` registers the result as the ``"ue4"`` mapping;
+:func:`fogref.models.ue4.ue4_to_medium` is the other direction (Unreal's settings to the physical
+medium of the same extinction).
 """
 
 from __future__ import annotations
@@ -17,7 +18,6 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass, field, replace
-from typing import Any
 
 import numpy as np
 
@@ -35,10 +35,9 @@ from fogref.mapping.unreal_basis import (
     unreal_inscatter,
 )
 from fogref.mapping.views import Views, fibonacci_directions, physical_single_scattering, sample_views
-from fogref.media import ExpLayer, FogMedium
 from fogref.models.base import SKY_DISTANCE
 from fogref.models.terms import annotate, unreal_field
-from fogref.models.ue4 import CM_PER_M, UE4ExponentialHeightFog, UE4FogParams, unreal_to_sigma
+from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
 
 __all__ = [
     "Basis",
@@ -58,7 +57,6 @@ __all__ = [
     "sample_views",
     "solve_colours",
     "ue4_from_physical",
-    "ue4_to_medium",
     "unreal_basis",
     "unreal_inscatter",
 ]
@@ -344,7 +342,7 @@ def ue4_from_physical(ps: PhysicalScene) -> UE4ExponentialHeightFog:
     """The Unreal fog that best represents a physical scene.
 
     Density, falloff, height (and the second layer) are exact
-    (:func:`~fogref.mapping.unreal_basis.base_params`, the inverse of :func:`ue4_to_medium`;
+    (:func:`~fogref.mapping.unreal_basis.base_params`, the inverse of :func:`fogref.models.ue4.ue4_to_medium`;
     profiles "exponential" with 1–2 layers and "homogeneous", unbounded, grey ``sigma_t``), so
     the float64 transmittance is the physical one.  With a sun, FogInscatteringColor,
     DirectionalInscatteringColor, DirectionalInscatteringExponent and
@@ -400,33 +398,3 @@ def ue4_from_physical(ps: PhysicalScene) -> UE4ExponentialHeightFog:
         DirectionalInscatteringStartDistance=q.DirectionalInscatteringStartDistance,
     )
     return UE4ExponentialHeightFog(p.with_sun(ps.sun_direction, 1.0))
-
-
-def ue4_to_medium(params: UE4FogParams, albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
-    """The physical medium with the same extinction as the Unreal fog.
-
-    ``sigma_t(y) = a_i exp(-b_i (y - h_i))`` per metre for each layer i with
-    density > 0 (:func:`fogref.models.ue4.unreal_to_sigma`, see :mod:`fogref.models.ue4`).
-    Albedo and g are free (Unreal has neither; its FogInscatteringColor stands for
-    ``albedo * L_sky``).  The inverse is :func:`~fogref.mapping.unreal_basis.base_params`.
-
-    Examples
-    --------
-    >>> m = ue4_to_medium(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2, FogHeight=100.0))
-    >>> round(m.sigma_t[0], 8), m.layers[0].height
-    (0.00096091, 1.0)
-    """
-    sfd = params.SecondFogData
-    specs = [
-        (params.FogDensity, params.FogHeightFalloff, params.FogHeight),
-        (sfd.FogDensity, sfd.FogHeightFalloff, params.FogHeight + sfd.FogHeightOffset),
-    ]
-    specs = [s for s in specs if s[0] > 0]
-    if not specs:
-        return FogMedium(sigma_t=0.0, albedo=albedo, g=g, layers=(ExpLayer(),), source="<ue4_to_medium>")
-    a0, _ = unreal_to_sigma(specs[0][0], specs[0][1])
-    layers = []
-    for d, f, h in specs:
-        a, b = unreal_to_sigma(d, f)
-        layers.append(ExpLayer(density=a / a0, falloff=b, height=h / CM_PER_M))
-    return FogMedium(sigma_t=a0, albedo=albedo, g=g, layers=tuple(layers), source="<ue4_to_medium>")

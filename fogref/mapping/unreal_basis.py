@@ -11,7 +11,7 @@ distance, the model is **linear** in the two colours, so each colour channel is 
 2-parameter non-negative least-squares problem (:func:`solve_colours`) on two basis
 images (:func:`unreal_basis`: the model evaluated with unit colours, in float64).
 Density, falloff and height come from the exact mapping :func:`base_params` (the inverse of
-:func:`fogref.mapping.unreal.ue4_to_medium`).
+:func:`fogref.models.ue4.ue4_to_medium`).
 
 Only the exponent and the start distance are nonlinear, and the lobe image factorises:
 ``max(cos, 0)^n (1 - T_dir(start))`` is the ``n = 1`` image times ``max(cos, 0)^(n - 1)``.

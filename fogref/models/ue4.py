@@ -35,7 +35,7 @@ and FogHeightFalloff ``f`` are divided by 1000 on the CPU; the shader uses
 
 i.e. per metre ``a = 100 (ln 2)^2 D/1000`` and ``b = 100 ln 2 f/1000`` (one factor
 ln 2 turns the exp2 of the line integral into exp, the other comes from
-integrating 2^(-x)).  See :func:`fogref.mapping.unreal.ue4_to_medium` and its inverse
+integrating 2^(-x)).  See :func:`fogref.models.ue4.ue4_to_medium` and its inverse
 :func:`fogref.mapping.unreal_basis.base_params`.
 
 **Base 2, and the path tracer's 0.5.**  The shader integrates the density in base 2
@@ -97,7 +97,7 @@ from typing import Any
 import numpy as np
 
 from fogref.errors import ParameterError
-from fogref.media import NP
+from fogref.media import NP, ExpLayer, FogMedium
 from fogref.media.closed_form import phi
 from fogref.models._num import LN2, dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
@@ -492,3 +492,33 @@ def unreal_to_sigma(density: float, falloff: float) -> tuple[float, float]:
 def sigma_to_unreal(a: float, b: float) -> tuple[float, float]:
     """Inverse of :func:`unreal_to_sigma`."""
     return a * 1000.0 / (CM_PER_M * LN2 * LN2), b * 1000.0 / (CM_PER_M * LN2)
+
+
+def ue4_to_medium(params: UE4FogParams, albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
+    """The physical medium with the same extinction as the Unreal fog.
+
+    ``sigma_t(y) = a_i exp(-b_i (y - h_i))`` per metre for each layer i with
+    density > 0 (:func:`fogref.models.ue4.unreal_to_sigma`, see :mod:`fogref.models.ue4`).
+    Albedo and g are free (Unreal has neither; its FogInscatteringColor stands for
+    ``albedo * L_sky``).  The inverse is :func:`~fogref.mapping.unreal_basis.base_params`.
+
+    Examples
+    --------
+    >>> m = ue4_to_medium(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2, FogHeight=100.0))
+    >>> round(m.sigma_t[0], 8), m.layers[0].height
+    (0.00096091, 1.0)
+    """
+    sfd = params.SecondFogData
+    specs = [
+        (params.FogDensity, params.FogHeightFalloff, params.FogHeight),
+        (sfd.FogDensity, sfd.FogHeightFalloff, params.FogHeight + sfd.FogHeightOffset),
+    ]
+    specs = [s for s in specs if s[0] > 0]
+    if not specs:
+        return FogMedium(sigma_t=0.0, albedo=albedo, g=g, layers=(ExpLayer(),), source="<ue4_to_medium>")
+    a0, _ = unreal_to_sigma(specs[0][0], specs[0][1])
+    layers = []
+    for d, f, h in specs:
+        a, b = unreal_to_sigma(d, f)
+        layers.append(ExpLayer(density=a / a0, falloff=b, height=h / CM_PER_M))
+    return FogMedium(sigma_t=a0, albedo=albedo, g=g, layers=tuple(layers), source="<ue4_to_medium>")
