@@ -79,7 +79,7 @@ def sky_radiance(desc: dict) -> Callable[[np.ndarray], np.ndarray]:
     directions toward the sky -> ``(N, 3)`` RGB radiance (0 below the horizon); times
     ``desc["sky_scale"]``.  ``desc``: :func:`sunsky_dict`, or any dict with its parameters
     (:data:`SUNSKY_KEYS`; a scene description's ``"sky"``).  For
-    :func:`fogref.media.single_scatter_nonuniform.sky_phase_projection`."""
+    :func:`fogref.media.single_scatter.sky_phase_projection`."""
     mi = _mitsuba()
     args = {k: desc[k] for k in SUNSKY_KEYS if k in desc}
     args["sun_direction"] = [float(x) for x in args["sun_direction"]]
