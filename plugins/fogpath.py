@@ -117,18 +117,6 @@ class Trace:
     (``has_smooth``) and any emitter (``has_lights``), and whether the sun's scattering along the
     camera ray is sampled along it (``sun_along``; then medium vertices on it skip sun NEE)."""
 
-    __slots__ = (
-        "scene",
-        "fog",
-        "ops",
-        "phase",
-        "phase_ctx",
-        "bsdf_ctx",
-        "has_smooth",
-        "has_lights",
-        "sun_along",
-    )
-
     def __init__(self, scene, fog, phase, sampler, has_delta, has_smooth):
         self.scene, self.fog, self.ops, self.phase = scene, fog, drjit_ops(), phase
         self.phase_ctx, self.bsdf_ctx = mi.PhaseFunctionContext(sampler), mi.BSDFContext()
@@ -141,29 +129,12 @@ class Path:
     whether the camera ray scattered first (``medium_first``), the ray and its hit ``si``, the
     vertex the ray leaves with its sampling pdf and deltaness (for MIS), and the live lanes."""
 
-    __slots__ = (
-        "split",
-        "β",
-        "β_cam",
-        "depth",
-        "medium_first",
-        "ray",
-        "si",
-        "prev_it",
-        "prev_pdf",
-        "prev_delta",
-        "active",
-    )
-
     def __init__(self, ray, si, active, depth=0):
         self.split, self.β, self.β_cam = Split(), mi.Spectrum(1.0), mi.Spectrum(1.0)
         self.depth, self.medium_first = mi.UInt32(depth), mi.Bool(False)
         self.ray, self.si, self.active = ray, si, active
-        self.prev_it, self.prev_pdf, self.prev_delta = (
-            dr.zeros(mi.Interaction3f),
-            mi.Float(1.0),
-            mi.Bool(True),
-        )
+        self.prev_it, self.prev_pdf = dr.zeros(mi.Interaction3f), mi.Float(1.0)
+        self.prev_delta = mi.Bool(True)
 
 
 class CameraRay:
@@ -171,8 +142,6 @@ class CameraRay:
     sampled along it (None where next-event estimation covers it), with forced splitting the
     sample of ``surface`` (``cover``, a :class:`Cover`; None without), and the :class:`Path` the
     loop continues."""
-
-    __slots__ = ("gbuf", "sun_ss", "cover", "path")
 
     def __init__(self, gbuf, sun_ss, cover, path):
         self.gbuf, self.sun_ss, self.cover, self.path = gbuf, sun_ss, cover, path
@@ -182,8 +151,6 @@ class Cover:
     """Forced splitting's sample of ``surface``: the lanes that continued the surface branch
     (``chosen``; for the sky: drew it with the same ``q``), the surface branch's depth-0 light
     (``direct``) and the probability ``q`` of continuing it."""
-
-    __slots__ = ("chosen", "direct", "q")
 
     def __init__(self, chosen, direct, q):
         self.chosen, self.direct, self.q = chosen, direct, q
@@ -757,14 +724,8 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         cam = self._camera_ray(tr, sampler, ray, active)
         p = cam.path
         split, β, β_cam, depth, medium_first = p.split, p.β, p.β_cam, p.depth, p.medium_first
-        ray, si, prev_it, prev_pdf, prev_delta, active = (
-            p.ray,
-            p.si,
-            p.prev_it,
-            p.prev_pdf,
-            p.prev_delta,
-            p.active,
-        )
+        ray, si, active = p.ray, p.si, p.active
+        prev_it, prev_pdf, prev_delta = p.prev_it, p.prev_pdf, p.prev_delta
         # the sun along the depth-1 segment (its vertices scatter only when max_depth >= 3)
         ss_next = tr.sun_along and self.sun_sampling_rays >= 2 and self.max_depth >= 3
         while dr.hint(active, max_iterations=-1, label="fogpath"):
