@@ -26,6 +26,7 @@ import numpy as np
 from fogref.mapping.physical import PhysicalScene
 from fogref.media import NP, single_scatter_sun
 from fogref.media.single_scatter import single_scatter_sky, single_scatter_sky_projected, sky_phase_projection
+from fogref.media.sky import sky_radiance
 from fogref.models.base import SKY_DISTANCE
 
 __all__ = [
@@ -138,8 +139,6 @@ def sky_projection(pf: PhysicalScene, d: np.ndarray, sky: Any = None) -> np.ndar
     its sun, :func:`fogref.media.sky.sky_radiance`), else the uniform ``pf.sky_radiance`` above
     the horizon (then ``S = L H(v_y)``, :func:`fogref.media.single_scatter.hg_upper_fraction`).
     """
-    from fogref.media.sky import sky_radiance
-
     if sky is None:
         if pf.sky_model is not None:
             sky = sky_radiance(pf.sky_model)

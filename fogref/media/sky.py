@@ -15,6 +15,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from fogref._llvm import DEFAULT_VARIANT, ensure_llvm
+
 __all__ = ["SUNSKY_APERTURE", "SUNSKY_KEYS", "eval_emitter", "sky_radiance", "sunsky_dict"]
 
 #: Mitsuba's default sun aperture (angular diameter) [deg] (``sunsky.cpp``).
@@ -25,8 +27,6 @@ SUNSKY_KEYS = ("sun_direction", "turbidity", "albedo", "sun_aperture", "sky_scal
 
 def _mitsuba() -> Any:
     """Mitsuba with a variant set (the one already set, else LLVM RGB)."""
-    from fogref._llvm import DEFAULT_VARIANT, ensure_llvm
-
     ensure_llvm()
     import mitsuba as mi
 
