@@ -48,7 +48,7 @@ def child(case: str) -> None:
 
     set_variant("llvm_ad_rgb")
     import drjit as dr
-    import fogref_plugins.fogpath_common as common
+    import fogref_plugins.fogpath as common
     import mitsuba as mi
     import numpy as np
 
@@ -56,7 +56,7 @@ def child(case: str) -> None:
     from fogref.media.ops import DrJitOps
     from fogref.render.load import load_scene
 
-    base = common.FogPathBase
+    base = common.FogPathIntegrator
     reads = {"sun": base._read_scene_sun, "sky": base._read_constant_sky, "sel": base._read_sky_selection}
     facts: dict = {}
     if case != "as_is":  # the trace-time reads answered from values read before the call

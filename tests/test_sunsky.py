@@ -15,8 +15,12 @@ import numpy as np
 import pytest
 from render_scenes import render_runs
 
-from fogref.media.single_scatter import hg_upper_fraction, single_scatter_sun
-from fogref.media.single_scatter_nonuniform import single_scatter_sun_disk, sky_phase_projection
+from fogref.media.single_scatter import (
+    hg_upper_fraction,
+    single_scatter_sun,
+    single_scatter_sun_disk,
+    sky_phase_projection,
+)
 
 W_SUN = (-0.31, 0.42, -0.85)  # behind the camera of tests/render_scenes.py (it looks along +z)
 
