@@ -13,6 +13,8 @@ import csv
 import json
 from pathlib import Path
 
+import numpy as np
+
 from fogref.gbuffer import Truth
 from fogref.html.inline import check_rows_html, esc, fmt, fmt_noise, table_html
 from fogref.html.page import figure, verdict_badge, write_page
@@ -359,8 +361,6 @@ def write_batch_html(out_dir, rows: list[dict], truth_path: str, columns) -> Pat
 def write_diff_html(out_dir, result, a, b) -> Path:
     """``out_dir/report.html`` of :func:`fogref.compare.diff.diff`: the viewer (A as the truth, B as
     the candidate: its error is B - A) and the rows tested."""
-    import numpy as np
-
     folder = Path(out_dir)
     truth = a if isinstance(a, Truth) else b if isinstance(b, Truth) else None
     ch: dict = {}

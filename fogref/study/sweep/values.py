@@ -11,7 +11,12 @@ from fogref import params as P
 from fogref.errors import FogrefError, ParameterError, did_you_mean
 
 
-def _err(path, key, msg) -> FogrefError:
+def toml_error(path, key, msg) -> FogrefError:
+    """The one-line error about table ``key`` of the sweep file ``path`` (no table: the file).
+
+    >>> str(toml_error("SWEEP.toml", "render", "must be a table"))
+    'SWEEP.toml: [render]: must be a table'
+    """
     return FogrefError(f"{path}: [{key}]: {msg}" if key else f"{path}: {msg}")
 
 
@@ -30,8 +35,12 @@ def as_str(v) -> str:
     return str(v)
 
 
-def _src(path, key) -> str:
-    """The source named in a ParameterError: ``"SWEEP.toml: [render]"``."""
+def toml_source(path, key) -> str:
+    """The source named in a ParameterError: ``"SWEEP.toml: [render]"``.
+
+    >>> toml_source("SWEEP.toml", "render")
+    'SWEEP.toml: [render]'
+    """
     return f"{path}: [{key}]"
 
 
@@ -43,29 +52,55 @@ def _typed(v, name: str, src: str, what: str = "a number"):
     return v
 
 
-def _num(v, name: str, src: str, **kw) -> float:
-    """A TOML number through :func:`fogref.params.number`."""
+def toml_number(v, name: str, src: str, **kw) -> float:
+    """A TOML number through :func:`fogref.params.number` (``**kw``: its range); a TOML string
+    or boolean is refused.
+
+    >>> toml_number(2, "spp", "S.toml: [render]", lo=1)
+    2.0
+    >>> toml_number("2", "spp", "S.toml: [render]")
+    Traceback (most recent call last):
+    fogref.errors.ParameterError: S.toml: [render]: parameter 'spp': '2' is not a number (write a TOML ...)
+    """
     return P.number(_typed(v, name, src), name, source=src, **kw)
 
 
-def _int(v, name: str, src: str, **kw) -> int:
-    """A TOML integer through :func:`fogref.params.integer`."""
+def toml_integer(v, name: str, src: str, **kw) -> int:
+    """A TOML integer through :func:`fogref.params.integer` (``**kw``: its range).
+
+    >>> toml_integer(16, "spp", "S.toml: [render]", lo=1)
+    16
+    """
     return P.integer(_typed(v, name, src, "an integer"), name, source=src, **kw)
 
 
-def _bool(v, name: str, src: str) -> bool:
+def toml_bool(v, name: str, src: str) -> bool:
+    """A TOML boolean; anything else is refused.
+
+    >>> toml_bool(True, "cache", "S.toml: [execution]")
+    True
+    """
     if not isinstance(v, bool):
         raise ParameterError(src, name, f"{v!r} is not true or false")
     return v
 
 
-def _table(path: Path, doc: dict, name: str, allowed) -> dict:
+def toml_table(path: Path, doc: dict, name: str, allowed) -> dict:
+    """The table ``[name]`` of the parsed file ``doc`` (``{}`` when absent), its keys among
+    ``allowed`` (did-you-mean for a misspelt one).
+
+    >>> toml_table(Path("S.toml"), {"render": {"spp": 4}}, "render", ["spp", "seed"])
+    {'spp': 4}
+    >>> toml_table(Path("S.toml"), {"render": {"sp": 4}}, "render", ["spp", "seed"])
+    Traceback (most recent call last):
+    fogref.errors.FogrefError: S.toml: [render]: unknown key(s) ['sp']; did you mean 'spp'?; ...
+    """
     t = doc.get(name, {})
     if not isinstance(t, dict):
-        raise _err(path, name, "must be a table")
+        raise toml_error(path, name, "must be a table")
     bad = set(t) - set(allowed)
     if bad:
-        raise _err(
+        raise toml_error(
             path,
             name,
             f"unknown key(s) {sorted(bad)}{did_you_mean(sorted(bad)[0], allowed)}; "
