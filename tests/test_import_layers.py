@@ -325,6 +325,9 @@ NOT_REVIEWED = "not yet reviewed"
 #: Every function-level import of fogref/ and plugins/: module -> {imported name: reason}. The
 #: imported name is what ``import a.b`` or ``from a import b`` (``a.b``) names.
 LAZY_IMPORTS: dict[str, dict[str, str]] = {
+    # the renderer (numpy, the plugins, the scene readers: 0.2 s over the command's module):
+    # `fogref render --help` and its option errors answer without it (tests/test_cli_spec.py)
+    "fogref.cli.render": {"fogref.render.render.render": HEAVY},
     # dask.distributed 0.8 s: a render or sweep in one process never starts a cluster
     "fogref.cluster": {"dask.distributed.Client": HEAVY, "dask.distributed.LocalCluster": HEAVY},
     # scipy.stats 1.4 s: `fogref compare --help` and the pytest plugin import the checker

@@ -23,7 +23,7 @@ from fogref.cli.engine import engine_model
 from fogref.cli.spec import UsageError, option, refuse, switch
 from fogref.compare import gate
 from fogref.compare.check import check
-from fogref.compare.foreign import load_engine_images
+from fogref.compare.foreign import ENCODINGS, load_engine_images
 from fogref.compare.gate import parse_distance_bands, parse_tolerances
 from fogref.compare.report import compare, compare_images, refuse_output_over_input, report_paths
 from fogref.engines import ENGINES
@@ -52,8 +52,6 @@ EPILOG = (
 COMPARE = "fogref.compare.report:compare"
 CHECK = "fogref.compare.check:check"
 IMAGES = "fogref.compare.foreign:load_engine_images"
-#: ``--encoding`` values (fogref.compare.foreign.ENCODINGS, checked equal by tests/test_cli_spec.py)
-ENCODINGS = ("auto", "linear", "srgb")
 MODEL_GROUP = "a fog model"
 IMAGE_GROUP = "an engine's images (instead of --model)"
 ENGINE_GROUP = "a real engine rendered here (instead of --model or --image; with --param, --from-scene)"

@@ -18,6 +18,7 @@ from fogref.cli.checks import Assignments, Choice, Number, PathArg, SceneArg
 from fogref.cli.spec import UsageError, option
 from fogref.errors import FogrefError
 from fogref.mapping.build import parse_param_assignments
+from fogref.mapping.export import ENGINES
 from fogref.shipped_scenes import resolve_scene
 from fogref.study.export import export_engine
 
@@ -31,9 +32,8 @@ DESCRIPTION = (
     "translate JSON, --param, or a fit of the model to --scene."
 )
 EPILOG = "exit codes: 0 written, 2 usage or input error"
-#: ``--engine`` values (fogref.mapping.export.ENGINES, checked equal by tests/test_export.py).
 API = "fogref.study.export:export_engine"
-ENGINE_NAMES = ("unreal", "godot", "bevy", "threejs", "unity", "hdrp", "filament")
+ENGINE_NAMES = tuple(ENGINES)  #: ``--engine`` values
 
 
 @dataclass

@@ -10,7 +10,6 @@ from dataclasses import dataclass
 
 from fogref.cli.checks import Address, Assignments, Choice, Integer, Number, PathArg, SceneArg
 from fogref.cli.spec import UsageError, option, refuse, switch
-from fogref.render.render import render
 from fogref.render.variant import VARIANTS
 
 NAME = "render"
@@ -126,6 +125,7 @@ class Options:
 def run(o: Options, given=frozenset()) -> int:
     """Render; print the EXR's path."""
     # here, not at module level: parsing a command line imports no renderer (test_cli_spec)
+    from fogref.render.render import render
 
     refuse(
         Options, given, ("scheduler",), ("workers",), SOURCE, "the workers of a running scheduler are its own"

@@ -1,6 +1,16 @@
 """The TOML values of a sweep file, checked: numbers, integers and booleans through
 :mod:`fogref.params`, tables with their allowed keys, and the one-line errors that name the
 file and the table (``SWEEP.toml: [render]``).
+
+>>> src = toml_source("S.toml", "render")
+>>> src, toml_number(2, "spp", src, lo=1), toml_integer(16, "spp", src), toml_bool(True, "cache", src)
+('S.toml: [render]', 2.0, 16, True)
+>>> toml_number("2", "spp", src)
+Traceback (most recent call last):
+fogref.errors.ParameterError: S.toml: [render]: parameter 'spp': '2' is not a number (write a TOML ...)
+>>> toml_table(Path("S.toml"), {"render": {"sp": 4}}, "render", ["spp", "seed"])
+Traceback (most recent call last):
+fogref.errors.FogrefError: S.toml: [render]: unknown key(s) ['sp']; did you mean 'spp'?; ...
 """
 
 from __future__ import annotations
@@ -12,11 +22,7 @@ from fogref.errors import FogrefError, ParameterError, did_you_mean
 
 
 def toml_error(path, key, msg) -> FogrefError:
-    """The one-line error about table ``key`` of the sweep file ``path`` (no table: the file).
-
-    >>> str(toml_error("SWEEP.toml", "render", "must be a table"))
-    'SWEEP.toml: [render]: must be a table'
-    """
+    """The one-line error about table ``key`` of the sweep file ``path`` (no table: the file)."""
     return FogrefError(f"{path}: [{key}]: {msg}" if key else f"{path}: {msg}")
 
 
@@ -36,11 +42,7 @@ def as_str(v) -> str:
 
 
 def toml_source(path, key) -> str:
-    """The source named in a ParameterError: ``"SWEEP.toml: [render]"``.
-
-    >>> toml_source("SWEEP.toml", "render")
-    'SWEEP.toml: [render]'
-    """
+    """The source named in a ParameterError: ``"SWEEP.toml: [render]"``."""
     return f"{path}: [{key}]"
 
 
@@ -53,48 +55,24 @@ def _typed(v, name: str, src: str, what: str = "a number"):
 
 
 def toml_number(v, name: str, src: str, **kw) -> float:
-    """A TOML number through :func:`fogref.params.number` (``**kw``: its range); a TOML string
-    or boolean is refused.
-
-    >>> toml_number(2, "spp", "S.toml: [render]", lo=1)
-    2.0
-    >>> toml_number("2", "spp", "S.toml: [render]")
-    Traceback (most recent call last):
-    fogref.errors.ParameterError: S.toml: [render]: parameter 'spp': '2' is not a number (write a TOML ...)
-    """
+    """A TOML number through :func:`fogref.params.number` (``**kw``: its range), not a string."""
     return P.number(_typed(v, name, src), name, source=src, **kw)
 
 
 def toml_integer(v, name: str, src: str, **kw) -> int:
-    """A TOML integer through :func:`fogref.params.integer` (``**kw``: its range).
-
-    >>> toml_integer(16, "spp", "S.toml: [render]", lo=1)
-    16
-    """
+    """A TOML integer through :func:`fogref.params.integer` (``**kw``: its range)."""
     return P.integer(_typed(v, name, src, "an integer"), name, source=src, **kw)
 
 
 def toml_bool(v, name: str, src: str) -> bool:
-    """A TOML boolean; anything else is refused.
-
-    >>> toml_bool(True, "cache", "S.toml: [execution]")
-    True
-    """
+    """A TOML boolean; anything else is refused."""
     if not isinstance(v, bool):
         raise ParameterError(src, name, f"{v!r} is not true or false")
     return v
 
 
 def toml_table(path: Path, doc: dict, name: str, allowed) -> dict:
-    """The table ``[name]`` of the parsed file ``doc`` (``{}`` when absent), its keys among
-    ``allowed`` (did-you-mean for a misspelt one).
-
-    >>> toml_table(Path("S.toml"), {"render": {"spp": 4}}, "render", ["spp", "seed"])
-    {'spp': 4}
-    >>> toml_table(Path("S.toml"), {"render": {"sp": 4}}, "render", ["spp", "seed"])
-    Traceback (most recent call last):
-    fogref.errors.FogrefError: S.toml: [render]: unknown key(s) ['sp']; did you mean 'spp'?; ...
-    """
+    """The table ``[name]`` of the parsed ``doc`` (``{}`` when absent), its keys among ``allowed``."""
     t = doc.get(name, {})
     if not isinstance(t, dict):
         raise toml_error(path, name, "must be a table")
