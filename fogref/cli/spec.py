@@ -225,7 +225,7 @@ def _shown(value) -> str:
     if isinstance(value, (tuple, list)):
         return ",".join(_shown(v) for v in value)
     if isinstance(value, float):
-        return params._fmt(value)
+        return params.format_number(value)
     return str(value)
 
 

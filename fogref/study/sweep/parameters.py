@@ -18,7 +18,7 @@ from fogref.errors import FogrefError, ParameterError, did_you_mean
 from fogref.render.scene import describe_scene
 from fogref.render.scene_defaults import declared
 from fogref.study.sweep.sections import model_param_name, model_value
-from fogref.study.sweep.values import as_str, toml_bool, toml_error, toml_integer, toml_number, toml_source
+from fogref.study.sweep.values import as_str, toml_bool, toml_error, toml_int, toml_num, toml_src
 
 _PARAMETER_KEYS = ("log", "num", "range", "scale", "target", "values")
 
@@ -30,7 +30,7 @@ def _spaced(lo, hi, num, log):
 
 def _parameter_target(path: Path, key: str, target, scene_names: set, models: dict) -> dict:
     """A scene ``$default`` every scene declares, or ``<model label>.<parameter>`` of a listed model."""
-    src = toml_source(path, key)
+    src = toml_src(path, key)
     if not isinstance(target, str) or not target:
         raise ParameterError(src, "target", f"{target!r} is not a $default or '<model>.<parameter>' name")
     if "." in target:
@@ -61,7 +61,7 @@ def _distinct(path: Path, key: str, vals: list, what: str) -> None:
         k = as_str(v)
         if k in seen:
             raise ParameterError(
-                toml_source(path, key),
+                toml_src(path, key),
                 what,
                 f"{v!r} is given twice ({vals!r}); "
                 "each value must be distinct (a repeated value repeats the same render)",
@@ -72,7 +72,7 @@ def _distinct(path: Path, key: str, vals: list, what: str) -> None:
 def _parameter_values(path: Path, key: str, spec: dict, design: dict) -> dict:
     """``values`` (a list of distinct values), or ``range`` [low, high] with ``log`` (and ``num`` points
     on a grid or list)."""
-    src = toml_source(path, key)
+    src = toml_src(path, key)
     kind = design["kind"]
     if "values" in spec:
         vals = spec["values"]
@@ -88,7 +88,7 @@ def _parameter_values(path: Path, key: str, spec: dict, design: dict) -> dict:
     r = spec["range"]
     if not (isinstance(r, list) and len(r) == 2):
         raise toml_error(path, key, f"range must be [low, high], got {r!r}")
-    lo, hi = (toml_number(x, "range", src) for x in r)
+    lo, hi = (toml_num(x, "range", src) for x in r)
     log = toml_bool(spec.get("log", False), "log", src)
     if not lo < hi or (log and lo <= 0):
         raise ParameterError(src, "range", f"[{lo}, {hi}] needs low < high (and low > 0 with log = true)")
@@ -96,7 +96,7 @@ def _parameter_values(path: Path, key: str, spec: dict, design: dict) -> dict:
     if kind in ("grid", "list"):
         if "num" not in spec:
             raise toml_error(path, key, f"a range in a '{kind}' design needs num = number of points")
-        num = toml_integer(spec["num"], "num", src, lo=1, hi=design["max_configs"])
+        num = toml_int(spec["num"], "num", src, lo=1, hi=design["max_configs"])
         out["values"] = _spaced(lo, hi, num, log)
     return out
 
@@ -114,14 +114,14 @@ def _read_parameter(path: Path, label: str, spec, scene_names: set, models: dict
             f"allowed: {list(_PARAMETER_KEYS)}",
         )
     ps = _parameter_target(path, key, spec.get("target", label), scene_names, models)
-    src = toml_source(path, key)
-    ps["scale"] = toml_number(spec.get("scale", 1.0), "scale", src)
+    src = toml_src(path, key)
+    ps["scale"] = toml_num(spec.get("scale", 1.0), "scale", src)
     if ps["scale"] == 0:
         raise ParameterError(src, "scale", "0 maps every value to 0: must be a finite number other than 0")
     ps.update(_parameter_values(path, key, spec, design))
     if ps["scale"] != 1.0:
         for v in ps.get("values", []):
-            toml_number(v, "values", src)
+            toml_num(v, "values", src)
     if ps["kind"] == "model":
         default = models[ps["model"]]["fields"].get(ps["target"])
         for v in ps.get("values", ps.get("range", [])):
@@ -154,7 +154,7 @@ def _check_targets(path: Path, params: dict, overrides: dict, models: dict) -> N
         t = p["target"] if p["kind"] == "scene" else f"{p['model']}.{p['target']}"
         if t in seen:
             raise ParameterError(
-                toml_source(path, f"parameters.{label}"),
+                toml_src(path, f"parameters.{label}"),
                 "target",
                 f"'{t}' is also swept by [parameters.{seen[t]}]: two labels of one "
                 "parameter would record values the render never used; keep one",
@@ -162,13 +162,13 @@ def _check_targets(path: Path, params: dict, overrides: dict, models: dict) -> N
         seen[t] = label
         if p["kind"] == "scene" and p["target"] in overrides:
             raise ParameterError(
-                toml_source(path, f"parameters.{label}"),
+                toml_src(path, f"parameters.{label}"),
                 "target",
                 f"'{t}' is swept here and fixed in [render].overrides; remove one",
             )
         if p["kind"] == "model" and p["target"] in models[p["model"]]["params"]:
             raise ParameterError(
-                toml_source(path, f"parameters.{label}"),
+                toml_src(path, f"parameters.{label}"),
                 "target",
                 f"'{t}' is swept here and fixed in the [[models]] '{p['model']}' params; remove one",
             )
@@ -189,7 +189,7 @@ def _check_size(path: Path, design: dict, params: dict, scenes: list) -> int:
     limit = design["max_configs"]
     if size > limit:
         raise ParameterError(
-            toml_source(path, "design"),
+            toml_src(path, "design"),
             "size",
             f"the {kind} design has {size:.4g} configurations ({len(scenes)} scene(s)); "
             f"the limit is {limit} (raise it with [design] max_configs = N)",

@@ -15,15 +15,7 @@ from fogref import params as P
 from fogref.errors import FogrefError, ParameterError, did_you_mean
 from fogref.models.resolve import resolve_model
 from fogref.render.render import PIXEL_FILTERS
-from fogref.study.sweep.values import (
-    as_str,
-    toml_bool,
-    toml_error,
-    toml_integer,
-    toml_number,
-    toml_source,
-    toml_table,
-)
+from fogref.study.sweep.values import as_str, toml_bool, toml_error, toml_int, toml_num, toml_src, toml_table
 
 DESIGN_KINDS = ("grid", "list", "random", "lhs")
 SEED_POLICIES = ("fixed", "per_config")
@@ -58,13 +50,13 @@ def read_sweep(path: Path, doc: dict) -> dict:
                 path, "sweep", f"scene '{s}' not found (relative to {base} or the working directory)"
             )
         if any(p.resolve() == q.resolve() for q in scene_paths):
-            raise ParameterError(toml_source(path, "sweep"), "scenes", f"'{s}' is listed twice")
+            raise ParameterError(toml_src(path, "sweep"), "scenes", f"'{s}' is listed twice")
         scene_paths.append(p)
     for k in ("out", "cache"):
         if k in sw:
-            P.path(sw[k], k, source=toml_source(path, "sweep"))
+            P.path(sw[k], k, source=toml_src(path, "sweep"))
     if "name" in sw and not (isinstance(sw["name"], str) and sw["name"].strip()):
-        raise ParameterError(toml_source(path, "sweep"), "name", f"{sw['name']!r} is not a non-empty string")
+        raise ParameterError(toml_src(path, "sweep"), "name", f"{sw['name']!r} is not a non-empty string")
     out = base / sw["out"] if "out" in sw and not Path(sw["out"]).is_absolute() else Path(sw.get("out", base))
     return {
         "name": str(sw.get("name", path.stem)),
@@ -77,9 +69,9 @@ def read_sweep(path: Path, doc: dict) -> dict:
 def read_render(path: Path, doc: dict) -> dict:
     """``[render]``: spp, seed, seed_policy, pixel_filter and the fixed ``$default`` overrides (as text)."""
     rd = toml_table(path, doc, "render", ("spp", "seed", "seed_policy", "overrides", "pixel_filter"))
-    src = toml_source(path, "render")
-    spp = toml_integer(rd.get("spp", 16), "spp", src, lo=1, hi=1 << 20)
-    seed = toml_integer(rd.get("seed", 0), "seed", src, lo=0, hi=(1 << 31) - 1)
+    src = toml_src(path, "render")
+    spp = toml_int(rd.get("spp", 16), "spp", src, lo=1, hi=1 << 20)
+    seed = toml_int(rd.get("seed", 0), "seed", src, lo=0, hi=(1 << 31) - 1)
     policy = P.choice(rd.get("seed_policy", "fixed"), "seed_policy", SEED_POLICIES, src)
     pixel_filter = P.choice(rd.get("pixel_filter", "centre"), "pixel_filter", PIXEL_FILTERS, src)
     overrides = rd.get("overrides", {})
@@ -112,7 +104,7 @@ def _model_fields(path: Path, key: str, name: str) -> dict:
 def model_value(v, name: str, src: str, default):
     """A model parameter's value: a number where the model's default is a number, else as given."""
     if isinstance(default, (int, float)) and not isinstance(default, bool):
-        return toml_number(v, name, src)
+        return toml_num(v, name, src)
     if isinstance(default, bool):
         return toml_bool(v, name, src)
     return v
@@ -140,7 +132,7 @@ def _read_model(path: Path, i: int, m, labels: set) -> dict:
     if bad:
         raise toml_error(path, key, f"unknown key(s) {sorted(bad)}; allowed: {list(_MODEL_KEYS)}")
     if not isinstance(m["name"], str):
-        raise ParameterError(toml_source(path, key), "name", f"{m['name']!r} is not a model name (a string)")
+        raise ParameterError(toml_src(path, key), "name", f"{m['name']!r} is not a model name (a string)")
     fields = _model_fields(path, key, m["name"])
     # "my_pkg.fog:MyFog" is labelled "MyFog" (a label has no '.')
     label = str(m.get("label", str(m["name"]).rpartition(":")[2]))
@@ -149,7 +141,7 @@ def _read_model(path: Path, i: int, m, labels: set) -> dict:
     params = m.get("params", {})
     if not isinstance(params, dict):
         raise toml_error(path, key, "params must be a table")
-    src = toml_source(path, f"models] '{label}' [params")
+    src = toml_src(path, f"models] '{label}' [params")
     params = {
         k: model_value(v, model_param_name(k, fields, src, m["name"]), src, fields.get(k))
         for k, v in params.items()
@@ -157,7 +149,7 @@ def _read_model(path: Path, i: int, m, labels: set) -> dict:
     return {
         "name": m["name"],
         "label": label,
-        "from_scene": toml_bool(m.get("from_scene", True), "from_scene", toml_source(path, key)),
+        "from_scene": toml_bool(m.get("from_scene", True), "from_scene", toml_src(path, key)),
         "params": params,
         "fields": fields,
     }
@@ -177,20 +169,20 @@ def read_models(path: Path, doc: dict) -> list[dict]:
 def read_design(path: Path, doc: dict) -> dict:
     """``[design]``: kind (grid, list, random, lhs), n (random and lhs), seed, max_configs."""
     dz = toml_table(path, doc, "design", ("kind", "n", "seed", "max_configs"))
-    src = toml_source(path, "design")
+    src = toml_src(path, "design")
     kind = P.choice(dz.get("kind", "grid"), "kind", DESIGN_KINDS, src)
-    limit = toml_integer(dz.get("max_configs", MAX_CONFIGS), "max_configs", src, lo=1)
+    limit = toml_int(dz.get("max_configs", MAX_CONFIGS), "max_configs", src, lo=1)
     n = dz.get("n")
     if kind in ("random", "lhs"):
         if n is None:
             raise ParameterError(
                 src, "n", f"kind '{kind}' needs n = the number of configurations, in [1, {limit}]"
             )
-        n = toml_integer(n, "n", src, lo=1, hi=limit)
+        n = toml_int(n, "n", src, lo=1, hi=limit)
     return {
         "kind": kind,
         "n": n,
-        "seed": toml_integer(dz.get("seed", 0), "seed", src, lo=0, hi=(1 << 32) - 1),
+        "seed": toml_int(dz.get("seed", 0), "seed", src, lo=0, hi=(1 << 32) - 1),
         "max_configs": limit,
     }
 
@@ -198,13 +190,13 @@ def read_design(path: Path, doc: dict) -> dict:
 def read_execution(path: Path, doc: dict) -> dict:
     """``[execution]``: Dask retries of a failing configuration."""
     retries = toml_table(path, doc, "execution", ("retries",)).get("retries", 1)
-    return {"retries": toml_integer(retries, "retries", toml_source(path, "execution"), lo=0, hi=100)}
+    return {"retries": toml_int(retries, "retries", toml_src(path, "execution"), lo=0, hi=100)}
 
 
 def read_outputs(path: Path, doc: dict, out: Path) -> dict:
     """``[outputs]``: table name (inside the output folder), plots, plotted metrics, Unreal budget columns."""
     ou = toml_table(path, doc, "outputs", ("table", "plots", "plot_metrics", "budget"))
-    src = toml_source(path, "outputs")
+    src = toml_src(path, "outputs")
     table = ou.get("table", "results")
     if not isinstance(table, str) or not table.strip():
         raise ParameterError(src, "table", f"{table!r} is not a file name")

@@ -2,10 +2,10 @@
 :mod:`fogref.params`, tables with their allowed keys, and the one-line errors that name the
 file and the table (``SWEEP.toml: [render]``).
 
->>> src = toml_source("S.toml", "render")
->>> src, toml_number(2, "spp", src, lo=1), toml_integer(16, "spp", src), toml_bool(True, "cache", src)
+>>> src = toml_src("S.toml", "render")
+>>> src, toml_num(2, "spp", src, lo=1), toml_int(16, "spp", src), toml_bool(True, "cache", src)
 ('S.toml: [render]', 2.0, 16, True)
->>> toml_number("2", "spp", src)
+>>> toml_num("2", "spp", src)
 Traceback (most recent call last):
 fogref.errors.ParameterError: S.toml: [render]: parameter 'spp': '2' is not a number (write a TOML ...)
 >>> toml_table(Path("S.toml"), {"render": {"sp": 4}}, "render", ["spp", "seed"])
@@ -41,7 +41,7 @@ def as_str(v) -> str:
     return str(v)
 
 
-def toml_source(path, key) -> str:
+def toml_src(path, key) -> str:
     """The source named in a ParameterError: ``"SWEEP.toml: [render]"``."""
     return f"{path}: [{key}]"
 
@@ -54,12 +54,12 @@ def _typed(v, name: str, src: str, what: str = "a number"):
     return v
 
 
-def toml_number(v, name: str, src: str, **kw) -> float:
+def toml_num(v, name: str, src: str, **kw) -> float:
     """A TOML number through :func:`fogref.params.number` (``**kw``: its range), not a string."""
     return P.number(_typed(v, name, src), name, source=src, **kw)
 
 
-def toml_integer(v, name: str, src: str, **kw) -> int:
+def toml_int(v, name: str, src: str, **kw) -> int:
     """A TOML integer through :func:`fogref.params.integer` (``**kw``: its range)."""
     return P.integer(_typed(v, name, src, "an integer"), name, source=src, **kw)
 
