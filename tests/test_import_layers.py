@@ -5,6 +5,8 @@ fogref is built in floors; each floor imports only the floors below it (see
 :mod:`ast`: every ``import`` and ``from ... import`` counts, at module level and
 inside functions alike (a function-level import is still an arrow between
 modules, it only runs later). ``plugins/`` is the package ``fogref_plugins``.
+Imports sit at the top of their module: every function-level import and every private
+name imported from another module is listed below with its reason.
 """
 
 from __future__ import annotations
@@ -319,7 +321,7 @@ OPTIONAL = "optional dependency"
 HEAVY = "heavy library, measured"
 #: (d) the floors forbid it at the top
 FLOOR = "the floors forbid it"
-#: in modules others are changing now; they are reviewed against the rule next
+#: not yet reviewed against the rule
 NOT_REVIEWED = "not yet reviewed"
 
 #: Every function-level import of fogref/ and plugins/: module -> {imported name: reason}. The
