@@ -12,6 +12,7 @@ name imported from another module is listed below with its reason.
 from __future__ import annotations
 
 import ast
+import functools
 import os
 import subprocess
 import sys
@@ -86,6 +87,11 @@ def floor_of(module: str) -> int:
     return best
 
 
+@functools.cache
+def _parsed(path: Path) -> ast.Module:
+    return ast.parse(path.read_text(encoding="utf-8"), str(path))
+
+
 def _function_nodes(tree):
     inside = set()
     for node in ast.walk(tree):
@@ -103,7 +109,7 @@ def imports_of(module: str):
     relative imports are resolved against the package.
     """
     path, is_pkg = MODULES[module]
-    tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+    tree = _parsed(path)
     in_function = _function_nodes(tree)
     package = module if is_pkg else module.rpartition(".")[0]
     for node in ast.walk(tree):
@@ -149,7 +155,7 @@ def _resolve(name: str) -> str | None:
 def _facade_uses(module: str):
     """(``fogref.<name>``, line) for each attribute use of a bare ``import fogref``."""
     path, _ = MODULES[module]
-    tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+    tree = _parsed(path)
     aliases = {
         a.asname or a.name
         for n in ast.walk(tree)
@@ -162,8 +168,9 @@ def _facade_uses(module: str):
             yield f"fogref.{node.attr}", node.lineno
 
 
+@functools.cache
 def import_graph() -> dict[str, dict[str, int]]:
-    """module -> {imported fogref module: line} (self-imports dropped)."""
+    """module -> {imported fogref module: line} (self-imports dropped; read once, not changed)."""
     graph: dict[str, dict[str, int]] = {m: {} for m in MODULES}
     for m in MODULES:
         uses = [(n, line) for n, line, _ in imports_of(m) if n != "fogref"] + list(_facade_uses(m))
@@ -588,21 +595,19 @@ def _import_nodes(tree, module: str, is_pkg: bool):
         yield node, names, id(node) in in_function
 
 
-def function_imports(source: str, module: str = "m", is_pkg: bool = False) -> set[tuple[str, int]]:
-    """(imported name, line) of every import inside a function or lambda of ``source``.
+def function_imports(tree: ast.Module, module: str = "m", is_pkg: bool = False) -> set[tuple[str, int]]:
+    """(imported name, line) of every import inside a function or lambda of ``tree``.
 
-    >>> sorted(function_imports("import os\\ndef f():\\n    from fogref import params as P\\n"))
+    >>> sorted(function_imports(ast.parse("import os\\ndef f():\\n    from fogref import params as P\\n")))
     [('fogref.params', 3)]
     """
-    tree = ast.parse(source)
     nodes = _import_nodes(tree, module, is_pkg)
     return {(n, node.lineno) for node, names, inside in nodes if inside for n in names}
 
 
-def private_imports(source: str, module: str = "m", is_pkg: bool = False) -> set[tuple[str, int]]:
+def private_imports(tree: ast.Module, module: str = "m", is_pkg: bool = False) -> set[tuple[str, int]]:
     """(imported name, line) of every private name (``_x``, not a module, not a dunder) that
-    ``source`` imports from a module of fogref or fogref_plugins."""
-    tree = ast.parse(source)
+    ``tree`` imports from a module of fogref or fogref_plugins."""
     out = set()
     for node, names, _ in _import_nodes(tree, module, is_pkg):
         if not isinstance(node, ast.ImportFrom):
@@ -648,15 +653,16 @@ def test_the_import_checks_see_what_they_look_for():
         "    g = lambda: __import__('x')\n"
         "    from .sections import _read\n"
     )
-    assert function_imports(src, "fogref.study.sweep.spec") == {
+    tree = ast.parse(src)
+    assert function_imports(tree, "fogref.study.sweep.spec") == {
         ("matplotlib.pyplot", 4),
         ("fogref.study.sweep.sections._read", 6),
     }
-    assert private_imports(src, "fogref.study.sweep.spec") == {
+    assert private_imports(tree, "fogref.study.sweep.spec") == {
         ("fogref.study.sweep.values._err", 2),
         ("fogref.study.sweep.sections._read", 6),
     }
-    assert private_imports("from fogref import _version\nfrom os import _exit\n") == set()
+    assert private_imports(ast.parse("from fogref import _version\nfrom os import _exit\n")) == set()
     unlisted, stale = _unlisted_and_stale({"m": ("m.py", {("a", 3)})}, {"m": {"b": HEAVY}})
     assert unlisted == ["m.py:3: m imports a"] and stale == ["m: b"]
 
@@ -666,7 +672,7 @@ def test_imports_are_at_the_top_unless_listed():
     found = {}
     for m, path, is_pkg in _sources():
         if m.split(".")[0] in PACKAGES:
-            hits = function_imports(path.read_text(encoding="utf-8"), m, is_pkg)
+            hits = function_imports(_parsed(path), m, is_pkg)
             found[m] = (path.relative_to(ROOT), hits)
     unlisted, stale = _unlisted_and_stale(found, LAZY_IMPORTS)
     assert not unlisted, (
@@ -684,7 +690,7 @@ def test_no_private_name_is_imported_from_another_module():
     a name used across modules is public (or the code moves to where it is used)."""
     found = {}
     for m, path, is_pkg in _sources():
-        found[m] = (path.relative_to(ROOT), private_imports(path.read_text(encoding="utf-8"), m, is_pkg))
+        found[m] = (path.relative_to(ROOT), private_imports(_parsed(path), m, is_pkg))
     unlisted, stale = _unlisted_and_stale(found, PRIVATE_IMPORTS)
     assert not unlisted, "private names imported from another module:\n" + "\n".join(unlisted)
     assert not stale, "PRIVATE_IMPORTS lists imports that are gone; remove them:\n" + "\n".join(stale)
