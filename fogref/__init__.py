@@ -31,6 +31,8 @@ True
 
 from __future__ import annotations
 
+import importlib as _importlib  # as _importlib: not a name the facade offers
+
 from fogref._llvm import require_llvm as _require_llvm
 from fogref._version import __version__
 
@@ -67,9 +69,7 @@ def __getattr__(name: str):
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'fogref' has no attribute '{name}'")
-    import importlib
-
-    return getattr(importlib.import_module(module), name)
+    return getattr(_importlib.import_module(module), name)
 
 
 def __dir__():

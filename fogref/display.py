@@ -20,6 +20,7 @@ from __future__ import annotations
 from typing import Any, Mapping
 
 import numpy as np
+from PIL import Image
 
 from fogref.atomic import atomic_write
 from fogref.gbuffer import PARTS, part_attribute
@@ -125,8 +126,6 @@ def write_png(display_rgb, path) -> None:
     8-bit values are ``floor(255 x)`` (what ``matplotlib.pyplot.imsave`` writes), saved
     with Pillow directly (matplotlib's import alone takes about 0.5 s).
     """
-    from PIL import Image
-
     img = np.clip(np.asarray(display_rgb, dtype=np.float64), 0.0, 1.0)
     px = (img * 255).astype(np.uint8)
     atomic_write(path, lambda tmp: Image.fromarray(px).save(tmp, format="PNG"))

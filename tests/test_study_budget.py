@@ -205,7 +205,7 @@ def test_shapley_budget_two_independent_effects_known_answer():
     dT = rng.uniform(-0.05, 0.05, (h, w, 3)) * (1 - left)
     T0 = np.full((h, w, 3), 0.6)
     engine = {
-        k: (T0 + dT * k[B._CONFIG.index("float32")], parts["sun_render"], parts["sky_render"])
+        k: (T0 + dT * k[B.CONFIG_EFFECTS.index("float32")], parts["sun_render"], parts["sky_render"])
         for k in parts["engine"]
     }
     p = dict(

@@ -15,10 +15,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from fogref.atomic import refuse_overwriting_inputs
 from fogref.cli.checks import Assignments, Choice, Number, PathArg
 from fogref.cli.spec import option, refuse, switch
-from fogref.engines import ENGINES
+from fogref.engines import ENGINES, engine_module
+from fogref.engines.render import output_paths, render_and_write
+from fogref.engines.view import view_from_scene, view_from_truth
 from fogref.errors import FogrefError
+from fogref.gbuffer import load_truth
+from fogref.mapping.build import build_model, current_parameters, parse_param_assignments
+from fogref.mapping.registry import MAPPINGS
 
 NAME = "engine"
 SOURCE = "fogref engine"
@@ -93,10 +99,6 @@ def engine_model(engine: str, param: dict | None, scene_params: dict | None, vie
     ``view_settings(near, far)``: PlayCanvas's clip planes); then ``param``.  Returns ``(model,
     sources)``, ``sources``: setting name -> where it came from.  A scene the mapping refuses
     gets its one-line error with the way out (``--param``)."""
-    from fogref.engines import engine_module
-    from fogref.mapping.build import build_model, current_parameters, parse_param_assignments
-    from fogref.mapping.registry import MAPPINGS
-
     mod = engine_module(engine)
     given = parse_param_assignments([f"{k}={v}" for k, v in (param or {}).items()])
     fixed = {}
@@ -131,10 +133,6 @@ def engine_model(engine: str, param: dict | None, scene_params: dict | None, vie
 
 def run(o: Options, given=frozenset()) -> int:
     """Render, write, print one line per finding; 0 on success."""
-    from fogref.atomic import refuse_overwriting_inputs
-    from fogref.engines.render import output_paths, render_and_write
-    from fogref.engines.view import view_from_scene, view_from_truth
-
     outputs = [(p, f"engine {k} file") for k, p in output_paths(o.out).items()]
     refuse_overwriting_inputs(
         outputs, [(o.input, "input")] + ([(o.scene, "scene")] if o.scene else []), "--out"
@@ -144,7 +142,6 @@ def run(o: Options, given=frozenset()) -> int:
         refuse(
             Options, given, ("input",), ("overrides",), SOURCE, "a truth's view is its own; render a scene"
         )
-        from fogref.gbuffer import load_truth
 
         truth = load_truth(o.input)
         view = view_from_truth(truth, o.scene)

@@ -71,12 +71,12 @@ from fogref.compare.report_parts import (
     PART_UNITS,
     PARTS,
     REGIONS,
-    _json_safe,
-    _model_description,
-    _model_name,
     check_sky_distance,
     evaluate_parts,
     image_parts,
+    json_safe,
+    model_description,
+    model_name,
     model_units,
     parts_from_check,
     truth_provenance,
@@ -195,10 +195,10 @@ def compare(
     if parts is None:
         parts = evaluate_parts(truth, model, precision, sky_distance)
     header = {
-        "candidate": {"kind": "model", "name": _model_name(model)},
+        "candidate": {"kind": "model", "name": model_name(model)},
         "model": {
-            "name": _model_name(model),
-            "parameters": _model_description(model),
+            "name": model_name(model),
+            "parameters": model_description(model),
             "units": model_units(model),
         },
         "precision": precision,
@@ -314,7 +314,7 @@ def write_report(
     exposures = part_exposures({p: parts[p]["reference"] for p in names})
 
     h, w = truth.shape
-    report = _json_safe(
+    report = json_safe(
         {
             "exr": str(truth.path),
             "truth": truth_provenance(truth),

@@ -39,6 +39,7 @@ import math
 import zlib
 
 import numpy as np
+from PIL import Image
 
 from fogref.display import TRUTH_PARTS, part_exposures, tone_map
 
@@ -112,8 +113,6 @@ def thumbnail_uri(linear_rgb, exposure: float, width: int = 160) -> str:
 def png_thumbnail_uri(px, width: int, smooth: bool) -> str:
     """8-bit pixels ``px`` (H, W, 3) as a PNG data URI, shrunk to at most ``width`` px wide [px >= 1]
     (the height in proportion, >= 1) with bilinear (``smooth``) or nearest-neighbour filtering."""
-    from PIL import Image
-
     im = Image.fromarray(px)
     if im.width > width:
         resample = Image.BILINEAR if smooth else Image.NEAREST

@@ -73,8 +73,8 @@ is estimated as ``|x(seed a) - x(seed b)| / sqrt(2)`` (the shares' noise).
 
 from __future__ import annotations
 
-from fogref.study.budget.effects import _CONFIG as _CONFIG
 from fogref.study.budget.effects import (
+    CONFIG_EFFECTS,
     EFFECTS,
     EFFECTS_COLOURS_IN_LOBE,
     PHASE,
@@ -106,6 +106,7 @@ from fogref.study.budget.telescoping import add_noise, attribute, chain, chain_n
 __all__ = [
     "BOOTSTRAP_BLOCK",
     "BOOTSTRAP_RESAMPLES",
+    "CONFIG_EFFECTS",
     "EFFECTS",
     "EFFECTS_COLOURS_IN_LOBE",
     "PHASE",

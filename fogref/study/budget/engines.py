@@ -1,7 +1,7 @@
 """The engine side of the budget, per model, and the budget of any model.
 
 :func:`unreal_engine` (Unreal's Exponential Height Fog, :mod:`fogref.models.ue4`, in each
-configuration of :data:`~fogref.study.budget.effects._CONFIG`) and :func:`model_engine` (any
+configuration of :data:`~fogref.study.budget.effects.CONFIG_EFFECTS`) and :func:`model_engine` (any
 fog model, its sun lobe split off with :attr:`fogref.mapping.free.FitSpec.sun_off`) give
 ``engine(truth, config, sky_distance) -> (T, L_sun, L_sky)``; :func:`applicable_effects` the
 effects that apply to a model; :func:`run_budget` plays the Shapley game with them.
@@ -22,7 +22,10 @@ from fogref.study.budget.report import port_vs_engine_line
 from fogref.study.budget.shapley import BOOTSTRAP_RESAMPLES, shapley_budget
 
 
-def _unreal(params: UE4FogParams, truth: Truth, precision: str, sky_distance: float):
+def unreal_fog(params: UE4FogParams, truth: Truth, precision: str, sky_distance: float):
+    """Unreal's fog with ``params`` at the truth's pixels (sky pixels at ``sky_distance`` m, the
+    shader in ``precision``): ``(transmittance (H, W) in [0, 1], inscatter (H, W, 3) >= 0)``,
+    float64 arrays."""
     r = UE4ExponentialHeightFog(params).evaluate(truth.camera, truth.world_positions(sky_distance), precision)
     return np.asarray(r.transmittance, np.float64), np.asarray(r.inscatter, np.float64)
 
@@ -45,7 +48,7 @@ def _config_params(
 def unreal_engine(lobe_params: UE4FogParams, model_params: UE4FogParams):
     """The engine side of the Shapley game for Unreal: ``engine(truth, config, sky_distance)``.
 
-    ``config``: a dict of the :data:`_CONFIG` effects (True = the engine's setting):
+    ``config``: a dict of the :data:`CONFIG_EFFECTS` effects (True = the engine's setting):
     ``refit`` (the study's colours/exponent instead of the lobe-only fit), ``start_distance``
     (its StartDistance and DirectionalInscatteringStartDistance, else 0), ``opacity_cutoff``
     (its FogMaxOpacity and FogCutoffDistance, else 1 and 0), ``float32`` (the shader's
@@ -59,9 +62,9 @@ def unreal_engine(lobe_params: UE4FogParams, model_params: UE4FogParams):
             lobe_params, model_params, config["refit"], config["start_distance"], config["opacity_cutoff"]
         )
         prec = "float32" if config["float32"] else "float64"
-        T, L = _unreal(p, truth, prec, sky_distance)
+        T, L = unreal_fog(p, truth, prec, sky_distance)
         no_sun = replace(p, DirectionalInscatteringColor=(0.0, 0.0, 0.0))
-        _, L_sky = _unreal(no_sun, truth, prec, sky_distance)
+        _, L_sky = unreal_fog(no_sun, truth, prec, sky_distance)
         return T, L - L_sky, L_sky
 
     return engine

@@ -14,19 +14,19 @@ from __future__ import annotations
 from pathlib import Path
 
 from fogref.errors import FogrefError
-from fogref.study.sweep.parameters import _read_parameters, design_size
+from fogref.study.sweep.parameters import design_size, read_parameters
 from fogref.study.sweep.sections import (
     DESIGN_KINDS,
     MAX_CONFIGS,
     SEED_POLICIES,
-    _read_design,
-    _read_execution,
-    _read_models,
-    _read_outputs,
-    _read_render,
-    _read_sweep,
+    read_design,
+    read_execution,
+    read_models,
+    read_outputs,
+    read_render,
+    read_sweep,
 )
-from fogref.study.sweep.values import _err, as_str
+from fogref.study.sweep.values import as_str, toml_error
 
 try:
     import tomllib  # Python >= 3.11
@@ -87,7 +87,7 @@ def _read_toml(path: Path) -> dict:
         raise FogrefError(f"{path}: not valid TOML ({e})") from None
     unknown = set(doc) - _TOP_KEYS
     if unknown:
-        raise _err(path, None, f"unknown table(s) {sorted(unknown)}; allowed: {sorted(_TOP_KEYS)}")
+        raise toml_error(path, None, f"unknown table(s) {sorted(unknown)}; allowed: {sorted(_TOP_KEYS)}")
     return doc
 
 
@@ -118,11 +118,11 @@ def load_sweep(path) -> SweepSpec:
     """
     path = Path(path)
     doc = _read_toml(path)
-    sweep = _read_sweep(path, doc)
-    render = _read_render(path, doc)
-    models = _read_models(path, doc)
-    design = _read_design(path, doc)
-    parameters = _read_parameters(path, doc, sweep["scenes"], models, design, render["overrides"])
+    sweep = read_sweep(path, doc)
+    render = read_render(path, doc)
+    models = read_models(path, doc)
+    design = read_design(path, doc)
+    parameters = read_parameters(path, doc, sweep["scenes"], models, design, render["overrides"])
     for m in models:
         del m["fields"]
     return SweepSpec(
@@ -132,6 +132,6 @@ def load_sweep(path) -> SweepSpec:
         parameters=parameters,
         design=design,
         models=models,
-        **_read_execution(path, doc),
-        **_read_outputs(path, doc, sweep["out"]),
+        **read_execution(path, doc),
+        **read_outputs(path, doc, sweep["out"]),
     )
