@@ -31,7 +31,15 @@ bounds_min/max  point      the fog's box [m] (required for ``box``)           no
 floor           float      lowest height the majorant considers [m] (stock     see text
                            integrators only): no ray may go below it in fog.
                            Default: bounds_min.y, else the lowest layer's
-                           ``reference_height`` (scenes put it at ground level).
+                           ``reference_height`` (scenes put it at ground level),
+                           and the Local Fog Volume's lowest point.
+lfv_centre      point      a Local Fog Volume's centre [m] (its parameters:   none
+                           ``fogref.media.local_fog_volume``; its density
+                           adds to the profile's, the bounds do not clip it)
+lfv_radius      float      its radius [m], (0, 1e6]; required for a volume     none
+lfv_density     float      its relative density at the centre, 0..1e6         1
+lfv_falloff     float      its height falloff [1/m], 0..1e3                   0
+lfv_height      float      its reference height [m]                           0
 ==============  =========  ==================================================  ========
 
 A ``<phase>`` child replaces ``g``: an ``hg`` (its ``g``, which the physics then uses) or a
@@ -95,6 +103,9 @@ class HeightFogMedium(mi.Medium):
             if self.fog.bounds is not None
             else min(L.reference_height for L in self.fog.layers)
         )
+        vol = self.fog.volume
+        if vol is not None:  # not clipped by the bounds: its lowest point counts too
+            default_floor = min(default_floor, vol.centre[1] - vol.radius)
         self.floor = check_range(src, "floor", params.get("floor", default_floor), -1e7, 1e7)
         self.m_is_homogeneous = False
         # Stock volpath's spectral mode gives every ray that escapes to infinity
@@ -107,7 +118,7 @@ class HeightFogMedium(mi.Medium):
     # -- stock-integrator interface -----------------------------------------
     def intersect_aabb(self, ray):
         ops = drjit_ops()
-        t0, t1 = self.fog.clip(ops, ray.o, ray.d)
+        t0, t1 = self.fog.clip(ops, ray.o, ray.d) if self.fog.volume is None else (mi.Float(0.0), ops.largest)
         t1 = dr.minimum(t1, ray.maxt)
         active = t1 > t0
         # the segment's height range, floored; the profiles give their largest density on it
@@ -116,7 +127,7 @@ class HeightFogMedium(mi.Medium):
         y1 = ray.o.y + far * ray.d.y
         y_low = dr.maximum(dr.minimum(y0, y1), self.floor)
         y_high = dr.maximum(dr.maximum(y0, y1), y_low)
-        if self.fog.bounds is not None:
+        if self.fog.bounds is not None and self.fog.volume is None:
             y_low = dr.maximum(y_low, self.fog.bounds.lo[1])
             y_high = dr.maximum(dr.minimum(y_high, self.fog.bounds.hi[1]), y_low)
         rho_max = self.fog.max_density(ops, y_low, y_high)

@@ -81,7 +81,8 @@ class FogPathIntegrator(FogPathCameraRay):
        - bool
        - Sample the sun's single scattering along camera rays from its exact integrand
          (zero variance without shadows; the first medium vertex then skips sun NEE), for
-         unbounded exponential layers and a sun above the horizon. Default: true.
+         unbounded exponential layers and a sun above the horizon (not with a Local Fog
+         Volume: next-event estimation then samples the sun). Default: true.
      * - sun_sampling_rays
        - int
        - Path segments along which ``sun_sampling`` samples the sun's scattering from its
@@ -112,7 +113,7 @@ class FogPathIntegrator(FogPathCameraRay):
          ``T`` and a forced medium collision on ``[0, D]`` with its light sample;
          the path then continues one branch, chosen in proportion to the branches'
          depth-0 throughputs (see :meth:`_camera_split`).  Used when the fog
-         scatters and ``max_depth >= 2``.  Default: ``FORCED_SPLIT_DEFAULT``.
+         scatters, has no Local Fog Volume and ``max_depth >= 2``.  Default: ``FORCED_SPLIT_DEFAULT``.
     """
 
     def __init__(self, props):
@@ -172,7 +173,7 @@ class FogPathIntegrator(FogPathCameraRay):
         if fog.sigma_t[1] != fog.sigma_t[0] or fog.sigma_t[2] != fog.sigma_t[0]:
             channel = self._draw_channel(sampler, active)
             sig = dr.select(channel == 1, sig_rgb[1], dr.select(channel == 2, sig_rgb[2], sig))
-        variates = [-dr.log(1.0 - sampler.next_1d(active)) for _ in fog.layers]
+        variates = [-dr.log(1.0 - sampler.next_1d(active)) for _ in range(fog.free_flight_variates)]
         t_med = fog.sample_distance(ops, ray.o, ray.d, variates, sig)
         is_medium = active & (t_med < t_surf) & (t_med < ops.largest)
         t_end = dr.select(is_medium, t_med, dr.minimum(t_surf, ops.largest))
@@ -310,9 +311,8 @@ class FogPathIntegrator(FogPathCameraRay):
         has_lights = has_delta or has_smooth
         active &= has_lights  # no emitter: nothing to trace beyond the G-buffer
         cam = None  # with forced splitting: (surface_coverage, depth-0 surface light, q)
-        if dr.hint(
-            self.forced_split and phase is not None and has_lights and self.max_depth >= 2, mode="scalar"
-        ):
+        forced = self.forced_split and phase is not None and fog.volume is None  # a volume: free flight
+        if dr.hint(forced and has_lights and self.max_depth >= 2, mode="scalar"):
             split, β_cam, cam, ray, si, β, medium_first, prev_it, prev_pdf, prev_delta, active = (
                 self._camera_split(
                     scene,

@@ -93,7 +93,9 @@ class FogPathCameraRay(FogPathBase):
         the mixture ``sigma sum_i rho_i T_i(t) / sum_j (1 - T_j(D))`` (one layer:
         ``sigma_t T / (1 - T)``), averaged over the channels (one-sample spectral
         MIS for this segment).  Returns (t, weight ``sigma_s T(t) / pdf``, valid).
+        Height layers only (fogpath uses free flight instead with a Local Fog Volume).
         """
+        fog.require_height_only("fogpath's forced collision")
         t0, t1 = (mi.Float(0.0), ops.largest) if fog.bounds is None else fog.clip(ops, ray.o, ray.d)
         t_end = dr.minimum(D, t1)
         length = dr.maximum(t_end - t0, 0.0)

@@ -186,6 +186,7 @@ def filament_to_medium(params: FilamentFogParams, albedo: Any = (1.0, 1.0, 1.0),
 
 def medium_to_filament(medium: FogMedium, **kw: Any) -> FilamentFogParams:
     """Filament options for an unbounded grey medium with one ExpLayer (``kw``: other options)."""
+    medium.require_height_only("medium_to_filament")
     src = getattr(medium, "source", "<medium>")
     if medium.bounds is not None or len(medium.layers) != 1 or not isinstance(medium.layers[0], ExpLayer):
         raise ParameterError(src, "layers", "Filament fog needs one unbounded ExpLayer")

@@ -197,6 +197,7 @@ def medium_to_hdrp(
 ) -> HDRPFogParams:
     """HDRP parameters for a grey medium with one :class:`~fogref.media.HDRPLayer` (or a
     homogeneous layer); ``maximumHeight = baseHeight + H ln(1000)``."""
+    medium.require_height_only("medium_to_hdrp")
     src = getattr(medium, "source", "<medium>")
     if medium.bounds is not None or len(medium.layers) != 1:
         raise ParameterError(src, "layers", "HDRP fog needs one unbounded height profile")

@@ -531,6 +531,7 @@ def medium_to_ue4(medium: FogMedium, base: UE4FogParams | None = None) -> UE4Fog
     The medium must be unbounded, grey (equal sigma_t per channel) and made of
     at most two :class:`~fogref.media.ExpLayer`.  Other fields come from ``base``.
     """
+    medium.require_height_only("medium_to_ue4")
     src = getattr(medium, "source", "<medium>")
     if medium.bounds is not None:
         raise ParameterError(src, "bounds", "Unreal's height fog is unbounded")
