@@ -79,6 +79,8 @@ OPTIONAL_GROUPS = {
     "surface": ("reflectance",),  # one settable diffuse reflectance for all surfaces
     "turbidity": ("turbidity",),  # a sunsky's atmosphere (fogref/render/sunsky.py)
     "sun_size": ("sun_angular_diameter",),  # the sun's angular diameter (0: a delta)
+    # a Local Fog Volume added to the fog (fogref.media.local_fog_volume)
+    "local_fog_volume": ("lfv_centre", "lfv_radius", "lfv_density", "lfv_falloff", "lfv_height"),
 }
 #: The kind, range and unit of every vocabulary name, each declared once (the fog's in
 #: :data:`fogref.mapping.fog_input.PHYSICAL` and ``SCATTERING``).  The options are
@@ -109,6 +111,7 @@ RANGES: dict[str, Range] = {
     "reflectance": Range("--ground-reflectance", "rgb", 0.0, 1.0),
     "turbidity": Range("--turbidity", "number", 1.0, 10.0),
     "sun_angular_diameter": Range("--sun-angular-diameter", "number", 0.0, 10.0, "deg"),
+    **{k: v for k, v in PHYSICAL.items() if k.startswith("lfv_")},
 }
 
 
