@@ -168,7 +168,8 @@ def fog_from_physical(fog: dict | None = None, *, albedo: Any = 0.9, g: float = 
         ``bounds_max`` (3 values each [m], both or none), and an optional Local Fog Volume:
         ``lfv_radius`` [m] with ``lfv_centre`` [m], ``lfv_density``, ``lfv_falloff`` [1/m],
         ``lfv_height`` [m] (:class:`~fogref.media.local_fog_volume.LocalFogVolume`; those not
-        given take its defaults). Missing values take the shipped valley's fog (Unreal's FogDensity 0.02, FogHeightFalloff 0.2 at 0 m).
+        given take its defaults). Missing values take the shipped valley's fog (Unreal's
+        FogDensity 0.02, FogHeightFalloff 0.2 at 0 m).
     albedo : float or 3 floats
         Single-scattering albedo in [0, 1].
     g : float
