@@ -5,7 +5,8 @@ is not virtual); it does delta tracking against ``get_majorant``.  This plugin
 gives it a *tight per-ray majorant*: ``intersect_aabb`` clips the ray to the fog's
 bounds and records the largest density on the clipped segment, which it asks the
 height profiles for (``max_density`` over the segment's height range, see
-:class:`fogref.media.protocol.HeightProfile`), and ``get_majorant`` returns it.  ``fogpath`` instead uses
+:class:`fogref.media.protocol.HeightProfile`; a Local Fog Volume widens the segment to its chord
+and adds its bound), and ``get_majorant`` returns it.  ``fogpath`` instead uses
 :attr:`fog` (the physics object) for analytic free flight and closed-form transmittance.
 
 XML parameters (SI units, y-up):
@@ -118,7 +119,9 @@ class HeightFogMedium(mi.Medium):
     # -- stock-integrator interface -----------------------------------------
     def intersect_aabb(self, ray):
         ops = drjit_ops()
-        t0, t1 = self.fog.clip(ops, ray.o, ray.d) if self.fog.volume is None else (mi.Float(0.0), ops.largest)
+        t0, t1 = self.fog.clip(ops, ray.o, ray.d)
+        if self.fog.volume is not None:
+            t0, t1 = self._with_volume(ops, ray, t0, t1)
         t1 = dr.minimum(t1, ray.maxt)
         active = t1 > t0
         # the segment's height range, floored; the profiles give their largest density on it
@@ -137,6 +140,16 @@ class HeightFogMedium(mi.Medium):
         # endless null steps.
         self._maj = mi.Float(rho_max) * 1.0001
         return active, dr.select(active, t0, dr.inf), dr.select(active, t1, dr.inf)
+
+    def _with_volume(self, ops, ray, t0, t1):
+        """The interval ``[t0, t1]`` of the bounds widened to the volume's chord (the bounds do
+        not clip the volume): the smallest interval holding both."""
+        c0, c1, _, _ = self.fog.volume.chord(ops, ray.o, ray.d)
+        c0 = dr.maximum(c0, 0.0)
+        meets, box = c1 > c0, mi.Float(t1) > t0
+        t0 = dr.select(meets, dr.select(box, dr.minimum(t0, c0), c0), t0)
+        t1 = dr.select(meets, dr.select(box, dr.maximum(t1, c1), c1), t1)
+        return t0, t1
 
     def _majorant(self):
         maj = self._maj if self._maj is not None else mi.Float(1.0)

@@ -31,9 +31,9 @@ LFV = dict(lfv_radius=8.0, lfv_density=4.0, lfv_falloff=0.05, lfv_height=5.0)
 CENTRE = (0.0, 5.0, 0.0)
 
 
-def _scene(mi, spp_pixel_exact=True):
+def _scene(mi):
     medium = {"type": "heightfog", **FOG, **LFV, "lfv_centre": mi.ScalarPoint3f(*CENTRE)}
-    integrator = {"type": "fogpath", "max_depth": 2, "pixel_exact": spp_pixel_exact}
+    integrator = {"type": "fogpath", "max_depth": 2, "pixel_exact": True}
     return mi.load_dict(base_scene(mi, integrator, medium, res=RES, sun=False, occluder=False))
 
 
