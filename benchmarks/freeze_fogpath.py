@@ -54,7 +54,7 @@ def child(case: str) -> None:
 
     from fogref.media import drjit_ops
     from fogref.media.ops import DrJitOps
-    from fogref.render.scene import load_scene
+    from fogref.render.load import load_scene
 
     base = common.FogPathBase
     reads = {"sun": base._read_scene_sun, "sky": base._read_constant_sky, "sel": base._read_sky_selection}

@@ -53,7 +53,7 @@ def main() -> None:
     import mitsuba as mi
     import numpy as np
 
-    from fogref.render.scene import load_scene
+    from fogref.render.load import load_scene
 
     read_once, optimize_loops = common.FogPathBase._read_once, common.OPTIMIZE_LOOPS
 

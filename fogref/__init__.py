@@ -7,7 +7,7 @@ it neither looks for LLVM nor imports Mitsuba or Dr.Jit. The physics
 Mitsuba is set up by one explicit call, :func:`set_variant`: it points Dr.Jit at
 an LLVM >= 16, selects the variant and registers fogref's plugins (the
 ``heightfog`` medium and the ``fogpath`` integrator). The render driver and
-:func:`fogref.render.scene.load_scene` call it; ``mi.load_file`` users call it
+:func:`fogref.render.load.load_scene` call it; ``mi.load_file`` users call it
 themselves::
 
     import fogref, mitsuba as mi

@@ -249,7 +249,7 @@ def refuse_overwriting_inputs(outputs, inputs, what: str = "output") -> None:
     ----------
     outputs, inputs
         Paths, ``(path, label)`` pairs, or objects with ``.path`` and ``.label`` (e.g.
-        :class:`fogref.render.inputs.SceneInput`); labels name them in the message.
+        :class:`fogref.scene.inputs.SceneInput`); labels name them in the message.
     what
         How the user named the outputs, e.g. ``"--out x.exr"``.
 

@@ -38,8 +38,8 @@ import mitsuba as mi
 from mitsuba.python.ad.integrators.common import mis_weight  # the module set_variant loaded (not a 2nd copy)
 
 from fogref import params
-from fogref.mapping.fog_input import MAX_DEPTH
 from fogref.media import drjit_ops
+from fogref.scene.vocabulary import MAX_DEPTH
 
 from .fogpath_camera import FogPathCameraRay
 from .fogpath_common import AOV_NAMES, Split, spectrum

@@ -41,6 +41,8 @@ FLOORS: list[tuple[str, tuple[str, ...]]] = [
     # the ground-truth schema, its I/O and the one display transform
     ("gbuffer", ("fogref.gbuffer", "fogref.exrio", "fogref.display")),
     ("models", ("fogref.models",)),  # ports of the engines' shaders
+    # the scene XML read once: parse, $defaults, vocabulary and ranges, inputs, describe, writer, editor
+    ("scene", ("fogref.scene",)),
     ("mapping", ("fogref.mapping",)),  # physical scene -> model parameters, fits
     # the Mitsuba plugins: the heightfog medium, the fogpath integrator and its passes
     ("plugins", ("fogref_plugins",)),
@@ -53,7 +55,18 @@ FLOORS: list[tuple[str, tuple[str, ...]]] = [
     ("cli", ("fogref.cli", "fogref.pytest_plugin", "fogref.info", "fogref")),
 ]
 #: floors that must not import Mitsuba or Dr.Jit at module level
-NO_MITSUBA_AT_IMPORT = {"base", "media", "gbuffer", "models", "mapping", "compare", "engines", "study", "cli"}
+NO_MITSUBA_AT_IMPORT = {
+    "base",
+    "media",
+    "gbuffer",
+    "models",
+    "scene",
+    "mapping",
+    "compare",
+    "engines",
+    "study",
+    "cli",
+}
 
 
 def _modules() -> dict[str, tuple[Path, bool]]:
@@ -270,6 +283,18 @@ def test_no_mitsuba_or_drjit_at_module_level_below_render():
         for name, line, top in imports_of(m):
             if top and name.split(".")[0] in ("mitsuba", "drjit", "fogref_plugins"):
                 bad.append(f"{_where(m, line)}: {m} imports {name} at module level")
+    assert not bad, "\n".join(bad)
+
+
+def test_the_scene_floor_never_imports_mitsuba():
+    """``fogref.scene`` reads and writes scene XML without Mitsuba or Dr.Jit, inside functions too."""
+    bad = [
+        f"{_where(m, line)}: {m} imports {name}"
+        for m in MODULES
+        if FLOORS[floor_of(m)][0] == "scene"
+        for name, line, _ in imports_of(m)
+        if name.split(".")[0] in ("mitsuba", "drjit", "fogref_plugins")
+    ]
     assert not bad, "\n".join(bad)
 
 

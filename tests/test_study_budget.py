@@ -240,6 +240,7 @@ def test_shapley_in_markdown_and_plot_first(tmp_path):
     )
     md = B.markdown(r)
     assert md.index("Shapley budget") < md.index("Telescoping chain (second view)") < md.index("| 9 | [h]")
+    assert md.count("Port vs engine (ue4): no runnable engine here.") == 1
     top = next(x for x in r["shapley"]["effects"] if x["key"] == r["shapley"]["largest"])
     assert f"Largest term: **[{top['effect']}] {top['label']}**" in md
     B.plot(r, tmp_path / "b.png")

@@ -7,8 +7,8 @@ not be budgeted (and its cache key missed them).
 
 import tiny_inputs_scene as tiny
 
-from fogref.render.inputs import inputs_digest, scene_inputs
-from fogref.study.unreal import sunless_scene
+from fogref.scene.edit import sunless_scene
+from fogref.scene.inputs import inputs_digest, scene_inputs
 
 
 def test_sunless_copy_loads_the_originals_files(tmp_path, mitsuba):

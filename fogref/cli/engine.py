@@ -22,11 +22,11 @@ from fogref.errors import FogrefError
 
 NAME = "engine"
 SOURCE = "fogref engine"
-HELP = "render a truth's or a scene's view with a real web engine (three.js, Babylon.js, PlayCanvas)"
+HELP = "render a truth's or scene's view with a real web engine (three.js, Babylon.js, PlayCanvas, Filament)"
 DESCRIPTION = (
     "Render the view of a ground-truth EXR (its scene file) or of a scene XML with a real engine "
-    "(three.js, Babylon.js or PlayCanvas from node_modules, in headless Chromium, SwiftShader WebGL): its "
-    "linear float render target (final.exr with distance and hit channels, T.exr, inscatter.exr, "
+    "(three.js, Babylon.js, PlayCanvas or Filament from node_modules, in headless Chromium, SwiftShader "
+    "WebGL): its linear float render target (final.exr with distance and hit channels, T.exr, inscatter.exr, "
     "surface.exr), its 8-bit canvas as the engine ships it (canvas.png) and engine.json (version, "
     "fog settings and where each came from, the difference from fogref's port of the engine, the "
     "camera against the truth's)."

@@ -81,7 +81,7 @@ from fogref.compare.report_parts import (
     parts_from_check,
     truth_provenance,
 )
-from fogref.display import exposure_for
+from fogref.display import part_exposures
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 from fogref.gbuffer import Truth, load_truth
@@ -311,7 +311,7 @@ def write_report(
         truth.distance, errors, log_distance_edges(truth.distance[truth.hit], distance_bins), mask=truth.hit
     )
     by_sun = binned_errors(sun_angle, errors, angle_edges(angle_step_deg)) if sun_angle is not None else None
-    exposures = {p: (1.0 if PART_UNITS[p] == "1" else exposure_for(parts[p]["reference"])) for p in names}
+    exposures = part_exposures({p: parts[p]["reference"] for p in names})
 
     h, w = truth.shape
     report = _json_safe(

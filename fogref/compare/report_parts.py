@@ -21,14 +21,15 @@ import numpy as np
 from fogref.compare import noise
 from fogref.compare.candidate import candidate_parts, evaluate_model, fog_parts
 from fogref.errors import FogrefError
-from fogref.gbuffer import Truth
+from fogref.gbuffer import COMPARED_PARTS, Truth, part_attribute
 from fogref.mapping.build import current_parameters
 from fogref.models.terms import annotate
 from fogref.params import number as valid_number
 
 #: Distance [m] at which the model fogs sky pixels (a stand-in for infinity).
 DEFAULT_SKY_DISTANCE = 1.0e5
-PARTS: tuple[str, ...] = ("final", "transmittance", "inscatter", "attenuated_surface")
+#: A model run's parts (:data:`fogref.gbuffer.COMPARED_PARTS`).
+PARTS: tuple[str, ...] = COMPARED_PARTS
 #: Units of each part's values ("1": dimensionless; radiance is in the scene's units).
 PART_UNITS: dict[str, str] = {
     "final": "radiance",
@@ -136,7 +137,7 @@ def _from_core(cp) -> dict:
     """The comparison core's parts (:class:`fogref.compare.check.CandidateParts`) as a report's,
     ``T`` named ``transmittance``."""
     return {
-        ("transmittance" if k == "T" else k): {
+        part_attribute(k): {
             "reference": cp.reference[k],
             "model": cp.parts[k],
             "cov": cp.noise_cov[k],

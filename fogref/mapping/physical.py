@@ -1,7 +1,7 @@
 """The physical scene a game fog model stands for, and its one parser.
 
 A ground truth's EXR carries its scene in the header attribute ``fogref.params``
-(written by ``fogref.render.scene.describe_scene``)::
+(written by ``fogref.render.load.describe_scene``)::
 
     {"scene": "valley.xml",
      "medium": {heightfog XML parameters: profile, sigma_t, albedo, g, ...},

@@ -262,10 +262,8 @@ def render_split(
     ``surface``, is neglected: stated in ``notes``) and the sum of both renders' variances
     (PT - exact).  The camera is the scene's ``$camera_origin``.
     """
-    import xml.etree.ElementTree as ET
-
     from fogref.mapping.unreal_pathtracer import exact_fog_params, rewrite_scene
-    from fogref.render.scene import load_scene
+    from fogref.render.load import load_scene
     from fogref.render.variant import set_variant
 
     set_variant()
@@ -274,12 +272,9 @@ def render_split(
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     p_pt, p_ex = out_dir / "ue_pathtracer.xml", out_dir / "exact.xml"
-    rewrite_scene(scene_xml, p_pt, ue, pt)
-    rewrite_scene(scene_xml, p_ex, ue, pt, params=exact_fog_params(ue, pt))
-    for p in (p_pt, p_ex):  # every sample through the pixel centre: the truths' convention
-        tree = ET.parse(p)
-        ET.SubElement(tree.getroot().find("integrator"), "boolean", name="pixel_exact", value="true")
-        tree.write(p)
+    # every sample through the pixel centre: the truths' convention
+    rewrite_scene(scene_xml, p_pt, ue, pt, pixel_exact=True)
+    rewrite_scene(scene_xml, p_ex, ue, pt, params=exact_fog_params(ue, pt), pixel_exact=True)
     res: dict[str, Any] = {}
     for key, p in (("pt", p_pt), ("exact", p_ex)):
         scene, desc = load_scene(p, overrides)

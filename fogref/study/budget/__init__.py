@@ -92,7 +92,7 @@ from fogref.study.budget.engines import (
     run_budget,
     unreal_engine,
 )
-from fogref.study.budget.report import markdown, plot, shapley_markdown
+from fogref.study.budget.report import markdown, plot, port_vs_engine_line, shapley_markdown
 from fogref.study.budget.shapley import (
     BOOTSTRAP_BLOCK,
     BOOTSTRAP_RESAMPLES,
@@ -125,6 +125,7 @@ __all__ = [
     "model_engine",
     "phase_effect",
     "plot",
+    "port_vs_engine_line",
     "run_budget",
     "shapley_budget",
     "shapley_markdown",

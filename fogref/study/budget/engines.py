@@ -18,6 +18,7 @@ from fogref.mapping.free import fit_spec
 from fogref.mapping.registry import from_physical
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
 from fogref.study.budget.effects import EFFECTS, shapley_parts
+from fogref.study.budget.report import port_vs_engine_line
 from fogref.study.budget.shapley import BOOTSTRAP_RESAMPLES, shapley_budget
 
 
@@ -134,14 +135,18 @@ def run_budget(
     sky_distance: float = 1.0e5,
     resamples: int = BOOTSTRAP_RESAMPLES,
     seed: int = 0,
+    port_vs_engine: dict | None = None,
 ) -> dict:
     """The Shapley budget of any model (an instance, or a name built by
     :func:`fogref.mapping.from_physical` of ``pf``) against a truth.
 
     Unreal with a ``lobe_model`` uses :func:`unreal_engine`; every other model
     :func:`model_engine`, over :func:`applicable_effects`.  ``sky_single``: the sun-less
-    render's ``single``; ``valid``: pixels (default ``truth.surface_valid``).  Returns
-    :func:`shapley_budget`'s dict with ``"model"`` added.
+    render's ``single``; ``valid``: pixels (default ``truth.surface_valid``); ``port_vs_engine``:
+    the model's port against its real engine where one ran (``engine.json``'s ``port_vs_engine``
+    from ``fogref compare TRUTH --engine NAME``).  Returns :func:`shapley_budget`'s dict with
+    ``"model"`` and ``"port_vs_engine"`` (:func:`~fogref.study.budget.report.port_vs_engine_line`)
+    added.
     """
     if isinstance(model, str):
         model = from_physical(model, pf)
@@ -157,4 +162,5 @@ def run_budget(
     effects = applicable_effects(model, lobe_model, pf)
     out = shapley_budget(parts, valid, effects, resamples=resamples, seed=seed)
     out["model"] = name
+    out["port_vs_engine"] = port_vs_engine_line(name, port_vs_engine)
     return out

@@ -4,7 +4,7 @@ Each swept parameter's target (a scene ``$default`` or ``<model label>.<paramete
 values (a list, or a range with ``log`` and ``num``); then, across the file: one label per
 target, nothing both swept and fixed, the design's size (:func:`design_size`, before
 anything is built) and every value against the scenes' own checks
-(:func:`fogref.render.scene.describe_scene`).
+(:func:`fogref.render.load.describe_scene`).
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from fogref.errors import FogrefError, ParameterError, did_you_mean
-from fogref.render.scene import describe_scene
-from fogref.render.scene_defaults import declared
+from fogref.render.load import describe_scene
+from fogref.scene.defaults import declared
 from fogref.study.sweep.sections import _model_param_name, _model_value
 from fogref.study.sweep.values import _bool, _err, _int, _num, _src, as_str
 
@@ -206,7 +206,7 @@ def _check_size(path: Path, design: dict, params: dict, scenes: list) -> int:
 
 def _check_scene_values(path: Path, scenes: list, overrides: dict, params: dict) -> None:
     """Every fixed override, and every swept scene value (a range: its ends) on its own, against each scene's
-    own checks (:func:`fogref.render.scene.describe_scene`: the ``$default`` kinds, the resolution, the
+    own checks (:func:`fogref.render.load.describe_scene`: the ``$default`` kinds, the resolution, the
     medium's physical ranges), so a value that cannot render is refused here, naming the TOML key."""
     for scene in scenes:
         try:
