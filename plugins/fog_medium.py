@@ -5,7 +5,8 @@ is not virtual); it does delta tracking against ``get_majorant``.  This plugin
 gives it a *tight per-ray majorant*: ``intersect_aabb`` clips the ray to the fog's
 bounds and records the largest density on the clipped segment, which it asks the
 height profiles for (``max_density`` over the segment's height range, see
-:class:`fogref.media.protocol.HeightProfile`), and ``get_majorant`` returns it.  ``fogpath`` instead uses
+:class:`fogref.media.protocol.HeightProfile`; a Local Fog Volume widens the segment to its chord
+and adds its bound), and ``get_majorant`` returns it.  ``fogpath`` instead uses
 :attr:`fog` (the physics object) for analytic free flight and closed-form transmittance.
 
 XML parameters (SI units, y-up):
@@ -31,7 +32,15 @@ bounds_min/max  point      the fog's box [m] (required for ``box``)           no
 floor           float      lowest height the majorant considers [m] (stock     see text
                            integrators only): no ray may go below it in fog.
                            Default: bounds_min.y, else the lowest layer's
-                           ``reference_height`` (scenes put it at ground level).
+                           ``reference_height`` (scenes put it at ground level),
+                           and the Local Fog Volume's lowest point.
+lfv_centre      point      a Local Fog Volume's centre [m] (its parameters:   none
+                           ``fogref.media.local_fog_volume``; its density
+                           adds to the profile's, the bounds do not clip it)
+lfv_radius      float      its radius [m], (0, 1e6]; required for a volume     none
+lfv_density     float      its relative density at the centre, 0..1e6         1
+lfv_falloff     float      its height falloff [1/m], 0..1e3                   0
+lfv_height      float      its reference height [m]                           0
 ==============  =========  ==================================================  ========
 
 A ``<phase>`` child replaces ``g``: an ``hg`` (its ``g``, which the physics then uses) or a
@@ -95,6 +104,9 @@ class HeightFogMedium(mi.Medium):
             if self.fog.bounds is not None
             else min(L.reference_height for L in self.fog.layers)
         )
+        vol = self.fog.volume
+        if vol is not None:  # not clipped by the bounds: its lowest point counts too
+            default_floor = min(default_floor, vol.centre[1] - vol.radius)
         self.floor = check_range(src, "floor", params.get("floor", default_floor), -1e7, 1e7)
         self.m_is_homogeneous = False
         # Stock volpath's spectral mode gives every ray that escapes to infinity
@@ -108,6 +120,8 @@ class HeightFogMedium(mi.Medium):
     def intersect_aabb(self, ray):
         ops = drjit_ops()
         t0, t1 = self.fog.clip(ops, ray.o, ray.d)
+        if self.fog.volume is not None:
+            t0, t1 = self._with_volume(ops, ray, t0, t1)
         t1 = dr.minimum(t1, ray.maxt)
         active = t1 > t0
         # the segment's height range, floored; the profiles give their largest density on it
@@ -116,7 +130,7 @@ class HeightFogMedium(mi.Medium):
         y1 = ray.o.y + far * ray.d.y
         y_low = dr.maximum(dr.minimum(y0, y1), self.floor)
         y_high = dr.maximum(dr.maximum(y0, y1), y_low)
-        if self.fog.bounds is not None:
+        if self.fog.bounds is not None and self.fog.volume is None:
             y_low = dr.maximum(y_low, self.fog.bounds.lo[1])
             y_high = dr.maximum(dr.minimum(y_high, self.fog.bounds.hi[1]), y_low)
         rho_max = self.fog.max_density(ops, y_low, y_high)
@@ -126,6 +140,16 @@ class HeightFogMedium(mi.Medium):
         # endless null steps.
         self._maj = mi.Float(rho_max) * 1.0001
         return active, dr.select(active, t0, dr.inf), dr.select(active, t1, dr.inf)
+
+    def _with_volume(self, ops, ray, t0, t1):
+        """The interval ``[t0, t1]`` of the bounds widened to the volume's chord (the bounds do
+        not clip the volume): the smallest interval holding both."""
+        c0, c1, _, _ = self.fog.volume.chord(ops, ray.o, ray.d)
+        c0 = dr.maximum(c0, 0.0)
+        meets, box = c1 > c0, mi.Float(t1) > t0
+        t0 = dr.select(meets, dr.select(box, dr.minimum(t0, c0), c0), t0)
+        t1 = dr.select(meets, dr.select(box, dr.maximum(t1, c1), c1), t1)
+        return t0, t1
 
     def _majorant(self):
         maj = self._maj if self._maj is not None else mi.Float(1.0)

@@ -215,7 +215,8 @@ class FogPathIntegrator(mi.SamplingIntegrator):
        - bool
        - Sample the sun's single scattering along camera rays from its exact integrand
          (zero variance without shadows; the first medium vertex then skips sun NEE), for
-         unbounded exponential layers and a sun above the horizon. Default: true.
+         unbounded exponential layers and a sun above the horizon (not with a Local Fog
+         Volume: next-event estimation then samples the sun). Default: true.
      * - sun_sampling_rays
        - int
        - Path segments along which ``sun_sampling`` samples the sun's scattering from its
@@ -246,7 +247,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
          ``T`` and a forced medium collision on ``[0, D]`` with its light sample;
          the path then continues one branch, chosen in proportion to the branches'
          depth-0 throughputs (see :meth:`_camera_split`).  Used when the fog
-         scatters and ``max_depth >= 2``.  Default: ``FORCED_SPLIT_DEFAULT``.
+         scatters, has no Local Fog Volume and ``max_depth >= 2``.  Default: ``FORCED_SPLIT_DEFAULT``.
     """
 
     def __init__(self, props):
@@ -409,7 +410,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         if fog.sigma_t[1] != fog.sigma_t[0] or fog.sigma_t[2] != fog.sigma_t[0]:
             channel = self._draw_channel(sampler, active)
             sig = dr.select(channel == 1, sig_rgb[1], dr.select(channel == 2, sig_rgb[2], sig))
-        variates = [-dr.log(1.0 - sampler.next_1d(active)) for _ in fog.layers]
+        variates = [-dr.log(1.0 - sampler.next_1d(active)) for _ in range(fog.free_flight_variates)]
         t_med = fog.sample_distance(ops, ray.o, ray.d, variates, sig)
         is_medium = active & (t_med < t_surf) & (t_med < ops.largest)
         t_end = dr.select(is_medium, t_med, dr.minimum(t_surf, ops.largest))
@@ -586,8 +587,10 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         the mixture ``sigma sum_i rho_i T_i(t) / sum_j (1 - T_j(D))`` (one layer:
         ``sigma_t T / (1 - T)``), averaged over the channels (one-sample spectral
         MIS for this segment).  Returns (t, weight ``sigma_s T(t) / pdf``, valid).
+        Height layers only (fogpath uses free flight instead with a Local Fog Volume).
         """
         fog, ops = tr.fog, tr.ops
+        fog.require_height_only("fogpath's forced collision")
         t0, t1 = (mi.Float(0.0), ops.largest) if fog.bounds is None else fog.clip(ops, ray.o, ray.d)
         t_end = dr.minimum(D, t1)
         length = dr.maximum(t_end - t0, 0.0)
@@ -689,7 +692,9 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         sun_ss = self._sun_single_scatter(tr, sampler, ray, D0, active)
         tr.sun_along = sun_ss is not None
         active = active & tr.has_lights  # no emitter: nothing to trace beyond the G-buffer
-        if tr.phase is not None and tr.has_lights and self.forced_split and self.max_depth >= 2:
+        # a Local Fog Volume: free flight (the forced collision covers height layers only)
+        forced = self.forced_split and tr.fog.volume is None
+        if tr.phase is not None and tr.has_lights and forced and self.max_depth >= 2:
             path, cover = self._camera_split(tr, sampler, ray, si, D0, active)
             return CameraRay(gbuf, sun_ss, cover, path)
         return CameraRay(gbuf, sun_ss, None, Path(ray, si, active))

@@ -21,6 +21,14 @@ PROFILES = {
     "powerlaw": {"profile": "powerlaw", "start": 2.0, "end": 30.0, "power": 2.0},
     # the radiation fog's tabulated Mie phase (fogtabphase), which stock volpath samples too
     "exponential, Mie phase": {"phase": "mie"},
+    # a Local Fog Volume added to the fog in the box (stock: the majorant adds the volume's bound)
+    "exponential + Local Fog Volume": {
+        "lfv_centre": [0.0, 6.0, 15.0],
+        "lfv_radius": 8.0,
+        "lfv_density": 4.0,
+        "lfv_falloff": 0.05,
+        "lfv_height": 6.0,
+    },
 }
 
 
@@ -30,6 +38,8 @@ def _medium(mi, kw):
 
         table = droplet_fog(None, "radiation").phase
         kw = dict(kw, phase=table.as_params(), g=table.mean_cosine)
+    if "lfv_centre" in kw:
+        kw = dict(kw, lfv_centre=mi.ScalarPoint3f(*kw["lfv_centre"]))
     return heightfog(mi, **kw)
 
 

@@ -52,6 +52,10 @@ DROPS = (
     "fogref/mapping/droplet_fog.py)"
 )
 LIGHT = "sun and sky"
+LFV = (
+    "a Local Fog Volume whose density adds to the fog's: a sphere, density "
+    "D max(1 - |p - C|^2 / R^2, 0) exp(-F (y - H)) times --sigma-t (fogref/media/local_fog_volume.py)"
+)
 CAMERA = "camera (y-up, metres)"
 
 
@@ -171,6 +175,21 @@ class _Options:
     )
     bounds_max: str | None = option(
         None, "fog box: upper corner [m]", check=Text(), metavar="X,Y,Z", group=PHYS
+    )
+    lfv_centre: str | None = option(
+        None, "the volume's centre C [m]", check=Text(), metavar="X,Y,Z", group=LFV, default_text="0,0,0"
+    )
+    lfv_radius: float | None = option(
+        None, f"its radius R, {_range(PHYSICAL, 'lfv_radius')}; gives the volume", check=Number(), group=LFV
+    )
+    lfv_density: float | None = option(
+        None, f"D, {_range(PHYSICAL, 'lfv_density')}", check=Number(), group=LFV, default_text="1"
+    )
+    lfv_falloff: float | None = option(
+        None, f"F, {_range(PHYSICAL, 'lfv_falloff')}", check=Number(), group=LFV, default_text="0"
+    )
+    lfv_height: float | None = option(
+        None, f"H, {_range(PHYSICAL, 'lfv_height')}", check=Number(), group=LFV, default_text="0"
     )
     visibility: float | None = option(
         None,

@@ -117,6 +117,7 @@ class PhysicalScene:
     def __post_init__(self) -> None:
         src: str = self.source or getattr(self.medium, "source", "<PhysicalScene>")
         object.__setattr__(self, "source", src)
+        self.medium.require_height_only("the game-model mappings")
         w = np.asarray(rgb(self.sun_direction, "direction", src), dtype=np.float64)
         n = float(np.linalg.norm(w))
         if not np.isfinite(n) or n == 0:

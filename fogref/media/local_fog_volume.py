@@ -32,6 +32,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
 from fogref.media.ops import Ops, Real
 from fogref.params import number, vector
@@ -41,6 +42,16 @@ SERIES_LIMIT = 2.0
 SERIES_TERMS = 30
 #: Safeguarded Newton steps of :meth:`LocalFogVolume.sample` (each halves the bracket at least).
 SAMPLE_ITERATIONS = 64
+#: The scalar fields' ranges: (name, lo, lo open, hi, unit); ``centre``'s coordinates lie in
+#: [-1e7, 1e7] m.  In scene parameters each name takes the prefix ``lfv_``.
+RANGES = (
+    ("radius", 0.0, True, 1e6, "m"),
+    ("density", 0.0, False, 1e6, ""),
+    ("falloff", 0.0, False, 1e3, "1/m"),
+    ("height", -1e7, False, 1e7, "m"),
+)
+#: The ``heightfog`` parameters of a volume (:meth:`LocalFogVolume.from_params`).
+PARAMS = ("lfv_centre",) + tuple("lfv_" + r[0] for r in RANGES)
 
 
 def exp_moments(ops: Ops, x: Real) -> tuple:
@@ -107,17 +118,66 @@ class LocalFogVolume:
     source: str = field(default="<LocalFogVolume>", compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        src = self.source
-        centre = vector(self.centre, "centre", source=src, lo=-1e7, hi=1e7, unit="m")
-        object.__setattr__(self, "centre", centre)
-        for name, lo, lo_open, hi, unit in (
-            ("radius", 0.0, True, 1e6, "m"),
-            ("density", 0.0, False, 1e6, ""),
-            ("falloff", 0.0, False, 1e3, "1/m"),
-            ("height", -1e7, False, 1e7, "m"),
-        ):
-            x = number(getattr(self, name), name, source=src, lo=lo, hi=hi, lo_open=lo_open, unit=unit)
-            object.__setattr__(self, name, x)
+        for name, value in self._checked(vars(self), "", self.source).items():
+            object.__setattr__(self, name, value)
+
+    @staticmethod
+    def _checked(values: dict, prefix: str, src: str) -> dict:
+        """The fields in ``values`` (keys ``prefix + name``), validated against :data:`RANGES`."""
+        out: dict[str, Any] = {}
+        if prefix + "centre" in values:
+            out["centre"] = vector(
+                values[prefix + "centre"], prefix + "centre", source=src, lo=-1e7, hi=1e7, unit="m"
+            )
+        for name, lo, lo_open, hi, unit in RANGES:
+            if prefix + name in values:
+                v = values[prefix + name]
+                out[name] = number(v, prefix + name, source=src, lo=lo, hi=hi, lo_open=lo_open, unit=unit)
+        return out
+
+    @classmethod
+    def from_params(cls, params: dict, src: str = "<params>") -> LocalFogVolume | None:
+        """The volume of a ``heightfog``'s parameters :data:`PARAMS` (``lfv_centre`` a point or
+        ``"x, y, z"``), None when there are none.  ``lfv_radius`` is required; the others default
+        to the fields' defaults.
+
+        >>> LocalFogVolume.from_params({"lfv_radius": "5", "lfv_centre": "0, 2, 0"})
+        LocalFogVolume(centre=(0.0, 2.0, 0.0), radius=5.0, density=1.0, falloff=0.0, height=0.0)
+        >>> LocalFogVolume.from_params({"lfv_density": 2.0}, "<doc>")
+        Traceback (most recent call last):
+        ...
+        fogref.errors.ParameterError: <doc>: parameter 'lfv_radius': required for a volume, in (0, 1e6] m
+        >>> LocalFogVolume.from_params({"lfv_radius": 0.0}, "<doc>")
+        Traceback (most recent call last):
+        ...
+        fogref.errors.ParameterError: <doc>: parameter 'lfv_radius': 0 is outside (0, 1000000] m
+        """
+        given = {k: v for k, v in params.items() if k.startswith("lfv_") and v is not None}
+        if not given:
+            return None
+        for k in given:
+            if k not in PARAMS:
+                raise ParameterError(src, k, f"unknown; a Local Fog Volume takes {', '.join(PARAMS)}")
+        if "lfv_radius" not in given:
+            raise ParameterError(src, "lfv_radius", "required for a volume, in (0, 1e6] m")
+        return cls(**cls._checked(given, "lfv_", src), source=src)
+
+    def max_density(self, ops: Ops, y_lo: Real, y_hi: Real) -> Real:
+        """An upper bound of the relative density on heights ``[y_lo, y_hi]``: the height
+        term at the lowest height the sphere and the range share (the radial factor <= 1), 0
+        where they share none.
+
+        >>> from fogref.media import NP
+        >>> v = LocalFogVolume(centre=(0.0, 0.0, 0.0), radius=2.0, density=3.0, falloff=0.5)
+        >>> [round(float(v.max_density(NP, y, 5.0)), 6) for y in (-5.0, 1.0, 3.0)]
+        [8.154845, 1.819592, 0.0]
+        """
+        c_y, R = ops.param(self.centre[1]), ops.param(self.radius)
+        y = ops.maximum(y_lo, c_y - R)
+        la = ops.param(self._log_density()) - ops.param(self.falloff) * (y - ops.param(self.height))
+        if not self.density > 0:
+            return 0.0 * y
+        return ops.where(y <= ops.minimum(y_hi, c_y + R), ops.exp(ops.minimum(la, ops.exp_limit)), 0.0)
 
     def _log_density(self) -> float:
         return math.log(self.density) if self.density > 0 else -1.0e4

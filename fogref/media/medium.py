@@ -1,9 +1,13 @@
-"""Physical fog media: exponential height layers, optionally clipped to a box.
+"""Physical fog media: exponential height layers, optionally clipped to a box, plus an
+optional Local Fog Volume.
 
 A :class:`FogMedium` has extinction ``sigma_t(p) = sigma_t_rgb * rho(p)`` [1/m] with
 relative density ``rho(p) = sum_l density_l * exp(-falloff_l * (p_y - height_l))``
-inside ``bounds`` (everywhere when ``bounds`` is None) and 0 outside.  World space
-is y-up, metres.  Special cases, all exact:
+inside ``bounds`` (everywhere when ``bounds`` is None) and 0 outside, plus the relative
+density of ``volume`` (a :class:`~fogref.media.local_fog_volume.LocalFogVolume`, not clipped
+by ``bounds``) where there is one: optical depths add, and the free flight through the sum is
+the nearer of the two parts' exact collisions.  World space is y-up, metres.  Special cases,
+all exact:
 
 * one or two exponential layers (Unreal's fog is two);
 * ``falloff = 0``: a homogeneous medium;
@@ -27,6 +31,7 @@ from typing import Any
 
 from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
+from fogref.media.local_fog_volume import LocalFogVolume
 from fogref.media.protocol import NonIncreasingLayer, number, register_profile, rgb
 from fogref.params import number as valid_number
 
@@ -236,8 +241,10 @@ class FogMedium:
     layers:  1 to 4 :class:`~fogref.media.protocol.HeightProfile` layers; empty
              layers are dropped (one is kept if all are empty).
     bounds:  optional :class:`Box` (or another convex bounds object with the same
-             methods, e.g. :class:`fogref.media.ue_pathtracer.Cylinder`); the fog
-             is 0 outside it.
+             methods, e.g. :class:`fogref.media.ue_pathtracer.Cylinder`); the layers'
+             fog is 0 outside it.
+    volume:  None or a :class:`~fogref.media.local_fog_volume.LocalFogVolume` whose relative
+             density adds to the layers' (see module).
 
     Examples
     --------
@@ -246,6 +253,10 @@ class FogMedium:
     >>> T = fog.transmittance(NP, (0.0, 0.0, 0.0), (1.0, 0.0, 0.0), 100.0)
     >>> [round(float(x), 6) for x in T]
     [0.367879, 0.367879, 0.367879]
+    >>> ball = LocalFogVolume(centre=(50.0, 0.0, 0.0), radius=10.0, density=3.0)
+    >>> lfv = FogMedium(sigma_t=0.01, layers=(ExpLayer(1.0, 0.0, 0.0),), volume=ball)
+    >>> round(float(lfv.optical_depth(NP, (0.0, 0.0, 0.0), (1.0, 0.0, 0.0), 100.0)), 9)  # 100 + 3 * 40/3
+    140.0
     """
 
     sigma_t: Any = (0.01, 0.01, 0.01)  # one number or three; stored as a 3-tuple
@@ -255,6 +266,7 @@ class FogMedium:
     bounds: Any = None
     source: str = field(default="<FogMedium>", compare=False, repr=False)
     phase: Any = None
+    volume: LocalFogVolume | None = None
 
     def __post_init__(self) -> None:
         src = self.source
@@ -274,6 +286,10 @@ class FogMedium:
         object.__setattr__(self, "layers", kept or layers[:1])
         if self.bounds is not None:
             object.__setattr__(self, "bounds", self.bounds.validate(src))
+        if self.volume is not None and not isinstance(self.volume, LocalFogVolume):
+            raise ParameterError(
+                src, "volume", f"expected a LocalFogVolume, got {type(self.volume).__name__}"
+            )
 
     # -- the phase function ----------------------------------------------------
     def phase_value(self, ops: Any, cos_theta: Any) -> Any:
@@ -293,10 +309,28 @@ class FogMedium:
                 f"{who} assumes a Henyey-Greenstein phase; the fog's is '{self.phase.label}'",
             )
 
+    def require_height_only(self, who: str) -> None:
+        """ParameterError naming 'lfv_radius' when the fog has a Local Fog Volume (``who``: the
+        closed form, sampler or mapping that knows height layers only).
+
+        >>> FogMedium(volume=LocalFogVolume(), source="<d>").require_height_only("f")
+        Traceback (most recent call last):
+        ...
+        fogref.errors.ParameterError: <d>: parameter 'lfv_radius': f: height layers only, no Local Fog Volume
+        """
+        if self.volume is not None:
+            raise ParameterError(self.source, "lfv_radius", f"{who}: height layers only, no Local Fog Volume")
+
     # -- what the scene needs (trace-time specialisation) ---------------------
     @property
     def is_vacuum(self) -> bool:
-        return max(self.sigma_t) == 0 or all(L.is_empty for L in self.layers)
+        empty = all(L.is_empty for L in self.layers) and (self.volume is None or self.volume.density == 0)
+        return max(self.sigma_t) == 0 or empty
+
+    @property
+    def free_flight_variates(self) -> int:
+        """How many Exp(1) variates :meth:`sample_distance` takes: one per layer, one for the volume."""
+        return len(self.layers) + (self.volume is not None)
 
     @property
     def scatters(self) -> bool:
@@ -304,7 +338,7 @@ class FogMedium:
 
     @property
     def is_homogeneous(self) -> bool:
-        return all(L.is_constant for L in self.layers)
+        return self.volume is None and all(L.is_constant for L in self.layers)
 
     def grey_sigma_t(self, who: str = "this model") -> float:
         """The extinction scale [1/m] when it is grey (equal RGB channels).
@@ -322,10 +356,14 @@ class FogMedium:
         return float(s[0])
 
     def max_density(self, ops: Any, y_lo: Any, y_hi: Any) -> Any:
-        """Largest relative density on heights ``[y_lo, y_hi]`` (sum over the layers)."""
+        """Largest relative density on heights ``[y_lo, y_hi]`` (sum over the layers and the
+        volume's bound; the bounds' heights are the caller's to apply, and the volume is not
+        clipped by them)."""
         rho = 0.0
         for L in self.layers:
             rho = rho + L.max_density(ops, y_lo, y_hi)
+        if self.volume is not None:
+            rho = rho + self.volume.max_density(ops, y_lo, y_hi)
         return rho
 
     # -- relative density ----------------------------------------------------
@@ -338,6 +376,8 @@ class FogMedium:
             rho = rho + L.rho(ops, y)
         if self.bounds is not None:
             rho = ops.where(self._inside(ops, p), rho, 0.0)
+        if self.volume is not None:
+            rho = rho + self.volume.rho(ops, p)
         return rho
 
     def _inside(self, ops: Any, p: Any) -> Any:
@@ -362,6 +402,12 @@ class FogMedium:
     @quiet_numpy
     def optical_depth(self, ops: Any, o: Any, d: Any, t: Any) -> Any:
         """Shape optical depth [m] over ``[0, t]`` (``t = ops.largest``: to infinity)."""
+        if self.volume is not None:
+            tau = self._height_depth(ops, o, d, t) + self.volume.optical_depth(ops, o, d, t)
+            return ops.minimum(tau, cf.TAU_MAX)
+        return self._height_depth(ops, o, d, t)
+
+    def _height_depth(self, ops: Any, o: Any, d: Any, t: Any) -> Any:
         if self.bounds is None:
             return self._layers_depth(ops, o[1], d[1], t)
         t0, t1 = self.clip(ops, o, d)
@@ -386,10 +432,10 @@ class FogMedium:
     def sample_distance(self, ops: Any, o: Any, d: Any, exp_variates: Any, sigma: Any) -> Any:
         """Exact free-flight distance for extinction ``sigma * rho`` [1/m].
 
-        ``exp_variates``: one Exp(1) variate (``-log1p(-u)``) per layer.  Each layer
-        is inverted in closed form and the nearest collision wins (exact: the
-        layers' transmittances multiply).  Returns ``ops.largest`` when the ray
-        leaves the fog without a collision.
+        ``exp_variates``: one Exp(1) variate (``-log1p(-u)``) per layer, then one for the
+        volume (:attr:`free_flight_variates`).  Each part is inverted in closed form and the
+        nearest collision wins (exact: the parts' transmittances multiply).  Returns
+        ``ops.largest`` when the ray leaves the fog without a collision.
         """
         t0, t1 = (0.0, ops.largest) if self.bounds is None else self.clip(ops, o, d)
         if self.bounds is not None:
@@ -406,19 +452,22 @@ class FogMedium:
         if self.bounds is not None:
             hit = (t < ops.largest) & (t0 + t <= t1) & meets_box
             t = ops.where(hit, t0 + t, ops.largest)
+        if self.volume is not None:
+            t = ops.minimum(t, self.volume.sample(ops, o, d, exp_variates[len(self.layers)] * inv_sigma))
         return t
 
     @quiet_numpy
     def invert_optical_depth(self, ops: Any, o: Any, d: Any, s: Any, t_max: Any, iterations: int = 16) -> Any:
         """Distance ``t`` in ``[0, t_max]`` where the shape optical depth reaches ``s``.
 
-        Unbounded media only.  One layer: the exact closed form.  Several layers:
-        Newton on ``tau(t) - s`` (``tau' = rho > 0``) started where it converges
+        Unbounded height layers only (a volume: ParameterError).  One layer: the exact closed
+        form.  Several layers: Newton on ``tau(t) - s`` (``tau' = rho > 0``) started where it converges
         monotonically: at 0 for rays that rise or stay level (``tau`` concave or
         linear), at the upper bound ``min_l t_l`` for descending rays (``tau``
         convex), ``t_l`` being where layer ``l`` alone reaches ``s``.  ``s`` must
         lie in ``[0, tau(t_max)]``.
         """
+        self.require_height_only("invert_optical_depth")
         oy, dy = o[1], d[1]
         hi = ops.minimum(t_max, ops.largest)
         for L in self.layers:

@@ -13,6 +13,7 @@ from __future__ import annotations
 from typing import Any
 
 from fogref.errors import ParameterError
+from fogref.media.local_fog_volume import LocalFogVolume
 from fogref.media.medium import Box, FogMedium
 from fogref.media.phase import TabulatedPhase
 from fogref.media.protocol import PROFILES, number, profile_entry, rgb
@@ -32,7 +33,10 @@ def medium_from_params(params: dict, src: str = "<params>") -> FogMedium:
         ``from_params``), optional ``bounds_min``/``bounds_max`` (points, m) and an
         optional ``phase``: a :class:`~fogref.media.phase.TabulatedPhase` or the dict of a
         ``fogtabphase`` (``cosines``, ``values``: comma-separated, ``label``), which
-        replaces the HG of ``g``.
+        replaces the HG of ``g``; an optional Local Fog Volume, ``lfv_radius`` (required for
+        one) and ``lfv_centre``, ``lfv_density``, ``lfv_falloff``, ``lfv_height``
+        (:meth:`~fogref.media.local_fog_volume.LocalFogVolume.from_params`), whose density
+        adds to the profile's.
         Numbers may be given as strings, RGB values as one number, 3 numbers or
         an XML string ``"r, g, b"``.
     src : str
@@ -93,7 +97,14 @@ def medium_from_params(params: dict, src: str = "<params>") -> FogMedium:
             )
         bounds = entry.parse_bounds(params, src)
     return FogMedium(
-        sigma_t=sigma_t, albedo=albedo, g=g, layers=tuple(layers), bounds=bounds, source=src, phase=phase
+        sigma_t=sigma_t,
+        albedo=albedo,
+        g=g,
+        layers=tuple(layers),
+        bounds=bounds,
+        source=src,
+        phase=phase,
+        volume=LocalFogVolume.from_params(params, src),
     )
 
 

@@ -72,6 +72,7 @@ def single_scatter_sun(
         raise ParameterError(
             medium.source, "bounds", "closed-form single scattering needs an unbounded medium"
         )
+    medium.require_height_only("closed-form single scattering")
     try:
         wy, per_sample = float(w[1]), False
     except (TypeError, RuntimeError):  # one direction per sample: the caller keeps them up
@@ -211,6 +212,7 @@ def sample_sun_single_scatter_mixture(
     :func:`sample_sun_single_scatter` (zero variance without shadows).
     ``u``, ``u_layer``: uniform variates; ``channel`` in {0, 1, 2}, uniform.
     """
+    medium.require_height_only("the sun's mixture sampler")
     wy, w_ = float(w[1]), ops.params(w)
     sig, layers = medium.sigma_t, medium.layers
     sig_p, log_sig = ops.params(sig), ops.params([math.log(max(s, 1e-37)) for s in sig])
@@ -284,8 +286,9 @@ def sun_sampling_mode(medium: Real, w: Real, max_layers: int = 1, mixture: bool 
     """How fogpath samples the sun's single scattering along camera rays (trace-time):
     ``"exact"`` (:func:`sample_sun_single_scatter`: unbounded exponential layers,
     at most ``max_layers``), ``"mixture"`` (:func:`sample_sun_single_scatter_mixture`:
-    bounded fog, more layers, constant layers in a box) or None (NEE only)."""
-    if not medium.scatters:
+    bounded fog, more layers, constant layers in a box) or None (NEE only; a Local Fog
+    Volume, which neither sampler knows)."""
+    if not medium.scatters or medium.volume is not None:
         return None
     if sun_sampling_applies(medium, w, max_layers):
         return "exact"
@@ -305,6 +308,7 @@ def sun_sampling_applies(medium: Real, w: Real, max_layers: int = 1) -> bool:
     """
     return (
         medium.bounds is None
+        and medium.volume is None
         and len(medium.layers) <= max_layers
         and all(isinstance(L, ExpLayer) and L.falloff > 0 for L in medium.layers)
         and float(w[1]) > 0

@@ -47,6 +47,14 @@ computes in float32; ``"float64"`` leaves the packing out.  Not modelled: rotati
 frame is the world's), several volumes, ``r.LocalFogVolume.RenderIntoVolumetricFog``.
 Robustness (deviation): a pixel at the camera has no view direction; its chord is empty.
 
+The truth renders the physical volume (:class:`~fogref.media.local_fog_volume.LocalFogVolume`,
+the ``heightfog`` parameters ``lfv_*``) exactly, its density added to the height fog's.  Against
+it on one scene (``docs/findings.md``, "Unreal's Local Fog Volume against the truth"): with the
+height term saturated the transmittance agrees (+0.2 %, the packing); the coverage product with
+``HeightFogExtinction = 1`` lets 9.9 % more light through than the summed densities; the
+unshadowed light gives +93 % of the truth's single scattering (64 spp, SE 1.2 %) and the missing
+multiple scattering (a third of the truth's inscatter) cancels part of it: +27 % in all.
+
 Examples
 --------
 >>> import numpy as np

@@ -20,6 +20,7 @@ import difflib
 from typing import Any
 
 from fogref.errors import ParameterError
+from fogref.media import local_fog_volume as lfv
 from fogref.media.params import medium_from_params
 from fogref.models.ue4 import (
     CM_PER_M,
@@ -263,8 +264,11 @@ def fog_from_physical(fog: dict | None = None, *, albedo: Any = 0.9, g: float = 
         ``falloff`` [1/m] (0..1e3), ``height`` [m], ``density`` (relative, default 1),
         an optional second layer ``density2`` (relative to ``sigma_t``; 0 = none),
         ``falloff2`` [1/m], ``height2`` [m], and optional box bounds ``bounds_min``,
-        ``bounds_max`` (3 values each [m], both or none). Missing values take the
-        shipped valley's fog (Unreal's FogDensity 0.02, FogHeightFalloff 0.2 at 0 m).
+        ``bounds_max`` (3 values each [m], both or none), and an optional Local Fog Volume:
+        ``lfv_radius`` [m] with ``lfv_centre`` [m], ``lfv_density``, ``lfv_falloff`` [1/m],
+        ``lfv_height`` [m] (:class:`~fogref.media.local_fog_volume.LocalFogVolume`; those not
+        given take its defaults). Missing values take the shipped valley's fog (Unreal's
+        FogDensity 0.02, FogHeightFalloff 0.2 at 0 m).
     albedo : float or 3 floats
         Single-scattering albedo in [0, 1].
     g : float
@@ -328,6 +332,10 @@ def fog_from_physical(fog: dict | None = None, *, albedo: Any = 0.9, g: float = 
             PHYSICAL["bounds_max"].label("bounds_max"),
             f"{out['bounds_max']} must exceed bounds_min {out['bounds_min']} on every axis",
         )
+    if "lfv_radius" in out:  # a volume is written whole (its scene $defaults are one group)
+        whole = lfv.LocalFogVolume(radius=out["lfv_radius"])
+        for name in lfv.PARAMS:
+            out.setdefault(name, check_option(getattr(whole, name[4:]), name, PHYSICAL[name]))
     out["fog_height"] = out.pop("height")
     _check_medium(out)
     return out

@@ -21,6 +21,7 @@ from typing import Any
 
 from fogref import params
 from fogref.errors import ParameterError
+from fogref.media import local_fog_volume as lfv
 
 __all__ = [
     "MAX_DEPTH",
@@ -130,6 +131,13 @@ PHYSICAL = {
     "height2": Range("--height2", "number", -1e7, 1e7, "m"),
     "bounds_min": Range("--bounds-min", "point", -1e7, 1e7, "m"),
     "bounds_max": Range("--bounds-max", "point", -1e7, 1e7, "m"),
+    **{  # a Local Fog Volume (fogref.media.local_fog_volume: its ranges)
+        "lfv_centre": Range("--lfv-centre", "point", -1e7, 1e7, "m"),
+        **{
+            f"lfv_{name}": Range(f"--lfv-{name}", "number", lo, hi, unit or "relative", lo_open=lo_open)
+            for name, lo, lo_open, hi, unit in lfv.RANGES
+        },
+    },
 }
 #: Shared by both fog inputs (Unreal has neither).
 SCATTERING = {
@@ -166,6 +174,8 @@ OPTIONAL_GROUPS = {
     "surface": ("reflectance",),  # one settable diffuse reflectance for all surfaces
     "turbidity": ("turbidity",),  # a sunsky's atmosphere (fogref/render/sunsky.py)
     "sun_size": ("sun_angular_diameter",),  # the sun's angular diameter (0: a delta)
+    # a Local Fog Volume added to the fog (fogref.media.local_fog_volume)
+    "local_fog_volume": lfv.PARAMS,
 }
 #: The kind, range and unit of every vocabulary name, each declared once (the fog's in
 #: :data:`PHYSICAL` and :data:`SCATTERING`).  The options are
@@ -196,6 +206,7 @@ RANGES: dict[str, Range] = {
     "reflectance": Range("--ground-reflectance", "rgb", 0.0, 1.0),
     "turbidity": Range("--turbidity", "number", 1.0, 10.0),
     "sun_angular_diameter": Range("--sun-angular-diameter", "number", 0.0, 10.0, "deg"),
+    **{k: PHYSICAL[k] for k in lfv.PARAMS},
 }
 
 

@@ -114,6 +114,11 @@ FOG_DEFAULTS = (
     ("height2", "float"),
     ("bounds_min", "point"),
     ("bounds_max", "point"),
+    ("lfv_centre", "point"),
+    ("lfv_radius", "float"),
+    ("lfv_density", "float"),
+    ("lfv_falloff", "float"),
+    ("lfv_height", "float"),
 )
 #: The default reflectance of the plane and mesh templates' surfaces (the ``surface`` group's
 #: ``$reflectance``; ``fogref scene --ground-reflectance``, ``--mesh-reflectance``).

@@ -77,6 +77,7 @@ def sun_single_scatter(medium, views: Views, w, E: float = 1.0, t_cap: float = 2
     clamp height (a kink), each integrated with :data:`GL_NODES`-point Gauss-Legendre.
     Checked against the closed form :func:`fogref.media.single_scatter_sun` in the tests.
     """
+    medium.require_height_only("the study's sun quadrature")
     o, d, D = _rays(views)
     n = len(D)
     t0, t1 = medium.clip(NP, o, d)
