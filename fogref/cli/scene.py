@@ -235,6 +235,11 @@ class _Options:
         "camera) instead of the exact fog",
         group=PT,
     )
+    ue_exact: bool = switch(
+        "with --ue-pathtracer: the same fog without the clamp and the cylinder (the physics the path "
+        "tracer approximates: its density, falloffs, heights, albedo and g, unbounded)",
+        group=PT,
+    )
     ue_volumetric_fog_distance: float | None = option(
         None,
         "VolumetricFogDistance: the cylinder's radius [cm], [0.1, 1e9]",
@@ -433,8 +438,9 @@ def run(a, given=frozenset()) -> int:
     pt = None
     if a.ue_pathtracer:
         pt = _pathtracer_settings(pt_given, phys, a)
-    elif pt_given:
-        raise UsageError(f"{SOURCE}: {', '.join(pt_given)}: only with --ue-pathtracer (the path-traced fog)")
+    elif pt_given or a.ue_exact:
+        opts = ", ".join([*pt_given, *(["--ue-exact"] if a.ue_exact else [])])
+        raise UsageError(f"{SOURCE}: {opts}: only with --ue-pathtracer (the path-traced fog)")
     albedo, g, phase, fog_notes = a.albedo, a.g, None, ()
     if a.visibility is not None or a.droplets is not None:
         albedo, g, phase, fog_notes = _droplet_fog(a, phys, ue)
@@ -485,11 +491,12 @@ def run(a, given=frozenset()) -> int:
         on_note=note,
     )
     if pt is not None:
-        from fogref.mapping.unreal_pathtracer import DROPPED, rewrite_scene
+        from fogref.mapping.unreal_pathtracer import DROPPED, exact_fog_params, rewrite_scene
         from fogref.models.ue4 import UE4FogParams
 
-        mapped = {k: v for k, v in ue.items() if k not in UNREAL_IGNORED}
-        rewrite_scene(r.path, r.path, UE4FogParams(**mapped), pt)  # the cylinder follows $camera_origin
+        uf = UE4FogParams(**{k: v for k, v in ue.items() if k not in UNREAL_IGNORED})
+        exact = exact_fog_params(uf, pt) if a.ue_exact else None
+        rewrite_scene(r.path, r.path, uf, pt, params=exact)  # the cylinder follows $camera_origin
         dropped = sorted(k for k in ue if k in DROPPED)
         if dropped:
             note(f"Unreal's path tracer does not use {', '.join(dropped)} (raster-only values)")

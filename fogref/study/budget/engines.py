@@ -21,7 +21,10 @@ from fogref.study.budget.effects import EFFECTS, shapley_parts
 from fogref.study.budget.shapley import BOOTSTRAP_RESAMPLES, shapley_budget
 
 
-def _unreal(params: UE4FogParams, truth: Truth, precision: str, sky_distance: float):
+def unreal_fog(params: UE4FogParams, truth: Truth, precision: str, sky_distance: float):
+    """Unreal's fog of ``params`` on the truth's pixels: ``(T, L)``, each (H, W, 3) float64, the
+    transmittance [1] and the inscatter [radiance]; ``precision`` ``"float32"`` (the shader's
+    arithmetic) or ``"float64"``, sky pixels at ``sky_distance`` [m]."""
     r = UE4ExponentialHeightFog(params).evaluate(truth.camera, truth.world_positions(sky_distance), precision)
     return np.asarray(r.transmittance, np.float64), np.asarray(r.inscatter, np.float64)
 
@@ -58,9 +61,9 @@ def unreal_engine(lobe_params: UE4FogParams, model_params: UE4FogParams):
             lobe_params, model_params, config["refit"], config["start_distance"], config["opacity_cutoff"]
         )
         prec = "float32" if config["float32"] else "float64"
-        T, L = _unreal(p, truth, prec, sky_distance)
+        T, L = unreal_fog(p, truth, prec, sky_distance)
         no_sun = replace(p, DirectionalInscatteringColor=(0.0, 0.0, 0.0))
-        _, L_sky = _unreal(no_sun, truth, prec, sky_distance)
+        _, L_sky = unreal_fog(no_sun, truth, prec, sky_distance)
         return T, L - L_sky, L_sky
 
     return engine

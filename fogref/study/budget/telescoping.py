@@ -17,7 +17,7 @@ from fogref.compare.metrics import mse_noise
 from fogref.gbuffer import Truth
 from fogref.models.ue4 import UE4FogParams
 from fogref.study.budget.effects import STEPS, closed_forms
-from fogref.study.budget.engines import _unreal
+from fogref.study.budget.engines import unreal_fog
 
 
 def _model_configs(lobe_params: UE4FogParams, model_params: UE4FogParams) -> list:
@@ -60,7 +60,7 @@ def chain(
         att + cf["sun_noatt"] + cf["sky"],
     ]
     for p, precision in _model_configs(lobe_params, model_params):
-        Tm, Lm = _unreal(p, truth, precision, sky_distance)
+        Tm, Lm = unreal_fog(p, truth, precision, sky_distance)
         S.append(truth.surface * Tm + Lm)
     return S
 
@@ -80,7 +80,7 @@ def chain_noise(
     """
     se = truth.stderr
     Tms = [
-        _unreal(p, truth, precision, sky_distance)[0]
+        unreal_fog(p, truth, precision, sky_distance)[0]
         for p, precision in _model_configs(lobe_params, model_params)
     ]
     zero = np.zeros(truth.final.shape)
@@ -223,7 +223,7 @@ def what_if(
     se = truth.stderr
 
     def row(params):
-        Tm, Lm = _unreal(params, truth, "float32", sky_distance)
+        Tm, Lm = unreal_fog(params, truth, "float32", sky_distance)
         d = truth.surface * Tm + Lm - truth.final
         return _rmse(d, valid), _noise_fields(d, np.hypot(se["final"], Tm * se["surface"]), valid)
 

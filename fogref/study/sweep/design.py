@@ -122,6 +122,8 @@ def build_configs(spec: SweepSpec) -> list[dict]:
     their parameters, spp, seed and the truth's cache path (in a folder of the
     inputs' hash, so an edited mesh is never served an old truth).
     """
+    if spec.kind == "ue_pathtracer":
+        return [_closed_form_config(spec, pt) for pt in design_points(spec)]
     _sized(spec, len(spec.scenes))
     out = []
     points = design_points(spec)
@@ -188,3 +190,15 @@ def build_configs(spec: SweepSpec) -> list[dict]:
             )
             out.append(cfg)
     return out
+
+
+def _closed_form_config(spec: SweepSpec, point: dict) -> dict:
+    """One configuration of a ``ue_pathtracer`` sweep: its ``values``, the editor values they set
+    (``settings``, scaled) and the sweep's ``closed_form`` table; its ``id`` hashes the last two."""
+    settings = {}
+    for label, v in point.items():
+        p = spec.parameters[label]
+        settings[p["target"]] = v * p["scale"] if p["scale"] != 1.0 else v
+    cfg = {"values": point, "settings": settings, "closed_form": spec.closed_form, "models": spec.models}
+    cfg["id"] = _hash({"settings": settings, "closed_form": spec.closed_form, "fogref": __version__})
+    return cfg

@@ -1,5 +1,6 @@
 """The readers of a sweep file's tables other than ``[parameters.*]``: ``[sweep]``,
-``[render]``, ``[[models]]``, ``[design]``, ``[execution]`` and ``[outputs]``.
+``[render]``, ``[[models]]``, ``[design]``, ``[execution]`` and ``[outputs]``, and those of the
+closed-form kind (``[sweep] kind = "ue_pathtracer"``): ``[fixed]``, ``[sun]`` and ``[views]``.
 
 Each takes the file's path and the parsed TOML and returns the validated fields of
 :class:`~fogref.study.sweep.spec.SweepSpec` it holds; the schema is in
@@ -13,11 +14,23 @@ from pathlib import Path
 
 from fogref import params as P
 from fogref.errors import FogrefError, ParameterError, did_you_mean
+from fogref.mapping.unreal_pathtracer import UEPathTracerSettings, settings_from
 from fogref.models.resolve import resolve_model
+from fogref.models.ue4 import UE4FogParams
 from fogref.render.render import PIXEL_FILTERS
-from fogref.study.sweep.values import _bool, _err, _int, _num, _src, _table, as_str
+from fogref.study.sweep.values import as_str, boolean, integer, number, read_table, sweep_error, table_source
 
 DESIGN_KINDS = ("grid", "list", "random", "lhs")
+#: ``render``: each configuration renders its truth and compares the models; ``ue_pathtracer``: each
+#: compares UE's path-traced fog with the exact fog in closed form
+#: (:func:`fogref.study.ue_pathtracer.closed_form_row`), nothing rendered.
+SWEEP_KINDS = ("render", "ue_pathtracer")
+#: The one "model" of a ``ue_pathtracer`` sweep: the editor values it takes (name -> default), those
+#: of :class:`~fogref.models.ue4.UE4FogParams` and
+#: :class:`~fogref.mapping.unreal_pathtracer.UEPathTracerSettings`.
+UE_PATHTRACER_FIELDS = {
+    f.name: f.default for c in (UE4FogParams, UEPathTracerSettings) for f in dataclasses.fields(c) if f.init
+}
 SEED_POLICIES = ("fixed", "per_config")
 
 
@@ -33,48 +46,104 @@ def _resolve(base: Path, p: str) -> Path:
     return base / q if (base / q).exists() else q
 
 
-def _read_sweep(path: Path, doc: dict) -> dict:
+def read_sweep(path: Path, doc: dict) -> dict:
     """``[sweep]``: name, scene paths (relative to the TOML file, else the working directory), out, cache."""
     base = path.parent
-    sw = _table(path, doc, "sweep", ("name", "scenes", "out", "cache"))
+    sw = read_table(path, doc, "sweep", ("name", "kind", "scenes", "out", "cache"))
     scenes = sw.get("scenes")
     if isinstance(scenes, str):
         scenes = [scenes]
     if not scenes or not all(isinstance(s, str) for s in scenes):
-        raise _err(path, "sweep", "'scenes' must be a non-empty list of scene file paths")
+        raise sweep_error(path, "sweep", "'scenes' must be a non-empty list of scene file paths")
     scene_paths = []
     for s in scenes:
         p = _resolve(base, s)
         if not p.is_file():
-            raise _err(path, "sweep", f"scene '{s}' not found (relative to {base} or the working directory)")
+            raise sweep_error(
+                path, "sweep", f"scene '{s}' not found (relative to {base} or the working directory)"
+            )
         if any(p.resolve() == q.resolve() for q in scene_paths):
-            raise ParameterError(_src(path, "sweep"), "scenes", f"'{s}' is listed twice")
+            raise ParameterError(table_source(path, "sweep"), "scenes", f"'{s}' is listed twice")
         scene_paths.append(p)
-    for k in ("out", "cache"):
-        if k in sw:
-            P.path(sw[k], k, source=_src(path, "sweep"))
-    if "name" in sw and not (isinstance(sw["name"], str) and sw["name"].strip()):
-        raise ParameterError(_src(path, "sweep"), "name", f"{sw['name']!r} is not a non-empty string")
-    out = base / sw["out"] if "out" in sw and not Path(sw["out"]).is_absolute() else Path(sw.get("out", base))
     return {
-        "name": str(sw.get("name", path.stem)),
+        **_name_and_out(path, sw),
         "scenes": scene_paths,
-        "out": out,
         "cache": Path(sw.get("cache", "out/sweep_cache")),
     }
 
 
-def _read_render(path: Path, doc: dict) -> dict:
+def _name_and_out(path: Path, sw: dict) -> dict:
+    """``[sweep]``'s name (default: the file's stem) and output folder (default: the file's)."""
+    for k in ("out", "cache"):
+        if k in sw:
+            P.path(sw[k], k, source=table_source(path, "sweep"))
+    if "name" in sw and not (isinstance(sw["name"], str) and sw["name"].strip()):
+        raise ParameterError(table_source(path, "sweep"), "name", f"{sw['name']!r} is not a non-empty string")
+    base = path.parent
+    out = base / sw["out"] if "out" in sw and not Path(sw["out"]).is_absolute() else Path(sw.get("out", base))
+    return {"name": str(sw.get("name", path.stem)), "out": out}
+
+
+def _numbers(v, name: str, src: str, n: int) -> list[float]:
+    """``n`` finite numbers (a TOML list), else a ParameterError."""
+    if not (isinstance(v, list) and len(v) == n):
+        raise ParameterError(src, name, f"{v!r} is not a list of {n} numbers")
+    return [number(x, name, src) for x in v]
+
+
+def read_closed_form(path: Path, doc: dict) -> dict:
+    """A ``ue_pathtracer`` sweep's ``[sweep]`` (name, out, ``threshold`` in (0, 1e3], default 0.01),
+    ``[fixed]`` (editor values of :data:`UE_PATHTRACER_FIELDS` and ``camera``, 3 numbers [m, y-up]),
+    ``[sun]`` (``direction``: toward the sun, y-up, not zero; absent: no sun) and ``[views]``
+    (``n_dirs``, ``ss_n_dirs`` in [1, 1e6]; ``distances``, ``ss_distances``: ``[start, stop, count]``
+    of a geometric series [m], 0 < start <= stop, count in [1, 1e4]; ``ground`` [m] or absent),
+    as the dict :func:`fogref.study.ue_pathtracer.closed_form_row` takes, under ``closed_form``."""
+    sw = read_table(path, doc, "sweep", ("name", "kind", "out", "threshold"))
+    src = table_source(path, "sweep")
+    thr = number(sw.get("threshold", 0.01), "threshold", src, lo=0.0, hi=1e3, lo_open=True)
+    fixed = dict(read_table(path, doc, "fixed", (*UE_PATHTRACER_FIELDS, "camera")))
+    if "camera" in fixed:
+        fixed["camera"] = _numbers(fixed["camera"], "camera", table_source(path, "fixed"), 3)
+    try:
+        settings_from(**{k: v for k, v in fixed.items() if k != "camera"})
+    except (FogrefError, TypeError, ValueError) as e:
+        raise sweep_error(path, "fixed", str(e).splitlines()[0]) from None
+    sun = read_table(path, doc, "sun", ("direction",)).get("direction")
+    if sun is not None:
+        sun = _numbers(sun, "direction", table_source(path, "sun"), 3)
+        if not any(sun):
+            raise ParameterError(table_source(path, "sun"), "direction", "[0, 0, 0] has no direction")
+    vw = read_table(path, doc, "views", ("n_dirs", "distances", "ss_n_dirs", "ss_distances", "ground"))
+    vsrc = table_source(path, "views")
+    views = {"ground": None if vw.get("ground") is None else number(vw["ground"], "ground", vsrc)}
+    for n_key, d_key, n, d in (
+        ("n_dirs", "distances", 400, [10.0, 2e4, 12]),
+        ("ss_n_dirs", "ss_distances", 64, [30.0, 1e4, 6]),
+    ):
+        views[n_key] = integer(vw.get(n_key, n), n_key, vsrc, lo=1, hi=1_000_000)
+        lo, hi, count = _numbers(vw.get(d_key, d), d_key, vsrc, 3)
+        if not 0 < lo <= hi or count != int(count) or not 1 <= count <= 1e4:
+            raise ParameterError(
+                vsrc, d_key, f"{[lo, hi, count]}: need 0 < start <= stop and count in [1, 1e4]"
+            )
+        views[d_key] = [lo, hi, int(count)]
+    return {
+        **_name_and_out(path, sw),
+        "closed_form": {"fixed": fixed, "sun": sun, "views": views, "threshold": thr},
+    }
+
+
+def read_render(path: Path, doc: dict) -> dict:
     """``[render]``: spp, seed, seed_policy, pixel_filter and the fixed ``$default`` overrides (as text)."""
-    rd = _table(path, doc, "render", ("spp", "seed", "seed_policy", "overrides", "pixel_filter"))
-    src = _src(path, "render")
-    spp = _int(rd.get("spp", 16), "spp", src, lo=1, hi=1 << 20)
-    seed = _int(rd.get("seed", 0), "seed", src, lo=0, hi=(1 << 31) - 1)
+    rd = read_table(path, doc, "render", ("spp", "seed", "seed_policy", "overrides", "pixel_filter"))
+    src = table_source(path, "render")
+    spp = integer(rd.get("spp", 16), "spp", src, lo=1, hi=1 << 20)
+    seed = integer(rd.get("seed", 0), "seed", src, lo=0, hi=(1 << 31) - 1)
     policy = P.choice(rd.get("seed_policy", "fixed"), "seed_policy", SEED_POLICIES, src)
     pixel_filter = P.choice(rd.get("pixel_filter", "centre"), "pixel_filter", PIXEL_FILTERS, src)
     overrides = rd.get("overrides", {})
     if not isinstance(overrides, dict):
-        raise _err(path, "render", "overrides must be a table of $default = value")
+        raise sweep_error(path, "render", "overrides must be a table of $default = value")
     for k, v in overrides.items():
         if isinstance(v, dict):
             raise ParameterError(src, f"overrides.{k}", f"{v!r} is not a value (a number, list or string)")
@@ -92,23 +161,23 @@ def _model_fields(path: Path, key: str, name: str) -> dict:
     try:
         cls = resolve_model(name)
     except FogrefError as e:
-        raise _err(path, key, str(e)) from None
+        raise sweep_error(path, key, str(e)) from None
     pc = getattr(cls, "Params", None)
     if not (isinstance(pc, type) and dataclasses.is_dataclass(pc)):
         return {}
     return {f.name: f.default for f in dataclasses.fields(pc) if f.init}
 
 
-def _model_value(v, name: str, src: str, default):
+def model_value(v, name: str, src: str, default):
     """A model parameter's value: a number where the model's default is a number, else as given."""
     if isinstance(default, (int, float)) and not isinstance(default, bool):
-        return _num(v, name, src)
+        return number(v, name, src)
     if isinstance(default, bool):
-        return _bool(v, name, src)
+        return boolean(v, name, src)
     return v
 
 
-def _model_param_name(name: str, fields: dict, src: str, model: str) -> str:
+def model_param_name(name: str, fields: dict, src: str, model: str) -> str:
     """``name`` if the model has that parameter, else a ParameterError with did-you-mean."""
     if fields and name not in fields:
         raise ParameterError(
@@ -123,78 +192,78 @@ def _model_param_name(name: str, fields: dict, src: str, model: str) -> str:
 def _read_model(path: Path, i: int, m, labels: set) -> dict:
     key = f"models][{i}"
     if not isinstance(m, dict) or "name" not in m:
-        raise _err(
+        raise sweep_error(
             path, key, 'each [[models]] entry needs a \'name\' (a model: "ue4", "my_pkg.fog:MyFog", ...)'
         )
     bad = set(m) - set(_MODEL_KEYS)
     if bad:
-        raise _err(path, key, f"unknown key(s) {sorted(bad)}; allowed: {list(_MODEL_KEYS)}")
+        raise sweep_error(path, key, f"unknown key(s) {sorted(bad)}; allowed: {list(_MODEL_KEYS)}")
     if not isinstance(m["name"], str):
-        raise ParameterError(_src(path, key), "name", f"{m['name']!r} is not a model name (a string)")
+        raise ParameterError(table_source(path, key), "name", f"{m['name']!r} is not a model name (a string)")
     fields = _model_fields(path, key, m["name"])
     # "my_pkg.fog:MyFog" is labelled "MyFog" (a label has no '.')
     label = str(m.get("label", str(m["name"]).rpartition(":")[2]))
     if label in labels or "." in label:
-        raise _err(path, key, f"model label '{label}' must be unique and contain no '.'")
+        raise sweep_error(path, key, f"model label '{label}' must be unique and contain no '.'")
     params = m.get("params", {})
     if not isinstance(params, dict):
-        raise _err(path, key, "params must be a table")
-    src = _src(path, f"models] '{label}' [params")
+        raise sweep_error(path, key, "params must be a table")
+    src = table_source(path, f"models] '{label}' [params")
     params = {
-        k: _model_value(v, _model_param_name(k, fields, src, m["name"]), src, fields.get(k))
+        k: model_value(v, model_param_name(k, fields, src, m["name"]), src, fields.get(k))
         for k, v in params.items()
     }
     return {
         "name": m["name"],
         "label": label,
-        "from_scene": _bool(m.get("from_scene", True), "from_scene", _src(path, key)),
+        "from_scene": boolean(m.get("from_scene", True), "from_scene", table_source(path, key)),
         "params": params,
         "fields": fields,
     }
 
 
-def _read_models(path: Path, doc: dict) -> list[dict]:
+def read_models(path: Path, doc: dict) -> list[dict]:
     """``[[models]]``: at least one; each name resolvable, each label unique, each parameter the model's."""
     models = doc.get("models", [])
     if not isinstance(models, list) or not models:
-        raise _err(path, "models", "need at least one [[models]] entry with a 'name'")
+        raise sweep_error(path, "models", "need at least one [[models]] entry with a 'name'")
     out: list[dict] = []
     for i, m in enumerate(models):
         out.append(_read_model(path, i, m, {x["label"] for x in out}))
     return out
 
 
-def _read_design(path: Path, doc: dict) -> dict:
+def read_design(path: Path, doc: dict) -> dict:
     """``[design]``: kind (grid, list, random, lhs), n (random and lhs), seed, max_configs."""
-    dz = _table(path, doc, "design", ("kind", "n", "seed", "max_configs"))
-    src = _src(path, "design")
+    dz = read_table(path, doc, "design", ("kind", "n", "seed", "max_configs"))
+    src = table_source(path, "design")
     kind = P.choice(dz.get("kind", "grid"), "kind", DESIGN_KINDS, src)
-    limit = _int(dz.get("max_configs", MAX_CONFIGS), "max_configs", src, lo=1)
+    limit = integer(dz.get("max_configs", MAX_CONFIGS), "max_configs", src, lo=1)
     n = dz.get("n")
     if kind in ("random", "lhs"):
         if n is None:
             raise ParameterError(
                 src, "n", f"kind '{kind}' needs n = the number of configurations, in [1, {limit}]"
             )
-        n = _int(n, "n", src, lo=1, hi=limit)
+        n = integer(n, "n", src, lo=1, hi=limit)
     return {
         "kind": kind,
         "n": n,
-        "seed": _int(dz.get("seed", 0), "seed", src, lo=0, hi=(1 << 32) - 1),
+        "seed": integer(dz.get("seed", 0), "seed", src, lo=0, hi=(1 << 32) - 1),
         "max_configs": limit,
     }
 
 
-def _read_execution(path: Path, doc: dict) -> dict:
+def read_execution(path: Path, doc: dict) -> dict:
     """``[execution]``: Dask retries of a failing configuration."""
-    retries = _table(path, doc, "execution", ("retries",)).get("retries", 1)
-    return {"retries": _int(retries, "retries", _src(path, "execution"), lo=0, hi=100)}
+    retries = read_table(path, doc, "execution", ("retries",)).get("retries", 1)
+    return {"retries": integer(retries, "retries", table_source(path, "execution"), lo=0, hi=100)}
 
 
-def _read_outputs(path: Path, doc: dict, out: Path) -> dict:
+def read_outputs(path: Path, doc: dict, out: Path) -> dict:
     """``[outputs]``: table name (inside the output folder), plots, plotted metrics, Unreal budget columns."""
-    ou = _table(path, doc, "outputs", ("table", "plots", "plot_metrics", "budget"))
-    src = _src(path, "outputs")
+    ou = read_table(path, doc, "outputs", ("table", "plots", "plot_metrics", "budget"))
+    src = table_source(path, "outputs")
     table = ou.get("table", "results")
     if not isinstance(table, str) or not table.strip():
         raise ParameterError(src, "table", f"{table!r} is not a file name")
@@ -212,7 +281,7 @@ def _read_outputs(path: Path, doc: dict, out: Path) -> dict:
         raise ParameterError(src, "plot_metrics", f"{metrics!r} is not a list of metric names")
     return {
         "table": table,
-        "plots": _bool(ou.get("plots", True), "plots", src),
+        "plots": boolean(ou.get("plots", True), "plots", src),
         "plot_metrics": metrics,
-        "budget": _bool(ou.get("budget", False), "budget", src),
+        "budget": boolean(ou.get("budget", False), "budget", src),
     }

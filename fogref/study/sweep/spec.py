@@ -13,20 +13,25 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from fogref import params as P
 from fogref.errors import FogrefError
-from fogref.study.sweep.parameters import _read_parameters, design_size
+from fogref.mapping.unreal_pathtracer import settings_from
+from fogref.study.sweep.parameters import design_size, read_parameters
 from fogref.study.sweep.sections import (
     DESIGN_KINDS,
     MAX_CONFIGS,
     SEED_POLICIES,
-    _read_design,
-    _read_execution,
-    _read_models,
-    _read_outputs,
-    _read_render,
-    _read_sweep,
+    SWEEP_KINDS,
+    UE_PATHTRACER_FIELDS,
+    read_closed_form,
+    read_design,
+    read_execution,
+    read_models,
+    read_outputs,
+    read_render,
+    read_sweep,
 )
-from fogref.study.sweep.values import _err, as_str
+from fogref.study.sweep.values import as_str, sweep_error, table_source
 
 try:
     import tomllib  # Python >= 3.11
@@ -35,7 +40,11 @@ except ImportError:  # pragma: no cover
 
 __all__ = ["DESIGN_KINDS", "MAX_CONFIGS", "SEED_POLICIES", "SweepSpec", "as_str", "design_size", "load_sweep"]
 
-_TOP_KEYS = {"sweep", "render", "design", "parameters", "models", "execution", "outputs"}
+#: The tables of a sweep file, per ``[sweep] kind``.
+_TOP_KEYS = {
+    "render": {"sweep", "render", "design", "parameters", "models", "execution", "outputs"},
+    "ue_pathtracer": {"sweep", "fixed", "sun", "views", "design", "parameters", "execution", "outputs"},
+}
 
 
 class SweepSpec:
@@ -85,10 +94,26 @@ def _read_toml(path: Path) -> dict:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as e:
         raise FogrefError(f"{path}: not valid TOML ({e})") from None
-    unknown = set(doc) - _TOP_KEYS
-    if unknown:
-        raise _err(path, None, f"unknown table(s) {sorted(unknown)}; allowed: {sorted(_TOP_KEYS)}")
     return doc
+
+
+def _kind(path: Path, doc: dict) -> str:
+    """``[sweep] kind`` (:data:`SWEEP_KINDS`, default ``render``), the file's tables checked against it."""
+    sw = doc.get("sweep", {})
+    kind = P.choice(
+        sw.get("kind", "render") if isinstance(sw, dict) else "render",
+        "kind",
+        SWEEP_KINDS,
+        table_source(path, "sweep"),
+    )
+    unknown = set(doc) - _TOP_KEYS[kind]
+    if unknown:
+        raise sweep_error(
+            path,
+            None,
+            f"unknown table(s) {sorted(unknown)} for kind '{kind}'; allowed: {sorted(_TOP_KEYS[kind])}",
+        )
+    return kind
 
 
 def load_sweep(path) -> SweepSpec:
@@ -118,20 +143,61 @@ def load_sweep(path) -> SweepSpec:
     """
     path = Path(path)
     doc = _read_toml(path)
-    sweep = _read_sweep(path, doc)
-    render = _read_render(path, doc)
-    models = _read_models(path, doc)
-    design = _read_design(path, doc)
-    parameters = _read_parameters(path, doc, sweep["scenes"], models, design, render["overrides"])
+    if _kind(path, doc) == "ue_pathtracer":
+        return _closed_form_sweep(path, doc)
+    sweep = read_sweep(path, doc)
+    render = read_render(path, doc)
+    models = read_models(path, doc)
+    design = read_design(path, doc)
+    parameters = read_parameters(path, doc, sweep["scenes"], models, design, render["overrides"])
     for m in models:
         del m["fields"]
     return SweepSpec(
         path=path,
+        kind="render",
         **sweep,
         **render,
         parameters=parameters,
         design=design,
         models=models,
-        **_read_execution(path, doc),
-        **_read_outputs(path, doc, sweep["out"]),
+        **read_execution(path, doc),
+        **read_outputs(path, doc, sweep["out"]),
+    )
+
+
+def _closed_form_sweep(path: Path, doc: dict) -> SweepSpec:
+    """A ``ue_pathtracer`` sweep: no scene and no render; its parameters are the editor values of its
+    one model, ``ue_pathtracer`` (:data:`~fogref.study.sweep.sections.UE_PATHTRACER_FIELDS`), each value
+    checked by the settings themselves."""
+    cf = read_closed_form(path, doc)
+    fixed = {k: v for k, v in cf["closed_form"]["fixed"].items() if k != "camera"}
+    model = {"name": "ue_pathtracer", "label": "ue_pathtracer", "from_scene": False, "params": fixed}
+    design = read_design(path, doc)
+    parameters = read_parameters(
+        path, doc, [], [{**model, "fields": UE_PATHTRACER_FIELDS}], design, {}, default_model="ue_pathtracer"
+    )
+    for label, p in parameters.items():
+        for v in p.get("values", p.get("range", [])):
+            try:
+                settings_from(**fixed, **{p["target"]: v * p["scale"]})
+            except (FogrefError, TypeError, ValueError) as e:
+                raise sweep_error(path, f"parameters.{label}", f"value {v!r} refused: {e}") from None
+    return SweepSpec(
+        path=path,
+        kind="ue_pathtracer",
+        name=cf["name"],
+        out=cf["out"],
+        closed_form=cf["closed_form"],
+        scenes=[],
+        cache=None,
+        spp=0,
+        seed=0,
+        seed_policy="fixed",
+        pixel_filter="centre",
+        overrides={},
+        parameters=parameters,
+        design=design,
+        models=[model],
+        **read_execution(path, doc),
+        **read_outputs(path, doc, cf["out"]),
     )

@@ -67,15 +67,24 @@ def set_aside_result(path, why: str) -> Path:
 
 def _rows_of(cfg: dict, result: dict) -> list[dict]:
     """Table rows of one configuration's result file."""
+    scene = cfg.get("scene")  # a closed-form configuration has none
     base = {
         "config_id": cfg["id"],
-        "scene": Path(cfg["scene"]).name,
-        "scene_path": cfg["scene"],
-        "scene_sha256": cfg["scene_sha256"],
+        **(
+            {"scene": Path(scene).name, "scene_path": scene, "scene_sha256": cfg["scene_sha256"]}
+            if scene
+            else {}
+        ),
         **{k: v for k, v in cfg["values"].items()},
-        "overrides": json.dumps(cfg["overrides"], sort_keys=True),
-        "spp": cfg["spp"],
-        "seed": cfg["seed"],
+        **(
+            {
+                "overrides": json.dumps(cfg["overrides"], sort_keys=True),
+                "spp": cfg["spp"],
+                "seed": cfg["seed"],
+            }
+            if scene
+            else {}
+        ),
     }
     for k, v in list(base.items()):
         if isinstance(v, (list, dict)):
@@ -88,7 +97,7 @@ def _rows_of(cfg: dict, result: dict) -> list[dict]:
                 "model_name": m["name"],
                 "status": "error",
                 "error": result["error"],
-                "truth_path": cfg["truth"],
+                "truth_path": cfg.get("truth", ""),
             }
             for m in cfg["models"]
         ]

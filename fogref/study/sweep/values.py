@@ -11,7 +11,8 @@ from fogref import params as P
 from fogref.errors import FogrefError, ParameterError, did_you_mean
 
 
-def _err(path, key, msg) -> FogrefError:
+def sweep_error(path, key, msg) -> FogrefError:
+    """The one-line error of a sweep file: ``"SWEEP.toml: [key]: msg"`` (no key: the file alone)."""
     return FogrefError(f"{path}: [{key}]: {msg}" if key else f"{path}: {msg}")
 
 
@@ -30,7 +31,7 @@ def as_str(v) -> str:
     return str(v)
 
 
-def _src(path, key) -> str:
+def table_source(path, key) -> str:
     """The source named in a ParameterError: ``"SWEEP.toml: [render]"``."""
     return f"{path}: [{key}]"
 
@@ -43,29 +44,32 @@ def _typed(v, name: str, src: str, what: str = "a number"):
     return v
 
 
-def _num(v, name: str, src: str, **kw) -> float:
+def number(v, name: str, src: str, **kw) -> float:
     """A TOML number through :func:`fogref.params.number`."""
     return P.number(_typed(v, name, src), name, source=src, **kw)
 
 
-def _int(v, name: str, src: str, **kw) -> int:
+def integer(v, name: str, src: str, **kw) -> int:
     """A TOML integer through :func:`fogref.params.integer`."""
     return P.integer(_typed(v, name, src, "an integer"), name, source=src, **kw)
 
 
-def _bool(v, name: str, src: str) -> bool:
+def boolean(v, name: str, src: str) -> bool:
+    """A TOML boolean (``true``/``false``), else a ParameterError naming ``src`` and ``name``."""
     if not isinstance(v, bool):
         raise ParameterError(src, name, f"{v!r} is not true or false")
     return v
 
 
-def _table(path: Path, doc: dict, name: str, allowed) -> dict:
+def read_table(path: Path, doc: dict, name: str, allowed) -> dict:
+    """The table ``[name]`` of the parsed file ``doc`` (``{}`` if absent), refused when it is not a
+    table or has a key outside ``allowed`` (with did-you-mean)."""
     t = doc.get(name, {})
     if not isinstance(t, dict):
-        raise _err(path, name, "must be a table")
+        raise sweep_error(path, name, "must be a table")
     bad = set(t) - set(allowed)
     if bad:
-        raise _err(
+        raise sweep_error(
             path,
             name,
             f"unknown key(s) {sorted(bad)}{did_you_mean(sorted(bad)[0], allowed)}; "
