@@ -61,14 +61,14 @@ def test_scene_renders_the_path_traced_fog(tmp_path, capsys):
 
 
 def test_ue_exact_writes_the_fog_without_clamp_and_cylinder(tmp_path):
-    """``--ue-pathtracer --ue-exact``: the medium holds :func:`exact_fog_params` of the same values
+    """``--ue-exact``: the medium holds :func:`exact_fog_params` of the Unreal and path-tracer values
     (profile exponential, no clamp, no cylinder), to the written digits."""
     import xml.etree.ElementTree as ET
 
     from fogref.mapping.unreal_pathtracer import exact_fog_params
 
     xml = tmp_path / "exact.xml"
-    assert main(["scene", "--out", str(xml), "--ue-pathtracer", "--ue-exact", *UE, *PT]) == 0
+    assert main(["scene", "--out", str(xml), "--ue-exact", *UE, *PT]) == 0
     medium = next(m for m in ET.parse(xml).getroot().iter("medium"))
     got = {e.get("name"): e.get("value") for e in medium if e.get("name")}
     ue = UE4FogParams(FogDensity=0.05, FogHeightFalloff=2.0, FogHeight=2000.0)
@@ -90,8 +90,12 @@ def test_ue_exact_writes_the_fog_without_clamp_and_cylinder(tmp_path):
 @pytest.mark.parametrize(
     "extra, words",
     [
-        (["--ue-fog-density-clamp", "4"], ["--ue-fog-density-clamp", "only with --ue-pathtracer"]),
-        (["--ue-exact"], ["--ue-exact", "only with --ue-pathtracer"]),
+        (
+            ["--ue-fog-density-clamp", "4"],
+            ["--ue-fog-density-clamp", "only with --ue-pathtracer or --ue-exact"],
+        ),
+        (["--ue-exact", "--visibility", "500"], ["--visibility", "--ue-exact"]),
+        (["--ue-exact", "--g", "0.5"], ["--ue-pathtracer", "--g"]),
         (["--ue-pathtracer", "--sigma-t", "0.01"], ["--ue-pathtracer", "--sigma-t"]),
         (["--ue-pathtracer", "--g", "0.5"], ["--ue-pathtracer", "--g"]),
         (["--ue-pathtracer", "--ue-fog-density-clamp", "400"], ["--ue-fog-density-clamp", "[1, 256]"]),

@@ -39,8 +39,10 @@ ss_n_dirs = 6
 ss_distances = [30.0, 300.0, 2]
 ground = 0.0
 [parameters.VolumetricFogDistance]
+target = "ue_pathtracer.VolumetricFogDistance"
 values = [3000.0, 100000.0]
 [parameters.FogDensityClamp]
+target = "ue_pathtracer.FogDensityClamp"
 values = [1.0, 256.0]
 [outputs]
 plots = false
@@ -123,8 +125,8 @@ def test_a_tiny_sweep_runs_on_the_cluster_and_resumes(tmp_path):
         (("distances = [10.0, 1000.0, 3]", "distances = [10.0, 1.0, 3]"), ["[views]", "distances"]),
         (("direction = [0.0, 0.5, 1.0]", "direction = [0, 0, 0]"), ["[sun]", "direction"]),
         (
-            ("[parameters.FogDensityClamp]", "[parameters.FogDensityClamps]"),
-            ["FogDensityClamps", "did you mean"],
+            ('"ue_pathtracer.FogDensityClamp"', '"ue_pathtracer.FogDensityClamps"'),
+            ["FogDensityClamps", "did you mean 'FogDensityClamp'"],
         ),
     ],
 )

@@ -236,7 +236,7 @@ class _Options:
         group=PT,
     )
     ue_exact: bool = switch(
-        "with --ue-pathtracer: the same fog without the clamp and the cylinder (the physics the path "
+        "as --ue-pathtracer, but the same fog without the clamp and the cylinder (the physics the path "
         "tracer approximates: its density, falloffs, heights, albedo and g, unbounded)",
         group=PT,
     )
@@ -436,11 +436,10 @@ def run(a, given=frozenset()) -> int:
         )
     pt_given = {opt: getattr(a, _dest(opt)) for opt in PT_OPTIONS if getattr(a, _dest(opt)) is not None}
     pt = None
-    if a.ue_pathtracer:
+    if a.ue_pathtracer or a.ue_exact:
         pt = _pathtracer_settings(pt_given, phys, a)
-    elif pt_given or a.ue_exact:
-        opts = ", ".join([*pt_given, *(["--ue-exact"] if a.ue_exact else [])])
-        raise UsageError(f"{SOURCE}: {opts}: only with --ue-pathtracer (the path-traced fog)")
+    elif pt_given:
+        raise UsageError(f"{SOURCE}: {', '.join(pt_given)}: only with --ue-pathtracer or --ue-exact")
     albedo, g, phase, fog_notes = a.albedo, a.g, None, ()
     if a.visibility is not None or a.droplets is not None:
         albedo, g, phase, fog_notes = _droplet_fog(a, phys, ue)
@@ -510,9 +509,8 @@ def _droplet_fog(a, phys: dict, ue: dict) -> tuple:
     from fogref.mapping.droplet_fog import droplet_fog
 
     clash = ["--sigma-t"] if "sigma_t" in phys else []
-    clash += sorted(_ue_option(k) for k in _flat_unreal(ue)) + (
-        ["--ue-pathtracer"] if a.ue_pathtracer else []
-    )
+    clash += sorted(_ue_option(k) for k in _flat_unreal(ue))
+    clash += [f"--{k.replace('_', '-')}" for k in ("ue_pathtracer", "ue_exact") if getattr(a, k)]
     if a.droplets is not None:
         clash += [opt for opt, v in (("--albedo", a.albedo), ("--g", a.g)) if v is not None]
     if clash:
@@ -556,7 +554,7 @@ def _pathtracer_settings(given: dict, phys: dict, a) -> object:
     clash += [opt for opt, v in (("--albedo", a.albedo), ("--g", a.g)) if v is not None]
     if clash:
         raise UsageError(
-            f"{SOURCE}: --ue-pathtracer takes the fog as Unreal values (its albedo and g are "
+            f"{SOURCE}: --ue-pathtracer and --ue-exact take the fog as Unreal values (its albedo and g are "
             "--ue-volumetric-fog-albedo and --ue-volumetric-fog-scattering-distribution), "
             f"not {', '.join(clash)}"
         )

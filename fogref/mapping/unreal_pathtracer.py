@@ -252,20 +252,11 @@ def exact_medium(ue: UE4FogParams, pt: UEPathTracerSettings) -> FogMedium:
     >>> m.bounds, len(m.layers), round(m.layers[0].falloff, 9)
     (None, 1, 0.013862944)
     """
-    (s0, b0, h0), (s1, b1, h1) = pathtracer_layers(ue, pt)
-    ref = max(s0, s1)
-    if ref <= 0:
-        return FogMedium(
-            sigma_t=0.0,
-            albedo=pt.VolumetricFogAlbedo,
-            g=pt.g,
-            layers=(ExpLayer(),),
-            source="<unreal_pathtracer exact>",
-        )
-    layers = tuple(ExpLayer(s / ref, b, h) for s, b, h in ((s0, b0, h0), (s1, b1, h1)) if s > 0)
-    return FogMedium(
-        sigma_t=ref, albedo=pt.VolumetricFogAlbedo, g=pt.g, layers=layers, source="<unreal_pathtracer exact>"
-    )
+    specs = pathtracer_layers(ue, pt)
+    ref = max(s for s, _, _ in specs)
+    layers = tuple(ExpLayer(s / ref, b, h) for s, b, h in specs if s > 0) if ref > 0 else (ExpLayer(),)
+    src = "<unreal_pathtracer exact>"
+    return FogMedium(sigma_t=max(ref, 0.0), albedo=pt.VolumetricFogAlbedo, g=pt.g, layers=layers, source=src)
 
 
 def exact_fog_params(ue: UE4FogParams, pt: UEPathTracerSettings) -> dict:

@@ -5,14 +5,13 @@ sees three things mixed: the raster approximations, the path tracer's own fog (i
 density clamp and camera-centred cylinder, :mod:`fogref.media.ue_pathtracer`) and
 the path tracer's noise.  This module separates them with fogref:
 
-* :func:`render_split`: one scene rendered twice by fogref's render driver and cache
-  (:func:`fogref.render.cache.render_cached`: UE's path-traced fog, and the exact fog with the
-  same physical inputs but no clamp and no cylinder:
+* :func:`render_split`: one scene rendered twice through fogref's render cache (UE's path-traced
+  fog, and the exact fog with the same physical inputs but no clamp and no cylinder:
   :func:`fogref.mapping.unreal_pathtracer.exact_medium`) plus Unreal's raster fog
   (:mod:`fogref.models.ue4`, float64) composited over the first render's surface.
   Two signed differences telescope, ``raster - exact = (raster - PT) + (PT - exact)``;
-  each gets its RMSE and its Monte Carlo noise (the truths' per-pixel covariances through
-  fogref's one noise model, :func:`fogref.compare.metrics.mse_noise`: :func:`split_stats`).
+  each gets its RMSE and its Monte Carlo noise (:func:`split_stats`: the truths' covariances
+  through :func:`fogref.compare.metrics.mse_noise`).
 * :func:`closed_form_split`: the same split on the transmittance (exact per ray in
   all three fogs: no noise) and on the sun's single scattering (Gauss-Legendre
   quadrature along each ray of closed-form transmittances: :func:`sun_single_scatter`),
@@ -30,7 +29,6 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -60,7 +58,6 @@ __all__ = [
     "SECTION_BEGIN",
     "SECTION_END",
     "SPLIT_ROWS",
-    "SplitStats",
     "closed_form_row",
     "closed_form_split",
     "departure_row",
@@ -76,13 +73,6 @@ GL_NODES = 16
 GL_PANELS = 48
 
 
-def _rays(views: Views):
-    o = tuple(np.full(len(views.D), c) for c in views.camera)
-    d = tuple(views.d[:, i] for i in range(3))
-    D = np.where(views.sky, NP.largest, views.D)
-    return o, d, D
-
-
 def sun_single_scatter(medium, views: Views, w, E: float = 1.0, t_cap: float = 2.0e5) -> np.ndarray:
     """Grey sun single scattering ``int sigma rho alpha p E T(0,t) T_sun(t) dt`` per view, by
     quadrature of closed-form transmittances (any medium, bounded or not; channel 0).
@@ -92,7 +82,7 @@ def sun_single_scatter(medium, views: Views, w, E: float = 1.0, t_cap: float = 2
     clamp height (a kink), each integrated with :data:`GL_NODES`-point Gauss-Legendre.
     Checked against the closed form :func:`fogref.media.single_scatter_sun` in the tests.
     """
-    o, d, D = _rays(views)
+    o, d, D = views.rays()
     n = len(D)
     t0, t1 = medium.clip(NP, o, d)
     t0 = np.broadcast_to(np.asarray(t0, dtype=float), (n,))
@@ -134,12 +124,6 @@ def sun_single_scatter(medium, views: Views, w, E: float = 1.0, t_cap: float = 2
     return np.where(ok & (w[1] > 0), out, 0.0)
 
 
-def _raster_T(ue: UE4FogParams, views: Views) -> np.ndarray:
-    fog = UE4ExponentialHeightFog(ue)
-    r = fog.evaluate(views.camera, views.world_positions(SKY_DISTANCE), "float64")
-    return np.asarray(r.transmittance, dtype=float)[:, 0]
-
-
 def closed_form_split(
     ue: UE4FogParams,
     pt: UEPathTracerSettings,
@@ -158,17 +142,18 @@ def closed_form_split(
     """
     views = views or sample_views(camera)
     m_pt, m_ex = pathtracer_medium(ue, pt, camera), exact_medium(ue, pt)
-    o, d, D = _rays(views)
+    o, d, D = views.rays()
+    raster = (views.camera, views.world_positions(SKY_DISTANCE))
     out: dict[str, Any] = {
         "views": views,
         "radius_m": m_pt.bounds.radius,
-        "T_raster": _raster_T(ue, views),
+        "T_raster": np.asarray(UE4ExponentialHeightFog(ue).evaluate(*raster, "float64").transmittance)[:, 0],
         "T_pt": m_pt.transmittance(NP, o, d, D)[0],
         "T_exact": m_ex.transmittance(NP, o, d, D)[0],
     }
     if sun is not None:
         sv = ss_views or views
-        so, sd, sD = _rays(sv)
+        so, sd, sD = sv.rays()
         out["ss_pt"] = sun_single_scatter(m_pt, sv, sun)
         out["ss_exact"] = single_scatter_sun(NP, m_ex, so, sd, sD, tuple(sun), (1.0, 1.0, 1.0))[0]
         out["ss_views"] = sv
@@ -214,44 +199,31 @@ def _nearest(views: Views, over: np.ndarray) -> float | None:
 
 
 # -- renders -----------------------------------------------------------------------
-@dataclass
-class SplitStats:
-    """One signed difference image's size and its Monte Carlo noise (over the valid pixels), on the
-    scale of the image (the square roots of :func:`fogref.compare.metrics.mse_noise`'s MSEs).
+def split_stats(diff: np.ndarray, cov: np.ndarray, mask: np.ndarray | None = None, spp: int = 0) -> dict:
+    """One signed difference image's size and its Monte Carlo noise, on the image's scale: the
+    square roots of :func:`fogref.compare.metrics.mse_noise`'s MSEs for ``diff`` (H, W, 3) whose noise
+    has the per-pixel covariance ``cov`` (H, W, 3, 3) [image units²] from ``spp`` samples per pixel
+    (0: exact), over the pixels of ``mask`` (H, W) (default all; none: all 0, below the noise).
 
-    rmse: RMSE of the difference; noise_floor: the RMSE that noise alone gives (root of the
-    mean of the per-pixel variances); debiased: ``sqrt(max(rmse^2 - noise_floor^2, 0))``,
-    the difference's size without the noise; below_noise: the MSE is within
-    :data:`fogref.compare.metrics.NOISE_Z` standard errors of the noise floor (a perfect
-    candidate's standard error, the channels' full covariance).
-    """
-
-    rmse: float
-    noise_floor: float
-    below_noise: bool
-    debiased: float = 0.0
-
-
-def split_stats(
-    diff: np.ndarray, cov: np.ndarray, mask: np.ndarray | None = None, spp: int = 0
-) -> SplitStats:
-    """:class:`SplitStats` of a difference image ``diff`` (H, W, 3) whose noise has the per-pixel
-    covariance ``cov`` (H, W, 3, 3) [image units²], estimated from ``spp`` samples per pixel
-    (0: exact), over the pixels of ``mask`` (H, W) (default all; none: all zero, below the noise).
+    ``rmse``; ``noise_floor``: the RMSE noise alone gives (root of the mean variance); ``debiased``:
+    ``sqrt(max(rmse² - noise_floor², 0))``; ``below_noise``: the MSE is within
+    :data:`fogref.compare.metrics.NOISE_Z` standard errors of the floor (the channels' full covariance).
 
     Examples
     --------
     >>> s = split_stats(np.full((2, 2, 3), 0.1), np.broadcast_to(np.eye(3) * 1e-4, (2, 2, 3, 3)))
-    >>> round(s.rmse, 6), round(s.noise_floor, 6), s.below_noise, round(s.debiased, 4)
+    >>> round(s["rmse"], 6), round(s["noise_floor"], 6), s["below_noise"], round(s["debiased"], 4)
     (0.1, 0.01, False, 0.0995)
     """
-    cov = np.asarray(cov, dtype=float)
     m = mse_noise(diff, np.sqrt(np.diagonal(cov, axis1=-2, axis2=-1)), mask, cov=cov, spp=spp)
     if m is None:
-        return SplitStats(0.0, 0.0, True, 0.0)
-    return SplitStats(
-        math.sqrt(m["mse"]), math.sqrt(m["noise_floor"]), m["below_noise"], math.sqrt(m["debiased"])
-    )
+        return {"rmse": 0.0, "noise_floor": 0.0, "debiased": 0.0, "below_noise": True}
+    return {
+        "rmse": math.sqrt(m["mse"]),
+        "noise_floor": math.sqrt(m["noise_floor"]),
+        "debiased": math.sqrt(m["debiased"]),
+        "below_noise": m["below_noise"],
+    }
 
 
 def render_split(
@@ -266,9 +238,8 @@ def render_split(
     """Render ``scene_xml`` with UE's path-traced fog and with the exact fog, and split
     ``raster - exact`` into ``raster - PT`` and ``PT - exact`` (final radiance, RGB).
 
-    Both renders are pixel-exact truths of fogref's render cache in ``out_dir``
-    (:func:`fogref.render.cache.render_cached`: a second call with the same inputs renders
-    nothing).  The raster image is Unreal's fog (float64, ``ue``'s colours) over the PT
+    Both renders are pixel-exact truths of :func:`fogref.render.cache.render_cached` in ``out_dir``
+    (a second call renders nothing).  The raster image is Unreal's fog (float64, ``ue``'s colours) over the PT
     truth's ``surface`` (:func:`fogref.study.budget.engines.unreal_fog`):
     ``surface T_raster + inscatter_raster``.  Noise: the PT truth's covariance of R,G,B
     (raster - PT; the raster part's own noise, through ``surface``, is neglected: stated in
@@ -328,18 +299,16 @@ def split_section(split: dict, ue: UE4FogParams, pt: UEPathTracerSettings, spp: 
         SECTION_BEGIN,
         "## What a UE user sees: raster EHF, UE's path-traced fog, the exact fog",
         "",
-        f"Final radiance (RGB), fogpath at {spp} spp; noise: the renders' per-pixel standard errors "
-        "(fogref.study.ue_pathtracer.split_study).",
+        f"Final radiance (RGB), fogpath at {spp} spp; noise: the renders' per-pixel covariances; below the "
+        "noise: within 3 standard errors of the noise floor (fogref.study.ue_pathtracer.split_study).",
         "",
         "| difference | RMSE | noise floor | RMSE without noise | below the noise | what it is |",
         "|---|---|---|---|---|---|",
     ]
     for key, name, what in SPLIT_ROWS:
         st = split[key]
-        below = "yes" if st.below_noise else "no"
-        lines.append(
-            f"| {name} | {st.rmse:.3g} | {st.noise_floor:.3g} | {st.debiased:.3g} | {below} | {what} |"
-        )
+        sizes = " | ".join(f"{st[k]:.3g}" for k in ("rmse", "noise_floor", "debiased"))
+        lines.append(f"| {name} | {sizes} | {'yes' if st['below_noise'] else 'no'} | {what} |")
     lines += [
         "",
         f"Path tracer: density clamp {pt.density_clamp:g} (r.PathTracing.FogDensityClamp), cylinder radius "
@@ -416,15 +385,7 @@ def split_study(
             "g": pt.g,
         },
         "raster": {"FogDensity": ue.FogDensity, "FogHeightFalloff": ue.FogHeightFalloff},
-        **{
-            key: {
-                "rmse": split[key].rmse,
-                "noise_floor": split[key].noise_floor,
-                "debiased": split[key].debiased,
-                "below_noise": bool(split[key].below_noise),
-            }
-            for key, _, _ in SPLIT_ROWS
-        },
+        **{key: split[key] for key, _, _ in SPLIT_ROWS},
         "notes": split["notes"],
     }
     write_text_atomic(out / "ue_pathtracer_split.json", json.dumps(doc, indent=2) + "\n")
@@ -438,25 +399,12 @@ def split_study(
 
 
 # -- the closed-form sweep ----------------------------------------------------------------
-def _grounded(views: Views, ground: float | None) -> Views:
-    """``views`` with every downward ray stopped at the plane ``y = ground`` [m] (None: no ground)."""
-    if ground is None:
-        return views
-    dy = views.d[:, 1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t_g = np.where(dy < 0, (float(ground) - views.camera[1]) / dy, np.inf)
-    return Views(views.camera, views.d, np.minimum(views.D, np.where(t_g > 0, t_g, np.inf)))
-
-
 def closed_form_row(values: dict, spec: dict) -> dict:
-    """One configuration of the closed-form sweep (``[sweep] kind = "ue_pathtracer"`` of
-    :mod:`fogref.study.sweep`): :func:`departure_row` of :func:`closed_form_split` for the editor
-    values ``values`` over ``spec["fixed"]`` (:func:`~fogref.mapping.unreal_pathtracer.settings_from`;
-    ``camera`` [m, y-up], default 2 m up), plus ``departs``: either departure over
-    ``spec["threshold"]``.  ``spec["views"]``: ``n_dirs`` Fibonacci directions x
-    ``geomspace(*distances)`` [m] for the opacity, ``ss_n_dirs`` x ``ss_distances`` for the sun's
-    single scattering (``spec["sun"]``: toward the sun, normalised here; None: none), downward rays
-    stopped at ``ground`` [m] (None: no ground).
+    """One configuration of a closed-form sweep (``[sweep] kind = "ue_pathtracer"``; ``spec``: its
+    tables, :func:`fogref.study.sweep.sections.read_closed_form`): :func:`departure_row` of
+    :func:`closed_form_split` for the editor values ``values`` over ``spec["fixed"]``, on
+    ``n_dirs`` Fibonacci directions x ``geomspace(*distances)`` [m] (the sun's single scattering:
+    ``ss_n_dirs`` x ``ss_distances``), plus ``departs``: either departure over ``spec["threshold"]``.
 
     Examples
     --------
@@ -473,12 +421,10 @@ def closed_form_row(values: dict, spec: dict) -> dict:
     camera = tuple(kw.pop("camera", (0.0, 2.0, 0.0)))
     v, thr, sun = spec["views"], float(spec["threshold"]), spec.get("sun")
     sun = None if sun is None else tuple(np.asarray(sun, float) / np.linalg.norm(sun))
-    views = sample_views(camera, n_dirs=int(v["n_dirs"]), distances=np.geomspace(*v["distances"]))
-    ss = sample_views(camera, n_dirs=int(v["ss_n_dirs"]), distances=np.geomspace(*v["ss_distances"]))
-    ue, pt = settings_from(**kw)
-    split = closed_form_split(
-        ue, pt, camera, _grounded(views, v.get("ground")), sun, _grounded(ss, v.get("ground"))
+    views, ss = (
+        sample_views(camera, int(v[k + "n_dirs"]), np.geomspace(*v[k + "distances"]), ground=v.get("ground"))
+        for k in ("", "ss_")
     )
-    row = departure_row(split, thr)
+    row = departure_row(closed_form_split(*settings_from(**kw), camera, views, sun, ss), thr)
     row["departs"] = bool(row["opacity_rel_max"] > thr or (row.get("sun_ss_rel_max") or 0.0) > thr)
     return row

@@ -37,7 +37,7 @@ from fogref.mapping import PhysicalScene, fit_unreal
 from fogref.mapping.build import build_model
 from fogref.render.cache import render_cached
 from fogref.render.render import file_sha256
-from fogref.render.scene_defaults import overrides_used_by as used
+from fogref.render.scene_defaults import overrides_used_by
 from fogref.shipped_scenes import SCENES_DIR, scene_label
 from fogref.study import budget as B
 from fogref.study.unreal_report import readme
@@ -116,23 +116,6 @@ def sunless_scene(scene: Path, out_dir: Path) -> Path:
     return out
 
 
-def overrides_used_by(scene: Path, overrides: dict | None) -> dict:
-    """The overrides whose ``$name`` the scene file uses.
-
-    A sun-less copy (:func:`sunless_scene`) no longer uses the sun's ``$defaults``
-    (``sun_elevation``, ...); Mitsuba refuses overrides a scene does not use, so the
-    budget's sun-less renders get only the others.
-
-    >>> import tempfile, pathlib
-    >>> p = pathlib.Path(tempfile.mkdtemp()) / "s.xml"
-    >>> _ = p.write_text('<scene><float name="g" value="$g"/><float name="x" value="$sun"/></scene>')
-    >>> overrides_used_by(p, {"g": 0.5, "sun_elevation": 4, "sun": 1})
-    {'g': 0.5, 'sun': 1}
-    """
-
-    return used(scene, overrides)
-
-
 def _render_cached(
     scene: Path, out: Path, spp: int, seed: int, overrides: dict, log, pixel_filter: str = "centre"
 ) -> Path:
@@ -174,8 +157,7 @@ def open_plane_check(scene: Path, rdir: Path, log, spp: int = 64, res=(160, 90))
 
 
 def truth_overrides(truth: Truth) -> dict:
-    """The ``--set`` overrides the truth was rendered with (its header's ``fogref.overrides``), as text
-    keys; FogrefError when that attribute is not a JSON object."""
+    """The truth's ``--set`` overrides (header ``fogref.overrides``); FogrefError if not an object."""
     ov = truth.attrs.get("fogref.overrides") or {}
     if not isinstance(ov, dict):
         raise FogrefError(f"{truth.path}: header attribute 'fogref.overrides' is not a JSON object: {ov!r}")

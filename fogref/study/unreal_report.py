@@ -1,7 +1,5 @@
-"""The README of ``fogref study``'s report folder: the headline numbers of the fit, the comparison
-and the error budget, in Markdown, generated from the data (:func:`readme`), and the shell
-commands that rebuild the truth and the study (:func:`reproduce_command`).
-"""
+"""The README of ``fogref study``'s report folder (:func:`readme`: the fit, the comparison and the
+error budget, from the data) and the commands that rebuild the study (:func:`reproduce_command`)."""
 
 from __future__ import annotations
 

@@ -193,12 +193,9 @@ def build_configs(spec: SweepSpec) -> list[dict]:
 
 
 def _closed_form_config(spec: SweepSpec, point: dict) -> dict:
-    """One configuration of a ``ue_pathtracer`` sweep: its ``values``, the editor values they set
-    (``settings``, scaled) and the sweep's ``closed_form`` table; its ``id`` hashes the last two."""
-    settings = {}
-    for label, v in point.items():
-        p = spec.parameters[label]
-        settings[p["target"]] = v * p["scale"] if p["scale"] != 1.0 else v
+    """A ``ue_pathtracer`` configuration: its values, the editor values they set, ``closed_form``."""
+    ps = spec.parameters
+    settings = {ps[k]["target"]: v * ps[k]["scale"] if ps[k]["scale"] != 1.0 else v for k, v in point.items()}
     cfg = {"values": point, "settings": settings, "closed_form": spec.closed_form, "models": spec.models}
     cfg["id"] = _hash({"settings": settings, "closed_form": spec.closed_form, "fogref": __version__})
     return cfg

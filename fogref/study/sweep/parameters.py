@@ -18,7 +18,7 @@ from fogref.errors import FogrefError, ParameterError, did_you_mean
 from fogref.render.scene import describe_scene
 from fogref.render.scene_defaults import declared
 from fogref.study.sweep.sections import model_param_name, model_value
-from fogref.study.sweep.values import as_str, boolean, integer, number, sweep_error, table_source
+from fogref.study.sweep.values import as_str, boolean, err, integer, number, src_of
 
 _PARAMETER_KEYS = ("log", "num", "range", "scale", "target", "values")
 
@@ -30,13 +30,13 @@ def _spaced(lo, hi, num, log):
 
 def _parameter_target(path: Path, key: str, target, scene_names: set, models: dict) -> dict:
     """A scene ``$default`` every scene declares, or ``<model label>.<parameter>`` of a listed model."""
-    src = table_source(path, key)
+    src = src_of(path, key)
     if not isinstance(target, str) or not target:
         raise ParameterError(src, "target", f"{target!r} is not a $default or '<model>.<parameter>' name")
     if "." in target:
         mlabel, mparam = target.split(".", 1)
         if mlabel not in models:
-            raise sweep_error(
+            raise err(
                 path,
                 key,
                 f"'{target}': model label '{mlabel}' is not a [[models]] label; "
@@ -45,7 +45,7 @@ def _parameter_target(path: Path, key: str, target, scene_names: set, models: di
         model_param_name(mparam, models[mlabel]["fields"], src, models[mlabel]["name"])
         return {"kind": "model", "model": mlabel, "target": mparam}
     if target not in scene_names:
-        raise sweep_error(
+        raise err(
             path,
             key,
             f"'{target}' is not a $default of every scene{did_you_mean(target, scene_names)}; "
@@ -61,7 +61,7 @@ def _distinct(path: Path, key: str, vals: list, what: str) -> None:
         k = as_str(v)
         if k in seen:
             raise ParameterError(
-                table_source(path, key),
+                src_of(path, key),
                 what,
                 f"{v!r} is given twice ({vals!r}); "
                 "each value must be distinct (a repeated value repeats the same render)",
@@ -72,22 +72,22 @@ def _distinct(path: Path, key: str, vals: list, what: str) -> None:
 def _parameter_values(path: Path, key: str, spec: dict, design: dict) -> dict:
     """``values`` (a list of distinct values), or ``range`` [low, high] with ``log`` (and ``num`` points
     on a grid or list)."""
-    src = table_source(path, key)
+    src = src_of(path, key)
     kind = design["kind"]
     if "values" in spec:
         vals = spec["values"]
         if not isinstance(vals, list) or not vals:
-            raise sweep_error(path, key, "values must be a non-empty list")
+            raise err(path, key, "values must be a non-empty list")
         if any(isinstance(v, dict) for v in vals):
             raise ParameterError(src, "values", f"{vals!r}: each value must be a number, list or string")
         if kind != "list":  # a zipped list may repeat one parameter's value; its rows are checked later
             _distinct(path, key, vals, "values")
         return {"values": vals}
     if "range" not in spec:
-        raise sweep_error(path, key, "give 'values' (a list) or 'range' ([low, high])")
+        raise err(path, key, "give 'values' (a list) or 'range' ([low, high])")
     r = spec["range"]
     if not (isinstance(r, list) and len(r) == 2):
-        raise sweep_error(path, key, f"range must be [low, high], got {r!r}")
+        raise err(path, key, f"range must be [low, high], got {r!r}")
     lo, hi = (number(x, "range", src) for x in r)
     log = boolean(spec.get("log", False), "log", src)
     if not lo < hi or (log and lo <= 0):
@@ -95,29 +95,26 @@ def _parameter_values(path: Path, key: str, spec: dict, design: dict) -> dict:
     out = {"range": [lo, hi], "log": log}
     if kind in ("grid", "list"):
         if "num" not in spec:
-            raise sweep_error(path, key, f"a range in a '{kind}' design needs num = number of points")
+            raise err(path, key, f"a range in a '{kind}' design needs num = number of points")
         num = integer(spec["num"], "num", src, lo=1, hi=design["max_configs"])
         out["values"] = _spaced(lo, hi, num, log)
     return out
 
 
-def _read_parameter(
-    path: Path, label: str, spec, scene_names: set, models: dict, design: dict, default_model: str | None
-) -> dict:
+def _read_parameter(path: Path, label: str, spec, scene_names: set, models: dict, design: dict) -> dict:
     key = f"parameters.{label}"
     if not isinstance(spec, dict):
-        raise sweep_error(path, key, "must be a table with 'values' or 'range'")
+        raise err(path, key, "must be a table with 'values' or 'range'")
     bad = set(spec) - set(_PARAMETER_KEYS)
     if bad:
-        raise sweep_error(
+        raise err(
             path,
             key,
             f"unknown key(s) {sorted(bad)}{did_you_mean(sorted(bad)[0], _PARAMETER_KEYS)}; "
             f"allowed: {list(_PARAMETER_KEYS)}",
         )
-    default = label if default_model is None else f"{default_model}.{label}"
-    ps = _parameter_target(path, key, spec.get("target", default), scene_names, models)
-    src = table_source(path, key)
+    ps = _parameter_target(path, key, spec.get("target", label), scene_names, models)
+    src = src_of(path, key)
     ps["scale"] = number(spec.get("scale", 1.0), "scale", src)
     if ps["scale"] == 0:
         raise ParameterError(src, "scale", "0 maps every value to 0: must be a finite number other than 0")
@@ -157,7 +154,7 @@ def _check_targets(path: Path, params: dict, overrides: dict, models: dict) -> N
         t = p["target"] if p["kind"] == "scene" else f"{p['model']}.{p['target']}"
         if t in seen:
             raise ParameterError(
-                table_source(path, f"parameters.{label}"),
+                src_of(path, f"parameters.{label}"),
                 "target",
                 f"'{t}' is also swept by [parameters.{seen[t]}]: two labels of one "
                 "parameter would record values the render never used; keep one",
@@ -165,13 +162,13 @@ def _check_targets(path: Path, params: dict, overrides: dict, models: dict) -> N
         seen[t] = label
         if p["kind"] == "scene" and p["target"] in overrides:
             raise ParameterError(
-                table_source(path, f"parameters.{label}"),
+                src_of(path, f"parameters.{label}"),
                 "target",
                 f"'{t}' is swept here and fixed in [render].overrides; remove one",
             )
         if p["kind"] == "model" and p["target"] in models[p["model"]]["params"]:
             raise ParameterError(
-                table_source(path, f"parameters.{label}"),
+                src_of(path, f"parameters.{label}"),
                 "target",
                 f"'{t}' is swept here and fixed in the [[models]] '{p['model']}' params; remove one",
             )
@@ -183,7 +180,7 @@ def _check_size(path: Path, design: dict, params: dict, scenes: list) -> int:
     if kind == "list" and params:
         lens = {len(p["values"]) for p in params.values()}
         if len(lens) > 1:
-            raise sweep_error(
+            raise err(
                 path,
                 "design",
                 f"kind 'list' zips the parameters' values: their lengths differ ({sorted(lens)})",
@@ -192,7 +189,7 @@ def _check_size(path: Path, design: dict, params: dict, scenes: list) -> int:
     limit = design["max_configs"]
     if size > limit:
         raise ParameterError(
-            table_source(path, "design"),
+            src_of(path, "design"),
             "size",
             f"the {kind} design has {size:.4g} configurations ({len(scenes)} scene(s)); "
             f"the limit is {limit} (raise it with [design] max_configs = N)",
@@ -215,7 +212,7 @@ def _check_scene_values(path: Path, scenes: list, overrides: dict, params: dict)
         try:
             describe_scene(scene, overrides)
         except FogrefError as e:
-            raise sweep_error(path, "render", f"overrides: {str(e).splitlines()[0]}") from None
+            raise err(path, "render", f"overrides: {str(e).splitlines()[0]}") from None
         for label, p in params.items():
             if p["kind"] != "scene":
                 continue
@@ -225,30 +222,23 @@ def _check_scene_values(path: Path, scenes: list, overrides: dict, params: dict)
                 try:
                     describe_scene(scene, {**overrides, p["target"]: as_str(value)})
                 except FogrefError as e:
-                    raise sweep_error(
+                    raise err(
                         path, f"parameters.{label}", f"value {v!r} refused: {str(e).splitlines()[0]}"
                     ) from None
 
 
 def read_parameters(
-    path: Path,
-    doc: dict,
-    scenes: list[Path],
-    models: list,
-    design: dict,
-    overrides: dict,
-    default_model: str | None = None,
+    path: Path, doc: dict, scenes: list[Path], models: list, design: dict, overrides: dict
 ) -> dict:
     """``[parameters.LABEL]``: what each swept parameter sets and its values, checked
-    (see :func:`load_sweep`).  A label's target is the label itself (a scene ``$default``), or
-    ``<default_model>.<label>`` when ``default_model`` is given (a sweep without scenes)."""
+    (see :func:`load_sweep`)."""
     params = doc.get("parameters", {})
     if not isinstance(params, dict):
-        raise sweep_error(path, "parameters", "must be a table of [parameters.NAME] tables")
+        raise err(path, "parameters", "must be a table of [parameters.NAME] tables")
     scene_names = set.intersection(*(set(declared(p)) for p in scenes)) if scenes else set()
     by_label = {m["label"]: m for m in models}
     out = {
-        label: _read_parameter(path, label, spec, scene_names, by_label, design, default_model)
+        label: _read_parameter(path, label, spec, scene_names, by_label, design)
         for label, spec in params.items()
     }
     _check_targets(path, out, overrides, by_label)

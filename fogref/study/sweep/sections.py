@@ -18,16 +18,11 @@ from fogref.mapping.unreal_pathtracer import UEPathTracerSettings, settings_from
 from fogref.models.resolve import resolve_model
 from fogref.models.ue4 import UE4FogParams
 from fogref.render.render import PIXEL_FILTERS
-from fogref.study.sweep.values import as_str, boolean, integer, number, read_table, sweep_error, table_source
+from fogref.study.sweep.values import as_str, boolean, err, integer, number, read_table, src_of
 
 DESIGN_KINDS = ("grid", "list", "random", "lhs")
-#: ``render``: each configuration renders its truth and compares the models; ``ue_pathtracer``: each
-#: compares UE's path-traced fog with the exact fog in closed form
-#: (:func:`fogref.study.ue_pathtracer.closed_form_row`), nothing rendered.
-SWEEP_KINDS = ("render", "ue_pathtracer")
-#: The one "model" of a ``ue_pathtracer`` sweep: the editor values it takes (name -> default), those
-#: of :class:`~fogref.models.ue4.UE4FogParams` and
-#: :class:`~fogref.mapping.unreal_pathtracer.UEPathTracerSettings`.
+#: The editor values (name -> default) of a ``ue_pathtracer`` sweep's one "model": the fields
+#: of :class:`~fogref.models.ue4.UE4FogParams` and ``fogref.mapping.unreal_pathtracer.UEPathTracerSettings``.
 UE_PATHTRACER_FIELDS = {
     f.name: f.default for c in (UE4FogParams, UEPathTracerSettings) for f in dataclasses.fields(c) if f.init
 }
@@ -54,16 +49,14 @@ def read_sweep(path: Path, doc: dict) -> dict:
     if isinstance(scenes, str):
         scenes = [scenes]
     if not scenes or not all(isinstance(s, str) for s in scenes):
-        raise sweep_error(path, "sweep", "'scenes' must be a non-empty list of scene file paths")
+        raise err(path, "sweep", "'scenes' must be a non-empty list of scene file paths")
     scene_paths = []
     for s in scenes:
         p = _resolve(base, s)
         if not p.is_file():
-            raise sweep_error(
-                path, "sweep", f"scene '{s}' not found (relative to {base} or the working directory)"
-            )
+            raise err(path, "sweep", f"scene '{s}' not found (relative to {base} or the working directory)")
         if any(p.resolve() == q.resolve() for q in scene_paths):
-            raise ParameterError(table_source(path, "sweep"), "scenes", f"'{s}' is listed twice")
+            raise ParameterError(src_of(path, "sweep"), "scenes", f"'{s}' is listed twice")
         scene_paths.append(p)
     return {
         **_name_and_out(path, sw),
@@ -76,74 +69,67 @@ def _name_and_out(path: Path, sw: dict) -> dict:
     """``[sweep]``'s name (default: the file's stem) and output folder (default: the file's)."""
     for k in ("out", "cache"):
         if k in sw:
-            P.path(sw[k], k, source=table_source(path, "sweep"))
+            P.path(sw[k], k, source=src_of(path, "sweep"))
     if "name" in sw and not (isinstance(sw["name"], str) and sw["name"].strip()):
-        raise ParameterError(table_source(path, "sweep"), "name", f"{sw['name']!r} is not a non-empty string")
+        raise ParameterError(src_of(path, "sweep"), "name", f"{sw['name']!r} is not a non-empty string")
     base = path.parent
     out = base / sw["out"] if "out" in sw and not Path(sw["out"]).is_absolute() else Path(sw.get("out", base))
     return {"name": str(sw.get("name", path.stem)), "out": out}
 
 
-def _numbers(v, name: str, src: str, n: int) -> list[float]:
-    """``n`` finite numbers (a TOML list), else a ParameterError."""
-    if not (isinstance(v, list) and len(v) == n):
-        raise ParameterError(src, name, f"{v!r} is not a list of {n} numbers")
-    return [number(x, name, src) for x in v]
+def ue_settings(path: Path, key: str, values: dict, value=None) -> None:
+    """Refuse, naming the table ``key`` (and the swept ``value``), editor values that the settings
+    themselves refuse (:func:`~fogref.mapping.unreal_pathtracer.settings_from`)."""
+    try:
+        settings_from(**values)
+    except (FogrefError, TypeError, ValueError) as e:
+        why = str(e).splitlines()[0]
+        raise err(path, key, why if value is None else f"value {value!r} refused: {why}") from None
 
 
 def read_closed_form(path: Path, doc: dict) -> dict:
     """A ``ue_pathtracer`` sweep's ``[sweep]`` (name, out, ``threshold`` in (0, 1e3], default 0.01),
-    ``[fixed]`` (editor values of :data:`UE_PATHTRACER_FIELDS` and ``camera``, 3 numbers [m, y-up]),
+    ``[fixed]`` (editor values of :data:`UE_PATHTRACER_FIELDS`; ``camera``: 3 numbers [m, y-up]),
     ``[sun]`` (``direction``: toward the sun, y-up, not zero; absent: no sun) and ``[views]``
     (``n_dirs``, ``ss_n_dirs`` in [1, 1e6]; ``distances``, ``ss_distances``: ``[start, stop, count]``
-    of a geometric series [m], 0 < start <= stop, count in [1, 1e4]; ``ground`` [m] or absent),
+    of a geometric series [m], 0 < start <= stop, a whole count >= 1; ``ground`` [m] or absent),
     as the dict :func:`fogref.study.ue_pathtracer.closed_form_row` takes, under ``closed_form``."""
     sw = read_table(path, doc, "sweep", ("name", "kind", "out", "threshold"))
-    src = table_source(path, "sweep")
-    thr = number(sw.get("threshold", 0.01), "threshold", src, lo=0.0, hi=1e3, lo_open=True)
+    thr = number(sw.get("threshold", 0.01), "threshold", src_of(path, "sweep"), lo=0.0, hi=1e3, lo_open=True)
     fixed = dict(read_table(path, doc, "fixed", (*UE_PATHTRACER_FIELDS, "camera")))
-    if "camera" in fixed:
-        fixed["camera"] = _numbers(fixed["camera"], "camera", table_source(path, "fixed"), 3)
-    try:
-        settings_from(**{k: v for k, v in fixed.items() if k != "camera"})
-    except (FogrefError, TypeError, ValueError) as e:
-        raise sweep_error(path, "fixed", str(e).splitlines()[0]) from None
+    fixed["camera"] = list(
+        P.vector(fixed.get("camera", [0.0, 2.0, 0.0]), "camera", source=src_of(path, "fixed"))
+    )
+    ue_settings(path, "fixed", {k: v for k, v in fixed.items() if k != "camera"})
     sun = read_table(path, doc, "sun", ("direction",)).get("direction")
-    if sun is not None:
-        sun = _numbers(sun, "direction", table_source(path, "sun"), 3)
-        if not any(sun):
-            raise ParameterError(table_source(path, "sun"), "direction", "[0, 0, 0] has no direction")
+    if sun is not None and not any(sun := list(P.vector(sun, "direction", source=src_of(path, "sun")))):
+        raise ParameterError(src_of(path, "sun"), "direction", "[0, 0, 0] has no direction")
     vw = read_table(path, doc, "views", ("n_dirs", "distances", "ss_n_dirs", "ss_distances", "ground"))
-    vsrc = table_source(path, "views")
-    views = {"ground": None if vw.get("ground") is None else number(vw["ground"], "ground", vsrc)}
-    for n_key, d_key, n, d in (
-        ("n_dirs", "distances", 400, [10.0, 2e4, 12]),
-        ("ss_n_dirs", "ss_distances", 64, [30.0, 1e4, 6]),
-    ):
-        views[n_key] = integer(vw.get(n_key, n), n_key, vsrc, lo=1, hi=1_000_000)
-        lo, hi, count = _numbers(vw.get(d_key, d), d_key, vsrc, 3)
-        if not 0 < lo <= hi or count != int(count) or not 1 <= count <= 1e4:
+    vs = src_of(path, "views")
+    views = {"ground": None if vw.get("ground") is None else number(vw["ground"], "ground", vs)}
+    for k, n, d in (("", 400, [10.0, 2e4, 12]), ("ss_", 64, [30.0, 1e4, 6])):
+        views[k + "n_dirs"] = integer(vw.get(k + "n_dirs", n), k + "n_dirs", vs, lo=1, hi=1_000_000)
+        lo, hi, count = P.vector(vw.get(k + "distances", d), k + "distances", source=vs)
+        if not (0 < lo <= hi and count == int(count) >= 1):
             raise ParameterError(
-                vsrc, d_key, f"{[lo, hi, count]}: need 0 < start <= stop and count in [1, 1e4]"
+                vs, k + "distances", f"{[lo, hi, count]}: need 0 < start <= stop, count >= 1"
             )
-        views[d_key] = [lo, hi, int(count)]
-    return {
-        **_name_and_out(path, sw),
-        "closed_form": {"fixed": fixed, "sun": sun, "views": views, "threshold": thr},
-    }
+        views[k + "distances"] = [lo, hi, int(count)]
+    cf = {"fixed": fixed, "sun": sun, "views": views, "threshold": thr}
+    return {**_name_and_out(path, sw), "closed_form": cf}
 
 
 def read_render(path: Path, doc: dict) -> dict:
     """``[render]``: spp, seed, seed_policy, pixel_filter and the fixed ``$default`` overrides (as text)."""
     rd = read_table(path, doc, "render", ("spp", "seed", "seed_policy", "overrides", "pixel_filter"))
-    src = table_source(path, "render")
+    src = src_of(path, "render")
     spp = integer(rd.get("spp", 16), "spp", src, lo=1, hi=1 << 20)
     seed = integer(rd.get("seed", 0), "seed", src, lo=0, hi=(1 << 31) - 1)
     policy = P.choice(rd.get("seed_policy", "fixed"), "seed_policy", SEED_POLICIES, src)
     pixel_filter = P.choice(rd.get("pixel_filter", "centre"), "pixel_filter", PIXEL_FILTERS, src)
     overrides = rd.get("overrides", {})
     if not isinstance(overrides, dict):
-        raise sweep_error(path, "render", "overrides must be a table of $default = value")
+        raise err(path, "render", "overrides must be a table of $default = value")
     for k, v in overrides.items():
         if isinstance(v, dict):
             raise ParameterError(src, f"overrides.{k}", f"{v!r} is not a value (a number, list or string)")
@@ -161,7 +147,7 @@ def _model_fields(path: Path, key: str, name: str) -> dict:
     try:
         cls = resolve_model(name)
     except FogrefError as e:
-        raise sweep_error(path, key, str(e)) from None
+        raise err(path, key, str(e)) from None
     pc = getattr(cls, "Params", None)
     if not (isinstance(pc, type) and dataclasses.is_dataclass(pc)):
         return {}
@@ -192,23 +178,23 @@ def model_param_name(name: str, fields: dict, src: str, model: str) -> str:
 def _read_model(path: Path, i: int, m, labels: set) -> dict:
     key = f"models][{i}"
     if not isinstance(m, dict) or "name" not in m:
-        raise sweep_error(
+        raise err(
             path, key, 'each [[models]] entry needs a \'name\' (a model: "ue4", "my_pkg.fog:MyFog", ...)'
         )
     bad = set(m) - set(_MODEL_KEYS)
     if bad:
-        raise sweep_error(path, key, f"unknown key(s) {sorted(bad)}; allowed: {list(_MODEL_KEYS)}")
+        raise err(path, key, f"unknown key(s) {sorted(bad)}; allowed: {list(_MODEL_KEYS)}")
     if not isinstance(m["name"], str):
-        raise ParameterError(table_source(path, key), "name", f"{m['name']!r} is not a model name (a string)")
+        raise ParameterError(src_of(path, key), "name", f"{m['name']!r} is not a model name (a string)")
     fields = _model_fields(path, key, m["name"])
     # "my_pkg.fog:MyFog" is labelled "MyFog" (a label has no '.')
     label = str(m.get("label", str(m["name"]).rpartition(":")[2]))
     if label in labels or "." in label:
-        raise sweep_error(path, key, f"model label '{label}' must be unique and contain no '.'")
+        raise err(path, key, f"model label '{label}' must be unique and contain no '.'")
     params = m.get("params", {})
     if not isinstance(params, dict):
-        raise sweep_error(path, key, "params must be a table")
-    src = table_source(path, f"models] '{label}' [params")
+        raise err(path, key, "params must be a table")
+    src = src_of(path, f"models] '{label}' [params")
     params = {
         k: model_value(v, model_param_name(k, fields, src, m["name"]), src, fields.get(k))
         for k, v in params.items()
@@ -216,7 +202,7 @@ def _read_model(path: Path, i: int, m, labels: set) -> dict:
     return {
         "name": m["name"],
         "label": label,
-        "from_scene": boolean(m.get("from_scene", True), "from_scene", table_source(path, key)),
+        "from_scene": boolean(m.get("from_scene", True), "from_scene", src_of(path, key)),
         "params": params,
         "fields": fields,
     }
@@ -226,7 +212,7 @@ def read_models(path: Path, doc: dict) -> list[dict]:
     """``[[models]]``: at least one; each name resolvable, each label unique, each parameter the model's."""
     models = doc.get("models", [])
     if not isinstance(models, list) or not models:
-        raise sweep_error(path, "models", "need at least one [[models]] entry with a 'name'")
+        raise err(path, "models", "need at least one [[models]] entry with a 'name'")
     out: list[dict] = []
     for i, m in enumerate(models):
         out.append(_read_model(path, i, m, {x["label"] for x in out}))
@@ -236,7 +222,7 @@ def read_models(path: Path, doc: dict) -> list[dict]:
 def read_design(path: Path, doc: dict) -> dict:
     """``[design]``: kind (grid, list, random, lhs), n (random and lhs), seed, max_configs."""
     dz = read_table(path, doc, "design", ("kind", "n", "seed", "max_configs"))
-    src = table_source(path, "design")
+    src = src_of(path, "design")
     kind = P.choice(dz.get("kind", "grid"), "kind", DESIGN_KINDS, src)
     limit = integer(dz.get("max_configs", MAX_CONFIGS), "max_configs", src, lo=1)
     n = dz.get("n")
@@ -257,13 +243,13 @@ def read_design(path: Path, doc: dict) -> dict:
 def read_execution(path: Path, doc: dict) -> dict:
     """``[execution]``: Dask retries of a failing configuration."""
     retries = read_table(path, doc, "execution", ("retries",)).get("retries", 1)
-    return {"retries": integer(retries, "retries", table_source(path, "execution"), lo=0, hi=100)}
+    return {"retries": integer(retries, "retries", src_of(path, "execution"), lo=0, hi=100)}
 
 
 def read_outputs(path: Path, doc: dict, out: Path) -> dict:
     """``[outputs]``: table name (inside the output folder), plots, plotted metrics, Unreal budget columns."""
     ou = read_table(path, doc, "outputs", ("table", "plots", "plot_metrics", "budget"))
-    src = table_source(path, "outputs")
+    src = src_of(path, "outputs")
     table = ou.get("table", "results")
     if not isinstance(table, str) or not table.strip():
         raise ParameterError(src, "table", f"{table!r} is not a file name")

@@ -15,13 +15,11 @@ from pathlib import Path
 
 from fogref import params as P
 from fogref.errors import FogrefError
-from fogref.mapping.unreal_pathtracer import settings_from
 from fogref.study.sweep.parameters import design_size, read_parameters
 from fogref.study.sweep.sections import (
     DESIGN_KINDS,
     MAX_CONFIGS,
     SEED_POLICIES,
-    SWEEP_KINDS,
     UE_PATHTRACER_FIELDS,
     read_closed_form,
     read_design,
@@ -30,8 +28,9 @@ from fogref.study.sweep.sections import (
     read_outputs,
     read_render,
     read_sweep,
+    ue_settings,
 )
-from fogref.study.sweep.values import as_str, sweep_error, table_source
+from fogref.study.sweep.values import as_str, err, src_of
 
 try:
     import tomllib  # Python >= 3.11
@@ -41,10 +40,11 @@ except ImportError:  # pragma: no cover
 __all__ = ["DESIGN_KINDS", "MAX_CONFIGS", "SEED_POLICIES", "SweepSpec", "as_str", "design_size", "load_sweep"]
 
 #: The tables of a sweep file, per ``[sweep] kind``.
-_TOP_KEYS = {
-    "render": {"sweep", "render", "design", "parameters", "models", "execution", "outputs"},
-    "ue_pathtracer": {"sweep", "fixed", "sun", "views", "design", "parameters", "execution", "outputs"},
-}
+#: ``render``: each configuration renders its truth and compares the models; ``ue_pathtracer``: each
+#: compares UE's path-traced fog with the exact fog in closed form, nothing rendered
+#: (:func:`fogref.study.ue_pathtracer.closed_form_row`; ``[fixed]``, ``[sun]``, ``[views]``).
+_TOP_KEYS = {"render": {"sweep", "render", "design", "parameters", "models", "execution", "outputs"}}
+_TOP_KEYS["ue_pathtracer"] = _TOP_KEYS["render"] - {"render", "models"} | {"fixed", "sun", "views"}
 
 
 class SweepSpec:
@@ -54,8 +54,9 @@ class SweepSpec:
     ----------
     path : Path
         The TOML file.
-    name : str
-        The sweep's name.
+    name, kind : str
+        The sweep's name; ``render`` or ``ue_pathtracer`` (closed form: ``closed_form`` holds its
+        ``fixed``, ``sun``, ``views`` and ``threshold``; no scenes, cache, spp, seed or seed policy).
     scenes : list of Path
         Scene files.
     out, cache : Path
@@ -87,33 +88,22 @@ class SweepSpec:
         self.__dict__.update(kw)
 
 
-def _read_toml(path: Path) -> dict:
+def _read_toml(path: Path) -> tuple[dict, str]:
+    """The parsed file and its ``[sweep] kind`` (a key of ``_TOP_KEYS``, default ``render``), its
+    tables checked against the kind's."""
     if not path.is_file():
         raise FogrefError(f"{path}: no such sweep file")
     try:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as e:
         raise FogrefError(f"{path}: not valid TOML ({e})") from None
-    return doc
-
-
-def _kind(path: Path, doc: dict) -> str:
-    """``[sweep] kind`` (:data:`SWEEP_KINDS`, default ``render``), the file's tables checked against it."""
-    sw = doc.get("sweep", {})
-    kind = P.choice(
-        sw.get("kind", "render") if isinstance(sw, dict) else "render",
-        "kind",
-        SWEEP_KINDS,
-        table_source(path, "sweep"),
-    )
-    unknown = set(doc) - _TOP_KEYS[kind]
-    if unknown:
-        raise sweep_error(
-            path,
-            None,
-            f"unknown table(s) {sorted(unknown)} for kind '{kind}'; allowed: {sorted(_TOP_KEYS[kind])}",
-        )
-    return kind
+    sw = doc["sweep"] if isinstance(doc.get("sweep"), dict) else {}
+    kind = P.choice(sw.get("kind", "render"), "kind", tuple(_TOP_KEYS), src_of(path, "sweep"))
+    allowed = _TOP_KEYS[kind]
+    if set(doc) - allowed:
+        bad = sorted(set(doc) - allowed)
+        raise err(path, None, f"unknown table(s) {bad} for kind '{kind}'; allowed: {sorted(allowed)}")
+    return doc, kind
 
 
 def load_sweep(path) -> SweepSpec:
@@ -142,8 +132,8 @@ def load_sweep(path) -> SweepSpec:
         pixel filter or model.
     """
     path = Path(path)
-    doc = _read_toml(path)
-    if _kind(path, doc) == "ue_pathtracer":
+    doc, kind = _read_toml(path)
+    if kind == "ue_pathtracer":
         return _closed_form_sweep(path, doc)
     sweep = read_sweep(path, doc)
     render = read_render(path, doc)
@@ -166,35 +156,21 @@ def load_sweep(path) -> SweepSpec:
 
 
 def _closed_form_sweep(path: Path, doc: dict) -> SweepSpec:
-    """A ``ue_pathtracer`` sweep: no scene and no render; its parameters are the editor values of its
-    one model, ``ue_pathtracer`` (:data:`~fogref.study.sweep.sections.UE_PATHTRACER_FIELDS`), each value
-    checked by the settings themselves."""
+    """A ``ue_pathtracer`` sweep: no scene, no render; its parameters are editor values of its one
+    model ``ue_pathtracer`` (:data:`~fogref.study.sweep.sections.UE_PATHTRACER_FIELDS`)."""
     cf = read_closed_form(path, doc)
     fixed = {k: v for k, v in cf["closed_form"]["fixed"].items() if k != "camera"}
     model = {"name": "ue_pathtracer", "label": "ue_pathtracer", "from_scene": False, "params": fixed}
     design = read_design(path, doc)
-    parameters = read_parameters(
-        path, doc, [], [{**model, "fields": UE_PATHTRACER_FIELDS}], design, {}, default_model="ue_pathtracer"
-    )
+    parameters = read_parameters(path, doc, [], [{**model, "fields": UE_PATHTRACER_FIELDS}], design, {})
     for label, p in parameters.items():
         for v in p.get("values", p.get("range", [])):
-            try:
-                settings_from(**fixed, **{p["target"]: v * p["scale"]})
-            except (FogrefError, TypeError, ValueError) as e:
-                raise sweep_error(path, f"parameters.{label}", f"value {v!r} refused: {e}") from None
+            ue_settings(path, f"parameters.{label}", {**fixed, p["target"]: v * p["scale"]}, v)
     return SweepSpec(
         path=path,
         kind="ue_pathtracer",
-        name=cf["name"],
-        out=cf["out"],
-        closed_form=cf["closed_form"],
-        scenes=[],
-        cache=None,
-        spp=0,
-        seed=0,
-        seed_policy="fixed",
-        pixel_filter="centre",
-        overrides={},
+        **cf,
+        **dict(scenes=[], cache=None, spp=None, seed=None, seed_policy=None),
         parameters=parameters,
         design=design,
         models=[model],

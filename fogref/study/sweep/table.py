@@ -67,25 +67,20 @@ def set_aside_result(path, why: str) -> Path:
 
 def _rows_of(cfg: dict, result: dict) -> list[dict]:
     """Table rows of one configuration's result file."""
-    scene = cfg.get("scene")  # a closed-form configuration has none
-    base = {
-        "config_id": cfg["id"],
-        **(
-            {"scene": Path(scene).name, "scene_path": scene, "scene_sha256": cfg["scene_sha256"]}
-            if scene
-            else {}
-        ),
-        **{k: v for k, v in cfg["values"].items()},
-        **(
-            {
-                "overrides": json.dumps(cfg["overrides"], sort_keys=True),
-                "spp": cfg["spp"],
-                "seed": cfg["seed"],
-            }
-            if scene
-            else {}
-        ),
-    }
+    base = (
+        {
+            "config_id": cfg["id"],
+            "scene": Path(cfg["scene"]).name,
+            "scene_path": cfg["scene"],
+            "scene_sha256": cfg["scene_sha256"],
+            **{k: v for k, v in cfg["values"].items()},
+            "overrides": json.dumps(cfg["overrides"], sort_keys=True),
+            "spp": cfg["spp"],
+            "seed": cfg["seed"],
+        }
+        if "scene" in cfg
+        else {"config_id": cfg["id"], **cfg["values"]}
+    )  # a closed-form configuration
     for k, v in list(base.items()):
         if isinstance(v, (list, dict)):
             base[k] = json.dumps(v)

@@ -77,8 +77,7 @@ def _flatten(prefix: str, obj, out: dict) -> None:
 
 
 def run_config(cfg: dict, drjit_threads: int | None = None) -> dict:
-    """Run one configuration: render (or reuse) its truth, compare every model (a closed-form
-    configuration: its one row, :func:`fogref.study.ue_pathtracer.closed_form_row`).
+    """Run one configuration: render (or reuse) its truth, compare every model (closed form: one row).
 
     Parameters
     ----------

@@ -11,7 +11,7 @@ from fogref import params as P
 from fogref.errors import FogrefError, ParameterError, did_you_mean
 
 
-def sweep_error(path, key, msg) -> FogrefError:
+def err(path, key, msg) -> FogrefError:
     """The one-line error of a sweep file: ``"SWEEP.toml: [key]: msg"`` (no key: the file alone)."""
     return FogrefError(f"{path}: [{key}]: {msg}" if key else f"{path}: {msg}")
 
@@ -31,7 +31,7 @@ def as_str(v) -> str:
     return str(v)
 
 
-def table_source(path, key) -> str:
+def src_of(path, key) -> str:
     """The source named in a ParameterError: ``"SWEEP.toml: [render]"``."""
     return f"{path}: [{key}]"
 
@@ -62,14 +62,13 @@ def boolean(v, name: str, src: str) -> bool:
 
 
 def read_table(path: Path, doc: dict, name: str, allowed) -> dict:
-    """The table ``[name]`` of the parsed file ``doc`` (``{}`` if absent), refused when it is not a
-    table or has a key outside ``allowed`` (with did-you-mean)."""
+    """``[name]`` of the parsed ``doc`` (``{}`` if absent); refused if not a table or a key is not allowed."""
     t = doc.get(name, {})
     if not isinstance(t, dict):
-        raise sweep_error(path, name, "must be a table")
+        raise err(path, name, "must be a table")
     bad = set(t) - set(allowed)
     if bad:
-        raise sweep_error(
+        raise err(
             path,
             name,
             f"unknown key(s) {sorted(bad)}{did_you_mean(sorted(bad)[0], allowed)}; "
