@@ -44,14 +44,14 @@ def _count_renders_once_mitsuba_is_set_up() -> None:
 
     def register_and_count() -> None:
         register()
-        from fogref_plugins.fogpath_common import FogPathBase
+        from fogref_plugins.fogpath import FogPathIntegrator
         from mitsuba.python import util
 
-        if not getattr(FogPathBase, "_fogref_counted", False):
-            _counting(FogPathBase, "render")
-            _counting(FogPathBase, "render_moments")
+        if not getattr(FogPathIntegrator, "_fogref_counted", False):
+            _counting(FogPathIntegrator, "render")
+            _counting(FogPathIntegrator, "render_moments")
             _counting(util._RenderOp, "eval")
-            FogPathBase._fogref_counted = True
+            FogPathIntegrator._fogref_counted = True
 
     fogref_plugins.register = register_and_count
 

@@ -11,7 +11,7 @@ of a previous run (``warm``: the caches that run left), timing the phases of
 * ``variant``: :func:`fogref.render.variant.set_variant` (LLVM discovery, Mitsuba and Dr.Jit
   import, the plugins' registration and their ``dr.syntax`` rewriting);
 * ``inputs``: listing and hashing the scene's inputs (the checkpoint key);
-* ``load``: :func:`fogref.render.scene.load_scene`;
+* ``load``: :func:`fogref.render.load.load_scene`;
 * ``pass``: the one ``render_moments`` call, split with Dr.Jit's kernel history into Python
   tracing (the rest), code generation, LLVM compilation (``backend``; nothing on a kernel-cache
   hit) and execution;
@@ -66,11 +66,11 @@ def child(t_launch: float, out: str) -> None:
     import drjit as dr
 
     lap("variant")
-    from fogref.render.inputs import inputs_digest, scene_inputs
+    from fogref.scene.inputs import inputs_digest, scene_inputs
 
     inputs_digest(SCENE, OVERRIDES, scene_inputs(SCENE, OVERRIDES))
     lap("inputs")
-    from fogref.render.scene import load_scene
+    from fogref.render.load import load_scene
 
     scene, desc = load_scene(SCENE, OVERRIDES)
     integrator = scene.integrator()

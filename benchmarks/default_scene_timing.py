@@ -42,7 +42,7 @@ def main():
     import mitsuba as mi
 
     dr.set_flag(dr.JitFlag.KernelHistory, False)
-    from fogref.render.scene import load_scene
+    from fogref.render.load import load_scene
 
     scene, _ = load_scene(Path(__file__).parents[1] / "scenes" / "valley.xml")
     methods = {"fogpath": scene.integrator(), "volpath": mi.load_dict({"type": "volpath", "max_depth": 16})}

@@ -33,7 +33,7 @@ from fogref.gbuffer import load_truth
 from fogref.mapping.droplet_fog import droplet_fog
 from fogref.mapping.physical import PhysicalScene
 from fogref.render.render import render
-from fogref.render.scene_writer import write_scene
+from fogref.scene.writer import write_scene
 from fogref.study.droplet_phase import final_difference, sun_angle, sun_phase_error
 
 DROPLETS = ("radiation", "advection")

@@ -48,15 +48,15 @@ def child(case: str) -> None:
 
     set_variant("llvm_ad_rgb")
     import drjit as dr
-    import fogref_plugins.fogpath_common as common
+    import fogref_plugins.fogpath as common
     import mitsuba as mi
     import numpy as np
 
     from fogref.media import drjit_ops
     from fogref.media.ops import DrJitOps
-    from fogref.render.scene import load_scene
+    from fogref.render.load import load_scene
 
-    base = common.FogPathBase
+    base = common.FogPathIntegrator
     reads = {"sun": base._read_scene_sun, "sky": base._read_constant_sky, "sel": base._read_sky_selection}
     facts: dict = {}
     if case != "as_is":  # the trace-time reads answered from values read before the call

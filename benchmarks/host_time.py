@@ -7,7 +7,7 @@ region), at 1 and 64 spp.  Each configuration is rendered in three modes, side b
 rotating order:
 
 * ``before``: fogpath reading the sensor's sky, the sun and the emitters' selection pdfs at every
-  call site while tracing (``FogPathBase._read_once`` patched to read every time), and Dr.Jit's
+  call site while tracing (``FogPathIntegrator._read_once`` patched to read every time), and Dr.Jit's
   ``OptimizeLoops`` on (each symbolic loop body traced twice);
 * ``read_once``: each of those values read once per render, ``OptimizeLoops`` on;
 * ``after``: fogref as it is (read once, ``OptimizeLoops`` off: loop bodies traced once).
@@ -49,19 +49,19 @@ def main() -> None:
 
     set_variant("llvm_ad_rgb")
     import drjit as dr
-    import fogref_plugins.fogpath_common as common
+    import fogref_plugins.fogpath as common
     import mitsuba as mi
     import numpy as np
 
-    from fogref.render.scene import load_scene
+    from fogref.render.load import load_scene
 
-    read_once, optimize_loops = common.FogPathBase._read_once, common.OPTIMIZE_LOOPS
+    read_once, optimize_loops = common.FogPathIntegrator._read_once, common.OPTIMIZE_LOOPS
 
     def every_time(self, scene, name, read):
         return read()
 
     def render(mode: str, sun: float, seed: int, spp: int, res: tuple = RES):
-        common.FogPathBase._read_once = every_time if mode == "before" else read_once
+        common.FogPathIntegrator._read_once = every_time if mode == "before" else read_once
         common.OPTIMIZE_LOOPS = True if mode != "after" else optimize_loops
         scene, _ = load_scene(SCENE, {"res": res[0], "resy": res[1], "sun_elevation": sun})
         integrator = scene.integrator()
@@ -108,7 +108,7 @@ def main() -> None:
             row, _ = render(mode, 20.0 + 5.0 * (i // 2), 2000 + i, 64, LARGE)
             row["steady"] = i >= WARMUP
             large.append(row)
-    common.FogPathBase._read_once, common.OPTIMIZE_LOOPS = read_once, optimize_loops
+    common.FogPathIntegrator._read_once, common.OPTIMIZE_LOOPS = read_once, optimize_loops
     result = {
         "res": list(RES),
         "configs": a.configs,

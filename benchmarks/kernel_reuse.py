@@ -55,7 +55,7 @@ def _child(mode: str, res: tuple, spp: int) -> list:
     import mitsuba as mi
 
     if mode == "literal":
-        import fogref_plugins.fogpath_common as fogpath
+        import fogref_plugins.fogpath as fogpath
 
         from fogref.media.ops import DrJitOps
 

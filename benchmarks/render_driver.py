@@ -58,7 +58,7 @@ def path_kernels_per_call(scene_path=SCENE) -> dict:
     """How many kernels over all lanes with the path tracer in them one render_moments makes."""
     import drjit as dr
 
-    from fogref.render.scene import load_scene
+    from fogref.render.load import load_scene
 
     scene, _ = load_scene(scene_path, {"res": 16, "resy": 9})
     integ = scene.integrator()
@@ -113,7 +113,7 @@ import numpy as np
 import fogref
 fogref.set_variant()
 import drjit as dr, mitsuba as mi
-from fogref.render.scene import load_scene
+from fogref.render.load import load_scene
 w, h, spp, seed = (int(x) for x in sys.argv[1:5])
 scene, _ = load_scene({scene!r}, {{"res": w, "resy": h}})
 integ = scene.integrator(); integ.pixel_exact = True; integ.aovs = True
@@ -135,7 +135,7 @@ class Case:
         from fogref_plugins.passes import max_lanes, pass_sizes
 
         import fogref.render.render as R
-        from fogref.render.scene import load_scene
+        from fogref.render.load import load_scene
 
         self.w, self.h, self.spp, self.tmp = w, h, spp, tmp
         self.name = f"{w}x{h} {spp} spp"
@@ -268,12 +268,12 @@ def patch(name, m):
         m.ensure_llvm = clock("ensure_llvm", m.ensure_llvm)
     elif name == "fogref_plugins":
         m.register = clock("register", m.register)
-    elif name == "fogref.render.scene":
+    elif name == "fogref.render.load":
         m.load_scene = clock("load_scene", m.load_scene)
         m.describe_scene = clock("describe_scene", m.describe_scene)
     elif name == "fogref_plugins.fogpath":
         m.FogPathIntegrator.render_moments = first_moments(m.FogPathIntegrator.render_moments)
-WATCH = {"fogref.render.render", "fogref.render.variant", "fogref_plugins", "fogref.render.scene",
+WATCH = {"fogref.render.render", "fogref.render.variant", "fogref_plugins", "fogref.render.load",
          "fogref_plugins.fogpath", "fogref_plugins.fog_medium", "mitsuba", "drjit", "numpy", "fogref.cli"}
 class Hook(importlib.abc.MetaPathFinder):
     def find_spec(self, name, path, target=None):

@@ -19,7 +19,7 @@ import time
 
 from _common import ROOT, dr, mi, np
 
-from fogref.render.scene import load_scene
+from fogref.render.load import load_scene
 
 SCENES = {"valley": "valley.xml", "open_plane": "open_plane.xml", "two_layer_sun": "two_layer_sun.xml"}
 

@@ -7,7 +7,7 @@ it neither looks for LLVM nor imports Mitsuba or Dr.Jit. The physics
 Mitsuba is set up by one explicit call, :func:`set_variant`: it points Dr.Jit at
 an LLVM >= 16, selects the variant and registers fogref's plugins (the
 ``heightfog`` medium and the ``fogpath`` integrator). The render driver and
-:func:`fogref.render.scene.load_scene` call it; ``mi.load_file`` users call it
+:func:`fogref.render.load.load_scene` call it; ``mi.load_file`` users call it
 themselves::
 
     import fogref, mitsuba as mi
@@ -30,6 +30,8 @@ True
 """
 
 from __future__ import annotations
+
+import importlib as _importlib  # as _importlib: not a name the facade offers
 
 from fogref._llvm import require_llvm as _require_llvm
 from fogref._version import __version__
@@ -67,9 +69,7 @@ def __getattr__(name: str):
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'fogref' has no attribute '{name}'")
-    import importlib
-
-    return getattr(importlib.import_module(module), name)
+    return getattr(_importlib.import_module(module), name)
 
 
 def __dir__():

@@ -32,11 +32,14 @@ OSError: disk full
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import stat
 import sys
 import tempfile
 from pathlib import Path
+
+import numpy as np
 
 from fogref.errors import FogrefError
 
@@ -171,8 +174,6 @@ def temporary_names(path) -> str:
     ...     temporary_names("a.exr"), "a.exr.my notes.tmp.exr"))
     (True, False)
     """
-    import re
-
     path = Path(path)
     return re.escape(path.name) + r"\.[a-z0-9_]+\.tmp" + re.escape(path.suffix)
 
@@ -190,8 +191,6 @@ def save_figure_atomic(figure, path, dpi: int = 110) -> Path:
 
 def savez_atomic(path, **arrays) -> Path:
     """``numpy.savez`` to ``path`` atomically (``path`` should end in ``.npz``)."""
-    import numpy as np
-
     return atomic_write(path, lambda tmp: np.savez(tmp, **arrays))
 
 
@@ -249,7 +248,7 @@ def refuse_overwriting_inputs(outputs, inputs, what: str = "output") -> None:
     ----------
     outputs, inputs
         Paths, ``(path, label)`` pairs, or objects with ``.path`` and ``.label`` (e.g.
-        :class:`fogref.render.inputs.SceneInput`); labels name them in the message.
+        :class:`fogref.scene.inputs.SceneInput`); labels name them in the message.
     what
         How the user named the outputs, e.g. ``"--out x.exr"``.
 

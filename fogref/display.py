@@ -3,9 +3,10 @@
 Every picture fogref writes (the render preview, the report's side-by-side images)
 goes through :func:`tone_map`, which computes colour-science's sRGB encoding
 (``colour.cctf_encoding(..., function="sRGB")``, bit for bit; see :func:`srgb_encode`), at one
-exposure rule, :func:`exposure_for`: the 99th percentile of the luminance maps to white (the render
-preview, a truth's thumbnails, the report's side-by-side images and the viewer alike; a
-transmittance is shown at exposure 1).
+exposure rule, :func:`part_exposures`: the 99th percentile of the luminance maps to white
+(:func:`exposure_for`), a transmittance is shown at exposure 1, and single and multiple
+scattering at the inscatter's (the render preview, a truth's thumbnails, the report's
+side-by-side images and the viewer alike).
 
 Examples
 --------
@@ -16,15 +17,25 @@ Examples
 
 from __future__ import annotations
 
+from typing import Any, Mapping
+
 import numpy as np
+from PIL import Image
 
 from fogref.atomic import atomic_write
+from fogref.gbuffer import PARTS, part_attribute
 
 #: Rec. 709 / sRGB luminance weights of linear R, G, B.
 LUMINANCE_WEIGHTS = np.array([0.2126, 0.7152, 0.0722])
 #: Percentile of the luminance that :func:`exposure_for` maps to white (Y = 1).
 WHITE_PERCENTILE = 99.0
 _FLT_MAX = float(np.finfo(np.float32).max)
+#: Parts pictured at another part's exposure so that they compare: single and multiple scattering
+#: at the inscatter's.
+EXPOSURE_FROM = {"single": "inscatter", "multiple": "inscatter"}
+#: The parts a truth's pictures show (the viewer, the notebook thumbnails), in the schema's order
+#: (``T`` is the transmittance); ``attenuated_surface`` only beside a report that compares it.
+TRUTH_PARTS = tuple(p for p in PARTS if p != "attenuated_surface")
 
 
 def luminance(rgb) -> np.ndarray:
@@ -88,14 +99,33 @@ def exposure_for(linear_rgb) -> float:
     return 1.0 / exposure_white(linear_rgb)
 
 
+def part_exposures(images: Mapping[str, Any]) -> dict[str, float]:
+    """The exposure of each part's picture [1/part units], the one rule of every preview.
+
+    ``images``: part name -> linear RGB ``(..., 3)``.  A transmittance (``T`` or
+    ``transmittance``) is shown at 1; a part of :data:`EXPOSURE_FROM` at the exposure of the part
+    it names when ``images`` holds that part; any other part at :func:`exposure_for` of its own
+    image.  Each value is finite and > 0.
+
+    >>> ex = part_exposures({"T": np.full((1, 1, 3), 0.2), "inscatter": np.full((1, 1, 3), 0.5),
+    ...                      "single": np.full((1, 1, 3), 0.1), "surface": np.full((1, 1, 3), 0.25)})
+    >>> ex
+    {'T': 1.0, 'inscatter': 2.0, 'single': 2.0, 'surface': 4.0}
+    """
+    out = {}
+    for part, img in images.items():
+        src = EXPOSURE_FROM.get(part)
+        own = part_attribute(part) == "transmittance"
+        out[part] = 1.0 if own else exposure_for(images[src] if src in images else img)
+    return out
+
+
 def write_png(display_rgb, path) -> None:
     """Write display-referred RGB in [0, 1] as an 8-bit PNG, atomically.
 
     8-bit values are ``floor(255 x)`` (what ``matplotlib.pyplot.imsave`` writes), saved
     with Pillow directly (matplotlib's import alone takes about 0.5 s).
     """
-    from PIL import Image
-
     img = np.clip(np.asarray(display_rgb, dtype=np.float64), 0.0, 1.0)
     px = (img * 255).astype(np.uint8)
     atomic_write(path, lambda tmp: Image.fromarray(px).save(tmp, format="PNG"))

@@ -14,6 +14,7 @@ import os
 from pathlib import Path
 
 import numpy as np
+import OpenEXR
 
 from fogref.atomic import atomic_write
 from fogref.errors import FogrefError
@@ -34,8 +35,6 @@ def write_exr(path, channels: dict, attrs: dict | None = None) -> None:
     attrs
         Header attributes; values that are not strings are stored as JSON strings.
     """
-    import OpenEXR
-
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
@@ -71,8 +70,6 @@ def read_exr(path) -> tuple[dict, dict]:
     fogref.errors.FogrefError
         The file is missing or not a readable EXR (the message names it).
     """
-    import OpenEXR
-
     path = Path(path)
     if not path.is_file():
         raise FogrefError(f"{path}: no such EXR file")

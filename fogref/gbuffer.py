@@ -86,6 +86,9 @@ GROUPS: tuple[Group, ...] = (
 _BY_NAME = {g.name: g for g in GROUPS}
 #: The radiance-like parts compared against models (each ``(H, W, 3)``).
 PARTS: tuple[str, ...] = tuple(g.name for g in GROUPS if g.components == RGB)
+#: The parts a fog model or an engine's images are compared on (``compare``'s reports and their
+#: viewer), in a report's order and spelled as :class:`Truth`'s attributes (:func:`part_attribute`).
+COMPARED_PARTS: tuple[str, ...] = ("final", "transmittance", "inscatter", "attenuated_surface")
 #: What the integrator writes per sample (besides R,G,B), in this order:
 #: the parts above with ``surface`` as the unattenuated sample (0 where it did
 #: not reach the surface), then the coverage indicator and the G-buffer.
@@ -94,6 +97,26 @@ SAMPLE_GROUPS: tuple[str, ...] = tuple(
 )
 #: Per-sample groups whose second moments the renderer accumulates.
 SQUARED_GROUPS: tuple[str, ...] = PARTS
+
+
+def part_attribute(name: str) -> str:
+    """The one alias of the schema: the group ``T`` is the attribute ``transmittance`` of a
+    :class:`Truth` (and its key in ``stderr``/``corr``, and a report's part name); every other
+    part has one name.  The inverse is :func:`part_group`.
+
+    >>> part_attribute("T"), part_attribute("transmittance"), part_attribute("inscatter")
+    ('transmittance', 'transmittance', 'inscatter')
+    """
+    return "transmittance" if name == "T" else name
+
+
+def part_group(name: str) -> str:
+    """The schema's group name of a part (``transmittance`` is ``T``), see :func:`part_attribute`.
+
+    >>> part_group("transmittance"), part_group("T"), part_group("final")
+    ('T', 'T', 'final')
+    """
+    return "T" if name == "transmittance" else name
 
 
 def group(name: str) -> Group:
@@ -325,7 +348,7 @@ class Truth:
         >>> t.noise_cov("inscatter")[0, 0].tolist()
         [[4.0, 2.0, 2.0], [2.0, 4.0, 2.0], [2.0, 2.0, 4.0]]
         """
-        name = "transmittance" if part == "T" else part
+        name = part_attribute(part)
         if name not in self.stderr:
             raise FogrefError(f"{self.path}: no noisy part '{part}' (parts: {', '.join(self.stderr)})")
         corr = self.corr if self.corr is not None else {}
@@ -360,10 +383,9 @@ class Truth:
 
     def part(self, name: str) -> np.ndarray:
         """A part by its schema name (``T`` and ``transmittance`` are the same)."""
-        name = "transmittance" if name == "T" else name
-        if name != "transmittance" and name not in PARTS:
+        if part_group(name) not in PARTS:
             raise FogrefError(f"{self.path}: no part '{name}' (parts: {', '.join(PARTS)})")
-        return getattr(self, name)
+        return getattr(self, part_attribute(name))
 
     def world_positions(self, sky_distance: float) -> np.ndarray:
         """The point each pixel shades [m], as an engine sees it: ``P`` on surfaces,
@@ -486,10 +508,7 @@ def truth_from_channels(channels: dict, attrs: dict, source: str = "<memory>") -
     noisy = [g.name for g in GROUPS if g.noisy]
     note = "assumed 1 (schema 2 has no corr.* channels)" if version == "2" else "measured (corr.* channels)"
     attrs = {**attrs, "fogref.noise_correlation": note}
-    names = {"final": "final", "transmittance": "T", "attenuated_surface": "attenuated_surface"}
-    names.update(
-        {g: g for g in ("inscatter", "single", "multiple", "surface", "surface_coverage", "distance")}
-    )
+    names = {part_attribute(g.name): g.name for g in GROUPS if g.name not in ("P", "view", "hit")}
     names.update(position="P", hit_fraction="hit")
     return Truth(
         path=Path(source),
@@ -499,8 +518,8 @@ def truth_from_channels(channels: dict, attrs: dict, source: str = "<memory>") -
         sun_direction=sun,
         params=params,
         attrs=attrs,
-        stderr={("transmittance" if g == "T" else g): se(g) for g in noisy},
-        corr={("transmittance" if g == "T" else g): corr(g) for g in noisy},
+        stderr={part_attribute(g): se(g) for g in noisy},
+        corr={part_attribute(g): corr(g) for g in noisy},
     )
 
 

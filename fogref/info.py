@@ -22,7 +22,7 @@ import numpy as np
 
 from fogref.errors import FogrefError
 from fogref.exrio import read_exr
-from fogref.gbuffer import truth_from_channels
+from fogref.gbuffer import COMPARED_PARTS, truth_from_channels
 from fogref.models.ue4 import direction_to_unreal, unreal_rotator, world_to_unreal
 
 
@@ -40,7 +40,7 @@ def camera_from_views(view: np.ndarray, origin) -> dict:
     Solves ``view(i, j) ∝ [right', up', forward] (u, v, 1)`` (``u = 2 (i + 0.5)/W - 1``,
     ``v = 1 - 2 (j + 0.5)/H``) by linear least squares (the cross product of both sides
     is 0; at most 4096 pixels), then ``fov = 2 atan |right'|`` [deg] (horizontal).  Same
-    keys as :func:`fogref.render.scene.sensor_camera` except the clip distances (None),
+    keys as :func:`fogref.render.load.sensor_camera` except the clip distances (None),
     plus ``mirrored``: True when image x grows along ``up x forward`` (not Mitsuba's
     ``forward x up``: then ``right``, not target/up/fov alone, gives the pixels' directions).
 
@@ -95,7 +95,7 @@ def camera_from_views(view: np.ndarray, origin) -> dict:
 
 
 def unreal_camera(camera: dict) -> dict:
-    """A camera (:func:`fogref.render.scene.sensor_camera`'s keys) in Unreal's frame.
+    """A camera (:func:`fogref.render.load.sensor_camera`'s keys) in Unreal's frame.
 
     Unreal is z-up, left-handed, centimetres: ``(x, y, z)_ue = 100 (x, z, y)_fogref``
     (:func:`fogref.models.ue4.world_to_unreal`; directions by
@@ -162,7 +162,7 @@ def info(path) -> dict:
         "identity_max_abs": truth.identity_residual(),
     }
     noise = {}
-    for part in ("final", "transmittance", "inscatter", "attenuated_surface", "surface"):
+    for part in (*COMPARED_PARTS, "surface"):
         x, se = truth.part(part), truth.stderr[part]
         ok = np.abs(x) > 1e-12
         rel = np.abs(se[ok]) / np.abs(x[ok]) if ok.any() else np.zeros(1)

@@ -35,16 +35,27 @@ from pathlib import Path
 
 from fogref.errors import ParameterError, did_you_mean
 
-__all__ = ["angle", "choice", "format_range", "integer", "number", "number_within", "path", "rgb", "vector"]
+__all__ = [
+    "angle",
+    "choice",
+    "format_number",
+    "format_range",
+    "integer",
+    "number",
+    "number_within",
+    "path",
+    "rgb",
+    "vector",
+]
 
 INF = math.inf
 
 
-def _fmt(x) -> str:
+def format_number(x) -> str:
     """A bound or value as short text: integers without a decimal point, ``inf``, else ``%g``.
 
-    >>> _fmt(1e6), _fmt(0.0), _fmt(-0.999), _fmt(-math.inf), _fmt(1.0e-7), _fmt(0.1 + 0.2)
-    ('1000000', '0', '-0.999', '-inf', '1e-07', '0.30000000000000004')
+    >>> [format_number(x) for x in (1e6, 0.0, -0.999, -math.inf, 1.0e-7, 0.1 + 0.2)]
+    ['1000000', '0', '-0.999', '-inf', '1e-07', '0.30000000000000004']
     """
     x = float(x)
     if math.isinf(x):
@@ -67,7 +78,7 @@ def format_range(lo=-INF, hi=INF, lo_open=False, hi_open=False, unit="") -> str:
     """
     left = "(" if lo_open or math.isinf(lo) else "["
     right = ")" if hi_open or math.isinf(hi) else "]"
-    return f"{left}{_fmt(lo)}, {_fmt(hi)}{right}" + (f" {unit}" if unit else "")
+    return f"{left}{format_number(lo)}, {format_number(hi)}{right}" + (f" {unit}" if unit else "")
 
 
 def _show(value) -> str:
@@ -75,7 +86,7 @@ def _show(value) -> str:
     if isinstance(value, str):
         return repr(value)
     if isinstance(value, numbers.Real) and not isinstance(value, bool):
-        return _fmt(value) if math.isfinite(float(value)) else str(float(value))
+        return format_number(value) if math.isfinite(float(value)) else str(float(value))
     return repr(value)
 
 

@@ -13,7 +13,7 @@ fogref has it::
   pytest's cache folder (``.pytest_cache/d/fogref_truths``), else (pytest's cache
   provider off) in ``~/.cache/fogref/truths``.  The cache key covers the
   scene and every file it loads (meshes, envmaps, textures, included XML:
-  :func:`fogref.render.inputs.inputs_digest`), so an edited mesh means a fresh render.
+  :func:`fogref.scene.inputs.inputs_digest`), so an edited mesh means a fresh render.
   A relative scene path is looked up in the working directory, then under pytest's
   root directory; a bare name (``"valley"``) is a shipped scene (:func:`fogref.scene_path`).
 * :func:`assert_fog_matches` (re-exported from :mod:`fogref.compare.check`): runs

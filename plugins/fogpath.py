@@ -1,9 +1,10 @@
 """``fogpath``: a path tracer for exact height fog, in Python with Dr.Jit loops.
 
-The estimator, :class:`FogPathIntegrator` (parameters in its docstring).  Beside it, as
-Mitsuba's ``common.py`` beside ``prb.py``: the plumbing (scene facts, opaque values, the
-parts and AOVs, per-pixel moments, passes) in :mod:`fogref_plugins.fogpath_common`, and
-the camera ray's variance reduction in :mod:`fogref_plugins.fogpath_camera`.  It has:
+The integrator, :class:`FogPathIntegrator` (parameters in its docstring), whose ``sample``
+returns R,G,B and :data:`AOV_NAMES` per sample, rendered as per-pixel moments
+(:meth:`FogPathIntegrator.render_moments`: what the render driver writes as means and
+standard errors; ``mi.render`` in passes of at most :data:`fogref_plugins.passes.MAX_LANES`
+lanes).  It has:
 
 * **camera rays from the camera itself, to any distance**: the perspective
   sensor's near and far clip planes are ignored, so ``T`` and ``distance`` cover
@@ -16,9 +17,18 @@ the camera ray's variance reduction in :mod:`fogref_plugins.fogpath_camera`.  It
 * **next-event estimation** with MIS (power heuristic) for the sun
   (``directional``), the sky (``constant``/``envmap``) and area lights;
   Henyey–Greenstein phase; any Mitsuba BSDF; ``max_depth`` and Russian roulette;
-* **the parts of the schema** per sample (:class:`~fogref_plugins.fogpath_common.Split`):
+* **variance reduction on the camera ray** (its one stage, :meth:`FogPathIntegrator._camera_ray`):
+  the sun's single scattering sampled from its exact integrand or a closed-form mixture
+  (``sun_sampling``; :func:`fogref.media.single_scatter.sun_sampling_mode`), and forced
+  splitting: both branches of the camera ray, the surface and a forced medium collision,
+  in every sample (``forced_split``);
+* **the parts of the schema** per sample (:class:`Split`):
   ``L = attenuated_surface + single + multiple`` exactly.  How the parts, forced
   splitting and the sun's sampling fit together: ``docs/design.md``, "fogpath".
+
+Scene values that are one Dr.Jit value (emitter radiance, transforms, ``g``, ...) are made
+opaque before a render (:func:`make_scene_values_opaque`), so kernels are reused across
+scenes that differ only in a value.
 
 Not supported: sensors other than ``perspective``; media attached to shapes
 (the fog fills all space outside surfaces); reconstruction filters other than
@@ -35,14 +45,27 @@ import math
 
 import drjit as dr
 import mitsuba as mi
+from fogref_plugins.passes import max_lanes, pass_seed, pass_sizes
 from mitsuba.python.ad.integrators.common import mis_weight  # the module set_variant loaded (not a 2nd copy)
 
-from fogref import params
-from fogref.mapping.fog_input import MAX_DEPTH
+from fogref import gbuffer, params
+from fogref.media import closed_form as cf
 from fogref.media import drjit_ops
+from fogref.media.single_scatter import (
+    sample_sun_single_scatter,
+    sample_sun_single_scatter_mixture,
+    sun_sampling_mode,
+)
+from fogref.scene.vocabulary import MAX_DEPTH
 
-from .fogpath_camera import FogPathCameraRay
-from .fogpath_common import AOV_NAMES, Split, spectrum
+#: The integrator's AOVs (after R,G,B): the per-sample groups of the schema.
+AOV_NAMES = gbuffer.sample_channel_names()
+
+#: Dr.Jit's ``OptimizeLoops`` while fogpath traces a pass.  On, Dr.Jit traces every symbolic
+#: loop body twice to drop loop-invariant state; off, once.  Off: about 20 ms less host time
+#: per pass, pixels bitwise equal and execution time unchanged within noise
+#: (``reports/benchmarks/host_time.md``).
+OPTIMIZE_LOOPS = False
 
 #: ``forced_split``'s default (see ``reports/benchmarks/variance_reduction_changes.md``)
 FORCED_SPLIT_DEFAULT = True
@@ -50,9 +73,120 @@ FORCED_SPLIT_DEFAULT = True
 SUN_SAMPLING_RAYS_DEFAULT = 2
 #: ``sky_at_surfaces``'s default (see ``reports/benchmarks/summary.md``)
 SKY_AT_SURFACES_DEFAULT = "bsdf"
+#: Stratified sun samples per camera ray (each one shadow ray)
+#: (``reports/benchmarks/variance_reduction.md``, "+2 sun samples").
+SUN_SAMPLES = 2
 
 
-class FogPathIntegrator(FogPathCameraRay):
+class _Opaque:
+    """Hides a Python object (e.g. a dataclass) from Dr.Jit's loop-state traversal."""
+
+    __slots__ = ("_obj",)
+
+    def __init__(self, obj):
+        object.__setattr__(self, "_obj", obj)
+
+    def __getattr__(self, name):
+        return getattr(self._obj, name)
+
+
+class Split:
+    """Where a contribution goes: ``surface`` (camera ray reached the surface or sky
+    unscattered; the camera segment's weight is applied at the end), ``single``
+    (direct light at the first medium vertex) or ``multiple``."""
+
+    DRJIT_STRUCT = {"surface": mi.Spectrum, "single": mi.Spectrum, "multiple": mi.Spectrum}
+
+    def __init__(self, surface=None, single=None, multiple=None):
+        self.surface = mi.Spectrum(0.0) if surface is None else surface
+        self.single = mi.Spectrum(0.0) if single is None else single
+        self.multiple = mi.Spectrum(0.0) if multiple is None else multiple
+
+    def add(self, c, medium_first, direct):
+        return Split(
+            self.surface + dr.select(medium_first, 0.0, c),
+            self.single + dr.select(medium_first & direct, c, 0.0),
+            self.multiple + dr.select(medium_first & ~direct, c, 0.0),
+        )
+
+
+class Trace:
+    """What one ``sample`` call traces with, fixed for the call (Python values, no loop state):
+    the scene, its fog (None: vacuum), the Dr.Jit ops, the fog's phase function (None: the fog
+    does not scatter) and the phase and BSDF contexts, whether the scene has non-delta emitters
+    (``has_smooth``) and any emitter (``has_lights``), and whether the sun's scattering along the
+    camera ray is sampled along it (``sun_along``; then medium vertices on it skip sun NEE)."""
+
+    def __init__(self, scene, fog, phase, sampler, has_delta, has_smooth):
+        self.scene, self.fog, self.ops, self.phase = scene, fog, drjit_ops(), phase
+        self.phase_ctx, self.bsdf_ctx = mi.PhaseFunctionContext(sampler), mi.BSDFContext()
+        self.has_smooth, self.has_lights, self.sun_along = has_smooth, has_delta or has_smooth, False
+
+
+class Path:
+    """The path loop's state where the loop takes it up: the parts so far (``split``), the
+    throughput ``β`` and the camera segment's weight of unscattered paths ``β_cam``, the depth,
+    whether the camera ray scattered first (``medium_first``), the ray and its hit ``si``, the
+    vertex the ray leaves with its sampling pdf and deltaness (for MIS), and the live lanes."""
+
+    def __init__(self, ray, si, active, depth=0):
+        self.split, self.β, self.β_cam = Split(), mi.Spectrum(1.0), mi.Spectrum(1.0)
+        self.depth, self.medium_first = mi.UInt32(depth), mi.Bool(False)
+        self.ray, self.si, self.active = ray, si, active
+        self.prev_it, self.prev_pdf = dr.zeros(mi.Interaction3f), mi.Float(1.0)
+        self.prev_delta = mi.Bool(True)
+
+
+class CameraRay:
+    """The camera ray's stage: its G-buffer (None without ``aovs``), the sun's single scattering
+    sampled along it (None where next-event estimation covers it), with forced splitting the
+    sample of ``surface`` (``cover``, a :class:`Cover`; None without), and the :class:`Path` the
+    loop continues."""
+
+    def __init__(self, gbuf, sun_ss, cover, path):
+        self.gbuf, self.sun_ss, self.cover, self.path = gbuf, sun_ss, cover, path
+
+
+class Cover:
+    """Forced splitting's sample of ``surface``: the lanes that continued the surface branch
+    (``chosen``; for the sky: drew it with the same ``q``), the surface branch's depth-0 light
+    (``direct``) and the probability ``q`` of continuing it."""
+
+    def __init__(self, chosen, direct, q):
+        self.chosen, self.direct, self.q = chosen, direct, q
+
+
+def spectrum(values):
+    """``mi.Spectrum`` of three channel values, or of one value for every channel."""
+    return mi.Spectrum(*values) if len(values) == 3 else mi.Spectrum(values[0])
+
+
+def make_scene_values_opaque(scene) -> int:
+    """Make the scene's one-value Dr.Jit parameters (emitter radiance and irradiance,
+    transforms, BSDF colours, the phase function's ``g``, ...) opaque, in place.
+
+    Mitsuba traces such values into kernels as literals, so a scene that differs
+    only in the sun's colour or the fog's ``g`` would compile new kernels;
+    opaque, the kernels are reused (a sweep's configurations share them).  Values
+    are unchanged.  Returns how many parameters were changed.
+    """
+    params = mi.traverse(scene)
+    changed = 0
+    for key in params.keys():
+        value = params[key]
+        if not (dr.is_jit_v(value) and dr.width(value) == 1):
+            continue
+        before = dr.detail.collect_indices(value)
+        dr.make_opaque(value)
+        if dr.detail.collect_indices(value) != before:  # was a literal: tell the object
+            params[key] = value
+            changed += 1
+    if changed:
+        params.update()
+    return changed
+
+
+class FogPathIntegrator(mi.SamplingIntegrator):
     """Path tracer with analytic free flight in fogref's exact fog (see module).
 
     .. pluginparameters::
@@ -143,6 +277,89 @@ class FogPathIntegrator(FogPathCameraRay):
         self.aovs = bool(props.get("aovs", True))
         self.pixel_exact = bool(props.get("pixel_exact", False))
 
+    def aov_names(self):
+        return list(AOV_NAMES) if self.aovs else []
+
+    # ------------------------------------------------------------ scene facts
+    @staticmethod
+    def _scene_fog(scene):
+        """The physics object of the sensor's heightfog medium (None: vacuum)."""
+        sensors = scene.sensors()
+        med = sensors[0].get_medium() if sensors else None
+        fog = getattr(med, "fog", None)
+        if fog is None or fog.is_vacuum:
+            return None
+        return _Opaque(fog)
+
+    @staticmethod
+    def _scene_lights(scene):
+        delta = [mi.has_flag(e.flags(), mi.EmitterFlags.Delta) for e in scene.emitters()]
+        return any(delta), not all(delta)
+
+    def _read_once(self, scene, name, read):
+        """``read()``, read once per :meth:`render_moments` call and scene: the scene values
+        fogpath reads while tracing (``str`` and ``float`` of evaluated variables, each a
+        wait on the device) are read once per render instead of at every call site.
+        Outside ``render_moments`` (``sample`` called directly) every call reads."""
+        memo = getattr(self, "_memo", None)
+        if memo is None or memo[0] is not scene:
+            return read()
+        if name not in memo[1]:
+            memo[1][name] = read()
+        return memo[1][name]
+
+    def _constant_sky(self, scene):
+        """The scene's ``constant`` sky emitter when it is the only non-delta infinite
+        emitter, else None (trace-time)."""
+        return self._read_once(scene, "sky", lambda: self._read_constant_sky(scene))
+
+    @staticmethod
+    def _read_constant_sky(scene):
+        smooth_inf = [
+            e
+            for e in scene.emitters()
+            if mi.has_flag(e.flags(), mi.EmitterFlags.Infinite)
+            and not mi.has_flag(e.flags(), mi.EmitterFlags.Delta)
+        ]
+        if len(smooth_inf) == 1 and str(smooth_inf[0]).startswith("ConstantBackgroundEmitter"):
+            return smooth_inf[0]
+        return None
+
+    def _sky_selection(self, scene):
+        """(the constant sky's probability of being chosen by ``scene.sample_emitter``, the
+        summed probability of the emitters before it): trace-time floats."""
+        return self._read_once(scene, "sky_selection", lambda: self._read_sky_selection(scene))
+
+    def _read_sky_selection(self, scene):
+        sky = self._constant_sky(scene)
+        probs = [float(scene.pdf_emitter(i)[0]) for i in range(len(scene.emitters()))]
+        j = next(i for i, e in enumerate(scene.emitters()) if e is sky)
+        return probs[j], sum(probs[:j])
+
+    def _scene_sun(self, scene):
+        """(direction toward the sun, RGB irradiance) of the only delta directional
+        emitter, or None (trace-time, Python floats)."""
+        return self._read_once(scene, "sun", lambda: self._read_scene_sun(scene))
+
+    @staticmethod
+    def _read_scene_sun(scene):
+        delta = [e for e in scene.emitters() if mi.has_flag(e.flags(), mi.EmitterFlags.Delta)]
+        if len(delta) != 1:
+            return None
+        p = mi.traverse(delta[0])
+        if "irradiance.value" not in p or "to_world" not in p:
+            return None
+        m = p["to_world"].matrix
+        w = [-float(m[i][2][0]) for i in range(3)]
+        n = sum(x * x for x in w) ** 0.5
+        E = p["irradiance.value"]
+        E = [float(E[i][0]) for i in range(3)] if len(E) == 3 else [float(E[0][0])] * 3
+        return [x / n for x in w], E
+
+    def _sky_by_bsdf(self, scene):
+        """Does the BSDF sample alone carry a constant sky at surfaces (trace-time)?"""
+        return self.sky_at_surfaces == "bsdf" and self._constant_sky(scene) is not None
+
     # --------------------------------------------------------------- pieces
     def _transmittance(self, fog, ops, o, d, t):
         tau = fog.optical_depth(ops, o, d, t)
@@ -151,7 +368,26 @@ class FogPathIntegrator(FogPathCameraRay):
     def _draw_channel(self, sampler, active=True):
         return mi.UInt32(dr.minimum(mi.UInt32(sampler.next_1d(active) * 3.0), 2))
 
-    def _free_flight(self, fog, ops, sampler, ray, t_surf, active):
+    @staticmethod
+    def _medium_interaction(ray, p, t):
+        mei = dr.zeros(mi.MediumInteraction3f)
+        mei.p, mei.t, mei.wi = p, t, -ray.d
+        mei.sh_frame = mi.Frame3f(mei.wi)
+        mei.time, mei.wavelengths = ray.time, ray.wavelengths
+        return mei
+
+    @staticmethod
+    def _vertex(ray, si, surf, p_med):
+        """The interaction a sampled direction leaves from (for MIS on emitters it hits):
+        a surface's, or at a medium vertex one with normal 0."""
+        it = dr.zeros(mi.Interaction3f)
+        it.p = dr.select(surf, si.p, p_med)
+        it.n = dr.select(surf, si.n, 0.0)
+        it.t = dr.select(surf, si.t, 0.0)
+        it.time, it.wavelengths = ray.time, ray.wavelengths
+        return it
+
+    def _free_flight(self, tr, sampler, ray, t_surf, active):
         """Sample the next medium event before ``t_surf``.
 
         Returns (is_medium, t, weight): weight multiplies the throughput, i.e.
@@ -162,8 +398,9 @@ class FogPathIntegrator(FogPathCameraRay):
         segment by its mean pdf is biased: 0.35 % too bright in the RGB furnace
         test, ``tests/test_render_bias.py``.)
         """
+        fog, ops = tr.fog, tr.ops
         if fog is None:
-            return mi.Bool(False), dr.minimum(t_surf, drjit_ops().largest), mi.Spectrum(1.0)
+            return mi.Bool(False), dr.minimum(t_surf, ops.largest), mi.Spectrum(1.0)
         if not fog.scatters:  # absorption only: deterministic, exact
             t_end = dr.minimum(t_surf, ops.largest)
             return mi.Bool(False), t_end, self._transmittance(fog, ops, ray.o, ray.d, t_end)
@@ -184,7 +421,7 @@ class FogPathIntegrator(FogPathCameraRay):
         num = dr.select(is_medium, sigma_t * spectrum(ops.params(fog.albedo)) * Tr, Tr)
         return is_medium, t_end, dr.select(pdf > 0, num / pdf, 0.0)
 
-    def _direct(self, scene, fog, ops, sampler, it, ctx, scatter, active, has_smooth):
+    def _direct(self, tr, sampler, it, scatter, active):
         """Next-event estimation at ``it`` (a medium interaction when ``scatter`` is a
         phase function, else a surface interaction and ``scatter`` its BSDF): emitter
         sample times the closed-form fog transmittance and visibility, times the phase
@@ -192,7 +429,9 @@ class FogPathIntegrator(FogPathCameraRay):
         Returns (contribution without the path throughput, is the sample delta).  At a surface with
         ``sky_at_surfaces = "bsdf"`` a sample of the constant sky contributes 0: the BSDF
         sample carries the sky alone (:meth:`_sky_by_bsdf`)."""
+        scene, fog, ops = tr.scene, tr.fog, tr.ops
         in_medium = isinstance(scatter, mi.PhaseFunction)
+        ctx = tr.phase_ctx if in_medium else tr.bsdf_ctx
         sky_by_bsdf = not in_medium and self._sky_by_bsdf(scene)
         if dr.hint(sky_by_bsdf and len(scene.emitters()) > 1, mode="scalar"):
             ds, em_w = self._sample_emitter_but_sky(scene, it, sampler.next_2d(active), active)
@@ -218,13 +457,9 @@ class FogPathIntegrator(FogPathCameraRay):
         if fog is not None:
             Tr = self._transmittance(fog, ops, it.p, ds.d, dr.select(infinite, ops.largest, ds.dist))
         c = em_w * f
-        if has_smooth:  # MIS only matters for emitters a sampled direction can hit
+        if tr.has_smooth:  # MIS only matters for emitters a sampled direction can hit
             c *= dr.select(ds.delta, 1.0, mis_weight(ds.pdf, f_pdf))
         return dr.select(visible, c * Tr, 0.0), ds.delta
-
-    def _sky_by_bsdf(self, scene):
-        """Does the BSDF sample alone carry a constant sky at surfaces (trace-time)?"""
-        return self.sky_at_surfaces == "bsdf" and self._constant_sky(scene) is not None
 
     def _sample_emitter_but_sky(self, scene, it, u, active):
         """``scene.sample_emitter_direction`` (no visibility test) among the emitters other
@@ -255,93 +490,253 @@ class FogPathIntegrator(FogPathCameraRay):
         local = mi.Vector3f(c * sin_t, s * sin_t, 1.0 - x)
         return dr.select(is_sun, dr.normalize(mi.Frame3f(d).to_world(local)), d)
 
-    def _medium_vertex(
-        self,
-        scene,
-        fog,
-        ops,
-        sampler,
-        ray,
-        p,
-        t,
-        phase,
-        ctx,
-        med,
-        first,
-        has_smooth,
-        sun_ss,
-        sun_sampled=None,
-    ):
-        """Light sample and phase sample at a medium vertex.  At the first vertex of the
-        camera ray the sun is left out when it is sampled along the camera ray.
-        ``sun_sampled``: lanes whose segment's sun scattering was sampled along it (default
-        ``first``); their sun NEE is left out.
+    def _sun_disk_seen(self, scene, ops, ray, seen):
+        """The sun disk's radiance ``E / Omega`` on the lanes ``seen`` (rays that escape to the sky
+        unscattered from the camera) whose direction lies in the disk, 0 on the others; None for a
+        delta sun or no sun (trace-time: such scenes trace no code for it).  In the disk:
+        ``|d - w|^2 <= 2 (1 - cos theta_max)``, the chord, free of the cancellation of ``1 - d.w``
+        in float32."""
+        sun = None if self.sun_one_minus_cos is None else self._scene_sun(scene)
+        if sun is None:
+            return None
+        w_sun, E_sun = sun
+        omega = 2.0 * math.pi * self.sun_one_minus_cos
+        to_sun = mi.Vector3f(*ops.params(w_sun))
+        inside = seen & (dr.squared_norm(ray.d - to_sun) <= ops.param(2.0 * self.sun_one_minus_cos))
+        return dr.select(inside, mi.Spectrum(*ops.params([e / omega for e in E_sun])), 0.0)
+
+    def _medium_vertex(self, tr, sampler, ray, p, t, med, sun_sampled):
+        """Light sample and phase sample at the medium vertex ``p`` at distance ``t`` on
+        ``ray``, on the lanes ``med``.  Where the sun's scattering is sampled along the segment
+        (``tr.sun_along``, on the lanes ``sun_sampled``) its sun NEE is left out.
         Returns (contribution without the throughput, direction, phase weight, its pdf)."""
         mei = self._medium_interaction(ray, p, t)
-        Ld, delta = self._direct(scene, fog, ops, sampler, mei, ctx, phase, med, has_smooth)
-        if sun_ss is not None:  # the sun on this segment is sampled along it
-            Ld = dr.select(delta & (first if sun_sampled is None else sun_sampled), 0.0, Ld)
-        wo, w, pdf = phase.sample(ctx, mei, sampler.next_1d(med), sampler.next_2d(med), med)
+        Ld, delta = self._direct(tr, sampler, mei, tr.phase, med)
+        if tr.sun_along:  # the sun on this segment is sampled along it
+            Ld = dr.select(delta & sun_sampled, 0.0, Ld)
+        wo, w, pdf = tr.phase.sample(tr.phase_ctx, mei, sampler.next_1d(med), sampler.next_2d(med), med)
         return Ld, wo, w, pdf
+
+    def _surface_vertex(self, tr, sampler, ray, si, surf):
+        """Light sample (when the scene has lights; else None) and BSDF sample at the surface
+        ``si`` hit by ``ray``, on the lanes ``surf``.  Returns (contribution without the
+        throughput, BSDF sample, its weight)."""
+        bsdf, Ls = si.bsdf(ray), None
+        if tr.has_lights:
+            smooth = surf & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
+            Ls, _ = self._direct(tr, sampler, si, bsdf, smooth)
+        bs, w_b = bsdf.sample(tr.bsdf_ctx, si, sampler.next_1d(surf), sampler.next_2d(surf), surf)
+        return Ls, bs, w_b
+
+    # ------------------------------------------------------------- the camera ray
+    def _sun_sampler(self, fog, w_sun):
+        """(how the sun's single scattering along a ray is sampled: ``"exact"``, ``"mixture"``
+        or None, stratified samples per camera ray) in the fog ``fog`` toward the sun ``w_sun``:
+        :func:`~fogref.media.single_scatter.sun_sampling_mode` with its defaults (the exact
+        sampler for one unbounded exponential layer: for several, its Newton inversion costs
+        more time than the variance it removes, ``reports/benchmarks/variance_reduction.md``;
+        elsewhere the closed-form mixture) and :data:`SUN_SAMPLES` samples."""
+        return sun_sampling_mode(fog, w_sun), SUN_SAMPLES
+
+    def _sun_single_scatter(self, tr, sampler, ray, D, active, samples=None):
+        """The sun's single scattering along the ray (the camera ray, or with
+        ``sun_sampling_rays = 2`` the next segment), sampled from its exact
+        integrand (``exact``) or a closed-form mixture proposal with the exact
+        weight (``mixture``: bounded fog, several layers), the stratified samples of
+        :meth:`_sun_sampler` averaged (``samples``, if given, instead; None when it does not
+        apply; then NEE covers it)."""
+        scene, fog, ops = tr.scene, tr.fog, tr.ops
+        sun = self._scene_sun(scene) if (fog is not None and self.sun_sampling) else None
+        mode, K = (None, 0) if (sun is None or self.max_depth < 2) else self._sun_sampler(fog._obj, sun[0])
+        disk = self.sun_one_minus_cos is not None
+        if disk and mode is not None:
+            # a sun disk: the exact sampler toward a point of the disk drawn per sample, when the
+            # whole disk is above the horizon; otherwise next-event estimation samples it
+            sin_radius = math.sqrt(self.sun_one_minus_cos * (2.0 - self.sun_one_minus_cos))
+            if mode != "exact" or sun[0][1] <= sin_radius + 1e-6:
+                mode = None
+        if mode is None:
+            return None
+        w_sun, E_sun = sun
+        K, total = samples or K, mi.Spectrum(0.0)
+        for k in range(K):
+            channel = self._draw_channel(sampler, active)  # one-sample spectral MIS inside the sampler
+            u = (k + sampler.next_1d(active)) / K  # stratified along the integrand's CDF
+            to_sun = mi.Vector3f(*ops.params(w_sun))
+            w_k = w_sun
+            if disk:  # uniform in the disk: the disk's mean of the delta sun's estimator
+                to_sun = self._sun_disk_direction(sampler, to_sun, mi.Bool(True), active)
+                w_k = (to_sun.x, to_sun.y, to_sun.z)
+            if mode == "exact":
+                t_ss, w_ss = sample_sun_single_scatter(ops, fog._obj, ray.o, ray.d, D, w_k, E_sun, u, channel)
+            else:
+                t_ss, w_ss = sample_sun_single_scatter_mixture(
+                    ops, fog._obj, ray.o, ray.d, D, w_sun, E_sun, u, sampler.next_1d(active), channel
+                )
+            vis = active & ~scene.ray_test(mi.Ray3f(ray.o + ray.d * t_ss, to_sun), active)
+            total += dr.select(vis, mi.Spectrum(*w_ss), 0.0)
+        return total / K
+
+    def _forced_collision(self, tr, sampler, ray, D, active):
+        """A medium collision on the camera ray's ``[0, D]`` forced to happen.
+
+        Layer ``i`` is chosen with probability ``(1 - T_i) / sum_j (1 - T_j)``
+        (``T_i``: its transmittance over ``[0, D]`` in the sampled channel) and
+        inverted in closed form conditioned on a collision before ``D``; the pdf is
+        the mixture ``sigma sum_i rho_i T_i(t) / sum_j (1 - T_j(D))`` (one layer:
+        ``sigma_t T / (1 - T)``), averaged over the channels (one-sample spectral
+        MIS for this segment).  Returns (t, weight ``sigma_s T(t) / pdf``, valid).
+        """
+        fog, ops = tr.fog, tr.ops
+        t0, t1 = (mi.Float(0.0), ops.largest) if fog.bounds is None else fog.clip(ops, ray.o, ray.d)
+        t_end = dr.minimum(D, t1)
+        length = dr.maximum(t_end - t0, 0.0)
+        t0 = dr.select(length > 0, t0, 0.0)
+        oy, dy = ray.o.y + t0 * ray.d.y, ray.d.y
+        om = lambda x: dr.select(x < 1e-4, x * (1.0 - 0.5 * x), 1.0 - dr.exp(-x))  # noqa: E731  1 - e^-x
+        tau_D = [dr.minimum(L.depth(ops, oy, dy, length), cf.TAU_MAX) for L in fog.layers]
+        sig_rgb, alb_rgb = ops.params(fog.sigma_t), ops.params(fog.albedo)
+        sig = sig_rgb[0]
+        grey = fog.sigma_t[1] == fog.sigma_t[0] and fog.sigma_t[2] == fog.sigma_t[0]
+        if not grey:
+            channel = self._draw_channel(sampler, active)
+            sig = dr.select(channel == 1, sig_rgb[1], dr.select(channel == 2, sig_rgb[2], sig))
+        u = sampler.next_1d(active)
+        oms = [om(sig * tau) for tau in tau_D]
+        t_rel = fog.layers[0].sample(ops, oy, dy, -dr.log(1.0 - u * oms[0]) / sig)
+        if len(fog.layers) > 1:
+            pick, acc = sampler.next_1d(active) * sum(oms), mi.Float(0.0)
+            for L, o_i in zip(fog.layers, oms):
+                t_i = L.sample(ops, oy, dy, -dr.log(1.0 - u * o_i) / sig)
+                t_rel = dr.select((pick >= acc) & (o_i > 0), t_i, t_rel)
+                acc += o_i
+        valid = active & (length > 0) & (t_rel < ops.largest) & (sum(oms) > 0)
+        t_rel = dr.minimum(dr.select(valid, t_rel, 0.0), length)
+        tau_t = [dr.minimum(L.depth(ops, oy, dy, t_rel), cf.TAU_MAX) for L in fog.layers]
+        rho_t = [L.rho(ops, oy + t_rel * dy) for L in fog.layers]
+        pdfs, fs = [], []
+        for s, a in zip(sig_rgb, alb_rgb):
+            norm = sum(om(s * tau) for tau in tau_D)
+            pdfs.append(
+                s * sum(r * dr.exp(-s * tau) for r, tau in zip(rho_t, tau_t)) / dr.maximum(norm, 1e-30)
+            )
+            fs.append(a * s * sum(rho_t) * dr.exp(-s * sum(tau_t)))
+        pdf = pdfs[0] if grey else (pdfs[0] + pdfs[1] + pdfs[2]) / 3.0
+        w = dr.select(valid & (pdf > 0), spectrum(fs) / pdf, 0.0)
+        return t0 + t_rel, w, valid & (pdf > 0)
+
+    def _camera_split(self, tr, sampler, ray, si, D, active):
+        """Depth 0 with ``forced_split``: the surface branch (light found by the camera
+        ray, light sample at the surface; weight ``T`` applied at the end) and a forced
+        medium vertex (its light sample feeds ``single``), then one branch continues,
+        chosen with probability ``q = T / (T + w_medium w_phase)`` (means over RGB).
+        Returns (the :class:`Path` from depth 1, the :class:`Cover`).  ``surface_coverage`` is
+        1 on samples that continued the surface branch (for the sky: drew it with the same q)
+        and ``surface`` their unweighted light, so that ``surface`` stays a ratio estimator
+        bounded by the radiance it estimates."""
+        scene, ops = tr.scene, tr.ops
+        hit, split = si.is_valid(), Split()
+        T = self._transmittance(tr.fog, ops, ray.o, ray.d, D)
+        if tr.has_smooth:
+            em = active & (hit if self.hide_emitters else mi.Bool(True))
+            ds = mi.DirectionSample3f(scene, si=si, ref=dr.zeros(mi.Interaction3f))
+            split = split.add(dr.select(em, ds.emitter.eval(si, em), 0.0), mi.Bool(False), mi.Bool(False))
+        disk = None if self.hide_emitters else self._sun_disk_seen(scene, ops, ray, active & ~hit)
+        if disk is not None:  # the sun disk the camera ray sees
+            split = split.add(disk, mi.Bool(False), mi.Bool(False))
+        surf = active & hit
+        Ls, bs, w_b = self._surface_vertex(tr, sampler, ray, si, surf)
+        split = split.add(Ls, mi.Bool(False), mi.Bool(False))
+        direct = mi.Spectrum(split.surface)
+        t_m, w_m, med = self._forced_collision(tr, sampler, ray, D, active)
+        p_med = ray.o + ray.d * t_m
+        Ld, wo_m, w_ph, pdf_m = self._medium_vertex(tr, sampler, ray, p_med, t_m, med, mi.Bool(True))
+        split = split.add(dr.select(med, w_m * Ld, 0.0), mi.Bool(True), mi.Bool(True))
+        # q = T / (T + w_medium) >= T: it must not depend on the surface branch's own samples
+        # (the ratio estimator `surface` keeps the samples that continued it), and q >= T
+        # keeps `surface` defined wherever the old scatter-or-reach choice defined it.
+        # A ray to the sky has no surface to continue: it always continues the medium and
+        # its q only draws surface_coverage, so that `surface` is undefined where T ~ 0.
+        ms = dr.mean(T)
+        mm = dr.select(med, dr.mean(w_m * w_ph), 0.0)
+        q = dr.select(ms + mm > 0, ms / (ms + mm), 0.0)  # probability of continuing the surface branch
+        chose_s = sampler.next_1d(active) < q
+        go_s = surf & chose_s
+        go_m = med & dr.select(hit, ~chose_s & (q < 1), True)
+        β = dr.select(go_s, w_b / q, dr.select(go_m, w_m * w_ph / dr.select(hit, 1.0 - q, 1.0), 0.0))
+        prev_it = self._vertex(ray, si, go_s, p_med)
+        prev_pdf = dr.select(go_s, bs.pdf, pdf_m)
+        prev_delta = go_s & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+        ray = dr.select(
+            go_s, si.spawn_ray(si.to_world(bs.wo)), mi.Ray3f(p_med, wo_m, ray.time, ray.wavelengths)
+        )
+        active = (go_s | go_m) & (dr.max(β) > 0) & (self.max_depth > 1)
+        path = Path(ray, scene.ray_intersect(ray, active), active, depth=1)
+        path.split, path.β_cam, path.β, path.medium_first = split, T, β, go_m
+        path.prev_it, path.prev_pdf, path.prev_delta = prev_it, prev_pdf, prev_delta
+        return path, Cover(chose_s, direct, dr.select(hit, q, 1.0))
+
+    def _camera_ray(self, tr, sampler, ray, active):
+        """The camera ray's stage: its hit, G-buffer and ``T``, the sun's single scattering
+        sampled along it, and with forced splitting (when the fog scatters, the scene has
+        lights and ``max_depth >= 2``) both of its branches (:meth:`_camera_split`).
+        Returns the :class:`CameraRay`; its ``path`` starts at depth 1 after forced
+        splitting, else at depth 0 on the camera ray (the loop then traces the camera ray's
+        free flight)."""
+        si = tr.scene.ray_intersect(ray, active)
+        D0 = dr.select(si.is_valid(), si.t, tr.ops.largest)
+        gbuf = self._gbuffer(tr.fog, tr.ops, ray, si) if self.aovs else None
+        sun_ss = self._sun_single_scatter(tr, sampler, ray, D0, active)
+        tr.sun_along = sun_ss is not None
+        active = active & tr.has_lights  # no emitter: nothing to trace beyond the G-buffer
+        if tr.phase is not None and tr.has_lights and self.forced_split and self.max_depth >= 2:
+            path, cover = self._camera_split(tr, sampler, ray, si, D0, active)
+            return CameraRay(gbuf, sun_ss, cover, path)
+        return CameraRay(gbuf, sun_ss, None, Path(ray, si, active))
+
+    def _gbuffer(self, fog, ops, ray, si):
+        """T, coverage-independent G-buffer of the camera ray (closed form, per sample)."""
+        hit = si.is_valid()
+        T = mi.Spectrum(1.0)
+        if fog is not None:
+            T = self._transmittance(fog, ops, ray.o, ray.d, dr.select(hit, si.t, ops.largest))
+        return {
+            "T": [T[0], T[1], T[2]],
+            "distance": [dr.select(hit, si.t, 0.0)],
+            "P": [dr.select(hit, si.p[i], 0.0) for i in range(3)],
+            "view": [ray.d[i] for i in range(3)],
+            "hit": [dr.select(hit, 1.0, 0.0)],
+        }
 
     # ----------------------------------------------------------------- sample
     @dr.syntax
     def sample(self, scene, sampler, ray, medium=None, active=True):
-        fog, ops = self._scene_fog(scene), drjit_ops()
+        fog = self._scene_fog(scene)
         has_delta, has_smooth = self._scene_lights(scene)
         phase = (
             scene.sensors()[0].get_medium().phase_function() if (fog is not None and fog.scatters) else None
         )
-        phase_ctx, bsdf_ctx = mi.PhaseFunctionContext(sampler), mi.BSDFContext()
+        tr = Trace(scene, fog, phase, sampler, has_delta, has_smooth)
+        ops = tr.ops
 
         ray, active = mi.Ray3f(ray), mi.Bool(active)
         active0 = mi.Bool(active)
-        split = Split()
-        β, β_cam = mi.Spectrum(1.0), mi.Spectrum(1.0)  # β_cam: the camera segment of unscattered paths
-        depth, medium_first = mi.UInt32(0), mi.Bool(False)
-        prev_it, prev_pdf, prev_delta = dr.zeros(mi.Interaction3f), mi.Float(1.0), mi.Bool(True)
-
-        # ---------------- camera ray: G-buffer, T, the sun's single scattering ----------------
-        si = scene.ray_intersect(ray, active)
-        D0 = dr.select(si.is_valid(), si.t, ops.largest)
-        gbuf = self._gbuffer(fog, ops, ray, si) if self.aovs else None
-        sun_ss = self._sun_single_scatter(scene, fog, ops, sampler, ray, D0, active)
-
-        has_lights = has_delta or has_smooth
-        active &= has_lights  # no emitter: nothing to trace beyond the G-buffer
-        cam = None  # with forced splitting: (surface_coverage, depth-0 surface light, q)
-        if dr.hint(
-            self.forced_split and phase is not None and has_lights and self.max_depth >= 2, mode="scalar"
-        ):
-            split, β_cam, cam, ray, si, β, medium_first, prev_it, prev_pdf, prev_delta, active = (
-                self._camera_split(
-                    scene,
-                    fog,
-                    ops,
-                    sampler,
-                    ray,
-                    si,
-                    D0,
-                    phase,
-                    phase_ctx,
-                    bsdf_ctx,
-                    has_smooth,
-                    sun_ss,
-                    active,
-                )
-            )
-            depth = mi.UInt32(1)
+        cam = self._camera_ray(tr, sampler, ray, active)
+        p = cam.path
+        split, β, β_cam, depth, medium_first = p.split, p.β, p.β_cam, p.depth, p.medium_first
+        ray, si, active = p.ray, p.si, p.active
+        prev_it, prev_pdf, prev_delta = p.prev_it, p.prev_pdf, p.prev_delta
         # the sun along the depth-1 segment (its vertices scatter only when max_depth >= 3)
-        ss_next = sun_ss is not None and self.sun_sampling_rays >= 2 and self.max_depth >= 3
+        ss_next = tr.sun_along and self.sun_sampling_rays >= 2 and self.max_depth >= 3
         while dr.hint(active, max_iterations=-1, label="fogpath"):
             if dr.hint(ss_next, mode="scalar"):
                 on = active & (depth == 1)
                 D1 = dr.select(si.is_valid(), si.t, ops.largest)
-                ss1 = self._sun_single_scatter(scene, fog, ops, sampler, ray, D1, on, samples=1)
+                ss1 = self._sun_single_scatter(tr, sampler, ray, D1, on, samples=1)
                 split = split.add(dr.select(on, β * ss1, 0.0), medium_first, mi.Bool(False))
             # ---------------- free flight to a medium vertex or the surface ----------------
             is_medium, t_end, w_ff = self._free_flight(
-                fog, ops, sampler, ray, dr.select(si.is_valid(), si.t, dr.inf), active
+                tr, sampler, ray, dr.select(si.is_valid(), si.t, dr.inf), active
             )
             passed = active & (depth == 0) & ~is_medium
             medium_first |= active & (depth == 0) & is_medium
@@ -379,34 +774,17 @@ class FogPathIntegrator(FogPathCameraRay):
                 mi.Spectrum(1.0),
                 mi.Point3f(p_med),
             )
-            if dr.hint(phase is not None and has_lights, mode="scalar"):
-                Ld, wo_m, w_m, pdf_m = self._medium_vertex(
-                    scene,
-                    fog,
-                    ops,
-                    sampler,
-                    ray,
-                    p_med,
-                    t_end,
-                    phase,
-                    phase_ctx,
-                    med,
-                    depth == 0,
-                    has_smooth,
-                    sun_ss,
-                    (depth <= 1) if ss_next else (depth == 0),
-                )
+            if dr.hint(phase is not None and tr.has_lights, mode="scalar"):
+                sun_sampled = (depth <= 1) if ss_next else (depth == 0)
+                Ld, wo_m, w_m, pdf_m = self._medium_vertex(tr, sampler, ray, p_med, t_end, med, sun_sampled)
                 split = split.add(β * Ld, medium_first, depth == 0)
                 wo[med], pdf_next[med], w_next[med] = wo_m, pdf_m, w_m
 
             # ---------------- surface vertex: light sample, BSDF sample ----------------
             surf = active & is_surface
-            bsdf = si.bsdf(ray)
-            if dr.hint(has_lights, mode="scalar"):
-                smooth = surf & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-                Ls, _ = self._direct(scene, fog, ops, sampler, si, bsdf_ctx, bsdf, smooth, has_smooth)
+            Ls, bs, w_b = self._surface_vertex(tr, sampler, ray, si, surf)
+            if dr.hint(Ls is not None, mode="scalar"):
                 split = split.add(β * Ls, medium_first, mi.Bool(False))
-            bs, w_b = bsdf.sample(bsdf_ctx, si, sampler.next_1d(surf), sampler.next_2d(surf), surf)
             wo[surf], pdf_next[surf], w_next[surf], origin[surf] = si.to_world(bs.wo), bs.pdf, w_b, si.p
             delta_next[surf] = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
 
@@ -423,24 +801,164 @@ class FogPathIntegrator(FogPathCameraRay):
             active &= ~rr | (sampler.next_1d(rr) < q)
             si = scene.ray_intersect(ray, active)
 
-        if dr.hint(sun_ss is not None, mode="scalar"):  # the camera ray's sampled sun scattering
-            split = Split(split.surface, split.single + dr.select(active0, sun_ss, 0.0), split.multiple)
-        return self._outputs(split, β_cam, medium_first, cam, gbuf)
+        if dr.hint(tr.sun_along, mode="scalar"):  # the camera ray's sampled sun scattering
+            split = Split(split.surface, split.single + dr.select(active0, cam.sun_ss, 0.0), split.multiple)
+        return self._outputs(split, β_cam, medium_first, cam.cover, cam.gbuf)
 
-    # ------------------------------------------------------------- G-buffer
-    def _gbuffer(self, fog, ops, ray, si):
-        """T, coverage-independent G-buffer of the camera ray (closed form, per sample)."""
-        hit = si.is_valid()
-        T = mi.Spectrum(1.0)
-        if fog is not None:
-            T = self._transmittance(fog, ops, ray.o, ray.d, dr.select(hit, si.t, ops.largest))
-        return {
-            "T": [T[0], T[1], T[2]],
-            "distance": [dr.select(hit, si.t, 0.0)],
-            "P": [dr.select(hit, si.p[i], 0.0) for i in range(3)],
-            "view": [ray.d[i] for i in range(3)],
-            "hit": [dr.select(hit, 1.0, 0.0)],
+    # ------------------------------------------------------------- outputs
+    def _outputs(self, split, β_cam, medium_first, cover, gbuf):
+        """(L, valid, AOVs) in the order of :data:`AOV_NAMES`.  ``surface`` and
+        ``surface_coverage``: the camera ray reached the surface unscattered, or with
+        forced splitting (``cover``, a :class:`Cover`) the sample continued the surface branch;
+        its light is then the depth-0 part plus the continuation without the 1/q weight."""
+        att = β_cam * split.surface
+        covered, s_out = ~medium_first, split.surface
+        if cover is not None:
+            covered, s_out = cover.chosen, cover.direct + cover.q * (split.surface - cover.direct)
+        L = att + split.single + split.multiple
+        if gbuf is None:
+            return L, mi.Bool(True), []
+        rgb = lambda s: [s[0], s[1], s[2]]  # noqa: E731
+        parts = {
+            "attenuated_surface": rgb(att),
+            "inscatter": rgb(split.single + split.multiple),
+            "single": rgb(split.single),
+            "multiple": rgb(split.multiple),
+            "surface": rgb(dr.select(covered, s_out, 0.0)),
+            "surface_coverage": [dr.select(covered, 1.0, 0.0)],
+            **gbuf,
         }
+        return L, mi.Bool(True), [c for g in gbuffer.SAMPLE_GROUPS for c in parts[g]]
+
+    # ------------------------------------------------------------- render
+    def render_moments(self, scene, sensor=0, seed=0, spp=1, pixel_exact=None, squares=True):
+        """Per-pixel sums of every per-sample output and of the squares of the parts.
+
+        Returns ``(sums, squares)``: float64 ``TensorXd`` of shape ``(H, W, 3 + len(AOV_NAMES))``
+        (R,G,B then :data:`AOV_NAMES`) and ``(H, W, 6 * len(gbuffer.SQUARED_GROUPS))``,
+        summed over the ``spp`` samples of each pixel: the squares of every channel of
+        :data:`~fogref.gbuffer.SQUARED_GROUPS`, then the products of their channel pairs
+        :data:`~fogref.gbuffer.CHANNEL_PAIRS` (R*G, R*B, G*B; the noise correlations).
+        With ``aovs`` off: R,G,B, their squares and products only.  ``squares=False``: the
+        second is None (not computed).
+        ``pixel_exact`` (default: the plugin's property) puts every sample at the
+        pixel centre; otherwise samples are uniform in the pixel (box filter).
+        Camera rays start at the camera and have no far limit.
+        """
+        pixel_exact = self.pixel_exact if pixel_exact is None else bool(pixel_exact)
+        make_scene_values_opaque(scene)  # one kernel for every value of the scene's parameters
+        self._memo = (scene, {})  # the scene values read while tracing: once (_read_once)
+        try:
+            with dr.scoped_set_flag(dr.JitFlag.OptimizeLoops, OPTIMIZE_LOOPS):
+                return self._render_moments(scene, sensor, seed, spp, pixel_exact, squares)
+        finally:
+            self._memo = None
+
+    def _render_moments(self, scene, sensor, seed, spp, pixel_exact, squares):
+        sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
+        if not str(sensor).startswith("PerspectiveCamera"):
+            raise ValueError(
+                f"fogpath renders from a 'perspective' sensor only, not {str(sensor).split('[')[0]}"
+            )
+        film = sensor.film()
+        if not film.rfilter().is_box_filter():
+            mi.Log(
+                mi.LogLevel.Warn,
+                "fogpath: the film's reconstruction filter is replaced by a box filter "
+                "(each sample counts in its own pixel)",
+            )
+        size = film.crop_size()
+        n_pix, spp = int(dr.prod(size)), int(spp)
+        sampler = sensor.sampler().clone()
+        sampler.set_sample_count(spp)
+        sampler.set_samples_per_wavefront(spp)
+        sampler.seed(dr.opaque(mi.UInt32, int(seed)), n_pix * spp)  # opaque: a new seed needs no new kernel
+
+        idx = dr.arange(mi.UInt32, n_pix * spp) // dr.opaque(mi.UInt32, spp)
+        pos = mi.Vector2u(0)
+        pos.y = idx // size[0]
+        pos.x = idx - pos.y * size[0]
+        pos_f = mi.Vector2f(pos) + (mi.Vector2f(0.5) if pixel_exact else sampler.next_2d())
+        ray, weight = sensor.sample_ray(
+            sensor.shutter_open(), 0.5, pos_f / mi.ScalarVector2f(size), mi.Point2f(0.5)
+        )
+        ray = mi.Ray3f(
+            sensor.world_transform().translation(), ray.d, ray.time, ray.wavelengths
+        )  # no clip planes
+        L, _, aovs = self.sample(scene, sampler, ray, None, True)
+        L = L * weight
+        values = [L[0], L[1], L[2]] + list(aovs)
+        names = ["R", "G", "B"] + (AOV_NAMES if self.aovs else [])
+        groups = (gbuffer.SQUARED_GROUPS if self.aovs else ("final",)) if squares else ()
+        products = [(names.index(c), names.index(c)) for g in groups for c in gbuffer.channel_names(g)]
+        products += [
+            (names.index(gbuffer.channel_names(g)[i]), names.index(gbuffer.channel_names(g)[j]))
+            for g in groups
+            for i, j in gbuffer.CHANNEL_PAIRS
+        ]
+        dr.eval(values)  # one kernel for every output; otherwise each per-pixel sum re-runs the path loop
+        sums, sq = self._per_pixel_sums(values, products, n_pix, spp)
+        shape = (size[1], size[0], 1)
+        sums = dr.concat([mi.TensorXd(a, shape=shape) for a in sums], axis=2)
+        sq = dr.concat([mi.TensorXd(a, shape=shape) for a in sq], axis=2) if squares else None
+        dr.eval(sums, sq)
+        return sums, sq
+
+    @staticmethod
+    def _per_pixel_sums(values, products, n_pix, spp):
+        """Per-pixel float64 sums of ``values`` (evaluated per-sample arrays, lane
+        ``p * spp + s``) and of the products ``values[j] * values[k]`` for ``(j, k)`` in
+        ``products`` (squares where ``j == k``): two lists of ``n_pix`` arrays.
+
+        One kernel: a loop over the ``spp`` samples of every pixel, each iteration
+        gathering the sample from every output, in a fixed order (deterministic,
+        unlike atomic scatter-adds).  Float64 throughout: a float32 square and sum
+        would leave a spurious stderr of ~3e-4 x the value.
+        """
+        spp_o = dr.opaque(mi.UInt32, spp)  # opaque: one kernel for every spp
+        first = dr.arange(mi.UInt32, n_pix) * spp_o
+        zeros = lambda k: tuple(dr.zeros(mi.Float64, n_pix) for _ in range(k))  # noqa: E731
+
+        def body(s, sums, squares):
+            x = [mi.Float64(v if dr.width(v) == 1 else dr.gather(type(v), v, first + s)) for v in values]
+            return (
+                s + 1,
+                tuple(a + b for a, b in zip(sums, x)),
+                tuple(
+                    a + (dr.square(x[j]) if j == k else x[j] * x[k]) for a, (j, k) in zip(squares, products)
+                ),
+            )
+
+        _, sums, squares = dr.while_loop(
+            (mi.UInt32(0), zeros(len(values)), zeros(len(products))),
+            lambda s, sums, squares: s < spp_o,
+            body,
+            label="fogpath_pixel_sums",
+        )
+        dr.eval(sums, squares)  # all at once: one loop kernel (read separately, each would re-run the loop)
+        return list(sums), list(squares)
+
+    def render(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
+        """``mi.render``: the per-pixel mean of R,G,B and the AOVs (box filter, or
+        pixel-exact with ``pixel_exact``), a ``TensorXf`` ``(H, W, 3 + len(aov_names()))``.
+        The ``surface.*`` AOVs are per-sample means here;
+        :func:`fogref.gbuffer.moments_to_channels` turns them into the EXR's ratio estimator.
+
+        In passes of at most :data:`fogref_plugins.passes.MAX_LANES` lanes, as the render
+        driver does (one pass keeps ``seed``; several are seeded with ``pass_seed``):
+        each pass holds every sample's outputs in memory, so one call at 1920x1080 and
+        1024 spp would otherwise need ~425 GB."""
+        sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
+        spp = int(spp) if int(spp) > 0 else sensor.sampler().sample_count()
+        passes = pass_sizes(int(dr.prod(sensor.film().crop_size())), spp, max_lanes(mi.variant()))
+        total = None
+        for k, n in enumerate(passes):
+            sums, _ = self.render_moments(
+                scene, sensor, seed if len(passes) == 1 else pass_seed(seed, k), n, squares=False
+            )
+            total = sums if total is None else total + sums
+            dr.eval(total)
+        return mi.TensorXf(total / spp)
 
 
 def register() -> None:

@@ -4,7 +4,7 @@ Usage: ``.venv/bin/python scripts/engine_table.py [--res 96 --resy 54 --spp 64 -
 
 For the default scene (``scenes/valley.xml``) and the open plane (``scenes/open_plane.xml``):
 a ground truth (``fogref.cached_truth``, seed 0, pixel-exact), then each engine of
-``fogref.engines.ENGINES`` (three.js, Babylon.js, PlayCanvas from ``node_modules``, in headless
+``fogref.engines.ENGINES`` (three.js, Babylon.js, PlayCanvas, Filament from ``node_modules``, in headless
 Chromium) renders the truth's view with its fog mapped from the scene (``fogref.cli.engine.
 engine_model``, as ``--from-scene``), and ``fogref.compare.check`` compares the engine's linear
 float render target (final, T, inscatter; ``composite`` is its fog over the truth's surface) and
@@ -134,17 +134,16 @@ def main(argv=None) -> int:
         "image, and its fog's transmittance `T` and inscatter from passes with black materials; "
         "`composite` puts that fog over the truth's own surface radiance, so only the fog differs), "
         "`canvas` the 8-bit canvas the engine ships with its defaults (three.js: sRGB output, its fog "
-        "blended in sRGB; Babylon.js: the linear values unconverted; PlayCanvas: a 2.2 power), read "
-        "as sRGB. Metrics: relative RMSE and relative bias against the truth, with 99 % intervals "
+        "blended in sRGB; Babylon.js: the linear values unconverted; PlayCanvas: a 2.2 power; "
+        "Filament: post-processing off, not its default, so the linear values clamped, unconverted), "
+        "read as sRGB. Metrics: relative RMSE and relative bias against the truth, with 99 % intervals "
         "from the truth's noise (`fogref.compare.check`); `final` also carries the engine's own "
         "surface shading (Lambert under a directional sun and a sky light: three.js's and Babylon's "
         "hemisphere lights are the truth's sky, PlayCanvas's uniform ambient light is it only on "
-        "horizontal ground; no shadows), which is not the fog's error. The engines draw their "
-        "background without fog, so on `sky` their transmittance is 1 and their inscatter 0. "
-        "Filament (npm `filament`, WebAssembly) is not in the loop: its `Engine.createMaterial` takes "
-        "only materials compiled ahead of time by Filament's `matc` (`.filamat`), which the package "
-        "does not ship, and its only built-in materials are gltfio's lit ubershaders; so the page "
-        "cannot write the depth pass both checks (port vs engine, camera vs truth) read.",
+        "horizontal ground; Filament (WebAssembly, whose npm build ships no material compiler): "
+        "unlit glTF triangles whose vertex colours are fogref's Lambert shading of each vertex, "
+        "interpolated; no shadows), which is not the fog's error. The engines draw their "
+        "background without fog, so on `sky` their transmittance is 1 and their inscatter 0.",
         "",
         f"Made by `{command}` in {time.perf_counter() - t0:.0f} s.",
         "",

@@ -82,7 +82,7 @@ def test_an_interruption_at_every_line_of_the_pass_loop_resumes_bitwise(tmp_path
     scene = tiny.make(mitsuba, tmp_path / "scene")
     kw = dict(spp=SPP, seed=5, progress=False, png=False)
     ref = _pixels(R.render(scene, tmp_path / "ref.exr", **kw))
-    import fogref.render.scene as S
+    import fogref.render.load as S
 
     loaded = S.load_scene(scene)
     monkeypatch.setattr(S, "load_scene", lambda *a, **k: loaded)  # the same scene every run: faster

@@ -106,7 +106,7 @@ def test_each_command_has_help_with_defaults_and_exit_codes(cmd, capsys):
 def test_render_builds_only_its_own_parser():
     code = (
         "import sys; from fogref.cli import parse; parse(['render', 's.xml', '-o', 'x.exr']); "
-        "bad = [m for m in ('fogref.compare', 'fogref.study', 'fogref.render.scene_writer', "
+        "bad = [m for m in ('fogref.compare', 'fogref.study', 'fogref.scene.writer', "
         "'fogref.render.render', 'fogref.cli.compare', 'fogref.cli.scene', 'dask', 'pandas', 'matplotlib', "
         "'mitsuba') if m in sys.modules]; assert not bad, bad"
     )

@@ -2,21 +2,26 @@
 
 Each test that renders starts Debian's headless Chromium with an engine from node_modules (a few
 seconds); they skip, saying why, only where Chromium cannot start.  The engines: three.js,
-Babylon.js and PlayCanvas (every engine of :data:`fogref.engines.ENGINES`).  References:
+Babylon.js, PlayCanvas and Filament (every engine of :data:`fogref.engines.ENGINES`).  References:
 
 * camera: the truth's G-buffer distance of the open plane (Mitsuba's pixel-centre rays, float32)
   against the engine's distance along the ray through each pixel centre.  Measured: 4.1e-7
-  relative at most (float32); the bound 1e-5 detects a camera off by 0.001 deg in pitch or a
+  relative at most (float32; Filament 5.6e-7); the bound 1e-5 detects a camera off by 0.001 deg in pitch or a
   field of view off by 1e-4 relative (each moves a 16x9 view's plane distances by >= 1e-4).
-* fog: the port (fogref.models.threejs, .babylon, .playcanvas) on the fog coordinate the
-  engine's fog interpolated (eye depth, distance), over the engine's own unfogged surface,
-  against the engine's linear image: measured 7.5e-8 (three.js), 1.2e-7 (Babylon, PlayCanvas)
-  (float32); the level is 1e-6 relative.  A density 1 % off gives 2.8e-3 here: the test can fail.
-* canvas: the port through the engine's canvas transform (three.js: sRGB transfer; Babylon: none;
-  PlayCanvas: a 2.2 power) and 8 bits: 0 code values measured, the level 1; an sRGB-encoded
-  linear blend instead differs by 17 (three.js) and 74 (Babylon) code values on the valley.
+* fog: the port (fogref.models.threejs, .babylon, .playcanvas, .filament) on the fog coordinate
+  the engine's fog interpolated (eye depth, distance; Filament: its interpolated position), over
+  the engine's own unfogged surface, against the engine's linear image: measured 7.5e-8
+  (three.js), 1.2e-7 (Babylon, PlayCanvas), 8.3e-7 (Filament) (float32); the level is 1e-6
+  relative (Filament's 6e-5: its shader's line integral cancels for a small height term, see
+  fogref.engines.filament.LINEAR_LEVEL; 2.9e-6 measured at 96x54).  A density 1 % off gives
+  2.8e-3 (Filament 4.0e-3) here: the test can fail.
+* canvas: the port through the engine's canvas transform (three.js: sRGB transfer; Babylon,
+  Filament: none; PlayCanvas: a 2.2 power) and 8 bits: 0 code values measured, the level 1; an
+  sRGB-encoded linear blend instead differs by 17 (three.js) and 74 (Babylon, Filament) code
+  values on the valley.
 * lighting: without fog, on the open plane, the engine's image is the truth's (exact per sample
-  there): 2.1e-7 (three.js), 7.0e-8 (Babylon, PlayCanvas) relative measured.
+  there): 2.1e-7 (three.js), 7.0e-8 (Babylon, PlayCanvas), 2.5e-7 (Filament's unlit vertex
+  colours, fogref's Lambert shading of each vertex) relative measured.
 """
 
 from __future__ import annotations
@@ -30,13 +35,13 @@ import pytest
 
 from conftest import ROOT, SCENES
 from fogref.cli import main
-from fogref.engines import ENGINES
+from fogref.engines import ENGINES, engine_module
 from fogref.engines.browser import Browser, EngineUnavailable, find_chromium
 
 pytestmark = pytest.mark.browser  # headless Chromium (CONTRIBUTING.md, the tiers)
 
 #: engine -> its model's density parameter (a 1 % change must be seen)
-DENSITY = {"threejs": "density", "babylon": "fogDensity", "playcanvas": "density"}
+DENSITY = {"threejs": "density", "babylon": "fogDensity", "playcanvas": "density", "filament": "density"}
 assert set(DENSITY) == set(ENGINES)
 
 
@@ -97,7 +102,8 @@ def test_fog_settings_arrive(valley):
     p = port_vs_engine(r, model)
     assert p["pixels"] > 100
     assert p["at_quantisation"], p["summary"]
-    assert p["linear_max_relative"] <= 1e-6 and p["canvas_max"] <= 1
+    level = getattr(engine_module(r.engine), "LINEAR_LEVEL", 1e-6)  # Filament's: 6e-5 (its module)
+    assert p["linear_max_relative"] <= level and p["canvas_max"] <= 1
     # three.js blends its fog in sRGB, Babylon writes linear values unconverted: neither canvas is
     # the sRGB encoding of the linear image (PlayCanvas's 2.2 power is within 2 code values of it)
     if r.engine != "playcanvas":
@@ -107,6 +113,28 @@ def test_fog_settings_arrive(valley):
     off = type(model)(dataclasses.replace(model.params, **{key: getattr(model.params, key) * 1.01}))
     q = port_vs_engine(r, off)
     assert not q["at_quantisation"] and q["linear_max"] > 1e-5
+
+
+@pytest.mark.render
+def test_filament_canvas_is_its_port_on_a_truths_view(plane_truth):
+    """Filament on the open plane's truth view (16x9), its fog mapped from the scene with the sun
+    term on: the 8-bit canvas (post-processing off) is the port's linear image clamped and rounded,
+    0 code values measured on all 80 surface pixels (level 1), the linear target 8.3e-8; the port
+    without its sun term misses by 10 code values and fails."""
+    from fogref.cli.engine import engine_model
+    from fogref.engines.port import port_vs_engine
+    from fogref.engines.render import render_engine
+    from fogref.engines.view import view_from_truth
+
+    view = view_from_truth(plane_truth)
+    model, _ = engine_model("filament", None, view.params, view)
+    assert model.params.inScatteringSize > 0
+    r = render_engine(view, model, "filament", timeout=120)
+    p = port_vs_engine(r, model)
+    assert p["pixels"] == 80 and p["canvas_max"] <= 1 and p["at_quantisation"], p["summary"]
+    no_sun = type(model)(dataclasses.replace(model.params, inScatteringSize=-1.0))
+    q = port_vs_engine(r, no_sun)
+    assert q["canvas_max"] > 5 and not q["at_quantisation"], q["summary"]
 
 
 def test_linear_fog_settings_arrive(chromium):
@@ -284,8 +312,9 @@ def test_engine_lighting_is_the_truths_without_fog(chromium, tmp_path, engine):
     constant sky by the cosine-weighted BSDF sample: stderr 0), and the engine's sun
     (three.js: DirectionalLight of colour E; Babylon, PlayCanvas: E / pi), sky (a hemisphere
     light; PlayCanvas: its ambient light, the sky's on this horizontal ground; the background L)
-    and Lambert material give the same image: 2.1e-7 (three.js), 7.0e-8 (Babylon, PlayCanvas)
-    relative measured (float32); the tolerance 1e-5 fails a sun or sky off by more than 0.001 %
+    and Lambert material give the same image (Filament: unlit, its vertex colours fogref's Lambert
+    shading): 2.1e-7 (three.js), 7.0e-8 (Babylon, PlayCanvas), 2.5e-7 (Filament) relative measured
+    (float32); the tolerance 1e-5 fails a sun or sky off by more than 0.001 %
     (a factor pi, the usual slip, is 200 %)."""
     from fogref.engines.render import render_engine
     from fogref.engines.view import view_from_truth

@@ -22,8 +22,9 @@ from fogref.cli import export as cli_export
 from fogref.cli import main
 from fogref.mapping.export import ENGINES
 from fogref.mapping.fit import with_sun_elevation
+from fogref.scene.describe import lookat_camera
 from fogref.shipped_scenes import scene_path
-from fogref.study.fit import lookat_camera, physical_from_scene
+from fogref.study.fit import physical_from_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 TABLE = ROOT / "reports" / "fit" / "engines.json"

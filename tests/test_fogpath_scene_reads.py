@@ -3,7 +3,7 @@
 Reading an evaluated Dr.Jit value from Python (``str`` of an emitter, ``float`` of the sun's
 transform) waits on the device; fogpath used to read them at every call site while tracing
 (the sky ten times, the sun three times per pass on the valley).  ``render_moments`` now keeps
-what it read for the call (``FogPathBase._read_once``).
+what it read for the call (``FogPathIntegrator._read_once``).
 
 * the reads happen once each per ``render_moments`` call, and nothing is kept after it (a
   later render of another scene reads its own values): fails if a call site reads past the
@@ -34,18 +34,18 @@ def _sums(scene, seed=3):
 
 
 def test_scene_values_are_read_once_per_render(mitsuba, monkeypatch):
-    import fogref_plugins.fogpath_common as common
+    import fogref_plugins.fogpath as common
 
     calls: Counter = Counter()
     for name in READS:
-        read = getattr(common.FogPathBase, name)
+        read = getattr(common.FogPathIntegrator, name)
 
         def counted(*args, _read=read, _name=name):
             calls[_name] += 1
             return _read(*args)
 
-        static = isinstance(common.FogPathBase.__dict__[name], staticmethod)
-        monkeypatch.setattr(common.FogPathBase, name, staticmethod(counted) if static else counted)
+        static = isinstance(common.FogPathIntegrator.__dict__[name], staticmethod)
+        monkeypatch.setattr(common.FogPathIntegrator, name, staticmethod(counted) if static else counted)
     for sun in ("20", "40"):
         calls.clear()
         scene = mitsuba.load_file(VALLEY, **TINY, sun_elevation=sun)
@@ -55,11 +55,11 @@ def test_scene_values_are_read_once_per_render(mitsuba, monkeypatch):
 
 
 def test_reading_once_keeps_the_pixels(mitsuba, monkeypatch):
-    import fogref_plugins.fogpath_common as common
+    import fogref_plugins.fogpath as common
 
     scenes = {sun: mitsuba.load_file(VALLEY, **TINY, sun_elevation=sun) for sun in ("20", "40")}
     once = {sun: _sums(s) for sun, s in scenes.items()}
-    monkeypatch.setattr(common.FogPathBase, "_read_once", lambda self, scene, name, read: read())
+    monkeypatch.setattr(common.FogPathIntegrator, "_read_once", lambda self, scene, name, read: read())
     every = {sun: _sums(s) for sun, s in scenes.items()}
     for sun in scenes:
         assert np.array_equal(once[sun], every[sun]), f"sun elevation {sun}: pixels changed"
@@ -67,7 +67,7 @@ def test_reading_once_keeps_the_pixels(mitsuba, monkeypatch):
 
 
 def test_loops_traced_once_keep_the_pixels(mitsuba, monkeypatch):
-    import fogref_plugins.fogpath_common as common
+    import fogref_plugins.fogpath as common
 
     assert common.OPTIMIZE_LOOPS is False
     scene = mitsuba.load_file(VALLEY, **TINY, sun_elevation="30")

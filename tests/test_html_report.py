@@ -245,6 +245,7 @@ def test_the_study_page_explains_its_budget_with_numbers_rounded_to_their_noise(
     assert "RMSE 0.14481 ± 0.00007" in text  # 0.144808... ± 7e-05 (reports/unreal_study/budget.json)
     assert "A negative share: the effect cancels part of the other effects' error" in text
     assert "can exceed 100 % or fall below −100 %" in text and "How the budget was checked" in text
+    assert "Port vs engine (ue4): no runnable engine here." in text
     # about 1.02 ± 0.06 and -1.15 ± 0.15 as fractions of the squared error
     assert "[e] geometric shadows (sun) 102 ± 6 % adds error" in text
     assert "[a/b] colours/exponent re-fitted to the attenuated target -115 ± 15 % cancels part" in text
@@ -280,3 +281,23 @@ def test_a_large_truth_is_shown_as_block_means_so_the_page_stays_small(monkeypat
         and "last 0 rows and 1 columns" in html
     )
     assert len(html) < 1.25 * len(small), (len(html), len(small))
+
+
+def test_every_truth_layer_of_the_viewer_carries_its_standard_error():
+    """The viewer's layers embed the truth's per-pixel standard error for every part that has one,
+    the transmittance (schema group ``T``, ``stderr["transmittance"]``) included: a lookup under
+    the group name would leave T without its noise."""
+    import fogref.html.viewer as V
+    from fogref.compare.synthetic import synthetic_truth
+    from fogref.gbuffer import part_attribute
+    from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+
+    model = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
+    t = synthetic_truth(model, shape=(9, 16), noise=0.05)
+    layers = {layer["part"]: layer for layer in V.viewer_data(t)["layers"]}
+    noisy = [p for p in layers if t.stderr.get(part_attribute(p)) is not None]
+    assert "T" in noisy, sorted(t.stderr)
+    for p in noisy:
+        se = np.asarray(t.stderr[part_attribute(p)], np.float64)
+        assert layers[p]["stderr"] is not None, p
+        assert np.array_equal(decode_half(layers[p]["stderr"]), se.astype(np.float16).astype(np.float64)), p

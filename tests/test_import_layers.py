@@ -5,11 +5,14 @@ fogref is built in floors; each floor imports only the floors below it (see
 :mod:`ast`: every ``import`` and ``from ... import`` counts, at module level and
 inside functions alike (a function-level import is still an arrow between
 modules, it only runs later). ``plugins/`` is the package ``fogref_plugins``.
+Imports sit at the top of their module: every function-level import and every private
+name imported from another module is listed below with its reason.
 """
 
 from __future__ import annotations
 
 import ast
+import functools
 import os
 import subprocess
 import sys
@@ -41,6 +44,8 @@ FLOORS: list[tuple[str, tuple[str, ...]]] = [
     # the ground-truth schema, its I/O and the one display transform
     ("gbuffer", ("fogref.gbuffer", "fogref.exrio", "fogref.display")),
     ("models", ("fogref.models",)),  # ports of the engines' shaders
+    # the scene XML read once: parse, $defaults, vocabulary and ranges, inputs, describe, writer, editor
+    ("scene", ("fogref.scene",)),
     ("mapping", ("fogref.mapping",)),  # physical scene -> model parameters, fits
     # the Mitsuba plugins: the heightfog medium, the fogpath integrator and its passes
     ("plugins", ("fogref_plugins",)),
@@ -52,8 +57,8 @@ FLOORS: list[tuple[str, tuple[str, ...]]] = [
     # entry points: the command line, the pytest plugin and the facade (fogref.set_variant)
     ("cli", ("fogref.cli", "fogref.pytest_plugin", "fogref.info", "fogref")),
 ]
-#: floors that must not import Mitsuba or Dr.Jit at module level
-NO_MITSUBA_AT_IMPORT = {"base", "media", "gbuffer", "models", "mapping", "compare", "engines", "study", "cli"}
+#: floors that must not import Mitsuba or Dr.Jit at module level: all but the plugins and render
+NO_MITSUBA_AT_IMPORT = {name for name, _ in FLOORS} - {"plugins", "render"}
 
 
 def _modules() -> dict[str, tuple[Path, bool]]:
@@ -84,6 +89,11 @@ def floor_of(module: str) -> int:
     return best
 
 
+@functools.cache
+def _parsed(path: Path) -> ast.Module:
+    return ast.parse(path.read_text(encoding="utf-8"), str(path))
+
+
 def _function_nodes(tree):
     inside = set()
     for node in ast.walk(tree):
@@ -101,7 +111,7 @@ def imports_of(module: str):
     relative imports are resolved against the package.
     """
     path, is_pkg = MODULES[module]
-    tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+    tree = _parsed(path)
     in_function = _function_nodes(tree)
     package = module if is_pkg else module.rpartition(".")[0]
     for node in ast.walk(tree):
@@ -147,7 +157,7 @@ def _resolve(name: str) -> str | None:
 def _facade_uses(module: str):
     """(``fogref.<name>``, line) for each attribute use of a bare ``import fogref``."""
     path, _ = MODULES[module]
-    tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+    tree = _parsed(path)
     aliases = {
         a.asname or a.name
         for n in ast.walk(tree)
@@ -160,8 +170,9 @@ def _facade_uses(module: str):
             yield f"fogref.{node.attr}", node.lineno
 
 
+@functools.cache
 def import_graph() -> dict[str, dict[str, int]]:
-    """module -> {imported fogref module: line} (self-imports dropped)."""
+    """module -> {imported fogref module: line} (self-imports dropped; read once, not changed)."""
     graph: dict[str, dict[str, int]] = {m: {} for m in MODULES}
     for m in MODULES:
         uses = [(n, line) for n, line, _ in imports_of(m) if n != "fogref"] + list(_facade_uses(m))
@@ -273,6 +284,18 @@ def test_no_mitsuba_or_drjit_at_module_level_below_render():
     assert not bad, "\n".join(bad)
 
 
+def test_the_scene_floor_never_imports_mitsuba():
+    """``fogref.scene`` reads and writes scene XML without Mitsuba or Dr.Jit, inside functions too."""
+    bad = [
+        f"{_where(m, line)}: {m} imports {name}"
+        for m in MODULES
+        if FLOORS[floor_of(m)][0] == "scene"
+        for name, line, _ in imports_of(m)
+        if name.split(".")[0] in ("mitsuba", "drjit", "fogref_plugins")
+    ]
+    assert not bad, "\n".join(bad)
+
+
 def test_the_package_facade_imports_lazily():
     """``fogref/__init__.py`` imports only base modules at module level; set-up is a call."""
     bad = [
@@ -304,3 +327,314 @@ def test_import_does_no_mitsuba_work(modules):
     env = {k: v for k, v in os.environ.items() if k != "DRJIT_LIBLLVM_PATH"}
     r = subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT, capture_output=True, text=True)
     assert r.returncode == 0, r.stderr[-2000:]
+
+
+# ---------------------------------------------------------------------------------------------
+# Imports sit at the top of their module (CONTRIBUTING.md, "Imports"); these are the exceptions.
+
+#: (a) importing it does work: Mitsuba, Dr.Jit (the floors below ``render`` and ``import fogref``
+#: must not load them), or a library that reads the environment as it loads
+DOES_WORK = "importing it does work"
+#: (b) an optional dependency, absent from a plain install
+OPTIONAL = "optional dependency"
+#: (c) a heavy library the module's common path does not need, its start-up cost measured
+#: (CPU seconds of ``python -c "import X"`` over a bare interpreter, on the 2-core machine)
+HEAVY = "heavy library, measured"
+#: (d) the floors forbid it at the top
+FLOOR = "the floors forbid it"
+#: not yet reviewed against the rule
+NOT_REVIEWED = "not yet reviewed"
+
+#: Every function-level import of fogref/ and plugins/: module -> {imported name: reason}. The
+#: imported name is what ``import a.b`` or ``from a import b`` (``a.b``) names.
+LAZY_IMPORTS: dict[str, dict[str, str]] = {
+    # the renderer (numpy, the plugins, the scene readers: 0.2 s over the command's module):
+    # `fogref render --help` and its option errors answer without it (tests/test_cli_spec.py)
+    "fogref.cli.render": {"fogref.render.render.render": HEAVY},
+    # dask.distributed 0.8 s: a render or sweep in one process never starts a cluster
+    "fogref.cluster": {"dask.distributed.Client": HEAVY, "dask.distributed.LocalCluster": HEAVY},
+    # scipy.stats 1.4 s: `fogref compare --help` and the pytest plugin import the checker
+    "fogref.compare.check": {"pytest": OPTIONAL, "scipy.stats.norm": HEAVY},
+    "fogref.compare.intervals": {"scipy.stats.t": HEAVY},
+    # colour 2.3 s: only an image whose encoding asks for it
+    "fogref.compare.foreign": {"colour": HEAVY},
+    # flip_evaluator"s libgomp reads OMP_WAIT_POLICY as it loads; it is set just before
+    "fogref.compare.perceptual": {"colour": HEAVY, "flip_evaluator": DOES_WORK},
+    # matplotlib 0.4 s (pyplot 0.9 s): only when figures are written
+    "fogref.compare.plots": {
+        "matplotlib": HEAVY,
+        "matplotlib.backends.backend_agg.FigureCanvasAgg": HEAVY,
+        "matplotlib.figure.Figure": HEAVY,
+    },
+    "fogref.gbuffer": {"drjit": DOES_WORK},
+    # pandas 0.7 s: only for a DataFrame"s display
+    "fogref.html.notebook": {"pandas": HEAVY},
+    # pytest loads this plugin in every session of a project that installs fogref; the render
+    # cache (0.5 s) only for a test that asks for a truth
+    "fogref.pytest_plugin": {
+        "fogref.render.cache.cached_truth": HEAVY,
+        "fogref.render.cache.default_cache_dir": HEAVY,
+    },
+    "fogref.study.budget.report": {"matplotlib": HEAVY, "matplotlib.pyplot": HEAVY},
+    "fogref.study.spectral_rgb": {"colour": HEAVY},
+    # scipy.stats.qmc 1.4 s: only the random and lhs designs
+    "fogref.study.sweep.design": {"scipy.stats.qmc": HEAVY},
+    # `fogref sweep --help` and load_sweep import the package; Dask only when a sweep runs
+    "fogref.study.sweep.run": {"dask.distributed.as_completed": HEAVY},
+    "fogref.study.sweep.table": {"matplotlib": HEAVY, "matplotlib.pyplot": HEAVY, "pandas": HEAVY},
+    "fogref.study.sweep.task": {
+        "distributed.Lock": HEAVY,
+        "distributed.get_worker": HEAVY,
+        "drjit": DOES_WORK,
+        "mitsuba": DOES_WORK,
+    },
+    # not yet reviewed
+    "fogref.cli.scene": {
+        "fogref.mapping.droplet_fog.droplet_fog": NOT_REVIEWED,
+    },
+    "fogref.engines.browser": {
+        "json": NOT_REVIEWED,
+        "selenium": NOT_REVIEWED,
+        "selenium.common.exceptions.JavascriptException": NOT_REVIEWED,
+        "selenium.common.exceptions.TimeoutException": NOT_REVIEWED,
+        "selenium.common.exceptions.WebDriverException": NOT_REVIEWED,
+        "selenium.webdriver": NOT_REVIEWED,
+        "selenium.webdriver.chrome.service.Service": NOT_REVIEWED,
+        "selenium.webdriver.support.ui.WebDriverWait": NOT_REVIEWED,
+    },
+    "fogref.engines.playcanvas": {
+        "fogref.models.playcanvas.gamma_correct_output": NOT_REVIEWED,
+    },
+    "fogref.engines.port": {
+        "fogref.display.srgb_encode": NOT_REVIEWED,
+    },
+    "fogref.engines.render": {
+        "PIL.Image": NOT_REVIEWED,
+        "fogref.engines.port.port_vs_engine": NOT_REVIEWED,
+        "fogref.mapping.PhysicalScene": NOT_REVIEWED,
+    },
+    "fogref.engines.view": {
+        "fogref.render.load.load_scene": NOT_REVIEWED,
+        "mitsuba": NOT_REVIEWED,
+    },
+    "fogref.mapping.droplet_fog": {
+        "fogref.media.NP": NOT_REVIEWED,
+    },
+    "fogref.mapping.export": {
+        "fogref.errors.did_you_mean": NOT_REVIEWED,
+        "fogref.models.resolve.resolve_model": NOT_REVIEWED,
+    },
+    "fogref.mapping.fit": {
+        "scipy.optimize.least_squares": NOT_REVIEWED,
+    },
+    "fogref.mapping.lobe": {
+        "scipy.optimize.minimize_scalar": NOT_REVIEWED,
+        "scipy.optimize.nnls": NOT_REVIEWED,
+    },
+    "fogref.mapping.unreal_basis": {
+        "scipy.optimize.minimize_scalar": NOT_REVIEWED,
+        "scipy.optimize.nnls": NOT_REVIEWED,
+    },
+    "fogref.media.droplets": {
+        "scipy.special.roots_genlaguerre": NOT_REVIEWED,
+    },
+    "fogref.media.mie": {
+        "miepython": NOT_REVIEWED,
+        "scipy.special.gammaincinv": NOT_REVIEWED,
+    },
+    "fogref.media.ops": {
+        "drjit": NOT_REVIEWED,
+        "mitsuba": NOT_REVIEWED,
+    },
+    "fogref.media.single_scatter": {
+        "scipy.integrate": NOT_REVIEWED,
+    },
+    "fogref.media.sky": {
+        "drjit": NOT_REVIEWED,
+        "mitsuba": NOT_REVIEWED,
+    },
+    "fogref.models.resolve": {
+        "importlib.metadata.entry_points": NOT_REVIEWED,
+    },
+    "fogref.render.cache": {
+        "fogref_plugins": NOT_REVIEWED,
+    },
+    "fogref.render.distributed": {
+        "dask.distributed.as_completed": NOT_REVIEWED,
+        "drjit": NOT_REVIEWED,
+        "fogref.render.load.load_scene": NOT_REVIEWED,
+        "fogref.render.variant.set_variant": NOT_REVIEWED,
+        "fogref.scene.parsed.read_scene": NOT_REVIEWED,
+        "fogref_plugins.passes.pass_seed": NOT_REVIEWED,
+        "numpy": NOT_REVIEWED,
+    },
+    "fogref.render.load": {
+        "mitsuba": NOT_REVIEWED,
+    },
+    "fogref.render.render": {
+        "OpenEXR": NOT_REVIEWED,
+        "drjit": NOT_REVIEWED,
+        "fogref.exrio.read_exr": NOT_REVIEWED,
+        "fogref.render.distributed": NOT_REVIEWED,
+        "mitsuba": NOT_REVIEWED,
+        "tqdm.tqdm": NOT_REVIEWED,
+    },
+    "fogref.render.sunsky": {
+        "mitsuba": NOT_REVIEWED,
+    },
+    "fogref.render.variant": {
+        "drjit": NOT_REVIEWED,
+        "fogref_plugins": NOT_REVIEWED,
+        "hashlib": NOT_REVIEWED,
+        "importlib.util": NOT_REVIEWED,
+        "marshal": NOT_REVIEWED,
+        "mitsuba": NOT_REVIEWED,
+        "pathlib.Path": NOT_REVIEWED,
+        "types": NOT_REVIEWED,
+    },
+    "fogref.study.fit": {
+        "fogref.mapping.fit.fit_model": NOT_REVIEWED,
+        "fogref.mapping.translate.translate": NOT_REVIEWED,
+        "matplotlib": NOT_REVIEWED,
+        "matplotlib.pyplot": NOT_REVIEWED,
+    },
+    "fogref_plugins": {
+        "fogref_plugins.fog_medium.register": NOT_REVIEWED,
+        "fogref_plugins.fogpath.register": NOT_REVIEWED,
+        "fogref_plugins.tab_phase.register": NOT_REVIEWED,
+    },
+}
+
+#: Every import of a private name (``from fogref.x import _name``) from another module:
+#: module -> {imported name: reason}. ``benchmarks.*`` are the scripts of benchmarks/.
+PRIVATE_IMPORTS: dict[str, dict[str, str]] = {
+    # not yet reviewed
+    "benchmarks.render_distributed": {
+        "fogref.render.render._device_f64": NOT_REVIEWED,
+    },
+    "benchmarks.ue4_precision_map": {
+        "fogref.models.ue4._line_integral_shared": NOT_REVIEWED,
+    },
+}
+
+
+def _import_nodes(tree, module: str, is_pkg: bool):
+    """(node, imported names, inside a function) for each import statement of ``tree``; ``from a
+    import b`` names ``a.b``, relative imports resolved against ``module``'s package."""
+    in_function = _function_nodes(tree)
+    package = module if is_pkg else module.rpartition(".")[0]
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                pkg = package
+                for _ in range(node.level - 1):
+                    pkg = pkg.rpartition(".")[0]
+                base = f"{pkg}.{node.module}" if node.module else pkg
+            names = [f"{base}.{a.name}" for a in node.names]
+        else:
+            continue
+        yield node, names, id(node) in in_function
+
+
+def function_imports(tree: ast.Module, module: str = "m", is_pkg: bool = False) -> set[tuple[str, int]]:
+    """(imported name, line) of every import inside a function or lambda of ``tree``.
+
+    >>> sorted(function_imports(ast.parse("import os\\ndef f():\\n    from fogref import params as P\\n")))
+    [('fogref.params', 3)]
+    """
+    nodes = _import_nodes(tree, module, is_pkg)
+    return {(n, node.lineno) for node, names, inside in nodes if inside for n in names}
+
+
+def private_imports(tree: ast.Module, module: str = "m", is_pkg: bool = False) -> set[tuple[str, int]]:
+    """(imported name, line) of every private name (``_x``, not a module, not a dunder) that
+    ``tree`` imports from a module of fogref or fogref_plugins."""
+    out = set()
+    for node, names, _ in _import_nodes(tree, module, is_pkg):
+        if not isinstance(node, ast.ImportFrom):
+            continue
+        for name in names:
+            src, _, last = name.rpartition(".")
+            if (
+                src.split(".")[0] in PACKAGES
+                and last.startswith("_")
+                and not last.startswith("__")
+                and name not in MODULES
+            ):
+                out.add((name, node.lineno))
+    return out
+
+
+def _sources():
+    """(module name, file, is_package) for fogref, fogref_plugins and the benchmarks' scripts."""
+    for m, (path, is_pkg) in MODULES.items():
+        yield m, path, is_pkg
+    for path in sorted((ROOT / "benchmarks").glob("*.py")):
+        yield f"benchmarks.{path.stem}", path, False
+
+
+def _unlisted_and_stale(found: dict[str, set[tuple[str, int]]], allowed: dict[str, dict[str, str]]):
+    unlisted = [
+        f"{path}:{line}: {m} imports {name}"
+        for m, (path, hits) in found.items()
+        for name, line in sorted(hits)
+        if name not in allowed.get(m, {})
+    ]
+    seen = {(m, name) for m, (_, hits) in found.items() for name, _ in hits}
+    stale = [f"{m}: {name}" for m, names in allowed.items() for name in names if (m, name) not in seen]
+    return unlisted, stale
+
+
+def test_the_import_checks_see_what_they_look_for():
+    src = (
+        "from fogref.errors import FogrefError\n"
+        "from fogref.study.sweep.values import _err, as_str\n"
+        "def f():\n"
+        "    import matplotlib.pyplot as plt\n"
+        "    g = lambda: __import__('x')\n"
+        "    from .sections import _read\n"
+    )
+    tree = ast.parse(src)
+    assert function_imports(tree, "fogref.study.sweep.spec") == {
+        ("matplotlib.pyplot", 4),
+        ("fogref.study.sweep.sections._read", 6),
+    }
+    assert private_imports(tree, "fogref.study.sweep.spec") == {
+        ("fogref.study.sweep.values._err", 2),
+        ("fogref.study.sweep.sections._read", 6),
+    }
+    assert private_imports(ast.parse("from fogref import _version\nfrom os import _exit\n")) == set()
+    unlisted, stale = _unlisted_and_stale({"m": ("m.py", {("a", 3)})}, {"m": {"b": HEAVY}})
+    assert unlisted == ["m.py:3: m imports a"] and stale == ["m: b"]
+
+
+def test_imports_are_at_the_top_unless_listed():
+    """A function-level import is in LAZY_IMPORTS with its reason; a listed one still exists."""
+    found = {}
+    for m, path, is_pkg in _sources():
+        if m.split(".")[0] in PACKAGES:
+            hits = function_imports(_parsed(path), m, is_pkg)
+            found[m] = (path.relative_to(ROOT), hits)
+    unlisted, stale = _unlisted_and_stale(found, LAZY_IMPORTS)
+    assert not unlisted, (
+        "imports inside functions; move them to the top of the module, or list them in LAZY_IMPORTS "
+        "with the reason (CONTRIBUTING.md, 'Imports'):\n" + "\n".join(unlisted)
+    )
+    assert not stale, "LAZY_IMPORTS lists imports that are gone; remove them:\n" + "\n".join(stale)
+    assert set(LAZY_IMPORTS) <= set(MODULES)
+    reasons = {DOES_WORK, OPTIONAL, HEAVY, FLOOR, NOT_REVIEWED}
+    assert {r for names in LAZY_IMPORTS.values() for r in names.values()} <= reasons
+
+
+def test_no_private_name_is_imported_from_another_module():
+    """``from fogref.x import _name`` in fogref/, plugins/ or benchmarks/ is in PRIVATE_IMPORTS;
+    a name used across modules is public (or the code moves to where it is used)."""
+    found = {}
+    for m, path, is_pkg in _sources():
+        found[m] = (path.relative_to(ROOT), private_imports(_parsed(path), m, is_pkg))
+    unlisted, stale = _unlisted_and_stale(found, PRIVATE_IMPORTS)
+    assert not unlisted, "private names imported from another module:\n" + "\n".join(unlisted)
+    assert not stale, "PRIVATE_IMPORTS lists imports that are gone; remove them:\n" + "\n".join(stale)

@@ -25,7 +25,7 @@ FOG = FogMedium(sigma_t=0.002, albedo=0.9, g=0.6, layers=(ExpLayer(1.0, 0.02, 0.
 @pytest.fixture(scope="module")
 def sunsky():
     """A sunsky's parameters (as in a scene description) and its isotropic projection."""
-    from fogref.media.single_scatter_nonuniform import sky_phase_projection
+    from fogref.media.single_scatter import sky_phase_projection
     from fogref.media.sky import sky_radiance
 
     model = {"type": "sunsky", "sun_direction": [float(x) for x in W_SUN], "turbidity": 4.0, "albedo": 0.3}

@@ -6,8 +6,9 @@ import mpmath
 import numpy as np
 import pytest
 
+from fogref.mapping.engines import altitude_to_medium
 from fogref.media import NP, PowerLawLayer
-from fogref.models.altitude import AltitudeFog, AltitudeFogParams, altitude_to_medium
+from fogref.models.altitude import AltitudeFog, AltitudeFogParams
 
 f32 = np.float32
 

@@ -9,9 +9,10 @@ import pytest
 
 from fogref.errors import ParameterError
 from fogref.mapping import PhysicalScene, from_physical
+from fogref.mapping.engines import babylon_to_medium
 from fogref.media import NP, Box, ExpLayer, FogMedium
 from fogref.models import SKY_DISTANCE, get
-from fogref.models.babylon import BabylonFog, BabylonFogParams, babylon_to_medium
+from fogref.models.babylon import BabylonFog, BabylonFogParams
 
 f32 = np.float32
 

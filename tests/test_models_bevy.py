@@ -7,9 +7,10 @@ import pytest
 
 from fogref.errors import ParameterError
 from fogref.mapping import PhysicalScene, from_physical, lobe_fit
+from fogref.mapping.engines import bevy_sigma, bevy_to_medium
 from fogref.media import NP, ExpLayer, FogMedium
 from fogref.models import get
-from fogref.models.bevy import BevyDistanceFog, BevyFogParams, bevy_sigma, bevy_to_medium
+from fogref.models.bevy import BevyDistanceFog, BevyFogParams
 
 f32 = np.float32
 

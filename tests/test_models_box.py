@@ -5,8 +5,9 @@ import math
 import numpy as np
 import pytest
 
+from fogref.mapping.engines import box_to_medium
 from fogref.media import NP
-from fogref.models.box import BoxFog, BoxFogParams, box_to_medium
+from fogref.models.box import BoxFog, BoxFogParams
 
 f32 = np.float32
 

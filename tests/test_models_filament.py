@@ -5,8 +5,10 @@ import math
 import numpy as np
 import pytest
 
+from fogref.mapping import PhysicalScene
+from fogref.mapping.engines import filament_from_physical, filament_to_medium
 from fogref.media import NP
-from fogref.models.filament import FilamentFog, FilamentFogParams, filament_to_medium, medium_to_filament
+from fogref.models.filament import FilamentFog, FilamentFogParams
 
 f32 = np.float32
 
@@ -87,7 +89,7 @@ def test_float64_equals_exponential_medium():
     L = 10 ** rng.uniform(-2, 3, 300)
     T = FilamentFog(p).evaluate(cam, cam + d * L[:, None], "float64").transmittance[:, 0]
     np.testing.assert_allclose(T, m.transmittance(NP, tuple(cam), tuple(d.T), L)[0], rtol=1e-9, atol=1e-300)
-    q = medium_to_filament(m)
+    q = filament_from_physical(PhysicalScene(m)).params
     assert (q.density, q.heightFalloff, q.height) == pytest.approx((0.02, 0.15, -1.0))
     # exp, not exp2: a horizontal ray at the fog height has T = exp(-density L)
     T1 = (

@@ -412,8 +412,9 @@ def test_eye_depth_is_along_the_scenes_camera(name, param):
 
 def test_scene_file_gives_its_view_direction():
     """``physical_from_scene`` (no Mitsuba) reads the sensor's lookat: forward = target - origin."""
+    from fogref.scene.describe import lookat_camera
     from fogref.shipped_scenes import scene_path
-    from fogref.study.fit import lookat_camera, physical_from_scene
+    from fogref.study.fit import physical_from_scene
 
     c = lookat_camera(scene_path("valley"))
     want = np.subtract(c["target"], c["origin"])

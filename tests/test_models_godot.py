@@ -7,10 +7,10 @@ import pytest
 
 from fogref.errors import ParameterError
 from fogref.mapping import PhysicalScene, from_physical
-from fogref.mapping.engines import fixed_lobe_amplitude
+from fogref.mapping.engines import fixed_lobe_amplitude, godot_to_medium
 from fogref.media import NP, ExpLayer, FogMedium
 from fogref.models import SKY_DISTANCE, get
-from fogref.models.godot import GodotFog, GodotFogParams, godot_to_medium
+from fogref.models.godot import GodotFog, GodotFogParams
 
 f32 = np.float32
 

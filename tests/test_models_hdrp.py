@@ -6,8 +6,10 @@ import mpmath
 import numpy as np
 import pytest
 
+from fogref.mapping import PhysicalScene
+from fogref.mapping.engines import hdrp_from_physical, hdrp_to_medium
 from fogref.media import NP, HDRPLayer
-from fogref.models.hdrp import HDRPFog, HDRPFogParams, hdrp_to_medium, medium_to_hdrp
+from fogref.models.hdrp import HDRPFog, HDRPFogParams
 
 f32 = np.float32
 
@@ -96,7 +98,7 @@ def test_profile_sampling_inverts_depth_and_roundtrip():
     t = L.sample(NP, oy, dy, s)
     np.testing.assert_allclose(L.depth(NP, oy, dy, t), s, rtol=1e-9)
     p = HDRPFogParams(meanFreePath=70.0, baseHeight=1.0, maximumHeight=31.0)
-    q = medium_to_hdrp(hdrp_to_medium(p))
+    q = hdrp_from_physical(PhysicalScene(hdrp_to_medium(p))).params
     assert q.meanFreePath == pytest.approx(70.0) and q.maximumHeight == pytest.approx(31.0, rel=1e-5)
 
 

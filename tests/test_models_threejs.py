@@ -8,9 +8,10 @@ import pytest
 
 from fogref.errors import ParameterError
 from fogref.mapping import PhysicalScene, from_physical
+from fogref.mapping.engines import threejs_sigma
 from fogref.media import ExpLayer, FogMedium
 from fogref.models import SKY_DISTANCE, get
-from fogref.models.threejs import ThreeFogParams, ThreeJSFog, srgb_transfer_oetf, threejs_sigma
+from fogref.models.threejs import ThreeFogParams, ThreeJSFog, srgb_transfer_oetf
 
 f32 = np.float32
 

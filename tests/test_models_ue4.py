@@ -5,15 +5,11 @@ import math
 import numpy as np
 import pytest
 
+from fogref.mapping import PhysicalScene
+from fogref.mapping.unreal import base_params
 from fogref.media import NP
 from fogref.models import get
-from fogref.models.ue4 import (
-    SecondFogData,
-    UE4ExponentialHeightFog,
-    UE4FogParams,
-    medium_to_ue4,
-    ue4_to_medium,
-)
+from fogref.models.ue4 import SecondFogData, UE4ExponentialHeightFog, UE4FogParams, ue4_to_medium
 
 f32 = np.float32
 
@@ -226,7 +222,7 @@ def test_sigma_formula_and_roundtrip():
         2
     ) ** 2 * 0.01 / 1000 * 2 ** (-0.5 / 1000 * (z_cm - 580.0))
     assert m.sigma_t[0] * m.density(NP, (0.0, np.array(y), 0.0)) == pytest.approx(100 * per_cm, rel=1e-12)
-    q = medium_to_ue4(m)
+    q = base_params(PhysicalScene(m))
     for k in ("FogDensity", "FogHeightFalloff", "FogHeight"):
         assert getattr(q, k) == pytest.approx(getattr(p, k), rel=1e-12, abs=1e-9)
     assert q.SecondFogData.FogDensity == pytest.approx(0.01, rel=1e-12)

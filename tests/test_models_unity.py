@@ -5,8 +5,10 @@ import math
 import numpy as np
 import pytest
 
+from fogref.mapping import PhysicalScene
+from fogref.mapping.engines import unity_from_physical, unity_to_medium
 from fogref.media import NP
-from fogref.models.unity_builtin import UnityBuiltinFog, UnityFogParams, medium_to_unity, unity_to_medium
+from fogref.models.unity_builtin import UnityBuiltinFog, UnityFogParams
 
 f32 = np.float32
 
@@ -68,7 +70,7 @@ def test_exp_on_distance_is_the_homogeneous_medium():
     L = 10 ** rng.uniform(-3, 3, 100)
     T = UnityBuiltinFog(p).evaluate(cam, cam + d * L[:, None], "float64").transmittance[:, 0]
     np.testing.assert_allclose(T, m.transmittance(NP, tuple(cam), tuple(d.T), L)[0], rtol=1e-12)
-    assert medium_to_unity(m).fogDensity == pytest.approx(0.013)
+    assert unity_from_physical(PhysicalScene(m)).params.fogDensity == pytest.approx(0.013)
 
 
 def test_nearest_fits_match_at_the_reference_distance():

@@ -183,7 +183,7 @@ def test_the_written_ground_is_the_plane_y0_to_float32_rounding(tmp_path, mitsub
     wider) keeps it at float32 rounding of the point itself.  One 1e5 m rectangle missed the plane
     by up to 2.5 cm (P.Z took 9 values over 17.7 mm along one image row that has one depth)."""
     from fogref.render.render import render
-    from fogref.render.scene_writer import write_scene
+    from fogref.scene.writer import write_scene
 
     W, H = 32, 18
     xml = tmp_path / "p.xml"

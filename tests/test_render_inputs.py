@@ -31,7 +31,7 @@ def test_scene_inputs_follow_mitsubas_resolution(tmp_path, mitsuba, monkeypatch)
     """Relative to the scene's folder, `$default`s and overrides applied, includes followed (a
     `filename` in an included file resolved against the top scene, as Mitsuba does), `<path>`
     folders searched first; each file once, the scene first."""
-    from fogref.render.inputs import scene_inputs
+    from fogref.scene.inputs import scene_inputs
 
     scene = tiny.make(mitsuba, tmp_path / "proj")
     (tmp_path / "proj" / "meshes").mkdir()
@@ -69,7 +69,7 @@ def test_scene_inputs_follow_mitsubas_resolution(tmp_path, mitsuba, monkeypatch)
 
 def test_digest_changes_with_every_input_and_only_with_them(tmp_path, mitsuba):
     from fogref.render.cache import truth_key
-    from fogref.render.inputs import inputs_digest
+    from fogref.scene.inputs import inputs_digest
 
     scene = tiny.make(mitsuba, tmp_path)
     tiny.write_obj(tmp_path / "unused.obj", dx=3)

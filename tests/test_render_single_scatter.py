@@ -48,7 +48,7 @@ def _reference(mi, scene, desc):
 @pytest.mark.parametrize("layers", [{}, {"density2": 0.4}], ids=["one-layer", "two-layer"])
 def test_single_channel_matches_closed_form(mitsuba, layers):
     mi = mitsuba
-    from fogref.render.scene import load_scene
+    from fogref.render.load import load_scene
 
     overrides = {"res": W, "resy": H, "sky_radiance": "0, 0, 0", "max_depth": 2, **layers}
     scene, desc = load_scene(SCENES / "open_plane.xml", overrides)

@@ -1,7 +1,7 @@
 """Every scene door refuses bad input in one line, through ``fogref.cli.main`` and the Python API.
 
 The doors: ``fogref render --set`` (and ``render(overrides=...)``), a scene's own ``$default``
-values, ``fogref scene`` (and :func:`~fogref.render.scene_writer.write_scene`) with its
+values, ``fogref scene`` (and :func:`~fogref.scene.writer.write_scene`) with its
 ``--ue-*`` values, the scene loaded for rendering (one sensor, one heightfog) and the
 Mitsuba variant.  Also: a mesh without normals is shaded flat, the ground's and the mesh's
 reflectance are options, and ``fogref scene --out`` never replaces one of its inputs.
@@ -113,7 +113,7 @@ def test_a_scenes_own_default_out_of_range_is_refused(tmp_path, capsys):
     )
     rc, err = cli(capsys, ["render", bad, "--out", tmp_path / "x.exr", *TINY])
     assert rc == 2 and "bad_sun.xml: <default>" in err and "[-90, 90] deg" in err, err
-    from fogref.render.scene import describe_scene
+    from fogref.render.load import describe_scene
 
     assert "[-90, 90] deg" in api_error(describe_scene, bad)
     assert "[-90, 90] deg" in api_error(render_api, bad, tmp_path / "x.exr", overrides={"res": 8, "resy": 6})
@@ -137,7 +137,7 @@ AGREE = [
 
 @pytest.mark.parametrize("kw, option, name, value, allowed", AGREE)
 def test_writer_and_set_agree_on_ranges(tmp_path, capsys, kw, option, name, value, allowed):
-    from fogref.render.scene_writer import write_scene
+    from fogref.scene.writer import write_scene
 
     rc, err = cli(capsys, ["scene", "--out", tmp_path / "w.xml", f"{option}={value}"])
     assert rc == 2 and allowed in err, err
@@ -224,7 +224,7 @@ UE = [
 
 @pytest.mark.parametrize("key, option, value, allowed", UE)
 def test_unreal_values_are_range_checked(tmp_path, capsys, key, option, value, allowed):
-    from fogref.render.scene_writer import write_scene
+    from fogref.scene.writer import write_scene
 
     rc, err = cli(capsys, ["scene", "--out", tmp_path / "u.xml", f"{option}={value}"])
     assert rc == 2 and allowed in err and option in err, err
@@ -244,14 +244,14 @@ def test_unreal_values_are_range_checked(tmp_path, capsys, key, option, value, a
     ],
 )
 def test_write_scene_api_arguments_are_checked(tmp_path, kw, words):
-    from fogref.render.scene_writer import write_scene
+    from fogref.scene.writer import write_scene
 
     msg = api_error(write_scene, **{"out": tmp_path / "w.xml", **kw})
     assert all(w in msg for w in words), msg
 
 
 def test_scene_api_arguments_are_checked(tmp_path):
-    from fogref.render.scene import describe_scene, load_scene
+    from fogref.render.load import describe_scene, load_scene
 
     assert "expected a path" in api_error(describe_scene, 123)
     assert "expected a dict" in api_error(load_scene, VALLEY, "res=8")
@@ -381,7 +381,7 @@ def test_mesh_without_normals_renders_flat_faces_cli(tmp_path, capsys):
 
 @pytest.mark.render
 def test_mesh_without_normals_renders_flat_faces_api(tmp_path):
-    from fogref.render.scene_writer import write_scene
+    from fogref.scene.writer import write_scene
 
     box = _box_obj(tmp_path / "box.obj")
     kw = {k: v for k, v in BOX_VIEW.items() if k != "sigma_t"}
@@ -393,7 +393,7 @@ def test_mesh_without_normals_renders_flat_faces_api(tmp_path):
 
 
 def test_mesh_with_normals_keeps_them_and_ply_without_gets_face_normals(tmp_path):
-    from fogref.render.scene_writer import write_scene
+    from fogref.scene.writer import write_scene
 
     smooth = _box_obj(tmp_path / "n.obj", normals=True)
     r = write_scene(tmp_path / "n.xml", geometry=smooth, on_note=lambda n: None)
@@ -409,7 +409,7 @@ def test_mesh_with_normals_keeps_them_and_ply_without_gets_face_normals(tmp_path
 
 
 def test_ground_and_mesh_reflectance(tmp_path, capsys):
-    from fogref.render.scene_writer import write_scene
+    from fogref.scene.writer import write_scene
 
     rc, _ = cli(capsys, ["scene", "--out", tmp_path / "p.xml", "--ground-reflectance", "0.5"])
     assert rc == 0
@@ -440,8 +440,9 @@ def test_ground_and_mesh_reflectance(tmp_path, capsys):
 
 
 def test_scene_out_is_never_an_input(tmp_path, capsys, monkeypatch):
-    from fogref.render import scene_templates, scene_writer
-    from fogref.render.scene_writer import write_scene
+    from fogref.scene import templates as scene_templates
+    from fogref.scene import writer as scene_writer
+    from fogref.scene.writer import write_scene
 
     box = _box_obj(tmp_path / "box.obj")
     before = box.read_bytes()

@@ -2,7 +2,7 @@
 back and rendered.
 
 The written scene is read back through the same path ``fogref render`` takes
-(:func:`fogref.render.scene.describe_scene` and :func:`fogref.media.params.medium_from_params`)
+(:func:`fogref.render.load.describe_scene` and :func:`fogref.media.params.medium_from_params`)
 and checked against Koschmieder's law in closed form (the green channel's extinction is
 ``-ln(eps) / V`` to 1e-12) and against the droplets' Mie optics (the phase table and ``g``).
 """
@@ -17,7 +17,7 @@ import pytest
 from fogref.cli import main
 from fogref.mapping.droplet_fog import droplet_fog
 from fogref.media.params import medium_from_params
-from fogref.render.scene import describe_scene
+from fogref.render.load import describe_scene
 
 
 def cli(capsys, argv) -> tuple[int, str]:

@@ -1,4 +1,4 @@
-"""``fogref scene`` / :func:`fogref.render.scene_writer.write_scene`: scene XML from fog
+"""``fogref scene`` / :func:`fogref.scene.writer.write_scene`: scene XML from fog
 (physical or Unreal editor values), sun, sky, camera and a geometry template.
 
 The written scene must be loadable, expose every fog/sun/sky/camera value as a
@@ -20,11 +20,13 @@ from fogref.cli import main
 from fogref.errors import FogrefError, ParameterError
 from fogref.media.params import medium_from_params
 from fogref.models.ue4 import SecondFogData, UE4FogParams, ue4_to_medium, unreal_to_sigma
-from fogref.render import scene_templates
-from fogref.render.scene import describe_scene
-from fogref.render.scene_defaults import OPTIONAL_GROUPS, VOCABULARY, declared, used_names, vocabulary_groups
-from fogref.render.scene_writer import UNREAL_IGNORED, fog_from_unreal, write_scene
-from fogref.render.sun import sun_direction_from_angles
+from fogref.render.load import describe_scene
+from fogref.scene import templates as scene_templates
+from fogref.scene.defaults import declared, used_names
+from fogref.scene.fog_input import UNREAL_IGNORED, fog_from_unreal
+from fogref.scene.sun import sun_direction_from_angles
+from fogref.scene.vocabulary import OPTIONAL_GROUPS, VOCABULARY, vocabulary_groups
+from fogref.scene.writer import write_scene
 
 UE = {
     "FogDensity": 0.05,
@@ -359,7 +361,7 @@ def test_ply_is_a_ply_shape(tmp_path):
 @pytest.mark.render
 def test_written_mesh_scene_loads_with_the_mesh_in_place(tmp_path, mitsuba):
     mi = mitsuba
-    from fogref.render.scene import load_scene
+    from fogref.render.load import load_scene
 
     mesh = tiny_obj(tmp_path / "tet.obj")
     out = tmp_path / "m.xml"

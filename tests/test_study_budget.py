@@ -205,7 +205,7 @@ def test_shapley_budget_two_independent_effects_known_answer():
     dT = rng.uniform(-0.05, 0.05, (h, w, 3)) * (1 - left)
     T0 = np.full((h, w, 3), 0.6)
     engine = {
-        k: (T0 + dT * k[B._CONFIG.index("float32")], parts["sun_render"], parts["sky_render"])
+        k: (T0 + dT * k[B.CONFIG_EFFECTS.index("float32")], parts["sun_render"], parts["sky_render"])
         for k in parts["engine"]
     }
     p = dict(
@@ -240,6 +240,7 @@ def test_shapley_in_markdown_and_plot_first(tmp_path):
     )
     md = B.markdown(r)
     assert md.index("Shapley budget") < md.index("Telescoping chain (second view)") < md.index("| 9 | [h]")
+    assert md.count("Port vs engine (ue4): no runnable engine here.") == 1
     top = next(x for x in r["shapley"]["effects"] if x["key"] == r["shapley"]["largest"])
     assert f"Largest term: **[{top['effect']}] {top['label']}**" in md
     B.plot(r, tmp_path / "b.png")

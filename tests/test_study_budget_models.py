@@ -39,3 +39,22 @@ def test_model_engine_splits_the_sun_lobe_and_unreal_keeps_all_effects():
     assert float(np.max(np.abs(L_sun2))) == 0.0
     ue4 = from_physical("ue4", pf)
     assert B.applicable_effects(ue4, ue4) == B.EFFECTS
+
+
+def test_budget_states_port_vs_engine():
+    """The "port vs engine" line: a model with a runnable web engine carries the size measured by
+    ``fogref compare --engine`` (engine.json's port_vs_engine) and whether it is at the quantisation
+    level; one without (Godot) says there is none; the Unreal study's report says so for Unreal."""
+    pf = budget_scene()
+    px, sky = synthetic_pixels(pf)
+    measured = {"linear_rms": 2.5e-8, "linear_max": 8.3e-8, "canvas_max": 0, "at_quantisation": True}
+    sh = B.run_budget(px, sky, pf, "filament", resamples=0, port_vs_engine=measured)
+    assert "RMSE 2.5e-08 (max 8.3e-08) radiance" in sh["port_vs_engine"]
+    assert "at the quantisation level, as expected" in B.shapley_markdown(sh)
+    above = {**measured, "at_quantisation": False}
+    off = B.run_budget(px, sky, pf, "filament", resamples=0, port_vs_engine=above)
+    assert "ABOVE the quantisation level" in off["port_vs_engine"]
+    assert "not measured" in B.run_budget(px, sky, pf, "filament", resamples=0)["port_vs_engine"]
+    godot = B.run_budget(px, sky, pf, "godot", resamples=0)
+    assert godot["port_vs_engine"] == "Port vs engine (godot): no runnable engine here."
+    assert godot["port_vs_engine"] in B.shapley_markdown(godot)

@@ -7,8 +7,8 @@ not be budgeted (and its cache key missed them).
 
 import tiny_inputs_scene as tiny
 
-from fogref.render.inputs import inputs_digest, scene_inputs
-from fogref.study.unreal import sunless_scene
+from fogref.scene.edit import sunless_scene
+from fogref.scene.inputs import inputs_digest, scene_inputs
 
 
 def test_sunless_copy_loads_the_originals_files(tmp_path, mitsuba):
@@ -27,7 +27,7 @@ def test_sunless_copy_loads_the_originals_files(tmp_path, mitsuba):
 
 def test_overrides_used_by_reads_a_scene_file(tmp_path):
     """A sun-less copy no longer uses the sun's ``$defaults``; only the overrides a scene file uses pass."""
-    from fogref.render.scene_defaults import overrides_used_by
+    from fogref.scene.defaults import overrides_used_by
 
     p = tmp_path / "s.xml"
     p.write_text('<scene><float name="g" value="$g"/><float name="x" value="$sun"/></scene>')

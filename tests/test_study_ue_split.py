@@ -51,11 +51,10 @@ def test_split_study_writes_its_section_and_json(tiny_truth, tmp_path):
 
 def test_cli_study_flag_calls_the_split(tiny_truth, tmp_path, monkeypatch):
     import fogref.cli.study as cs
-    import fogref.html.reports as hr
 
     calls = []
     monkeypatch.setattr(cs, "run_study", lambda *a, **k: calls.append("study"))
-    monkeypatch.setattr(hr, "write_study_html", lambda *a, **k: "x.html")
+    monkeypatch.setattr(cs, "write_study_html", lambda *a, **k: "x.html")
     monkeypatch.setattr(cs, "split_study", lambda exr, out, renders, scene=None: calls.append(("split", out)))
     out = str(tmp_path / "s")
     assert main(["study", str(tiny_truth), "--out", out, "--ue-pathtracer"]) == 0

@@ -15,8 +15,12 @@ import numpy as np
 import pytest
 from render_scenes import render_runs
 
-from fogref.media.single_scatter import hg_upper_fraction, single_scatter_sun
-from fogref.media.single_scatter_nonuniform import single_scatter_sun_disk, sky_phase_projection
+from fogref.media.single_scatter import (
+    hg_upper_fraction,
+    single_scatter_sun,
+    single_scatter_sun_disk,
+    sky_phase_projection,
+)
 
 W_SUN = (-0.31, 0.42, -0.85)  # behind the camera of tests/render_scenes.py (it looks along +z)
 
@@ -84,7 +88,7 @@ def test_sun_irradiance_matches_mitsubas_own_sampling(mi):
 
 
 def _sunsky_scene(tmp_path, **kw):
-    from fogref.render.scene_writer import write_scene
+    from fogref.scene.writer import write_scene
 
     out = tmp_path / "sunsky.xml"
     write_scene(out, sky="sunsky", res=16, resy=9, sun_elevation=25, sun_azimuth=200, **kw)
@@ -92,7 +96,7 @@ def _sunsky_scene(tmp_path, **kw):
 
 
 def test_sunsky_scene_is_split_once_each(mi, tmp_path):
-    from fogref.render.scene import load_scene
+    from fogref.render.load import load_scene
     from fogref.render.sunsky import sun_irradiance, sunsky_dict
 
     path = _sunsky_scene(tmp_path, turbidity=5.0)
@@ -338,7 +342,8 @@ def test_fogref_scene_cli_writes_a_sunsky_scene(tmp_path):
     import subprocess
     import sys
 
-    from fogref.render.scene_defaults import declared, vocabulary_groups
+    from fogref.scene.defaults import declared
+    from fogref.scene.vocabulary import vocabulary_groups
 
     out = tmp_path / "s.xml"
     cmd = [
@@ -367,7 +372,7 @@ def test_fogref_scene_cli_writes_a_sunsky_scene(tmp_path):
 
 def test_a_bad_turbidity_override_is_one_line(mi, tmp_path):
     from fogref.errors import FogrefError
-    from fogref.render.scene import load_scene
+    from fogref.render.load import load_scene
 
     with pytest.raises(FogrefError, match="turbidity"):
         load_scene(_sunsky_scene(tmp_path), {"turbidity": "11"})
@@ -457,7 +462,7 @@ def test_a_sunsky_without_sun_direction_takes_the_sun_mitsuba_gives_it(mi, tmp_p
     (Mitsuba's radiance along fogref's direction is the disk's, and 0 at 0.3 deg from it)."""
     import xml.etree.ElementTree as ET
 
-    from fogref.render.scene import load_scene
+    from fogref.render.load import load_scene
 
     root = ET.parse(_sunsky_scene(tmp_path)).getroot()
     for d in [d for d in root.findall("default") if d.get("name") in ("sun_elevation", "sun_azimuth")]:
@@ -493,8 +498,8 @@ def test_the_camera_sees_the_sun_disk_through_the_fog(mi, tmp_path):
     added: 24 of 576 pixels differ, with and without forced splitting)."""
     from fogref.gbuffer import load_truth
     from fogref.render.render import render
-    from fogref.render.scene_writer import write_scene
-    from fogref.render.sun import sun_direction_from_angles
+    from fogref.scene.sun import sun_direction_from_angles
+    from fogref.scene.writer import write_scene
 
     w = np.asarray(sun_direction_from_angles(8.0, 24.0))
     o = np.array([0.0, 2.0, 0.0])

@@ -259,19 +259,14 @@ def test_render_T_matches_closed_form(mitsuba, tmp_path):
     distance).  The fog is set so that the camera (2 m) sits below the clamp height
     (5 m) and rays beyond 60 m leave through the wall.  Tolerance: float32 (Dr.Jit) vs
     float64, 1e-5 relative (measured: 3e-7)."""
-    import xml.etree.ElementTree as ET
-
     from fogref.mapping.unreal_pathtracer import rewrite_scene
-    from fogref.render.scene import load_scene
+    from fogref.render.load import load_scene
 
     mi = mitsuba
     ue = UE4FogParams(FogDensity=0.05, FogHeightFalloff=2.0, FogHeight=2000.0)
     pt = UEPathTracerSettings()
     dst = tmp_path / "ue_pt.xml"
-    params = rewrite_scene("scenes/valley.xml", dst, ue, pt)
-    tree = ET.parse(dst)
-    ET.SubElement(tree.getroot().find("integrator"), "boolean", name="pixel_exact", value="true")
-    tree.write(dst)
+    params = rewrite_scene("scenes/valley.xml", dst, ue, pt, pixel_exact=True)
     scene, desc = load_scene(dst, {"res": 16, "resy": 9, "max_depth": 2})
     assert desc["medium"]["profile"] == "ue_pathtracer"
     names = ["R", "G", "B"] + list(scene.integrator().aov_names())

@@ -20,7 +20,7 @@ import pytest
 from scipy.optimize import minimize
 
 from fogref.mapping import FIT_RTOL, fit_unreal, sample_views
-from fogref.mapping.fit_targets import with_sun_elevation
+from fogref.mapping.fit import with_sun_elevation
 from fogref.mapping.unreal import (
     LOG_N_RANGE,
     MAX_START_CM,

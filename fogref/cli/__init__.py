@@ -34,7 +34,9 @@ True
 
 from __future__ import annotations
 
+import gc
 import importlib
+import os
 import sys
 
 from fogref._version import __version__
@@ -137,8 +139,6 @@ def main(argv=None) -> int:
         return _run(argv)
     finally:
         if ends_process:
-            import gc
-
             gc.freeze()
 
 
@@ -151,8 +151,6 @@ def _run(argv) -> int:
         print(f"fogref: error: {e}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # `fogref ... | head`: the reader left; not an error
-        import os
-
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except KeyboardInterrupt as e:  # a sweep's SweepInterrupted names the workers' log

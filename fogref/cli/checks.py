@@ -20,6 +20,7 @@ import math
 from fogref import params
 from fogref.cluster import check_scheduler
 from fogref.errors import ParameterError
+from fogref.shipped_scenes import resolve_scene
 
 __all__ = [
     "Address",
@@ -174,8 +175,6 @@ class SceneArg(PathArg):
     role: str = "input"
 
     def parse(self, raw, name, source):
-        from fogref.shipped_scenes import resolve_scene
-
         return str(resolve_scene(super().parse(raw, name, source)))
 
 

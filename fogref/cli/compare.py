@@ -16,10 +16,22 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from fogref.atomic import check_output_file
 from fogref.cli.checks import Assignments, Check, Choice, Number, PathArg
-from fogref.cli.compare_batch import ImageList
+from fogref.cli.compare_batch import ImageList, run_batch
+from fogref.cli.engine import engine_model
 from fogref.cli.spec import UsageError, option, refuse, switch
+from fogref.compare import gate
+from fogref.compare.check import check
+from fogref.compare.foreign import ENCODINGS, load_engine_images
+from fogref.compare.gate import parse_distance_bands, parse_tolerances
+from fogref.compare.report import compare, compare_images, refuse_output_over_input, report_paths
 from fogref.engines import ENGINES
+from fogref.engines.render import render_and_write
+from fogref.engines.view import view_from_truth
+from fogref.gbuffer import load_truth
+from fogref.html.reports import write_compare_html
+from fogref.mapping.build import build_model, parse_param_assignments
 
 NAME = "compare"
 SOURCE = "fogref compare"
@@ -40,8 +52,6 @@ EPILOG = (
 COMPARE = "fogref.compare.report:compare"
 CHECK = "fogref.compare.check:check"
 IMAGES = "fogref.compare.foreign:load_engine_images"
-#: ``--encoding`` values (fogref.compare.foreign.ENCODINGS, checked equal by tests/test_cli_spec.py)
-ENCODINGS = ("auto", "linear", "srgb")
 MODEL_GROUP = "a fog model"
 IMAGE_GROUP = "an engine's images (instead of --model)"
 ENGINE_GROUP = "a real engine rendered here (instead of --model or --image; with --param, --from-scene)"
@@ -60,8 +70,6 @@ class Tolerances(Check):
     takes_list = True
 
     def parse(self, raw, name, source):
-        from fogref.compare.gate import parse_tolerances
-
         return parse_tolerances(raw)
 
 
@@ -71,8 +79,6 @@ class DistanceBands(Check):
     metavar = "M,M"
 
     def parse(self, raw, name, source):
-        from fogref.compare.gate import parse_distance_bands
-
         return parse_distance_bands(raw)
 
     def describe(self):
@@ -321,9 +327,6 @@ def _refuse_outputs_over_inputs(o: Options) -> None:
     """A ParameterError (exit 2) before any work when a file the run writes
     (the report's files and figures, ``--json``, ``--junit``) resolves to an input (the truth, an
     engine image) or two outputs to the same file (:func:`fogref.compare.report.refuse_output_over_input`)."""
-    from fogref.atomic import check_output_file
-    from fogref.compare.report import refuse_output_over_input, report_paths
-
     inputs = [
         ("EXR", o.exr),
         ("--image", o.image),
@@ -344,11 +347,6 @@ def _refuse_outputs_over_inputs(o: Options) -> None:
 def _engine_images(o: Options, truth):
     """Render the truth's view with ``--engine`` into ``OUT/engine`` and read back the images of
     ``--engine-output``; returns ``(EngineImages, the engine's record)``."""
-    from fogref.cli.engine import engine_model
-    from fogref.compare.foreign import load_engine_images
-    from fogref.engines.render import render_and_write
-    from fogref.engines.view import view_from_truth
-
     view = view_from_truth(truth, o.scene)
     model, sources = engine_model(o.engine, o.param, truth.params if o.from_scene else None, view)
     inputs = [(o.exr, "EXR"), (view.source, "scene")]
@@ -374,17 +372,8 @@ def run(o: Options, given=frozenset()) -> int:
     Options are checked before anything is read; warnings (model non-finite values,
     excluded pixels) go to stderr.
     """
-    from fogref.compare import gate
-    from fogref.compare.check import check
-    from fogref.compare.foreign import load_engine_images
-    from fogref.compare.report import compare, compare_images
-    from fogref.gbuffer import load_truth
-    from fogref.mapping.build import build_model, parse_param_assignments
-
     images = check_modes(o, given)
     if images and isinstance(o.image, tuple):  # several images: one table (fogref.cli.compare_batch)
-        from fogref.cli.compare_batch import run_batch
-
         return run_batch(o, given, default_out_dir(o.exr, "batch"))
     options = {"tolerances": o.tolerance, "distance_bands": o.distance_bands, "confidence": o.confidence}
     _refuse_outputs_over_inputs(o)
@@ -435,7 +424,6 @@ def run(o: Options, given=frozenset()) -> int:
     for w in report["warnings"]:
         print(f"fogref compare: warning: {w}", file=sys.stderr)
     print(f"report: {out / 'index.md'}")
-    from fogref.html.reports import write_compare_html
 
     print(f"html: {write_compare_html(out, truth)}")
     return gate.finish(o, result, report=str(out), **extra)

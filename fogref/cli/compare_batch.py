@@ -20,8 +20,16 @@ import sys
 from pathlib import Path
 
 from fogref import params
+from fogref.atomic import write_text_atomic
 from fogref.cli.checks import Check
+from fogref.cli.spec import UsageError
+from fogref.compare.check import check
+from fogref.compare.foreign import IMAGE_SUFFIXES, load_engine_images
+from fogref.compare.gate import exit_code
+from fogref.compare.report import compare_images
 from fogref.errors import FogrefError
+from fogref.gbuffer import load_truth
+from fogref.html.reports import write_batch_html, write_compare_html
 
 #: Descriptive metrics of the ``final`` part over all pixels added to each row (metrics.json keys).
 DESCRIPTIVE = (
@@ -53,8 +61,6 @@ class ImageList(Check):
     role = "input"  # the files a command reads (fogref.cli.spec.check_paths)
 
     def parse(self, raw, name, source):
-        from fogref.compare.foreign import IMAGE_SUFFIXES
-
         raw = [raw] if isinstance(raw, str) else list(raw)
         out: list[str] = []
         for r in raw:
@@ -111,15 +117,6 @@ def batch_rows(results) -> tuple[list[dict], list[str]]:
 def run_batch(o, given, default_out) -> int:
     """Check and report every image of ``o.image`` (a tuple) against the truth; write the table into
     ``o.out``, else ``default_out``."""
-    from fogref.atomic import write_text_atomic
-    from fogref.cli.spec import UsageError
-    from fogref.compare.check import check
-    from fogref.compare.foreign import load_engine_images
-    from fogref.compare.gate import exit_code
-    from fogref.compare.report import compare_images
-    from fogref.gbuffer import load_truth
-    from fogref.html.reports import write_batch_html, write_compare_html
-
     for opt in ("transmittance", "inscatter", "fog_colour", "json", "junit"):
         if opt in given:
             flag = "--" + opt.replace("_", "-")

@@ -11,8 +11,11 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from fogref.atomic import check_output_file, refuse_overwriting_inputs, write_text_atomic
 from fogref.cli.checks import Choice, Number, PathArg
 from fogref.cli.spec import option
+from fogref.compare.diff import diff, load_side
+from fogref.html.reports import write_diff_html
 
 NAME = "diff"
 HELP = "do two truths (or images) differ beyond noise? exit 0 equal, 1 differ, 2 error"
@@ -71,12 +74,7 @@ class Options:
 
 def run(o: Options, given=frozenset()) -> int:
     """Print the diff and return its exit code."""
-    from fogref.atomic import write_text_atomic
-    from fogref.compare.diff import diff, load_side
-
     if o.out:
-        from fogref.atomic import check_output_file, refuse_overwriting_inputs
-
         page = Path(o.out) / "report.html"
         check_output_file(page, "fogref diff: --out")
         refuse_overwriting_inputs([(page, "report")], [(o.a, "A"), (o.b, "B")], "fogref diff: --out")
@@ -86,8 +84,6 @@ def run(o: Options, given=frozenset()) -> int:
     if o.json:
         write_text_atomic(o.json, json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n")
     if o.out:
-        from fogref.html.reports import write_diff_html
-
         print(f"html: {write_diff_html(Path(o.out), result, a, b)}")
     print(f"exit code {result.code} ({result.verdict})")
     return result.code

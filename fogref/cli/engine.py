@@ -15,18 +15,24 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from fogref.atomic import refuse_overwriting_inputs
 from fogref.cli.checks import Assignments, Choice, Number, PathArg
 from fogref.cli.spec import option, refuse, switch
-from fogref.engines import ENGINES
+from fogref.engines import ENGINES, engine_module
+from fogref.engines.render import output_paths, render_and_write
+from fogref.engines.view import view_from_scene, view_from_truth
 from fogref.errors import FogrefError
+from fogref.gbuffer import load_truth
+from fogref.mapping.build import build_model, current_parameters, parse_param_assignments
+from fogref.mapping.registry import MAPPINGS
 
 NAME = "engine"
 SOURCE = "fogref engine"
-HELP = "render a truth's or a scene's view with a real web engine (three.js, Babylon.js, PlayCanvas)"
+HELP = "render a truth's or scene's view with a real web engine (three.js, Babylon.js, PlayCanvas, Filament)"
 DESCRIPTION = (
     "Render the view of a ground-truth EXR (its scene file) or of a scene XML with a real engine "
-    "(three.js, Babylon.js or PlayCanvas from node_modules, in headless Chromium, SwiftShader WebGL): its "
-    "linear float render target (final.exr with distance and hit channels, T.exr, inscatter.exr, "
+    "(three.js, Babylon.js, PlayCanvas or Filament from node_modules, in headless Chromium, SwiftShader "
+    "WebGL): its linear float render target (final.exr with distance and hit channels, T.exr, inscatter.exr, "
     "surface.exr), its 8-bit canvas as the engine ships it (canvas.png) and engine.json (version, "
     "fog settings and where each came from, the difference from fogref's port of the engine, the "
     "camera against the truth's)."
@@ -93,10 +99,6 @@ def engine_model(engine: str, param: dict | None, scene_params: dict | None, vie
     ``view_settings(near, far)``: PlayCanvas's clip planes); then ``param``.  Returns ``(model,
     sources)``, ``sources``: setting name -> where it came from.  A scene the mapping refuses
     gets its one-line error with the way out (``--param``)."""
-    from fogref.engines import engine_module
-    from fogref.mapping.build import build_model, current_parameters, parse_param_assignments
-    from fogref.mapping.registry import MAPPINGS
-
     mod = engine_module(engine)
     given = parse_param_assignments([f"{k}={v}" for k, v in (param or {}).items()])
     fixed = {}
@@ -131,10 +133,6 @@ def engine_model(engine: str, param: dict | None, scene_params: dict | None, vie
 
 def run(o: Options, given=frozenset()) -> int:
     """Render, write, print one line per finding; 0 on success."""
-    from fogref.atomic import refuse_overwriting_inputs
-    from fogref.engines.render import output_paths, render_and_write
-    from fogref.engines.view import view_from_scene, view_from_truth
-
     outputs = [(p, f"engine {k} file") for k, p in output_paths(o.out).items()]
     refuse_overwriting_inputs(
         outputs, [(o.input, "input")] + ([(o.scene, "scene")] if o.scene else []), "--out"
@@ -144,7 +142,6 @@ def run(o: Options, given=frozenset()) -> int:
         refuse(
             Options, given, ("input",), ("overrides",), SOURCE, "a truth's view is its own; render a scene"
         )
-        from fogref.gbuffer import load_truth
 
         truth = load_truth(o.input)
         view = view_from_truth(truth, o.scene)

@@ -13,9 +13,14 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from fogref.atomic import write_text_atomic
 from fogref.cli.checks import Assignments, Choice, Number, PathArg, SceneArg
 from fogref.cli.spec import UsageError, option
 from fogref.errors import FogrefError
+from fogref.mapping.build import parse_param_assignments
+from fogref.mapping.export import ENGINES
+from fogref.shipped_scenes import resolve_scene
+from fogref.study.export import export_engine
 
 NAME = "export"
 SOURCE = "fogref export"
@@ -27,9 +32,8 @@ DESCRIPTION = (
     "translate JSON, --param, or a fit of the model to --scene."
 )
 EPILOG = "exit codes: 0 written, 2 usage or input error"
-#: ``--engine`` values (fogref.mapping.export.ENGINES, checked equal by tests/test_export.py).
 API = "fogref.study.export:export_engine"
-ENGINE_NAMES = ("unreal", "godot", "bevy", "threejs", "unity", "hdrp", "filament")
+ENGINE_NAMES = tuple(ENGINES)  #: ``--engine`` values
 
 
 @dataclass
@@ -77,11 +81,6 @@ class Options:
 
 
 def run(o: Options, given=frozenset()) -> int:
-    from fogref.atomic import write_text_atomic
-    from fogref.mapping.build import parse_param_assignments
-    from fogref.shipped_scenes import resolve_scene
-    from fogref.study.export import export_engine
-
     params = parse_param_assignments(f"{k}={v}" for k, v in (o.param or {}).items())
     if o.sun_elevation is not None and not o.json:
         raise UsageError(f"{SOURCE}: --sun-elevation picks a row of a fit table given with --json")

@@ -14,12 +14,18 @@ from __future__ import annotations
 
 import json
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from fogref import params
 from fogref.cli.checks import RGB, Assignments, Integer, Number, PathArg, SceneArg, Text, Vector
 from fogref.cli.spec import UsageError, option, switch
+from fogref.gbuffer import load_truth
+from fogref.mapping import PhysicalScene, fit_unreal, lobe_table, sample_views
+from fogref.mapping.build import parse_param_assignments
+from fogref.mapping.fit import fit_model, model_class
+from fogref.media import ExpLayer, FogMedium
 from fogref.models.terms import note, unreal_field
+from fogref.study.fit import physical_from_scene, write_lobe_table
 
 NAME = "fit"
 SOURCE = "fogref fit"
@@ -204,12 +210,6 @@ def check_physical(pf, source: str) -> None:
 def physical_from_options(o: Options):
     """The :class:`fogref.mapping.PhysicalScene` of the options: the scene's, the truth's or
     :data:`VALLEY`, each flag given overriding its value."""
-    from dataclasses import replace
-
-    from fogref.mapping import PhysicalScene
-    from fogref.media import ExpLayer, FogMedium
-    from fogref.study.fit import physical_from_scene
-
     if o.scene and o.exr:
         raise UsageError(f"{SOURCE}: give --scene or --exr, not both")
     if o.sun_dir is not None and not any(o.sun_dir):
@@ -217,8 +217,6 @@ def physical_from_options(o: Options):
     if o.scene:
         pf = physical_from_scene(o.scene, camera=o.camera)
     elif o.exr:
-        from fogref.gbuffer import load_truth
-
         pf = PhysicalScene.from_params(load_truth(o.exr).params, camera=o.camera)  # refuses a foreign EXR
     else:
         v = {k: getattr(o, k) if getattr(o, k) is not None else d for k, d in VALLEY.items()}
@@ -274,9 +272,6 @@ def physical_doc(pf) -> dict:
 
 def run_generic(o: Options, pf) -> int:
     """Any model through :func:`fogref.mapping.fit.fit_model`: JSON on stdout, a table on stderr."""
-    from fogref.mapping.build import parse_param_assignments
-    from fogref.mapping.fit import fit_model
-
     fixed = parse_param_assignments(f"{k}={v}" for k, v in (o.param or {}).items())
     r = fit_model(
         o.model,
@@ -311,10 +306,6 @@ def run_generic(o: Options, pf) -> int:
 
 
 def run(o: Options, given=frozenset()) -> int:
-    from fogref.mapping import fit_unreal, lobe_table, sample_views
-    from fogref.mapping.fit import model_class
-    from fogref.study.fit import write_lobe_table
-
     cls = model_class(o.model)  # an unknown model: "did you mean", before any work
     pf = physical_from_options(o)
     check_physical(pf, o.scene or o.exr or "fogref fit flags")

@@ -1,7 +1,7 @@
 """``fogref scene --out S.xml``: write a scene XML from fog, sun, sky, camera and geometry.
 
 The work, and the checks of every value with its range, is
-:func:`fogref.render.scene_writer.write_scene`; its defaults are the options' defaults.
+:func:`fogref.scene.writer.write_scene`; its defaults are the options' defaults.
 Fog is given either in physical units or as Unreal editor values, not both.
 """
 
@@ -13,19 +13,13 @@ from dataclasses import dataclass, make_dataclass
 from fogref.cli.checks import Choice, Integer, Number, PathArg, Text
 from fogref.cli.spec import UsageError, option, switch, toggle
 from fogref.mapping.droplet_fog import PHASES
+from fogref.mapping.unreal_pathtracer import DROPPED, exact_fog_params, rewrite_scene, validated_settings
 from fogref.media.droplets import DROPLET_PRESETS
-from fogref.render.scene_writer import (
-    MESH_UP,
-    PHYSICAL,
-    RANGES,
-    SCATTERING,
-    SOURCE,
-    UNREAL_IGNORED,
-    UNREAL_IGNORED_RANGES,
-    UNREAL_MAPPED,
-    _flat_unreal,
-    write_scene,
-)
+from fogref.models.ue4 import UE4FogParams
+from fogref.scene.fog_input import UNREAL_IGNORED, UNREAL_IGNORED_RANGES, UNREAL_MAPPED, flat_unreal
+from fogref.scene.templates import MESH_UP
+from fogref.scene.vocabulary import PHYSICAL, RANGES, SCATTERING, SOURCE
+from fogref.scene.writer import write_scene
 
 NAME = "scene"
 HELP = "write a scene XML from fog (physical or Unreal values), sun, sky, camera and geometry"
@@ -35,7 +29,7 @@ DESCRIPTION = (
     "`fogref render --set` can change.  fogref is y-up, metres; Unreal values are z-up, centimetres."
 )
 EPILOG = "exit codes: 0 written, 2 usage or input error"
-WRITE = "fogref.render.scene_writer:write_scene"
+WRITE = "fogref.scene.writer:write_scene"
 GEOMETRY = "geometry"
 PHYS = "fog in physical units (y-up, metres)"
 UE = (
@@ -408,7 +402,7 @@ _IGNORED_FIELDS = [
     for key, (opt, kind, why) in UNREAL_IGNORED.items()
 ]
 Options = make_dataclass("Options", _IGNORED_FIELDS, bases=(_Options,))
-Options.__doc__ = "The options of ``fogref scene`` (those of :func:`fogref.render.scene_writer.write_scene`)."
+Options.__doc__ = "The options of ``fogref scene`` (those of :func:`fogref.scene.writer.write_scene`)."
 Options.__module__ = __name__
 
 
@@ -429,7 +423,7 @@ def run(a, given=frozenset()) -> int:
             ue[key] = v
     if phys and ue:
         p_opts = ", ".join(PHYSICAL[k].option for k in phys)
-        u_opts = ", ".join(sorted(_ue_option(k) for k in _flat_unreal(ue)))
+        u_opts = ", ".join(sorted(_ue_option(k) for k in flat_unreal(ue)))
         raise UsageError(
             f"{SOURCE}: give the fog either in physical units or as Unreal editor values, not both "
             f"(got {p_opts} and {u_opts})"
@@ -490,9 +484,6 @@ def run(a, given=frozenset()) -> int:
         on_note=note,
     )
     if pt is not None:
-        from fogref.mapping.unreal_pathtracer import DROPPED, exact_fog_params, rewrite_scene
-        from fogref.models.ue4 import UE4FogParams
-
         uf = UE4FogParams(**{k: v for k, v in ue.items() if k not in UNREAL_IGNORED})
         exact = exact_fog_params(uf, pt) if a.ue_exact else None
         rewrite_scene(r.path, r.path, uf, pt, params=exact)  # the cylinder follows $camera_origin
@@ -509,7 +500,7 @@ def _droplet_fog(a, phys: dict, ue: dict) -> tuple:
     from fogref.mapping.droplet_fog import droplet_fog
 
     clash = ["--sigma-t"] if "sigma_t" in phys else []
-    clash += sorted(_ue_option(k) for k in _flat_unreal(ue))
+    clash += sorted(_ue_option(k) for k in flat_unreal(ue))
     clash += [f"--{k.replace('_', '-')}" for k in ("ue_pathtracer", "ue_exact") if getattr(a, k)]
     if a.droplets is not None:
         clash += [opt for opt, v in (("--albedo", a.albedo), ("--g", a.g)) if v is not None]
@@ -548,8 +539,6 @@ def _refuse_sky_options(a, given) -> None:
 
 def _pathtracer_settings(given: dict, phys: dict, a) -> object:
     """The checked path-traced fog settings of ``--ue-*`` (refused beside physical fog, --albedo, --g)."""
-    from fogref.mapping.unreal_pathtracer import validated_settings
-
     clash = [PHYSICAL[k].option for k in phys]
     clash += [opt for opt, v in (("--albedo", a.albedo), ("--g", a.g)) if v is not None]
     if clash:

@@ -40,6 +40,7 @@ import os
 from dataclasses import MISSING, field
 
 from fogref import params
+from fogref.atomic import check_output_file, is_stream, refuse_overwriting_inputs
 from fogref.cli.checks import Check, PathArg, Text
 from fogref.errors import FogrefError, did_you_mean
 
@@ -224,7 +225,7 @@ def _shown(value) -> str:
     if isinstance(value, (tuple, list)):
         return ",".join(_shown(v) for v in value)
     if isinstance(value, float):
-        return params._fmt(value)
+        return params.format_number(value)
     return str(value)
 
 
@@ -378,8 +379,6 @@ def check_paths(opts, source: str) -> None:
     "output")``: ``--json``, ``--junit``, ``--out S.xml``...) is a folder, or would overwrite an
     input file option (``PathArg(role="input")``: the truth, the images, the scene), or another
     output (:func:`fogref.atomic.refuse_overwriting_inputs`, the one check of every command)."""
-    from fogref.atomic import check_output_file, is_stream, refuse_overwriting_inputs
-
     outputs = _paths(opts, "output")
     for flag, p in outputs:
         check_output_file(p, f"{source}: {flag}")

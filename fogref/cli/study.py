@@ -10,6 +10,8 @@ from pathlib import Path
 
 from fogref.cli.checks import Number, PathArg
 from fogref.cli.spec import option, switch
+from fogref.gbuffer import load_truth
+from fogref.html.reports import write_study_html
 from fogref.study.ue_pathtracer import split_study
 from fogref.study.unreal import run_study
 
@@ -76,8 +78,6 @@ def run(o: Options, given=frozenset()) -> int:
     run_study(o.exr, o.out, o.renders, scene=o.scene, compare_report=not o.no_compare, settings=settings)
     if o.ue_pathtracer:
         split_study(o.exr, o.out, Path(o.renders) / "ue_pathtracer", scene=o.scene)
-    from fogref.gbuffer import load_truth
-    from fogref.html.reports import write_study_html
 
     print(f"html: {write_study_html(o.out, load_truth(o.exr))}")
     return 0

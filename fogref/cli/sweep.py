@@ -11,6 +11,7 @@ from pathlib import Path
 
 from fogref.cli.checks import Address, Integer, PathArg
 from fogref.cli.spec import option, refuse, switch
+from fogref.html.reports import write_sweep_html
 from fogref.study.sweep import run_sweep
 
 NAME = "sweep"
@@ -79,7 +80,6 @@ def run(a: Options, given=frozenset()) -> int:
         f"{info['wall_seconds']:.1f} s; table: {info['table']} ({info['rows']} rows), {info['parquet']}; "
         f"{len(info['plots'])} plots"
     )
-    from fogref.html.reports import write_sweep_html
 
     print(f"html: {write_sweep_html(Path(info['table']).parent, Path(info['table']).stem)}")
     return 0

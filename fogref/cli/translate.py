@@ -15,7 +15,10 @@ from dataclasses import dataclass
 
 from fogref.cli.checks import Assignments, Integer, Number, SceneArg, Text
 from fogref.cli.spec import option
+from fogref.mapping.build import parse_param_assignments
+from fogref.mapping.fit import model_class
 from fogref.models.terms import describe, note
+from fogref.study.fit import translate
 
 NAME = "translate"
 SOURCE = "fogref translate"
@@ -67,10 +70,6 @@ class Options:
 
 
 def run(o: Options, given=frozenset()) -> int:
-    from fogref.mapping.build import parse_param_assignments
-    from fogref.mapping.fit import model_class
-    from fogref.study.fit import translate
-
     model_class(o.source), model_class(o.target)  # unknown names: "did you mean", before any work
     params = parse_param_assignments(f"{k}={v}" for k, v in (o.param or {}).items())
     t = translate(o.source, o.target, params, o.scene, views=o.directions, sun_elevations=o.sun_elevation)

@@ -50,6 +50,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from PIL import Image
 
 from fogref.compare import report
 from fogref.compare.check import check
@@ -76,8 +77,6 @@ def _read_exr_rgb(path: Path) -> np.ndarray:
 
 
 def _read_png(path: Path) -> np.ndarray:
-    from PIL import Image
-
     with path.open("rb") as f:
         head = f.read(26)
     if head[:8] != b"\x89PNG\r\n\x1a\n":

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import json
 import math
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from fogref.atomic import write_text_atomic
@@ -130,8 +131,6 @@ def write_json(path, result, code: int, **extra) -> Path:
 
 def junit_xml(result, inconclusive: str | None = None) -> str:
     """JUnit XML of the rows that have a tolerance (see the module's docstring for the mapping)."""
-    import xml.etree.ElementTree as ET
-
     rows = [r for r in result.rows if r.tolerance is not None]
     suite = ET.Element("testsuite", name="fogref compare", tests=str(len(rows)))
     counts = {"failures": 0, "skipped": 0}

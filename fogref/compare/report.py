@@ -71,17 +71,17 @@ from fogref.compare.report_parts import (
     PART_UNITS,
     PARTS,
     REGIONS,
-    _json_safe,
-    _model_description,
-    _model_name,
     check_sky_distance,
     evaluate_parts,
     image_parts,
+    json_safe,
+    model_description,
+    model_name,
     model_units,
     parts_from_check,
     truth_provenance,
 )
-from fogref.display import exposure_for
+from fogref.display import part_exposures
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 from fogref.gbuffer import Truth, load_truth
@@ -195,10 +195,10 @@ def compare(
     if parts is None:
         parts = evaluate_parts(truth, model, precision, sky_distance)
     header = {
-        "candidate": {"kind": "model", "name": _model_name(model)},
+        "candidate": {"kind": "model", "name": model_name(model)},
         "model": {
-            "name": _model_name(model),
-            "parameters": _model_description(model),
+            "name": model_name(model),
+            "parameters": model_description(model),
             "units": model_units(model),
         },
         "precision": precision,
@@ -311,10 +311,10 @@ def write_report(
         truth.distance, errors, log_distance_edges(truth.distance[truth.hit], distance_bins), mask=truth.hit
     )
     by_sun = binned_errors(sun_angle, errors, angle_edges(angle_step_deg)) if sun_angle is not None else None
-    exposures = {p: (1.0 if PART_UNITS[p] == "1" else exposure_for(parts[p]["reference"])) for p in names}
+    exposures = part_exposures({p: parts[p]["reference"] for p in names})
 
     h, w = truth.shape
-    report = _json_safe(
+    report = json_safe(
         {
             "exr": str(truth.path),
             "truth": truth_provenance(truth),

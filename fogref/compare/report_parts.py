@@ -21,14 +21,15 @@ import numpy as np
 from fogref.compare import noise
 from fogref.compare.candidate import candidate_parts, evaluate_model, fog_parts
 from fogref.errors import FogrefError
-from fogref.gbuffer import Truth
+from fogref.gbuffer import COMPARED_PARTS, Truth, part_attribute
 from fogref.mapping.build import current_parameters
 from fogref.models.terms import annotate
 from fogref.params import number as valid_number
 
 #: Distance [m] at which the model fogs sky pixels (a stand-in for infinity).
 DEFAULT_SKY_DISTANCE = 1.0e5
-PARTS: tuple[str, ...] = ("final", "transmittance", "inscatter", "attenuated_surface")
+#: A model run's parts (:data:`fogref.gbuffer.COMPARED_PARTS`).
+PARTS: tuple[str, ...] = COMPARED_PARTS
 #: Units of each part's values ("1": dimensionless; radiance is in the scene's units).
 PART_UNITS: dict[str, str] = {
     "final": "radiance",
@@ -42,14 +43,20 @@ REGIONS: tuple[str, ...] = ("all", "surface", "sky")
 ALL_PARTS: tuple[str, ...] = (*PARTS, "composite")
 
 
-def _model_name(model) -> str:
+def model_name(model) -> str:
+    """The name a report gives ``model``: its ``name``, else its class's name.
+
+    >>> from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+    >>> model_name(UE4ExponentialHeightFog(UE4FogParams())), model_name(object())
+    ('ue4', 'object')
+    """
     return str(getattr(model, "name", None) or type(model).__name__)
 
 
-def _model_description(model) -> dict | str:
+def model_description(model) -> dict | str:
     """JSON-ready parameters of ``model`` (see :func:`~fogref.mapping.build.current_parameters`)."""
     try:
-        return _json_safe(current_parameters(model))
+        return json_safe(current_parameters(model))
     except (TypeError, AttributeError, ValueError, FogrefError):
         return repr(model)
 
@@ -57,10 +64,10 @@ def _model_description(model) -> dict | str:
 def model_units(model) -> dict:
     """Each parameter's unit and colour space (:func:`fogref.models.terms.annotate`), where fogref
     knows them."""
-    params = _model_description(model)
+    params = model_description(model)
     if not isinstance(params, dict):
         return {}
-    name = _model_name(model)
+    name = model_name(model)
     return {k: a for k, v in params.items() if (a := annotate(name, k, v))}
 
 
@@ -136,7 +143,7 @@ def _from_core(cp) -> dict:
     """The comparison core's parts (:class:`fogref.compare.check.CandidateParts`) as a report's,
     ``T`` named ``transmittance``."""
     return {
-        ("transmittance" if k == "T" else k): {
+        part_attribute(k): {
             "reference": cp.reference[k],
             "model": cp.parts[k],
             "cov": cp.noise_cov[k],
@@ -181,16 +188,20 @@ def truth_provenance(truth: Truth) -> dict:
     }
 
 
-def _json_safe(obj):
-    """Numpy scalars/arrays -> Python; non-finite floats -> None (never NaN in JSON)."""
+def json_safe(obj):
+    """Numpy scalars/arrays -> Python; non-finite floats -> None (never NaN in JSON).
+
+    >>> json_safe({"a": np.array([1.0, np.nan]), 2: (np.float32(0.5), np.bool_(True))})
+    {'a': [1.0, None], '2': [0.5, True]}
+    """
     if isinstance(obj, dict):
-        return {str(k): _json_safe(v) for k, v in obj.items()}
+        return {str(k): json_safe(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [_json_safe(v) for v in obj]
+        return [json_safe(v) for v in obj]
     if isinstance(obj, np.ndarray):
-        return _json_safe(obj.tolist())
+        return json_safe(obj.tolist())
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
-        return _json_safe({f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)})
+        return json_safe({f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)})
     if isinstance(obj, (np.bool_, bool)):
         return bool(obj)
     if isinstance(obj, (np.integer,)):

@@ -1,7 +1,7 @@
 """Real engines in the loop: render the truth's view with an engine itself, in headless Chromium.
 
 fogref's ports (:mod:`fogref.models`) are transcriptions of the engines' shaders; this floor
-renders the same view with the engine (three.js, Babylon.js, PlayCanvas from npm,
+renders the same view with the engine (three.js, Babylon.js, PlayCanvas, Filament from npm,
 ``package.json``) and reads its pixels back, so a port can be held to its engine and the engine
 to the truth.
 
@@ -15,6 +15,7 @@ module            what
 ``threejs``       three.js: its page (``threejs.js``), its fog settings, its canvas
 ``babylon``       Babylon.js: its page (``babylon.js``), its fog settings, its canvas
 ``playcanvas``    PlayCanvas: its page (``playcanvas.js``), its fog settings, its canvas
+``filament``      Filament (WebAssembly): its page (``filament.js``), its fog settings, its canvas
 ================  =====================================================================
 
 **An engine is one page and one mapping.** Its module (registered in :data:`ENGINES`) gives
@@ -22,11 +23,13 @@ module            what
 and whose port is compared), ``PAGE`` (an ES module), ``IMPORTS`` (bare import name -> path
 under ``node_modules``), ``PACKAGE`` (its npm name), ``settings(model)`` (the fog settings the
 page takes, JSON) and ``canvas_port(surface, model, fog_factor)`` (the canvas the port predicts,
-8-bit), ``port(model, camera)`` (the port for that camera) and optionally ``FOG_COORDINATE``
+8-bit; or ``canvas_of(image)`` for an engine whose canvas is its linear image in 8 bits:
+Filament), ``port(model, camera)`` (the port for that camera) and optionally ``FOG_COORDINATE``
 (``"depth"``, the default, or ``"distance"``: what the engine's fog reads, see
 :mod:`fogref.engines.port`) and ``view_settings(near, far)`` (the settings the view fixes:
-PlayCanvas's clip planes, which its fog reads). The page sets ``window.fogrefRender(spec)`` (it
-may return a promise) and then ``data-ready`` on ``<body>``. ``spec``: ``width``, ``height``
+PlayCanvas's clip planes, which its fog reads) and ``NOTES`` (said in ``engine.json``). The
+page sets ``window.fogrefRender(spec)`` (it may return a promise) and then ``data-ready`` on
+``<body>``. ``spec``: ``width``, ``height``
 [px]; ``camera`` (``origin`` [m], unit ``forward``, ``up``, ``right``, ``fov_y_deg``, ``near``,
 ``far`` [m]); ``shapes`` (base64 float32 world ``positions`` and ``normals`` or null, uint32
 ``indices``, linear ``reflectance``); ``sun`` (unit ``direction`` toward it, ``irradiance``) or
@@ -34,14 +37,15 @@ null; ``sky`` (uniform radiance) or null; ``fog`` (``settings``) or null. It ret
 ``version``; ``final``, ``surface`` (no fog), ``fog_factor`` (black materials, white fog:
 ``1 - T``), ``inscatter`` (black materials, the fog's colour) and ``depth`` (view distance, eye depth,
 0, hit) as base64 float32 RGBA rows bottom-up from a linear float render target; ``canvas``
-(base64 uint8 RGBA) as the engine ships it.
+(base64 uint8 RGBA) as the engine ships it; optionally ``position`` (the point its fog read,
+minus the camera, float32 RGBA: the port is evaluated there).
 
 Importing this package does no work; nothing starts until :func:`fogref.engines.render.render_engine`.
 
 Examples
 --------
 >>> sorted(ENGINES)
-['babylon', 'playcanvas', 'threejs']
+['babylon', 'filament', 'playcanvas', 'threejs']
 >>> engine_module("threejs").MODEL
 'threejs'
 >>> engine_module("three")
@@ -64,6 +68,7 @@ ENGINES = {
     "threejs": "fogref.engines.threejs",
     "babylon": "fogref.engines.babylon",
     "playcanvas": "fogref.engines.playcanvas",
+    "filament": "fogref.engines.filament",
 }
 
 

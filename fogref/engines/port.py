@@ -2,16 +2,18 @@
 
 The port (:mod:`fogref.models`) is evaluated at the points whose fog coordinate is the one the
 engine's fog saw, interpolated by the rasteriser: the eye depth (``fog_depth``), or the distance
-(``fog_distance``) for an engine module whose ``FOG_COORDINATE`` is ``"distance"``; composited
+(``fog_distance``) for an engine module whose ``FOG_COORDINATE`` is ``"distance"``, or the point
+itself where the page returns it (``fog_position``: Filament, whose fog reads it); composited
 over the engine's own unfogged surface (``surface * T + inscatter``) and compared with the
 engine's linear image, and -- through the engine's canvas transform (its module's
-``canvas_port``) -- with the 8-bit canvas.  Only the pixels the engine drew a surface on are
-compared (three.js and Babylon.js draw their background without fog;
-``sky_pixels`` counts the others).
+``canvas_port``, or ``canvas_of`` of the composited image) -- with the 8-bit canvas.  Only the
+pixels the engine drew a surface on are compared (three.js and Babylon.js draw their background
+without fog; ``sky_pixels`` counts the others).
 
 The verdict ``at_quantisation`` is True when the linear difference is within
 :data:`LINEAR_LEVEL` (relative to ``max(1, |value|)``: float32 storage and float32 shader
-arithmetic on eye depths of up to a few km) and the canvas within one 8-bit code value
+arithmetic on eye depths of up to a few km; an engine module's own ``LINEAR_LEVEL`` where its
+shader's arithmetic loses more: Filament's) and the canvas within one 8-bit code value
 (:data:`CANVAS_LEVEL`: the rounding of the last step).
 
 Examples
@@ -57,7 +59,9 @@ def port_vs_engine(r: Any, model: Any, view_dirs: np.ndarray | None = None) -> d
     dirs = pixel_directions(r.camera) if view_dirs is None else np.asarray(view_dirs, dtype=np.float64)
     cam = np.asarray(r.camera["origin"], dtype=np.float64)
     hit = r.hit
-    if getattr(mod, "FOG_COORDINATE", "depth") == "distance":
+    if r.fog_position is not None:  # the position the engine's fog read, relative to the camera
+        pos = cam + r.fog_position
+    elif getattr(mod, "FOG_COORDINATE", "depth") == "distance":
         pos = cam + dirs * r.fog_distance[..., None]
     else:
         along = dirs @ np.asarray(r.camera["forward"], dtype=np.float64)
@@ -70,7 +74,12 @@ def port_vs_engine(r: Any, model: Any, view_dirs: np.ndarray | None = None) -> d
     scale = np.maximum(1.0, np.abs(final))
     f = np.zeros(r.hit.shape)
     f[hit] = 1.0 - T[:, 0]
-    canvas = mod.canvas_port(r.surface, port, f)[hit].astype(np.int64)
+    if hasattr(mod, "canvas_of"):  # a canvas that holds the linear image (Filament)
+        image = r.surface.copy()
+        image[hit] = final
+        canvas = mod.canvas_of(image)[hit].astype(np.int64)
+    else:
+        canvas = mod.canvas_port(r.surface, port, f)[hit].astype(np.int64)
     dc = r.canvas[hit].astype(np.int64) - canvas
     from fogref.display import srgb_encode
 
@@ -89,7 +98,8 @@ def port_vs_engine(r: Any, model: Any, view_dirs: np.ndarray | None = None) -> d
         "linear_blend_canvas_max": int(np.abs(r.canvas[hit].astype(np.int64) - linear_blend).max(initial=0)),
     }
     out["at_quantisation"] = bool(
-        out["linear_max_relative"] <= LINEAR_LEVEL and out["canvas_max"] <= CANVAS_LEVEL
+        out["linear_max_relative"] <= getattr(mod, "LINEAR_LEVEL", LINEAR_LEVEL)
+        and out["canvas_max"] <= CANVAS_LEVEL
     )
     out["summary"] = summary(out)
     return out

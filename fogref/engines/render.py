@@ -64,6 +64,8 @@ class EngineRender:
     final, surface: with and without fog.  transmittance: ``1 - f``; inscatter: ``C f``
     (both None without fog).
     canvas: ``(H, W, 3)`` uint8 sRGB as shipped.  settings: the fog settings given to the engine.
+    fog_position: ``(H, W, 3)`` the point the engine's fog read minus the camera [m] (0 on sky),
+    where the page returns it (Filament), else None.
     """
 
     engine: str
@@ -86,6 +88,7 @@ class EngineRender:
     tone_mapping: str = ""
     seconds: float = 0.0
     notes: list[str] = field(default_factory=list)
+    fog_position: np.ndarray | None = None
 
     def record(self) -> dict:
         """The JSON-able description written to ``engine.json`` (no pixels)."""
@@ -211,7 +214,10 @@ def render_engine(
         output_colour_space=str(out.get("output_colour_space", "")),
         tone_mapping=str(out.get("tone_mapping", "")),
         seconds=seconds,
-        notes=list(view.notes),
+        notes=[*view.notes, *getattr(mod, "NOTES", ())],
+        fog_position=np.where(hit[..., None], _pixels(out["position"], shape, np.float32)[..., :3], 0.0)
+        if "position" in out
+        else None,
     )
 
 

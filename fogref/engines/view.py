@@ -1,7 +1,7 @@
 """The view an engine renders: the truth's camera, geometry, sun and sky, read from the scene file.
 
 :func:`view_from_scene` reads a fogref scene through the one scene reader
-(:func:`fogref.render.scene.load_scene`: Mitsuba loads it, so meshes, cubes and transforms are
+(:func:`fogref.render.load.load_scene`: Mitsuba loads it, so meshes, cubes and transforms are
 exactly the truth's) and :func:`view_from_truth` reads the scene a truth was rendered from
 (header ``fogref.scene`` and ``fogref.overrides``), refusing a scene whose fog, sun, sky or
 camera no longer match the truth's header.  Shapes become world-space triangles
@@ -55,7 +55,7 @@ class Triangles:
 class EngineView:
     """What an engine needs to render the truth's view.
 
-    camera: :func:`fogref.render.scene.sensor_camera`'s dict (origin, forward, up, right,
+    camera: :func:`fogref.render.load.sensor_camera`'s dict (origin, forward, up, right,
     fov_y_deg, resolution [W, H], near_clip, far_clip).  shapes: :class:`Triangles`.
     params: the scene's description (``fogref.params``: medium, sun, sky, camera).
     source: the scene file; notes: what the engine draws differently, said once.
@@ -91,7 +91,7 @@ class EngineView:
 
 def pixel_directions(camera: dict) -> np.ndarray:
     """``(H, W, 3)`` unit directions [world, y-up] through the pixel centres of ``camera``
-    (:func:`fogref.render.scene.sensor_camera`'s dict and its formula).
+    (:func:`fogref.render.load.sensor_camera`'s dict and its formula).
 
     >>> cam = {"forward": [0, 0, 1], "up": [0, 1, 0], "right": [-1, 0, 0], "fov_deg": 90.0,
     ...        "resolution": [2, 1]}
@@ -244,7 +244,7 @@ def view_from_scene(path, overrides: dict | None = None) -> EngineView:
     FogrefError (one line, naming the file) for a scene the truth renderer refuses, a shape type
     other than meshes, rectangles and spheres, an area light or a textured BSDF.
     """
-    from fogref.render.scene import load_scene
+    from fogref.render.load import load_scene
 
     scene, desc = load_scene(path, overrides)
     origin = np.asarray(desc["camera"]["origin"], dtype=np.float64)

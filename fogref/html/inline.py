@@ -39,8 +39,9 @@ import math
 import zlib
 
 import numpy as np
+from PIL import Image
 
-from fogref.display import exposure_for, tone_map
+from fogref.display import TRUTH_PARTS, part_exposures, tone_map
 
 #: Largest finite half float.
 HALF_MAX = 65504.0
@@ -112,8 +113,6 @@ def thumbnail_uri(linear_rgb, exposure: float, width: int = 160) -> str:
 def png_thumbnail_uri(px, width: int, smooth: bool) -> str:
     """8-bit pixels ``px`` (H, W, 3) as a PNG data URI, shrunk to at most ``width`` px wide [px >= 1]
     (the height in proportion, >= 1) with bilinear (``smooth``) or nearest-neighbour filtering."""
-    from PIL import Image
-
     im = Image.fromarray(px)
     if im.width > width:
         resample = Image.BILINEAR if smooth else Image.NEAREST
@@ -241,22 +240,12 @@ def _figures_row(items) -> str:
 
 
 def truth_html(truth) -> str:
-    """A truth's notebook display: thumbnails of ``final``, ``T``, ``inscatter``, ``single``,
-    ``multiple``, ``surface`` (radiance parts at :func:`fogref.display.exposure_for` of ``final``;
-    inscatter, single and multiple share the inscatter's; ``T`` at exposure 1) and its provenance."""
-
-    ex_final, ex_in = exposure_for(truth.final), exposure_for(truth.inscatter)
-    thumbs = [
-        (p, thumbnail_uri(img, ex))
-        for p, img, ex in (
-            ("final", truth.final, ex_final),
-            ("T", truth.transmittance, 1.0),
-            ("inscatter", truth.inscatter, ex_in),
-            ("single", truth.single, ex_in),
-            ("multiple", truth.multiple, ex_in),
-            ("surface", truth.surface, ex_final),
-        )
-    ]
+    """A truth's notebook display: thumbnails of the parts the viewer shows
+    (:data:`fogref.display.TRUTH_PARTS`: ``final``, ``T``, ``inscatter``, ``single``,
+    ``multiple``, ``surface``) at the viewer's exposures (:func:`fogref.display.part_exposures`)
+    and its provenance."""
+    images = {p: truth.part(p) for p in TRUTH_PARTS}
+    thumbs = [(p, thumbnail_uri(images[p], ex)) for p, ex in part_exposures(images).items()]
     h, w = truth.shape
     a = truth.attrs
     with np.errstate(divide="ignore", invalid="ignore"):

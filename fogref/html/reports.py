@@ -13,12 +13,14 @@ import csv
 import json
 from pathlib import Path
 
-from fogref.gbuffer import Truth
+import numpy as np
+
+from fogref.gbuffer import Truth, part_attribute
 from fogref.html.inline import check_rows_html, esc, fmt, fmt_noise, table_html
 from fogref.html.page import figure, verdict_badge, write_page
 from fogref.html.viewer import viewer_data
 from fogref.models.terms import note, unreal_field
-from fogref.study.budget.report import validation_paragraphs
+from fogref.study.budget.report import port_vs_engine_line, validation_paragraphs
 from fogref.study.plot_units import HEADLINE_METRICS
 
 #: Columns of the descriptive metric table: (metrics.json key, heading, with its ± stderr).
@@ -274,6 +276,7 @@ def _budget_html(budget: dict) -> str:
                 "error.</p>"
             )
         out += [SHARES_EXPLAINED, '<div class="fr-wide">' + _shapley_table(sh) + "</div>"]
+        out.append(f"<p>{esc(port_vs_engine_line('ue4'))}</p>")
     folded = budget.get("shapley_colours_in_lobe")
     if folded:
         out += [
@@ -359,13 +362,11 @@ def write_batch_html(out_dir, rows: list[dict], truth_path: str, columns) -> Pat
 def write_diff_html(out_dir, result, a, b) -> Path:
     """``out_dir/report.html`` of :func:`fogref.compare.diff.diff`: the viewer (A as the truth, B as
     the candidate: its error is B - A) and the rows tested."""
-    import numpy as np
-
     folder = Path(out_dir)
     truth = a if isinstance(a, Truth) else b if isinstance(b, Truth) else None
     ch: dict = {}
     for part, e in result.errors.items():
-        name = "transmittance" if part == "T" else part
+        name = part_attribute(part)
         for i, c in enumerate("RGB"):
             ch[f"{name}.error.{c}"] = e[..., i]
         valid = truth.surface_valid if (truth is not None and part == "final") else np.ones(e.shape[:2], bool)

@@ -34,24 +34,13 @@ from types import SimpleNamespace
 import numpy as np
 
 from fogref.compare.regions import region_masks
-from fogref.display import exposure_for
+from fogref.display import TRUTH_PARTS, part_exposures
 from fogref.exrio import read_exr
-from fogref.gbuffer import PARTS
+from fogref.gbuffer import COMPARED_PARTS, part_attribute, part_group
 from fogref.html.inline import encode_half, encode_mask
 
-#: The truth's parts the viewer shows, in the schema's order (``T`` is the transmittance;
-#: ``attenuated_surface`` only beside a report that compares it).
-TRUTH_PARTS = tuple(p for p in PARTS if p != "attenuated_surface")
 #: A report's part name -> the truth's part it is compared with.
-REPORT_TO_TRUTH = {
-    "final": "final",
-    "transmittance": "T",
-    "inscatter": "inscatter",
-    "attenuated_surface": "attenuated_surface",
-    "composite": "final",
-}
-#: The exposure a truth part borrows (single and multiple: the inscatter's, so that they compare).
-EXPOSURE_FROM = {"single": "inscatter", "multiple": "inscatter"}
+REPORT_TO_TRUTH = {**{p: part_group(p) for p in COMPARED_PARTS}, "composite": "final"}
 UNITS_RADIANCE = "radiance (the scene's units)"
 #: The most pixels the viewer embeds (480 x 270); larger images are shown as block means.
 MAX_PIXELS = 480 * 270
@@ -95,7 +84,7 @@ def block_stderr(se, k: int) -> np.ndarray:
 
 
 def _units(part: str) -> str:
-    return "1 (transmittance)" if part in ("T", "transmittance") else UNITS_RADIANCE
+    return "1 (transmittance)" if part_attribute(part) == "transmittance" else UNITS_RADIANCE
 
 
 def _rgb(ch: dict, prefix: str) -> np.ndarray:
@@ -120,8 +109,7 @@ def error_limit(error, valid=None) -> float:
 
 
 def _truth_part(truth, part: str) -> tuple[np.ndarray, np.ndarray | None]:
-    img = truth.transmittance if part == "T" else getattr(truth, part)
-    return img, truth.stderr.get(part)
+    return truth.part(part), truth.stderr.get(part_attribute(part))
 
 
 def viewer_data(
@@ -159,22 +147,13 @@ def viewer_data(
     k = block_scale(shape)
     mean = lambda a: block_mean(a, k)  # noqa: E731
     se = lambda a: block_stderr(a, k)  # noqa: E731
-    layers, exposures = [], {}
+    layers = []
 
-    def exposure(part, img):
-        if part in ("T", "transmittance"):
-            return 1.0
-        if part not in exposures:
-            exposures[part] = exposure_for(img)
-        return exposures[part]
-
-    def add(name, truth_img, std, rpart):
-        src = EXPOSURE_FROM.get(name)
-        ex_img = _truth_part(truth, src)[0] if (src and truth is not None) else truth_img
+    def add(name, truth_img, std, rpart, exposure):
         layer = {
             "part": name,
             "units": _units(name),
-            "exposure": exposure(src or name, ex_img),
+            "exposure": exposure,
             "truth": encode_half(mean(truth_img)),
             "stderr": encode_half(se(std)) if std is not None else None,
             "error": None,
@@ -199,18 +178,21 @@ def viewer_data(
         layers.append(layer)
 
     by_truth = {REPORT_TO_TRUTH[p]: p for p in compared if p != "composite"}
+    shown = []  # (name, truth image, its noise, the report's part)
     if truth is not None:
         names = list(TRUTH_PARTS) + (["attenuated_surface"] if "attenuated_surface" in by_truth else [])
         for p in names:
             img, std = _truth_part(truth, p)
-            add(p, img, std if stderr else None, by_truth.get(p))
+            shown.append((p, img, std, by_truth.get(p)))
         if "composite" in compared:
-            add("composite", truth.final, truth.stderr.get("final") if stderr else None, "composite")
+            shown.append(("composite", truth.final, truth.stderr.get("final"), "composite"))
     else:
         for p in compared:
             name = REPORT_TO_TRUTH[p] if p != "composite" else "composite"
-            noise = np.asarray(ch[f"{p}.noise"], np.float64)
-            add(name, _rgb(ch, f"{p}.reference"), noise if stderr else None, p)
+            shown.append((name, _rgb(ch, f"{p}.reference"), np.asarray(ch[f"{p}.noise"], np.float64), p))
+    exposures = part_exposures({name: img for name, img, _, _ in shown})
+    for name, img, std, rpart in shown:
+        add(name, img, std if stderr else None, rpart, exposures[name])
     regions = {k: v for k, v in region_masks(geo, tuple(distance_bands)).items() if k != "all"}
     bits = np.zeros(shape, np.uint8)
     for i, m in enumerate(regions.values()):

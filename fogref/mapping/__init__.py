@@ -7,10 +7,11 @@ Layering: ``fogref.media`` (physics) <- ``fogref.models`` (pure shader ports) <-
   parser (:meth:`PhysicalScene.from_params`, an EXR's ``fogref.params``)
 * :mod:`~fogref.mapping.registry`  :func:`from_physical` and the mapping registry
 * :mod:`~fogref.mapping.unreal`    Unreal's colour/lobe fit (:func:`fit_unreal`) and its mapping
+  (:func:`ue4_from_physical`; the other way is :func:`fogref.models.ue4.ue4_to_medium`)
 * :mod:`~fogref.mapping.unreal_basis`  Unreal's inscatter, linear in its two colours, and the colour solve
 * :mod:`~fogref.mapping.views`     sample views from the camera and the physical single scattering on them
 * :mod:`~fogref.mapping.lobe`      the best cosine lobe for an HG phase (:func:`lobe_fit`, :func:`lobe_table`)
-* :mod:`~fogref.mapping.engines`   Unity, altitude, box, HDRP, Filament, Godot, Bevy, three.js mappings
+* :mod:`~fogref.mapping.engines`   other engines' mappings, both ways (``X_from_physical``, ``X_to_medium``)
 * :mod:`~fogref.mapping.free`      each model's free parameters and bounds (:data:`FIT_SPECS`)
 * :mod:`~fogref.mapping.fit`       any model fitted to the physical fog, with uncertainties
 * :mod:`~fogref.mapping.translate` one engine's settings to another's through the physical fog

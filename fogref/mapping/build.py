@@ -49,30 +49,52 @@ def parse_param_assignments(assignments: Any) -> dict:
     return out
 
 
-def _label(cls: Any) -> str:
+def model_label(cls: Any) -> str:
+    """The name a model class goes by in messages: its registry ``name``, else its class name.
+
+    Examples
+    --------
+    >>> from fogref.models.ue4 import UE4ExponentialHeightFog
+    >>> model_label(UE4ExponentialHeightFog), model_label(dict)
+    ('ue4', 'dict')
+    """
     return str(getattr(cls, "name", None) or getattr(cls, "__name__", type(cls).__name__))
+
+
+def param_dict(params: Any) -> dict[str, Any]:
+    """A model's parameter dataclass as a dict of its constructor fields (name -> value, unchanged).
+
+    Examples
+    --------
+    >>> from fogref.models.unity_builtin import UnityFogParams
+    >>> param_dict(UnityFogParams(fogDensity=0.5))["fogDensity"]
+    0.5
+    """
+    return {f.name: getattr(params, f.name) for f in dataclasses.fields(params) if f.init}
 
 
 def current_parameters(model: Any) -> dict:
     """The parameters of a model instance as a dict: the fields of its ``params`` dataclass."""
     params = getattr(model, "params", None)
     if params is None or not dataclasses.is_dataclass(params) or isinstance(params, type):
-        raise FogrefError(f"model '{_label(type(model))}' keeps no parameter dataclass in 'params'")
-    return {f.name: getattr(params, f.name) for f in dataclasses.fields(params) if f.init}
+        raise FogrefError(f"model '{model_label(type(model))}' keeps no parameter dataclass in 'params'")
+    return param_dict(params)
 
 
 def _params_class(cls: type, params: dict) -> type:
     params_class = getattr(cls, "Params", None)
     if not (isinstance(params_class, type) and dataclasses.is_dataclass(params_class)):
         raise FogrefError(
-            f"model '{_label(cls)}': cannot set parameters {sorted(params)}: "
+            f"model '{model_label(cls)}': cannot set parameters {sorted(params)}: "
             f"it has no parameter dataclass 'Params'"
         )
     names = [f.name for f in dataclasses.fields(params_class) if f.init]
     for key in params:
         if key not in names:
             hint, listing = did_you_mean(key, names), ", ".join(names)
-            raise FogrefError(f"model '{_label(cls)}': no parameter '{key}'{hint} (parameters: {listing})")
+            raise FogrefError(
+                f"model '{model_label(cls)}': no parameter '{key}'{hint} (parameters: {listing})"
+            )
     return params_class
 
 
@@ -83,7 +105,7 @@ def _construct(cls: type, params: dict) -> Any:
     except ParameterError:  # names the parameter, its value and its range already
         raise
     except (TypeError, ValueError, KeyError) as e:
-        raise FogrefError(f"model '{_label(cls)}': cannot set parameters {sorted(params)}: {e}") from e
+        raise FogrefError(f"model '{model_label(cls)}': cannot set parameters {sorted(params)}: {e}") from e
 
 
 def build_model(model: Any, params: dict | None = None, scene_params: dict | None = None) -> Any:
@@ -134,12 +156,12 @@ def build_model(model: Any, params: dict | None = None, scene_params: dict | Non
             return cls()
         except TypeError as e:
             raise FogrefError(
-                f"model '{_label(cls)}': {cls.__name__}() needs arguments ({e}); give --param "
+                f"model '{model_label(cls)}': {cls.__name__}() needs arguments ({e}); give --param "
                 "KEY=VALUE (with a Params dataclass) or --from-scene (with from_physical)"
             ) from e
     if not has_mapping(cls):
         raise FogrefError(
-            f"model '{_label(cls)}' has no physical mapping (fogref.mapping) and no "
+            f"model '{model_label(cls)}' has no physical mapping (fogref.mapping) and no "
             f"from_physical(physical) classmethod, so --from-scene cannot derive its parameters; "
             f"set them with --param KEY=VALUE instead"
         )

@@ -52,6 +52,7 @@ Examples
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 import time
 from dataclasses import dataclass, field, replace
@@ -60,26 +61,27 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from fogref.errors import FogrefError, ParameterError
-from fogref.mapping.fit_targets import Target, physical_targets, sun_elevation, with_sun_elevation
+from fogref.errors import FogrefError, ParameterError, did_you_mean
+from fogref.mapping.build import build_model, model_label, param_dict
 from fogref.mapping.free import FitSpec, Free, fit_spec
 from fogref.mapping.physical import PhysicalScene
-from fogref.mapping.unreal import (
-    FIT_DIRECTIONS_START,
-    FIT_RTOL,
-    Views,
-    sample_views,
-)
-from fogref.mapping.views import rotated_views
+from fogref.mapping.registry import from_physical, has_mapping
+from fogref.mapping.unreal import FIT_DIRECTIONS_START, FIT_RTOL
+from fogref.mapping.views import Views, physical_single_scattering, rotated_views, sample_views
+from fogref.media import NP
 from fogref.models.base import SKY_DISTANCE, FogModel
+from fogref.models.resolve import resolve_model
 from fogref.models.terms import annotate
+from fogref.params import number
 
 __all__ = [
     "FIT_DIRECTIONS_MAX_GENERIC",
     "ModelFit",
     "Target",
     "fit_model",
+    "evaluate_on_views",
     "fit_to_targets",
+    "jsonable",
     "model_class",
     "physical_targets",
     "start_params",
@@ -94,20 +96,71 @@ FIT_DIRECTIONS_MAX_GENERIC = 4096
 RESAMPLE_TURNS = tuple(k / 3 * math.pi * (3.0 - math.sqrt(5.0)) for k in (1, 2))
 
 
+def sun_elevation(pf: PhysicalScene) -> float:
+    """The scene's sun elevation above the horizon [degrees], in [-90, 90].
+
+    Examples
+    --------
+    >>> from fogref.media import FogMedium
+    >>> round(sun_elevation(PhysicalScene(FogMedium(), (1.0, 1.0, 0.0), 1.0)), 6)
+    45.0
+    """
+    return math.degrees(math.asin(max(-1.0, min(1.0, pf.sun_direction[1]))))
+
+
+def with_sun_elevation(pf: PhysicalScene, elevation_deg: float) -> PhysicalScene:
+    """``pf`` with the sun at ``elevation_deg`` [degrees, -90..90], same azimuth (north +z if
+    the scene's sun is at the zenith).  ParameterError naming 'sun_elevation' outside the range.
+
+    Examples
+    --------
+    >>> from fogref.media import ExpLayer, FogMedium
+    >>> ps = PhysicalScene(FogMedium(sigma_t=0.01, layers=(ExpLayer(1.0, 0.0, 0.0),)), (1.0, 1.0, 0.0), 1.0)
+    >>> round(sun_elevation(with_sun_elevation(ps, 30.0)), 6)
+    30.0
+    """
+    e = number(elevation_deg, "sun_elevation", source=pf.source, lo=-90.0, hi=90.0, unit="deg")
+    w = np.asarray(pf.sun_direction, dtype=float)
+    h = math.hypot(w[0], w[2])
+    ax, az = (w[0] / h, w[2] / h) if h > 1e-12 else (0.0, 1.0)
+    c, s = math.cos(math.radians(e)), math.sin(math.radians(e))
+    return replace(pf, sun_direction=(c * ax, s, c * az))
+
+
+@dataclass
+class Target:
+    """The physical fog on a set of views: inscatter ``L`` and transmittance ``T`` (N, 3)."""
+
+    scene: PhysicalScene
+    views: Views
+    L: np.ndarray
+    T: np.ndarray
+
+
+def physical_targets(
+    pf: PhysicalScene, views: Views, elevations: Iterable[float] | None = None
+) -> list[Target]:
+    """One :class:`Target` per sun elevation (default: the scene's own sun): what a fit aims at,
+    the physical fog's closed-form inscatter and transmittance on ``views`` (the targets of
+    :func:`fit_model` and :func:`fogref.mapping.translate.translate`)."""
+    scenes = [pf] if elevations is None else [with_sun_elevation(pf, e) for e in elevations]
+    out = []
+    for ps in scenes:
+        L = physical_single_scattering(ps, views)
+        o = tuple(np.full(len(views.D), c) for c in views.camera)
+        d = tuple(views.d[:, i] for i in range(3))
+        D = np.where(views.sky, NP.largest, views.D)
+        T = np.stack(ps.medium.transmittance(NP, o, d, D), axis=-1)
+        out.append(Target(ps, views, np.asarray(L, float), np.asarray(T, float)))
+    return out
+
+
 def model_class(model: str | type) -> type:
     """The model class a name (or class) stands for (:func:`fogref.models.resolve.resolve_model`)."""
-    import inspect
-
-    from fogref.models.resolve import resolve_model
-
     cls = resolve_model(model) if isinstance(model, str) else model
     if not inspect.isclass(cls):
         raise FogrefError(f"model '{model}' names an instance, not a class: the fit builds its own instances")
     return cls
-
-
-def _label(cls: type) -> str:
-    return getattr(cls, "name", None) or cls.__name__
 
 
 def start_params(
@@ -123,8 +176,6 @@ def start_params(
 
     Returns ``(params, source)`` with source "mapping" or "defaults".
     """
-    from fogref.mapping.registry import from_physical, has_mapping
-
     spec = spec or fit_spec(cls)
     params: Any = None  # the model's Params dataclass
     source = "defaults"
@@ -140,22 +191,20 @@ def start_params(
     if params is None:
         pc = getattr(cls, "Params", None)
         if not (isinstance(pc, type) and dataclasses.is_dataclass(pc)):
-            raise FogrefError(f"model '{_label(cls)}': the fit needs a parameter dataclass 'Params'")
+            raise FogrefError(f"model '{model_label(cls)}': the fit needs a parameter dataclass 'Params'")
         params = pc()
     kw = {k: v for k, v in spec.start.items() if source == "defaults" or k not in _MAPPED_KEEP}
     kw.update(overrides or {})
     names = {f.name for f in dataclasses.fields(params)}
     bad = [k for k in kw if k not in names]
     if bad:
-        from fogref.errors import did_you_mean
-
-        raise FogrefError(f"model '{_label(cls)}': no parameter '{bad[0]}'{did_you_mean(bad[0], names)}")
+        raise FogrefError(f"model '{model_label(cls)}': no parameter '{bad[0]}'{did_you_mean(bad[0], names)}")
     try:
         return replace(params, **kw), source
     except ParameterError:  # names the parameter, its value and its range already
         raise
     except (TypeError, ValueError) as e:
-        raise FogrefError(f"model '{_label(cls)}': cannot set {sorted(kw)}: {e}") from e
+        raise FogrefError(f"model '{model_label(cls)}': cannot set {sorted(kw)}: {e}") from e
 
 
 #: Start settings the physical mapping chooses better than a generic start (the lobe it fitted).
@@ -193,7 +242,12 @@ def _bounds(free: Sequence[Free]) -> tuple[npt.NDArray[np.float64], npt.NDArray[
     return np.array(lo, float), np.array(hi, float)
 
 
-def _evaluate(cls: type, params: Any, view_sets: Iterable[Views]) -> list[tuple[np.ndarray, np.ndarray]]:
+def evaluate_on_views(
+    cls: type, params: Any, view_sets: Iterable[Views]
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The model ``cls(params)`` in float64 on each set of views: ``(L, T)`` per set, its inscatter
+    (radiance) and transmittance ([0, 1]), each (N, 3) for the N views (the sky at
+    :data:`~fogref.models.base.SKY_DISTANCE`)."""
     out = []
     for views in view_sets:
         r = cls(params).evaluate(views.camera, views.world_positions(SKY_DISTANCE), "float64")
@@ -254,7 +308,7 @@ def fit_to_targets(
     def predict(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         Ls, Ts = [], []
         for t, w in zip(targets, suns):
-            ((L, T),) = _evaluate(cls, params_at(x, w), [t.views])
+            ((L, T),) = evaluate_on_views(cls, params_at(x, w), [t.views])
             Ls.append(L)
             Ts.append(T)
         return np.concatenate(Ls), np.concatenate(Ts)
@@ -343,9 +397,7 @@ class ModelFit:
 
     def instance(self) -> FogModel:
         """The fitted model (the scene's own sun)."""
-        from fogref.mapping.build import build_model
-
-        return build_model(self.model, _param_dict(self.params))
+        return build_model(self.model, param_dict(self.params))
 
     def to_dict(self) -> dict:
         return {
@@ -360,9 +412,9 @@ class ModelFit:
                 }
                 for k, v in self.values.items()
             },
-            "settings": _jsonable(_param_dict(self.params)),
+            "settings": jsonable(param_dict(self.params)),
             "settings_units": {
-                k: a for k, v in _param_dict(self.params).items() if (a := annotate(self.model, k, v))
+                k: a for k, v in param_dict(self.params).items() if (a := annotate(self.model, k, v))
             },
             "error": {
                 "rmse": self.rmse,
@@ -388,15 +440,19 @@ class ModelFit:
         }
 
 
-def _param_dict(params: Any) -> dict[str, Any]:
-    return {f.name: getattr(params, f.name) for f in dataclasses.fields(params) if f.init}
+def jsonable(d: dict[str, Any]) -> dict[str, Any]:
+    """``d`` (model settings) ready for :func:`json.dumps`: nested parameter dataclasses as dicts,
+    tuples as lists, infinities and NaN as strings; other values unchanged.
 
-
-def _jsonable(d: dict[str, Any]) -> dict[str, Any]:
+    Examples
+    --------
+    >>> jsonable({"cutOffDistance": math.inf, "color": (0.5, 0.5, 0.5)})
+    {'cutOffDistance': 'inf', 'color': [0.5, 0.5, 0.5]}
+    """
     out = {}
     for k, v in d.items():
         if dataclasses.is_dataclass(v):
-            v = _jsonable(_param_dict(v))
+            v = jsonable(param_dict(v))
         elif isinstance(v, float) and not math.isfinite(v):
             v = str(v)
         elif isinstance(v, tuple):

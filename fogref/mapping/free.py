@@ -35,21 +35,27 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any, Callable, Mapping, TypeVar
+from typing import Any, Callable, Mapping, TypeVar
 
 from fogref.errors import FogrefError, ParameterError
-
-if TYPE_CHECKING:
-    from fogref.mapping.physical import PhysicalScene
-    from fogref.media import FogMedium
-    from fogref.models.babylon import BabylonFogParams
-    from fogref.models.bevy import BevyFogParams
-    from fogref.models.box import BoxFogParams
-    from fogref.models.filament import FilamentFogParams
-    from fogref.models.godot import GodotFogParams
-    from fogref.models.hdrp import HDRPFogParams
-    from fogref.models.ue4 import UE4FogParams
-    from fogref.models.unity_builtin import UnityFogParams
+from fogref.mapping.engines import (
+    babylon_to_medium,
+    bevy_to_medium,
+    box_to_medium,
+    filament_to_medium,
+    godot_to_medium,
+    hdrp_to_medium,
+    unity_to_medium,
+)
+from fogref.mapping.physical import PhysicalScene
+from fogref.mapping.unreal import base_params
+from fogref.media import FogMedium
+from fogref.models.babylon import BabylonFogParams
+from fogref.models.bevy import BevyFogParams
+from fogref.models.box import BoxFogParams
+from fogref.models.filament import FilamentFogParams
+from fogref.models.ue4 import UE4FogParams, ue4_to_medium
+from fogref.models.unity_builtin import UnityFogParams
 
 __all__ = ["FIT_SPECS", "FitSpec", "Free", "fit_spec", "rgb_free"]
 
@@ -113,8 +119,6 @@ def _try(fn: Callable[[_P], _R]) -> Callable[[_P], _R | None]:
 
 
 def _ue4_exact(p: UE4FogParams) -> FogMedium | None:
-    from fogref.models.ue4 import ue4_to_medium
-
     plain = p.StartDistance == 0 and p.FogCutoffDistance == 0 and p.FogMaxOpacity == 1 and p.EndDistance == 0
     return ue4_to_medium(p) if plain else None
 
@@ -122,28 +126,16 @@ def _ue4_exact(p: UE4FogParams) -> FogMedium | None:
 def _ue4_initial(ps: PhysicalScene) -> UE4FogParams | None:
     """Without a sun above the horizon, Unreal's mapping (its lobe fit) has nothing to fit: start from
     the exact extinction and the sky colour instead."""
-    from fogref.mapping.unreal import base_params
-
     if ps.has_sun and ps.sun_direction[1] > 0:
         return None
     return base_params(ps, FogInscatteringColor=ps.sky_colour(), DirectionalInscatteringColor=(0.0, 0.0, 0.0))
 
 
 def _unity_exact(p: UnityFogParams) -> FogMedium | None:
-    from fogref.models.unity_builtin import unity_to_medium
-
     return unity_to_medium(p) if p.fogMode == "exp" and p.fog_coordinate == "distance" else None
 
 
-def _godot_exact(p: GodotFogParams) -> FogMedium:
-    from fogref.models.godot import godot_to_medium
-
-    return godot_to_medium(p)
-
-
 def _bevy_exact(p: BevyFogParams) -> FogMedium | None:
-    from fogref.models.bevy import bevy_to_medium
-
     if p.falloff not in ("Exponential", "Atmospheric"):
         return None
     if p.falloff == "Atmospheric" and tuple(p.extinction) != tuple(p.inscattering):
@@ -151,28 +143,16 @@ def _bevy_exact(p: BevyFogParams) -> FogMedium | None:
     return bevy_to_medium(p)
 
 
-def _hdrp_exact(p: HDRPFogParams) -> FogMedium:
-    from fogref.models.hdrp import hdrp_to_medium
-
-    return hdrp_to_medium(p)
-
-
 def _filament_exact(p: FilamentFogParams) -> FogMedium | None:
-    from fogref.models.filament import filament_to_medium
-
     plain = p.distance == 0 and math.isinf(p.cutOffDistance) and p.maximumOpacity == 1
     return filament_to_medium(p) if plain else None
 
 
 def _babylon_exact(p: BabylonFogParams) -> FogMedium | None:
-    from fogref.models.babylon import babylon_to_medium
-
     return babylon_to_medium(p) if p.fogMode == "EXP" else None
 
 
 def _box_exact(p: BoxFogParams) -> FogMedium | None:
-    from fogref.models.box import box_to_medium
-
     return box_to_medium(p) if p.mode == "beer" else None
 
 
@@ -207,7 +187,7 @@ def _builtin_specs() -> dict[str, FitSpec]:
                 Free("maximumHeight", -1e4, 1e4),
                 *rgb_free("color"),
             ),
-            exact_medium=_try(_hdrp_exact),
+            exact_medium=_try(hdrp_to_medium),
             note="constant below baseHeight; no sun",
         ),
         "filament": FitSpec(
@@ -267,7 +247,7 @@ def _builtin_specs() -> dict[str, FitSpec]:
             },
             sun=lambda p, w: replace(p, sun_direction=tuple(float(x) for x in w)),
             sun_off=lambda p: replace(p, fog_sun_scatter=0.0),
-            exact_medium=_try(_godot_exact),
+            exact_medium=_try(godot_to_medium),
             note="no height term in the optical depth; fixed lobe exponent 8; lobe not attenuated",
         ),
         "bevy": FitSpec(

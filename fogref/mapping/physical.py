@@ -1,7 +1,7 @@
 """The physical scene a game fog model stands for, and its one parser.
 
 A ground truth's EXR carries its scene in the header attribute ``fogref.params``
-(written by ``fogref.render.scene.describe_scene``)::
+(written by ``fogref.render.load.describe_scene``)::
 
     {"scene": "valley.xml",
      "medium": {heightfog XML parameters: profile, sigma_t, albedo, g, ...},
@@ -22,7 +22,7 @@ ignored, ``albedo * L_sky * (1 - T)``, i.e. colour = ``albedo * L_sky``
 isotropic projection ``(1/4 pi) int_{up} L dw``, the uniform sky whose single scattering is the
 same at ``g = 0``; the sky's own parameters are in :attr:`PhysicalScene.sky_model`, and its
 exact single scattering for any ``g`` is ``alpha S(d) (1 - T)``
-(:func:`fogref.media.single_scatter_nonuniform.sky_phase_projection`).
+(:func:`fogref.media.single_scatter.sky_phase_projection`).
 """
 
 from __future__ import annotations
@@ -244,7 +244,7 @@ class PhysicalScene:
         Toward the disk's centre (a delta).  A 0.53 deg disk's average ``T_sun`` differs by
         ``O((theta_s cot e)^2)`` relative (``e``: the sun's elevation): for an exponential layer,
         -1.4e-4 at ``tau = 1`` and +2e-3 at ``tau = 5`` with the sun 8 deg high, -1.3e-5 and
-        +9e-5 at 30 deg (disk quadrature, :func:`fogref.media.single_scatter_nonuniform.sun_disk_directions`).
+        +9e-5 at 30 deg (disk quadrature, :func:`fogref.media.single_scatter.sun_disk_directions`).
 
         Examples
         --------

@@ -47,23 +47,25 @@ import numpy as np
 import numpy.typing as npt
 
 from fogref.errors import FogrefError, ParameterError
+from fogref.mapping.build import model_label, param_dict
 from fogref.mapping.fit import (
     FIT_DIRECTIONS_MAX_GENERIC,
     ModelFit,
     Target,
-    _evaluate,
-    _param_dict,
+    evaluate_on_views,
     fit_model,
     fit_to_targets,
+    jsonable,
     model_class,
     start_params,
     with_sun_elevation,
 )
 from fogref.mapping.free import FitSpec, Free, fit_spec, rgb_free
 from fogref.mapping.physical import PhysicalScene
-from fogref.mapping.unreal import Views, physical_single_scattering, sample_views
+from fogref.mapping.views import Views, physical_single_scattering, sample_views
 from fogref.media import NP, ExpLayer, FogMedium
 from fogref.models.base import SKY_DISTANCE, FogResult
+from fogref.models.terms import DEFAULTS_FROM, annotate
 
 __all__ = ["PhysicalFog", "PhysicalFogParams", "Translation", "physical_of_model", "translate"]
 
@@ -158,7 +160,7 @@ def _source_targets(
     out = []
     for ps in scenes:
         p = spec.sun(params, ps.sun_direction) if spec.sun is not None else params
-        ((L, T),) = _evaluate(cls, p, [views])
+        ((L, T),) = evaluate_on_views(cls, p, [views])
         out.append(Target(ps, views, np.array(L), np.array(T)))
     return out
 
@@ -226,7 +228,7 @@ def source_settings(
     :data:`fogref.models.terms.DEFAULTS_FROM`).  A setting the sun sets (its direction) says so.
     """
     given = dict(params or {})
-    name = _name(cls)
+    name = model_label(cls)
     if fill == "mapping":
         p, how = start_params(cls, pf, spec, given)
         origin = (
@@ -239,9 +241,9 @@ def source_settings(
         origin = _defaults_from(name)
     else:
         raise ParameterError("translate", "fill", f"{fill!r} is not one of {', '.join(FILLS)}")
-    sunlit = _param_dict(spec.sun(p, pf.sun_direction)) if spec.sun is not None else {}
+    sunlit = param_dict(spec.sun(p, pf.sun_direction)) if spec.sun is not None else {}
     filled = {}
-    for k, v in _param_dict(p).items():
+    for k, v in param_dict(p).items():
         if k in given:
             continue
         moved = k in sunlit and sunlit[k] != v
@@ -252,13 +254,7 @@ def source_settings(
     return p, filled
 
 
-def _name(cls: type) -> str:
-    return getattr(cls, "name", None) or cls.__name__
-
-
 def _defaults_from(name: str) -> str:
-    from fogref.models.terms import DEFAULTS_FROM
-
     where = DEFAULTS_FROM.get(name)
     return f"the default of {where}" if where else f"the default of {name}'s Params"
 
@@ -279,18 +275,15 @@ class Translation:
     reference: str = ""
 
     def to_dict(self) -> dict:
-        from fogref.mapping.fit import _jsonable
-        from fogref.models.terms import annotate
-
         return {
             "source": {
                 "model": self.source,
-                "settings": _jsonable(self.source_settings),
+                "settings": jsonable(self.source_settings),
                 "units": {
                     k: a for k, v in self.source_settings.items() if (a := annotate(self.source, k, v))
                 },
                 "not_given": {
-                    k: {"value": _jsonable({"v": d["value"]})["v"], "from": d["from"]}
+                    k: {"value": jsonable({"v": d["value"]})["v"], "from": d["from"]}
                     for k, d in self.filled.items()
                 },
                 "reference_scene": self.reference,
@@ -373,7 +366,7 @@ def translate(
     errs, ref = [], []
     for t in src_targets:
         p = tspec.sun(tfit.params, t.scene.sun_direction) if tspec.sun is not None else tfit.params
-        ((L, _),) = _evaluate(tgt_cls, p, [views])
+        ((L, _),) = evaluate_on_views(tgt_cls, p, [views])
         errs.append(L - t.L)
         ref.append(t.L)
     e, r = np.concatenate(errs), np.concatenate(ref)
@@ -393,7 +386,7 @@ def translate(
     }
     return Translation(
         source=getattr(src_cls, "name", str(source)),
-        source_settings=_param_dict(src_params),
+        source_settings=param_dict(src_params),
         physical=physical,
         target=tfit,
         residual_vs_truth=tfit.rel_rmse,

@@ -6,9 +6,10 @@ scattering of sun and sky over sample views from the camera (:mod:`fogref.mappin
 The exponent ``n`` and the start distance are found by bounded Brent searches, over ``log10 n``
 inside one over the start (:class:`~fogref.mapping.unreal_basis.ColourLoss`: one model
 evaluation per start distance, the colours in closed form); density, falloff and height come
-from the exact mapping
-:func:`fogref.models.ue4.medium_to_ue4`.  :func:`ue4_from_physical` registers the result as
-the ``"ue4"`` mapping.
+from the exact mapping :func:`~fogref.mapping.unreal_basis.base_params`.
+:func:`ue4_from_physical` registers the result as the ``"ue4"`` mapping;
+:func:`fogref.models.ue4.ue4_to_medium` is the other direction (Unreal's settings to the physical
+medium of the same extinction).
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ from fogref.mapping.unreal_basis import (
 from fogref.mapping.views import Views, fibonacci_directions, physical_single_scattering, sample_views
 from fogref.models.base import SKY_DISTANCE
 from fogref.models.terms import annotate, unreal_field
-from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams, medium_to_ue4
+from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
 
 __all__ = [
     "Basis",
@@ -341,9 +342,9 @@ def ue4_from_physical(ps: PhysicalScene) -> UE4ExponentialHeightFog:
     """The Unreal fog that best represents a physical scene.
 
     Density, falloff, height (and the second layer) are exact
-    (:func:`~fogref.models.ue4.medium_to_ue4`; profiles "exponential" with 1–2
-    layers and "homogeneous", unbounded, grey ``sigma_t``), so the float64
-    transmittance is the physical one.  With a sun, FogInscatteringColor,
+    (:func:`~fogref.mapping.unreal_basis.base_params`, the inverse of :func:`fogref.models.ue4.ue4_to_medium`;
+    profiles "exponential" with 1–2 layers and "homogeneous", unbounded, grey ``sigma_t``), so
+    the float64 transmittance is the physical one.  With a sun, FogInscatteringColor,
     DirectionalInscatteringColor, DirectionalInscatteringExponent and
     DirectionalInscatteringStartDistance come from :func:`fit_unreal`
     (closed-form sun + sky single scattering, sun attenuation included; the
@@ -383,19 +384,8 @@ def ue4_from_physical(ps: PhysicalScene) -> UE4ExponentialHeightFog:
     )
     ps.require_unbounded("Unreal")
     ps.grey_sigma_t("Unreal")
-    base = replace(
-        UE4FogParams(),
-        StartDistance=0.0,
-        FogMaxOpacity=1.0,
-        FogCutoffDistance=0.0,
-        EndDistance=0.0,
-        DirectionalInscatteringStartDistance=0.0,
-        SunLuminance=1.0,
-        FogInscatteringColor=ps.sky_colour(),
-        DirectionalInscatteringColor=(0.0, 0.0, 0.0),
-        InscatteringLightDirection=None,
-    )
-    p = medium_to_ue4(ps.medium, base)
+    colours = {"FogInscatteringColor": ps.sky_colour(), "DirectionalInscatteringColor": (0.0, 0.0, 0.0)}
+    p = replace(base_params(ps, EndDistance=0.0, **colours), InscatteringLightDirection=None)
     if not ps.has_sun:
         return UE4ExponentialHeightFog(p)
     fit = fit_unreal(ps)

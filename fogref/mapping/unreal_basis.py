@@ -10,8 +10,8 @@ DirectionalInscatteringStartDistance.  Given the exponent ``n`` and the start
 distance, the model is **linear** in the two colours, so each colour channel is a
 2-parameter non-negative least-squares problem (:func:`solve_colours`) on two basis
 images (:func:`unreal_basis`: the model evaluated with unit colours, in float64).
-Density, falloff and height come from the exact mapping
-:func:`fogref.models.ue4.medium_to_ue4` (:func:`base_params`).
+Density, falloff and height come from the exact mapping :func:`base_params` (the inverse of
+:func:`fogref.models.ue4.ue4_to_medium`).
 
 Only the exponent and the start distance are nonlinear, and the lobe image factorises:
 ``max(cos, 0)^n (1 - T_dir(start))`` is the ``n = 1`` image times ``max(cos, 0)^(n - 1)``.
@@ -27,10 +27,12 @@ from typing import Any
 
 import numpy as np
 
+from fogref.errors import ParameterError
 from fogref.mapping.physical import PhysicalScene
 from fogref.mapping.views import Views
+from fogref.media import ExpLayer
 from fogref.models.base import SKY_DISTANCE
-from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams, medium_to_ue4
+from fogref.models.ue4 import CM_PER_M, SecondFogData, UE4ExponentialHeightFog, UE4FogParams, sigma_to_unreal
 
 __all__ = [
     "Basis",
@@ -54,7 +56,21 @@ START_GRID_CM = (0.0, 1.0e3, 3.0e3, 1.0e4, 3.0e4, MAX_START_CM)
 
 def base_params(pf: PhysicalScene, **kw: Any) -> UE4FogParams:
     """Unreal parameters with the exact density/falloff/height of ``pf.medium``, the
-    sun direction, and ``kw`` (other fields; start distances default to 0)."""
+    sun direction, and ``kw`` (other fields; start distances default to 0).
+
+    The medium must be unbounded (ParameterError naming 'bounds'), grey (equal sigma_t per
+    channel, else naming 'sigma_t') and made of 1 or 2 :class:`~fogref.media.ExpLayer` (else
+    naming 'layers'): each layer ``a exp(-b (y - h))`` [1/m] becomes FogDensity/FogHeightFalloff
+    (:func:`fogref.models.ue4.sigma_to_unreal`) and its height ``100 h`` [cm], the second one
+    SecondFogData with its offset from the first.
+
+    Examples
+    --------
+    >>> from fogref.media import ExpLayer, FogMedium
+    >>> p = base_params(PhysicalScene(FogMedium(sigma_t=0.002, layers=(ExpLayer(1.0, 0.02, 3.0),))))
+    >>> round(p.FogDensity, 6), round(p.FogHeightFalloff, 6), p.FogHeight
+    (0.041627, 0.288539, 300.0)
+    """
     defaults: dict[str, Any] = dict(
         DirectionalInscatteringStartDistance=0.0,
         StartDistance=0.0,
@@ -63,7 +79,23 @@ def base_params(pf: PhysicalScene, **kw: Any) -> UE4FogParams:
         SunLuminance=1.0,
     )
     defaults.update(kw)
-    p = medium_to_ue4(pf.medium, replace(UE4FogParams(), **defaults))
+    base = replace(UE4FogParams(), **defaults)
+    medium = pf.medium
+    if medium.bounds is not None:
+        raise ParameterError(medium.source, "bounds", "Unreal's height fog is unbounded")
+    sigma = medium.grey_sigma_t("Unreal")
+    layers = [L for L in medium.layers if isinstance(L, ExpLayer)]
+    if len(layers) != len(medium.layers) or not 1 <= len(layers) <= 2:
+        raise ParameterError(medium.source, "layers", "need 1 or 2 ExpLayer")
+    vals = [(*sigma_to_unreal(sigma * L.density, L.falloff), L.height * CM_PER_M) for L in layers]
+    second = SecondFogData(FogDensity=0.0, FogHeightFalloff=base.SecondFogData.FogHeightFalloff)
+    if len(vals) == 2:
+        second = SecondFogData(
+            FogDensity=vals[1][0], FogHeightFalloff=vals[1][1], FogHeightOffset=vals[1][2] - vals[0][2]
+        )
+    p = replace(
+        base, FogDensity=vals[0][0], FogHeightFalloff=vals[0][1], FogHeight=vals[0][2], SecondFogData=second
+    )
     return p.with_sun(pf.sun_direction, p.SunLuminance)
 
 

@@ -26,7 +26,6 @@ The editor values the path tracer does not use are :data:`DROPPED`.
 from __future__ import annotations
 
 import math
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -36,6 +35,8 @@ from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, medium_from_params, rgb
 from fogref.media.ue_pathtracer import DENSITY_CLAMP_DEFAULT, DENSITY_CLAMP_RANGE, RADIUS_RANGE
 from fogref.models.ue4 import UE4FogParams
+from fogref.scene.defaults import declared
+from fogref.scene.edit import replace_fog
 
 __all__ = [
     "CM_PER_M",
@@ -278,17 +279,8 @@ def exact_fog_params(ue: UE4FogParams, pt: UEPathTracerSettings) -> dict:
     return out
 
 
-def _tag(name: str, value: Any) -> tuple[str, str]:
-    """The XML tag and text of one ``heightfog`` parameter (``center``: a point; colours: rgb)."""
-    if isinstance(value, str):
-        return "string", value
-    if isinstance(value, (list, tuple)):
-        return ("point" if name == "center" else "rgb"), ", ".join(repr(float(x)) for x in value)
-    return "float", repr(float(value))
-
-
 #: The ``<default>`` of each fog parameter in a scene :func:`rewrite_scene` writes (the others keep
-#: their own name): the scene vocabulary's (:mod:`fogref.render.scene_defaults`) and two of its own.
+#: their own name): the scene vocabulary's (:mod:`fogref.scene.defaults`) and two of its own.
 DEFAULT_NAMES = {
     "height": "fog_height",
     "center": "camera_origin",
@@ -304,6 +296,7 @@ def rewrite_scene(
     pt: UEPathTracerSettings,
     camera: Any = None,
     params: dict | None = None,
+    pixel_exact: bool = False,
 ) -> dict:
     """Copy the fogref scene ``src`` to ``dst`` with its ``heightfog`` replaced by UE's
     path-traced fog of ``ue`` and ``pt`` (or by ``params``, e.g. :func:`exact_fog_params`);
@@ -315,41 +308,20 @@ def rewrite_scene(
     as Unreal does).  The medium's ``phase`` child, if any, is kept.  With that default, every
     other value of the fog becomes a ``<default>`` too (:data:`DEFAULT_NAMES`: the scene
     vocabulary's names, and ``fog_clamp``, ``fog_radius``), so ``--set g=0.9`` changes it; the
-    scene's comments are kept.
+    scene's comments are kept (:func:`fogref.scene.edit.replace_fog`).  ``pixel_exact``: every
+    sample through the pixel centre (the truths' convention).
     """
-    tree = ET.parse(src, parser=ET.XMLParser(target=ET.TreeBuilder(insert_comments=True)))
-    root = tree.getroot()
-    med = next((m for m in root.iter("medium") if m.get("type") == "heightfog"), None)
-    if med is None:
-        raise ParameterError(str(src), "medium", "the scene has no heightfog medium to replace")
     follow = camera is None and params is None
     if follow:
-        d = next((e for e in root.findall("default") if e.get("name") == "camera_origin"), None)
-        if d is None:
+        origin = declared(src).get("camera_origin")
+        if origin is None:
             raise ParameterError(
                 str(src), "camera_origin", "no $camera_origin default: give the camera position"
             )
-        camera = [float(x) for x in d.get("value", "").replace(",", " ").split()]
+        camera = [float(x) for x in origin.replace(",", " ").split()]
     if params is None:
         params = pathtracer_fog_params(ue, pt, camera)
-    for child in [c for c in med if c.get("name") is not None and c.tag != "phase"]:
-        med.remove(child)
-    defaults = {e.get("name"): e for e in root.findall("default")}
-    at = max((i + 1 for i, e in enumerate(root) if e.tag == "default"), default=0)
-    for k, v in params.items():
-        tag, text = _tag(k, v)
-        if follow and k != "profile":
-            name = DEFAULT_NAMES.get(k, k)
-            if k != "center":  # the camera's own default
-                if name not in defaults:
-                    defaults[name] = ET.Element("default", name=name)
-                    root.insert(at, defaults[name])
-                    at += 1
-                defaults[name].set("value", text)
-            text = f"${name}"
-        ET.SubElement(med, tag, name=k, value=text)
-    ET.indent(tree, space="    ")
-    tree.write(dst, encoding="unicode", xml_declaration=True)
+    replace_fog(src, dst, params, DEFAULT_NAMES if follow else None, pixel_exact=pixel_exact)
     return params
 
 

@@ -25,8 +25,8 @@ import numpy as np
 
 from fogref.mapping.physical import PhysicalScene
 from fogref.media import NP, single_scatter_sun
-from fogref.media.single_scatter import single_scatter_sky
-from fogref.media.single_scatter_nonuniform import single_scatter_sky_projected, sky_phase_projection
+from fogref.media.single_scatter import single_scatter_sky, single_scatter_sky_projected, sky_phase_projection
+from fogref.media.sky import sky_radiance
 from fogref.models.base import SKY_DISTANCE
 
 __all__ = [
@@ -152,14 +152,12 @@ def sky_projection(pf: PhysicalScene, d: np.ndarray, sky: Any = None) -> np.ndar
     """The sky of ``pf`` projected onto its phase function per view direction, (N, 3).
 
     ``S(v) = int_{w_y > 0} L_sky(w) p_HG(w . v; g) dw``
-    (:func:`fogref.media.single_scatter_nonuniform.sky_phase_projection`), each distinct direction of ``d``
+    (:func:`fogref.media.single_scatter.sky_phase_projection`), each distinct direction of ``d``
     ((N, 3) unit, away from the camera) once.  ``sky``: the radiance function ((M, 3) directions
     -> (M, 3) RGB); default the physical sky of ``pf.sky_model`` (Mitsuba's ``sunsky`` without
     its sun, :func:`fogref.media.sky.sky_radiance`), else the uniform ``pf.sky_radiance`` above
     the horizon (then ``S = L H(v_y)``, :func:`fogref.media.single_scatter.hg_upper_fraction`).
     """
-    from fogref.media.sky import sky_radiance
-
     if sky is None:
         if pf.sky_model is not None:
             sky = sky_radiance(pf.sky_model)

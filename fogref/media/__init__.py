@@ -7,7 +7,7 @@
 * :mod:`~fogref.media.local_fog_volume` :class:`LocalFogVolume` (a sphere of fog, closed form)
 * :mod:`~fogref.media.params`        :func:`medium_from_params` (the ``heightfog`` XML parameters)
 * :mod:`~fogref.media.closed_form`   optical depth, free flight, ``phi``/``psi``, HG phase
-* :mod:`~fogref.media.single_scatter` closed-form and sampled sun single scattering
+* :mod:`~fogref.media.single_scatter` single scattering of the sun and the sky, closed form and sampled
 * :mod:`~fogref.media.phase`         tabulated, Draine and approximate-Mie phase functions
 * :mod:`~fogref.media.visibility`    visibility (meteorological optical range) <-> extinction
 * :mod:`~fogref.media.droplets`      fog droplet size distributions (gamma; radiation, advection fog)

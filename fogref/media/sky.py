@@ -15,6 +15,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from fogref._llvm import DEFAULT_VARIANT, ensure_llvm
+
 __all__ = ["SUNSKY_APERTURE", "SUNSKY_KEYS", "eval_emitter", "sky_radiance", "sunsky_dict"]
 
 #: Mitsuba's default sun aperture (angular diameter) [deg] (``sunsky.cpp``).
@@ -25,8 +27,6 @@ SUNSKY_KEYS = ("sun_direction", "turbidity", "albedo", "sun_aperture", "sky_scal
 
 def _mitsuba() -> Any:
     """Mitsuba with a variant set (the one already set, else LLVM RGB)."""
-    from fogref._llvm import DEFAULT_VARIANT, ensure_llvm
-
     ensure_llvm()
     import mitsuba as mi
 
@@ -79,7 +79,7 @@ def sky_radiance(desc: dict) -> Callable[[np.ndarray], np.ndarray]:
     directions toward the sky -> ``(N, 3)`` RGB radiance (0 below the horizon); times
     ``desc["sky_scale"]``.  ``desc``: :func:`sunsky_dict`, or any dict with its parameters
     (:data:`SUNSKY_KEYS`; a scene description's ``"sky"``).  For
-    :func:`fogref.media.single_scatter_nonuniform.sky_phase_projection`."""
+    :func:`fogref.media.single_scatter.sky_phase_projection`."""
     mi = _mitsuba()
     args = {k: desc[k] for k in SUNSKY_KEYS if k in desc}
     args["sun_direction"] = [float(x) for x in args["sun_direction"]]

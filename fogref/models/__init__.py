@@ -48,13 +48,7 @@ from fogref.models.box import BoxFog, BoxFogParams
 from fogref.models.filament import FilamentFog, FilamentFogParams
 from fogref.models.hdrp import HDRPFog, HDRPFogParams
 from fogref.models.resolve import available_models, get, resolve_model
-from fogref.models.ue4 import (
-    SecondFogData,
-    UE4ExponentialHeightFog,
-    UE4FogParams,
-    medium_to_ue4,
-    ue4_to_medium,
-)
+from fogref.models.ue4 import SecondFogData, UE4ExponentialHeightFog, UE4FogParams
 from fogref.models.unity_builtin import UnityBuiltinFog, UnityFogParams
 
 __all__ = [
@@ -77,8 +71,6 @@ __all__ = [
     "SecondFogData",
     "UE4ExponentialHeightFog",
     "UE4FogParams",
-    "medium_to_ue4",
-    "ue4_to_medium",
     "UnityBuiltinFog",
     "UnityFogParams",
 ]

@@ -18,7 +18,7 @@ antiderivative ``F(x)`` along the horizontal coordinate x (``y = k x + b``, time
 Compositing: the fog blends **linearly in optical depth**:
 ``opacity = saturate(I * _FogColor.a)``, ``final = lerp(scene, _FogColor.rgb,
 opacity)``, i.e. ``transmittance = 1 - opacity`` and ``inscatter =
-_FogColor.rgb * opacity``.  The physical counterpart (:func:`altitude_to_medium`)
+_FogColor.rgb * opacity``.  The physical counterpart (:func:`fogref.mapping.engines.altitude_to_medium`)
 is the medium ``sigma_t(y) = _FogColor.a * T(y)`` [1/m] (a :class:`fogref.media.PowerLawLayer`),
 whose optical depth is exactly ``_FogColor.a * I``; only the blend differs
 (``1 - saturate(tau)`` instead of Beer–Lambert ``exp(-tau)``).
@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 
 from fogref import params as valid
-from fogref.media import NP, FogMedium, PowerLawLayer
+from fogref.media import NP, PowerLawLayer
 from fogref.models._num import dtype_of, grey, saturate, split
 from fogref.models.base import FogResult, register
 
@@ -156,20 +156,3 @@ class AltitudeFog:
         opacity = saturate(I * dt(self.params._FogColor[3])).astype(dt)
         color = np.asarray(self.params._FogColor[:3], dtype=dt)
         return FogResult(inscatter=color * opacity[..., None], transmittance=grey(dt(1.0) - opacity, dt))
-
-    def to_medium(self, **kw: Any) -> FogMedium:
-        return altitude_to_medium(self.params, **kw)
-
-
-# -- physical counterpart ---------------------------------------------------------
-def altitude_to_medium(params: AltitudeFogParams, albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
-    """The medium ``sigma_t = _FogColor.a * T(y)`` [1/m]: its optical depth is ``a * I``."""
-    return FogMedium(
-        sigma_t=params._FogColor[3],
-        albedo=albedo,
-        g=g,
-        layers=(
-            PowerLawLayer(density=1.0, start=params._FogStart, end=params._FogEnd, power=params._FogPower),
-        ),
-        source="<altitude_to_medium>",
-    )

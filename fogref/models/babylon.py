@@ -47,7 +47,6 @@ Physical counterpart: ``EXP`` is a homogeneous medium with ``sigma_t = fogDensit
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -55,7 +54,6 @@ import numpy as np
 
 from fogref import params as valid
 from fogref.errors import ParameterError
-from fogref.media import ExpLayer, FogMedium
 from fogref.models._num import dtype_of, grey, sky_pixels, split, view_ray
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
@@ -147,27 +145,3 @@ class BabylonFog:
         coeff = np.where(sky_pixels(cam, wp, hit, p.sky_distance), dt(1.0), coeff).astype(dt)
         color = np.asarray(p.fogColor, dtype=dt)
         return FogResult(inscatter=color * (dt(1.0) - coeff)[..., None], transmittance=grey(coeff, dt))
-
-    def to_medium(self, **kw: Any) -> FogMedium:
-        return babylon_to_medium(self.params, **kw)
-
-
-def babylon_to_medium(params: BabylonFogParams, albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
-    """The homogeneous medium of ``EXP`` fog: ``sigma_t = fogDensity ln(E)`` [1/m] (exact).
-
-    ``EXP2`` and ``LINEAR`` have no physical counterpart: ParameterError naming 'fogMode'.
-
-    >>> round(babylon_to_medium(BabylonFogParams(fogMode="EXP", fogDensity=0.5)).sigma_t[0], 8)
-    0.49999966
-    """
-    if params.fogMode != "EXP":
-        raise ParameterError(
-            "<babylon_to_medium>", "fogMode", f"only EXP is Beer-Lambert, got {params.fogMode}"
-        )
-    return FogMedium(
-        sigma_t=params.fogDensity * math.log(E),
-        albedo=albedo,
-        g=g,
-        layers=(ExpLayer(1.0, 0.0, 0.0),),
-        source="<babylon_to_medium>",
-    )

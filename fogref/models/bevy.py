@@ -62,7 +62,7 @@ import numpy as np
 
 from fogref import params as P
 from fogref.errors import ParameterError
-from fogref.media import ExpLayer, FogMedium, rgb
+from fogref.media import rgb
 from fogref.models._num import dtype_of, grey, sky_pixels, split, unit_direction, view_ray
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
@@ -195,64 +195,3 @@ class BevyDistanceFog:
             trans = np.where(sky[..., None], dt(1.0), trans)
             insc = np.where(sky[..., None], dt(0.0), insc)
         return FogResult(inscatter=insc.astype(dt), transmittance=trans.astype(dt))
-
-    def to_medium(self, **kw: Any) -> FogMedium:
-        return bevy_to_medium(self.params, **kw)
-
-
-def bevy_sigma(params: BevyFogParams, reference_distance: float | None = None) -> tuple:
-    """RGB extinction [1/m] of the homogeneous medium nearest to ``params``.
-
-    Exponential: ``density`` (exact); Atmospheric: ``extinction`` (exact for the
-    transmittance); ExponentialSquared: ``density^2 r`` (equal transmittance at ``r``,
-    default ``1/density``); Linear: ``-ln(T(r))/r`` at ``r`` (default ``(start + end)/2``).
-    All for a fog alpha of 1.
-
-    Examples
-    --------
-    >>> bevy_sigma(BevyFogParams(falloff="Atmospheric", extinction=(0.1, 0.2, 0.3)))
-    (0.1, 0.2, 0.3)
-    """
-    if params.falloff == "Atmospheric":
-        return tuple(params.extinction)
-    if params.falloff == "Exponential":
-        return (params.density,) * 3
-    if params.falloff == "ExponentialSquared":
-        if params.density <= 0:
-            return (0.0,) * 3
-        r = reference_distance or 1.0 / params.density
-        return (params.density**2 * r,) * 3
-    s, e = params.start, params.end
-    r = reference_distance if reference_distance is not None else 0.5 * (s + e)
-    T = min(max((e - r) / (e - s), 1e-300), 1.0)
-    return (-math.log(T) / r if r > 0 else 0.0,) * 3
-
-
-def bevy_to_medium(
-    params: BevyFogParams,
-    reference_distance: float | None = None,
-    albedo: Any = (1.0, 1.0, 1.0),
-    g: float = 0.0,
-) -> FogMedium:
-    """Homogeneous :class:`~fogref.media.FogMedium` for ``params`` (see :func:`bevy_sigma`)."""
-    return FogMedium(
-        sigma_t=bevy_sigma(params, reference_distance),
-        albedo=albedo,
-        g=g,
-        layers=(ExpLayer(1.0, 0.0, 0.0),),
-        source="<bevy_to_medium>",
-    )
-
-
-def medium_to_bevy(medium: FogMedium, **kw: Any) -> BevyFogParams:
-    """Atmospheric fog equal to a homogeneous, unbounded medium (RGB extinction allowed).
-
-    ``extinction = inscattering = sigma_t * density`` [1/m]; ``kw``: the other options
-    (colours, lobe).  ParameterError naming 'layers' for a bounded or height-varying medium.
-    """
-    src = getattr(medium, "source", "<medium>")
-    if medium.bounds is not None or not medium.is_homogeneous:
-        raise ParameterError(src, "layers", "Bevy's DistanceFog needs an unbounded homogeneous medium")
-    k = sum(L.density for L in medium.layers)
-    s = tuple(float(x) * k for x in np.asarray(medium.sigma_t, dtype=np.float64))
-    return BevyFogParams(falloff="Atmospheric", extinction=s, inscattering=s, **kw)

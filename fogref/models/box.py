@@ -30,7 +30,6 @@ blend by ``1 - exp(-k t)``: exactly the homogeneous box medium.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -38,7 +37,6 @@ import numpy as np
 
 from fogref import params as valid
 from fogref.errors import ParameterError
-from fogref.media import Box, ExpLayer, FogMedium
 from fogref.models._num import dtype_of, grey, saturate, split, view_ray
 from fogref.models.base import FogResult, register
 
@@ -136,31 +134,3 @@ class BoxFog:
         fog = fog.astype(dt)
         color = np.asarray(q.fog_color, dtype=dt)
         return FogResult(inscatter=color * fog[..., None], transmittance=grey(dt(1.0) - fog, dt))
-
-    def to_medium(self, **kw: Any) -> FogMedium:
-        return box_to_medium(self.params, **kw)
-
-
-def box_to_medium(
-    params: BoxFogParams, reference_chord: float | None = None, albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0
-) -> FogMedium:
-    """The homogeneous medium ``sigma_t`` [1/m] inside :class:`~fogref.media.Box`.
-
-    "thickness"/"beer": ``sigma_t = k`` (optical depth ``k t`` exactly; "beer" is
-    then exact).  "ratio": nearest fit, equal opacity at the far wall of a chord
-    of length ``reference_chord`` (default: the box's smallest side):
-    ``1 - exp(-sigma L) = min(k, 1 - 1e-6)``.
-    """
-    if params.mode == "ratio":
-        L = reference_chord or min(h - l for l, h in zip(params.box_min, params.box_max))
-        sigma = -math.log1p(-min(params.density, 1.0 - 1e-6)) / L
-    else:
-        sigma = params.density
-    return FogMedium(
-        sigma_t=sigma,
-        albedo=albedo,
-        g=g,
-        layers=(ExpLayer(1.0, 0.0, 0.0),),
-        bounds=Box(params.box_min, params.box_max),
-        source="<box_to_medium>",
-    )

@@ -43,7 +43,7 @@ import numpy as np
 
 from fogref import params as valid
 from fogref.errors import ParameterError
-from fogref.media import NP, ExpLayer, FogMedium
+from fogref.media import NP
 from fogref.media.closed_form import phi
 from fogref.models._num import dtype_of, grey, split
 from fogref.models.base import FogResult, register
@@ -164,31 +164,3 @@ class FilamentFog:
                 trans = np.where(cut, dt(1.0), trans)
                 fog_color = np.where(cut[..., None], dt(0.0), fog_color)
         return FogResult(inscatter=fog_color.astype(dt), transmittance=grey(trans, dt))
-
-    def to_medium(self, **kw: Any) -> FogMedium:
-        return filament_to_medium(self.params, **kw)
-
-    @classmethod
-    def from_medium(cls, medium: FogMedium, **kw: Any) -> "FilamentFog":
-        return cls(medium_to_filament(medium, **kw))
-
-
-def filament_to_medium(params: FilamentFogParams, albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
-    """Exact medium ``sigma_t = density`` [1/m], ``ExpLayer(1, heightFalloff, height)``."""
-    return FogMedium(
-        sigma_t=params.density,
-        albedo=albedo,
-        g=g,
-        layers=(ExpLayer(1.0, params.heightFalloff, params.height),),
-        source="<filament_to_medium>",
-    )
-
-
-def medium_to_filament(medium: FogMedium, **kw: Any) -> FilamentFogParams:
-    """Filament options for an unbounded grey medium with one ExpLayer (``kw``: other options)."""
-    src = getattr(medium, "source", "<medium>")
-    if medium.bounds is not None or len(medium.layers) != 1 or not isinstance(medium.layers[0], ExpLayer):
-        raise ParameterError(src, "layers", "Filament fog needs one unbounded ExpLayer")
-    s = medium.grey_sigma_t("Filament")
-    L = medium.layers[0]
-    return FilamentFogParams(density=s * L.density, heightFalloff=L.falloff, height=L.height, **kw)

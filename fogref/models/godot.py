@@ -73,7 +73,7 @@ import numpy as np
 
 from fogref import params as P
 from fogref.errors import ParameterError
-from fogref.media import ExpLayer, FogMedium, rgb
+from fogref.media import rgb
 from fogref.models._num import dtype_of, glsl_smoothstep, grey, sky_pixels, split, unit_direction, view_ray
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
@@ -247,39 +247,3 @@ class GodotFog:
                 trans = np.where(sky, t_sky, trans)
                 insc = np.where(sky[..., None], i_sky, insc)
         return FogResult(inscatter=insc.astype(dt), transmittance=grey(trans, dt))
-
-    def to_medium(self, **kw: Any) -> FogMedium:
-        return godot_to_medium(self.params, **kw)
-
-
-def godot_to_medium(params: GodotFogParams, albedo: Any = (1.0, 1.0, 1.0), g: float = 0.0) -> FogMedium:
-    """The homogeneous medium ``sigma_t = fog_density`` [1/m] (exact for the exponential
-    mode without height fog; ParameterError naming 'fog_mode' or 'fog_height_density' otherwise).
-
-    Examples
-    --------
-    >>> float(godot_to_medium(GodotFogParams(fog_density=0.02)).sigma_t[0])
-    0.02
-    """
-    src = "<godot_to_medium>"
-    if params.fog_mode != "exponential":
-        raise ParameterError(src, "fog_mode", "only the exponential mode has a physical counterpart")
-    if params.fog_height_density != 0.0:
-        raise ParameterError(src, "fog_height_density", "Godot's height fog is not an optical depth")
-    return FogMedium(
-        sigma_t=params.fog_density, albedo=albedo, g=g, layers=(ExpLayer(1.0, 0.0, 0.0),), source=src
-    )
-
-
-def medium_to_godot(medium: FogMedium, **kw: Any) -> GodotFogParams:
-    """Exponential Godot fog equal to a homogeneous, unbounded, grey medium (``kw``: other options)."""
-    src = getattr(medium, "source", "<medium>")
-    if medium.bounds is not None or not medium.is_homogeneous:
-        raise ParameterError(src, "layers", "Godot's fog needs an unbounded homogeneous medium")
-    s = medium.grey_sigma_t("Godot")
-    return GodotFogParams(
-        fog_mode="exponential",
-        fog_density=s * sum(L.density for L in medium.layers),
-        fog_height_density=0.0,
-        **kw,
-    )

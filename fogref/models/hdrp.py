@@ -42,19 +42,13 @@ from typing import Any
 import numpy as np
 
 from fogref import params as valid
-from fogref.errors import ParameterError
-from fogref.media import NP, ExpLayer, FogMedium, HDRPLayer
+from fogref.media import NP
 from fogref.media.closed_form import phi
 from fogref.models._num import dtype_of, grey, sky_pixels, split, view_ray
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
 #: VolumeRendering.cs ScaleHeightFromLayerDepth: 1 / ln(1000).
 LAYER_DEPTH_TO_H = 0.144765
-#: fogref.mapping (hdrp_from_physical): base height [m] that makes HDRP's fog homogeneous everywhere below it.
-HOMOGENEOUS_BASE_HEIGHT = 1.0e7
-#: fogref.mapping (hdrp_from_physical): maxFogDistance [m], the distance over which sky pixels are
-#: fogged: far enough to stand for the physical sky ray's infinite one.
-FROM_PHYSICAL_MAX_FOG_DISTANCE = 1.0e7
 
 
 @dataclass(frozen=True)
@@ -170,50 +164,3 @@ class HDRPFog:
         T = np.exp(-self.optical_depth(camera, world_pos, precision, hit))
         col = np.asarray(q.color, dtype=dt) * np.asarray(q.albedo, dtype=dt)
         return FogResult(inscatter=col * (dt(1.0) - T)[..., None], transmittance=grey(T, dt))
-
-    def to_medium(self, **kw: Any) -> FogMedium:
-        return hdrp_to_medium(self.params, **kw)
-
-    @classmethod
-    def from_medium(cls, medium: FogMedium, **kw: Any) -> "HDRPFog":
-        return cls(medium_to_hdrp(medium, **kw))
-
-
-# -- physical counterpart ---------------------------------------------------------
-def hdrp_to_medium(params: HDRPFogParams, g: float = 0.0) -> FogMedium:
-    """Exact medium: ``sigma_t = 1/meanFreePath`` [1/m] with a :class:`~fogref.media.HDRPLayer`."""
-    H = float(params.scale_height(np.float64))
-    return FogMedium(
-        sigma_t=1.0 / params.meanFreePath,
-        albedo=params.albedo,
-        g=g,
-        layers=(HDRPLayer(density=1.0, base_height=params.baseHeight, falloff=1.0 / H),),
-        source="<hdrp_to_medium>",
-    )
-
-
-def medium_to_hdrp(
-    medium: FogMedium, color: Any = (0.5, 0.6, 0.7), maxFogDistance: float = 5000.0
-) -> HDRPFogParams:
-    """HDRP parameters for a grey medium with one :class:`~fogref.media.HDRPLayer` (or a
-    homogeneous layer); ``maximumHeight = baseHeight + H ln(1000)``."""
-    src = getattr(medium, "source", "<medium>")
-    if medium.bounds is not None or len(medium.layers) != 1:
-        raise ParameterError(src, "layers", "HDRP fog needs one unbounded height profile")
-    L = medium.layers[0]
-    s = (medium.grey_sigma_t("HDRP"),) * 3
-    if isinstance(L, ExpLayer) and L.falloff != 0:
-        raise ParameterError(src, "layers", "an unclamped ExpLayer has no HDRP counterpart")
-    if not isinstance(L, (ExpLayer, HDRPLayer)):
-        raise ParameterError(src, "layers", f"unsupported profile {type(L).__name__}")
-    ext = s[0] * L.density
-    depth = (1.0 / L.falloff) / LAYER_DEPTH_TO_H if L.falloff > 0 else 1e9
-    base = L.base_height if isinstance(L, HDRPLayer) else L.height
-    return HDRPFogParams(
-        meanFreePath=1.0 / ext,
-        baseHeight=base,
-        maximumHeight=base + depth,
-        albedo=medium.albedo,
-        color=color,
-        maxFogDistance=maxFogDistance,
-    )

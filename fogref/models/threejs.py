@@ -64,7 +64,7 @@ import numpy as np
 
 from fogref import params as P
 from fogref.errors import ParameterError
-from fogref.media import ExpLayer, FogMedium, rgb
+from fogref.media import rgb
 from fogref.models._num import dtype_of, glsl_smoothstep, grey, sky_pixels, split
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
@@ -242,46 +242,3 @@ class ThreeJSFog:
             return FogResult(inscatter=inscatter, transmittance=transmittance)
         fog_srgb = np.asarray(linear_to_srgb_cpu(p.color), dtype=dt)
         return CanvasBlend(inscatter, transmittance, factor=factor, fog_srgb=fog_srgb)
-
-    def to_medium(self, **kw: Any) -> FogMedium:
-        return threejs_to_medium(self.params, **kw)
-
-
-def threejs_sigma(params: ThreeFogParams, reference_depth: float | None = None) -> float:
-    """Extinction [1/m] of the homogeneous medium with the same transmittance at ``reference_depth``.
-
-    FogExp2: ``density^2 r`` (default ``r = 1/density``: ``sigma = density``).  Fog:
-    ``-ln(1 - smoothstep(near, far, r))/r`` (default ``r = (near + far)/2``).  Exact only at
-    ``r`` on the camera axis (three.js fogs the eye depth, and exp2 is not Beer–Lambert).
-
-    Examples
-    --------
-    >>> threejs_sigma(ThreeFogParams(mode="FogExp2", density=0.02))
-    0.02
-    """
-    if params.mode == "FogExp2":
-        if params.density <= 0:
-            return 0.0
-        r = reference_depth or 1.0 / params.density
-        return params.density**2 * r
-    r = reference_depth if reference_depth is not None else 0.5 * (params.near + params.far)
-    t = min(max((r - params.near) / (params.far - params.near), 0.0), 1.0)
-    f = t * t * (3 - 2 * t)
-    T = min(max(1.0 - f, 1e-300), 1.0)
-    return -math.log(T) / r if r > 0 else 0.0
-
-
-def threejs_to_medium(
-    params: ThreeFogParams,
-    reference_depth: float | None = None,
-    albedo: Any = (1.0, 1.0, 1.0),
-    g: float = 0.0,
-) -> FogMedium:
-    """Homogeneous :class:`~fogref.media.FogMedium` nearest to ``params`` (see :func:`threejs_sigma`)."""
-    return FogMedium(
-        sigma_t=threejs_sigma(params, reference_depth),
-        albedo=albedo,
-        g=g,
-        layers=(ExpLayer(1.0, 0.0, 0.0),),
-        source="<threejs_to_medium>",
-    )

@@ -35,7 +35,8 @@ and FogHeightFalloff ``f`` are divided by 1000 on the CPU; the shader uses
 
 i.e. per metre ``a = 100 (ln 2)^2 D/1000`` and ``b = 100 ln 2 f/1000`` (one factor
 ln 2 turns the exp2 of the line integral into exp, the other comes from
-integrating 2^(-x)).  See :func:`ue4_to_medium` / :func:`medium_to_ue4`.
+integrating 2^(-x)).  See :func:`fogref.models.ue4.ue4_to_medium` and its inverse
+:func:`fogref.mapping.unreal_basis.base_params`.
 
 **Base 2, and the path tracer's 0.5.**  The shader integrates the density in base 2
 (``CalculateLineIntegralShared``: ``(1 - exp2(-F)) / F``, Taylor ``ln 2 - ln^2 2 F / 2``) and
@@ -481,15 +482,6 @@ class UE4ExponentialHeightFog:
             fog_color, factor = shade(C, cam_z_cm, rel, dt, exact=(dt is np.float64))
         return FogResult(inscatter=fog_color, transmittance=grey(factor, dt))
 
-    @classmethod
-    def from_medium(cls, medium: FogMedium, **kw: Any) -> "UE4ExponentialHeightFog":
-        """The Unreal fog whose extinction equals ``medium``'s (see :func:`medium_to_ue4`)."""
-        return cls(medium_to_ue4(medium, **kw))
-
-    def to_medium(self, **kw: Any) -> FogMedium:
-        """The physical medium of this fog's extinction (see :func:`ue4_to_medium`)."""
-        return ue4_to_medium(self.params, **kw)
-
 
 # -- exact physical mapping -----------------------------------------------------
 def unreal_to_sigma(density: float, falloff: float) -> tuple[float, float]:
@@ -506,8 +498,15 @@ def ue4_to_medium(params: UE4FogParams, albedo: Any = (1.0, 1.0, 1.0), g: float 
     """The physical medium with the same extinction as the Unreal fog.
 
     ``sigma_t(y) = a_i exp(-b_i (y - h_i))`` per metre for each layer i with
-    density > 0 (see module doc).  Albedo and g are free (Unreal has neither;
-    its FogInscatteringColor stands for ``albedo * L_sky``).
+    density > 0 (:func:`fogref.models.ue4.unreal_to_sigma`, see :mod:`fogref.models.ue4`).
+    Albedo and g are free (Unreal has neither; its FogInscatteringColor stands for
+    ``albedo * L_sky``).  The inverse is :func:`~fogref.mapping.unreal_basis.base_params`.
+
+    Examples
+    --------
+    >>> m = ue4_to_medium(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2, FogHeight=100.0))
+    >>> round(m.sigma_t[0], 8), m.layers[0].height
+    (0.00096091, 1.0)
     """
     sfd = params.SecondFogData
     specs = [
@@ -523,31 +522,3 @@ def ue4_to_medium(params: UE4FogParams, albedo: Any = (1.0, 1.0, 1.0), g: float 
         a, b = unreal_to_sigma(d, f)
         layers.append(ExpLayer(density=a / a0, falloff=b, height=h / CM_PER_M))
     return FogMedium(sigma_t=a0, albedo=albedo, g=g, layers=tuple(layers), source="<ue4_to_medium>")
-
-
-def medium_to_ue4(medium: FogMedium, base: UE4FogParams | None = None) -> UE4FogParams:
-    """Unreal parameters (density, falloff, height parts) for a 1–2 layer medium.
-
-    The medium must be unbounded, grey (equal sigma_t per channel) and made of
-    at most two :class:`~fogref.media.ExpLayer`.  Other fields come from ``base``.
-    """
-    src = getattr(medium, "source", "<medium>")
-    if medium.bounds is not None:
-        raise ParameterError(src, "bounds", "Unreal's height fog is unbounded")
-    s = (medium.grey_sigma_t("Unreal"),) * 3
-    layers = [L for L in medium.layers if isinstance(L, ExpLayer)]
-    if len(layers) != len(medium.layers) or not 1 <= len(layers) <= 2:
-        raise ParameterError(src, "layers", "need 1 or 2 ExpLayer")
-    vals = []
-    for L in layers:
-        d, f = sigma_to_unreal(s[0] * L.density, L.falloff)
-        vals.append((d, f, L.height * CM_PER_M))
-    base = base or UE4FogParams()
-    second = SecondFogData(FogDensity=0.0, FogHeightFalloff=base.SecondFogData.FogHeightFalloff)
-    if len(vals) == 2:
-        second = SecondFogData(
-            FogDensity=vals[1][0], FogHeightFalloff=vals[1][1], FogHeightOffset=vals[1][2] - vals[0][2]
-        )
-    return replace(
-        base, FogDensity=vals[0][0], FogHeightFalloff=vals[0][1], FogHeight=vals[0][2], SecondFogData=second
-    )

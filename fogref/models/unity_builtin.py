@@ -30,7 +30,7 @@ distance of at least :data:`~fogref.models.base.SKY_DISTANCE`, see
 :func:`~fogref.models._num.sky_pixels`) get ``transmittance = 1``, ``inscatter = 0``.
 
 Physical counterpart: Exp fog on *distance* is exactly a homogeneous medium with
-``sigma_t = density`` [1/m].  Exp2 and Linear have none; :func:`unity_to_medium`
+``sigma_t = density`` [1/m].  Exp2 and Linear have none; :func:`fogref.mapping.engines.unity_to_medium`
 gives the homogeneous medium that matches the transmittance at a reference
 distance (default: Linear at ``(start + end) / 2``, Exp2 at ``1 / density``).
 """
@@ -45,7 +45,6 @@ import numpy as np
 
 from fogref import params as valid
 from fogref.errors import ParameterError
-from fogref.media import ExpLayer, FogMedium
 from fogref.models._num import LN2, dtype_of, grey, saturate, sky_pixels, split
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
@@ -152,56 +151,3 @@ class UnityBuiltinFog:
             factor = np.where(sky, dt(1.0), factor).astype(dt)
         color = np.asarray(p.fogColor, dtype=dt)
         return FogResult(inscatter=color * (dt(1.0) - factor)[..., None], transmittance=grey(factor, dt))
-
-    @classmethod
-    def from_medium(cls, medium: FogMedium, **kw: Any) -> "UnityBuiltinFog":
-        """Exp fog on distance with the homogeneous medium's extinction."""
-        return cls(medium_to_unity(medium, **kw))
-
-    def to_medium(self, **kw: Any) -> FogMedium:
-        return unity_to_medium(self.params, **kw)
-
-
-def unity_sigma(params: UnityFogParams, reference_distance: float | None = None) -> float:
-    """Extinction [1/m] of the homogeneous medium nearest to ``params``.
-
-    Exp: ``density`` (exact on distance).  Exp2: ``density^2 r`` (equal
-    transmittance ``exp(-(density r)^2)`` at ``r``, default ``1/density``).
-    Linear: ``-ln(T(r)) / r`` with ``T(r) = (end - r)/(end - start)`` at ``r``
-    (default ``(start + end)/2``).
-    """
-    if params.fogMode == "exp":
-        return params.fogDensity
-    if params.fogMode == "exp2":
-        r = reference_distance or (1.0 / params.fogDensity if params.fogDensity > 0 else 1.0)
-        return params.fogDensity**2 * r
-    s, e = params.fogStartDistance, params.fogEndDistance
-    r = reference_distance if reference_distance is not None else 0.5 * (s + e)
-    T = min(max((e - r) / (e - s), 1e-12), 1.0)
-    return -math.log(T) / r if r > 0 else 0.0
-
-
-def unity_to_medium(
-    params: UnityFogParams,
-    reference_distance: float | None = None,
-    albedo: Any = (1.0, 1.0, 1.0),
-    g: float = 0.0,
-) -> FogMedium:
-    """Homogeneous :class:`~fogref.media.FogMedium` for ``params`` (see :func:`unity_sigma`)."""
-    return FogMedium(
-        sigma_t=unity_sigma(params, reference_distance),
-        albedo=albedo,
-        g=g,
-        layers=(ExpLayer(1.0, 0.0, 0.0),),
-        source="<unity_to_medium>",
-    )
-
-
-def medium_to_unity(medium: FogMedium, fogColor: Any = (0.5, 0.5, 0.5)) -> UnityFogParams:
-    """Exp fog on distance equal to a homogeneous, unbounded, grey medium."""
-    src = getattr(medium, "source", "<medium>")
-    if medium.bounds is not None or not medium.is_homogeneous:
-        raise ParameterError(src, "layers", "Unity Exp fog needs an unbounded homogeneous medium")
-    s = (medium.grey_sigma_t("Unity"),) * 3
-    density = s[0] * sum(L.density for L in medium.layers)
-    return UnityFogParams(fogMode="exp", fogDensity=density, fogColor=fogColor, fog_coordinate="distance")

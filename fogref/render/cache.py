@@ -2,7 +2,7 @@
 
 The key holds the digest of the scene file and of every file it loads (meshes,
 environment maps, textures, included XML, and the files that ``$default``s and
-overrides select: :func:`fogref.render.inputs.inputs_digest`), the overrides
+overrides select: :func:`fogref.scene.inputs.inputs_digest`), the overrides
 (``res``, ``resy`` and any ``--set``), the
 sample count, the seed, the pixel filter, fogref's version and a hash of the
 renderer's source (``fogref/media``, ``fogref/render``, ``fogref/gbuffer.py``, the
@@ -28,8 +28,8 @@ from fogref._version import __version__
 from fogref.cache_dir import default_cache_dir, sources_digest
 from fogref.errors import FogrefError, ParameterError
 from fogref.gbuffer import load_truth
-from fogref.render.inputs import inputs_digest
 from fogref.render.render import render
+from fogref.scene.parsed import ParsedScene, read_scene
 from fogref.shipped_scenes import resolve_scene
 
 
@@ -44,12 +44,21 @@ def _renderer_hash() -> str:
         except ImportError:
             plugins = None
     return sources_digest(
-        [root / "media", root / "render", root / "gbuffer.py", *([plugins] if plugins else [])]
+        [
+            root / "media",
+            root / "scene",
+            root / "render",
+            root / "gbuffer.py",
+            *([plugins] if plugins else []),
+        ]
     )
 
 
 def truth_key(scene, spp: int, seed: int, overrides: dict | None = None, pixel_filter: str = "centre") -> str:
     """The cache key (hex, 24 characters) of a truth; FogrefError if the scene is missing.
+
+    ``scene``: a path (with ``overrides``) or a :class:`~fogref.scene.parsed.ParsedScene`
+    (which carries its overrides).
 
     Examples
     --------
@@ -57,12 +66,13 @@ def truth_key(scene, spp: int, seed: int, overrides: dict | None = None, pixel_f
     >>> len(k), k == truth_key("scenes/valley.xml", 16, 1, {"res": 32, "resy": 18})
     (24, False)
     """
+    parsed = scene if isinstance(scene, ParsedScene) else read_scene(scene, overrides)
     spec = {
-        "inputs": inputs_digest(scene, overrides),
+        "inputs": parsed.digest,
         "spp": int(spp),
         "seed": int(seed),
         "pixel_filter": pixel_filter,
-        "overrides": {str(k): str(v) for k, v in sorted((overrides or {}).items())},
+        "overrides": {str(k): str(v) for k, v in sorted(parsed.overrides.items())},
         "version": __version__,
         "renderer": _renderer_hash(),
     }
@@ -74,7 +84,8 @@ def truth_path(
 ) -> Path:
     """Where the cache keeps the truth of these inputs: ``<cache>/<scene stem>-<key>.exr``."""
     folder = Path(cache_dir) if cache_dir is not None else default_cache_dir()
-    return folder / f"{Path(scene).stem}-{truth_key(scene, spp, seed, overrides, pixel_filter)}.exr"
+    stem = (scene.path if isinstance(scene, ParsedScene) else Path(scene)).stem
+    return folder / f"{stem}-{truth_key(scene, spp, seed, overrides, pixel_filter)}.exr"
 
 
 def render_cached(
@@ -93,8 +104,8 @@ def render_cached(
     """
     if int(spp) < 1 or int(seed) < 0:
         raise FogrefError(f"spp {spp} must be >= 1 and seed {seed} >= 0")
-    over = dict(overrides or {})
-    path = truth_path(scene, spp, seed, over, cache_dir, pixel_filter)
+    parsed = read_scene(scene, overrides)  # once, for the key and the render
+    path = truth_path(parsed, spp, seed, None, cache_dir, pixel_filter)
     folder = path.parent
     if path.is_file():
         try:
@@ -104,12 +115,11 @@ def render_cached(
             path.unlink(missing_ok=True)
     folder.mkdir(parents=True, exist_ok=True)
     render(
-        scene,
+        parsed,
         path,
         spp=int(spp),
         seed=int(seed),
         variant=variant,
-        overrides=over,
         progress=False,
         resume=False,
         png=False,

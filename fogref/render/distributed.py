@@ -18,7 +18,7 @@ of the same instruction set: the LLVM back end compiles for the host CPU).
   every later pass of that render; the seed and spp are opaque to the kernels, so every pass
   after a worker's first reuses its compiled kernels.
 * **Same inputs everywhere**: a worker renders only if the digest of the scene and of every
-  file it loads (:func:`fogref.render.inputs.inputs_digest`), read on the worker, is the
+  file it loads (:func:`fogref.scene.inputs.inputs_digest`), read on the worker, is the
   driver's; workers on other machines need the scene at the same path (a shared file system).
 * **A lost worker is named**: each pass that the scheduler reruns because its worker died
   (running there, or its result lost with it) is reported in one line (:func:`redone_passes`,
@@ -86,9 +86,9 @@ def _worker_scene(j: dict):
     hit = _LOADED.get(key)
     if hit is not None:
         return hit
-    from fogref.render.inputs import inputs_digest
-    from fogref.render.scene import load_scene
+    from fogref.render.load import load_scene
     from fogref.render.variant import set_variant
+    from fogref.scene.parsed import read_scene
 
     set_variant(j["variant"])
     if j["threads"]:
@@ -96,14 +96,15 @@ def _worker_scene(j: dict):
 
         if dr.thread_count() != int(j["threads"]):
             dr.set_thread_count(int(j["threads"]))
-    digest = inputs_digest(Path(j["scene"]), j["overrides"])
+    parsed = read_scene(Path(j["scene"]), j["overrides"] or None)
+    digest = parsed.digest
     if digest != j["digest"]:
         raise FogrefError(
             f"{j['scene']}: this worker (pid {os.getpid()}) reads other inputs than the driver "
             f"(inputs SHA-256 {digest[:12]}..., not {j['digest'][:12]}...); the workers need the scene "
             f"and the files it loads at the same path"
         )
-    scene, _ = load_scene(Path(j["scene"]), j["overrides"] or None)
+    scene, _ = load_scene(parsed)
     integrator = scene.integrator()
     integrator.aovs = True
     while len(_LOADED) >= _KEEP:

@@ -18,7 +18,7 @@ the back end's memory allows, and turns them into means and standard errors.
 * **Resumable**: the running sums are checkpointed atomically next to the output
   (``<out>.partial.npz``) every ``checkpoint_seconds`` and on Ctrl-C or SIGTERM; a rerun
   resumes only from a checkpoint whose key (the digest of the scene and of every file it
-  loads, :func:`fogref.render.inputs.inputs_digest`; overrides, resolution, spp, seed,
+  loads, :func:`fogref.scene.inputs.inputs_digest`; overrides, resolution, spp, seed,
   filter, variant, fogref version) matches.  A checkpoint is one record: the sums, their
   squares and the count of passes they hold change together in memory (one assignment)
   and on disk (one file, with a SHA-256 of its content); signals are deferred while it is
@@ -61,10 +61,11 @@ from fogref.display import write_preview
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 from fogref.render import checkpoint
-from fogref.render import scene as scene_reader
+from fogref.render import load as scene_loader
 from fogref.render.distributed import PassFailed
-from fogref.render.inputs import file_sha256, inputs_digest, scene_inputs
 from fogref.render.variant import set_variant
+from fogref.scene.inputs import file_sha256
+from fogref.scene.parsed import ParsedScene, read_scene
 
 PIXEL_FILTERS = ("centre", "box")
 _SOURCE = "fogref render"
@@ -74,7 +75,7 @@ _SOURCE = "fogref render"
 _HOST_BYTES_PER_PIXEL = (30 + 42) * 8 * 2 + len(gbuffer.exr_channel_names()) * 4
 
 
-__all__ = ["render", "check_output", "file_sha256", "checkpoint_path", "moments_path", "PIXEL_FILTERS"]
+__all__ = ["render", "check_output", "checkpoint_path", "moments_path", "PIXEL_FILTERS"]
 
 
 def _physical_memory() -> int:
@@ -111,7 +112,7 @@ def check_output(
 
     The outputs are ``out``, its PNG preview (when ``png``), its checkpoint and, with
     ``workers_log``, the workers' log (:func:`workers_log_path`); the inputs are the scene
-    and every file it loads (``inputs``, from :func:`fogref.render.inputs.scene_inputs`;
+    and every file it loads (``inputs``, from :func:`fogref.scene.inputs.scene_inputs`;
     only the scene when None).
     """
     if out.suffix.lower() != ".exr":
@@ -185,7 +186,8 @@ def render(
 
     Parameters
     ----------
-    scene_path:   a fogref XML scene (``fogpath`` integrator, ``heightfog`` medium).
+    scene_path:   a fogref XML scene (``fogpath`` integrator, ``heightfog`` medium), or one already
+                  read (:class:`~fogref.scene.parsed.ParsedScene`, which carries its overrides).
     out:          the output ``.exr``; a PNG preview goes beside it when ``png``.
     spp:          samples per pixel, [1, 2^20].  seed: [0, 2^31).
     variant:      Mitsuba variant (default ``llvm_ad_rgb``; ``cuda_ad_rgb`` on a GPU).
@@ -217,17 +219,19 @@ def render(
     workers = cluster.check_workers(workers, _SOURCE)
     worker_timeout = cluster.check_worker_timeout(worker_timeout, _SOURCE)
     on_cluster = scheduler is not None or workers is not None
-    scene_path, out = Path(scene_path), Path(out)
-    inputs = scene_inputs(scene_path, overrides)
-    check_output(out, scene_path, png, inputs, workers_log=on_cluster)
-    hashes: dict = {}  # before the scene is loaded: what its pixels will see
-    digest = inputs_digest(scene_path, overrides, inputs, record=hashes)
+    if isinstance(scene_path, ParsedScene) and overrides is not None:
+        raise FogrefError(f"{scene_path.path}: a read scene carries its overrides; give them to read_scene")
+    # the one parse of the XML before Mitsuba's own
+    parsed = scene_path if isinstance(scene_path, ParsedScene) else read_scene(scene_path, overrides)
+    scene_path, overrides, out = parsed.path, parsed.overrides, Path(out)
+    check_output(out, scene_path, png, list(parsed.inputs), workers_log=on_cluster)
+    digest, hashes = parsed.digest, parsed.input_hashes  # before the scene is loaded: what its pixels see
 
     variant = set_variant(variant)
     import drjit as dr
     import mitsuba as mi
 
-    scene, desc = scene_reader.load_scene(scene_path, overrides)
+    scene, desc = scene_loader.load_scene(parsed)
     integrator = scene.integrator()
     if not hasattr(integrator, "render_moments"):
         raise FogrefError(f"{scene_path}: the scene's integrator must be 'fogpath' to write a ground truth")

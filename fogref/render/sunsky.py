@@ -35,10 +35,12 @@ import numpy as np
 
 from fogref import params as P
 from fogref.errors import FogrefError
+from fogref.media.single_scatter import sky_phase_projection
 from fogref.media.sky import SUNSKY_APERTURE, sky_radiance, sunsky_dict
 from fogref.media.sky import eval_emitter as _eval
-from fogref.render.scene_defaults import substitute
-from fogref.render.sun import sun_direction_from_angles
+from fogref.render.variant import set_variant
+from fogref.scene.defaults import overrides_used_by, substitute
+from fogref.scene.sun import sun_direction_from_angles
 
 __all__ = [
     "SUNSKY_APERTURE",
@@ -127,7 +129,7 @@ def sunsky_from_element(el: ET.Element, defaults: dict, source: str) -> dict:
     the direction Mitsuba's own sunsky takes from them and its defaults (latitude 35.6894,
     longitude 139.692, timezone 9, 2010-07-10 15:00: :func:`sun_from_time_and_place`); else the
     scene's ``$sun_elevation`` and ``$sun_azimuth``
-    (:func:`fogref.render.sun.sun_direction_from_angles`).  Its ``to_world`` must be fogref's
+    (:func:`fogref.scene.sun.sun_direction_from_angles`).  Its ``to_world`` must be fogref's
     z-up -> y-up rotation (or absent, then it is added)."""
     src = f"{source}: sunsky"
     v = el.find("vector[@name='sun_direction']")
@@ -187,8 +189,6 @@ def lower_sunsky(root: ET.Element, defaults: dict, source) -> dict | None:
     ``g = 0``), ``sun`` its direction and disk-integrated irradiance.  A second sun (a
     ``directional`` emitter beside the sunsky) is refused: the sunsky has its own.
     """
-    from fogref.render.variant import set_variant
-
     ems = [e for e in root.iter("emitter") if e.get("type") == "sunsky"]
     if not ems:
         return None
@@ -215,8 +215,6 @@ def lower_sunsky(root: ET.Element, defaults: dict, source) -> dict | None:
     ET.SubElement(sun, "rgb", name="irradiance", value=", ".join(repr(float(x)) for x in E))
     root.append(sun)
     # isotropic projection of the sky: the g = 0 single scattering per unit alpha (1 - T)
-    from fogref.media.single_scatter_nonuniform import sky_phase_projection
-
     L_iso = sky_phase_projection(sky_radiance(desc), 0.0, [[0.0, 1.0, 0.0]])[0]
     sky = {"type": "sunsky", **d, "radiance": [float(x) for x in L_iso]}
     return {"sky": sky, "sun": {"direction": d["sun_direction"], "irradiance": [float(x) for x in E]}}
@@ -225,8 +223,6 @@ def lower_sunsky(root: ET.Element, defaults: dict, source) -> dict | None:
 def load_lowered(path: Path, root: ET.Element, overrides: dict | None):
     """``mi.load_string`` of a lowered scene, relative files resolved against the scene's folder."""
     import mitsuba as mi
-
-    from fogref.render.scene_defaults import overrides_used_by
 
     fr = mi.file_resolver()
     before = [str(fr[i]) for i in range(len(fr))]

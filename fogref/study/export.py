@@ -18,8 +18,10 @@ from fogref.errors import FogrefError, ParameterError
 from fogref.mapping.build import build_model
 from fogref.mapping.export import ENGINES, Camera, Sun, export
 from fogref.mapping.fit import with_sun_elevation
+from fogref.scene.describe import lookat_camera
+from fogref.scene.parsed import read_scene
 from fogref.shipped_scenes import resolve_scene
-from fogref.study.fit import fit_model, lookat_camera, physical_from_scene
+from fogref.study.fit import fit_model, physical_from_scene
 
 __all__ = ["export_engine", "settings_from_json"]
 
@@ -93,11 +95,11 @@ def export_engine(
     if engine not in ENGINES:
         export(engine, None, Camera((0, 0, 0), (0, 0, 1)), Sun((0, 1, 0), (1, 1, 1)))  # names the engines
     model = ENGINES[engine]
-    path = resolve_scene(scene)
-    pf = physical_from_scene(path)
-    cam = lookat_camera(path)
+    parsed = read_scene(resolve_scene(scene))
+    pf = physical_from_scene(parsed)
+    cam = lookat_camera(parsed)
     if cam is None:
-        raise FogrefError(f"{path}: no sensor with a <lookat> (the export needs the camera)")
+        raise FogrefError(f"{parsed.path}: no sensor with a <lookat> (the export needs the camera)")
     settings: dict = {}
     sun_dir, sun_E = pf.sun_direction, pf.sun_irradiance
     if json_path is not None:

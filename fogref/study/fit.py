@@ -19,68 +19,27 @@ from fogref.atomic import write_text_atomic as write_text
 from fogref.errors import FogrefError
 from fogref.mapping import PhysicalScene, lobe_fit
 from fogref.media import NP, hg_phase
-from fogref.render.scene import describe_scene
-from fogref.render.scene_defaults import parse_scene, resolve, substitute
+from fogref.render.load import describe_scene
+from fogref.scene.describe import lookat_camera
+from fogref.scene.parsed import ParsedScene, read_scene
 from fogref.shipped_scenes import SCENES_DIR, resolve_scene
 
 
 def physical_from_scene(path, camera=None) -> PhysicalScene:
-    """The physical scene of a fogref XML file (no Mitsuba needed): fog, sun, sky and
-    the sensor's ``lookat`` origin (``camera`` [m] overrides it) and view direction."""
-    desc = describe_scene(path)
+    """The physical scene of a fogref XML file (a path or a :class:`~fogref.scene.parsed.ParsedScene`;
+    no Mitsuba needed): fog, sun, sky and the sensor's ``lookat`` origin (``camera`` [m] overrides
+    it) and view direction."""
+    scene = path if isinstance(path, ParsedScene) else read_scene(path)  # once, for fog and camera
+    desc = describe_scene(scene)
     if desc["medium"] is None:
         raise FogrefError(f'{path}: no <medium type="heightfog"> in the scene')
-    look = lookat_camera(path)
+    look = lookat_camera(scene)
     if not desc.get("camera") and look is not None:
         forward = np.subtract(look["target"], look["origin"])
         desc = {**desc, "camera": {"origin": look["origin"], "forward": forward.tolist()}}
     if camera is None:
         camera = (desc.get("camera") or {}).get("origin")
     return PhysicalScene.from_params(desc, camera)
-
-
-def lookat_camera(path) -> dict | None:
-    """The first sensor of a fogref XML file with a ``lookat``, read without Mitsuba, its
-    ``$defaults`` substituted: ``origin``, ``target``, ``up`` [m, fogref frame], the horizontal
-    field of view ``fov_deg`` [deg] (a ``fov_axis`` "y" is converted) and ``resolution``
-    ``[W, H]`` [px].  None without such a sensor.
-
-    >>> from fogref.shipped_scenes import scene_path
-    >>> c = lookat_camera(scene_path("valley"))
-    >>> c["origin"], c["fov_deg"], c["resolution"]
-    ((0.0, 2.0, 0.0), 70.0, (320, 180))
-    """
-
-    root = parse_scene(path)
-    defaults = resolve(root, source=path)
-
-    def value(el, kind, name, default):
-        node = el.find(f"{kind}[@name='{name}']")
-        return substitute(node.get("value"), defaults) if node is not None else default
-
-    def vec(text):
-        return tuple(float(x) for x in text.replace(",", " ").split())
-
-    for s in root.iter("sensor"):
-        la = s.find(".//lookat")
-        if la is None or not la.get("origin"):
-            continue
-        film = s.find("film")
-        res = (
-            int(value(film, "integer", "width", 768)) if film is not None else 768,
-            int(value(film, "integer", "height", 576)) if film is not None else 576,
-        )
-        fov = float(value(s, "float", "fov", 45.0))
-        if value(s, "string", "fov_axis", "x") == "y":
-            fov = math.degrees(2 * math.atan(math.tan(math.radians(fov) / 2) * res[0] / res[1]))
-        return {
-            "origin": vec(substitute(la.get("origin"), defaults)),
-            "target": vec(substitute(la.get("target", "0, 0, 1"), defaults)),
-            "up": vec(substitute(la.get("up", "0, 1, 0"), defaults)),
-            "fov_deg": fov,
-            "resolution": res,
-        }
-    return None
 
 
 def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -> dict:

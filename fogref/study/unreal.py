@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import json
 import time
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
@@ -36,8 +35,9 @@ from fogref.gbuffer import Truth, load_truth
 from fogref.mapping import PhysicalScene, fit_unreal
 from fogref.mapping.build import build_model
 from fogref.render.cache import render_cached
-from fogref.render.render import file_sha256
-from fogref.render.scene_defaults import overrides_used_by
+from fogref.scene.defaults import overrides_used_by
+from fogref.scene.edit import sunless_scene
+from fogref.scene.inputs import file_sha256
 from fogref.shipped_scenes import SCENES_DIR, scene_label
 from fogref.study import budget as B
 from fogref.study.unreal_report import readme
@@ -51,12 +51,6 @@ WHAT_IF = {
     "FogMaxOpacity 0.9": {"FogMaxOpacity": 0.9},
     "FogCutoffDistance 2 km": {"FogCutoffDistance": 200000.0},
 }
-
-
-def _sha256(path: Path) -> str:
-    """The scene hash as the render driver recorded it (``fogref.scene_sha256``)."""
-
-    return file_sha256(path)
 
 
 def scene_of_truth(truth: Truth, scene: str | None = None) -> Path:
@@ -85,35 +79,14 @@ def scene_of_truth(truth: Truth, scene: str | None = None) -> Path:
     if not found:
         raise FogrefError(f"{exr}: cannot find the scene it was rendered from ({recorded!r}); pass --scene")
     for c in found:
-        if _sha256(c) == sha:
+        if file_sha256(c) == sha:
             return c
     c = found[0]
     raise FogrefError(
         f"{exr}: the scene file {c} has changed since this truth was rendered (its SHA-256 is now "
-        f"{_sha256(c)}, the truth recorded {sha}). The study re-renders budget steps from the scene as the "
-        "truth recorded it: restore that version (or pass it with --scene), or render the truth again."
+        f"{file_sha256(c)}, the truth recorded {sha}). The study re-renders budget steps from the scene "
+        "as the truth recorded it: restore that version (or pass it with --scene), or render the truth again."
     )
-
-
-def sunless_scene(scene: Path, out_dir: Path) -> Path:
-    """A copy of ``scene`` without its ``directional`` emitter(s) (sky-only light), written in
-    ``out_dir``.  Its first element is ``<path value="SCENE'S FOLDER"/>``, so the meshes,
-    envmaps and textures it names relatively resolve where the original's do (Mitsuba's
-    search path; :func:`fogref.render.inputs.scene_inputs` follows it, so the copy's cache
-    keys cover the original's files)."""
-    tree = ET.parse(scene)
-    root = tree.getroot()
-    root.insert(0, ET.Element("path", value=str(Path(scene).resolve().parent)))
-    for parent in list(root.iter()):
-        for ch in list(parent):
-            if ch.tag == "emitter" and ch.get("type") == "directional":
-                parent.remove(ch)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    out = out_dir / f"{scene.stem}_nosun.xml"
-    text = ET.tostring(root, encoding="unicode")
-    if not (out.is_file() and out.read_text() == text):  # keep the mtime: the renders are cached on it
-        write_text(out, text)
-    return out
 
 
 def _render_cached(

@@ -73,8 +73,8 @@ is estimated as ``|x(seed a) - x(seed b)| / sqrt(2)`` (the shares' noise).
 
 from __future__ import annotations
 
-from fogref.study.budget.effects import _CONFIG as _CONFIG
 from fogref.study.budget.effects import (
+    CONFIG_EFFECTS,
     EFFECTS,
     EFFECTS_COLOURS_IN_LOBE,
     PHASE,
@@ -92,7 +92,7 @@ from fogref.study.budget.engines import (
     run_budget,
     unreal_engine,
 )
-from fogref.study.budget.report import markdown, plot, shapley_markdown
+from fogref.study.budget.report import markdown, plot, port_vs_engine_line, shapley_markdown
 from fogref.study.budget.shapley import (
     BOOTSTRAP_BLOCK,
     BOOTSTRAP_RESAMPLES,
@@ -106,6 +106,7 @@ from fogref.study.budget.telescoping import add_noise, attribute, chain, chain_n
 __all__ = [
     "BOOTSTRAP_BLOCK",
     "BOOTSTRAP_RESAMPLES",
+    "CONFIG_EFFECTS",
     "EFFECTS",
     "EFFECTS_COLOURS_IN_LOBE",
     "PHASE",
@@ -125,6 +126,7 @@ __all__ = [
     "model_engine",
     "phase_effect",
     "plot",
+    "port_vs_engine_line",
     "run_budget",
     "shapley_budget",
     "shapley_markdown",

@@ -50,7 +50,7 @@ EFFECTS: tuple[str, ...] = tuple(s[0] for s in STEPS)
 EFFECTS_COLOURS_IN_LOBE: tuple[str, ...] = tuple(k for k in EFFECTS if k != "refit")
 
 #: Effects that select the engine's configuration (refit, start distances, opacity/cutoff, float32).
-_CONFIG = ("refit", "start_distance", "opacity_cutoff", "float32")
+CONFIG_EFFECTS = ("refit", "start_distance", "opacity_cutoff", "float32")
 
 
 def closed_forms(truth: Truth, pf) -> dict:
@@ -83,7 +83,7 @@ def shapley_parts(truth: Truth, sky_single: np.ndarray, pf, engine, sky_distance
 
     The renders (the truth and ``sky_single``, the sun-less render's ``single``), the closed
     forms of :func:`closed_forms`, and the engine's ``(T, L_sun, L_sky)`` for each of the
-    2^4 configurations of :data:`_CONFIG` (``engine``: e.g. :func:`unreal_engine`).
+    2^4 configurations of :data:`CONFIG_EFFECTS` (``engine``: e.g. :func:`unreal_engine`).
     """
     cf = closed_forms(truth, pf)
     ratio = None
@@ -94,8 +94,8 @@ def shapley_parts(truth: Truth, sky_single: np.ndarray, pf, engine, sky_distance
         r = hg_phase(NP, cos, pf.medium.g) / pf.medium.phase_value(NP, cos)
         ratio = r.reshape(*truth.shape, 1)
     eng = {}
-    for bits in itertools.product((False, True), repeat=len(_CONFIG)):
-        eng[bits] = engine(truth, dict(zip(_CONFIG, bits)), sky_distance)
+    for bits in itertools.product((False, True), repeat=len(CONFIG_EFFECTS)):
+        eng[bits] = engine(truth, dict(zip(CONFIG_EFFECTS, bits)), sky_distance)
     return {
         "final": truth.final,
         "att": truth.attenuated_surface,
@@ -140,9 +140,9 @@ def coalition_image(parts: dict, coalition, fixed=()) -> np.ndarray:
     interactions equally between the effects involved.
     """
     C = set(coalition) | set(fixed)
-    cfg = tuple(k in C for k in _CONFIG)
+    cfg = tuple(k in C for k in CONFIG_EFFECTS)
     T, L_sun, L_sky = parts["engine"][cfg]
-    T0 = parts["engine"][(False,) * len(_CONFIG)][0]
+    T0 = parts["engine"][(False,) * len(CONFIG_EFFECTS)][0]
     surf = parts["surface"] * T0 if "lobe" in C else parts["att"]
     if any(cfg[1:]):
         surf = surf + parts["surface"] * (T - T0)

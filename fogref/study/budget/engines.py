@@ -1,7 +1,7 @@
 """The engine side of the budget, per model, and the budget of any model.
 
 :func:`unreal_engine` (Unreal's Exponential Height Fog, :mod:`fogref.models.ue4`, in each
-configuration of :data:`~fogref.study.budget.effects._CONFIG`) and :func:`model_engine` (any
+configuration of :data:`~fogref.study.budget.effects.CONFIG_EFFECTS`) and :func:`model_engine` (any
 fog model, its sun lobe split off with :attr:`fogref.mapping.free.FitSpec.sun_off`) give
 ``engine(truth, config, sky_distance) -> (T, L_sun, L_sky)``; :func:`applicable_effects` the
 effects that apply to a model; :func:`run_budget` plays the Shapley game with them.
@@ -18,13 +18,14 @@ from fogref.mapping.free import fit_spec
 from fogref.mapping.registry import from_physical
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
 from fogref.study.budget.effects import EFFECTS, shapley_parts
+from fogref.study.budget.report import port_vs_engine_line
 from fogref.study.budget.shapley import BOOTSTRAP_RESAMPLES, shapley_budget
 
 
 def unreal_fog(params: UE4FogParams, truth: Truth, precision: str, sky_distance: float):
-    """Unreal's fog of ``params`` on the truth's pixels: ``(T, L)``, each (H, W, 3) float64, the
-    transmittance [1] and the inscatter [radiance]; ``precision`` ``"float32"`` (the shader's
-    arithmetic) or ``"float64"``, sky pixels at ``sky_distance`` [m]."""
+    """Unreal's fog with ``params`` at the truth's pixels (sky pixels at ``sky_distance`` m, the
+    shader in ``precision``): ``(transmittance (H, W) in [0, 1], inscatter (H, W, 3) >= 0)``,
+    float64 arrays."""
     r = UE4ExponentialHeightFog(params).evaluate(truth.camera, truth.world_positions(sky_distance), precision)
     return np.asarray(r.transmittance, np.float64), np.asarray(r.inscatter, np.float64)
 
@@ -47,7 +48,7 @@ def _config_params(
 def unreal_engine(lobe_params: UE4FogParams, model_params: UE4FogParams):
     """The engine side of the Shapley game for Unreal: ``engine(truth, config, sky_distance)``.
 
-    ``config``: a dict of the :data:`_CONFIG` effects (True = the engine's setting):
+    ``config``: a dict of the :data:`CONFIG_EFFECTS` effects (True = the engine's setting):
     ``refit`` (the study's colours/exponent instead of the lobe-only fit), ``start_distance``
     (its StartDistance and DirectionalInscatteringStartDistance, else 0), ``opacity_cutoff``
     (its FogMaxOpacity and FogCutoffDistance, else 1 and 0), ``float32`` (the shader's
@@ -137,14 +138,18 @@ def run_budget(
     sky_distance: float = 1.0e5,
     resamples: int = BOOTSTRAP_RESAMPLES,
     seed: int = 0,
+    port_vs_engine: dict | None = None,
 ) -> dict:
     """The Shapley budget of any model (an instance, or a name built by
     :func:`fogref.mapping.from_physical` of ``pf``) against a truth.
 
     Unreal with a ``lobe_model`` uses :func:`unreal_engine`; every other model
     :func:`model_engine`, over :func:`applicable_effects`.  ``sky_single``: the sun-less
-    render's ``single``; ``valid``: pixels (default ``truth.surface_valid``).  Returns
-    :func:`shapley_budget`'s dict with ``"model"`` added.
+    render's ``single``; ``valid``: pixels (default ``truth.surface_valid``); ``port_vs_engine``:
+    the model's port against its real engine where one ran (``engine.json``'s ``port_vs_engine``
+    from ``fogref compare TRUTH --engine NAME``).  Returns :func:`shapley_budget`'s dict with
+    ``"model"`` and ``"port_vs_engine"`` (:func:`~fogref.study.budget.report.port_vs_engine_line`)
+    added.
     """
     if isinstance(model, str):
         model = from_physical(model, pf)
@@ -160,4 +165,5 @@ def run_budget(
     effects = applicable_effects(model, lobe_model, pf)
     out = shapley_budget(parts, valid, effects, resamples=resamples, seed=seed)
     out["model"] = name
+    out["port_vs_engine"] = port_vs_engine_line(name, port_vs_engine)
     return out

@@ -1,8 +1,8 @@
 """The budget's report: its Markdown tables (``budget.md``) and its figure (``budget.png``).
 
 :func:`markdown` writes the Shapley table (:func:`shapley_markdown`), the telescoping chain
-and the checks beside it; :func:`plot` draws the shares and the chain's steps (matplotlib,
-imported when called).
+and the checks beside it, and the "port vs engine" line (:func:`port_vs_engine_line`);
+:func:`plot` draws the shares and the chain's steps (matplotlib, imported when called).
 """
 
 from __future__ import annotations
@@ -10,7 +10,40 @@ from __future__ import annotations
 import numpy as np
 
 from fogref.atomic import save_figure_atomic as save_figure
+from fogref.engines import ENGINES
 from fogref.study.budget.effects import RENDERED
+
+
+def port_vs_engine_line(model: str, measured: dict | None = None) -> str:
+    """The budget's "port vs engine" line for the fogref model ``model``: how far fogref's port is
+    from the real engine (:func:`fogref.engines.port.port_vs_engine`'s dict, ``measured``, as
+    ``fogref compare TRUTH --engine NAME`` writes it in ``engine.json``), in the budget's units
+    (radiance, linear RGB, RMSE over the engine's surface pixels).  It should be at the
+    quantisation level (float32, 8 bits); the line says so, or that it is not.  A model with no
+    engine that runs here (Unreal, Godot, Bevy, Unity, HDRP) gets "no runnable engine here".
+
+    >>> port_vs_engine_line("ue4")
+    'Port vs engine (ue4): no runnable engine here.'
+    >>> port_vs_engine_line("filament")
+    'Port vs engine (filament): not measured (`fogref compare TRUTH --engine filament` measures it).'
+    >>> port_vs_engine_line("filament", {"linear_rms": 2.5e-8, "linear_max": 8.3e-8, "canvas_max": 0,
+    ...                                  "at_quantisation": True})[27:]
+    'RMSE 2.5e-08 (max 8.3e-08) radiance, canvas max 0 code values: at the quantisation level, as expected.'
+    """
+    head = f"Port vs engine ({model}): "
+    if model not in ENGINES:
+        return head + "no runnable engine here."
+    if measured is None:
+        return head + f"not measured (`fogref compare TRUTH --engine {model}` measures it)."
+    verdict = (
+        "at the quantisation level, as expected"
+        if measured["at_quantisation"]
+        else "ABOVE the quantisation level, where it should be at it"
+    )
+    return (
+        head + f"RMSE {measured['linear_rms']:.2g} (max {measured['linear_max']:.2g}) radiance, "
+        f"canvas max {measured['canvas_max']} code values: {verdict}."
+    )
 
 
 def _floor(s: dict) -> str:
@@ -65,7 +98,7 @@ def markdown(result: dict, title: str = "Error budget of Unreal's exponential he
         "",
     ]
     if result.get("shapley"):
-        lines += [shapley_markdown(result["shapley"]), ""]
+        lines += [shapley_markdown(result["shapley"]), "", port_vs_engine_line("ue4"), ""]
         if result.get("shapley_colours_in_lobe"):
             lines += [
                 shapley_markdown(
@@ -177,6 +210,8 @@ def shapley_markdown(sh: dict, title: str = "## Shapley budget (order-independen
             f"| [{r['effect']}] {r['label']} | {100 * r['share']:+.1f} % | "
             f"±{100 * r['share_noise']:.2g} % | {ns} |"
         )
+    if sh.get("port_vs_engine"):
+        lines += ["", sh["port_vs_engine"]]
     return "\n".join(lines)
 
 

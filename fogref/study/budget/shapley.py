@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from fogref.study.budget.effects import _CONFIG, EFFECTS, PHASE, STEPS, coalition_image
+from fogref.study.budget.effects import CONFIG_EFFECTS, EFFECTS, PHASE, STEPS, coalition_image
 
 #: Side of the square pixel blocks of the bootstrap [pixels].
 BOOTSTRAP_BLOCK = 16
@@ -117,7 +117,7 @@ def shapley_budget(
     "resamples", "coalitions": 2^k}``.
     """
     effects = list(effects)
-    fixed = tuple(k for k in _CONFIG if k not in effects)
+    fixed = tuple(k for k in CONFIG_EFFECTS if k not in effects)
     valid = np.asarray(valid, dtype=bool)
     ids = _block_ids(valid.shape, block)[valid]
     nb = int(ids.max()) + 1 if ids.size else 1

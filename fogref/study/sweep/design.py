@@ -22,7 +22,7 @@ import numpy as np
 from fogref._version import __version__
 from fogref.errors import FogrefError, ParameterError
 from fogref.render.cache import truth_path
-from fogref.render.inputs import file_sha256, inputs_digest, scene_inputs
+from fogref.scene.inputs import file_sha256, inputs_digest, scene_inputs
 from fogref.study.sweep.spec import MAX_CONFIGS, SweepSpec, as_str, design_size
 
 __all__ = ["build_configs", "design_points", "scene_input_files"]
@@ -30,7 +30,7 @@ __all__ = ["build_configs", "design_points", "scene_input_files"]
 
 def scene_input_files(scene_path, overrides: dict | None = None) -> list[Path]:
     """The files a scene loads (meshes, envmaps, textures, included XML), without the scene itself:
-    :func:`fogref.render.inputs.scene_inputs` with ``overrides`` applied.
+    :func:`fogref.scene.inputs.scene_inputs` with ``overrides`` applied.
 
     Raises FogrefError naming the scene element and the file when a loaded file does not exist.
     """
@@ -46,7 +46,7 @@ def _existing_inputs(scene_path, overrides: dict | None) -> list:
 
 
 def _scene_inputs_digest(scene_path, overrides: dict | None = None) -> str:
-    """SHA-256 over the scene XML and every file it loads (:func:`fogref.render.inputs.inputs_digest`):
+    """SHA-256 over the scene XML and every file it loads (:func:`fogref.scene.inputs.inputs_digest`):
     the one place the sweep's configuration id and truth folder learn a scene's inputs."""
     return inputs_digest(scene_path, overrides, inputs=_existing_inputs(scene_path, overrides))
 

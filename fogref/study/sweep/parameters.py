@@ -4,7 +4,7 @@ Each swept parameter's target (a scene ``$default`` or ``<model label>.<paramete
 values (a list, or a range with ``log`` and ``num``); then, across the file: one label per
 target, nothing both swept and fixed, the design's size (:func:`design_size`, before
 anything is built) and every value against the scenes' own checks
-(:func:`fogref.render.scene.describe_scene`).
+(:func:`fogref.render.load.describe_scene`).
 """
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 
 from fogref.errors import FogrefError, ParameterError, did_you_mean
-from fogref.render.scene import describe_scene
-from fogref.render.scene_defaults import declared
+from fogref.render.load import describe_scene
+from fogref.scene.defaults import declared
 from fogref.study.sweep.sections import model_param_name, model_value
-from fogref.study.sweep.values import as_str, boolean, err, integer, number, src_of
+from fogref.study.sweep.values import as_str, toml_bool, toml_error, toml_int, toml_num, toml_src
 
 _PARAMETER_KEYS = ("log", "num", "range", "scale", "target", "values")
 
@@ -30,13 +30,13 @@ def _spaced(lo, hi, num, log):
 
 def _parameter_target(path: Path, key: str, target, scene_names: set, models: dict) -> dict:
     """A scene ``$default`` every scene declares, or ``<model label>.<parameter>`` of a listed model."""
-    src = src_of(path, key)
+    src = toml_src(path, key)
     if not isinstance(target, str) or not target:
         raise ParameterError(src, "target", f"{target!r} is not a $default or '<model>.<parameter>' name")
     if "." in target:
         mlabel, mparam = target.split(".", 1)
         if mlabel not in models:
-            raise err(
+            raise toml_error(
                 path,
                 key,
                 f"'{target}': model label '{mlabel}' is not a [[models]] label; "
@@ -45,7 +45,7 @@ def _parameter_target(path: Path, key: str, target, scene_names: set, models: di
         model_param_name(mparam, models[mlabel]["fields"], src, models[mlabel]["name"])
         return {"kind": "model", "model": mlabel, "target": mparam}
     if target not in scene_names:
-        raise err(
+        raise toml_error(
             path,
             key,
             f"'{target}' is not a $default of every scene{did_you_mean(target, scene_names)}; "
@@ -61,7 +61,7 @@ def _distinct(path: Path, key: str, vals: list, what: str) -> None:
         k = as_str(v)
         if k in seen:
             raise ParameterError(
-                src_of(path, key),
+                toml_src(path, key),
                 what,
                 f"{v!r} is given twice ({vals!r}); "
                 "each value must be distinct (a repeated value repeats the same render)",
@@ -72,31 +72,31 @@ def _distinct(path: Path, key: str, vals: list, what: str) -> None:
 def _parameter_values(path: Path, key: str, spec: dict, design: dict) -> dict:
     """``values`` (a list of distinct values), or ``range`` [low, high] with ``log`` (and ``num`` points
     on a grid or list)."""
-    src = src_of(path, key)
+    src = toml_src(path, key)
     kind = design["kind"]
     if "values" in spec:
         vals = spec["values"]
         if not isinstance(vals, list) or not vals:
-            raise err(path, key, "values must be a non-empty list")
+            raise toml_error(path, key, "values must be a non-empty list")
         if any(isinstance(v, dict) for v in vals):
             raise ParameterError(src, "values", f"{vals!r}: each value must be a number, list or string")
         if kind != "list":  # a zipped list may repeat one parameter's value; its rows are checked later
             _distinct(path, key, vals, "values")
         return {"values": vals}
     if "range" not in spec:
-        raise err(path, key, "give 'values' (a list) or 'range' ([low, high])")
+        raise toml_error(path, key, "give 'values' (a list) or 'range' ([low, high])")
     r = spec["range"]
     if not (isinstance(r, list) and len(r) == 2):
-        raise err(path, key, f"range must be [low, high], got {r!r}")
-    lo, hi = (number(x, "range", src) for x in r)
-    log = boolean(spec.get("log", False), "log", src)
+        raise toml_error(path, key, f"range must be [low, high], got {r!r}")
+    lo, hi = (toml_num(x, "range", src) for x in r)
+    log = toml_bool(spec.get("log", False), "log", src)
     if not lo < hi or (log and lo <= 0):
         raise ParameterError(src, "range", f"[{lo}, {hi}] needs low < high (and low > 0 with log = true)")
     out = {"range": [lo, hi], "log": log}
     if kind in ("grid", "list"):
         if "num" not in spec:
-            raise err(path, key, f"a range in a '{kind}' design needs num = number of points")
-        num = integer(spec["num"], "num", src, lo=1, hi=design["max_configs"])
+            raise toml_error(path, key, f"a range in a '{kind}' design needs num = number of points")
+        num = toml_int(spec["num"], "num", src, lo=1, hi=design["max_configs"])
         out["values"] = _spaced(lo, hi, num, log)
     return out
 
@@ -104,24 +104,24 @@ def _parameter_values(path: Path, key: str, spec: dict, design: dict) -> dict:
 def _read_parameter(path: Path, label: str, spec, scene_names: set, models: dict, design: dict) -> dict:
     key = f"parameters.{label}"
     if not isinstance(spec, dict):
-        raise err(path, key, "must be a table with 'values' or 'range'")
+        raise toml_error(path, key, "must be a table with 'values' or 'range'")
     bad = set(spec) - set(_PARAMETER_KEYS)
     if bad:
-        raise err(
+        raise toml_error(
             path,
             key,
             f"unknown key(s) {sorted(bad)}{did_you_mean(sorted(bad)[0], _PARAMETER_KEYS)}; "
             f"allowed: {list(_PARAMETER_KEYS)}",
         )
     ps = _parameter_target(path, key, spec.get("target", label), scene_names, models)
-    src = src_of(path, key)
-    ps["scale"] = number(spec.get("scale", 1.0), "scale", src)
+    src = toml_src(path, key)
+    ps["scale"] = toml_num(spec.get("scale", 1.0), "scale", src)
     if ps["scale"] == 0:
         raise ParameterError(src, "scale", "0 maps every value to 0: must be a finite number other than 0")
     ps.update(_parameter_values(path, key, spec, design))
     if ps["scale"] != 1.0:
         for v in ps.get("values", []):
-            number(v, "values", src)
+            toml_num(v, "values", src)
     if ps["kind"] == "model":
         default = models[ps["model"]]["fields"].get(ps["target"])
         for v in ps.get("values", ps.get("range", [])):
@@ -154,7 +154,7 @@ def _check_targets(path: Path, params: dict, overrides: dict, models: dict) -> N
         t = p["target"] if p["kind"] == "scene" else f"{p['model']}.{p['target']}"
         if t in seen:
             raise ParameterError(
-                src_of(path, f"parameters.{label}"),
+                toml_src(path, f"parameters.{label}"),
                 "target",
                 f"'{t}' is also swept by [parameters.{seen[t]}]: two labels of one "
                 "parameter would record values the render never used; keep one",
@@ -162,13 +162,13 @@ def _check_targets(path: Path, params: dict, overrides: dict, models: dict) -> N
         seen[t] = label
         if p["kind"] == "scene" and p["target"] in overrides:
             raise ParameterError(
-                src_of(path, f"parameters.{label}"),
+                toml_src(path, f"parameters.{label}"),
                 "target",
                 f"'{t}' is swept here and fixed in [render].overrides; remove one",
             )
         if p["kind"] == "model" and p["target"] in models[p["model"]]["params"]:
             raise ParameterError(
-                src_of(path, f"parameters.{label}"),
+                toml_src(path, f"parameters.{label}"),
                 "target",
                 f"'{t}' is swept here and fixed in the [[models]] '{p['model']}' params; remove one",
             )
@@ -180,7 +180,7 @@ def _check_size(path: Path, design: dict, params: dict, scenes: list) -> int:
     if kind == "list" and params:
         lens = {len(p["values"]) for p in params.values()}
         if len(lens) > 1:
-            raise err(
+            raise toml_error(
                 path,
                 "design",
                 f"kind 'list' zips the parameters' values: their lengths differ ({sorted(lens)})",
@@ -189,7 +189,7 @@ def _check_size(path: Path, design: dict, params: dict, scenes: list) -> int:
     limit = design["max_configs"]
     if size > limit:
         raise ParameterError(
-            src_of(path, "design"),
+            toml_src(path, "design"),
             "size",
             f"the {kind} design has {size:.4g} configurations ({len(scenes)} scene(s)); "
             f"the limit is {limit} (raise it with [design] max_configs = N)",
@@ -206,13 +206,13 @@ def _check_size(path: Path, design: dict, params: dict, scenes: list) -> int:
 
 def _check_scene_values(path: Path, scenes: list, overrides: dict, params: dict) -> None:
     """Every fixed override, and every swept scene value (a range: its ends) on its own, against each scene's
-    own checks (:func:`fogref.render.scene.describe_scene`: the ``$default`` kinds, the resolution, the
+    own checks (:func:`fogref.render.load.describe_scene`: the ``$default`` kinds, the resolution, the
     medium's physical ranges), so a value that cannot render is refused here, naming the TOML key."""
     for scene in scenes:
         try:
             describe_scene(scene, overrides)
         except FogrefError as e:
-            raise err(path, "render", f"overrides: {str(e).splitlines()[0]}") from None
+            raise toml_error(path, "render", f"overrides: {str(e).splitlines()[0]}") from None
         for label, p in params.items():
             if p["kind"] != "scene":
                 continue
@@ -222,7 +222,7 @@ def _check_scene_values(path: Path, scenes: list, overrides: dict, params: dict)
                 try:
                     describe_scene(scene, {**overrides, p["target"]: as_str(value)})
                 except FogrefError as e:
-                    raise err(
+                    raise toml_error(
                         path, f"parameters.{label}", f"value {v!r} refused: {str(e).splitlines()[0]}"
                     ) from None
 
@@ -234,7 +234,7 @@ def read_parameters(
     (see :func:`load_sweep`)."""
     params = doc.get("parameters", {})
     if not isinstance(params, dict):
-        raise err(path, "parameters", "must be a table of [parameters.NAME] tables")
+        raise toml_error(path, "parameters", "must be a table of [parameters.NAME] tables")
     scene_names = set.intersection(*(set(declared(p)) for p in scenes)) if scenes else set()
     by_label = {m["label"]: m for m in models}
     out = {

@@ -23,6 +23,8 @@ import time
 import traceback
 from pathlib import Path
 
+from tqdm import tqdm
+
 from fogref import cluster
 from fogref import params as P
 from fogref.atomic import write_text_atomic
@@ -104,7 +106,6 @@ def _todo(configs: list[dict], cdir: Path, retry_failed: bool) -> list[dict]:
 def _run(client, todo, configs, spec, threads, cdir, progress) -> int:
     """Submit ``todo``, write each result as it arrives; returns the number of failures."""
     from dask.distributed import as_completed
-    from tqdm import tqdm
 
     failed = 0
     futures = {

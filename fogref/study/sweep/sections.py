@@ -18,7 +18,7 @@ from fogref.mapping.unreal_pathtracer import UEPathTracerSettings, settings_from
 from fogref.models.resolve import resolve_model
 from fogref.models.ue4 import UE4FogParams
 from fogref.render.render import PIXEL_FILTERS
-from fogref.study.sweep.values import as_str, boolean, err, integer, number, read_table, src_of
+from fogref.study.sweep.values import as_str, toml_bool, toml_error, toml_int, toml_num, toml_src, toml_table
 
 DESIGN_KINDS = ("grid", "list", "random", "lhs")
 #: The editor values (name -> default) of a ``ue_pathtracer`` sweep's one "model": the fields
@@ -44,19 +44,21 @@ def _resolve(base: Path, p: str) -> Path:
 def read_sweep(path: Path, doc: dict) -> dict:
     """``[sweep]``: name, scene paths (relative to the TOML file, else the working directory), out, cache."""
     base = path.parent
-    sw = read_table(path, doc, "sweep", ("name", "kind", "scenes", "out", "cache"))
+    sw = toml_table(path, doc, "sweep", ("name", "kind", "scenes", "out", "cache"))
     scenes = sw.get("scenes")
     if isinstance(scenes, str):
         scenes = [scenes]
     if not scenes or not all(isinstance(s, str) for s in scenes):
-        raise err(path, "sweep", "'scenes' must be a non-empty list of scene file paths")
+        raise toml_error(path, "sweep", "'scenes' must be a non-empty list of scene file paths")
     scene_paths = []
     for s in scenes:
         p = _resolve(base, s)
         if not p.is_file():
-            raise err(path, "sweep", f"scene '{s}' not found (relative to {base} or the working directory)")
+            raise toml_error(
+                path, "sweep", f"scene '{s}' not found (relative to {base} or the working directory)"
+            )
         if any(p.resolve() == q.resolve() for q in scene_paths):
-            raise ParameterError(src_of(path, "sweep"), "scenes", f"'{s}' is listed twice")
+            raise ParameterError(toml_src(path, "sweep"), "scenes", f"'{s}' is listed twice")
         scene_paths.append(p)
     return {
         **_name_and_out(path, sw),
@@ -69,9 +71,9 @@ def _name_and_out(path: Path, sw: dict) -> dict:
     """``[sweep]``'s name (default: the file's stem) and output folder (default: the file's)."""
     for k in ("out", "cache"):
         if k in sw:
-            P.path(sw[k], k, source=src_of(path, "sweep"))
+            P.path(sw[k], k, source=toml_src(path, "sweep"))
     if "name" in sw and not (isinstance(sw["name"], str) and sw["name"].strip()):
-        raise ParameterError(src_of(path, "sweep"), "name", f"{sw['name']!r} is not a non-empty string")
+        raise ParameterError(toml_src(path, "sweep"), "name", f"{sw['name']!r} is not a non-empty string")
     base = path.parent
     out = base / sw["out"] if "out" in sw and not Path(sw["out"]).is_absolute() else Path(sw.get("out", base))
     return {"name": str(sw.get("name", path.stem)), "out": out}
@@ -84,7 +86,7 @@ def ue_settings(path: Path, key: str, values: dict, value=None) -> None:
         settings_from(**values)
     except (FogrefError, TypeError, ValueError) as e:
         why = str(e).splitlines()[0]
-        raise err(path, key, why if value is None else f"value {value!r} refused: {why}") from None
+        raise toml_error(path, key, why if value is None else f"value {value!r} refused: {why}") from None
 
 
 def read_closed_form(path: Path, doc: dict) -> dict:
@@ -94,21 +96,23 @@ def read_closed_form(path: Path, doc: dict) -> dict:
     (``n_dirs``, ``ss_n_dirs`` in [1, 1e6]; ``distances``, ``ss_distances``: ``[start, stop, count]``
     of a geometric series [m], 0 < start <= stop, a whole count >= 1; ``ground`` [m] or absent),
     as the dict :func:`fogref.study.ue_pathtracer.closed_form_row` takes, under ``closed_form``."""
-    sw = read_table(path, doc, "sweep", ("name", "kind", "out", "threshold"))
-    thr = number(sw.get("threshold", 0.01), "threshold", src_of(path, "sweep"), lo=0.0, hi=1e3, lo_open=True)
-    fixed = dict(read_table(path, doc, "fixed", (*UE_PATHTRACER_FIELDS, "camera")))
+    sw = toml_table(path, doc, "sweep", ("name", "kind", "out", "threshold"))
+    thr = toml_num(
+        sw.get("threshold", 0.01), "threshold", toml_src(path, "sweep"), lo=0.0, hi=1e3, lo_open=True
+    )
+    fixed = dict(toml_table(path, doc, "fixed", (*UE_PATHTRACER_FIELDS, "camera")))
     fixed["camera"] = list(
-        P.vector(fixed.get("camera", [0.0, 2.0, 0.0]), "camera", source=src_of(path, "fixed"))
+        P.vector(fixed.get("camera", [0.0, 2.0, 0.0]), "camera", source=toml_src(path, "fixed"))
     )
     ue_settings(path, "fixed", {k: v for k, v in fixed.items() if k != "camera"})
-    sun = read_table(path, doc, "sun", ("direction",)).get("direction")
-    if sun is not None and not any(sun := list(P.vector(sun, "direction", source=src_of(path, "sun")))):
-        raise ParameterError(src_of(path, "sun"), "direction", "[0, 0, 0] has no direction")
-    vw = read_table(path, doc, "views", ("n_dirs", "distances", "ss_n_dirs", "ss_distances", "ground"))
-    vs = src_of(path, "views")
-    views = {"ground": None if vw.get("ground") is None else number(vw["ground"], "ground", vs)}
+    sun = toml_table(path, doc, "sun", ("direction",)).get("direction")
+    if sun is not None and not any(sun := list(P.vector(sun, "direction", source=toml_src(path, "sun")))):
+        raise ParameterError(toml_src(path, "sun"), "direction", "[0, 0, 0] has no direction")
+    vw = toml_table(path, doc, "views", ("n_dirs", "distances", "ss_n_dirs", "ss_distances", "ground"))
+    vs = toml_src(path, "views")
+    views = {"ground": None if vw.get("ground") is None else toml_num(vw["ground"], "ground", vs)}
     for k, n, d in (("", 400, [10.0, 2e4, 12]), ("ss_", 64, [30.0, 1e4, 6])):
-        views[k + "n_dirs"] = integer(vw.get(k + "n_dirs", n), k + "n_dirs", vs, lo=1, hi=1_000_000)
+        views[k + "n_dirs"] = toml_int(vw.get(k + "n_dirs", n), k + "n_dirs", vs, lo=1, hi=1_000_000)
         lo, hi, count = P.vector(vw.get(k + "distances", d), k + "distances", source=vs)
         if not (0 < lo <= hi and count == int(count) >= 1):
             raise ParameterError(
@@ -121,15 +125,15 @@ def read_closed_form(path: Path, doc: dict) -> dict:
 
 def read_render(path: Path, doc: dict) -> dict:
     """``[render]``: spp, seed, seed_policy, pixel_filter and the fixed ``$default`` overrides (as text)."""
-    rd = read_table(path, doc, "render", ("spp", "seed", "seed_policy", "overrides", "pixel_filter"))
-    src = src_of(path, "render")
-    spp = integer(rd.get("spp", 16), "spp", src, lo=1, hi=1 << 20)
-    seed = integer(rd.get("seed", 0), "seed", src, lo=0, hi=(1 << 31) - 1)
+    rd = toml_table(path, doc, "render", ("spp", "seed", "seed_policy", "overrides", "pixel_filter"))
+    src = toml_src(path, "render")
+    spp = toml_int(rd.get("spp", 16), "spp", src, lo=1, hi=1 << 20)
+    seed = toml_int(rd.get("seed", 0), "seed", src, lo=0, hi=(1 << 31) - 1)
     policy = P.choice(rd.get("seed_policy", "fixed"), "seed_policy", SEED_POLICIES, src)
     pixel_filter = P.choice(rd.get("pixel_filter", "centre"), "pixel_filter", PIXEL_FILTERS, src)
     overrides = rd.get("overrides", {})
     if not isinstance(overrides, dict):
-        raise err(path, "render", "overrides must be a table of $default = value")
+        raise toml_error(path, "render", "overrides must be a table of $default = value")
     for k, v in overrides.items():
         if isinstance(v, dict):
             raise ParameterError(src, f"overrides.{k}", f"{v!r} is not a value (a number, list or string)")
@@ -147,7 +151,7 @@ def _model_fields(path: Path, key: str, name: str) -> dict:
     try:
         cls = resolve_model(name)
     except FogrefError as e:
-        raise err(path, key, str(e)) from None
+        raise toml_error(path, key, str(e)) from None
     pc = getattr(cls, "Params", None)
     if not (isinstance(pc, type) and dataclasses.is_dataclass(pc)):
         return {}
@@ -157,9 +161,9 @@ def _model_fields(path: Path, key: str, name: str) -> dict:
 def model_value(v, name: str, src: str, default):
     """A model parameter's value: a number where the model's default is a number, else as given."""
     if isinstance(default, (int, float)) and not isinstance(default, bool):
-        return number(v, name, src)
+        return toml_num(v, name, src)
     if isinstance(default, bool):
-        return boolean(v, name, src)
+        return toml_bool(v, name, src)
     return v
 
 
@@ -178,23 +182,23 @@ def model_param_name(name: str, fields: dict, src: str, model: str) -> str:
 def _read_model(path: Path, i: int, m, labels: set) -> dict:
     key = f"models][{i}"
     if not isinstance(m, dict) or "name" not in m:
-        raise err(
+        raise toml_error(
             path, key, 'each [[models]] entry needs a \'name\' (a model: "ue4", "my_pkg.fog:MyFog", ...)'
         )
     bad = set(m) - set(_MODEL_KEYS)
     if bad:
-        raise err(path, key, f"unknown key(s) {sorted(bad)}; allowed: {list(_MODEL_KEYS)}")
+        raise toml_error(path, key, f"unknown key(s) {sorted(bad)}; allowed: {list(_MODEL_KEYS)}")
     if not isinstance(m["name"], str):
-        raise ParameterError(src_of(path, key), "name", f"{m['name']!r} is not a model name (a string)")
+        raise ParameterError(toml_src(path, key), "name", f"{m['name']!r} is not a model name (a string)")
     fields = _model_fields(path, key, m["name"])
     # "my_pkg.fog:MyFog" is labelled "MyFog" (a label has no '.')
     label = str(m.get("label", str(m["name"]).rpartition(":")[2]))
     if label in labels or "." in label:
-        raise err(path, key, f"model label '{label}' must be unique and contain no '.'")
+        raise toml_error(path, key, f"model label '{label}' must be unique and contain no '.'")
     params = m.get("params", {})
     if not isinstance(params, dict):
-        raise err(path, key, "params must be a table")
-    src = src_of(path, f"models] '{label}' [params")
+        raise toml_error(path, key, "params must be a table")
+    src = toml_src(path, f"models] '{label}' [params")
     params = {
         k: model_value(v, model_param_name(k, fields, src, m["name"]), src, fields.get(k))
         for k, v in params.items()
@@ -202,7 +206,7 @@ def _read_model(path: Path, i: int, m, labels: set) -> dict:
     return {
         "name": m["name"],
         "label": label,
-        "from_scene": boolean(m.get("from_scene", True), "from_scene", src_of(path, key)),
+        "from_scene": toml_bool(m.get("from_scene", True), "from_scene", toml_src(path, key)),
         "params": params,
         "fields": fields,
     }
@@ -212,7 +216,7 @@ def read_models(path: Path, doc: dict) -> list[dict]:
     """``[[models]]``: at least one; each name resolvable, each label unique, each parameter the model's."""
     models = doc.get("models", [])
     if not isinstance(models, list) or not models:
-        raise err(path, "models", "need at least one [[models]] entry with a 'name'")
+        raise toml_error(path, "models", "need at least one [[models]] entry with a 'name'")
     out: list[dict] = []
     for i, m in enumerate(models):
         out.append(_read_model(path, i, m, {x["label"] for x in out}))
@@ -221,35 +225,35 @@ def read_models(path: Path, doc: dict) -> list[dict]:
 
 def read_design(path: Path, doc: dict) -> dict:
     """``[design]``: kind (grid, list, random, lhs), n (random and lhs), seed, max_configs."""
-    dz = read_table(path, doc, "design", ("kind", "n", "seed", "max_configs"))
-    src = src_of(path, "design")
+    dz = toml_table(path, doc, "design", ("kind", "n", "seed", "max_configs"))
+    src = toml_src(path, "design")
     kind = P.choice(dz.get("kind", "grid"), "kind", DESIGN_KINDS, src)
-    limit = integer(dz.get("max_configs", MAX_CONFIGS), "max_configs", src, lo=1)
+    limit = toml_int(dz.get("max_configs", MAX_CONFIGS), "max_configs", src, lo=1)
     n = dz.get("n")
     if kind in ("random", "lhs"):
         if n is None:
             raise ParameterError(
                 src, "n", f"kind '{kind}' needs n = the number of configurations, in [1, {limit}]"
             )
-        n = integer(n, "n", src, lo=1, hi=limit)
+        n = toml_int(n, "n", src, lo=1, hi=limit)
     return {
         "kind": kind,
         "n": n,
-        "seed": integer(dz.get("seed", 0), "seed", src, lo=0, hi=(1 << 32) - 1),
+        "seed": toml_int(dz.get("seed", 0), "seed", src, lo=0, hi=(1 << 32) - 1),
         "max_configs": limit,
     }
 
 
 def read_execution(path: Path, doc: dict) -> dict:
     """``[execution]``: Dask retries of a failing configuration."""
-    retries = read_table(path, doc, "execution", ("retries",)).get("retries", 1)
-    return {"retries": integer(retries, "retries", src_of(path, "execution"), lo=0, hi=100)}
+    retries = toml_table(path, doc, "execution", ("retries",)).get("retries", 1)
+    return {"retries": toml_int(retries, "retries", toml_src(path, "execution"), lo=0, hi=100)}
 
 
 def read_outputs(path: Path, doc: dict, out: Path) -> dict:
     """``[outputs]``: table name (inside the output folder), plots, plotted metrics, Unreal budget columns."""
-    ou = read_table(path, doc, "outputs", ("table", "plots", "plot_metrics", "budget"))
-    src = src_of(path, "outputs")
+    ou = toml_table(path, doc, "outputs", ("table", "plots", "plot_metrics", "budget"))
+    src = toml_src(path, "outputs")
     table = ou.get("table", "results")
     if not isinstance(table, str) or not table.strip():
         raise ParameterError(src, "table", f"{table!r} is not a file name")
@@ -267,7 +271,7 @@ def read_outputs(path: Path, doc: dict, out: Path) -> dict:
         raise ParameterError(src, "plot_metrics", f"{metrics!r} is not a list of metric names")
     return {
         "table": table,
-        "plots": boolean(ou.get("plots", True), "plots", src),
+        "plots": toml_bool(ou.get("plots", True), "plots", src),
         "plot_metrics": metrics,
-        "budget": boolean(ou.get("budget", False), "budget", src),
+        "budget": toml_bool(ou.get("budget", False), "budget", src),
     }

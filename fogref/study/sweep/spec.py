@@ -30,7 +30,7 @@ from fogref.study.sweep.sections import (
     read_sweep,
     ue_settings,
 )
-from fogref.study.sweep.values import as_str, err, src_of
+from fogref.study.sweep.values import as_str, toml_error, toml_src
 
 try:
     import tomllib  # Python >= 3.11
@@ -98,11 +98,11 @@ def _read_toml(path: Path) -> tuple[dict, str]:
     except tomllib.TOMLDecodeError as e:
         raise FogrefError(f"{path}: not valid TOML ({e})") from None
     sw = doc["sweep"] if isinstance(doc.get("sweep"), dict) else {}
-    kind = P.choice(sw.get("kind", "render"), "kind", tuple(_TOP_KEYS), src_of(path, "sweep"))
+    kind = P.choice(sw.get("kind", "render"), "kind", tuple(_TOP_KEYS), toml_src(path, "sweep"))
     allowed = _TOP_KEYS[kind]
     if set(doc) - allowed:
         bad = sorted(set(doc) - allowed)
-        raise err(path, None, f"unknown table(s) {bad} for kind '{kind}'; allowed: {sorted(allowed)}")
+        raise toml_error(path, None, f"unknown table(s) {bad} for kind '{kind}'; allowed: {sorted(allowed)}")
     return doc, kind
 
 

@@ -25,12 +25,12 @@ from fogref.gbuffer import load_truth
 from fogref.mapping import PhysicalScene, fit_unreal
 from fogref.mapping.build import build_model
 from fogref.render.cache import render_cached
-from fogref.render.render import file_sha256
-from fogref.render.scene_defaults import overrides_used_by
 from fogref.render.variant import set_variant
+from fogref.scene.defaults import overrides_used_by
+from fogref.scene.edit import sunless_scene
+from fogref.scene.inputs import file_sha256
 from fogref.study import budget as B
 from fogref.study.ue_pathtracer import closed_form_row
-from fogref.study.unreal import sunless_scene
 
 __all__ = ["run_config"]
 

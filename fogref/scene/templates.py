@@ -29,8 +29,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fogref.errors import ParameterError
-from fogref.mapping.fog_input import SOURCE, _fmt
-from fogref.render.scene_defaults import parse_scene
+from fogref.scene.defaults import parse_scene
+from fogref.scene.vocabulary import SOURCE, float_text
 from fogref.shipped_scenes import SCENES_DIR
 
 __all__ = [
@@ -194,10 +194,10 @@ def ground(parent, size: float, bsdf_id: str, shape_id: str = "ground"):
     for k, (cx, cz, hx, hz) in enumerate(ground_tiles(size)):
         s = sub(parent, "shape", type="rectangle", id=shape_id if k == 0 else f"{shape_id}_{k}")
         tw = sub(s, "transform", name="to_world")
-        sub(tw, "scale", x=_fmt(hx), y=_fmt(hz), z="1")
+        sub(tw, "scale", x=float_text(hx), y=float_text(hz), z="1")
         sub(tw, "rotate", x="1", angle="-90")
         if cx or cz:
-            sub(tw, "translate", x=_fmt(cx), y="0", z=_fmt(cz))
+            sub(tw, "translate", x=float_text(cx), y="0", z=float_text(cz))
         sub(s, "ref", id=bsdf_id)
 
 
@@ -234,7 +234,7 @@ def add_valley(root, ground_size: float | None = None):
         if started and el.tag in ("bsdf", "shape", ET.Comment):
             root.append(copy.deepcopy(el))
     if ground_size is not None:
-        _valley_ground(root).set("value", _fmt(ground_size))
+        _valley_ground(root).set("value", float_text(ground_size))
 
 
 def add_mesh(
@@ -249,7 +249,8 @@ def add_mesh(
         filename = str(geo.mesh.resolve())
     root.append(
         ET.Comment(
-            f" mesh: {geo.mesh.name}, {_fmt(scale)} m per file unit, {up}-up in the file (fogref is y-up) "
+            f" mesh: {geo.mesh.name}, {float_text(scale)} m per file unit, "
+            f"{up}-up in the file (fogref is y-up) "
         )
     )
     s = sub(root, "shape", type=geo.plugin, id="mesh")
@@ -257,11 +258,17 @@ def add_mesh(
     if face_normals:
         sub(s, "boolean", name="face_normals", value="true")
     tw = sub(s, "transform", name="to_world")
-    sub(tw, "scale", value=_fmt(scale))
+    sub(tw, "scale", value=float_text(scale))
     if up == "z":  # (x, y, z) -> (x, z, -y): the file's +z becomes +y, a proper rotation
         sub(tw, "rotate", x="1", angle="-90")
     elif up == "unreal":  # (x, y, z) -> (x, z, y): the inverse of world_to_unreal's swap (a mirror)
         sub(tw, "matrix", value="1 0 0 0 0 0 1 0 0 1 0 0 0 0 0 1")
     if any(translate):
-        sub(tw, "translate", x=_fmt(translate[0]), y=_fmt(translate[1]), z=_fmt(translate[2]))
+        sub(
+            tw,
+            "translate",
+            x=float_text(translate[0]),
+            y=float_text(translate[1]),
+            z=float_text(translate[2]),
+        )
     sub(s, "ref", id="surface")

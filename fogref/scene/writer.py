@@ -4,17 +4,19 @@ It turns what a user has, fog parameters in physical units **or** Unreal's edito
 values, a sun angle, a sky colour, a camera and a level's geometry, into a Mitsuba 3
 XML scene that ``fogref render`` takes as is, built like the shipped ones
 (``scenes/*.xml``) and declaring the same ``$default`` vocabulary
-(:data:`fogref.render.scene_defaults.VOCABULARY`), so ``fogref render --set
+(:data:`fogref.scene.vocabulary.VOCABULARY`), so ``fogref render --set
 NAME=VALUE`` changes any fog, sun, sky or camera value.
 
-The concepts live beside it: the physical fog and the declared range of each of its
-values in :mod:`fogref.mapping.fog_input` (checked through :mod:`fogref.params`; the
-scene vocabulary's ranges, :data:`fogref.render.scene_defaults.RANGES`, are the same
-declarations that ``fogref render --set`` is checked against), the exact Unreal ->
-physical mapping in :mod:`fogref.mapping.unreal_editor`, the geometry templates (``"plane"``,
-``"valley"`` read from ``scenes/valley.xml``, ``.obj``/``.ply`` meshes) in
-:mod:`fogref.render.scene_templates` and the XML in :mod:`fogref.render.scene_xml`.
-This module checks the sun, sky, camera and geometry arguments and writes the file.
+The concepts live beside it: the declared range of each value in
+:mod:`fogref.scene.vocabulary` (checked through :mod:`fogref.params`; the same
+declarations that ``fogref render --set`` is checked against), the physical fog and the exact
+Unreal -> physical mapping in :mod:`fogref.scene.fog_input`, the geometry templates
+(``"plane"``, ``"valley"`` read from ``scenes/valley.xml``, ``.obj``/``.ply`` meshes) in
+:mod:`fogref.scene.templates`.  This module builds the XML: every fog, sun, sky and camera
+value a ``<default>``, the ``fogpath`` integrator, a ``heightfog`` medium inside the sensor, a
+box reconstruction filter, a ``directional`` sun oriented by ``$sun_elevation`` and
+``$sun_azimuth`` (:mod:`fogref.scene.sun`) and a ``constant`` sky, with
+:mod:`xml.etree.ElementTree`, after checking the sun, sky, camera and geometry arguments.
 Units: fogref is **y-up, metres**; Unreal is z-up, centimetres.  Writing needs no Mitsuba.
 """
 
@@ -22,55 +24,57 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
+import xml.etree.ElementTree as ET
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from fogref import params
+from fogref._version import __version__
+from fogref.atomic import atomic_write
 from fogref.errors import FogrefError, ParameterError
-from fogref.mapping.fog_input import (
-    PHYSICAL,
-    SCATTERING,
-    SOURCE,
-    Range,
-    _check,
-    _fmt,
-    _rgb3,
-    _text,
-    fog_from_physical,
-)
-from fogref.mapping.unreal_editor import UNREAL_IGNORED, UNREAL_IGNORED_RANGES, UNREAL_MAPPED, fog_from_unreal
-from fogref.mapping.unreal_editor import flat_unreal as _flat_unreal
 from fogref.media.params import medium_from_params
 from fogref.media.phase import TabulatedPhase
-from fogref.render.scene_defaults import RANGES, check_camera
-from fogref.render.scene_templates import (
+from fogref.scene.defaults import check_camera
+from fogref.scene.fog_input import (
+    flat_unreal,
+    fog_from_physical,
+    fog_from_unreal,
+)
+from fogref.scene.sun import sun_direction_from_angles
+from fogref.scene.templates import (
     GROUND_SIZE,
-    MESH_PLUGINS,
     MESH_UP,
-    TEMPLATES,
     VALLEY_SCENE,
+    Geometry,
+    add_mesh,
+    add_valley,
+    diffuse,
+    ground,
     mesh_files,
     mesh_has_normals,
+    sub,
 )
-from fogref.render.scene_templates import geometry as resolve_geometry
-from fogref.render.scene_xml import DEFAULT_REFLECTANCE, scene_defaults, scene_element, write_xml
-from fogref.render.sun import sun_direction_from_angles
+from fogref.scene.templates import geometry as resolve_geometry
+from fogref.scene.vocabulary import (
+    RANGES,
+    SOURCE,
+    Range,
+    check_option,
+    float_text,
+    rgb3,
+    value_text,
+    vector_text,
+)
 
 __all__ = [
-    "MESH_PLUGINS",
-    "MESH_UP",
-    "PHYSICAL",
-    "RANGES",
-    "SCATTERING",
-    "TEMPLATES",
-    "UNREAL_IGNORED",
-    "UNREAL_IGNORED_RANGES",
-    "UNREAL_MAPPED",
+    "FOG_DEFAULTS",
     "SceneWriteResult",
-    "fog_from_physical",
-    "fog_from_unreal",
+    "comment_text",
+    "scene_defaults",
+    "scene_element",
     "write_scene",
+    "write_xml",
 ]
 
 #: The writer's own values (not scene $defaults); the vocabulary's are RANGES.
@@ -96,9 +100,212 @@ class SceneWriteResult:
     notes: list = field(default_factory=list)
 
 
+#: The fog's ``$default``s in the order they are declared, and the ``heightfog`` tag of each
+#: (None: "rgb" for three values, "float" for one).
+FOG_DEFAULTS = (
+    ("sigma_t", None),
+    ("albedo", None),
+    ("g", "float"),
+    ("density", "float"),
+    ("falloff", "float"),
+    ("fog_height", "float"),
+    ("density2", "float"),
+    ("falloff2", "float"),
+    ("height2", "float"),
+    ("bounds_min", "point"),
+    ("bounds_max", "point"),
+)
+#: The default reflectance of the plane and mesh templates' surfaces (the ``surface`` group's
+#: ``$reflectance``; ``fogref scene --ground-reflectance``, ``--mesh-reflectance``).
+DEFAULT_REFLECTANCE = 0.2
+SURFACE_REFLECTANCE = vector_text(rgb3(DEFAULT_REFLECTANCE))
+
+
+def scene_defaults(
+    fog: dict,
+    camera: dict,
+    max_depth: int,
+    sun_elevation: float,
+    sun_azimuth: float,
+    sun_irradiance,
+    sky_radiance,
+    geometry_kind: str,
+    reflectance=None,
+) -> dict[str, str]:
+    """The ``<default>`` values (XML text) of a written scene, in declaration order.
+
+    ``fog``: :func:`fogref.scene.fog_input.fog_from_physical`'s output; ``camera``:
+    ``res``, ``resy``, ``camera_origin``, ``camera_target``, ``fov``; ``sky_radiance``
+    None declares no sky; the plane and mesh templates add ``reflectance`` (grey or RGB in
+    [0, 1]; None: :data:`SURFACE_REFLECTANCE`): the plane's ground, or the mesh's surfaces.
+    """
+    d: dict[str, str] = {
+        "res": str(camera["res"]),
+        "resy": str(camera["resy"]),
+        "max_depth": str(int(max_depth)),
+    }
+    for k, _ in FOG_DEFAULTS:
+        if k in fog:
+            d[k] = value_text(fog[k])
+    d.update(
+        sun_elevation=float_text(sun_elevation),
+        sun_azimuth=float_text(sun_azimuth),
+        sun_irradiance=vector_text(rgb3(sun_irradiance)),
+    )
+    if sky_radiance is not None:
+        d["sky_radiance"] = vector_text(rgb3(sky_radiance))
+    d.update(
+        camera_origin=vector_text(camera["camera_origin"]),
+        camera_target=vector_text(camera["camera_target"]),
+        fov=float_text(camera["fov"]),
+    )
+    if geometry_kind != "valley":
+        d["reflectance"] = SURFACE_REFLECTANCE if reflectance is None else vector_text(rgb3(reflectance))
+    return d
+
+
+def comment_text(text: str) -> str:
+    """XML comments may not hold "--".
+
+    >>> comment_text(" give --force ")
+    ' give - -force '
+    """
+    while "--" in text:
+        text = text.replace("--", "- -")
+    return text
+
+
+def _header(root, geo: Geometry, fog_source: str, notes) -> None:
+    geo_text = geo.kind if geo.kind != "mesh" else f"mesh {geo.mesh.name}"
+    root.append(
+        ET.Comment(
+            comment_text(
+                f" Written by fogref scene (fogref {__version__}). Geometry: {geo_text}. Fog from "
+                f"{fog_source}. Units: metres, y up; the sun's elevation is above the horizon and its "
+                "azimuth is from +z toward +x [deg] (fogref/scene/sun.py). Every default below can be "
+                "changed by the set option of fogref render (NAME=VALUE). "
+            )
+        )
+    )
+    for n in notes:
+        root.append(ET.Comment(comment_text(f" note: {n} ")))
+
+
+def _sensor(root, fog: dict) -> None:
+    sensor = sub(root, "sensor", type="perspective")
+    sub(sensor, "float", name="fov", value="$fov")
+    sub(sensor, "string", name="fov_axis", value="x")
+    tw = sub(sensor, "transform", name="to_world")
+    sub(tw, "lookat", origin="$camera_origin", target="$camera_target", up="0, 1, 0")
+    film = sub(sensor, "film", type="hdrfilm")
+    sub(film, "integer", name="width", value="$res")
+    sub(film, "integer", name="height", value="$resy")
+    sub(film, "rfilter", type="box")
+    med = sub(sensor, "medium", type="heightfog", name="medium")
+    sub(med, "string", name="profile", value="exponential")
+    for k, tag in FOG_DEFAULTS:
+        if k not in fog:
+            continue
+        if tag is None:  # grey: one number (like valley.xml); RGB: three (like above_fog.xml)
+            tag = "rgb" if isinstance(fog[k], list) else "float"
+        sub(med, tag, name="height" if k == "fog_height" else k, value=f"${k}")
+    if "phase" in fog:  # a tabulated phase (fogtabphase): written as is, not a $default
+        phase = fog["phase"]
+        med.append(ET.Comment(f" the phase function: {phase['label']} (g above is its mean cosine) "))
+        el = sub(med, "phase", type=phase["type"])
+        for name in ("label", "cosines", "values"):
+            sub(el, "string", name=name, value=phase[name])
+
+
+def _lights(root, sky) -> None:
+    """The sun and the sky: ``sky`` True (a ``constant`` sky), False (none) or ``"sunsky"``
+    (Mitsuba's sunsky, turned y-up, with its own sun along ``$sun_elevation``, ``$sun_azimuth``:
+    fogref/render/sunsky.py)."""
+    if sky == "sunsky":
+        root.append(
+            ET.Comment(
+                " Mitsuba's physical sun and sky. fogref sets its sun_direction from sun_elevation and "
+                "sun_azimuth and splits it into a sky (sun_scale 0) and a directional sun with the disk's "
+                "irradiance (fogref/render/sunsky.py); sun_irradiance is not used "
+            )
+        )
+        el = sub(root, "emitter", type="sunsky", id="sky")
+        sub(el, "float", name="turbidity", value="$turbidity")
+        tw = sub(el, "transform", name="to_world")
+        tw.append(ET.Comment(" sunsky is z-up, fogref y-up "))
+        sub(tw, "rotate", x="1", angle="-90")
+        return
+    sun_el = sub(root, "emitter", type="directional", id="sun")
+    tw = sub(sun_el, "transform", name="to_world")
+    tw.append(ET.Comment(" light travels along -w(sun_elevation, sun_azimuth): fogref/scene/sun.py "))
+    sub(tw, "rotate", x="1", angle="$sun_elevation")
+    sub(tw, "rotate", y="1", angle="$sun_azimuth")
+    sub(tw, "rotate", y="1", angle="180")
+    sub(sun_el, "rgb", name="irradiance", value="$sun_irradiance")
+    if sky:
+        sky_el = sub(root, "emitter", type="constant", id="sky")
+        sub(sky_el, "rgb", name="radiance", value="$sky_radiance")
+    else:
+        root.append(ET.Comment(" no sky: the sky is black "))
+
+
+def scene_element(
+    defaults: dict[str, str],
+    fog: dict,
+    geo: Geometry,
+    *,
+    fog_source: str,
+    notes=(),
+    ground_size: float | None,
+    with_ground: bool,
+    out_dir: Path,
+    mesh_scale: float = 1.0,
+    mesh_up: str = "y",
+    mesh_translate=(0.0, 0.0, 0.0),
+    ground_reflectance=None,
+    face_normals: bool = False,
+) -> ET.Element:
+    """The ``<scene>`` element: a header comment (``fog_source``, ``notes``), the ``defaults``,
+    integrator, sensor with the fog, sun, sky (when ``defaults`` has ``sky_radiance``) and
+    geometry (``out_dir``: the scene's folder, which a mesh's file name is relative to).
+
+    The surfaces share ``$reflectance``; with a mesh, a ``ground_reflectance`` (grey or RGB)
+    gives the ground its own diffuse BSDF with that value written as is.  ``face_normals``:
+    the mesh is shaded with its faces' normals."""
+    root = ET.Element("scene", version="3.0.0")
+    _header(root, geo, fog_source, notes)
+    for k, v in defaults.items():
+        sub(root, "default", name=k, value=v)
+    integ = sub(root, "integrator", type="fogpath")
+    sub(integ, "integer", name="max_depth", value="$max_depth")
+    if "sun_angular_diameter" in defaults:
+        sub(integ, "float", name="sun_angular_diameter", value="$sun_angular_diameter")
+    _sensor(root, fog)
+    _lights(root, "sunsky" if "turbidity" in defaults else "sky_radiance" in defaults)
+    if geo.kind == "valley":
+        add_valley(root, ground_size)
+    else:
+        diffuse(root, "surface", "$reflectance", twosided=geo.kind == "mesh")
+        own = geo.kind == "mesh" and ground_reflectance is not None
+        if own:
+            diffuse(root, "ground_surface", vector_text(rgb3(ground_reflectance)))
+        if with_ground:
+            ground(root, ground_size, "ground_surface" if own else "surface")
+        if geo.kind == "mesh":
+            add_mesh(root, geo, out_dir, mesh_scale, mesh_up, mesh_translate, face_normals=face_normals)
+    ET.indent(root, space="    ")
+    return root
+
+
+def write_xml(out: Path, root: ET.Element) -> None:
+    """Write ``root`` to ``out`` atomically, UTF-8 with an XML declaration."""
+    tree = ET.ElementTree(root)
+    atomic_write(out, lambda tmp: tree.write(tmp, encoding="utf-8", xml_declaration=True))
+
+
 def _camera(origin, target, fov, res, resy) -> dict:
     out = {
-        name: _check(v, name, RANGES[name])
+        name: check_option(v, name, RANGES[name])
         for name, v in (
             ("camera_origin", origin),
             ("camera_target", target),
@@ -175,7 +382,7 @@ def write_scene(
         Henyey-Greenstein asymmetry in [-0.999, 0.999] (default 0.6).
     sun_elevation, sun_azimuth : float
         The sun [deg]: elevation above the horizon in [-90, 90], azimuth from +z toward +x
-        (:func:`fogref.render.sun.sun_direction_from_angles`).
+        (:func:`fogref.scene.sun.sun_direction_from_angles`).
     sun_irradiance : float or 3 floats
         RGB sun irradiance on a plane facing the sun, >= 0 (relative linear units).
     sky_radiance : float, 3 floats or None
@@ -279,21 +486,21 @@ def write_scene(
         medium_from_params(fogp, SOURCE)  # g against the phase's mean cosine
     if unreal is not None:
         notes.append(
-            f"Unreal has no albedo or phase function: the fog uses albedo {_text(fogp['albedo'])} "
-            f"and Henyey-Greenstein g {_fmt(fogp['g'])} (the albedo and g parameters)"
+            f"Unreal has no albedo or phase function: the fog uses albedo {value_text(fogp['albedo'])} "
+            f"and Henyey-Greenstein g {float_text(fogp['g'])} (the albedo and g parameters)"
         )
-    el = _check(sun_elevation, "sun_elevation", RANGES["sun_elevation"])
-    az = _check(sun_azimuth, "sun_azimuth", RANGES["sun_azimuth"])
+    el = check_option(sun_elevation, "sun_elevation", RANGES["sun_elevation"])
+    az = check_option(sun_azimuth, "sun_azimuth", RANGES["sun_azimuth"])
     sun_direction_from_angles(el, az)
-    sun = _check(sun_irradiance, "sun_irradiance", RANGES["sun_irradiance"])
+    sun = check_option(sun_irradiance, "sun_irradiance", RANGES["sun_irradiance"])
     sky_kind = sky
-    sky = None if sky_radiance is None else _check(sky_radiance, "sky_radiance", RANGES["sky_radiance"])
+    sky = None if sky_radiance is None else check_option(sky_radiance, "sky_radiance", RANGES["sky_radiance"])
     cam = _camera(camera_origin, camera_target, fov, res, resy)
-    depth = _check(max_depth, "max_depth", RANGES["max_depth"])
+    depth = check_option(max_depth, "max_depth", RANGES["max_depth"])
     geo = resolve_geometry(geometry)
-    scale = _check(mesh_scale, "mesh_scale", MESH_SCALE)
+    scale = check_option(mesh_scale, "mesh_scale", MESH_SCALE)
     params.choice(mesh_up, "mesh_up (--mesh-up)", MESH_UP, SOURCE)
-    shift = _check(mesh_translate, "mesh_translate", MESH_TRANSLATE)
+    shift = check_option(mesh_translate, "mesh_translate", MESH_TRANSLATE)
     if geo.kind != "mesh":
         given_args = (
             ("mesh_scale", scale != 1.0),
@@ -311,7 +518,7 @@ def write_scene(
     gsize = (
         GROUND_SIZE.get(geo.kind)
         if ground_size is None
-        else _check(ground_size, "ground_size", GROUND_SIZE_RANGE)
+        else check_option(ground_size, "ground_size", GROUND_SIZE_RANGE)
     )
     with_ground = (geo.kind != "mesh") if ground is None else bool(ground)
     if geo.kind == "valley" and not with_ground:
@@ -326,10 +533,12 @@ def write_scene(
     g_refl = (
         None
         if ground_reflectance is None
-        else _check(ground_reflectance, "ground_reflectance", GROUND_REFLECTANCE)
+        else check_option(ground_reflectance, "ground_reflectance", GROUND_REFLECTANCE)
     )
     m_refl = (
-        None if mesh_reflectance is None else _check(mesh_reflectance, "mesh_reflectance", MESH_REFLECTANCE)
+        None
+        if mesh_reflectance is None
+        else check_option(mesh_reflectance, "mesh_reflectance", MESH_REFLECTANCE)
     )
     inputs = mesh_files(geo.mesh) if geo.kind == "mesh" else [VALLEY_SCENE] if geo.kind == "valley" else []
     _check_inputs(out, inputs)
@@ -348,11 +557,11 @@ def write_scene(
     own_ground = (
         geo.kind == "mesh"
         and g_refl is not None
-        and (_rgb3(g_refl) != _rgb3(DEFAULT_REFLECTANCE if m_refl is None else m_refl))
+        and (rgb3(g_refl) != rgb3(DEFAULT_REFLECTANCE if m_refl is None else m_refl))
     )
     if own_ground:
         notes.append(
-            f"the ground's reflectance {_text(g_refl)} is written in its BSDF; "
+            f"the ground's reflectance {value_text(g_refl)} is written in its BSDF; "
             "the reflectance default is the mesh's"
         )
 
@@ -361,19 +570,19 @@ def write_scene(
         sky = None
     defaults = scene_defaults(fogp, cam, depth, el, az, sun, sky, geo.kind, reflectance=refl)
     if sky_kind == "sunsky":
-        defaults["turbidity"] = _fmt(_check(turbidity, "turbidity", RANGES["turbidity"]))
+        defaults["turbidity"] = float_text(check_option(turbidity, "turbidity", RANGES["turbidity"]))
         if el < 0:
             notes.append(
-                f"the sun is {_fmt(-el)} deg below the horizon: Mitsuba's sunsky then gives no light "
+                f"the sun is {float_text(-el)} deg below the horizon: Mitsuba's sunsky then gives no light "
                 "(no sun, a black sky): the truth is black"
             )
         if sun_angular_diameter is None:
             sun_angular_diameter = 0.0
     if sun_angular_diameter is not None:
-        size = _check(sun_angular_diameter, "sun_angular_diameter", RANGES["sun_angular_diameter"])
-        defaults["sun_angular_diameter"] = _fmt(size)
+        size = check_option(sun_angular_diameter, "sun_angular_diameter", RANGES["sun_angular_diameter"])
+        defaults["sun_angular_diameter"] = float_text(size)
     fog_source = (
-        "Unreal editor values " + ", ".join(f"{k}={v}" for k, v in _flat_unreal(unreal).items())
+        "Unreal editor values " + ", ".join(f"{k}={v}" for k, v in flat_unreal(unreal).items())
         if unreal is not None
         else "physical units"
     )

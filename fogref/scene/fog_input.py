@@ -1,6 +1,10 @@
-"""Unreal's Exponential Height Fog editor values -> the physical ``heightfog`` of a fogref scene.
+"""The fog a user gives ``fogref scene``: in physical units, or as Unreal's Exponential Height Fog
+editor values, as the physical ``heightfog`` of a fogref scene.
 
-:func:`fog_from_unreal` maps FogDensity, FogHeightFalloff, FogHeight and
+:func:`fog_from_physical` validates extinction, falloff, heights, a second layer
+and box bounds (y-up, metres) plus albedo and the Henyey-Greenstein ``g`` against
+:data:`fogref.scene.vocabulary.PHYSICAL` and ``SCATTERING``, and returns the ``heightfog`` XML
+parameters.  :func:`fog_from_unreal` maps FogDensity, FogHeightFalloff, FogHeight and
 SecondFogData exactly (:func:`fogref.models.ue4.ue4_to_medium`: Unreal is z-up,
 centimetres; ``sigma_t = 100 (ln 2)^2 FogDensity/1000`` per metre at
 ``FogHeight/100`` m, ``falloff = 100 ln 2 FogHeightFalloff/1000`` per metre; see
@@ -16,7 +20,7 @@ import difflib
 from typing import Any
 
 from fogref.errors import ParameterError
-from fogref.mapping.fog_input import PHYSICAL, SOURCE, Range, _check, _fmt, _vec, fog_from_physical
+from fogref.media.params import medium_from_params
 from fogref.models.ue4 import (
     CM_PER_M,
     SecondFogData,
@@ -25,8 +29,24 @@ from fogref.models.ue4 import (
     ue4_to_medium,
     unreal_to_sigma,
 )
+from fogref.scene.vocabulary import (
+    PHYSICAL,
+    SCATTERING,
+    SOURCE,
+    Range,
+    check_option,
+    float_text,
+    vector_text,
+)
 
-__all__ = ["UNREAL_IGNORED", "UNREAL_IGNORED_RANGES", "UNREAL_MAPPED", "flat_unreal", "fog_from_unreal"]
+__all__ = [
+    "UNREAL_IGNORED",
+    "UNREAL_IGNORED_RANGES",
+    "UNREAL_MAPPED",
+    "flat_unreal",
+    "fog_from_physical",
+    "fog_from_unreal",
+]
 
 #: Unreal editor values that map exactly onto the physical fog: name -> command-line option.
 UNREAL_MAPPED = {
@@ -168,7 +188,7 @@ def fog_from_unreal(unreal: dict, *, albedo: Any = 0.9, g: float = 0.6) -> tuple
     for key, opt in UNREAL_MAPPED.items():
         lo, hi, unit, default = limits[key]
         raw = _unreal_value(unreal, key)
-        v[key] = _check(default if raw is None else raw, key, Range(opt, "number", lo, hi, unit))
+        v[key] = check_option(default if raw is None else raw, key, Range(opt, "number", lo, hi, unit))
     sfd = unreal.get("SecondFogData") or {}
     extra = sorted(set(sfd) - {"FogDensity", "FogHeightFalloff", "FogHeightOffset"})
     if extra:
@@ -181,8 +201,8 @@ def fog_from_unreal(unreal: dict, *, albedo: Any = 0.9, g: float = 0.6) -> tuple
     for key, (_, _, why) in UNREAL_IGNORED.items():
         if unreal.get(key) is None:
             continue
-        val = _check(unreal[key], key, UNREAL_IGNORED_RANGES[key])
-        shown = _vec(val) if isinstance(val, list) else _fmt(val)
+        val = check_option(unreal[key], key, UNREAL_IGNORED_RANGES[key])
+        shown = vector_text(val) if isinstance(val, list) else float_text(val)
         notes.append(f"Unreal {key} = {shown} is ignored: {why}")
     params = UE4FogParams(
         FogDensity=v["FogDensity"],
@@ -231,3 +251,95 @@ def flat_unreal(unreal: dict) -> dict:
         else:
             flat[k] = v
     return flat
+
+
+def fog_from_physical(fog: dict | None = None, *, albedo: Any = 0.9, g: float = 0.6) -> dict:
+    """The ``heightfog`` parameters of a fog given in physical units, validated.
+
+    Parameters
+    ----------
+    fog : dict, optional
+        ``sigma_t`` [1/m] (1 grey or 3 RGB values, 0..1e2; extinction at ``height``),
+        ``falloff`` [1/m] (0..1e3), ``height`` [m], ``density`` (relative, default 1),
+        an optional second layer ``density2`` (relative to ``sigma_t``; 0 = none),
+        ``falloff2`` [1/m], ``height2`` [m], and optional box bounds ``bounds_min``,
+        ``bounds_max`` (3 values each [m], both or none). Missing values take the
+        shipped valley's fog (Unreal's FogDensity 0.02, FogHeightFalloff 0.2 at 0 m).
+    albedo : float or 3 floats
+        Single-scattering albedo in [0, 1].
+    g : float
+        Henyey-Greenstein asymmetry in [-0.999, 0.999].
+
+    Returns
+    -------
+    dict
+        XML parameter name -> value (floats, lists of floats): ``sigma_t``, ``albedo``,
+        ``g``, ``density``, ``falloff``, ``fog_height``, ``density2``, ``falloff2``,
+        ``height2`` and, when given, ``bounds_min``, ``bounds_max``.
+
+    Raises
+    ------
+    fogref.errors.ParameterError
+        Naming the parameter, its command-line option and the allowed range.
+
+    Examples
+    --------
+    >>> p = fog_from_physical({"sigma_t": [0.001, 0.002, 0.003], "falloff": 0.05, "height": 10})
+    >>> p["sigma_t"], p["falloff"], p["fog_height"], p["density2"]
+    ([0.001, 0.002, 0.003], 0.05, 10.0, 0.0)
+    >>> fog_from_physical({"falloff": -1})  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    fogref.errors.ParameterError: fogref scene: parameter 'falloff (--falloff)': -1 is outside [0, 1000] 1/m
+    """
+    if fog is not None and not isinstance(fog, dict):
+        raise ParameterError(SOURCE, "fog", f"expected a dict of physical fog values, got {fog!r}")
+    fog = dict(fog or {})
+    unknown = sorted(set(fog) - set(PHYSICAL) - set(SCATTERING))
+    if unknown:
+        raise ParameterError(
+            SOURCE, unknown[0], f"not a physical fog parameter; known: {', '.join(PHYSICAL)}"
+        )
+    albedo = fog.pop("albedo", albedo)
+    g = fog.pop("g", g)
+    sigma0, falloff0 = unreal_to_sigma(0.02, 0.2)  # the shipped valley's fog
+    defaults = {
+        "sigma_t": sigma0,
+        "density": 1.0,
+        "falloff": falloff0,
+        "height": 0.0,
+        "density2": 0.0,
+        "falloff2": 0.002,
+        "height2": 100.0,
+    }
+    out = {}
+    for name, rng in PHYSICAL.items():
+        v = fog.get(name, defaults.get(name))
+        if v is not None:
+            out[name] = check_option(v, name, rng)
+    out["albedo"] = check_option(albedo, "albedo", SCATTERING["albedo"])
+    out["g"] = check_option(g, "g", SCATTERING["g"])
+    if ("bounds_min" in out) != ("bounds_max" in out):
+        missing = "bounds_max" if "bounds_min" in out else "bounds_min"
+        raise ParameterError(SOURCE, PHYSICAL[missing].label(missing), "give both bounds or none")
+    if "bounds_min" in out and not all(a < b for a, b in zip(out["bounds_min"], out["bounds_max"])):
+        raise ParameterError(
+            SOURCE,
+            PHYSICAL["bounds_max"].label("bounds_max"),
+            f"{out['bounds_max']} must exceed bounds_min {out['bounds_min']} on every axis",
+        )
+    out["fog_height"] = out.pop("height")
+    _check_medium(out)
+    return out
+
+
+def _medium_params(fog: dict) -> dict:
+    """``heightfog`` XML parameter names (``height`` for ``fog_height``)."""
+    p = {k: v for k, v in fog.items() if k != "fog_height"}
+    p["height"] = fog["fog_height"]
+    return p
+
+
+def _check_medium(fog: dict) -> None:
+    """The medium parser that ``fogref render`` uses must accept the values too."""
+    medium_from_params(_medium_params(fog), f"{SOURCE}: fog")

@@ -55,11 +55,11 @@ import hashlib
 import os
 import sys
 import time
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
 from fogref.errors import FogrefError
+from fogref.scene.defaults import parse_scene, substitute
 
 #: Mitsuba's limit on nested ``<include>`` (``ParserConfig.max_include_depth``).
 MAX_INCLUDE_DEPTH = 15
@@ -105,30 +105,6 @@ class SceneInput:
         return named.get(self.kind, other)
 
 
-def substitute(value: str, params: list) -> str:
-    """``value`` with Mitsuba's ``$name`` substitution from ``params``, ``[(name, value)]``.
-
-    Longest names first; ``\\$`` is kept as a literal ``$``.  An unknown ``$name`` is
-    left as is (Mitsuba then refuses the scene with its own message).
-
-    >>> substitute("$mesh_dir/$mesh.obj", [("mesh", "box"), ("mesh_dir", "meshes")])
-    'meshes/box.obj'
-    >>> substitute("price \\\\$5", [("5", "x")])
-    'price $5'
-    """
-    if "$" not in value:
-        return value
-    for name, rep in sorted(params, key=lambda p: len(p[0]), reverse=True):
-        key, pos = "$" + name, 0
-        while (pos := value.find(key, pos)) != -1:
-            if pos > 0 and value[pos - 1] == "\\":
-                pos += len(key)
-            else:
-                value = value[:pos] + rep + value[pos + len(key) :]
-                pos += len(rep)
-    return value.replace("\\$", "$")
-
-
 def _global_resolver() -> list[Path]:
     """Mitsuba's global file resolver: its folders if Mitsuba is loaded, else the working directory."""
     mi = sys.modules.get("mitsuba")
@@ -164,15 +140,10 @@ class _Walker:
     def add(self, path: Path, kind: str, source: str, plugin: str = "") -> None:
         self.found.append(SceneInput(path, kind, source, path.is_file(), plugin))
 
-    def file(self, path: Path, resolver: list[Path], depth: int, top: bool = False) -> None:
+    def file(self, path: Path, resolver: list[Path], depth: int, top: bool = False, root=None) -> None:
         if depth >= MAX_INCLUDE_DEPTH:
             raise FogrefError(f"{path}: more than {MAX_INCLUDE_DEPTH} nested <include>s")
-        try:
-            root = ET.parse(path).getroot()
-        except ET.ParseError as e:
-            raise FogrefError(f"{path}: malformed XML ({e})") from None
-        except OSError as e:
-            raise FogrefError(f"{path}: cannot read ({e.strerror})") from None
+        root = parse_scene(path) if root is None else root
         own = [Path(os.path.abspath(path.parent))] + resolver
         self.node(root, path, own, depth, parent=None)
         if top:
@@ -212,7 +183,7 @@ class _Walker:
             self.node(c, path, resolver, depth, parent=el)
 
 
-def scene_inputs(scene, overrides: dict | None = None) -> list[SceneInput]:
+def scene_inputs(scene, overrides: dict | None = None, root=None) -> list[SceneInput]:
     """The scene file and every file it loads, in document order, each once.
 
     Parameters
@@ -221,6 +192,8 @@ def scene_inputs(scene, overrides: dict | None = None) -> list[SceneInput]:
         A Mitsuba XML scene.
     overrides : dict, optional
         ``$name`` values as given to ``mitsuba.load_file`` (``fogref render --set``).
+    root : xml.etree.ElementTree.Element, optional
+        The scene's parsed tree, if already parsed (it is modified: pass a copy).
 
     Returns a list of :class:`SceneInput`, the scene first.  A file named but missing
     is listed with ``exists=False`` (Mitsuba refuses the scene when it loads it).
@@ -231,7 +204,7 @@ def scene_inputs(scene, overrides: dict | None = None) -> list[SceneInput]:
         raise FogrefError(f"{scene}: no such scene file")
     w = _Walker(scene, overrides)
     w.add(Path(os.path.abspath(scene)), "scene", str(scene))
-    w.file(scene, _global_resolver(), 0, top=True)
+    w.file(scene, _global_resolver(), 0, top=True, root=root)
     for value, kind, plugin, where, is_filename in w.strings:
         p = _resolve(value, w.top_resolver)
         if is_filename or _names_file(p, "is_file"):

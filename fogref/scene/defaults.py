@@ -4,20 +4,15 @@ Mitsuba 3 scene files declare parameters as ``<default name="NAME" value="TEXT"/
 and reference them as ``$NAME`` inside attribute values (``value="$sigma_t"``,
 ``origin="$camera_origin"``); ``mitsuba.load_file(path, NAME=TEXT)`` overrides a
 declared value, like ``fogref render --set NAME=TEXT``.  Everything in fogref that
-needs a scene's defaults (the scene description, the fit's camera, the sweep's
-parameter check, the budget's sun-less renders, the geometry templates) reads them
-here, with :mod:`xml.etree.ElementTree`.
+needs a scene's defaults (the scene description, the files a scene loads, the fit's
+camera, the sweep's parameter check, the budget's sun-less renders, the geometry
+templates) reads them here, with :mod:`xml.etree.ElementTree`: :func:`parse_scene` is
+the one parse of scene XML and :func:`substitute` the one ``$NAME`` substitution
+(Mitsuba's rule).
 
-A reference is ``$`` followed by the longest run of letters, digits and ``_``
-(``$sun_elevation`` names ``sun_elevation``, never ``sun``).
-
-:data:`VOCABULARY` is the one set of names every shipped and written scene
-declares; :data:`OPTIONAL_GROUPS` are the names a scene declares only as a whole
-group, where the concept applies (a second fog layer, fog bounds, a sky, a
-settable surface reflectance).  :data:`RANGES` declares the kind, range and unit of
-each of these names once; :func:`resolve` checks the scene's own values and every
-``--set`` override against it (through :mod:`fogref.params`), and ``fogref scene``
-checks what it writes against the same table.
+:func:`resolve` checks the scene's own values and every ``--set`` override against the
+vocabulary's ranges (:data:`fogref.scene.vocabulary.RANGES`, through
+:mod:`fogref.params`), the same table ``fogref scene`` checks what it writes against.
 """
 
 from __future__ import annotations
@@ -30,12 +25,9 @@ from pathlib import Path
 
 from fogref import params
 from fogref.errors import FogrefError, ParameterError
-from fogref.mapping.fog_input import MAX_DEPTH, PHYSICAL, SCATTERING, Range
+from fogref.scene.vocabulary import RANGES
 
 __all__ = [
-    "OPTIONAL_GROUPS",
-    "RANGES",
-    "VOCABULARY",
     "check_camera",
     "check_overrides",
     "check_values",
@@ -46,74 +38,15 @@ __all__ = [
     "resolve",
     "substitute",
     "used_names",
-    "vocabulary_groups",
 ]
 
 #: ``$NAME`` references in an attribute value.
 REFERENCE = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
 
-#: The ``$default`` names every fogref scene declares (shipped ``scenes/*.xml`` and
-#: ``fogref scene``'s output): image, path depth, fog, sun, camera.
-VOCABULARY = (
-    "res",
-    "resy",
-    "max_depth",
-    "sigma_t",
-    "albedo",
-    "g",
-    "density",
-    "falloff",
-    "fog_height",
-    "sun_elevation",
-    "sun_azimuth",
-    "sun_irradiance",
-    "camera_origin",
-    "camera_target",
-    "fov",
-)
-#: Names a scene declares only all together, where the concept applies: group -> names.
-OPTIONAL_GROUPS = {
-    "sky": ("sky_radiance",),  # a uniform sky (none: a black sky)
-    "second_layer": ("density2", "falloff2", "height2"),  # a second exponential fog layer
-    "bounds": ("bounds_min", "bounds_max"),  # a box the fog is confined to
-    "surface": ("reflectance",),  # one settable diffuse reflectance for all surfaces
-    "turbidity": ("turbidity",),  # a sunsky's atmosphere (fogref/render/sunsky.py)
-    "sun_size": ("sun_angular_diameter",),  # the sun's angular diameter (0: a delta)
-}
-#: The kind, range and unit of every vocabulary name, each declared once (the fog's in
-#: :data:`fogref.mapping.fog_input.PHYSICAL` and ``SCATTERING``).  The options are
-#: ``fogref scene``'s.  ``sun_azimuth``: one turn either way; camera points within 1e7 m;
-#: ``fov``: the horizontal field of view of a perspective camera.
-RANGES: dict[str, Range] = {
-    "res": Range("--res", "integer", 1, 65536, "pixels"),
-    "resy": Range("--resy", "integer", 1, 65536, "pixels"),
-    "max_depth": MAX_DEPTH,
-    "sigma_t": PHYSICAL["sigma_t"],
-    "albedo": SCATTERING["albedo"],
-    "g": SCATTERING["g"],
-    "density": PHYSICAL["density"],
-    "falloff": PHYSICAL["falloff"],
-    "fog_height": PHYSICAL["height"],
-    "sun_elevation": Range("--sun-elevation", "angle", -90.0, 90.0, "deg"),
-    "sun_azimuth": Range("--sun-azimuth", "angle", -360.0, 360.0, "deg"),
-    "sun_irradiance": Range("--sun-irradiance", "rgb", 0.0),
-    "camera_origin": Range("--camera-origin", "point", -1e7, 1e7, "m"),
-    "camera_target": Range("--camera-target", "point", -1e7, 1e7, "m"),
-    "fov": Range("--fov", "angle", 0.0, 180.0, "deg", lo_open=True, hi_open=True),
-    "sky_radiance": Range("--sky-radiance", "rgb", 0.0),
-    "density2": PHYSICAL["density2"],
-    "falloff2": PHYSICAL["falloff2"],
-    "height2": PHYSICAL["height2"],
-    "bounds_min": PHYSICAL["bounds_min"],
-    "bounds_max": PHYSICAL["bounds_max"],
-    "reflectance": Range("--ground-reflectance", "rgb", 0.0, 1.0),
-    "turbidity": Range("--turbidity", "number", 1.0, 10.0),
-    "sun_angular_diameter": Range("--sun-angular-diameter", "number", 0.0, 10.0, "deg"),
-}
-
 
 def parse_scene(path, comments: bool = False) -> ET.Element:
-    """The root element of a scene file (with its ``<!-- -->`` comments as elements if ``comments``).
+    """The root element of a scene file (with its ``<!-- -->`` comments as elements if ``comments``):
+    the one parse of scene XML in fogref (a scene, its ``<include>``s, the valley template).
 
     Raises :class:`~fogref.errors.FogrefError` naming the file when it does not exist
     or is not well-formed XML.
@@ -126,6 +59,8 @@ def parse_scene(path, comments: bool = False) -> ET.Element:
         return ET.parse(path, parser).getroot()
     except ET.ParseError as e:
         raise FogrefError(f"{path}: malformed XML ({e})") from None
+    except OSError as e:
+        raise FogrefError(f"{path}: cannot read ({e.strerror})") from None
 
 
 def _root(scene) -> ET.Element:
@@ -155,10 +90,13 @@ def references(text: str) -> list[str]:
     return REFERENCE.findall(text or "")
 
 
-def substitute(text: str, values: dict) -> str:
-    """``text`` with each ``$NAME`` whose name is in ``values`` replaced by its value.
+def substitute(text: str, values) -> str:
+    """``text`` with Mitsuba's ``$NAME`` substitution from ``values`` (a dict, or ``[(name, value)]``).
 
-    A reference to an undeclared name is left as it is (Mitsuba refuses it on load).
+    Mitsuba 3's rule (``src/core/parser.cpp``, ``substitute_parameters``): the longest names
+    first, each ``$NAME`` replaced wherever it occurs unless escaped as ``\\$``, which is then
+    kept as a literal ``$``.  A reference to an undeclared name is left as it is (Mitsuba
+    refuses it on load).
 
     >>> substitute("$camera_origin", {"camera_origin": "0, 2, 0"})
     '0, 2, 0'
@@ -166,10 +104,23 @@ def substitute(text: str, values: dict) -> str:
     '8'
     >>> substitute("$unknown", {})
     '$unknown'
+    >>> substitute("$mesh_dir/$mesh.obj", [("mesh", "box"), ("mesh_dir", "meshes")])
+    'meshes/box.obj'
+    >>> substitute("price \\\\$5", [("5", "x")])
+    'price $5'
     """
     if not text or "$" not in text:
         return text
-    return REFERENCE.sub(lambda m: str(values[m.group(1)]) if m.group(1) in values else m.group(0), text)
+    pairs = values.items() if isinstance(values, dict) else values
+    for name, rep in sorted(((str(k), str(v)) for k, v in pairs), key=lambda p: len(p[0]), reverse=True):
+        key, pos = "$" + name, 0
+        while (pos := text.find(key, pos)) != -1:
+            if pos > 0 and text[pos - 1] == "\\":
+                pos += len(key)
+            else:
+                text = text[:pos] + rep + text[pos + len(key) :]
+                pos += len(rep)
+    return text.replace("\\$", "$")
 
 
 def used_names(scene) -> set[str]:
@@ -189,10 +140,17 @@ def used_names(scene) -> set[str]:
 
 
 def overrides_used_by(scene, overrides: dict | None) -> dict:
-    """The overrides whose ``$NAME`` the scene references (Mitsuba refuses the others).
+    """The overrides whose ``$NAME`` the scene (a path or a parsed root) references: Mitsuba refuses
+    the others, e.g. the sun's ``$default``s given to a sun-less copy
+    (:func:`fogref.scene.edit.sunless_scene`).
 
     >>> root = ET.fromstring('<scene><float name="g" value="$g"/><float name="x" value="$sun"/></scene>')
     >>> overrides_used_by(root, {"g": 0.5, "sun_elevation": 4, "sun": 1})
+    {'g': 0.5, 'sun': 1}
+    >>> import tempfile
+    >>> p = Path(tempfile.mkdtemp()) / "s.xml"
+    >>> _ = p.write_text(ET.tostring(root, encoding="unicode"))
+    >>> overrides_used_by(p, {"g": 0.5, "sun_elevation": 4, "sun": 1})
     {'g': 0.5, 'sun': 1}
     """
     used = used_names(scene)
@@ -335,29 +293,3 @@ def _like_default(default: str, value, name: str, source: str) -> None:
         raise ParameterError(
             source, name, f"--set {name}={value}: {why} (like the scene's default '{default}')"
         ) from None
-
-
-def vocabulary_groups(names) -> tuple[list[str], list[str]]:
-    """Check ``names`` (a scene's declared defaults) against the vocabulary.
-
-    Returns ``(wrong, groups)``: the sorted :data:`VOCABULARY` names absent, the
-    absent members of partly declared optional groups and the names outside the
-    vocabulary (empty: the scene speaks the vocabulary); and the optional groups it
-    declares in full.
-
-    >>> vocabulary_groups(set(VOCABULARY) | {"sky_radiance"})
-    ([], ['sky'])
-    >>> vocabulary_groups(set(VOCABULARY) - {"fov"} | {"density2", "sun"})
-    (['falloff2', 'fov', 'height2', 'sun'], [])
-    """
-    names = set(names)
-    wrong = set(VOCABULARY) - names
-    groups = []
-    for group, members in OPTIONAL_GROUPS.items():
-        present = names & set(members)
-        if present == set(members):
-            groups.append(group)
-        elif present:
-            wrong |= set(members) - present
-    known = set(VOCABULARY).union(*OPTIONAL_GROUPS.values())
-    return sorted(wrong | (names - known)), groups

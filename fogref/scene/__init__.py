@@ -1,0 +1,1 @@
+"""The scene XML read once: parse, ``$default``s, vocabulary, inputs, description, writer, edits."""
