@@ -88,8 +88,7 @@ def sun_single_scatter(medium, views: Views, w, E: float = 1.0, t_cap: float = 2
     t0 = np.broadcast_to(np.asarray(t0, dtype=float), (n,))
     t_end = np.minimum(np.minimum(np.broadcast_to(np.asarray(t1, dtype=float), (n,)), D), t_cap)
     ok = t_end > t0
-    a = np.where(ok, t0, 0.0)
-    b = np.where(ok, t_end, 1.0)
+    a, b = np.where(ok, t0, 0.0), np.where(ok, t_end, 1.0)
     # panel edges: geometric in (t - a) from 1e-5 of the length, plus the clamp-height crossings
     frac = np.concatenate([[0.0], np.geomspace(1e-5, 1.0, GL_PANELS)])
     edges = a[:, None] + (b - a)[:, None] * frac[None, :]
@@ -218,12 +217,8 @@ def split_stats(diff: np.ndarray, cov: np.ndarray, mask: np.ndarray | None = Non
     m = mse_noise(diff, np.sqrt(np.diagonal(cov, axis1=-2, axis2=-1)), mask, cov=cov, spp=spp)
     if m is None:
         return {"rmse": 0.0, "noise_floor": 0.0, "debiased": 0.0, "below_noise": True}
-    return {
-        "rmse": math.sqrt(m["mse"]),
-        "noise_floor": math.sqrt(m["noise_floor"]),
-        "debiased": math.sqrt(m["debiased"]),
-        "below_noise": m["below_noise"],
-    }
+    roots = {"rmse": "mse", "noise_floor": "noise_floor", "debiased": "debiased"}
+    return {k: math.sqrt(m[v]) for k, v in roots.items()} | {"below_noise": m["below_noise"]}
 
 
 def render_split(

@@ -196,6 +196,6 @@ def _closed_form_config(spec: SweepSpec, point: dict) -> dict:
     """A ``ue_pathtracer`` configuration: its values, the editor values they set, ``closed_form``."""
     ps = spec.parameters
     settings = {ps[k]["target"]: v * ps[k]["scale"] if ps[k]["scale"] != 1.0 else v for k, v in point.items()}
-    cfg = {"values": point, "settings": settings, "closed_form": spec.closed_form, "models": spec.models}
-    cfg["id"] = _hash({"settings": settings, "closed_form": spec.closed_form, "fogref": __version__})
-    return cfg
+    cf = spec.closed_form
+    key = _hash({"settings": settings, "closed_form": cf, "fogref": __version__})
+    return {"id": key, "values": point, "settings": settings, "closed_form": cf, "models": spec.models}

@@ -90,20 +90,17 @@ def ue_settings(path: Path, key: str, values: dict, value=None) -> None:
 
 
 def read_closed_form(path: Path, doc: dict) -> dict:
-    """A ``ue_pathtracer`` sweep's ``[sweep]`` (name, out, ``threshold`` in (0, 1e3], default 0.01),
+    """A ``ue_pathtracer`` sweep's ``[sweep]`` (name, out, ``threshold`` > 0, default 0.01),
     ``[fixed]`` (editor values of :data:`UE_PATHTRACER_FIELDS`; ``camera``: 3 numbers [m, y-up]),
     ``[sun]`` (``direction``: toward the sun, y-up, not zero; absent: no sun) and ``[views]``
     (``n_dirs``, ``ss_n_dirs`` in [1, 1e6]; ``distances``, ``ss_distances``: ``[start, stop, count]``
     of a geometric series [m], 0 < start <= stop, a whole count >= 1; ``ground`` [m] or absent),
     as the dict :func:`fogref.study.ue_pathtracer.closed_form_row` takes, under ``closed_form``."""
     sw = toml_table(path, doc, "sweep", ("name", "kind", "out", "threshold"))
-    thr = toml_num(
-        sw.get("threshold", 0.01), "threshold", toml_src(path, "sweep"), lo=0.0, hi=1e3, lo_open=True
-    )
+    thr = toml_num(sw.get("threshold", 0.01), "threshold", toml_src(path, "sweep"), lo=0.0, lo_open=True)
     fixed = dict(toml_table(path, doc, "fixed", (*UE_PATHTRACER_FIELDS, "camera")))
-    fixed["camera"] = list(
-        P.vector(fixed.get("camera", [0.0, 2.0, 0.0]), "camera", source=toml_src(path, "fixed"))
-    )
+    cam = fixed.get("camera", [0.0, 2.0, 0.0])
+    fixed["camera"] = list(P.vector(cam, "camera", source=toml_src(path, "fixed")))
     ue_settings(path, "fixed", {k: v for k, v in fixed.items() if k != "camera"})
     sun = toml_table(path, doc, "sun", ("direction",)).get("direction")
     if sun is not None and not any(sun := list(P.vector(sun, "direction", source=toml_src(path, "sun")))):
@@ -115,9 +112,7 @@ def read_closed_form(path: Path, doc: dict) -> dict:
         views[k + "n_dirs"] = toml_int(vw.get(k + "n_dirs", n), k + "n_dirs", vs, lo=1, hi=1_000_000)
         lo, hi, count = P.vector(vw.get(k + "distances", d), k + "distances", source=vs)
         if not (0 < lo <= hi and count == int(count) >= 1):
-            raise ParameterError(
-                vs, k + "distances", f"{[lo, hi, count]}: need 0 < start <= stop, count >= 1"
-            )
+            raise ParameterError(vs, k + "distances", f"{[lo, hi, count]}: 0 < start <= stop, count >= 1")
         views[k + "distances"] = [lo, hi, int(count)]
     cf = {"fixed": fixed, "sun": sun, "views": views, "threshold": thr}
     return {**_name_and_out(path, sw), "closed_form": cf}

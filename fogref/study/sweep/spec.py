@@ -39,10 +39,8 @@ except ImportError:  # pragma: no cover
 
 __all__ = ["DESIGN_KINDS", "MAX_CONFIGS", "SEED_POLICIES", "SweepSpec", "as_str", "design_size", "load_sweep"]
 
-#: The tables of a sweep file, per ``[sweep] kind``.
-#: ``render``: each configuration renders its truth and compares the models; ``ue_pathtracer``: each
-#: compares UE's path-traced fog with the exact fog in closed form, nothing rendered
-#: (:func:`fogref.study.ue_pathtracer.closed_form_row`; ``[fixed]``, ``[sun]``, ``[views]``).
+#: The tables of a sweep file per ``[sweep] kind``: ``render`` (each configuration renders and compares)
+#: or ``ue_pathtracer`` (closed form, nothing rendered: :mod:`fogref.study.sweep`'s docstring).
 _TOP_KEYS = {"render": {"sweep", "render", "design", "parameters", "models", "execution", "outputs"}}
 _TOP_KEYS["ue_pathtracer"] = _TOP_KEYS["render"] - {"render", "models"} | {"fixed", "sun", "views"}
 

@@ -67,8 +67,10 @@ def set_aside_result(path, why: str) -> Path:
 
 def _rows_of(cfg: dict, result: dict) -> list[dict]:
     """Table rows of one configuration's result file."""
-    base = (
-        {
+    if "scene" not in cfg:  # a closed-form configuration
+        base = {"config_id": cfg["id"], **cfg["values"]}
+    else:
+        base = {
             "config_id": cfg["id"],
             "scene": Path(cfg["scene"]).name,
             "scene_path": cfg["scene"],
@@ -78,9 +80,6 @@ def _rows_of(cfg: dict, result: dict) -> list[dict]:
             "spp": cfg["spp"],
             "seed": cfg["seed"],
         }
-        if "scene" in cfg
-        else {"config_id": cfg["id"], **cfg["values"]}
-    )  # a closed-form configuration
     for k, v in list(base.items()):
         if isinstance(v, (list, dict)):
             base[k] = json.dumps(v)
