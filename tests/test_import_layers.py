@@ -391,10 +391,6 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
     # not yet reviewed
     "fogref.cli.scene": {
         "fogref.mapping.droplet_fog.droplet_fog": NOT_REVIEWED,
-        "fogref.mapping.unreal_pathtracer.DROPPED": NOT_REVIEWED,
-        "fogref.mapping.unreal_pathtracer.rewrite_scene": NOT_REVIEWED,
-        "fogref.mapping.unreal_pathtracer.validated_settings": NOT_REVIEWED,
-        "fogref.models.ue4.UE4FogParams": NOT_REVIEWED,
     },
     "fogref.engines.browser": {
         "json": NOT_REVIEWED,
@@ -438,9 +434,6 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
     "fogref.mapping.unreal_basis": {
         "scipy.optimize.minimize_scalar": NOT_REVIEWED,
         "scipy.optimize.nnls": NOT_REVIEWED,
-    },
-    "fogref.mapping.unreal_pathtracer": {
-        "argparse": NOT_REVIEWED,
     },
     "fogref.media.droplets": {
         "scipy.special.roots_genlaguerre": NOT_REVIEWED,
@@ -505,25 +498,6 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
         "matplotlib": NOT_REVIEWED,
         "matplotlib.pyplot": NOT_REVIEWED,
     },
-    "fogref.study.ue_pathtracer": {
-        "csv": NOT_REVIEWED,
-        "fogref.mapping.unreal_pathtracer.exact_fog_params": NOT_REVIEWED,
-        "fogref.mapping.unreal_pathtracer.rewrite_scene": NOT_REVIEWED,
-        "fogref.render.load.load_scene": NOT_REVIEWED,
-        "fogref.render.variant.set_variant": NOT_REVIEWED,
-        "itertools": NOT_REVIEWED,
-        "mitsuba": NOT_REVIEWED,
-        "tomllib": NOT_REVIEWED,
-    },
-    "fogref.study.ue_pathtracer_split": {
-        "fogref.atomic.write_text_atomic": NOT_REVIEWED,
-        "fogref.gbuffer.load_truth": NOT_REVIEWED,
-        "fogref.mapping.PhysicalScene": NOT_REVIEWED,
-        "fogref.mapping.unreal.ue4_from_physical": NOT_REVIEWED,
-        "fogref.study.unreal._overrides": NOT_REVIEWED,
-        "fogref.study.unreal.scene_of_truth": NOT_REVIEWED,
-        "json": NOT_REVIEWED,
-    },
     "fogref_plugins": {
         "fogref_plugins.fog_medium.register": NOT_REVIEWED,
         "fogref_plugins.fogpath.register": NOT_REVIEWED,
@@ -535,9 +509,6 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
 #: module -> {imported name: reason}. ``benchmarks.*`` are the scripts of benchmarks/.
 PRIVATE_IMPORTS: dict[str, dict[str, str]] = {
     # not yet reviewed
-    "fogref.study.ue_pathtracer_split": {
-        "fogref.study.unreal._overrides": NOT_REVIEWED,
-    },
     "benchmarks.render_distributed": {
         "fogref.render.render._device_f64": NOT_REVIEWED,
     },

@@ -60,10 +60,42 @@ def test_scene_renders_the_path_traced_fog(tmp_path, capsys):
     np.testing.assert_allclose(T, T_ref, rtol=1e-5, atol=1e-7)
 
 
+def test_ue_exact_writes_the_fog_without_clamp_and_cylinder(tmp_path):
+    """``--ue-exact``: the medium holds :func:`exact_fog_params` of the Unreal and path-tracer values
+    (profile exponential, no clamp, no cylinder), to the written digits."""
+    import xml.etree.ElementTree as ET
+
+    from fogref.mapping.unreal_pathtracer import exact_fog_params
+
+    xml = tmp_path / "exact.xml"
+    assert main(["scene", "--out", str(xml), "--ue-exact", *UE, *PT]) == 0
+    medium = next(m for m in ET.parse(xml).getroot().iter("medium"))
+    got = {e.get("name"): e.get("value") for e in medium if e.get("name")}
+    ue = UE4FogParams(FogDensity=0.05, FogHeightFalloff=2.0, FogHeight=2000.0)
+    pt = UEPathTracerSettings(
+        VolumetricFogDistance=3000.0,
+        FogDensityClamp=4.0,
+        VolumetricFogAlbedo=(0.8, 0.7, 0.6),
+        VolumetricFogScatteringDistribution=0.3,
+        VolumetricFogExtinctionScale=1.5,
+    )
+    want = exact_fog_params(ue, pt)
+    assert got["profile"] == "exponential" and not {"clamp", "radius", "center"} & set(got)
+    assert set(got) == set(want)
+    for k, v in want.items():
+        if k != "profile":
+            np.testing.assert_allclose([float(x) for x in got[k].split(",")], np.ravel(v), rtol=1e-12)
+
+
 @pytest.mark.parametrize(
     "extra, words",
     [
-        (["--ue-fog-density-clamp", "4"], ["--ue-fog-density-clamp", "only with --ue-pathtracer"]),
+        (
+            ["--ue-fog-density-clamp", "4"],
+            ["--ue-fog-density-clamp", "only with --ue-pathtracer or --ue-exact"],
+        ),
+        (["--ue-exact", "--visibility", "500"], ["--visibility", "--ue-exact"]),
+        (["--ue-exact", "--g", "0.5"], ["--ue-pathtracer", "--g"]),
         (["--ue-pathtracer", "--sigma-t", "0.01"], ["--ue-pathtracer", "--sigma-t"]),
         (["--ue-pathtracer", "--g", "0.5"], ["--ue-pathtracer", "--g"]),
         (["--ue-pathtracer", "--ue-fog-density-clamp", "400"], ["--ue-fog-density-clamp", "[1, 256]"]),

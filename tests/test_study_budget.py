@@ -248,7 +248,7 @@ def test_shapley_in_markdown_and_plot_first(tmp_path):
 
 
 def test_study_text_names_the_largest_shapley_term():
-    from fogref.study.unreal import readme
+    from fogref.study.unreal_report import readme
 
     pf, px, sky, lobe, model, parts = _shapley_setup()
     S = B.chain(px, sky, pf, lobe, model)

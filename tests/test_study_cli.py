@@ -170,7 +170,7 @@ def test_study_refuses_an_old_schema_truth(tmp_path, capsys):
 
 
 def test_study_text_comes_from_the_data():
-    from fogref.study.unreal import readme, reproduce_command
+    from fogref.study.unreal_report import readme, reproduce_command
 
     prov = {
         "scene": "scenes/lake.xml",

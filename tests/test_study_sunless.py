@@ -23,3 +23,12 @@ def test_sunless_copy_loads_the_originals_files(tmp_path, mitsuba):
     assert inputs_digest(copy) != before  # the copy's key covers the original's mesh
     s = mitsuba.load_file(str(copy), **tiny.RES)  # Mitsuba finds them too, and the sun is gone
     assert all("Directional" not in str(e) for e in s.emitters())
+
+
+def test_overrides_used_by_reads_a_scene_file(tmp_path):
+    """A sun-less copy no longer uses the sun's ``$defaults``; only the overrides a scene file uses pass."""
+    from fogref.scene.defaults import overrides_used_by
+
+    p = tmp_path / "s.xml"
+    p.write_text('<scene><float name="g" value="$g"/><float name="x" value="$sun"/></scene>')
+    assert overrides_used_by(p, {"g": 0.5, "sun_elevation": 4, "sun": 1}) == {"g": 0.5, "sun": 1}

@@ -13,7 +13,7 @@ import pytest
 
 from fogref.cli import main
 from fogref.mapping.unreal_pathtracer import UEPathTracerSettings
-from fogref.study.ue_pathtracer_split import SECTION_BEGIN, SECTION_END, split_study
+from fogref.study.ue_pathtracer import SECTION_BEGIN, SECTION_END, split_study
 
 
 @pytest.fixture(scope="module")

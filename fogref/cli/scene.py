@@ -13,7 +13,9 @@ from dataclasses import dataclass, make_dataclass
 from fogref.cli.checks import Choice, Integer, Number, PathArg, Text
 from fogref.cli.spec import UsageError, option, switch, toggle
 from fogref.mapping.droplet_fog import PHASES
+from fogref.mapping.unreal_pathtracer import DROPPED, exact_fog_params, rewrite_scene, validated_settings
 from fogref.media.droplets import DROPLET_PRESETS
+from fogref.models.ue4 import UE4FogParams
 from fogref.scene.fog_input import UNREAL_IGNORED, UNREAL_IGNORED_RANGES, UNREAL_MAPPED, flat_unreal
 from fogref.scene.templates import MESH_UP
 from fogref.scene.vocabulary import PHYSICAL, RANGES, SCATTERING, SOURCE
@@ -246,6 +248,11 @@ class _Options:
         "camera) instead of the exact fog",
         group=PT,
     )
+    ue_exact: bool = switch(
+        "as --ue-pathtracer, but the same fog without the clamp and the cylinder (the physics the path "
+        "tracer approximates: its density, falloffs, heights, albedo and g, unbounded)",
+        group=PT,
+    )
     ue_volumetric_fog_distance: float | None = option(
         None,
         "VolumetricFogDistance: the cylinder's radius [cm], [0.1, 1e9]",
@@ -442,10 +449,10 @@ def run(a, given=frozenset()) -> int:
         )
     pt_given = {opt: getattr(a, _dest(opt)) for opt in PT_OPTIONS if getattr(a, _dest(opt)) is not None}
     pt = None
-    if a.ue_pathtracer:
+    if a.ue_pathtracer or a.ue_exact:
         pt = _pathtracer_settings(pt_given, phys, a)
     elif pt_given:
-        raise UsageError(f"{SOURCE}: {', '.join(pt_given)}: only with --ue-pathtracer (the path-traced fog)")
+        raise UsageError(f"{SOURCE}: {', '.join(pt_given)}: only with --ue-pathtracer or --ue-exact")
     albedo, g, phase, fog_notes = a.albedo, a.g, None, ()
     if a.visibility is not None or a.droplets is not None:
         albedo, g, phase, fog_notes = _droplet_fog(a, phys, ue)
@@ -496,11 +503,9 @@ def run(a, given=frozenset()) -> int:
         on_note=note,
     )
     if pt is not None:
-        from fogref.mapping.unreal_pathtracer import DROPPED, rewrite_scene
-        from fogref.models.ue4 import UE4FogParams
-
-        mapped = {k: v for k, v in ue.items() if k not in UNREAL_IGNORED}
-        rewrite_scene(r.path, r.path, UE4FogParams(**mapped), pt)  # the cylinder follows $camera_origin
+        uf = UE4FogParams(**{k: v for k, v in ue.items() if k not in UNREAL_IGNORED})
+        exact = exact_fog_params(uf, pt) if a.ue_exact else None
+        rewrite_scene(r.path, r.path, uf, pt, params=exact)  # the cylinder follows $camera_origin
         dropped = sorted(k for k in ue if k in DROPPED)
         if dropped:
             note(f"Unreal's path tracer does not use {', '.join(dropped)} (raster-only values)")
@@ -514,7 +519,8 @@ def _droplet_fog(a, phys: dict, ue: dict) -> tuple:
     from fogref.mapping.droplet_fog import droplet_fog
 
     clash = ["--sigma-t"] if "sigma_t" in phys else []
-    clash += sorted(_ue_option(k) for k in flat_unreal(ue)) + (["--ue-pathtracer"] if a.ue_pathtracer else [])
+    clash += sorted(_ue_option(k) for k in flat_unreal(ue))
+    clash += [f"--{k.replace('_', '-')}" for k in ("ue_pathtracer", "ue_exact") if getattr(a, k)]
     if a.droplets is not None:
         clash += [opt for opt, v in (("--albedo", a.albedo), ("--g", a.g)) if v is not None]
     if clash:
@@ -552,13 +558,11 @@ def _refuse_sky_options(a, given) -> None:
 
 def _pathtracer_settings(given: dict, phys: dict, a) -> object:
     """The checked path-traced fog settings of ``--ue-*`` (refused beside physical fog, --albedo, --g)."""
-    from fogref.mapping.unreal_pathtracer import validated_settings
-
     clash = [PHYSICAL[k].option for k in phys]
     clash += [opt for opt, v in (("--albedo", a.albedo), ("--g", a.g)) if v is not None]
     if clash:
         raise UsageError(
-            f"{SOURCE}: --ue-pathtracer takes the fog as Unreal values (its albedo and g are "
+            f"{SOURCE}: --ue-pathtracer and --ue-exact take the fog as Unreal values (its albedo and g are "
             "--ue-volumetric-fog-albedo and --ue-volumetric-fog-scattering-distribution), "
             f"not {', '.join(clash)}"
         )

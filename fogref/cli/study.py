@@ -12,7 +12,7 @@ from fogref.cli.checks import Number, PathArg
 from fogref.cli.spec import option, switch
 from fogref.gbuffer import load_truth
 from fogref.html.reports import write_study_html
-from fogref.study.ue_pathtracer_split import split_study
+from fogref.study.ue_pathtracer import split_study
 from fogref.study.unreal import run_study
 
 NAME = "study"
@@ -47,7 +47,7 @@ class Options:
     )
     ue_pathtracer: bool = switch(
         "also split what a UE user sees into raster EHF vs UE's path-traced fog and UE's path-traced "
-        "fog vs the exact fog, each with its noise (fogref.study.ue_pathtracer_split.split_study): a section "
+        "fog vs the exact fog, each with its noise (fogref.study.ue_pathtracer.split_study): a section "
         "of budget.md, summary.json's ue_pathtracer_split and ue_pathtracer_split.json"
     )
     start_distance: float | None = option(

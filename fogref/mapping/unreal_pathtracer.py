@@ -8,9 +8,10 @@ density, inside a vertical cylinder centred on the camera of radius
 ``VolumetricFogStartDistance + VolumetricFogDistance``, with ``VolumetricFogAlbedo``
 and an HG phase of ``VolumetricFogScatteringDistribution``.  This module maps the
 editor settings onto the ``heightfog`` profile ``"ue_pathtracer"`` (y-up, metres),
-so ``fogref render`` renders "what UE's path tracer renders" (:func:`rewrite_scene`),
-and onto the same fog without the clamp and the cylinder (:func:`exact_medium`: the
-physics the path tracer approximates).
+so ``fogref render`` renders "what UE's path tracer renders" (:func:`rewrite_scene`;
+``fogref scene --ue-pathtracer`` writes such a scene), and onto the same fog without the
+clamp and the cylinder (:func:`exact_medium`: the physics the path tracer approximates;
+``fogref scene --ue-pathtracer --ue-exact``).
 
 Units: Unreal is z-up, cm, ``2^(-F z)`` per cm with ``F = FogHeightFalloff/1000``;
 fogref is y-up, metres, ``exp(-b y)``: ``sigma = 100 * 0.5 * ES * FogDensity/1000``
@@ -252,20 +253,11 @@ def exact_medium(ue: UE4FogParams, pt: UEPathTracerSettings) -> FogMedium:
     >>> m.bounds, len(m.layers), round(m.layers[0].falloff, 9)
     (None, 1, 0.013862944)
     """
-    (s0, b0, h0), (s1, b1, h1) = pathtracer_layers(ue, pt)
-    ref = max(s0, s1)
-    if ref <= 0:
-        return FogMedium(
-            sigma_t=0.0,
-            albedo=pt.VolumetricFogAlbedo,
-            g=pt.g,
-            layers=(ExpLayer(),),
-            source="<unreal_pathtracer exact>",
-        )
-    layers = tuple(ExpLayer(s / ref, b, h) for s, b, h in ((s0, b0, h0), (s1, b1, h1)) if s > 0)
-    return FogMedium(
-        sigma_t=ref, albedo=pt.VolumetricFogAlbedo, g=pt.g, layers=layers, source="<unreal_pathtracer exact>"
-    )
+    specs = pathtracer_layers(ue, pt)
+    ref = max(s for s, _, _ in specs)
+    layers = tuple(ExpLayer(s / ref, b, h) for s, b, h in specs if s > 0) if ref > 0 else (ExpLayer(),)
+    src = "<unreal_pathtracer exact>"
+    return FogMedium(sigma_t=max(ref, 0.0), albedo=pt.VolumetricFogAlbedo, g=pt.g, layers=layers, source=src)
 
 
 def exact_fog_params(ue: UE4FogParams, pt: UEPathTracerSettings) -> dict:
@@ -386,37 +378,3 @@ def settings_from(ue: UE4FogParams | None = None, **pt: Any) -> tuple[UE4FogPara
     ue_fields = {k: v for k, v in pt.items() if hasattr(ue, k)}
     rest = {k: v for k, v in pt.items() if k not in ue_fields}
     return replace(ue, **ue_fields), UEPathTracerSettings(**rest)
-
-
-def main(argv: list[str] | None = None) -> int:
-    """``python -m fogref.mapping.unreal_pathtracer SRC.xml DST.xml [NAME=VALUE ...]``: write DST,
-    the scene SRC with UE's path-traced fog for the given editor values (names of
-    :class:`~fogref.models.ue4.UE4FogParams` and :class:`UEPathTracerSettings`, Unreal units;
-    ``exact=1`` writes the exact fog instead); then ``fogref render DST.xml``."""
-    import argparse
-
-    ap = argparse.ArgumentParser(prog="python -m fogref.mapping.unreal_pathtracer", description=main.__doc__)
-    ap.add_argument("src")
-    ap.add_argument("dst")
-    ap.add_argument("values", nargs="*", metavar="NAME=VALUE")
-    a = ap.parse_args(argv)
-    kw: dict[str, Any] = {}
-    for item in a.values:
-        name, sep, text = item.partition("=")
-        if not sep:
-            raise ParameterError("<command line>", item, "expected NAME=VALUE")
-        kw[name] = (
-            [float(x) for x in text.replace(",", " ").split()]
-            if name == "VolumetricFogAlbedo"
-            else float(text)
-        )
-    exact = bool(kw.pop("exact", 0.0))
-    ue, pt = settings_from(**kw)
-    params = exact_fog_params(ue, pt) if exact else None
-    rewrite_scene(a.src, a.dst, ue, pt, params=params)
-    print(f"wrote {a.dst}: {'the exact fog' if exact else 'UE path-traced fog'}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

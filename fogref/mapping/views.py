@@ -55,6 +55,12 @@ class Views:
         D = np.where(self.sky, sky_distance, self.D)
         return self.camera + self.d * D[:, None]
 
+    def rays(self) -> tuple:
+        """``(o, d, D)`` as 3-tuples of (N,) arrays and (N,) [m], the sky at ``NP.largest``: the
+        closed forms' rays (:mod:`fogref.media`)."""
+        o = tuple(np.full(len(self.D), c) for c in self.camera)
+        return o, tuple(self.d[:, i] for i in range(3)), np.where(self.sky, NP.largest, self.D)
+
 
 def fibonacci_directions(n: int) -> np.ndarray:
     """``n`` nearly uniform unit directions on the sphere (y-up), (n, 3)."""
@@ -66,11 +72,21 @@ def fibonacci_directions(n: int) -> np.ndarray:
 
 
 def sample_views(
-    camera: Any, n_dirs: int = 400, distances: Any = None, min_dy: float = -0.5, sky_min_dy: float = 0.0
+    camera: Any,
+    n_dirs: int = 400,
+    distances: Any = None,
+    min_dy: float = -0.5,
+    sky_min_dy: float = 0.0,
+    ground: float | None = None,
 ) -> Views:
     """Views from ``camera``: Fibonacci directions with ``d_y >= min_dy`` at each of
     ``distances`` [m] (default 12 log-spaced from 10 m to 20 km), plus the sky
-    (infinite distance) for directions with ``d_y > sky_min_dy``."""
+    (infinite distance) for directions with ``d_y > sky_min_dy``; with ``ground`` [m], every
+    downward view stops at the plane ``y = ground`` if that is nearer.
+
+    >>> sample_views((0.0, 2.0, 0.0), 2, [10.0], ground=0.0).D.tolist()
+    [10.0, 4.0, inf]
+    """
     if distances is None:
         distances = np.geomspace(10.0, 2.0e4, 12)
     dirs = fibonacci_directions(n_dirs)
@@ -81,7 +97,12 @@ def sample_views(
     up = dirs[dirs[:, 1] > sky_min_dy]
     d_all = np.concatenate([d_all, up])
     D_all = np.concatenate([D_all, np.full(len(up), np.inf)])
-    return Views(np.asarray(camera, dtype=float), d_all, D_all)
+    cam = np.asarray(camera, dtype=float)
+    if ground is not None:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.where(d_all[:, 1] < 0, (float(ground) - cam[1]) / d_all[:, 1], np.inf)
+        D_all = np.minimum(D_all, np.where(t > 0, t, np.inf))
+    return Views(cam, d_all, D_all)
 
 
 def rotated_views(views: Views, angle: float) -> Views:
@@ -108,9 +129,7 @@ def physical_single_scattering(
     ``alpha S(d) (1 - T)`` for a physical sky (``pf.sky_model``; :func:`sky_projection`).
     """
     m = pf.medium
-    o = tuple(np.full(len(views.D), c) for c in views.camera)
-    d = tuple(views.d[:, i] for i in range(3))
-    D = np.where(views.sky, NP.largest, views.D)
+    o, d, D = views.rays()
     out = np.zeros((len(D), 3))
     if sun and max(pf.sun_irradiance) > 0:
         w = pf.sun_direction

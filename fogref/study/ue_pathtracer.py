@@ -5,18 +5,18 @@ sees three things mixed: the raster approximations, the path tracer's own fog (i
 density clamp and camera-centred cylinder, :mod:`fogref.media.ue_pathtracer`) and
 the path tracer's noise.  This module separates them with fogref:
 
-* :func:`render_split`: one scene rendered twice by fogpath (UE's path-traced fog,
-  and the exact fog with the same physical inputs but no clamp and no cylinder:
+* :func:`render_split`: one scene rendered twice through fogref's render cache (UE's path-traced
+  fog, and the exact fog with the same physical inputs but no clamp and no cylinder:
   :func:`fogref.mapping.unreal_pathtracer.exact_medium`) plus Unreal's raster fog
   (:mod:`fogref.models.ue4`, float64) composited over the first render's surface.
   Two signed differences telescope, ``raster - exact = (raster - PT) + (PT - exact)``;
-  each gets its RMSE and its Monte Carlo noise (per-pixel standard errors from the
-  renders' second moments: :func:`split_stats`).
+  each gets its RMSE and its Monte Carlo noise (:func:`split_stats`: the truths' covariances
+  through :func:`fogref.compare.metrics.mse_noise`).
 * :func:`closed_form_split`: the same split on the transmittance (exact per ray in
   all three fogs: no noise) and on the sun's single scattering (Gauss-Legendre
   quadrature along each ray of closed-form transmittances: :func:`sun_single_scatter`),
-  over a set of views; what the committed sweep ``reports/sweeps/ue_pathtracer`` uses
-  (:func:`run_sweep`, ``python -m fogref.study.ue_pathtracer SWEEP.toml``).
+  over a set of views; one configuration of a closed-form sweep (:func:`closed_form_row`,
+  ``fogref sweep reports/sweeps/ue_pathtracer/SWEEP.toml``).
 * :func:`split_study`: :func:`render_split` for a truth (``fogref study TRUTH --ue-pathtracer``):
   the raster EHF is the study's Unreal fog of the truth's physical fog
   (:func:`fogref.mapping.unreal.ue4_from_physical`), the path-traced fog is what UE's path tracer
@@ -27,45 +27,50 @@ the path tracer's noise.  This module separates them with fogref:
 
 from __future__ import annotations
 
+import json
 import math
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from fogref.compare import noise
-from fogref.mapping.unreal import Views, sample_views
+from fogref.atomic import write_text_atomic
+from fogref.compare.metrics import mse_noise
+from fogref.gbuffer import load_truth
+from fogref.mapping import PhysicalScene
+from fogref.mapping.unreal import Views, sample_views, ue4_from_physical
 from fogref.mapping.unreal_pathtracer import (
     UEPathTracerSettings,
+    exact_fog_params,
     exact_medium,
     pathtracer_medium,
+    rewrite_scene,
     settings_from,
 )
 from fogref.media import NP, single_scatter_sun
 from fogref.models.base import SKY_DISTANCE
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+from fogref.render.cache import render_cached
+from fogref.study.budget.engines import unreal_fog
+from fogref.study.unreal import scene_of_truth, truth_overrides
 
 __all__ = [
-    "SplitStats",
+    "SECTION_BEGIN",
+    "SECTION_END",
+    "SPLIT_ROWS",
+    "closed_form_row",
     "closed_form_split",
     "departure_row",
     "render_split",
-    "run_sweep",
+    "split_section",
     "split_stats",
+    "split_study",
     "sun_single_scatter",
 ]
 
 #: Gauss-Legendre nodes per panel and panels per ray of :func:`sun_single_scatter`.
 GL_NODES = 16
 GL_PANELS = 48
-
-
-def _rays(views: Views):
-    o = tuple(np.full(len(views.D), c) for c in views.camera)
-    d = tuple(views.d[:, i] for i in range(3))
-    D = np.where(views.sky, NP.largest, views.D)
-    return o, d, D
 
 
 def sun_single_scatter(medium, views: Views, w, E: float = 1.0, t_cap: float = 2.0e5) -> np.ndarray:
@@ -78,14 +83,13 @@ def sun_single_scatter(medium, views: Views, w, E: float = 1.0, t_cap: float = 2
     Checked against the closed form :func:`fogref.media.single_scatter_sun` in the tests.
     """
     medium.require_height_only("the study's sun quadrature")
-    o, d, D = _rays(views)
+    o, d, D = views.rays()
     n = len(D)
     t0, t1 = medium.clip(NP, o, d)
     t0 = np.broadcast_to(np.asarray(t0, dtype=float), (n,))
     t_end = np.minimum(np.minimum(np.broadcast_to(np.asarray(t1, dtype=float), (n,)), D), t_cap)
     ok = t_end > t0
-    a = np.where(ok, t0, 0.0)
-    b = np.where(ok, t_end, 1.0)
+    a, b = np.where(ok, t0, 0.0), np.where(ok, t_end, 1.0)
     # panel edges: geometric in (t - a) from 1e-5 of the length, plus the clamp-height crossings
     frac = np.concatenate([[0.0], np.geomspace(1e-5, 1.0, GL_PANELS)])
     edges = a[:, None] + (b - a)[:, None] * frac[None, :]
@@ -120,12 +124,6 @@ def sun_single_scatter(medium, views: Views, w, E: float = 1.0, t_cap: float = 2
     return np.where(ok & (w[1] > 0), out, 0.0)
 
 
-def _raster_T(ue: UE4FogParams, views: Views) -> np.ndarray:
-    fog = UE4ExponentialHeightFog(ue)
-    r = fog.evaluate(views.camera, views.world_positions(SKY_DISTANCE), "float64")
-    return np.asarray(r.transmittance, dtype=float)[:, 0]
-
-
 def closed_form_split(
     ue: UE4FogParams,
     pt: UEPathTracerSettings,
@@ -144,17 +142,18 @@ def closed_form_split(
     """
     views = views or sample_views(camera)
     m_pt, m_ex = pathtracer_medium(ue, pt, camera), exact_medium(ue, pt)
-    o, d, D = _rays(views)
+    o, d, D = views.rays()
+    raster = (views.camera, views.world_positions(SKY_DISTANCE))
     out: dict[str, Any] = {
         "views": views,
         "radius_m": m_pt.bounds.radius,
-        "T_raster": _raster_T(ue, views),
+        "T_raster": np.asarray(UE4ExponentialHeightFog(ue).evaluate(*raster, "float64").transmittance)[:, 0],
         "T_pt": m_pt.transmittance(NP, o, d, D)[0],
         "T_exact": m_ex.transmittance(NP, o, d, D)[0],
     }
     if sun is not None:
         sv = ss_views or views
-        so, sd, sD = _rays(sv)
+        so, sd, sD = sv.rays()
         out["ss_pt"] = sun_single_scatter(m_pt, sv, sun)
         out["ss_exact"] = single_scatter_sun(NP, m_ex, so, sd, sD, tuple(sun), (1.0, 1.0, 1.0))[0]
         out["ss_views"] = sv
@@ -200,48 +199,27 @@ def _nearest(views: Views, over: np.ndarray) -> float | None:
 
 
 # -- renders -----------------------------------------------------------------------
-@dataclass
-class SplitStats:
-    """One signed difference image's size and its Monte Carlo noise (over the valid pixels).
+def split_stats(diff: np.ndarray, cov: np.ndarray, mask: np.ndarray | None = None, spp: int = 0) -> dict:
+    """One signed difference image's size and its Monte Carlo noise, on the image's scale: the
+    square roots of :func:`fogref.compare.metrics.mse_noise`'s MSEs for ``diff`` (H, W, 3) whose noise
+    has the per-pixel covariance ``cov`` (H, W, 3, 3) [image units²] from ``spp`` samples per pixel
+    (0: exact), over the pixels of ``mask`` (H, W) (default all; none: all 0, below the noise).
 
-    rmse: RMSE of the difference; noise_floor: the RMSE that noise alone gives (root of the
-    mean of the per-pixel variances); debiased: ``sqrt(max(rmse^2 - noise_floor^2, 0))``,
-    the difference's size without the noise; below_noise: ``rmse <= 2 noise_floor``.
-    """
-
-    rmse: float
-    noise_floor: float
-    below_noise: bool
-    debiased: float = 0.0
-
-
-def split_stats(diff: np.ndarray, var: np.ndarray, mask: np.ndarray | None = None) -> SplitStats:
-    """:class:`SplitStats` of a difference image ``diff`` (H, W, C) with per-pixel variance ``var``.
+    ``rmse``; ``noise_floor``: the RMSE noise alone gives (root of the mean variance); ``debiased``:
+    ``sqrt(max(rmse² - noise_floor², 0))``; ``below_noise``: the MSE is within
+    :data:`fogref.compare.metrics.NOISE_Z` standard errors of the floor (the channels' full covariance).
 
     Examples
     --------
-    >>> s = split_stats(np.full((2, 2, 3), 0.1), np.full((2, 2, 3), 1e-4))
-    >>> round(s.rmse, 6), round(s.noise_floor, 6), s.below_noise, round(s.debiased, 4)
+    >>> s = split_stats(np.full((2, 2, 3), 0.1), np.broadcast_to(np.eye(3) * 1e-4, (2, 2, 3, 3)))
+    >>> round(s["rmse"], 6), round(s["noise_floor"], 6), s["below_noise"], round(s["debiased"], 4)
     (0.1, 0.01, False, 0.0995)
     """
-    m = np.ones(diff.shape[:2], bool) if mask is None else mask
-    d, v = diff[m], var[m]
-    if not d.size:
-        return SplitStats(0.0, 0.0, True, 0.0)
-    # the renders give each channel's variance only; Q (the debiased square) reads only C's diagonal
-    q, _ = noise.squared_stat(d, noise.add_diagonal(np.zeros((*v.shape, 3)), v), spp=0)
-    rmse = float(np.sqrt(np.mean(d * d)))
-    floor = float(np.sqrt(np.mean(v)))
-    return SplitStats(rmse, floor, rmse <= 2.0 * floor, math.sqrt(max(q / d.size, 0.0)))
-
-
-def _moments(mi, scene, spp: int, seed: int):
-    integ = scene.integrator()
-    names = ["R", "G", "B"] + list(integ.aov_names())
-    sums, squares = integ.render_moments(scene, seed=seed, spp=spp)
-    mean = np.array(sums) / spp
-    sq = np.array(squares) / spp
-    return names, mean, sq
+    m = mse_noise(diff, np.sqrt(np.diagonal(cov, axis1=-2, axis2=-1)), mask, cov=cov, spp=spp)
+    if m is None:
+        return {"rmse": 0.0, "noise_floor": 0.0, "debiased": 0.0, "below_noise": True}
+    roots = {"rmse": "mse", "noise_floor": "noise_floor", "debiased": "debiased"}
+    return {k: math.sqrt(m[v]) for k, v in roots.items()} | {"below_noise": m["below_noise"]}
 
 
 def render_split(
@@ -256,124 +234,193 @@ def render_split(
     """Render ``scene_xml`` with UE's path-traced fog and with the exact fog, and split
     ``raster - exact`` into ``raster - PT`` and ``PT - exact`` (final radiance, RGB).
 
-    The raster image is Unreal's fog (float64, ``ue``'s colours) over the PT render's
-    unattenuated ``surface``: ``surface T_raster + inscatter_raster``.  Noise: the PT
-    render's variance of R,G,B (raster - PT; the raster part's own noise, through
-    ``surface``, is neglected: stated in ``notes``) and the sum of both renders' variances
-    (PT - exact).  The camera is the scene's ``$camera_origin``.
+    Both renders are pixel-exact truths of :func:`fogref.render.cache.render_cached` in ``out_dir``
+    (a second call renders nothing).  The raster image is Unreal's fog (float64, ``ue``'s colours) over the PT
+    truth's ``surface`` (:func:`fogref.study.budget.engines.unreal_fog`):
+    ``surface T_raster + inscatter_raster``.  Noise: the PT truth's covariance of R,G,B
+    (raster - PT; the raster part's own noise, through ``surface``, is neglected: stated in
+    ``notes``), the exact truth's (raster - exact) and their sum (PT - exact).  Pixels where the
+    PT truth's ``surface`` is undefined (no sample reached it) are left out of all three.  The
+    camera is the scene's ``$camera_origin``.
     """
-    from fogref.mapping.unreal_pathtracer import exact_fog_params, rewrite_scene
-    from fogref.render.load import load_scene
-    from fogref.render.variant import set_variant
-
-    set_variant()
-    import mitsuba as mi
-
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     p_pt, p_ex = out_dir / "ue_pathtracer.xml", out_dir / "exact.xml"
-    # every sample through the pixel centre: the truths' convention
-    rewrite_scene(scene_xml, p_pt, ue, pt, pixel_exact=True)
-    rewrite_scene(scene_xml, p_ex, ue, pt, params=exact_fog_params(ue, pt), pixel_exact=True)
-    res: dict[str, Any] = {}
-    for key, p in (("pt", p_pt), ("exact", p_ex)):
-        scene, desc = load_scene(p, overrides)
-        names, mean, sq = _moments(mi, scene, spp, seed)
-        res[key] = (names, mean, sq, desc)
-    names, m_pt, sq_pt, desc = res["pt"]
-    _, m_ex, sq_ex, _ = res["exact"]
-    ix = {n: i for i, n in enumerate(names)}
-    rgb = [ix["R"], ix["G"], ix["B"]]
-    n_sq = len(rgb)
-    var_pt = np.maximum(sq_pt[..., :n_sq] - m_pt[..., rgb] ** 2, 0.0) / spp
-    var_ex = np.maximum(sq_ex[..., :n_sq] - m_ex[..., rgb] ** 2, 0.0) / spp
-    hit = m_pt[..., ix["hit"]] > 0.5
-    cam = np.asarray(desc["camera"]["origin"], dtype=float)
-    view = np.stack([m_pt[..., ix[f"view.{c}"]] for c in "XYZ"], axis=-1)
-    view /= np.linalg.norm(view, axis=-1, keepdims=True)
-    dist = np.where(hit, m_pt[..., ix["distance"]], SKY_DISTANCE)
-    wp = cam + view * dist[..., None]
-    r = UE4ExponentialHeightFog(ue).evaluate(cam, wp.reshape(-1, 3), "float64")
-    T_r = np.asarray(r.transmittance, float).reshape(*hit.shape, 3)
-    L_r = np.asarray(r.inscatter, float).reshape(*hit.shape, 3)
-    surface = m_pt[..., [ix["surface.R"], ix["surface.G"], ix["surface.B"]]]
-    S_raster = surface * T_r + L_r
-    S_pt, S_ex = m_pt[..., rgb], m_ex[..., rgb]
+    rewrite_scene(scene_xml, p_pt, ue, pt)
+    rewrite_scene(scene_xml, p_ex, ue, pt, params=exact_fog_params(ue, pt))
+    t_pt, t_ex = (
+        load_truth(render_cached(p, spp, seed, overrides, cache_dir=out_dir)[0]) for p in (p_pt, p_ex)
+    )
+    T_r, L_r = unreal_fog(ue, t_pt, "float64", SKY_DISTANCE)
+    S_raster = t_pt.surface * T_r + L_r
+    C_pt, C_ex = t_pt.noise_cov("final"), t_ex.noise_cov("final")
+    valid = t_pt.surface_valid
+    excluded = int((~valid).sum())
     return {
-        "raster_vs_pt": split_stats(S_raster - S_pt, var_pt),
-        "pt_vs_exact": split_stats(S_pt - S_ex, var_pt + var_ex),
-        "raster_vs_exact": split_stats(S_raster - S_ex, var_ex),
-        "images": {"raster": S_raster, "pt": S_pt, "exact": S_ex},
+        "raster_vs_pt": split_stats(S_raster - t_pt.final, C_pt, valid, spp),
+        "pt_vs_exact": split_stats(t_pt.final - t_ex.final, C_pt + C_ex, valid, spp),
+        "raster_vs_exact": split_stats(S_raster - t_ex.final, C_ex, valid, spp),
+        "images": {"raster": S_raster, "pt": t_pt.final, "exact": t_ex.final},
         "notes": [
             "the raster image's noise through the rendered surface is neglected",
             "colours of the raster fog are ue's (FogInscatteringColor, DirectionalInscatteringColor)",
-        ],
+        ]
+        + ([f"{excluded} pixel(s) left out: the PT render's surface is undefined there"] if excluded else []),
     }
 
 
 # -- the study's section --------------------------------------------------------------
 #: The markers of :func:`split_study`'s section in ``budget.md`` (replaced when run again).
-def _grounded(views: Views, ground: float | None) -> Views:
-    """``views`` with every downward ray stopped at the plane ``y = ground`` [m] (None: no ground)."""
-    if ground is None:
-        return views
-    dy = views.d[:, 1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t_g = np.where(dy < 0, (float(ground) - views.camera[1]) / dy, np.inf)
-    return Views(views.camera, views.d, np.minimum(views.D, np.where(t_g > 0, t_g, np.inf)))
+SECTION_BEGIN = "<!-- fogref: ue_pathtracer split -->"
+SECTION_END = "<!-- /fogref: ue_pathtracer split -->"
+#: The three differences of the split, in the report's order, with what each one is.
+SPLIT_ROWS = (
+    ("raster_vs_pt", "raster EHF - UE path-traced fog", "what the raster fog's approximations cost"),
+    ("pt_vs_exact", "UE path-traced fog - exact fog", "what the path tracer's clamp and cylinder cost"),
+    ("raster_vs_exact", "raster EHF - exact fog", "the sum of both (telescoping)"),
+)
 
 
-def run_sweep(toml_path: str | Path, out: str | Path | None = None) -> list[dict]:
-    """Run the closed-form sweep of ``toml_path`` (``reports/sweeps/ue_pathtracer/SWEEP.toml``)
-    and write its table (``results.csv`` and ``results.md`` beside it, or in ``out``)."""
-    import csv
-    import itertools
+def split_section(split: dict, ue: UE4FogParams, pt: UEPathTracerSettings, spp: int) -> str:
+    """The Markdown section of :func:`split_study` (between :data:`SECTION_BEGIN` and :data:`SECTION_END`).
 
-    import tomllib
+    Examples
+    --------
+    >>> C = np.eye(3)[None, None] * 1e-4
+    >>> s = {k: split_stats(np.full((1, 1, 3), 0.1), C) for k, _, _ in SPLIT_ROWS}
+    >>> print(split_section(s, UE4FogParams(), UEPathTracerSettings(), 4).splitlines()[7])
+    | raster EHF - UE path-traced fog | 0.1 | 0.01 | 0.0995 | no | what the raster fog's approximations cost |
+    """
+    lines = [
+        SECTION_BEGIN,
+        "## What a UE user sees: raster EHF, UE's path-traced fog, the exact fog",
+        "",
+        f"Final radiance (RGB), fogpath at {spp} spp; noise: the renders' per-pixel covariances; below the "
+        "noise: within 3 standard errors of the noise floor (fogref.study.ue_pathtracer.split_study).",
+        "",
+        "| difference | RMSE | noise floor | RMSE without noise | below the noise | what it is |",
+        "|---|---|---|---|---|---|",
+    ]
+    for key, name, what in SPLIT_ROWS:
+        st = split[key]
+        sizes = " | ".join(f"{st[k]:.3g}" for k in ("rmse", "noise_floor", "debiased"))
+        lines.append(f"| {name} | {sizes} | {'yes' if st['below_noise'] else 'no'} | {what} |")
+    lines += [
+        "",
+        f"Path tracer: density clamp {pt.density_clamp:g} (r.PathTracing.FogDensityClamp), cylinder radius "
+        f"{pt.radius_cm:g} cm (VolumetricFogDistance), extinction scale {pt.VolumetricFogExtinctionScale:g}, "
+        f"albedo {', '.join(f'{a:.3g}' for a in pt.VolumetricFogAlbedo)}, g {pt.g:g}; raster FogDensity "
+        f"{ue.FogDensity:.4g}, FogHeightFalloff {ue.FogHeightFalloff:.4g}.",
+        SECTION_END,
+    ]
+    return "\n".join(lines) + "\n"
 
-    toml_path = Path(toml_path)
-    spec = tomllib.loads(toml_path.read_text())
-    fixed = dict(spec.get("fixed", {}))
-    thr = float(spec.get("sweep", {}).get("threshold", 0.01))
-    camera = tuple(fixed.pop("camera", (0.0, 2.0, 0.0)))
-    sun = spec.get("sun", {}).get("direction")
-    sun = None if sun is None else tuple(np.asarray(sun, float) / np.linalg.norm(sun))
-    v = spec.get("views", {})
-    names = list(spec["parameters"])
-    grids = [spec["parameters"][n]["values"] for n in names]
-    dist = np.geomspace(*v.get("distances", [10, 2e4, 12]))
-    views = _grounded(sample_views(camera, n_dirs=int(v.get("n_dirs", 400)), distances=dist), v.get("ground"))
-    sv = _grounded(
-        sample_views(
-            camera,
-            n_dirs=int(v.get("ss_n_dirs", 64)),
-            distances=np.geomspace(*v.get("ss_distances", [30, 1e4, 6])),
-        ),
-        v.get("ground"),
-    )
-    rows = []
-    for combo in itertools.product(*grids):
-        kw = {**fixed, **dict(zip(names, combo))}
-        ue, pt = settings_from(**kw)
-        row = dict(zip(names, combo))
-        row.update(departure_row(closed_form_split(ue, pt, camera, views, sun, sv), thr))
-        row["departs"] = bool(row["opacity_rel_max"] > thr or row.get("sun_ss_rel_max", 0.0) > thr)
-        rows.append(row)
-    out = Path(out) if out else toml_path.parent
+
+def _put_section(path: Path, section: str) -> None:
+    text = path.read_text(encoding="utf-8") if path.exists() else ""
+    if SECTION_BEGIN in text and SECTION_END in text:
+        head, rest = text.split(SECTION_BEGIN, 1)
+        text = head + section.rstrip("\n") + rest.split(SECTION_END, 1)[1]
+    else:
+        text = text + ("\n" if text and not text.endswith("\n\n") else "") + section
+    write_text_atomic(path, text)
+
+
+def split_study(
+    exr: str | Path,
+    out_dir: str | Path = "out/unreal_study",
+    renders_dir: str | Path | None = None,
+    pt: UEPathTracerSettings | None = None,
+    ue: UE4FogParams | None = None,
+    spp: int | None = None,
+    seed: int | None = None,
+    scene: str | Path | None = None,
+) -> dict:
+    """What a UE user sees for the truth ``exr``, split into raster EHF vs UE's path-traced fog and
+    UE's path-traced fog vs the exact fog, each with its noise (:func:`render_split`), written
+    into the study's report folder ``out_dir``.
+
+    ``ue``: the raster EHF settings (default: the study's Unreal fog of the truth's physical fog,
+    :func:`fogref.mapping.unreal.ue4_from_physical`: exact density, falloff and height, fitted
+    colours); ``pt``: the path tracer's settings (default: UEPathTracerSettings with the truth's
+    albedo and g as VolumetricFogAlbedo and VolumetricFogScatteringDistribution, the engine's
+    defaults otherwise).  The scene is the truth's (checked against its recorded hash), with its
+    overrides; ``spp`` and ``seed`` default to the truth's.  Renders go to ``renders_dir``
+    (default ``out_dir/ue_pathtracer``).
+
+    Writes ``ue_pathtracer_split.json``, a section of ``budget.md`` (:func:`split_section`,
+    replaced when run again) and, when the study's ``summary.json`` exists, its key
+    ``"ue_pathtracer_split"``.  Returns the JSON's dict.
+    """
+    truth = load_truth(exr)
+    pf = PhysicalScene.from_params(truth.params)
+    if ue is None:
+        ue = ue4_from_physical(pf).params
+    if pt is None:
+        pt = UEPathTracerSettings(
+            VolumetricFogAlbedo=tuple(float(a) for a in pf.albedo),
+            VolumetricFogScatteringDistribution=float(pf.medium.g),
+        )
+    spp = int(truth.spp if spp is None else spp)
+    seed = int(truth.attrs.get("fogref.seed", 0) if seed is None else seed)
+    out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    keys = list(rows[0])
-    with open(out / "results.csv", "w", newline="") as f:
-        wr = csv.DictWriter(f, keys)
-        wr.writeheader()
-        wr.writerows(rows)
-    fmt = lambda x: "" if x is None else f"{x:.3g}" if isinstance(x, float) else str(x)  # noqa: E731
-    lines = ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
-    lines += ["| " + " | ".join(fmt(r[k]) for k in keys) + " |" for r in rows]
-    (out / "results.md").write_text("\n".join(lines) + "\n")
-    return rows
+    rdir = Path(renders_dir) if renders_dir is not None else out / "ue_pathtracer"
+    path = scene_of_truth(truth, None if scene is None else str(scene))
+    split = render_split(path, ue, pt, rdir, spp=spp, seed=seed, overrides=truth_overrides(truth))
+    doc = {
+        "truth": str(exr),
+        "scene": str(path),
+        "spp": spp,
+        "seed": seed,
+        "pathtracer": {
+            "density_clamp": pt.density_clamp,
+            "radius_cm": pt.radius_cm,
+            "extinction_scale": pt.VolumetricFogExtinctionScale,
+            "albedo": list(pt.VolumetricFogAlbedo),
+            "g": pt.g,
+        },
+        "raster": {"FogDensity": ue.FogDensity, "FogHeightFalloff": ue.FogHeightFalloff},
+        **{key: split[key] for key, _, _ in SPLIT_ROWS},
+        "notes": split["notes"],
+    }
+    write_text_atomic(out / "ue_pathtracer_split.json", json.dumps(doc, indent=2) + "\n")
+    _put_section(out / "budget.md", split_section(split, ue, pt, spp))
+    summary = out / "summary.json"
+    if summary.exists():
+        d = json.loads(summary.read_text(encoding="utf-8"))
+        d["ue_pathtracer_split"] = doc
+        write_text_atomic(summary, json.dumps(d, indent=2) + "\n")
+    return doc
 
 
-if __name__ == "__main__":
-    import sys
+# -- the closed-form sweep ----------------------------------------------------------------
+def closed_form_row(values: dict, spec: dict) -> dict:
+    """One configuration of a closed-form sweep (``[sweep] kind = "ue_pathtracer"``; ``spec``: its
+    tables, :func:`fogref.study.sweep.sections.read_closed_form`): :func:`departure_row` of
+    :func:`closed_form_split` for the editor values ``values`` over ``spec["fixed"]``, on
+    ``n_dirs`` Fibonacci directions x ``geomspace(*distances)`` [m] (the sun's single scattering:
+    ``ss_n_dirs`` x ``ss_distances``), plus ``departs``: either departure over ``spec["threshold"]``.
 
-    run_sweep(sys.argv[1], sys.argv[2] if len(sys.argv) > 2 else None)
+    Examples
+    --------
+    A 30 m cylinder in thin fog at the ground: the opacity departs first just past its wall.
+
+    >>> v = {"n_dirs": 16, "distances": [10.0, 1000.0, 3], "ss_n_dirs": 8, "ss_distances": [30.0, 300.0, 2]}
+    >>> fixed = {"FogDensity": 0.02, "FogHeightFalloff": 0.02}
+    >>> spec = {"fixed": fixed, "views": {**v, "ground": 0.0}, "sun": [0.0, 1.0, 1.0], "threshold": 0.01}
+    >>> row = closed_form_row({"VolumetricFogDistance": 3000.0}, spec)
+    >>> row["departs"], 30.0 < row["opacity_nearest_departure_m"] < 35.0
+    (True, True)
+    """
+    kw = {**spec["fixed"], **values}
+    camera = tuple(kw.pop("camera", (0.0, 2.0, 0.0)))
+    v, thr, sun = spec["views"], float(spec["threshold"]), spec.get("sun")
+    sun = None if sun is None else tuple(np.asarray(sun, float) / np.linalg.norm(sun))
+    views, ss = (
+        sample_views(camera, int(v[k + "n_dirs"]), np.geomspace(*v[k + "distances"]), ground=v.get("ground"))
+        for k in ("", "ss_")
+    )
+    row = departure_row(closed_form_split(*settings_from(**kw), camera, views, sun, ss), thr)
+    row["departs"] = bool(row["opacity_rel_max"] > thr or (row.get("sun_ss_rel_max") or 0.0) > thr)
+    return row

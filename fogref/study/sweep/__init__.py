@@ -65,6 +65,10 @@ Output folder::
 No output may replace an input (the sweep file, the scenes, the files they load):
 :func:`run_sweep` compares resolved paths before any work.
 
+``[sweep] kind = "ue_pathtracer"``: each configuration compares Unreal's path-traced fog with the exact
+fog in closed form, nothing rendered (:func:`fogref.study.ue_pathtracer.closed_form_row`); ``[fixed]``,
+``[sun]``, ``[views]`` replace ``[render]``, ``[[models]]`` (``reports/sweeps/ue_pathtracer/SWEEP.toml``).
+
 Modules: :mod:`~fogref.study.sweep.spec` (the TOML schema, :func:`load_sweep`),
 :mod:`~fogref.study.sweep.design` (the designs, :func:`build_configs`),
 :mod:`~fogref.study.sweep.task` (one configuration on a worker, :func:`run_config`),

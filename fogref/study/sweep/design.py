@@ -122,6 +122,8 @@ def build_configs(spec: SweepSpec) -> list[dict]:
     their parameters, spp, seed and the truth's cache path (in a folder of the
     inputs' hash, so an edited mesh is never served an old truth).
     """
+    if spec.kind == "ue_pathtracer":
+        return [_closed_form_config(spec, pt) for pt in design_points(spec)]
     _sized(spec, len(spec.scenes))
     out = []
     points = design_points(spec)
@@ -188,3 +190,12 @@ def build_configs(spec: SweepSpec) -> list[dict]:
             )
             out.append(cfg)
     return out
+
+
+def _closed_form_config(spec: SweepSpec, point: dict) -> dict:
+    """A ``ue_pathtracer`` configuration: its values, the editor values they set, ``closed_form``."""
+    ps = spec.parameters
+    settings = {ps[k]["target"]: v * ps[k]["scale"] if ps[k]["scale"] != 1.0 else v for k, v in point.items()}
+    cf = spec.closed_form
+    key = _hash({"settings": settings, "closed_form": cf, "fogref": __version__})
+    return {"id": key, "values": point, "settings": settings, "closed_form": cf, "models": spec.models}

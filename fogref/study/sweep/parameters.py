@@ -242,6 +242,6 @@ def read_parameters(
         for label, spec in params.items()
     }
     _check_targets(path, out, overrides, by_label)
-    _check_size(path, design, out, scenes)
+    _check_size(path, design, out, scenes or [None])
     _check_scene_values(path, scenes, overrides, out)
     return out

@@ -69,7 +69,7 @@ def check_outputs(spec: SweepSpec, configs: list[dict]) -> None:
     files.update({f: "a plot" for f in plot_files(spec, out / "plots")})
     inputs = {Path(spec.path): "the sweep file"}
     seen = set()
-    for cfg in configs:
+    for cfg in (c for c in configs if "scene" in c):  # a closed-form sweep has no scene
         key = (cfg["scene"], json.dumps(cfg["overrides"], sort_keys=True))
         if key in seen:
             continue
@@ -189,7 +189,8 @@ def run_sweep(
     out = Path(spec.out)
     cdir = out / "configs"
     cdir.mkdir(parents=True, exist_ok=True)
-    spec.cache.mkdir(parents=True, exist_ok=True)
+    if spec.cache is not None:
+        spec.cache.mkdir(parents=True, exist_ok=True)
     todo = _todo(configs, cdir, retry_failed)
     write_text_atomic(
         out / "sweep.json",
@@ -203,7 +204,7 @@ def run_sweep(
                 "spp": spec.spp,
                 "seed": spec.seed,
                 "seed_policy": spec.seed_policy,
-                "configs": [{"id": c["id"], "scene": c["scene"], "values": c["values"]} for c in configs],
+                "configs": [{"id": c["id"], "scene": c.get("scene"), "values": c["values"]} for c in configs],
             },
             indent=2,
             default=str,

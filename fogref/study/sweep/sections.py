@@ -1,5 +1,6 @@
 """The readers of a sweep file's tables other than ``[parameters.*]``: ``[sweep]``,
-``[render]``, ``[[models]]``, ``[design]``, ``[execution]`` and ``[outputs]``.
+``[render]``, ``[[models]]``, ``[design]``, ``[execution]`` and ``[outputs]``, and those of the
+closed-form kind (``[sweep] kind = "ue_pathtracer"``): ``[fixed]``, ``[sun]`` and ``[views]``.
 
 Each takes the file's path and the parsed TOML and returns the validated fields of
 :class:`~fogref.study.sweep.spec.SweepSpec` it holds; the schema is in
@@ -13,11 +14,18 @@ from pathlib import Path
 
 from fogref import params as P
 from fogref.errors import FogrefError, ParameterError, did_you_mean
+from fogref.mapping.unreal_pathtracer import UEPathTracerSettings, settings_from
 from fogref.models.resolve import resolve_model
+from fogref.models.ue4 import UE4FogParams
 from fogref.render.render import PIXEL_FILTERS
 from fogref.study.sweep.values import as_str, toml_bool, toml_error, toml_int, toml_num, toml_src, toml_table
 
 DESIGN_KINDS = ("grid", "list", "random", "lhs")
+#: The editor values (name -> default) of a ``ue_pathtracer`` sweep's one "model": the fields
+#: of :class:`~fogref.models.ue4.UE4FogParams` and ``fogref.mapping.unreal_pathtracer.UEPathTracerSettings``.
+UE_PATHTRACER_FIELDS = {
+    f.name: f.default for c in (UE4FogParams, UEPathTracerSettings) for f in dataclasses.fields(c) if f.init
+}
 SEED_POLICIES = ("fixed", "per_config")
 
 
@@ -36,7 +44,7 @@ def _resolve(base: Path, p: str) -> Path:
 def read_sweep(path: Path, doc: dict) -> dict:
     """``[sweep]``: name, scene paths (relative to the TOML file, else the working directory), out, cache."""
     base = path.parent
-    sw = toml_table(path, doc, "sweep", ("name", "scenes", "out", "cache"))
+    sw = toml_table(path, doc, "sweep", ("name", "kind", "scenes", "out", "cache"))
     scenes = sw.get("scenes")
     if isinstance(scenes, str):
         scenes = [scenes]
@@ -52,18 +60,62 @@ def read_sweep(path: Path, doc: dict) -> dict:
         if any(p.resolve() == q.resolve() for q in scene_paths):
             raise ParameterError(toml_src(path, "sweep"), "scenes", f"'{s}' is listed twice")
         scene_paths.append(p)
+    return {
+        **_name_and_out(path, sw),
+        "scenes": scene_paths,
+        "cache": Path(sw.get("cache", "out/sweep_cache")),
+    }
+
+
+def _name_and_out(path: Path, sw: dict) -> dict:
+    """``[sweep]``'s name (default: the file's stem) and output folder (default: the file's)."""
     for k in ("out", "cache"):
         if k in sw:
             P.path(sw[k], k, source=toml_src(path, "sweep"))
     if "name" in sw and not (isinstance(sw["name"], str) and sw["name"].strip()):
         raise ParameterError(toml_src(path, "sweep"), "name", f"{sw['name']!r} is not a non-empty string")
+    base = path.parent
     out = base / sw["out"] if "out" in sw and not Path(sw["out"]).is_absolute() else Path(sw.get("out", base))
-    return {
-        "name": str(sw.get("name", path.stem)),
-        "scenes": scene_paths,
-        "out": out,
-        "cache": Path(sw.get("cache", "out/sweep_cache")),
-    }
+    return {"name": str(sw.get("name", path.stem)), "out": out}
+
+
+def ue_settings(path: Path, key: str, values: dict, value=None) -> None:
+    """Refuse, naming the table ``key`` (and the swept ``value``), editor values that the settings
+    themselves refuse (:func:`~fogref.mapping.unreal_pathtracer.settings_from`)."""
+    try:
+        settings_from(**values)
+    except (FogrefError, TypeError, ValueError) as e:
+        why = str(e).splitlines()[0]
+        raise toml_error(path, key, why if value is None else f"value {value!r} refused: {why}") from None
+
+
+def read_closed_form(path: Path, doc: dict) -> dict:
+    """A ``ue_pathtracer`` sweep's ``[sweep]`` (name, out, ``threshold`` > 0, default 0.01),
+    ``[fixed]`` (editor values of :data:`UE_PATHTRACER_FIELDS`; ``camera``: 3 numbers [m, y-up]),
+    ``[sun]`` (``direction``: toward the sun, y-up, not zero; absent: no sun) and ``[views]``
+    (``n_dirs``, ``ss_n_dirs`` in [1, 1e6]; ``distances``, ``ss_distances``: ``[start, stop, count]``
+    of a geometric series [m], 0 < start <= stop, a whole count >= 1; ``ground`` [m] or absent),
+    as the dict :func:`fogref.study.ue_pathtracer.closed_form_row` takes, under ``closed_form``."""
+    sw = toml_table(path, doc, "sweep", ("name", "kind", "out", "threshold"))
+    thr = toml_num(sw.get("threshold", 0.01), "threshold", toml_src(path, "sweep"), lo=0.0, lo_open=True)
+    fixed = dict(toml_table(path, doc, "fixed", (*UE_PATHTRACER_FIELDS, "camera")))
+    cam = fixed.get("camera", [0.0, 2.0, 0.0])
+    fixed["camera"] = list(P.vector(cam, "camera", source=toml_src(path, "fixed")))
+    ue_settings(path, "fixed", {k: v for k, v in fixed.items() if k != "camera"})
+    sun = toml_table(path, doc, "sun", ("direction",)).get("direction")
+    if sun is not None and not any(sun := list(P.vector(sun, "direction", source=toml_src(path, "sun")))):
+        raise ParameterError(toml_src(path, "sun"), "direction", "[0, 0, 0] has no direction")
+    vw = toml_table(path, doc, "views", ("n_dirs", "distances", "ss_n_dirs", "ss_distances", "ground"))
+    vs = toml_src(path, "views")
+    views = {"ground": None if vw.get("ground") is None else toml_num(vw["ground"], "ground", vs)}
+    for k, n, d in (("", 400, [10.0, 2e4, 12]), ("ss_", 64, [30.0, 1e4, 6])):
+        views[k + "n_dirs"] = toml_int(vw.get(k + "n_dirs", n), k + "n_dirs", vs, lo=1, hi=1_000_000)
+        lo, hi, count = P.vector(vw.get(k + "distances", d), k + "distances", source=vs)
+        if not (0 < lo <= hi and count == int(count) >= 1):
+            raise ParameterError(vs, k + "distances", f"{[lo, hi, count]}: 0 < start <= stop, count >= 1")
+        views[k + "distances"] = [lo, hi, int(count)]
+    cf = {"fixed": fixed, "sun": sun, "views": views, "threshold": thr}
+    return {**_name_and_out(path, sw), "closed_form": cf}
 
 
 def read_render(path: Path, doc: dict) -> dict:

@@ -13,20 +13,24 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from fogref import params as P
 from fogref.errors import FogrefError
 from fogref.study.sweep.parameters import design_size, read_parameters
 from fogref.study.sweep.sections import (
     DESIGN_KINDS,
     MAX_CONFIGS,
     SEED_POLICIES,
+    UE_PATHTRACER_FIELDS,
+    read_closed_form,
     read_design,
     read_execution,
     read_models,
     read_outputs,
     read_render,
     read_sweep,
+    ue_settings,
 )
-from fogref.study.sweep.values import as_str, toml_error
+from fogref.study.sweep.values import as_str, toml_error, toml_src
 
 try:
     import tomllib  # Python >= 3.11
@@ -35,7 +39,10 @@ except ImportError:  # pragma: no cover
 
 __all__ = ["DESIGN_KINDS", "MAX_CONFIGS", "SEED_POLICIES", "SweepSpec", "as_str", "design_size", "load_sweep"]
 
-_TOP_KEYS = {"sweep", "render", "design", "parameters", "models", "execution", "outputs"}
+#: The tables of a sweep file per ``[sweep] kind``: ``render`` (each configuration renders and compares)
+#: or ``ue_pathtracer`` (closed form, nothing rendered: :mod:`fogref.study.sweep`'s docstring).
+_TOP_KEYS = {"render": {"sweep", "render", "design", "parameters", "models", "execution", "outputs"}}
+_TOP_KEYS["ue_pathtracer"] = _TOP_KEYS["render"] - {"render", "models"} | {"fixed", "sun", "views"}
 
 
 class SweepSpec:
@@ -45,8 +52,9 @@ class SweepSpec:
     ----------
     path : Path
         The TOML file.
-    name : str
-        The sweep's name.
+    name, kind : str
+        The sweep's name; ``render`` or ``ue_pathtracer`` (closed form: ``closed_form`` holds its
+        ``fixed``, ``sun``, ``views`` and ``threshold``; no scenes, cache, spp, seed or seed policy).
     scenes : list of Path
         Scene files.
     out, cache : Path
@@ -78,17 +86,22 @@ class SweepSpec:
         self.__dict__.update(kw)
 
 
-def _read_toml(path: Path) -> dict:
+def _read_toml(path: Path) -> tuple[dict, str]:
+    """The parsed file and its ``[sweep] kind`` (a key of ``_TOP_KEYS``, default ``render``), its
+    tables checked against the kind's."""
     if not path.is_file():
         raise FogrefError(f"{path}: no such sweep file")
     try:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as e:
         raise FogrefError(f"{path}: not valid TOML ({e})") from None
-    unknown = set(doc) - _TOP_KEYS
-    if unknown:
-        raise toml_error(path, None, f"unknown table(s) {sorted(unknown)}; allowed: {sorted(_TOP_KEYS)}")
-    return doc
+    sw = doc["sweep"] if isinstance(doc.get("sweep"), dict) else {}
+    kind = P.choice(sw.get("kind", "render"), "kind", tuple(_TOP_KEYS), toml_src(path, "sweep"))
+    allowed = _TOP_KEYS[kind]
+    if set(doc) - allowed:
+        bad = sorted(set(doc) - allowed)
+        raise toml_error(path, None, f"unknown table(s) {bad} for kind '{kind}'; allowed: {sorted(allowed)}")
+    return doc, kind
 
 
 def load_sweep(path) -> SweepSpec:
@@ -117,7 +130,9 @@ def load_sweep(path) -> SweepSpec:
         pixel filter or model.
     """
     path = Path(path)
-    doc = _read_toml(path)
+    doc, kind = _read_toml(path)
+    if kind == "ue_pathtracer":
+        return _closed_form_sweep(path, doc)
     sweep = read_sweep(path, doc)
     render = read_render(path, doc)
     models = read_models(path, doc)
@@ -127,6 +142,7 @@ def load_sweep(path) -> SweepSpec:
         del m["fields"]
     return SweepSpec(
         path=path,
+        kind="render",
         **sweep,
         **render,
         parameters=parameters,
@@ -134,4 +150,28 @@ def load_sweep(path) -> SweepSpec:
         models=models,
         **read_execution(path, doc),
         **read_outputs(path, doc, sweep["out"]),
+    )
+
+
+def _closed_form_sweep(path: Path, doc: dict) -> SweepSpec:
+    """A ``ue_pathtracer`` sweep: no scene, no render; its parameters are editor values of its one
+    model ``ue_pathtracer`` (:data:`~fogref.study.sweep.sections.UE_PATHTRACER_FIELDS`)."""
+    cf = read_closed_form(path, doc)
+    fixed = {k: v for k, v in cf["closed_form"]["fixed"].items() if k != "camera"}
+    model = {"name": "ue_pathtracer", "label": "ue_pathtracer", "from_scene": False, "params": fixed}
+    design = read_design(path, doc)
+    parameters = read_parameters(path, doc, [], [{**model, "fields": UE_PATHTRACER_FIELDS}], design, {})
+    for label, p in parameters.items():
+        for v in p.get("values", p.get("range", [])):
+            ue_settings(path, f"parameters.{label}", {**fixed, p["target"]: v * p["scale"]}, v)
+    return SweepSpec(
+        path=path,
+        kind="ue_pathtracer",
+        **cf,
+        **dict(scenes=[], cache=None, spp=None, seed=None, seed_policy=None),
+        parameters=parameters,
+        design=design,
+        models=[model],
+        **read_execution(path, doc),
+        **read_outputs(path, doc, cf["out"]),
     )

@@ -67,16 +67,19 @@ def set_aside_result(path, why: str) -> Path:
 
 def _rows_of(cfg: dict, result: dict) -> list[dict]:
     """Table rows of one configuration's result file."""
-    base = {
-        "config_id": cfg["id"],
-        "scene": Path(cfg["scene"]).name,
-        "scene_path": cfg["scene"],
-        "scene_sha256": cfg["scene_sha256"],
-        **{k: v for k, v in cfg["values"].items()},
-        "overrides": json.dumps(cfg["overrides"], sort_keys=True),
-        "spp": cfg["spp"],
-        "seed": cfg["seed"],
-    }
+    if "scene" not in cfg:  # a closed-form configuration
+        base = {"config_id": cfg["id"], **cfg["values"]}
+    else:
+        base = {
+            "config_id": cfg["id"],
+            "scene": Path(cfg["scene"]).name,
+            "scene_path": cfg["scene"],
+            "scene_sha256": cfg["scene_sha256"],
+            **{k: v for k, v in cfg["values"].items()},
+            "overrides": json.dumps(cfg["overrides"], sort_keys=True),
+            "spp": cfg["spp"],
+            "seed": cfg["seed"],
+        }
     for k, v in list(base.items()):
         if isinstance(v, (list, dict)):
             base[k] = json.dumps(v)
@@ -88,7 +91,7 @@ def _rows_of(cfg: dict, result: dict) -> list[dict]:
                 "model_name": m["name"],
                 "status": "error",
                 "error": result["error"],
-                "truth_path": cfg["truth"],
+                "truth_path": cfg.get("truth", ""),
             }
             for m in cfg["models"]
         ]

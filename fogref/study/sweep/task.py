@@ -30,6 +30,7 @@ from fogref.scene.defaults import overrides_used_by
 from fogref.scene.edit import sunless_scene
 from fogref.scene.inputs import file_sha256
 from fogref.study import budget as B
+from fogref.study.ue_pathtracer import closed_form_row
 
 __all__ = ["run_config"]
 
@@ -76,7 +77,7 @@ def _flatten(prefix: str, obj, out: dict) -> None:
 
 
 def run_config(cfg: dict, drjit_threads: int | None = None) -> dict:
-    """Run one configuration: render (or reuse) its truth, compare every model.
+    """Run one configuration: render (or reuse) its truth, compare every model (closed form: one row).
 
     Parameters
     ----------
@@ -99,6 +100,9 @@ def run_config(cfg: dict, drjit_threads: int | None = None) -> dict:
         Whatever the render or a comparison raises (Dask retries the task, then the
         client records the error).
     """
+    if "closed_form" in cfg:  # nothing to render
+        row = {"model": "ue_pathtracer", **closed_form_row(cfg["settings"], cfg["closed_form"])}
+        return {"id": cfg["id"], "provenance": {"fogref_version": __version__}, "rows": [row]}
     env = _worker_setup(drjit_threads)
     truth = Path(cfg["truth"])
     t0 = time.perf_counter()
