@@ -35,11 +35,6 @@ from fogref.errors import FogrefError
 
 #: Exit code of each overall verdict (2 is a usage or input error).
 EXIT_CODES: dict[str, int] = {"pass": 0, "fail": 1, "inconclusive": 3}
-USAGE_ERROR = 2
-EXIT_HELP = (
-    "exit codes: 0 pass, 1 fail, 2 usage or input error, 3 inconclusive (no row fails but an "
-    "interval straddles its tolerance; --inconclusive fail|pass maps it to 1|0)"
-)
 
 
 def parse_tolerances(items) -> dict:

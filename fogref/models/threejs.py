@@ -65,7 +65,7 @@ import numpy as np
 from fogref import params as P
 from fogref.errors import ParameterError
 from fogref.media import rgb
-from fogref.models._num import dtype_of, glsl_smoothstep, grey, sky_pixels, split
+from fogref.models._num import dtype_of, glsl_smoothstep, grey, sky_pixels, split, unit_direction
 from fogref.models.base import SKY_DISTANCE, FogResult, register
 
 MODES = ("Fog", "FogExp2")
@@ -114,11 +114,7 @@ class ThreeFogParams:
         if self.mode == "Fog" and not self.far > self.near:
             raise ParameterError(src, "far", f"must be greater than near ({self.far} <= {self.near})")
         object.__setattr__(self, "color", rgb(self.color, "color", src, lo=0.0))  # linear RGB >= 0
-        f = np.asarray(self.camera_forward, dtype=np.float64)
-        n = float(np.linalg.norm(f))
-        if f.shape != (3,) or not (math.isfinite(n) and n > 0):
-            raise ParameterError(src, "camera_forward", "expected a non-zero finite 3-vector")
-        object.__setattr__(self, "camera_forward", tuple(float(x) for x in f / n))
+        object.__setattr__(self, "camera_forward", unit_direction(self.camera_forward, "camera_forward", src))
 
 
 def srgb_transfer_oetf(linear: Any, dt: Any) -> Any:
