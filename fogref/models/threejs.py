@@ -66,7 +66,7 @@ from fogref import params as P
 from fogref.errors import ParameterError
 from fogref.media import rgb
 from fogref.models._num import dtype_of, glsl_smoothstep, grey, sky_pixels, split, unit_direction
-from fogref.models.base import SKY_DISTANCE, FogResult, register
+from fogref.models.base import SKY_DISTANCE, FogResult, ParamModel, register
 
 MODES = ("Fog", "FogExp2")
 OUTPUTS = ("linear", "canvas")
@@ -188,7 +188,7 @@ class CanvasBlend(FogResult):
 
 
 @register("threejs")
-class ThreeJSFog:
+class ThreeJSFog(ParamModel[ThreeFogParams]):
     """three.js Fog / FogExp2 (see module doc).
 
     Examples
@@ -202,9 +202,6 @@ class ThreeJSFog:
     """
 
     Params = ThreeFogParams
-
-    def __init__(self, params: ThreeFogParams | None = None):
-        self.params = params or ThreeFogParams()
 
     def fog_depth(self, camera: Any, world_pos: Any, dt: Any = np.float64) -> np.ndarray:
         """``vFogDepth`` [m]: the eye depth ``dot(p - camera, camera_forward)`` of each pixel."""
