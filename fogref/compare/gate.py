@@ -144,11 +144,6 @@ def junit_xml(result, inconclusive: str | None = None) -> str:
     return ET.tostring(suite, encoding="unicode", xml_declaration=True) + "\n"
 
 
-def write_junit(path, result, inconclusive: str | None = None) -> Path:
-    """Write :func:`junit_xml` to ``path`` atomically."""
-    return write_text_atomic(path, junit_xml(result, inconclusive))
-
-
 def finish(args, result, **extra) -> int:
     """Write ``--json``/``--junit``, print the verdict and return the exit code.
 
@@ -158,7 +153,7 @@ def finish(args, result, **extra) -> int:
     if args.json:
         write_json(args.json, result, code, **extra)
     if args.junit:
-        write_junit(args.junit, result, args.inconclusive)
+        write_text_atomic(args.junit, junit_xml(result, args.inconclusive))
     print(result.summary())
     print(f"exit code {code} ({result.verdict})")
     return code
