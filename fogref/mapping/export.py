@@ -194,11 +194,7 @@ def _srgb8(lin: Sequence[float]) -> tuple[int, int, int]:
 
 def _srgb8_to_linear(c8: Sequence[int]) -> tuple[float, ...]:
     """FLinearColor(FColor): the sRGB decoding of 8-bit values (``sRGBToLinearTable``)."""
-    out = []
-    for c in c8:
-        x = c / 255.0
-        out.append(x / 12.92 if x <= 0.04045 else ((x + 0.055) / 1.055) ** 2.4)
-    return tuple(out)
+    return tuple(x / 12.92 if x <= 0.04045 else ((x + 0.055) / 1.055) ** 2.4 for x in (c / 255.0 for c in c8))
 
 
 def unreal_plan(p: Any, cam: Camera, sun: Sun) -> dict:
