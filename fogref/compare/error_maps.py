@@ -79,11 +79,6 @@ class ErrorMaps:
         if self.sigma is None:
             self.sigma = np.zeros(self.signed.shape)
 
-    def selection(self, mask=None) -> np.ndarray:
-        """``(H, W)`` bool: the valid pixels of ``mask`` (None: all)."""
-        sel = np.ones(self.absolute.shape, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
-        return sel & self.valid
-
     def summary(self, mask=None, z: float = NOISE_Z) -> dict:
         """Scalar metrics over the valid pixels of ``mask`` (pixel-shaped bool, None = all).
 
@@ -157,7 +152,6 @@ def error_maps(
     ppd: float = FLIP_PPD,
     sigma=None,
     valid=None,
-    noise_seed: int | None = 0,
     noise_cov=None,
     spp: int = 0,
 ) -> ErrorMaps:
@@ -181,9 +175,6 @@ def error_maps(
         noise [image units]; default 0 (noise-free).
     valid : array_like of bool, ``(H, W)``, optional
         Pixels where the comparison is defined (default all).
-    noise_seed : int or None
-        Seed of the noise draw for the ΔE2000/FLIP noise floors (None: skip them;
-        they are also skipped when ``sigma`` is 0 everywhere, where they are 0).
     noise_cov : array_like, ``(H, W, 3, 3)``, optional
         The noise's covariance [image units²]; when given, ``sigma`` is its diagonal's
         root and the noise draw is correlated as it says.
@@ -223,8 +214,8 @@ def error_maps(
         white = exposure_white(r)
     flip, flip_params = flip_map(r, x, ppd)
     de_noise = flip_noise = None
-    if noise_seed is not None and np.any(s > 0):
-        draw = np.random.default_rng(noise_seed).standard_normal(r.shape)
+    if np.any(s > 0):  # the ΔE2000/FLIP noise floors, from one seeded draw (0 where sigma is)
+        draw = np.random.default_rng(0).standard_normal(r.shape)
         if C is None:
             noisy = r + s * draw
         else:  # correlated as the noise is

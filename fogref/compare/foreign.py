@@ -232,15 +232,10 @@ def read_image(path, encoding: str = "auto", exposure: float = 1.0, radiance: bo
     if not path.is_file():
         raise FogrefError(f"{path}: no such image file")
     suffix = path.suffix.lower()
-    if suffix == ".exr":
-        img = _read_exr_rgb(path)
-    elif suffix == ".png":
-        img = _read_png(path)
-    elif suffix in (".hdr", ".pic"):
-        img = _read_hdr(path)
-    else:
+    reader = {".exr": _read_exr_rgb, ".png": _read_png, ".hdr": _read_hdr, ".pic": _read_hdr}.get(suffix)
+    if reader is None:
         raise FogrefError(f"{path}: unknown image type '{suffix}' (readable: {', '.join(IMAGE_SUFFIXES)})")
-    img = np.asarray(img, dtype=np.float64)
+    img = np.asarray(reader(path), dtype=np.float64)
     bad = ~np.isfinite(img)
     if bad.any():
         ys, xs = np.nonzero(bad.any(-1))

@@ -36,11 +36,6 @@ from fogref.errors import FogrefError
 
 #: Exit code of each overall verdict (2 is a usage or input error).
 EXIT_CODES: dict[str, int] = {"pass": 0, "fail": 1, "inconclusive": 3}
-USAGE_ERROR = 2
-EXIT_HELP = (
-    "exit codes: 0 pass, 1 fail, 2 usage or input error, 3 inconclusive (no row fails but an "
-    "interval straddles its tolerance; --inconclusive fail|pass maps it to 1|0)"
-)
 
 
 def parse_tolerances(items) -> dict:
@@ -148,11 +143,6 @@ def junit_xml(result, inconclusive: str | None = None) -> str:
     return ET.tostring(suite, encoding="unicode", xml_declaration=True) + "\n"
 
 
-def write_junit(path, result, inconclusive: str | None = None) -> Path:
-    """Write :func:`junit_xml` to ``path`` atomically."""
-    return write_text_atomic(path, junit_xml(result, inconclusive))
-
-
 def finish(args, result, **extra) -> int:
     """Write ``--json``/``--junit``, print the verdict and return the exit code.
 
@@ -162,7 +152,7 @@ def finish(args, result, **extra) -> int:
     if args.json:
         write_json(args.json, result, code, **extra)
     if args.junit:
-        write_junit(args.junit, result, args.inconclusive)
+        write_text_atomic(args.junit, junit_xml(result, args.inconclusive))
     print(result.summary())
     print(f"exit code {code} ({result.verdict})")
     return code

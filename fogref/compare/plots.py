@@ -42,11 +42,6 @@ def _robust_max(m: np.ndarray) -> float:
     return hi if hi > 0 else 1.0
 
 
-def _symmetric_limit(m: np.ndarray) -> float:
-    """Symmetric colour limit of a signed map: the 99.5th percentile of ``|m|`` (> 0), else 1."""
-    return _robust_max(np.abs(m))
-
-
 def plot_error_heatmaps(errors: ErrorMaps, part: str, units: str, path) -> Path:
     """Five heatmaps of one part, each with a colour bar and its units.
 
@@ -58,7 +53,7 @@ def plot_error_heatmaps(errors: ErrorMaps, part: str, units: str, path) -> Path:
     pixels (``errors.valid`` False) are grey.
     """
     signed = errors.signed.mean(-1)
-    lim = _symmetric_limit(signed[errors.valid]) if errors.valid.any() else 1.0
+    lim = _robust_max(np.abs(signed[errors.valid])) if errors.valid.any() else 1.0  # symmetric limits
     panels = [
         (signed, "candidate − truth (signed)", f"[{units}]", "RdBu_r", -lim, lim),
         (errors.absolute, "|candidate − truth|", f"[{units}]", "viridis", 0.0, _robust_max(errors.absolute)),

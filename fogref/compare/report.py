@@ -340,26 +340,21 @@ def write_report(
                 "flip_params": {p: errors[p].flip_params for p in names},
                 "tone_map": "display = sRGB_OETF(clip(exposure * linear, 0, 1)); "
                 "exposure = 1 / (99th percentile of the reference part's luminance), transmittance 1",
-                "sky": (
-                    "a model is evaluated at camera + view * sky_distance, composited over the truth's "
-                    "surface.*"
-                ),
+                "sky": "a model is evaluated at camera + view * sky_distance, composited over the truth's "
+                "surface.*",
                 "composite": "model: final = surface * T_model + inscatter_model; images: composite = "
-                "surface * "
-                "T_engine + inscatter_engine; attenuated_surface = surface * T; only where "
+                "surface * T_engine + inscatter_engine; attenuated_surface = surface * T; only where "
                 "surface_coverage > 0; other pixels excluded and counted",
                 "noise": "per-pixel covariance of candidate - truth from the truth's stderr.* and corr.* "
-                "channels "
-                "(fogref.compare.noise, through check's comparison core: final/composite = surface * T' + "
-                "L' against surface * T + L) plus a rounding floor (4 ulp of float32 of |truth|); "
+                "channels (fogref.compare.noise, through check's comparison core: final/composite = surface "
+                "* T' + L' against surface * T + L) plus a rounding floor (4 ulp of float32 of |truth|); "
                 "*_noise_floor: a perfect candidate's score; *_stderr: standard error of the estimate; "
-                "*_below_noise: within noise_z standard errors of the noise floor (descriptive; the "
-                "verdict is the check's)",
+                "*_below_noise: within noise_z standard errors of the noise floor (descriptive; the verdict "
+                "is the check's)",
                 "noise_correlation": truth.attrs.get("fogref.noise_correlation", "measured"),
                 "noise_z": M.NOISE_Z,
                 "nonfinite": "a candidate with NaN, inf or |value| > 1e30 is refused (count and first "
-                "pixel), "
-                "as in check; the truth is refused if it holds any non-finite value",
+                "pixel), as in check; the truth is refused if it holds any non-finite value",
             },
             "metrics": table,
             "diagnostics": {

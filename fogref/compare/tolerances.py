@@ -26,8 +26,6 @@ DEFAULT_TOLERANCES: dict = {
 }
 #: The parts a tolerance may name.
 PART_NAMES = ("T", "inscatter", "final", "composite")
-#: The verdicts of a row with a tolerance.
-VERDICTS = ("pass", "fail", "inconclusive")
 
 
 def tolerance_table(tolerances, regions=None) -> dict:

@@ -194,11 +194,7 @@ def _srgb8(lin: Sequence[float]) -> tuple[int, int, int]:
 
 def _srgb8_to_linear(c8: Sequence[int]) -> tuple[float, ...]:
     """FLinearColor(FColor): the sRGB decoding of 8-bit values (``sRGBToLinearTable``)."""
-    out = []
-    for c in c8:
-        x = c / 255.0
-        out.append(x / 12.92 if x <= 0.04045 else ((x + 0.055) / 1.055) ** 2.4)
-    return tuple(out)
+    return tuple(x / 12.92 if x <= 0.04045 else ((x + 0.055) / 1.055) ** 2.4 for x in (c / 255.0 for c in c8))
 
 
 def unreal_plan(p: Any, cam: Camera, sun: Sun) -> dict:
@@ -555,14 +551,28 @@ def _unity_colour_gamma(c: Any) -> str:
     return f"new Color({_f(c[0])}f, {_f(c[1])}f, {_f(c[2])}f).gamma"
 
 
-def _unity_common(cam: Camera, sun: Sun, lux: bool) -> list[str]:
+def _unity_script(
+    engine: str, source: str, head: list[str], fog: list[str], cam: Camera, sun: Sun
+) -> dict[str, str]:
+    """The C# class of ``engine`` ("unity" or "hdrp") whose ``Apply`` runs the ``fog`` lines, then
+    sets the camera and the sun (in lux for HDRP)."""
+    hdrp = engine == "hdrp"
     colour, intensity = light_split(sun.irradiance)
-    if lux:
+    if hdrp:
         unit = "lux (HDRP)"
     else:  # UnityStandardBRDF.cginc leaves out the diffuse 1/pi: the light carries it
         intensity /= math.pi
         unit = "built-in pipeline: irradiance / pi (its Standard BRDF leaves out the diffuse 1/pi)"
-    return [
+    lines = [
+        _header("//", engine, source, head).rstrip("\n"),
+        "using UnityEngine;",
+        *(["using UnityEngine.Rendering;", "using UnityEngine.Rendering.HighDefinition;"] if hdrp else []),
+        "",
+        f"public static class {'FogrefHdrpFog' if hdrp else 'FogrefFog'}",
+        "{",
+        f"    public static void Apply({'VolumeProfile profile, ' if hdrp else ''}Camera camera, Light sun)",
+        "    {",
+        *fog,
         "        camera.transform.position = " + _unity_vec(cam.origin) + ";",
         "        camera.transform.rotation = Quaternion.LookRotation("
         + _unity_vec(cam.forward)
@@ -576,7 +586,10 @@ def _unity_common(cam: Camera, sun: Sun, lux: bool) -> list[str]:
         "        sun.transform.rotation = Quaternion.LookRotation(" + _unity_vec(-sun.w) + ");",
         f"        sun.color = {_unity_colour_gamma(colour)};  // linear -> Unity's sRGB Color",
         f"        sun.intensity = {_f(intensity)}f;  // {unit}",
+        "    }",
+        "}",
     ]
+    return {".cs": "\n".join(lines) + "\n"}
 
 
 def _unity(p: Any, cam: Camera, sun: Sun, source: str) -> dict[str, str]:
@@ -587,25 +600,15 @@ def _unity(p: Any, cam: Camera, sun: Sun, source: str) -> dict[str, str]:
         f"linear values.  fogref's fog coordinate: {p.fog_coordinate} (Unity's built-in fog uses depth",
         "unless the shader computes the distance).",
     ]
-    lines = [
-        _header("//", "unity", source, head).rstrip("\n"),
-        "using UnityEngine;",
-        "",
-        "public static class FogrefFog",
-        "{",
-        "    public static void Apply(Camera camera, Light sun)",
-        "    {",
+    fog = [
         "        RenderSettings.fog = true;",
         f"        RenderSettings.fogMode = FogMode.{mode};",
         f"        RenderSettings.fogDensity = {_f(p.fogDensity)}f;",
         f"        RenderSettings.fogStartDistance = {_f(p.fogStartDistance)}f;",
         f"        RenderSettings.fogEndDistance = {_f(p.fogEndDistance)}f;",
         f"        RenderSettings.fogColor = {_unity_colour_gamma(p.fogColor)};",
-        *_unity_common(cam, sun, lux=False),
-        "    }",
-        "}",
     ]
-    return {".cs": "\n".join(lines) + "\n"}
+    return _unity_script("unity", source, head, fog, cam, sun)
 
 
 def _hdrp(p: Any, cam: Camera, sun: Sun, source: str) -> dict[str, str]:
@@ -617,16 +620,7 @@ def _hdrp(p: Any, cam: Camera, sun: Sun, source: str) -> dict[str, str]:
     def col(c: Sequence[float]) -> str:
         return f"new Color({_f(c[0])}f, {_f(c[1])}f, {_f(c[2])}f)"
 
-    lines = [
-        _header("//", "hdrp", source, head).rstrip("\n"),
-        "using UnityEngine;",
-        "using UnityEngine.Rendering;",
-        "using UnityEngine.Rendering.HighDefinition;",
-        "",
-        "public static class FogrefHdrpFog",
-        "{",
-        "    public static void Apply(VolumeProfile profile, Camera camera, Light sun)",
-        "    {",
+    fog = [
         "        if (!profile.TryGet(out Fog fog))",
         "            fog = profile.Add<Fog>(true);",
         "        fog.enabled.Override(true);",
@@ -637,11 +631,8 @@ def _hdrp(p: Any, cam: Camera, sun: Sun, source: str) -> dict[str, str]:
         f"        fog.baseHeight.Override({_f(p.baseHeight)}f);",
         f"        fog.maximumHeight.Override({_f(p.maximumHeight)}f);",
         f"        fog.maxFogDistance.Override({_f(p.maxFogDistance)}f);",
-        *_unity_common(cam, sun, lux=True),
-        "    }",
-        "}",
     ]
-    return {".cs": "\n".join(lines) + "\n"}
+    return _unity_script("hdrp", source, head, fog, cam, sun)
 
 
 # -- Filament -------------------------------------------------------------------------------------

@@ -62,14 +62,14 @@ import numpy as np
 import numpy.typing as npt
 
 from fogref.errors import FogrefError, ParameterError, did_you_mean
-from fogref.mapping.build import build_model, model_label, param_dict
+from fogref.mapping.build import model_label, param_dict
 from fogref.mapping.free import FitSpec, Free, fit_spec
 from fogref.mapping.physical import PhysicalScene
 from fogref.mapping.registry import from_physical, has_mapping
 from fogref.mapping.unreal import FIT_DIRECTIONS_START, FIT_RTOL
 from fogref.mapping.views import Views, physical_single_scattering, rotated_views, sample_views
 from fogref.media import NP
-from fogref.models.base import SKY_DISTANCE, FogModel
+from fogref.models.base import SKY_DISTANCE
 from fogref.models.resolve import resolve_model
 from fogref.models.terms import annotate
 from fogref.params import number
@@ -394,10 +394,6 @@ class ModelFit:
         """The parameters the views do not determine: uncertainty (or spread) larger than the value."""
         spread = self.spread or {}
         return [k for k, v in self.values.items() if max(self.uncertainty[k], spread.get(k, 0.0)) > abs(v)]
-
-    def instance(self) -> FogModel:
-        """The fitted model (the scene's own sun)."""
-        return build_model(self.model, param_dict(self.params))
 
     def to_dict(self) -> dict:
         return {

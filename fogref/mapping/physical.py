@@ -53,6 +53,15 @@ def _infer_profile(medium: FogMedium) -> str:
     return "exponential"
 
 
+def _unit(value: Any, name: str, what: str, src: str) -> tuple:
+    """``value`` (3 finite numbers, not all 0) as a unit tuple; ParameterError naming ``name``."""
+    w = np.asarray(rgb(value, name, src), dtype=np.float64)
+    n = float(np.linalg.norm(w))
+    if not np.isfinite(n) or n == 0:
+        raise ParameterError(src, name, f"{what} {tuple(value)} is not a direction")
+    return tuple(float(x) for x in w / n)
+
+
 class _SkyModel(dict):
     """A physical sky's parameters (a dict) that hash by value, so a scene keeps its hash."""
 
@@ -118,25 +127,15 @@ class PhysicalScene:
         src: str = self.source or getattr(self.medium, "source", "<PhysicalScene>")
         object.__setattr__(self, "source", src)
         self.medium.require_height_only("the game-model mappings")
-        w = np.asarray(rgb(self.sun_direction, "direction", src), dtype=np.float64)
-        n = float(np.linalg.norm(w))
-        if not np.isfinite(n) or n == 0:
-            raise ParameterError(
-                src, "direction", f"sun direction {tuple(self.sun_direction)} is not a direction"
-            )
-        object.__setattr__(self, "sun_direction", tuple(float(x) for x in w / n))
+        sun = _unit(self.sun_direction, "direction", "sun direction", src)
+        object.__setattr__(self, "sun_direction", sun)
         object.__setattr__(self, "sun_irradiance", rgb(self.sun_irradiance, "irradiance", src, 0.0))
         sky = (0.0, 0.0, 0.0) if self.sky_radiance is None else self.sky_radiance
         object.__setattr__(self, "sky_radiance", rgb(sky, "radiance", src, 0.0))
         object.__setattr__(self, "camera", rgb(self.camera, "origin", src))
         if self.camera_forward is not None:
-            f = np.asarray(rgb(self.camera_forward, "forward", src), dtype=np.float64)
-            n = float(np.linalg.norm(f))
-            if not np.isfinite(n) or n == 0:
-                raise ParameterError(
-                    src, "forward", f"camera forward {tuple(self.camera_forward)} is not a direction"
-                )
-            object.__setattr__(self, "camera_forward", tuple(float(x) for x in f / n))
+            forward = _unit(self.camera_forward, "forward", "camera forward", src)
+            object.__setattr__(self, "camera_forward", forward)
         if self.profile is None:
             object.__setattr__(self, "profile", _infer_profile(self.medium))
         if self.sky_model is not None:

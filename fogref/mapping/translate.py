@@ -64,7 +64,7 @@ from fogref.mapping.free import FitSpec, Free, fit_spec, rgb_free
 from fogref.mapping.physical import PhysicalScene
 from fogref.mapping.views import Views, physical_single_scattering, sample_views
 from fogref.media import NP, ExpLayer, FogMedium
-from fogref.models.base import SKY_DISTANCE, FogResult
+from fogref.models.base import SKY_DISTANCE, FogResult, ParamModel
 from fogref.models.terms import DEFAULTS_FROM, annotate
 
 __all__ = ["PhysicalFog", "PhysicalFogParams", "Translation", "physical_of_model", "translate"]
@@ -105,15 +105,12 @@ class PhysicalFogParams:
         )
 
 
-class PhysicalFog:
+class PhysicalFog(ParamModel[PhysicalFogParams]):
     """The closed-form single scattering and transmittance of a physical fog, as a fog model
     (sky pixels, at :data:`~fogref.models.base.SKY_DISTANCE` or farther, see an infinite distance)."""
 
     name = "physical"
     Params = PhysicalFogParams
-
-    def __init__(self, params: PhysicalFogParams | None = None):
-        self.params = params or PhysicalFogParams()
 
     def evaluate(
         self, camera: npt.ArrayLike, positions: npt.ArrayLike, precision: str = "float64"

@@ -51,7 +51,7 @@ import numpy as np
 from fogref import params as valid
 from fogref.media import NP, PowerLawLayer
 from fogref.models._num import dtype_of, grey, saturate, split
-from fogref.models.base import FogResult, register
+from fogref.models.base import FogResult, ParamModel, register
 
 
 @dataclass(frozen=True)
@@ -112,13 +112,10 @@ def path_integral_exact(cam: Any, wp: Any, s: Any, e: Any, p: Any) -> np.ndarray
 
 
 @register("altitude")
-class AltitudeFog:
+class AltitudeFog(ParamModel[AltitudeFogParams]):
     """The altitude fog of "积分解 Unity 高度雾" (see module doc)."""
 
     Params = AltitudeFogParams
-
-    def __init__(self, params: AltitudeFogParams | None = None) -> None:
-        self.params = params or AltitudeFogParams()
 
     def path_integral(self, camera: Any, world_pos: Any, precision: str = "float32") -> np.ndarray:
         """``GetAltitudeFog``: the density path integral I [m] of each pixel."""

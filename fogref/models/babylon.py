@@ -55,7 +55,7 @@ import numpy as np
 from fogref import params as valid
 from fogref.errors import ParameterError
 from fogref.models._num import dtype_of, grey, sky_pixels, split, view_ray
-from fogref.models.base import SKY_DISTANCE, FogResult, register
+from fogref.models.base import SKY_DISTANCE, FogResult, ParamModel, register
 
 MODES = ("LINEAR", "EXP", "EXP2")
 #: ``fogFragmentDeclaration.fx``'s ``#define E 2.71828``.
@@ -118,7 +118,7 @@ def calc_fog_factor(p: BabylonFogParams, distance: Any, dt: Any) -> Any:
 
 
 @register("babylon")
-class BabylonFog:
+class BabylonFog(ParamModel[BabylonFogParams]):
     """Babylon.js scene fog (see module doc).
 
     Examples
@@ -130,9 +130,6 @@ class BabylonFog:
     """
 
     Params = BabylonFogParams
-
-    def __init__(self, params: BabylonFogParams | None = None) -> None:
-        self.params = params or BabylonFogParams()
 
     def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32", hit: Any = None) -> FogResult:
         """Fog of each pixel: camera (3,), world_pos (..., 3) in metres; ``hit`` (...,) bool,

@@ -15,11 +15,11 @@ the business of :mod:`fogref.mapping`.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable, ClassVar, Protocol, runtime_checkable
+from typing import Any, Callable, ClassVar, Generic, Protocol, TypeVar, runtime_checkable
 
 import numpy as np
 
-__all__ = ["SKY_DISTANCE", "FogModel", "FogResult", "as_points", "register"]
+__all__ = ["SKY_DISTANCE", "FogModel", "FogResult", "ParamModel", "as_points", "register"]
 
 #: Where a model fogs the pixels that see the sky [m] (compare, the fits and the
 #: study all use it): far enough that every fog of the scenes is saturated.
@@ -83,6 +83,24 @@ class FogModel(Protocol):
     name: ClassVar[str]
 
     def evaluate(self, camera: Any, positions: Any, precision: str = "float32") -> FogResult: ...
+
+
+P = TypeVar("P")
+
+
+class ParamModel(Generic[P]):
+    """What the built-in models share: ``Model(params)`` keeps ``params``, an instance of the
+    class attribute ``Params`` (the engine's settings dataclass); None builds ``Params()``.
+
+    >>> from fogref.models import get
+    >>> get("unity")().params.fogMode
+    'exp2'
+    """
+
+    Params: type[P]
+
+    def __init__(self, params: P | None = None) -> None:
+        self.params: P = params or self.Params()
 
 
 _REGISTRY: dict[str, type] = {}

@@ -64,7 +64,7 @@ from fogref import params as P
 from fogref.errors import ParameterError
 from fogref.media import rgb
 from fogref.models._num import dtype_of, grey, sky_pixels, split, unit_direction, view_ray
-from fogref.models.base import SKY_DISTANCE, FogResult, register
+from fogref.models.base import SKY_DISTANCE, FogResult, ParamModel, register
 
 FALLOFFS = ("Linear", "Exponential", "ExponentialSquared", "Atmospheric")
 
@@ -136,7 +136,7 @@ def _one_minus_inv_exp(x: Any, dt: Any) -> Any:
 
 
 @register("bevy")
-class BevyDistanceFog:
+class BevyDistanceFog(ParamModel[BevyFogParams]):
     """Bevy DistanceFog (see module doc).
 
     Examples
@@ -148,9 +148,6 @@ class BevyDistanceFog:
     """
 
     Params = BevyFogParams
-
-    def __init__(self, params: BevyFogParams | None = None):
-        self.params = params or BevyFogParams()
 
     def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32", hit: Any = None) -> FogResult:
         """Fog of each pixel: camera (3,), world_pos (..., 3) in metres; ``hit`` (...,) bool,

@@ -38,7 +38,7 @@ import numpy as np
 from fogref import params as valid
 from fogref.errors import ParameterError
 from fogref.models._num import dtype_of, grey, saturate, split, view_ray
-from fogref.models.base import FogResult, register
+from fogref.models.base import FogResult, ParamModel, register
 
 BOX_MODES = ("ratio", "thickness", "beer")
 
@@ -93,13 +93,10 @@ def slab_chord(cam: Any, v: Any, lo: Any, hi: Any, dt: Any) -> Any:
 
 
 @register("box")
-class BoxFog:
+class BoxFog(ParamModel[BoxFogParams]):
     """The blog's box volume fog (see module doc)."""
 
     Params = BoxFogParams
-
-    def __init__(self, params: BoxFogParams | None = None) -> None:
-        self.params = params or BoxFogParams()
 
     def fog_lengths(self, camera: Any, world_pos: Any, precision: str = "float32") -> Any:
         """``(t, d)`` [m]: fog length in front of and behind each pixel along its ray."""

@@ -75,7 +75,7 @@ from fogref import params as P
 from fogref.errors import ParameterError
 from fogref.media import rgb
 from fogref.models._num import dtype_of, glsl_smoothstep, grey, sky_pixels, split, unit_direction, view_ray
-from fogref.models.base import SKY_DISTANCE, FogResult, register
+from fogref.models.base import SKY_DISTANCE, FogResult, ParamModel, register
 
 MODES = ("exponential", "depth")
 #: Godot's default ``fog_light_color`` Color(0.518, 0.553, 0.608) (sRGB) as linear RGB.
@@ -186,7 +186,7 @@ class GodotFogParams:
 
 
 @register("godot")
-class GodotFog:
+class GodotFog(ParamModel[GodotFogParams]):
     """Godot 4 environment fog (see module doc).
 
     Examples
@@ -198,9 +198,6 @@ class GodotFog:
     """
 
     Params = GodotFogParams
-
-    def __init__(self, params: GodotFogParams | None = None):
-        self.params = params or GodotFogParams()
 
     def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32", hit: Any = None) -> FogResult:
         """Fog of each pixel: camera (3,), world_pos (..., 3) in metres; ``hit`` (..., ) bool,

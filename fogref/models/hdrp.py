@@ -45,7 +45,7 @@ from fogref import params as valid
 from fogref.media import NP
 from fogref.media.closed_form import phi
 from fogref.models._num import dtype_of, grey, sky_pixels, split, view_ray
-from fogref.models.base import SKY_DISTANCE, FogResult, register
+from fogref.models.base import SKY_DISTANCE, FogResult, ParamModel, register
 
 #: VolumeRendering.cs ScaleHeightFromLayerDepth: 1 / ln(1000).
 LAYER_DEPTH_TO_H = 0.144765
@@ -121,13 +121,10 @@ def optical_depth_height_fog(
 
 
 @register("hdrp")
-class HDRPFog:
+class HDRPFog(ParamModel[HDRPFogParams]):
     """HDRP height fog (see module doc)."""
 
     Params = HDRPFogParams
-
-    def __init__(self, params: HDRPFogParams | None = None) -> None:
-        self.params = params or HDRPFogParams()
 
     def optical_depth(
         self, camera: Any, world_pos: Any, precision: str = "float32", hit: Any = None

@@ -51,7 +51,7 @@ import numpy as np
 from fogref import params as valid
 from fogref.errors import ParameterError
 from fogref.models._num import dtype_of, grey, sky_pixels, split, unit_direction
-from fogref.models.base import SKY_DISTANCE, FogResult, register
+from fogref.models.base import SKY_DISTANCE, FogResult, ParamModel, register
 
 TYPES = ("linear", "exp", "exp2")
 
@@ -117,7 +117,7 @@ def gamma_correct_output(linear: Any, dt: Any = np.float32) -> Any:
 
 
 @register("playcanvas")
-class PlayCanvasFog:
+class PlayCanvasFog(ParamModel[PlayCanvasFogParams]):
     """PlayCanvas scene fog (see module doc).
 
     Examples
@@ -129,9 +129,6 @@ class PlayCanvasFog:
     """
 
     Params = PlayCanvasFogParams
-
-    def __init__(self, params: PlayCanvasFogParams | None = None) -> None:
-        self.params = params or PlayCanvasFogParams()
 
     def fog_depth(self, camera: Any, world_pos: Any, dt: Any = np.float64) -> np.ndarray:
         """``gl_FragCoord.z / gl_FragCoord.w`` [m]: ``far (z - near) / (far - near)`` of the eye depth z."""

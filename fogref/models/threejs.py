@@ -65,8 +65,8 @@ import numpy as np
 from fogref import params as P
 from fogref.errors import ParameterError
 from fogref.media import rgb
-from fogref.models._num import dtype_of, glsl_smoothstep, grey, sky_pixels, split
-from fogref.models.base import SKY_DISTANCE, FogResult, register
+from fogref.models._num import dtype_of, glsl_smoothstep, grey, sky_pixels, split, unit_direction
+from fogref.models.base import SKY_DISTANCE, FogResult, ParamModel, register
 
 MODES = ("Fog", "FogExp2")
 OUTPUTS = ("linear", "canvas")
@@ -114,11 +114,7 @@ class ThreeFogParams:
         if self.mode == "Fog" and not self.far > self.near:
             raise ParameterError(src, "far", f"must be greater than near ({self.far} <= {self.near})")
         object.__setattr__(self, "color", rgb(self.color, "color", src, lo=0.0))  # linear RGB >= 0
-        f = np.asarray(self.camera_forward, dtype=np.float64)
-        n = float(np.linalg.norm(f))
-        if f.shape != (3,) or not (math.isfinite(n) and n > 0):
-            raise ParameterError(src, "camera_forward", "expected a non-zero finite 3-vector")
-        object.__setattr__(self, "camera_forward", tuple(float(x) for x in f / n))
+        object.__setattr__(self, "camera_forward", unit_direction(self.camera_forward, "camera_forward", src))
 
 
 def srgb_transfer_oetf(linear: Any, dt: Any) -> Any:
@@ -192,7 +188,7 @@ class CanvasBlend(FogResult):
 
 
 @register("threejs")
-class ThreeJSFog:
+class ThreeJSFog(ParamModel[ThreeFogParams]):
     """three.js Fog / FogExp2 (see module doc).
 
     Examples
@@ -206,9 +202,6 @@ class ThreeJSFog:
     """
 
     Params = ThreeFogParams
-
-    def __init__(self, params: ThreeFogParams | None = None):
-        self.params = params or ThreeFogParams()
 
     def fog_depth(self, camera: Any, world_pos: Any, dt: Any = np.float64) -> np.ndarray:
         """``vFogDepth`` [m]: the eye depth ``dot(p - camera, camera_forward)`` of each pixel."""

@@ -100,7 +100,7 @@ from fogref.errors import ParameterError
 from fogref.media import NP, ExpLayer, FogMedium
 from fogref.media.closed_form import phi
 from fogref.models._num import LN2, dtype_of, grey, saturate, split
-from fogref.models.base import FogResult, register
+from fogref.models.base import FogResult, ParamModel, register
 from fogref.params import number, vector
 from fogref.params import rgb as valid_rgb
 
@@ -463,13 +463,10 @@ def shade(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt: Any, exact: bool) ->
 
 
 @register("ue4")
-class UE4ExponentialHeightFog:
+class UE4ExponentialHeightFog(ParamModel[UE4FogParams]):
     """Unreal's exponential height fog; ``params`` in Unreal units (see module doc)."""
 
     Params = UE4FogParams
-
-    def __init__(self, params: UE4FogParams | None = None) -> None:
-        self.params = params or UE4FogParams()
 
     def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
         """Fog of each pixel: camera (3,) and world_pos (..., 3) in fogref metres."""

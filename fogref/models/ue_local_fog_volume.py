@@ -74,7 +74,7 @@ import numpy as np
 
 from fogref.errors import ParameterError
 from fogref.models._num import dtype_of, grey, split
-from fogref.models.base import FogResult, register
+from fogref.models.base import FogResult, ParamModel, register
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams, direction_to_unreal, world_to_unreal
 from fogref.params import number, vector
 from fogref.params import rgb as valid_rgb
@@ -195,13 +195,10 @@ class UELocalFogVolumeParams:
 
 
 @register("ue5_lfv")
-class UELocalFogVolume:
+class UELocalFogVolume(ParamModel[UELocalFogVolumeParams]):
     """Unreal Engine 5's Local Fog Volume over its Exponential Height Fog (see module doc)."""
 
     Params = UELocalFogVolumeParams
-
-    def __init__(self, params: UELocalFogVolumeParams | None = None) -> None:
-        self.params = params or UELocalFogVolumeParams()
 
     def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
         """Fog of each pixel: camera (3,) and world_pos (..., 3) in fogref metres."""

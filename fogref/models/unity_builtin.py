@@ -46,7 +46,7 @@ import numpy as np
 from fogref import params as valid
 from fogref.errors import ParameterError
 from fogref.models._num import LN2, dtype_of, grey, saturate, sky_pixels, split
-from fogref.models.base import SKY_DISTANCE, FogResult, register
+from fogref.models.base import SKY_DISTANCE, FogResult, ParamModel, register
 
 MODES = ("linear", "exp", "exp2")
 
@@ -115,13 +115,10 @@ def unity_fog_factor(mode: str, fog_params: Any, coord: Any, dt: Any) -> Any:
 
 
 @register("unity")
-class UnityBuiltinFog:
+class UnityBuiltinFog(ParamModel[UnityFogParams]):
     """Unity built-in Linear/Exp/Exp2 fog (see module doc)."""
 
     Params = UnityFogParams
-
-    def __init__(self, params: UnityFogParams | None = None) -> None:
-        self.params = params or UnityFogParams()
 
     def fog_coordinate(self, camera: Any, world_pos: Any, dt: Any = np.float64) -> np.ndarray:
         """The fog coordinate c [m] of each pixel (eye depth or distance)."""
