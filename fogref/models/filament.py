@@ -5,9 +5,9 @@ Atmospheric Effects in Games (Carsten Wenzel)" version, ``exp`` based) and
 ``PerViewUniforms::prepareFog`` (CPU: ``fogDensity = (density, -heightFalloff (camera.y -
 height), density exp(-heightFalloff (camera.y - height)))``); the same GLSL is in the
 1.53.4 web build's ``filament.wasm`` (gltfio's ubershaders).  Held to that web build (npm
-``filament`` 1.53.4) in headless Chromium by ``tests/test_web_filament.py``: unlit quads,
-post-processing off, sun term on, the 8-bit canvas within 1/255.  The shader scales the fog colour by
-``iblLuminance`` (the indirect light's intensity times the camera's exposure): ``color`` here
+``filament`` 1.53.4) in headless Chromium by ``tests/test_web_filament.py``: unlit quads, sun
+term on, the default 8-bit canvas (``output="canvas"``) within 1/255.  The shader scales the fog
+colour by ``iblLuminance`` (the indirect light's intensity times the camera's exposure): ``color`` here
 is ``FogOptions.color`` times that (the test sets both to 1).
 
 Units: Filament is y-up **metres** (same as fogref) and uses **exp** (not exp2):
@@ -119,68 +119,27 @@ class FilamentFogParams:
         object.__setattr__(self, "lightColorIntensity", lci)
 
 
-def _columns(*v: float) -> np.ndarray:
-    """A ``mat3f`` of ``ColorSpaceUtils.h`` (its nine values listed by column), float32."""
-    return np.asarray(v, dtype=np.float32).reshape(3, 3).T
-
-
-# filament/src/ColorSpaceUtils.h; the products are formed in float32, as its constexpr mat3f are
-_XYZ_TO_SRGB = _columns(
-    3.2404542, -0.9692660, 0.0556434, -1.5371385, 1.8760108, -0.2040259, -0.4985314, 0.0415560, 1.0572252
+# filament/src/ColorSpaceUtils.h: each mat3f's nine values, listed by column; the products below
+# are formed in float32, as its constexpr mat3f are
+# fmt: off
+(_XYZ_TO_SRGB, _SRGB_TO_XYZ, _REC2020_TO_XYZ, _XYZ_TO_REC2020,
+ _AP1_TO_XYZ, _XYZ_TO_AP1, _AP1_TO_AP0, _AP0_TO_AP1) = (
+    np.asarray(columns, dtype=np.float32).reshape(3, 3).T for columns in (
+    (3.2404542, -0.9692660, 0.0556434, -1.5371385, 1.8760108, -0.2040259, -0.4985314, 0.0415560, 1.0572252),
+    (0.4124560, 0.2126730, 0.0193339, 0.3575760, 0.7151520, 0.1191920, 0.1804380, 0.0721750, 0.9503040),
+    (0.6369530, 0.2626983, 0.0000000, 0.1446169, 0.6780088, 0.0280731, 0.1688558, 0.0592929, 1.0608272),
+    (1.7166634, -0.6666738, 0.0176425, -0.3556733, 1.6164557, -0.0427770, -0.2533681, 0.0157683, 0.9422433),
+    (0.6624541811, 0.2722287168, -0.0055746495, 0.1340042065, 0.6740817658, 0.0040607335,
+     0.1561876870, 0.0536895174, 1.0103391003),
+    (1.6410233797, -0.6636628587, 0.0117218943, -0.3248032942, 1.6153315917, -0.0082844420,
+     -0.2364246952, 0.0167563477, 0.9883948585),
+    (0.6954522414, 0.0447945634, -0.0055258826, 0.1406786965, 0.8596711185, 0.0040252103,
+     0.1638690622, 0.0955343182, 1.0015006723),
+    (1.4514393161, -0.0765537734, 0.0083161484, -0.2365107469, 1.1762296998, -0.0060324498,
+     -0.2149285693, -0.0996759264, 0.9977163014),
+    )
 )
-_SRGB_TO_XYZ = _columns(
-    0.4124560, 0.2126730, 0.0193339, 0.3575760, 0.7151520, 0.1191920, 0.1804380, 0.0721750, 0.9503040
-)
-_REC2020_TO_XYZ = _columns(
-    0.6369530, 0.2626983, 0.0, 0.1446169, 0.6780088, 0.0280731, 0.1688558, 0.0592929, 1.0608272
-)
-_XYZ_TO_REC2020 = _columns(
-    1.7166634, -0.6666738, 0.0176425, -0.3556733, 1.6164557, -0.0427770, -0.2533681, 0.0157683, 0.9422433
-)
-_AP1_TO_XYZ = _columns(
-    0.6624541811,
-    0.2722287168,
-    -0.0055746495,
-    0.1340042065,
-    0.6740817658,
-    0.0040607335,
-    0.1561876870,
-    0.0536895174,
-    1.0103391003,
-)
-_XYZ_TO_AP1 = _columns(
-    1.6410233797,
-    -0.6636628587,
-    0.0117218943,
-    -0.3248032942,
-    1.6153315917,
-    -0.0082844420,
-    -0.2364246952,
-    0.0167563477,
-    0.9883948585,
-)
-_AP1_TO_AP0 = _columns(
-    0.6954522414,
-    0.0447945634,
-    -0.0055258826,
-    0.1406786965,
-    0.8596711185,
-    0.0040252103,
-    0.1638690622,
-    0.0955343182,
-    1.0015006723,
-)
-_AP0_TO_AP1 = _columns(
-    1.4514393161,
-    -0.0765537734,
-    0.0083161484,
-    -0.2365107469,
-    1.1762296998,
-    -0.0060324498,
-    -0.2149285693,
-    -0.0996759264,
-    0.9977163014,
-)
+# fmt: on
 _REC2020_TO_AP0 = _AP1_TO_AP0 @ _XYZ_TO_AP1 @ _REC2020_TO_XYZ
 _AP1_TO_REC2020 = _XYZ_TO_REC2020 @ _AP1_TO_XYZ
 _LUMINANCE_AP1 = np.asarray([0.272229, 0.674082, 0.0536895], dtype=np.float32)
