@@ -35,13 +35,14 @@ form is used; float64 always uses that closed form (no 0.00125 branch).
 Output (``output``): ``"linear"``, the fogged image as the colour pass writes it (a linear
 render target, post-processing off; the blend above); ``"canvas"``, the default canvas of a
 Filament ``View`` (post-processing on), whose colour-grading pass maps that image through the
-engine's default ``ColorGrading`` (transcribed from google/filament, files as at commit
-``0916f5bbbdeb3bfa553ce6ad2276652e570d4712`` for ``filament/src/ToneMapper.cpp``,
-``082da86ca889c905cfdc8928fb8fbeff1c50b091`` for ``filament/src/ColorSpaceUtils.h``,
-``1e3a258bf12047b681fad3be1d9bec60512c783f`` for ``filament/src/details/ColorGrading.cpp`` and
-``263d042924de0a13fe14d57a4fea4f538ac565f2`` for
-``filament/src/materials/colorGrading/colorGrading.mat``; held to the 1.53.4 web build by
-``tests/test_web_filament.py``): a 32^3 LUT in ``RGB10_A2`` (quality MEDIUM), indexed by the
+engine's default ``ColorGrading``, transcribed from google/filament at the nearest commits
+available here, later than ``v1.53.4`` (``filament/src/ToneMapper.cpp`` at
+``0916f5bbbdeb3bfa553ce6ad2276652e570d4712``, ``filament/src/ColorSpaceUtils.h`` at
+``082da86ca889c905cfdc8928fb8fbeff1c50b091``, ``filament/src/details/ColorGrading.cpp`` at
+``1e3a258bf12047b681fad3be1d9bec60512c783f``, ``filament/src/materials/colorGrading/
+colorGrading.mat`` at ``263d042924de0a13fe14d57a4fea4f538ac565f2``; the pass's GLSL as the
+1.53.4 web build hands it to WebGL has the same LogC lookup and dithering) and held to the 1.53.4
+web build by ``tests/test_web_filament.py``: a 32^3 LUT in ``RGB10_A2`` (quality MEDIUM), indexed by the
 Alexa LogC (EI 1000) encoding of the linear sRGB colour, whose entries are the colour in
 Rec.2020, tone-mapped by ``ACESLegacyToneMapper`` (:func:`aces_legacy`), back to sRGB,
 clamped to [0, 1] and sRGB-encoded (``outputColorSpace`` Rec709-sRGB-D65); the pass samples it
