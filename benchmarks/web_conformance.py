@@ -2,9 +2,9 @@
 
 Runs the probes of ``tests/web_probe.py`` (the same ones ``tests/test_web_*.py`` assert on):
 for each engine, 16 fog set-ups x 1024 probe pixels, read back from a float32 render target
-(linear) and from the default canvas (8 bits, the engine's own output encoding; Filament:
-post-processing off), against the fogref port.  Writes ``reports/engines/conformance.md``
-and ``conformance.json``.
+(linear) and from the default canvas (8 bits, the engine's own output encoding; Filament: its
+default colour grading, FXAA and dithering off), against the fogref port.  Writes
+``reports/engines/conformance.md`` and ``conformance.json``.
 
     .venv/bin/python benchmarks/web_conformance.py [--out DIR]
 
@@ -37,7 +37,7 @@ CANVAS = {
     "threejs": "sRGB (outputColorSpace), NoToneMapping; fog blended after the encoding",
     "babylon": "unconverted (StandardMaterial, default image processing)",
     "playcanvas": "GAMMA_SRGB: pow(c + 1e-7, 1/2.2), TONEMAP_LINEAR",
-    "filament": "post-processing off: the linear blend in 8 bits (no tone mapping, no encoding)",
+    "filament": "default ColorGrading: ACES-legacy tone mapping, sRGB output (32^3 LUT); FXAA, dithering off",
 }
 
 

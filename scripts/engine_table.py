@@ -133,17 +133,17 @@ def main(argv=None) -> int:
         "part of an engine's images with the truth: `linear` is its float32 render target (final "
         "image, and its fog's transmittance `T` and inscatter from passes with black materials; "
         "`composite` puts that fog over the truth's own surface radiance, so only the fog differs), "
-        "`canvas` the 8-bit canvas the engine ships with its defaults (three.js: sRGB output, its fog "
-        "blended in sRGB; Babylon.js: the linear values unconverted; PlayCanvas: a 2.2 power; "
-        "Filament: post-processing off, not its default, so the linear values clamped, unconverted), "
-        "read as sRGB. Metrics: relative RMSE and relative bias against the truth, with 99 % intervals "
-        "from the truth's noise (`fogref.compare.check`); `final` also carries the engine's own "
-        "surface shading (Lambert under a directional sun and a sky light: three.js's and Babylon's "
-        "hemisphere lights are the truth's sky, PlayCanvas's uniform ambient light is it only on "
-        "horizontal ground; Filament (WebAssembly, whose npm build ships no material compiler): "
-        "unlit glTF triangles whose vertex colours are fogref's Lambert shading of each vertex, "
-        "interpolated; no shadows), which is not the fog's error. The engines draw their "
-        "background without fog, so on `sky` their transmittance is 1 and their inscatter 0.",
+        "`canvas` the 8-bit canvas the engine ships with its defaults (three.js: sRGB output, its fog"
+        " blended in sRGB; Babylon.js: the linear values unconverted; PlayCanvas: a 2.2 power; "
+        "Filament: its default colour grading, ACES-legacy tone mapping and sRGB output, with FXAA "
+        "and dithering off), read as sRGB. Metrics: relative RMSE and relative bias against the "
+        "truth, with 99 % intervals from the truth's noise (`fogref.compare.check`); `final` also "
+        "carries the engine's own surface shading (Lambert under a directional sun and a sky light: "
+        "three.js's and Babylon's hemisphere lights are the truth's sky, PlayCanvas's uniform ambient"
+        " light is it only on horizontal ground; Filament (WebAssembly, whose npm build ships no "
+        "material compiler): unlit glTF triangles whose vertex colours are fogref's Lambert shading "
+        "of each vertex, interpolated; no shadows), which is not the fog's error. The engines draw "
+        "their background without fog, so on `sky` their transmittance is 1 and their inscatter 0.",
         "",
         f"Made by `{command}` in {time.perf_counter() - t0:.0f} s.",
         "",

@@ -15,10 +15,11 @@ Babylon.js, PlayCanvas and Filament (every engine of :data:`fogref.engines.ENGIN
   relative (Filament's 6e-5: its shader's line integral cancels for a small height term, see
   fogref.engines.filament.LINEAR_LEVEL; 2.9e-6 measured at 96x54).  A density 1 % off gives
   2.8e-3 (Filament 4.0e-3) here: the test can fail.
-* canvas: the port through the engine's canvas transform (three.js: sRGB transfer; Babylon,
-  Filament: none; PlayCanvas: a 2.2 power) and 8 bits: 0 code values measured, the level 1; an
-  sRGB-encoded linear blend instead differs by 17 (three.js) and 74 (Babylon, Filament) code
-  values on the valley.
+* canvas: the port through the engine's canvas transform (three.js: sRGB transfer; Babylon: none;
+  PlayCanvas: a 2.2 power; Filament: its default colour grading, ACES-legacy tone mapping and sRGB
+  output, the port's ``output="canvas"``) and 8 bits: 0 code values measured (Filament 1), the
+  level 1; an sRGB-encoded linear blend instead differs by 17 (three.js), 74 (Babylon) and 25
+  (Filament) code values on the valley.
 * lighting: without fog, on the open plane, the engine's image is the truth's (exact per sample
   there): 2.1e-7 (three.js), 7.0e-8 (Babylon, PlayCanvas), 2.5e-7 (Filament's unlit vertex
   colours, fogref's Lambert shading of each vertex) relative measured.
@@ -118,9 +119,11 @@ def test_fog_settings_arrive(valley):
 @pytest.mark.render
 def test_filament_canvas_is_its_port_on_a_truths_view(plane_truth):
     """Filament on the open plane's truth view (16x9), its fog mapped from the scene with the sun
-    term on: the 8-bit canvas (post-processing off) is the port's linear image clamped and rounded,
-    0 code values measured on all 80 surface pixels (level 1), the linear target 8.3e-8; the port
-    without its sun term misses by 10 code values and fails."""
+    term on: the 8-bit canvas as Filament ships it (its default colour grading: ACES-legacy tone
+    mapping, sRGB output; FXAA and dithering off) is the port's ``output="canvas"``, 1 code value
+    measured on the 80 surface pixels (RMS 0.065; level 1), the linear target 8.3e-8; the port
+    without its sun term misses by 22 code values and fails, the port without the tone mapping
+    (the sRGB encoding of its linear image) by 12."""
     from fogref.cli.engine import engine_model
     from fogref.engines.port import port_vs_engine
     from fogref.engines.render import render_engine
@@ -135,6 +138,7 @@ def test_filament_canvas_is_its_port_on_a_truths_view(plane_truth):
     no_sun = type(model)(dataclasses.replace(model.params, inScatteringSize=-1.0))
     q = port_vs_engine(r, no_sun)
     assert q["canvas_max"] > 5 and not q["at_quantisation"], q["summary"]
+    assert p["linear_blend_canvas_max"] > 5, p["summary"]
 
 
 def test_linear_fog_settings_arrive(chromium):

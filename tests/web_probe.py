@@ -361,7 +361,7 @@ def filament_model(fog: dict, output: str) -> Any:
     if sun:  # FogParams: lightDirection toward the sun, lightColorIntensity (colour, intensity x exposure)
         fog["lightDirection"] = tuple(-np.asarray(sun["direction"]))
         fog["lightColorIntensity"] = (*sun["color"], sun["intensity"])
-    return FilamentFog(FilamentFogParams(**{**fog, "color": tuple(fog["color"])}))
+    return FilamentFog(FilamentFogParams(**{**fog, "color": tuple(fog["color"])}, output=output))
 
 
 FILAMENT = Engine(
@@ -369,7 +369,7 @@ FILAMENT = Engine(
     "filament",
     filament_setups,
     filament_model,
-    lambda res, scene: np.clip(res.composite(scene.astype(np.float32)), 0.0, 1.0),
+    lambda res, scene: res.display(scene.astype(np.float32)),
     outputs=("canvas",),
     background=False,
 )

@@ -23,7 +23,7 @@ module            what
 and whose port is compared), ``PAGE`` (an ES module), ``IMPORTS`` (bare import name -> path
 under ``node_modules``), ``PACKAGE`` (its npm name), ``settings(model)`` (the fog settings the
 page takes, JSON) and ``canvas_port(surface, model, fog_factor)`` (the canvas the port predicts,
-8-bit; or ``canvas_of(image)`` for an engine whose canvas is its linear image in 8 bits:
+8-bit; none where the port has a canvas output of its own, a result with ``display``:
 Filament), ``port(model, camera)`` (the port for that camera) and optionally ``FOG_COORDINATE``
 (``"depth"``, the default, or ``"distance"``: what the engine's fog reads, see
 :mod:`fogref.engines.port`) and ``view_settings(near, far)`` (the settings the view fixes:

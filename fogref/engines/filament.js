@@ -9,7 +9,7 @@
 // RGBA32F colour texture (post-processing off, so the colour pass writes it directly); Filament's
 // JS has no readPixels, so the page notes which GL texture Filament allocates as RGBA32F
 // (texStorage2D on its WebGL 2 context, engine.context) and reads it back with gl.readPixels.
-import { arrayToB64, b64ToArray, unindexed } from "./page_helpers.js";
+import { arrayToB64, b64ToArray, unindexed, withoutDithering } from "./page_helpers.js";
 
 const loaded = new Promise((ok, fail) => {
   const s = document.createElement("script");
@@ -113,6 +113,7 @@ window.fogrefRender = async function (spec) {
   const engine = Filament.Engine.create(canvas, { preserveDrawingBuffer: true });
   const gl = engine.context;
   gl.getExtension("EXT_color_buffer_float");
+  const ditheringRemoved = withoutDithering(gl);
   const floatTextures = [];
   const texStorage2D = gl.texStorage2D.bind(gl);
   gl.texStorage2D = (target, levels, format, w, h) => {
@@ -143,8 +144,15 @@ window.fogrefRender = async function (spec) {
     v.setCamera(cam);
     v.setScene(scene);
     v.setViewport([0, 0, W, H]);
-    v.setPostProcessingEnabled(false);
-    if (toTarget) v.setRenderTarget(rt);
+    // the float target: post-processing off (the colour pass writes it).  The canvas: Filament's
+    // defaults (post-processing on: its default ColorGrading, ACES-legacy tone mapping and sRGB
+    // output) but FXAA and temporal dithering, turned off (withoutDithering)
+    if (toTarget) {
+      v.setPostProcessingEnabled(false);
+      v.setRenderTarget(rt);
+    } else {
+      v.setAntiAliasing(Filament.View$AntiAliasing.NONE);
+    }
     return v;
   });
   const renderer = engine.createRenderer();
@@ -188,7 +196,8 @@ window.fogrefRender = async function (spec) {
     return out;
   }
 
-  const out = { version: "", target_type: "RGBA32F RenderTarget", output_colour_space: "linear", tone_mapping: "none" };
+  const out = { version: "", target_type: "RGBA32F RenderTarget", output_colour_space: "sRGB (Rec709-sRGB-D65)",
+                tone_mapping: "ACES_LEGACY (the default ColorGrading)" };
   out.final = arrayToB64(await draw(true, "shaded", fog && fogOptions, [...sky, 1]));
   if (floatTextures.length !== 1) throw new Error(`expected one RGBA32F texture, Filament made ${floatTextures.length}`);
   out.surface = arrayToB64(await draw(true, "shaded", null, [...sky, 1]));
@@ -217,6 +226,7 @@ window.fogrefRender = async function (spec) {
   out.depth = arrayToB64(depth);
   out.position = arrayToB64(p);
   out.canvas = arrayToB64(await draw(false, "shaded", fog && fogOptions, [...sky, 1]));
+  if (ditheringRemoved() !== 1) throw new Error(`dithering: expected one shader to change, ${ditheringRemoved()} did`);
   out.renderer = gl.getParameter(gl.RENDERER);
   Filament.Engine.destroy(engine);
   return out;

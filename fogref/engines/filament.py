@@ -16,11 +16,14 @@ Float pixels: the view draws into a ``RenderTarget`` with an ``RGBA32F`` texture
 Filament's WebGL 2 context (its JS API has no ``readPixels``).  Depth: a pass whose vertex
 colours are the positions relative to the camera.
 
-The canvas: Filament's ``View`` defaults to post-processing on (colour grading with its default
-ACES-legacy tone mapping and output encoding, temporal dithering, FXAA: ``View.h``,
-``ColorGrading.h`` of v1.53.4).  The page turns post-processing off (as the float target
-requires), so the canvas holds the linear fogged image clamped to [0, 1] in 8 bits: no tone
-mapping, no sRGB encoding (read as sRGB by ``compare``, like Babylon.js's): :func:`canvas_of`.
+The canvas: what a Filament ``View`` shows by default (post-processing on: the default
+``ColorGrading``, ACES-legacy tone mapping and the sRGB output encoding of ``ColorGrading.h`` /
+``ToneMapper.cpp``), but with FXAA (an edge filter across neighbouring pixels) and temporal
+dithering (noise under one 8-bit step, which no per-pixel port reproduces) turned off: FXAA by
+``View.setAntiAliasing``, the dithering by ``withoutDithering`` of ``page_helpers.js`` (the JS
+API has no ``View.setDithering``: the page compiles the colour-grading shader with its noise
+term 0).  The port's canvas is its ``output="canvas"``
+(:class:`fogref.models.filament.CanvasGrade`): :func:`port` returns it.
 
 Examples
 --------
@@ -28,17 +31,16 @@ Examples
 >>> s = settings(FilamentFog(FilamentFogParams(density=0.01, heightFalloff=0.1)))
 >>> s["density"], s["heightFalloff"], s["inScatteringSize"], "cutOffDistance" in s
 (0.01, 0.1, -1.0, False)
->>> canvas_of(np.array([[[0.5, 1.5, -0.1]]])).tolist()
-[[[128, 255, 0]]]
+>>> port(FilamentFog(FilamentFogParams()), {}).params.output
+'canvas'
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 __all__ = [
     "FOG_COORDINATE",
@@ -48,7 +50,6 @@ __all__ = [
     "MODEL",
     "PACKAGE",
     "PAGE",
-    "canvas_of",
     "port",
     "settings",
 ]
@@ -69,8 +70,11 @@ LINEAR_LEVEL = 6e-5
 NOTES = (
     "filament: unlit glTF (KHR_materials_unlit) whose vertex colours are fogref's Lambert shading of "
     "each vertex (sun and sky), interpolated across each triangle: Filament's own lighting is not used",
-    "filament: post-processing off (Filament's default is on: tone mapping, dithering, FXAA); the "
-    "canvas holds the linear image clamped to [0, 1] in 8 bits, no tone mapping, no sRGB encoding",
+    "filament: the linear target is drawn with post-processing off; the canvas with Filament's defaults "
+    "(post-processing on: the default ColorGrading, ACES-legacy tone mapping, sRGB output encoding) but "
+    "FXAA (an edge filter across pixels) and temporal dithering (noise under one 8-bit step; the JS API "
+    "has no View.setDithering, so the page compiles the colour-grading shader with its noise term 0), "
+    "turned off: neither is reproduced by the per-pixel port",
 )
 
 
@@ -103,11 +107,7 @@ def settings(model: Any) -> dict:
 
 
 def port(model: Any, camera: dict) -> Any:
-    """The port itself: Filament's fog reads the world position, whatever the camera's axis."""
-    return model
-
-
-def canvas_of(image: np.ndarray) -> np.ndarray:
-    """The 8-bit canvas of Filament with post-processing off: the linear ``image`` (H, W, 3) clamped
-    to [0, 1] and rounded; returns uint8 (H, W, 3)."""
-    return np.rint(np.clip(np.asarray(image, dtype=np.float64), 0.0, 1.0) * 255).astype(np.uint8)
+    """The port with its canvas output (Filament's fog reads the world position, whatever the
+    camera's axis): its ``transmittance`` and ``inscatter`` are the linear target's, its
+    ``display`` the default canvas."""
+    return type(model)(dataclasses.replace(model.params, output="canvas"))

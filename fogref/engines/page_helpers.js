@@ -1,6 +1,7 @@
 // What fogref's engine pages share: the pixel transport (typed arrays to and from base64: selenium
-// passes strings between Python and the page) and the depth pass's triangle corners.  Imported by
-// threejs.js, babylon.js and playcanvas.js as "./page_helpers.js".
+// passes strings between Python and the page), the depth pass's triangle corners and Filament's
+// dithering switch.  Imported by the engine pages as "./page_helpers.js" (and by Filament's probe
+// page, tests/web/filament.html).
 
 export function b64ToArray(text, Type) {
   const bin = atob(text);
@@ -35,4 +36,19 @@ export function triangleCorners(p) {
     }
   }
   return c;
+}
+
+// Filament (npm "filament" 1.53.4): its colour-grading pass adds temporal dithering, triangular
+// noise under one 8-bit step (shaders/src/dithering.fs), and its JS API has no View.setDithering.
+// This turns the dithering off as View::setDithering(Dithering::NONE) does: the noise term of the
+// GLSL that Filament gives WebGL context gl is replaced by 0.  Returns how many shaders it changed.
+export function withoutDithering(gl) {
+  const noise = /\(\(fract\((\w+) \* 95\.4307\) \+ fract\(\1 \* 75\.04961\)\) - 1\.0\) \/ 255\.0/;
+  const shaderSource = gl.shaderSource.bind(gl);
+  let changed = 0;
+  gl.shaderSource = (shader, source) => {
+    if (noise.test(source)) changed++;
+    shaderSource(shader, source.replace(noise, "0.0"));
+  };
+  return () => changed;
 }

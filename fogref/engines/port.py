@@ -6,9 +6,9 @@ engine's fog saw, interpolated by the rasteriser: the eye depth (``fog_depth``),
 itself where the page returns it (``fog_position``: Filament, whose fog reads it); composited
 over the engine's own unfogged surface (``surface * T + inscatter``) and compared with the
 engine's linear image, and -- through the engine's canvas transform (its module's
-``canvas_port``, or ``canvas_of`` of the composited image) -- with the 8-bit canvas.  Only the
-pixels the engine drew a surface on are compared (three.js and Babylon.js draw their background
-without fog; ``sky_pixels`` counts the others).
+``canvas_port``, or the port's own canvas output, its result's ``display``: Filament's) -- with
+the 8-bit canvas.  Only the pixels the engine drew a surface on are compared (three.js and
+Babylon.js draw their background without fog; ``sky_pixels`` counts the others).
 
 The verdict ``at_quantisation`` is True when the linear difference is within
 :data:`LINEAR_LEVEL` (relative to ``max(1, |value|)``: float32 storage and float32 shader
@@ -74,10 +74,8 @@ def port_vs_engine(r: Any, model: Any, view_dirs: np.ndarray | None = None) -> d
     scale = np.maximum(1.0, np.abs(final))
     f = np.zeros(r.hit.shape)
     f[hit] = 1.0 - T[:, 0]
-    if hasattr(mod, "canvas_of"):  # a canvas that holds the linear image (Filament)
-        image = r.surface.copy()
-        image[hit] = final
-        canvas = mod.canvas_of(image)[hit].astype(np.int64)
+    if hasattr(res, "display"):  # the port's own canvas output (Filament's)
+        canvas = np.rint(np.asarray(res.display(r.surface[hit]), dtype=np.float64) * 255).astype(np.int64)
     else:
         canvas = mod.canvas_port(r.surface, port, f)[hit].astype(np.int64)
     dc = r.canvas[hit].astype(np.int64) - canvas

@@ -160,6 +160,7 @@ TERMS: dict[str, dict[str, Term]] = {
         "inScatteringSize": Term("1 (the lobe's exponent; < 0: no lobe)"),
         "lightDirection": _DIR,
         "lightColorIntensity": Term("linear RGB + intensity, scene radiance units", "linear"),
+        "output": _MODE,
     },
     "altitude": {
         "_FogStart": _M,
