@@ -1,7 +1,7 @@
 """Sun-guided phase sampling at medium vertices against fogpath's defaults: bias and
 equal-time error on the ladder's scenes.
 
-    .venv/bin/python benchmarks/sun_guiding.py                 # 96x54, 16 spp x 32 renders each
+    .venv/bin/python benchmarks/sun_guiding.py --renders 32    # 96x54, 16 spp x 32 renders each, share 0.25
     .venv/bin/python benchmarks/sun_guiding.py --res 48 27     # under heavy load
 
 ``fogpath_guided`` is ``fogpath_knobs`` (``benchmarks/_fogpath_knobs.py``) with
@@ -208,7 +208,7 @@ def main(argv=None):
     ap.add_argument("--res", type=int, nargs=2, default=(96, 54), metavar=("W", "H"))
     ap.add_argument("--spp", type=int, default=16)
     ap.add_argument("--renders", type=int, default=32)
-    ap.add_argument("--share", type=float, default=0.5)
+    ap.add_argument("--share", type=float, default=0.25)
     ap.add_argument("--max-depth", type=int, default=8)
     ap.add_argument("--boot", type=int, default=1000)
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
