@@ -59,6 +59,10 @@ PY=${PYTHON:-python3}
 # the locked versions (ruff, mypy, pytest included), then fogref on top of them
 .venv/bin/python -m pip install -q -r requirements.lock
 .venv/bin/python -m pip install -q --no-deps -e .
+# fogref and its plugins as bytecode: an editable install writes none, and where
+# PYTHONDONTWRITEBYTECODE is set Python never writes it, so every fresh `fogref` process would
+# compile its ~75 modules from source (0.2 s of CPU; reports/benchmarks/render_driver_startup.md)
+.venv/bin/python -m compileall -q fogref plugins >/dev/null
 .venv/bin/python -m pip check >/dev/null || {
   echo "setup: requirements.lock lacks a dependency of pyproject.toml; regenerate it (CONTRIBUTING.md)" >&2
   .venv/bin/python -m pip check >&2

@@ -1,0 +1,242 @@
+"""Sun-guided phase sampling at medium vertices against fogpath's defaults: bias and
+equal-time error on the ladder's scenes.
+
+    .venv/bin/python benchmarks/sun_guiding.py --renders 32    # 96x54, 16 spp x 32 renders each, share 0.25
+    .venv/bin/python benchmarks/sun_guiding.py --res 48 27     # under heavy load
+
+``fogpath_guided`` is ``fogpath_knobs`` (``benchmarks/_fogpath_knobs.py``) with
+``sun_guiding = --share``: the phase sample at every medium vertex is drawn from a mixture of
+the fog's phase function and a Henyey-Greenstein lobe around the direction toward the sun,
+weighted by ``f / p_mix`` (its pdf, ``p_mix``, also in the MIS weights).  For each scene the two
+methods render ``--renders`` images of ``--spp`` samples each with their own seeds,
+interleaved (the order alternates every render), and from the spread of those images:
+
+* **bias**: the image means (over pixels and RGB) of the two methods, their difference and its
+  z-score with the standard error from the spread of the renders' means; and the chi^2 per
+  pixel of the two pooled images (~1 when they agree within noise);
+* **variance per sample** of the final image and of its ``multiple`` part, summed over pixels
+  and RGB;
+* **equal-time efficiency ratio** ``(var x time)_fogpath / (var x time)_guided`` (> 1: the
+  guided sampler reaches the same RMSE in less time), time the median wall time of a render,
+  with a 95 % bootstrap interval over the renders.
+
+Writes ``reports/benchmarks/sun_guiding.{json,md}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import _scenes as S
+from _common import ROOT, machine_info, median, mi, np, timed_render
+
+from fogref import gbuffer
+
+
+def _channels():
+    names = gbuffer.sample_channel_names()
+    return [0, 1, 2] + [3 + names.index(f"multiple.{c}") for c in "RGB"]
+
+
+def _stats(imgs, times, spp):
+    """(variance per sample of final and multiple, summed over pixels and RGB; median time)."""
+    a = np.stack(imgs)
+    v = a.var(axis=0, ddof=1) * spp
+    return float(v[..., :3].sum()), float(v[..., 3:].sum()), median(times)
+
+
+def _chi2(a, b):
+    """Mean over pixels and RGB of (difference of the two stacks' means)^2 / (its variance from
+    their spreads)."""
+    var = np.maximum(a.var(0, ddof=1) / len(a) + b.var(0, ddof=1) / len(b), 1e-30)
+    return float(((a.mean(0) - b.mean(0)) ** 2 / var).mean())
+
+
+def run_scene(name, args, rng):
+    methods = {"fogpath": {}, "fogpath_guided": {"sun_guiding": args.share}}
+    scenes = {
+        m: S.build(mi, name, "fogpath", res=args.res, max_depth=args.max_depth, integrator_over=o)
+        for m, o in methods.items()
+    }
+    ch = _channels()
+    for m in methods:  # tracing and compilation outside the timings
+        timed_render(scenes[m], args.spp, 7, ch)
+    imgs = {m: [] for m in methods}
+    times = {m: [] for m in methods}
+    seed = {"fogpath": 1000, "fogpath_guided": 500_000}
+    for r in range(args.renders):
+        for m in list(methods)[:: 1 if r % 2 == 0 else -1]:
+            img, t = timed_render(scenes[m], args.spp, seed[m] + r, ch)
+            imgs[m].append(img)
+            times[m].append(t)
+    out = {}
+    for m in methods:
+        a = np.stack(imgs[m])
+        means = a[..., :3].mean(axis=(1, 2, 3))
+        vf, vm, t = _stats(imgs[m], times[m], args.spp)
+        out[m] = {
+            "image_mean": float(means.mean()),
+            "image_mean_se": float(means.std(ddof=1) / np.sqrt(len(means))),
+            "var_final": vf,
+            "var_multiple": vm,
+            "time_s": t,
+            "time_iqr_s": [float(np.percentile(times[m], 25)), float(np.percentile(times[m], 75))],
+        }
+    d, g = out["fogpath"], out["fogpath_guided"]
+    diff = g["image_mean"] - d["image_mean"]
+    se = float(np.hypot(g["image_mean_se"], d["image_mean_se"]))
+    pa, pb = np.stack(imgs["fogpath"])[..., :3], np.stack(imgs["fogpath_guided"])[..., :3]
+    n = args.renders
+    chi2 = _chi2(pa, pb)
+    h = n // 2  # the same statistic between the two halves of one method's renders: its value without bias
+    chi2_null = [_chi2(x[:h], x[h : 2 * h]) for x in (pa, pb)]
+    boot = []
+    for _ in range(args.boot):
+        ia, ib = rng.integers(0, n, n), rng.integers(0, n, n)
+        a, b = "fogpath", "fogpath_guided"
+        sa = _stats([imgs[a][i] for i in ia], [times[a][i] for i in ia], args.spp)
+        sb = _stats([imgs[b][i] for i in ib], [times[b][i] for i in ib], args.spp)
+        boot.append((sa[0] * sa[2] / (sb[0] * sb[2]), sa[1] / sb[1], sa[0] / sb[0]))
+    boot = np.array(boot)
+    ci = lambda k: [float(np.percentile(boot[:, k], 2.5)), float(np.percentile(boot[:, k], 97.5))]  # noqa: E731
+    out["comparison"] = {
+        "mean_diff_rel": diff / d["image_mean"],
+        "z": diff / se if se > 0 else 0.0,
+        "chi2_per_pixel": chi2,
+        "chi2_per_pixel_null": chi2_null,
+        "efficiency_ratio": d["var_final"] * d["time_s"] / (g["var_final"] * g["time_s"]),
+        "efficiency_ratio_ci95": ci(0),
+        "multiple_var_ratio": d["var_multiple"] / g["var_multiple"],
+        "multiple_var_ratio_ci95": ci(1),
+        "final_var_ratio": d["var_final"] / g["var_final"],
+        "final_var_ratio_ci95": ci(2),
+        "time_ratio": g["time_s"] / d["time_s"],
+    }
+    c = out["comparison"]
+    print(
+        f"[{name}] z {c['z']:+.2f}, chi2/px {chi2:.3f}, var final x{c['final_var_ratio']:.3f} "
+        f"multiple x{c['multiple_var_ratio']:.3f}, time x{c['time_ratio']:.3f}, "
+        f"efficiency {c['efficiency_ratio']:.3f} {c['efficiency_ratio_ci95']}",
+        flush=True,
+    )
+    return out
+
+
+def write_md(res, args) -> str:
+    m = res["machine"]
+    null = all("chi2_per_pixel_null" in r["comparison"] for r in res["scenes"].values())
+    lines = [
+        "# Sun-guided phase sampling at medium vertices (benchmark only)",
+        "",
+        f"Command: `python benchmarks/sun_guiding.py {res['argv']}`  ",
+        f"Machine: {m['cpu']}, {m['cores']} cores (shared), mitsuba {m['mitsuba']}, drjit {m['drjit']}, "
+        f"`{m['variant']}`; load average (1 min) {res['load_start'][0]:.1f} at the start, "
+        f"{res['load_end'][0]:.1f} at the end "
+        f"(5 min: {res['load_start'][1]:.1f}, {res['load_end'][1]:.1f}).  ",
+        f"Images {args.res[0]}x{args.res[1]}, max_depth {args.max_depth}; per scene and method "
+        f"{args.renders} renders of {args.spp} spp with their own seeds, the two methods interleaved; "
+        f"lobe share {args.share}, lobe g = the fog's g (at least 0.5). Total run {res['total_s']:.0f} s.",
+        "",
+        "`fogpath_guided`: the phase sample at every medium vertex drawn from `(1 - s) p_HG + s p_lobe`, "
+        "`p_lobe` a Henyey-Greenstein lobe around the direction toward the sun, weight `f / p_mix`, "
+        "`p_mix` also in the MIS weights against the sky (`benchmarks/_fogpath_knobs.py`, "
+        "`SunGuidedPhase`).",
+        "",
+        "## Bias: guided against fogpath",
+        "",
+        "| scene | image mean fogpath | image mean guided | rel. diff | z | smallest detectable rel. diff "
+        "| chi2 / pixel |" + (" the same, halves of fogpath / of guided |" if null else ""),
+        "|---|---|---|---|---|---|---|" + ("---|" if null else ""),
+    ]
+    for s, r in res["scenes"].items():
+        d, g, c = r["fogpath"], r["fogpath_guided"], r["comparison"]
+        lines.append(
+            f"| {s} | {d['image_mean']:.5f} ± {d['image_mean_se']:.5f} | {g['image_mean']:.5f} ± "
+            f"{g['image_mean_se']:.5f} | {c['mean_diff_rel']:+.2e} | {c['z']:+.2f} | "
+            f"{2.8 * np.hypot(d['image_mean_se'], g['image_mean_se']) / d['image_mean']:.1e} | "
+            f"{c['chi2_per_pixel']:.3f} |"
+            + (" " + " / ".join(f"{x:.3f}" for x in c["chi2_per_pixel_null"]) + " |" if null else "")
+        )
+    lines += [
+        "",
+        "± is the standard error of the mean from the spread of the renders' means; |z| < 1.96 at 95 % "
+        "confidence; the smallest detectable relative difference is 2.8 standard errors (95 % confidence, "
+        "80 % power). chi2 / pixel = mean over pixels and RGB of (difference of the pooled means)^2 / "
+        "(its variance from the spread), ~1 when the two agree (above 1 also from heavy-tailed samples)"
+        + (
+            "; the last column is the same statistic between the two halves of one method's renders "
+            "(no bias by construction)."
+            if null
+            else "."
+        ),
+        "",
+        "## Variance and equal-time efficiency",
+        "",
+        "| scene | var/sample fogpath | var/sample guided | final var ratio [95% CI] | multiple var ratio "
+        "[95% CI] | time fogpath [s] (IQR) | time guided [s] (IQR) | efficiency ratio [95% CI] |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for s, r in res["scenes"].items():
+        d, g, c = r["fogpath"], r["fogpath_guided"], r["comparison"]
+        f = lambda k: f"{c[k]:.3f} [{c[k + '_ci95'][0]:.3f}, {c[k + '_ci95'][1]:.3f}]"  # noqa: E731
+        t = lambda r: f"{r['time_s']:.3f} ({r['time_iqr_s'][0]:.3f}-{r['time_iqr_s'][1]:.3f})"  # noqa: E731
+        lines.append(
+            f"| {s} | {d['var_final']:.4g} | {g['var_final']:.4g} | {f('final_var_ratio')} | "
+            f"{f('multiple_var_ratio')} | {t(d)} | {t(g)} | {f('efficiency_ratio')} |"
+        )
+    lines += [
+        "",
+        "Ratios are fogpath / guided: > 1 means the guided sampler has less variance (or, for the "
+        "efficiency ratio, reaches the same RMSE in less time: `(var x median time)` of fogpath over that "
+        "of the guided sampler). Variance per sample summed over pixels and RGB; 95 % intervals from "
+        f"{args.boot} bootstrap resamples of the renders (the time's noise included).",
+        "",
+    ]
+    if res.get("reading"):
+        lines += ["## Verdict", "", res["reading"], ""]
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--scenes", nargs="*", default=list(S.SCENES))
+    ap.add_argument("--res", type=int, nargs=2, default=(96, 54), metavar=("W", "H"))
+    ap.add_argument("--spp", type=int, default=16)
+    ap.add_argument("--renders", type=int, default=32)
+    ap.add_argument("--share", type=float, default=0.25)
+    ap.add_argument("--max-depth", type=int, default=8)
+    ap.add_argument("--boot", type=int, default=1000)
+    ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
+    ap.add_argument("--name", default="sun_guiding")
+    ap.add_argument("--reading", default=None, help="a file whose text goes under 'Verdict' in the .md")
+    ap.add_argument("--from-json", default=None, help="rewrite the .md of this run's .json (same arguments)")
+    args = ap.parse_args(argv)
+    args.res = tuple(args.res)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    if args.from_json:
+        res = json.loads(Path(args.from_json).read_text())
+        if args.reading:
+            res["reading"] = Path(args.reading).read_text().strip()
+        (out / f"{args.name}.json").write_text(json.dumps(res, indent=1))
+        (out / f"{args.name}.md").write_text(write_md(res, args))
+        return
+    rng = np.random.default_rng(0)
+    t0, load0 = time.perf_counter(), os.getloadavg()
+    res = {"machine": machine_info(), "argv": " ".join(sys.argv[1:]), "load_start": list(load0), "scenes": {}}
+    for s in args.scenes:
+        res["scenes"][s] = run_scene(s, args, rng)
+    res["load_end"], res["total_s"] = list(os.getloadavg()), time.perf_counter() - t0
+    if args.reading:
+        res["reading"] = Path(args.reading).read_text().strip()
+    (out / f"{args.name}.json").write_text(json.dumps(res, indent=1))
+    (out / f"{args.name}.md").write_text(write_md(res, args))
+
+
+if __name__ == "__main__":
+    main()
