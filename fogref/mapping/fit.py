@@ -147,10 +147,7 @@ def physical_targets(
     out = []
     for ps in scenes:
         L = physical_single_scattering(ps, views)
-        o = tuple(np.full(len(views.D), c) for c in views.camera)
-        d = tuple(views.d[:, i] for i in range(3))
-        D = np.where(views.sky, NP.largest, views.D)
-        T = np.stack(ps.medium.transmittance(NP, o, d, D), axis=-1)
+        T = np.stack(ps.medium.transmittance(NP, *views.rays()), axis=-1)
         out.append(Target(ps, views, np.asarray(L, float), np.asarray(T, float)))
     return out
 

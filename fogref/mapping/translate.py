@@ -123,13 +123,7 @@ class PhysicalFog(ParamModel[PhysicalFogParams]):
         ps = self.params.scene(cam)
         v = Views(cam, d, D)
         L = physical_single_scattering(ps, v)
-        o = tuple(np.full(len(D), c) for c in cam)
-        T = np.stack(
-            ps.medium.transmittance(
-                NP, o, tuple(d[:, i] for i in range(3)), np.where(np.isfinite(D), D, NP.largest)
-            ),
-            axis=-1,
-        )
+        T = np.stack(ps.medium.transmittance(NP, *v.rays()), axis=-1)
         shape = np.shape(positions)
         return FogResult(inscatter=L.reshape(shape), transmittance=T.reshape(shape))
 

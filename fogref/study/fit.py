@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fogref import mapping
 from fogref.atomic import save_figure_atomic as save_figure
 from fogref.atomic import write_text_atomic as write_text
 from fogref.errors import FogrefError
@@ -156,9 +157,7 @@ def fit_model(name, scene=None, views=None, sun_elevations=None, **kw):
     """``fogref.fit_model``: :func:`fogref.mapping.fit.fit_model` of a model for a scene XML path
     (default :data:`DEFAULT_SCENE`), an EXR's ``fogref.params`` dict or a
     :class:`~fogref.mapping.PhysicalScene`.  Returns a :class:`fogref.mapping.fit.ModelFit`."""
-    from fogref.mapping.fit import fit_model as fit
-
-    return fit(name, _physical(scene), views=views, sun_elevations=sun_elevations, **kw)
+    return mapping.fit_model(name, _physical(scene), views=views, sun_elevations=sun_elevations, **kw)
 
 
 def translate(source, target, params: dict | None = None, scene=None, **kw):
@@ -170,12 +169,10 @@ def translate(source, target, params: dict | None = None, scene=None, **kw):
     and :data:`DEFAULT_SCENE` is the reference (camera, albedo, sun); with one, they come from
     that scene's fit (``fill`` overrides either).
     """
-    from fogref.mapping.translate import translate as tr
-
     kw.setdefault("fill", "defaults" if scene is None else "mapping")
     if isinstance(scene, (str, Path)):
         label = str(scene)
     else:
         label = f"the default scene {DEFAULT_SCENE.name}" if scene is None else "the reference scene"
     kw.setdefault("scene_label", label)
-    return tr(source, target, params, _physical(scene), **kw)
+    return mapping.translate(source, target, params, _physical(scene), **kw)
