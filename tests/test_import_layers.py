@@ -375,7 +375,6 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
     "fogref.mapping.lobe": {"scipy.optimize.minimize_scalar": HEAVY, "scipy.optimize.nnls": HEAVY},
     "fogref.mapping.unreal_basis": {"scipy.optimize.minimize_scalar": HEAVY, "scipy.optimize.nnls": HEAVY},
     # scipy.special 0.5 s: only droplet fogs; miepython (0.5 s) reads MIEPYTHON_USE_JIT as it loads
-    "fogref.media.droplets": {"scipy.special.roots_genlaguerre": HEAVY},
     "fogref.media.mie": {"miepython": DOES_WORK, "scipy.special.gammaincinv": HEAVY},
     # the media floor runs without Mitsuba; Dr.Jit only for the plugins' back end and the sky
     "fogref.media.ops": {"drjit": DOES_WORK, "mitsuba": DOES_WORK},
