@@ -5,7 +5,7 @@
 Quantity: the optical depth of the camera ray, tau = ln2 * integral with
 ``integral = CalculateLineIntegralShared(...) * RayLength`` of HeightFogCommon.ush
 (one layer, no start distance), computed by fogref's transcription
-(:mod:`fogref.models.ue4`: ``fog_constants`` and ``_line_integral_shared``,
+(:mod:`fogref.models.ue4`: ``fog_constants`` and ``line_integral_shared``,
 i.e. the CPU clamps, ``max(-127, Falloff)`` and the Taylor branch
 ``ln2 - 0.5 ln2^2 Falloff`` below ``|Falloff| <= 0.01``), in float32 (shader)
 and in float64 with the Taylor branch kept (the formula's own error without
@@ -45,8 +45,8 @@ from fogref.media.closed_form import exp_layer_optical_depth  # noqa: E402
 from fogref.models.ue4 import (  # noqa: E402
     FLT_EPSILON2,
     UE4FogParams,
-    _line_integral_shared,
     fog_constants,
+    line_integral_shared,
     unreal_to_sigma,
 )
 
@@ -82,7 +82,7 @@ def shader_tau(cam_z_cm, dz_cm, horiz_cm, dt, taylor=True, params=None):
     with np.errstate(all="ignore"):
         length = np.sqrt(cx * cx + cz * cz)
         ro = np.broadcast_to(P[0], length.shape)
-        shared = _line_integral_shared(P[1], cz, ro, dt, exact=not taylor)
+        shared = line_integral_shared(P[1], cz, ro, dt, exact=not taylor)
         return (shared * length).astype(np.float64) * LN2
 
 
@@ -152,7 +152,7 @@ def main():
         ("shader float32", np.float32, True),
         ("shader formula float64", np.float64, True),
     ):
-        g = _line_integral_shared(dt(1.0), F.astype(dt), dt(1.0), dt, exact=not taylor).astype(np.float64)
+        g = line_integral_shared(dt(1.0), F.astype(dt), dt(1.0), dt, exact=not taylor).astype(np.float64)
         curves[name] = rel(g, g_ref)
     # fogref's phi form: g = ln2 * phi(ln2 F)
     from fogref.media.closed_form import phi as cf_phi
@@ -186,7 +186,7 @@ def main():
     one_d["clamp_minus_127_examples"] = {
         f"F={f}": float(
             rel(
-                _line_integral_shared(np.float64(1.0), np.float64(f), 1.0, np.float64, True),
+                line_integral_shared(np.float64(1.0), np.float64(f), 1.0, np.float64, True),
                 float(-mp.expm1(-mp.mpf(f) * mp.log(2)) / mp.mpf(f)),
             )
         )

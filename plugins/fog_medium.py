@@ -57,7 +57,7 @@ import mitsuba as mi
 from fogref.errors import ParameterError
 from fogref.media import drjit_ops
 from fogref.media.params import medium_from_params
-from fogref.media.protocol import check_range
+from fogref.params import number as valid_number
 
 from .tab_phase import TabulatedPhaseFunction
 
@@ -107,7 +107,7 @@ class HeightFogMedium(mi.Medium):
         vol = self.fog.volume
         if vol is not None:  # not clipped by the bounds: its lowest point counts too
             default_floor = min(default_floor, vol.centre[1] - vol.radius)
-        self.floor = check_range(src, "floor", params.get("floor", default_floor), -1e7, 1e7)
+        self.floor = valid_number(params.get("floor", default_floor), "floor", source=src, lo=-1e7, hi=1e7)
         self.m_is_homogeneous = False
         # Stock volpath's spectral mode gives every ray that escapes to infinity
         # weight 0 (its transmittance pdf uses t = inf), so stock comparisons need

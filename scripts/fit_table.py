@@ -43,9 +43,9 @@ def main(argv=None) -> int:
         return 0
     from fogref.atomic import write_text_atomic as write_text
     from fogref.mapping.fit import sun_elevation
-    from fogref.study.fit import _physical, fit_model, translate
+    from fogref.study.fit import fit_model, reference_scene, translate
 
-    pf = _physical(a.scene)
+    pf = reference_scene(a.scene)
     elevations = [round(sun_elevation(pf), 2), *EXTRA_ELEVATIONS]
     command = f"python scripts/fit_table.py --scene {a.scene} --out {a.out}"
     rows = []

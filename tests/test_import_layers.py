@@ -369,6 +369,18 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
     "fogref.gbuffer": {"drjit": DOES_WORK},
     # pandas 0.7 s: only for a DataFrame"s display
     "fogref.html.notebook": {"pandas": HEAVY},
+    # scipy.optimize 0.7 s: `import fogref.mapping` (which imports every mapping module) and
+    # the mappings that need no fit go without it
+    "fogref.mapping.fit": {"scipy.optimize.least_squares": HEAVY},
+    "fogref.mapping.lobe": {"scipy.optimize.minimize_scalar": HEAVY, "scipy.optimize.nnls": HEAVY},
+    "fogref.mapping.unreal_basis": {"scipy.optimize.minimize_scalar": HEAVY, "scipy.optimize.nnls": HEAVY},
+    # scipy.special 0.5 s: only droplet fogs; miepython (0.5 s) reads MIEPYTHON_USE_JIT as it loads
+    "fogref.media.mie": {"miepython": DOES_WORK, "scipy.special.gammaincinv": HEAVY},
+    # the media floor runs without Mitsuba; Dr.Jit only for the plugins' back end and the sky
+    "fogref.media.ops": {"drjit": DOES_WORK, "mitsuba": DOES_WORK},
+    # scipy.integrate 0.8 s: only the horizon share of a lobe (hg_upper_fraction)
+    "fogref.media.single_scatter": {"scipy.integrate": HEAVY},
+    "fogref.media.sky": {"drjit": DOES_WORK, "mitsuba": DOES_WORK},
     # pytest loads this plugin in every session of a project that installs fogref; the render
     # cache (0.5 s) only for a test that asks for a truth
     "fogref.pytest_plugin": {
@@ -376,6 +388,8 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
         "fogref.render.cache.default_cache_dir": HEAVY,
     },
     "fogref.study.budget.report": {"matplotlib": HEAVY, "matplotlib.pyplot": HEAVY},
+    # matplotlib 0.4 s (pyplot 0.6 s): only the lobe table's figure
+    "fogref.study.fit": {"matplotlib": HEAVY, "matplotlib.pyplot": HEAVY},
     "fogref.study.spectral_rgb": {"colour": HEAVY},
     # scipy.stats.qmc 1.4 s: only the random and lhs designs
     "fogref.study.sweep.design": {"scipy.stats.qmc": HEAVY},
@@ -417,45 +431,6 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
         "fogref.render.load.load_scene": NOT_REVIEWED,
         "mitsuba": NOT_REVIEWED,
     },
-    "fogref.mapping.droplet_fog": {
-        "fogref.media.NP": NOT_REVIEWED,
-    },
-    "fogref.mapping.export": {
-        "fogref.errors.did_you_mean": NOT_REVIEWED,
-        "fogref.models.resolve.resolve_model": NOT_REVIEWED,
-    },
-    "fogref.mapping.fit": {
-        "scipy.optimize.least_squares": NOT_REVIEWED,
-    },
-    "fogref.mapping.lobe": {
-        "scipy.optimize.minimize_scalar": NOT_REVIEWED,
-        "scipy.optimize.nnls": NOT_REVIEWED,
-    },
-    "fogref.mapping.unreal_basis": {
-        "scipy.optimize.minimize_scalar": NOT_REVIEWED,
-        "scipy.optimize.nnls": NOT_REVIEWED,
-    },
-    "fogref.media.droplets": {
-        "scipy.special.roots_genlaguerre": NOT_REVIEWED,
-    },
-    "fogref.media.mie": {
-        "miepython": NOT_REVIEWED,
-        "scipy.special.gammaincinv": NOT_REVIEWED,
-    },
-    "fogref.media.ops": {
-        "drjit": NOT_REVIEWED,
-        "mitsuba": NOT_REVIEWED,
-    },
-    "fogref.media.single_scatter": {
-        "scipy.integrate": NOT_REVIEWED,
-    },
-    "fogref.media.sky": {
-        "drjit": NOT_REVIEWED,
-        "mitsuba": NOT_REVIEWED,
-    },
-    "fogref.models.resolve": {
-        "importlib.metadata.entry_points": NOT_REVIEWED,
-    },
     "fogref.render.cache": {
         "fogref_plugins": NOT_REVIEWED,
     },
@@ -492,12 +467,6 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
         "pathlib.Path": NOT_REVIEWED,
         "types": NOT_REVIEWED,
     },
-    "fogref.study.fit": {
-        "fogref.mapping.fit.fit_model": NOT_REVIEWED,
-        "fogref.mapping.translate.translate": NOT_REVIEWED,
-        "matplotlib": NOT_REVIEWED,
-        "matplotlib.pyplot": NOT_REVIEWED,
-    },
     "fogref_plugins": {
         "fogref_plugins.fog_medium.register": NOT_REVIEWED,
         "fogref_plugins.fogpath.register": NOT_REVIEWED,
@@ -511,9 +480,6 @@ PRIVATE_IMPORTS: dict[str, dict[str, str]] = {
     # not yet reviewed
     "benchmarks.render_distributed": {
         "fogref.render.render._device_f64": NOT_REVIEWED,
-    },
-    "benchmarks.ue4_precision_map": {
-        "fogref.models.ue4._line_integral_shared": NOT_REVIEWED,
     },
 }
 

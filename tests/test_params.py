@@ -135,12 +135,12 @@ def test_the_old_doors_use_it():
     """The media's and compare's validators give fogref.params' messages."""
     from fogref.compare.report import check_sky_distance
     from fogref.media.medium import check_layer_param
-    from fogref.media.protocol import check_range, number, profile_entry, rgb
+    from fogref.media.protocol import number, profile_entry, rgb
 
     with pytest.raises(ParameterError, match=r"'layer0.falloff': -1 is outside \[0, 1000\]"):
         check_layer_param("s.xml", 0, "falloff", -1, 0.0, 1e3)
     with pytest.raises(ParameterError, match="'floor': nan is not finite"):
-        check_range("s.xml", "floor", math.nan, -1e7, 1e7)
+        P.number(math.nan, "floor", source="s.xml", lo=-1e7, hi=1e7)  # fog_medium's floor
     with pytest.raises(ParameterError, match="'g': True is not a number"):
         number({"g": True}, "g", 0.0, "s.xml")
     with pytest.raises(ParameterError, match="'sigma_t': 1e400|not finite"):

@@ -31,6 +31,7 @@ from typing import Any
 from fogref.errors import ParameterError
 from fogref.media.droplets import GammaDroplets, droplet_preset
 from fogref.media.mie import droplet_optics
+from fogref.media.ops import NP
 from fogref.media.phase import TabulatedPhase, approx_mie_phase
 from fogref.media.visibility import (
     KOSCHMIEDER_CONTRAST,
@@ -148,7 +149,7 @@ def droplet_fog(
     elif phase == "approx-mie":
         diameter = 2.0 * d.r_eff
         table = TabulatedPhase.from_function(
-            lambda c: approx_mie_phase(_np(), c, diameter), label=f"approx-mie {diameter:g} um"
+            lambda c: approx_mie_phase(NP, c, diameter), label=f"approx-mie {diameter:g} um"
         )
     else:
         table = None
@@ -163,9 +164,3 @@ def droplet_fog(
     )
     alb = tuple(float(a) for a in optics.albedo)
     return DropletFog(sigma, alb, g_out, table, float(visibility), contrast, number, notes)
-
-
-def _np() -> Any:
-    from fogref.media import NP
-
-    return NP

@@ -67,7 +67,8 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from fogref.display import luminance
-from fogref.errors import ParameterError
+from fogref.errors import ParameterError, did_you_mean
+from fogref.models.resolve import resolve_model
 from fogref.models.terms import linear_to_srgb
 from fogref.models.ue4 import direction_to_unreal, unreal_rotator, world_to_unreal
 
@@ -702,9 +703,6 @@ def export(engine: str, params: Any, camera: Camera, sun: Sun, source: str = "")
     ``sun``: fogref's frame; ``source``: one line saying where the settings come from (written
     at the top).  ParameterError for an unknown engine or settings of another model.
     """
-    from fogref.errors import did_you_mean
-    from fogref.models.resolve import resolve_model
-
     if engine not in _WRITERS:
         raise ParameterError(
             "fogref export",

@@ -147,10 +147,7 @@ def physical_targets(
     out = []
     for ps in scenes:
         L = physical_single_scattering(ps, views)
-        o = tuple(np.full(len(views.D), c) for c in views.camera)
-        d = tuple(views.d[:, i] for i in range(3))
-        D = np.where(views.sky, NP.largest, views.D)
-        T = np.stack(ps.medium.transmittance(NP, o, d, D), axis=-1)
+        T = np.stack(ps.medium.transmittance(NP, *views.rays()), axis=-1)
         out.append(Target(ps, views, np.asarray(L, float), np.asarray(T, float)))
     return out
 
@@ -543,18 +540,11 @@ def fit_model(
         history = {"directions_converged": converged, "convergence": conv}
     history["fit_seconds"] = time.perf_counter() - t0
     name = getattr(cls, "name", None) or f"{cls.__module__}:{cls.__qualname__}"
+    fitted = "params values uncertainty at_bound rmse rel_rmse rmse_T target_rms n_views".split()
     return ModelFit(
         model=name,
-        params=r["params"],
-        values=r["values"],
-        uncertainty=r["uncertainty"],
+        **{k: r[k] for k in fitted},
         spread=spread,
-        at_bound=r["at_bound"],
-        rmse=r["rmse"],
-        rel_rmse=r["rel_rmse"],
-        rmse_T=r["rmse_T"],
-        target_rms=r["target_rms"],
-        n_views=r["n_views"],
         n_dirs=n,
         sun_elevations=elevations if elevations is not None else [sun_elevation(pf)],
         start=source,

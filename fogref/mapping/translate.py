@@ -123,13 +123,7 @@ class PhysicalFog(ParamModel[PhysicalFogParams]):
         ps = self.params.scene(cam)
         v = Views(cam, d, D)
         L = physical_single_scattering(ps, v)
-        o = tuple(np.full(len(D), c) for c in cam)
-        T = np.stack(
-            ps.medium.transmittance(
-                NP, o, tuple(d[:, i] for i in range(3)), np.where(np.isfinite(D), D, NP.largest)
-            ),
-            axis=-1,
-        )
+        T = np.stack(ps.medium.transmittance(NP, *v.rays()), axis=-1)
         shape = np.shape(positions)
         return FogResult(inscatter=L.reshape(shape), transmittance=T.reshape(shape))
 
@@ -192,14 +186,11 @@ def physical_of_model(
         medium = None
     m = pf.medium
     L0 = m.layers[0]
-    height = float(getattr(L0, "height", 0.0))
-    falloff = float(getattr(L0, "falloff", 0.0))
-    sigma = float(np.mean(m.sigma_t))
     p0 = PhysicalFogParams(
-        sigma_t=sigma,
-        falloff=falloff,
-        height=height,
-        albedo=tuple(pf.medium.albedo),
+        sigma_t=float(np.mean(m.sigma_t)),
+        falloff=float(getattr(L0, "falloff", 0.0)),
+        height=float(getattr(L0, "height", 0.0)),
+        albedo=tuple(m.albedo),
         g=float(m.g),
         sun_irradiance=tuple(pf.sun_irradiance),
         sky_radiance=tuple(pf.sky_radiance),

@@ -34,7 +34,7 @@ from fogref import params as P
 from fogref.errors import ParameterError
 from fogref.media import ExpLayer, FogMedium, medium_from_params, rgb
 from fogref.media.ue_pathtracer import DENSITY_CLAMP_DEFAULT, DENSITY_CLAMP_RANGE, RADIUS_RANGE
-from fogref.models.ue4 import UE4FogParams
+from fogref.models.ue4 import CM_PER_M, UE4FogParams
 from fogref.scene.defaults import declared
 from fogref.scene.edit import replace_fog
 
@@ -55,7 +55,6 @@ __all__ = [
     "validated_settings",
 ]
 
-CM_PER_M = 100.0
 #: [PT] ``MatchHeightFogFactor``: the path tracer's density is half the scene-info density.
 PT_DENSITY_FACTOR = 0.5
 #: [PT]: ``FogFalloff = max(FogData.HeightFalloff, 0.001 / 1000)``: the editor falloff's floor.

@@ -31,8 +31,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
 from fogref.errors import ParameterError
 
 __all__ = ["DROPLET_PRESETS", "GammaDroplets", "droplet_preset"]
@@ -93,23 +91,6 @@ class GammaDroplets:
     def liquid_water(self) -> float:
         """Liquid water content [g/m^3] of :attr:`number` droplets per cm^3 (water 1 g/cm^3)."""
         return self.number * 4.0 / 3.0 * math.pi * self.moment(3.0) * 1e-6
-
-    def area_quadrature(self, n: int = 48) -> tuple[np.ndarray, np.ndarray]:
-        """Radii [um] and weights (sum 1) of the ``n``-node Gauss–Laguerre rule for means
-        weighted by the droplets' cross section: ``<pi r^2 f(r)> = pi <r^2> sum w_i f(r_i)``
-        (exact for polynomial ``f`` of degree < 2n).  Nodes of weight below 1e-15 are left
-        out (their radii are far in the tail).
-
-        >>> r, w = GammaDroplets(3.0, 1 / 9).area_quadrature(8)
-        >>> round(float(w.sum()), 12), round(float((w * r).sum()), 9)   # <r^3> / <r^2> = r_eff
-        (1.0, 3.0)
-        """
-        from scipy.special import roots_genlaguerre
-
-        x, w = roots_genlaguerre(int(n), self.alpha + 2.0)
-        w = w / math.exp(math.lgamma(self.alpha + 3.0))
-        keep = w > 1e-15
-        return x[keep] / self.b, w[keep]
 
 
 #: Named fogs (see module): ``radiation`` and ``advection`` (Shettle & Fenn 1979, table 3)

@@ -1,12 +1,11 @@
 """Mie optics of fog droplets: extinction, albedo and phase per RGB band, averaged over a size
 distribution (``miepython``).
 
-For each band's wavelength, every droplet radius of the distribution's
-cross-section quadrature (:meth:`fogref.media.droplets.GammaDroplets.area_quadrature`)
-gets miepython's efficiencies and unpolarised phase function; their means, weighted by
-the droplets' cross sections, give the fog's mean extinction cross section per
-droplet, its albedo, its asymmetry ``g`` and its phase function tabulated on
-:func:`fogref.media.phase.phase_cosines`.
+For each band's wavelength, droplet radii every ``dx`` in size parameter (over all but 1e-8
+of the distribution's cross section) get miepython's efficiencies and unpolarised phase
+function; their means, weighted by the droplets' cross sections, give the fog's mean
+extinction cross section per droplet, its albedo, its asymmetry ``g`` and its phase function
+tabulated on :func:`fogref.media.phase.phase_cosines`.
 
 The bands are represented by one wavelength each, the dominant wavelengths of the
 sRGB (Rec. 709) primaries: 611.4, 549.1 and 464.3 nm (:data:`RGB_WAVELENGTHS_NM`;

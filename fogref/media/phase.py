@@ -39,8 +39,6 @@ __all__ = [
     "phase_cosines",
 ]
 
-FOUR_PI = 4.0 * math.pi
-
 
 def phase_cosines(forward_deg: float = 0.05, knee_deg: float = 5.0, step_deg: float = 0.25) -> np.ndarray:
     """Increasing cosines from -1 to 1 for a droplet phase table (float64 values that are

@@ -40,7 +40,6 @@ __all__ = [
     "NonIncreasingLayer",
     "register_profile",
     "profile_entry",
-    "check_range",
     "number",
     "rgb",
 ]
@@ -176,22 +175,6 @@ def profile_entry(name: str, src: str = "<params>") -> ProfileEntry:
     True
     """
     return PROFILES[params.choice(name, "profile", PROFILES, src)]
-
-
-def check_range(src: str, name: str, v: Any, lo: float, hi: float) -> float:
-    """``float(v)``, or ParameterError naming ``name`` unless finite and in ``[lo, hi]``
-    (:func:`fogref.params.number`).
-
-    Examples
-    --------
-    >>> check_range("<doc>", "layer0.falloff", 0.5, 0.0, 1e3)
-    0.5
-    >>> check_range("<doc>", "layer0.falloff", -1, 0.0, 1e3)
-    Traceback (most recent call last):
-    ...
-    fogref.errors.ParameterError: <doc>: parameter 'layer0.falloff': -1 is outside [0, 1000]
-    """
-    return params.number(v, name, source=src, lo=lo, hi=hi)
 
 
 def number(

@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import importlib
 import inspect
+from importlib.metadata import entry_points
 from typing import Any
 
 from fogref.errors import FogrefError, did_you_mean
@@ -74,8 +75,6 @@ def _builtin_names() -> list[str]:
 
 def entry_point_models() -> dict:
     """Name -> entry point of every model registered under the group ``fogref.models``."""
-    from importlib.metadata import entry_points
-
     return {ep.name: ep for ep in entry_points(group=ENTRY_POINT_GROUP)}
 
 

@@ -377,8 +377,14 @@ def _hg_shader(g: Any, cos_theta: Any, dt: Any) -> Any:
     return (dt(1.0) - g * g) / (dt(4.0) * dt(math.pi) * np.power(denom, dt(1.5)))
 
 
-def _line_integral_shared(falloff: Any, ray_dir_z: Any, origin_terms: Any, dt: Any, exact: bool) -> Any:
-    """CalculateLineIntegralShared (HeightFogCommon.ush).  ``exact``: no Taylor branch."""
+def line_integral_shared(falloff: Any, ray_dir_z: Any, origin_terms: Any, dt: Any, exact: bool) -> Any:
+    """CalculateLineIntegralShared (HeightFogCommon.ush): ``origin_terms (1 - 2^-F) / F`` with
+    ``F = max(-127, falloff ray_dir_z)`` (falloff [1/cm], ray_dir_z [cm]; any real), in the float
+    type ``dt``, ``ln 2 origin_terms`` near ``F = 0``.  ``exact``: no Taylor branch.
+
+    >>> round(float(line_integral_shared(1.0, 0.0, 1.0, np.float64, True)), 12)  # ln 2
+    0.69314718056
+    """
     F = np.maximum(dt(-127.0), falloff * ray_dir_z)
     if exact:
         return origin_terms * (dt(LN2) * phi(NP, dt(LN2) * F))
@@ -425,9 +431,9 @@ def shade(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt: Any, exact: bool) ->
         ro = P3[0] * np.exp2(-expo)
         expo2 = np.maximum(dt(-127.0), P2[1] * (excl_z - P2[3]))
         ro2 = P2[2] * np.exp2(-expo2)
-    shared = _line_integral_shared(P[1], ray_dir_z, ro, dt, exact)
+    shared = line_integral_shared(P[1], ray_dir_z, ro, dt, exact)
     if P2[2] > 0:  # second layer only when it exists (exact: a zero-density layer adds 0)
-        shared = shared + _line_integral_shared(P2[1], ray_dir_z, ro2, dt, exact)
+        shared = shared + line_integral_shared(P2[1], ray_dir_z, ro2, dt, exact)
     # Robustness (deviation): the shader's ``shared * length`` is NaN when an
     # overflowed (inf) density meets a zero-length ray; an empty ray has no fog.
     # Identical to the shader wherever the shader is not NaN.

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fogref import mapping
 from fogref.atomic import save_figure_atomic as save_figure
 from fogref.atomic import write_text_atomic as write_text
 from fogref.errors import FogrefError
@@ -139,7 +140,13 @@ def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -
 DEFAULT_SCENE = SCENES_DIR / "valley.xml"
 
 
-def _physical(scene, camera=None) -> PhysicalScene:
+def reference_scene(scene=None, camera=None) -> PhysicalScene:
+    """The physical scene of a scene XML path or shipped name (default :data:`DEFAULT_SCENE`), an
+    EXR's ``fogref.params`` dict, or a :class:`~fogref.mapping.PhysicalScene` as it is.
+
+    >>> reference_scene("valley") == reference_scene()
+    True
+    """
     if scene is None:
         scene = DEFAULT_SCENE
     if isinstance(scene, (str, Path)):
@@ -156,9 +163,7 @@ def fit_model(name, scene=None, views=None, sun_elevations=None, **kw):
     """``fogref.fit_model``: :func:`fogref.mapping.fit.fit_model` of a model for a scene XML path
     (default :data:`DEFAULT_SCENE`), an EXR's ``fogref.params`` dict or a
     :class:`~fogref.mapping.PhysicalScene`.  Returns a :class:`fogref.mapping.fit.ModelFit`."""
-    from fogref.mapping.fit import fit_model as fit
-
-    return fit(name, _physical(scene), views=views, sun_elevations=sun_elevations, **kw)
+    return mapping.fit_model(name, reference_scene(scene), views=views, sun_elevations=sun_elevations, **kw)
 
 
 def translate(source, target, params: dict | None = None, scene=None, **kw):
@@ -170,12 +175,10 @@ def translate(source, target, params: dict | None = None, scene=None, **kw):
     and :data:`DEFAULT_SCENE` is the reference (camera, albedo, sun); with one, they come from
     that scene's fit (``fill`` overrides either).
     """
-    from fogref.mapping.translate import translate as tr
-
     kw.setdefault("fill", "defaults" if scene is None else "mapping")
     if isinstance(scene, (str, Path)):
         label = str(scene)
     else:
         label = f"the default scene {DEFAULT_SCENE.name}" if scene is None else "the reference scene"
     kw.setdefault("scene_label", label)
-    return tr(source, target, params, _physical(scene), **kw)
+    return mapping.translate(source, target, params, reference_scene(scene), **kw)

@@ -113,6 +113,10 @@ def _hash(obj, n=16) -> str:
     return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:n]
 
 
+#: What a render configuration's ``id`` hashes (with fogref's version, and ``budget`` when set).
+_ID_KEYS = ("scene_sha256", "inputs_sha256", "overrides", "models", "spp", "seed", "pixel_filter")
+
+
 def build_configs(spec: SweepSpec) -> list[dict]:
     """Every configuration as a self-contained, JSON-ready task description.
 
@@ -150,13 +154,9 @@ def build_configs(spec: SweepSpec) -> list[dict]:
             if key not in digests:
                 digests[key] = _scene_inputs_digest(scene, overrides)
             inputs = digests[key]
+            cache = Path(spec.cache) / inputs[:16]
             truth = truth_path(
-                scene,
-                spec.spp,
-                seed,
-                overrides,
-                cache_dir=Path(spec.cache) / inputs[:16],
-                pixel_filter=spec.pixel_filter,
+                scene, spec.spp, seed, overrides, cache_dir=cache, pixel_filter=spec.pixel_filter
             )
             models = [{**m, "params": model_params[m["label"]]} for m in spec.models]
             cfg = {
@@ -172,22 +172,8 @@ def build_configs(spec: SweepSpec) -> list[dict]:
                 "truth": str(truth),
                 "budget": bool(getattr(spec, "budget", False)),
             }
-            cfg["id"] = _hash(
-                {
-                    k: cfg[k]
-                    for k in (
-                        "scene_sha256",
-                        "inputs_sha256",
-                        "overrides",
-                        "models",
-                        "spp",
-                        "seed",
-                        "pixel_filter",
-                    )
-                }
-                | {"fogref": __version__}
-                | ({"budget": True} if cfg["budget"] else {})
-            )
+            budget = {"budget": True} if cfg["budget"] else {}
+            cfg["id"] = _hash({k: cfg[k] for k in _ID_KEYS} | {"fogref": __version__} | budget)
             out.append(cfg)
     return out
 
