@@ -17,10 +17,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fogref.atomic import check_output_file
-from fogref.cli.checks import Assignments, Check, Choice, Number, PathArg
+from fogref.cli.checks import Check, Choice, Number, PathArg
 from fogref.cli.compare_batch import ImageList, run_batch
 from fogref.cli.engine import engine_model
-from fogref.cli.spec import UsageError, option, refuse, switch
+from fogref.cli.spec import UsageError, assignments, option, refuse, switch
 from fogref.compare import gate
 from fogref.compare.check import check
 from fogref.compare.foreign import ENCODINGS, load_engine_images
@@ -60,7 +60,6 @@ GATE_GROUP = "verdict (fogref.compare.check.check, as assert_fog_matches)"
 MODEL_ONLY = ("model", "param", "from_scene", "precision", "sky_distance")
 IMAGE_ONLY = ("image", "transmittance", "inscatter", "fog_colour", "encoding", "exposure")
 ENGINE_ONLY = ("engine", "engine_output", "scene")
-ENGINE_RENDER = "fogref.engines.render:render_and_write"
 
 
 class Tolerances(Check):
@@ -109,11 +108,8 @@ class Options:
         group=MODEL_GROUP,
         metavar="NAME",
     )
-    param: dict | None = option(
-        None,
+    param: dict | None = assignments(
         "set a model parameter (VALUE parsed as JSON when possible; each KEY once)",
-        repeat=True,
-        check=Assignments(),
         metavar="KEY=VALUE",
         group=MODEL_GROUP,
     )

@@ -17,8 +17,8 @@ import sys
 from dataclasses import dataclass, replace
 
 from fogref import params
-from fogref.cli.checks import RGB, Assignments, Integer, Number, PathArg, SceneArg, Text, Vector
-from fogref.cli.spec import UsageError, option, switch
+from fogref.cli.checks import RGB, Integer, Number, PathArg, SceneArg, Text, Vector
+from fogref.cli.spec import UsageError, assignments, option, switch
 from fogref.gbuffer import load_truth
 from fogref.mapping import PhysicalScene, fit_unreal, lobe_table, sample_views
 from fogref.mapping.build import parse_param_assignments
@@ -78,11 +78,8 @@ class Options:
         metavar="NAME",
         group=MODEL_GROUP,
     )
-    param: dict | None = option(
-        None,
+    param: dict | None = assignments(
         "fix a model setting in the engine's units; a colour is linear RGB (VALUE: JSON if it parses)",
-        repeat=True,
-        check=Assignments(),
         metavar="KEY=VALUE",
         group=MODEL_GROUP,
     )

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from fogref.cli.checks import Address, Assignments, Choice, Integer, Number, PathArg, SceneArg
-from fogref.cli.spec import UsageError, option, refuse, switch
+from fogref.cli.checks import Address, Choice, Integer, Number, PathArg, SceneArg
+from fogref.cli.spec import UsageError, assignments, option, refuse, switch
 from fogref.render.variant import VARIANTS
 
 NAME = "render"
@@ -59,13 +59,8 @@ class Options:
         api=API,
         default_text="$FOGREF_VARIANT, else llvm_ad_rgb",
     )
-    overrides: dict | None = option(
-        None,
-        "set a scene XML $default, e.g. --set res=64 (each NAME once)",
-        flag="--set",
-        repeat=True,
-        check=Assignments(),
-        api=API,
+    overrides: dict | None = assignments(
+        "set a scene XML $default, e.g. --set res=64 (each NAME once)", flag="--set", api=API
     )
     quiet: bool = switch("no progress bar", api=API, api_name="progress", negates=True)
     no_resume: bool = switch(
