@@ -62,6 +62,11 @@ IMAGE_ONLY = ("image", "transmittance", "inscatter", "fog_colour", "encoding", "
 ENGINE_ONLY = ("engine", "engine_output", "scene")
 
 
+def _engine_image(help: str):
+    """An engine image option of :func:`~fogref.compare.foreign.load_engine_images` (a file read)."""
+    return option(None, help, check=PathArg(role="input"), metavar="FILE", group=IMAGE_GROUP, api=IMAGES)
+
+
 class Tolerances(Check):
     """``--tolerance PART[/REGION][:METRIC]=VALUE`` options (:func:`fogref.compare.gate.parse_tolerances`)."""
 
@@ -143,29 +148,10 @@ class Options:
         group=IMAGE_GROUP,
         api=IMAGES,
     )
-    transmittance: str | None = option(
-        None,
-        "the engine's fog transmittance image",
-        check=PathArg(role="input"),
-        metavar="FILE",
-        group=IMAGE_GROUP,
-        api=IMAGES,
-    )
-    inscatter: str | None = option(
-        None,
-        "the engine's fog inscatter image",
-        check=PathArg(role="input"),
-        metavar="FILE",
-        group=IMAGE_GROUP,
-        api=IMAGES,
-    )
-    fog_colour: str | None = option(
-        None,
-        "the engine's fog colour C (final = lerp(scene, C, 1 - T)); needs --transmittance",
-        check=PathArg(role="input"),
-        metavar="FILE",
-        group=IMAGE_GROUP,
-        api=IMAGES,
+    transmittance: str | None = _engine_image("the engine's fog transmittance image")
+    inscatter: str | None = _engine_image("the engine's fog inscatter image")
+    fog_colour: str | None = _engine_image(
+        "the engine's fog colour C (final = lerp(scene, C, 1 - T)); needs --transmittance"
     )
     encoding: str = option(
         "auto",

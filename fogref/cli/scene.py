@@ -74,6 +74,11 @@ def _ue_option(key: str) -> str:
     return UNREAL_MAPPED.get(key) or UNREAL_IGNORED[key][0]
 
 
+def _number(help: str, group: str, default_text: str | None = None):
+    """A number option that write_scene checks (its range is in ``help``), None unless given."""
+    return option(None, help, check=Number(), group=group, default_text=default_text)
+
+
 @dataclass
 class _Options:
     out: str = option(help="scene file to write (.xml)", check=PathArg(role="output"), metavar="S.xml")
@@ -130,47 +135,15 @@ class _Options:
         group=PHYS,
         default_text="the valley's, Unreal FogDensity 0.02",
     )
-    falloff: float | None = option(
-        None,
-        f"height falloff, {_range(PHYSICAL, 'falloff')}",
-        check=Number(),
-        group=PHYS,
-        default_text="0.0138629",
+    falloff: float | None = _number(f"height falloff, {_range(PHYSICAL, 'falloff')}", PHYS, "0.0138629")
+    height: float | None = _number(f"reference height of --sigma-t, {_range(PHYSICAL, 'height')}", PHYS, "0")
+    density: float | None = _number(f"relative density of layer 1, {_range(PHYSICAL, 'density')}", PHYS, "1")
+    density2: float | None = _number(
+        f"second layer: density relative to --sigma-t, {_range(PHYSICAL, 'density2')}", PHYS, "0: none"
     )
-    height: float | None = option(
-        None,
-        f"reference height of --sigma-t, {_range(PHYSICAL, 'height')}",
-        check=Number(),
-        group=PHYS,
-        default_text="0",
-    )
-    density: float | None = option(
-        None,
-        f"relative density of layer 1, {_range(PHYSICAL, 'density')}",
-        check=Number(),
-        group=PHYS,
-        default_text="1",
-    )
-    density2: float | None = option(
-        None,
-        f"second layer: density relative to --sigma-t, {_range(PHYSICAL, 'density2')}",
-        check=Number(),
-        group=PHYS,
-        default_text="0: none",
-    )
-    falloff2: float | None = option(
-        None,
-        f"second layer: falloff, {_range(PHYSICAL, 'falloff2')}",
-        check=Number(),
-        group=PHYS,
-        default_text="0.002",
-    )
-    height2: float | None = option(
-        None,
-        f"second layer: reference height, {_range(PHYSICAL, 'height2')}",
-        check=Number(),
-        group=PHYS,
-        default_text="100",
+    falloff2: float | None = _number(f"second layer: falloff, {_range(PHYSICAL, 'falloff2')}", PHYS, "0.002")
+    height2: float | None = _number(
+        f"second layer: reference height, {_range(PHYSICAL, 'height2')}", PHYS, "100"
     )
     bounds_min: str | None = option(
         None, "fog box: lower corner [m]", check=Text(), metavar="X,Y,Z", group=PHYS
@@ -181,18 +154,12 @@ class _Options:
     lfv_centre: str | None = option(
         None, "the volume's centre C [m]", check=Text(), metavar="X,Y,Z", group=LFV, default_text="0,0,0"
     )
-    lfv_radius: float | None = option(
-        None, f"its radius R, {_range(PHYSICAL, 'lfv_radius')}; gives the volume", check=Number(), group=LFV
+    lfv_radius: float | None = _number(
+        f"its radius R, {_range(PHYSICAL, 'lfv_radius')}; gives the volume", LFV
     )
-    lfv_density: float | None = option(
-        None, f"D, {_range(PHYSICAL, 'lfv_density')}", check=Number(), group=LFV, default_text="1"
-    )
-    lfv_falloff: float | None = option(
-        None, f"F, {_range(PHYSICAL, 'lfv_falloff')}", check=Number(), group=LFV, default_text="0"
-    )
-    lfv_height: float | None = option(
-        None, f"H, {_range(PHYSICAL, 'lfv_height')}", check=Number(), group=LFV, default_text="0"
-    )
+    lfv_density: float | None = _number(f"D, {_range(PHYSICAL, 'lfv_density')}", LFV, "1")
+    lfv_falloff: float | None = _number(f"F, {_range(PHYSICAL, 'lfv_falloff')}", LFV, "0")
+    lfv_height: float | None = _number(f"H, {_range(PHYSICAL, 'lfv_height')}", LFV, "0")
     visibility: float | None = option(
         None,
         "meteorological optical range at --height: the green channel's extinction is -ln(contrast) / V",
@@ -226,22 +193,12 @@ class _Options:
         "extinction is grey within about 2 %)",
         group=DROPS,
     )
-    ue_fog_density: float | None = option(None, "Fog Density", check=Number(), group=UE, default_text="0.02")
-    ue_fog_height_falloff: float | None = option(
-        None, "Fog Height Falloff", check=Number(), group=UE, default_text="0.2"
-    )
-    ue_fog_height: float | None = option(
-        None, "the fog's world Z [cm]: y = Z/100 m", check=Number(), group=UE, default_text="0"
-    )
-    ue_second_fog_density: float | None = option(
-        None, "Second Fog Data: Fog Density", check=Number(), group=UE, default_text="0"
-    )
-    ue_second_fog_height_falloff: float | None = option(
-        None, "Second Fog Data: Fog Height Falloff", check=Number(), group=UE, default_text="0.2"
-    )
-    ue_second_fog_height_offset: float | None = option(
-        None, "Second Fog Data: Fog Height Offset [cm]", check=Number(), group=UE, default_text="0"
-    )
+    ue_fog_density: float | None = _number("Fog Density", UE, "0.02")
+    ue_fog_height_falloff: float | None = _number("Fog Height Falloff", UE, "0.2")
+    ue_fog_height: float | None = _number("the fog's world Z [cm]: y = Z/100 m", UE, "0")
+    ue_second_fog_density: float | None = _number("Second Fog Data: Fog Density", UE, "0")
+    ue_second_fog_height_falloff: float | None = _number("Second Fog Data: Fog Height Falloff", UE, "0.2")
+    ue_second_fog_height_offset: float | None = _number("Second Fog Data: Fog Height Offset [cm]", UE, "0")
     ue_pathtracer: bool = switch(
         "write the fog Unreal's path tracer renders for the Unreal values (profile ue_pathtracer: "
         "density x extinction scale, clamped below the fog height, inside a cylinder centred on the "
@@ -253,19 +210,11 @@ class _Options:
         "tracer approximates: its density, falloffs, heights, albedo and g, unbounded)",
         group=PT,
     )
-    ue_volumetric_fog_distance: float | None = option(
-        None,
-        "VolumetricFogDistance: the cylinder's radius [cm], [0.1, 1e9]",
-        check=Number(),
-        group=PT,
-        default_text="6000",
+    ue_volumetric_fog_distance: float | None = _number(
+        "VolumetricFogDistance: the cylinder's radius [cm], [0.1, 1e9]", PT, "6000"
     )
-    ue_volumetric_fog_extinction_scale: float | None = option(
-        None,
-        "VolumetricFogExtinctionScale: multiplies the density, >= 0",
-        check=Number(),
-        group=PT,
-        default_text="1",
+    ue_volumetric_fog_extinction_scale: float | None = _number(
+        "VolumetricFogExtinctionScale: multiplies the density, >= 0", PT, "1"
     )
     ue_volumetric_fog_albedo: str | None = option(
         None,
@@ -275,20 +224,14 @@ class _Options:
         group=PT,
         default_text="1",
     )
-    ue_volumetric_fog_scattering_distribution: float | None = option(
-        None,
-        "VolumetricFogScatteringDistribution: the HG g, [-0.99, 0.99]",
-        check=Number(),
-        group=PT,
-        default_text="0.2",
+    ue_volumetric_fog_scattering_distribution: float | None = _number(
+        "VolumetricFogScatteringDistribution: the HG g, [-0.99, 0.99]", PT, "0.2"
     )
-    ue_fog_density_clamp: float | None = option(
-        None,
+    ue_fog_density_clamp: float | None = _number(
         "r.PathTracing.FogDensityClamp: the density's growth below the fog height, in multiples of "
         "the fog density, [1, 256]",
-        check=Number(),
-        group=PT,
-        default_text="8",
+        PT,
+        "8",
     )
     albedo: str | None = option(
         None,
