@@ -11,7 +11,7 @@ import sys
 from dataclasses import dataclass, make_dataclass
 
 from fogref.cli.checks import Choice, Integer, Number, PathArg, Text
-from fogref.cli.spec import UsageError, option, switch, toggle
+from fogref.cli.spec import UsageError, api_arguments, option, switch, toggle
 from fogref.mapping.droplet_fog import PHASES
 from fogref.mapping.unreal_pathtracer import DROPPED, exact_fog_params, rewrite_scene, validated_settings
 from fogref.media.droplets import DROPLET_PRESETS
@@ -413,37 +413,15 @@ def run(a, given=frozenset()) -> int:
             return  # the path-traced fog has VolumetricFogAlbedo and its g
         print(f"fogref scene: note: {n}", file=sys.stderr)
 
+    write_args = {**api_arguments(a, WRITE), "albedo": albedo, "g": g, "sky_radiance": sky}
     r = write_scene(
         a.out,
         fog=phys if not ue else None,
         unreal=ue or None,
-        albedo=albedo,
-        g=g,
         phase=phase,
         notes=fog_notes,
-        sun_elevation=a.sun_elevation,
-        sun_azimuth=a.sun_azimuth,
-        sun_irradiance=a.sun_irradiance,
-        sky_radiance=sky,
-        sky=a.sky,
-        turbidity=a.turbidity,
-        sun_angular_diameter=a.sun_angular_diameter,
-        camera_origin=a.camera_origin,
-        camera_target=a.camera_target,
-        fov=a.fov,
-        res=a.res,
-        resy=a.resy,
-        geometry=a.geometry,
-        mesh_scale=a.mesh_scale,
-        mesh_up=a.mesh_up,
-        mesh_translate=a.mesh_translate,
-        ground=a.ground,
-        ground_size=a.ground_size,
-        max_depth=a.max_depth,
-        ground_reflectance=a.ground_reflectance,
-        mesh_reflectance=a.mesh_reflectance,
-        overwrite=a.force,
         on_note=note,
+        **write_args,
     )
     if pt is not None:
         uf = UE4FogParams(**{k: v for k, v in ue.items() if k not in UNREAL_IGNORED})

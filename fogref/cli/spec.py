@@ -48,6 +48,7 @@ __all__ = [
     "Parser",
     "UsageError",
     "add_options",
+    "api_arguments",
     "assignments",
     "check_paths",
     "option",
@@ -340,6 +341,28 @@ def refuse(spec, given: set, these, those, source: str, why: str = "") -> None:
         raise UsageError(
             f"{source}: {', '.join(b)} does not apply with {', '.join(a)}" + (f" ({why})" if why else "")
         )
+
+
+def api_arguments(opts, api: str) -> dict:
+    """The keyword arguments of the Python function ``api`` (``"module:function"``) from the options
+    of ``opts`` declared with it: each value under its ``api_name`` (default: the field's name),
+    the opposite for a ``negates`` switch (``--no-png`` is ``png=False``).
+
+    >>> from dataclasses import dataclass
+    >>> @dataclass
+    ... class Demo:
+    ...     spp: int = option(64, "samples per pixel", api="m:f")
+    ...     no_png: bool = switch("no PNG", api="m:f", api_name="png", negates=True)
+    ...     quiet: bool = switch("no progress bar")
+    >>> api_arguments(Demo(spp=8), "m:f")
+    {'spp': 8, 'png': True}
+    """
+    out = {}
+    for f in dataclasses.fields(opts):
+        m, value = meta(f), getattr(opts, f.name)
+        if m["api"] == api:
+            out[m["api_name"] or f.name] = not value if m["negates"] else value
+    return out
 
 
 def _paths(opts, role: str) -> list[tuple[str, str]]:
