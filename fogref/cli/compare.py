@@ -20,7 +20,7 @@ from fogref.atomic import check_output_file
 from fogref.cli.checks import Check, Choice, Number, PathArg
 from fogref.cli.compare_batch import ImageList, run_batch
 from fogref.cli.engine import engine_model
-from fogref.cli.spec import UsageError, assignments, option, refuse, switch
+from fogref.cli.spec import UsageError, api_arguments, assignments, option, refuse, switch
 from fogref.compare import gate
 from fogref.compare.check import check
 from fogref.compare.foreign import ENCODINGS, load_engine_images
@@ -357,51 +357,30 @@ def run(o: Options, given=frozenset()) -> int:
     images = check_modes(o, given)
     if images and isinstance(o.image, tuple):  # several images: one table (fogref.cli.compare_batch)
         return run_batch(o, given, default_out_dir(o.exr, "batch"))
-    options = {"tolerances": o.tolerance, "distance_bands": o.distance_bands, "confidence": o.confidence}
+    options = api_arguments(o, CHECK)
     _refuse_outputs_over_inputs(o)
     truth = load_truth(o.exr)
     extra = {}
     if o.engine:
         imgs, extra["engine"] = _engine_images(o, truth)
-        out = _out_dir(o)
+    elif images:
+        imgs = load_engine_images(**api_arguments(o, IMAGES), shape=truth.shape, truth_name=str(o.exr))
+    out = _out_dir(o)
+    if o.engine or images:
         result = check(truth, imgs, **options)
         report = compare_images(
-            truth, imgs, out, figures=not o.no_figures, check=result, engine=extra["engine"]
+            truth, imgs, out, figures=not o.no_figures, check=result, engine=extra.get("engine")
         )
         extra["encodings"] = report["images"]["encodings"]
-        for line in extra["engine"]["summary"]:
+        for line in extra.get("engine", {}).get("summary", ()):
             print(line)
-    elif images:
-        imgs = load_engine_images(
-            o.image,
-            o.transmittance,
-            o.inscatter,
-            o.fog_colour,
-            encoding=o.encoding,
-            exposure=o.exposure,
-            shape=truth.shape,
-            truth_name=str(o.exr),
-        )
-        out = _out_dir(o)
-        result = check(truth, imgs, **options)
-        report = compare_images(truth, imgs, out, figures=not o.no_figures, check=result)
-        extra["encodings"] = report["images"]["encodings"]
     else:
         assignments = [f"{k}={v}" for k, v in (o.param or {}).items()]
         model = build_model(
             o.model, parse_param_assignments(assignments), truth.params if o.from_scene else None
         )
-        out = _out_dir(o)
         result = check(truth, model, **options, precision=o.precision, sky_distance=o.sky_distance)
-        report = compare(
-            truth,
-            model,
-            out,
-            precision=o.precision,
-            sky_distance=o.sky_distance,
-            figures=not o.no_figures,
-            check=result,
-        )
+        report = compare(truth, model, out, check=result, **api_arguments(o, COMPARE))
         _print_metrics(o.model, o.exr, report["metrics"]["final"]["all"])
     for w in report["warnings"]:
         print(f"fogref compare: warning: {w}", file=sys.stderr)
