@@ -111,16 +111,10 @@ def engine_model(engine: str, param: dict | None, scene_params: dict | None, vie
         fn = MAPPINGS.get(mod.MODEL)
         where = f"{fn.__module__}.{fn.__name__}" if fn is not None else f"{mod.MODEL}.from_physical"
         start = f"the scene (its fog, sky, camera) through {where} (--from-scene)"
-    sources = {}
-    for k in current_parameters(model):
-        if k in given:
-            sources[k] = "--param"
-        elif k in fixed:
-            sources[k] = (
-                "the view: the engine camera's clip planes (fogref.engines.view.EngineView.clip_planes)"
-            )
-        else:
-            sources[k] = start
+    by_view = "the view: the engine camera's clip planes (fogref.engines.view.EngineView.clip_planes)"
+    sources = {
+        k: "--param" if k in given else by_view if k in fixed else start for k in current_parameters(model)
+    }
     return model, sources
 
 

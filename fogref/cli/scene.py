@@ -371,17 +371,12 @@ Options.__module__ = __name__
 def run(a, given=frozenset()) -> int:
     """Write the scene; print its path (notes on stderr)."""
     phys = {k: getattr(a, k) for k in PHYSICAL if getattr(a, k) is not None}
-    ue = {}
-    for key, opt in UNREAL_MAPPED.items():
+    ue: dict = {}
+    for key, opt in [*UNREAL_MAPPED.items(), *((k, opt) for k, (opt, _, _) in UNREAL_IGNORED.items())]:
         v = getattr(a, _dest(opt))
-        if v is not None:
-            if key.startswith("SecondFogData."):
-                ue.setdefault("SecondFogData", {})[key.split(".", 1)[1]] = v
-            else:
-                ue[key] = v
-    for key, (opt, _, _) in UNREAL_IGNORED.items():
-        v = getattr(a, _dest(opt))
-        if v is not None:
+        if v is not None and key.startswith("SecondFogData."):
+            ue.setdefault("SecondFogData", {})[key.split(".", 1)[1]] = v
+        elif v is not None:
             ue[key] = v
     if phys and ue:
         p_opts = ", ".join(PHYSICAL[k].option for k in phys)
