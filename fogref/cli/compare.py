@@ -356,7 +356,7 @@ def run(o: Options, given=frozenset()) -> int:
     """
     images = check_modes(o, given)
     if images and isinstance(o.image, tuple):  # several images: one table (fogref.cli.compare_batch)
-        return run_batch(o, given, default_out_dir(o.exr, "batch"))
+        return run_batch(o, given, default_out_dir(o.exr, "batch"), api_arguments(o, CHECK))
     options = api_arguments(o, CHECK)
     _refuse_outputs_over_inputs(o)
     truth = load_truth(o.exr)
