@@ -176,18 +176,9 @@ def info(path) -> dict:
     return out
 
 
-HEADER_KEYS = (
-    "fogref.schema",
-    "fogref.spp",
-    "fogref.seed",
-    "fogref.pixel_filter",
-    "fogref.scene",
-    "fogref.scene_sha256",
-    "fogref.overrides",
-    "fogref.variant",
-    "fogref.version",
-    "fogref.mitsuba",
-)
+_HEADER = "schema spp seed pixel_filter scene scene_sha256 overrides variant version mitsuba"
+#: The header attributes ``fogref info`` shows, in this order.
+HEADER_KEYS = tuple(f"fogref.{k}" for k in _HEADER.split())
 
 
 def _vec(v, unit: str = "") -> str:

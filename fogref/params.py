@@ -183,30 +183,13 @@ def number_within(value, name: str, *, source: str, bounds) -> float:
     ...
     fogref.errors.ParameterError: api: parameter 'albedo': 1 is outside [0, 1)
     """
-    return number(
-        value,
-        name,
-        source=source,
-        lo=bounds.lo,
-        hi=bounds.hi,
-        lo_open=bounds.lo_open,
-        hi_open=bounds.hi_open,
-        unit=bounds.unit,
-    )
+    keys = ("lo", "hi", "lo_open", "hi_open", "unit")
+    return number(value, name, source=source, **{k: getattr(bounds, k) for k in keys})
 
 
-def angle(
-    value,
-    name: str,
-    *,
-    source: str,
-    lo: float = -INF,
-    hi: float = INF,
-    lo_open: bool = False,
-    hi_open: bool = False,
-    unit: str = "deg",
-) -> float:
-    """An angle (default unit degrees): :func:`number` with ``unit="deg"``.
+def angle(value, name: str, *, source: str, unit: str = "deg", **bounds) -> float:
+    """An angle (default unit degrees): :func:`number` with ``unit="deg"``; ``bounds``: its ``lo``,
+    ``hi``, ``lo_open``, ``hi_open``.
 
     >>> angle("8", "sun_elevation", source="--set", lo=-90, hi=90)
     8.0
@@ -215,7 +198,7 @@ def angle(
     ...
     fogref.errors.ParameterError: --set: parameter 'sun_elevation': 1000 is outside [-90, 90] deg
     """
-    return number(value, name, source=source, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open, unit=unit)
+    return number(value, name, source=source, unit=unit, **bounds)
 
 
 def integer(value, name: str, *, source: str, lo: float = -INF, hi: float = INF, unit: str = "") -> int:

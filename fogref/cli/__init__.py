@@ -46,22 +46,8 @@ from fogref.errors import FogrefError, did_you_mean
 __all__ = ["COMMANDS", "build_parser", "main", "parse"]
 
 #: The commands, in the order ``fogref --help`` lists them, and the module of each.
-COMMANDS = {
-    name: f"fogref.cli.{name}"
-    for name in (
-        "render",
-        "info",
-        "compare",
-        "diff",
-        "study",
-        "fit",
-        "translate",
-        "export",
-        "scene",
-        "sweep",
-        "engine",
-    )
-}
+_NAMES = "render info compare diff study fit translate export scene sweep engine"
+COMMANDS = {name: f"fogref.cli.{name}" for name in _NAMES.split()}
 
 DESCRIPTION = (
     "fogref: path-traced ground truth for game-engine fog (Mitsuba 3), and the tools that check "

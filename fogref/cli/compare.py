@@ -17,10 +17,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fogref.atomic import check_output_file
-from fogref.cli.checks import Assignments, Check, Choice, Number, PathArg
+from fogref.cli.checks import Check, Choice, Number, PathArg
 from fogref.cli.compare_batch import ImageList, run_batch
 from fogref.cli.engine import engine_model
-from fogref.cli.spec import UsageError, option, refuse, switch
+from fogref.cli.spec import UsageError, api_arguments, assignments, option, refuse, switch
 from fogref.compare import gate
 from fogref.compare.check import check
 from fogref.compare.foreign import ENCODINGS, load_engine_images
@@ -60,7 +60,11 @@ GATE_GROUP = "verdict (fogref.compare.check.check, as assert_fog_matches)"
 MODEL_ONLY = ("model", "param", "from_scene", "precision", "sky_distance")
 IMAGE_ONLY = ("image", "transmittance", "inscatter", "fog_colour", "encoding", "exposure")
 ENGINE_ONLY = ("engine", "engine_output", "scene")
-ENGINE_RENDER = "fogref.engines.render:render_and_write"
+
+
+def _engine_image(help: str):
+    """An engine image option of :func:`~fogref.compare.foreign.load_engine_images` (a file read)."""
+    return option(None, help, check=PathArg(role="input"), metavar="FILE", group=IMAGE_GROUP, api=IMAGES)
 
 
 class Tolerances(Check):
@@ -109,11 +113,8 @@ class Options:
         group=MODEL_GROUP,
         metavar="NAME",
     )
-    param: dict | None = option(
-        None,
+    param: dict | None = assignments(
         "set a model parameter (VALUE parsed as JSON when possible; each KEY once)",
-        repeat=True,
-        check=Assignments(),
         metavar="KEY=VALUE",
         group=MODEL_GROUP,
     )
@@ -147,29 +148,10 @@ class Options:
         group=IMAGE_GROUP,
         api=IMAGES,
     )
-    transmittance: str | None = option(
-        None,
-        "the engine's fog transmittance image",
-        check=PathArg(role="input"),
-        metavar="FILE",
-        group=IMAGE_GROUP,
-        api=IMAGES,
-    )
-    inscatter: str | None = option(
-        None,
-        "the engine's fog inscatter image",
-        check=PathArg(role="input"),
-        metavar="FILE",
-        group=IMAGE_GROUP,
-        api=IMAGES,
-    )
-    fog_colour: str | None = option(
-        None,
-        "the engine's fog colour C (final = lerp(scene, C, 1 - T)); needs --transmittance",
-        check=PathArg(role="input"),
-        metavar="FILE",
-        group=IMAGE_GROUP,
-        api=IMAGES,
+    transmittance: str | None = _engine_image("the engine's fog transmittance image")
+    inscatter: str | None = _engine_image("the engine's fog inscatter image")
+    fog_colour: str | None = _engine_image(
+        "the engine's fog colour C (final = lerp(scene, C, 1 - T)); needs --transmittance"
     )
     encoding: str = option(
         "auto",
@@ -374,52 +356,31 @@ def run(o: Options, given=frozenset()) -> int:
     """
     images = check_modes(o, given)
     if images and isinstance(o.image, tuple):  # several images: one table (fogref.cli.compare_batch)
-        return run_batch(o, given, default_out_dir(o.exr, "batch"))
-    options = {"tolerances": o.tolerance, "distance_bands": o.distance_bands, "confidence": o.confidence}
+        return run_batch(o, given, default_out_dir(o.exr, "batch"), api_arguments(o, CHECK))
+    options = api_arguments(o, CHECK)
     _refuse_outputs_over_inputs(o)
     truth = load_truth(o.exr)
     extra = {}
     if o.engine:
         imgs, extra["engine"] = _engine_images(o, truth)
-        out = _out_dir(o)
+    elif images:
+        imgs = load_engine_images(**api_arguments(o, IMAGES), shape=truth.shape, truth_name=str(o.exr))
+    out = _out_dir(o)
+    if o.engine or images:
         result = check(truth, imgs, **options)
         report = compare_images(
-            truth, imgs, out, figures=not o.no_figures, check=result, engine=extra["engine"]
+            truth, imgs, out, figures=not o.no_figures, check=result, engine=extra.get("engine")
         )
         extra["encodings"] = report["images"]["encodings"]
-        for line in extra["engine"]["summary"]:
+        for line in extra.get("engine", {}).get("summary", ()):
             print(line)
-    elif images:
-        imgs = load_engine_images(
-            o.image,
-            o.transmittance,
-            o.inscatter,
-            o.fog_colour,
-            encoding=o.encoding,
-            exposure=o.exposure,
-            shape=truth.shape,
-            truth_name=str(o.exr),
-        )
-        out = _out_dir(o)
-        result = check(truth, imgs, **options)
-        report = compare_images(truth, imgs, out, figures=not o.no_figures, check=result)
-        extra["encodings"] = report["images"]["encodings"]
     else:
         assignments = [f"{k}={v}" for k, v in (o.param or {}).items()]
         model = build_model(
             o.model, parse_param_assignments(assignments), truth.params if o.from_scene else None
         )
-        out = _out_dir(o)
         result = check(truth, model, **options, precision=o.precision, sky_distance=o.sky_distance)
-        report = compare(
-            truth,
-            model,
-            out,
-            precision=o.precision,
-            sky_distance=o.sky_distance,
-            figures=not o.no_figures,
-            check=result,
-        )
+        report = compare(truth, model, out, check=result, **api_arguments(o, COMPARE))
         _print_metrics(o.model, o.exr, report["metrics"]["final"]["all"])
     for w in report["warnings"]:
         print(f"fogref compare: warning: {w}", file=sys.stderr)

@@ -114,9 +114,9 @@ def batch_rows(results) -> tuple[list[dict], list[str]]:
     return rows, cols
 
 
-def run_batch(o, given, default_out) -> int:
-    """Check and report every image of ``o.image`` (a tuple) against the truth; write the table into
-    ``o.out``, else ``default_out``."""
+def run_batch(o, given, default_out, options: dict) -> int:
+    """Check and report every image of ``o.image`` (a tuple) against the truth with ``options`` (of
+    :func:`fogref.compare.check.check`); write the table into ``o.out``, else ``default_out``."""
     for opt in ("transmittance", "inscatter", "fog_colour", "json", "junit"):
         if opt in given:
             flag = "--" + opt.replace("_", "-")
@@ -124,7 +124,6 @@ def run_batch(o, given, default_out) -> int:
                 f"fogref compare: {flag} does not apply to several --image files "
                 "(the batch writes batch.json and batch.csv)"
             )
-    options = {"tolerances": o.tolerance, "distance_bands": o.distance_bands, "confidence": o.confidence}
     truth = load_truth(o.exr)
     out = Path(o.out) if o.out else Path(default_out)
     results = []

@@ -15,6 +15,7 @@ from fogref.atomic import check_output_file, refuse_overwriting_inputs, write_te
 from fogref.cli.checks import Choice, Number, PathArg
 from fogref.cli.spec import option
 from fogref.compare.diff import diff, load_side
+from fogref.compare.foreign import ENCODINGS
 from fogref.html.reports import write_diff_html
 
 NAME = "diff"
@@ -56,7 +57,7 @@ class Options:
     encoding: str = option(
         "auto",
         "how images (not truths) are encoded (auto: 8-bit PNG is sRGB)",
-        check=Choice(("auto", "linear", "srgb")),
+        check=Choice(ENCODINGS),
     )
     json: str | None = option(
         None,

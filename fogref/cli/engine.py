@@ -16,8 +16,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fogref.atomic import refuse_overwriting_inputs
-from fogref.cli.checks import Assignments, Choice, Number, PathArg
-from fogref.cli.spec import option, refuse, switch
+from fogref.cli.checks import Choice, Number, PathArg
+from fogref.cli.spec import assignments, option, refuse, switch
 from fogref.engines import ENGINES, engine_module
 from fogref.engines.render import output_paths, render_and_write
 from fogref.engines.view import view_from_scene, view_from_truth
@@ -52,23 +52,16 @@ class Options:
     )
     out: str = option(help="folder for the engine's images", check=PathArg(), metavar="DIR")
     engine: str = option("threejs", "the engine", check=Choice(tuple(ENGINES)), api=API)
-    param: dict | None = option(
-        None,
+    param: dict | None = assignments(
         "set an engine fog setting, in the engine model's names (fogref.models; VALUE parsed as JSON "
         "when possible; each KEY once)",
-        repeat=True,
-        check=Assignments(),
         metavar="KEY=VALUE",
     )
     from_scene: bool = switch(
         "the fog settings from the scene's fog (fogref.mapping); --param values then override"
     )
-    overrides: dict | None = option(
-        None,
-        "set a scene XML $default (a scene input only), e.g. --set res=32",
-        flag="--set",
-        repeat=True,
-        check=Assignments(),
+    overrides: dict | None = assignments(
+        "set a scene XML $default (a scene input only), e.g. --set res=32", flag="--set"
     )
     scene: str | None = option(
         None,
@@ -118,16 +111,10 @@ def engine_model(engine: str, param: dict | None, scene_params: dict | None, vie
         fn = MAPPINGS.get(mod.MODEL)
         where = f"{fn.__module__}.{fn.__name__}" if fn is not None else f"{mod.MODEL}.from_physical"
         start = f"the scene (its fog, sky, camera) through {where} (--from-scene)"
-    sources = {}
-    for k in current_parameters(model):
-        if k in given:
-            sources[k] = "--param"
-        elif k in fixed:
-            sources[k] = (
-                "the view: the engine camera's clip planes (fogref.engines.view.EngineView.clip_planes)"
-            )
-        else:
-            sources[k] = start
+    by_view = "the view: the engine camera's clip planes (fogref.engines.view.EngineView.clip_planes)"
+    sources = {
+        k: "--param" if k in given else by_view if k in fixed else start for k in current_parameters(model)
+    }
     return model, sources
 
 

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fogref.atomic import write_text_atomic
-from fogref.cli.checks import Assignments, Choice, Number, PathArg, SceneArg
-from fogref.cli.spec import UsageError, option
+from fogref.cli.checks import Choice, Number, PathArg, SceneArg
+from fogref.cli.spec import UsageError, assignments, option
 from fogref.errors import FogrefError
 from fogref.mapping.build import parse_param_assignments
 from fogref.mapping.export import ENGINES
@@ -55,11 +55,8 @@ class Options:
         default_text="the table's first (the scene's own sun)",
         api=API,
     )
-    param: dict | None = option(
-        None,
+    param: dict | None = assignments(
         "a setting in the engine model's names and units; a colour is linear RGB (VALUE parsed as JSON)",
-        repeat=True,
-        check=Assignments(),
         metavar="KEY=VALUE",
         api=API,
         api_name="params",

@@ -17,8 +17,8 @@ import sys
 from dataclasses import dataclass, replace
 
 from fogref import params
-from fogref.cli.checks import RGB, Assignments, Integer, Number, PathArg, SceneArg, Text, Vector
-from fogref.cli.spec import UsageError, option, switch
+from fogref.cli.checks import RGB, Integer, Number, PathArg, SceneArg, Text, Vector
+from fogref.cli.spec import UsageError, assignments, option, switch
 from fogref.gbuffer import load_truth
 from fogref.mapping import PhysicalScene, fit_unreal, lobe_table, sample_views
 from fogref.mapping.build import parse_param_assignments
@@ -78,11 +78,8 @@ class Options:
         metavar="NAME",
         group=MODEL_GROUP,
     )
-    param: dict | None = option(
-        None,
+    param: dict | None = assignments(
         "fix a model setting in the engine's units; a colour is linear RGB (VALUE: JSON if it parses)",
-        repeat=True,
-        check=Assignments(),
         metavar="KEY=VALUE",
         group=MODEL_GROUP,
     )
@@ -236,24 +233,13 @@ def physical_from_options(o: Options):
         m = replace(m, **kw)
     if o.falloff is not None or o.height is not None:
         L = m.layers[0]
-        m = replace(
-            m,
-            layers=(
-                ExpLayer(
-                    L.density,
-                    o.falloff if o.falloff is not None else L.falloff,
-                    o.height if o.height is not None else L.height,
-                ),
-            )
-            + tuple(m.layers[1:]),
-        )
+        falloff = L.falloff if o.falloff is None else o.falloff
+        height = L.height if o.height is None else o.height
+        m = replace(m, layers=(ExpLayer(L.density, falloff, height), *m.layers[1:]))
     pf = replace(pf, medium=m)
-    if o.sun_dir:
-        pf = replace(pf, sun_direction=tuple(o.sun_dir))
-    if o.sun_irradiance:
-        pf = replace(pf, sun_irradiance=tuple(o.sun_irradiance))
-    if o.sky:
-        pf = replace(pf, sky_radiance=tuple(o.sky))
+    for k, v in (("sun_direction", o.sun_dir), ("sun_irradiance", o.sun_irradiance), ("sky_radiance", o.sky)):
+        if v:  # one replace each, in this order (each re-normalises the sun direction)
+            pf = replace(pf, **{k: tuple(v)})
     return pf
 
 

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from fogref.cli.checks import Address, Assignments, Choice, Integer, Number, PathArg, SceneArg
-from fogref.cli.spec import UsageError, option, refuse, switch
+from fogref.cli.checks import Address, Choice, Integer, Number, PathArg, SceneArg
+from fogref.cli.spec import UsageError, api_arguments, assignments, option, refuse, switch
 from fogref.render.variant import VARIANTS
 
 NAME = "render"
@@ -59,13 +59,8 @@ class Options:
         api=API,
         default_text="$FOGREF_VARIANT, else llvm_ad_rgb",
     )
-    overrides: dict | None = option(
-        None,
-        "set a scene XML $default, e.g. --set res=64 (each NAME once)",
-        flag="--set",
-        repeat=True,
-        check=Assignments(),
-        api=API,
+    overrides: dict | None = assignments(
+        "set a scene XML $default, e.g. --set res=64 (each NAME once)", flag="--set", api=API
     )
     quiet: bool = switch("no progress bar", api=API, api_name="progress", negates=True)
     no_resume: bool = switch(
@@ -132,22 +127,6 @@ def run(o: Options, given=frozenset()) -> int:
     )
     if "worker_timeout" in given and "scheduler" not in given:
         raise UsageError(f"{SOURCE}: --worker-timeout applies only with --scheduler")
-    path = render(
-        o.scene,
-        o.out,
-        spp=o.spp,
-        seed=o.seed,
-        variant=o.variant,
-        overrides=o.overrides or {},
-        progress=not o.quiet,
-        resume=not o.no_resume,
-        png=not o.no_png,
-        keep_moments=not o.no_moments,
-        pixel_filter=o.pixel_filter,
-        checkpoint_seconds=o.checkpoint_seconds,
-        scheduler=o.scheduler,
-        workers=o.workers,
-        worker_timeout=o.worker_timeout,
-    )
+    path = render(o.scene, o.out, **{**api_arguments(o, API), "overrides": o.overrides or {}})
     print(path)
     return 0

@@ -11,7 +11,7 @@ import sys
 from dataclasses import dataclass, make_dataclass
 
 from fogref.cli.checks import Choice, Integer, Number, PathArg, Text
-from fogref.cli.spec import UsageError, option, switch, toggle
+from fogref.cli.spec import UsageError, api_arguments, option, switch, toggle
 from fogref.mapping.droplet_fog import PHASES
 from fogref.mapping.unreal_pathtracer import DROPPED, exact_fog_params, rewrite_scene, validated_settings
 from fogref.media.droplets import DROPLET_PRESETS
@@ -74,6 +74,11 @@ def _ue_option(key: str) -> str:
     return UNREAL_MAPPED.get(key) or UNREAL_IGNORED[key][0]
 
 
+def _number(help: str, group: str, default_text: str | None = None):
+    """A number option that write_scene checks (its range is in ``help``), None unless given."""
+    return option(None, help, check=Number(), group=group, default_text=default_text)
+
+
 @dataclass
 class _Options:
     out: str = option(help="scene file to write (.xml)", check=PathArg(role="output"), metavar="S.xml")
@@ -130,47 +135,15 @@ class _Options:
         group=PHYS,
         default_text="the valley's, Unreal FogDensity 0.02",
     )
-    falloff: float | None = option(
-        None,
-        f"height falloff, {_range(PHYSICAL, 'falloff')}",
-        check=Number(),
-        group=PHYS,
-        default_text="0.0138629",
+    falloff: float | None = _number(f"height falloff, {_range(PHYSICAL, 'falloff')}", PHYS, "0.0138629")
+    height: float | None = _number(f"reference height of --sigma-t, {_range(PHYSICAL, 'height')}", PHYS, "0")
+    density: float | None = _number(f"relative density of layer 1, {_range(PHYSICAL, 'density')}", PHYS, "1")
+    density2: float | None = _number(
+        f"second layer: density relative to --sigma-t, {_range(PHYSICAL, 'density2')}", PHYS, "0: none"
     )
-    height: float | None = option(
-        None,
-        f"reference height of --sigma-t, {_range(PHYSICAL, 'height')}",
-        check=Number(),
-        group=PHYS,
-        default_text="0",
-    )
-    density: float | None = option(
-        None,
-        f"relative density of layer 1, {_range(PHYSICAL, 'density')}",
-        check=Number(),
-        group=PHYS,
-        default_text="1",
-    )
-    density2: float | None = option(
-        None,
-        f"second layer: density relative to --sigma-t, {_range(PHYSICAL, 'density2')}",
-        check=Number(),
-        group=PHYS,
-        default_text="0: none",
-    )
-    falloff2: float | None = option(
-        None,
-        f"second layer: falloff, {_range(PHYSICAL, 'falloff2')}",
-        check=Number(),
-        group=PHYS,
-        default_text="0.002",
-    )
-    height2: float | None = option(
-        None,
-        f"second layer: reference height, {_range(PHYSICAL, 'height2')}",
-        check=Number(),
-        group=PHYS,
-        default_text="100",
+    falloff2: float | None = _number(f"second layer: falloff, {_range(PHYSICAL, 'falloff2')}", PHYS, "0.002")
+    height2: float | None = _number(
+        f"second layer: reference height, {_range(PHYSICAL, 'height2')}", PHYS, "100"
     )
     bounds_min: str | None = option(
         None, "fog box: lower corner [m]", check=Text(), metavar="X,Y,Z", group=PHYS
@@ -181,18 +154,12 @@ class _Options:
     lfv_centre: str | None = option(
         None, "the volume's centre C [m]", check=Text(), metavar="X,Y,Z", group=LFV, default_text="0,0,0"
     )
-    lfv_radius: float | None = option(
-        None, f"its radius R, {_range(PHYSICAL, 'lfv_radius')}; gives the volume", check=Number(), group=LFV
+    lfv_radius: float | None = _number(
+        f"its radius R, {_range(PHYSICAL, 'lfv_radius')}; gives the volume", LFV
     )
-    lfv_density: float | None = option(
-        None, f"D, {_range(PHYSICAL, 'lfv_density')}", check=Number(), group=LFV, default_text="1"
-    )
-    lfv_falloff: float | None = option(
-        None, f"F, {_range(PHYSICAL, 'lfv_falloff')}", check=Number(), group=LFV, default_text="0"
-    )
-    lfv_height: float | None = option(
-        None, f"H, {_range(PHYSICAL, 'lfv_height')}", check=Number(), group=LFV, default_text="0"
-    )
+    lfv_density: float | None = _number(f"D, {_range(PHYSICAL, 'lfv_density')}", LFV, "1")
+    lfv_falloff: float | None = _number(f"F, {_range(PHYSICAL, 'lfv_falloff')}", LFV, "0")
+    lfv_height: float | None = _number(f"H, {_range(PHYSICAL, 'lfv_height')}", LFV, "0")
     visibility: float | None = option(
         None,
         "meteorological optical range at --height: the green channel's extinction is -ln(contrast) / V",
@@ -226,22 +193,12 @@ class _Options:
         "extinction is grey within about 2 %)",
         group=DROPS,
     )
-    ue_fog_density: float | None = option(None, "Fog Density", check=Number(), group=UE, default_text="0.02")
-    ue_fog_height_falloff: float | None = option(
-        None, "Fog Height Falloff", check=Number(), group=UE, default_text="0.2"
-    )
-    ue_fog_height: float | None = option(
-        None, "the fog's world Z [cm]: y = Z/100 m", check=Number(), group=UE, default_text="0"
-    )
-    ue_second_fog_density: float | None = option(
-        None, "Second Fog Data: Fog Density", check=Number(), group=UE, default_text="0"
-    )
-    ue_second_fog_height_falloff: float | None = option(
-        None, "Second Fog Data: Fog Height Falloff", check=Number(), group=UE, default_text="0.2"
-    )
-    ue_second_fog_height_offset: float | None = option(
-        None, "Second Fog Data: Fog Height Offset [cm]", check=Number(), group=UE, default_text="0"
-    )
+    ue_fog_density: float | None = _number("Fog Density", UE, "0.02")
+    ue_fog_height_falloff: float | None = _number("Fog Height Falloff", UE, "0.2")
+    ue_fog_height: float | None = _number("the fog's world Z [cm]: y = Z/100 m", UE, "0")
+    ue_second_fog_density: float | None = _number("Second Fog Data: Fog Density", UE, "0")
+    ue_second_fog_height_falloff: float | None = _number("Second Fog Data: Fog Height Falloff", UE, "0.2")
+    ue_second_fog_height_offset: float | None = _number("Second Fog Data: Fog Height Offset [cm]", UE, "0")
     ue_pathtracer: bool = switch(
         "write the fog Unreal's path tracer renders for the Unreal values (profile ue_pathtracer: "
         "density x extinction scale, clamped below the fog height, inside a cylinder centred on the "
@@ -253,19 +210,11 @@ class _Options:
         "tracer approximates: its density, falloffs, heights, albedo and g, unbounded)",
         group=PT,
     )
-    ue_volumetric_fog_distance: float | None = option(
-        None,
-        "VolumetricFogDistance: the cylinder's radius [cm], [0.1, 1e9]",
-        check=Number(),
-        group=PT,
-        default_text="6000",
+    ue_volumetric_fog_distance: float | None = _number(
+        "VolumetricFogDistance: the cylinder's radius [cm], [0.1, 1e9]", PT, "6000"
     )
-    ue_volumetric_fog_extinction_scale: float | None = option(
-        None,
-        "VolumetricFogExtinctionScale: multiplies the density, >= 0",
-        check=Number(),
-        group=PT,
-        default_text="1",
+    ue_volumetric_fog_extinction_scale: float | None = _number(
+        "VolumetricFogExtinctionScale: multiplies the density, >= 0", PT, "1"
     )
     ue_volumetric_fog_albedo: str | None = option(
         None,
@@ -275,20 +224,14 @@ class _Options:
         group=PT,
         default_text="1",
     )
-    ue_volumetric_fog_scattering_distribution: float | None = option(
-        None,
-        "VolumetricFogScatteringDistribution: the HG g, [-0.99, 0.99]",
-        check=Number(),
-        group=PT,
-        default_text="0.2",
+    ue_volumetric_fog_scattering_distribution: float | None = _number(
+        "VolumetricFogScatteringDistribution: the HG g, [-0.99, 0.99]", PT, "0.2"
     )
-    ue_fog_density_clamp: float | None = option(
-        None,
+    ue_fog_density_clamp: float | None = _number(
         "r.PathTracing.FogDensityClamp: the density's growth below the fog height, in multiples of "
         "the fog density, [1, 256]",
-        check=Number(),
-        group=PT,
-        default_text="8",
+        PT,
+        "8",
     )
     albedo: str | None = option(
         None,
@@ -428,17 +371,12 @@ Options.__module__ = __name__
 def run(a, given=frozenset()) -> int:
     """Write the scene; print its path (notes on stderr)."""
     phys = {k: getattr(a, k) for k in PHYSICAL if getattr(a, k) is not None}
-    ue = {}
-    for key, opt in UNREAL_MAPPED.items():
+    ue: dict = {}
+    for key, opt in [*UNREAL_MAPPED.items(), *((k, opt) for k, (opt, _, _) in UNREAL_IGNORED.items())]:
         v = getattr(a, _dest(opt))
-        if v is not None:
-            if key.startswith("SecondFogData."):
-                ue.setdefault("SecondFogData", {})[key.split(".", 1)[1]] = v
-            else:
-                ue[key] = v
-    for key, (opt, _, _) in UNREAL_IGNORED.items():
-        v = getattr(a, _dest(opt))
-        if v is not None:
+        if v is not None and key.startswith("SecondFogData."):
+            ue.setdefault("SecondFogData", {})[key.split(".", 1)[1]] = v
+        elif v is not None:
             ue[key] = v
     if phys and ue:
         p_opts = ", ".join(PHYSICAL[k].option for k in phys)
@@ -470,37 +408,15 @@ def run(a, given=frozenset()) -> int:
             return  # the path-traced fog has VolumetricFogAlbedo and its g
         print(f"fogref scene: note: {n}", file=sys.stderr)
 
+    write_args = {**api_arguments(a, WRITE), "albedo": albedo, "g": g, "sky_radiance": sky}
     r = write_scene(
         a.out,
         fog=phys if not ue else None,
         unreal=ue or None,
-        albedo=albedo,
-        g=g,
         phase=phase,
         notes=fog_notes,
-        sun_elevation=a.sun_elevation,
-        sun_azimuth=a.sun_azimuth,
-        sun_irradiance=a.sun_irradiance,
-        sky_radiance=sky,
-        sky=a.sky,
-        turbidity=a.turbidity,
-        sun_angular_diameter=a.sun_angular_diameter,
-        camera_origin=a.camera_origin,
-        camera_target=a.camera_target,
-        fov=a.fov,
-        res=a.res,
-        resy=a.resy,
-        geometry=a.geometry,
-        mesh_scale=a.mesh_scale,
-        mesh_up=a.mesh_up,
-        mesh_translate=a.mesh_translate,
-        ground=a.ground,
-        ground_size=a.ground_size,
-        max_depth=a.max_depth,
-        ground_reflectance=a.ground_reflectance,
-        mesh_reflectance=a.mesh_reflectance,
-        overwrite=a.force,
         on_note=note,
+        **write_args,
     )
     if pt is not None:
         uf = UE4FogParams(**{k: v for k, v in ue.items() if k not in UNREAL_IGNORED})

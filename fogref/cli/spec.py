@@ -41,13 +41,15 @@ from dataclasses import MISSING, field
 
 from fogref import params
 from fogref.atomic import check_output_file, is_stream, refuse_overwriting_inputs
-from fogref.cli.checks import Check, PathArg, Text
+from fogref.cli.checks import Assignments, Check, PathArg, Text
 from fogref.errors import FogrefError, did_you_mean
 
 __all__ = [
     "Parser",
     "UsageError",
     "add_options",
+    "api_arguments",
+    "assignments",
     "check_paths",
     "option",
     "parse_options",
@@ -149,24 +151,19 @@ def option(
         has the same default (checked by tests/test_cli_spec.py).
     default_text : how the default is shown in the help (default: the value; None: not shown).
     """
-    meta = dict(
-        _BLANK,
-        help=help,
-        check=check or Text(),
-        flag=flag,
-        short=short,
-        metavar=metavar,
-        positional=positional,
-        repeat=repeat,
-        nargs=nargs,
-        group=group,
-        api=api,
-        api_name=api_name,
-        default_text=default_text,
-    )
-    if default is MISSING:
-        return field(metadata={"fogref": meta})
-    return field(default=default, metadata={"fogref": meta})
+    return _field(default, dict(locals(), check=check or Text()))
+
+
+def assignments(help: str, **kw):
+    """A repeatable ``NAME=VALUE`` option (:class:`~fogref.cli.checks.Assignments`), None unless given;
+    ``kw`` as :func:`option`'s."""
+    return option(None, help, repeat=True, check=Assignments(), **kw)
+
+
+def _field(default, given: dict) -> dataclasses.Field:
+    """A dataclass field holding an option's metadata: :data:`_BLANK`, the keys of ``given`` overriding."""
+    md = {"fogref": {k: given.get(k, blank) for k, blank in _BLANK.items()}}
+    return field(metadata=md) if default is MISSING else field(default=default, metadata=md)
 
 
 def switch(
@@ -180,10 +177,7 @@ def switch(
 ):
     """A boolean flag, False unless given.  ``negates``: the API parameter ``api_name`` is its
     opposite (``--no-png`` is ``png=False``)."""
-    meta = dict(
-        _BLANK, help=help, flag=flag, group=group, api=api, api_name=api_name, switch=True, negates=negates
-    )
-    return field(default=False, metadata={"fogref": meta})
+    return _field(False, dict(locals(), switch=True))
 
 
 def toggle(
@@ -196,17 +190,7 @@ def toggle(
     default_text: str | None = None,
 ):
     """A ``--x``/``--no-x`` pair: True, False, or None when neither is given (given once at most)."""
-    meta = dict(
-        _BLANK,
-        help=help,
-        flag=flag,
-        group=group,
-        api=api,
-        api_name=api_name,
-        default_text=default_text,
-        toggle=True,
-    )
-    return field(default=None, metadata={"fogref": meta})
+    return _field(None, dict(locals(), toggle=True))
 
 
 def meta(f: dataclasses.Field) -> dict:
@@ -357,6 +341,28 @@ def refuse(spec, given: set, these, those, source: str, why: str = "") -> None:
         raise UsageError(
             f"{source}: {', '.join(b)} does not apply with {', '.join(a)}" + (f" ({why})" if why else "")
         )
+
+
+def api_arguments(opts, api: str) -> dict:
+    """The keyword arguments of the Python function ``api`` (``"module:function"``) from the options
+    of ``opts`` declared with it: each value under its ``api_name`` (default: the field's name),
+    the opposite for a ``negates`` switch (``--no-png`` is ``png=False``).
+
+    >>> from dataclasses import dataclass
+    >>> @dataclass
+    ... class Demo:
+    ...     spp: int = option(64, "samples per pixel", api="m:f")
+    ...     no_png: bool = switch("no PNG", api="m:f", api_name="png", negates=True)
+    ...     quiet: bool = switch("no progress bar")
+    >>> api_arguments(Demo(spp=8), "m:f")
+    {'spp': 8, 'png': True}
+    """
+    out = {}
+    for f in dataclasses.fields(opts):
+        m, value = meta(f), getattr(opts, f.name)
+        if m["api"] == api:
+            out[m["api_name"] or f.name] = not value if m["negates"] else value
+    return out
 
 
 def _paths(opts, role: str) -> list[tuple[str, str]]:

@@ -66,15 +66,8 @@ class Options:
 
 
 def run(o: Options, given=frozenset()) -> int:
-    settings = {
-        k: v
-        for k, v in (
-            ("StartDistance", o.start_distance),
-            ("FogMaxOpacity", o.max_opacity),
-            ("FogCutoffDistance", o.cutoff),
-        )
-        if v is not None
-    }
+    named = {"StartDistance": o.start_distance, "FogMaxOpacity": o.max_opacity, "FogCutoffDistance": o.cutoff}
+    settings = {k: v for k, v in named.items() if v is not None}
     run_study(o.exr, o.out, o.renders, scene=o.scene, compare_report=not o.no_compare, settings=settings)
     if o.ue_pathtracer:
         split_study(o.exr, o.out, Path(o.renders) / "ue_pathtracer", scene=o.scene)

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fogref.cli.checks import Address, Integer, PathArg
-from fogref.cli.spec import option, refuse, switch
+from fogref.cli.spec import api_arguments, option, refuse, switch
 from fogref.html.reports import write_sweep_html
 from fogref.study.sweep import run_sweep
 
@@ -67,14 +67,7 @@ def run(a: Options, given=frozenset()) -> int:
     refuse(
         Options, given, ("scheduler",), ("workers",), SOURCE, "the workers of a running scheduler are its own"
     )
-    info = run_sweep(
-        a.sweep,
-        scheduler=a.scheduler,
-        n_workers=a.workers,
-        progress=not a.quiet,
-        retry_failed=a.retry_failed,
-        drjit_threads=a.drjit_threads,
-    )
+    info = run_sweep(a.sweep, **api_arguments(a, RUN))
     print(
         f"{info['configs']} configurations ({info['ran']} run now, {info['failed']} failed) in "
         f"{info['wall_seconds']:.1f} s; table: {info['table']} ({info['rows']} rows), {info['parquet']}; "

@@ -13,8 +13,8 @@ import json
 import sys
 from dataclasses import dataclass
 
-from fogref.cli.checks import Assignments, Integer, Number, SceneArg, Text
-from fogref.cli.spec import option
+from fogref.cli.checks import Integer, Number, SceneArg, Text
+from fogref.cli.spec import assignments, option
 from fogref.mapping.build import parse_param_assignments
 from fogref.mapping.fit import model_class
 from fogref.models.terms import describe, note
@@ -41,11 +41,8 @@ class Options:
         metavar="NAME",
     )
     target: str = option(help="target model", flag="--to", check=Text(), metavar="NAME")
-    param: dict | None = option(
-        None,
+    param: dict | None = assignments(
         "a source setting in the engine's units; a colour is linear RGB (VALUE parsed as JSON when possible)",
-        repeat=True,
-        check=Assignments(),
         metavar="KEY=VALUE",
     )
     scene: str | None = option(

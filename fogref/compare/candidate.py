@@ -33,6 +33,7 @@ import numpy as np
 from fogref.compare import noise
 from fogref.errors import FogrefError, ParameterError
 from fogref.gbuffer import Truth, load_truth
+from fogref.mapping.build import model_label
 from fogref.models.base import SKY_DISTANCE as DEFAULT_SKY_DISTANCE
 from fogref.params import number as valid_number
 from fogref.params import path as valid_path
@@ -191,7 +192,7 @@ def evaluate_model(
     extra = {
         k: v for k, v in (("hit", truth.hit), ("distance", truth.distance)) if _accepts(model.evaluate, k)
     }
-    name = str(getattr(model, "name", None) or type(model).__name__)
+    name = model_label(model)
     try:
         positions = truth.world_positions(sky_distance)
         result = model.evaluate(truth.camera, positions, precision=precision, **extra)
@@ -353,7 +354,7 @@ def candidate_parts(
 
     if callable(getattr(candidate, "evaluate", None)):
         m = evaluate_model(truth, candidate, precision, sky_distance)
-        name = str(getattr(candidate, "name", None) or type(candidate).__name__)
+        name = model_label(candidate)
         cp = fog_parts(truth, m["T"], m["inscatter"], name=f"model '{name}'")
         cp.source, cp.precision, cp.sky_distance = candidate, precision, float(sky_distance)
         return cp

@@ -2,8 +2,8 @@
 
 A rendering engineer's engine writes a picture of the same view as the truth
 (same camera, same resolution, pixel-centred: one sample through each pixel's
-centre, as fogref's default ``pixel_filter="centre"``).  This module reads it and
-compares it, part by part:
+centre, as fogref's default ``pixel_filter="centre"``).  This module reads it; each
+image is compared, part by part (:func:`fogref.compare.check.check`):
 
 ================  ====================================  ===============================
 engine image      what it is                            compared against the truth's
@@ -52,11 +52,8 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from fogref.compare import report
-from fogref.compare.check import check
 from fogref.errors import FogrefError
 from fogref.exrio import read_exr
-from fogref.gbuffer import Truth, load_truth
 
 ENCODINGS = ("auto", "linear", "srgb")
 IMAGE_SUFFIXES = (".exr", ".png", ".hdr", ".pic")
@@ -370,55 +367,3 @@ def load_engine_images(
         encoding_option=encoding,
         exposure=float(exposure),
     )
-
-
-def check_images(
-    truth, images: EngineImages, out_dir=None, tolerances=None, *, figures: bool = True, **check_options
-):
-    """Check an engine's images against a truth; optionally write the report.
-
-    Every part the engine gave is compared with the truth's matching part, with
-    the truth's noise taken out and a confidence interval per metric (see
-    :func:`fogref.compare.check.check`); with both transmittance and inscatter, also
-    ``composite``, the engine's fog over the truth's surface.
-
-    Parameters
-    ----------
-    truth : Truth or path
-        The ground truth (a path is read with :func:`fogref.gbuffer.load_truth`).
-    images : EngineImages
-        From :func:`load_engine_images`.
-    out_dir : path, optional
-        Where to write the report of :func:`fogref.compare.report.compare_images` (the
-        model report's layout: ``metrics.json`` with a ``check`` section, ``check.json``,
-        ``errors.exr``, ``index.md`` and, unless ``figures`` is False, the figures).
-    tolerances, check_options :
-        Passed to :func:`~fogref.compare.check.check`.
-
-    Returns
-    -------
-    CheckResult
-
-    Examples
-    --------
-    >>> from fogref.compare.candidate import evaluate_model
-    >>> from fogref.compare.synthetic import synthetic_truth
-    >>> from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
-    >>> model = UE4ExponentialHeightFog(UE4FogParams(FogDensity=0.02, FogHeightFalloff=0.2))
-    >>> truth = synthetic_truth(model)
-    >>> p = evaluate_model(truth, model)
-    >>> r = check_images(truth, EngineImages(transmittance=p["T"], inscatter=1.05 * p["inscatter"]))
-    >>> r.row("inscatter", "all", "rel_bias").verdict, r.row("T", "all").verdict
-    ('fail', 'pass')
-    """
-    if not isinstance(truth, Truth):
-        truth = load_truth(truth)
-    if images.shape is not None and images.shape != truth.shape:
-        raise FogrefError(
-            f"engine images are {images.shape[1]}x{images.shape[0]} px, but {truth.path} is "
-            f"{truth.shape[1]}x{truth.shape[0]} px"
-        )
-    result = check(truth, images, tolerances, **check_options)
-    if out_dir is not None:
-        report.compare_images(truth, images, out_dir, figures=figures, check=result)
-    return result

@@ -67,7 +67,6 @@ from fogref.compare.plots import plot_binned_errors, plot_error_heatmaps, plot_s
 from fogref.compare.report_page import ERRORS_EXR_LAYOUT, check_table_markdown, index_markdown, warnings_of
 from fogref.compare.report_parts import (
     ALL_PARTS,
-    DEFAULT_SKY_DISTANCE,
     PART_UNITS,
     PARTS,
     REGIONS,
@@ -76,7 +75,6 @@ from fogref.compare.report_parts import (
     image_parts,
     json_safe,
     model_description,
-    model_name,
     model_units,
     parts_from_check,
     truth_provenance,
@@ -85,6 +83,8 @@ from fogref.display import part_exposures
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
 from fogref.gbuffer import Truth, load_truth
+from fogref.mapping.build import model_label
+from fogref.models.base import SKY_DISTANCE as DEFAULT_SKY_DISTANCE
 
 __all__ = [
     "ALL_PARTS",
@@ -195,9 +195,9 @@ def compare(
     if parts is None:
         parts = evaluate_parts(truth, model, precision, sky_distance)
     header = {
-        "candidate": {"kind": "model", "name": model_name(model)},
+        "candidate": {"kind": "model", "name": model_label(model)},
         "model": {
-            "name": model_name(model),
+            "name": model_label(model),
             "parameters": model_description(model),
             "units": model_units(model),
         },

@@ -22,12 +22,10 @@ from fogref.compare import noise
 from fogref.compare.candidate import candidate_parts, evaluate_model, fog_parts
 from fogref.errors import FogrefError
 from fogref.gbuffer import COMPARED_PARTS, Truth, part_attribute
-from fogref.mapping.build import current_parameters
+from fogref.mapping.build import current_parameters, model_label
 from fogref.models.terms import annotate
 from fogref.params import number as valid_number
 
-#: Distance [m] at which the model fogs sky pixels (a stand-in for infinity).
-DEFAULT_SKY_DISTANCE = 1.0e5
 #: A model run's parts (:data:`fogref.gbuffer.COMPARED_PARTS`).
 PARTS: tuple[str, ...] = COMPARED_PARTS
 #: Units of each part's values ("1": dimensionless; radiance is in the scene's units).
@@ -41,16 +39,6 @@ PART_UNITS: dict[str, str] = {
 REGIONS: tuple[str, ...] = ("all", "surface", "sky")
 #: Every part a report may hold (model runs: PARTS; engine images add ``composite``).
 ALL_PARTS: tuple[str, ...] = (*PARTS, "composite")
-
-
-def model_name(model) -> str:
-    """The name a report gives ``model``: its ``name``, else its class's name.
-
-    >>> from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
-    >>> model_name(UE4ExponentialHeightFog(UE4FogParams())), model_name(object())
-    ('ue4', 'object')
-    """
-    return str(getattr(model, "name", None) or type(model).__name__)
 
 
 def model_description(model) -> dict | str:
@@ -67,7 +55,7 @@ def model_units(model) -> dict:
     params = model_description(model)
     if not isinstance(params, dict):
         return {}
-    name = model_name(model)
+    name = model_label(model)
     return {k: a for k, v in params.items() if (a := annotate(name, k, v))}
 
 

@@ -50,13 +50,16 @@ def parse_param_assignments(assignments: Any) -> dict:
 
 
 def model_label(cls: Any) -> str:
-    """The name a model class goes by in messages: its registry ``name``, else its class name.
+    """The name a model class or instance goes by in messages and reports: its registry ``name``,
+    else its class name.
 
     Examples
     --------
-    >>> from fogref.models.ue4 import UE4ExponentialHeightFog
+    >>> from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
     >>> model_label(UE4ExponentialHeightFog), model_label(dict)
     ('ue4', 'dict')
+    >>> model_label(UE4ExponentialHeightFog(UE4FogParams())), model_label(object())
+    ('ue4', 'object')
     """
     return str(getattr(cls, "name", None) or getattr(cls, "__name__", type(cls).__name__))
 
