@@ -693,7 +693,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         tr.sun_along = sun_ss is not None
         active = active & tr.has_lights  # no emitter: nothing to trace beyond the G-buffer
         # a Local Fog Volume: free flight (the forced collision covers height layers only)
-        forced = self.forced_split and tr.fog.volume is None
+        forced = self.forced_split and (tr.fog is None or tr.fog.volume is None)
         if tr.phase is not None and tr.has_lights and forced and self.max_depth >= 2:
             path, cover = self._camera_split(tr, sampler, ray, si, D0, active)
             return CameraRay(gbuf, sun_ss, cover, path)
