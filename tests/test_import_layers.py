@@ -366,6 +366,17 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
         "matplotlib.backends.backend_agg.FigureCanvasAgg": HEAVY,
         "matplotlib.figure.Figure": HEAVY,
     },
+    # selenium, Chromium's driver: the `test` extra only
+    "fogref.engines.browser": {
+        "selenium": OPTIONAL,
+        "selenium.common.exceptions.JavascriptException": OPTIONAL,
+        "selenium.common.exceptions.TimeoutException": OPTIONAL,
+        "selenium.common.exceptions.WebDriverException": OPTIONAL,
+        "selenium.webdriver": OPTIONAL,
+        "selenium.webdriver.chrome.service.Service": OPTIONAL,
+        "selenium.webdriver.support.ui.WebDriverWait": OPTIONAL,
+    },
+    "fogref.engines.view": {"mitsuba": DOES_WORK},
     "fogref.gbuffer": {"drjit": DOES_WORK},
     # pandas 0.7 s: only for a DataFrame"s display
     "fogref.html.notebook": {"pandas": HEAVY},
@@ -375,6 +386,13 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
         "fogref.render.cache.cached_truth": HEAVY,
         "fogref.render.cache.default_cache_dir": HEAVY,
     },
+    # dask.distributed 0.8 s: a render in one process never submits a pass
+    "fogref.render.distributed": {"dask.distributed.as_completed": HEAVY, "drjit": DOES_WORK},
+    "fogref.render.load": {"mitsuba": DOES_WORK},
+    # tqdm 0.03 s (`python -X importtime`): a quiet render shows no bar (tests/test_startup.py)
+    "fogref.render.render": {"drjit": DOES_WORK, "mitsuba": DOES_WORK, "tqdm.tqdm": HEAVY},
+    "fogref.render.sunsky": {"mitsuba": DOES_WORK},
+    "fogref.render.variant": {"drjit": DOES_WORK, "mitsuba": DOES_WORK},
     "fogref.study.budget.report": {"matplotlib": HEAVY, "matplotlib.pyplot": HEAVY},
     "fogref.study.spectral_rgb": {"colour": HEAVY},
     # scipy.stats.qmc 1.4 s: only the random and lhs designs
@@ -388,34 +406,15 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
         "drjit": DOES_WORK,
         "mitsuba": DOES_WORK,
     },
+    # the plugins' modules import Mitsuba, which needs a variant set first
+    "fogref_plugins": {
+        "fogref_plugins.fog_medium.register": DOES_WORK,
+        "fogref_plugins.fogpath.register": DOES_WORK,
+        "fogref_plugins.tab_phase.register": DOES_WORK,
+    },
     # not yet reviewed
     "fogref.cli.scene": {
         "fogref.mapping.droplet_fog.droplet_fog": NOT_REVIEWED,
-    },
-    "fogref.engines.browser": {
-        "json": NOT_REVIEWED,
-        "selenium": NOT_REVIEWED,
-        "selenium.common.exceptions.JavascriptException": NOT_REVIEWED,
-        "selenium.common.exceptions.TimeoutException": NOT_REVIEWED,
-        "selenium.common.exceptions.WebDriverException": NOT_REVIEWED,
-        "selenium.webdriver": NOT_REVIEWED,
-        "selenium.webdriver.chrome.service.Service": NOT_REVIEWED,
-        "selenium.webdriver.support.ui.WebDriverWait": NOT_REVIEWED,
-    },
-    "fogref.engines.playcanvas": {
-        "fogref.models.playcanvas.gamma_correct_output": NOT_REVIEWED,
-    },
-    "fogref.engines.port": {
-        "fogref.display.srgb_encode": NOT_REVIEWED,
-    },
-    "fogref.engines.render": {
-        "PIL.Image": NOT_REVIEWED,
-        "fogref.engines.port.port_vs_engine": NOT_REVIEWED,
-        "fogref.mapping.PhysicalScene": NOT_REVIEWED,
-    },
-    "fogref.engines.view": {
-        "fogref.render.load.load_scene": NOT_REVIEWED,
-        "mitsuba": NOT_REVIEWED,
     },
     "fogref.mapping.droplet_fog": {
         "fogref.media.NP": NOT_REVIEWED,
@@ -456,52 +455,11 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
     "fogref.models.resolve": {
         "importlib.metadata.entry_points": NOT_REVIEWED,
     },
-    "fogref.render.cache": {
-        "fogref_plugins": NOT_REVIEWED,
-    },
-    "fogref.render.distributed": {
-        "dask.distributed.as_completed": NOT_REVIEWED,
-        "drjit": NOT_REVIEWED,
-        "fogref.render.load.load_scene": NOT_REVIEWED,
-        "fogref.render.variant.set_variant": NOT_REVIEWED,
-        "fogref.scene.parsed.read_scene": NOT_REVIEWED,
-        "fogref_plugins.passes.pass_seed": NOT_REVIEWED,
-        "numpy": NOT_REVIEWED,
-    },
-    "fogref.render.load": {
-        "mitsuba": NOT_REVIEWED,
-    },
-    "fogref.render.render": {
-        "OpenEXR": NOT_REVIEWED,
-        "drjit": NOT_REVIEWED,
-        "fogref.exrio.read_exr": NOT_REVIEWED,
-        "fogref.render.distributed": NOT_REVIEWED,
-        "mitsuba": NOT_REVIEWED,
-        "tqdm.tqdm": NOT_REVIEWED,
-    },
-    "fogref.render.sunsky": {
-        "mitsuba": NOT_REVIEWED,
-    },
-    "fogref.render.variant": {
-        "drjit": NOT_REVIEWED,
-        "fogref_plugins": NOT_REVIEWED,
-        "hashlib": NOT_REVIEWED,
-        "importlib.util": NOT_REVIEWED,
-        "marshal": NOT_REVIEWED,
-        "mitsuba": NOT_REVIEWED,
-        "pathlib.Path": NOT_REVIEWED,
-        "types": NOT_REVIEWED,
-    },
     "fogref.study.fit": {
         "fogref.mapping.fit.fit_model": NOT_REVIEWED,
         "fogref.mapping.translate.translate": NOT_REVIEWED,
         "matplotlib": NOT_REVIEWED,
         "matplotlib.pyplot": NOT_REVIEWED,
-    },
-    "fogref_plugins": {
-        "fogref_plugins.fog_medium.register": NOT_REVIEWED,
-        "fogref_plugins.fogpath.register": NOT_REVIEWED,
-        "fogref_plugins.tab_phase.register": NOT_REVIEWED,
     },
 }
 
@@ -509,9 +467,6 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
 #: module -> {imported name: reason}. ``benchmarks.*`` are the scripts of benchmarks/.
 PRIVATE_IMPORTS: dict[str, dict[str, str]] = {
     # not yet reviewed
-    "benchmarks.render_distributed": {
-        "fogref.render.render._device_f64": NOT_REVIEWED,
-    },
     "benchmarks.ue4_precision_map": {
         "fogref.models.ue4._line_integral_shared": NOT_REVIEWED,
     },

@@ -22,6 +22,7 @@ True
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import tempfile
@@ -76,8 +77,6 @@ def find_chromium() -> tuple[str | None, str | None, str]:
 
 def package_version(node_modules: Path, package: str) -> str:
     """The installed version of the npm ``package`` (its ``package.json``), e.g. ``"0.187.0"``."""
-    import json
-
     return str(json.loads((Path(node_modules) / package / "package.json").read_text())["version"])
 
 
@@ -151,8 +150,6 @@ class Browser:
         EngineUnavailable when a file is missing; FogrefError naming the page and the browser's
         console errors when the page does not get ready or its script throws.
         """
-        import json
-
         from selenium.common.exceptions import JavascriptException, TimeoutException
         from selenium.webdriver.support.ui import WebDriverWait
 

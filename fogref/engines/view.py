@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from fogref.errors import FogrefError
+from fogref.render.load import load_scene
 
 __all__ = ["EngineView", "Triangles", "pixel_directions", "view_from_scene", "view_from_truth"]
 
@@ -244,8 +245,6 @@ def view_from_scene(path, overrides: dict | None = None) -> EngineView:
     FogrefError (one line, naming the file) for a scene the truth renderer refuses, a shape type
     other than meshes, rectangles and spheres, an area light or a textured BSDF.
     """
-    from fogref.render.load import load_scene
-
     scene, desc = load_scene(path, overrides)
     origin = np.asarray(desc["camera"]["origin"], dtype=np.float64)
     notes = _notes(desc)

@@ -52,6 +52,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import OpenEXR
 from fogref_plugins.passes import max_lanes, pass_seed, pass_sizes
 
 from fogref import cluster, gbuffer
@@ -59,10 +60,9 @@ from fogref._version import __version__
 from fogref.atomic import atomic_write, refuse_overwriting_inputs, temporary_names
 from fogref.display import write_preview
 from fogref.errors import FogrefError
-from fogref.exrio import write_exr
-from fogref.render import checkpoint
+from fogref.exrio import read_exr, write_exr
+from fogref.render import checkpoint, distributed
 from fogref.render import load as scene_loader
-from fogref.render.distributed import PassFailed
 from fogref.render.variant import set_variant
 from fogref.scene.inputs import file_sha256
 from fogref.scene.parsed import ParsedScene, read_scene
@@ -297,7 +297,7 @@ def render(
             source = _local_passes(integrator, scene, seed, pixel_filter, passes, saved)
         try:
             for k, s, q, seconds in source:
-                s, q = _device_f64(s), _device_f64(q)
+                s, q = device_f64(s), device_f64(q)
                 if state is not None:
                     s, q = state[0] + s, state[1] + q
                 dr.eval(s, q)
@@ -312,7 +312,7 @@ def render(
                         checkpoint.write_checkpoint(ckpt, state, key)
                         saved = state[2]
                     last_ckpt = time.perf_counter()
-        except (KeyboardInterrupt, RuntimeError, PassFailed) as e:
+        except (KeyboardInterrupt, RuntimeError, distributed.PassFailed) as e:
             if isinstance(e, RuntimeError) and "KeyboardInterrupt" not in str(e):
                 raise
             done = state  # one read: the sums and their count
@@ -320,7 +320,7 @@ def render(
                 with stop.deferred():
                     checkpoint.write_checkpoint(ckpt, done, key)
             if (
-                isinstance(e, PassFailed) and not stop.requested
+                isinstance(e, distributed.PassFailed) and not stop.requested
             ):  # (a Ctrl-C also stops a LocalCluster's workers)
                 why = f"{scene_path}: {e}; the passes done are checkpointed, run again to resume"
                 raise FogrefError(why) from None
@@ -385,8 +385,6 @@ def _truth_to_extend(out: Path, fields: dict, hashes: dict, scene_path: Path, sc
     SHA-256 of each file the scene loads now, ``scene_sha`` the scene's."""
     if not out.is_file():
         return None
-    from fogref.exrio import read_exr
-
     try:
         channels, attrs = read_exr(out)
         H0, W0 = next(iter(channels.values())).shape
@@ -450,8 +448,6 @@ def _cluster_passes(
     ``closing`` (an ExitStack) ends.  Fewer passes than workers is said on stderr
     (:func:`fogref.render.distributed.split_note`, ``pixels`` per sample of a pass); each pass
     redone because its worker was lost, on stderr and in ``<out>.workers.log``."""
-    from fogref.render import distributed
-
     if start >= len(passes):
         return
     log = workers_log_path(out)
@@ -477,7 +473,7 @@ def _cluster_passes(
         yield r["k"], r["sums"], r["squares"], r["seconds"]
 
 
-def _device_f64(x):
+def device_f64(x):
     """A pass's sums as a Dr.Jit float64 tensor (what ``render_moments`` returns; anything
     array-like is converted)."""
     import mitsuba as mi
@@ -507,8 +503,6 @@ def _host_float32(channels: dict) -> dict:
 def _exr_threads() -> None:
     """Let OpenEXR compress with every core (its default is 0 threads: the caller's thread
     only).  ZIP output does not depend on the thread count."""
-    import OpenEXR
-
     if hasattr(OpenEXR, "set_global_thread_count") and OpenEXR.global_thread_count() < (os.cpu_count() or 1):
         OpenEXR.set_global_thread_count(os.cpu_count() or 1)
 
