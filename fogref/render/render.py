@@ -50,6 +50,7 @@ import re
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import OpenEXR
@@ -87,22 +88,19 @@ def _physical_memory() -> int:
 
 def checkpoint_path(out) -> Path:
     """Where :func:`render` keeps the running sums of ``out``: ``<out>.partial.npz``."""
-    out = Path(out)
-    return out.with_name(out.name + ".partial.npz")
+    return Path(out).with_name(Path(out).name + ".partial.npz")
 
 
 def moments_path(out) -> Path:
     """Where :func:`render` keeps the float64 sums of the finished ``out``: ``<out>.moments.npz``
     (the checkpoint's format, :mod:`fogref.render.checkpoint`)."""
-    out = Path(out)
-    return out.with_name(out.name + ".moments.npz")
+    return Path(out).with_name(Path(out).name + ".moments.npz")
 
 
 def workers_log_path(out) -> Path:
     """Where a LocalCluster's workers write their own output while rendering ``out``, and where a
     render on any cluster names the passes redone because a worker was lost: ``<out>.workers.log``."""
-    out = Path(out)
-    return out.with_name(out.name + ".workers.log")
+    return Path(out).with_name(Path(out).name + ".workers.log")
 
 
 def check_output(
@@ -150,19 +148,6 @@ def check_output(
 def _is_exr(path: Path) -> bool:
     with open(path, "rb") as f:
         return f.read(4) == b"\x76\x2f\x31\x01"
-
-
-class _NoBar:
-    """The progress bar of a quiet render: counts nothing, shows nothing."""
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        return False
-
-    def update(self, n):
-        pass
 
 
 def render(
@@ -285,9 +270,9 @@ def render(
 
         bar = tqdm(total=spp, initial=sum(passes[:saved]), unit="spp", desc=scene_path.name)
     else:  # no bar, no tqdm import (a quiet run's start-up skips it)
-        bar = _NoBar()
+        bar = contextlib.nullcontext(SimpleNamespace(update=lambda n: None))
     t0, last_ckpt, timings = time.perf_counter(), time.perf_counter(), []
-    with cluster.Interrupt() as stop, bar, contextlib.ExitStack() as closing:
+    with cluster.Interrupt() as stop, bar as shown, contextlib.ExitStack() as closing:
         if on_cluster:  # the passes' sums come from Dask workers, in pass order
             j = (scene_path, overrides, digest, variant, seed, pixel_filter)
             source = _cluster_passes(
@@ -304,7 +289,7 @@ def render(
                 dr.sync_thread()
                 state = (s, q, k + 1)
                 timings.append(seconds)
-                bar.update(passes[k])
+                shown.update(passes[k])
                 if stop.requested:
                     raise KeyboardInterrupt
                 if state[2] < len(passes) and time.perf_counter() - last_ckpt > checkpoint_seconds:
