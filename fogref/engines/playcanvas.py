@@ -32,16 +32,7 @@ import numpy as np
 
 from fogref.models.playcanvas import gamma_correct_output
 
-__all__ = [
-    "IMPORTS",
-    "MODEL",
-    "PACKAGE",
-    "PAGE",
-    "canvas_port",
-    "port",
-    "settings",
-    "view_settings",
-]
+__all__ = ["IMPORTS", "MODEL", "PACKAGE", "PAGE", "canvas_port", "port", "settings", "view_settings"]
 
 MODEL = "playcanvas"
 PACKAGE = "playcanvas"
