@@ -64,14 +64,11 @@ def find_chromium() -> tuple[str | None, str | None, str]:
     d = next((shutil.which(n) for n in DRIVERS if shutil.which(n)), None)
     if not b or not d:
         missing = " and ".join(n for n, x in (("chromium", b), ("chromedriver", d)) if not x)
-        return (
-            b,
-            d,
-            (
-                f"no {missing} on PATH: the engines run in headless Chromium (apt-get install chromium "
-                "chromium-driver; scripts/setup.sh does it where it runs as root)"
-            ),
+        why = (
+            f"no {missing} on PATH: the engines run in headless Chromium (apt-get install chromium "
+            "chromium-driver; scripts/setup.sh does it where it runs as root)"
         )
+        return b, d, why
     return b, d, ""
 
 
@@ -123,9 +120,8 @@ class Browser:
             self.driver = webdriver.Chrome(service=Service(driver), options=o)
         except WebDriverException as e:
             self._dir.cleanup()
-            first = (
-                (e.msg or str(e)).strip().splitlines()[0] if (e.msg or str(e)).strip() else type(e).__name__
-            )
+            text = (e.msg or str(e)).strip()
+            first = text.splitlines()[0] if text else type(e).__name__
             raise EngineUnavailable(f"{browser}: Chromium did not start ({first})") from None
         self.driver.set_script_timeout(self.timeout)
         self.version = self.driver.capabilities.get("browserVersion", "?")

@@ -190,12 +190,8 @@ def _triangles(shape, source: str, origin: np.ndarray, notes: list) -> Triangles
     if kind == mi.ShapeType.Mesh and "vertex_positions" in p:
         pos = np.asarray(p["vertex_positions"], dtype=np.float64).reshape(-1, 3)
         tri = np.asarray(p["faces"], dtype=np.int64).reshape(-1, 3)
-        vn = (
-            np.asarray(p["vertex_normals"], dtype=np.float64).reshape(-1, 3)
-            if "vertex_normals" in p
-            else None
-        )
-        nrm = vn if vn is not None and vn.shape == pos.shape else None
+        vn = np.asarray(p["vertex_normals"] if "vertex_normals" in p else [], dtype=np.float64).reshape(-1, 3)
+        nrm = vn if "vertex_normals" in p and vn.shape == pos.shape else None
     elif kind in (mi.ShapeType.Rectangle, mi.ShapeType.Sphere):
         m = np.asarray(p["to_world"].matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
         if kind == mi.ShapeType.Sphere:
