@@ -495,12 +495,7 @@ def _exr_threads() -> None:
 def _channels(sums, squares, spp: int) -> dict:
     """EXR channels from the integrator's per-pixel sums, ``(H, W, K)`` Dr.Jit float64
     tensors or numpy arrays (see :func:`gbuffer.moments_to_channels`)."""
-    names = ["final"] + list(gbuffer.SAMPLE_GROUPS)
-    by_group, i = {}, 0
-    for g in names:
-        k = len(gbuffer.channel_names(g))
-        by_group[g] = sums[..., i : i + k]
-        i += k
+    by_group = {g: sums[..., checkpoint.sum_channels(g)] for g in ("final", *gbuffer.SAMPLE_GROUPS)}
     k = 3 * len(gbuffer.SQUARED_GROUPS)  # squares first, then the channel-pair products
     sq = {g: squares[..., 3 * i : 3 * i + 3] for i, g in enumerate(gbuffer.SQUARED_GROUPS)}
     cross = {g: squares[..., k + 3 * i : k + 3 * i + 3] for i, g in enumerate(gbuffer.SQUARED_GROUPS)}
