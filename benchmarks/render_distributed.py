@@ -139,14 +139,14 @@ def _merge_rate(w: int, h: int, repeats: int = 20) -> float:
     import drjit as dr
     import numpy as np
 
-    from fogref.render.render import _device_f64
+    from fogref.render.render import device_f64
 
     rng = np.random.default_rng(0)
     s, q = rng.random((h, w, 30)), rng.random((h, w, 42))
-    acc = (_device_f64(s), _device_f64(q))
+    acc = (device_f64(s), device_f64(q))
     t0 = time.perf_counter()
     for _ in range(repeats):
-        a, b = acc[0] + _device_f64(s), acc[1] + _device_f64(q)
+        a, b = acc[0] + device_f64(s), acc[1] + device_f64(q)
         dr.eval(a, b)
         dr.sync_thread()
         acc = (a, b)

@@ -12,7 +12,7 @@ from dataclasses import dataclass, make_dataclass
 
 from fogref.cli.checks import Choice, Integer, Number, PathArg, Text
 from fogref.cli.spec import UsageError, api_arguments, option, switch, toggle
-from fogref.mapping.droplet_fog import PHASES
+from fogref.mapping.droplet_fog import PHASES, droplet_fog
 from fogref.mapping.unreal_pathtracer import DROPPED, exact_fog_params, rewrite_scene, validated_settings
 from fogref.media.droplets import DROPLET_PRESETS
 from fogref.models.ue4 import UE4FogParams
@@ -432,8 +432,6 @@ def run(a, given=frozenset()) -> int:
 def _droplet_fog(a, phys: dict, ue: dict) -> tuple:
     """``phys['sigma_t']`` set from --visibility/--droplets (refused beside --sigma-t, Unreal
     values, and --albedo/--g with droplets); returns (albedo, g, phase, notes)."""
-    from fogref.mapping.droplet_fog import droplet_fog
-
     clash = ["--sigma-t"] if "sigma_t" in phys else []
     clash += sorted(_ue_option(k) for k in flat_unreal(ue))
     clash += [f"--{k.replace('_', '-')}" for k in ("ue_pathtracer", "ue_exact") if getattr(a, k)]

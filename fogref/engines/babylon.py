@@ -28,16 +28,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = [
-    "FOG_COORDINATE",
-    "IMPORTS",
-    "MODEL",
-    "PACKAGE",
-    "PAGE",
-    "canvas_port",
-    "port",
-    "settings",
-]
+__all__ = ["FOG_COORDINATE", "IMPORTS", "MODEL", "PACKAGE", "PAGE", "canvas_port", "port", "settings"]
 
 MODEL = "babylon"
 PACKAGE = "@babylonjs/core"

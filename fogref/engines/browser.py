@@ -22,6 +22,7 @@ True
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import tempfile
@@ -63,21 +64,16 @@ def find_chromium() -> tuple[str | None, str | None, str]:
     d = next((shutil.which(n) for n in DRIVERS if shutil.which(n)), None)
     if not b or not d:
         missing = " and ".join(n for n, x in (("chromium", b), ("chromedriver", d)) if not x)
-        return (
-            b,
-            d,
-            (
-                f"no {missing} on PATH: the engines run in headless Chromium (apt-get install chromium "
-                "chromium-driver; scripts/setup.sh does it where it runs as root)"
-            ),
+        why = (
+            f"no {missing} on PATH: the engines run in headless Chromium (apt-get install chromium "
+            "chromium-driver; scripts/setup.sh does it where it runs as root)"
         )
+        return b, d, why
     return b, d, ""
 
 
 def package_version(node_modules: Path, package: str) -> str:
     """The installed version of the npm ``package`` (its ``package.json``), e.g. ``"0.187.0"``."""
-    import json
-
     return str(json.loads((Path(node_modules) / package / "package.json").read_text())["version"])
 
 
@@ -124,9 +120,8 @@ class Browser:
             self.driver = webdriver.Chrome(service=Service(driver), options=o)
         except WebDriverException as e:
             self._dir.cleanup()
-            first = (
-                (e.msg or str(e)).strip().splitlines()[0] if (e.msg or str(e)).strip() else type(e).__name__
-            )
+            text = (e.msg or str(e)).strip()
+            first = text.splitlines()[0] if text else type(e).__name__
             raise EngineUnavailable(f"{browser}: Chromium did not start ({first})") from None
         self.driver.set_script_timeout(self.timeout)
         self.version = self.driver.capabilities.get("browserVersion", "?")
@@ -151,8 +146,6 @@ class Browser:
         EngineUnavailable when a file is missing; FogrefError naming the page and the browser's
         console errors when the page does not get ready or its script throws.
         """
-        import json
-
         from selenium.common.exceptions import JavascriptException, TimeoutException
         from selenium.webdriver.support.ui import WebDriverWait
 

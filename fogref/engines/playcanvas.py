@@ -30,16 +30,9 @@ from typing import Any
 
 import numpy as np
 
-__all__ = [
-    "IMPORTS",
-    "MODEL",
-    "PACKAGE",
-    "PAGE",
-    "canvas_port",
-    "port",
-    "settings",
-    "view_settings",
-]
+from fogref.models.playcanvas import gamma_correct_output
+
+__all__ = ["IMPORTS", "MODEL", "PACKAGE", "PAGE", "canvas_port", "port", "settings", "view_settings"]
 
 MODEL = "playcanvas"
 PACKAGE = "playcanvas"
@@ -77,8 +70,6 @@ def canvas_port(surface: np.ndarray, model: Any, fog_factor: np.ndarray) -> np.n
 
     ``surface`` (H, W, 3) linear, ``fog_factor`` (H, W) in [0, 1]; returns uint8 (H, W, 3).
     """
-    from fogref.models.playcanvas import gamma_correct_output
-
     colour = np.asarray([float(c) ** 2.2 for c in model.params.color], dtype=np.float64)
     f = np.asarray(fog_factor, dtype=np.float64)[..., None]
     out = gamma_correct_output(np.asarray(surface, dtype=np.float64) * (1 - f) + colour * f, np.float64)

@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from fogref.display import srgb_encode
 from fogref.engines import engine_module
 from fogref.engines.view import pixel_directions
 
@@ -79,8 +80,6 @@ def port_vs_engine(r: Any, model: Any, view_dirs: np.ndarray | None = None) -> d
     else:
         canvas = mod.canvas_port(r.surface, port, f)[hit].astype(np.int64)
     dc = r.canvas[hit].astype(np.int64) - canvas
-    from fogref.display import srgb_encode
-
     linear_blend = np.rint(srgb_encode(final) * 255).astype(np.int64)
     out = {
         "pixels": int(hit.sum()),

@@ -36,13 +36,16 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from PIL import Image
 
 from fogref.atomic import atomic_write, refuse_overwriting_inputs, write_text_atomic
 from fogref.engines import engine_module
 from fogref.engines.browser import Browser, node_modules_dir, package_version
+from fogref.engines.port import port_vs_engine
 from fogref.engines.view import EngineView
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
+from fogref.mapping import PhysicalScene
 
 __all__ = ["EngineRender", "FILES", "output_paths", "render_engine", "write_engine_render"]
 
@@ -121,8 +124,6 @@ def _pixels(text: str, shape: tuple[int, int], dtype: Any) -> np.ndarray:
 
 def spec_of(view: EngineView, fog: dict | None) -> dict:
     """The page's ``spec`` (see :mod:`fogref.engines`) for ``view`` and the fog settings ``fog``."""
-    from fogref.mapping import PhysicalScene
-
     ps = PhysicalScene.from_params(view.params)
     H, W = view.shape
     c = view.camera
@@ -252,8 +253,6 @@ def write_engine_render(r: EngineRender, out_dir, inputs=(), extra: dict | None 
         write_exr(paths["inscatter"], _rgb(r.inscatter), attrs)
 
     def png(tmp: str) -> None:
-        from PIL import Image
-
         Image.fromarray(r.canvas, "RGB").save(tmp, format="PNG")
 
     atomic_write(paths["canvas"], png)
@@ -304,8 +303,6 @@ def render_and_write(
     Returns ``(render, role -> path, record)``; ``record`` (what ``engine.json`` holds) has
     ``summary``, one line per finding.
     """
-    from fogref.engines.port import port_vs_engine
-
     refuse_overwriting_inputs(
         [(p, f"engine {k} file") for k, p in output_paths(out_dir).items()], inputs, "--out"
     )

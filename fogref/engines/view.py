@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from fogref.errors import FogrefError
+from fogref.render.load import load_scene
 
 __all__ = ["EngineView", "Triangles", "pixel_directions", "view_from_scene", "view_from_truth"]
 
@@ -189,12 +190,8 @@ def _triangles(shape, source: str, origin: np.ndarray, notes: list) -> Triangles
     if kind == mi.ShapeType.Mesh and "vertex_positions" in p:
         pos = np.asarray(p["vertex_positions"], dtype=np.float64).reshape(-1, 3)
         tri = np.asarray(p["faces"], dtype=np.int64).reshape(-1, 3)
-        vn = (
-            np.asarray(p["vertex_normals"], dtype=np.float64).reshape(-1, 3)
-            if "vertex_normals" in p
-            else None
-        )
-        nrm = vn if vn is not None and vn.shape == pos.shape else None
+        vn = np.asarray(p["vertex_normals"] if "vertex_normals" in p else [], dtype=np.float64).reshape(-1, 3)
+        nrm = vn if "vertex_normals" in p and vn.shape == pos.shape else None
     elif kind in (mi.ShapeType.Rectangle, mi.ShapeType.Sphere):
         m = np.asarray(p["to_world"].matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
         if kind == mi.ShapeType.Sphere:
@@ -244,8 +241,6 @@ def view_from_scene(path, overrides: dict | None = None) -> EngineView:
     FogrefError (one line, naming the file) for a scene the truth renderer refuses, a shape type
     other than meshes, rectangles and spheres, an area light or a textured BSDF.
     """
-    from fogref.render.load import load_scene
-
     scene, desc = load_scene(path, overrides)
     origin = np.asarray(desc["camera"]["origin"], dtype=np.float64)
     notes = _notes(desc)

@@ -295,7 +295,6 @@ def rewrite_scene(
     pt: UEPathTracerSettings,
     camera: Any = None,
     params: dict | None = None,
-    pixel_exact: bool = False,
 ) -> dict:
     """Copy the fogref scene ``src`` to ``dst`` with its ``heightfog`` replaced by UE's
     path-traced fog of ``ue`` and ``pt`` (or by ``params``, e.g. :func:`exact_fog_params`);
@@ -307,8 +306,7 @@ def rewrite_scene(
     as Unreal does).  The medium's ``phase`` child, if any, is kept.  With that default, every
     other value of the fog becomes a ``<default>`` too (:data:`DEFAULT_NAMES`: the scene
     vocabulary's names, and ``fog_clamp``, ``fog_radius``), so ``--set g=0.9`` changes it; the
-    scene's comments are kept (:func:`fogref.scene.edit.replace_fog`).  ``pixel_exact``: every
-    sample through the pixel centre (the truths' convention).
+    scene's comments are kept (:func:`fogref.scene.edit.replace_fog`).
     """
     follow = camera is None and params is None
     if follow:
@@ -320,7 +318,7 @@ def rewrite_scene(
         camera = [float(x) for x in origin.replace(",", " ").split()]
     if params is None:
         params = pathtracer_fog_params(ue, pt, camera)
-    replace_fog(src, dst, params, DEFAULT_NAMES if follow else None, pixel_exact=pixel_exact)
+    replace_fog(src, dst, params, DEFAULT_NAMES if follow else None)
     return params
 
 

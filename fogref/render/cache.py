@@ -22,6 +22,8 @@ import hashlib
 import json
 from pathlib import Path
 
+import fogref_plugins
+
 import fogref
 from fogref import params
 from fogref._version import __version__
@@ -35,23 +37,8 @@ from fogref.shipped_scenes import resolve_scene
 
 def _renderer_hash() -> str:
     root = Path(fogref.__file__).resolve().parent
-    plugins = root.parent / "plugins"
-    if not plugins.is_dir():
-        try:  # an installed fogref without the source tree; the plugins are optional here
-            import fogref_plugins
-
-            plugins = Path(fogref_plugins.__file__).resolve().parent
-        except ImportError:
-            plugins = None
-    return sources_digest(
-        [
-            root / "media",
-            root / "scene",
-            root / "render",
-            root / "gbuffer.py",
-            *([plugins] if plugins else []),
-        ]
-    )
+    plugins = Path(fogref_plugins.__file__).resolve().parent  # the plugins this process renders with
+    return sources_digest([root / "media", root / "scene", root / "render", root / "gbuffer.py", plugins])
 
 
 def truth_key(scene, spp: int, seed: int, overrides: dict | None = None, pixel_filter: str = "centre") -> str:

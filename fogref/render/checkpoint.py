@@ -51,9 +51,13 @@ def write_checkpoint(ckpt: Path, state, key: str) -> None:
 _BOUNDED = ("T", "surface_coverage", "hit")
 
 
-def _sum_channels(group: str) -> slice:
+def sum_channels(group: str) -> slice:
     """Where ``group``'s channels sit in the last axis of the sums (``final`` first, then
-    :data:`fogref.gbuffer.SAMPLE_GROUPS`)."""
+    :data:`fogref.gbuffer.SAMPLE_GROUPS`); KeyError for another name.
+
+    >>> sum_channels("final")
+    slice(0, 3, None)
+    """
     i = 0
     for g in ("final",) + tuple(gbuffer.SAMPLE_GROUPS):
         k = len(gbuffer.channel_names(g))
@@ -93,7 +97,7 @@ def checkpoint_problem(z, key: str, shape: tuple, passes: list):
         return "non-finite sums"
     n = sum(passes[:done])
     for g in _BOUNDED:
-        part = sums[..., _sum_channels(g)]
+        part = sums[..., sum_channels(g)]
         if part.min() < 0 or part.max() > n * (1 + 1e-9):
             return f"the sums of '{g}' leave [0, {n}] (the samples of {done} pass(es))"
     return None

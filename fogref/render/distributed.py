@@ -41,7 +41,13 @@ import secrets
 import time
 from pathlib import Path
 
+import numpy as np
+from fogref_plugins.passes import pass_seed
+
 from fogref.errors import FogrefError
+from fogref.render.load import load_scene
+from fogref.render.variant import set_variant
+from fogref.scene.parsed import read_scene
 
 __all__ = [
     "PassFailed",
@@ -86,10 +92,6 @@ def _worker_scene(j: dict):
     hit = _LOADED.get(key)
     if hit is not None:
         return hit
-    from fogref.render.load import load_scene
-    from fogref.render.variant import set_variant
-    from fogref.scene.parsed import read_scene
-
     set_variant(j["variant"])
     if j["threads"]:
         import drjit as dr
@@ -121,9 +123,6 @@ def render_pass(j: dict, k: int, spp: int) -> dict:
     and ``(H, W, 42)``, the wall and CPU seconds the pass took in this process (its first pass
     on this process includes loading the scene and compiling the kernels) and the process id.
     """
-    import numpy as np
-    from fogref_plugins.passes import pass_seed
-
     t0, c0 = time.perf_counter(), time.process_time()
     scene, integrator = _worker_scene(j)
     s, q = integrator.render_moments(

@@ -50,8 +50,10 @@ import re
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
+import OpenEXR
 from fogref_plugins.passes import max_lanes, pass_seed, pass_sizes
 
 from fogref import cluster, gbuffer
@@ -59,10 +61,9 @@ from fogref._version import __version__
 from fogref.atomic import atomic_write, refuse_overwriting_inputs, temporary_names
 from fogref.display import write_preview
 from fogref.errors import FogrefError
-from fogref.exrio import write_exr
-from fogref.render import checkpoint
+from fogref.exrio import read_exr, write_exr
+from fogref.render import checkpoint, distributed
 from fogref.render import load as scene_loader
-from fogref.render.distributed import PassFailed
 from fogref.render.variant import set_variant
 from fogref.scene.inputs import file_sha256
 from fogref.scene.parsed import ParsedScene, read_scene
@@ -87,22 +88,19 @@ def _physical_memory() -> int:
 
 def checkpoint_path(out) -> Path:
     """Where :func:`render` keeps the running sums of ``out``: ``<out>.partial.npz``."""
-    out = Path(out)
-    return out.with_name(out.name + ".partial.npz")
+    return Path(out).with_name(Path(out).name + ".partial.npz")
 
 
 def moments_path(out) -> Path:
     """Where :func:`render` keeps the float64 sums of the finished ``out``: ``<out>.moments.npz``
     (the checkpoint's format, :mod:`fogref.render.checkpoint`)."""
-    out = Path(out)
-    return out.with_name(out.name + ".moments.npz")
+    return Path(out).with_name(Path(out).name + ".moments.npz")
 
 
 def workers_log_path(out) -> Path:
     """Where a LocalCluster's workers write their own output while rendering ``out``, and where a
     render on any cluster names the passes redone because a worker was lost: ``<out>.workers.log``."""
-    out = Path(out)
-    return out.with_name(out.name + ".workers.log")
+    return Path(out).with_name(Path(out).name + ".workers.log")
 
 
 def check_output(
@@ -150,19 +148,6 @@ def check_output(
 def _is_exr(path: Path) -> bool:
     with open(path, "rb") as f:
         return f.read(4) == b"\x76\x2f\x31\x01"
-
-
-class _NoBar:
-    """The progress bar of a quiet render: counts nothing, shows nothing."""
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        return False
-
-    def update(self, n):
-        pass
 
 
 def render(
@@ -285,9 +270,9 @@ def render(
 
         bar = tqdm(total=spp, initial=sum(passes[:saved]), unit="spp", desc=scene_path.name)
     else:  # no bar, no tqdm import (a quiet run's start-up skips it)
-        bar = _NoBar()
+        bar = contextlib.nullcontext(SimpleNamespace(update=lambda n: None))
     t0, last_ckpt, timings = time.perf_counter(), time.perf_counter(), []
-    with cluster.Interrupt() as stop, bar, contextlib.ExitStack() as closing:
+    with cluster.Interrupt() as stop, bar as shown, contextlib.ExitStack() as closing:
         if on_cluster:  # the passes' sums come from Dask workers, in pass order
             j = (scene_path, overrides, digest, variant, seed, pixel_filter)
             source = _cluster_passes(
@@ -297,14 +282,14 @@ def render(
             source = _local_passes(integrator, scene, seed, pixel_filter, passes, saved)
         try:
             for k, s, q, seconds in source:
-                s, q = _device_f64(s), _device_f64(q)
+                s, q = device_f64(s), device_f64(q)
                 if state is not None:
                     s, q = state[0] + s, state[1] + q
                 dr.eval(s, q)
                 dr.sync_thread()
                 state = (s, q, k + 1)
                 timings.append(seconds)
-                bar.update(passes[k])
+                shown.update(passes[k])
                 if stop.requested:
                     raise KeyboardInterrupt
                 if state[2] < len(passes) and time.perf_counter() - last_ckpt > checkpoint_seconds:
@@ -312,7 +297,7 @@ def render(
                         checkpoint.write_checkpoint(ckpt, state, key)
                         saved = state[2]
                     last_ckpt = time.perf_counter()
-        except (KeyboardInterrupt, RuntimeError, PassFailed) as e:
+        except (KeyboardInterrupt, RuntimeError, distributed.PassFailed) as e:
             if isinstance(e, RuntimeError) and "KeyboardInterrupt" not in str(e):
                 raise
             done = state  # one read: the sums and their count
@@ -320,7 +305,7 @@ def render(
                 with stop.deferred():
                     checkpoint.write_checkpoint(ckpt, done, key)
             if (
-                isinstance(e, PassFailed) and not stop.requested
+                isinstance(e, distributed.PassFailed) and not stop.requested
             ):  # (a Ctrl-C also stops a LocalCluster's workers)
                 why = f"{scene_path}: {e}; the passes done are checkpointed, run again to resume"
                 raise FogrefError(why) from None
@@ -385,8 +370,6 @@ def _truth_to_extend(out: Path, fields: dict, hashes: dict, scene_path: Path, sc
     SHA-256 of each file the scene loads now, ``scene_sha`` the scene's."""
     if not out.is_file():
         return None
-    from fogref.exrio import read_exr
-
     try:
         channels, attrs = read_exr(out)
         H0, W0 = next(iter(channels.values())).shape
@@ -450,8 +433,6 @@ def _cluster_passes(
     ``closing`` (an ExitStack) ends.  Fewer passes than workers is said on stderr
     (:func:`fogref.render.distributed.split_note`, ``pixels`` per sample of a pass); each pass
     redone because its worker was lost, on stderr and in ``<out>.workers.log``."""
-    from fogref.render import distributed
-
     if start >= len(passes):
         return
     log = workers_log_path(out)
@@ -477,7 +458,7 @@ def _cluster_passes(
         yield r["k"], r["sums"], r["squares"], r["seconds"]
 
 
-def _device_f64(x):
+def device_f64(x):
     """A pass's sums as a Dr.Jit float64 tensor (what ``render_moments`` returns; anything
     array-like is converted)."""
     import mitsuba as mi
@@ -507,8 +488,6 @@ def _host_float32(channels: dict) -> dict:
 def _exr_threads() -> None:
     """Let OpenEXR compress with every core (its default is 0 threads: the caller's thread
     only).  ZIP output does not depend on the thread count."""
-    import OpenEXR
-
     if hasattr(OpenEXR, "set_global_thread_count") and OpenEXR.global_thread_count() < (os.cpu_count() or 1):
         OpenEXR.set_global_thread_count(os.cpu_count() or 1)
 
@@ -516,12 +495,7 @@ def _exr_threads() -> None:
 def _channels(sums, squares, spp: int) -> dict:
     """EXR channels from the integrator's per-pixel sums, ``(H, W, K)`` Dr.Jit float64
     tensors or numpy arrays (see :func:`gbuffer.moments_to_channels`)."""
-    names = ["final"] + list(gbuffer.SAMPLE_GROUPS)
-    by_group, i = {}, 0
-    for g in names:
-        k = len(gbuffer.channel_names(g))
-        by_group[g] = sums[..., i : i + k]
-        i += k
+    by_group = {g: sums[..., checkpoint.sum_channels(g)] for g in ("final", *gbuffer.SAMPLE_GROUPS)}
     k = 3 * len(gbuffer.SQUARED_GROUPS)  # squares first, then the channel-pair products
     sq = {g: squares[..., 3 * i : 3 * i + 3] for i, g in enumerate(gbuffer.SQUARED_GROUPS)}
     cross = {g: squares[..., k + 3 * i : k + 3 * i + 3] for i, g in enumerate(gbuffer.SQUARED_GROUPS)}

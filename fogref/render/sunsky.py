@@ -159,10 +159,7 @@ def sunsky_from_element(el: ET.Element, defaults: dict, source: str) -> dict:
         raise FogrefError(
             f'{src}: to_world must be <rotate x="1" angle="-90"/> (sunsky is z-up, fogref y-up), or absent'
         )
-    alb = el.find("float[@name='albedo']")
-    albedo = (
-        0.3 if alb is None else P.number(substitute(alb.get("value", ""), defaults), "albedo", source=src)
-    )
+    albedo = _float_param(el, "albedo", defaults, 0.3, src)
     turb = _float_param(el, "turbidity", defaults, 3.0, src)
     if not 1.0 <= turb <= 10.0:
         raise FogrefError(f"{src}: parameter 'turbidity': {turb} is outside [1, 10]")

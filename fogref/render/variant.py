@@ -15,7 +15,14 @@ which keeps the rewritten code objects on disk, keyed on the source file's bytes
 from __future__ import annotations
 
 import contextlib
+import hashlib
+import importlib.util
+import marshal
 import os
+import types
+from pathlib import Path
+
+import fogref_plugins
 
 from fogref import params
 from fogref._llvm import DEFAULT_VARIANT, HELP, ensure_llvm
@@ -43,8 +50,6 @@ def _cache_dir_from(setting):
     >>> _cache_dir_from(None).parts[-3:], _cache_dir_from("off"), str(_cache_dir_from("/tmp/s"))
     (('.cache', 'fogref', 'drjit-syntax'), None, '/tmp/s')
     """
-    from pathlib import Path
-
     if setting is None:
         return Path.home() / ".cache" / "fogref" / "drjit-syntax"
     return None if setting.strip().lower() in ("", "0", "off", "false", "no") else Path(setting)
@@ -70,12 +75,6 @@ def _cached_syntax():
     if folder is None:
         yield
         return
-    import hashlib
-    import importlib.util
-    import marshal
-    import types
-    from pathlib import Path
-
     import drjit as dr
 
     original = dr.syntax
@@ -204,9 +203,6 @@ def set_variant(name: str | None = None) -> str:
             except Exception as e:  # CUDA without a GPU, a broken LLVM, ...
                 raise FogrefError(f"cannot use Mitsuba variant '{name}': {e}") from e
         if name not in _registered:
-            # here, not at module level: fogref_plugins is Mitsuba's side, loaded with a variant
-            import fogref_plugins
-
-            fogref_plugins.register()
+            fogref_plugins.register()  # its modules import Mitsuba: after the variant is set
             _registered.add(name)
     return name

@@ -1,5 +1,4 @@
-"""Edited copies of a fogref scene: without its sun, with another fog, with every sample through
-the pixel centre.
+"""Edited copies of a fogref scene: without its sun, with another fog.
 
 Each edit reads the scene with :func:`fogref.scene.defaults.parse_scene` (its comments kept where
 the copy is for people to read) and writes a new XML file; the original is never changed.
@@ -9,8 +8,6 @@ the copy is for people to read) and writes a new XML file; the original is never
   so the files it names relatively resolve where the original's do.
 * :func:`replace_fog`: the sensor's ``heightfog`` with other parameters (UE's path-traced fog,
   :func:`fogref.mapping.unreal_pathtracer.rewrite_scene`), each value optionally a ``<default>``.
-* ``pixel_exact``: :func:`replace_fog` adds fogpath's ``pixel_exact`` (one ray through each pixel
-  centre, the truths' convention) to the integrator.
 """
 
 from __future__ import annotations
@@ -67,13 +64,7 @@ def _tag(name: str, value) -> tuple[str, str]:
     return "float", repr(float(value))
 
 
-def replace_fog(
-    src,
-    dst,
-    params: dict,
-    default_names: dict | None = None,
-    pixel_exact: bool = False,
-) -> None:
+def replace_fog(src, dst, params: dict, default_names: dict | None = None) -> None:
     """Copy the fogref scene ``src`` to ``dst`` with its ``heightfog``'s parameters replaced by
     ``params`` (name -> number, list of 3 numbers or text; ``center`` is a point, other lists rgb).
 
@@ -81,8 +72,7 @@ def replace_fog(
     (``default_names.get(name, name)``, declared after the scene's own or updated in place) and
     the medium refers to it as ``$name``; ``center`` refers to its default without setting it
     (the camera's own, e.g. ``$camera_origin``: the fog follows the camera).  The medium's
-    ``phase`` child and the scene's comments are kept.  ``pixel_exact``: fogpath's
-    ``pixel_exact`` is switched on.
+    ``phase`` child and the scene's comments are kept.
 
     Raises :class:`~fogref.errors.ParameterError` naming ``src`` when it has no heightfog.
     """
@@ -106,8 +96,6 @@ def replace_fog(
                 defaults[name].set("value", text)
             text = f"${name}"
         ET.SubElement(med, tag, name=k, value=text)
-    if pixel_exact:
-        ET.SubElement(root.find("integrator"), "boolean", name="pixel_exact", value="true")
     tree = ET.ElementTree(root)
     ET.indent(tree, space="    ")
     tree.write(dst, encoding="unicode", xml_declaration=True)

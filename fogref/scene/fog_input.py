@@ -30,15 +30,7 @@ from fogref.models.ue4 import (
     ue4_to_medium,
     unreal_to_sigma,
 )
-from fogref.scene.vocabulary import (
-    PHYSICAL,
-    SCATTERING,
-    SOURCE,
-    Range,
-    check_option,
-    float_text,
-    vector_text,
-)
+from fogref.scene.vocabulary import PHYSICAL, SCATTERING, SOURCE, Range, check_option, value_text
 
 __all__ = [
     "UNREAL_IGNORED",
@@ -203,8 +195,7 @@ def fog_from_unreal(unreal: dict, *, albedo: Any = 0.9, g: float = 0.6) -> tuple
         if unreal.get(key) is None:
             continue
         val = check_option(unreal[key], key, UNREAL_IGNORED_RANGES[key])
-        shown = vector_text(val) if isinstance(val, list) else float_text(val)
-        notes.append(f"Unreal {key} = {shown} is ignored: {why}")
+        notes.append(f"Unreal {key} = {value_text(val)} is ignored: {why}")
     params = UE4FogParams(
         FogDensity=v["FogDensity"],
         FogHeightFalloff=v["FogHeightFalloff"],

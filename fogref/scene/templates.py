@@ -49,7 +49,6 @@ __all__ = [
     "ground",
     "ground_tiles",
     "sub",
-    "valley_ground_size",
 ]
 
 #: Built-in geometry templates (anything else must be a mesh file).
@@ -97,8 +96,7 @@ def geometry(template) -> Geometry:
                 SOURCE,
                 "geometry (--geometry)",
                 f"'{t}': Mitsuba loads meshes from {', '.join(MESH_PLUGINS)} files only, "
-                f"not "
-                f"'{ext or 'no extension'}'; convert it, or {choices}",
+                f"not '{ext or 'no extension'}'; convert it, or {choices}",
             )
         raise ParameterError(SOURCE, "geometry (--geometry)", f"unknown template '{t}': {choices}")
     if not path.is_file():
@@ -201,8 +199,11 @@ def ground(parent, size: float, bsdf_id: str, shape_id: str = "ground"):
         sub(s, "ref", id=bsdf_id)
 
 
-def _valley_root() -> ET.Element:
-    """``scenes/valley.xml`` with its comments (they label the ridges)."""
+def add_valley(root, ground_size: float | None = None):
+    """The valley's BSDFs and shapes (with the comments among them), copied from ``scenes/valley.xml``.
+
+    ``ground_size`` [m] replaces the ground's half-size (None: the file's).
+    """
     if not VALLEY_SCENE.is_file():
         raise ParameterError(
             SOURCE,
@@ -210,31 +211,14 @@ def _valley_root() -> ET.Element:
             f"the valley template reads {VALLEY_SCENE}, which is missing "
             "(fogref installs it with the package: reinstall fogref)",
         )
-    return parse_scene(VALLEY_SCENE, comments=True)
-
-
-def _valley_ground(root: ET.Element) -> ET.Element:
-    return root.find("shape[@id='ground']/transform[@name='to_world']/scale")
-
-
-def valley_ground_size() -> float:
-    """The half-size [m] of the shipped valley's ground (its ``scale``)."""
-    return float(_valley_ground(_valley_root()).get("value"))
-
-
-def add_valley(root, ground_size: float | None = None):
-    """The valley's BSDFs and shapes (with the comments among them), copied from ``scenes/valley.xml``.
-
-    ``ground_size`` [m] replaces the ground's half-size (None: the file's).
-    """
-    valley = _valley_root()
     started = False
-    for el in valley:
+    for el in parse_scene(VALLEY_SCENE, comments=True):  # its comments label the ridges
         started = started or el.tag == "bsdf"
         if started and el.tag in ("bsdf", "shape", ET.Comment):
             root.append(copy.deepcopy(el))
     if ground_size is not None:
-        _valley_ground(root).set("value", float_text(ground_size))
+        scale = root.find("shape[@id='ground']/transform[@name='to_world']/scale")
+        scale.set("value", float_text(ground_size))
 
 
 def add_mesh(
@@ -264,11 +248,5 @@ def add_mesh(
     elif up == "unreal":  # (x, y, z) -> (x, z, y): the inverse of world_to_unreal's swap (a mirror)
         sub(tw, "matrix", value="1 0 0 0 0 0 1 0 0 1 0 0 0 0 0 1")
     if any(translate):
-        sub(
-            tw,
-            "translate",
-            x=float_text(translate[0]),
-            y=float_text(translate[1]),
-            z=float_text(translate[2]),
-        )
+        sub(tw, "translate", **{a: float_text(v) for a, v in zip("xyz", translate)})
     sub(s, "ref", id="surface")

@@ -36,11 +36,7 @@ from fogref.errors import FogrefError, ParameterError
 from fogref.media.params import medium_from_params
 from fogref.media.phase import TabulatedPhase
 from fogref.scene.defaults import check_camera
-from fogref.scene.fog_input import (
-    flat_unreal,
-    fog_from_physical,
-    fog_from_unreal,
-)
+from fogref.scene.fog_input import flat_unreal, fog_from_physical, fog_from_unreal
 from fogref.scene.sun import sun_direction_from_angles
 from fogref.scene.templates import (
     GROUND_SIZE,
@@ -535,15 +531,12 @@ def write_scene(
             else "there is no ground plane (add one with --ground)"
         )
         raise ParameterError(SOURCE, "ground_reflectance (--ground-reflectance)", f"does not apply: {why}")
-    g_refl = (
-        None
-        if ground_reflectance is None
-        else check_option(ground_reflectance, "ground_reflectance", GROUND_REFLECTANCE)
-    )
-    m_refl = (
-        None
-        if mesh_reflectance is None
-        else check_option(mesh_reflectance, "mesh_reflectance", MESH_REFLECTANCE)
+    g_refl, m_refl = (
+        None if v is None else check_option(v, name, rng)
+        for v, name, rng in (
+            (ground_reflectance, "ground_reflectance", GROUND_REFLECTANCE),
+            (mesh_reflectance, "mesh_reflectance", MESH_REFLECTANCE),
+        )
     )
     inputs = mesh_files(geo.mesh) if geo.kind == "mesh" else [VALLEY_SCENE] if geo.kind == "valley" else []
     _check_inputs(out, inputs)
