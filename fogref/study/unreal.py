@@ -3,7 +3,7 @@
 1. The truth is read by :func:`fogref.gbuffer.load_truth` (the one reader); the
    physical fog, sun, sky and camera come from its ``fogref.params``.
 2. Unreal's parameters: density/falloff/height by the exact mapping
-   (:func:`fogref.models.ue4.medium_to_ue4`); FogInscatteringColor,
+   (:func:`fogref.mapping.unreal_basis.base_params`); FogInscatteringColor,
    DirectionalInscatteringColor, the exponent and the directional start distance
    fitted to the closed-form single scattering (:mod:`fogref.study.fit`); the
    other engine settings (StartDistance, FogMaxOpacity, FogCutoffDistance) at

@@ -61,7 +61,7 @@ def readme(summary: dict, res: dict) -> str:
         lines.append(f"| {k} | {col(v) if isinstance(v, list) else f'{v:.6g}'} | {unit} |")
     lines += [
         "",
-        "Density, falloff and height: exact mapping (`medium_to_ue4`).  Colours, exponent and "
+        "Density, falloff and height: exact mapping (`fogref.mapping.base_params`).  Colours, exponent and "
         "directional start distance: `fogref fit` (least squares against the closed-form sun + sky "
         f"single scattering with sun attenuation over {fit['error']['n_views']} views from the camera; "
         f"relative RMSE of the fit on those views {fit['error']['rel_rmse']:.3f}).  Sun luminance 1 "
