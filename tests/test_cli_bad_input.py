@@ -415,6 +415,7 @@ def test_viewer_in_physical_units_reads_out_the_radiance_and_its_exposure(tmp_pa
 # ---------------------------------------------------------------- fit uncertainties
 
 
+@pytest.mark.slow  # a bootstrap of the Bevy fit: 10 s
 def test_an_ill_posed_fit_says_so(capsys):
     assert main(["fit", "--model", "bevy", "--directions", "8"]) == 0
     out, err = capsys.readouterr()
