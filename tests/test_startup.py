@@ -54,21 +54,21 @@ def syntax_calls(monkeypatch, tmp_path):
     return calls
 
 
-def test_cached_syntax_gives_dr_syntax_code_and_skips_it_on_a_hit(tmp_path, syntax_calls):
+def testcached_syntax_gives_dr_syntax_code_and_skips_it_on_a_hit(tmp_path, syntax_calls):
     import drjit as dr
 
-    from fogref.render.variant import _cached_syntax
+    from fogref.render.variant import cached_syntax
 
     src = tmp_path / "looped.py"
     src.write_text(SOURCE)
     own = _load(src, "looped_own").count  # Dr.Jit's syntax, no cache
     assert syntax_calls == ["count"]
     counted = dr.syntax
-    with _cached_syntax():
+    with cached_syntax():
         miss = _load(src, "looped_miss").count
     assert dr.syntax is counted  # restored
     assert syntax_calls == ["count", "count"] and len(list((tmp_path / "cache").iterdir())) == 1
-    with _cached_syntax():
+    with cached_syntax():
         hit = _load(src, "looped_hit").count
     assert syntax_calls == ["count", "count"]  # from the cache, Dr.Jit not asked
     for f in (miss, hit):
@@ -78,21 +78,21 @@ def test_cached_syntax_gives_dr_syntax_code_and_skips_it_on_a_hit(tmp_path, synt
 
 
 def test_an_edited_source_or_a_broken_entry_is_rewritten_not_reused(tmp_path, syntax_calls):
-    from fogref.render.variant import _cached_syntax
+    from fogref.render.variant import cached_syntax
 
     src = tmp_path / "looped.py"
     src.write_text(SOURCE)
-    with _cached_syntax():
+    with cached_syntax():
         first = _load(src, "looped_a").count
     src.write_text(SOURCE.replace("i += 1", "i += 2  # edited"))
-    with _cached_syntax():
+    with cached_syntax():
         edited = _load(src, "looped_b").count
     assert syntax_calls == ["count", "count"] and edited.__code__ != first.__code__
     entries = sorted((tmp_path / "cache").iterdir())
     assert len(entries) == 2
     for e in entries:
         e.write_bytes(b"not marshal data")
-    with _cached_syntax():
+    with cached_syntax():
         again = _load(src, "looped_c").count
     assert syntax_calls == ["count"] * 3 and again.__code__ == edited.__code__
 
@@ -100,18 +100,18 @@ def test_an_edited_source_or_a_broken_entry_is_rewritten_not_reused(tmp_path, sy
 def test_cache_off_or_unwritable_is_dr_syntax_itself(tmp_path, monkeypatch, syntax_calls):
     import drjit as dr
 
-    from fogref.render.variant import _cached_syntax
+    from fogref.render.variant import cached_syntax
 
     src = tmp_path / "looped.py"
     src.write_text(SOURCE)
     monkeypatch.setenv("FOGREF_SYNTAX_CACHE", "off")
     counted = dr.syntax
-    with _cached_syntax():
+    with cached_syntax():
         assert dr.syntax is counted
     blocker = tmp_path / "a_file"
     blocker.write_text("")
     monkeypatch.setenv("FOGREF_SYNTAX_CACHE", str(blocker / "cache"))  # cannot be created
-    with _cached_syntax():
+    with cached_syntax():
         f = _load(src, "looped_ro").count
     assert syntax_calls == ["count"] and f.__name__ == "count"
 

@@ -36,8 +36,7 @@ import numpy as np
 from fogref import params as P
 from fogref.errors import FogrefError
 from fogref.media.single_scatter import sky_phase_projection
-from fogref.media.sky import SUNSKY_APERTURE, sky_radiance, sunsky_dict
-from fogref.media.sky import eval_emitter as _eval
+from fogref.media.sky import SUNSKY_APERTURE, eval_emitter, sky_radiance, sunsky_dict
 from fogref.render.variant import set_variant
 from fogref.scene.defaults import overrides_used_by, substitute
 from fogref.scene.sun import sun_direction_from_angles
@@ -85,7 +84,7 @@ def sun_irradiance(desc: dict, n_gamma: int = 8, n_phi: int = 16) -> np.ndarray:
     dirs = np.cos(G)[..., None] * w + np.sin(G)[..., None] * (
         np.cos(F)[..., None] * t1 + np.sin(F)[..., None] * t2
     )
-    L = _eval(sun_only, dirs.reshape(-1, 3)).reshape(len(gam), len(phi), 3)
+    L = eval_emitter(sun_only, dirs.reshape(-1, 3)).reshape(len(gam), len(phi), 3)
     E = (L * wg[:, None, None]).sum((0, 1)) * (2.0 * math.pi / len(phi))
     return np.maximum(E, 0.0) * float(desc.get("sun_scale", 1.0))
 

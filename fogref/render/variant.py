@@ -8,7 +8,7 @@ variant and registering fogpath run ``@dr.syntax`` on 11 functions (Mitsuba's
 Python integrators and projective helpers, fogpath's ``sample``), each a parse, an
 AST rewrite and a compile of its source, in every process's start (twice for
 Mitsuba's integrators while fogpath's ``import mitsuba.ad...`` loads them a second time).
-While :func:`set_variant` runs, ``dr.syntax`` is wrapped by :func:`_cached_syntax`,
+While :func:`set_variant` runs, ``dr.syntax`` is wrapped by :func:`cached_syntax`,
 which keeps the rewritten code objects on disk, keyed on the source file's bytes.
 """
 
@@ -38,7 +38,7 @@ _registered: set[str] = set()
 
 
 def syntax_cache_dir():
-    """The folder of :func:`_cached_syntax`'s code objects (``$FOGREF_SYNTAX_CACHE``, see
+    """The folder of :func:`cached_syntax`'s code objects (``$FOGREF_SYNTAX_CACHE``, see
     :func:`_cache_dir_from`), or None when it is off."""
     return _cache_dir_from(os.environ.get("FOGREF_SYNTAX_CACHE"))
 
@@ -56,7 +56,7 @@ def _cache_dir_from(setting):
 
 
 @contextlib.contextmanager
-def _cached_syntax():
+def cached_syntax():
     """Within the block, ``drjit.syntax`` keeps its rewritten code objects on disk.
 
     ``@dr.syntax`` turns a function's source into another function (Dr.Jit's
@@ -178,7 +178,7 @@ def set_variant(name: str | None = None) -> str:
     if name is not None:
         params.choice(name, "variant", VARIANTS, "fogref.set_variant")
     llvm = ensure_llvm()  # before Dr.Jit starts its LLVM back end
-    with _cached_syntax():  # Mitsuba's import and set_variant, fogpath's import: @dr.syntax
+    with cached_syntax():  # Mitsuba's import and set_variant, fogpath's import: @dr.syntax
         import mitsuba as mi
 
         if name is None:
