@@ -157,7 +157,11 @@ def report(d: dict) -> str:
             f"| `{v}` | {cell('first_s')} | {cell('codegen_s', p=3)} | {cell('backend_s')} | "
             f"{x['largest_kernel_ops']} | {cell('steady_median_s', p=3)} |"
         )
-    r = d["ratios"]
+    r, pr = d["ratios"], d["paired_ratios"]
+
+    def rng(k):
+        return f"{pr[k]['median']:.2f} ({pr[k]['min']:.2f}–{pr[k]['max']:.2f})"
+
     m = d["machine"]
     load = d["load_average"]
     return f"""# Local Fog Volume: first render (compile) and steady time, Newton steps unrolled vs a loop
@@ -180,8 +184,10 @@ compiled in it; **steady**: per process the median wall seconds of {d["steady"]}
 
 Ratios of medians, before / after: first render {r["first"]:.1f}x, LLVM compilation
 {r["backend"]:.1f}x, steady {r["steady"]:.2f}x (before / loop64: first {r["first_loop64"]:.1f}x,
-steady {r["steady_loop64"]:.2f}x).  The 64-spp images are bit for bit equal in all
-{d["processes"]} processes: {d["images_equal"]}.
+steady {r["steady_loop64"]:.2f}x).  The same ratios per repeat (the versions' processes one after
+another, so that they share the load), median (min–max): before / after first {rng("first")},
+steady {rng("steady")}; before / loop64 first {rng("first_loop64")}, steady {rng("steady_loop64")}.
+The 64-spp images are bit for bit equal in all {d["processes"]} processes: {d["images_equal"]}.
 
 Machine: {m["cpu"]}, {m["cores"]} cores shared with other work; load average (1 min) from
 {load["min"]:.1f} to {load["max"]:.1f} over the run; Python {m["python"]}, Mitsuba {m["mitsuba"]},
@@ -242,6 +248,9 @@ def main() -> None:
     def ratio(k, num="before", den="after"):
         return summary[num][k]["median"] / summary[den][k]["median"]
 
+    def paired(k, num="before", den="after"):  # per repeat: the processes ran one after another
+        return spread([x[k] / y[k] for x, y in zip(runs[num], runs[den])])
+
     loads = [y for v in VERSIONS for x in runs[v] for y in x["load_average"]]
     digests = {x["image_sha256"] for v in VERSIONS for x in runs[v]}
     head = subprocess.run(
@@ -274,6 +283,12 @@ def main() -> None:
             "steady": ratio("steady_median_s"),
             "first_loop64": ratio("first_s", "before", "loop64"),
             "steady_loop64": ratio("steady_median_s", "before", "loop64"),
+        },
+        "paired_ratios": {
+            "first": paired("first_s"),
+            "steady": paired("steady_median_s"),
+            "first_loop64": paired("first_s", "before", "loop64"),
+            "steady_loop64": paired("steady_median_s", "before", "loop64"),
         },
         "summary": summary,
         "runs": runs,
