@@ -6,6 +6,8 @@
 * free flight: the round trip ``depth(sample(s)) == s`` to 1e-13 of the ray's total depth, and a KS test of
   sampled distances against the closed-form CDF ``1 - exp(-sigma tau(t))``;
 * float32 (Dr.Jit): the same depths within 1e-4 relative of float64, distances within 1e-5 R;
+  free flight's symbolic loop (``iterate``, leaving at a fixed point) bit for bit the steps
+  unrolled, on rays whose lanes stop early and rays that run every step;
 * Unreal's volume (``ue5_lfv``) with only its radial term visible: the same transmittance as the
   sphere mapped from its parameters (centre, radius, axes), 1e-9 relative.
 """
@@ -20,8 +22,8 @@ import pytest
 from scipy import stats
 
 from fogref.errors import ParameterError
-from fogref.media import NP
-from fogref.media.local_fog_volume import LocalFogVolume, exp_moments
+from fogref.media import NP, local_fog_volume
+from fogref.media.local_fog_volume import LocalFogVolume, exp_moments, iterate
 
 mpmath.mp.dps = 50
 
@@ -170,6 +172,65 @@ def test_drjit_float32_matches_float64():
         meets = ref > 0
         assert np.all(t32[~meets] >= D.largest) and np.all(t64[~meets] == NP.largest)
         assert np.allclose(t32[meets], t64[meets], rtol=0.0, atol=1e-5 * v.radius), (t32, t64)
+
+
+def _llvm_ops():
+    pytest.importorskip("drjit")
+    from drjit.llvm import Float
+
+    import fogref
+    from fogref.media import drjit_ops
+
+    fogref.ensure_llvm()
+    return drjit_ops(Float), Float
+
+
+def _unrolled(ops, step, state, iterations):
+    """``iterate``'s numpy form (a Python loop) on Dr.Jit arrays: the steps traced one after another."""
+    for _ in range(iterations):
+        state = step(*state)
+    return state
+
+
+def test_iterate_drjit_counts_steps_and_stops_at_a_fixed_point():
+    """Dr.Jit's loop runs exactly ``iterations`` steps where no fixed point comes (a counter:
+    one step more or less shows), and stops at one bit for bit where the steps unrolled end
+    (Newton for sqrt(a), float32, 24 steps: fixed after about 6)."""
+    D, Float = _llvm_ops()
+    (n,) = iterate(D, lambda x: (x + 1.0,), (Float([0.0, 5.0]),), 64)
+    assert n.numpy().tolist() == [64.0, 69.0]
+    a = Float(np.geomspace(1e-6, 1e6, 101, dtype=np.float32))
+
+    def newton(x):
+        return (0.5 * (x + a / x),)
+
+    (loop,) = iterate(D, newton, (a,), 24)
+    (unrolled,) = _unrolled(D, newton, (a,), 24)
+    assert np.array_equal(loop.numpy().view(np.uint32), unrolled.numpy().view(np.uint32))
+    assert np.allclose(loop.numpy(), np.sqrt(a.numpy()), rtol=2e-7)
+
+
+def test_drjit_free_flight_loop_is_the_unrolled_steps_bit_for_bit(monkeypatch):
+    """``sample`` in Dr.Jit's loop equals the same steps unrolled, every bit, on 4096 random
+    rays from inside and around each volume with free-flight depths from 0 and 1e-8 to 10
+    (24 steps, so that some lanes leave the loop at a fixed point and tiny depths run all 24).
+    Detects one differing bit in one lane."""
+    D, Float = _llvm_ops()
+    rng = np.random.default_rng(7)
+    n = 4096
+    for v in VOLUMES[:3]:
+        o = [(v.centre[a] + v.radius * rng.uniform(-2.0, 2.0, n)).astype(np.float32) for a in range(3)]
+        d = rng.normal(size=(3, n))
+        d = (d / np.linalg.norm(d, axis=0)).astype(np.float32)
+        s = (v.radius * v.density * 10.0 ** rng.uniform(-8.0, 1.0, n)).astype(np.float32)
+        s[:64] = 0.0
+        args = ([Float(x) for x in o], [Float(x) for x in d], Float(s))
+        loop = v.sample(D, *args, iterations=24).numpy()
+        with monkeypatch.context() as m:
+            m.setattr(local_fog_volume, "iterate", _unrolled)
+            unrolled = v.sample(D, *args, iterations=24).numpy()
+        assert np.sum(loop < D.largest) > n // 20  # enough rays collide in the volume
+        assert np.array_equal(loop.view(np.uint32), unrolled.view(np.uint32))
 
 
 @pytest.mark.parametrize(

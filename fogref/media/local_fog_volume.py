@@ -34,7 +34,7 @@ from typing import Any
 
 from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
-from fogref.media.ops import Ops, Real
+from fogref.media.ops import DrJitOps, Ops, Real
 from fogref.params import number, vector
 
 #: ``E_n`` uses its Taylor series below this ``x`` (30 terms: truncation < 1e-22 there).
@@ -244,14 +244,14 @@ class LocalFogVolume:
         the chord's start (a ray from outside), each step near the root halves the error until
         the quadratic convergence sets in: ``iterations = 64`` leave a round trip
         ``|depth(sample(s)) - s|`` below 1e-14 of the ray's total depth for ``s`` down to 1e-30
-        of it (float64)."""
+        of it (float64).  The steps run in :func:`iterate`: in Dr.Jit a lane stops at a fixed
+        point, with the result of all ``iterations``."""
         with ops.errstate():
             chord = self.chord(ops, o, d)
             total = self._depth(ops, o, d, ops.largest, chord)
             start = ops.maximum(chord[0], 0.0)
-            lo, hi = start, ops.maximum(chord[1], start)
-            t = 0.5 * (lo + hi)
-            for _ in range(iterations):
+
+            def step(lo: Real, hi: Real, t: Real) -> tuple:
                 f = self._depth(ops, o, d, t, chord) - s
                 lo = ops.where(f < 0.0, t, lo)
                 hi = ops.where(f < 0.0, hi, t)
@@ -259,6 +259,49 @@ class LocalFogVolume:
                 rho = self.rho(ops, p)
                 step = t - f / ops.where(rho > 0.0, rho, 1.0)
                 newton_ok = (rho > 0.0) & (step >= lo) & (step <= hi)
-                t = ops.where(newton_ok, step, 0.5 * (lo + hi))
+                return lo, hi, ops.where(newton_ok, step, 0.5 * (lo + hi))
+
+            lo, hi = start, ops.maximum(chord[1], start)
+            _, _, t = iterate(ops, step, (lo, hi, 0.5 * (lo + hi)), iterations)
             t = ops.where(s > 0.0, t, start)
             return ops.where(s < total, t, ops.largest)
+
+
+def iterate(ops: Ops, step: Any, state: tuple, iterations: int) -> tuple:
+    """``state`` (a tuple of arrays) after ``iterations`` applications of ``state = step(*state)``.
+
+    ``step`` maps the state's arrays (floating point) to new ones, the same function of their
+    bits wherever it runs.  numpy: a Python loop.  Dr.Jit: one symbolic loop
+    (``dr.while_loop``), so that the kernel holds one copy of ``step``, not ``iterations``
+    (traced unrolled, its compile time grows with ``iterations``); a lane leaves the loop once
+    ``step`` returns its state bit for bit unchanged, a fixed point of ``step``, so that the
+    result is bit for bit that of ``iterations`` steps, in fewer of them.
+
+    >>> from fogref.media import NP
+    >>> iterate(NP, lambda x: (0.5 * (x + 2.0 / x),), (1.0,), 6)  # Newton for sqrt(2)
+    (1.414213562373095,)
+    """
+    if not isinstance(ops, DrJitOps):
+        for _ in range(iterations):
+            state = step(*state)
+        return state
+    dr = ops.dr
+    UInt = dr.uint32_array_t(ops.Float)
+
+    def bits(x: Any) -> Any:
+        return dr.reinterpret_array(dr.uint_array_t(type(x)), x)
+
+    def body(i: Any, moving: Any, *old: Any) -> tuple:
+        new = step(*old)
+        moving = dr.zeros(dr.mask_t(ops.Float))
+        for x, y in zip(new, old):
+            moving = moving | (bits(x) != bits(y))
+        return (i + 1, moving, *new)
+
+    out = dr.while_loop(
+        (UInt(0), dr.mask_t(ops.Float)(True), *state),
+        lambda i, moving, *_: moving & (i < iterations),
+        body,
+        label="iterate",
+    )
+    return tuple(out[2:])
