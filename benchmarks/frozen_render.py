@@ -8,7 +8,8 @@ in two modes, side by side in rotating order, the same seed in both:
 * ``before``: as fogref was: the scene loaded for every render
   (:func:`fogref.render.load.load_scene`) and fogpath's ``freeze`` off (every pass traced);
 * ``after``: fogref as it is: the loaded scene kept (:func:`fogref.render.load.loaded_scene`) and
-  passes frozen (recorded the first time a pass of that kind is seen, replayed from then on).
+  passes frozen (traced the first time a pass of that kind is seen, recorded the second time,
+  replayed from then on: :data:`fogref_plugins.fogpath.RECORD_FROM_CALL`).
 
 Cases: 32x18 at 64 spp and at 1 spp (one pass each), 320x180 at 64 spp (several passes).  Each
 render's wall time is split into phases by timing the driver's calls: ``parse`` (reading the
@@ -18,8 +19,9 @@ kernel history gives apart), ``channels`` (the means and standard errors from th
 the host), ``exr`` (the EXR and the moments file written, atomically) and ``rest`` (the
 output checks, the merge of the passes' sums, the non-finite check).  ``host`` = wall - execution.
 The first render of each mode compiles (or loads Dr.Jit's disk cache) and is reported apart.
-The EXRs of the two modes are compared bitwise.  Last, what recording costs: a freshly loaded
-scene's first pass traced (``freeze`` off) against recorded, alternating, paired differences.
+The EXRs of the two modes are compared bitwise.  Last, what recording costs, which sets
+:data:`~fogref_plugins.fogpath.RECORD_FROM_CALL`: a freshly loaded scene's first pass traced
+(``freeze`` off) against recorded (``RECORD_FROM_CALL`` 1), alternating, paired differences.
 
     .venv/bin/python benchmarks/frozen_render.py [--rounds 12]
 """
@@ -167,6 +169,7 @@ def main() -> None:
         "mitsuba": mi.__version__,
         "drjit": dr.__version__,
         "variant": "llvm_ad_rgb",
+        "record_from_call": fpm.RECORD_FROM_CALL,
         "load_average_before": load0[0],
         "cases": [],
     }
@@ -198,8 +201,10 @@ def main() -> None:
 
     # what recording costs: a freshly loaded scene's first pass traced (freeze off) or recorded
     first: dict = {"traced": [], "recorded": []}
+    policy = fpm.RECORD_FROM_CALL
     for i in range(2 * a.first + 2):
         kind = ("traced", "recorded")[i % 2]
+        fpm.RECORD_FROM_CALL = 1
         scene, _ = load.load_scene(SCENE, {"res": 32, "resy": 18})
         fp = scene.integrator()
         fp.aovs, fp.freeze = True, kind == "recorded"
@@ -208,6 +213,7 @@ def main() -> None:
         if i >= 2:  # the first of each compiles
             first[kind].append(clock["trace"])
         del scene, fp
+    fpm.RECORD_FROM_CALL = policy
     diff = [r - t for t, r in zip(first["traced"], first["recorded"])]
     result["first_pass"] = {
         "traced": quartiles(first["traced"]),
@@ -234,8 +240,8 @@ def report(r: dict) -> str:
         f"Mitsuba {r['mitsuba']}, Dr.Jit {r['drjit']}, `{r['variant']}`; {r['machine']}, load "
         f"average {r['load_average_before']:.1f} before and {r['load_average_after']:.1f} after.  "
         "`before`: the scene loaded for every render, fogpath's `freeze` off (as fogref was); "
-        "`after`: the loaded scene kept and the passes frozen (recorded the first time a pass of "
-        "that kind is seen, replayed after).  Modes "
+        "`after`: the loaded scene kept and the passes frozen (traced the first time a pass of "
+        f"that kind is seen, recorded the time {r['record_from_call']}, replayed after).  Modes "
         "alternate; medians over the renders after each mode's first, interquartile range in "
         "brackets, milliseconds.  `host` = wall - kernel execution; `trace` = fogpath's passes "
         "less execution (tracing, recording or replaying, launches).",

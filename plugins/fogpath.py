@@ -78,11 +78,14 @@ SKY_AT_SURFACES_DEFAULT = "bsdf"
 SUN_SAMPLES = 2
 
 
-#: Recordings kept per integrator (the least recently used dropped).  A pass is recorded on
-#: the first call of its fingerprint (:meth:`FogPathIntegrator._fingerprint`): recording costs
-#: no more host time than tracing, within the noise of a shared machine
-#: (``reports/benchmarks/frozen_render.md``), so a one-pass render is no slower than traced.
-KEEP_RECORDINGS = 8
+#: The call of a fingerprint (:meth:`FogPathIntegrator._fingerprint`) from which an integrator's
+#: passes run under ``dr.freeze``: earlier calls are traced.  Recording a pass costs more host
+#: time than tracing it (24 ms more at 32x18, ``reports/benchmarks/frozen_render.md``), so a
+#: one-pass render is traced as before, and the second pass of its kind (or the second render
+#: of a kept scene, :func:`fogref.render.load.loaded_scene`) records.
+RECORD_FROM_CALL = 2
+#: Recordings kept per integrator (least recently used dropped), and fingerprints counted.
+KEEP_RECORDINGS, KEEP_FINGERPRINTS = 8, 64
 
 
 def _plain(v):
@@ -136,14 +139,15 @@ class _Held:
 
 class _FrozenPasses:
     """One integrator's frozen passes: its ``dr.freeze`` function (made on first use, so that
-    recordings die with the integrator and its scene) and, once Dr.Jit refused to record, its
-    reason (then every pass is traced).  Compared by identity: Dr.Jit sees it, unchanged, among
-    the integrator's attributes while its contents change."""
+    recordings die with the integrator and its scene), how often each fingerprint was seen
+    (:data:`RECORD_FROM_CALL`) and, once Dr.Jit refused to record, its reason (then every pass
+    is traced).  Compared by identity: Dr.Jit sees it, unchanged, among the integrator's
+    attributes while its contents change."""
 
-    __slots__ = ("frozen", "refused", "held")
+    __slots__ = ("frozen", "calls", "refused", "held")
 
     def __init__(self):
-        self.frozen, self.refused, self.held = None, None, None
+        self.frozen, self.calls, self.refused, self.held = None, {}, None, None
 
     def __eq__(self, other):
         return self is other
@@ -151,13 +155,19 @@ class _FrozenPasses:
     __hash__ = object.__hash__
 
     def run(self, fp, scene, sensor, seed, spp, pixel_exact, squares):
-        """``fp._pass(scene, sensor, seed, spp, pixel_exact, squares)`` under ``dr.freeze``: recorded
-        on the first call of its fingerprint, replayed after; traced when the scene is not
-        ``fp``'s or after a refusal (one warning)."""
+        """``fp._pass(scene, sensor, seed, spp, pixel_exact, squares)``: traced on the first call
+        of its fingerprint, recorded with ``dr.freeze`` on the :data:`RECORD_FROM_CALL`-th,
+        replayed after; always traced when the scene is not ``fp``'s or after a refusal (one
+        warning)."""
         args = (scene, sensor, seed, spp, pixel_exact, squares)
         if self.refused is not None or scene.integrator() is not fp:
             return fp._pass(*args)
         key = fp._fingerprint(scene, sensor, spp, pixel_exact, squares)
+        if key not in self.calls and len(self.calls) >= KEEP_FINGERPRINTS:
+            self.calls.clear()
+        self.calls[key] = n = self.calls.get(key, 0) + 1
+        if n < RECORD_FROM_CALL:
+            return fp._pass(*args)
         if self.frozen is None:
             self.frozen = dr.freeze(_frozen_pass, limit=KEEP_RECORDINGS, warn_after=1 << 30)
         values = {k: v for k, v in mi.traverse(scene).items() if dr.is_jit_v(v) and dr.width(v) == 1}

@@ -1,12 +1,13 @@
 """fogpath's frozen passes (``dr.freeze``) give the traced pixels, bitwise, and never stale ones.
 
-``FogPathIntegrator.render_moments`` records its pass with ``dr.freeze`` on the first call of a
-fingerprint (every Python value the trace reads) and replays the recording after.
+``FogPathIntegrator.render_moments`` traces its pass on the first call of a fingerprint (every
+Python value the trace reads), records it with ``dr.freeze`` on the
+:data:`~fogref_plugins.fogpath.RECORD_FROM_CALL`-th call and replays the recording after.
 Every comparison here is bitwise (float64 per-pixel sums and squares, 8x6 px, 4 spp of
 ``scenes/valley.xml``), so each test fails on any pixel that differs in any bit:
 
 * replays of one loaded scene with new seeds equal the traced passes; the Python pass body runs
-  only for the recording (fails if replays were not happening);
+  only for the traced calls and the recording (fails if replays were not happening);
 * a value changed on the loaded scene (the sky's radiance, a Dr.Jit input: replayed with the new
   value; the sun's irradiance, read in Python too; the fog object's extinction) gives the traced
   pixels of the changed scene, and differs from before (fails on a stale replay);
@@ -55,12 +56,14 @@ def counted(mitsuba, monkeypatch):
 
 @pytest.mark.render
 def test_replays_of_one_scene_give_the_traced_pixels_bitwise(mitsuba, counted):
+    import fogref_plugins.fogpath as fpm
+
     scene = mitsuba.load_file(str(VALLEY), **TINY)
-    seeds = range(1, 5)  # a recording, 3 replays
+    seeds = range(1, fpm.RECORD_FROM_CALL + 4)  # traced, recorded, 3 replays
     frozen = []
     for seed in seeds:
         frozen.append(_sums(scene, seed))
-    assert counted[0] == 1, "the pass body ran on a replay (or never recorded)"
+    assert counted[0] == fpm.RECORD_FROM_CALL, "the pass body ran on a replay (or never recorded)"
     assert scene.integrator().n_recordings == 1
     traced = [_sums(scene, seed, freeze=False) for seed in seeds]
     assert scene.integrator().n_recordings == 1
@@ -71,8 +74,10 @@ def test_replays_of_one_scene_give_the_traced_pixels_bitwise(mitsuba, counted):
 
 def _replaying(scene):
     """Frozen calls until ``scene``'s pass replays (a recording exists for its fingerprint)."""
-    for seed in (10, 11):
-        _sums(scene, seed)
+    import fogref_plugins.fogpath as fpm
+
+    for seed in range(fpm.RECORD_FROM_CALL + 1):
+        _sums(scene, 10 + seed)
 
 
 @pytest.mark.render
@@ -102,7 +107,7 @@ def test_a_changed_scene_value_gives_the_changed_scenes_traced_pixels(mitsuba, c
     # a fog value of the medium object (Python numbers of a Python plugin)
     medium = scene.sensors()[0].get_medium()
     medium.fog = dataclasses.replace(medium.fog, sigma_t=(0.003, 0.002, 0.001))
-    for seed in (7, 8, 9):  # recorded, replayed: each the changed scene's pixels
+    for seed in (7, 8, 9):  # traced, recorded, replayed: each the changed scene's pixels
         fog = _sums(scene, seed)
         assert np.array_equal(fog, _sums(scene, seed, freeze=False)), f"seed {seed}: stale fog replayed"
     assert not np.array_equal(_sums(scene, 7), sun)
