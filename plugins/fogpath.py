@@ -30,6 +30,14 @@ Scene values that are one Dr.Jit value (emitter radiance, transforms, ``g``, ...
 opaque before a render (:func:`make_scene_values_opaque`), so kernels are reused across
 scenes that differ only in a value.
 
+**Frozen passes** (``freeze``, default on): a pass is traced by Python the first time, recorded
+with ``dr.freeze`` the :data:`RECORD_FROM_CALL`-th time and then replayed without running Python.
+One frozen function per integrator (so per loaded scene); its inputs are the seed, the scene's
+one-value parameters and a fingerprint of every Python value the trace reads
+(:meth:`FogPathIntegrator._fingerprint`), so an edited value records anew instead of replaying
+a stale one; a recording Dr.Jit refuses falls back to tracing with one warning
+(``docs/design.md``, "Tracing was the fixed cost").
+
 Not supported: sensors other than ``perspective``; media attached to shapes
 (the fog fills all space outside surfaces); reconstruction filters other than
 box (a warning says so); differentiation.
@@ -80,7 +88,7 @@ SUN_SAMPLES = 2
 
 #: The call of a fingerprint (:meth:`FogPathIntegrator._fingerprint`) from which an integrator's
 #: passes run under ``dr.freeze``: earlier calls are traced.  Recording a pass costs more host
-#: time than tracing it (24 ms more at 32x18, ``reports/benchmarks/frozen_render.md``), so a
+#: time than tracing it (28 ms more at 32x18, paired, ``reports/benchmarks/frozen_render.md``), so a
 #: one-pass render is traced as before, and the second pass of its kind (or the second render
 #: of a kept scene, :func:`fogref.render.load.loaded_scene`) records.
 RECORD_FROM_CALL = 2
@@ -361,6 +369,11 @@ class FogPathIntegrator(mi.SamplingIntegrator):
          the path then continues one branch, chosen in proportion to the branches'
          depth-0 throughputs (see :meth:`_camera_split`).  Used when the fog
          scatters, has no Local Fog Volume and ``max_depth >= 2``.  Default: ``FORCED_SPLIT_DEFAULT``.
+     * - freeze
+       - bool
+       - Run passes under ``dr.freeze`` (see module): the same pixels, bitwise, with ~2 ms of
+         host time per replayed pass instead of tracing it; false traces every pass.  Also
+         settable as an attribute.  Default: true.
     """
 
     def __init__(self, props):
