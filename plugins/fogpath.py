@@ -189,7 +189,7 @@ class _FrozenPasses:
             while cause.__cause__ is not None:
                 cause = cause.__cause__
             if not isinstance(cause, RuntimeError) or "KeyboardInterrupt" in str(cause):
-                raise  # the pass's own error (or an interruption), not a refusal to record
+                raise cause from None  # the pass's own error (or an interruption), not a refusal
             self.refused = (str(cause).strip().splitlines() or [type(cause).__name__])[0]
         mi.Log(
             mi.LogLevel.Warn,

@@ -218,3 +218,15 @@ def test_what_a_caller_sets_on_a_loaded_integrator_does_not_outlive_the_call(mit
     assert desc2["camera"] is not None
     other, _ = loaded_scene(read_scene(VALLEY, {"res": 8, "resy": 7}))
     assert other is not scene
+
+
+@pytest.mark.render
+def test_mi_render_replays_too(mitsuba):
+    """``mi.render`` (fogpath's ``render``: passes of ``render_moments``) goes through the same path."""
+    scene = mitsuba.load_file(str(VALLEY), **TINY)
+    fp = scene.integrator()
+    frozen = [np.array(mitsuba.render(scene, spp=SPP, seed=s)) for s in (1, 2, 3, 4)]
+    assert fp.n_recordings == 1
+    fp.freeze = False
+    for s, a in zip((1, 2, 3, 4), frozen):
+        assert np.array_equal(a, np.array(mitsuba.render(scene, spp=SPP, seed=s))), f"seed {s}"
