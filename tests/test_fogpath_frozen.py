@@ -230,3 +230,26 @@ def test_mi_render_replays_too(mitsuba):
     fp.freeze = False
     for s, a in zip((1, 2, 3, 4), frozen):
         assert np.array_equal(a, np.array(mitsuba.render(scene, spp=SPP, seed=s))), f"seed {s}"
+
+
+@pytest.mark.render
+def test_an_error_of_the_pass_while_recording_is_raised_as_itself(mitsuba, monkeypatch):
+    """Not taken for a refusal: the pass's own exception reaches the caller and freezing stays on."""
+    import fogref_plugins.fogpath as fpm
+
+    scene = mitsuba.load_file(str(VALLEY), **TINY)
+    body = fpm.FogPathIntegrator._pass
+    calls = [0]
+
+    def failing_when_recorded(self, *args):
+        calls[0] += 1
+        if calls[0] == fpm.RECORD_FROM_CALL:
+            raise ValueError("the pass failed")
+        return body(self, *args)
+
+    monkeypatch.setattr(fpm.FogPathIntegrator, "_pass", failing_when_recorded)
+    for seed in range(1, fpm.RECORD_FROM_CALL):
+        _sums(scene, seed)
+    with pytest.raises(ValueError, match="the pass failed"):
+        _sums(scene, 99)
+    assert scene.integrator().freeze_refused is None
