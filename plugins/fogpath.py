@@ -49,6 +49,7 @@ MIS); Mitsuba 3, ``src/python/python/ad/integrators/prb.py`` (loop structure).
 
 from __future__ import annotations
 
+import gc
 import math
 
 import drjit as dr
@@ -120,24 +121,23 @@ def _plain(v):
     return repr(v)
 
 
-def _frozen_pass(held, scene, sensor, seed, spp, pixel_exact, squares, values, fingerprint):
-    """A pass as ``dr.freeze`` records and replays it: :meth:`FogPathIntegrator._pass`.  ``values``
-    (the scene's one-value parameters) and ``fingerprint`` are inputs only: the first makes
-    their current values the replay's, the second makes a change of any Python value the trace
-    reads a new recording.  ``held``: a :class:`_Held` of the integrator (Dr.Jit does not traverse
-    the integrator's Python attributes)."""
-    return held.values._pass(scene, sensor, seed, spp, pixel_exact, squares)
+def _frozen_pass(scene, sensor, seed, spp, pixel_exact, squares, values, fingerprint):
+    """A pass as ``dr.freeze`` records and replays it: :meth:`FogPathIntegrator._pass` of the
+    scene's integrator.  ``values`` (the scene's one-value parameters) and ``fingerprint`` are
+    inputs only: the first makes their current values the replay's, the second makes a change
+    of any Python value the trace reads a new recording."""
+    return scene.integrator()._pass(scene, sensor, seed, spp, pixel_exact, squares)
 
 
 class _Held:
-    """A Python object that Dr.Jit's traversal of a frozen function's inputs does not enter
-    (its ``scene`` attribute: the scene it belongs to; ``values``: a dict), compared by
-    identity."""
+    """The scene whose values a ``render_moments`` call read, and those values (a dict), where
+    Dr.Jit's traversal of the integrator's attributes does not enter (:meth:`FogPathIntegrator._read_once`).
+    Compared by identity."""
 
-    __slots__ = ("scene", "values")
+    __slots__ = ("obj", "values")
 
-    def __init__(self, scene, values=None):
-        self.scene, self.values = scene, values
+    def __init__(self, obj, values):
+        self.obj, self.values = obj, values
 
     def __eq__(self, other):
         return self is other
@@ -152,10 +152,10 @@ class _FrozenPasses:
     is traced).  Compared by identity: Dr.Jit sees it, unchanged, among the integrator's
     attributes while its contents change."""
 
-    __slots__ = ("frozen", "calls", "refused", "held")
+    __slots__ = ("frozen", "calls", "refused")
 
     def __init__(self):
-        self.frozen, self.calls, self.refused, self.held = None, {}, None, None
+        self.frozen, self.calls, self.refused = None, {}, None
 
     def __eq__(self, other):
         return self is other
@@ -179,11 +179,11 @@ class _FrozenPasses:
         if self.frozen is None:
             self.frozen = dr.freeze(_frozen_pass, limit=KEEP_RECORDINGS, warn_after=1 << 30)
         values = {k: v for k, v in mi.traverse(scene).items() if dr.is_jit_v(v) and dr.width(v) == 1}
+        collecting = gc.isenabled()
+        gc.disable()  # a collection freeing a failed recording's arrays during a recording aborts Dr.Jit
         try:
             with drjit_ops().isolated_params():
-                if self.held is None or self.held.values is not fp:
-                    self.held = _Held(None, fp)
-                return self.frozen(self.held, *args, values, key)
+                return self.frozen(*args, values, key)
         except RuntimeError as e:
             cause = e
             while cause.__cause__ is not None:
@@ -191,6 +191,12 @@ class _FrozenPasses:
             if not isinstance(cause, RuntimeError) or "KeyboardInterrupt" in str(cause):
                 raise cause from None  # the pass's own error (or an interruption), not a refusal
             self.refused = (str(cause).strip().splitlines() or [type(cause).__name__])[0]
+            x: BaseException | None = e
+            while x is not None:  # the failed recording's frames (and arrays) go now, not in a collection
+                x.__traceback__, x = None, x.__cause__
+        finally:
+            if collecting:
+                gc.enable()
         mi.Log(
             mi.LogLevel.Warn,
             f"fogpath: dr.freeze refused to record a pass ({self.refused}); this integrator "
@@ -443,7 +449,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         wait on the device) are read once per render instead of at every call site.
         Outside ``render_moments`` (``sample`` called directly) every call reads."""
         memo = getattr(self, "_memo", None)
-        if memo is None or memo.scene is not scene:
+        if memo is None or memo.obj is not scene:
             return read()
         if name not in memo.values:
             memo.values[name] = read()
