@@ -30,6 +30,14 @@ Scene values that are one Dr.Jit value (emitter radiance, transforms, ``g``, ...
 opaque before a render (:func:`make_scene_values_opaque`), so kernels are reused across
 scenes that differ only in a value.
 
+**Frozen passes** (``freeze``, default on): a pass is traced by Python the first time, recorded
+with ``dr.freeze`` the :data:`RECORD_FROM_CALL`-th time and then replayed without running Python.
+One frozen function per integrator (so per loaded scene); its inputs are the seed, the scene's
+one-value parameters and a fingerprint of every Python value the trace reads
+(:meth:`FogPathIntegrator._fingerprint`), so an edited value records anew instead of replaying
+a stale one; a recording Dr.Jit refuses falls back to tracing with one warning
+(``docs/design.md``, "Tracing was the fixed cost").
+
 Not supported: sensors other than ``perspective``; media attached to shapes
 (the fog fills all space outside surfaces); reconstruction filters other than
 box (a warning says so); differentiation.
@@ -41,6 +49,7 @@ MIS); Mitsuba 3, ``src/python/python/ad/integrators/prb.py`` (loop structure).
 
 from __future__ import annotations
 
+import gc
 import math
 
 import drjit as dr
@@ -76,6 +85,124 @@ SKY_AT_SURFACES_DEFAULT = "bsdf"
 #: Stratified sun samples per camera ray (each one shadow ray)
 #: (``reports/benchmarks/variance_reduction.md``, "+2 sun samples").
 SUN_SAMPLES = 2
+
+
+#: The call of a fingerprint (:meth:`FogPathIntegrator._fingerprint`) from which an integrator's
+#: passes run under ``dr.freeze``: earlier calls are traced.  Recording a pass costs more host
+#: time than tracing it (28 ms more at 32x18, paired, ``reports/benchmarks/frozen_render.md``), so a
+#: one-pass render is traced as before, and the second pass of its kind (or the second render
+#: of a kept scene, :func:`fogref.render.load.loaded_scene`) records.
+RECORD_FROM_CALL = 2
+#: Recordings kept per integrator (least recently used dropped), and fingerprints counted.
+KEEP_RECORDINGS, KEEP_FINGERPRINTS = 8, 64
+
+
+def _plain(v):
+    """``v`` (numbers, strings, containers, plain Python objects such as the fog's dataclasses)
+    as nested tuples that compare equal exactly when the values are bitwise equal: floats as
+    ``float.hex`` (``-0.0`` differs from ``0.0``, which ``==`` does not tell apart), objects
+    by type and attributes, anything else by ``repr``.
+
+    >>> _plain({"g": -0.0, "layers": [1, (0.5, "a")]})
+    (('g', '-0x0.0p+0'), ('layers', (1, ('0x1.0000000000000p-1', 'a'))))
+    """
+    if v is None or isinstance(v, (bool, int, str)):
+        return v
+    if isinstance(v, float):
+        return float.hex(v)
+    if isinstance(v, (tuple, list)):
+        return tuple(_plain(x) for x in v)
+    if isinstance(v, dict):
+        return tuple(sorted(((str(k), _plain(x)) for k, x in v.items()), key=lambda kv: kv[0]))
+    if hasattr(v, "tobytes") and hasattr(v, "dtype"):  # a numpy array
+        return (str(v.dtype), tuple(v.shape), v.tobytes())
+    if hasattr(v, "__dict__") and not isinstance(v, type):
+        return (type(v).__qualname__, _plain(vars(v)))
+    return repr(v)
+
+
+def _frozen_pass(scene, sensor, seed, spp, pixel_exact, squares, values, fingerprint):
+    """A pass as ``dr.freeze`` records and replays it: :meth:`FogPathIntegrator._pass` of the
+    scene's integrator.  ``values`` (the scene's one-value parameters) and ``fingerprint`` are
+    inputs only: the first makes their current values the replay's, the second makes a change
+    of any Python value the trace reads a new recording."""
+    return scene.integrator()._pass(scene, sensor, seed, spp, pixel_exact, squares)
+
+
+class _Held:
+    """The scene whose values a ``render_moments`` call read, and those values (a dict), where
+    Dr.Jit's traversal of the integrator's attributes does not enter (:meth:`FogPathIntegrator._read_once`).
+    Compared by identity."""
+
+    __slots__ = ("obj", "values")
+
+    def __init__(self, obj, values):
+        self.obj, self.values = obj, values
+
+    def __eq__(self, other):
+        return self is other
+
+    __hash__ = object.__hash__
+
+
+class _FrozenPasses:
+    """One integrator's frozen passes: its ``dr.freeze`` function (made on first use, so that
+    recordings die with the integrator and its scene), how often each fingerprint was seen
+    (:data:`RECORD_FROM_CALL`) and, once Dr.Jit refused to record, its reason (then every pass
+    is traced).  Compared by identity: Dr.Jit sees it, unchanged, among the integrator's
+    attributes while its contents change."""
+
+    __slots__ = ("frozen", "calls", "refused")
+
+    def __init__(self):
+        self.frozen, self.calls, self.refused = None, {}, None
+
+    def __eq__(self, other):
+        return self is other
+
+    __hash__ = object.__hash__
+
+    def run(self, fp, scene, sensor, seed, spp, pixel_exact, squares):
+        """``fp._pass(scene, sensor, seed, spp, pixel_exact, squares)``: traced on the first call
+        of its fingerprint, recorded with ``dr.freeze`` on the :data:`RECORD_FROM_CALL`-th,
+        replayed after; always traced when the scene is not ``fp``'s or after a refusal (one
+        warning)."""
+        args = (scene, sensor, seed, spp, pixel_exact, squares)
+        if self.refused is not None or scene.integrator() is not fp:
+            return fp._pass(*args)
+        key = fp._fingerprint(scene, sensor, spp, pixel_exact, squares)
+        if key not in self.calls and len(self.calls) >= KEEP_FINGERPRINTS:
+            self.calls.clear()
+        self.calls[key] = n = self.calls.get(key, 0) + 1
+        if n < RECORD_FROM_CALL:
+            return fp._pass(*args)
+        if self.frozen is None:
+            self.frozen = dr.freeze(_frozen_pass, limit=KEEP_RECORDINGS, warn_after=1 << 30)
+        values = {k: v for k, v in mi.traverse(scene).items() if dr.is_jit_v(v) and dr.width(v) == 1}
+        collecting = gc.isenabled()
+        gc.disable()  # a collection freeing a failed recording's arrays during a recording aborts Dr.Jit
+        try:
+            with drjit_ops().isolated_params():
+                return self.frozen(*args, values, key)
+        except RuntimeError as e:
+            cause = e
+            while cause.__cause__ is not None:
+                cause = cause.__cause__
+            if not isinstance(cause, RuntimeError) or "KeyboardInterrupt" in str(cause):
+                raise cause from None  # the pass's own error (or an interruption), not a refusal
+            self.refused = (str(cause).strip().splitlines() or [type(cause).__name__])[0]
+            x: BaseException | None = e
+            while x is not None:  # the failed recording's frames (and arrays) go now, not in a collection
+                x.__traceback__, x = None, x.__cause__
+        finally:
+            if collecting:
+                gc.enable()
+        mi.Log(
+            mi.LogLevel.Warn,
+            f"fogpath: dr.freeze refused to record a pass ({self.refused}); this integrator "
+            "traces its passes from now on",
+        )
+        return fp._pass(*args)
 
 
 class _Opaque:
@@ -248,6 +375,11 @@ class FogPathIntegrator(mi.SamplingIntegrator):
          the path then continues one branch, chosen in proportion to the branches'
          depth-0 throughputs (see :meth:`_camera_split`).  Used when the fog
          scatters, has no Local Fog Volume and ``max_depth >= 2``.  Default: ``FORCED_SPLIT_DEFAULT``.
+     * - freeze
+       - bool
+       - Run passes under ``dr.freeze`` (see module): the same pixels, bitwise, with ~2 ms of
+         host time per replayed pass instead of tracing it; false traces every pass.  Also
+         settable as an attribute.  Default: true.
     """
 
     def __init__(self, props):
@@ -277,6 +409,20 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         self.sun_one_minus_cos = 2.0 * math.sin(math.radians(diameter) / 4.0) ** 2 if diameter > 0 else None
         self.aovs = bool(props.get("aovs", True))
         self.pixel_exact = bool(props.get("pixel_exact", False))
+        self.freeze = bool(props.get("freeze", True))
+        self._frozen = _FrozenPasses()
+
+    @property
+    def n_recordings(self) -> int:
+        """How many times Dr.Jit recorded this integrator's pass (``dr.freeze``'s
+        ``n_recordings``; 0 before its first recording and with ``freeze`` off)."""
+        f = self._frozen.frozen
+        return 0 if f is None else int(f.n_recordings)
+
+    @property
+    def freeze_refused(self) -> str | None:
+        """Dr.Jit's reason for refusing to record a pass (then every pass is traced), or None."""
+        return self._frozen.refused
 
     def aov_names(self):
         return list(AOV_NAMES) if self.aovs else []
@@ -303,11 +449,11 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         wait on the device) are read once per render instead of at every call site.
         Outside ``render_moments`` (``sample`` called directly) every call reads."""
         memo = getattr(self, "_memo", None)
-        if memo is None or memo[0] is not scene:
+        if memo is None or memo.obj is not scene:
             return read()
-        if name not in memo[1]:
-            memo[1][name] = read()
-        return memo[1][name]
+        if name not in memo.values:
+            memo.values[name] = read()
+        return memo.values[name]
 
     def _constant_sky(self, scene):
         """The scene's ``constant`` sky emitter when it is the only non-delta infinite
@@ -852,32 +998,74 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         """
         pixel_exact = self.pixel_exact if pixel_exact is None else bool(pixel_exact)
         make_scene_values_opaque(scene)  # one kernel for every value of the scene's parameters
-        self._memo = (scene, {})  # the scene values read while tracing: once (_read_once)
+        self._memo = _Held(scene, {})  # the scene values read while tracing: once (_read_once)
         try:
             with dr.scoped_set_flag(dr.JitFlag.OptimizeLoops, OPTIMIZE_LOOPS):
-                return self._render_moments(scene, sensor, seed, spp, pixel_exact, squares)
+                sensor = self._checked_sensor(scene, sensor)
+                seed_o = dr.opaque(mi.UInt32, int(seed))  # opaque: a new seed needs no new kernel
+                args = (scene, sensor, seed_o, int(spp), pixel_exact, squares)
+                return self._frozen.run(self, *args) if self.freeze else self._pass(*args)
         finally:
             self._memo = None
 
-    def _render_moments(self, scene, sensor, seed, spp, pixel_exact, squares):
+    @staticmethod
+    def _checked_sensor(scene, sensor):
+        """The sensor (an index into ``scene.sensors()`` or the sensor), checked: perspective
+        only; a reconstruction filter other than box is replaced by a box filter (warned)."""
         sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
         if not str(sensor).startswith("PerspectiveCamera"):
             raise ValueError(
                 f"fogpath renders from a 'perspective' sensor only, not {str(sensor).split('[')[0]}"
             )
-        film = sensor.film()
-        if not film.rfilter().is_box_filter():
+        if not sensor.film().rfilter().is_box_filter():
             mi.Log(
                 mi.LogLevel.Warn,
                 "fogpath: the film's reconstruction filter is replaced by a box filter "
                 "(each sample counts in its own pixel)",
             )
+        return sensor
+
+    def _fingerprint(self, scene, sensor, spp, pixel_exact, squares):
+        """Every Python value a pass's trace reads, as a hashable value compared by equality
+        (floats as ``float.hex``, so that -0.0 differs from 0.0): the fog object's fields
+        (layers, bounds, phase table, Local Fog Volume), the sun's direction and irradiance,
+        the constant sky and its selection pdfs, the integrator's settings, the film's size,
+        ``spp``, the pass's options, the scene's emitters and the variant.  Reads (and keeps
+        for the call, :meth:`_read_once`) the scene values the trace would read."""
+        fog = self._scene_fog(scene)
+        sky = self._constant_sky(scene)
+        medium = scene.sensors()[0].get_medium() if scene.sensors() else None
+        phase = medium.phase_function() if medium is not None else None
+        settings = {k: v for k, v in vars(self).items() if not k.startswith("_")}
+        settings["hide_emitters"] = self.hide_emitters  # a C++ property of the integrator
+        return _plain(
+            (
+                mi.variant(),
+                id(scene),
+                [e.class_name() for e in scene.emitters()],
+                len(scene.shapes()),
+                None if fog is None else fog._obj,
+                None if phase is None else phase.class_name(),
+                self._scene_sun(scene),
+                None if sky is None else (scene.emitters().index(sky), self._sky_selection(scene)),
+                settings,
+                list(sensor.film().crop_size()),
+                sensor.sampler().class_name(),
+                spp,
+                pixel_exact,
+                squares,
+            )
+        )
+
+    def _pass(self, scene, sensor, seed, spp, pixel_exact, squares):
+        """One pass (``render_moments`` after its checks): ``seed`` an opaque ``UInt32``."""
+        film = sensor.film()
         size = film.crop_size()
-        n_pix, spp = int(dr.prod(size)), int(spp)
+        n_pix = int(dr.prod(size))
         sampler = sensor.sampler().clone()
         sampler.set_sample_count(spp)
         sampler.set_samples_per_wavefront(spp)
-        sampler.seed(dr.opaque(mi.UInt32, int(seed)), n_pix * spp)  # opaque: a new seed needs no new kernel
+        sampler.seed(seed, n_pix * spp)
 
         idx = dr.arange(mi.UInt32, n_pix * spp) // dr.opaque(mi.UInt32, spp)
         pos = mi.Vector2u(0)

@@ -397,8 +397,8 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
         "fogref.render.cache.default_cache_dir": HEAVY,
     },
     # dask.distributed 0.8 s: a render in one process never submits a pass
-    "fogref.render.distributed": {"dask.distributed.as_completed": HEAVY, "drjit": DOES_WORK},
-    "fogref.render.load": {"mitsuba": DOES_WORK},
+    "fogref.render.distributed": {"dask.distributed.as_completed": HEAVY},
+    "fogref.render.load": {"drjit": DOES_WORK, "mitsuba": DOES_WORK},
     # tqdm 0.03 s (`python -X importtime`): a quiet render shows no bar (tests/test_startup.py)
     "fogref.render.render": {"drjit": DOES_WORK, "mitsuba": DOES_WORK, "tqdm.tqdm": HEAVY},
     "fogref.render.sunsky": {"mitsuba": DOES_WORK},

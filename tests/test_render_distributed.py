@@ -87,10 +87,10 @@ def _render(out, **kw):
 
 
 def _loaded_scenes() -> dict:
-    """On a worker: its pid -> the ids of the scenes it holds (:data:`fogref.render.distributed._LOADED`)."""
-    import fogref.render.distributed as D
+    """On a worker: its pid -> the ids of the scenes it holds (:func:`fogref.render.load.held_scenes`)."""
+    from fogref.render.load import held_scenes
 
-    return {os.getpid(): sorted(id(scene) for scene, _ in D._LOADED.values())}
+    return {os.getpid(): sorted(id(scene) for scene in held_scenes())}
 
 
 def test_the_split_lets_workers_share_a_render_and_never_depends_on_them():

@@ -15,6 +15,8 @@ arithmetic options in the proposed IEEE floating point arithmetic standard",
 from __future__ import annotations
 
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any, Literal, TypeAlias
 
 import numpy as np
@@ -144,6 +146,27 @@ class DrJitOps:
         turns from grey to RGB compiles again."""
         caller, values = sys._getframe(1), list(values)
         return tuple(self._param(v, caller, values.index(v)) for v in values)
+
+    @contextmanager
+    def isolated_params(self) -> Iterator[DrJitOps]:
+        """A scope in which :meth:`param` and :meth:`interp` start from an empty cache, and
+        after which the cache is what it was before: what ``dr.freeze`` records must not read
+        arrays made before the recording (they are not its inputs), and arrays made while it
+        records belong to that recording, not to later traced calls.
+
+        >>> ops = DrJitOps.__new__(DrJitOps)  # no Dr.Jit needed to show the scope
+        >>> ops._params = {"kept": 1}
+        >>> with ops.isolated_params():
+        ...     ops._params
+        {}
+        >>> ops._params
+        {'kept': 1}
+        """
+        saved, self._params = self._params, {}
+        try:
+            yield self
+        finally:
+            self._params = saved
 
     def _param(self, x: Real, caller: Real, slot: Real) -> Real:
         if self.dr.is_array_v(x):

@@ -13,10 +13,12 @@ of the same instruction set: the LLVM back end compiles for the host CPU).
 * **A killed worker's passes are redone**: the scheduler reruns the tasks of a worker that
   dies (Dask's ``distributed.scheduler.allowed-failures``), and a task that raises is retried
   ``retries`` times; a pass is a pure function of its key, so a rerun gives the same sums.
-* **Workers keep their compiled kernels**: a worker process loads the scene once (cached by
-  the digest of its inputs, the variant and the overrides, :data:`_LOADED`) and keeps it for
-  every later pass of that render; the seed and spp are opaque to the kernels, so every pass
-  after a worker's first reuses its compiled kernels.
+* **Workers keep their compiled kernels**: a worker process loads the scene once (kept by
+  the digest of its inputs, the variant, the overrides and the thread count,
+  :func:`fogref.render.load.loaded_scene`) and keeps it for every later pass of that render and
+  later renders of the same scene; the seed and spp are opaque to the kernels, so every pass
+  after a worker's first reuses its compiled kernels; fogpath records a worker's second pass of
+  a size and replays it from the third on (:mod:`fogref_plugins.fogpath`).
 * **Same inputs everywhere**: a worker renders only if the digest of the scene and of every
   file it loads (:func:`fogref.scene.inputs.inputs_digest`), read on the worker, is the
   driver's; workers on other machines need the scene at the same path (a shared file system).
@@ -35,7 +37,6 @@ The cluster itself (a LocalCluster or a running scheduler, the workers' log, clo
 
 from __future__ import annotations
 
-import json
 import os
 import secrets
 import time
@@ -45,7 +46,7 @@ import numpy as np
 from fogref_plugins.passes import pass_seed
 
 from fogref.errors import FogrefError
-from fogref.render.load import load_scene
+from fogref.render.load import loaded_scene
 from fogref.render.variant import set_variant
 from fogref.scene.parsed import read_scene
 
@@ -58,11 +59,6 @@ __all__ = [
     "split_note",
     "transfer_bytes",
 ]
-
-#: Scenes loaded by this worker process: ``(inputs digest, variant, overrides, threads)`` ->
-#: ``(scene, integrator)``.  The last few renders' scenes only (:data:`_KEEP`).
-_LOADED: dict = {}
-_KEEP = 4
 
 
 class PassFailed(FogrefError):
@@ -87,17 +83,10 @@ def job(scene_path, overrides, digest: str, variant: str, seed: int, pixel_filte
 
 
 def _worker_scene(j: dict):
-    """``(scene, integrator)`` of ``j`` in this process: loaded on the first pass, then reused."""
-    key = (j["digest"], j["variant"], json.dumps(j["overrides"], sort_keys=True, default=str), j["threads"])
-    hit = _LOADED.get(key)
-    if hit is not None:
-        return hit
+    """``(scene, integrator)`` of ``j`` in this process: the inputs read and checked against the
+    driver's digest, the scene loaded on the first pass and then reused
+    (:func:`fogref.render.load.loaded_scene`)."""
     set_variant(j["variant"])
-    if j["threads"]:
-        import drjit as dr
-
-        if dr.thread_count() != int(j["threads"]):
-            dr.set_thread_count(int(j["threads"]))
     parsed = read_scene(Path(j["scene"]), j["overrides"] or None)
     digest = parsed.digest
     if digest != j["digest"]:
@@ -106,12 +95,9 @@ def _worker_scene(j: dict):
             f"(inputs SHA-256 {digest[:12]}..., not {j['digest'][:12]}...); the workers need the scene "
             f"and the files it loads at the same path"
         )
-    scene, _ = load_scene(parsed)
+    scene, _ = loaded_scene(parsed, j["threads"])
     integrator = scene.integrator()
     integrator.aovs = True
-    while len(_LOADED) >= _KEEP:
-        _LOADED.pop(next(iter(_LOADED)))
-    _LOADED[key] = (scene, integrator)
     return scene, integrator
 
 

@@ -11,6 +11,7 @@ Mitsuba's sensor (:func:`sensor_camera`: the truth's header).
 from __future__ import annotations
 
 import copy
+import json
 import math
 import re
 
@@ -72,6 +73,55 @@ def load_scene(scene, overrides: dict | None = None):
         raise FogrefError(f"{s.path}: Mitsuba could not load the scene: {_mitsuba_reason(e)}") from None
     desc["camera"] = sensor_camera(mi_scene.sensors()[0])
     return mi_scene, desc
+
+
+#: Scenes loaded in this process (:func:`loaded_scene`): ``(inputs digest, variant, overrides,
+#: threads)`` -> ``(scene, description, the integrator's settings as loaded)``; the last
+#: :data:`KEEP_LOADED` only, oldest dropped first.
+_LOADED: dict = {}
+#: How many loaded scenes a process keeps.
+KEEP_LOADED = 4
+
+
+def loaded_scene(parsed: ParsedScene, threads: int | None = None):
+    """:func:`load_scene` of ``parsed``, kept for later calls in this process: the same scene
+    (the same digest of every input file, :attr:`~fogref.scene.parsed.ParsedScene.digest`, so an
+    edited file is loaded again), variant and overrides, and thread count, returns the scene
+    loaded before, whose integrator keeps its compiled kernels and frozen passes.
+
+    ``threads``: Dr.Jit's thread count to set first (None: unchanged).  Returns
+    ``(scene, description)`` as :func:`load_scene` (the description a copy the caller may change).
+    On every call the integrator's Python settings (``aovs``, ``max_depth``, ...; what a caller
+    such as the render driver sets on it) are put back as loaded, so what one render set does not
+    leak into the next.  The scene is shared: a caller that changes other values of it (its
+    ``mi.traverse`` parameters, its medium) must use :func:`load_scene` instead.  At most
+    :data:`KEEP_LOADED` scenes are kept.
+    """
+    variant = set_variant()
+    if threads:
+        import drjit as dr
+
+        if dr.thread_count() != int(threads):
+            dr.set_thread_count(int(threads))
+    key = (parsed.digest, variant, json.dumps(parsed.overrides or {}, sort_keys=True, default=str), threads)
+    hit = _LOADED.pop(key, None)
+    if hit is None:
+        scene, desc = load_scene(parsed)
+        integrator = scene.integrator()
+        hit = (scene, desc, dict(vars(integrator)) if hasattr(integrator, "__dict__") else {})
+        while len(_LOADED) >= KEEP_LOADED:
+            _LOADED.pop(next(iter(_LOADED)))
+    _LOADED[key] = hit  # the most recently used last
+    scene, desc, settings = hit
+    for name, value in settings.items():
+        if not name.startswith("_"):
+            setattr(scene.integrator(), name, value)
+    return scene, copy.deepcopy(desc)
+
+
+def held_scenes() -> list:
+    """The Mitsuba scenes :func:`loaded_scene` keeps in this process, oldest first."""
+    return [scene for scene, _, _ in _LOADED.values()]
 
 
 def sensor_camera(sensor) -> dict:

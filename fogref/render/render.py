@@ -14,7 +14,10 @@ the back end's memory allows, and turns them into means and standard errors.
   every pass; copied to the host only for a checkpoint and once at the end), and the
   passes are as few and as equal as :data:`fogref_plugins.passes.MAX_LANES` allows
   (``benchmarks/render_driver.py``
-  measures the driver against one ``mi.render`` call).
+  measures the driver against one ``mi.render`` call).  A process keeps the scenes it loaded
+  (:func:`fogref.render.load.loaded_scene`: same input files, variant and overrides), so a
+  render repeated with another seed skips loading and replays fogpath's frozen passes
+  (``benchmarks/frozen_render.py``).
 * **Resumable**: the running sums are checkpointed atomically next to the output
   (``<out>.partial.npz``) every ``checkpoint_seconds`` and on Ctrl-C or SIGTERM; a rerun
   resumes only from a checkpoint whose key (the digest of the scene and of every file it
@@ -216,7 +219,7 @@ def render(
     import drjit as dr
     import mitsuba as mi
 
-    scene, desc = scene_loader.load_scene(parsed)
+    scene, desc = scene_loader.loaded_scene(parsed)  # loaded once per process: kernels and frozen passes kept
     integrator = scene.integrator()
     if not hasattr(integrator, "render_moments"):
         raise FogrefError(f"{scene_path}: the scene's integrator must be 'fogpath' to write a ground truth")

@@ -1,0 +1,313 @@
+"""A truth rendered again in a warm process: loaded scenes kept and fogpath's passes frozen.
+-> reports/benchmarks/frozen_render.{json,md}
+
+One process calls the render driver (:func:`fogref.render.render.render`, as ``fogref render``
+does, EXR and moments written) on ``scenes/valley.xml`` again and again, each call a new seed,
+in two modes, side by side in rotating order, the same seed in both:
+
+* ``before``: as fogref was: the scene loaded for every render
+  (:func:`fogref.render.load.load_scene`) and fogpath's ``freeze`` off (every pass traced);
+* ``after``: fogref as it is: the loaded scene kept (:func:`fogref.render.load.loaded_scene`) and
+  passes frozen (traced the first time a pass of that kind is seen, recorded the second time,
+  replayed from then on: :data:`fogref_plugins.fogpath.RECORD_FROM_CALL`).
+
+Cases: 32x18 at 64 spp and at 1 spp (one pass each), 320x180 at 64 spp (several passes).  Each
+render's wall time is split into phases by timing the driver's calls: ``parse`` (reading the
+scene and hashing its inputs), ``load`` (Mitsuba's load, or the kept scene), ``passes`` (fogpath's
+``render_moments``: tracing, recording or replaying, and the kernels' execution, which Dr.Jit's
+kernel history gives apart), ``channels`` (the means and standard errors from the sums, copied to
+the host), ``exr`` (the EXR and the moments file written, atomically) and ``rest`` (the
+output checks, the merge of the passes' sums, the non-finite check).  ``host`` = wall - execution.
+The first render of each mode compiles (or loads Dr.Jit's disk cache) and is reported apart.
+The EXRs of the two modes are compared bitwise.  Last, what recording costs, which sets
+:data:`~fogref_plugins.fogpath.RECORD_FROM_CALL`: a freshly loaded scene's first pass traced
+(``freeze`` off) against recorded (``RECORD_FROM_CALL`` 1), alternating, paired differences.
+
+    .venv/bin/python benchmarks/frozen_render.py [--rounds 12]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENE = ROOT / "scenes" / "valley.xml"
+CASES = [((32, 18), 64), ((32, 18), 1), ((320, 180), 64)]
+MODES = ("before", "after")
+PHASES = ("parse", "load", "trace", "execution", "channels", "exr", "rest")
+
+
+def quartiles(xs: list) -> list:
+    """[median, first quartile, third quartile] of ``xs``."""
+    if len(xs) < 2:
+        return [xs[0]] * 3 if xs else [float("nan")] * 3
+    q = statistics.quantiles(xs, n=4, method="inclusive")
+    return [statistics.median(xs), q[0], q[2]]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--rounds", type=int, default=12, help="renders per mode and case (small cases)")
+    ap.add_argument("--big-rounds", type=int, default=3, help="renders per mode of the multi-pass case")
+    ap.add_argument("--first", type=int, default=6, help="fresh scenes per first-pass policy")
+    ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
+    ap.add_argument("--report-only", action="store_true", help="rewrite the Markdown from the JSON")
+    a = ap.parse_args()
+    if a.report_only:
+        r = json.loads((Path(a.out) / "frozen_render.json").read_text())
+        (Path(a.out) / "frozen_render.md").write_text(report(r))
+        return
+
+    from fogref.render.variant import set_variant
+
+    set_variant("llvm_ad_rgb")
+    import drjit as dr
+    import fogref_plugins.fogpath as fpm
+    import mitsuba as mi
+    import numpy as np
+
+    import fogref.render.render as R
+    from fogref.exrio import read_exr
+    from fogref.render import load
+
+    load0 = os.getloadavg()
+    tmp = Path(tempfile.mkdtemp(prefix="frozen_render_"))
+    traced_scene = tmp / "valley_traced.xml"  # the same scene, freeze off (before)
+    traced_scene.write_text(
+        SCENE.read_text().replace(
+            '<integrator type="fogpath">',
+            '<integrator type="fogpath">\n        <boolean name="freeze" value="false"/>',
+        )
+    )
+    clock: dict = {}
+
+    def timed(name, fn):
+        def wrapper(*args, **kw):
+            t0 = time.perf_counter()
+            try:
+                return fn(*args, **kw)
+            finally:
+                clock[name] = clock.get(name, 0.0) + time.perf_counter() - t0
+
+        return wrapper
+
+    R.read_scene = timed("parse", R.read_scene)
+    kept = load.loaded_scene
+    loading = {"each time": False}
+
+    def load_or_keep(parsed, threads=None):  # before: Mitsuba loads the scene for every render
+        if loading["each time"]:
+            return load.load_scene(parsed)
+        return kept(parsed, threads)
+
+    load.loaded_scene = timed("load", load_or_keep)
+    R.write_exr = timed("exr", R.write_exr)
+    R.checkpoint.write_checkpoint = timed("exr", R.checkpoint.write_checkpoint)
+    R._channels = timed("channels", R._channels)
+    R._host_float32 = timed("channels", R._host_float32)
+    moments, body = fpm.FogPathIntegrator.render_moments, fpm.FogPathIntegrator._pass
+    kinds: dict = {}
+
+    def pass_timed(self, scene, *args, **kw):
+        before_rec = self.n_recordings
+        ran = clock.get("_body", 0)
+        dr.kernel_history()
+        dr.set_flag(dr.JitFlag.KernelHistory, True)
+        t0 = time.perf_counter()
+        out = moments(self, scene, *args, **kw)
+        dr.sync_thread()
+        wall = time.perf_counter() - t0
+        hist = dr.kernel_history()
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+        execution = sum(k.get("execution_time", 0.0) for k in hist) / 1e3
+        kind = (
+            "recorded"
+            if self.n_recordings > before_rec
+            else ("traced" if clock.get("_body", 0) > ran else "replayed")
+        )
+        kinds[kind] = kinds.get(kind, 0) + 1
+        clock["execution"] = clock.get("execution", 0.0) + execution
+        clock["trace"] = clock.get("trace", 0.0) + wall - execution
+        clock["backend"] = clock.get("backend", 0.0) + sum(k.get("backend_time", 0.0) for k in hist) / 1e3
+        return out
+
+    def body_counted(self, *args):
+        clock["_body"] = clock.get("_body", 0) + 1
+        return body(self, *args)
+
+    fpm.FogPathIntegrator.render_moments = pass_timed
+    fpm.FogPathIntegrator._pass = body_counted
+
+    def render(mode: str, res: tuple, spp: int, seed: int) -> dict:
+        loading["each time"] = mode == "before"
+        clock.clear()
+        kinds.clear()
+        out = tmp / f"{mode}.exr"
+        t0 = time.perf_counter()
+        R.render(
+            traced_scene if mode == "before" else SCENE,
+            out,
+            spp=spp,
+            seed=seed,
+            overrides={"res": res[0], "resy": res[1]},
+            progress=False,
+            png=False,
+            resume=False,
+        )
+        wall = time.perf_counter() - t0
+        row = {"wall": wall, **{p: clock.get(p, 0.0) for p in PHASES if p != "rest"}}
+        row["rest"] = wall - sum(row[p] for p in PHASES if p != "rest")
+        row["host"] = wall - row["execution"]
+        row["backend"] = clock.get("backend", 0.0)
+        row["passes"] = dict(kinds)
+        return row
+
+    result: dict = {
+        "machine": f"{platform.machine()}, {os.cpu_count()} cores (shared)",
+        "mitsuba": mi.__version__,
+        "drjit": dr.__version__,
+        "variant": "llvm_ad_rgb",
+        "record_from_call": fpm.RECORD_FROM_CALL,
+        "load_average_before": load0[0],
+        "cases": [],
+    }
+    for res, spp in CASES:
+        rounds = a.big_rounds if res[0] * res[1] * spp > 1 << 20 else a.rounds
+        case: dict = {
+            "res": list(res),
+            "spp": spp,
+            "first": {},
+            "rows": {m: [] for m in MODES},
+            "bitwise": True,
+        }
+        for mode in MODES:  # the first render of each mode: compilation (or the disk cache), apart
+            case["first"][mode] = render(mode, res, spp, 1000)
+        for r in range(rounds):
+            order = MODES if r % 2 == 0 else MODES[::-1]
+            pixels = {}
+            for mode in order:
+                case["rows"][mode].append(render(mode, res, spp, r))
+                channels, _ = read_exr(tmp / f"{mode}.exr")
+                pixels[mode] = np.stack([channels[k] for k in sorted(channels)])
+            case["bitwise"] &= bool(np.array_equal(pixels["before"], pixels["after"]))
+        case["summary"] = {
+            m: {k: quartiles([row[k] for row in case["rows"][m]]) for k in ("wall", "host", *PHASES)}
+            for m in MODES
+        }
+        result["cases"].append(case)
+        print(json.dumps({"res": res, "spp": spp, "summary": case["summary"]}), flush=True)
+
+    # what recording costs: a freshly loaded scene's first pass traced (freeze off) or recorded
+    first: dict = {"traced": [], "recorded": []}
+    policy = fpm.RECORD_FROM_CALL
+    for i in range(2 * a.first + 2):
+        kind = ("traced", "recorded")[i % 2]
+        fpm.RECORD_FROM_CALL = 1
+        scene, _ = load.load_scene(SCENE, {"res": 32, "resy": 18})
+        fp = scene.integrator()
+        fp.aovs, fp.freeze = True, kind == "recorded"
+        clock.clear()
+        fp.render_moments(scene, 0, i, 64, pixel_exact=True)
+        if i >= 2:  # the first of each compiles
+            first[kind].append(clock["trace"])
+        del scene, fp
+    fpm.RECORD_FROM_CALL = policy
+    diff = [r - t for t, r in zip(first["traced"], first["recorded"])]
+    result["first_pass"] = {
+        "traced": quartiles(first["traced"]),
+        "recorded": quartiles(first["recorded"]),
+        "recorded_minus_traced": quartiles(diff),
+        "n": len(diff),
+    }
+    result["load_average_after"] = os.getloadavg()[0]
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "frozen_render.json").write_text(json.dumps(result, indent=1) + "\n")
+    (out / "frozen_render.md").write_text(report(result))
+    print((out / "frozen_render.md").read_text())
+
+
+def report(r: dict) -> str:
+    """The Markdown page of a run."""
+    ms = lambda q: f"{q[0] * 1e3:.0f} [{q[1] * 1e3:.0f}–{q[2] * 1e3:.0f}]"  # noqa: E731
+    md = [
+        "# A truth rendered again in a warm process: loaded scenes kept, fogpath's passes frozen",
+        "",
+        f"`benchmarks/frozen_render.py`: the render driver (`fogref.render.render.render`, EXR and "
+        f"moments written) on `scenes/valley.xml`, one warm process, each render a new seed; "
+        f"Mitsuba {r['mitsuba']}, Dr.Jit {r['drjit']}, `{r['variant']}`; {r['machine']}, load "
+        f"average {r['load_average_before']:.1f} before and {r['load_average_after']:.1f} after.  "
+        "`before`: the scene loaded for every render, fogpath's `freeze` off (as fogref was); "
+        "`after`: the loaded scene kept and the passes frozen (a pass of a kind traced the first "
+        f"time, recorded on call {r['record_from_call']}, replayed after).  Modes "
+        "alternate; medians over the renders after each mode's first, interquartile range in "
+        "brackets, milliseconds.  `host` = wall - kernel execution; `trace` = fogpath's passes "
+        "less execution (tracing, recording or replaying, launches).",
+    ]
+    for c in r["cases"]:
+        (w, h), spp = c["res"], c["spp"]
+        n = len(c["rows"]["after"])
+        md += [
+            "",
+            f"## {w}x{h}, {spp} spp ({n} renders per mode; EXRs of the two modes bitwise equal: "
+            f"{'yes' if c['bitwise'] else 'NO'})",
+            "",
+        ]
+        head = "| mode | wall | host | parse | load | trace | execution | channels | exr | rest |"
+        md += [head + " passes (last render) |"]
+        md += ["|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
+        for m in MODES:
+            s = c["summary"][m]
+            kinds = ", ".join(f"{v} {k}" for k, v in sorted(c["rows"][m][-1]["passes"].items()))
+            md.append(
+                f"| {m} | {ms(s['wall'])} | {ms(s['host'])} | "
+                + " | ".join(ms(s[p]) for p in PHASES)
+                + f" | {kinds} |"
+            )
+        f = c["first"]
+        md += [
+            "",
+            "First render of each mode (compilation, or Dr.Jit's disk cache, included): "
+            + ", ".join(
+                f"{m} {f[m]['wall'] * 1e3:.0f} ms (LLVM {f[m]['backend'] * 1e3:.0f} ms)" for m in MODES
+            )
+            + ".",
+        ]
+    small = r["cases"][0]["summary"]
+    ratio = small["after"]["host"][0] / small["after"]["wall"][0]
+    ratio_b = small["before"]["host"][0] / small["before"]["wall"][0]
+    fp = r["first_pass"]
+    md += [
+        "",
+        "## Fixed cost",
+        "",
+        f"At 32x18 and 64 spp the host time (everything but kernel execution) is "
+        f"{ratio:.0%} of the render's wall time after, {ratio_b:.0%} before (goal: under 1/8 = 12.5%, "
+        f"not reached).  Of the {small['after']['host'][0] * 1e3:.0f} ms after, fogpath's replayed pass "
+        f"takes {small['after']['trace'][0] * 1e3:.0f} ms (traced: {small['before']['trace'][0] * 1e3:.0f} "
+        f"ms) and loading {small['after']['load'][0] * 1e3:.1f} ms (a kept scene; "
+        f"{small['before']['load'][0] * 1e3:.0f} ms loaded); the rest is the driver's: the channels "
+        f"{small['after']['channels'][0] * 1e3:.0f} ms, the EXR (72 channels, ZIP) and moments files "
+        f"{small['after']['exr'][0] * 1e3:.0f} ms, checks and the merge "
+        f"{small['after']['rest'][0] * 1e3:.0f} ms (medians of each phase; they do not add up to "
+        "the median of the sum).",
+        "",
+        "## Recording against tracing: a freshly loaded scene's first pass",
+        "",
+        f"32x18, 64 spp, host time of `render_moments` (wall - execution) of a freshly loaded "
+        f"scene's first pass, `freeze` off (traced) and on (recorded), alternating, {fp['n']} pairs "
+        f"after one of each that compiles: traced {ms(fp['traced'])} ms, recorded "
+        f"{ms(fp['recorded'])} ms; recorded - traced, paired: {ms(fp['recorded_minus_traced'])} ms.",
+    ]
+    return "\n".join(md) + "\n"
+
+
+if __name__ == "__main__":
+    main()
