@@ -32,7 +32,17 @@ from fogref.mapping.physical import PhysicalScene
 from fogref.mapping.views import Views
 from fogref.media import ExpLayer
 from fogref.models.base import SKY_DISTANCE
-from fogref.models.ue4 import CM_PER_M, SecondFogData, UE4ExponentialHeightFog, UE4FogParams, sigma_to_unreal
+from fogref.models.ue4 import (
+    CM_PER_M,
+    SecondFogData,
+    UE4ExponentialHeightFog,
+    UE4FogParams,
+    directional_lobe,
+    directional_opacity,
+    fog_constants,
+    shade_geometry,
+    sigma_to_unreal,
+)
 
 __all__ = [
     "Basis",
@@ -247,9 +257,19 @@ class ColourLoss:
         self._cos = np.zeros(int(self._group.max(initial=-1)) + 1)
         self._cos[self._group] = two.lobe[self._lit] / one.lobe[self._lit]
         self._iso_lit, self._y_lit = one.iso[self._lit], y[self._lit]
-        # a start distance's lobe is needed on the lit views only: the model runs on those (each view's
-        # value is the same as on all views: no operation of the model mixes views)
-        self._wp_lit = wp[self._lit]
+        # a start distance's lobe is needed on the lit views only, and of the model's shading only the
+        # opacity beyond the start changes with it: the rest is computed once, on the lit views (no
+        # operation of the model mixes views, so each value is the one of the whole evaluation)
+        p1 = replace(
+            self._unit, DirectionalInscatteringExponent=1.0, DirectionalInscatteringStartDistance=0.0
+        )
+        dt, self._cam_z_cm, rel = UE4ExponentialHeightFog.receivers(
+            np.asarray(pf.camera), wp[self._lit], "float64"
+        )
+        C = fog_constants(p1, self._cam_z_cm, dt)
+        with np.errstate(all="ignore"):
+            self._geo = shade_geometry(C, self._cam_z_cm, rel, dt, exact=True)
+            self._lobe1 = directional_lobe(C, self._geo, dt)
         self._g00 = float(one.iso @ one.iso)
         self._b0 = one.iso @ y
         self._yy = np.sum(y * y, axis=0)
@@ -270,7 +290,13 @@ class ColourLoss:
     def sums(self, start_cm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The per-direction sums of the lobe at ``start_cm`` [cm] (one model evaluation, once)."""
         if start_cm not in self._sums:
-            lobe = _unit_inscatter(self._unit, self.pf, self._wp_lit, 1.0, start_cm)[:, 1]
+            # the model's lobe channel at exponent 1: lobe * (1 - T_dir) times a unit colour, plus 0
+            p = replace(
+                self._unit, DirectionalInscatteringExponent=1.0, DirectionalInscatteringStartDistance=start_cm
+            )
+            C = fog_constants(p, self._cam_z_cm, np.float64)
+            with np.errstate(all="ignore"):
+                lobe = self._lobe1 * directional_opacity(C, self._geo, np.float64)
             self.model_evaluations += 1
             self._add_start(start_cm, lobe)
         return self._sums[start_cm]
