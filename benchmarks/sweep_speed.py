@@ -17,8 +17,8 @@ main: ``git clone -q /work/main /tmp/base && bash /tmp/base/scripts/setup.sh``) 
   the Unreal fit; the comparison's parts) and the table and plots at the end; fixed costs
   (imports, reading the sweep) apart from per-configuration costs.
 * **Identity**: the two command runs' ``results.csv`` must agree in every cell but the timings and
-  the run's own paths (``render_seconds``, ``compare_seconds``, ``worker_pid``, ``worker_host``,
-  ``truth_path``, ``truth_cached``, ``truth_sha256``: the truth EXR's header holds its render
+  the run's own paths (``scene_path``, ``render_seconds``, ``compare_seconds``, ``worker_pid``,
+  ``worker_host``,  ``truth_path``, ``truth_cached``, ``truth_sha256``: the truth EXR's header holds its render
   time, so the file's hash differs between any two runs), every truth's pixels must be equal
   bit for bit and every plot's PNG byte for byte.
 
@@ -47,6 +47,7 @@ ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = Path("reports") / "sweeps" / "unreal_sun_falloff_g" / "SWEEP.toml"
 #: Columns of results.csv that hold timings or the run's own paths (module doc).
 RUN_COLUMNS = (
+    "scene_path",
     "render_seconds",
     "compare_seconds",
     "worker_pid",
@@ -177,6 +178,7 @@ def phase_child(tree: Path, work: Path, n_configs: int) -> None:
     sweep = _sweep_copy(tree, work)
     os.environ["FOGREF_CACHE"] = str(work / "fits-cache")
     acc: dict = defaultdict(float)
+    cpu: dict = defaultdict(float)
     cnt: dict = defaultdict(int)
 
     def wrap(owner, name: str, label: str) -> None:
@@ -186,11 +188,12 @@ def phase_child(tree: Path, work: Path, n_configs: int) -> None:
 
         @functools.wraps(f)
         def timed(*a, **k):
-            t = time.perf_counter()
+            t, c = time.perf_counter(), time.process_time()
             try:
                 return f(*a, **k)
             finally:
                 acc[label] += time.perf_counter() - t
+                cpu[label] += time.process_time() - c
                 cnt[label] += 1
 
         setattr(owner, name, timed)
@@ -215,13 +218,14 @@ def phase_child(tree: Path, work: Path, n_configs: int) -> None:
     chosen = configs[::step][:n_configs]
     t_spec = time.perf_counter()
     (work / "configs").mkdir(exist_ok=True)
-    per = []
+    per, per_cpu = [], []
     for cfg in chosen:
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         r = S.run_config(cfg, os.cpu_count())
         body = json.dumps({**r, "status": "ok", "config": cfg}, indent=1, default=str) + "\n"
         (work / "configs" / f"{cfg['id']}.json").write_text(body)
         per.append(time.perf_counter() - t)
+        per_cpu.append(time.process_time() - c)
     t_cfg = time.perf_counter()
     S.write_table(spec, chosen)
     t_table = time.perf_counter()
@@ -240,7 +244,10 @@ def phase_child(tree: Path, work: Path, n_configs: int) -> None:
                     "table and plots (of these configurations)": t_table - t_cfg,
                 },
                 "per_config_s": per,
-                "phases": {k: {"s": acc[k], "calls": cnt[k]} for _, _, k in PHASES if cnt[k]},
+                "per_config_cpu_s": per_cpu,
+                "phases": {
+                    k: {"s": acc[k], "cpu_s": cpu[k], "calls": cnt[k]} for _, _, k in PHASES if cnt[k]
+                },
                 "versions": {
                     "mitsuba": mitsuba.__version__,
                     "drjit": drjit.__version__,
@@ -286,12 +293,14 @@ def report(res: dict) -> str:
         f"Command: `{res['command_line']}`.  Machine: {res['machine']}; {res['versions']}.  "
         f"Base: `{res['base']}` at {res['base_commit']}; after: this checkout at {res['after_commit']}.",
         "",
-        "Sweep: `reports/sweeps/unreal_sun_falloff_g/SWEEP.toml` (valley, sun elevation x FogHeightFalloff x g, "
+        "Sweep: `reports/sweeps/unreal_sun_falloff_g/SWEEP.toml` (valley, sun elevation x "
+        "FogHeightFalloff x g, "
         "64x36 px, 16 spp, model ue4 fitted to each truth), a LocalCluster of one single-threaded worker per "
         "core, every run from an empty truth cache and an empty fit cache, the Dr.Jit kernel cache warm.  "
         "Runs alternate base, after, ...  CPU = user + sys of the command and its workers.",
         "",
-        "| run | checkout | wall [s] | sweep's 'configurations in' [s] | CPU [s] | load average before -> after (1 min) |",
+        "| run | checkout | wall [s] | sweep's 'configurations in' [s] | CPU [s] | "
+        "load average before -> after (1 min) |",
         "|---|---|---|---|---|---|",
     ]
     for i, r in enumerate(runs):
@@ -322,25 +331,29 @@ def report(res: dict) -> str:
         n = b["configs"]
         L += [
             "",
-            f"## Phases (one process, no cluster, {n} of the 48 configurations spread over the grid, one after "
+            f"## Phases (one process, no cluster, {n} of the 48 configurations spread over the grid, "
+            "one after "
             "the other; timers on the phases' functions)",
             "",
-            f"Load average (1 min) before -> after: base {b['load_before'][0]:.1f} -> {b['load_after'][0]:.1f}, "
-            f"after {a['load_before'][0]:.1f} -> {a['load_after'][0]:.1f}.  Indented rows are parts of the row "
-            "above; 'per configuration' is the phase's total over the configurations divided by their number.",
+            f"Load average (1 min) before -> after: base {b['load_before'][0]:.1f} -> "
+            f"{b['load_after'][0]:.1f}, after {a['load_before'][0]:.1f} -> {a['load_after'][0]:.1f}.  "
+            "Rows marked (part) are parts of the row above; 'per configuration': the phase's total over the "
+            "configurations divided by their number; CPU: the process's (all its threads).",
             "",
-            "| phase | base, per configuration [s] | after, per configuration [s] | base / after |",
+            "| phase | base: wall, CPU per configuration [s] | after: wall, CPU [s] | base / after (CPU) |",
             "|---|---|---|---|",
         ]
         for _, _, k in PHASES:
-            x, y = b["phases"].get(k, {}).get("s"), a["phases"].get(k, {}).get("s")
-            fx = f"{x / n:.3f}" if x is not None else "not called"
-            fy = f"{y / n:.3f}" if y is not None else "not called"
-            ratio = f"{x / y:.2f}x" if x and y else ""
-            L.append(f"| {k.strip()} {'(part)' if k.startswith('  ') else ''} | {fx} | {fy} | {ratio} |")
-        sb, sa = sum(b["per_config_s"]), sum(a["per_config_s"])
+            x, y = b["phases"].get(k), a["phases"].get(k)
+            fx = f"{x['s'] / n:.3f}, {x['cpu_s'] / n:.3f}" if x else "not called"
+            fy = f"{y['s'] / n:.3f}, {y['cpu_s'] / n:.3f}" if y else "not called"
+            ratio = f"{x['cpu_s'] / y['cpu_s']:.2f}x" if x and y and y["cpu_s"] > 0 else ""
+            part = " (part)" if k.startswith("  ") else ""
+            L.append(f"| {k.strip()}{part} | {fx} | {fy} | {ratio} |")
+        cb, ca = sum(b["per_config_cpu_s"]), sum(a["per_config_cpu_s"])
         L.append(
-            f"| **a configuration, all of it** (median) | {_median(b['per_config_s']):.3f} | {_median(a['per_config_s']):.3f} | {sb / sa:.2f}x (totals) |"
+            f"| **a configuration, all of it** (wall median, CPU mean) | {_median(b['per_config_s']):.3f}, "
+            f"{cb / n:.3f} | {_median(a['per_config_s']):.3f}, {ca / n:.3f} | {cb / ca:.2f}x |"
         )
         L += ["", "| fixed cost | base [s] | after [s] |", "|---|---|---|"]
         for k in b["fixed"]:
@@ -398,7 +411,8 @@ def main(argv=None) -> int:
                 res["command"].append({"which": which, **r})
                 last[which] = Path(tmp) / f"{which}-{i}"
                 print(
-                    f"{which}: {r['wall_s']:.1f} s wall, {r['cpu_s']:.1f} s CPU, load {r['load_before'][0]:.1f}",
+                    f"{which}: {r['wall_s']:.1f} s wall, {r['cpu_s']:.1f} s CPU, "
+                    f"load {r['load_before'][0]:.1f}",
                     flush=True,
                 )
         res["identical"] = identical(last["base"], last["after"])
