@@ -18,9 +18,9 @@ main: ``git clone -q /work/main /tmp/base && bash /tmp/base/scripts/setup.sh``) 
   (imports, reading the sweep) apart from per-configuration costs.
 * **Identity**: the two command runs' ``results.csv`` must agree in every cell but the timings and
   the run's own paths (``scene_path``, ``render_seconds``, ``compare_seconds``, ``worker_pid``,
-  ``worker_host``,  ``truth_path``, ``truth_cached``, ``truth_sha256``: the truth EXR's header holds its render
-  time, so the file's hash differs between any two runs), every truth's pixels must be equal
-  bit for bit and every plot's PNG byte for byte.
+  ``worker_host``, ``truth_path``, ``truth_cached``, ``truth_sha256``: the truth EXR's header holds
+  its render time, so the file's hash differs between any two runs), every truth's pixels must be
+  equal bit for bit and every plot's PNG byte for byte.
 
     .venv/bin/python benchmarks/sweep_speed.py --base /tmp/base [--repeats 1] [--phase-configs 12]
 """
