@@ -175,7 +175,8 @@ def run_sweep(
     -------
     dict
         ``{"table": csv path, "parquet": path, "rows": n, "configs": n, "ran": n,
-        "failed": n, "wall_seconds": s, "plots": [paths]}``.
+        "failed": n, "wall_seconds": s, "plots": [paths]}``; ``wall_seconds``: from the cluster's
+        start to the last configuration's result (the table and plots after it not included).
 
     Raises
     ------
