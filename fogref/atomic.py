@@ -183,7 +183,11 @@ def write_text_atomic(path, text: str) -> Path:
     return atomic_write(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
 
 
-def save_figure_atomic(figure, path, dpi: int = 110) -> Path:
+#: The resolution of fogref's saved figures [dots per inch].
+FIGURE_DPI = 110
+
+
+def save_figure_atomic(figure, path, dpi: int = FIGURE_DPI) -> Path:
     """Save a matplotlib ``Figure`` to ``path`` (format from the suffix) atomically."""
     fmt = Path(path).suffix.lstrip(".") or "png"
     return atomic_write(path, lambda tmp: figure.savefig(tmp, format=fmt, dpi=dpi, bbox_inches="tight"))

@@ -155,6 +155,11 @@ def test_sweep_on_two_worker_cluster_records_failure_resumes_and_reuses_truths(t
     assert not ok["truth_cached"].any() and len(list((tmp_path / "cache").rglob("*.exr"))) == 4
     assert (tmp_path / "plots" / "final.all.rmse_vs_sun_elevation.png").is_file()
     assert len(list((tmp_path / "configs").glob("*.json"))) == 4
+    # the figures drawn on the cluster's workers are byte for byte the ones drawn here
+    spec = S.load_sweep(p)
+    here = S.plot_table(df, spec, tmp_path / "plots-here")
+    assert sorted(f.name for f in here) == sorted(Path(f).name for f in info["plots"]) and len(here) == 3
+    assert all(f.read_bytes() == (tmp_path / "plots" / f.name).read_bytes() for f in here)
 
     # resume: nothing is run again, the table is the same
     stamps = {f: f.stat().st_mtime_ns for f in (tmp_path / "configs").glob("*.json")}
@@ -175,6 +180,42 @@ def test_sweep_on_two_worker_cluster_records_failure_resumes_and_reuses_truths(t
     assert all(
         json.loads(m)["StartDistance"] == 500.0 for m in df3[df3["status"] == "ok"]["model_parameters"]
     )
+
+
+def test_plot_table_draws_each_figure_through_run_with_the_same_bytes(tmp_path):
+    """``plot_table(..., run)`` hands every (parameter, metric) figure to ``run`` (here a pool of
+    two fresh processes) and writes the PNGs it returns: the same files, byte for byte, as drawn in
+    this process (one byte of one figure is detected)."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    import pandas as pd
+
+    p = _toml(tmp_path, MODELS + TINY.replace('plot_metrics = ["final.all.rmse"]', "plots = true"))
+    spec = S.load_sweep(p)
+    rng = np.random.default_rng(3)
+    df = pd.DataFrame(
+        {
+            "status": ["ok"] * 8 + ["error"],
+            "model": ["ue4"] * 9,
+            "sun_elevation": [5, 20, 40, 60] * 2 + [5],
+            "g": [0.2, 0.6, 0.7, 0.8, 0.8, 0.7, 0.6, 0.2, 0.2],
+            "final.all.rmse": rng.uniform(0.01, 1.0, 9),
+            "final.all.rmse_stderr": rng.uniform(0.0, 0.01, 9),
+            "final.all.relmse": rng.uniform(0.01, 1.0, 9),
+        }
+    )
+    here = S.plot_table(df, spec, tmp_path / "here")
+    calls = []
+
+    def pool(f, jobs):
+        calls.append(len(jobs))
+        with ProcessPoolExecutor(2) as ex:
+            return list(ex.map(f, *zip(*jobs)))
+
+    there = S.plot_table(df, spec, tmp_path / "there", pool)
+    assert calls == [len(here)] and len(here) == 2 * 2  # (rmse, relmse) x (sun_elevation, g)
+    assert [f.name for f in here] == [f.name for f in there]
+    assert all(a.read_bytes() == b.read_bytes() for a, b in zip(here, there))
 
 
 KILL = (

@@ -32,7 +32,17 @@ from fogref.mapping.physical import PhysicalScene
 from fogref.mapping.views import Views
 from fogref.media import ExpLayer
 from fogref.models.base import SKY_DISTANCE
-from fogref.models.ue4 import CM_PER_M, SecondFogData, UE4ExponentialHeightFog, UE4FogParams, sigma_to_unreal
+from fogref.models.ue4 import (
+    CM_PER_M,
+    SecondFogData,
+    UE4ExponentialHeightFog,
+    UE4FogParams,
+    directional_lobe,
+    directional_opacity,
+    fog_constants,
+    shade_geometry,
+    sigma_to_unreal,
+)
 
 __all__ = [
     "Basis",
@@ -119,16 +129,23 @@ def unreal_basis(
     pf: PhysicalScene, views: Views, exponent: float, start_cm: float, sky_distance: float = SKY_DISTANCE
 ) -> Basis:
     """Unreal (float64) evaluated with unit colours: the isotropic and lobe images."""
-    wp = views.world_positions(sky_distance)
-    p = base_params(
-        pf,
-        DirectionalInscatteringExponent=exponent,
-        DirectionalInscatteringStartDistance=start_cm,
-        FogInscatteringColor=(1.0, 0.0, 0.0),
-        DirectionalInscatteringColor=(0.0, 1.0, 0.0),
-    )
-    ins = unreal_inscatter(p, np.asarray(pf.camera), wp)
+    ins = _unit_inscatter(_unit_params(pf), pf, views.world_positions(sky_distance), exponent, start_cm)
     return Basis(iso=ins[:, 0], lobe=ins[:, 1])
+
+
+def _unit_params(pf: PhysicalScene) -> UE4FogParams:
+    """:func:`base_params` of ``pf`` with the unit colours of :func:`unreal_basis` (FogInscatteringColor
+    red, DirectionalInscatteringColor green)."""
+    return base_params(pf, FogInscatteringColor=(1.0, 0.0, 0.0), DirectionalInscatteringColor=(0.0, 1.0, 0.0))
+
+
+def _unit_inscatter(
+    unit: UE4FogParams, pf: PhysicalScene, wp: np.ndarray, exponent: float, start_cm: float
+) -> np.ndarray:
+    """Unreal's inscatter (N, 3) at the world positions ``wp`` with :func:`_unit_params`'s ``unit``, the
+    exponent and the start distance [cm] (every field but those two is ``unit``'s, already checked)."""
+    p = replace(unit, DirectionalInscatteringExponent=exponent, DirectionalInscatteringStartDistance=start_cm)
+    return unreal_inscatter(p, np.asarray(pf.camera), wp)
 
 
 def solve_colours(
@@ -153,31 +170,42 @@ def solve_colours(
 
 
 def _nnls2(
-    g00: float, g01: float, g11: float, b0: np.ndarray, b1: np.ndarray, yy: np.ndarray
+    g00: float, g01: float, g11: float, b0: Any, b1: Any, yy: Any
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Two-column non-negative least squares from its normal equations, per channel.
 
     ``G = [[g00, g01], [g01, g11]] = A^T A``, ``b0``, ``b1`` (3,) ``= A^T y``, ``yy`` (3,) ``= y.y``.
     The optimum is the best of the four candidates (both columns, one, none) that are
-    feasible.  Returns ``(x0, x1, sse)``, each (3,).
+    feasible.  Returns ``(x0, x1, sse)``, each (3,).  Each channel is solved in Python floats
+    (the same IEEE operations, in the same order, as the array form: three values are too few
+    for NumPy to pay for its calls).
+
+    >>> x0, x1, sse = _nnls2(2.0, 0.0, 1.0, [4.0, -1.0, 0.0], [1.0, 2.0, 0.0], [9.0, 4.0, 0.0])
+    >>> x0.tolist(), x1.tolist(), sse.tolist()
+    ([2.0, 0.0, 0.0], [1.0, 2.0, 0.0], [0.0, 0.0, 0.0])
     """
-    zero = np.zeros_like(b0)
-    cands = [(zero, zero)]
-    if g00 > 0:
-        cands.append((np.maximum(b0, 0.0) / g00, zero))
-    if g11 > 0:
-        cands.append((zero, np.maximum(b1, 0.0) / g11))
     det = g00 * g11 - g01 * g01
-    if det > 1e-12 * g00 * g11:
-        x0, x1 = (g11 * b0 - g01 * b1) / det, (g00 * b1 - g01 * b0) / det
-        ok = (x0 >= 0) & (x1 >= 0)
-        cands.append((np.where(ok, x0, 0.0), np.where(ok, x1, 0.0)))
-    best = (zero, zero, yy)
-    for x0, x1 in cands:
-        sse = yy - 2.0 * (x0 * b0 + x1 * b1) + g00 * x0 * x0 + 2.0 * g01 * x0 * x1 + g11 * x1 * x1
-        take = sse < best[2]
-        best = (np.where(take, x0, best[0]), np.where(take, x1, best[1]), np.where(take, sse, best[2]))
-    return best[0], best[1], np.maximum(best[2], 0.0)
+    both = det > 1e-12 * g00 * g11
+    out = np.empty((3, 3))
+    for c in range(3):
+        p, q, r = float(b0[c]), float(b1[c]), float(yy[c])
+        cands = []
+        if g00 > 0:  # np.maximum's rule: the first value when it is >= or NaN
+            cands.append(((p if p >= 0.0 or p != p else 0.0) / g00, 0.0))
+        if g11 > 0:
+            cands.append((0.0, (q if q >= 0.0 or q != q else 0.0) / g11))
+        if both:
+            x0, x1 = (g11 * p - g01 * q) / det, (g00 * q - g01 * p) / det
+            cands.append((x0, x1) if x0 >= 0 and x1 >= 0 else (0.0, 0.0))
+        # the candidate (0, 0) scores r exactly; it starts as the best
+        b_x0, b_x1, b_sse = 0.0, 0.0, r
+        for x0, x1 in cands:
+            sse = r - 2.0 * (x0 * p + x1 * q) + g00 * x0 * x0 + 2.0 * g01 * x0 * x1 + g11 * x1 * x1
+            if sse < b_sse:
+                b_x0, b_x1, b_sse = x0, x1, sse
+        out[0, c], out[1, c] = b_x0, b_x1
+        out[2, c] = b_sse if b_sse >= 0.0 or b_sse != b_sse else 0.0
+    return out[0], out[1], out[2]
 
 
 class ColourLoss:
@@ -216,8 +244,10 @@ class ColourLoss:
     ):
         self.pf, self.views, self.sky_distance = pf, views, float(sky_distance)
         y = np.broadcast_to(np.asarray(target, dtype=float), (len(views.D), 3))
-        one = unreal_basis(pf, views, 1.0, 0.0, sky_distance)
-        two = unreal_basis(pf, views, 2.0, 0.0, sky_distance)
+        # the parameters and positions every model evaluation shares, made once
+        self._unit, wp = _unit_params(pf), views.world_positions(sky_distance)
+        one = Basis(*_unit_inscatter(self._unit, pf, wp, 1.0, 0.0)[:, :2].T)
+        two = Basis(*_unit_inscatter(self._unit, pf, wp, 2.0, 0.0)[:, :2].T)
         self.model_evaluations = 2
         self.colour_solves = 0
         self._lit = one.lobe > 0  # the lobe is 0 elsewhere for every exponent and start
@@ -227,6 +257,19 @@ class ColourLoss:
         self._cos = np.zeros(int(self._group.max(initial=-1)) + 1)
         self._cos[self._group] = two.lobe[self._lit] / one.lobe[self._lit]
         self._iso_lit, self._y_lit = one.iso[self._lit], y[self._lit]
+        # a start distance's lobe is needed on the lit views only, and of the model's shading only the
+        # opacity beyond the start changes with it: the rest is computed once, on the lit views (no
+        # operation of the model mixes views, so each value is the one of the whole evaluation)
+        p1 = replace(
+            self._unit, DirectionalInscatteringExponent=1.0, DirectionalInscatteringStartDistance=0.0
+        )
+        dt, self._cam_z_cm, rel = UE4ExponentialHeightFog.receivers(
+            np.asarray(pf.camera), wp[self._lit], "float64"
+        )
+        C = fog_constants(p1, self._cam_z_cm, dt)
+        with np.errstate(all="ignore"):
+            self._geo = shade_geometry(C, self._cam_z_cm, rel, dt, exact=True)
+            self._lobe1 = directional_lobe(C, self._geo, dt)
         self._g00 = float(one.iso @ one.iso)
         self._b0 = one.iso @ y
         self._yy = np.sum(y * y, axis=0)
@@ -247,9 +290,15 @@ class ColourLoss:
     def sums(self, start_cm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The per-direction sums of the lobe at ``start_cm`` [cm] (one model evaluation, once)."""
         if start_cm not in self._sums:
-            b = unreal_basis(self.pf, self.views, 1.0, start_cm, self.sky_distance)
+            # the model's lobe channel at exponent 1: lobe * (1 - T_dir) times a unit colour, plus 0
+            p = replace(
+                self._unit, DirectionalInscatteringExponent=1.0, DirectionalInscatteringStartDistance=start_cm
+            )
+            C = fog_constants(p, self._cam_z_cm, np.float64)
+            with np.errstate(all="ignore"):
+                lobe = self._lobe1 * directional_opacity(C, self._geo, np.float64)
             self.model_evaluations += 1
-            self._add_start(start_cm, b.lobe[self._lit])
+            self._add_start(start_cm, lobe)
         return self._sums[start_cm]
 
     def solve(self, log_n: float, start_cm: float) -> tuple[np.ndarray, np.ndarray, float]:

@@ -395,14 +395,13 @@ def line_integral_shared(falloff: Any, ray_dir_z: Any, origin_terms: Any, dt: An
     return origin_terms * np.where(np.abs(F) > dt(FLT_EPSILON2), li, taylor)
 
 
-def shade(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt: Any, exact: bool) -> Any:
-    """GetExponentialHeightFog on camera-relative receiver positions (Unreal cm).
-
-    Returns ``(FogColor (..., 3), ExpFogFactor (...))``.
-    """
+def shade_geometry(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt: Any, exact: bool) -> dict:
+    """The part of :func:`shade` that the directional light's start distance, exponent and colour
+    leave alone, per camera-relative receiver position (Unreal cm): ``n`` (the unit view direction,
+    3 arrays), ``length`` and ``ray_length`` (beyond StartDistance) [cm], the line integral
+    ``shared`` [1/cm] and the optical depth ``integral`` (of ``2^-integral``)."""
     P, P2, P3 = C["P"], C["P2"], C["P3"]
     rel = np.asarray(rel_cm, dtype=dt)
-    min_opacity = C["min_opacity"]
     obs_z = min(dt(cam_z_cm), P[2])
     end = C["end_distance"]
     if end > 0:  # EndDistance: on the receiver's horizontal distance, before the observer clamp
@@ -438,22 +437,56 @@ def shade(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt: Any, exact: bool) ->
     # overflowed (inf) density meets a zero-length ray; an empty ray has no fog.
     # Identical to the shader wherever the shader is not NaN.
     integral = np.where(ray_length > 0, shared * ray_length, dt(0.0))
+    return {
+        "n": (nx, ny, nz),
+        "length": length,
+        "ray_length": ray_length,
+        "shared": shared,
+        "integral": integral,
+    }
+
+
+def directional_lobe(C: dict, geo: dict, dt: Any) -> Any:
+    """The directional inscattering's angular factor of :func:`shade` on :func:`shade_geometry`'s
+    ``geo``: ``max(cos, 0)^DirectionalInscatteringExponent`` (HG with the volumetric fog's match)."""
+    nx, ny, nz = geo["n"]
+    light = C["light"]
+    if C["match"]:  # HG of the volumetric fog's g at dot(-CameraToReceiverNormalized, L)
+        return _hg_shader(C["phase_g"], -(nx * light[0] + ny * light[1] + nz * light[2]), dt)
+    cos = saturate(nx * light[0] + ny * light[1] + nz * light[2])
+    lobe = np.power(cos, C["dir_exponent"])
+    if C["sky"]:  # the sky-atmosphere branch: ... * UniformPhaseFunction
+        lobe = lobe * (dt(1.0) / (dt(4.0) * dt(math.pi)))
+    return lobe
+
+
+def directional_opacity(C: dict, geo: dict, dt: Any) -> Any:
+    """``1 - T_dir`` of :func:`shade`: the opacity of the part of each ray beyond
+    DirectionalInscatteringStartDistance (``C["light"][3]`` [cm]), on :func:`shade_geometry`'s ``geo``."""
+    dir_run = np.maximum(geo["ray_length"] - C["light"][3], dt(0.0))
+    dir_integral = np.where(dir_run > 0, geo["shared"] * dir_run, dt(0.0))  # no inf * 0 (see above)
+    dir_factor = saturate(np.exp2(-dir_integral))
+    return dt(1.0) - dir_factor
+
+
+def shade(C: dict, cam_z_cm: float, rel_cm: np.ndarray, dt: Any, exact: bool) -> Any:
+    """GetExponentialHeightFog on camera-relative receiver positions (Unreal cm).
+
+    Returns ``(FogColor (..., 3), ExpFogFactor (...))``.
+    """
+    P3 = C["P3"]
+    min_opacity = C["min_opacity"]
+    geo = shade_geometry(C, cam_z_cm, rel_cm, dt, exact)
+    length, integral = geo["length"], geo["integral"]
 
     color = np.asarray(C["color"], dtype=dt)
     light = C["light"]
     dir_inscatter = None
     if light[3] >= 0:
-        if C["match"]:  # HG of the volumetric fog's g at dot(-CameraToReceiverNormalized, L)
-            lobe = _hg_shader(C["phase_g"], -(nx * light[0] + ny * light[1] + nz * light[2]), dt)
-        else:
-            cos = saturate(nx * light[0] + ny * light[1] + nz * light[2])
-            lobe = np.power(cos, C["dir_exponent"])
-            if C["sky"]:  # the sky-atmosphere branch: ... * UniformPhaseFunction
-                lobe = lobe * (dt(1.0) / (dt(4.0) * dt(math.pi)))
-        dir_run = np.maximum(ray_length - light[3], dt(0.0))
-        dir_integral = np.where(dir_run > 0, shared * dir_run, dt(0.0))  # no inf * 0 (see above)
-        dir_factor = saturate(np.exp2(-dir_integral))
-        dir_inscatter = (lobe * (dt(1.0) - dir_factor))[..., None] * np.asarray(C["dir_color"], dtype=dt)
+        lobe = directional_lobe(C, geo, dt)
+        dir_inscatter = (lobe * directional_opacity(C, geo, dt))[..., None] * np.asarray(
+            C["dir_color"], dtype=dt
+        )
         if C["match"]:
             dir_inscatter = dir_inscatter * np.asarray(C["albedo"], dtype=dt)
     factor = np.maximum(saturate(np.exp2(-integral)), min_opacity)
@@ -476,14 +509,21 @@ class UE4ExponentialHeightFog(ParamModel[UE4FogParams]):
 
     def evaluate(self, camera: Any, world_pos: Any, precision: str = "float32") -> FogResult:
         """Fog of each pixel: camera (3,) and world_pos (..., 3) in fogref metres."""
-        dt = dtype_of(precision)
-        cam, wp = split(camera, world_pos)
-        cam_z_cm = float(np.float32(cam[1] * CM_PER_M)) if dt is np.float32 else cam[1] * CM_PER_M
-        rel = world_to_unreal(wp - cam)
+        dt, cam_z_cm, rel = self.receivers(camera, world_pos, precision)
         C = fog_constants(self.params, cam_z_cm, dt)
         with np.errstate(all="ignore"):
             fog_color, factor = shade(C, cam_z_cm, rel, dt, exact=(dt is np.float64))
         return FogResult(inscatter=fog_color, transmittance=grey(factor, dt))
+
+    @staticmethod
+    def receivers(camera: Any, world_pos: Any, precision: str = "float32") -> tuple:
+        """``(dt, camera height [cm], receivers relative to the camera (..., 3) [Unreal cm])``: the
+        inputs of :func:`shade` that :meth:`evaluate` makes of a camera (3,) and world positions
+        (..., 3) in fogref metres (the height rounded to float32 in float32)."""
+        dt = dtype_of(precision)
+        cam, wp = split(camera, world_pos)
+        cam_z_cm = float(np.float32(cam[1] * CM_PER_M)) if dt is np.float32 else cam[1] * CM_PER_M
+        return dt, cam_z_cm, world_to_unreal(wp - cam)
 
 
 # -- exact physical mapping -----------------------------------------------------

@@ -17,6 +17,7 @@ one line names the log file that holds the workers' output.
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import time
@@ -137,6 +138,11 @@ def _run(client, todo, configs, spec, threads, cdir, progress) -> int:
     return failed
 
 
+def _map_on(client, f, jobs: list[tuple]) -> list:
+    """``[f(*job) for job in jobs]``, computed on the Dask ``client``'s workers."""
+    return client.gather(client.map(f, *zip(*jobs), pure=False)) if jobs else []
+
+
 def run_sweep(
     sweep_path,
     scheduler: str | None = None,
@@ -169,7 +175,8 @@ def run_sweep(
     -------
     dict
         ``{"table": csv path, "parquet": path, "rows": n, "configs": n, "ran": n,
-        "failed": n, "wall_seconds": s, "plots": [paths]}``.
+        "failed": n, "wall_seconds": s, "plots": [paths]}``; ``wall_seconds``: from the cluster's
+        start to the last configuration's result (the table and plots after it not included).
 
     Raises
     ------
@@ -212,7 +219,7 @@ def run_sweep(
         + "\n",
     )
     t0 = time.perf_counter()
-    failed = 0
+    failed, info = 0, None
     if todo:
         log = out / WORKER_LOG
         client = local = None
@@ -224,6 +231,14 @@ def run_sweep(
                 failed = _run(client, todo, configs, spec, drjit_threads or threads, cdir, progress)
                 if stop.requested:
                     raise KeyboardInterrupt
+                wall = time.perf_counter() - t0
+                # the table here, its figures drawn on the workers side by side (they have matplotlib
+                # loaded already); the PNGs come back and are written here
+                try:
+                    info = write_table(spec, configs, functools.partial(_map_on, client))
+                except Exception:
+                    cluster.stop(client, local, log)
+                    raise
             except KeyboardInterrupt:
                 if client is not None:
                     cluster.stop(client, local, log)
@@ -234,6 +249,7 @@ def run_sweep(
                     f"done; the cluster is stopped{where}; run the same command again to resume"
                 ) from None
         cluster.stop(client, local, log)
-    wall = time.perf_counter() - t0
-    info = write_table(spec, configs)
+    if info is None:  # nothing ran: no cluster
+        wall = time.perf_counter() - t0
+        info = write_table(spec, configs)
     return {**info, "configs": len(configs), "ran": len(todo), "failed": failed, "wall_seconds": wall}

@@ -7,15 +7,24 @@ shows each plotted metric against each swept parameter.
 
 from __future__ import annotations
 
+import io
 import json
 import sys
 from pathlib import Path
 
-from fogref.atomic import atomic_write, save_figure_atomic, set_aside, write_text_atomic
+from fogref.atomic import FIGURE_DPI, atomic_write, set_aside, write_text_atomic
 from fogref.study.plot_units import HEADLINE_METRICS, metric_label, parameter_label
 from fogref.study.sweep.spec import SweepSpec
 
-__all__ = ["DEFAULT_PLOT_METRICS", "plot_files", "read_result", "set_aside_result", "write_table"]
+__all__ = [
+    "DEFAULT_PLOT_METRICS",
+    "figure_png",
+    "plot_files",
+    "plot_table",
+    "read_result",
+    "set_aside_result",
+    "write_table",
+]
 
 #: Metrics plotted when the sweep's ``[outputs] plot_metrics`` is not given.
 DEFAULT_PLOT_METRICS = HEADLINE_METRICS
@@ -98,8 +107,9 @@ def _rows_of(cfg: dict, result: dict) -> list[dict]:
     return [{**base, **result["provenance"], "status": "ok", "error": "", **row} for row in result["rows"]]
 
 
-def write_table(spec: SweepSpec, configs: list[dict]) -> dict:
-    """Gather the per-configuration result files into the CSV + Parquet table and the plots."""
+def write_table(spec: SweepSpec, configs: list[dict], run=None) -> dict:
+    """Gather the per-configuration result files into the CSV + Parquet table and the plots
+    (``run``: how :func:`plot_table` draws them)."""
     import pandas as pd
 
     out = Path(spec.out)
@@ -115,7 +125,7 @@ def write_table(spec: SweepSpec, configs: list[dict]) -> dict:
     csv, pq = out / f"{spec.table}.csv", out / f"{spec.table}.parquet"
     write_text_atomic(csv, df.to_csv(index=False))
     atomic_write(pq, lambda tmp: df.to_parquet(tmp, index=False))
-    plots = plot_table(df, spec, out / "plots") if spec.plots and len(df) else []
+    plots = plot_table(df, spec, out / "plots", run) if spec.plots and len(df) else []
     return {"table": csv, "parquet": pq, "rows": len(df), "plots": plots}
 
 
@@ -137,61 +147,79 @@ def _noise_column(df, metric: str) -> str | None:
     return None
 
 
-def plot_table(df, spec: SweepSpec, plot_dir: Path) -> list[Path]:
+def plot_table(df, spec: SweepSpec, plot_dir: Path, run=None) -> list[Path]:
     """One figure per (metric, swept parameter): every configuration as a point, the
     mean over the other parameters as a line, one colour per model; error bars from
-    the metric's Monte Carlo noise column when the table has one.  Returns the paths."""
+    the metric's Monte Carlo noise column when the table has one.  Returns the paths.
+
+    ``run(figure_png, jobs)``: how the figures are drawn, a list of PNGs (bytes) in the order of
+    ``jobs`` (each a tuple of :func:`figure_png`'s arguments); default: one after the other here.
+    :func:`run_sweep` passes its cluster's ``map``, so the figures are drawn on its workers, side by
+    side, and written here.
+    """
+    ok = df[df["status"] == "ok"] if "status" in df.columns else df
+    if ok.empty:
+        return []
+    metrics = [m for m in (spec.plot_metrics or DEFAULT_PLOT_METRICS) if m in ok.columns]
+    jobs = [
+        (ok, spec.name, param, metric)
+        for param in spec.parameters
+        if param in ok.columns
+        for metric in metrics
+    ]
+    pngs = run(figure_png, jobs) if run is not None else [figure_png(*job) for job in jobs]
+    paths = []
+    for (_, _, param, metric), png in zip(jobs, pngs, strict=True):
+        paths.append(
+            atomic_write(plot_dir / f"{metric}_vs_{param}.png", lambda tmp, b=png: Path(tmp).write_bytes(b))
+        )
+    return paths
+
+
+def figure_png(ok, name: str, param: str, metric: str) -> bytes:
+    """The PNG of :func:`plot_table`'s figure of ``metric`` against ``param`` over the rows ``ok``
+    (``name``: the sweep's, in the title), drawn as :func:`fogref.atomic.save_figure_atomic` saves."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    ok = df[df["status"] == "ok"] if "status" in df.columns else df
-    if ok.empty:
-        return []
-    metrics = [m for m in (spec.plot_metrics or DEFAULT_PLOT_METRICS) if m in ok.columns]
-    paths = []
-    for param in spec.parameters:
-        if param not in ok.columns:
-            continue
-        numeric = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in ok[param])
-        for metric in metrics:
-            fig, ax = plt.subplots(figsize=(5.2, 3.6))
-            for i, (model, g) in enumerate(ok.groupby("model")):
-                colour = f"C{i}"  # one colour per model: its points, error bars and mean line
-                x = g[param] if numeric else g[param].astype(str)
-                noise = _noise_column(ok, metric)
-                if noise:
-                    ax.errorbar(
-                        x,
-                        g[metric],
-                        yerr=2 * g[noise],
-                        fmt="o",
-                        ms=3,
-                        alpha=0.4,
-                        capsize=2,
-                        color=colour,
-                        label=f"{model}: each configuration (±2 standard errors)",
-                    )
-                else:
-                    ax.plot(
-                        x, g[metric], "o", ms=3, alpha=0.4, color=colour, label=f"{model}: each configuration"
-                    )
-                mean = g.groupby(param)[metric].mean()
-                ax.plot(
-                    mean.index if numeric else mean.index.astype(str),
-                    mean.values,
-                    "-",
-                    lw=1.8,
-                    color=colour,
-                    label=f"{model}: mean over the other parameters",
-                )
-            ax.set_xlabel(parameter_label(param), fontsize=8)
-            ax.set_ylabel(metric_label(metric), fontsize=8)
-            if (ok[metric] > 0).all() and ok[metric].max() > 20 * ok[metric].min():
-                ax.set_yscale("log")
-            ax.legend(fontsize=7)
-            ax.set_title(f"{spec.name}: {metric} vs {param}", fontsize=9)
-            paths.append(save_figure_atomic(fig, plot_dir / f"{metric}_vs_{param}.png"))
-            plt.close(fig)
-    return paths
+    numeric = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in ok[param])
+    fig, ax = plt.subplots(figsize=(5.2, 3.6))
+    for i, (model, g) in enumerate(ok.groupby("model")):
+        colour = f"C{i}"  # one colour per model: its points, error bars and mean line
+        x = g[param] if numeric else g[param].astype(str)
+        noise = _noise_column(ok, metric)
+        if noise:
+            ax.errorbar(
+                x,
+                g[metric],
+                yerr=2 * g[noise],
+                fmt="o",
+                ms=3,
+                alpha=0.4,
+                capsize=2,
+                color=colour,
+                label=f"{model}: each configuration (±2 standard errors)",
+            )
+        else:
+            ax.plot(x, g[metric], "o", ms=3, alpha=0.4, color=colour, label=f"{model}: each configuration")
+        mean = g.groupby(param)[metric].mean()
+        ax.plot(
+            mean.index if numeric else mean.index.astype(str),
+            mean.values,
+            "-",
+            lw=1.8,
+            color=colour,
+            label=f"{model}: mean over the other parameters",
+        )
+    ax.set_xlabel(parameter_label(param), fontsize=8)
+    ax.set_ylabel(metric_label(metric), fontsize=8)
+    if (ok[metric] > 0).all() and ok[metric].max() > 20 * ok[metric].min():
+        ax.set_yscale("log")
+    ax.legend(fontsize=7)
+    ax.set_title(f"{name}: {metric} vs {param}", fontsize=9)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=FIGURE_DPI, bbox_inches="tight")
+    plt.close(fig)
+    return buf.getvalue()

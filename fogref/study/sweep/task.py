@@ -20,7 +20,6 @@ from pathlib import Path
 
 from fogref._version import __version__
 from fogref.compare.report import compare
-from fogref.exrio import read_exr
 from fogref.gbuffer import load_truth
 from fogref.mapping import PhysicalScene, fit_unreal
 from fogref.mapping.build import build_model
@@ -116,7 +115,8 @@ def run_config(cfg: dict, drjit_threads: int | None = None) -> dict:
             pixel_filter=cfg["pixel_filter"],
         )
     wall_render = time.perf_counter() - t0
-    header = read_exr(truth)[1]
+    truth_data = load_truth(truth)  # read once: its header here, its pixels for every model's compare
+    header = truth_data.attrs
     rs = header.get("fogref.render_seconds")
     render_seconds = float(rs.get("total", wall_render)) if isinstance(rs, dict) else float(rs or wall_render)
     prov = {
@@ -136,7 +136,7 @@ def run_config(cfg: dict, drjit_threads: int | None = None) -> dict:
         for m in cfg["models"]:
             tc = time.perf_counter()
             model = build_model(m["name"], m["params"], scene_params if m["from_scene"] else None)
-            report = compare(truth, model, Path(tmp) / m["label"], figures=False)
+            report = compare(truth_data, model, Path(tmp) / m["label"], figures=False)
             row = {
                 "model": m["label"],
                 "model_name": m["name"],
@@ -149,12 +149,12 @@ def run_config(cfg: dict, drjit_threads: int | None = None) -> dict:
             _flatten("", report.get("metrics", {}), metrics)
             row.update(metrics)
             if cfg.get("budget") and m["name"] == "ue4":
-                row.update(_budget_columns(cfg, truth, model))
+                row.update(_budget_columns(cfg, truth_data, model))
             rows.append(row)
     return {"id": cfg["id"], "provenance": prov, "rows": rows}
 
 
-def _budget_columns(cfg: dict, truth_path: Path, model) -> dict:
+def _budget_columns(cfg: dict, truth, model) -> dict:
     """Unreal's error budget (:mod:`fogref.study.budget`) of one configuration as table columns.
 
     Renders (or takes from the cache) the scene without its sun at the truth's spp,
@@ -165,6 +165,7 @@ def _budget_columns(cfg: dict, truth_path: Path, model) -> dict:
     plus ``budget.total.rmse``.  The second-seed noise of ``fogref study`` is not
     computed (it would double the renders).
     """
+    truth_path = Path(truth.path)
     nosun = sunless_scene(Path(cfg["scene"]), truth_path.parent / "scenes" / cfg["scene_sha256"][:16])
     sky_key = file_sha256(nosun)[:24]
     with _truth_lock(f"fogref-truth-{sky_key}"):
@@ -177,7 +178,7 @@ def _budget_columns(cfg: dict, truth_path: Path, model) -> dict:
             cache_dir=truth_path.parent,
             pixel_filter=cfg["pixel_filter"],
         )
-    truth, sky = load_truth(truth_path), load_truth(sky_path)
+    sky = load_truth(sky_path)
     pf = PhysicalScene.from_params(truth.params)
     lobe = fit_unreal(pf, sun_attenuation=False, fit_start=False)
     S = B.chain(truth, sky.single, pf, lobe.params, model.params)

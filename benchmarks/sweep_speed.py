@@ -1,0 +1,439 @@
+"""The example sweep before and after, side by side: wall time, phases, identical results
+-> reports/benchmarks/sweep_speed.{md,json}.
+
+Two checkouts, each with its own ``.venv`` (``scripts/setup.sh``): ``--base`` (e.g. a clone of
+main: ``git clone -q /work/main /tmp/base && bash /tmp/base/scripts/setup.sh``) and this one.
+
+* **Command**: ``fogref sweep`` on a copy of ``reports/sweeps/unreal_sun_falloff_g/SWEEP.toml``
+  (48 configurations, valley, 64x36 px, 16 spp, model ue4 with its Unreal fit), each run from an
+  empty truth cache and an empty fit cache (``$FOGREF_CACHE``), the Dr.Jit kernel cache warm
+  (both checkouts compile the same kernels); runs alternate base, after, base, after ...; the
+  wall time of the whole process, the sweep's own "configurations in X s", the CPU time of the
+  process and its workers (user + sys, what the machine's load does not inflate) and the load
+  average before and after each run.
+* **Phases**: one process per checkout runs ``--phase-configs`` configurations (spread over the
+  grid) one after the other, with no cluster, timers put on the functions of each phase
+  (the render's parse, load, passes and EXR write; the truth's reads; the model's build, that is
+  the Unreal fit; the comparison's parts) and the table and plots at the end; fixed costs
+  (imports, reading the sweep) apart from per-configuration costs.
+* **Identity**: the two command runs' ``results.csv`` must agree in every cell but the timings and
+  the run's own paths (``scene_path``, ``render_seconds``, ``compare_seconds``, ``worker_pid``,
+  ``worker_host``, ``truth_path``, ``truth_cached``, ``truth_sha256``: the truth EXR's header holds
+  its render time, so the file's hash differs between any two runs), every truth's pixels must be
+  equal bit for bit and every plot's PNG byte for byte.
+
+    .venv/bin/python benchmarks/sweep_speed.py --base /tmp/base [--repeats 1] [--phase-configs 12]
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import functools
+import importlib
+import json
+import os
+import platform
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from collections import defaultdict
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = Path("reports") / "sweeps" / "unreal_sun_falloff_g" / "SWEEP.toml"
+#: Columns of results.csv that hold timings or the run's own paths (module doc).
+RUN_COLUMNS = (
+    "scene_path",
+    "render_seconds",
+    "compare_seconds",
+    "worker_pid",
+    "worker_host",
+    "truth_path",
+    "truth_cached",
+    "truth_sha256",
+)
+#: (module, function, phase) timed in the phase child; indented phases are parts of the one above.
+PHASES = (
+    ("fogref.study.sweep.task", "render_cached", "render (fogref.render.cache.render_cached)"),
+    ("fogref.render.cache", "read_scene", "  parse the scene XML (read_scene; also for the key)"),
+    ("fogref.render.load", "load_scene", "  load_scene (describe, mi.load_file)"),
+    ("fogref_plugins.fogpath", "render_moments", "  passes: tracing, kernels (render_moments)"),
+    ("fogref.render.render", "write_exr", "  write the truth EXR"),
+    ("fogref.study.sweep.task", "read_exr", "read the truth's header (read_exr)"),
+    ("fogref.study.sweep.task", "load_truth", "read the truth (load_truth)"),
+    ("fogref.study.sweep.task", "file_sha256", "hash the truth file"),
+    ("fogref.study.sweep.task", "build_model", "build the model (ue4: the Unreal fit)"),
+    ("fogref.study.sweep.task", "compare", "compare (metrics of every part)"),
+    ("fogref.compare.report", "load_truth", "  compare: read the truth"),
+    ("fogref.compare.report", "evaluate_parts", "  compare: evaluate the model"),
+    ("fogref.compare.report", "error_maps", "  compare: error maps (incl. dE2000, FLIP)"),
+    ("fogref.compare.report", "binned_errors", "  compare: binned errors"),
+    ("fogref.compare.report", "write_exr", "  compare: write errors.exr"),
+    ("fogref.compare.report", "write_text_atomic", "  compare: write metrics.json, index.md"),
+)
+
+
+def _sweep_copy(tree: Path, work: Path) -> Path:
+    """``work/SWEEP.toml``: the example of ``tree`` with its scene by absolute path, the truth cache
+    and the outputs in ``work``."""
+    text = (tree / EXAMPLE).read_text()
+    text = text.replace('"scenes/valley.xml"', f'"{(tree / "scenes" / "valley.xml").as_posix()}"')
+    text = text.replace('"out/sweep_cache"', f'"{(work / "cache").as_posix()}"')
+    work.mkdir(parents=True, exist_ok=True)
+    (work / "SWEEP.toml").write_text(text)
+    return work / "SWEEP.toml"
+
+
+def _env(work: Path) -> dict:
+    env = dict(os.environ, FOGREF_CACHE=str(work / "fits-cache"))
+    env.pop("PYTHONPATH", None)
+    return env
+
+
+# ------------------------------------------------------------------ the command, end to end
+def run_command(tree: Path, work: Path) -> dict:
+    """``fogref sweep`` of ``tree`` on a fresh copy of the example in ``work``."""
+    shutil.rmtree(work, ignore_errors=True)
+    sweep = _sweep_copy(tree, work)
+    load0 = os.getloadavg()
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    p = subprocess.run(
+        [str(tree / ".venv" / "bin" / "fogref"), "sweep", str(sweep), "--quiet"],
+        cwd=work,
+        env=_env(work),
+        capture_output=True,
+        text=True,
+    )
+    wall = time.perf_counter() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if p.returncode != 0:
+        raise SystemExit(f"{tree}: fogref sweep failed ({p.returncode}):\n{p.stderr[-3000:]}")
+    line = next(x for x in p.stdout.splitlines() if "configurations" in x)
+    return {
+        "tree": str(tree),
+        "wall_s": wall,
+        "sweep_line": line,
+        "configs_s": float(line.split(" in ")[1].split(" s")[0]),
+        "cpu_s": (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime),
+        "load_before": load0,
+        "load_after": os.getloadavg(),
+    }
+
+
+def _truth_pixels(folder: Path) -> dict:
+    """Every truth EXR under ``folder``: name -> {channel: bytes}."""
+    from fogref.exrio import read_exr
+
+    return {
+        f.name: {c: a.tobytes() for c, a in read_exr(f)[0].items()} for f in sorted(folder.rglob("*.exr"))
+    }
+
+
+def identical(base: Path, after: Path) -> dict:
+    """Cell by cell (but :data:`RUN_COLUMNS`), pixel by pixel and byte by byte: ``{"ok": bool, ...}``."""
+    rows = [list(csv.DictReader((d / "results.csv").open())) for d in (base, after)]
+    key = [{r["config_id"] + "/" + r["model"]: r for r in rs} for rs in rows]
+    differ = []
+    if set(key[0]) != set(key[1]):
+        differ.append("the rows' (config_id, model) differ")
+    for k in sorted(set(key[0]) & set(key[1])):
+        a, b = key[0][k], key[1][k]
+        if set(a) != set(b):
+            differ.append(f"{k}: columns differ")
+        differ += [
+            f"{k}: {c}: {a[c]!r} != {b.get(c)!r}" for c in a if c not in RUN_COLUMNS and a[c] != b.get(c)
+        ]
+    px = [_truth_pixels(d / "cache") for d in (base, after)]
+    if px[0] != px[1]:
+        differ.append("truth pixels differ: " + ", ".join(n for n in px[0] if px[0].get(n) != px[1].get(n)))
+    pngs = sorted(p.name for p in (base / "plots").glob("*.png"))
+    differ += [
+        f"plot {n} differs"
+        for n in pngs
+        if (base / "plots" / n).read_bytes() != (after / "plots" / n).read_bytes()
+    ]
+    if pngs != sorted(p.name for p in (after / "plots").glob("*.png")):
+        differ.append("the plots' names differ")
+    cells = sum(len(r) - len(RUN_COLUMNS) for r in rows[0])
+    return {
+        "ok": not differ,
+        "rows": len(rows[0]),
+        "cells_compared": cells,
+        "truths": len(px[0]),
+        "plots": len(pngs),
+        "differ": differ[:20],
+    }
+
+
+# ------------------------------------------------------------------ phases, one process, no cluster
+def phase_child(tree: Path, work: Path, n_configs: int) -> None:
+    """(Runs in the checkout's own interpreter.)  Print the phases' JSON on the last line of stdout."""
+    t_start = time.perf_counter()
+    shutil.rmtree(work, ignore_errors=True)
+    sweep = _sweep_copy(tree, work)
+    os.environ["FOGREF_CACHE"] = str(work / "fits-cache")
+    acc: dict = defaultdict(float)
+    cpu: dict = defaultdict(float)
+    cnt: dict = defaultdict(int)
+
+    def wrap(owner, name: str, label: str) -> None:
+        f = getattr(owner, name, None)
+        if f is None:
+            return
+
+        @functools.wraps(f)
+        def timed(*a, **k):
+            t, c = time.perf_counter(), time.process_time()
+            try:
+                return f(*a, **k)
+            finally:
+                acc[label] += time.perf_counter() - t
+                cpu[label] += time.process_time() - c
+                cnt[label] += 1
+
+        setattr(owner, name, timed)
+
+    import fogref.study.sweep as S
+    from fogref.render.variant import set_variant
+
+    t_import = time.perf_counter()
+    set_variant(None)
+    for mod, name, label in PHASES:
+        m = importlib.import_module(mod)
+        if name == "render_moments":  # a method of the integrator class
+            for c in vars(m).values():
+                if isinstance(c, type) and "render_moments" in vars(c):
+                    wrap(c, name, label)
+        else:
+            wrap(m, name, label)
+    t_setup = time.perf_counter()
+    spec = S.load_sweep(sweep)
+    configs = S.build_configs(spec)
+    step = max(1, len(configs) // n_configs)
+    chosen = configs[::step][:n_configs]
+    t_spec = time.perf_counter()
+    (work / "configs").mkdir(exist_ok=True)
+    per, per_cpu = [], []
+    for cfg in chosen:
+        t, c = time.perf_counter(), time.process_time()
+        r = S.run_config(cfg, os.cpu_count())
+        body = json.dumps({**r, "status": "ok", "config": cfg}, indent=1, default=str) + "\n"
+        (work / "configs" / f"{cfg['id']}.json").write_text(body)
+        per.append(time.perf_counter() - t)
+        per_cpu.append(time.process_time() - c)
+    t_cfg = time.perf_counter()
+    S.write_table(spec, chosen)
+    t_table = time.perf_counter()
+    import drjit
+    import mitsuba
+    import numpy
+
+    print(
+        json.dumps(
+            {
+                "configs": len(per),
+                "fixed": {
+                    "import fogref.study.sweep": t_import - t_start,
+                    "Mitsuba variant, timers": t_setup - t_import,
+                    "read the sweep, build the configurations": t_spec - t_setup,
+                    "table and plots (of these configurations)": t_table - t_cfg,
+                },
+                "per_config_s": per,
+                "per_config_cpu_s": per_cpu,
+                "phases": {
+                    k: {"s": acc[k], "cpu_s": cpu[k], "calls": cnt[k]} for _, _, k in PHASES if cnt[k]
+                },
+                "versions": {
+                    "mitsuba": mitsuba.__version__,
+                    "drjit": drjit.__version__,
+                    "numpy": numpy.__version__,
+                },
+            }
+        )
+    )
+
+
+def run_phases(tree: Path, work: Path, n_configs: int) -> dict:
+    load0 = os.getloadavg()
+    p = subprocess.run(
+        [str(tree / ".venv" / "bin" / "python"), __file__, "--child", str(tree), str(work), str(n_configs)],
+        cwd=tree,
+        env=_env(work),
+        capture_output=True,
+        text=True,
+    )
+    if p.returncode != 0:
+        raise SystemExit(f"{tree}: phase run failed:\n{p.stderr[-3000:]}")
+    return {
+        **json.loads(p.stdout.strip().splitlines()[-1]),
+        "load_before": load0,
+        "load_after": os.getloadavg(),
+    }
+
+
+# ------------------------------------------------------------------ report
+def _median(xs):
+    xs = sorted(xs)
+    n = len(xs)
+    return (xs[n // 2] + xs[(n - 1) // 2]) / 2 if n else float("nan")
+
+
+def report(res: dict) -> str:
+    runs = res["command"]
+    base = [r for r in runs if r["which"] == "base"]
+    after = [r for r in runs if r["which"] == "after"]
+    L = [
+        "# The example sweep before and after (`fogref sweep`, 48 configurations)",
+        "",
+        f"Command: `{res['command_line']}`.  Machine: {res['machine']}; {res['versions']}.  "
+        f"Base: `{res['base']}` at {res['base_commit']}; after: this checkout at {res['after_commit']}.",
+        "",
+        "Sweep: `reports/sweeps/unreal_sun_falloff_g/SWEEP.toml` (valley, sun elevation x "
+        "FogHeightFalloff x g, "
+        "64x36 px, 16 spp, model ue4 fitted to each truth), a LocalCluster of one single-threaded worker per "
+        "core, every run from an empty truth cache and an empty fit cache, the Dr.Jit kernel cache warm.  "
+        "Runs alternate base, after, ...  CPU = user + sys of the command and its workers.",
+        "",
+        "| run | checkout | wall [s] | sweep's 'configurations in' [s] | CPU [s] | "
+        "load average before -> after (1 min) |",
+        "|---|---|---|---|---|---|",
+    ]
+    for i, r in enumerate(runs):
+        L.append(
+            f"| {i + 1} | {r['which']} | {r['wall_s']:.1f} | {r['configs_s']:.1f} | {r['cpu_s']:.1f} | "
+            f"{r['load_before'][0]:.1f} -> {r['load_after'][0]:.1f} |"
+        )
+    if base and after:
+        rw = [b["wall_s"] / a["wall_s"] for b, a in zip(base, after)]
+        rc = [b["cpu_s"] / a["cpu_s"] for b, a in zip(base, after)]
+        L += [
+            "",
+            f"**Speed-up (base / after, pairs run back to back): wall {', '.join(f'{x:.2f}x' for x in rw)}; "
+            f"CPU {', '.join(f'{x:.2f}x' for x in rc)}.**",
+        ]
+    ident = res.get("identical")
+    if ident:
+        L += [
+            "",
+            f"Identity: {'**identical**' if ident['ok'] else '**DIFFERENT**'}: {ident['rows']} rows, "
+            f"{ident['cells_compared']} cells compared (all but {', '.join(RUN_COLUMNS)}), the pixels of "
+            f"{ident['truths']} truths, {ident['plots']} plot PNGs.",
+        ]
+        L += [f"* {d}" for d in ident["differ"]]
+    ph = res.get("phases")
+    if ph:
+        b, a = ph["base"], ph["after"]
+        n = b["configs"]
+        L += [
+            "",
+            f"## Phases (one process, no cluster, {n} of the 48 configurations spread over the grid, "
+            "one after "
+            "the other; timers on the phases' functions)",
+            "",
+            f"Load average (1 min) before -> after: base {b['load_before'][0]:.1f} -> "
+            f"{b['load_after'][0]:.1f}, after {a['load_before'][0]:.1f} -> {a['load_after'][0]:.1f}.  "
+            "Rows marked (part) are parts of the row above; 'per configuration': the phase's total over the "
+            "configurations divided by their number; CPU: the process's (all its threads).",
+            "",
+            "| phase | base: wall, CPU per configuration [s] | after: wall, CPU [s] | base / after (CPU) |",
+            "|---|---|---|---|",
+        ]
+        for _, _, k in PHASES:
+            x, y = b["phases"].get(k), a["phases"].get(k)
+            fx = f"{x['s'] / n:.3f}, {x['cpu_s'] / n:.3f}" if x else "not called"
+            fy = f"{y['s'] / n:.3f}, {y['cpu_s'] / n:.3f}" if y else "not called"
+            ratio = f"{x['cpu_s'] / y['cpu_s']:.2f}x" if x and y and y["cpu_s"] > 0 else ""
+            part = " (part)" if k.startswith("  ") else ""
+            L.append(f"| {k.strip()}{part} | {fx} | {fy} | {ratio} |")
+        cb, ca = sum(b["per_config_cpu_s"]), sum(a["per_config_cpu_s"])
+        L.append(
+            f"| **a configuration, all of it** (wall median, CPU mean) | {_median(b['per_config_s']):.3f}, "
+            f"{cb / n:.3f} | {_median(a['per_config_s']):.3f}, {ca / n:.3f} | {cb / ca:.2f}x |"
+        )
+        L += ["", "| fixed cost | base [s] | after [s] |", "|---|---|---|"]
+        for k in b["fixed"]:
+            L.append(f"| {k} | {b['fixed'][k]:.2f} | {a['fixed'].get(k, float('nan')):.2f} |")
+    L += ["", *res.get("reading", [])]
+    return "\n".join(L) + "\n"
+
+
+def _commit(tree: Path) -> str:
+    r = subprocess.run(
+        ["git", "-C", str(tree), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
+    )
+    dirty = subprocess.run(
+        ["git", "-C", str(tree), "status", "--porcelain", "--untracked-files=no"],
+        capture_output=True,
+        text=True,
+    )
+    return r.stdout.strip() + (" (with uncommitted changes)" if dirty.stdout.strip() else "")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--base", help="the checkout to compare with (with its own .venv)")
+    ap.add_argument("--repeats", type=int, default=1, help="command runs of each checkout (default 1)")
+    ap.add_argument(
+        "--phase-configs", type=int, default=12, help="configurations of the phase runs (0: none)"
+    )
+    ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks" / "sweep_speed"))
+    ap.add_argument("--child", nargs=3, help=argparse.SUPPRESS)
+    a = ap.parse_args(argv)
+    if a.child:
+        phase_child(Path(a.child[0]), Path(a.child[1]), int(a.child[2]))
+        return 0
+    if not a.base:
+        ap.error("--base is required")
+    base = Path(a.base).resolve()
+    trees = {"base": base, "after": ROOT}
+    for t in trees.values():
+        if not (t / ".venv" / "bin" / "fogref").is_file():
+            raise SystemExit(f"{t}: no .venv/bin/fogref (run scripts/setup.sh there)")
+    res: dict = {
+        "command_line": "python benchmarks/sweep_speed.py "
+        + " ".join(argv if argv is not None else sys.argv[1:]),
+        "machine": f"{platform.machine()}, {os.cpu_count()} cores",
+        "base": str(base),
+        "base_commit": _commit(base),
+        "after_commit": _commit(ROOT),
+        "command": [],
+    }
+    with tempfile.TemporaryDirectory(prefix="fogref-sweep-speed-") as tmp:
+        last = {}
+        for i in range(a.repeats):
+            for which, tree in trees.items():
+                r = run_command(tree, Path(tmp) / f"{which}-{i}")
+                res["command"].append({"which": which, **r})
+                last[which] = Path(tmp) / f"{which}-{i}"
+                print(
+                    f"{which}: {r['wall_s']:.1f} s wall, {r['cpu_s']:.1f} s CPU, "
+                    f"load {r['load_before'][0]:.1f}",
+                    flush=True,
+                )
+        res["identical"] = identical(last["base"], last["after"])
+        print("identical:", res["identical"]["ok"], res["identical"]["differ"][:3], flush=True)
+        if a.phase_configs:
+            res["phases"] = {
+                w: run_phases(t, Path(tmp) / f"phases-{w}", a.phase_configs) for w, t in trees.items()
+            }
+    v = (res.get("phases") or {}).get("after", {}).get("versions", {})
+    res["versions"] = ", ".join(f"{k} {x}" for k, x in v.items()) or "versions not recorded"
+    out = Path(a.out)
+    prev = out.with_suffix(".md")
+    if prev.is_file():  # the hand-written reading below the tables is kept across reruns
+        text = prev.read_text()
+        if "\n## Reading\n" in text:
+            res["reading"] = ["## Reading", *text.split("\n## Reading\n", 1)[1].rstrip("\n").split("\n")]
+    out.with_suffix(".json").write_text(json.dumps(res, indent=1, default=str) + "\n")
+    out.with_suffix(".md").write_text(report(res))
+    print(out.with_suffix(".md").read_text())
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
