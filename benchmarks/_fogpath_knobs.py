@@ -224,7 +224,10 @@ class FogPathKnobs(FogPathIntegrator):
         owner = dr.minimum(dr.cumsum(mark), n) - 1
         live = slot < dr.sum(N)
         dr.eval(owner, live)
-        ws = WideSampler(mi.PCG32(n * K, mi.UInt64(dr.gather(mi.UInt32, seed, owner)), mi.UInt64(slot)))
+        # each continuation's stream: its slot, and a start hashed from the lane's seed and the slot
+        # (TEA, Zafar et al. 2010), so no two share a start (PCG32 streams that do are correlated)
+        h0, h1 = mi.sample_tea_32(dr.gather(mi.UInt32, seed, owner), slot)
+        ws = WideSampler(mi.PCG32(n * K, (mi.UInt64(h0) << 32) | mi.UInt64(h1), mi.UInt64(slot)))
         at = lambda v: dr.gather(type(v), v, owner)  # noqa: E731
         ray_w, si_w, T_w, direct_w = at(ray), at(si), at(T), at(direct)
         path, chose_s, q = self._continuation(
