@@ -18,11 +18,14 @@ benchmarks that measure them (fogpath itself fixes them:
   G-buffer, the sun's sampled single scattering, the surface's light) is traced once, and what
   follows it (fogpath's forced collision with its light sample, the choice between the surface
   and the medium branch, and the path from depth 1) ``N`` times, each with weight ``1 / N``;
-* ``ms_split_by`` (``"fixed"``, default, or ``"single"``): ``N = ms_split`` on every camera
-  ray, or ``N`` in proportion to the camera ray's sampled single scattering of the sun (its
-  mean over RGB), ``ms_split`` on average over the pass, in [1, ``ms_split_max``];
+* ``ms_split_by`` (``"fixed"``, default, ``"single"`` or ``"stddev"``): ``N = ms_split`` on
+  every camera ray, or ``N - 1`` in proportion to an estimate ``x`` of the continuation's
+  expected contribution, ``ms_split`` on average over the pass, ``N`` in [1, ``ms_split_max``]
+  (:meth:`FogPathKnobs._split_weights`): ``"single"``, ``x`` the camera ray's sampled single
+  scattering of the sun; ``"stddev"``, ``x`` an estimate of the continuation's standard
+  deviation (Neyman allocation) from it and the branch probability;
 * ``ms_split_max`` (int in [1, 64], default ``4 ms_split``, at most 16): the most
-  continuations of one camera ray with ``ms_split_by = "single"``.
+  continuations of one camera ray with ``ms_split_by`` other than ``"fixed"``.
 
 Importing this module registers the plugin (after ``_common`` set the variant).
 """
@@ -136,7 +139,7 @@ class FogPathKnobs(FogPathIntegrator):
         self.sun_guiding_g = g
         self.ms_split = params.integer(props.get("ms_split", 1), "ms_split", source=SOURCE, lo=1, hi=16)
         self.ms_split_by = str(props.get("ms_split_by", "fixed"))
-        params.choice(self.ms_split_by, "ms_split_by", ("fixed", "single"), SOURCE)
+        params.choice(self.ms_split_by, "ms_split_by", ("fixed", "single", "stddev"), SOURCE)
         self.ms_split_max = params.integer(
             props.get("ms_split_max", min(4 * self.ms_split, 16)), "ms_split_max", source=SOURCE, lo=1, hi=64
         )
@@ -161,7 +164,7 @@ class FogPathKnobs(FogPathIntegrator):
 
     # ------------------------------------------------ continuation splitting (ms_split)
     def sample(self, scene, sampler, ray, medium=None, active=True):
-        """fogpath's ``sample``, or with ``ms_split`` above 1 or ``ms_split_by = "single"`` (where
+        """fogpath's ``sample``, or with ``ms_split`` above 1 or ``ms_split_by`` not ``fixed`` (where
         fogpath splits the camera ray: a scattering fog without a Local Fog Volume, lights,
         ``max_depth >= 2``) the camera ray's continuation split (:meth:`_split_sample`)."""
         fog = self._scene_fog(scene)
@@ -208,8 +211,8 @@ class FogPathKnobs(FogPathIntegrator):
         # continuations per lane, on a wavefront of n K lanes (fixed, so its kernel is reused)
         K = self.ms_split
         N = dr.full(mi.UInt32, K, n)
-        if self.ms_split_by == "single" and sun_ss is not None:
-            x = dr.select(active, dr.mean(sun_ss), 0.0)
+        if self.ms_split_by != "fixed" and sun_ss is not None:
+            x = dr.select(active, self._split_weights(tr, sun_ss, T, hit), 0.0)
             total = dr.sum(x)  # over the pass's lanes; N below sums to at most n K
             extra = dr.select(total > 0, (K - 1) * (1.0 - 1e-5) * n * x / total, float(K - 1))
             N = mi.UInt32(1.0 + dr.minimum(dr.floor(extra), float(self.ms_split_max - 1)))
@@ -264,6 +267,22 @@ class FogPathKnobs(FogPathIntegrator):
             **gbuf,
         }
         return L, mi.Bool(True), [c for g in gbuffer.SAMPLE_GROUPS for c in parts[g]]
+
+    def _split_weights(self, tr, sun_ss, T, hit):
+        """Per camera ray, the estimate ``x >= 0`` of the continuation's contribution that
+        ``ms_split_by`` allocates continuations by (``N - 1`` in proportion to it), from the
+        depth-0 stage only: ``"single"``, the mean over RGB of the sun's single scattering
+        sampled along the camera ray (``s``); ``"stddev"``, the standard deviation of one
+        continuation if its radiance scales as ``s / m`` (``m = albedo (1 - T)``, the forced
+        collision's mean weight, means over RGB) and the medium branch, taken with probability
+        ``1 - q = m / (T + m)`` on a ray that hits a surface, dominates its variance:
+        ``s sqrt((T + m) / m)`` there, ``s`` on a ray to the sky (always the medium branch)."""
+        s = dr.mean(sun_ss)
+        if self.ms_split_by == "single":
+            return s
+        t = dr.mean(T)
+        m = dr.maximum(dr.mean(mi.Spectrum(*tr.ops.params(tr.fog.albedo))) * (1.0 - t), 1e-6)
+        return s * dr.select(hit, dr.sqrt((t + m) / m), 1.0)
 
     def _continuation(self, tr, sampler, ray, si, D, T, active):
         """One continuation of the camera ray ``ray`` (hit ``si`` at ``D``, transmittance ``T``)

@@ -9,10 +9,15 @@ traces the camera ray's depth-0 stage (hit, G-buffer, the sun's sampled single s
 surface's light) once per sample and then **one** continuation (a forced collision with its
 light sample, the choice between the surface and the medium branch, the path from depth 1);
 ``split<K>`` traces ``K`` continuations per camera ray, each weighted ``1/K``;
-``single<K>`` traces ``N`` of them, ``N - 1`` in proportion to the camera ray's sampled sun
-single scattering (the continuation's expected contribution, as in Vorba & Krivanek 2016's
-adjoint-driven splitting, here with the closed-form single scattering as the estimate),
-``K`` on average, at most ``4 K``.  For each scene every method renders ``--renders`` images of
+``single<K>`` and ``stddev<K>`` trace ``N`` of them, ``K`` on average over the pass, at most
+``4 K``, ``N - 1`` in proportion to an estimate of the continuation's contribution from the
+depth-0 stage (splitting driven by the expected contribution, as in Vorba & Krivanek, "Adjoint-
+driven Russian roulette and splitting in light transport simulation", ACM TOG 35(4), 2016, with
+the closed-form single scattering in place of their adjoint estimate): ``single``, the camera
+ray's sampled sun single scattering; ``stddev``, the continuation's standard deviation estimated
+from it and the branch probability (Neyman allocation: N proportional to the standard
+deviation minimises the summed variance at a fixed number of continuations;
+``FogPathKnobs._split_weights``).  For each scene every method renders ``--renders`` images of
 ``--spp`` samples with its own seeds, interleaved (the order rotates every render), and from
 their spread:
 
@@ -51,6 +56,7 @@ METHODS = {
     "split2": {"ms_split": 2},
     "split4": {"ms_split": 4},
     "single2": {"ms_split": 2, "ms_split_by": "single"},
+    "stddev2": {"ms_split": 2, "ms_split_by": "stddev"},
 }
 BASE = "fogpath"
 
@@ -179,8 +185,9 @@ def write_md(res, args) -> str:
         "sample, branch choice, path from depth 1), each weighted 1/N, on a wavefront of N x the "
         "samples with a PCG32 stream each. "
         + "; ".join(f"`{k}`: `{v}`" for k, v in METHODS.items() if k in methods or k == BASE)
-        + " (`ms_split_by = single`: N - 1 in proportion to the camera ray's sampled sun single "
-        "scattering, mean N = ms_split, N <= 4 ms_split).",
+        + " (`ms_split_by` `single` / `stddev`: N - 1 in proportion to the camera ray's sampled sun single "
+        "scattering s / to the continuation's estimated standard deviation, s sqrt((T + m) / m) on rays "
+        "that hit a surface, m = albedo (1 - T); mean N = ms_split over the pass, N <= 4 ms_split).",
         "",
         "## Bias: each method against fogpath",
         "",
