@@ -209,13 +209,14 @@ class FogPathKnobs(FogPathIntegrator):
         Ls, _ = self._direct(tr, sampler, si, bsdf, smooth)
         direct += Ls
         # continuations per lane, on a wavefront of n K lanes (fixed, so its kernel is reused)
-        K = self.ms_split
+        K = k_max = self.ms_split
         N = dr.full(mi.UInt32, K, n)
         if self.ms_split_by != "fixed" and sun_ss is not None:
             x = dr.select(active, self._split_weights(tr, sun_ss, T, hit), 0.0)
             total = dr.sum(x)  # over the pass's lanes; N below sums to at most n K
             extra = dr.select(total > 0, (K - 1) * (1.0 - 1e-5) * n * x / total, float(K - 1))
-            N = mi.UInt32(1.0 + dr.minimum(dr.floor(extra), float(self.ms_split_max - 1)))
+            k_max = max(self.ms_split_max, 1)
+            N = mi.UInt32(1.0 + dr.minimum(dr.floor(extra), float(k_max - 1)))
         seed = (mi.UInt32(sampler.next_1d(active) * 65536.0) << 16) | mi.UInt32(
             sampler.next_1d(active) * 65536.0
         )
@@ -238,20 +239,21 @@ class FogPathKnobs(FogPathIntegrator):
         )
         split = self._trace(tr, ws, path)
         dr.eval(split, chose_s, q)  # one wavefront kernel (each sum below would re-run the loop)
-        w = dr.rcp(mi.Float(at(N)))
-
-        def back(v):  # per-lane sum of the continuations' v / N
-            if isinstance(v, mi.Spectrum):
-                return mi.Spectrum(*[back(v[i]) for i in range(3)])
-            out = dr.zeros(mi.Float, n)
-            dr.scatter_reduce(dr.ReduceOp.Add, out, v * w, owner, live)
-            return out
-
-        surface = direct + back(split.surface)
-        single = back(split.single) + (0.0 if sun_ss is None else dr.select(active, sun_ss, 0.0))
-        multiple = back(split.multiple)
-        coverage = back(dr.select(chose_s, 1.0, 0.0))
-        s_out = back(dr.select(chose_s, direct_w + q * split.surface, 0.0))
+        w = dr.select(live, dr.rcp(mi.Float(at(N))), 0.0)
+        cont = [split.surface, split.single, split.multiple, mi.Spectrum(dr.select(chose_s, 1.0, 0.0))]
+        cont.append(dr.select(chose_s, direct_w + q * split.surface, 0.0))
+        flat = [c[i] * w for c in cont for i in range(3)]
+        dr.eval(flat)
+        # per lane, the sum of its continuations' values / N, in slot order (deterministic,
+        # unlike atomic scatter-adds): lane l's continuations are the slots [start_l, start_l + N_l)
+        sums = [mi.Float(0.0)] * len(flat)
+        for j in range(k_max):
+            on = active & (j < N)
+            sums = [a + dr.gather(mi.Float, f, start + j, on) for a, f in zip(sums, flat)]
+        back = [mi.Spectrum(*sums[3 * i : 3 * i + 3]) for i in range(len(cont))]
+        surface = direct + back[0]
+        single = back[1] + (0.0 if sun_ss is None else dr.select(active, sun_ss, 0.0))
+        multiple, coverage, s_out = back[2], back[3][0], back[4]
         att = T * surface
         L = att + single + multiple
         if gbuf is None:
