@@ -8,7 +8,7 @@ The methods are ``fogpath_knobs`` (``benchmarks/_fogpath_knobs.py``) with ``ms_s
 traces the camera ray's depth-0 stage (hit, G-buffer, the sun's sampled single scattering, the
 surface's light) once per sample and then **one** continuation (a forced collision with its
 light sample, the choice between the surface and the medium branch, the path from depth 1);
-``split<K>`` traces ``K`` continuations per camera ray, each weighted ``1/K``;
+``split<K>`` (K = 2, 3, 4) traces ``K`` continuations per camera ray, each weighted ``1/K``;
 ``single<K>`` and ``stddev<K>`` trace ``N`` of them, ``K`` on average over the pass, at most
 ``4 K``, ``N - 1`` in proportion to an estimate of the continuation's contribution from the
 depth-0 stage (splitting driven by the expected contribution, as in Vorba & Krivanek, "Adjoint-
@@ -28,9 +28,10 @@ their spread:
 * **variance per sample** of the final image and of its ``multiple`` part, summed over pixels
   and RGB, as ratios fogpath / method (> 1: less variance);
 * **equal-time efficiency ratio** ``(var x time)_fogpath / (var x time)_method`` (> 1: the
-  method reaches the same RMSE sooner), time the median wall time of a steady render (the first
-  render, which traces and compiles, is reported apart), with a 95 % bootstrap interval over
-  the renders.
+  method reaches the same RMSE sooner), time the median wall time of a steady render, and the
+  same with the median CPU time of the process (all threads; less disturbed by other processes
+  on a shared machine), each with a 95 % bootstrap interval over the renders (the first render,
+  which traces and compiles, is reported apart).
 
 Writes ``reports/benchmarks/ms_splitting.{json,md}`` (atomically).
 """
@@ -45,7 +46,7 @@ import time
 from pathlib import Path
 
 import _scenes as S
-from _common import ROOT, machine_info, median, mi, np, timed_render
+from _common import ROOT, dr, machine_info, median, mi, np
 
 from fogref import gbuffer
 from fogref.atomic import write_text_atomic
@@ -54,6 +55,7 @@ from fogref.atomic import write_text_atomic
 METHODS = {
     "fogpath": {},
     "split2": {"ms_split": 2},
+    "split3": {"ms_split": 3},
     "split4": {"ms_split": 4},
     "single2": {"ms_split": 2, "ms_split_by": "single"},
     "stddev2": {"ms_split": 2, "ms_split_by": "stddev"},
@@ -66,11 +68,24 @@ def _channels():
     return [0, 1, 2] + [3 + names.index(f"multiple.{c}") for c in "RGB"]
 
 
-def _stats(imgs, times, spp):
-    """(variance per sample of final and multiple, summed over pixels and RGB; median time)."""
+def _timed(scene, spp, seed, channels):
+    """(float64 image of ``channels``, wall seconds, CPU seconds of this process, all its threads)
+    of one ``mi.render`` with ``dr.sync_thread()`` inside the clocks.  The CPU time is the cost
+    measure that other processes on a shared machine disturb least."""
+    w0, c0 = time.perf_counter(), time.process_time()
+    img = mi.render(scene, spp=spp, seed=seed)
+    dr.eval(img)
+    dr.sync_thread()
+    wall, cpu = time.perf_counter() - w0, time.process_time() - c0
+    return np.array(img, dtype=np.float64)[..., channels], wall, cpu
+
+
+def _stats(imgs, times, cpus, spp):
+    """(variance per sample of final and multiple, summed over pixels and RGB; median wall time,
+    median CPU time)."""
     a = np.stack(imgs)
     v = a.var(axis=0, ddof=1) * spp
-    return float(v[..., :3].sum()), float(v[..., 3:].sum()), median(times)
+    return float(v[..., :3].sum()), float(v[..., 3:].sum()), median(times), median(cpus)
 
 
 def _chi2(a, b):
@@ -89,24 +104,26 @@ def run_scene(name, args, rng):
     ch = _channels()
     first = {}
     for m in methods:  # tracing and compilation outside the steady timings
-        first[m] = timed_render(scenes[m], args.spp, 7, ch)[1]
+        first[m] = _timed(scenes[m], args.spp, 7, ch)[1]
     imgs = {m: [] for m in methods}
     times = {m: [] for m in methods}
+    cpus = {m: [] for m in methods}
     seed = {m: 1000 + 100_000 * i for i, m in enumerate(methods)}
     order = list(methods)
     for r in range(args.renders):
         k = r % len(order)
         for m in order[k:] + order[:k]:
-            img, t = timed_render(scenes[m], args.spp, seed[m] + r, ch)
+            img, t, cpu = _timed(scenes[m], args.spp, seed[m] + r, ch)
             if not np.isfinite(img).all():
                 raise SystemExit(f"ms_splitting: {name}/{m} render {r} has NaN or Inf")
             imgs[m].append(img)
             times[m].append(t)
+            cpus[m].append(cpu)
     out = {}
     for m in methods:
         a = np.stack(imgs[m])
         means = a[..., :3].mean(axis=(1, 2, 3))
-        vf, vm, t = _stats(imgs[m], times[m], args.spp)
+        vf, vm, t, cpu = _stats(imgs[m], times[m], cpus[m], args.spp)
         out[m] = {
             "params": methods[m],
             "image_mean": float(means.mean()),
@@ -115,6 +132,8 @@ def run_scene(name, args, rng):
             "var_multiple": vm,
             "time_s": t,
             "time_iqr_s": [float(np.percentile(times[m], 25)), float(np.percentile(times[m], 75))],
+            "cpu_s": cpu,
+            "cpu_iqr_s": [float(np.percentile(cpus[m], 25)), float(np.percentile(cpus[m], 75))],
             "first_render_s": first[m],
         }
     n, h = args.renders, args.renders // 2
@@ -131,10 +150,17 @@ def run_scene(name, args, rng):
         boot = []
         for _ in range(args.boot):
             ia, ib = rng.integers(0, n, n), rng.integers(0, n, n)
-            sa = _stats([imgs[BASE][i] for i in ia], [times[BASE][i] for i in ia], args.spp)
-            sb = _stats([imgs[m][i] for i in ib], [times[m][i] for i in ib], args.spp)
-            if min(sb[0], sb[1], sb[2]) > 0:  # a resample of one repeated render has no spread
-                boot.append((sa[0] * sa[2] / (sb[0] * sb[2]), sa[1] / sb[1], sa[0] / sb[0]))
+            sa = _stats(*[[x[BASE][i] for i in ia] for x in (imgs, times, cpus)], args.spp)
+            sb = _stats(*[[x[m][i] for i in ib] for x in (imgs, times, cpus)], args.spp)
+            if min(sb) > 0:  # a resample of one repeated render has no spread
+                boot.append(
+                    (
+                        sa[0] * sa[2] / (sb[0] * sb[2]),
+                        sa[1] / sb[1],
+                        sa[0] / sb[0],
+                        sa[0] * sa[3] / (sb[0] * sb[3]),
+                    )
+                )
         boot = np.array(boot)
         ci = lambda k: [float(np.percentile(boot[:, k], 2.5)), float(np.percentile(boot[:, k], 97.5))]  # noqa: E731,B023
         c = comp[m] = {
@@ -149,12 +175,16 @@ def run_scene(name, args, rng):
             "final_var_ratio": d["var_final"] / g["var_final"],
             "final_var_ratio_ci95": ci(2),
             "time_ratio": g["time_s"] / d["time_s"],
+            "cpu_ratio": g["cpu_s"] / d["cpu_s"],
+            "efficiency_ratio_cpu": d["var_final"] * d["cpu_s"] / (g["var_final"] * g["cpu_s"]),
+            "efficiency_ratio_cpu_ci95": ci(3),
         }
         print(
             f"[{name}] {m}: z {c['z']:+.2f}, chi2/px {c['chi2_per_pixel']:.3f}, var final "
             f"x{c['final_var_ratio']:.3f} multiple x{c['multiple_var_ratio']:.3f}, "
             f"time x{c['time_ratio']:.3f}, "
-            f"efficiency {c['efficiency_ratio']:.3f} {c['efficiency_ratio_ci95']}",
+            f"efficiency {c['efficiency_ratio']:.3f} {c['efficiency_ratio_ci95']}, cpu x{c['cpu_ratio']:.3f} "
+            f"efficiency (cpu) {c['efficiency_ratio_cpu']:.3f} {c['efficiency_ratio_cpu_ci95']}",
             flush=True,
         )
     out["comparison"] = comp
@@ -220,14 +250,16 @@ def write_md(res, args) -> str:
         "## Variance and equal-time efficiency",
         "",
         "| scene | method | var/sample final | var/sample multiple | final var ratio [95% CI] | multiple var "
-        "ratio [95% CI] | time [s] (IQR) | first render [s] | efficiency ratio [95% CI] |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "ratio [95% CI] | wall [s] (IQR) | CPU [s] (IQR) | first render [s] | efficiency, wall [95% CI] "
+        "| efficiency, CPU [95% CI] |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for s, r in res["scenes"].items():
         d = r[BASE]
         lines.append(
             f"| {s} | fogpath | {d['var_final']:.4g} | {d['var_multiple']:.4g} | | | {d['time_s']:.3f} "
-            f"({d['time_iqr_s'][0]:.3f}-{d['time_iqr_s'][1]:.3f}) | {d['first_render_s']:.2f} | |"
+            f"({d['time_iqr_s'][0]:.3f}-{d['time_iqr_s'][1]:.3f}) | {d['cpu_s']:.3f} "
+            f"({d['cpu_iqr_s'][0]:.3f}-{d['cpu_iqr_s'][1]:.3f}) | {d['first_render_s']:.2f} | | |"
         )
         for k in methods:
             g, c = r[k], r["comparison"][k]
@@ -235,17 +267,22 @@ def write_md(res, args) -> str:
                 f"| {s} | {k} | {g['var_final']:.4g} | {g['var_multiple']:.4g} | {c['final_var_ratio']:.3f} "
                 f"{_ci(c['final_var_ratio_ci95'])} | {c['multiple_var_ratio']:.3f} "
                 f"{_ci(c['multiple_var_ratio_ci95'])} "
-                f"| {g['time_s']:.3f} ({g['time_iqr_s'][0]:.3f}-{g['time_iqr_s'][1]:.3f}) | "
-                f"{g['first_render_s']:.2f} | {c['efficiency_ratio']:.3f} {_ci(c['efficiency_ratio_ci95'])} |"
+                f"| {g['time_s']:.3f} ({g['time_iqr_s'][0]:.3f}-{g['time_iqr_s'][1]:.3f}) | {g['cpu_s']:.3f} "
+                f"({g['cpu_iqr_s'][0]:.3f}-{g['cpu_iqr_s'][1]:.3f}) | "
+                f"{g['first_render_s']:.2f} | "
+                f"{c['efficiency_ratio']:.3f} {_ci(c['efficiency_ratio_ci95'])} | "
+                f"{c['efficiency_ratio_cpu']:.3f} {_ci(c['efficiency_ratio_cpu_ci95'])} |"
             )
     lines += [
         "",
         "Ratios are fogpath / method: > 1 means the method has less variance per sample (or, for the "
-        "efficiency ratio, reaches the same RMSE in less time: `(var x median time)` of fogpath over the "
-        "method's). Variance per sample (one camera ray) summed over pixels and RGB (linear sRGB radiance, "
-        "squared); time: median wall time of one steady render [s], IQR over the renders; first render: "
-        "tracing and compilation included (the kernel cache may hold the kernels). 95 % intervals from "
-        f"{res['boot']} bootstrap resamples of the renders (the time's noise included).",
+        "efficiency ratios, reaches the same RMSE at less cost: `(var x median time)` of fogpath over the "
+        "method's, with the wall time or the process's CPU time). Variance per sample (one camera ray) "
+        "summed over pixels and RGB (linear sRGB radiance, squared); wall: median wall time of one steady "
+        "render [s]; CPU: median CPU time of this process (all its threads) for one render [s], the cost "
+        "that other processes on the shared machine disturb least; IQR over the renders; first render: "
+        "wall time with tracing and compilation (the kernel cache may hold the kernels). 95 % intervals "
+        f"from {res['boot']} bootstrap resamples of the renders (the time's noise included).",
         "",
     ]
     if res.get("reading"):
