@@ -17,15 +17,20 @@ benchmarks that measure them (fogpath itself fixes them:
   on the camera ray (:meth:`FogPathKnobs.sample`): the camera ray's depth-0 stage (hit,
   G-buffer, the sun's sampled single scattering, the surface's light) is traced once, and what
   follows it (fogpath's forced collision with its light sample, the choice between the surface
-  and the medium branch, and the path from depth 1) ``N`` times, each with weight ``1 / N``;
-* ``ms_split_by`` (``"fixed"``, default, ``"single"`` or ``"stddev"``): ``N = ms_split`` on
-  every camera ray, or ``N - 1`` in proportion to an estimate ``x`` of the continuation's
+  and the medium branch, and the path from depth 1) ``N`` times, each weighted ``1 / N`` (the
+  forced collisions' light samples always; the paths as ``ms_split_by`` says);
+* ``ms_split_by`` (``"fixed"``, default, ``"branch"``, ``"single"`` or ``"stddev"``):
+  ``N = ms_split`` on every camera ray, each continuation fogpath's (a branch drawn with
+  ``q``); ``"branch"``, ``N = ms_split >= 2`` and no branch drawn: on a ray that hits a surface
+  the first continues the surface branch (weight 1) and the other ``N - 1`` the medium branch
+  (weight ``1 / (N - 1)`` each), on a ray to the sky all ``N`` the medium branch; or ``N - 1``
+  in proportion to an estimate ``x`` of the continuation's
   expected contribution, ``ms_split`` on average over the pass, ``N`` in [1, ``ms_split_max``]
   (:meth:`FogPathKnobs._split_weights`): ``"single"``, ``x`` the camera ray's sampled single
   scattering of the sun; ``"stddev"``, ``x`` an estimate of the continuation's standard
   deviation (Neyman allocation) from it and the branch probability;
 * ``ms_split_max`` (int in [1, 64], default ``4 ms_split``, at most 16): the most
-  continuations of one camera ray with ``ms_split_by`` other than ``"fixed"``.
+  continuations of one camera ray with ``ms_split_by`` ``"single"`` or ``"stddev"``.
 
 Importing this module registers the plugin (after ``_common`` set the variant).
 """
@@ -139,7 +144,11 @@ class FogPathKnobs(FogPathIntegrator):
         self.sun_guiding_g = g
         self.ms_split = params.integer(props.get("ms_split", 1), "ms_split", source=SOURCE, lo=1, hi=16)
         self.ms_split_by = str(props.get("ms_split_by", "fixed"))
-        params.choice(self.ms_split_by, "ms_split_by", ("fixed", "single", "stddev"), SOURCE)
+        params.choice(self.ms_split_by, "ms_split_by", ("fixed", "single", "stddev", "branch"), SOURCE)
+        if self.ms_split_by == "branch" and self.ms_split < 2:
+            raise ParameterError(
+                SOURCE, "ms_split", f"must be >= 2 with ms_split_by 'branch', got {self.ms_split}"
+            )
         self.ms_split_max = params.integer(
             props.get("ms_split_max", min(4 * self.ms_split, 16)), "ms_split_max", source=SOURCE, lo=1, hi=64
         )
@@ -211,7 +220,7 @@ class FogPathKnobs(FogPathIntegrator):
         # continuations per lane, on a wavefront of n K lanes (fixed, so its kernel is reused)
         K = k_max = self.ms_split
         N = dr.full(mi.UInt32, K, n)
-        if self.ms_split_by != "fixed" and sun_ss is not None:
+        if self.ms_split_by in ("single", "stddev") and sun_ss is not None:
             x = dr.select(active, self._split_weights(tr, sun_ss, T, hit), 0.0)
             total = dr.sum(x)  # over the pass's lanes; N below sums to at most n K
             extra = dr.select(total > 0, (K - 1) * (1.0 - 1e-5) * n * x / total, float(K - 1))
@@ -234,15 +243,39 @@ class FogPathKnobs(FogPathIntegrator):
         ws = WideSampler(mi.PCG32(n * K, (mi.UInt64(h0) << 32) | mi.UInt64(h1), mi.UInt64(slot)))
         at = lambda v: dr.gather(type(v), v, owner)  # noqa: E731
         ray_w, si_w, T_w, direct_w = at(ray), at(si), at(T), at(direct)
-        path, chose_s, q = self._continuation(
-            tr, ws, ray_w, si_w, dr.select(si_w.is_valid(), si_w.t, ops.largest), T_w, at(active)
+        hit_w, N_w = si_w.is_valid(), mi.Float(at(N))
+        first = slot == at(start)  # a lane's first continuation
+        branch = self.ms_split_by == "branch"
+        path, chose_s, q, ld = self._continuation(
+            tr,
+            ws,
+            ray_w,
+            si_w,
+            dr.select(hit_w, si_w.t, ops.largest),
+            T_w,
+            at(active),
+            first if branch else None,
         )
         split = self._trace(tr, ws, path)
-        dr.eval(split, chose_s, q)  # one wavefront kernel (each sum below would re-run the loop)
-        w = dr.select(live, dr.rcp(mi.Float(at(N))), 0.0)
-        cont = [split.surface, split.single, split.multiple, mi.Spectrum(dr.select(chose_s, 1.0, 0.0))]
-        cont.append(dr.select(chose_s, direct_w + q * split.surface, 0.0))
-        flat = [c[i] * w for c in cont for i in range(3)]
+        dr.eval(split, chose_s, q, ld)  # one wavefront kernel (each sum below would re-run the loop)
+        w = dr.select(live, dr.rcp(N_w), 0.0)  # the forced collisions' light samples: their mean
+        if branch:  # hit: the first continues the surface branch (weight 1), the others the medium
+            w_b = dr.select(
+                live, dr.select(hit_w, dr.select(first, 1.0, dr.rcp(N_w - 1.0)), dr.rcp(N_w)), 0.0
+            )
+            cov = dr.select(hit_w, dr.select(first & live, 1.0, 0.0), q * w)
+            s_out = dr.select(hit_w, dr.select(first & live, direct_w + split.surface, 0.0), q * w * direct_w)
+        else:  # each continuation fogpath's, weight 1/N
+            w_b, cov = w, dr.select(chose_s, w, 0.0)
+            s_out = dr.select(chose_s, direct_w + q * split.surface, 0.0) * w
+        cont = [
+            split.surface * w_b,
+            split.single * w_b + ld * w,
+            split.multiple * w_b,
+            mi.Spectrum(cov),
+            s_out,
+        ]
+        flat = [c[i] for c in cont for i in range(3)]
         dr.eval(flat)
         # per lane, the sum of its continuations' values / N, in slot order (deterministic,
         # unlike atomic scatter-adds): lane l's continuations are the slots [start_l, start_l + N_l)
@@ -286,12 +319,15 @@ class FogPathKnobs(FogPathIntegrator):
         m = dr.maximum(dr.mean(mi.Spectrum(*tr.ops.params(tr.fog.albedo))) * (1.0 - t), 1e-6)
         return s * dr.select(hit, dr.sqrt((t + m) / m), 1.0)
 
-    def _continuation(self, tr, sampler, ray, si, D, T, active):
+    def _continuation(self, tr, sampler, ray, si, D, T, active, surface_slot=None):
         """One continuation of the camera ray ``ray`` (hit ``si`` at ``D``, transmittance ``T``)
         after its depth-0 stage: fogpath's :meth:`_camera_split` from the forced collision on
-        (its light sample feeds ``single``; branch probability ``q = T / (T + w_medium
-        w_phase)``), the surface branch's BSDF sample drawn here.  Returns (the :class:`Path`
-        from depth 1, whether it continued the surface branch, ``q``; 1 for a ray to the sky)."""
+        (branch probability ``q = T / (T + w_medium w_phase)``), the surface branch's BSDF sample
+        drawn here.  With ``surface_slot`` (a mask) the branch is not drawn: the lanes on it
+        that hit a surface continue the surface branch, the others the medium branch, without
+        the ``1/q``, ``1/(1 - q)`` weights.  Returns (the :class:`Path` from depth 1, whether it
+        continued the surface branch, ``q``, the forced collision's light sample times its
+        weight: the path's ``single`` at depth 0, kept out of the path's :class:`Split`)."""
         scene = tr.scene
         hit = si.is_valid()
         surf = active & hit
@@ -301,26 +337,26 @@ class FogPathKnobs(FogPathIntegrator):
         ms = dr.mean(T)
         mm = dr.select(med, dr.mean(w_m * w_ph), 0.0)
         q = dr.select(ms + mm > 0, ms / (ms + mm), 0.0)
-        chose_s = sampler.next_1d(active) < q
         bs, w_b = si.bsdf(ray).sample(tr.bsdf_ctx, si, sampler.next_1d(surf), sampler.next_2d(surf), surf)
-        go_s = surf & chose_s
-        go_m = med & dr.select(hit, ~chose_s & (q < 1), True)
-        β = dr.select(go_s, w_b / q, dr.select(go_m, w_m * w_ph / dr.select(hit, 1.0 - q, 1.0), 0.0))
+        if surface_slot is None:
+            chose_s = sampler.next_1d(active) < q
+            go_s = surf & chose_s
+            go_m = med & dr.select(hit, ~chose_s & (q < 1), True)
+            β = dr.select(go_s, w_b / q, dr.select(go_m, w_m * w_ph / dr.select(hit, 1.0 - q, 1.0), 0.0))
+        else:
+            chose_s = surface_slot & hit
+            go_s, go_m = surf & chose_s, med & ~chose_s
+            β = dr.select(go_s, w_b, dr.select(go_m, w_m * w_ph, 0.0))
         prev_it = self._vertex(ray, si, go_s, p_med)
         ray = dr.select(
             go_s, si.spawn_ray(si.to_world(bs.wo)), mi.Ray3f(p_med, wo_m, ray.time, ray.wavelengths)
         )
         act = (go_s | go_m) & (dr.max(β) > 0) & (self.max_depth > 1)
         path = Path(ray, scene.ray_intersect(ray, act), act, depth=1)
-        path.split, path.β_cam, path.β, path.medium_first = (
-            Split(single=dr.select(med, w_m * Ld, 0.0)),
-            T,
-            β,
-            go_m,
-        )
+        path.split, path.β_cam, path.β, path.medium_first = Split(), T, β, go_m
         path.prev_it, path.prev_pdf = prev_it, dr.select(go_s, bs.pdf, pdf_m)
         path.prev_delta = go_s & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
-        return path, chose_s & active, dr.select(hit, q, 1.0)
+        return path, chose_s & active, q, dr.select(med, w_m * Ld, 0.0)
 
     @dr.syntax
     def _trace(self, tr, sampler, p):
