@@ -9,7 +9,11 @@ traces the camera ray's depth-0 stage (hit, G-buffer, the sun's sampled single s
 surface's light) once per sample and then **one** continuation (a forced collision with its
 light sample, the choice between the surface and the medium branch, the path from depth 1);
 ``split<K>`` (K = 2, 3, 4) traces ``K`` continuations per camera ray, each weighted ``1/K``;
-``single<K>`` and ``stddev<K>`` trace ``N`` of them, ``K`` on average over the pass, at most
+``branch<K>`` traces ``K`` continuations and draws no branch: on a camera ray that hits a
+surface one continues the surface branch (weight 1) and ``K - 1`` the medium branch (weight
+``1/(K - 1)`` each; on a ray to the sky all ``K``), so the ``1/q``, ``1/(1 - q)`` weights of the
+branch choice are gone (forced splitting carried on past depth 0); ``single<K>`` and
+``stddev<K>`` trace ``N`` of them, ``K`` on average over the pass, at most
 ``4 K``, ``N - 1`` in proportion to an estimate of the continuation's contribution from the
 depth-0 stage (splitting driven by the expected contribution, as in Vorba & Krivanek, "Adjoint-
 driven Russian roulette and splitting in light transport simulation", ACM TOG 35(4), 2016, with
@@ -57,6 +61,8 @@ METHODS = {
     "split2": {"ms_split": 2},
     "split3": {"ms_split": 3},
     "split4": {"ms_split": 4},
+    "branch2": {"ms_split": 2, "ms_split_by": "branch"},
+    "branch3": {"ms_split": 3, "ms_split_by": "branch"},
     "single2": {"ms_split": 2, "ms_split_by": "single"},
     "stddev2": {"ms_split": 2, "ms_split_by": "stddev"},
 }
@@ -215,7 +221,9 @@ def write_md(res, args) -> str:
         "sample, branch choice, path from depth 1), each weighted 1/N, on a wavefront of N x the "
         "samples with a PCG32 stream each. "
         + "; ".join(f"`{k}`: `{v}`" for k, v in METHODS.items() if k in methods or k == BASE)
-        + " (`ms_split_by` `single` / `stddev`: N - 1 in proportion to the camera ray's sampled sun single "
+        + " (`branch`: no branch drawn; on a ray that hits a surface one continuation takes the surface "
+        "branch at weight 1, the others the medium branch at 1/(N - 1); `ms_split_by` `single` / "
+        "`stddev`: N - 1 in proportion to the camera ray's sampled sun single "
         "scattering s / to the continuation's estimated standard deviation, s sqrt((T + m) / m) on rays "
         "that hit a surface, m = albedo (1 - T); mean N = ms_split over the pass, N <= 4 ms_split).",
         "",
