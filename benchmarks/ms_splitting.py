@@ -114,7 +114,7 @@ def run_scene(name, args, rng):
     imgs = {m: [] for m in methods}
     times = {m: [] for m in methods}
     cpus = {m: [] for m in methods}
-    seed = {m: 1000 + 100_000 * i for i, m in enumerate(methods)}
+    seed = {m: args.seed + 1000 + 100_000 * i for i, m in enumerate(methods)}
     order = list(methods)
     for r in range(args.renders):
         k = r % len(order)
@@ -307,6 +307,7 @@ def main(argv=None):
     ap.add_argument("--renders", type=int, default=32)
     ap.add_argument("--max-depth", type=int, default=8)
     ap.add_argument("--boot", type=int, default=1000)
+    ap.add_argument("--seed", type=int, default=0, help="added to every render's seed (a confirmation run)")
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
     ap.add_argument("--name", default="ms_splitting")
     ap.add_argument("--reading", default=None, help="a file whose text goes under 'Verdict' in the .md")
