@@ -191,11 +191,15 @@ class FogPathKnobs(FogPathIntegrator):
         single scattering, the surface branch's light: fogpath's :meth:`_camera_split` up to its
         forced collision), then ``N`` continuations per lane (:meth:`_continuation`, each
         fogpath's forced collision, light sample at it, branch choice and path from depth 1) on a
-        wavefront of their own with a PCG32 stream each, summed back with weight ``1 / N``.
-        ``N`` depends on the depth-0 stage only (never on a continuation's samples), so the
-        mean of the ``N`` continuations is an unbiased estimate of one.  Outputs as fogpath's
-        ``_outputs``; per lane, ``surface_coverage`` is the share of its continuations that
-        continued the surface branch and ``surface`` their light without the ``1/q`` weight."""
+        wavefront of their own with a PCG32 stream each, summed back per lane with the weights
+        ``ms_split_by`` gives (``1 / N`` each, or with ``"branch"`` 1 for the surface branch and
+        ``1 / (N - 1)`` for the medium branch's).  ``N`` depends on the depth-0 stage only (never
+        on a continuation's samples), so the weighted sum is an unbiased estimate of one
+        continuation; ``"single"`` and ``"stddev"`` fall back to ``N = ms_split`` where the
+        sun is not sampled along the camera ray.  Outputs as fogpath's ``_outputs``; per lane,
+        ``surface_coverage`` is the weighted share of its continuations that continued the
+        surface branch (``q`` on a ray to the sky with ``"branch"``) and ``surface`` their light
+        without the ``1/q`` weight."""
         scene, ops = tr.scene, tr.ops
         n = dr.width(ray.d)
         si = scene.ray_intersect(ray, active)
@@ -235,7 +239,12 @@ class FogPathKnobs(FogPathIntegrator):
         dr.scatter(mark, mi.UInt32(1), start, start < n * K)
         slot = dr.arange(mi.UInt32, n * K)
         owner = dr.minimum(dr.cumsum(mark), n) - 1
-        live = slot < dr.sum(N)
+        total_n = int(dr.sum(N)[0])
+        if total_n > n * K:  # the allocation's floors keep it at most n K; never drop a continuation
+            raise RuntimeError(
+                f"{SOURCE}: {total_n} continuations do not fit the {n * K} lanes of the wavefront"
+            )
+        live = slot < total_n
         dr.eval(owner, live)
         # each continuation's stream: its slot, and a start hashed from the lane's seed and the slot
         # (TEA, Zafar et al. 2010), so no two share a start (PCG32 streams that do are correlated)

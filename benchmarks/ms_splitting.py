@@ -158,7 +158,7 @@ def run_scene(name, args, rng):
             ia, ib = rng.integers(0, n, n), rng.integers(0, n, n)
             sa = _stats(*[[x[BASE][i] for i in ia] for x in (imgs, times, cpus)], args.spp)
             sb = _stats(*[[x[m][i] for i in ib] for x in (imgs, times, cpus)], args.spp)
-            if min(sb) > 0:  # a resample of one repeated render has no spread
+            if min(sa) > 0 and min(sb) > 0:  # a resample of one repeated render has no spread
                 boot.append(
                     (
                         sa[0] * sa[2] / (sb[0] * sb[2]),
