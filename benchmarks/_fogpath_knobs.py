@@ -12,7 +12,25 @@ benchmarks that measure them (fogpath itself fixes them:
   Henyey-Greenstein lobe around the direction toward the sun in the phase sample at medium
   vertices (:class:`SunGuidedPhase`);
 * ``sun_guiding_g`` (float in [0, 0.99], default: the fog's ``g``, at least 0.5): that lobe's
-  asymmetry.
+  asymmetry;
+* ``ms_split`` (int in [1, 16], default 1: fogpath's one continuation): continuation splitting
+  on the camera ray (:meth:`FogPathKnobs.sample`): the camera ray's depth-0 stage (hit,
+  G-buffer, the sun's sampled single scattering, the surface's light) is traced once, and what
+  follows it (fogpath's forced collision with its light sample, the choice between the surface
+  and the medium branch, and the path from depth 1) ``N`` times, each weighted ``1 / N`` (the
+  forced collisions' light samples always; the paths as ``ms_split_by`` says);
+* ``ms_split_by`` (``"fixed"``, default, ``"branch"``, ``"single"`` or ``"stddev"``):
+  ``N = ms_split`` on every camera ray, each continuation fogpath's (a branch drawn with
+  ``q``); ``"branch"``, ``N = ms_split >= 2`` and no branch drawn: on a ray that hits a surface
+  the first continues the surface branch (weight 1) and the other ``N - 1`` the medium branch
+  (weight ``1 / (N - 1)`` each), on a ray to the sky all ``N`` the medium branch; or ``N - 1``
+  in proportion to an estimate ``x`` of the continuation's
+  expected contribution, ``ms_split`` on average over the pass, ``N`` in [1, ``ms_split_max``]
+  (:meth:`FogPathKnobs._split_weights`): ``"single"``, ``x`` the camera ray's sampled single
+  scattering of the sun; ``"stddev"``, ``x`` an estimate of the continuation's standard
+  deviation (Neyman allocation) from it and the branch probability;
+* ``ms_split_max`` (int in [1, 64], default ``4 ms_split``, at most 16): the most
+  continuations of one camera ray with ``ms_split_by`` ``"single"`` or ``"stddev"``.
 
 Importing this module registers the plugin (after ``_common`` set the variant).
 """
@@ -22,9 +40,10 @@ from __future__ import annotations
 import math
 
 from _common import dr, mi
-from fogref_plugins.fogpath import SUN_SAMPLES, FogPathIntegrator
+from fogref_plugins.fogpath import SUN_SAMPLES, FogPathIntegrator, Path, Split, Trace
+from mitsuba.python.ad.integrators.common import mis_weight
 
-from fogref import params
+from fogref import gbuffer, params
 from fogref.errors import ParameterError
 from fogref.media.single_scatter import sun_sampling_mode
 
@@ -83,6 +102,23 @@ class SunGuidedPhase(mi.PhaseFunction):
         return self._pdf(ctx, mei, wo, active)
 
 
+class WideSampler:
+    """The random numbers of the split continuations: one PCG32 stream per continuation (lane),
+    drawn as Mitsuba's ``independent`` sampler draws them (``next_1d``, ``next_2d``; a masked
+    draw leaves the state of the lanes off the mask unchanged)."""
+
+    DRJIT_STRUCT = {"rng": mi.PCG32}
+
+    def __init__(self, rng=None):
+        self.rng = mi.PCG32() if rng is None else rng
+
+    def next_1d(self, active=True):
+        return self.rng.next_float32(mi.Bool(active))
+
+    def next_2d(self, active=True):
+        return mi.Point2f(self.next_1d(active), self.next_1d(active))
+
+
 class FogPathKnobs(FogPathIntegrator):
     """fogpath with ``sun_sampling_layers``, ``sun_sampling_mixture``, ``sun_samples``,
     ``sun_guiding`` and ``sun_guiding_g`` read from the plugin's parameters (checked by fogref's
@@ -106,6 +142,16 @@ class FogPathKnobs(FogPathIntegrator):
         if g is not None:
             g = params.number(g, "sun_guiding_g", source=SOURCE, lo=0.0, hi=0.99)
         self.sun_guiding_g = g
+        self.ms_split = params.integer(props.get("ms_split", 1), "ms_split", source=SOURCE, lo=1, hi=16)
+        self.ms_split_by = str(props.get("ms_split_by", "fixed"))
+        params.choice(self.ms_split_by, "ms_split_by", ("fixed", "single", "stddev", "branch"), SOURCE)
+        if self.ms_split_by == "branch" and self.ms_split < 2:
+            raise ParameterError(
+                SOURCE, "ms_split", f"must be >= 2 with ms_split_by 'branch', got {self.ms_split}"
+            )
+        self.ms_split_max = params.integer(
+            props.get("ms_split_max", min(4 * self.ms_split, 16)), "ms_split_max", source=SOURCE, lo=1, hi=64
+        )
 
     def _medium_vertex(self, tr, sampler, ray, p, t, med, sun_sampled):
         """fogpath's medium vertex, its phase function sampled by :class:`SunGuidedPhase` when
@@ -124,6 +170,277 @@ class FogPathKnobs(FogPathIntegrator):
     def _sun_sampler(self, fog, w_sun):
         mode = sun_sampling_mode(fog, w_sun, self.sun_sampling_layers, self.sun_sampling_mixture)
         return mode, self.sun_samples
+
+    # ------------------------------------------------ continuation splitting (ms_split)
+    def sample(self, scene, sampler, ray, medium=None, active=True):
+        """fogpath's ``sample``, or with ``ms_split`` above 1 or ``ms_split_by`` not ``fixed`` (where
+        fogpath splits the camera ray: a scattering fog without a Local Fog Volume, lights,
+        ``max_depth >= 2``) the camera ray's continuation split (:meth:`_split_sample`)."""
+        fog = self._scene_fog(scene)
+        has_delta, has_smooth = self._scene_lights(scene)
+        on = self.ms_split > 1 or self.ms_split_by != "fixed"
+        forced = self.forced_split and fog is not None and fog.scatters and fog.volume is None
+        if not (on and forced and (has_delta or has_smooth) and self.max_depth >= 2):
+            return super().sample(scene, sampler, ray, medium, active)
+        phase = scene.sensors()[0].get_medium().phase_function()
+        tr = Trace(scene, fog, phase, sampler, has_delta, has_smooth)
+        return self._split_sample(tr, sampler, mi.Ray3f(ray), mi.Bool(active))
+
+    def _split_sample(self, tr, sampler, ray, active):
+        """The camera ray's depth-0 stage once per lane (hit, G-buffer, ``T``, the sun's sampled
+        single scattering, the surface branch's light: fogpath's :meth:`_camera_split` up to its
+        forced collision), then ``N`` continuations per lane (:meth:`_continuation`, each
+        fogpath's forced collision, light sample at it, branch choice and path from depth 1) on a
+        wavefront of their own with a PCG32 stream each, summed back per lane with the weights
+        ``ms_split_by`` gives (``1 / N`` each, or with ``"branch"`` 1 for the surface branch and
+        ``1 / (N - 1)`` for the medium branch's).  ``N`` depends on the depth-0 stage only (never
+        on a continuation's samples), so the weighted sum is an unbiased estimate of one
+        continuation; ``"single"`` and ``"stddev"`` fall back to ``N = ms_split`` where the
+        sun is not sampled along the camera ray.  Outputs as fogpath's ``_outputs``; per lane,
+        ``surface_coverage`` is the weighted share of its continuations that continued the
+        surface branch (``q`` on a ray to the sky with ``"branch"``) and ``surface`` their light
+        without the ``1/q`` weight."""
+        scene, ops = tr.scene, tr.ops
+        n = dr.width(ray.d)
+        si = scene.ray_intersect(ray, active)
+        hit = si.is_valid()
+        D0 = dr.select(hit, si.t, ops.largest)
+        gbuf = self._gbuffer(tr.fog, ops, ray, si) if self.aovs else None
+        sun_ss = self._sun_single_scatter(tr, sampler, ray, D0, active)
+        tr.sun_along = sun_ss is not None
+        T = self._transmittance(tr.fog, ops, ray.o, ray.d, D0)
+        direct = mi.Spectrum(0.0)  # the surface branch's depth-0 light, as in _camera_split
+        if tr.has_smooth:
+            em = active & (hit if self.hide_emitters else mi.Bool(True))
+            ds = mi.DirectionSample3f(scene, si=si, ref=dr.zeros(mi.Interaction3f))
+            direct += dr.select(em, ds.emitter.eval(si, em), 0.0)
+        disk = None if self.hide_emitters else self._sun_disk_seen(scene, ops, ray, active & ~hit)
+        if disk is not None:
+            direct += disk
+        bsdf = si.bsdf(ray)
+        smooth = active & hit & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
+        Ls, _ = self._direct(tr, sampler, si, bsdf, smooth)
+        direct += Ls
+        # continuations per lane, on a wavefront of n K lanes (fixed, so its kernel is reused)
+        K = k_max = self.ms_split
+        N = dr.full(mi.UInt32, K, n)
+        if self.ms_split_by in ("single", "stddev") and sun_ss is not None:
+            x = dr.select(active, self._split_weights(tr, sun_ss, T, hit), 0.0)
+            total = dr.sum(x)  # over the pass's lanes; N below sums to at most n K
+            extra = dr.select(total > 0, (K - 1) * (1.0 - 1e-5) * n * x / total, float(K - 1))
+            k_max = max(self.ms_split_max, 1)
+            N = mi.UInt32(1.0 + dr.minimum(dr.floor(extra), float(k_max - 1)))
+        seed = (mi.UInt32(sampler.next_1d(active) * 65536.0) << 16) | mi.UInt32(
+            sampler.next_1d(active) * 65536.0
+        )
+        dr.eval(si, D0, T, direct, N, seed, sun_ss, gbuf)
+        start = dr.prefix_sum(N)  # lane l owns the slots [start_l, start_l + N_l)
+        mark = dr.zeros(mi.UInt32, n * K)
+        dr.scatter(mark, mi.UInt32(1), start, start < n * K)
+        slot = dr.arange(mi.UInt32, n * K)
+        owner = dr.minimum(dr.cumsum(mark), n) - 1
+        total_n = int(dr.sum(N)[0])
+        if total_n > n * K:  # the allocation's floors keep it at most n K; never drop a continuation
+            raise RuntimeError(
+                f"{SOURCE}: {total_n} continuations do not fit the {n * K} lanes of the wavefront"
+            )
+        live = slot < total_n
+        dr.eval(owner, live)
+        # each continuation's stream: its slot, and a start hashed from the lane's seed and the slot
+        # (TEA, Zafar et al. 2010), so no two share a start (PCG32 streams that do are correlated)
+        h0, h1 = mi.sample_tea_32(dr.gather(mi.UInt32, seed, owner), slot)
+        ws = WideSampler(mi.PCG32(n * K, (mi.UInt64(h0) << 32) | mi.UInt64(h1), mi.UInt64(slot)))
+        at = lambda v: dr.gather(type(v), v, owner)  # noqa: E731
+        ray_w, si_w, T_w, direct_w = at(ray), at(si), at(T), at(direct)
+        hit_w, N_w = si_w.is_valid(), mi.Float(at(N))
+        first = slot == at(start)  # a lane's first continuation
+        branch = self.ms_split_by == "branch"
+        path, chose_s, q, ld = self._continuation(
+            tr,
+            ws,
+            ray_w,
+            si_w,
+            dr.select(hit_w, si_w.t, ops.largest),
+            T_w,
+            at(active),
+            first if branch else None,
+        )
+        split = self._trace(tr, ws, path)
+        dr.eval(split, chose_s, q, ld)  # one wavefront kernel (each sum below would re-run the loop)
+        w = dr.select(live, dr.rcp(N_w), 0.0)  # the forced collisions' light samples: their mean
+        if branch:  # hit: the first continues the surface branch (weight 1), the others the medium
+            w_b = dr.select(
+                live, dr.select(hit_w, dr.select(first, 1.0, dr.rcp(N_w - 1.0)), dr.rcp(N_w)), 0.0
+            )
+            cov = dr.select(hit_w, dr.select(first & live, 1.0, 0.0), q * w)
+            s_out = dr.select(hit_w, dr.select(first & live, direct_w + split.surface, 0.0), q * w * direct_w)
+        else:  # each continuation fogpath's, weight 1/N
+            w_b, cov = w, dr.select(chose_s, w, 0.0)
+            s_out = dr.select(chose_s, direct_w + q * split.surface, 0.0) * w
+        cont = [
+            split.surface * w_b,
+            split.single * w_b + ld * w,
+            split.multiple * w_b,
+            mi.Spectrum(cov),
+            s_out,
+        ]
+        flat = [c[i] for c in cont for i in range(3)]
+        dr.eval(flat)
+        # per lane, the sum of its continuations' values / N, in slot order (deterministic,
+        # unlike atomic scatter-adds): lane l's continuations are the slots [start_l, start_l + N_l)
+        sums = [mi.Float(0.0)] * len(flat)
+        for j in range(k_max):
+            on = active & (j < N)
+            sums = [a + dr.gather(mi.Float, f, start + j, on) for a, f in zip(sums, flat)]
+        back = [mi.Spectrum(*sums[3 * i : 3 * i + 3]) for i in range(len(cont))]
+        surface = direct + back[0]
+        single = back[1] + (0.0 if sun_ss is None else dr.select(active, sun_ss, 0.0))
+        multiple, coverage, s_out = back[2], back[3][0], back[4]
+        att = T * surface
+        L = att + single + multiple
+        if gbuf is None:
+            return L, mi.Bool(True), []
+        rgb = lambda s: [s[0], s[1], s[2]]  # noqa: E731
+        parts = {
+            "attenuated_surface": rgb(att),
+            "inscatter": rgb(single + multiple),
+            "single": rgb(single),
+            "multiple": rgb(multiple),
+            "surface": rgb(s_out),
+            "surface_coverage": [coverage],
+            **gbuf,
+        }
+        return L, mi.Bool(True), [c for g in gbuffer.SAMPLE_GROUPS for c in parts[g]]
+
+    def _split_weights(self, tr, sun_ss, T, hit):
+        """Per camera ray, the estimate ``x >= 0`` of the continuation's contribution that
+        ``ms_split_by`` allocates continuations by (``N - 1`` in proportion to it), from the
+        depth-0 stage only: ``"single"``, the mean over RGB of the sun's single scattering
+        sampled along the camera ray (``s``); ``"stddev"``, the standard deviation of one
+        continuation if its radiance scales as ``s / m`` (``m = albedo (1 - T)``, the forced
+        collision's mean weight, means over RGB) and the medium branch, taken with probability
+        ``1 - q = m / (T + m)`` on a ray that hits a surface, dominates its variance:
+        ``s sqrt((T + m) / m)`` there, ``s`` on a ray to the sky (always the medium branch)."""
+        s = dr.mean(sun_ss)
+        if self.ms_split_by == "single":
+            return s
+        t = dr.mean(T)
+        m = dr.maximum(dr.mean(mi.Spectrum(*tr.ops.params(tr.fog.albedo))) * (1.0 - t), 1e-6)
+        return s * dr.select(hit, dr.sqrt((t + m) / m), 1.0)
+
+    def _continuation(self, tr, sampler, ray, si, D, T, active, surface_slot=None):
+        """One continuation of the camera ray ``ray`` (hit ``si`` at ``D``, transmittance ``T``)
+        after its depth-0 stage: fogpath's :meth:`_camera_split` from the forced collision on
+        (branch probability ``q = T / (T + w_medium w_phase)``), the surface branch's BSDF sample
+        drawn here.  With ``surface_slot`` (a mask) the branch is not drawn: the lanes on it
+        that hit a surface continue the surface branch, the others the medium branch, without
+        the ``1/q``, ``1/(1 - q)`` weights.  Returns (the :class:`Path` from depth 1, whether it
+        continued the surface branch, ``q``, the forced collision's light sample times its
+        weight: the path's ``single`` at depth 0, kept out of the path's :class:`Split`)."""
+        scene = tr.scene
+        hit = si.is_valid()
+        surf = active & hit
+        t_m, w_m, med = self._forced_collision(tr, sampler, ray, D, active)
+        p_med = ray.o + ray.d * t_m
+        Ld, wo_m, w_ph, pdf_m = self._medium_vertex(tr, sampler, ray, p_med, t_m, med, mi.Bool(True))
+        ms = dr.mean(T)
+        mm = dr.select(med, dr.mean(w_m * w_ph), 0.0)
+        q = dr.select(ms + mm > 0, ms / (ms + mm), 0.0)
+        bs, w_b = si.bsdf(ray).sample(tr.bsdf_ctx, si, sampler.next_1d(surf), sampler.next_2d(surf), surf)
+        if surface_slot is None:
+            chose_s = sampler.next_1d(active) < q
+            go_s = surf & chose_s
+            go_m = med & dr.select(hit, ~chose_s & (q < 1), True)
+            β = dr.select(go_s, w_b / q, dr.select(go_m, w_m * w_ph / dr.select(hit, 1.0 - q, 1.0), 0.0))
+        else:
+            chose_s = surface_slot & hit
+            go_s, go_m = surf & chose_s, med & ~chose_s
+            β = dr.select(go_s, w_b, dr.select(go_m, w_m * w_ph, 0.0))
+        prev_it = self._vertex(ray, si, go_s, p_med)
+        ray = dr.select(
+            go_s, si.spawn_ray(si.to_world(bs.wo)), mi.Ray3f(p_med, wo_m, ray.time, ray.wavelengths)
+        )
+        act = (go_s | go_m) & (dr.max(β) > 0) & (self.max_depth > 1)
+        path = Path(ray, scene.ray_intersect(ray, act), act, depth=1)
+        path.split, path.β_cam, path.β, path.medium_first = Split(), T, β, go_m
+        path.prev_it, path.prev_pdf = prev_it, dr.select(go_s, bs.pdf, pdf_m)
+        path.prev_delta = go_s & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+        return path, chose_s & active, q, dr.select(med, w_m * Ld, 0.0)
+
+    @dr.syntax
+    def _trace(self, tr, sampler, p):
+        """fogpath's path loop (``FogPathIntegrator.sample``, after the camera ray's stage) on
+        the :class:`Path` ``p``: returns its :class:`Split` (the camera segment's weight is
+        ``p.β_cam``, applied by the caller)."""
+        scene, phase, has_smooth, ops = tr.scene, tr.phase, tr.has_smooth, tr.ops
+        split, β, β_cam, depth, medium_first = p.split, p.β, p.β_cam, p.depth, p.medium_first
+        ray, si, active = p.ray, p.si, p.active
+        prev_it, prev_pdf, prev_delta = p.prev_it, p.prev_pdf, p.prev_delta
+        ss_next = tr.sun_along and self.sun_sampling_rays >= 2 and self.max_depth >= 3
+        while dr.hint(active, max_iterations=-1, label="fogpath_knobs"):
+            if dr.hint(ss_next, mode="scalar"):
+                on = active & (depth == 1)
+                D1 = dr.select(si.is_valid(), si.t, ops.largest)
+                ss1 = self._sun_single_scatter(tr, sampler, ray, D1, on, samples=1)
+                split = split.add(dr.select(on, β * ss1, 0.0), medium_first, mi.Bool(False))
+            is_medium, t_end, w_ff = self._free_flight(
+                tr, sampler, ray, dr.select(si.is_valid(), si.t, dr.inf), active
+            )
+            passed = active & (depth == 0) & ~is_medium
+            medium_first |= active & (depth == 0) & is_medium
+            β_cam[passed] = w_ff
+            β[active & ~passed] *= w_ff
+            is_surface, escaped = active & ~is_medium & si.is_valid(), active & ~is_medium & ~si.is_valid()
+            if dr.hint(has_smooth, mode="scalar"):
+                em = is_surface | escaped
+                if dr.hint(self.hide_emitters, mode="scalar"):
+                    em &= ~((depth == 0) & escaped)
+                ds = mi.DirectionSample3f(scene, si=si, ref=prev_it)
+                em_pdf = scene.pdf_emitter_direction(prev_it, ds, em & ~prev_delta)
+                if dr.hint(self._sky_by_bsdf(scene), mode="scalar"):
+                    from_surface = dr.squared_norm(prev_it.n) > 0
+                    p_sky = self._sky_selection(scene)[0]
+                    other = em_pdf / (1.0 - p_sky) if p_sky < 1.0 else em_pdf
+                    em_pdf = dr.select(from_surface, dr.select(escaped, 0.0, other), em_pdf)
+                Le = β * mis_weight(prev_pdf, dr.select(prev_delta, 0.0, em_pdf)) * ds.emitter.eval(si, em)
+                split = split.add(dr.select(em, Le, 0.0), medium_first, depth == 1)
+            seen = escaped & (depth == 0)
+            disk = None if self.hide_emitters else self._sun_disk_seen(scene, ops, ray, seen)
+            if disk is not None:
+                split = split.add(β * disk, medium_first, mi.Bool(False))
+            active &= ~escaped & (depth + 1 < self.max_depth)
+            p_med = ray.o + ray.d * dr.select(is_medium, t_end, 0.0)
+            med = active & is_medium
+            wo, pdf_next, delta_next, w_next, origin = (
+                mi.Vector3f(ray.d),
+                mi.Float(1.0),
+                mi.Bool(False),
+                mi.Spectrum(1.0),
+                mi.Point3f(p_med),
+            )
+            if dr.hint(phase is not None and tr.has_lights, mode="scalar"):
+                sun_sampled = (depth <= 1) if ss_next else (depth == 0)
+                Ld, wo_m, w_m, pdf_m = self._medium_vertex(tr, sampler, ray, p_med, t_end, med, sun_sampled)
+                split = split.add(β * Ld, medium_first, depth == 0)
+                wo[med], pdf_next[med], w_next[med] = wo_m, pdf_m, w_m
+            surf = active & is_surface
+            Ls, bs, w_b = self._surface_vertex(tr, sampler, ray, si, surf)
+            if dr.hint(Ls is not None, mode="scalar"):
+                split = split.add(β * Ls, medium_first, mi.Bool(False))
+            wo[surf], pdf_next[surf], w_next[surf], origin[surf] = si.to_world(bs.wo), bs.pdf, w_b, si.p
+            delta_next[surf] = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+            prev_it = self._vertex(ray, si, surf, p_med)
+            prev_pdf, prev_delta = pdf_next, delta_next
+            β *= w_next
+            ray = dr.select(surf, si.spawn_ray(wo), mi.Ray3f(origin, wo, ray.time, ray.wavelengths))
+            depth[active] += 1
+            active &= dr.max(β) > 0
+            rr = active & (depth >= self.rr_depth)
+            q = dr.minimum(dr.max(β), 0.95)
+            β[rr] *= dr.rcp(q)
+            active &= ~rr | (sampler.next_1d(rr) < q)
+            si = scene.ray_intersect(ray, active)
+        return split
 
 
 mi.register_integrator("fogpath_knobs", lambda props: FogPathKnobs(props))

@@ -64,7 +64,16 @@ METHODS = (
     "homogeneous",
 )
 #: fogpath's sun samplers' settings that only ``fogpath_knobs`` (``_fogpath_knobs.py``) reads
-KNOBS = {"sun_sampling_layers", "sun_sampling_mixture", "sun_samples", "sun_guiding", "sun_guiding_g"}
+KNOBS = {
+    "sun_sampling_layers",
+    "sun_sampling_mixture",
+    "sun_samples",
+    "sun_guiding",
+    "sun_guiding_g",
+    "ms_split",
+    "ms_split_by",
+    "ms_split_max",
+}
 #: fogpath without its variance reduction (one sun sample, sun sampling only in unbounded
 #: one-layer fog, no forced splitting, MIS for the sky at surfaces, one sun-sampled segment),
 #: measured beside today's defaults
