@@ -14,6 +14,10 @@ pixels changed, so the value was used.  Smallest error detected: any one of thes
 values traced as a literal anywhere in the path-tracing kernel.  Structural changes
 (a layer becoming constant, grey extinction becoming RGB) may compile other kernels
 on purpose and are not tested here.
+
+Each case renders its base scene once before it records hashes: the first render of a
+process can launch a kernel of another hash (one-time set-up outside the path-tracing
+kernels, seen now and then when the case runs first), which is not what is tested.
 """
 
 from collections import Counter
@@ -61,6 +65,7 @@ def _hashes_and_image(mi, scene):
 @pytest.mark.parametrize("change", VALLEY_CHANGES, ids=lambda c: next(iter(c)))
 def test_valley_value_reuses_kernels(mitsuba, change):
     mi = mitsuba
+    _hashes_and_image(mi, mi.load_file(VALLEY, **TINY))  # the process's first render, not compared
     base_h, base_img = _hashes_and_image(mi, mi.load_file(VALLEY, **TINY))
     h, img = _hashes_and_image(mi, mi.load_file(VALLEY, **TINY, **change))
     assert not np.array_equal(img, base_img), f"{change} did not change the render"
@@ -97,6 +102,7 @@ def test_profile_values_reuse_kernels(mitsuba, name, before, after):
     def scene(kw):
         return mi.load_dict(base_scene(mi, integrator, heightfog(mi, **kw), res=(8, 6)))
 
+    _hashes_and_image(mi, scene(before))  # the process's first render, not compared
     base_h, base_img = _hashes_and_image(mi, scene(before))
     h, img = _hashes_and_image(mi, scene(after))
     assert not np.array_equal(img, base_img), f"{name}: the change did not change the render"
