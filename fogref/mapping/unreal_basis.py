@@ -50,6 +50,7 @@ __all__ = [
     "LOG_N_RANGE",
     "MAX_START_CM",
     "base_params",
+    "nnls2",
     "solve_colours",
     "unreal_basis",
     "unreal_inscatter",
@@ -169,7 +170,7 @@ def solve_colours(
     return cf, cd, float(sse)
 
 
-def _nnls2(
+def nnls2(
     g00: float, g01: float, g11: float, b0: Any, b1: Any, yy: Any
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Two-column non-negative least squares from its normal equations, per channel.
@@ -180,7 +181,7 @@ def _nnls2(
     (the same IEEE operations, in the same order, as the array form: three values are too few
     for NumPy to pay for its calls).
 
-    >>> x0, x1, sse = _nnls2(2.0, 0.0, 1.0, [4.0, -1.0, 0.0], [1.0, 2.0, 0.0], [9.0, 4.0, 0.0])
+    >>> x0, x1, sse = nnls2(2.0, 0.0, 1.0, [4.0, -1.0, 0.0], [1.0, 2.0, 0.0], [9.0, 4.0, 0.0])
     >>> x0.tolist(), x1.tolist(), sse.tolist()
     ([2.0, 0.0, 0.0], [1.0, 2.0, 0.0], [0.0, 0.0, 0.0])
     """
@@ -306,7 +307,7 @@ class ColourLoss:
         iso_g, gg, yg = self.sums(start_cm)
         cn = self._cos ** (10.0**log_n)
         self.colour_solves += 1
-        cf, cd, sse = _nnls2(self._g00, float(cn @ iso_g), float((cn * cn) @ gg), self._b0, cn @ yg, self._yy)
+        cf, cd, sse = nnls2(self._g00, float(cn @ iso_g), float((cn * cn) @ gg), self._b0, cn @ yg, self._yy)
         return cf, cd, float(np.sum(sse))
 
     def best_exponent(self, start_cm: float, log_n: float | None = None) -> tuple[float, float]:
