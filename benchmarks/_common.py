@@ -97,3 +97,19 @@ def machine_info() -> dict:
 
 def median(xs):
     return float(statistics.median(xs))
+
+
+def final_and_multiple_channels():
+    """The channels of a fogpath ``mi.render`` image (R,G,B, then the AOVs) that the variance
+    benchmarks keep: R,G,B of the final image, then ``multiple.R,G,B``."""
+    from fogref import gbuffer
+
+    names = gbuffer.sample_channel_names()
+    return [0, 1, 2] + [3 + names.index(f"multiple.{c}") for c in "RGB"]
+
+
+def chi2_per_pixel(a, b):
+    """Mean over pixels and RGB of (difference of the two stacks' means)^2 / (its variance from
+    their spreads): ~1 when the two stacks of independent renders estimate the same image."""
+    var = np.maximum(a.var(0, ddof=1) / len(a) + b.var(0, ddof=1) / len(b), 1e-30)
+    return float(((a.mean(0) - b.mean(0)) ** 2 / var).mean())

@@ -50,9 +50,8 @@ import time
 from pathlib import Path
 
 import _scenes as S
-from _common import ROOT, dr, machine_info, median, mi, np
+from _common import ROOT, chi2_per_pixel, dr, final_and_multiple_channels, machine_info, median, mi, np
 
-from fogref import gbuffer
 from fogref.atomic import write_text_atomic
 
 #: method -> fogpath_knobs parameters (fogpath: none, its defaults)
@@ -67,11 +66,6 @@ METHODS = {
     "stddev2": {"ms_split": 2, "ms_split_by": "stddev"},
 }
 BASE = "fogpath"
-
-
-def _channels():
-    names = gbuffer.sample_channel_names()
-    return [0, 1, 2] + [3 + names.index(f"multiple.{c}") for c in "RGB"]
 
 
 def _timed(scene, spp, seed, channels):
@@ -94,20 +88,13 @@ def _stats(imgs, times, cpus, spp):
     return float(v[..., :3].sum()), float(v[..., 3:].sum()), median(times), median(cpus)
 
 
-def _chi2(a, b):
-    """Mean over pixels and RGB of (difference of the two stacks' means)^2 / (its variance from
-    their spreads)."""
-    var = np.maximum(a.var(0, ddof=1) / len(a) + b.var(0, ddof=1) / len(b), 1e-30)
-    return float(((a.mean(0) - b.mean(0)) ** 2 / var).mean())
-
-
 def run_scene(name, args, rng):
     methods = {m: METHODS[m] for m in args.methods}
     scenes = {
         m: S.build(mi, name, "fogpath", res=args.res, max_depth=args.max_depth, integrator_over=o)
         for m, o in methods.items()
     }
-    ch = _channels()
+    ch = final_and_multiple_channels()
     first = {}
     for m in methods:  # tracing and compilation outside the steady timings
         first[m] = _timed(scenes[m], args.spp, 7, ch)[1]
@@ -145,7 +132,7 @@ def run_scene(name, args, rng):
     n, h = args.renders, args.renders // 2
     pa = np.stack(imgs[BASE])[..., :3]
     d = out[BASE]
-    out["chi2_per_pixel_null"] = _chi2(pa[:h], pa[h : 2 * h])
+    out["chi2_per_pixel_null"] = chi2_per_pixel(pa[:h], pa[h : 2 * h])
     comp = {}
     for m in methods:
         if m == BASE:
@@ -173,7 +160,7 @@ def run_scene(name, args, rng):
             "mean_diff_rel": diff / d["image_mean"],
             "z": diff / se if se > 0 else 0.0,
             "smallest_detectable_rel": 2.8 * se / d["image_mean"],
-            "chi2_per_pixel": _chi2(pa, np.stack(imgs[m])[..., :3]),
+            "chi2_per_pixel": chi2_per_pixel(pa, np.stack(imgs[m])[..., :3]),
             "efficiency_ratio": d["var_final"] * d["time_s"] / (g["var_final"] * g["time_s"]),
             "efficiency_ratio_ci95": ci(0),
             "multiple_var_ratio": d["var_multiple"] / g["var_multiple"],

@@ -33,14 +33,16 @@ import time
 from pathlib import Path
 
 import _scenes as S
-from _common import ROOT, machine_info, median, mi, np, timed_render
-
-from fogref import gbuffer
-
-
-def _channels():
-    names = gbuffer.sample_channel_names()
-    return [0, 1, 2] + [3 + names.index(f"multiple.{c}") for c in "RGB"]
+from _common import (
+    ROOT,
+    chi2_per_pixel,
+    final_and_multiple_channels,
+    machine_info,
+    median,
+    mi,
+    np,
+    timed_render,
+)
 
 
 def _stats(imgs, times, spp):
@@ -50,20 +52,13 @@ def _stats(imgs, times, spp):
     return float(v[..., :3].sum()), float(v[..., 3:].sum()), median(times)
 
 
-def _chi2(a, b):
-    """Mean over pixels and RGB of (difference of the two stacks' means)^2 / (its variance from
-    their spreads)."""
-    var = np.maximum(a.var(0, ddof=1) / len(a) + b.var(0, ddof=1) / len(b), 1e-30)
-    return float(((a.mean(0) - b.mean(0)) ** 2 / var).mean())
-
-
 def run_scene(name, args, rng):
     methods = {"fogpath": {}, "fogpath_guided": {"sun_guiding": args.share}}
     scenes = {
         m: S.build(mi, name, "fogpath", res=args.res, max_depth=args.max_depth, integrator_over=o)
         for m, o in methods.items()
     }
-    ch = _channels()
+    ch = final_and_multiple_channels()
     for m in methods:  # tracing and compilation outside the timings
         timed_render(scenes[m], args.spp, 7, ch)
     imgs = {m: [] for m in methods}
@@ -92,9 +87,9 @@ def run_scene(name, args, rng):
     se = float(np.hypot(g["image_mean_se"], d["image_mean_se"]))
     pa, pb = np.stack(imgs["fogpath"])[..., :3], np.stack(imgs["fogpath_guided"])[..., :3]
     n = args.renders
-    chi2 = _chi2(pa, pb)
+    chi2 = chi2_per_pixel(pa, pb)
     h = n // 2  # the same statistic between the two halves of one method's renders: its value without bias
-    chi2_null = [_chi2(x[:h], x[h : 2 * h]) for x in (pa, pb)]
+    chi2_null = [chi2_per_pixel(x[:h], x[h : 2 * h]) for x in (pa, pb)]
     boot = []
     for _ in range(args.boot):
         ia, ib = rng.integers(0, n, n), rng.integers(0, n, n)
