@@ -14,7 +14,7 @@ benchmarks that measure them (fogpath itself fixes them:
 * ``sun_guiding_g`` (float in [0, 0.99], default: the fog's ``g``, at least 0.5): that lobe's
   asymmetry;
 * ``ms_split`` (int in [1, 16], default 1: fogpath's one continuation): continuation splitting
-  on the camera ray (:meth:`FogPathKnobs.sample`): the camera ray's depth-0 stage (hit,
+  on the camera ray (:meth:`FogPathKnobs._split_sample`): the camera ray's depth-0 stage (hit,
   G-buffer, the sun's sampled single scattering, the surface's light) is traced once, and what
   follows it (fogpath's forced collision with its light sample, the choice between the surface
   and the medium branch, and the path from depth 1) ``N`` times, each weighted ``1 / N`` (the
@@ -32,7 +32,11 @@ benchmarks that measure them (fogpath itself fixes them:
 * ``ms_split_max`` (int in [1, 64], default ``4 ms_split``, at most 16): the most
   continuations of one camera ray with ``ms_split_by`` ``"single"`` or ``"stddev"``.
 
-Importing this module registers the plugin (after ``_common`` set the variant).
+The knobs hold no copy of fogpath's tracing: they override fogpath's ``_sun_sampler`` and
+``_medium_vertex`` (the phase sample), and continuation splitting runs fogpath's own camera
+stage (``_camera_hit``, ``_camera_light``), forced-splitting continuation (``_continuation``)
+and path loop (``_trace``) on a wavefront of its own, so what the benchmarks measure is today's
+fogpath.  Importing this module registers the plugin (after ``_common`` set the variant).
 """
 
 from __future__ import annotations
@@ -40,10 +44,9 @@ from __future__ import annotations
 import math
 
 from _common import dr, mi
-from fogref_plugins.fogpath import SUN_SAMPLES, FogPathIntegrator, Path, Split, Trace
-from mitsuba.python.ad.integrators.common import mis_weight
+from fogref_plugins.fogpath import SUN_SAMPLES, FogPathIntegrator, Split
 
-from fogref import gbuffer, params
+from fogref import params
 from fogref.errors import ParameterError
 from fogref.media.single_scatter import sun_sampling_mode
 
@@ -174,53 +177,32 @@ class FogPathKnobs(FogPathIntegrator):
     # ------------------------------------------------ continuation splitting (ms_split)
     def sample(self, scene, sampler, ray, medium=None, active=True):
         """fogpath's ``sample``, or with ``ms_split`` above 1 or ``ms_split_by`` not ``fixed`` (where
-        fogpath splits the camera ray: a scattering fog without a Local Fog Volume, lights,
-        ``max_depth >= 2``) the camera ray's continuation split (:meth:`_split_sample`)."""
-        fog = self._scene_fog(scene)
-        has_delta, has_smooth = self._scene_lights(scene)
-        on = self.ms_split > 1 or self.ms_split_by != "fixed"
-        forced = self.forced_split and fog is not None and fog.scatters and fog.volume is None
-        if not (on and forced and (has_delta or has_smooth) and self.max_depth >= 2):
+        fogpath splits the camera ray, :meth:`FogPathIntegrator._splits`) the camera ray's
+        continuation split (:meth:`_split_sample`)."""
+        tr = self._tracing(scene, sampler)
+        if (self.ms_split == 1 and self.ms_split_by == "fixed") or not self._splits(tr):
             return super().sample(scene, sampler, ray, medium, active)
-        phase = scene.sensors()[0].get_medium().phase_function()
-        tr = Trace(scene, fog, phase, sampler, has_delta, has_smooth)
         return self._split_sample(tr, sampler, mi.Ray3f(ray), mi.Bool(active))
 
     def _split_sample(self, tr, sampler, ray, active):
         """The camera ray's depth-0 stage once per lane (hit, G-buffer, ``T``, the sun's sampled
-        single scattering, the surface branch's light: fogpath's :meth:`_camera_split` up to its
-        forced collision), then ``N`` continuations per lane (:meth:`_continuation`, each
-        fogpath's forced collision, light sample at it, branch choice and path from depth 1) on a
+        single scattering, the surface branch's light: fogpath's :meth:`_camera_hit` and
+        :meth:`_camera_light`), then ``N`` continuations per lane (fogpath's :meth:`_continuation`,
+        its BSDF sample drawn after the medium vertex, and path loop :meth:`_trace`) on a
         wavefront of their own with a PCG32 stream each, summed back per lane with the weights
         ``ms_split_by`` gives (``1 / N`` each, or with ``"branch"`` 1 for the surface branch and
         ``1 / (N - 1)`` for the medium branch's).  ``N`` depends on the depth-0 stage only (never
         on a continuation's samples), so the weighted sum is an unbiased estimate of one
         continuation; ``"single"`` and ``"stddev"`` fall back to ``N = ms_split`` where the
-        sun is not sampled along the camera ray.  Outputs as fogpath's ``_outputs``; per lane,
+        sun is not sampled along the camera ray.  Outputs by fogpath's ``_outputs``; per lane,
         ``surface_coverage`` is the weighted share of its continuations that continued the
         surface branch (``q`` on a ray to the sky with ``"branch"``) and ``surface`` their light
         without the ``1/q`` weight."""
-        scene, ops = tr.scene, tr.ops
         n = dr.width(ray.d)
-        si = scene.ray_intersect(ray, active)
+        si, D0, gbuf, sun_ss = self._camera_hit(tr, sampler, ray, active)
         hit = si.is_valid()
-        D0 = dr.select(hit, si.t, ops.largest)
-        gbuf = self._gbuffer(tr.fog, ops, ray, si) if self.aovs else None
-        sun_ss = self._sun_single_scatter(tr, sampler, ray, D0, active)
-        tr.sun_along = sun_ss is not None
-        T = self._transmittance(tr.fog, ops, ray.o, ray.d, D0)
-        direct = mi.Spectrum(0.0)  # the surface branch's depth-0 light, as in _camera_split
-        if tr.has_smooth:
-            em = active & (hit if self.hide_emitters else mi.Bool(True))
-            ds = mi.DirectionSample3f(scene, si=si, ref=dr.zeros(mi.Interaction3f))
-            direct += dr.select(em, ds.emitter.eval(si, em), 0.0)
-        disk = None if self.hide_emitters else self._sun_disk_seen(scene, ops, ray, active & ~hit)
-        if disk is not None:
-            direct += disk
-        bsdf = si.bsdf(ray)
-        smooth = active & hit & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-        Ls, _ = self._direct(tr, sampler, si, bsdf, smooth)
-        direct += Ls
+        T = self._transmittance(tr.fog, tr.ops, ray.o, ray.d, D0)
+        direct = self._camera_light(tr, sampler, ray, si, active)
         # continuations per lane, on a wavefront of n K lanes (fixed, so its kernel is reused)
         K = k_max = self.ms_split
         N = dr.full(mi.UInt32, K, n)
@@ -255,17 +237,10 @@ class FogPathKnobs(FogPathIntegrator):
         hit_w, N_w = si_w.is_valid(), mi.Float(at(N))
         first = slot == at(start)  # a lane's first continuation
         branch = self.ms_split_by == "branch"
-        path, chose_s, q, ld = self._continuation(
-            tr,
-            ws,
-            ray_w,
-            si_w,
-            dr.select(hit_w, si_w.t, ops.largest),
-            T_w,
-            at(active),
-            first if branch else None,
-        )
-        split = self._trace(tr, ws, path)
+        D_w = dr.select(hit_w, si_w.t, tr.ops.largest)
+        slot_s = first if branch else None
+        path, chose_s, q, ld = self._continuation(tr, ws, ray_w, si_w, D_w, T_w, at(active), False, slot_s)
+        split = self._trace(tr, ws, path)[0]
         dr.eval(split, chose_s, q, ld)  # one wavefront kernel (each sum below would re-run the loop)
         w = dr.select(live, dr.rcp(N_w), 0.0)  # the forced collisions' light samples: their mean
         if branch:  # hit: the first continues the surface branch (weight 1), the others the medium
@@ -293,24 +268,8 @@ class FogPathKnobs(FogPathIntegrator):
             on = active & (j < N)
             sums = [a + dr.gather(mi.Float, f, start + j, on) for a, f in zip(sums, flat)]
         back = [mi.Spectrum(*sums[3 * i : 3 * i + 3]) for i in range(len(cont))]
-        surface = direct + back[0]
         single = back[1] + (0.0 if sun_ss is None else dr.select(active, sun_ss, 0.0))
-        multiple, coverage, s_out = back[2], back[3][0], back[4]
-        att = T * surface
-        L = att + single + multiple
-        if gbuf is None:
-            return L, mi.Bool(True), []
-        rgb = lambda s: [s[0], s[1], s[2]]  # noqa: E731
-        parts = {
-            "attenuated_surface": rgb(att),
-            "inscatter": rgb(single + multiple),
-            "single": rgb(single),
-            "multiple": rgb(multiple),
-            "surface": rgb(s_out),
-            "surface_coverage": [coverage],
-            **gbuf,
-        }
-        return L, mi.Bool(True), [c for g in gbuffer.SAMPLE_GROUPS for c in parts[g]]
+        return self._outputs(Split(direct + back[0], single, back[2]), T, gbuf, back[3][0], back[4])
 
     def _split_weights(self, tr, sun_ss, T, hit):
         """Per camera ray, the estimate ``x >= 0`` of the continuation's contribution that
@@ -327,120 +286,6 @@ class FogPathKnobs(FogPathIntegrator):
         t = dr.mean(T)
         m = dr.maximum(dr.mean(mi.Spectrum(*tr.ops.params(tr.fog.albedo))) * (1.0 - t), 1e-6)
         return s * dr.select(hit, dr.sqrt((t + m) / m), 1.0)
-
-    def _continuation(self, tr, sampler, ray, si, D, T, active, surface_slot=None):
-        """One continuation of the camera ray ``ray`` (hit ``si`` at ``D``, transmittance ``T``)
-        after its depth-0 stage: fogpath's :meth:`_camera_split` from the forced collision on
-        (branch probability ``q = T / (T + w_medium w_phase)``), the surface branch's BSDF sample
-        drawn here.  With ``surface_slot`` (a mask) the branch is not drawn: the lanes on it
-        that hit a surface continue the surface branch, the others the medium branch, without
-        the ``1/q``, ``1/(1 - q)`` weights.  Returns (the :class:`Path` from depth 1, whether it
-        continued the surface branch, ``q``, the forced collision's light sample times its
-        weight: the path's ``single`` at depth 0, kept out of the path's :class:`Split`)."""
-        scene = tr.scene
-        hit = si.is_valid()
-        surf = active & hit
-        t_m, w_m, med = self._forced_collision(tr, sampler, ray, D, active)
-        p_med = ray.o + ray.d * t_m
-        Ld, wo_m, w_ph, pdf_m = self._medium_vertex(tr, sampler, ray, p_med, t_m, med, mi.Bool(True))
-        ms = dr.mean(T)
-        mm = dr.select(med, dr.mean(w_m * w_ph), 0.0)
-        q = dr.select(ms + mm > 0, ms / (ms + mm), 0.0)
-        bs, w_b = si.bsdf(ray).sample(tr.bsdf_ctx, si, sampler.next_1d(surf), sampler.next_2d(surf), surf)
-        if surface_slot is None:
-            chose_s = sampler.next_1d(active) < q
-            go_s = surf & chose_s
-            go_m = med & dr.select(hit, ~chose_s & (q < 1), True)
-            β = dr.select(go_s, w_b / q, dr.select(go_m, w_m * w_ph / dr.select(hit, 1.0 - q, 1.0), 0.0))
-        else:
-            chose_s = surface_slot & hit
-            go_s, go_m = surf & chose_s, med & ~chose_s
-            β = dr.select(go_s, w_b, dr.select(go_m, w_m * w_ph, 0.0))
-        prev_it = self._vertex(ray, si, go_s, p_med)
-        ray = dr.select(
-            go_s, si.spawn_ray(si.to_world(bs.wo)), mi.Ray3f(p_med, wo_m, ray.time, ray.wavelengths)
-        )
-        act = (go_s | go_m) & (dr.max(β) > 0) & (self.max_depth > 1)
-        path = Path(ray, scene.ray_intersect(ray, act), act, depth=1)
-        path.split, path.β_cam, path.β, path.medium_first = Split(), T, β, go_m
-        path.prev_it, path.prev_pdf = prev_it, dr.select(go_s, bs.pdf, pdf_m)
-        path.prev_delta = go_s & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
-        return path, chose_s & active, q, dr.select(med, w_m * Ld, 0.0)
-
-    @dr.syntax
-    def _trace(self, tr, sampler, p):
-        """fogpath's path loop (``FogPathIntegrator.sample``, after the camera ray's stage) on
-        the :class:`Path` ``p``: returns its :class:`Split` (the camera segment's weight is
-        ``p.β_cam``, applied by the caller)."""
-        scene, phase, has_smooth, ops = tr.scene, tr.phase, tr.has_smooth, tr.ops
-        split, β, β_cam, depth, medium_first = p.split, p.β, p.β_cam, p.depth, p.medium_first
-        ray, si, active = p.ray, p.si, p.active
-        prev_it, prev_pdf, prev_delta = p.prev_it, p.prev_pdf, p.prev_delta
-        ss_next = tr.sun_along and self.sun_sampling_rays >= 2 and self.max_depth >= 3
-        while dr.hint(active, max_iterations=-1, label="fogpath_knobs"):
-            if dr.hint(ss_next, mode="scalar"):
-                on = active & (depth == 1)
-                D1 = dr.select(si.is_valid(), si.t, ops.largest)
-                ss1 = self._sun_single_scatter(tr, sampler, ray, D1, on, samples=1)
-                split = split.add(dr.select(on, β * ss1, 0.0), medium_first, mi.Bool(False))
-            is_medium, t_end, w_ff = self._free_flight(
-                tr, sampler, ray, dr.select(si.is_valid(), si.t, dr.inf), active
-            )
-            passed = active & (depth == 0) & ~is_medium
-            medium_first |= active & (depth == 0) & is_medium
-            β_cam[passed] = w_ff
-            β[active & ~passed] *= w_ff
-            is_surface, escaped = active & ~is_medium & si.is_valid(), active & ~is_medium & ~si.is_valid()
-            if dr.hint(has_smooth, mode="scalar"):
-                em = is_surface | escaped
-                if dr.hint(self.hide_emitters, mode="scalar"):
-                    em &= ~((depth == 0) & escaped)
-                ds = mi.DirectionSample3f(scene, si=si, ref=prev_it)
-                em_pdf = scene.pdf_emitter_direction(prev_it, ds, em & ~prev_delta)
-                if dr.hint(self._sky_by_bsdf(scene), mode="scalar"):
-                    from_surface = dr.squared_norm(prev_it.n) > 0
-                    p_sky = self._sky_selection(scene)[0]
-                    other = em_pdf / (1.0 - p_sky) if p_sky < 1.0 else em_pdf
-                    em_pdf = dr.select(from_surface, dr.select(escaped, 0.0, other), em_pdf)
-                Le = β * mis_weight(prev_pdf, dr.select(prev_delta, 0.0, em_pdf)) * ds.emitter.eval(si, em)
-                split = split.add(dr.select(em, Le, 0.0), medium_first, depth == 1)
-            seen = escaped & (depth == 0)
-            disk = None if self.hide_emitters else self._sun_disk_seen(scene, ops, ray, seen)
-            if disk is not None:
-                split = split.add(β * disk, medium_first, mi.Bool(False))
-            active &= ~escaped & (depth + 1 < self.max_depth)
-            p_med = ray.o + ray.d * dr.select(is_medium, t_end, 0.0)
-            med = active & is_medium
-            wo, pdf_next, delta_next, w_next, origin = (
-                mi.Vector3f(ray.d),
-                mi.Float(1.0),
-                mi.Bool(False),
-                mi.Spectrum(1.0),
-                mi.Point3f(p_med),
-            )
-            if dr.hint(phase is not None and tr.has_lights, mode="scalar"):
-                sun_sampled = (depth <= 1) if ss_next else (depth == 0)
-                Ld, wo_m, w_m, pdf_m = self._medium_vertex(tr, sampler, ray, p_med, t_end, med, sun_sampled)
-                split = split.add(β * Ld, medium_first, depth == 0)
-                wo[med], pdf_next[med], w_next[med] = wo_m, pdf_m, w_m
-            surf = active & is_surface
-            Ls, bs, w_b = self._surface_vertex(tr, sampler, ray, si, surf)
-            if dr.hint(Ls is not None, mode="scalar"):
-                split = split.add(β * Ls, medium_first, mi.Bool(False))
-            wo[surf], pdf_next[surf], w_next[surf], origin[surf] = si.to_world(bs.wo), bs.pdf, w_b, si.p
-            delta_next[surf] = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
-            prev_it = self._vertex(ray, si, surf, p_med)
-            prev_pdf, prev_delta = pdf_next, delta_next
-            β *= w_next
-            ray = dr.select(surf, si.spawn_ray(wo), mi.Ray3f(origin, wo, ray.time, ray.wavelengths))
-            depth[active] += 1
-            active &= dr.max(β) > 0
-            rr = active & (depth >= self.rr_depth)
-            q = dr.minimum(dr.max(β), 0.95)
-            β[rr] *= dr.rcp(q)
-            active &= ~rr | (sampler.next_1d(rr) < q)
-            si = scene.ray_intersect(ray, active)
-        return split
 
 
 mi.register_integrator("fogpath_knobs", lambda props: FogPathKnobs(props))

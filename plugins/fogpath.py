@@ -774,33 +774,59 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         w = dr.select(valid & (pdf > 0), spectrum(fs) / pdf, 0.0)
         return t0 + t_rel, w, valid & (pdf > 0)
 
-    def _camera_split(self, tr, sampler, ray, si, D, active):
-        """Depth 0 with ``forced_split``: the surface branch (light found by the camera
-        ray, light sample at the surface; weight ``T`` applied at the end) and a forced
-        medium vertex (its light sample feeds ``single``), then one branch continues,
-        chosen with probability ``q = T / (T + w_medium w_phase)`` (means over RGB).
-        Returns (the :class:`Path` from depth 1, the :class:`Cover`).  ``surface_coverage`` is
-        1 on samples that continued the surface branch (for the sky: drew it with the same q)
-        and ``surface`` their unweighted light, so that ``surface`` stays a ratio estimator
-        bounded by the radiance it estimates."""
-        scene, ops = tr.scene, tr.ops
-        hit, split = si.is_valid(), Split()
-        T = self._transmittance(tr.fog, ops, ray.o, ray.d, D)
+    def _camera_light(self, tr, sampler, ray, si, active):
+        """The surface branch's light at depth 0, without the camera segment's weight ``T``:
+        the emitter the camera ray hits (the sky too, unless ``hide_emitters``), the sun disk it
+        sees and the light sample at the surface ``si`` it hits (one sampler draw set)."""
+        scene, ops, hit = tr.scene, tr.ops, si.is_valid()
+        direct = mi.Spectrum(0.0)
         if tr.has_smooth:
             em = active & (hit if self.hide_emitters else mi.Bool(True))
             ds = mi.DirectionSample3f(scene, si=si, ref=dr.zeros(mi.Interaction3f))
-            split = split.add(dr.select(em, ds.emitter.eval(si, em), 0.0), mi.Bool(False), mi.Bool(False))
+            direct += dr.select(em, ds.emitter.eval(si, em), 0.0)
         disk = None if self.hide_emitters else self._sun_disk_seen(scene, ops, ray, active & ~hit)
         if disk is not None:  # the sun disk the camera ray sees
-            split = split.add(disk, mi.Bool(False), mi.Bool(False))
+            direct += disk
+        bsdf = si.bsdf(ray)
+        smooth = active & hit & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
+        return direct + self._direct(tr, sampler, si, bsdf, smooth)[0]
+
+    def _camera_split(self, tr, sampler, ray, si, D, active):
+        """Depth 0 with ``forced_split``: the surface branch (light found by the camera
+        ray, light sample at the surface, :meth:`_camera_light`; weight ``T`` applied at the
+        end), then :meth:`_continuation`: the surface's BSDF sample, a forced medium vertex
+        (its light sample feeds ``single``) and one branch continued.  Returns (the :class:`Path` from
+        depth 1, the :class:`Cover`).  ``surface_coverage`` is 1 on samples that continued the
+        surface branch (for the sky: drew it with the same q) and ``surface`` their unweighted
+        light, so that ``surface`` stays a ratio estimator bounded by the radiance it estimates."""
+        T = self._transmittance(tr.fog, tr.ops, ray.o, ray.d, D)
+        direct = self._camera_light(tr, sampler, ray, si, active)
+        path, chose_s, q, ld = self._continuation(tr, sampler, ray, si, D, T, active)
+        path.split = Split(direct).add(ld, mi.Bool(True), mi.Bool(True))
+        return path, Cover(chose_s, direct, dr.select(si.is_valid(), q, 1.0))
+
+    def _continuation(self, tr, sampler, ray, si, D, T, active, bsdf_first=True, surface_slot=None):
+        """Forced splitting after the camera ray's surface branch: a medium collision on its
+        ``[0, D]`` forced to happen (:meth:`_forced_collision`) with its light sample, then one
+        branch continues, the surface (hit ``si``) or the medium, chosen with probability
+        ``q = T / (T + w_medium w_phase)`` (means over RGB; weight ``1/q`` or ``1/(1 - q)``).
+
+        ``bsdf_first``: the surface's BSDF sample is drawn before the forced collision (fogpath),
+        or after its medium vertex (false: the benchmarks' order).  ``surface_slot``
+        (a mask; the benchmarks' continuation splitting, ``benchmarks/_fogpath_knobs.py``): no
+        branch drawn, the lanes on it that hit a surface continue the surface branch, the others
+        the medium branch, without the ``1/q``, ``1/(1 - q)`` weights.  Both are Python-level
+        choices: the defaults trace fogpath's kernel.  Returns (the :class:`Path` from depth 1,
+        with an empty :class:`Split`; the lanes that continued the surface branch; ``q``; the
+        forced collision's light sample times its weight, which feeds ``single``)."""
+        hit = si.is_valid()
         surf = active & hit
-        Ls, bs, w_b = self._surface_vertex(tr, sampler, ray, si, surf)
-        split = split.add(Ls, mi.Bool(False), mi.Bool(False))
-        direct = mi.Spectrum(split.surface)
+        bsdf = si.bsdf(ray)
+        draw = lambda: bsdf.sample(tr.bsdf_ctx, si, sampler.next_1d(surf), sampler.next_2d(surf), surf)  # noqa: E731
+        bsdf_sample = draw() if bsdf_first else None
         t_m, w_m, med = self._forced_collision(tr, sampler, ray, D, active)
         p_med = ray.o + ray.d * t_m
         Ld, wo_m, w_ph, pdf_m = self._medium_vertex(tr, sampler, ray, p_med, t_m, med, mi.Bool(True))
-        split = split.add(dr.select(med, w_m * Ld, 0.0), mi.Bool(True), mi.Bool(True))
         # q = T / (T + w_medium) >= T: it must not depend on the surface branch's own samples
         # (the ratio estimator `surface` keeps the samples that continued it), and q >= T
         # keeps `surface` defined wherever the old scatter-or-reach choice defined it.
@@ -809,38 +835,54 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         ms = dr.mean(T)
         mm = dr.select(med, dr.mean(w_m * w_ph), 0.0)
         q = dr.select(ms + mm > 0, ms / (ms + mm), 0.0)  # probability of continuing the surface branch
-        chose_s = sampler.next_1d(active) < q
-        go_s = surf & chose_s
-        go_m = med & dr.select(hit, ~chose_s & (q < 1), True)
-        β = dr.select(go_s, w_b / q, dr.select(go_m, w_m * w_ph / dr.select(hit, 1.0 - q, 1.0), 0.0))
+        bs, w_b = bsdf_sample if bsdf_first else draw()
+        if surface_slot is None:
+            chose_s = sampler.next_1d(active) < q
+            go_s = surf & chose_s
+            go_m = med & dr.select(hit, ~chose_s & (q < 1), True)
+            β = dr.select(go_s, w_b / q, dr.select(go_m, w_m * w_ph / dr.select(hit, 1.0 - q, 1.0), 0.0))
+        else:
+            chose_s = surface_slot & hit
+            go_s, go_m = surf & chose_s, med & ~chose_s
+            β = dr.select(go_s, w_b, dr.select(go_m, w_m * w_ph, 0.0))
         prev_it = self._vertex(ray, si, go_s, p_med)
-        prev_pdf = dr.select(go_s, bs.pdf, pdf_m)
-        prev_delta = go_s & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
         ray = dr.select(
             go_s, si.spawn_ray(si.to_world(bs.wo)), mi.Ray3f(p_med, wo_m, ray.time, ray.wavelengths)
         )
-        active = (go_s | go_m) & (dr.max(β) > 0) & (self.max_depth > 1)
-        path = Path(ray, scene.ray_intersect(ray, active), active, depth=1)
-        path.split, path.β_cam, path.β, path.medium_first = split, T, β, go_m
-        path.prev_it, path.prev_pdf, path.prev_delta = prev_it, prev_pdf, prev_delta
-        return path, Cover(chose_s, direct, dr.select(hit, q, 1.0))
+        act = (go_s | go_m) & (dr.max(β) > 0) & (self.max_depth > 1)
+        path = Path(ray, tr.scene.ray_intersect(ray, act), act, depth=1)
+        path.β_cam, path.β, path.medium_first = T, β, go_m
+        path.prev_it, path.prev_pdf = prev_it, dr.select(go_s, bs.pdf, pdf_m)
+        path.prev_delta = go_s & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+        return path, chose_s & active, q, dr.select(med, w_m * Ld, 0.0)
 
-    def _camera_ray(self, tr, sampler, ray, active):
-        """The camera ray's stage: its hit, G-buffer and ``T``, the sun's single scattering
-        sampled along it, and with forced splitting (when the fog scatters, the scene has
-        lights and ``max_depth >= 2``) both of its branches (:meth:`_camera_split`).
-        Returns the :class:`CameraRay`; its ``path`` starts at depth 1 after forced
-        splitting, else at depth 0 on the camera ray (the loop then traces the camera ray's
-        free flight)."""
+    def _camera_hit(self, tr, sampler, ray, active):
+        """The camera ray's hit ``si``, its distance ``D`` (``ops.largest`` to the sky), its
+        G-buffer (None without ``aovs``) and the sun's single scattering sampled along it (None
+        where next-event estimation covers it; sets ``tr.sun_along``)."""
         si = tr.scene.ray_intersect(ray, active)
         D0 = dr.select(si.is_valid(), si.t, tr.ops.largest)
         gbuf = self._gbuffer(tr.fog, tr.ops, ray, si) if self.aovs else None
         sun_ss = self._sun_single_scatter(tr, sampler, ray, D0, active)
         tr.sun_along = sun_ss is not None
-        active = active & tr.has_lights  # no emitter: nothing to trace beyond the G-buffer
-        # a Local Fog Volume: free flight (the forced collision covers height layers only)
+        return si, D0, gbuf, sun_ss
+
+    def _splits(self, tr):
+        """Does the camera ray take forced splitting: ``forced_split``, a scattering fog without a
+        Local Fog Volume (free flight there: the forced collision covers height layers only),
+        lights, ``max_depth >= 2`` (trace-time)."""
         forced = self.forced_split and (tr.fog is None or tr.fog.volume is None)
-        if tr.phase is not None and tr.has_lights and forced and self.max_depth >= 2:
+        return tr.phase is not None and tr.has_lights and forced and self.max_depth >= 2
+
+    def _camera_ray(self, tr, sampler, ray, active):
+        """The camera ray's stage: its hit, G-buffer and the sun's single scattering sampled
+        along it (:meth:`_camera_hit`), and with forced splitting (:meth:`_splits`) both of its
+        branches (:meth:`_camera_split`).  Returns the :class:`CameraRay`; its ``path`` starts
+        at depth 1 after forced splitting, else at depth 0 on the camera ray (the loop then
+        traces the camera ray's free flight)."""
+        si, D0, gbuf, sun_ss = self._camera_hit(tr, sampler, ray, active)
+        active = active & tr.has_lights  # no emitter: nothing to trace beyond the G-buffer
+        if self._splits(tr):
             path, cover = self._camera_split(tr, sampler, ray, si, D0, active)
             return CameraRay(gbuf, sun_ss, cover, path)
         return CameraRay(gbuf, sun_ss, None, Path(ray, si, active))
@@ -860,20 +902,40 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         }
 
     # ----------------------------------------------------------------- sample
-    @dr.syntax
-    def sample(self, scene, sampler, ray, medium=None, active=True):
+    def _tracing(self, scene, sampler):
+        """The :class:`Trace` of a ``sample`` call on ``scene`` (trace-time)."""
         fog = self._scene_fog(scene)
         has_delta, has_smooth = self._scene_lights(scene)
         phase = (
             scene.sensors()[0].get_medium().phase_function() if (fog is not None and fog.scatters) else None
         )
-        tr = Trace(scene, fog, phase, sampler, has_delta, has_smooth)
-        ops = tr.ops
+        return Trace(scene, fog, phase, sampler, has_delta, has_smooth)
 
-        ray, active = mi.Ray3f(ray), mi.Bool(active)
-        active0 = mi.Bool(active)
-        cam = self._camera_ray(tr, sampler, ray, active)
-        p = cam.path
+    def sample(self, scene, sampler, ray, medium=None, active=True):
+        tr = self._tracing(scene, sampler)
+        active = mi.Bool(active)
+        cam = self._camera_ray(tr, sampler, mi.Ray3f(ray), active)
+        split, β_cam, medium_first = self._trace(tr, sampler, cam.path)
+        if tr.sun_along:  # the camera ray's sampled sun scattering
+            split = Split(split.surface, split.single + dr.select(active, cam.sun_ss, 0.0), split.multiple)
+        # surface, surface_coverage: the camera ray reached the surface unscattered, or with forced
+        # splitting the sample continued the surface branch: its light is then the depth-0 part
+        # plus the continuation without the 1/q weight
+        covered, s_out = ~medium_first, split.surface
+        if cam.cover is not None:
+            c = cam.cover
+            covered, s_out = c.chosen, c.direct + c.q * (split.surface - c.direct)
+        coverage, surface = dr.select(covered, 1.0, 0.0), dr.select(covered, s_out, 0.0)
+        return self._outputs(split, β_cam, cam.gbuf, coverage, surface)
+
+    @dr.syntax
+    def _trace(self, tr, sampler, p):
+        """The path loop, from the :class:`Path` ``p`` (on the camera ray at depth 0, or at depth 1
+        after forced splitting) until every lane has ended: free flight, emission found, light
+        and direction samples at medium and surface vertices, Russian roulette.  Returns (the
+        parts so far plus the path's, a :class:`Split`; the camera segment's weight ``β_cam``;
+        whether the camera ray scattered first)."""
+        scene, phase, has_smooth, ops = tr.scene, tr.phase, tr.has_smooth, tr.ops
         split, β, β_cam, depth, medium_first = p.split, p.β, p.β_cam, p.depth, p.medium_first
         ray, si, active = p.ray, p.si, p.active
         prev_it, prev_pdf, prev_delta = p.prev_it, p.prev_pdf, p.prev_delta
@@ -951,21 +1013,14 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             β[rr] *= dr.rcp(q)
             active &= ~rr | (sampler.next_1d(rr) < q)
             si = scene.ray_intersect(ray, active)
-
-        if dr.hint(tr.sun_along, mode="scalar"):  # the camera ray's sampled sun scattering
-            split = Split(split.surface, split.single + dr.select(active0, cam.sun_ss, 0.0), split.multiple)
-        return self._outputs(split, β_cam, medium_first, cam.cover, cam.gbuf)
+        return split, β_cam, medium_first
 
     # ------------------------------------------------------------- outputs
-    def _outputs(self, split, β_cam, medium_first, cover, gbuf):
-        """(L, valid, AOVs) in the order of :data:`AOV_NAMES`.  ``surface`` and
-        ``surface_coverage``: the camera ray reached the surface unscattered, or with
-        forced splitting (``cover``, a :class:`Cover`) the sample continued the surface branch;
-        its light is then the depth-0 part plus the continuation without the 1/q weight."""
+    def _outputs(self, split, β_cam, gbuf, coverage, surface):
+        """(L, valid, AOVs) in the order of :data:`AOV_NAMES`, from the parts ``split``, the camera
+        segment's weight ``β_cam`` (``attenuated_surface = β_cam surface``), the G-buffer (None:
+        no AOVs) and the sample's ``surface_coverage`` (in [0, 1]) and ``surface``."""
         att = β_cam * split.surface
-        covered, s_out = ~medium_first, split.surface
-        if cover is not None:
-            covered, s_out = cover.chosen, cover.direct + cover.q * (split.surface - cover.direct)
         L = att + split.single + split.multiple
         if gbuf is None:
             return L, mi.Bool(True), []
@@ -975,8 +1030,8 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             "inscatter": rgb(split.single + split.multiple),
             "single": rgb(split.single),
             "multiple": rgb(split.multiple),
-            "surface": rgb(dr.select(covered, s_out, 0.0)),
-            "surface_coverage": [dr.select(covered, 1.0, 0.0)],
+            "surface": rgb(surface),
+            "surface_coverage": [coverage],
             **gbuf,
         }
         return L, mi.Bool(True), [c for g in gbuffer.SAMPLE_GROUPS for c in parts[g]]
