@@ -11,7 +11,8 @@ the back end's memory allows, and turns them into means and standard errors.
 * **Deterministic**: pass ``k`` has its own seed derived from ``seed``; the same
   ``(scene, overrides, spp, seed, pixel_filter, variant)`` gives identical pixels.
 * **Cheap**: the running sums stay on the device (Dr.Jit float64, added there after
-  every pass; copied to the host only for a checkpoint and once at the end), and the
+  every pass; copied to the host only for a checkpoint and once at the end, where the
+  channels are numpy arithmetic on that one copy, which the moments file shares), and the
   passes are as few and as equal as :data:`fogref_plugins.passes.MAX_LANES` allows
   (``benchmarks/render_driver.py``
   measures the driver against one ``mi.render`` call).  A process keeps the scenes it loaded
@@ -316,9 +317,10 @@ def render(
         finally:
             source.close()
 
-    sums, squares = state[0], state[1]
-    channels = _host_float32(_channels(sums, squares, spp))  # arithmetic on the device, one copy
-    bad = gbuffer.nonfinite_report(channels)
+    # the sums copied to the host once: the channels' arithmetic and the moments file share the copy
+    sums, squares = np.asarray(state[0], dtype=np.float64), np.asarray(state[1], dtype=np.float64)
+    channels, block = _float32_planes(_channels(sums, squares, spp))
+    bad = None if np.isfinite(block).all() else gbuffer.nonfinite_report(channels)
     if bad:
         raise FogrefError(
             f"{scene_path}: the render produced {bad}; no ground truth written "
@@ -345,7 +347,7 @@ def render(
     write_exr(out, channels, attrs)
     moments = moments_path(out)  # after the EXR: sums without their truth are never left
     if keep_moments:
-        checkpoint.write_checkpoint(moments, state, key)
+        checkpoint.write_checkpoint(moments, (sums, squares, state[2]), key)
     else:
         moments.unlink(missing_ok=True)  # they would belong to the truth this one replaced
     if png:
@@ -471,21 +473,14 @@ def device_f64(x):
     return mi.TensorXd(np.ascontiguousarray(np.asarray(x, dtype=np.float64)))
 
 
-def _host_float32(channels: dict) -> dict:
-    """The EXR's channels, ``(H, W)`` float64 tensors on the device, as host float32 planes.
-
-    All channels are cast and stacked on the device and copied to the host in one
-    contiguous block (each channel a contiguous plane): the channel arithmetic is part of
-    one kernel on the device, not numpy work on the host after per-channel copies.
-    """
-    import drjit as dr
-    import mitsuba as mi
-
+def _float32_planes(channels: dict) -> tuple[dict, np.ndarray]:
+    """The EXR's channels, ``(H, W)`` float64 arrays, cast to float32 planes of one contiguous
+    ``(channels, H, W)`` block: ``(name -> plane, block)`` (one finiteness check covers them all)."""
     names = list(channels)
-    h, w = (int(x) for x in channels[names[0]].shape)
-    flat = dr.concat([mi.Float(channels[k].array) for k in names])
-    planes = np.asarray(flat).reshape(len(names), h, w)
-    return dict(zip(names, planes))
+    block = np.empty((len(names), *np.shape(channels[names[0]])), dtype=np.float32)
+    for plane, name in zip(block, names):
+        plane[...] = channels[name]  # round to nearest, as astype
+    return dict(zip(names, block)), block
 
 
 def _exr_threads() -> None:
@@ -495,9 +490,9 @@ def _exr_threads() -> None:
         OpenEXR.set_global_thread_count(os.cpu_count() or 1)
 
 
-def _channels(sums, squares, spp: int) -> dict:
-    """EXR channels from the integrator's per-pixel sums, ``(H, W, K)`` Dr.Jit float64
-    tensors or numpy arrays (see :func:`gbuffer.moments_to_channels`)."""
+def _channels(sums: np.ndarray, squares: np.ndarray, spp: int) -> dict:
+    """EXR channels (float64) from the integrator's per-pixel sums and squares, ``(H, W, K)``
+    float64 arrays on the host (see :func:`gbuffer.moments_to_channels`)."""
     by_group = {g: sums[..., checkpoint.sum_channels(g)] for g in ("final", *gbuffer.SAMPLE_GROUPS)}
     k = 3 * len(gbuffer.SQUARED_GROUPS)  # squares first, then the channel-pair products
     sq = {g: squares[..., 3 * i : 3 * i + 3] for i, g in enumerate(gbuffer.SQUARED_GROUPS)}
