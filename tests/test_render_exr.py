@@ -54,6 +54,48 @@ def test_same_seed_same_pixels(rendered):
         assert np.array_equal(a[k], b[k]), k
 
 
+def test_every_compression_stores_the_same_values(rendered, mitsuba):
+    """``exr_compression`` changes the file, never a value: the render of ``a`` written with each
+    other lossless compression reads back bitwise equal (smallest error detected: one bit of one
+    float32 value of one channel); a lossy or unknown one is refused in one line before any work."""
+    import OpenEXR
+
+    from fogref.render.render import render
+
+    d, (a, _), _ = rendered
+    sizes = {}
+    for c in ("none", "rle"):
+        out = render(
+            SCENES / "valley.xml",
+            d / f"{c}.exr",
+            spp=8,
+            seed=3,
+            overrides=SMALL,
+            progress=False,
+            png=False,
+            exr_compression=c,
+        )
+        got, attrs = read_exr(out)
+        assert attrs["compression"] == getattr(
+            OpenEXR, "NO_COMPRESSION" if c == "none" else "RLE_COMPRESSION"
+        )
+        assert sorted(got) == sorted(a) and all(
+            np.array_equal(got[k].view(np.uint32), a[k].view(np.uint32)) for k in a
+        )
+        sizes[c] = out.stat().st_size
+    assert sizes["none"] > (d / "a.exr").stat().st_size  # zip, the default, compresses
+    with pytest.raises(FogrefError, match="--exr-compression: 'b44' is not one of"):
+        render(
+            SCENES / "valley.xml",
+            d / "lossy.exr",
+            spp=8,
+            overrides=SMALL,
+            progress=False,
+            exr_compression="b44",
+        )
+    assert not (d / "lossy.exr").exists()
+
+
 def test_header_records_everything(rendered):
     _, (_, attrs), _ = rendered
     for k in (

@@ -65,7 +65,7 @@ from fogref._version import __version__
 from fogref.atomic import atomic_write, refuse_overwriting_inputs, temporary_names
 from fogref.display import write_preview
 from fogref.errors import FogrefError
-from fogref.exrio import read_exr, write_exr
+from fogref.exrio import EXR_COMPRESSIONS, read_exr, write_exr
 from fogref.render import checkpoint, distributed
 from fogref.render import load as scene_loader
 from fogref.render.variant import set_variant
@@ -170,6 +170,7 @@ def render(
     workers: int | None = None,
     keep_moments: bool = True,
     worker_timeout: float = cluster.WORKER_TIMEOUT,
+    exr_compression: str = "zip",
 ) -> Path:
     """Render ``scene_path`` with ``spp`` samples per pixel into the EXR ``out``.
 
@@ -193,6 +194,9 @@ def render(
                   (the module doc); False: render afresh.
     worker_timeout: with ``scheduler``: seconds to wait for its first worker, (0, 1e6] (it says
                   that it waits; then a one-line error).
+    exr_compression: the EXR's lossless compression, one of
+                  :data:`fogref.exrio.EXR_COMPRESSIONS` (``zip``: the smallest file; ``none``
+                  and ``rle`` write faster, the same values in a larger file).
 
     Returns the EXR path.  Raises :class:`FogrefError` (or its ParameterError) for bad input,
     and before any work when an output (the EXR, the PNG, the checkpoint) is the scene or a
@@ -204,6 +208,8 @@ def render(
         raise FogrefError(f"--seed: {seed} outside [0, 2^31)")
     if pixel_filter not in PIXEL_FILTERS:
         raise FogrefError(f"--pixel-filter: '{pixel_filter}' is not one of {PIXEL_FILTERS}")
+    if exr_compression not in EXR_COMPRESSIONS:
+        raise FogrefError(f"--exr-compression: '{exr_compression}' is not one of {EXR_COMPRESSIONS}")
     scheduler = cluster.check_scheduler(scheduler, _SOURCE)
     workers = cluster.check_workers(workers, _SOURCE)
     worker_timeout = cluster.check_worker_timeout(worker_timeout, _SOURCE)
@@ -344,7 +350,7 @@ def render(
         "fogref.render_seconds": {"total": time.perf_counter() - t0, "passes": timings},
     }
     _exr_threads()
-    write_exr(out, channels, attrs)
+    write_exr(out, channels, attrs, exr_compression)
     moments = moments_path(out)  # after the EXR: sums without their truth are never left
     if keep_moments:
         checkpoint.write_checkpoint(moments, (sums, squares, state[2]), key)
