@@ -103,7 +103,7 @@ def child(t_launch: float, out: str) -> None:
     import numpy as np
 
     sums, squares = np.asarray(state[0]), np.asarray(state[1])
-    channels = R._float32_planes(R._channels(sums, squares, SPP))[0]
+    channels = R._float32_planes(R._channels(sums, squares, SPP))[0]  # 32x18: the driver's host path
     lap("channels")
     from fogref.exrio import write_exr
 

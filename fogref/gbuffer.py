@@ -175,14 +175,43 @@ def schema_table() -> str:
     return "\n".join(rows)
 
 
+class _NumpyArrays:
+    """The array operations :func:`moments_to_channels` needs, for numpy arrays."""
+
+    asarray = staticmethod(lambda x: np.asarray(x, dtype=np.float64))
+    where = staticmethod(np.where)
+    sqrt = staticmethod(np.sqrt)
+    maximum = staticmethod(np.maximum)
+    minimum = staticmethod(np.minimum)
+    zeros_like = staticmethod(np.zeros_like)
+    stack_last = staticmethod(lambda xs: np.stack(xs, -1))
+
+
+class _DrJitArrays:
+    """The same for Dr.Jit float64 tensors (the render driver's sums stay on the device)."""
+
+    def __init__(self) -> None:
+        import drjit as dr
+
+        self.asarray = lambda x: x
+        self.where, self.sqrt, self.maximum, self.minimum = dr.select, dr.sqrt, dr.maximum, dr.minimum
+        self.zeros_like = lambda x: dr.zeros(type(x), x.shape)
+        self.stack_last = lambda xs: dr.concat([x[..., None] for x in xs], axis=len(xs[0].shape))
+
+
+def _arrays_for(x: Any) -> Any:
+    return _DrJitArrays() if type(x).__module__.startswith("drjit") else _NumpyArrays
+
+
 def moments_to_channels(
-    sums: dict[str, np.ndarray], squares: dict[str, np.ndarray], n: int, cross: dict[str, np.ndarray]
-) -> dict[str, np.ndarray]:
+    sums: dict[str, Any], squares: dict[str, Any], n: int, cross: dict[str, Any]
+) -> dict[str, Any]:
     """EXR channels from per-pixel sums of the per-sample outputs.
 
     ``sums``: group -> ``(H, W, k)`` float64 sum over a pixel's ``n >= 1`` samples, for each of
-    ``("final",) + SAMPLE_GROUPS``.  ``squares`` and ``cross``: group -> ``(H, W, 3)`` sums of
-    squares and of the pair products :data:`CHANNEL_PAIRS` (R*G, R*B, G*B), for :data:`SQUARED_GROUPS`.
+    ``("final",) + SAMPLE_GROUPS``, as numpy arrays or Dr.Jit float64 tensors (then so is the
+    result).  ``squares`` and ``cross``: group -> ``(H, W, 3)`` sums of squares and of the
+    pair products :data:`CHANNEL_PAIRS` (R*G, R*B, G*B), for :data:`SQUARED_GROUPS`.
     Returns channel -> ``(H, W)`` float64: means, the ratio estimator ``surface`` (0 where no
     sample reached the surface), ``stderr.*`` (0 if ``n == 1``) and ``corr.*`` in [-1, 1] (0
     where a channel has no noise, or ``n == 1``).
@@ -209,8 +238,9 @@ def moments_to_channels(
     >>> float(c["stderr.R"][0, 0]), float(c["corr.RG"][0, 0])
     (1.0, 1.0)
     """
+    xp = _arrays_for(next(iter(sums.values())))
     out = {}
-    mean = {g: np.asarray(s, dtype=np.float64) / n for g, s in sums.items()}
+    mean = {g: xp.asarray(s) / n for g, s in sums.items()}
     for g in ("final",) + SAMPLE_GROUPS:
         if g == "surface":
             continue
@@ -218,16 +248,16 @@ def moments_to_channels(
             out[c] = mean[g][..., i]
     cover = mean["surface_coverage"][..., 0]
     valid = cover > 0
-    safe = np.where(valid, cover, 1.0)
+    safe = xp.where(valid, cover, 1.0)
     for i, c in enumerate(channel_names("surface")):
         ratio = mean["surface"][..., i] / safe
-        out[c] = np.where(valid, ratio, 0.0)
+        out[c] = xp.where(valid, ratio, 0.0)
     for g in SQUARED_GROUPS:
-        m2 = np.asarray(squares[g], dtype=np.float64) / n
-        mx = np.asarray(cross[g], dtype=np.float64) / n
+        m2 = xp.asarray(squares[g]) / n
+        mx = xp.asarray(cross[g]) / n
         if g == "surface":
             # the delta method for the ratio r = E[s]/E[c] (docs/schema.md, "surface")
-            r = np.stack([out[c] for c in channel_names("surface")], -1)
+            r = xp.stack_last([out[c] for c in channel_names("surface")])
             var = (m2 - 2 * r * mean["surface"] + r * r * cover[..., None]) / safe[..., None] ** 2
 
             def cov(i: int, j: int, mij: Any, r: Any = r) -> Any:
@@ -241,16 +271,16 @@ def moments_to_channels(
             def cov(i: int, j: int, mij: Any, r: Any = mean[g]) -> Any:
                 return mij - r[..., i] * r[..., j]
 
-        var = np.maximum(var, 0.0)
-        se = np.sqrt(var / max(n - 1, 1)) if n > 1 else np.zeros_like(var)
+        var = xp.maximum(var, 0.0)
+        se = xp.sqrt(var / max(n - 1, 1)) if n > 1 else xp.zeros_like(var)
         for i, c in enumerate(stderr_names(g)):
-            out[c] = np.where(valid, se[..., i], 0.0) if g == "surface" else se[..., i]
+            out[c] = xp.where(valid, se[..., i], 0.0) if g == "surface" else se[..., i]
         for k, ((i, j), c) in enumerate(zip(CHANNEL_PAIRS, correlation_names(g))):
             vv = var[..., i] * var[..., j]
             has = (vv > 0) & valid if g == "surface" else vv > 0
-            rho = cov(i, j, mx[..., k]) / np.sqrt(np.where(has, vv, 1.0))
-            rho = np.maximum(np.minimum(rho, 1.0), -1.0)
-            out[c] = np.where(has, rho, 0.0) if n > 1 else np.zeros_like(rho)
+            rho = cov(i, j, mx[..., k]) / xp.sqrt(xp.where(has, vv, 1.0))
+            rho = xp.maximum(xp.minimum(rho, 1.0), -1.0)
+            out[c] = xp.where(has, rho, 0.0) if n > 1 else xp.zeros_like(rho)
     return out
 
 

@@ -11,8 +11,8 @@ the back end's memory allows, and turns them into means and standard errors.
 * **Deterministic**: pass ``k`` has its own seed derived from ``seed``; the same
   ``(scene, overrides, spp, seed, pixel_filter, variant)`` gives identical pixels.
 * **Cheap**: the running sums stay on the device (Dr.Jit float64, added there after
-  every pass; copied to the host only for a checkpoint and once at the end, where the
-  channels are numpy arithmetic on that one copy, which the moments file shares), and the
+  every pass; copied to the host only for a checkpoint and once at the end, for the moments
+  file and, up to :data:`HOST_CHANNELS_MAX_PIXELS`, the channels' numpy arithmetic), and the
   passes are as few and as equal as :data:`fogref_plugins.passes.MAX_LANES` allows
   (``benchmarks/render_driver.py``
   measures the driver against one ``mi.render`` call).  A process keeps the scenes it loaded
@@ -74,6 +74,11 @@ from fogref.scene.parsed import ParsedScene, read_scene
 
 PIXEL_FILTERS = ("centre", "box")
 _SOURCE = "fogref render"
+#: Up to this many pixels the EXR's channels are numpy arithmetic on the host copy of the sums (no
+#: Dr.Jit kernel traced for them: at 32x18, 2 ms against 12 ms); above, one fused Dr.Jit kernel
+#: (numpy's temporaries cost more than the tracing: at 320x180, about 2x the kernel).  The two give
+#: the same float32 values, bit for bit (tests/test_render_exr.py).
+HOST_CHANNELS_MAX_PIXELS = 1 << 14
 #: Bytes per pixel the driver holds: float64 sums of 30 channels and 42 squares and
 #: channel-pair products, twice (running sum and the pass being added), plus the EXR's
 #: float32 channels.
@@ -325,7 +330,10 @@ def render(
 
     # the sums copied to the host once: the channels' arithmetic and the moments file share the copy
     sums, squares = np.asarray(state[0], dtype=np.float64), np.asarray(state[1], dtype=np.float64)
-    channels, block = _float32_planes(_channels(sums, squares, spp))
+    if W * H <= HOST_CHANNELS_MAX_PIXELS:  # numpy on that copy: no Dr.Jit kernel traced
+        channels, block = _float32_planes(_channels(sums, squares, spp))
+    else:  # one fused kernel on the device, one copy of the float32 block
+        channels, block = _device_float32(_channels(state[0], state[1], spp))
     bad = None if np.isfinite(block).all() else gbuffer.nonfinite_report(channels)
     if bad:
         raise FogrefError(
@@ -350,7 +358,7 @@ def render(
         "fogref.render_seconds": {"total": time.perf_counter() - t0, "passes": timings},
     }
     _exr_threads()
-    write_exr(out, channels, attrs, exr_compression)
+    write_exr(out, channels, attrs, compression=exr_compression)
     moments = moments_path(out)  # after the EXR: sums without their truth are never left
     if keep_moments:
         checkpoint.write_checkpoint(moments, (sums, squares, state[2]), key)
@@ -479,6 +487,20 @@ def device_f64(x):
     return mi.TensorXd(np.ascontiguousarray(np.asarray(x, dtype=np.float64)))
 
 
+def _device_float32(channels: dict) -> tuple[dict, np.ndarray]:
+    """The EXR's channels, ``(H, W)`` float64 Dr.Jit tensors, cast and stacked on the device and
+    copied to the host in one contiguous ``(channels, H, W)`` float32 block: ``(name -> plane,
+    block)``.  The channel arithmetic is part of one kernel, not numpy work after per-channel
+    copies."""
+    import drjit as dr
+    import mitsuba as mi
+
+    names = list(channels)
+    h, w = (int(x) for x in channels[names[0]].shape)
+    block = np.asarray(dr.concat([mi.Float(channels[k].array) for k in names])).reshape(len(names), h, w)
+    return dict(zip(names, block)), block
+
+
 def _float32_planes(channels: dict) -> tuple[dict, np.ndarray]:
     """The EXR's channels, ``(H, W)`` float64 arrays, cast to float32 planes of one contiguous
     ``(channels, H, W)`` block: ``(name -> plane, block)`` (one finiteness check covers them all)."""
@@ -496,9 +518,10 @@ def _exr_threads() -> None:
         OpenEXR.set_global_thread_count(os.cpu_count() or 1)
 
 
-def _channels(sums: np.ndarray, squares: np.ndarray, spp: int) -> dict:
+def _channels(sums, squares, spp: int) -> dict:
     """EXR channels (float64) from the integrator's per-pixel sums and squares, ``(H, W, K)``
-    float64 arrays on the host (see :func:`gbuffer.moments_to_channels`)."""
+    numpy arrays or Dr.Jit float64 tensors, the result of the same kind (see
+    :func:`gbuffer.moments_to_channels`)."""
     by_group = {g: sums[..., checkpoint.sum_channels(g)] for g in ("final", *gbuffer.SAMPLE_GROUPS)}
     k = 3 * len(gbuffer.SQUARED_GROUPS)  # squares first, then the channel-pair products
     sq = {g: squares[..., 3 * i : 3 * i + 3] for i, g in enumerate(gbuffer.SQUARED_GROUPS)}
