@@ -404,6 +404,13 @@ def report(r: dict) -> str:
         m: statistics.median(row["host"] / row["wall"] for row in r["cases"][0]["rows"][m]) for m in modes
     }
     met = lambda m: "met" if share[m] < 1 / 8 else "not met"  # noqa: E731
+    rows = r["cases"][0]["rows"]
+    paired = {  # after's host time over another mode's, render by render (the same round and seed)
+        m: quartiles([a["host"] / b["host"] for a, b in zip(rows["after"], rows[m])])
+        for m in modes
+        if m != "after"
+    }
+    ratio = lambda m: f"{paired[m][0]:.2f} [{paired[m][1]:.2f}–{paired[m][2]:.2f}]"  # noqa: E731
     after = small["after"]
     md += [
         "",
@@ -422,7 +429,8 @@ def report(r: dict) -> str:
         f"({small['after, none']['exr'][0] * 1e3:.0f} ms with an uncompressed EXR), reading the scene "
         f"{after['parse'][0] * 1e3:.1f} ms, checks, the inputs' listing and digest and the merge "
         f"{after['rest'][0] * 1e3:.0f} ms (medians of each phase; they do not add up to the median "
-        "of the sum).",
+        "of the sum).  After's host time over each other mode's, render by render (same round and "
+        "seed): " + ", ".join(f"{m} {ratio(m)}" for m in paired) + ".",
     ]
     fp = r["first_pass"]
     md += [
