@@ -216,6 +216,39 @@ def worker_check(rounds: int = 200) -> dict:
     return {k: quartiles(v) for k, v in times.items()} | {"n": rounds}
 
 
+def channel_paths(rounds: int = 7) -> dict:
+    """The driver's two ways from a render's float64 sums to the EXR's float32 planes, on the same
+    sums (valley, 16 spp): ``host`` (numpy on the host copy, ``_float32_planes``, the copy included)
+    and ``device`` (one Dr.Jit kernel, ``_device_float32``), alternating, seconds per resolution."""
+    import drjit as dr
+    import numpy as np
+
+    import fogref.render.render as R
+    from fogref.render import load
+
+    out = {}
+    for w, h in ((32, 18), (64, 36), (128, 72), (320, 180)):
+        scene, _ = load.load_scene(SCENE, {"res": w, "resy": h})
+        integrator = scene.integrator()
+        integrator.aovs = True
+        s, q = integrator.render_moments(scene, 0, 0, 16, pixel_exact=True)
+        dr.eval(s, q)
+        ways = {
+            "host": lambda: R._float32_planes(R._channels(np.asarray(s), np.asarray(q), 16)),
+            "device": lambda: R._device_float32(R._channels(s, q, 16)),
+        }
+        times: dict = {k: [] for k in ways}
+        for f in ways.values():  # the first compiles the device's kernel
+            f()
+        for _ in range(rounds):
+            for k, f in ways.items():
+                t0 = time.perf_counter()
+                f()
+                times[k].append(time.perf_counter() - t0)
+        out[f"{w}x{h}"] = {k: quartiles(v) for k, v in times.items()}
+    return out | {"n": rounds, "limit": R.HOST_CHANNELS_MAX_PIXELS, "load_average": os.getloadavg()[0]}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--rounds", type=int, default=12, help="renders per mode and case (small cases)")
@@ -225,9 +258,19 @@ def main() -> None:
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
     ap.add_argument("--report-only", action="store_true", help="rewrite the Markdown from the JSON")
     ap.add_argument("--serve", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--channels-only", action="store_true", help="rerun only the channels' two paths")
     a = ap.parse_args()
     if a.serve:
         return serve()
+    if a.channels_only:
+        from fogref.render.variant import set_variant
+
+        set_variant("llvm_ad_rgb")
+        r = json.loads((Path(a.out) / "frozen_render.json").read_text())
+        r["channel_paths"] = channel_paths()
+        (Path(a.out) / "frozen_render.json").write_text(json.dumps(r, indent=1) + "\n")
+        (Path(a.out) / "frozen_render.md").write_text(report(r))
+        return
     if a.report_only:
         r = json.loads((Path(a.out) / "frozen_render.json").read_text())
         (Path(a.out) / "frozen_render.md").write_text(report(r))
@@ -335,6 +378,7 @@ def main() -> None:
         "n": len(diff),
     }
     result["worker_check"] = worker_check()
+    result["channel_paths"] = channel_paths()
     result["load_average_after"] = os.getloadavg()[0]
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -442,6 +486,19 @@ def report(r: dict) -> str:
         f"after one of each that compiles: traced {ms(fp['traced'])} ms, recorded "
         f"{ms(fp['recorded'])} ms; recorded - traced, paired: {ms(fp['recorded_minus_traced'])} ms.",
     ]
+    cp = r.get("channel_paths")
+    if cp:
+        sizes = [k for k in cp if "x" in k]
+        md += [
+            "",
+            "## The channels: numpy on the host or one Dr.Jit kernel",
+            "",
+            f"The same float64 sums (valley, 16 spp) to the EXR's float32 planes, {cp['n']} of each "
+            f"way alternating after one that compiles, load average {cp['load_average']:.1f}, ms: "
+            + "; ".join(f"{k} host {ms(cp[k]['host'])}, device {ms(cp[k]['device'])}" for k in sizes)
+            + f".  The driver takes the host's way up to {cp['limit']} pixels "
+            "(`HOST_CHANNELS_MAX_PIXELS`), the device's above.",
+        ]
     wc = r.get("worker_check")
     if wc:
         us = lambda q: f"{q[0] * 1e3:.2f} [{q[1] * 1e3:.2f}–{q[2] * 1e3:.2f}]"  # noqa: E731

@@ -75,10 +75,10 @@ from fogref.scene.parsed import ParsedScene, read_scene
 PIXEL_FILTERS = ("centre", "box")
 _SOURCE = "fogref render"
 #: Up to this many pixels the EXR's channels are numpy arithmetic on the host copy of the sums (no
-#: Dr.Jit kernel traced for them: at 32x18, 2 ms against 12 ms); above, one fused Dr.Jit kernel
-#: (numpy's temporaries cost more than the tracing: at 320x180, about 2x the kernel).  The two give
-#: the same float32 values, bit for bit (tests/test_render_exr.py).
-HOST_CHANNELS_MAX_PIXELS = 1 << 14
+#: Dr.Jit kernel traced for them); above, one fused Dr.Jit kernel (numpy's temporaries cost more
+#: than the tracing).  Both timed on the same sums in ``reports/benchmarks/frozen_render.md``; the
+#: two give the same float32 values, bit for bit (tests/test_render_exr.py).
+HOST_CHANNELS_MAX_PIXELS = 1 << 12
 #: Bytes per pixel the driver holds: float64 sums of 30 channels and 42 squares and
 #: channel-pair products, twice (running sum and the pass being added), plus the EXR's
 #: float32 channels.
@@ -328,10 +328,11 @@ def render(
         finally:
             source.close()
 
-    # the sums copied to the host once: the channels' arithmetic and the moments file share the copy
-    sums, squares = np.asarray(state[0], dtype=np.float64), np.asarray(state[1], dtype=np.float64)
-    if W * H <= HOST_CHANNELS_MAX_PIXELS:  # numpy on that copy: no Dr.Jit kernel traced
-        channels, block = _float32_planes(_channels(sums, squares, spp))
+    small = W * H <= HOST_CHANNELS_MAX_PIXELS
+    # the sums copied to the host once: the moments file and the small render's channels share it
+    host = tuple(np.asarray(x, dtype=np.float64) for x in state[:2]) if small or keep_moments else ()
+    if small:  # numpy on that copy: no Dr.Jit kernel traced
+        channels, block = _float32_planes(_channels(host[0], host[1], spp))
     else:  # one fused kernel on the device, one copy of the float32 block
         channels, block = _device_float32(_channels(state[0], state[1], spp))
     bad = None if np.isfinite(block).all() else gbuffer.nonfinite_report(channels)
@@ -361,7 +362,7 @@ def render(
     write_exr(out, channels, attrs, compression=exr_compression)
     moments = moments_path(out)  # after the EXR: sums without their truth are never left
     if keep_moments:
-        checkpoint.write_checkpoint(moments, (sums, squares, state[2]), key)
+        checkpoint.write_checkpoint(moments, (*host, state[2]), key)
     else:
         moments.unlink(missing_ok=True)  # they would belong to the truth this one replaced
     if png:
