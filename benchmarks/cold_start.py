@@ -100,7 +100,10 @@ def child(t_launch: float, out: str) -> None:
     t["kernels"] = len(jit)
     t["kernels_compiled"] = sum(1 for k in jit if k.get("backend_time", 0.0) > 0.05)
     t0 = time.perf_counter()
-    channels = R._host_float32(R._channels(state[0], state[1], SPP))
+    import numpy as np
+
+    sums, squares = np.asarray(state[0]), np.asarray(state[1])
+    channels = R._float32_planes(R._channels(sums, squares, SPP))[0]  # 32x18: the driver's host path
     lap("channels")
     from fogref.exrio import write_exr
 

@@ -19,9 +19,16 @@ import OpenEXR
 from fogref.atomic import atomic_write
 from fogref.errors import FogrefError
 
+#: The lossless compressions :func:`write_exr` offers (OpenEXR's names, lower case), every one
+#: readable by OpenEXR 2 and later: ``zip`` (zlib, 16 scan lines a block: the default; the
+#: smallest files but the slowest to write), ``zips`` (zlib, one scan line a block), ``rle``
+#: (run lengths: fast, larger), ``piz`` (wavelet and Huffman) and ``none``.  The lossy ones
+#: (``pxr24``, ``b44``, ``dwaa``) would change a truth's float32 values and are not offered.
+EXR_COMPRESSIONS = ("zip", "zips", "rle", "piz", "none")
 
-def write_exr(path, channels: dict, attrs: dict | None = None) -> None:
-    """Write ``channels`` atomically to the EXR ``path`` (ZIP-compressed scan lines).
+
+def write_exr(path, channels: dict, attrs: dict | None = None, compression: str = "zip") -> None:
+    """Write ``channels`` atomically to the EXR ``path`` (scan lines, ``compression``).
 
     Parameters
     ----------
@@ -34,10 +41,30 @@ def write_exr(path, channels: dict, attrs: dict | None = None) -> None:
         with :class:`~fogref.errors.FogrefError`; nothing is silently replaced.
     attrs
         Header attributes; values that are not strings are stored as JSON strings.
+    compression
+        One of :data:`EXR_COMPRESSIONS` (all lossless: the values read back are the same);
+        another is a :class:`~fogref.errors.FogrefError`.
+
+    >>> import tempfile
+    >>> p = Path(tempfile.mkdtemp()) / "a.exr"
+    >>> ramp = {"R": np.linspace(0, 1, 6, dtype=np.float32).reshape(2, 3) / 3}
+    >>> for c in EXR_COMPRESSIONS:
+    ...     write_exr(p, ramp, compression=c)
+    ...     assert np.array_equal(read_exr(p)[0]["R"], ramp["R"]), c
+    >>> write_exr(p, ramp, compression="b44")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.FogrefError: ...: EXR compression 'b44' is not one of zip, zips, rle, piz, none ...
     """
     path = Path(path)
+    if compression not in EXR_COMPRESSIONS:
+        raise FogrefError(
+            f"{path}: EXR compression {compression!r} is not one of {', '.join(EXR_COMPRESSIONS)} "
+            "(the lossless ones)"
+        )
     path.parent.mkdir(parents=True, exist_ok=True)
-    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    kind = getattr(OpenEXR, f"{'NO' if compression == 'none' else compression.upper()}_COMPRESSION")
+    header = {"compression": kind, "type": OpenEXR.scanlineimage}
     for k, v in (attrs or {}).items():
         header[k] = v if isinstance(v, str) else json.dumps(v)
     with np.errstate(over="ignore", invalid="ignore"):  # beyond float32: inf, refused just below

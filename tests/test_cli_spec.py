@@ -74,11 +74,13 @@ def test_every_default_equals_the_python_apis(cmd):
 def test_tied_constants_are_the_apis():
     from fogref.cli import compare, render
     from fogref.compare import foreign
+    from fogref.exrio import EXR_COMPRESSIONS
     from fogref.render import render as R
     from fogref.render.variant import DEFAULT_VARIANT
 
     assert render.PIXEL_FILTERS == R.PIXEL_FILTERS and compare.ENCODINGS == foreign.ENCODINGS
     assert DEFAULT_VARIANT in render.VARIANTS
+    assert render.EXR_COMPRESSIONS == EXR_COMPRESSIONS
 
 
 def test_the_top_help_lists_every_command_with_one_line(capsys):

@@ -319,3 +319,59 @@ def test_a_worker_that_reads_other_inputs_refuses_to_render(tmp_path):
     j = D.job(SCENE, RES, "0" * 64, "llvm_ad_rgb", SEED, "centre", None)
     with pytest.raises(FogrefError, match="reads other inputs than the driver"):
         D.render_pass(j, 0, 1)
+
+
+def test_a_worker_checks_the_inputs_once_per_render_and_refuses_an_edit_mid_render(
+    tmp_path, monkeypatch, mitsuba
+):
+    """A worker reads the scene and digests its inputs on its first pass of a render only (a new
+    render checks again); an input edited mid-render, between two passes or while a pass runs, is
+    refused and that pass is not returned.  Smallest error detected: one byte appended to the scene
+    file (whitespace: the same scene to Mitsuba), its times set back as a file unmodified for a while
+    (the memoised hash is trusted until the file's size or times change)."""
+    import fogref_plugins.fogpath as fpm
+
+    import fogref.render.distributed as D
+    from fogref.errors import FogrefError
+    from fogref.scene.parsed import read_scene
+
+    scene = tmp_path / "valley.xml"
+    scene.write_bytes(SCENE.read_bytes())
+
+    def age(path):  # unmodified for a minute: its hash is memoised on its size, times and inode
+        old = path.stat().st_mtime - 60
+        os.utime(path, (old, old))
+
+    def new_job():
+        age(scene)
+        return D.job(scene, RES, read_scene(scene, RES).digest, "llvm_ad_rgb", SEED, "centre", None)
+
+    reads = []
+    real_read = D.read_scene
+    monkeypatch.setattr(D, "read_scene", lambda *a: reads.append(a) or real_read(*a))
+    j = new_job()
+    first = D.render_pass(j, 0, 1)
+    D.render_pass(j, 1, 1)
+    assert len(reads) == 1  # the second pass: no read of the scene, no digest
+    again = D.render_pass(new_job(), 0, 1)
+    assert len(reads) == 2 and np.array_equal(again["sums"], first["sums"])  # a new render: checked
+
+    with open(scene, "ab") as f:  # edited between two passes
+        f.write(b" ")
+    with pytest.raises(FogrefError, match=f"{scene} changed during the render"):
+        D.render_pass(j, 2, 1)
+
+    j = new_job()
+    real_pass = fpm.FogPathIntegrator.render_moments
+
+    def edited_while_running(self, *args, **kw):
+        with open(scene, "ab") as f:
+            f.write(b" ")
+        return real_pass(self, *args, **kw)
+
+    monkeypatch.setattr(fpm.FogPathIntegrator, "render_moments", edited_while_running)
+    with pytest.raises(FogrefError, match="changed during the render"):
+        D.render_pass(j, 0, 1)
+    monkeypatch.setattr(fpm.FogPathIntegrator, "render_moments", real_pass)
+    with pytest.raises(FogrefError, match="reads other inputs than the driver"):  # a worker new to it
+        D.render_pass({**j, "render": "another"}, 1, 1)

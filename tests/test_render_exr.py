@@ -54,6 +54,73 @@ def test_same_seed_same_pixels(rendered):
         assert np.array_equal(a[k], b[k]), k
 
 
+def test_every_compression_stores_the_same_values(rendered, mitsuba, tmp_path):
+    """``exr_compression`` changes the file, never a value: the render of ``a`` written with each
+    other lossless compression reads back bitwise equal (smallest error detected: one bit of one
+    float32 value of one channel); a lossy or unknown one is refused in one line before any work."""
+    import OpenEXR
+
+    from fogref.render.render import render
+
+    d, (a, _), _ = rendered
+    sizes = {}
+    for c in ("none", "rle"):
+        out = render(
+            SCENES / "valley.xml",
+            tmp_path / f"{c}.exr",
+            spp=8,
+            seed=3,
+            overrides=SMALL,
+            progress=False,
+            png=False,
+            exr_compression=c,
+        )
+        got, attrs = read_exr(out)
+        assert attrs["compression"] == getattr(
+            OpenEXR, "NO_COMPRESSION" if c == "none" else "RLE_COMPRESSION"
+        )
+        assert sorted(got) == sorted(a) and all(
+            np.array_equal(got[k].view(np.uint32), a[k].view(np.uint32)) for k in a
+        )
+        sizes[c] = out.stat().st_size
+    assert sizes["none"] > (d / "a.exr").stat().st_size  # zip, the default, compresses
+    with pytest.raises(FogrefError, match="--exr-compression: 'b44' is not one of"):
+        render(
+            SCENES / "valley.xml",
+            tmp_path / "lossy.exr",
+            spp=8,
+            overrides=SMALL,
+            progress=False,
+            exr_compression="b44",
+        )
+    assert not (tmp_path / "lossy.exr").exists()
+
+
+@pytest.mark.parametrize("spp, exact", [(1, True), (2, True), (8, True), (4, False)])
+def test_the_channels_on_the_host_and_on_the_device_are_bitwise_equal(mitsuba, spp, exact):
+    """The driver computes the EXR's channels with numpy on the host copy of the sums up to
+    ``HOST_CHANNELS_MAX_PIXELS`` pixels and with one Dr.Jit kernel above: the same sums give the
+    same float32 values either way.  Smallest error detected: one bit of one value of one channel
+    (a fused multiply-add, another rounding of the cast, another order of the operations)."""
+    import drjit as dr
+
+    import fogref.render.render as R
+    from fogref.render.load import loaded_scene
+    from fogref.scene.parsed import read_scene
+
+    scene, _ = loaded_scene(read_scene(SCENES / "valley.xml", {"res": 24, "resy": 14}))
+    integrator = scene.integrator()
+    integrator.aovs = True
+    s, q = integrator.render_moments(scene, 0, 7, spp, pixel_exact=exact)
+    dr.eval(s, q)
+    host, _ = R._float32_planes(R._channels(np.asarray(s), np.asarray(q), spp))
+    device, _ = R._device_float32(R._channels(s, q, spp))
+    assert sorted(host) == sorted(device) == sorted(gbuffer.exr_channel_names())
+    differ = [k for k in host if not np.array_equal(host[k].view(np.uint32), device[k].view(np.uint32))]
+    assert not differ, differ
+    assert 24 * 14 <= R.HOST_CHANNELS_MAX_PIXELS < 320 * 180
+
+
 def test_header_records_everything(rendered):
     _, (_, attrs), _ = rendered
     for k in (
@@ -424,7 +491,7 @@ def test_full_disk_is_an_error_not_a_traceback(tmp_path, mitsuba, monkeypatch, c
     import fogref.render.render as R
     from fogref.cli import main
 
-    def full(path, channels, attrs=None):
+    def full(path, channels, attrs=None, compression="zip"):
         raise OSError(errno.ENOSPC, "No space left on device", str(path))
 
     monkeypatch.setattr(R, "write_exr", full)

@@ -12,6 +12,7 @@ The driver (:mod:`fogref.render.render`) defers SIGINT/SIGTERM across the write.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import sys
 from pathlib import Path
@@ -58,13 +59,18 @@ def sum_channels(group: str) -> slice:
     >>> sum_channels("final")
     slice(0, 3, None)
     """
-    i = 0
+    return _sum_slices()[group]
+
+
+@functools.cache
+def _sum_slices() -> dict[str, slice]:
+    """Group -> its slice of the sums' last axis (built once: the driver asks for every group
+    at the end of every render)."""
+    slices, i = {}, 0
     for g in ("final",) + tuple(gbuffer.SAMPLE_GROUPS):
         k = len(gbuffer.channel_names(g))
-        if g == group:
-            return slice(i, i + k)
-        i += k
-    raise KeyError(group)
+        slices[g], i = slice(i, i + k), i + k
+    return slices
 
 
 def _sum_widths() -> tuple[int, int]:

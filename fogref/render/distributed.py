@@ -22,6 +22,11 @@ of the same instruction set: the LLVM back end compiles for the host CPU).
 * **Same inputs everywhere**: a worker renders only if the digest of the scene and of every
   file it loads (:func:`fogref.scene.inputs.inputs_digest`), read on the worker, is the
   driver's; workers on other machines need the scene at the same path (a shared file system).
+  A worker reads the scene and digests its inputs once per render (the job's ``render``
+  token), on its first pass of it; each of its passes then compares every input's SHA-256
+  with the one it checked (:func:`fogref.scene.inputs.file_sha256`, memoised on the file's
+  size, times and inode: a ``stat`` per file, the bytes read again only when they changed), after
+  the pass, so a pass whose inputs were edited before it ended is refused, not returned.
 * **A lost worker is named**: each pass that the scheduler reruns because its worker died
   (running there, or its result lost with it) is reported in one line (:func:`redone_passes`,
   from the scheduler's ``remove-worker`` events).
@@ -48,6 +53,7 @@ from fogref_plugins.passes import pass_seed
 from fogref.errors import FogrefError
 from fogref.render.load import loaded_scene
 from fogref.render.variant import set_variant
+from fogref.scene.inputs import file_sha256
 from fogref.scene.parsed import read_scene
 
 __all__ = [
@@ -66,12 +72,14 @@ class PassFailed(FogrefError):
 
 
 def job(scene_path, overrides, digest: str, variant: str, seed: int, pixel_filter: str, threads) -> dict:
-    """What every pass of one render needs on a worker: a small dict, sent with each task.
+    """What every pass of one render needs on a worker: a small dict, sent with each task; ``render``
+    is a token of this render, new on each call (a worker checks the inputs once per render).
 
     >>> sorted(job("a.xml", {}, "0" * 64, "llvm_ad_rgb", 0, "centre", 1))  # doctest: +NORMALIZE_WHITESPACE
-    ['digest', 'overrides', 'pixel_filter', 'scene', 'seed', 'threads', 'variant']
+    ['digest', 'overrides', 'pixel_filter', 'render', 'scene', 'seed', 'threads', 'variant']
     """
     return {
+        "render": secrets.token_hex(8),
         "scene": os.path.abspath(scene_path),
         "overrides": dict(overrides or {}),
         "digest": digest,
@@ -82,23 +90,58 @@ def job(scene_path, overrides, digest: str, variant: str, seed: int, pixel_filte
     }
 
 
+#: The renders this worker process checked: ``render`` token -> ``(the read scene, {input path:
+#: SHA-256 as checked})``; the last :data:`KEEP_CHECKED` only, oldest dropped first.
+_CHECKED: dict = {}
+#: How many renders' checks a worker keeps.
+KEEP_CHECKED = 4
+
+
+def _input_sha256(path) -> str:
+    """:func:`fogref.scene.inputs.file_sha256` of ``path``, ``"missing"`` when it can't be read."""
+    try:
+        return file_sha256(path)
+    except OSError:
+        return "missing"
+
+
 def _worker_scene(j: dict):
-    """``(scene, integrator)`` of ``j`` in this process: the inputs read and checked against the
-    driver's digest, the scene loaded on the first pass and then reused
+    """``(scene, integrator, the inputs' hashes as checked)`` of ``j`` in this process.  On this
+    worker's first pass of the render: the scene read, its inputs hashed (before the digest and the
+    load, so an edit after that is seen by :func:`_check_unchanged`) and their digest compared with
+    the driver's; the scene loaded on the first pass and then reused
     (:func:`fogref.render.load.loaded_scene`)."""
     set_variant(j["variant"])
-    parsed = read_scene(Path(j["scene"]), j["overrides"] or None)
-    digest = parsed.digest
-    if digest != j["digest"]:
-        raise FogrefError(
-            f"{j['scene']}: this worker (pid {os.getpid()}) reads other inputs than the driver "
-            f"(inputs SHA-256 {digest[:12]}..., not {j['digest'][:12]}...); the workers need the scene "
-            f"and the files it loads at the same path"
-        )
+    hit = _CHECKED.pop(j["render"], None)
+    if hit is None:
+        parsed = read_scene(Path(j["scene"]), j["overrides"] or None)
+        hashes = {i.path: _input_sha256(i.path) for i in parsed.inputs}
+        digest = parsed.digest
+        if digest != j["digest"]:
+            raise FogrefError(
+                f"{j['scene']}: this worker (pid {os.getpid()}) reads other inputs than the driver "
+                f"(inputs SHA-256 {digest[:12]}..., not {j['digest'][:12]}...); the workers need the "
+                f"scene and the files it loads at the same path"
+            )
+        hit = (parsed, hashes)
+        while len(_CHECKED) >= KEEP_CHECKED:
+            _CHECKED.pop(next(iter(_CHECKED)))
+    _CHECKED[j["render"]] = hit  # the most recently used last
+    parsed, hashes = hit
     scene, _ = loaded_scene(parsed, j["threads"])
     integrator = scene.integrator()
     integrator.aovs = True
-    return scene, integrator
+    return scene, integrator, hashes
+
+
+def _check_unchanged(j: dict, hashes: dict) -> None:
+    """A FogrefError naming the inputs of ``j`` whose SHA-256 is no longer the one checked."""
+    changed = [str(p) for p, sha in hashes.items() if _input_sha256(p) != sha]
+    if changed:
+        raise FogrefError(
+            f"{j['scene']}: {', '.join(changed)} changed during the render (seen by the worker with "
+            f"pid {os.getpid()}); render again"
+        )
 
 
 def render_pass(j: dict, k: int, spp: int) -> dict:
@@ -108,13 +151,16 @@ def render_pass(j: dict, k: int, spp: int) -> dict:
     sums and squares of :meth:`FogPathIntegrator.render_moments` as numpy arrays ``(H, W, 30)``
     and ``(H, W, 42)``, the wall and CPU seconds the pass took in this process (its first pass
     on this process includes loading the scene and compiling the kernels) and the process id.
+    Raises :class:`~fogref.errors.FogrefError` when the inputs read here are not the driver's,
+    or when one of them changed since this worker checked them (the pass is not returned).
     """
     t0, c0 = time.perf_counter(), time.process_time()
-    scene, integrator = _worker_scene(j)
+    scene, integrator, hashes = _worker_scene(j)
     s, q = integrator.render_moments(
         scene, 0, pass_seed(j["seed"], k), int(spp), pixel_exact=j["pixel_filter"] == "centre"
     )
     sums, squares = np.asarray(s, dtype=np.float64), np.asarray(q, dtype=np.float64)
+    _check_unchanged(j, hashes)
     return {
         "k": k,
         "sums": sums,

@@ -11,7 +11,8 @@ the back end's memory allows, and turns them into means and standard errors.
 * **Deterministic**: pass ``k`` has its own seed derived from ``seed``; the same
   ``(scene, overrides, spp, seed, pixel_filter, variant)`` gives identical pixels.
 * **Cheap**: the running sums stay on the device (Dr.Jit float64, added there after
-  every pass; copied to the host only for a checkpoint and once at the end), and the
+  every pass; copied to the host only for a checkpoint and once at the end, for the moments
+  file and, up to :data:`HOST_CHANNELS_MAX_PIXELS`, the channels' numpy arithmetic), and the
   passes are as few and as equal as :data:`fogref_plugins.passes.MAX_LANES` allows
   (``benchmarks/render_driver.py``
   measures the driver against one ``mi.render`` call).  A process keeps the scenes it loaded
@@ -64,7 +65,7 @@ from fogref._version import __version__
 from fogref.atomic import atomic_write, refuse_overwriting_inputs, temporary_names
 from fogref.display import write_preview
 from fogref.errors import FogrefError
-from fogref.exrio import read_exr, write_exr
+from fogref.exrio import EXR_COMPRESSIONS, read_exr, write_exr
 from fogref.render import checkpoint, distributed
 from fogref.render import load as scene_loader
 from fogref.render.variant import set_variant
@@ -73,6 +74,11 @@ from fogref.scene.parsed import ParsedScene, read_scene
 
 PIXEL_FILTERS = ("centre", "box")
 _SOURCE = "fogref render"
+#: Up to this many pixels the EXR's channels are numpy arithmetic on the host copy of the sums (no
+#: Dr.Jit kernel traced for them); above, one fused Dr.Jit kernel (numpy's temporaries cost more
+#: than the tracing).  Both timed on the same sums in ``reports/benchmarks/frozen_render.md``; the
+#: two give the same float32 values, bit for bit (tests/test_render_exr.py).
+HOST_CHANNELS_MAX_PIXELS = 1 << 12
 #: Bytes per pixel the driver holds: float64 sums of 30 channels and 42 squares and
 #: channel-pair products, twice (running sum and the pass being added), plus the EXR's
 #: float32 channels.
@@ -169,6 +175,7 @@ def render(
     workers: int | None = None,
     keep_moments: bool = True,
     worker_timeout: float = cluster.WORKER_TIMEOUT,
+    exr_compression: str = "zip",
 ) -> Path:
     """Render ``scene_path`` with ``spp`` samples per pixel into the EXR ``out``.
 
@@ -192,6 +199,9 @@ def render(
                   (the module doc); False: render afresh.
     worker_timeout: with ``scheduler``: seconds to wait for its first worker, (0, 1e6] (it says
                   that it waits; then a one-line error).
+    exr_compression: the EXR's lossless compression, one of
+                  :data:`fogref.exrio.EXR_COMPRESSIONS` (``zip``: the smallest file; ``none``
+                  and ``rle`` write faster, the same values in a larger file).
 
     Returns the EXR path.  Raises :class:`FogrefError` (or its ParameterError) for bad input,
     and before any work when an output (the EXR, the PNG, the checkpoint) is the scene or a
@@ -203,6 +213,8 @@ def render(
         raise FogrefError(f"--seed: {seed} outside [0, 2^31)")
     if pixel_filter not in PIXEL_FILTERS:
         raise FogrefError(f"--pixel-filter: '{pixel_filter}' is not one of {PIXEL_FILTERS}")
+    if exr_compression not in EXR_COMPRESSIONS:
+        raise FogrefError(f"--exr-compression: '{exr_compression}' is not one of {EXR_COMPRESSIONS}")
     scheduler = cluster.check_scheduler(scheduler, _SOURCE)
     workers = cluster.check_workers(workers, _SOURCE)
     worker_timeout = cluster.check_worker_timeout(worker_timeout, _SOURCE)
@@ -316,9 +328,14 @@ def render(
         finally:
             source.close()
 
-    sums, squares = state[0], state[1]
-    channels = _host_float32(_channels(sums, squares, spp))  # arithmetic on the device, one copy
-    bad = gbuffer.nonfinite_report(channels)
+    small = W * H <= HOST_CHANNELS_MAX_PIXELS
+    # the sums copied to the host once: the moments file and the small render's channels share it
+    host = tuple(np.asarray(x, dtype=np.float64) for x in state[:2]) if small or keep_moments else ()
+    if small:  # numpy on that copy: no Dr.Jit kernel traced
+        channels, block = _float32_planes(_channels(host[0], host[1], spp))
+    else:  # one fused kernel on the device, one copy of the float32 block
+        channels, block = _device_float32(_channels(state[0], state[1], spp))
+    bad = None if np.isfinite(block).all() else gbuffer.nonfinite_report(channels)
     if bad:
         raise FogrefError(
             f"{scene_path}: the render produced {bad}; no ground truth written "
@@ -342,10 +359,10 @@ def render(
         "fogref.render_seconds": {"total": time.perf_counter() - t0, "passes": timings},
     }
     _exr_threads()
-    write_exr(out, channels, attrs)
+    write_exr(out, channels, attrs, compression=exr_compression)
     moments = moments_path(out)  # after the EXR: sums without their truth are never left
     if keep_moments:
-        checkpoint.write_checkpoint(moments, state, key)
+        checkpoint.write_checkpoint(moments, (*host, state[2]), key)
     else:
         moments.unlink(missing_ok=True)  # they would belong to the truth this one replaced
     if png:
@@ -471,21 +488,28 @@ def device_f64(x):
     return mi.TensorXd(np.ascontiguousarray(np.asarray(x, dtype=np.float64)))
 
 
-def _host_float32(channels: dict) -> dict:
-    """The EXR's channels, ``(H, W)`` float64 tensors on the device, as host float32 planes.
-
-    All channels are cast and stacked on the device and copied to the host in one
-    contiguous block (each channel a contiguous plane): the channel arithmetic is part of
-    one kernel on the device, not numpy work on the host after per-channel copies.
-    """
+def _device_float32(channels: dict) -> tuple[dict, np.ndarray]:
+    """The EXR's channels, ``(H, W)`` float64 Dr.Jit tensors, cast and stacked on the device and
+    copied to the host in one contiguous ``(channels, H, W)`` float32 block: ``(name -> plane,
+    block)``.  The channel arithmetic is part of one kernel, not numpy work after per-channel
+    copies."""
     import drjit as dr
     import mitsuba as mi
 
     names = list(channels)
     h, w = (int(x) for x in channels[names[0]].shape)
-    flat = dr.concat([mi.Float(channels[k].array) for k in names])
-    planes = np.asarray(flat).reshape(len(names), h, w)
-    return dict(zip(names, planes))
+    block = np.asarray(dr.concat([mi.Float(channels[k].array) for k in names])).reshape(len(names), h, w)
+    return dict(zip(names, block)), block
+
+
+def _float32_planes(channels: dict) -> tuple[dict, np.ndarray]:
+    """The EXR's channels, ``(H, W)`` float64 arrays, cast to float32 planes of one contiguous
+    ``(channels, H, W)`` block: ``(name -> plane, block)`` (one finiteness check covers them all)."""
+    names = list(channels)
+    block = np.empty((len(names), *np.shape(channels[names[0]])), dtype=np.float32)
+    for plane, name in zip(block, names):
+        plane[...] = channels[name]  # round to nearest, as astype
+    return dict(zip(names, block)), block
 
 
 def _exr_threads() -> None:
@@ -496,8 +520,9 @@ def _exr_threads() -> None:
 
 
 def _channels(sums, squares, spp: int) -> dict:
-    """EXR channels from the integrator's per-pixel sums, ``(H, W, K)`` Dr.Jit float64
-    tensors or numpy arrays (see :func:`gbuffer.moments_to_channels`)."""
+    """EXR channels (float64) from the integrator's per-pixel sums and squares, ``(H, W, K)``
+    numpy arrays or Dr.Jit float64 tensors, the result of the same kind (see
+    :func:`gbuffer.moments_to_channels`)."""
     by_group = {g: sums[..., checkpoint.sum_channels(g)] for g in ("final", *gbuffer.SAMPLE_GROUPS)}
     k = 3 * len(gbuffer.SQUARED_GROUPS)  # squares first, then the channel-pair products
     sq = {g: squares[..., 3 * i : 3 * i + 3] for i, g in enumerate(gbuffer.SQUARED_GROUPS)}
