@@ -56,7 +56,8 @@ RUN_COLUMNS = (
     "truth_cached",
     "truth_sha256",
 )
-#: (module, function, phase) timed in the phase child; indented phases are parts of the one above.
+#: (module, function, phase) timed in the phase child; indented phases are parts of the one above; a
+#: phase may name two functions (a checkout has one of them).
 PHASES = (
     ("fogref.study.sweep.task", "render_cached", "render (fogref.render.cache.render_cached)"),
     ("fogref.render.cache", "read_scene", "  parse the scene XML (read_scene; also for the key)"),
@@ -68,6 +69,7 @@ PHASES = (
     ("fogref.study.sweep.task", "file_sha256", "hash the truth file"),
     ("fogref.study.sweep.task", "build_model", "build the model (ue4: the Unreal fit)"),
     ("fogref.study.sweep.task", "compare", "compare (metrics of every part)"),
+    ("fogref.study.sweep.task", "compare_metrics", "compare (metrics of every part)"),
     ("fogref.compare.report", "load_truth", "  compare: read the truth"),
     ("fogref.compare.report", "evaluate_parts", "  compare: evaluate the model"),
     ("fogref.compare.report", "error_maps", "  compare: error maps (incl. dE2000, FLIP)"),
@@ -343,7 +345,7 @@ def report(res: dict) -> str:
             "| phase | base: wall, CPU per configuration [s] | after: wall, CPU [s] | base / after (CPU) |",
             "|---|---|---|---|",
         ]
-        for _, _, k in PHASES:
+        for k in dict.fromkeys(label for _, _, label in PHASES):
             x, y = b["phases"].get(k), a["phases"].get(k)
             fx = f"{x['s'] / n:.3f}, {x['cpu_s'] / n:.3f}" if x else "not called"
             fy = f"{y['s'] / n:.3f}, {y['cpu_s'] / n:.3f}" if y else "not called"

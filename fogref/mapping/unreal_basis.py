@@ -39,6 +39,7 @@ from fogref.models.ue4 import (
     UE4FogParams,
     directional_lobe,
     directional_opacity,
+    directional_start_uniform,
     fog_constants,
     shade_geometry,
     sigma_to_unreal,
@@ -50,6 +51,7 @@ __all__ = [
     "LOG_N_RANGE",
     "MAX_START_CM",
     "base_params",
+    "direction_groups",
     "nnls2",
     "solve_colours",
     "unreal_basis",
@@ -209,6 +211,25 @@ def nnls2(
     return out[0], out[1], out[2]
 
 
+def direction_groups(d: np.ndarray) -> np.ndarray:
+    """Per row of ``d`` (N, 3) finite, the index of its value among the distinct rows sorted
+    lexicographically: the numbering of ``np.unique(d, axis=0, return_inverse=True)``, from a
+    lexsort of the three columns (``np.unique`` sorts the rows as records, about ten times slower).
+
+    >>> direction_groups(np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])).tolist()
+    [1, 0, 1]
+    """
+    d = np.asarray(d, dtype=np.float64)
+    group = np.zeros(len(d), dtype=np.intp)
+    if len(d):
+        order = np.lexsort((d[:, 2], d[:, 1], d[:, 0]))
+        s = d[order]
+        new = np.zeros(len(d), dtype=np.intp)
+        new[1:] = np.any(s[1:] != s[:-1], axis=1)
+        group[order] = np.cumsum(new)
+    return group
+
+
 class ColourLoss:
     """The squared error of the best colours (:func:`solve_colours`) as a function of
     ``(log10 n, start)``, with Unreal's basis factorised (module doc).
@@ -248,15 +269,12 @@ class ColourLoss:
         # the parameters and positions every model evaluation shares, made once
         self._unit, wp = _unit_params(pf), views.world_positions(sky_distance)
         one = Basis(*_unit_inscatter(self._unit, pf, wp, 1.0, 0.0)[:, :2].T)
-        two = Basis(*_unit_inscatter(self._unit, pf, wp, 2.0, 0.0)[:, :2].T)
-        self.model_evaluations = 2
+        self.model_evaluations = 1
         self.colour_solves = 0
         self._lit = one.lobe > 0  # the lobe is 0 elsewhere for every exponent and start
+        self._iso = one.iso  # and the isotropic image is the same for every exponent and start
         # the lit views grouped by direction: max(cos, 0) is a function of the direction
-        _, group = np.unique(views.d[self._lit], axis=0, return_inverse=True)
-        self._group = np.asarray(group).reshape(-1)
-        self._cos = np.zeros(int(self._group.max(initial=-1)) + 1)
-        self._cos[self._group] = two.lobe[self._lit] / one.lobe[self._lit]
+        self._group = direction_groups(views.d[self._lit])
         self._iso_lit, self._y_lit = one.iso[self._lit], y[self._lit]
         # a start distance's lobe is needed on the lit views only, and of the model's shading only the
         # opacity beyond the start changes with it: the rest is computed once, on the lit views (no
@@ -267,15 +285,37 @@ class ColourLoss:
         dt, self._cam_z_cm, rel = UE4ExponentialHeightFog.receivers(
             np.asarray(pf.camera), wp[self._lit], "float64"
         )
-        C = fog_constants(p1, self._cam_z_cm, dt)
+        self._C1 = fog_constants(p1, self._cam_z_cm, dt)
         with np.errstate(all="ignore"):
-            self._geo = shade_geometry(C, self._cam_z_cm, rel, dt, exact=True)
-            self._lobe1 = directional_lobe(C, self._geo, dt)
+            self._geo = shade_geometry(self._C1, self._cam_z_cm, rel, dt, exact=True)
+            self._lobe1 = directional_lobe(self._C1, self._geo, dt)
+        # max(cos, 0) per direction: the lobe at exponent 2 over the one at exponent 1
+        self._cos = np.zeros(int(self._group.max(initial=-1)) + 1)
+        self._cos[self._group] = self._lit_lobe(2.0, 0.0) / one.lobe[self._lit]
         self._g00 = float(one.iso @ one.iso)
         self._b0 = one.iso @ y
         self._yy = np.sum(y * y, axis=0)
         self._sums: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._add_start(0.0, one.lobe[self._lit])
+
+    def _lit_lobe(self, exponent: float, start_cm: float) -> np.ndarray:
+        """The model's lobe channel on the lit views at ``exponent`` and ``start_cm`` [cm]: the
+        angular factor times the opacity beyond the start (times a unit colour, plus 0)."""
+        p = replace(
+            self._unit,
+            DirectionalInscatteringExponent=exponent,
+            DirectionalInscatteringStartDistance=start_cm,
+        )
+        C = fog_constants(p, self._cam_z_cm, np.float64)
+        with np.errstate(all="ignore"):
+            return directional_lobe(C, self._geo, np.float64) * directional_opacity(C, self._geo, np.float64)
+
+    def basis(self, log_n: float, start_cm: float) -> Basis:
+        """:func:`unreal_basis` at exponent ``10**log_n`` and ``start_cm`` [cm] on the loss's views,
+        bit for bit, from the lit views' shading (one model evaluation's cost on those views)."""
+        lobe = np.zeros(len(self._iso))
+        lobe[self._lit] = self._lit_lobe(10.0**log_n, start_cm)
+        return Basis(iso=self._iso, lobe=lobe)
 
     def _add_start(self, start_cm: float, lobe1: np.ndarray) -> None:
         """Per direction, the sums over its views of ``iso g``, ``g^2`` and ``g y`` (``g = lobe1 / cos``)."""
@@ -291,11 +331,11 @@ class ColourLoss:
     def sums(self, start_cm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The per-direction sums of the lobe at ``start_cm`` [cm] (one model evaluation, once)."""
         if start_cm not in self._sums:
-            # the model's lobe channel at exponent 1: lobe * (1 - T_dir) times a unit colour, plus 0
-            p = replace(
-                self._unit, DirectionalInscatteringExponent=1.0, DirectionalInscatteringStartDistance=start_cm
-            )
-            C = fog_constants(p, self._cam_z_cm, np.float64)
+            # the model's lobe channel at exponent 1 (lobe * (1 - T_dir) times a unit colour, plus 0);
+            # of the uniforms only the start distance differs from those of start 0
+            light = self._unit.InscatteringLightDirection is not None
+            w = directional_start_uniform(start_cm, light, self._C1["match"], np.float64)
+            C = {**self._C1, "light": (*self._C1["light"][:3], w)}
             with np.errstate(all="ignore"):
                 lobe = self._lobe1 * directional_opacity(C, self._geo, np.float64)
             self.model_evaluations += 1
