@@ -174,6 +174,24 @@ def test_colour_loss_start_sums_equal_the_full_models_bitwise(name):
             assert loss.solve(ln, start)[2] == ref.solve(ln, start)[2]
 
 
+@pytest.mark.parametrize("seed", [0, 1])
+def test_colour_loss_sse_is_the_solves_bitwise(seed):
+    """ColourLoss.sse (what the searches call: the three channels' sse added in Python) against
+    solve's np.sum of them, for targets with random signs and scales (clamped colours, sse over
+    ten decades): equal bit for bit at 200 random exponents and starts (one ulp is detected)."""
+    rng = np.random.default_rng(seed)
+    pf = scenes()["sun30"]
+    views = sample_views(pf.camera, n_dirs=64)
+    base = physical_single_scattering(pf, views)
+    for _ in range(4):
+        target = base * rng.uniform(-1.0, 2.0, 3) * 10.0 ** rng.uniform(-5, 5, 3)
+        target += rng.normal(0.0, 0.05, target.shape) * np.abs(target).mean()
+        loss = ColourLoss(pf, views, target)
+        for _ in range(50):
+            ln, start = rng.uniform(*LOG_N_RANGE), float(rng.choice([0.0, rng.uniform(0.0, 5e4)]))
+            assert loss.sse(ln, start) == loss.solve(ln, start)[2]
+
+
 def test_direction_groups_number_as_numpy_unique():
     """direction_groups (a lexsort) against np.unique(axis=0)'s inverse on the lit views of 64 to 2048
     Fibonacci directions and on rows with repeated values, -0.0 and ties in the first columns: the

@@ -187,11 +187,19 @@ def nnls2(
     >>> x0.tolist(), x1.tolist(), sse.tolist()
     ([2.0, 0.0, 0.0], [1.0, 2.0, 0.0], [0.0, 0.0, 0.0])
     """
+    lists = (np.asarray(v, dtype=np.float64).tolist() for v in (b0, b1, yy))
+    out = np.array(_nnls2_channels(g00, g01, g11, *lists)).T.copy()
+    return out[0], out[1], out[2]
+
+
+def _nnls2_channels(
+    g00: float, g01: float, g11: float, b0: list, b1: list, yy: list
+) -> list[tuple[float, float, float]]:
+    """:func:`nnls2` on Python floats: ``(x0, x1, sse)`` per channel of ``b0``, ``b1``, ``yy``."""
     det = g00 * g11 - g01 * g01
     both = det > 1e-12 * g00 * g11
-    out = np.empty((3, 3))
-    for c in range(3):
-        p, q, r = float(b0[c]), float(b1[c]), float(yy[c])
+    out = []
+    for p, q, r in zip(b0, b1, yy):
         cands = []
         if g00 > 0:  # np.maximum's rule: the first value when it is >= or NaN
             cands.append(((p if p >= 0.0 or p != p else 0.0) / g00, 0.0))
@@ -206,9 +214,8 @@ def nnls2(
             sse = r - 2.0 * (x0 * p + x1 * q) + g00 * x0 * x0 + 2.0 * g01 * x0 * x1 + g11 * x1 * x1
             if sse < b_sse:
                 b_x0, b_x1, b_sse = x0, x1, sse
-        out[0, c], out[1, c] = b_x0, b_x1
-        out[2, c] = b_sse if b_sse >= 0.0 or b_sse != b_sse else 0.0
-    return out[0], out[1], out[2]
+        out.append((b_x0, b_x1, b_sse if b_sse >= 0.0 or b_sse != b_sse else 0.0))
+    return out
 
 
 def direction_groups(d: np.ndarray) -> np.ndarray:
@@ -293,8 +300,8 @@ class ColourLoss:
         self._cos = np.zeros(int(self._group.max(initial=-1)) + 1)
         self._cos[self._group] = self._lit_lobe(2.0, 0.0) / one.lobe[self._lit]
         self._g00 = float(one.iso @ one.iso)
-        self._b0 = one.iso @ y
-        self._yy = np.sum(y * y, axis=0)
+        self._b0_list = (one.iso @ y).tolist()
+        self._yy_list = np.sum(y * y, axis=0).tolist()
         self._sums: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._add_start(0.0, one.lobe[self._lit])
 
@@ -342,13 +349,24 @@ class ColourLoss:
             self._add_start(start_cm, lobe)
         return self._sums[start_cm]
 
-    def solve(self, log_n: float, start_cm: float) -> tuple[np.ndarray, np.ndarray, float]:
-        """``(C_fog (3,), C_dir (3,), sse)`` at exponent ``10**log_n`` and ``start_cm`` [cm]."""
+    def _channels(self, log_n: float, start_cm: float) -> list[tuple[float, float, float]]:
+        """:func:`nnls2`'s ``(C_fog, C_dir, sse)`` per channel at exponent ``10**log_n`` and ``start_cm``."""
         iso_g, gg, yg = self.sums(start_cm)
         cn = self._cos ** (10.0**log_n)
         self.colour_solves += 1
-        cf, cd, sse = nnls2(self._g00, float(cn @ iso_g), float((cn * cn) @ gg), self._b0, cn @ yg, self._yy)
-        return cf, cd, float(np.sum(sse))
+        g01, g11 = float(cn @ iso_g), float((cn * cn) @ gg)
+        return _nnls2_channels(self._g00, g01, g11, self._b0_list, (cn @ yg).tolist(), self._yy_list)
+
+    def solve(self, log_n: float, start_cm: float) -> tuple[np.ndarray, np.ndarray, float]:
+        """``(C_fog (3,), C_dir (3,), sse)`` at exponent ``10**log_n`` and ``start_cm`` [cm]."""
+        out = np.array(self._channels(log_n, start_cm)).T.copy()
+        return out[0], out[1], float(np.sum(out[2]))
+
+    def sse(self, log_n: float, start_cm: float) -> float:
+        """:meth:`solve`'s ``sse`` alone (the searches need no colours): the channels' sum in
+        ``np.sum``'s order for three values, ``(R + G) + B``."""
+        (_, _, r), (_, _, g), (_, _, b) = self._channels(log_n, start_cm)
+        return r + g + b
 
     def best_exponent(self, start_cm: float, log_n: float | None = None) -> tuple[float, float]:
         """``(log10 n, sse)`` of the best exponent at ``start_cm``: a grid of 21 in
@@ -358,12 +376,12 @@ class ColourLoss:
 
         if log_n is not None:
             ln = float(np.clip(log_n, *LOG_N_RANGE))
-            return ln, self.solve(ln, start_cm)[2]
+            return ln, self.sse(ln, start_cm)
         grid = np.linspace(*LOG_N_RANGE, 21)
-        values = [self.solve(g, start_cm)[2] for g in grid]
+        values = [self.sse(g, start_cm) for g in grid]
         k = int(np.argmin(values))
         res = minimize_scalar(
-            lambda ln: self.solve(ln, start_cm)[2],
+            lambda ln: self.sse(ln, start_cm),
             bounds=(grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]),
             method="bounded",
             options={"xatol": 1e-6},
