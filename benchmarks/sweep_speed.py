@@ -1,13 +1,14 @@
 """The example sweep before and after, side by side: wall time, phases, identical results
 -> reports/benchmarks/sweep_speed.{md,json}.
 
-Two checkouts, each with its own ``.venv`` (``scripts/setup.sh``): ``--base`` (e.g. a clone of
-main: ``git clone -q /work/main /tmp/base && bash /tmp/base/scripts/setup.sh``) and this one.
+Checkouts, each with its own ``.venv`` (``scripts/setup.sh``): one or more ``--base`` (e.g. a clone
+of main: ``git clone -q /work/main /tmp/base && bash /tmp/base/scripts/setup.sh``; the first is
+``base``, the next ``base2``, ...) and this one (``after``).
 
 * **Command**: ``fogref sweep`` on a copy of ``reports/sweeps/unreal_sun_falloff_g/SWEEP.toml``
   (48 configurations, valley, 64x36 px, 16 spp, model ue4 with its Unreal fit), each run from an
   empty truth cache and an empty fit cache (``$FOGREF_CACHE``), the Dr.Jit kernel cache warm
-  (both checkouts compile the same kernels); runs alternate base, after, base, after ...; the
+  (every checkout compiles the same kernels); runs alternate base, [base2, ...,] after, base ...; the
   wall time of the whole process, the sweep's own "configurations in X s", the CPU time of the
   process and its workers (user + sys, what the machine's load does not inflate) and the load
   average before and after each run.
@@ -22,7 +23,8 @@ main: ``git clone -q /work/main /tmp/base && bash /tmp/base/scripts/setup.sh``) 
   its render time, so the file's hash differs between any two runs), every truth's pixels must be
   equal bit for bit and every plot's PNG byte for byte.
 
-    .venv/bin/python benchmarks/sweep_speed.py --base /tmp/base [--repeats 1] [--phase-configs 12]
+    .venv/bin/python benchmarks/sweep_speed.py --base /tmp/base [--base /tmp/base2] [--repeats 1]
+        [--phase-configs 12]
 """
 
 from __future__ import annotations
@@ -56,7 +58,8 @@ RUN_COLUMNS = (
     "truth_cached",
     "truth_sha256",
 )
-#: (module, function, phase) timed in the phase child; indented phases are parts of the one above.
+#: (module, function, phase) timed in the phase child; indented phases are parts of the one above; a
+#: phase may name two functions (a checkout has one of them).
 PHASES = (
     ("fogref.study.sweep.task", "render_cached", "render (fogref.render.cache.render_cached)"),
     ("fogref.render.cache", "read_scene", "  parse the scene XML (read_scene; also for the key)"),
@@ -68,9 +71,13 @@ PHASES = (
     ("fogref.study.sweep.task", "file_sha256", "hash the truth file"),
     ("fogref.study.sweep.task", "build_model", "build the model (ue4: the Unreal fit)"),
     ("fogref.study.sweep.task", "compare", "compare (metrics of every part)"),
+    ("fogref.study.sweep.task", "compare_metrics", "compare (metrics of every part)"),
     ("fogref.compare.report", "load_truth", "  compare: read the truth"),
     ("fogref.compare.report", "evaluate_parts", "  compare: evaluate the model"),
     ("fogref.compare.report", "error_maps", "  compare: error maps (incl. dE2000, FLIP)"),
+    ("fogref.compare.error_maps", "flip_map", "  compare: FLIP maps (model and noise floor)"),
+    ("fogref.compare.error_maps", "delta_e2000_map", "  compare: dE2000 maps (model and noise floor)"),
+    ("fogref.compare.error_maps", "delta_e2000_maps", "  compare: dE2000 maps (model and noise floor)"),
     ("fogref.compare.report", "binned_errors", "  compare: binned errors"),
     ("fogref.compare.report", "write_exr", "  compare: write errors.exr"),
     ("fogref.compare.report", "write_text_atomic", "  compare: write metrics.json, index.md"),
@@ -285,19 +292,20 @@ def _median(xs):
 
 def report(res: dict) -> str:
     runs = res["command"]
-    base = [r for r in runs if r["which"] == "base"]
+    names = [n for n in res["trees"] if n != "after"]
     after = [r for r in runs if r["which"] == "after"]
+    commits = "; ".join(f"{n}: `{res['trees'][n]}` at {res['commits'][n]}" for n in names)
     L = [
         "# The example sweep before and after (`fogref sweep`, 48 configurations)",
         "",
         f"Command: `{res['command_line']}`.  Machine: {res['machine']}; {res['versions']}.  "
-        f"Base: `{res['base']}` at {res['base_commit']}; after: this checkout at {res['after_commit']}.",
+        f"{commits}; after: this checkout at {res['commits']['after']}.",
         "",
         "Sweep: `reports/sweeps/unreal_sun_falloff_g/SWEEP.toml` (valley, sun elevation x "
         "FogHeightFalloff x g, "
         "64x36 px, 16 spp, model ue4 fitted to each truth), a LocalCluster of one single-threaded worker per "
         "core, every run from an empty truth cache and an empty fit cache, the Dr.Jit kernel cache warm.  "
-        "Runs alternate base, after, ...  CPU = user + sys of the command and its workers.",
+        f"Runs alternate {', '.join(names)}, after, ...  CPU = user + sys of the command and its workers.",
         "",
         "| run | checkout | wall [s] | sweep's 'configurations in' [s] | CPU [s] | "
         "load average before -> after (1 min) |",
@@ -308,56 +316,73 @@ def report(res: dict) -> str:
             f"| {i + 1} | {r['which']} | {r['wall_s']:.1f} | {r['configs_s']:.1f} | {r['cpu_s']:.1f} | "
             f"{r['load_before'][0]:.1f} -> {r['load_after'][0]:.1f} |"
         )
-    if base and after:
-        rw = [b["wall_s"] / a["wall_s"] for b, a in zip(base, after)]
-        rc = [b["cpu_s"] / a["cpu_s"] for b, a in zip(base, after)]
-        L += [
-            "",
-            f"**Speed-up (base / after, pairs run back to back): wall {', '.join(f'{x:.2f}x' for x in rw)}; "
-            f"CPU {', '.join(f'{x:.2f}x' for x in rc)}.**",
-        ]
-    ident = res.get("identical")
-    if ident:
-        L += [
-            "",
-            f"Identity: {'**identical**' if ident['ok'] else '**DIFFERENT**'}: {ident['rows']} rows, "
-            f"{ident['cells_compared']} cells compared (all but {', '.join(RUN_COLUMNS)}), the pixels of "
-            f"{ident['truths']} truths, {ident['plots']} plot PNGs.",
-        ]
-        L += [f"* {d}" for d in ident["differ"]]
+    for n in names:
+        base = [r for r in runs if r["which"] == n]
+        if base and after:
+            rw = [b["wall_s"] / a["wall_s"] for b, a in zip(base, after)]
+            rc = [b["cpu_s"] / a["cpu_s"] for b, a in zip(base, after)]
+            L += [
+                "",
+                f"**Speed-up ({n} / after, runs of one round): wall {', '.join(f'{x:.2f}x' for x in rw)}; "
+                f"CPU {', '.join(f'{x:.2f}x' for x in rc)}.**",
+            ]
+    for n in names:
+        ident = res.get("identical", {}).get(n)
+        if ident:
+            L += [
+                "",
+                f"Identity ({n} / after): {'**identical**' if ident['ok'] else '**DIFFERENT**'}: "
+                f"{ident['rows']} rows, {ident['cells_compared']} cells compared (all but "
+                f"{', '.join(RUN_COLUMNS)}), the pixels of {ident['truths']} truths, "
+                f"{ident['plots']} plot PNGs.",
+            ]
+            L += [f"* {d}" for d in ident["differ"]]
     ph = res.get("phases")
     if ph:
-        b, a = ph["base"], ph["after"]
-        n = b["configs"]
+        cols = [*names, "after"]
+        n = ph["after"]["configs"]
+        loads = ", ".join(f"{c} {ph[c]['load_before'][0]:.1f} -> {ph[c]['load_after'][0]:.1f}" for c in cols)
         L += [
             "",
             f"## Phases (one process, no cluster, {n} of the 48 configurations spread over the grid, "
             "one after "
             "the other; timers on the phases' functions)",
             "",
-            f"Load average (1 min) before -> after: base {b['load_before'][0]:.1f} -> "
-            f"{b['load_after'][0]:.1f}, after {a['load_before'][0]:.1f} -> {a['load_after'][0]:.1f}.  "
+            f"Load average (1 min) before -> after: {loads}.  "
             "Rows marked (part) are parts of the row above; 'per configuration': the phase's total over the "
             "configurations divided by their number; CPU: the process's (all its threads).",
             "",
-            "| phase | base: wall, CPU per configuration [s] | after: wall, CPU [s] | base / after (CPU) |",
-            "|---|---|---|---|",
+            "| phase | "
+            + " | ".join(f"{c}: wall, CPU per configuration [s]" for c in cols)
+            + " | "
+            + " | ".join(f"{c} / after (CPU)" for c in names)
+            + " |",
+            "|---|" + "---|" * (len(cols) + len(names)),
         ]
-        for _, _, k in PHASES:
-            x, y = b["phases"].get(k), a["phases"].get(k)
-            fx = f"{x['s'] / n:.3f}, {x['cpu_s'] / n:.3f}" if x else "not called"
-            fy = f"{y['s'] / n:.3f}, {y['cpu_s'] / n:.3f}" if y else "not called"
-            ratio = f"{x['cpu_s'] / y['cpu_s']:.2f}x" if x and y and y["cpu_s"] > 0 else ""
+        for k in dict.fromkeys(label for _, _, label in PHASES):
+            xs = [ph[c]["phases"].get(k) for c in cols]
+            cells = [f"{x['s'] / n:.3f}, {x['cpu_s'] / n:.3f}" if x else "not called" for x in xs]
+            y = xs[-1]
+            ratios = [
+                f"{x['cpu_s'] / y['cpu_s']:.2f}x" if x and y and y["cpu_s"] > 0 else "" for x in xs[:-1]
+            ]
             part = " (part)" if k.startswith("  ") else ""
-            L.append(f"| {k.strip()}{part} | {fx} | {fy} | {ratio} |")
-        cb, ca = sum(b["per_config_cpu_s"]), sum(a["per_config_cpu_s"])
+            L.append(f"| {k.strip()}{part} | " + " | ".join(cells + ratios) + " |")
+        tot = {c: sum(ph[c]["per_config_cpu_s"]) for c in cols}
+        cells = [f"{_median(ph[c]['per_config_s']):.3f}, {tot[c] / n:.3f}" for c in cols]
+        ratios = [f"{tot[c] / tot['after']:.2f}x" for c in names]
         L.append(
-            f"| **a configuration, all of it** (wall median, CPU mean) | {_median(b['per_config_s']):.3f}, "
-            f"{cb / n:.3f} | {_median(a['per_config_s']):.3f}, {ca / n:.3f} | {cb / ca:.2f}x |"
+            "| **a configuration, all of it** (wall median, CPU mean) | " + " | ".join(cells + ratios) + " |"
         )
-        L += ["", "| fixed cost | base [s] | after [s] |", "|---|---|---|"]
-        for k in b["fixed"]:
-            L.append(f"| {k} | {b['fixed'][k]:.2f} | {a['fixed'].get(k, float('nan')):.2f} |")
+        L += [
+            "",
+            "| fixed cost | " + " | ".join(f"{c} [s]" for c in cols) + " |",
+            "|---" * (len(cols) + 1) + "|",
+        ]
+        for k in ph["after"]["fixed"]:
+            L.append(
+                f"| {k} | " + " | ".join(f"{ph[c]['fixed'].get(k, float('nan')):.2f}" for c in cols) + " |"
+            )
     L += ["", *res.get("reading", [])]
     return "\n".join(L) + "\n"
 
@@ -376,7 +401,9 @@ def _commit(tree: Path) -> str:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--base", help="the checkout to compare with (with its own .venv)")
+    ap.add_argument(
+        "--base", action="append", help="a checkout to compare with (with its own .venv); repeatable"
+    )
     ap.add_argument("--repeats", type=int, default=1, help="command runs of each checkout (default 1)")
     ap.add_argument(
         "--phase-configs", type=int, default=12, help="configurations of the phase runs (0: none)"
@@ -389,8 +416,9 @@ def main(argv=None) -> int:
         return 0
     if not a.base:
         ap.error("--base is required")
-    base = Path(a.base).resolve()
-    trees = {"base": base, "after": ROOT}
+    bases = [Path(b).resolve() for b in a.base]
+    trees = {("base" if i == 0 else f"base{i + 1}"): b for i, b in enumerate(bases)}
+    trees["after"] = ROOT
     for t in trees.values():
         if not (t / ".venv" / "bin" / "fogref").is_file():
             raise SystemExit(f"{t}: no .venv/bin/fogref (run scripts/setup.sh there)")
@@ -398,9 +426,8 @@ def main(argv=None) -> int:
         "command_line": "python benchmarks/sweep_speed.py "
         + " ".join(argv if argv is not None else sys.argv[1:]),
         "machine": f"{platform.machine()}, {os.cpu_count()} cores",
-        "base": str(base),
-        "base_commit": _commit(base),
-        "after_commit": _commit(ROOT),
+        "trees": {w: str(t) for w, t in trees.items()},
+        "commits": {w: _commit(t) for w, t in trees.items()},
         "command": [],
     }
     with tempfile.TemporaryDirectory(prefix="fogref-sweep-speed-") as tmp:
@@ -415,8 +442,9 @@ def main(argv=None) -> int:
                     f"load {r['load_before'][0]:.1f}",
                     flush=True,
                 )
-        res["identical"] = identical(last["base"], last["after"])
-        print("identical:", res["identical"]["ok"], res["identical"]["differ"][:3], flush=True)
+        res["identical"] = {w: identical(last[w], last["after"]) for w in trees if w != "after"}
+        for w, ident in res["identical"].items():
+            print(f"identical ({w}):", ident["ok"], ident["differ"][:3], flush=True)
         if a.phase_configs:
             res["phases"] = {
                 w: run_phases(t, Path(tmp) / f"phases-{w}", a.phase_configs) for w, t in trees.items()

@@ -69,6 +69,41 @@ def test_delta_e2000_matches_colour_science_directly():
     assert P.linear_rgb_to_lab(np.ones(3), 1.0)[0] == pytest.approx(100.0, abs=1e-3)
 
 
+def test_delta_e2000_and_cielab_are_colour_sciences_bit_for_bit():
+    """fogref's own CIELAB and CIEDE2000 (no colour-science import) against colour-science's
+    RGB_to_XYZ, XYZ_to_Lab and delta_E (CIE 2000) on 200 random image pairs: (H, W, 3), (N, 3)
+    and (3,) shapes, 1e-8 to 1e4 radiances, greys (a* = b* = 0, hue undefined), zero channels,
+    negatives (clipped) and identical pairs; every value equal bit for bit (one ulp is detected),
+    and the two constant matrices are colour-science's."""
+    d65 = colour.RGB_COLOURSPACES["sRGB"].whitepoint
+    assert P.SRGB_TO_XYZ.tobytes() == colour.RGB_COLOURSPACES["sRGB"].matrix_RGB_to_XYZ.tobytes()
+    assert tuple(d65) == P.D65_XY
+
+    def lab(rgb, white):
+        x = np.clip(rgb, 0.0, None) / white
+        return colour.XYZ_to_Lab(colour.RGB_to_XYZ(x, "sRGB", apply_cctf_decoding=False), d65)
+
+    rng = np.random.default_rng(11)
+    for k in range(200):
+        shape = [(9, 16, 3), (7, 3), (3,), (2, 5, 3)][k % 4]
+        scale = 10.0 ** rng.uniform(-8, 4)
+        r = rng.random(shape) ** rng.uniform(0.2, 5.0) * scale
+        x = r * rng.uniform(0.5, 1.5, shape) + rng.normal(0.0, 0.1 * scale, shape)
+        if k % 5 == 0:
+            x[..., 0], r[..., 1] = 0.0, 0.0
+        if k % 7 == 0:
+            x = r.copy()
+        if k % 9 == 0:  # greys
+            r = np.repeat(r.mean(axis=-1, keepdims=True), 3, axis=-1)
+        white = float(rng.choice([1.0, scale, 0.37 * scale]))
+        want = np.asarray(colour.delta_E(lab(r, white), lab(x, white), method="CIE 2000"), dtype=np.float64)
+        got = P.delta_e2000_map(r, x, white=white)
+        assert got.shape == want.shape and got.tobytes() == want.tobytes(), k
+        assert P.linear_rgb_to_lab(x, white).tobytes() == lab(x, white).tobytes(), k
+        many = P.delta_e2000_maps(r, [x, r], white=white)
+        assert many[0].tobytes() == want.tobytes() and not np.any(many[1]), k
+
+
 def test_delta_e2000_default_white_is_the_reference_p99_luminance():
     r = _rand(seed=1, scale=3.0)
     x = r * 1.2

@@ -205,6 +205,24 @@ def test_report_metrics_structure_and_values(perturbed_report):
     assert report["diagnostics"]["surface_undefined_pixels"] == W * H - surface_px
 
 
+def test_compare_metrics_are_the_reports_values_and_write_nothing(
+    perturbed_report, exr_path, tmp_path, monkeypatch
+):
+    """compare_metrics (what a sweep keeps) against the report of compare on the same truth and
+    model: candidate, model, precision, sky distance and every metric of every part and region
+    equal (JSON values, so one ulp of any metric is detected), and no file written."""
+    from fogref.compare.report import compare_metrics
+
+    _, report = perturbed_report
+    monkeypatch.chdir(tmp_path)
+    model = BeerLambertFog(sigma=SIGMA * 1.3, ambient=AMBIENT * 0.9)
+    got = compare_metrics(exr_path, model, precision="float32")
+    keys = ("candidate", "model", "precision", "sky_distance_m", "metrics")
+    assert set(got) == set(keys)
+    assert json.dumps(got, sort_keys=True) == json.dumps({k: report[k] for k in keys}, sort_keys=True)
+    assert not list(tmp_path.iterdir())
+
+
 def test_errors_exr_has_no_nan(perturbed_report):
     out, _ = perturbed_report
     ch, attrs = read_exr(out / "errors.exr")

@@ -172,3 +172,58 @@ def test_colour_loss_start_sums_equal_the_full_models_bitwise(name):
             assert got.tobytes() == want.tobytes(), start
         for ln in (-1.0, 0.3, 1.7):
             assert loss.solve(ln, start)[2] == ref.solve(ln, start)[2]
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_colour_loss_sse_is_the_solves_bitwise(seed):
+    """ColourLoss.sse (what the searches call: the three channels' sse added in Python) against
+    solve's np.sum of them, for targets with random signs and scales (clamped colours, sse over
+    ten decades): equal bit for bit at 200 random exponents and starts (one ulp is detected)."""
+    rng = np.random.default_rng(seed)
+    pf = scenes()["sun30"]
+    views = sample_views(pf.camera, n_dirs=64)
+    base = physical_single_scattering(pf, views)
+    for _ in range(4):
+        target = base * rng.uniform(-1.0, 2.0, 3) * 10.0 ** rng.uniform(-5, 5, 3)
+        target += rng.normal(0.0, 0.05, target.shape) * np.abs(target).mean()
+        loss = ColourLoss(pf, views, target)
+        for _ in range(50):
+            ln, start = rng.uniform(*LOG_N_RANGE), float(rng.choice([0.0, rng.uniform(0.0, 5e4)]))
+            assert loss.sse(ln, start) == loss.solve(ln, start)[2]
+
+
+def test_direction_groups_number_as_numpy_unique():
+    """direction_groups (a lexsort) against np.unique(axis=0)'s inverse on the lit views of 64 to 2048
+    Fibonacci directions and on rows with repeated values, -0.0 and ties in the first columns: the
+    same index for every row (one differing index is detected)."""
+    from fogref.mapping.unreal_basis import direction_groups
+
+    rng = np.random.default_rng(3)
+    cases = [sample_views((0.0, 2.0, 0.0), n_dirs=n).d for n in (64, 300, 2048)]
+    cases.append(rng.integers(-2, 3, size=(500, 3)).astype(float) * 0.5)
+    cases.append(np.array([[0.0, 1.0, 0.0], [-0.0, 1.0, 0.0], [0.0, -0.0, 1.0], [0.0, 0.0, 1.0]]))
+    cases.append(np.zeros((0, 3)))
+    for d in cases:
+        want = np.unique(d, axis=0, return_inverse=True)[1].reshape(-1)
+        assert direction_groups(d).tolist() == want.tolist()
+
+
+@pytest.mark.parametrize("name", ["valley", "dense_sun30"])
+def test_colour_loss_basis_is_the_models_bitwise(name):
+    """ColourLoss.basis (the lit views' shading, zeros elsewhere; fit_unreal's final colour solve
+    uses it) against unreal_basis (the whole model on every view) at exponents and starts
+    across their ranges: both images equal bit for bit (one ulp of one view is detected), so the
+    fitted colours are those of the model's own basis."""
+    pf = scenes()[name]
+    views = sample_views(pf.camera, n_dirs=256)
+    loss = ColourLoss(pf, views, physical_single_scattering(pf, views))
+    for ln, start in (
+        (-2.0, 0.0),
+        (0.0, 0.0),
+        (0.3010299956639812, 0.0),
+        (1.1, 12345.678),
+        (3.0, MAX_START_CM),
+    ):
+        got, want = loss.basis(ln, start), unreal_basis(pf, views, 10.0**ln, start)
+        assert got.iso.tobytes() == want.iso.tobytes(), (ln, start)
+        assert got.lobe.tobytes() == want.lobe.tobytes(), (ln, start)

@@ -26,7 +26,7 @@ from fogref.compare.metrics import (
     relative_squared_error_map,
     squared_error_map,
 )
-from fogref.compare.perceptual import FLIP_PPD, delta_e2000_map, flip_map
+from fogref.compare.perceptual import FLIP_PPD, delta_e2000_maps, flip_map
 from fogref.display import exposure_white
 
 
@@ -220,14 +220,16 @@ def error_maps(
             noisy = r + s * draw
         else:  # correlated as the noise is
             noisy = r + np.einsum("...ij,...j->...i", noise.sqrt_psd(C), draw)
-        de_noise = delta_e2000_map(r, noisy, white)
+        de, de_noise = delta_e2000_maps(r, [x, noisy], white)  # the reference in CIELAB once
         flip_noise, _ = flip_map(r, noisy, ppd)
+    else:
+        (de,) = delta_e2000_maps(r, [x], white)
     return ErrorMaps(
         signed=x - r,
         absolute=abs_error_map(r, x),
         squared=squared_error_map(r, x),
         relative_squared=relative_squared_error_map(r, x, eps),
-        delta_e2000=delta_e2000_map(r, x, white),
+        delta_e2000=de,
         flip=flip,
         white=float(white),
         flip_params=flip_params,

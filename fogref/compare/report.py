@@ -97,6 +97,7 @@ __all__ = [
     "check_table_markdown",
     "compare",
     "compare_images",
+    "compare_metrics",
     "evaluate_parts",
     "figure_paths",
     "image_parts",
@@ -186,10 +187,29 @@ def compare(
     dict
         What ``metrics.json`` holds.  FogrefError for a bad option or truth.
     """
+    refuse_output_over_input([("out_dir", p) for p in report_paths(out_dir)], [("truth", _path_of(truth))])
+    truth, parts, header = _model_parts(truth, model, precision, sky_distance, check)
+    return write_report(
+        truth,
+        parts,
+        out_dir,
+        header,
+        {"final": True, "attenuated_surface": True},
+        relmse_eps=relmse_eps,
+        flip_ppd=flip_ppd,
+        distance_bins=distance_bins,
+        angle_step_deg=angle_step_deg,
+        figures=figures,
+        check=check,
+    )
+
+
+def _model_parts(truth, model, precision: str, sky_distance: float, check=None) -> tuple:
+    """``(truth, parts, header)`` of :func:`compare`: the truth read, the parts of ``model`` (or of
+    ``check``'s evaluation) and what the report says about the model; FogrefError for a bad option."""
     if precision not in ("float32", "float64"):
         raise FogrefError(f"precision must be 'float32' or 'float64', got {precision!r}")
     sky_distance = check_sky_distance(sky_distance)
-    refuse_output_over_input([("out_dir", p) for p in report_paths(out_dir)], [("truth", _path_of(truth))])
     truth = truth if isinstance(truth, Truth) else load_truth(truth)
     parts = parts_from_check(truth, check, model, precision, sky_distance)
     if parts is None:
@@ -204,19 +224,55 @@ def compare(
         "precision": precision,
         "sky_distance_m": float(sky_distance),
     }
-    return write_report(
-        truth,
-        parts,
-        out_dir,
-        header,
-        {"final": True, "attenuated_surface": True},
-        relmse_eps=relmse_eps,
-        flip_ppd=flip_ppd,
-        distance_bins=distance_bins,
-        angle_step_deg=angle_step_deg,
-        figures=figures,
-        check=check,
-    )
+    return truth, parts, header
+
+
+def compare_metrics(
+    truth,
+    model,
+    precision: str = "float32",
+    sky_distance: float = DEFAULT_SKY_DISTANCE,
+    *,
+    relmse_eps: float = M.RELMSE_EPS,
+    flip_ppd: float = FLIP_PPD,
+) -> dict:
+    """The metrics of :func:`compare` without its report (nothing is written, no binned errors):
+    ``metrics.json``'s ``candidate``, ``model``, ``precision``, ``sky_distance_m`` and ``metrics``,
+    the same values.  What a sweep keeps of each comparison.  Arguments as :func:`compare`'s.
+
+    >>> from fogref.compare.synthetic import synthetic_truth
+    >>> from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+    >>> fog = UE4ExponentialHeightFog(UE4FogParams())
+    >>> m = compare_metrics(synthetic_truth(fog, shape=(9, 16)), fog)
+    >>> sorted(m), sorted(m["metrics"]["final"])
+    (['candidate', 'metrics', 'model', 'precision', 'sky_distance_m'], ['all', 'sky', 'surface'])
+    """
+    truth, parts, header = _model_parts(truth, model, precision, sky_distance)
+    errors = _part_errors(truth, parts, relmse_eps, flip_ppd)
+    return json_safe({**header, "metrics": _metrics_table(truth, errors)})
+
+
+def _part_errors(truth: Truth, parts: dict, relmse_eps: float, flip_ppd: float) -> dict:
+    """The :class:`~fogref.compare.error_maps.ErrorMaps` of every part."""
+    return {
+        part: error_maps(
+            p["reference"],
+            p["model"],
+            white=1.0 if PART_UNITS[part] == "1" else None,
+            eps=relmse_eps,
+            ppd=flip_ppd,
+            noise_cov=p["cov"],
+            valid=p["valid"],
+            spp=truth.spp,
+        )
+        for part, p in parts.items()
+    }
+
+
+def _metrics_table(truth: Truth, errors: dict) -> dict:
+    """part -> region -> the summary of the part's errors over the region's pixels."""
+    masks = {"all": None, "surface": truth.hit, "sky": truth.sky}
+    return {part: {r: errors[part].summary(masks[r]) for r in REGIONS} for part in errors}
 
 
 def compare_images(
@@ -290,21 +346,8 @@ def write_report(
     names = list(parts)
     out.mkdir(parents=True, exist_ok=True)
 
-    errors = {
-        part: error_maps(
-            p["reference"],
-            p["model"],
-            white=1.0 if PART_UNITS[part] == "1" else None,
-            eps=relmse_eps,
-            ppd=flip_ppd,
-            noise_cov=p["cov"],
-            valid=p["valid"],
-            spp=truth.spp,
-        )
-        for part, p in parts.items()
-    }
-    masks = {"all": None, "surface": truth.hit, "sky": truth.sky}
-    table = {part: {r: errors[part].summary(masks[r]) for r in REGIONS} for part in names}
+    errors = _part_errors(truth, parts, relmse_eps, flip_ppd)
+    table = _metrics_table(truth, errors)
 
     sun_angle = truth.sun_angle_deg()
     by_distance = binned_errors(

@@ -223,7 +223,7 @@ def fit_unreal(
     N = len(views.D)
     loss = ColourLoss(pf, views, target, sky_distance)
     ln0, s0 = loss.minimise(None if exponent is None else math.log10(exponent), fit_start)
-    cf, cd, best = solve_colours(unreal_basis(pf, views, 10.0**ln0, s0, sky_distance), target)
+    cf, cd, best = solve_colours(loss.basis(ln0, s0), target)
     params = base_params(
         pf,
         FogInscatteringColor=tuple(cf),

@@ -39,6 +39,7 @@ from fogref.models.ue4 import (
     UE4FogParams,
     directional_lobe,
     directional_opacity,
+    directional_start_uniform,
     fog_constants,
     shade_geometry,
     sigma_to_unreal,
@@ -50,6 +51,7 @@ __all__ = [
     "LOG_N_RANGE",
     "MAX_START_CM",
     "base_params",
+    "direction_groups",
     "nnls2",
     "solve_colours",
     "unreal_basis",
@@ -185,11 +187,19 @@ def nnls2(
     >>> x0.tolist(), x1.tolist(), sse.tolist()
     ([2.0, 0.0, 0.0], [1.0, 2.0, 0.0], [0.0, 0.0, 0.0])
     """
+    lists = (np.asarray(v, dtype=np.float64).tolist() for v in (b0, b1, yy))
+    out = np.array(_nnls2_channels(g00, g01, g11, *lists)).T.copy()
+    return out[0], out[1], out[2]
+
+
+def _nnls2_channels(
+    g00: float, g01: float, g11: float, b0: list, b1: list, yy: list
+) -> list[tuple[float, float, float]]:
+    """:func:`nnls2` on Python floats: ``(x0, x1, sse)`` per channel of ``b0``, ``b1``, ``yy``."""
     det = g00 * g11 - g01 * g01
     both = det > 1e-12 * g00 * g11
-    out = np.empty((3, 3))
-    for c in range(3):
-        p, q, r = float(b0[c]), float(b1[c]), float(yy[c])
+    out = []
+    for p, q, r in zip(b0, b1, yy):
         cands = []
         if g00 > 0:  # np.maximum's rule: the first value when it is >= or NaN
             cands.append(((p if p >= 0.0 or p != p else 0.0) / g00, 0.0))
@@ -204,9 +214,27 @@ def nnls2(
             sse = r - 2.0 * (x0 * p + x1 * q) + g00 * x0 * x0 + 2.0 * g01 * x0 * x1 + g11 * x1 * x1
             if sse < b_sse:
                 b_x0, b_x1, b_sse = x0, x1, sse
-        out[0, c], out[1, c] = b_x0, b_x1
-        out[2, c] = b_sse if b_sse >= 0.0 or b_sse != b_sse else 0.0
-    return out[0], out[1], out[2]
+        out.append((b_x0, b_x1, b_sse if b_sse >= 0.0 or b_sse != b_sse else 0.0))
+    return out
+
+
+def direction_groups(d: np.ndarray) -> np.ndarray:
+    """Per row of ``d`` (N, 3) finite, the index of its value among the distinct rows sorted
+    lexicographically: the numbering of ``np.unique(d, axis=0, return_inverse=True)``, from a
+    lexsort of the three columns (``np.unique`` sorts the rows as records, about ten times slower).
+
+    >>> direction_groups(np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])).tolist()
+    [1, 0, 1]
+    """
+    d = np.asarray(d, dtype=np.float64)
+    group = np.zeros(len(d), dtype=np.intp)
+    if len(d):
+        order = np.lexsort((d[:, 2], d[:, 1], d[:, 0]))
+        s = d[order]
+        new = np.zeros(len(d), dtype=np.intp)
+        new[1:] = np.any(s[1:] != s[:-1], axis=1)
+        group[order] = np.cumsum(new)
+    return group
 
 
 class ColourLoss:
@@ -248,15 +276,12 @@ class ColourLoss:
         # the parameters and positions every model evaluation shares, made once
         self._unit, wp = _unit_params(pf), views.world_positions(sky_distance)
         one = Basis(*_unit_inscatter(self._unit, pf, wp, 1.0, 0.0)[:, :2].T)
-        two = Basis(*_unit_inscatter(self._unit, pf, wp, 2.0, 0.0)[:, :2].T)
-        self.model_evaluations = 2
+        self.model_evaluations = 1
         self.colour_solves = 0
         self._lit = one.lobe > 0  # the lobe is 0 elsewhere for every exponent and start
+        self._iso = one.iso  # and the isotropic image is the same for every exponent and start
         # the lit views grouped by direction: max(cos, 0) is a function of the direction
-        _, group = np.unique(views.d[self._lit], axis=0, return_inverse=True)
-        self._group = np.asarray(group).reshape(-1)
-        self._cos = np.zeros(int(self._group.max(initial=-1)) + 1)
-        self._cos[self._group] = two.lobe[self._lit] / one.lobe[self._lit]
+        self._group = direction_groups(views.d[self._lit])
         self._iso_lit, self._y_lit = one.iso[self._lit], y[self._lit]
         # a start distance's lobe is needed on the lit views only, and of the model's shading only the
         # opacity beyond the start changes with it: the rest is computed once, on the lit views (no
@@ -267,15 +292,37 @@ class ColourLoss:
         dt, self._cam_z_cm, rel = UE4ExponentialHeightFog.receivers(
             np.asarray(pf.camera), wp[self._lit], "float64"
         )
-        C = fog_constants(p1, self._cam_z_cm, dt)
+        self._C1 = fog_constants(p1, self._cam_z_cm, dt)
         with np.errstate(all="ignore"):
-            self._geo = shade_geometry(C, self._cam_z_cm, rel, dt, exact=True)
-            self._lobe1 = directional_lobe(C, self._geo, dt)
+            self._geo = shade_geometry(self._C1, self._cam_z_cm, rel, dt, exact=True)
+            self._lobe1 = directional_lobe(self._C1, self._geo, dt)
+        # max(cos, 0) per direction: the lobe at exponent 2 over the one at exponent 1
+        self._cos = np.zeros(int(self._group.max(initial=-1)) + 1)
+        self._cos[self._group] = self._lit_lobe(2.0, 0.0) / one.lobe[self._lit]
         self._g00 = float(one.iso @ one.iso)
-        self._b0 = one.iso @ y
-        self._yy = np.sum(y * y, axis=0)
+        self._b0_list = (one.iso @ y).tolist()
+        self._yy_list = np.sum(y * y, axis=0).tolist()
         self._sums: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._add_start(0.0, one.lobe[self._lit])
+
+    def _lit_lobe(self, exponent: float, start_cm: float) -> np.ndarray:
+        """The model's lobe channel on the lit views at ``exponent`` and ``start_cm`` [cm]: the
+        angular factor times the opacity beyond the start (times a unit colour, plus 0)."""
+        p = replace(
+            self._unit,
+            DirectionalInscatteringExponent=exponent,
+            DirectionalInscatteringStartDistance=start_cm,
+        )
+        C = fog_constants(p, self._cam_z_cm, np.float64)
+        with np.errstate(all="ignore"):
+            return directional_lobe(C, self._geo, np.float64) * directional_opacity(C, self._geo, np.float64)
+
+    def basis(self, log_n: float, start_cm: float) -> Basis:
+        """:func:`unreal_basis` at exponent ``10**log_n`` and ``start_cm`` [cm] on the loss's views,
+        bit for bit, from the lit views' shading (one model evaluation's cost on those views)."""
+        lobe = np.zeros(len(self._iso))
+        lobe[self._lit] = self._lit_lobe(10.0**log_n, start_cm)
+        return Basis(iso=self._iso, lobe=lobe)
 
     def _add_start(self, start_cm: float, lobe1: np.ndarray) -> None:
         """Per direction, the sums over its views of ``iso g``, ``g^2`` and ``g y`` (``g = lobe1 / cos``)."""
@@ -291,24 +338,35 @@ class ColourLoss:
     def sums(self, start_cm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The per-direction sums of the lobe at ``start_cm`` [cm] (one model evaluation, once)."""
         if start_cm not in self._sums:
-            # the model's lobe channel at exponent 1: lobe * (1 - T_dir) times a unit colour, plus 0
-            p = replace(
-                self._unit, DirectionalInscatteringExponent=1.0, DirectionalInscatteringStartDistance=start_cm
-            )
-            C = fog_constants(p, self._cam_z_cm, np.float64)
+            # the model's lobe channel at exponent 1 (lobe * (1 - T_dir) times a unit colour, plus 0);
+            # of the uniforms only the start distance differs from those of start 0
+            light = self._unit.InscatteringLightDirection is not None
+            w = directional_start_uniform(start_cm, light, self._C1["match"], np.float64)
+            C = {**self._C1, "light": (*self._C1["light"][:3], w)}
             with np.errstate(all="ignore"):
                 lobe = self._lobe1 * directional_opacity(C, self._geo, np.float64)
             self.model_evaluations += 1
             self._add_start(start_cm, lobe)
         return self._sums[start_cm]
 
-    def solve(self, log_n: float, start_cm: float) -> tuple[np.ndarray, np.ndarray, float]:
-        """``(C_fog (3,), C_dir (3,), sse)`` at exponent ``10**log_n`` and ``start_cm`` [cm]."""
+    def _channels(self, log_n: float, start_cm: float) -> list[tuple[float, float, float]]:
+        """:func:`nnls2`'s ``(C_fog, C_dir, sse)`` per channel at exponent ``10**log_n`` and ``start_cm``."""
         iso_g, gg, yg = self.sums(start_cm)
         cn = self._cos ** (10.0**log_n)
         self.colour_solves += 1
-        cf, cd, sse = nnls2(self._g00, float(cn @ iso_g), float((cn * cn) @ gg), self._b0, cn @ yg, self._yy)
-        return cf, cd, float(np.sum(sse))
+        g01, g11 = float(cn @ iso_g), float((cn * cn) @ gg)
+        return _nnls2_channels(self._g00, g01, g11, self._b0_list, (cn @ yg).tolist(), self._yy_list)
+
+    def solve(self, log_n: float, start_cm: float) -> tuple[np.ndarray, np.ndarray, float]:
+        """``(C_fog (3,), C_dir (3,), sse)`` at exponent ``10**log_n`` and ``start_cm`` [cm]."""
+        out = np.array(self._channels(log_n, start_cm)).T.copy()
+        return out[0], out[1], float(np.sum(out[2]))
+
+    def sse(self, log_n: float, start_cm: float) -> float:
+        """:meth:`solve`'s ``sse`` alone (the searches need no colours): the channels' sum in
+        ``np.sum``'s order for three values, ``(R + G) + B``."""
+        (_, _, r), (_, _, g), (_, _, b) = self._channels(log_n, start_cm)
+        return r + g + b
 
     def best_exponent(self, start_cm: float, log_n: float | None = None) -> tuple[float, float]:
         """``(log10 n, sse)`` of the best exponent at ``start_cm``: a grid of 21 in
@@ -318,12 +376,12 @@ class ColourLoss:
 
         if log_n is not None:
             ln = float(np.clip(log_n, *LOG_N_RANGE))
-            return ln, self.solve(ln, start_cm)[2]
+            return ln, self.sse(ln, start_cm)
         grid = np.linspace(*LOG_N_RANGE, 21)
-        values = [self.solve(g, start_cm)[2] for g in grid]
+        values = [self.sse(g, start_cm) for g in grid]
         k = int(np.argmin(values))
         res = minimize_scalar(
-            lambda ln: self.solve(ln, start_cm)[2],
+            lambda ln: self.sse(ln, start_cm),
             bounds=(grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]),
             method="bounded",
             options={"xatol": 1e-6},

@@ -311,6 +311,19 @@ def _validate(p: "UE4FogParams") -> None:
         object.__setattr__(p, "InscatteringLightDirection", tuple(float(x) for x in np.asarray(w) / norm))
 
 
+def directional_start_uniform(start_cm: float, light: bool, match: bool, dt: Any = np.float32) -> Any:
+    """The w of :func:`fog_constants`'s ``light`` uniform (FogRendering.cpp), in ``dt``:
+    DirectionalInscatteringStartDistance ``start_cm`` [cm] clamped at 0; 0 with
+    ExpFogMatchesVolumetricFog (``match``); -1 without a light.
+
+    >>> [float(directional_start_uniform(s, *f)) for s, f in ((-5.0, (1, 0)), (5.0, (1, 1)), (5.0, (0, 0)))]
+    [0.0, 0.0, -1.0]
+    """
+    if not light:
+        return dt(-1.0)
+    return dt(0.0) if match else dt(max(0.0, start_cm))
+
+
 def fog_constants(p: UE4FogParams, camera_z_cm: float, dt: Any = np.float32) -> dict:
     """The uniforms of FogRendering.cpp for an observer at ``camera_z_cm``.
 
@@ -331,17 +344,14 @@ def fog_constants(p: UE4FogParams, camera_z_cm: float, dt: Any = np.float32) -> 
     for i in range(2):
         power = np.clip(-fall[i] * (obs - height[i]), f(-126.0 + 1.0), f(127.0 - 1.0)).astype(dt)
         collapsed.append(dens[i] * np.power(f(2.0), power))
-    light_w = (
-        f(max(0.0, p.DirectionalInscatteringStartDistance))
-        if p.InscatteringLightDirection is not None
-        else f(-1.0)
+    match, sky = p.ExpFogMatchesVolumetricFog, p.SkyAtmosphereAffectsHeightFog
+    light_w = directional_start_uniform(
+        p.DirectionalInscatteringStartDistance, p.InscatteringLightDirection is not None, match, f
     )
     light_dir = p.InscatteringLightDirection or (0.0, 0.0, 0.0)
     color = tuple(f(c) for c in p.FogInscatteringColor)
     dir_color = tuple(f(c) * f(p.SunLuminance) for c in p.DirectionalInscatteringColor)
-    match, sky = p.ExpFogMatchesVolumetricFog, p.SkyAtmosphereAffectsHeightFog
     if match:  # InitFogConstants: no start distance, the emissive as fog colour, black directional
-        light_w = f(0.0) if p.InscatteringLightDirection is not None else f(-1.0)
         color = tuple(f(e) for e in p.VolumetricFogEmissive)
         dir_color = (f(0.0),) * 3
     if sky:  # PROJECT_SUPPORT_SKY_ATMOSPHERE_AFFECTS_HEIGHFOG: the atmosphere's sky and sun added

@@ -4,7 +4,8 @@
 (:func:`_worker_setup`, so Dr.Jit's compiled kernels are kept across tasks),
 renders the configuration's ground truth through fogref's render cache under a
 cluster-wide lock (configurations sharing a truth render it once), compares every
-model with figures off and returns one row of flattened metrics per model.
+model (:func:`~fogref.compare.report.compare_metrics`: the metrics, no report files) and
+returns one row of flattened metrics per model.
 """
 
 from __future__ import annotations
@@ -14,12 +15,11 @@ import functools
 import json
 import os
 import socket
-import tempfile
 import time
 from pathlib import Path
 
 from fogref._version import __version__
-from fogref.compare.report import compare
+from fogref.compare.report import compare_metrics
 from fogref.gbuffer import load_truth
 from fogref.mapping import PhysicalScene, fit_unreal
 from fogref.mapping.build import build_model
@@ -132,25 +132,24 @@ def run_config(cfg: dict, drjit_threads: int | None = None) -> dict:
     }
     scene_params = header.get("fogref.params")
     rows = []
-    with tempfile.TemporaryDirectory(prefix="fogref-sweep-") as tmp:
-        for m in cfg["models"]:
-            tc = time.perf_counter()
-            model = build_model(m["name"], m["params"], scene_params if m["from_scene"] else None)
-            report = compare(truth_data, model, Path(tmp) / m["label"], figures=False)
-            row = {
-                "model": m["label"],
-                "model_name": m["name"],
-                "model_parameters": json.dumps(
-                    report.get("model", {}).get("parameters"), sort_keys=True, default=str
-                ),
-                "compare_seconds": time.perf_counter() - tc,
-            }
-            metrics: dict = {}
-            _flatten("", report.get("metrics", {}), metrics)
-            row.update(metrics)
-            if cfg.get("budget") and m["name"] == "ue4":
-                row.update(_budget_columns(cfg, truth_data, model))
-            rows.append(row)
+    for m in cfg["models"]:
+        tc = time.perf_counter()
+        model = build_model(m["name"], m["params"], scene_params if m["from_scene"] else None)
+        report = compare_metrics(truth_data, model)  # compare's metrics; its report files are not kept
+        row = {
+            "model": m["label"],
+            "model_name": m["name"],
+            "model_parameters": json.dumps(
+                report.get("model", {}).get("parameters"), sort_keys=True, default=str
+            ),
+            "compare_seconds": time.perf_counter() - tc,
+        }
+        metrics: dict = {}
+        _flatten("", report.get("metrics", {}), metrics)
+        row.update(metrics)
+        if cfg.get("budget") and m["name"] == "ue4":
+            row.update(_budget_columns(cfg, truth_data, model))
+        rows.append(row)
     return {"id": cfg["id"], "provenance": prov, "rows": rows}
 
 
