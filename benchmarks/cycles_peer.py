@@ -350,9 +350,14 @@ def write_report(res, path_md):
         f"Written by `benchmarks/cycles_peer.py{' --quick' if a['quick'] else ''}` ({res['date']}, "
         f"{res['wall_min']:.1f} min). An optional benchmark, not a test.",
         "",
-        f"Machine: {m['cpu']}, {m['cores']} cores (shared; renders niced), {a['threads']} threads in both. "
+        f"Machine: {m['cpu']}, {m['cores']} cores (shared), {a['threads']} threads in both. "
         f"Mitsuba {m['mitsuba']}, Dr.Jit {m['drjit']}, `{m['variant']}`; Blender {res['blender']} "
-        f"(`bpy` from PyPI, Python {res['bpy_python_version']}).",
+        f"(`bpy` from PyPI, Python {res['bpy_python_version']}). Load average (1 min) "
+        + (
+            " -> ".join(f"{x:.1f}" for x in res["load_avg_1min"]) + " (start, after each scene)."
+            if "load_avg_1min" in res
+            else "not recorded."
+        ),
         "",
         "Scenes: 64x36, exponential height fog sigma_t = 0.03 exp(-0.06 y) /m, albedo 0.9, HG g 0.5, in "
         "the box [-60, 60] x [-1, 40] x [-60, 60] m; delta sun E = (2, 1.9, 1.7) W/m^2; constant sky "
@@ -475,8 +480,10 @@ def main():
         "scenes": {},
     }
     res["args"] = {k: v for k, v in vars(args).items() if k != "out"}
+    res["load_avg_1min"] = [os.getloadavg()[0]]
     for name in args.scenes.split(","):
         res["scenes"][name] = run_scene(name, args, py, env)
+        res["load_avg_1min"].append(os.getloadavg()[0])
     res["blender"] = next(iter(res["scenes"].values()))["blender"]
     res["date"] = time.strftime("%Y-%m-%d")
     res["wall_min"] = (time.time() - t0) / 60

@@ -28,6 +28,16 @@ toward low error and fogpath's 1-spp time toward high error).  > 1 means fogpath
 is faster.
 
 Writes ``reports/benchmarks/time_vs_error.{json,csv,png}`` and ``summary.md``.
+
+``--reference-from PREVIOUS.json`` re-times a ladder without recomputing its errors: every
+render is seeded, so with unchanged code a ladder image, and the reference, are bitwise
+those of the previous run.  The reference render and the variance shares are skipped and the
+errors (MSE, RMSE, noise, bias) are read from the previous run's JSON (same image size,
+ladder, repeats, reference spp, max_depth and methods, or a one-line error); the ladder,
+first calls and kernel profiles are rendered and timed afresh, methods interleaved as
+without it.  The scenes named by ``--verify`` (default: the first) still render their
+reference and compute every error afresh, and the JSON and summary give the largest
+relative difference between fresh and stored ``mse_raw`` (0 when the code is unchanged).
 """
 
 from __future__ import annotations
@@ -36,6 +46,9 @@ import argparse
 import csv
 import json
 import math
+import os
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -165,8 +178,49 @@ def fogpath_time_at(err, f_pts):
     return float("nan"), "none"
 
 
-def run_scene(name, args, rng):
+#: what ``--reference-from`` reads from the previous run, per ladder point
+ERROR_KEYS = ("mse_raw", "mse", "rmse", "rel_rmse", "noise_rmse", "rel_noise_rmse", "rmse_inscatter")
+
+
+def load_previous(path: str, args) -> dict:
+    """The previous run's JSON, checked against this run's settings (one-line errors)."""
+    try:
+        prev = json.loads(Path(path).read_text())
+        cfg = prev["config"]
+    except (OSError, ValueError, KeyError) as e:
+        raise SystemExit(f"--reference-from {path}: not a time_vs_error.json ({e})") from None
+    want = {
+        "res": list(args.res),
+        "ladder": list(args.ladder),
+        "ref_spp": args.ref_spp,
+        "max_depth": args.max_depth,
+        "repeats": {str(s): REPEATS[s] for s in args.ladder},
+    }
+    got = {k: cfg.get(k) for k in want}
+    got["repeats"] = {str(k): v for k, v in (got["repeats"] or {}).items()}
+    for k, v in want.items():
+        if got[k] != v:
+            raise SystemExit(
+                f"--reference-from {path}: its {k} is {got[k]}, this run's is {v} (must be equal)"
+            )
+    for name in args.scenes:
+        if name not in prev.get("scenes", {}):
+            raise SystemExit(
+                f"--reference-from {path}: has no scene {name!r} (it has {list(prev['scenes'])})"
+            )
+        had = list(prev["scenes"][name]["methods"])
+        if had != S.methods_for(name):
+            raise SystemExit(
+                f"--reference-from {path}: scene {name!r} had methods {had}, now {S.methods_for(name)} "
+                "(the seeds would differ)"
+            )
+    return prev
+
+
+def run_scene(name, args, rng, prev=None):
+    """One scene's ladder; ``prev``: that scene in a previous run's JSON (errors reused)."""
     methods = S.methods_for(name)
+    fresh = prev is None or name in args.verify  # render the reference, compute the errors
     scenes = {m: S.build(mi, name, m, res=args.res, max_depth=args.max_depth) for m in methods}
     out = {"methods": {}}
     print(f"[{name}] methods: {methods}", flush=True)
@@ -181,27 +235,30 @@ def run_scene(name, args, rng):
     for spp in args.ladder[1:]:
         for m in methods:
             timed_render(scenes[m], spp, 54321)
-    # reference
-    refx, var_refx, t_ref, ref_spp = render_reference(
-        scenes["fogpath"], args.ref_spp, channels=_insc_channels()
-    )
-    ref, var_ref, ref_i, var_ref_i = refx[..., :3], var_refx[..., :3], refx[..., 3:], var_refx[..., 3:]
-    ref_mean = float(ref.mean())
-    out["reference"] = {
-        "method": "fogpath",
-        "spp": ref_spp,
-        "chunks": 8,
-        "time_s": t_ref,
-        "mean": ref_mean,
-        "rms_sd_of_mean": float(math.sqrt(var_ref.mean())),
-        "rel_rms_sd_of_mean": rel(math.sqrt(var_ref.mean()), ref_mean),
-    }
-    print(
-        f"[{name}] reference {ref_spp} spp: {t_ref:.1f} s, mean {ref_mean:.4f}, "
-        f"rel sd {out['reference']['rel_rms_sd_of_mean']:.2e}",
-        flush=True,
-    )
-    vref = float(var_ref.mean())
+    if fresh:  # reference
+        refx, var_refx, t_ref, ref_spp = render_reference(
+            scenes["fogpath"], args.ref_spp, channels=_insc_channels()
+        )
+        ref, var_ref, ref_i, var_ref_i = refx[..., :3], var_refx[..., :3], refx[..., 3:], var_refx[..., 3:]
+        ref_mean = float(ref.mean())
+        out["reference"] = {
+            "method": "fogpath",
+            "spp": ref_spp,
+            "chunks": 8,
+            "time_s": t_ref,
+            "mean": ref_mean,
+            "rms_sd_of_mean": float(math.sqrt(var_ref.mean())),
+            "rel_rms_sd_of_mean": rel(math.sqrt(var_ref.mean()), ref_mean),
+        }
+        print(
+            f"[{name}] reference {ref_spp} spp: {t_ref:.1f} s, mean {ref_mean:.4f}, "
+            f"rel sd {out['reference']['rel_rms_sd_of_mean']:.2e}",
+            flush=True,
+        )
+        vref = float(var_ref.mean())
+    else:  # the previous run's reference (its statistics; the ladder's errors below)
+        out["reference"] = dict(prev["reference"], reused_from=args.reference_from)
+        ref_mean = out["reference"]["mean"]
 
     # ladder, round-robin over methods (rotated each repeat)
     rec = {m: {} for m in methods}
@@ -216,49 +273,58 @@ def run_scene(name, args, rng):
                 img, t = timed_render(
                     scenes[m], spp, seed, _insc_channels() if m.startswith("fogpath") else slice(0, 3)
                 )
-                mse = float(((img[..., :3] - ref) ** 2).mean())
                 d = rec[m].setdefault(spp, {"times": [], "mse_raw": [], "mse_insc_raw": []})
                 d["times"].append(t)
-                d["mse_raw"].append(mse)
+                if not fresh:
+                    continue
+                d["mse_raw"].append(float(((img[..., :3] - ref) ** 2).mean()))
                 if m.startswith("fogpath"):
                     d["mse_insc_raw"].append(float(((img[..., 3:] - ref_i) ** 2).mean()))
-                img = img[..., :3]
-                pool[m].append((img, spp))
+                pool[m].append((img[..., :3], spp))
         print(
             f"[{name}] spp {spp}: " + ", ".join(f"{m} {median(rec[m][spp]['times']):.3f}s" for m in methods),
             flush=True,
         )
 
     for m in methods:
-        P, var_P, N = pooled(pool[m])
-        b = bias_stats(P, var_P, ref, var_ref, rng)
-        b["pooled_spp"] = N
+        if fresh:
+            P, var_P, N = pooled(pool[m])
+            b = bias_stats(P, var_P, ref, var_ref, rng)
+            b["pooled_spp"] = N
+        else:
+            b = prev["methods"][m]["bias"]
         ladder = []
-        for spp in args.ladder:
+        for i, spp in enumerate(args.ladder):
             d = rec[m][spp]
-            mse = float(np.mean(d["mse_raw"])) - vref
-            rmse = math.sqrt(max(mse, 1e-30))
-            noise = math.sqrt(max(mse - max(b["bias2"], 0.0), 1e-30))
-            if d["mse_insc_raw"]:
-                ladder_insc = math.sqrt(
-                    max(float(np.mean(d["mse_insc_raw"])) - float(var_ref_i.mean()), 1e-30)
-                )
-            else:
-                ladder_insc = None
-            ladder.append(
-                {
-                    "spp": spp,
-                    "repeats": len(d["times"]),
-                    "time_median_s": median(d["times"]),
-                    "rmse_inscatter": ladder_insc,
-                    "time_min_s": float(min(d["times"])),
-                    "times_s": d["times"],
+            if fresh:
+                mse = float(np.mean(d["mse_raw"])) - vref
+                rmse = math.sqrt(max(mse, 1e-30))
+                noise = math.sqrt(max(mse - max(b["bias2"], 0.0), 1e-30))
+                if d["mse_insc_raw"]:
+                    ladder_insc = math.sqrt(
+                        max(float(np.mean(d["mse_insc_raw"])) - float(var_ref_i.mean()), 1e-30)
+                    )
+                else:
+                    ladder_insc = None
+                err = {
                     "mse_raw": float(np.mean(d["mse_raw"])),
                     "mse": mse,
                     "rmse": rmse,
                     "rel_rmse": rel(rmse, ref_mean),
                     "noise_rmse": noise,
                     "rel_noise_rmse": rel(noise, ref_mean),
+                    "rmse_inscatter": ladder_insc,
+                }
+            else:
+                err = {k: prev["methods"][m]["ladder"][i][k] for k in ERROR_KEYS}
+            ladder.append(
+                {
+                    "spp": spp,
+                    "repeats": len(d["times"]),
+                    "time_median_s": median(d["times"]),
+                    "time_min_s": float(min(d["times"])),
+                    "times_s": d["times"],
+                    **err,
                 }
             )
         steady1 = ladder[0]["time_median_s"]
@@ -302,8 +368,24 @@ def run_scene(name, args, rng):
         out["methods"][m]["ns_per_sample_top"] = (
             top["time_median_s"] / (top["spp"] * args.res[0] * args.res[1]) * 1e9
         )
+    if prev is not None and fresh:  # the fresh errors against the stored ones
+        pairs = [
+            (p["mse_raw"], q["mse_raw"])
+            for m in methods
+            for p, q in zip(out["methods"][m]["ladder"], prev["methods"][m]["ladder"], strict=True)
+        ]
+        out["error_check"] = {
+            "against": args.reference_from,
+            "points": len(pairs),
+            "bitwise_equal": sum(a == b for a, b in pairs),
+            "max_rel_diff_mse_raw": max(abs(a / b - 1.0) for a, b in pairs),
+        }
+        print(f"[{name}] fresh errors vs {args.reference_from}: {out['error_check']}", flush=True)
     # where the variance lives, fogpath_before against fogpath (one sample, per part)
-    out["variance_shares"] = {m: variance_shares(scenes[m]) for m in methods if m.startswith("fogpath")}
+    if prev is None:
+        out["variance_shares"] = {m: variance_shares(scenes[m]) for m in methods if m.startswith("fogpath")}
+    else:
+        out["variance_shares"] = prev["variance_shares"]
     # where the time goes (kernel history), fogpath and the slowest stock method
     prof_spp = args.ladder[-2] if len(args.ladder) > 1 else args.ladder[-1]
     out["profile"] = {}
@@ -409,6 +491,24 @@ def write_reports(res, args, outdir: Path):
     (outdir / "summary.md").write_text(summary_md(res, args))
 
 
+def _reuse_lines(res) -> list[str]:
+    """The summary's note on errors reused from a previous run (``--reference-from``)."""
+    src = res["config"].get("reference_from")
+    if not src:
+        return []
+    checks = {n: sc["error_check"] for n, sc in res["scenes"].items() if "error_check" in sc}
+    told = "; ".join(
+        f"{n}: {c['bitwise_equal']} of {c['points']} (method, spp) MSEs bitwise equal to the stored ones, "
+        f"largest relative difference {c['max_rel_diff_mse_raw']:.1e}"
+        for n, c in checks.items()
+    )
+    return [
+        f"Errors reused: the times are fresh; the reference, RMSEs, noise, bias and variance shares are "
+        f"those of `{src}` (same seeds, image size, ladder and reference), except in the scenes "
+        f"rendered afresh to check them ({told or 'none'}).\n"
+    ]
+
+
 def summary_md(res, args) -> str:
     cfg = res["config"]
     L = [
@@ -418,11 +518,16 @@ def summary_md(res, args) -> str:
         f"{cfg['machine']['mitsuba']}, drjit {cfg['machine']['drjit']}, `{cfg['machine']['variant']}`  ",
         f"Images {cfg['res'][0]}x{cfg['res'][1]}, max_depth {cfg['max_depth']} for every method, rr_depth 5; "
         f"ladder {cfg['ladder']} spp (repeats {cfg['repeats']}); reference fogpath {cfg['ref_spp']} spp "
-        f"in 8 chunks. Total run {cfg['total_s']:.0f} s.\n",
+        f"in 8 chunks. Total run {cfg['total_s']:.0f} s.  ",
+        f"Load average (1 min) {cfg['load_avg_1min']['start']:.1f} at the start, "
+        f"{cfg['load_avg_1min']['end']:.1f} at the end, {cfg['load_avg_1min']['min']:.1f}-"
+        f"{cfg['load_avg_1min']['max']:.1f} at the scene boundaries; "
+        f"fogref commit `{cfg.get('commit', '?')}`.\n",
         "Times are steady wall times (median of repeats, methods interleaved); the first call "
         "(tracing + LLVM compilation or kernel-cache load) is reported apart. Grids: density sampled at "
         "cell **centres** of a 1xNx1 `gridvolume` over the fog box, trilinear, `has_spectral_extinction` "
         "false.\n",
+        *_reuse_lines(res),
         "![time vs error](time_vs_error.png)\n",
         "## Equal-error time ratio (method time / fogpath time at the same RMSE; > 1: fogpath faster)\n",
         "| scene | method | " + " | ".join(f"{s} spp" for s in cfg["ladder"]) + " | noise-only @top |",
@@ -532,6 +637,16 @@ def summary_md(res, args) -> str:
     return "\n".join(L) + "\n"
 
 
+def _commit() -> str:
+    """The repository's commit (``git describe --always --dirty``), or '?' outside git."""
+    try:
+        return subprocess.run(
+            ["git", "describe", "--always", "--dirty"], cwd=ROOT, capture_output=True, text=True, check=True
+        ).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "?"
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="32x18 images, spp <= 64, 512-spp reference")
@@ -541,35 +656,65 @@ def main(argv=None):
     ap.add_argument("--max-spp", type=int, default=1024, help="top of the spp ladder")
     ap.add_argument("--res", type=int, nargs=2, default=None, metavar=("W", "H"), help="default 96 54")
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
+    ap.add_argument(
+        "--reference-from",
+        default=None,
+        metavar="JSON",
+        help="a previous run's time_vs_error.json: re-time the ladder, reuse its reference and errors",
+    )
+    ap.add_argument(
+        "--verify",
+        nargs="*",
+        default=None,
+        metavar="SCENE",
+        help="with --reference-from: scenes whose reference and errors are recomputed and compared "
+        "(default: the first scene)",
+    )
     args = ap.parse_args(argv)
     res_given = args.res
+    for name in args.scenes:
+        if name not in S.SCENES:
+            raise SystemExit(f"--scenes: unknown scene {name!r} (allowed: {', '.join(S.SCENES)})")
+    if args.verify is None:
+        args.verify = args.scenes[:1]
+    elif not set(args.verify) <= set(args.scenes):
+        raise SystemExit(f"--verify: {args.verify} must be among --scenes {args.scenes}")
     if args.quick:
         args.res, args.ladder = (32, 18), [s for s in LADDER if s <= 64]
         args.ref_spp = args.ref_spp or 512
     else:
         args.res, args.ladder = tuple(res_given or (96, 54)), [s for s in LADDER if s <= args.max_spp]
         args.ref_spp = args.ref_spp or 4096
+    prev = load_previous(args.reference_from, args) if args.reference_from else None
     rng = np.random.default_rng(0)
     t0 = time.perf_counter()
+    loads = [os.getloadavg()[0]]
     res = {
         "config": {
-            "command": "python benchmarks/time_vs_error.py"
-            + (" --quick" if args.quick else "")
-            + (f" --max-spp {args.max_spp}" if args.max_spp != 1024 else "")
-            + (f" --ref-spp {args.ref_spp}" if args.ref_spp not in (None, 4096, 512) else "")
-            + (f" --res {args.res[0]} {args.res[1]}" if res_given else ""),
+            "command": "python " + " ".join(["benchmarks/time_vs_error.py", *sys.argv[1:]])
+            if argv is None
+            else "main(" + repr(argv) + ")",
             "res": list(args.res),
             "ladder": args.ladder,
             "repeats": {s: REPEATS[s] for s in args.ladder},
             "ref_spp": args.ref_spp,
             "max_depth": args.max_depth,
             "machine": machine_info(),
+            "commit": _commit(),
+            "reference_from": args.reference_from,
         },
         "scenes": {},
     }
     for name in args.scenes:
-        res["scenes"][name] = run_scene(name, args, rng)
+        res["scenes"][name] = run_scene(name, args, rng, prev["scenes"][name] if prev else None)
         res["config"]["total_s"] = time.perf_counter() - t0
+        loads.append(os.getloadavg()[0])
+        res["config"]["load_avg_1min"] = {
+            "start": loads[0],
+            "end": loads[-1],
+            "min": min(loads),
+            "max": max(loads),
+        }
         write_reports(res, args, Path(args.out))  # partial results survive an interruption
     print(f"done in {time.perf_counter() - t0:.0f} s -> {args.out}", flush=True)
 
