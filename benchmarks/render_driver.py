@@ -88,8 +88,9 @@ def path_kernels_per_call(scene_path=SCENE) -> dict:
 
 
 def _cli_cmd(w, h, spp, seed, out):
+    script = Path(PY).parent / "fogref"  # the installed command; without an install, its module
     return [
-        str(Path(PY).parent / "fogref"),
+        *([str(script)] if script.exists() else [PY, "-m", "fogref.cli"]),
         "render",
         str(SCENE),
         "--set",
