@@ -54,8 +54,8 @@ CASES = {
     ),
     "forced split, unbounded, two layers": (
         [0, 3, -10],
-        dict(falloff=0.1, density2=0.5, falloff2=0.01, height2=5.0),
-        120,
+        dict(falloff=0.1, density2=0.5, falloff2=0.03, height2=5.0),
+        88,
     ),
     "forced split, occluders, exponential, RGB": (
         [0, 3, -10],
