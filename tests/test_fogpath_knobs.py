@@ -25,8 +25,10 @@ BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 def knobs(mitsuba):
     """The module that registers ``fogpath_knobs`` (it sets the same variant as ``mitsuba``)."""
     sys.path.insert(0, str(BENCHMARKS))
-    import _fogpath_knobs
-
+    try:
+        import _fogpath_knobs
+    finally:  # the benchmarks' module names stay off the other tests' path
+        sys.path.remove(str(BENCHMARKS))
     return _fogpath_knobs
 
 
