@@ -357,7 +357,7 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
     # colour 2.3 s: only an image whose encoding asks for it
     "fogref.compare.foreign": {"colour": HEAVY},
     # flip_evaluator"s libgomp reads OMP_WAIT_POLICY as it loads; it is set just before
-    "fogref.compare.perceptual": {"flip_evaluator": DOES_WORK},
+    "fogref.compare.perceptual": {"colour": HEAVY, "flip_evaluator": DOES_WORK},
     # matplotlib 0.4 s (pyplot 0.9 s): only when figures are written
     "fogref.compare.plots": {
         "matplotlib": HEAVY,

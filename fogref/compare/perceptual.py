@@ -50,132 +50,29 @@ def to_display_radiance(image, ceiling: float | None = None) -> np.ndarray:
     return np.clip(x, 0.0, _FLT_MAX if ceiling is None else ceiling)
 
 
-#: Linear sRGB / Rec.709 -> CIE XYZ (D65): IEC 61966-2-1's matrix, as colour-science's ``"sRGB"``
-#: colourspace holds it (``colour.RGB_COLOURSPACES["sRGB"].matrix_RGB_to_XYZ``).
-SRGB_TO_XYZ = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]])
-#: The chromatic adaptation from D65 to D65 by CAT02 that ``colour.RGB_to_XYZ`` (colour-science 0.4.7)
-#: applies after :data:`SRGB_TO_XYZ` by default: the identity up to its rounding (off the diagonal
-#: below 3e-17).  Kept, in colour-science's float64 values, so that the CIELAB values are its own
-#: bit for bit (``tests/test_compare_metrics.py`` compares).
-D65_CAT02 = np.array(
-    [
-        [1.0, -2.925337592710602e-17, -2.0424934209769367e-17],
-        [1.865516512262643e-17, 1.0, -6.012863655103287e-19],
-        [-1.1925326645651568e-18, -6.805220268068795e-19, 1.0],
-    ]
-)
-#: CIE 1931 2° chromaticity of D65, sRGB's white: CIELAB's reference white.
-D65_XY = (0.3127, 0.3290)
-
-
-def _vecmul(m: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """``m (3, 3)`` times each vector of ``v (..., 3)`` (``np.matmul``, as colour-science's ``vecmul``)."""
-    return np.matmul(m, v[..., None]).squeeze(-1)
-
-
-def _lab_rows(rgb, white: float) -> np.ndarray:
-    """``(3, ...)``: the L*, a*, b* planes of :func:`linear_rgb_to_lab` (each contiguous).
-
-    The operations, in their order, of colour-science 0.4.7's ``RGB_to_XYZ(x, "sRGB",
-    apply_cctf_decoding=False)`` and ``XYZ_to_Lab(XYZ, D65)`` (CIE 015:2004, 8.2.1: ``f(t) = t^(1/3)``
-    above ``(24/116)^3``, else ``(841/108) t + 16/116``), so that every value is the same bit for bit.
-    """
-    if not (np.isfinite(white) and white > 0):
-        raise ValueError(f"white must be finite and > 0, got {white}")
-    xyz = _vecmul(D65_CAT02, _vecmul(SRGB_TO_XYZ, to_display_radiance(rgb) / white))
-    x, y = D65_XY
-    y_y = 1.0 / y  # the white's XYZ at Y = 1
-    white_xyz = (np.float64(x * y_y), np.float64(1.0), np.float64((1 - (x + y)) * y_y))
-    one_third = np.asarray(1 / 3)
-    f = []
-    for i in range(3):
-        t = np.array(xyz[..., i]) / white_xyz[i]  # a contiguous copy, as colour-science's tsplit makes
-        cube_root = np.sign(t) * np.abs(t) ** one_third
-        f.append(np.where(t > (24 / 116) ** 3, cube_root, (841 / 108) * t + 16 / 116))
-    return np.array([116 * f[1] - 16, 500 * (f[0] - f[1]), 200 * (f[1] - f[2])])
-
-
 def linear_rgb_to_lab(rgb, white: float) -> np.ndarray:
     """CIELAB (D65) of linear sRGB/Rec.709 ``rgb`` after exposure normalisation, ``(..., 3)``.
 
     Steps: ``rgb / white`` (so that luminance ``white`` becomes ``Y = 1``, i.e.
     L* = 100; brighter pixels get L* > 100, which CIEDE2000 handles), negatives
-    clipped to 0, then linear sRGB -> XYZ (:data:`SRGB_TO_XYZ`, no CCTF decoding) and
-    XYZ -> Lab with the D65 white point, as colour-science 0.4.7 computes them (its
-    values bit for bit).  ``white`` must be finite and > 0.
+    clipped to 0, then colour-science's linear sRGB -> XYZ (no CCTF decoding) and
+    XYZ -> Lab with the D65 white point.  ``white`` must be finite and > 0.
 
     >>> [round(float(v), 6) for v in linear_rgb_to_lab(np.ones(3), 1.0)]
     [100.0, 0.0, 0.0]
     """
-    return np.moveaxis(_lab_rows(rgb, white), 0, -1).copy()
+    import colour
 
-
-def _ciede2000(lab1: np.ndarray, lab2: np.ndarray) -> np.ndarray:
-    """CIEDE2000 between CIELAB planes ``(3, ...)`` (Sharma, Wu and Dalal 2005, "The CIEDE2000
-    color-difference formula", Color Res. Appl. 30(1), eq. 1-24; k_L = k_C = k_H = 1), in the
-    operations and order of colour-science 0.4.7's ``delta_E_CIE2000`` (its values bit for bit)."""
-    L_1, a_1, b_1 = lab1
-    L_2, a_2, b_2 = lab2
-    C_1_ab = np.hypot(a_1, b_1)
-    C_2_ab = np.hypot(a_2, b_2)
-    C_bar_ab = (C_1_ab + C_2_ab) / 2
-    C_bar_ab_7 = C_bar_ab**7
-    G = 0.5 * (1 - np.sqrt(C_bar_ab_7 / (C_bar_ab_7 + 25**7)))
-    a_p_1 = (1 + G) * a_1
-    a_p_2 = (1 + G) * a_2
-    C_p_1 = np.hypot(a_p_1, b_1)
-    C_p_2 = np.hypot(a_p_2, b_2)
-    h_p_1 = np.where(np.logical_and(b_1 == 0, a_p_1 == 0), 0, np.degrees(np.arctan2(b_1, a_p_1)) % 360)
-    h_p_2 = np.where(np.logical_and(b_2 == 0, a_p_2 == 0), 0, np.degrees(np.arctan2(b_2, a_p_2)) % 360)
-    delta_L_p = L_2 - L_1
-    delta_C_p = C_p_2 - C_p_1
-    h_p_2_s_1 = h_p_2 - h_p_1
-    C_p_1_m_2 = C_p_1 * C_p_2
-    delta_h_p = np.select(
-        [C_p_1_m_2 == 0, np.fabs(h_p_2_s_1) <= 180, h_p_2_s_1 > 180, h_p_2_s_1 < -180],
-        [0, h_p_2_s_1, h_p_2_s_1 - 360, h_p_2_s_1 + 360],
-    )
-    delta_H_p = 2 * np.sqrt(C_p_1_m_2) * np.sin(np.deg2rad(delta_h_p / 2))
-    L_bar_p = (L_1 + L_2) / 2
-    C_bar_p = (C_p_1 + C_p_2) / 2
-    a_h_p_1_s_2 = np.fabs(h_p_1 - h_p_2)
-    h_p_1_a_2 = h_p_1 + h_p_2
-    h_bar_p = np.select(
-        [
-            C_p_1_m_2 == 0,
-            a_h_p_1_s_2 <= 180,
-            np.logical_and(a_h_p_1_s_2 > 180, h_p_1_a_2 < 360),
-            np.logical_and(a_h_p_1_s_2 > 180, h_p_1_a_2 >= 360),
-        ],
-        [h_p_1_a_2, h_p_1_a_2 / 2, (h_p_1_a_2 + 360) / 2, (h_p_1_a_2 - 360) / 2],
-    )
-    T = (
-        1
-        - 0.17 * np.cos(np.deg2rad(h_bar_p - 30))
-        + 0.24 * np.cos(np.deg2rad(2 * h_bar_p))
-        + 0.32 * np.cos(np.deg2rad(3 * h_bar_p + 6))
-        - 0.20 * np.cos(np.deg2rad(4 * h_bar_p - 63))
-    )
-    delta_theta = 30 * np.exp(-(((h_bar_p - 275) / 25) ** 2))
-    C_bar_p_7 = C_bar_p**7
-    R_C = 2 * np.sqrt(C_bar_p_7 / (C_bar_p_7 + 25**7))
-    L_bar_p_2 = (L_bar_p - 50) ** 2
-    S_L = 1 + ((0.015 * L_bar_p_2) / np.sqrt(20 + L_bar_p_2))
-    S_C = 1 + 0.045 * C_bar_p
-    S_H = 1 + 0.015 * C_bar_p * T
-    R_T = -np.sin(np.deg2rad(2 * delta_theta)) * R_C
-    k_L = k_C = k_H = 1
-    return np.sqrt(
-        (delta_L_p / (k_L * S_L)) ** 2
-        + (delta_C_p / (k_C * S_C)) ** 2
-        + (delta_H_p / (k_H * S_H)) ** 2
-        + R_T * (delta_C_p / (k_C * S_C)) * (delta_H_p / (k_H * S_H))
-    )
+    if not (np.isfinite(white) and white > 0):
+        raise ValueError(f"white must be finite and > 0, got {white}")
+    x = to_display_radiance(rgb) / white
+    xyz = colour.RGB_to_XYZ(x, "sRGB", apply_cctf_decoding=False)
+    return colour.XYZ_to_Lab(xyz, colour.RGB_COLOURSPACES["sRGB"].whitepoint)
 
 
 def delta_e2000_maps(reference, tests, white: float | None = None) -> list[np.ndarray]:
-    """CIEDE2000 per pixel, ``(...)`` each, of every image of ``tests`` against ``reference``
-    (converted to CIELAB once); unitless.
+    """CIEDE2000 per pixel (colour-science's ``delta_E_CIE2000``), ``(...)`` each, of every image
+    of ``tests`` against ``reference`` (converted to CIELAB once); unitless.
 
     All images are exposure-normalised by the **same** ``white`` (default:
     :func:`exposure_white` of the reference), see :func:`linear_rgb_to_lab`.
@@ -184,14 +81,17 @@ def delta_e2000_maps(reference, tests, white: float | None = None) -> list[np.nd
     >>> [m.tolist() for m in delta_e2000_maps(r, [r, r])]
     [[0.0, 0.0], [0.0, 0.0]]
     """
+    import colour
+
     r = np.asarray(reference, dtype=np.float64)
     xs = [check_pair(r, x)[1] for x in tests]
     if white is None:
         white = exposure_white(r)
     for x in xs:
         require_finite(x, "ΔE2000")
-    lab_r = _lab_rows(r, white)
-    return [np.asarray(_ciede2000(lab_r, _lab_rows(x, white)), dtype=np.float64) for x in xs]
+    lab_r = linear_rgb_to_lab(r, white)
+    de = colour.difference.delta_E_CIE2000
+    return [np.asarray(de(lab_r, linear_rgb_to_lab(x, white)), dtype=np.float64) for x in xs]
 
 
 def delta_e2000_map(reference, test, white: float | None = None) -> np.ndarray:
