@@ -240,7 +240,10 @@ def moments_to_channels(
     """
     xp = _arrays_for(next(iter(sums.values())))
     out = {}
-    mean = {g: xp.asarray(s) / n for g, s in sums.items()}
+    # every division by a number is a product with its reciprocal, as Dr.Jit computes ``x / n``,
+    # so that numpy and Dr.Jit arrays give the same bits
+    inv_n = 1.0 / n
+    mean = {g: xp.asarray(s) * inv_n for g, s in sums.items()}
     for g in ("final",) + SAMPLE_GROUPS:
         if g == "surface":
             continue
@@ -253,8 +256,8 @@ def moments_to_channels(
         ratio = mean["surface"][..., i] / safe
         out[c] = xp.where(valid, ratio, 0.0)
     for g in SQUARED_GROUPS:
-        m2 = xp.asarray(squares[g]) / n
-        mx = xp.asarray(cross[g]) / n
+        m2 = xp.asarray(squares[g]) * inv_n
+        mx = xp.asarray(cross[g]) * inv_n
         if g == "surface":
             # the delta method for the ratio r = E[s]/E[c] (docs/schema.md, "surface")
             r = xp.stack_last([out[c] for c in channel_names("surface")])
@@ -272,7 +275,7 @@ def moments_to_channels(
                 return mij - r[..., i] * r[..., j]
 
         var = xp.maximum(var, 0.0)
-        se = xp.sqrt(var / max(n - 1, 1)) if n > 1 else xp.zeros_like(var)
+        se = xp.sqrt(var * (1.0 / max(n - 1, 1))) if n > 1 else xp.zeros_like(var)
         for i, c in enumerate(stderr_names(g)):
             out[c] = xp.where(valid, se[..., i], 0.0) if g == "surface" else se[..., i]
         for k, ((i, j), c) in enumerate(zip(CHANNEL_PAIRS, correlation_names(g))):

@@ -96,12 +96,14 @@ def test_every_compression_stores_the_same_values(rendered, mitsuba, tmp_path):
     assert not (tmp_path / "lossy.exr").exists()
 
 
-@pytest.mark.parametrize("spp, exact", [(1, True), (2, True), (8, True), (4, False)])
+@pytest.mark.parametrize("spp, exact", [(1, True), (2, True), (8, True), (3, True), (16, True), (4, False)])
 def test_the_channels_on_the_host_and_on_the_device_are_bitwise_equal(mitsuba, spp, exact):
     """The driver computes the EXR's channels with numpy on the host copy of the sums up to
     ``HOST_CHANNELS_MAX_PIXELS`` pixels and with one Dr.Jit kernel above: the same sums give the
-    same float32 values either way.  Smallest error detected: one bit of one value of one channel
-    (a fused multiply-add, another rounding of the cast, another order of the operations)."""
+    same float64 values, and so the same float32 ones, either way.  Smallest error detected: one
+    bit of one float64 value of one channel (a fused multiply-add, a division where Dr.Jit
+    multiplies by the reciprocal: spp 3 and 16 divide by 3 and 15, another order of the
+    operations)."""
     import drjit as dr
 
     import fogref.render.render as R
@@ -113,8 +115,11 @@ def test_the_channels_on_the_host_and_on_the_device_are_bitwise_equal(mitsuba, s
     integrator.aovs = True
     s, q = integrator.render_moments(scene, 0, 7, spp, pixel_exact=exact)
     dr.eval(s, q)
-    host, _ = R._float32_planes(R._channels(np.asarray(s), np.asarray(q), spp))
-    device, _ = R._device_float32(R._channels(s, q, spp))
+    host64, device64 = R._channels(np.asarray(s), np.asarray(q), spp), R._channels(s, q, spp)
+    differ = [k for k in host64 if np.asarray(device64[k]).tobytes() != host64[k].tobytes()]
+    assert not differ, differ
+    host, _ = R._float32_planes(host64)
+    device, _ = R._device_float32(device64)
     assert sorted(host) == sorted(device) == sorted(gbuffer.exr_channel_names())
     differ = [k for k in host if not np.array_equal(host[k].view(np.uint32), device[k].view(np.uint32))]
     assert not differ, differ
