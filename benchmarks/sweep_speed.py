@@ -132,13 +132,17 @@ def run_command(tree: Path, work: Path) -> dict:
     }
 
 
-def _truth_pixels(folder: Path) -> dict:
-    """Every truth EXR under ``folder``: name -> {channel: bytes}."""
+def _truth_pixels(folder: Path, rows: dict) -> dict:
+    """The truth EXR of every row under ``folder``, found by its file name (the render cache's key,
+    which hashes the renderer's sources, so it differs between checkouts): row key -> {channel: bytes}."""
     from fogref.exrio import read_exr
 
-    return {
-        f.name: {c: a.tobytes() for c, a in read_exr(f)[0].items()} for f in sorted(folder.rglob("*.exr"))
-    }
+    files = {f.name: f for f in folder.rglob("*.exr")}
+    out = {}
+    for k, r in rows.items():
+        f = files.get(Path(r["truth_path"]).name)
+        out[k] = None if f is None else {c: a.tobytes() for c, a in read_exr(f)[0].items()}
+    return out
 
 
 def identical(base: Path, after: Path) -> dict:
@@ -155,7 +159,7 @@ def identical(base: Path, after: Path) -> dict:
         differ += [
             f"{k}: {c}: {a[c]!r} != {b.get(c)!r}" for c in a if c not in RUN_COLUMNS and a[c] != b.get(c)
         ]
-    px = [_truth_pixels(d / "cache") for d in (base, after)]
+    px = [_truth_pixels(d / "cache", rows) for d, rows in zip((base, after), key)]
     if px[0] != px[1]:
         differ.append("truth pixels differ: " + ", ".join(n for n in px[0] if px[0].get(n) != px[1].get(n)))
     pngs = sorted(p.name for p in (base / "plots").glob("*.png"))
