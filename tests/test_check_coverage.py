@@ -1,4 +1,4 @@
-"""``check``'s intervals cover at their nominal rate on real renders (issue: 10 % misses at 99 %).
+"""``check``'s intervals cover at their nominal rate on real renders (once 10 % missed at 99 %).
 
 32 pairs of independent truths of the default scene (32x18 px, 16 spp, own seeds) are
 checked against each other, so every statistic's true value is 0 (see

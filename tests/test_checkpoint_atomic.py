@@ -121,7 +121,7 @@ def test_an_interruption_at_every_line_of_the_pass_loop_resumes_bitwise(tmp_path
 
 
 def test_a_second_ctrl_c_during_the_checkpoint_write_waits_for_it(tmp_path, mitsuba, monkeypatch):
-    """The issue's race: a second Ctrl-C right after a pass is summed.  The checkpoint on disk then
+    """A race: a second Ctrl-C right after a pass is summed.  The checkpoint on disk then
     holds the sums of the passes it says it holds, and the resumed truth is the uninterrupted one."""
     import fogref.render.checkpoint as C
     import fogref.render.render as R
@@ -179,7 +179,7 @@ def _nan_in_sums(p: Path) -> None:
 
 
 def _sums_of_two_passes_counted_as_one(p: Path) -> None:
-    """The issue's race: 'done = 1' with the sums of 2 passes (here: the sums doubled)."""
+    """What that race left before: 'done = 1' with the sums of 2 passes (here: the sums doubled)."""
     with np.load(p) as z:
         s, q = z["sums"] * 2, z["squares"] * 2
     _rewrite(p, sums=s, squares=q)

@@ -107,10 +107,10 @@ def test_unknown_names_get_did_you_mean_everywhere(site, tmp_path):
         FogrefError, match="unknown fog model 'eu4'; did you mean 'ue4'.*installed: .*resolver_ep"
     ):
         fogref.build_model("eu4")
-    from test_sweep import _toml
+    from test_sweep import sweep_toml
 
     with pytest.raises(FogrefError, match=r"SWEEP.toml.*models\]\[0\].*did you mean 'MyFog'"):
-        S.load_sweep(_toml(tmp_path, f'[[models]]\nname = "{USER_MODULE}:MyFgo"\n'))
+        S.load_sweep(sweep_toml(tmp_path, f'[[models]]\nname = "{USER_MODULE}:MyFgo"\n'))
 
 
 def _unreal(params: dict) -> list:

@@ -11,7 +11,7 @@ from their spread, and every test first checks that it detects a 0.1 % bias with
 The bounded cases are the ones that caught the box-clipping bug in
 ``FogMedium.sample_distance`` (rays starting outside the fog's box that pass over
 it took a collision in empty space and lost their sky light: fogpath was 0.25 %
-dark in the issue's scene, tens of percent with the camera outside the box).
+dark with the camera inside the box, tens of percent with the camera outside the box).
 """
 
 import pytest

@@ -20,7 +20,7 @@ ROOT = Path(__file__).resolve().parents[1]
 VALLEY = (ROOT / "scenes" / "valley.xml").as_posix()
 
 
-def _toml(folder, body: str, cache=None) -> Path:
+def sweep_toml(folder, body: str, cache=None) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     p = folder / "SWEEP.toml"
     cache = (cache or folder / "cache").as_posix()
@@ -35,7 +35,7 @@ MODELS = '[[models]]\nname = "ue4"\n'
 
 
 def test_grid_design_and_scaled_target(tmp_path):
-    p = _toml(
+    p = sweep_toml(
         tmp_path,
         MODELS + "[parameters.sun_elevation]\nvalues = [5, 30]\n"
         '[parameters.FogHeightFalloff]\ntarget = "falloff"\nscale = 0.0693147\nvalues = [0.1, 0.2, 0.4]\n',
@@ -49,7 +49,7 @@ def test_grid_design_and_scaled_target(tmp_path):
 
 
 def test_lhs_design_is_seeded_stratified_and_in_range(tmp_path):
-    p = _toml(
+    p = sweep_toml(
         tmp_path,
         MODELS + '[design]\nkind = "lhs"\nn = 8\nseed = 3\n[render]\nseed_policy = "per_config"\n'
         "[parameters.g]\nrange = [-0.5, 0.9]\n[parameters.sigma_t]\nrange = [1e-4, 1e-2]\nlog = true\n"
@@ -88,7 +88,7 @@ def test_lhs_design_is_seeded_stratified_and_in_range(tmp_path):
     ],
 )
 def test_invalid_sweep_files_name_file_key_and_allowed_values(tmp_path, body, needle):
-    p = _toml(tmp_path, body)
+    p = sweep_toml(tmp_path, body)
     with pytest.raises(FogrefError) as e:
         S.load_sweep(p)
     assert str(p) in str(e.value) and needle in str(e.value)
@@ -126,7 +126,7 @@ TINY = (
 @pytest.mark.render
 def test_sweep_on_two_worker_cluster_records_failure_resumes_and_reuses_truths(tmp_path, cluster):
     addr = cluster.scheduler_address
-    p = _toml(tmp_path, MODELS + TINY)
+    p = sweep_toml(tmp_path, MODELS + TINY)
     info = S.run_sweep(p, scheduler=addr, progress=False, drjit_threads=1)
     assert (info["configs"], info["ran"], info["failed"], info["rows"]) == (4, 4, 1, 4)
 
@@ -169,7 +169,7 @@ def test_sweep_on_two_worker_cluster_records_failure_resumes_and_reuses_truths(t
     assert stamps == {f: f.stat().st_mtime_ns for f in (tmp_path / "configs").glob("*.json")}
 
     # new model parameters, same truths: the truths come from the cache (no render)
-    q = _toml(
+    q = sweep_toml(
         tmp_path / "second",
         MODELS.replace('"ue4"\n', '"ue4"\nparams = { StartDistance = 500.0 }\n') + TINY,
         cache=tmp_path / "cache",
@@ -190,7 +190,7 @@ def test_plot_table_draws_each_figure_through_run_with_the_same_bytes(tmp_path):
 
     import pandas as pd
 
-    p = _toml(tmp_path, MODELS + TINY.replace('plot_metrics = ["final.all.rmse"]', "plots = true"))
+    p = sweep_toml(tmp_path, MODELS + TINY.replace('plot_metrics = ["final.all.rmse"]', "plots = true"))
     spec = S.load_sweep(p)
     rng = np.random.default_rng(3)
     df = pd.DataFrame(
@@ -251,7 +251,7 @@ def test_worker_killed_mid_sweep_is_recorded_and_nothing_else_is_lost(tmp_path):
         "distributed.scheduler.locks.lease-timeout": "3s",
         "distributed.scheduler.locks.lease-validation-interval": "1s",
     }
-    p = _toml(tmp_path, MODELS + KILL)
+    p = sweep_toml(tmp_path, MODELS + KILL)
     with (
         dask.config.set(cfg),
         distributed.LocalCluster(
@@ -333,9 +333,9 @@ def test_budget_steps_per_configuration(tmp_path):
         "[render]\nspp = 4\noverrides = { res = 16, resy = 9, max_depth = 3, sun_elevation = 20 }\n"
         "[outputs]\nbudget = true\nplots = false\n"
     )
-    spec = S.load_sweep(_toml(tmp_path, body))
+    spec = S.load_sweep(sweep_toml(tmp_path, body))
     (cfg,) = S.build_configs(spec)
-    (plain,) = S.build_configs(S.load_sweep(_toml(tmp_path / "plain", body.split("[outputs]")[0])))
+    (plain,) = S.build_configs(S.load_sweep(sweep_toml(tmp_path / "plain", body.split("[outputs]")[0])))
     assert cfg["budget"] and not plain["budget"] and cfg["id"] != plain["id"]  # a budget sweep is not resumed
     row = S.run_config(cfg)["rows"][0]
     shares = [row[f"budget.{k}.share"] for k, _, _ in STEPS]
