@@ -77,7 +77,7 @@ _SOURCE = "fogref render"
 #: Up to this many pixels the EXR's channels are numpy arithmetic on the host copy of the sums (no
 #: Dr.Jit kernel traced for them); above, one fused Dr.Jit kernel (numpy's temporaries cost more
 #: than the tracing).  Both timed on the same sums in ``reports/benchmarks/frozen_render.md``; the
-#: two give the same float32 values, bit for bit (tests/test_render_exr.py).
+#: two give the same float64 values, bit for bit (tests/test_render_exr.py).
 HOST_CHANNELS_MAX_PIXELS = 1 << 12
 #: Bytes per pixel the driver holds: float64 sums of 30 channels and 42 squares and
 #: channel-pair products, twice (running sum and the pass being added), plus the EXR's
