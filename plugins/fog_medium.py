@@ -79,6 +79,20 @@ def _props_to_dict(props) -> dict:
     return out
 
 
+class _SegmentMajorant:
+    """The majorant ``intersect_aabb`` found for the rays being traced, held where Dr.Jit's
+    traversal does not enter (a plain object with slots).  ``dr.freeze`` traverses every
+    registered Mitsuba object, this medium's attributes included; a majorant left on the medium
+    by a finished render is a variable of that render's symbolic loop, which a later recording of
+    any frozen function in the process (fogpath's passes) would take as an input and refuse
+    (``jit_var_schedule(...): not permitted``)."""
+
+    __slots__ = ("value",)
+
+    def __init__(self):
+        self.value = None
+
+
 class HeightFogMedium(mi.Medium):
     """Exact fog medium (see module docstring); ``self.fog`` is the physics."""
 
@@ -114,7 +128,7 @@ class HeightFogMedium(mi.Medium):
         # grey extinction, which runs in its non-spectral mode.
         st = self.fog.sigma_t
         self.m_has_spectral_extinction = not (st[0] == st[1] == st[2])
-        self._maj = None
+        self._maj = _SegmentMajorant()
 
     # -- stock-integrator interface -----------------------------------------
     def intersect_aabb(self, ray):
@@ -138,7 +152,7 @@ class HeightFogMedium(mi.Medium):
         # an unbounded layer) the majorant underflows to 0, the next tentative
         # collision lands at infinity and the ray escapes instead of taking
         # endless null steps.
-        self._maj = mi.Float(rho_max) * 1.0001
+        self._maj.value = mi.Float(rho_max) * 1.0001
         return active, dr.select(active, t0, dr.inf), dr.select(active, t1, dr.inf)
 
     def _with_volume(self, ops, ray, t0, t1):
@@ -152,7 +166,7 @@ class HeightFogMedium(mi.Medium):
         return t0, t1
 
     def _majorant(self):
-        maj = self._maj if self._maj is not None else mi.Float(1.0)
+        maj = self._maj.value if self._maj.value is not None else mi.Float(1.0)
         return mi.UnpolarizedSpectrum(*(s * maj for s in self.fog.sigma_t))
 
     def get_majorant(self, mei, active=True):

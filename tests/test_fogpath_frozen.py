@@ -253,3 +253,29 @@ def test_an_error_of_the_pass_while_recording_is_raised_as_itself(mitsuba, monke
     with pytest.raises(ValueError, match="the pass failed"):
         _sums(scene, 99)
     assert scene.integrator().freeze_refused is None
+
+
+@pytest.mark.render
+def test_a_stock_volpath_render_with_heightfog_does_not_stop_later_recordings(mitsuba, counted):
+    """``dr.freeze`` takes every registered Mitsuba object's variables as inputs of a recording,
+    those of other scenes too.  A stock ``volpath`` render through the ``heightfog`` medium must
+    leave none of its symbolic loop's variables on the medium, or every later recording in the
+    process is refused (``jit_var_schedule(...): not permitted``) and fogpath traces every pass.
+    Fails if the recording is refused or if the replays differ from the traced pixels in any bit."""
+    import fogref_plugins.fogpath as fpm
+    from render_scenes import base_scene, heightfog
+
+    stock = mitsuba.load_dict(
+        base_scene(mitsuba, {"type": "volpath", "max_depth": 4}, heightfog(mitsuba), res=(8, 6))
+    )
+    scene = mitsuba.load_file(str(VALLEY), **TINY)
+    seeds = range(1, fpm.RECORD_FROM_CALL + 3)
+    frozen = []
+    for seed in seeds:
+        mitsuba.render(stock, spp=2, seed=seed)  # a stock render between every pass of fogpath
+        frozen.append(_sums(scene, seed))
+    fp = scene.integrator()
+    assert fp.freeze_refused is None, f"the recording was refused: {fp.freeze_refused}"
+    assert fp.n_recordings == 1 and counted[0] == fpm.RECORD_FROM_CALL
+    for seed, a in zip(seeds, frozen):
+        assert np.array_equal(a, _sums(scene, seed, freeze=False)), f"seed {seed}: frozen and traced differ"
