@@ -336,6 +336,12 @@ def run_scene(name, args, rng, prev=None):
             "ladder": ladder,
             "bias": b,
         }
+        fp = scenes[m].integrator()
+        if hasattr(fp, "freeze_refused"):  # fogpath: were its ladder passes replayed recordings?
+            out["methods"][m]["frozen_passes"] = {
+                "recordings": fp.n_recordings,
+                "refused": fp.freeze_refused,
+            }
     # equal-error ratios against fogpath
     f_pts = [(p["time_median_s"], p["rmse"]) for p in out["methods"]["fogpath"]["ladder"]]
     f_pts_noise = [(p["time_median_s"], p["noise_rmse"]) for p in out["methods"]["fogpath"]["ladder"]]
@@ -509,6 +515,26 @@ def _reuse_lines(res) -> list[str]:
     ]
 
 
+def _frozen_line(res) -> str:
+    """Whether fogpath's passes in the ladder were replayed ``dr.freeze`` recordings or traced."""
+    rows = [
+        (f"{s}/{m}", d["frozen_passes"])
+        for s, sc in res["scenes"].items()
+        for m, d in sc["methods"].items()
+        if "frozen_passes" in d
+    ]
+    if not rows:
+        return "fogpath's passes: not recorded by this run.\n"
+    refused = [f"{k} ({f['refused']})" for k, f in rows if f["refused"]]
+    if refused:
+        return "fogpath's passes: **traced, dr.freeze refused** in " + "; ".join(refused) + ".\n"
+    n = sum(f["recordings"] for _, f in rows)
+    return (
+        f"fogpath's passes: recorded with `dr.freeze` on their second call and replayed after, in every "
+        f"fogpath method of every scene ({n} recordings in all, none refused).\n"
+    )
+
+
 def summary_md(res, args) -> str:
     cfg = res["config"]
     L = [
@@ -528,6 +554,7 @@ def summary_md(res, args) -> str:
         "cell **centres** of a 1xNx1 `gridvolume` over the fog box, trilinear, `has_spectral_extinction` "
         "false.\n",
         *_reuse_lines(res),
+        _frozen_line(res),
         "![time vs error](time_vs_error.png)\n",
         "## Equal-error time ratio (method time / fogpath time at the same RMSE; > 1: fogpath faster)\n",
         "| scene | method | " + " | ".join(f"{s} spp" for s in cfg["ladder"]) + " | noise-only @top |",
