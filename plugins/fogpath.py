@@ -121,12 +121,13 @@ def _plain(v):
     return repr(v)
 
 
-def _frozen_pass(scene, sensor, seed, spp, pixel_exact, squares, values, fingerprint):
+def _frozen_pass(scene, sensor, seed, spp, pixel_exact, squares, values, tables, fingerprint):
     """A pass as ``dr.freeze`` records and replays it: :meth:`FogPathIntegrator._pass` of the
-    scene's integrator.  ``values`` (the scene's one-value parameters) and ``fingerprint`` are
-    inputs only: the first makes their current values the replay's, the second makes a change
-    of any Python value the trace reads a new recording."""
-    return scene.integrator()._pass(scene, sensor, seed, spp, pixel_exact, squares)
+    scene's integrator, with ``tables`` (the fog's interpolation tables, as received: inputs of
+    the recording) as the ones it reads.  ``values`` (the scene's one-value parameters) and
+    ``fingerprint`` are inputs only: the first makes their current values the replay's, the
+    second makes a change of any Python value the trace reads a new recording."""
+    return scene.integrator()._pass_reading(tables, scene, sensor, seed, spp, pixel_exact, squares)
 
 
 class _Held:
@@ -182,8 +183,7 @@ class _FrozenPasses:
         collecting = gc.isenabled()
         gc.disable()  # a collection freeing a failed recording's arrays during a recording aborts Dr.Jit
         try:
-            with drjit_ops().isolated_params():
-                return self.frozen(*args, values, key)
+            return self.frozen(*args, values, fp._fog_tables(scene), key)
         except RuntimeError as e:
             cause = e
             while cause.__cause__ is not None:
@@ -1111,6 +1111,20 @@ class FogPathIntegrator(mi.SamplingIntegrator):
                 squares,
             )
         )
+
+    def _fog_tables(self, scene) -> dict:
+        """The arrays of the fog's interpolation tables (a tabulated phase function's cosines
+        and values; none for Henyey-Greenstein), made before a recording, which takes them as
+        inputs."""
+        fog = self._scene_fog(scene)
+        phase = None if fog is None else fog.phase
+        return drjit_ops().tables(phase.cosines, phase.values) if hasattr(phase, "cosines") else {}
+
+    def _pass_reading(self, tables, scene, sensor, seed, spp, pixel_exact, squares):
+        """:meth:`_pass` with Dr.Jit's parameter cache holding only ``tables`` (what a recording
+        reads: :meth:`fogref.media.ops.DrJitOps.isolated_params`)."""
+        with drjit_ops().isolated_params(tables):
+            return self._pass(scene, sensor, seed, spp, pixel_exact, squares)
 
     def _pass(self, scene, sensor, seed, spp, pixel_exact, squares):
         """One pass (``render_moments`` after its checks): ``seed`` an opaque ``UInt32``."""

@@ -148,25 +148,38 @@ class DrJitOps:
         return tuple(self._param(v, caller, values.index(v)) for v in values)
 
     @contextmanager
-    def isolated_params(self) -> Iterator[DrJitOps]:
+    def isolated_params(self, tables: dict | None = None) -> Iterator[DrJitOps]:
         """A scope in which :meth:`param` and :meth:`interp` start from an empty cache, and
         after which the cache is what it was before: what ``dr.freeze`` records must not read
         arrays made before the recording (they are not its inputs), and arrays made while it
         records belong to that recording, not to later traced calls.
+
+        ``tables``: :meth:`tables`' arrays as the frozen function received them (its
+        inputs), which :meth:`interp` then uses.  A table can't be made inside a recording:
+        Dr.Jit takes an array made from host data there for one made before it.
 
         >>> ops = DrJitOps.__new__(DrJitOps)  # no Dr.Jit needed to show the scope
         >>> ops._params = {"kept": 1}
         >>> with ops.isolated_params():
         ...     ops._params
         {}
+        >>> with ops.isolated_params({"table:2:7": "an array"}):
+        ...     ops._params
+        {'table:2:7': 'an array'}
         >>> ops._params
         {'kept': 1}
         """
-        saved, self._params = self._params, {}
+        saved, self._params = self._params, dict(tables or {})
         try:
             yield self
         finally:
             self._params = saved
+
+    def tables(self, *columns: tuple) -> dict:
+        """The arrays :meth:`interp` reads for these table columns (tuples of Python numbers),
+        uploaded now where they are not yet, keyed as :meth:`interp` finds them: what a
+        ``dr.freeze`` recording takes as inputs (:meth:`isolated_params`)."""
+        return {self._table_key(c): self._table(c) for c in columns}
 
     def _param(self, x: Real, caller: Real, slot: Real) -> Real:
         if self.dr.is_array_v(x):
@@ -247,8 +260,12 @@ class DrJitOps:
         f0, f1 = dr.gather(self.Float, fs, i), dr.gather(self.Float, fs, i + 1)
         return dr.lerp(f0, f1, (x - x0) / (x1 - x0))
 
+    @staticmethod
+    def _table_key(values: tuple) -> str:
+        return f"table:{len(values)}:{hash(values)}"
+
     def _table(self, values: tuple) -> Real:
-        key = ("table", len(values), hash(values))
+        key = self._table_key(values)
         arr = self._params.get(key)
         if arr is None:
             arr = self._params[key] = self.Float(np.asarray(values, dtype=np.float64))
