@@ -109,7 +109,7 @@ class DrJitOps:
         fi = np.finfo(np.float32 if single else np.float64)
         self.log_largest = float(np.log(fi.max))
         self.tiny = float(fi.tiny)
-        self._params: dict[tuple[Any, ...], Any] = {}
+        self._params: dict[Any, Any] = {}  # parameter keys (tuples) and table keys (str)
 
     #: opaque parameters kept (see :meth:`param`); about 100 bytes each
     MAX_PARAMS = 4096
