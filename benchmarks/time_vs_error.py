@@ -540,6 +540,44 @@ def _frozen_line(res) -> str:
     )
 
 
+def ratio_spread(m_ladder: list, f_ladder: list) -> dict:
+    """The top rung's equal-error ratio of a method against fogpath with its spread from the
+    repeats' times: ``low`` = the method's fastest repeat over fogpath's slowest (fogpath's
+    ladder built from each rung's slowest repeat), ``high`` the reverse; ``per_sample`` =
+    (time x MSE) of the method over fogpath's at the top rung, each time less that method's
+    1-spp time (the ratio once per-call costs are removed)."""
+    top, ftop = m_ladder[-1], f_ladder[-1]
+    slow = [(max(q["times_s"]), q["rmse"]) for q in f_ladder]
+    fast = [(min(q["times_s"]), q["rmse"]) for q in f_ladder]
+    work = (top["time_median_s"] - m_ladder[0]["time_median_s"]) * top["mse"]
+    fwork = (ftop["time_median_s"] - f_ladder[0]["time_median_s"]) * ftop["mse"]
+    return {
+        "ratio": top["equal_error_ratio"],
+        "low": min(top["times_s"]) / fogpath_time_at(top["rmse"], slow)[0],
+        "high": max(top["times_s"]) / fogpath_time_at(top["rmse"], fast)[0],
+        "per_sample": work / fwork if fwork > 0 else float("nan"),
+    }
+
+
+def _spread_lines(res) -> list:
+    """The top rung's ratio of every stock method with its spread (:func:`ratio_spread`)."""
+    L = [
+        "### At the top of the ladder, with the spread of the repeats\n",
+        "| scene | method | equal-error ratio [fastest/slowest, slowest/fastest] | per sample, 1-spp time "
+        "subtracted |",
+        "|---|---|---|---|",
+    ]
+    for sname, sc in res["scenes"].items():
+        f = sc["methods"]["fogpath"]["ladder"]
+        for m, d in sc["methods"].items():
+            if m.startswith("fogpath"):
+                continue
+            r = ratio_spread(d["ladder"], f)
+            spread = f"{r['ratio']:.2f} [{r['low']:.1f}, {r['high']:.1f}]"
+            L.append(f"| {sname} | {m} | {spread} | {r['per_sample']:.1f} |")
+    return L + [""]
+
+
 def summary_md(res, args) -> str:
     cfg = res["config"]
     L = [
@@ -578,6 +616,7 @@ def summary_md(res, args) -> str:
         "\n`*`: outside fogpath's measured range (extrapolated with t ~ RMSE^-2, or clamped at fogpath's "
         "1-spp time).  Noise-only: the same ratio with the method's bias removed from its error.\n"
     )
+    L += _spread_lines(res)
     L += [
         "## fogpath without and with its variance reduction, side by side in this run\n",
         "`fogpath_before` = fogpath with one sun sample, sun sampling only in unbounded one-layer fog, no "
