@@ -404,7 +404,7 @@ def report(r: dict) -> str:
         f"time, recorded on call {r['record_from_call']}, replayed after)"
         + (
             f"; `baseline`: `after` with the `fogref` package of commit {base['commit']} (a child "
-            "process, the same plugins), the driver before this round's changes"
+            "process, the same plugins), the driver before the changes since that commit"
             if base
             else ""
         )
