@@ -331,13 +331,13 @@ def test_param_parsing_and_model_building():
 
 @pytest.fixture
 def registered_models():
-    from fogref.models.base import _REGISTRY
+    from fogref.models.base import BUILTIN_MODELS
 
     added = {c.name: c for c in (BeerLambertFog, NoPhysical)}
-    _REGISTRY.update(added)
+    BUILTIN_MODELS.update(added)
     yield
     for k in added:
-        _REGISTRY.pop(k, None)
+        BUILTIN_MODELS.pop(k, None)
 
 
 def _registry_importable():

@@ -257,11 +257,11 @@ def test_no_truth_is_sanitised_in_compare_or_study():
 
 @pytest.fixture
 def grey_registered():
-    from fogref.models.base import _REGISTRY
+    from fogref.models.base import BUILTIN_MODELS
 
-    _REGISTRY[GreyFog.name] = GreyFog
+    BUILTIN_MODELS[GreyFog.name] = GreyFog
     yield
-    _REGISTRY.pop(GreyFog.name, None)
+    BUILTIN_MODELS.pop(GreyFog.name, None)
 
 
 @pytest.mark.parametrize("value", ["0", "-5", "nan", "inf"])

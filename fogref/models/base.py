@@ -19,7 +19,7 @@ from typing import Any, Callable, ClassVar, Generic, Protocol, TypeVar, runtime_
 
 import numpy as np
 
-__all__ = ["SKY_DISTANCE", "FogModel", "FogResult", "ParamModel", "as_points", "register"]
+__all__ = ["BUILTIN_MODELS", "SKY_DISTANCE", "FogModel", "FogResult", "ParamModel", "as_points", "register"]
 
 #: Where a model fogs the pixels that see the sky [m] (compare, the fits and the
 #: study all use it): far enough that every fog of the scenes is saturated.
@@ -103,7 +103,8 @@ class ParamModel(Generic[P]):
         self.params: P = params or self.Params()
 
 
-_REGISTRY: dict[str, type] = {}
+#: The built-in models by name (filled by :func:`register`), read by :mod:`fogref.models.resolve`.
+BUILTIN_MODELS: dict[str, type] = {}
 
 
 def register(name: str) -> Callable[[type], type]:
@@ -115,14 +116,14 @@ def register(name: str) -> Callable[[type], type]:
     >>> @register("doc_fog")
     ... class DocFog:
     ...     def evaluate(self, camera, positions, precision="float32"): ...
-    >>> _REGISTRY["doc_fog"].name
+    >>> BUILTIN_MODELS["doc_fog"].name
     'doc_fog'
-    >>> del _REGISTRY["doc_fog"]
+    >>> del BUILTIN_MODELS["doc_fog"]
     """
 
     def deco(cls: Any) -> Any:
         cls.name = name
-        _REGISTRY[name] = cls
+        BUILTIN_MODELS[name] = cls
         return cls
 
     return deco

@@ -70,7 +70,7 @@ ENTRY_POINT_GROUP = "fogref.models"
 
 def _builtin_names() -> list[str]:
     # the built-in models registered themselves when fogref.models (which imports this module) imported them
-    return sorted(base._REGISTRY)
+    return sorted(base.BUILTIN_MODELS)
 
 
 def entry_point_models() -> dict:
@@ -204,7 +204,7 @@ def resolve_model(spec: str) -> Any:
     if ":" in spec:
         return _load_spec(spec)
     if spec in _builtin_names():
-        return base._REGISTRY[spec]
+        return base.BUILTIN_MODELS[spec]
     eps = entry_point_models()
     if spec in eps:
         try:
