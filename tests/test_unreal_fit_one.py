@@ -102,3 +102,39 @@ def test_convergence_record_and_cache(valley):
     assert fit_unreal(valley).history["n_dirs"] == r.history["n_dirs"]
     with pytest.raises(ValueError, match="needs the views"):
         fit_unreal(valley, target=np.zeros((3, 3)))
+
+
+def _without_times(doc):
+    """``doc`` (the JSON of ``fogref fit``) without its wall times (``*_seconds``)."""
+    if isinstance(doc, dict):
+        return {k: _without_times(v) for k, v in doc.items() if not k.endswith("seconds")}
+    if isinstance(doc, list):
+        return [_without_times(v) for v in doc]
+    return doc
+
+
+def test_the_fit_does_not_depend_on_the_blas_thread_count(tmp_path):
+    """``fogref fit --scene valley.xml`` in two processes, one with a single BLAS thread (as in a Dask
+    worker, which Dask starts with ``OPENBLAS_NUM_THREADS=1``) and one with two, each with an empty
+    fit cache: every value is bitwise the same.  A BLAS dot product over the views splits its sum
+    across threads, so it rounds differently with their number; the sweep's worker and the command
+    line then gave Unreal values 1e-10 apart.  Fails where a thread count changes any bit (on a
+    machine with one core both runs use one thread, and it cannot fail)."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    out = []
+    for threads in ("1", "2"):
+        env = {**os.environ, "OPENBLAS_NUM_THREADS": threads, "FOGREF_CACHE": str(tmp_path / threads)}
+        run = subprocess.run(
+            [sys.executable, "-m", "fogref.cli", "fit", "--scene", str(VALLEY)],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
+        assert run.returncode == 0, run.stderr
+        out.append(_without_times(json.loads(run.stdout)))
+    assert out[0] == out[1]

@@ -299,8 +299,10 @@ class ColourLoss:
         # max(cos, 0) per direction: the lobe at exponent 2 over the one at exponent 1
         self._cos = np.zeros(int(self._group.max(initial=-1)) + 1)
         self._cos[self._group] = self._lit_lobe(2.0, 0.0) / one.lobe[self._lit]
-        self._g00 = float(one.iso @ one.iso)
-        self._b0_list = (one.iso @ y).tolist()
+        # numpy's pairwise sums, not BLAS dots over the views: a threaded BLAS splits a dot's sum over
+        # its threads, so the fit's last digits would depend on their number (a Dask worker has one)
+        self._g00 = float(np.sum(one.iso * one.iso))
+        self._b0_list = np.sum(one.iso[:, None] * y, axis=0).tolist()
         self._yy_list = np.sum(y * y, axis=0).tolist()
         self._sums: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._add_start(0.0, one.lobe[self._lit])
