@@ -255,6 +255,18 @@ def test_an_error_of_the_pass_while_recording_is_raised_as_itself(mitsuba, monke
     assert scene.integrator().freeze_refused is None
 
 
+def _assert_recorded_and_replayed_the_traced_pixels(scene, seeds, frozen, counted):
+    """``frozen`` (``_sums`` of ``scene`` at ``seeds``, freeze on) was recorded without a refusal,
+    at least one call replayed (Dr.Jit records again when the registry it walks has changed, e.g.
+    when a collection freed another test's objects between two calls), and every call's pixels
+    are bitwise the traced ones."""
+    fp = scene.integrator()
+    assert fp.freeze_refused is None, f"the recording was refused: {fp.freeze_refused}"
+    assert fp.n_recordings >= 1 and counted[0] < len(seeds), "no pass was replayed"
+    for seed, a in zip(seeds, frozen):
+        assert np.array_equal(a, _sums(scene, seed, freeze=False)), f"seed {seed}: frozen and traced differ"
+
+
 @pytest.mark.render
 def test_a_stock_volpath_render_with_heightfog_does_not_stop_later_recordings(mitsuba, counted):
     """``dr.freeze`` takes every registered Mitsuba object's variables as inputs of a recording,
@@ -274,13 +286,7 @@ def test_a_stock_volpath_render_with_heightfog_does_not_stop_later_recordings(mi
     for seed in seeds:
         mitsuba.render(stock, spp=2, seed=seed)  # a stock render between every pass of fogpath
         frozen.append(_sums(scene, seed))
-    fp = scene.integrator()
-    assert fp.freeze_refused is None, f"the recording was refused: {fp.freeze_refused}"
-    # at least one call replayed (Dr.Jit records again when the registry it walks has changed,
-    # e.g. when a collection freed another test's objects between two calls)
-    assert fp.n_recordings >= 1 and counted[0] < len(seeds), "no pass was replayed"
-    for seed, a in zip(seeds, frozen):
-        assert np.array_equal(a, _sums(scene, seed, freeze=False)), f"seed {seed}: frozen and traced differ"
+    _assert_recorded_and_replayed_the_traced_pixels(scene, seeds, frozen, counted)
 
 
 @pytest.mark.render
@@ -299,11 +305,5 @@ def test_a_droplet_fogs_tabulated_phase_is_recorded_and_replays_the_traced_pixel
     scene = mitsuba.load_dict(base_scene(mitsuba, {"type": "fogpath", "max_depth": 4}, fog, res=(8, 6)))
     seeds = range(1, fpm.RECORD_FROM_CALL + 4)
     frozen = [_sums(scene, seed) for seed in seeds]
-    fp = scene.integrator()
-    assert fp.freeze_refused is None, f"the recording was refused: {fp.freeze_refused}"
-    # at least one call replayed (Dr.Jit records again when the registry it walks has changed,
-    # e.g. when a collection freed another test's objects between two calls)
-    assert fp.n_recordings >= 1 and counted[0] < len(seeds), "no pass was replayed"
-    for seed, a in zip(seeds, frozen):
-        assert np.array_equal(a, _sums(scene, seed, freeze=False)), f"seed {seed}: frozen and traced differ"
+    _assert_recorded_and_replayed_the_traced_pixels(scene, seeds, frozen, counted)
     assert not np.array_equal(frozen[-1], frozen[-2]), "a new seed did not change the pixels"
