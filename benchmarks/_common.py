@@ -33,6 +33,19 @@ def timed_render(scene, spp: int, seed: int, channels=slice(0, 3)):
     return np.array(img, dtype=np.float64)[..., channels], t
 
 
+def warm_ladder(scenes, ladder, seed: int, first_done: bool = True) -> None:
+    """Render every scene of ``scenes`` at every spp of ``ladder`` until its timed renders replay:
+    each spp is its own kernel (compiled or loaded on its first call), and fogpath traces a pass's
+    first call and records its ``RECORD_FROM_CALL``-th (``fogref_plugins.fogpath``).
+    ``first_done``: each scene was already rendered once at ``ladder[0]``."""
+    from fogref_plugins.fogpath import RECORD_FROM_CALL
+
+    for spp in ladder:
+        for _ in range(RECORD_FROM_CALL - (first_done and spp == ladder[0])):
+            for scene in scenes:
+                timed_render(scene, spp, seed)
+
+
 def kernel_profile(scene, spp: int, seed: int) -> dict:
     """One render with Dr.Jit's kernel history on: where the wall time goes."""
     dr.kernel_history_clear() if hasattr(dr, "kernel_history_clear") else dr.kernel_history()

@@ -234,7 +234,7 @@ def headline(np, tva, runs_fr, runs_cy, ref, var_ref):
 
 def run_scene(name, args, py, env):
     mi, np, S, tva = env["mi"], env["np"], env["S"], env["tva"]
-    from _common import kernel_profile, timed_render
+    from _common import kernel_profile, timed_render, warm_ladder
 
     spec = SCENES[name]
     res, D = (64, 36), args.max_depth
@@ -253,13 +253,7 @@ def run_scene(name, args, py, env):
     fr.update(
         cold_first_call_s=k["wall_s"], cold_llvm_backend_s=k["backend_s"], cold_codegen_s=k["codegen_s"]
     )
-    # each spp is its own kernel: compile it outside the ladder; fogpath traces a pass's first call
-    # and records its RECORD_FROM_CALL-th, so every timed fogref render replays
-    from fogref_plugins.fogpath import RECORD_FROM_CALL
-
-    for spp in args.ladder_fr:
-        for _ in range(RECORD_FROM_CALL - (spp == args.ladder_fr[0])):
-            timed_render(scene, spp, 778)
+    warm_ladder([scene], args.ladder_fr, 778)  # compiled and recorded outside the timed ladder
     cy = Cycles(py, spec, res, D, args.threads)
     c0 = args.ladder_cy[0]
     cyi = {"import_bpy_s": cy.info["import_s"], "scene_build_s": cy.info["build_s"]}

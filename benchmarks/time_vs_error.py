@@ -53,7 +53,7 @@ import time
 from pathlib import Path
 
 import _scenes as S
-from _common import ROOT, dr, kernel_profile, machine_info, median, mi, np, timed_render  # noqa: F401
+from _common import ROOT, dr, kernel_profile, machine_info, median, mi, np, timed_render, warm_ladder  # noqa: F401
 
 LADDER = (1, 4, 16, 64, 256, 1024)
 REPEATS = {1: 5, 4: 5, 16: 5, 64: 3, 256: 2, 1024: 1}
@@ -230,16 +230,9 @@ def run_scene(name, args, rng, prev=None):
     for m in methods:
         _, t = timed_render(scenes[m], 1, 12345)
         first[m] = t
-    # the kernel depends on spp: compile (or load) every ladder size outside the timings, or a
-    # repeat that compiles counts in the median (2 repeats at the top: half of it); fogpath traces
-    # a pass's first call and records its RECORD_FROM_CALL-th, so each size is rendered that often
-    # first and every timed repeat of fogpath replays
-    from fogref_plugins.fogpath import RECORD_FROM_CALL
-
-    for spp in args.ladder:
-        for _ in range(RECORD_FROM_CALL - (spp == args.ladder[0])):
-            for m in methods:
-                timed_render(scenes[m], spp, 54321)
+    # every ladder size compiled (or loaded) and fogpath's passes recorded outside the timings, or a
+    # repeat that compiles or records counts in the median (2 repeats at the top: half of it)
+    warm_ladder([scenes[m] for m in methods], args.ladder, 54321)
     if fresh:  # reference
         refx, var_refx, t_ref, ref_spp = render_reference(
             scenes["fogpath"], args.ref_spp, channels=_insc_channels()
