@@ -1053,6 +1053,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         """
         pixel_exact = self.pixel_exact if pixel_exact is None else bool(pixel_exact)
         make_scene_values_opaque(scene)  # one kernel for every value of the scene's parameters
+        drjit_ops().trim_params()  # between traces, so that the cache's bound is not met inside one
         self._memo = _Held(scene, {})  # the scene values read while tracing: once (_read_once)
         try:
             with dr.scoped_set_flag(dr.JitFlag.OptimizeLoops, OPTIMIZE_LOOPS):

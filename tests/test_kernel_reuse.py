@@ -107,3 +107,23 @@ def test_profile_values_reuse_kernels(mitsuba, name, before, after):
     h, img = _hashes_and_image(mi, scene(after))
     assert not np.array_equal(img, base_img), f"{name}: the change did not change the render"
     assert h == base_h, f"{name}: new kernels {sorted(set(h) - set(base_h))} (a value traced as a literal)"
+
+
+@pytest.mark.render
+def test_a_nearly_full_parameter_cache_does_not_change_the_kernels(mitsuba):
+    """DrJitOps keeps at most ``MAX_PARAMS`` opaque parameters and clears them when full.  Cleared
+    inside a trace, one parameter would get two inputs and the kernel a new hash (a compile the
+    values did not need); fogpath trims the cache between traces (``trim_params``) so that this
+    cannot happen.  Here the cache is filled to 10 short of its bound before the changed scene's
+    trace, which adds more than 10: fails if the kernels differ from the unchanged scene's."""
+    from fogref.media import drjit_ops
+
+    mi = mitsuba
+    ops = drjit_ops()
+    _hashes_and_image(mi, mi.load_file(VALLEY, **TINY))  # the process's first render, not compared
+    base_h, _ = _hashes_and_image(mi, mi.load_file(VALLEY, **TINY))
+    with ops.isolated_params():  # an empty cache, filled to 10 short of the bound
+        for i in range(ops.MAX_PARAMS - 10):
+            ops.param(1.0 + i)  # a parameter per value, as a long sweep leaves them
+        h, _ = _hashes_and_image(mi, mi.load_file(VALLEY, **TINY, sigma_t="0.0021"))
+    assert h == base_h, f"new kernels {sorted(set(h) - set(base_h))} after the cache filled up"

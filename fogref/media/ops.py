@@ -181,6 +181,14 @@ class DrJitOps:
         ``dr.freeze`` recording takes as inputs (:meth:`isolated_params`)."""
         return {self._table_key(c): self._table(c) for c in columns}
 
+    def trim_params(self) -> None:
+        """Drop the kept parameters once they fill half of :data:`MAX_PARAMS`.  For a caller to run
+        between two traces (fogpath does before each pass): the bound in :meth:`param` is then not
+        reached inside a trace, where clearing gives one parameter two inputs and the kernel a new
+        hash, so a compile that its values did not need."""
+        if len(self._params) >= self.MAX_PARAMS // 2:
+            self._params.clear()
+
     def _param(self, x: Real, caller: Real, slot: Real) -> Real:
         if self.dr.is_array_v(x):
             return x
@@ -189,7 +197,7 @@ class DrJitOps:
         value = self._params.get(key)
         if value is None:
             if len(self._params) >= self.MAX_PARAMS:
-                self._params.clear()  # bounded: a long sweep sees many values
+                self._params.clear()  # bounded: a long sweep sees many values (see trim_params)
             value = self._params[key] = self.dr.opaque(self.Float, x)
         return value
 
