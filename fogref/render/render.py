@@ -57,7 +57,6 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
-import OpenEXR
 from fogref_plugins.passes import max_lanes, pass_seed, pass_sizes
 
 from fogref import cluster, gbuffer
@@ -358,7 +357,6 @@ def render(
         "fogref.overrides": {k: str(v) for k, v in (overrides or {}).items()},
         "fogref.render_seconds": {"total": time.perf_counter() - t0, "passes": timings},
     }
-    _exr_threads()
     write_exr(out, channels, attrs, compression=exr_compression)
     moments = moments_path(out)  # after the EXR: sums without their truth are never left
     if keep_moments:
@@ -510,13 +508,6 @@ def _float32_planes(channels: dict) -> tuple[dict, np.ndarray]:
     for plane, name in zip(block, names):
         plane[...] = channels[name]  # round to nearest, as astype
     return dict(zip(names, block)), block
-
-
-def _exr_threads() -> None:
-    """Let OpenEXR compress with every core (its default is 0 threads: the caller's thread
-    only).  ZIP output does not depend on the thread count."""
-    if hasattr(OpenEXR, "set_global_thread_count") and OpenEXR.global_thread_count() < (os.cpu_count() or 1):
-        OpenEXR.set_global_thread_count(os.cpu_count() or 1)
 
 
 def _channels(sums, squares, spp: int) -> dict:
