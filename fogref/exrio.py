@@ -11,6 +11,8 @@ from __future__ import annotations
 import errno
 import json
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -119,24 +121,60 @@ def read_exr(path) -> tuple[dict, dict]:
         The file is missing or not a readable EXR (the message names it).
     """
     path = Path(path)
+    with _opened(path, separate_channels=True) as f:
+        chans = {k: np.array(v.pixels, dtype=np.float32) for k, v in f.channels().items()}
+        return chans, _decoded(f.header())
+
+
+def read_exr_header(path) -> tuple[dict, tuple[int, int]]:
+    """The attributes of the EXR ``path`` (decoded as :func:`read_exr` decodes them) and its size
+    ``(H, W)`` [pixels], without reading its pixels: what deciding about a file needs (is it a
+    truth, may a render extend it), at the cost of its header whatever the image's size.
+
+    Raises
+    ------
+    fogref.errors.FogrefError
+        The file is missing or not a readable EXR (the message names it).
+
+    >>> import tempfile
+    >>> p = Path(tempfile.mkdtemp()) / "a.exr"
+    >>> write_exr(p, {"R": np.zeros((2, 3))}, {"fogref.spp": 4})
+    >>> attrs, size = read_exr_header(p)
+    >>> attrs["fogref.spp"], size
+    (4, (2, 3))
+    """
+    path = Path(path)
+    with _opened(path, header_only=True) as f:
+        header = f.header()
+        (x0, y0), (x1, y1) = (np.asarray(c).tolist() for c in header["dataWindow"])
+        return _decoded(header), (int(y1 - y0 + 1), int(x1 - x0 + 1))
+
+
+@contextmanager
+def _opened(path: Path, **options) -> Iterator:
+    """``OpenEXR.File(path, **options)``; FogrefError naming ``path`` when it is missing or not a
+    readable EXR (also when reading its header or pixels in the ``with`` block fails)."""
     if not path.is_file():
         raise FogrefError(f"{path}: no such EXR file")
     use_every_core()
     try:
-        with OpenEXR.File(str(path), separate_channels=True) as f:
-            chans = {k: np.array(v.pixels, dtype=np.float32) for k, v in f.channels().items()}
-            header = dict(f.header())
+        with OpenEXR.File(str(path), **options) as f:
+            yield f
     except Exception as e:
         raise FogrefError(f"{path}: not a readable EXR file ({e})") from e
+
+
+def _decoded(header) -> dict:
+    """The header's attributes, ``fogref.*`` ones that hold JSON decoded."""
     attrs = {}
-    for k, v in header.items():
+    for k, v in dict(header).items():
         if isinstance(v, str) and k.startswith("fogref."):
             try:
                 v = json.loads(v)
             except ValueError:
                 pass
         attrs[k] = v
-    return chans, attrs
+    return attrs
 
 
 def rgb(channels: dict, group: str = "") -> np.ndarray:

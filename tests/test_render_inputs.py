@@ -150,7 +150,8 @@ def test_cached_truth_after_a_mesh_edit_is_rendered_again(tmp_path, mitsuba, mon
     first = cached_truth(scene, res=(8, 6), spp=4, cache_dir=tmp_path / "cache")
     assert render_cached(scene, 4, 0, tiny.RES, tmp_path / "cache")[1]  # unchanged: from the cache
     tiny.write_obj(tmp_path / "scene" / "box.obj", dx=8)
-    path, was_cached = render_cached(scene, 4, 0, tiny.RES, tmp_path / "cache")
+    truth, was_cached = render_cached(scene, 4, 0, tiny.RES, tmp_path / "cache")
+    path = truth.path
     assert not was_cached and path != first.path
     fresh = render(scene, tmp_path / "fresh.exr", spp=4, seed=0, progress=False, png=False)
     assert _same_pixels(path, fresh)

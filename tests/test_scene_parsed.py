@@ -35,7 +35,7 @@ def test_a_render_parses_the_scene_once(tmp_path, mitsuba, parses):
 def test_a_cached_truth_parses_the_scene_once(tmp_path, mitsuba, parses):
     from fogref.render.cache import render_cached
 
-    path, cached = render_cached(scene_path("valley"), 1, 0, {"res": 8, "resy": 4}, cache_dir=tmp_path)
+    _, cached = render_cached(scene_path("valley"), 1, 0, {"res": 8, "resy": 4}, cache_dir=tmp_path)
     assert not cached and len(parses) == 1, parses  # the key and the render share the parse
 
 

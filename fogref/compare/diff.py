@@ -38,7 +38,7 @@ import numpy as np
 from fogref.compare.check import check
 from fogref.compare.foreign import read_image
 from fogref.errors import FogrefError
-from fogref.exrio import read_exr
+from fogref.exrio import read_exr_header
 from fogref.gbuffer import Truth, load_truth
 
 #: Metrics a noisy diff tests, and how a row says "differ".
@@ -110,7 +110,7 @@ def is_truth(path) -> bool:
     if Path(path).suffix.lower() != ".exr":
         return False
 
-    return "fogref.schema" in read_exr(path)[1]
+    return "fogref.schema" in read_exr_header(path)[0]
 
 
 def load_side(path, encoding: str = "auto", exposure: float = 1.0):

@@ -29,7 +29,7 @@ from fogref import params
 from fogref._version import __version__
 from fogref.cache_dir import default_cache_dir, sources_digest
 from fogref.errors import FogrefError, ParameterError
-from fogref.gbuffer import load_truth
+from fogref.gbuffer import Truth, load_truth
 from fogref.render.render import render
 from fogref.scene.parsed import ParsedScene, read_scene
 from fogref.shipped_scenes import resolve_scene
@@ -83,8 +83,9 @@ def render_cached(
     cache_dir=None,
     variant: str | None = None,
     pixel_filter: str = "centre",
-) -> tuple[Path, bool]:
-    """The cached EXR of a truth, rendered first if needed: ``(path, was_cached)``.
+) -> tuple[Truth, bool]:
+    """The cached truth, rendered first if needed, read once: ``(truth, was_cached)``;
+    ``truth.path`` is the cached EXR.
 
     Parameters as :func:`cached_truth` (``overrides`` holds ``res``/``resy`` if wanted).
     A cached file that no longer reads as a truth (older schema, damaged) is rendered again.
@@ -96,8 +97,7 @@ def render_cached(
     folder = path.parent
     if path.is_file():
         try:
-            load_truth(path)
-            return path, True
+            return load_truth(path), True
         except FogrefError:
             path.unlink(missing_ok=True)
     folder.mkdir(parents=True, exist_ok=True)
@@ -113,7 +113,7 @@ def render_cached(
         pixel_filter=pixel_filter,
         keep_moments=False,
     )
-    return path, False
+    return load_truth(path), False
 
 
 def cached_truth(
@@ -159,5 +159,4 @@ def cached_truth(
             raise ParameterError("cached_truth", "res", f"{res!r}: expected (width, height) [px]")
         w, h = (params.integer(x, "res", source="cached_truth", lo=1, hi=1 << 16, unit="px") for x in res)
         over.update({"res": w, "resy": h})
-    path, _ = render_cached(resolve_scene(scene), spp, seed, over, cache_dir, variant, pixel_filter)
-    return load_truth(path)
+    return render_cached(resolve_scene(scene), spp, seed, over, cache_dir, variant, pixel_filter)[0]

@@ -64,7 +64,7 @@ from fogref._version import __version__
 from fogref.atomic import atomic_write, refuse_overwriting_inputs, temporary_names
 from fogref.display import write_preview
 from fogref.errors import FogrefError
-from fogref.exrio import EXR_COMPRESSIONS, read_exr, write_exr
+from fogref.exrio import EXR_COMPRESSIONS, read_exr_header, write_exr
 from fogref.render import checkpoint, distributed
 from fogref.render import load as scene_loader
 from fogref.render.variant import set_variant
@@ -389,8 +389,7 @@ def _truth_to_extend(out: Path, fields: dict, hashes: dict, scene_path: Path, sc
     if not out.is_file():
         return None
     try:
-        channels, attrs = read_exr(out)
-        H0, W0 = next(iter(channels.values())).shape
+        attrs, (H0, W0) = read_exr_header(out)
         old = {
             "inputs_sha256": attrs["fogref.inputs_sha256"],
             "overrides": attrs["fogref.overrides"],

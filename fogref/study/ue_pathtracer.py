@@ -248,9 +248,7 @@ def render_split(
     p_pt, p_ex = out_dir / "ue_pathtracer.xml", out_dir / "exact.xml"
     rewrite_scene(scene_xml, p_pt, ue, pt)
     rewrite_scene(scene_xml, p_ex, ue, pt, params=exact_fog_params(ue, pt))
-    t_pt, t_ex = (
-        load_truth(render_cached(p, spp, seed, overrides, cache_dir=out_dir)[0]) for p in (p_pt, p_ex)
-    )
+    t_pt, t_ex = (render_cached(p, spp, seed, overrides, cache_dir=out_dir)[0] for p in (p_pt, p_ex))
     T_r, L_r = unreal_fog(ue, t_pt, "float64", SKY_DISTANCE)
     S_raster = t_pt.surface * T_r + L_r
     C_pt, C_ex = t_pt.noise_cov("final"), t_ex.noise_cov("final")

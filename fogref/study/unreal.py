@@ -91,13 +91,15 @@ def scene_of_truth(truth: Truth, scene: str | None = None) -> Path:
 
 def _render_cached(
     scene: Path, out: Path, spp: int, seed: int, overrides: dict, log, pixel_filter: str = "centre"
-) -> Path:
+) -> Truth:
     """A truth of ``scene`` from fogref's render cache (:mod:`fogref.render.cache`) in ``out``'s folder."""
 
     t = time.perf_counter()
-    path, cached = render_cached(scene, spp, seed, overrides, cache_dir=out.parent, pixel_filter=pixel_filter)
-    log(f"  {'cached' if cached else 'rendered'} {path} ({time.perf_counter() - t:.1f} s)")
-    return path
+    truth, cached = render_cached(
+        scene, spp, seed, overrides, cache_dir=out.parent, pixel_filter=pixel_filter
+    )
+    log(f"  {'cached' if cached else 'rendered'} {truth.path} ({time.perf_counter() - t:.1f} s)")
+    return truth
 
 
 def open_plane_check(scene: Path, rdir: Path, log, spp: int = 64, res=(160, 90)) -> dict:
@@ -108,11 +110,11 @@ def open_plane_check(scene: Path, rdir: Path, log, spp: int = 64, res=(160, 90))
     ``single - single_sky`` (from the two seeds, and from the stderr channels)."""
     ov = {"res": res[0], "resy": res[1]}
     nosun = sunless_scene(scene, rdir)
-    a = load_truth(_render_cached(scene, rdir / f"{scene.stem}_s0.exr", spp, 0, ov, log))
-    b = load_truth(_render_cached(scene, rdir / f"{scene.stem}_s1.exr", spp, 1, ov, log))
+    a = _render_cached(scene, rdir / f"{scene.stem}_s0.exr", spp, 0, ov, log)
+    b = _render_cached(scene, rdir / f"{scene.stem}_s1.exr", spp, 1, ov, log)
     ov_nosun = overrides_used_by(nosun, ov)
-    sa = load_truth(_render_cached(nosun, rdir / f"{scene.stem}_nosun_s0.exr", spp, 0, ov_nosun, log))
-    sb = load_truth(_render_cached(nosun, rdir / f"{scene.stem}_nosun_s1.exr", spp, 1, ov_nosun, log))
+    sa = _render_cached(nosun, rdir / f"{scene.stem}_nosun_s0.exr", spp, 0, ov_nosun, log)
+    sb = _render_cached(nosun, rdir / f"{scene.stem}_nosun_s1.exr", spp, 1, ov_nosun, log)
     pf = PhysicalScene.from_params(a.params)
     sun = B.closed_forms(a, pf)["sun_att"]
     sh = a.single - sa.single - sun
@@ -215,23 +217,20 @@ def run_study(
     rdir = Path(renders_dir)
     nosun = sunless_scene(scene_path, rdir)
     ov_nosun = overrides_used_by(nosun, overrides)
-    sky_a = _render_cached(
-        nosun, rdir / f"{exr.stem}_nosun_s{seed}.exr", spp, seed, ov_nosun, log, pixel_filter
-    )
-    truth_b = _render_cached(
+    sa = _render_cached(nosun, rdir / f"{exr.stem}_nosun_s{seed}.exr", spp, seed, ov_nosun, log, pixel_filter)
+    tb = _render_cached(
         scene_path, rdir / f"{exr.stem}_s{seed + 1}.exr", spp, seed + 1, overrides, log, pixel_filter
     )
-    sky_b = _render_cached(
+    sb = _render_cached(
         nosun, rdir / f"{exr.stem}_nosun_s{seed + 1}.exr", spp, seed + 1, ov_nosun, log, pixel_filter
     )
 
     # -- 4. budget -------------------------------------------------------------
     log("computing the error budget ...")
-    tb, sa, sb = load_truth(truth_b), load_truth(sky_a), load_truth(sky_b)
-    for other, path in ((tb, truth_b), (sa, sky_a), (sb, sky_b)):
+    for other in (tb, sa, sb):
         if other.shape != truth.shape:
             raise FogrefError(
-                f"{path}: resolution {other.shape[::-1]} differs from {exr} {truth.shape[::-1]}"
+                f"{other.path}: resolution {other.shape[::-1]} differs from {exr} {truth.shape[::-1]}"
             )
     S_a = B.chain(truth, sa.single, pf, lobe.params, model_params)
     S_b = B.chain(tb, sb.single, pf, lobe.params, model_params)
@@ -261,9 +260,9 @@ def run_study(
             res["open_plane_check"] = open_plane_check(op, rdir, log)
     res["inputs"] = {
         **provenance,
-        "sky_only": str(sky_a),
-        "truth_other_seed": str(truth_b),
-        "sky_only_other_seed": str(sky_b),
+        "sky_only": str(sa.path),
+        "truth_other_seed": str(tb.path),
+        "sky_only_other_seed": str(sb.path),
         "resolution": list(truth.shape[::-1]),
         "unreal_params": fit_doc["unreal"]
         | {

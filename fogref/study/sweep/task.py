@@ -20,7 +20,6 @@ from pathlib import Path
 
 from fogref._version import __version__
 from fogref.compare.report import compare_metrics
-from fogref.gbuffer import load_truth
 from fogref.mapping import PhysicalScene, fit_unreal
 from fogref.mapping.build import build_model
 from fogref.render.cache import render_cached
@@ -106,7 +105,7 @@ def run_config(cfg: dict, drjit_threads: int | None = None) -> dict:
     truth = Path(cfg["truth"])
     t0 = time.perf_counter()
     with _truth_lock(f"fogref-truth-{truth.stem}"):  # configurations sharing a truth render it once
-        truth, cached = render_cached(
+        truth_data, cached = render_cached(
             cfg["scene"],
             cfg["spp"],
             cfg["seed"],
@@ -115,7 +114,7 @@ def run_config(cfg: dict, drjit_threads: int | None = None) -> dict:
             pixel_filter=cfg["pixel_filter"],
         )
     wall_render = time.perf_counter() - t0
-    truth_data = load_truth(truth)  # read once: its header here, its pixels for every model's compare
+    truth = Path(truth_data.path)  # read once: its header here, its pixels for every model's compare
     header = truth_data.attrs
     rs = header.get("fogref.render_seconds")
     render_seconds = float(rs.get("total", wall_render)) if isinstance(rs, dict) else float(rs or wall_render)
@@ -169,7 +168,7 @@ def _budget_columns(cfg: dict, truth, model) -> dict:
     sky_key = file_sha256(nosun)[:24]
     with _truth_lock(f"fogref-truth-{sky_key}"):
         sky_overrides = overrides_used_by(nosun, cfg["overrides"])
-        sky_path, _ = render_cached(
+        sky, _ = render_cached(
             nosun,
             cfg["spp"],
             cfg["seed"],
@@ -177,7 +176,6 @@ def _budget_columns(cfg: dict, truth, model) -> dict:
             cache_dir=truth_path.parent,
             pixel_filter=cfg["pixel_filter"],
         )
-    sky = load_truth(sky_path)
     pf = PhysicalScene.from_params(truth.params)
     lobe = fit_unreal(pf, sun_attenuation=False, fit_start=False)
     S = B.chain(truth, sky.single, pf, lobe.params, model.params)
@@ -187,7 +185,7 @@ def _budget_columns(cfg: dict, truth, model) -> dict:
         truth.surface_valid,
         B.chain_noise(truth, sky.stderr["single"], lobe.params, model.params),
     )
-    cols = {"budget.total.rmse": res["total"]["rmse"]["all"], "budget.sky_only_truth": str(sky_path)}
+    cols = {"budget.total.rmse": res["total"]["rmse"]["all"], "budget.sky_only_truth": str(sky.path)}
     for st in res["steps"]:
         cols[f"budget.{st['key']}.share"] = st["share"]
         cols[f"budget.{st['key']}.rmse"] = st["rmse"]["all"]
