@@ -60,6 +60,7 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 import numpy.typing as npt
+from threadpoolctl import threadpool_limits
 
 from fogref.errors import FogrefError, ParameterError, did_you_mean
 from fogref.mapping.build import model_label, param_dict
@@ -320,23 +321,24 @@ def fit_to_targets(
         r = np.concatenate([(L - L_t).ravel(), wT * (T - T_t).ravel()])
         return r if np.all(np.isfinite(r)) else bad
 
-    res = least_squares(
-        resid,
-        x0,
-        bounds=(lo, hi),
-        method="trf",
-        x_scale="jac",
-        ftol=1e-12,
-        xtol=1e-12,
-        gtol=1e-12,
-        max_nfev=200 * (len(free) + 1),
-    )
-    x = res.x
-    r = res.fun
-    J = np.asarray(res.jac, float)
-    m, p = r.size, len(free)
-    s2 = float(r @ r) / max(m - p, 1)
-    sig_int = _jacobian_sigma(J, s2)
+    with threadpool_limits(limits=1, user_api="blas"):  # the same last digits with any BLAS thread count
+        res = least_squares(
+            resid,
+            x0,
+            bounds=(lo, hi),
+            method="trf",
+            x_scale="jac",
+            ftol=1e-12,
+            xtol=1e-12,
+            gtol=1e-12,
+            max_nfev=200 * (len(free) + 1),
+        )
+        x = res.x
+        r = res.fun
+        J = np.asarray(res.jac, float)
+        m, p = r.size, len(free)
+        s2 = float(r @ r) / max(m - p, 1)
+        sig_int = _jacobian_sigma(J, s2)
     values = {f.name: float(_to_value(f, xi)) for f, xi in zip(free, x)}
     unc = {
         f.name: float(math.log(10.0) * values[f.name] * si) if f.log else float(si)

@@ -20,6 +20,7 @@ import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from fogref.mapping.fit_cache import load_fit, store_fit
 from fogref.mapping.physical import PhysicalScene
@@ -198,7 +199,29 @@ def fit_unreal(
         Keep the exponent fixed (only colours, and start, are fitted).
     rtol : float
         Convergence tolerance of the direction count, in (0, 1).
+
+    Notes
+    -----
+    BLAS runs on one thread here (``threadpoolctl``): a threaded BLAS splits a sum of more than
+    about 10000 terms over its threads, so the last digits would depend on their number (a Dask
+    worker has one, the command line every core; ``--directions 32768`` gave values 1e-10 apart).
     """
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _fit_unreal(pf, views, sun_attenuation, fit_start, target, sky_distance, exponent, rtol)
+
+
+def _fit_unreal(
+    pf: PhysicalScene,
+    views: Views | None,
+    sun_attenuation: bool,
+    fit_start: bool,
+    target: np.ndarray | None,
+    sky_distance: float,
+    exponent: float | None,
+    rtol: float,
+) -> FitResult:
+    """:func:`fit_unreal` (its arguments, in order), BLAS's thread count set."""
     if views is None:
         if target is not None:
             raise ValueError("fit_unreal: a target needs the views it was computed on")
@@ -304,13 +327,15 @@ def _fit_converged(
     t0 = time.perf_counter()
     steps, prev, n = [], None, FIT_DIRECTIONS_START
     while True:
-        r = fit_unreal(
+        r = _fit_unreal(
             pf,
             sample_views(pf.camera, n_dirs=n),
-            sun_attenuation=sun_attenuation,
-            fit_start=fit_start,
-            sky_distance=sky_distance,
-            exponent=exponent,
+            sun_attenuation,
+            fit_start,
+            None,
+            sky_distance,
+            exponent,
+            rtol,
         )
         q = r.params
         steps.append(
