@@ -206,14 +206,23 @@ def fit_unreal(
     about 10000 terms over its threads, so the last digits would depend on their number (a Dask
     worker has one, the command line every core; ``--directions 32768`` gave values 1e-10 apart).
     """
-
     with threadpool_limits(limits=1, user_api="blas"):
-        return _fit_unreal(pf, views, sun_attenuation, fit_start, target, sky_distance, exponent, rtol)
+        return _fit_unreal(
+            pf,
+            views,
+            sun_attenuation=sun_attenuation,
+            fit_start=fit_start,
+            target=target,
+            sky_distance=sky_distance,
+            exponent=exponent,
+            rtol=rtol,
+        )
 
 
 def _fit_unreal(
     pf: PhysicalScene,
     views: Views | None,
+    *,
     sun_attenuation: bool,
     fit_start: bool,
     target: np.ndarray | None,
@@ -221,7 +230,7 @@ def _fit_unreal(
     exponent: float | None,
     rtol: float,
 ) -> FitResult:
-    """:func:`fit_unreal` (its arguments, in order), BLAS's thread count set."""
+    """:func:`fit_unreal` with BLAS's thread count already set (its arguments)."""
     if views is None:
         if target is not None:
             raise ValueError("fit_unreal: a target needs the views it was computed on")
@@ -330,12 +339,12 @@ def _fit_converged(
         r = _fit_unreal(
             pf,
             sample_views(pf.camera, n_dirs=n),
-            sun_attenuation,
-            fit_start,
-            None,
-            sky_distance,
-            exponent,
-            rtol,
+            sun_attenuation=sun_attenuation,
+            fit_start=fit_start,
+            target=None,
+            sky_distance=sky_distance,
+            exponent=exponent,
+            rtol=rtol,
         )
         q = r.params
         steps.append(
