@@ -33,8 +33,8 @@ from __future__ import annotations
 
 import importlib as _importlib  # as _importlib: not a name the facade offers
 
-from fogref._llvm import require_llvm as _require_llvm
 from fogref._version import __version__
+from fogref.llvm import require_llvm as _require_llvm
 
 #: The public API for checking a fog model or an engine's images against a truth
 #: (docs/byo.md): name -> module.  Imported on first use (:func:`__getattr__`), so

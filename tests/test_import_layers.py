@@ -34,7 +34,7 @@ FLOORS: list[tuple[str, tuple[str, ...]]] = [
             "fogref.errors",
             "fogref.params",
             "fogref.atomic",
-            "fogref._llvm",
+            "fogref.llvm",
             "fogref.cluster",
             "fogref.cache_dir",
             "fogref.shipped_scenes",
@@ -138,7 +138,7 @@ def imports_of(module: str):
 #: each ``fogref.<name>`` or ``from fogref import <name>`` is an arrow to the module behind it.
 FACADE = {
     "set_variant": "fogref.render.variant",
-    "ensure_llvm": "fogref._llvm",
+    "ensure_llvm": "fogref.llvm",
     "__version__": "fogref._version",
     "__file__": "fogref._version",
     "__name__": "fogref._version",

@@ -1,7 +1,7 @@
 """LLVM discovery for Dr.Jit: newest >= 16 wins, 14/15 are never chosen, and a
 machine without one gets a message that says what to install."""
 
-import fogref._llvm as L
+import fogref.llvm as L
 
 
 def test_prefers_newest_supported(monkeypatch, tmp_path):

@@ -15,7 +15,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from fogref._llvm import DEFAULT_VARIANT, ensure_llvm
+from fogref.llvm import DEFAULT_VARIANT, ensure_llvm
 
 __all__ = ["SUNSKY_APERTURE", "SUNSKY_KEYS", "eval_emitter", "sky_radiance", "sunsky_dict"]
 

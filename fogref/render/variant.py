@@ -25,9 +25,9 @@ from pathlib import Path
 import fogref_plugins
 
 from fogref import params
-from fogref._llvm import DEFAULT_VARIANT, HELP, ensure_llvm
 from fogref.atomic import atomic_write
 from fogref.errors import FogrefError
+from fogref.llvm import DEFAULT_VARIANT, HELP, ensure_llvm
 
 #: The Mitsuba variants fogref renders with: its plugins (fogpath, heightfog) need an RGB
 #: autodiff variant, on the CPU (LLVM) or an NVIDIA GPU (CUDA).
