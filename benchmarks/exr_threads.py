@@ -67,13 +67,20 @@ def main(argv=None) -> int:
                 times[n]["read"].append(time.perf_counter() - t)
                 files[n] = path.read_bytes()
         med = {str(n): {k: statistics.median(v) * 1e3 for k, v in d.items()} for n, d in times.items()}
-        ratio = {
-            k: statistics.median([x / y for x, y in zip(times[0][k], times[cores][k])])
-            for k in ("write", "read")
-        }
+        pairs = {k: [x / y for x, y in zip(times[0][k], times[cores][k])] for k in ("write", "read")}
+        ratio = {k: statistics.median(v) for k, v in pairs.items()}
+        spread = {k: [min(v), max(v)] for k, v in pairs.items()}
         same = files[0] == files[cores]
         res["sizes"].append(
-            {"size": [w, h], "ms": med, "ratio": ratio, "bytes": len(files[0]), "identical": same}
+            {
+                "size": [w, h],
+                "ms": med,
+                "ratio": ratio,
+                "ratio_range": spread,
+                "times_s": {str(n): d for n, d in times.items()},
+                "bytes": len(files[0]),
+                "identical": same,
+            }
         )
         print(
             w, h, {k: round(v, 2) for k, v in ratio.items()}, "identical" if same else "DIFFERENT", flush=True
@@ -98,17 +105,22 @@ def report(res: dict) -> str:
         f"`benchmarks/exr_threads.py` (see its docstring): {res['channels']} channels of a real truth, "
         f"ZIP, {res['repeats']} repeats of each pool size alternating, {n} cores (shared), load average "
         f"{res['load_average'][0]:.1f} before, {res['load_average'][1]:.1f} after.  Milliseconds, medians; "
-        "ratio: no thread over one per core, the median of the back-to-back pairs' ratios.",
+        "ratio: no thread over one per core, the median of the back-to-back pairs' ratios [the smallest "
+        "and largest pair's].",
         "",
         f"| size | file [MB] | write, no thread | write, {n} threads | write ratio | read, no thread "
         f"| read, {n} threads | read ratio | bytes identical |",
         "|---|---:|---:|---:|---:|---:|---:|---:|---|",
     ]
     for s in res["sizes"]:
-        m0, m1, r = s["ms"]["0"], s["ms"][n], s["ratio"]
+        m0, m1 = s["ms"]["0"], s["ms"][n]
+        r = {
+            k: f"{s['ratio'][k]:.2f} [{s['ratio_range'][k][0]:.2f}, {s['ratio_range'][k][1]:.2f}]"
+            for k in s["ratio"]
+        }
         lines.append(
             f"| {s['size'][0]}x{s['size'][1]} | {s['bytes'] / 1e6:.2f} | {m0['write']:.1f} "
-            f"| {m1['write']:.1f} | {r['write']:.2f} | {m0['read']:.1f} | {m1['read']:.1f} | {r['read']:.2f} "
+            f"| {m1['write']:.1f} | {r['write']} | {m0['read']:.1f} | {m1['read']:.1f} | {r['read']} "
             f"| {'yes' if s['identical'] else 'NO'} |"
         )
     return "\n".join(lines) + "\n"

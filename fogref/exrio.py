@@ -36,9 +36,10 @@ def use_every_core() -> int:
 
     :func:`write_exr` and :func:`read_exr` call it: OpenEXR then compresses and decompresses a
     file's blocks of scan lines in parallel (ZIP blocks hold 16 lines), and the bytes written do
-    not depend on the thread count.  On 2 cores a 72-channel truth's ZIP write takes 1.4x less
-    time at 160x90 and 1.6x less at 320x180 and 960x540, its read 1.5-1.6x less; at 32x18 (two
-    blocks) the same within 10 % (``reports/benchmarks/exr_threads.md``).
+    not depend on the thread count.  On 2 cores a 72-channel truth's ZIP write takes 1.45x less
+    time at 160x90 and 1.7x less at 320x180 and 960x540, its read 1.5-1.8x less (medians of 7
+    pairs; each pair's ratio within about 0.3 of it); at 32x18 (two blocks) no gain beyond the
+    pairs' spread (``reports/benchmarks/exr_threads.md``).
 
     >>> use_every_core() >= 1
     True
