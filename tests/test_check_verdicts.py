@@ -6,9 +6,12 @@ its channel correlation are known exactly.
 
 import numpy as np
 import pytest
+from scipy.stats import norm
+from scipy.stats import t as student_t
 
 from fogref.compare.candidate import evaluate_model
 from fogref.compare.check import check
+from fogref.compare.intervals import bootstrap_interval
 from fogref.compare.synthetic import synthetic_truth
 from fogref.errors import FogrefError
 from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
@@ -114,3 +117,20 @@ def test_models_receive_hit_and_distance():
     evaluate_model(t, Masked(MODEL.params))
     assert seen["hit"].shape == t.shape and seen["hit"].dtype == bool
     assert np.array_equal(seen["distance"], t.distance)
+
+
+@pytest.mark.parametrize("confidence", [0.8, 0.95, 0.99, 0.999])
+def test_interval_quantiles_are_scipy_stats(confidence):
+    # detects: a wrong quantile behind the intervals' half widths (a normal quantile off by 1e-12
+    # relative, or Student's t with the wrong degrees of freedom), against scipy.stats' norm and t
+    truth = synthetic_truth(MODEL, noise=0.02, seed=7)
+    row = check(truth, MODEL, confidence=confidence, parts=["inscatter"], distance_bands=())
+    r = row.row("inscatter", "all", "rel_bias")
+    half_width_in_sd = (r.high - r.low) / 2.0 / (r.estimate / r.z)
+    assert half_width_in_sd == pytest.approx(norm.ppf(0.5 + confidence / 2.0), rel=1e-12)
+    reps = np.array([0.0, 1.0, 2.0, 4.0])
+    for k in (2, 5, 40):
+        lo, hi = bootstrap_interval(0.0, reps, k, (1.0 - confidence) / 2.0)
+        sd = np.std(reps, ddof=1) * np.sqrt(k / (k - 1))
+        assert hi / sd == pytest.approx(student_t.ppf(0.5 + confidence / 2.0, k - 1), rel=1e-12)
+        assert lo == -hi

@@ -161,10 +161,10 @@ def check(
         if p not in cp.parts:
             raise FogrefError(f"part '{p}': {cp.name} has only {', '.join(cp.parts)}")
     alpha = (1.0 - confidence) / 2.0
-    from scipy.stats import norm
+    from scipy.special import ndtri  # the normal quantile (scipy.stats.norm.ppf's own), 3x quicker to import
 
-    z = float(norm.ppf(1.0 - alpha))
-    z_one = float(norm.ppf(confidence))  # the one-sided upper bound where an RMSE's estimate is 0
+    z = float(ndtri(1.0 - alpha))
+    z_one = float(ndtri(confidence))  # the one-sided upper bound where an RMSE's estimate is 0
     spp = int(truth.attrs.get("fogref.spp", 0) or 0)
     rows, errors = [], {}
     for k, part in enumerate(wanted):

@@ -109,10 +109,10 @@ def bootstrap_interval(est: float, reps: np.ndarray, k: int, alpha: float) -> tu
     The bootstrap's spread underestimates the variance by ``(k-1)/k`` and the normal
     quantile is too narrow for few blocks; both are corrected here.
     """
-    from scipy.stats import t as student_t  # here, not at import: scipy.stats is slow to import
+    from scipy.special import stdtrit  # Student's t quantile (scipy.stats.t.ppf's own); slow to import
 
     sd = float(np.std(reps, ddof=1)) * math.sqrt(k / max(k - 1, 1))
-    q = float(student_t.ppf(1.0 - alpha, max(k - 1, 1)))
+    q = float(stdtrit(max(k - 1, 1), 1.0 - alpha))
     return est - q * sd, est + q * sd
 
 
