@@ -12,7 +12,7 @@ import json
 import sys
 from pathlib import Path
 
-from fogref.atomic import FIGURE_DPI, atomic_write, set_aside, write_text_atomic
+from fogref.atomic import atomic_write, figure_save_options, set_aside, write_text_atomic
 from fogref.study.plot_units import HEADLINE_METRICS, metric_label, parameter_label
 from fogref.study.sweep.spec import SweepSpec
 
@@ -220,6 +220,6 @@ def figure_png(ok, name: str, param: str, metric: str) -> bytes:
     ax.legend(fontsize=7)
     ax.set_title(f"{name}: {metric} vs {param}", fontsize=9)
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=FIGURE_DPI, bbox_inches="tight")
+    fig.savefig(buf, **figure_save_options("png"))
     plt.close(fig)
     return buf.getvalue()
