@@ -19,6 +19,7 @@ import numpy as np
 import OpenEXR
 
 from fogref.atomic import atomic_write
+from fogref.cores import usable_cores
 from fogref.errors import FogrefError
 
 #: The lossless compressions :func:`write_exr` offers (OpenEXR's names, lower case), every one
@@ -44,7 +45,7 @@ def use_every_core() -> int:
     >>> use_every_core() >= 1
     True
     """
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    cores = usable_cores()
     if OpenEXR.global_thread_count() < cores:
         OpenEXR.set_global_thread_count(cores)
     return OpenEXR.global_thread_count()

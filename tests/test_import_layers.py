@@ -37,6 +37,7 @@ FLOORS: list[tuple[str, tuple[str, ...]]] = [
             "fogref.llvm",
             "fogref.cluster",
             "fogref.cache_dir",
+            "fogref.cores",
             "fogref.shipped_scenes",
         ),
     ),

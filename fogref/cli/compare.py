@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fogref.atomic import check_output_file
-from fogref.cli.checks import Check, Choice, Number, PathArg
+from fogref.cli.checks import Check, Choice, Integer, Number, PathArg
 from fogref.cli.compare_batch import ImageList, run_batch
 from fogref.cli.engine import engine_model
 from fogref.cli.spec import UsageError, api_arguments, assignments, option, refuse, switch
@@ -106,6 +106,13 @@ class Options:
         api=COMPARE,
         api_name="figures",
         negates=True,
+    )
+    figure_processes: int | None = option(
+        None,
+        "worker processes that draw the figures",
+        check=Integer(1, 1024),
+        metavar="N",
+        default_text="one per core this process may use; the Python API's default is 1",
     )
     model: str | None = option(
         None,
@@ -369,7 +376,13 @@ def run(o: Options, given=frozenset()) -> int:
     if o.engine or images:
         result = check(truth, imgs, **options)
         report = compare_images(
-            truth, imgs, out, figures=not o.no_figures, check=result, engine=extra.get("engine")
+            truth,
+            imgs,
+            out,
+            figures=not o.no_figures,
+            figure_processes=o.figure_processes,
+            check=result,
+            engine=extra.get("engine"),
         )
         extra["encodings"] = report["images"]["encodings"]
         for line in extra.get("engine", {}).get("summary", ()):
@@ -380,7 +393,9 @@ def run(o: Options, given=frozenset()) -> int:
             o.model, parse_param_assignments(assignments), truth.params if o.from_scene else None
         )
         result = check(truth, model, **options, precision=o.precision, sky_distance=o.sky_distance)
-        report = compare(truth, model, out, check=result, **api_arguments(o, COMPARE))
+        report = compare(
+            truth, model, out, check=result, figure_processes=o.figure_processes, **api_arguments(o, COMPARE)
+        )
         _print_metrics(o.model, o.exr, report["metrics"]["final"]["all"])
     for w in report["warnings"]:
         print(f"fogref compare: warning: {w}", file=sys.stderr)

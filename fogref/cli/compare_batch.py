@@ -139,7 +139,14 @@ def run_batch(o, given, default_out, options: dict) -> int:
             results.append((image, name, e, {}))
             continue
         result = check(truth, imgs, **options)
-        report = compare_images(truth, imgs, out / name, figures=not o.no_figures, check=result)
+        report = compare_images(
+            truth,
+            imgs,
+            out / name,
+            figures=not o.no_figures,
+            figure_processes=o.figure_processes,
+            check=result,
+        )
         write_compare_html(out / name, truth)
         for w in report["warnings"]:
             print(f"fogref compare: warning: {image}: {w}", file=sys.stderr)

@@ -63,7 +63,13 @@ from fogref.compare.binning import angle_edges, binned_errors, log_distance_edge
 from fogref.compare.error_maps import error_maps
 from fogref.compare.paths import refuse_output_over_input
 from fogref.compare.perceptual import FLIP_PPD
-from fogref.compare.plots import plot_binned_errors, plot_error_heatmaps, plot_side_by_side
+from fogref.compare.plots import (
+    draw_figures,
+    heatmap_maps,
+    plot_binned_errors,
+    plot_error_heatmaps,
+    plot_side_by_side,
+)
 from fogref.compare.report_page import ERRORS_EXR_LAYOUT, check_table_markdown, index_markdown, warnings_of
 from fogref.compare.report_parts import (
     ALL_PARTS,
@@ -149,6 +155,7 @@ def compare(
     distance_bins: int = 24,
     angle_step_deg: float = 5.0,
     figures: bool = True,
+    figure_processes: int | None = 1,
     check=None,
 ) -> dict:
     """Compare ``model`` with a ground truth; write a report to ``out_dir``.
@@ -176,6 +183,11 @@ def compare(
     figures : bool
         False writes only ``metrics.json``, ``errors.exr`` and ``index.md`` (no PNGs:
         for CI, where matplotlib dominates the run time).
+    figure_processes : int >= 1 or None
+        Worker processes that draw the figures side by side (None: one per core this process may
+        use; 1: this process draws them).  Above 1 the workers fork from Python's fork server,
+        which imports the main module as :mod:`multiprocessing` does: a script calling this needs
+        its ``if __name__ == "__main__":`` guard.  ``fogref compare`` draws them on every core.
     check : CheckResult, optional
         The verdict of :func:`fogref.compare.check.check` on the same truth and model (and
         precision, sky distance): the model's images are taken from it (the model is evaluated
@@ -200,6 +212,7 @@ def compare(
         distance_bins=distance_bins,
         angle_step_deg=angle_step_deg,
         figures=figures,
+        figure_processes=figure_processes,
         check=check,
     )
 
@@ -284,7 +297,8 @@ def compare_images(
     :class:`~fogref.compare.check.CheckResult` of the same images; ``engine``: the record of a
     real engine that rendered them (``fogref.engines.render.EngineRender.record`` with its
     ``summary`` lines), shown in ``index.md`` and kept in ``metrics.json``; ``options``:
-    ``relmse_eps``, ``flip_ppd``, ``distance_bins``, ``angle_step_deg`` as :func:`compare`.
+    ``relmse_eps``, ``flip_ppd``, ``distance_bins``, ``angle_step_deg``, ``figure_processes`` as
+    :func:`compare`.
     Returns what ``metrics.json`` holds.
     """
     inputs = [("truth", _path_of(truth))] + [(k, v) for k, v in getattr(images, "sources", {}).items()]
@@ -332,6 +346,7 @@ def write_report(
     distance_bins: int = 24,
     angle_step_deg: float = 5.0,
     figures: bool = True,
+    figure_processes: int | None = 1,
     check=None,
 ) -> dict:
     """Metrics, maps, figures and pages of ``parts`` (from :func:`evaluate_parts` or :func:`image_parts`).
@@ -340,8 +355,13 @@ def write_report(
     ``model``/``precision``/``sky_distance_m`` or ``images``); ``composited``: part -> True for the
     parts composited over the truth's surface (their excluded pixels are warned about).  Writes
     ``metrics.json``, ``errors.exr``, ``index.md``, the figures unless ``figures`` is False, and with
-    ``check`` (a CheckResult) ``check.json``.  Returns what ``metrics.json`` holds.
+    ``check`` (a CheckResult) ``check.json``; ``figure_processes`` as :func:`compare`.  Returns what
+    ``metrics.json`` holds.
     """
+    if not (figure_processes is None or (isinstance(figure_processes, int) and figure_processes >= 1)):
+        raise FogrefError(
+            f"figure_processes: {figure_processes!r} must be an integer >= 1, or None (every core)"
+        )
     out = Path(out_dir)
     names = list(parts)
     out.mkdir(parents=True, exist_ok=True)
@@ -428,7 +448,8 @@ def write_report(
     )
     _remove_stale_figures(out)
     if figures:
-        _write_figures(out, parts, errors, exposures, by_distance, by_sun, angle_step_deg)
+        jobs = _figure_jobs(out, parts, errors, exposures, by_distance, by_sun, angle_step_deg)
+        draw_figures(jobs, figure_processes)
     if check is not None:
         write_text_atomic(out / "check.json", json.dumps(report["check"], indent=2, allow_nan=False) + "\n")
     write_text_atomic(out / "metrics.json", json.dumps(report, indent=2, allow_nan=False) + "\n")
@@ -462,35 +483,28 @@ def _remove_stale_figures(out: Path) -> None:
         png.unlink(missing_ok=True)
 
 
-def _write_figures(out: Path, parts, errors, exposures, by_distance, by_sun, angle_step_deg) -> None:
+def _figure_jobs(out: Path, parts, errors, exposures, by_distance, by_sun, angle_step_deg) -> list:
+    """The report's figures as :func:`~fogref.compare.plots.draw_figures`' jobs."""
+    jobs: list = []
     for part in parts:
         e = errors[part]
         ref = parts[part]["reference"]
-        plot_side_by_side(
-            ref,
-            ref + e.signed,
-            exposures[part],
-            part,
-            PART_UNITS[part],
-            out / "side_by_side" / f"{part}.png",
-            valid=e.valid,
-        )
-        plot_error_heatmaps(e, part, PART_UNITS[part], out / "heatmaps" / f"{part}.png")
+        side = (ref, ref + e.signed, exposures[part], part, PART_UNITS[part])
+        jobs.append((plot_side_by_side, (*side, out / "side_by_side" / f"{part}.png", e.valid)))
+        heatmap = (heatmap_maps(e), part, PART_UNITS[part], out / "heatmaps" / f"{part}.png")
+        jobs.append((plot_error_heatmaps, heatmap))
     units = {p: PART_UNITS[p] for p in parts}
-    plot_binned_errors(
-        by_distance,
-        units,
+    distance_axis = (
         "distance to the surface [m] (log scale)",
         "error vs distance (surface pixels, log-spaced bins)",
-        out / "error_vs_distance.png",
-        True,
+    )
+    jobs.append(
+        (plot_binned_errors, (by_distance, units, *distance_axis, out / "error_vs_distance.png", True))
     )
     if by_sun is not None:
-        plot_binned_errors(
-            by_sun,
-            units,
+        sun_axis = (
             "angle between view ray and sun [degrees]",
             f"error vs angle to the sun ({angle_step_deg:g}° bins, all pixels)",
-            out / "error_vs_sun_angle.png",
-            False,
         )
+        jobs.append((plot_binned_errors, (by_sun, units, *sun_axis, out / "error_vs_sun_angle.png", False)))
+    return jobs
