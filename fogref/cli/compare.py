@@ -25,6 +25,7 @@ from fogref.compare import gate
 from fogref.compare.check import check
 from fogref.compare.foreign import ENCODINGS, load_engine_images
 from fogref.compare.gate import parse_distance_bands, parse_tolerances
+from fogref.compare.plots import start_figure_workers
 from fogref.compare.report import compare, compare_images, refuse_output_over_input, report_paths
 from fogref.engines import ENGINES
 from fogref.engines.render import render_and_write
@@ -366,6 +367,8 @@ def run(o: Options, given=frozenset()) -> int:
         return run_batch(o, given, default_out_dir(o.exr, "batch"), api_arguments(o, CHECK))
     options = api_arguments(o, CHECK)
     _refuse_outputs_over_inputs(o)
+    if not o.no_figures:
+        start_figure_workers(o.figure_processes)  # they import matplotlib while the truth is checked
     truth = load_truth(o.exr)
     extra = {}
     if o.engine:

@@ -69,6 +69,7 @@ from fogref.compare.plots import (
     plot_binned_errors,
     plot_error_heatmaps,
     plot_side_by_side,
+    start_figure_workers,
 )
 from fogref.compare.report_page import ERRORS_EXR_LAYOUT, check_table_markdown, index_markdown, warnings_of
 from fogref.compare.report_parts import (
@@ -362,6 +363,8 @@ def write_report(
         raise FogrefError(
             f"figure_processes: {figure_processes!r} must be an integer >= 1, or None (every core)"
         )
+    if figures:
+        start_figure_workers(figure_processes)  # they import matplotlib meanwhile, on another core
     out = Path(out_dir)
     names = list(parts)
     out.mkdir(parents=True, exist_ok=True)
