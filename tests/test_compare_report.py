@@ -11,6 +11,7 @@ and they are excluded from the composited parts.
 import json
 import os
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import pytest
@@ -18,8 +19,8 @@ from truth_factory import truth_attrs, truth_channels
 
 from fogref.cli import parse as parse_command_line
 from fogref.compare import compare
-from fogref.compare.plots import draw_figures
 from fogref.compare.report import PARTS, REGIONS
+from fogref.compare.workers import run_jobs
 from fogref.errors import FogrefError
 from fogref.exrio import read_exr, write_exr
 from fogref.gbuffer import load_truth
@@ -399,29 +400,32 @@ def test_add_cli_registers_subcommand():
     assert args.precision == "float32" and args.out is None and callable(module.run)
 
 
-def test_figures_drawn_by_worker_processes_are_the_same_bytes(exr_path, perturbed_report, tmp_path):
-    # detects: a figure that depends on where it is drawn (a worker's own matplotlib settings, a
-    # heatmap sent without a map it draws) or a figure the workers leave out; and a bad count refused
-    out, _ = perturbed_report  # drawn in this process (figure_processes=1, the API's default)
+def test_worker_processes_give_the_same_report(exr_path, perturbed_report, tmp_path):
+    # detects: an error map or a figure that depends on where it is computed or drawn (a worker's
+    # own random state or matplotlib settings, a heatmap sent without a map it draws), a figure
+    # the workers leave out, a part's maps attached to another part; and a bad count refused
+    out, report = perturbed_report  # in this process (processes=1, the API's default)
     model = BeerLambertFog(sigma=SIGMA * 1.3, ambient=AMBIENT * 0.9)
-    compare(exr_path, model, tmp_path / "pool", precision="float32", figure_processes=2)
+    pooled = compare(exr_path, model, tmp_path / "pool", precision="float32", processes=2)
+    assert json.dumps(pooled["metrics"]) == json.dumps(report["metrics"])
+    assert (tmp_path / "pool" / "errors.exr").read_bytes() == (out / "errors.exr").read_bytes()
     for f in (f for f in EXPECTED_FILES if f.endswith(".png")):
         assert (tmp_path / "pool" / f).read_bytes() == (out / f).read_bytes(), f
-    for bad in (0, 2.0, "2"):
-        with pytest.raises(FogrefError, match="figure_processes"):
-            compare(exr_path, model, tmp_path / "bad", figure_processes=bad)
+    for bad in (0, 2.0, "2", True):
+        with pytest.raises(FogrefError, match="processes"):
+            compare(exr_path, model, tmp_path / "bad", processes=bad)
 
 
 def _die_in_a_worker(path, parent: int):
-    """A plot job that kills the worker process drawing it (and draws in ``parent``)."""
+    """A job that kills the worker process running it (and writes ``path`` in ``parent``)."""
     if os.getpid() != parent:
         os._exit(3)
-    path.write_text("drawn here")
+    path.write_text("written here")
     return path
 
 
-def test_jobs_of_a_dead_worker_are_drawn_here(tmp_path):
+def test_jobs_of_a_dead_worker_run_here(tmp_path):
     # detects: a report that loses its figures, or hangs, when a worker dies (out of memory, killed)
-    jobs = [(_die_in_a_worker, (tmp_path / f"{i}.txt", os.getpid())) for i in range(3)]
-    assert draw_figures(jobs, processes=2) == [tmp_path / f"{i}.txt" for i in range(3)]
-    assert all((tmp_path / f"{i}.txt").read_text() == "drawn here" for i in range(3))
+    jobs = [partial(_die_in_a_worker, tmp_path / f"{i}.txt", os.getpid()) for i in range(3)]
+    assert run_jobs(jobs, processes=2) == [tmp_path / f"{i}.txt" for i in range(3)]
+    assert all((tmp_path / f"{i}.txt").read_text() == "written here" for i in range(3))

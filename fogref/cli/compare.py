@@ -25,8 +25,8 @@ from fogref.compare import gate
 from fogref.compare.check import check
 from fogref.compare.foreign import ENCODINGS, load_engine_images
 from fogref.compare.gate import parse_distance_bands, parse_tolerances
-from fogref.compare.plots import start_figure_workers
 from fogref.compare.report import compare, compare_images, refuse_output_over_input, report_paths
+from fogref.compare.workers import start_workers
 from fogref.engines import ENGINES
 from fogref.engines.render import render_and_write
 from fogref.engines.view import view_from_truth
@@ -108,9 +108,9 @@ class Options:
         api_name="figures",
         negates=True,
     )
-    figure_processes: int | None = option(
+    processes: int | None = option(
         None,
-        "worker processes that draw the figures",
+        "worker processes that compute the parts' error maps and draw the figures",
         check=Integer(1, 1024),
         metavar="N",
         default_text="one per core this process may use; the Python API's default is 1",
@@ -367,8 +367,7 @@ def run(o: Options, given=frozenset()) -> int:
         return run_batch(o, given, default_out_dir(o.exr, "batch"), api_arguments(o, CHECK))
     options = api_arguments(o, CHECK)
     _refuse_outputs_over_inputs(o)
-    if not o.no_figures:
-        start_figure_workers(o.figure_processes)  # they import matplotlib while the truth is checked
+    start_workers(o.processes)  # they import matplotlib while the truth is read and checked
     truth = load_truth(o.exr)
     extra = {}
     if o.engine:
@@ -383,7 +382,7 @@ def run(o: Options, given=frozenset()) -> int:
             imgs,
             out,
             figures=not o.no_figures,
-            figure_processes=o.figure_processes,
+            processes=o.processes,
             check=result,
             engine=extra.get("engine"),
         )
@@ -396,9 +395,7 @@ def run(o: Options, given=frozenset()) -> int:
             o.model, parse_param_assignments(assignments), truth.params if o.from_scene else None
         )
         result = check(truth, model, **options, precision=o.precision, sky_distance=o.sky_distance)
-        report = compare(
-            truth, model, out, check=result, figure_processes=o.figure_processes, **api_arguments(o, COMPARE)
-        )
+        report = compare(truth, model, out, check=result, processes=o.processes, **api_arguments(o, COMPARE))
         _print_metrics(o.model, o.exr, report["metrics"]["final"]["all"])
     for w in report["warnings"]:
         print(f"fogref compare: warning: {w}", file=sys.stderr)

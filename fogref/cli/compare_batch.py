@@ -144,7 +144,7 @@ def run_batch(o, given, default_out, options: dict) -> int:
             imgs,
             out / name,
             figures=not o.no_figures,
-            figure_processes=o.figure_processes,
+            processes=o.processes,
             check=result,
         )
         write_compare_html(out / name, truth)

@@ -3,85 +3,21 @@
 Uses matplotlib's object API with the Agg canvas (no pyplot, no global backend
 change, no display needed).  Every figure is written atomically.
 Image row 0 is the top of the picture, as in the EXR.
-
 Drawing a figure is matplotlib laying it out in Python, on one core: about 0.5 s for a heatmap
-figure, whatever the image size.  :func:`draw_figures` can draw a report's figures side by side in
-worker processes, one per core.
+figure, whatever the image size (:mod:`fogref.compare.workers` draws a report's figures side by
+side).
 """
 
 from __future__ import annotations
 
-import multiprocessing
-from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
-from concurrent.futures.process import BrokenProcessPool
 from dataclasses import replace
-from multiprocessing import forkserver
 from pathlib import Path
 
 import numpy as np
 
 from fogref.atomic import save_figure_atomic
 from fogref.compare.error_maps import ErrorMaps
-from fogref.cores import usable_cores
 from fogref.display import tone_map
-
-#: What Python's fork server imports before it forks a figure worker.
-FIGURE_WORKER_IMPORTS = (__name__, "matplotlib.figure", "matplotlib.backends.backend_agg")
-
-
-def start_figure_workers(processes: int | None = 1):
-    """The :mod:`multiprocessing` context in which :func:`draw_figures` starts its workers for
-    ``processes`` (None: :func:`usable_cores`), or None where it draws in this process: one
-    process, or a daemonic process (a Dask worker, which may not start children).
-
-    Where there is one, the context is Python's fork server (``spawn`` elsewhere), started here
-    if it is not running: it imports :data:`FIGURE_WORKER_IMPORTS` while the caller computes what
-    the figures show, and the workers it forks start with them imported.
-
-    >>> start_figure_workers(1) is None
-    True
-    """
-    if (
-        usable_cores() if processes is None else int(processes)
-    ) <= 1 or multiprocessing.current_process().daemon:
-        return None
-    if "forkserver" not in multiprocessing.get_all_start_methods():
-        return multiprocessing.get_context("spawn")
-    context = multiprocessing.get_context("forkserver")
-    context.set_forkserver_preload(list(FIGURE_WORKER_IMPORTS))
-    forkserver.ensure_running()
-    return context
-
-
-def draw_figures(jobs: Sequence[tuple[Callable[..., Path], tuple]], processes: int | None = 1) -> list[Path]:
-    """Run each plot job ``(function, arguments)`` (a plot function of this module that saves its
-    figure and returns its path) and return the paths, in the jobs' order.
-
-    ``processes`` (None: :func:`usable_cores`): above 1 the jobs are drawn by at most this many
-    worker processes, at most one per job, started in :func:`start_figure_workers`' context.
-    Like every :mod:`multiprocessing` child, a worker imports the main module first: a script
-    that calls this needs its ``if __name__ == "__main__":`` guard.  Where that context is None,
-    or a worker dies, the jobs left are drawn in this process.  A figure's bytes do not depend on
-    where it was drawn.
-
-    >>> draw_figures([])
-    []
-    """
-    jobs = list(jobs)
-    n = min(len(jobs), usable_cores() if processes is None else int(processes))
-    context = start_figure_workers(processes) if n > 1 else None
-    if context is None:
-        return [function(*args) for function, args in jobs]
-    done: dict[int, Path] = {}
-    try:
-        with ProcessPoolExecutor(n, mp_context=context) as pool:
-            futures = [pool.submit(function, *args) for function, args in jobs]
-            for i, future in enumerate(futures):
-                done[i] = future.result()
-    except BrokenProcessPool:  # a worker was killed (e.g. out of memory): draw what is left here
-        pass
-    return [done[i] if i in done else jobs[i][0](*jobs[i][1]) for i in range(len(jobs))]
 
 
 def heatmap_maps(errors: ErrorMaps) -> ErrorMaps:

@@ -53,6 +53,7 @@ from __future__ import annotations
 
 import json
 import os
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -63,14 +64,7 @@ from fogref.compare.binning import angle_edges, binned_errors, log_distance_edge
 from fogref.compare.error_maps import error_maps
 from fogref.compare.paths import refuse_output_over_input
 from fogref.compare.perceptual import FLIP_PPD
-from fogref.compare.plots import (
-    draw_figures,
-    heatmap_maps,
-    plot_binned_errors,
-    plot_error_heatmaps,
-    plot_side_by_side,
-    start_figure_workers,
-)
+from fogref.compare.plots import heatmap_maps, plot_binned_errors, plot_error_heatmaps, plot_side_by_side
 from fogref.compare.report_page import ERRORS_EXR_LAYOUT, check_table_markdown, index_markdown, warnings_of
 from fogref.compare.report_parts import (
     ALL_PARTS,
@@ -86,6 +80,7 @@ from fogref.compare.report_parts import (
     parts_from_check,
     truth_provenance,
 )
+from fogref.compare.workers import check_processes, run_jobs, start_workers
 from fogref.display import part_exposures
 from fogref.errors import FogrefError
 from fogref.exrio import write_exr
@@ -156,7 +151,7 @@ def compare(
     distance_bins: int = 24,
     angle_step_deg: float = 5.0,
     figures: bool = True,
-    figure_processes: int | None = 1,
+    processes: int | None = 1,
     check=None,
 ) -> dict:
     """Compare ``model`` with a ground truth; write a report to ``out_dir``.
@@ -184,11 +179,12 @@ def compare(
     figures : bool
         False writes only ``metrics.json``, ``errors.exr`` and ``index.md`` (no PNGs:
         for CI, where matplotlib dominates the run time).
-    figure_processes : int >= 1 or None
-        Worker processes that draw the figures side by side (None: one per core this process may
-        use; 1: this process draws them).  Above 1 the workers fork from Python's fork server,
-        which imports the main module as :mod:`multiprocessing` does: a script calling this needs
-        its ``if __name__ == "__main__":`` guard.  ``fogref compare`` draws them on every core.
+    processes : int >= 1 or None
+        Worker processes that compute the parts' error maps and draw the figures side by side
+        (:mod:`fogref.compare.workers`; None: one per core this process may use; 1: this process
+        does it all).  Above 1 the workers import the main module, as :mod:`multiprocessing`'s do:
+        a script calling this needs its ``if __name__ == "__main__":`` guard.  ``fogref compare``
+        uses every core.
     check : CheckResult, optional
         The verdict of :func:`fogref.compare.check.check` on the same truth and model (and
         precision, sky distance): the model's images are taken from it (the model is evaluated
@@ -213,7 +209,7 @@ def compare(
         distance_bins=distance_bins,
         angle_step_deg=angle_step_deg,
         figures=figures,
-        figure_processes=figure_processes,
+        processes=processes,
         check=check,
     )
 
@@ -266,10 +262,14 @@ def compare_metrics(
     return json_safe({**header, "metrics": _metrics_table(truth, errors)})
 
 
-def _part_errors(truth: Truth, parts: dict, relmse_eps: float, flip_ppd: float) -> dict:
-    """The :class:`~fogref.compare.error_maps.ErrorMaps` of every part."""
-    return {
-        part: error_maps(
+def _part_errors(
+    truth: Truth, parts: dict, relmse_eps: float, flip_ppd: float, processes: int | None = 1
+) -> dict:
+    """The :class:`~fogref.compare.error_maps.ErrorMaps` of every part, computed by ``processes``
+    (:func:`~fogref.compare.workers.run_jobs`)."""
+    jobs = [
+        partial(
+            error_maps,
             p["reference"],
             p["model"],
             white=1.0 if PART_UNITS[part] == "1" else None,
@@ -280,7 +280,8 @@ def _part_errors(truth: Truth, parts: dict, relmse_eps: float, flip_ppd: float) 
             spp=truth.spp,
         )
         for part, p in parts.items()
-    }
+    ]
+    return dict(zip(parts, run_jobs(jobs, processes)))
 
 
 def _metrics_table(truth: Truth, errors: dict) -> dict:
@@ -298,7 +299,7 @@ def compare_images(
     :class:`~fogref.compare.check.CheckResult` of the same images; ``engine``: the record of a
     real engine that rendered them (``fogref.engines.render.EngineRender.record`` with its
     ``summary`` lines), shown in ``index.md`` and kept in ``metrics.json``; ``options``:
-    ``relmse_eps``, ``flip_ppd``, ``distance_bins``, ``angle_step_deg``, ``figure_processes`` as
+    ``relmse_eps``, ``flip_ppd``, ``distance_bins``, ``angle_step_deg``, ``processes`` as
     :func:`compare`.
     Returns what ``metrics.json`` holds.
     """
@@ -347,7 +348,7 @@ def write_report(
     distance_bins: int = 24,
     angle_step_deg: float = 5.0,
     figures: bool = True,
-    figure_processes: int | None = 1,
+    processes: int | None = 1,
     check=None,
 ) -> dict:
     """Metrics, maps, figures and pages of ``parts`` (from :func:`evaluate_parts` or :func:`image_parts`).
@@ -356,20 +357,15 @@ def write_report(
     ``model``/``precision``/``sky_distance_m`` or ``images``); ``composited``: part -> True for the
     parts composited over the truth's surface (their excluded pixels are warned about).  Writes
     ``metrics.json``, ``errors.exr``, ``index.md``, the figures unless ``figures`` is False, and with
-    ``check`` (a CheckResult) ``check.json``; ``figure_processes`` as :func:`compare`.  Returns what
+    ``check`` (a CheckResult) ``check.json``; ``processes`` as :func:`compare`.  Returns what
     ``metrics.json`` holds.
     """
-    if not (figure_processes is None or (isinstance(figure_processes, int) and figure_processes >= 1)):
-        raise FogrefError(
-            f"figure_processes: {figure_processes!r} must be an integer >= 1, or None (every core)"
-        )
-    if figures:
-        start_figure_workers(figure_processes)  # they import matplotlib meanwhile, on another core
+    start_workers(check_processes(processes))  # they import meanwhile, on another core
     out = Path(out_dir)
     names = list(parts)
     out.mkdir(parents=True, exist_ok=True)
 
-    errors = _part_errors(truth, parts, relmse_eps, flip_ppd)
+    errors = _part_errors(truth, parts, relmse_eps, flip_ppd, processes)
     table = _metrics_table(truth, errors)
 
     sun_angle = truth.sun_angle_deg()
@@ -451,8 +447,7 @@ def write_report(
     )
     _remove_stale_figures(out)
     if figures:
-        jobs = _figure_jobs(out, parts, errors, exposures, by_distance, by_sun, angle_step_deg)
-        draw_figures(jobs, figure_processes)
+        run_jobs(_figure_jobs(out, parts, errors, exposures, by_distance, by_sun, angle_step_deg), processes)
     if check is not None:
         write_text_atomic(out / "check.json", json.dumps(report["check"], indent=2, allow_nan=False) + "\n")
     write_text_atomic(out / "metrics.json", json.dumps(report, indent=2, allow_nan=False) + "\n")
@@ -487,27 +482,32 @@ def _remove_stale_figures(out: Path) -> None:
 
 
 def _figure_jobs(out: Path, parts, errors, exposures, by_distance, by_sun, angle_step_deg) -> list:
-    """The report's figures as :func:`~fogref.compare.plots.draw_figures`' jobs."""
+    """The report's figures as :func:`~fogref.compare.workers.run_jobs`' jobs."""
     jobs: list = []
     for part in parts:
         e = errors[part]
         ref = parts[part]["reference"]
         side = (ref, ref + e.signed, exposures[part], part, PART_UNITS[part])
-        jobs.append((plot_side_by_side, (*side, out / "side_by_side" / f"{part}.png", e.valid)))
-        heatmap = (heatmap_maps(e), part, PART_UNITS[part], out / "heatmaps" / f"{part}.png")
-        jobs.append((plot_error_heatmaps, heatmap))
+        jobs.append(partial(plot_side_by_side, *side, out / "side_by_side" / f"{part}.png", e.valid))
+        jobs.append(
+            partial(
+                plot_error_heatmaps, heatmap_maps(e), part, PART_UNITS[part], out / "heatmaps" / f"{part}.png"
+            )
+        )
     units = {p: PART_UNITS[p] for p in parts}
     distance_axis = (
         "distance to the surface [m] (log scale)",
         "error vs distance (surface pixels, log-spaced bins)",
     )
     jobs.append(
-        (plot_binned_errors, (by_distance, units, *distance_axis, out / "error_vs_distance.png", True))
+        partial(plot_binned_errors, by_distance, units, *distance_axis, out / "error_vs_distance.png", True)
     )
     if by_sun is not None:
         sun_axis = (
             "angle between view ray and sun [degrees]",
             f"error vs angle to the sun ({angle_step_deg:g}° bins, all pixels)",
         )
-        jobs.append((plot_binned_errors, (by_sun, units, *sun_axis, out / "error_vs_sun_angle.png", False)))
+        jobs.append(
+            partial(plot_binned_errors, by_sun, units, *sun_axis, out / "error_vs_sun_angle.png", False)
+        )
     return jobs
