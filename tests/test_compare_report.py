@@ -401,9 +401,9 @@ def test_add_cli_registers_subcommand():
 
 
 def test_worker_processes_give_the_same_report(exr_path, perturbed_report, tmp_path):
-    # detects: an error map or a figure that depends on where it is computed or drawn (a worker's
-    # own random state or matplotlib settings, a heatmap sent without a map it draws), a figure
-    # the workers leave out, a part's maps attached to another part; and a bad count refused
+    # detects: a figure that depends on where it is drawn (a worker's own matplotlib settings, a
+    # heatmap sent without a map it draws) or that the workers leave out, a report whose other
+    # files change with the workers; and a bad count refused
     out, report = perturbed_report  # in this process (processes=1, the API's default)
     model = BeerLambertFog(sigma=SIGMA * 1.3, ambient=AMBIENT * 0.9)
     pooled = compare(exr_path, model, tmp_path / "pool", precision="float32", processes=2)
@@ -429,3 +429,14 @@ def test_jobs_of_a_dead_worker_run_here(tmp_path):
     jobs = [partial(_die_in_a_worker, tmp_path / f"{i}.txt", os.getpid()) for i in range(3)]
     assert run_jobs(jobs, processes=2) == [tmp_path / f"{i}.txt" for i in range(3)]
     assert all((tmp_path / f"{i}.txt").read_text() == "written here" for i in range(3))
+
+
+def _refuse(path):
+    raise FogrefError(f"{path}: could not write: No space left on device")
+
+
+def test_a_jobs_error_in_a_worker_is_raised_here(tmp_path):
+    # detects: an error of a worker's job (a full disk under a figure) lost, or turned into another
+    jobs = [partial(_refuse, tmp_path / "a.png"), partial(_refuse, tmp_path / "b.png")]
+    with pytest.raises(FogrefError, match="a.png: could not write: No space left"):
+        run_jobs(jobs, processes=2)

@@ -110,7 +110,7 @@ class Options:
     )
     processes: int | None = option(
         None,
-        "worker processes that compute the parts' error maps and draw the figures",
+        "worker processes that draw the report's figures",
         check=Integer(1, 1024),
         metavar="N",
         default_text="one per core this process may use; the Python API's default is 1",
@@ -367,7 +367,8 @@ def run(o: Options, given=frozenset()) -> int:
         return run_batch(o, given, default_out_dir(o.exr, "batch"), api_arguments(o, CHECK))
     options = api_arguments(o, CHECK)
     _refuse_outputs_over_inputs(o)
-    start_workers(o.processes)  # they import matplotlib while the truth is read and checked
+    if not o.no_figures:
+        start_workers(o.processes)  # they import matplotlib while the truth is read and checked
     truth = load_truth(o.exr)
     extra = {}
     if o.engine:

@@ -180,11 +180,10 @@ def compare(
         False writes only ``metrics.json``, ``errors.exr`` and ``index.md`` (no PNGs:
         for CI, where matplotlib dominates the run time).
     processes : int >= 1 or None
-        Worker processes that compute the parts' error maps and draw the figures side by side
-        (:mod:`fogref.compare.workers`; None: one per core this process may use; 1: this process
-        does it all).  Above 1 the workers import the main module, as :mod:`multiprocessing`'s do:
-        a script calling this needs its ``if __name__ == "__main__":`` guard.  ``fogref compare``
-        uses every core.
+        Worker processes that draw the figures side by side (:mod:`fogref.compare.workers`; None:
+        one per core this process may use; 1: this process draws them).  Above 1 the workers
+        import the main module, as :mod:`multiprocessing`'s do: a script calling this needs its
+        ``if __name__ == "__main__":`` guard.  ``fogref compare`` uses every core.
     check : CheckResult, optional
         The verdict of :func:`fogref.compare.check.check` on the same truth and model (and
         precision, sky distance): the model's images are taken from it (the model is evaluated
@@ -262,14 +261,13 @@ def compare_metrics(
     return json_safe({**header, "metrics": _metrics_table(truth, errors)})
 
 
-def _part_errors(
-    truth: Truth, parts: dict, relmse_eps: float, flip_ppd: float, processes: int | None = 1
-) -> dict:
-    """The :class:`~fogref.compare.error_maps.ErrorMaps` of every part, computed by ``processes``
-    (:func:`~fogref.compare.workers.run_jobs`)."""
-    jobs = [
-        partial(
-            error_maps,
+def _part_errors(truth: Truth, parts: dict, relmse_eps: float, flip_ppd: float) -> dict:
+    """The :class:`~fogref.compare.error_maps.ErrorMaps` of every part.
+
+    In this process: FLIP's C++ already runs on every core at large sizes, and the worker processes
+    measured no faster here (``reports/benchmarks/compare_speed.md``)."""
+    return {
+        part: error_maps(
             p["reference"],
             p["model"],
             white=1.0 if PART_UNITS[part] == "1" else None,
@@ -280,8 +278,7 @@ def _part_errors(
             spp=truth.spp,
         )
         for part, p in parts.items()
-    ]
-    return dict(zip(parts, run_jobs(jobs, processes)))
+    }
 
 
 def _metrics_table(truth: Truth, errors: dict) -> dict:
@@ -360,12 +357,13 @@ def write_report(
     ``check`` (a CheckResult) ``check.json``; ``processes`` as :func:`compare`.  Returns what
     ``metrics.json`` holds.
     """
-    start_workers(check_processes(processes))  # they import meanwhile, on another core
+    if check_processes(processes) and figures:
+        start_workers(processes)  # they import matplotlib meanwhile, on another core
     out = Path(out_dir)
     names = list(parts)
     out.mkdir(parents=True, exist_ok=True)
 
-    errors = _part_errors(truth, parts, relmse_eps, flip_ppd, processes)
+    errors = _part_errors(truth, parts, relmse_eps, flip_ppd)
     table = _metrics_table(truth, errors)
 
     sun_angle = truth.sun_angle_deg()

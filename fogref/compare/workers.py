@@ -1,11 +1,13 @@
-"""A report's independent work on worker processes, one per core: its parts' error maps, its figures.
+"""A report's figures on worker processes, one per core.
 
-Most of a ``fogref compare`` run is work that no part or figure shares with another: each part's
-FLIP and ΔE2000 maps (C++ and numpy that keep Python's lock, so threads would not help) and each
-figure's layout (matplotlib, in Python).  :func:`run_jobs` runs such jobs side by side in worker
-processes forked from Python's fork server, which :func:`start_workers` starts early with
-:data:`WORKER_IMPORTS` imported, so that the imports take another core while the caller reads the
-truth.  A job's result is the same wherever it runs (``tests/test_compare_report.py``).
+A ``fogref compare`` report's ten figures are independent, and each is matplotlib laying it out in
+Python, on one core (threads would not help): about 0.5 s for a heatmap figure at any image size.
+:func:`run_jobs` runs such jobs side by side in worker processes forked from Python's fork
+server, which :func:`start_workers` starts early with :data:`WORKER_IMPORTS` imported, so that
+the imports take another core while the caller reads the truth and computes the error maps.  A
+job's result is the same wherever it runs (``tests/test_compare_report.py``).  The error maps
+stay in the caller's process: FLIP's C++ already runs on every core at large sizes, and workers
+measured no faster for them (``reports/benchmarks/compare_speed.md``).
 
 Like every :mod:`multiprocessing` child, a worker imports the main module first: a script that asks
 for more than one process needs its ``if __name__ == "__main__":`` guard.  The Python API's default
@@ -28,16 +30,8 @@ __all__ = ["WORKER_IMPORTS", "check_processes", "run_jobs", "start_workers"]
 
 T = TypeVar("T")
 
-#: What Python's fork server imports before it forks a worker: what the error maps (colour-science
-#: for ΔE2000, about 1 s; FLIP) and the figures (matplotlib) need.
-WORKER_IMPORTS = (
-    "fogref.compare.error_maps",
-    "fogref.compare.plots",
-    "colour",
-    "flip_evaluator",
-    "matplotlib.figure",
-    "matplotlib.backends.backend_agg",
-)
+#: What Python's fork server imports before it forks a worker: what the figures need.
+WORKER_IMPORTS = ("fogref.compare.plots", "matplotlib.figure", "matplotlib.backends.backend_agg")
 
 
 def check_processes(processes) -> int | None:
