@@ -8,9 +8,9 @@ process, one machine; rounds alternate the modes:
 
 * ``before``: the checkout ``--base`` (a git worktree), run with this ``.venv`` and its own
   ``fogref`` package first on ``PYTHONPATH`` (the dependencies are the same);
-* ``after``: this checkout as the command runs it (the parts' error maps and the figures on
-  worker processes, one per core);
-* ``after, 1 process``: this checkout with ``--processes 1`` (everything in the command's
+* ``after``: this checkout as the command runs it (the figures drawn on worker processes, one
+  per core);
+* ``after, 1 process``: this checkout with ``--processes 1`` (the figures in the command's
   process, as before).
 
 Per size: each mode's median wall time, and the per-round ratios ``before / mode`` as their median
@@ -243,9 +243,9 @@ def report(r: dict) -> str:
         f"alternating the modes (half as many at 960x540); {r['cores']} cores, load average (1 min) "
         + ", ".join(f"{x:.1f}" for x in r["load_average"])
         + f" (start, after each size, end).  `before`: {r['base']}; `after`: {r['after']}, the "
-        "parts' error maps and the figures on worker processes, one per core (the command's "
-        "default); `after, 1 process`: the same with `--processes 1`.  Ratio: `before` / the "
-        "mode's time, per round; median [smallest, largest].",
+        "figures drawn on worker processes, one per core (the command's default); `after, 1 "
+        "process`: the same with `--processes 1`.  Ratio: `before` / the mode's time, per round; "
+        "median [smallest, largest].",
         "",
         "| size | mode | wall [s], median | each round [s] | before / mode | report folder [MB] |",
         "|---|---|---:|---|---|---:|",
