@@ -42,6 +42,7 @@ import zlib
 from pathlib import Path
 
 import numpy as np
+from _checkouts import commit_of
 from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -55,18 +56,6 @@ def _env(checkout: Path) -> dict:
     env = {**os.environ, "PYTHONPATH": str(checkout)}
     env.pop("FOGREF_VARIANT", None)
     return env
-
-
-def _commit(checkout: Path) -> str:
-    out = subprocess.run(
-        ["git", "-C", str(checkout), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
-    )
-    dirty = subprocess.run(
-        ["git", "-C", str(checkout), "status", "--porcelain", "--untracked-files=no"],
-        capture_output=True,
-        text=True,
-    ).stdout.strip()
-    return out.stdout.strip() + (" (with uncommitted changes)" if dirty else "")
 
 
 def _compare(checkout: Path, truth: Path, out: Path, extra: list[str]) -> float:
@@ -155,8 +144,8 @@ def main() -> None:
     work = Path(tempfile.mkdtemp(prefix="compare-speed-"))
     load = [os.getloadavg()[0]]
     result: dict = {
-        "base": _commit(base),
-        "after": _commit(ROOT),
+        "base": commit_of(base),
+        "after": commit_of(ROOT),
         "cores": len(os.sched_getaffinity(0)),
         "rounds": a.rounds,
         "sizes": {},

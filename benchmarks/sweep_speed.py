@@ -45,6 +45,8 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
+from _checkouts import commit_of
+
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = Path("reports") / "sweeps" / "unreal_sun_falloff_g" / "SWEEP.toml"
 #: Columns of results.csv that hold timings or the run's own paths (module doc).
@@ -391,18 +393,6 @@ def report(res: dict) -> str:
     return "\n".join(L) + "\n"
 
 
-def _commit(tree: Path) -> str:
-    r = subprocess.run(
-        ["git", "-C", str(tree), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
-    )
-    dirty = subprocess.run(
-        ["git", "-C", str(tree), "status", "--porcelain", "--untracked-files=no"],
-        capture_output=True,
-        text=True,
-    )
-    return r.stdout.strip() + (" (with uncommitted changes)" if dirty.stdout.strip() else "")
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument(
@@ -431,7 +421,7 @@ def main(argv=None) -> int:
         + " ".join(argv if argv is not None else sys.argv[1:]),
         "machine": f"{platform.machine()}, {os.cpu_count()} cores",
         "trees": {w: str(t) for w, t in trees.items()},
-        "commits": {w: _commit(t) for w, t in trees.items()},
+        "commits": {w: commit_of(t) for w, t in trees.items()},
         "command": [],
     }
     with tempfile.TemporaryDirectory(prefix="fogref-sweep-speed-") as tmp:
