@@ -418,15 +418,3 @@ def test_compare_evaluates_the_model_once(user_module, truth_exr, tmp_path):
     # a different precision is a different evaluation
     compare(truth, model, tmp_path / "r3", precision="float64", figures=False, check=result)
     assert h9_user_fog.Counting.calls == 2
-
-
-# ---------------------------------------------------------------- 8. report.py split
-
-
-def test_report_modules_under_500_lines():
-    from pathlib import Path
-
-    import fogref.compare
-
-    for f in Path(fogref.compare.__file__).parent.glob("*.py"):
-        assert len(f.read_text().splitlines()) <= 500, f
