@@ -187,8 +187,8 @@ def write_text_atomic(path, text: str) -> Path:
 FIGURE_DPI = 110
 
 
-#: zlib level of fogref's PNG figures (0-9; Pillow's default is 6).  At 3 a compare report's figures
-#: encode about twice as fast as at 6, for files 4-10 % larger (``benchmarks/compare_speed.py``).
+#: zlib level of fogref's PNG figures (0-9; Pillow's default is 6).  At 3 a 320x180 compare report's
+#: ten figures encode 1.8x as fast as at 6, for 6.5 % more bytes (``reports/benchmarks/compare_speed.md``).
 FIGURE_PNG_COMPRESSION = 3
 
 

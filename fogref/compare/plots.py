@@ -21,11 +21,10 @@ from fogref.display import tone_map
 
 
 def heatmap_maps(errors: ErrorMaps) -> ErrorMaps:
-    """``errors`` with only the maps :func:`plot_error_heatmaps` draws (the noise model's
-    ``(H, W, 3, 3)`` covariance and the noise floors' maps dropped: less to send to a worker)."""
-    return replace(
-        errors, noise_cov=None, sigma=None, relative_weight=None, delta_e2000_noise=None, flip_noise=None
-    )
+    """``errors`` without what :func:`plot_error_heatmaps` does not draw: the noise model's
+    ``(H, W, 3, 3)`` covariance, the relMSE weights and the noise floors' maps (less to send to a
+    worker)."""
+    return replace(errors, noise_cov=None, relative_weight=None, delta_e2000_noise=None, flip_noise=None)
 
 
 def _figure(width_in: float, height_in: float):

@@ -357,7 +357,8 @@ def write_report(
     ``check`` (a CheckResult) ``check.json``; ``processes`` as :func:`compare`.  Returns what
     ``metrics.json`` holds.
     """
-    if check_processes(processes) and figures:
+    check_processes(processes)
+    if figures:
         start_workers(processes)  # they import matplotlib meanwhile, on another core
     out = Path(out_dir)
     names = list(parts)

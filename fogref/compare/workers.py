@@ -85,7 +85,7 @@ def run_jobs(jobs: Sequence[Callable[[], T]], processes: int | None = 1) -> list
     """
     jobs = list(jobs)
     n = min(len(jobs), usable_cores() if processes is None else int(processes))
-    context = start_workers(processes) if n > 1 else None
+    context = start_workers(n) if n > 1 else None
     if context is None:
         return [job() for job in jobs]
     done: dict[int, T] = {}

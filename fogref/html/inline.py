@@ -47,7 +47,7 @@ from fogref.display import TRUTH_PARTS, part_exposures, tone_map
 HALF_MAX = 65504.0
 ENCODING = "f16-shuffle-deflate"
 #: zlib level of the embedded arrays (0-9).  On a 320x180 truth's 14 RGB images, level 1 deflates
-#: 8.5x faster than 9 (89 against 765 ms) into 5.7 % more bytes (``benchmarks/compare_speed.py``).
+#: 7.6x faster than 9 (96 against 729 ms) into 4.9 % more bytes (``reports/benchmarks/compare_speed.md``).
 DEFLATE_LEVEL = 1
 
 
