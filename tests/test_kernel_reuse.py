@@ -18,8 +18,16 @@ on purpose and are not tested here.
 Each case renders its base scene once before it records hashes: the first render of a
 process can launch a kernel of another hash (one-time set-up outside the path-tracing
 kernels, seen now and then when the case runs first), which is not what is tested.
+
+The path-tracing kernel calls the scene's emitters and shapes through Dr.Jit's instance
+registry, and its code holds their registry IDs (the call table's offsets).  A scene loaded
+while an earlier one is still alive gets other IDs, so other kernel hashes, for the same
+values: kept alive by a reference cycle until Python's collector ran, an earlier scene made
+this test fail now and then in a long test process.  Each render therefore collects garbage
+before it loads its scene, and its scene is gone when it returns.
 """
 
+import gc
 from collections import Counter
 from pathlib import Path
 
@@ -45,9 +53,13 @@ VALLEY_CHANGES = [
 ]
 
 
-def _hashes_and_image(mi, scene):
+def _hashes_and_image(mi, load_scene):
+    """The hashes of the kernels that rendering ``load_scene()`` launched, and its image; the
+    scene is loaded once every earlier scene is collected (the registry IDs, module docstring)."""
     import drjit as dr
 
+    gc.collect()
+    scene = load_scene()
     dr.kernel_history()  # clear
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     try:
@@ -65,9 +77,9 @@ def _hashes_and_image(mi, scene):
 @pytest.mark.parametrize("change", VALLEY_CHANGES, ids=lambda c: next(iter(c)))
 def test_valley_value_reuses_kernels(mitsuba, change):
     mi = mitsuba
-    _hashes_and_image(mi, mi.load_file(VALLEY, **TINY))  # the process's first render, not compared
-    base_h, base_img = _hashes_and_image(mi, mi.load_file(VALLEY, **TINY))
-    h, img = _hashes_and_image(mi, mi.load_file(VALLEY, **TINY, **change))
+    _hashes_and_image(mi, lambda: mi.load_file(VALLEY, **TINY))  # the process's first render, not compared
+    base_h, base_img = _hashes_and_image(mi, lambda: mi.load_file(VALLEY, **TINY))
+    h, img = _hashes_and_image(mi, lambda: mi.load_file(VALLEY, **TINY, **change))
     assert not np.array_equal(img, base_img), f"{change} did not change the render"
     assert h == base_h, f"{change}: new kernels {sorted(set(h) - set(base_h))} (a value traced as a literal)"
 
@@ -102,9 +114,9 @@ def test_profile_values_reuse_kernels(mitsuba, name, before, after):
     def scene(kw):
         return mi.load_dict(base_scene(mi, integrator, heightfog(mi, **kw), res=(8, 6)))
 
-    _hashes_and_image(mi, scene(before))  # the process's first render, not compared
-    base_h, base_img = _hashes_and_image(mi, scene(before))
-    h, img = _hashes_and_image(mi, scene(after))
+    _hashes_and_image(mi, lambda: scene(before))  # the process's first render, not compared
+    base_h, base_img = _hashes_and_image(mi, lambda: scene(before))
+    h, img = _hashes_and_image(mi, lambda: scene(after))
     assert not np.array_equal(img, base_img), f"{name}: the change did not change the render"
     assert h == base_h, f"{name}: new kernels {sorted(set(h) - set(base_h))} (a value traced as a literal)"
 
@@ -120,10 +132,10 @@ def test_a_nearly_full_parameter_cache_does_not_change_the_kernels(mitsuba):
 
     mi = mitsuba
     ops = drjit_ops()
-    _hashes_and_image(mi, mi.load_file(VALLEY, **TINY))  # the process's first render, not compared
-    base_h, _ = _hashes_and_image(mi, mi.load_file(VALLEY, **TINY))
+    _hashes_and_image(mi, lambda: mi.load_file(VALLEY, **TINY))  # the process's first render, not compared
+    base_h, _ = _hashes_and_image(mi, lambda: mi.load_file(VALLEY, **TINY))
     with ops.isolated_params():  # an empty cache, filled to 10 short of the bound
         for i in range(ops.MAX_PARAMS - 10):
             ops.param(1.0 + i)  # a parameter per value, as a long sweep leaves them
-        h, _ = _hashes_and_image(mi, mi.load_file(VALLEY, **TINY, sigma_t="0.0021"))
+        h, _ = _hashes_and_image(mi, lambda: mi.load_file(VALLEY, **TINY, sigma_t="0.0021"))
     assert h == base_h, f"new kernels {sorted(set(h) - set(base_h))} after the cache filled up"
