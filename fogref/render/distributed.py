@@ -16,9 +16,9 @@ of the same instruction set: the LLVM back end compiles for the host CPU).
 * **Workers keep their compiled kernels**: a worker process loads the scene once (kept by
   the digest of its inputs, the variant, the overrides and the thread count,
   :func:`fogref.render.load.loaded_scene`) and keeps it for every later pass of that render and
-  later renders of the same scene; the seed and spp are opaque to the kernels, so every pass
-  after a worker's first reuses its compiled kernels; fogpath records a worker's second pass of
-  a size and replays it from the third on (:mod:`fogref_plugins.fogpath`).
+  later renders of the same scene, until it loads another; the seed and spp are opaque to the
+  kernels, so every pass after a worker's first reuses its compiled kernels; fogpath records a
+  worker's second pass of a size and replays it from the third on (:mod:`fogref_plugins.fogpath`).
 * **Same inputs everywhere**: a worker renders only if the digest of the scene and of every
   file it loads (:func:`fogref.scene.inputs.inputs_digest`), read on the worker, is the
   driver's; workers on other machines need the scene at the same path (a shared file system).

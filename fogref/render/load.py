@@ -11,6 +11,7 @@ Mitsuba's sensor (:func:`sensor_camera`: the truth's header).
 from __future__ import annotations
 
 import copy
+import gc
 import json
 import math
 import re
@@ -75,27 +76,32 @@ def load_scene(scene, overrides: dict | None = None):
     return mi_scene, desc
 
 
-#: Scenes loaded in this process (:func:`loaded_scene`): ``(inputs digest, variant, overrides,
-#: threads)`` -> ``(scene, description, the integrator's settings as loaded)``; the last
-#: :data:`KEEP_LOADED` only, oldest dropped first.
+#: The scene loaded in this process (:func:`loaded_scene`): ``(inputs digest, variant, overrides,
+#: threads)`` -> ``(scene, description, the integrator's settings as loaded)``; one entry at most.
 _LOADED: dict = {}
-#: How many loaded scenes a process keeps.
-KEEP_LOADED = 4
 
 
 def loaded_scene(parsed: ParsedScene, threads: int | None = None):
     """:func:`load_scene` of ``parsed``, kept for later calls in this process: the same scene
     (the same digest of every input file, :attr:`~fogref.scene.parsed.ParsedScene.digest`, so an
     edited file is loaded again), variant and overrides, and thread count, returns the scene
-    loaded before, whose integrator keeps its compiled kernels and frozen passes.
+    loaded before, whose integrator keeps its frozen passes.
 
     ``threads``: Dr.Jit's thread count to set first (None: unchanged).  Returns
     ``(scene, description)`` as :func:`load_scene` (the description a copy the caller may change).
     On every call the integrator's Python settings (``aovs``, ``max_depth``, ...; what a caller
     such as the render driver sets on it) are put back as loaded, so what one render set does not
     leak into the next.  The scene is shared: a caller that changes other values of it (its
-    ``mi.traverse`` parameters, its medium) must use :func:`load_scene` instead.  At most
-    :data:`KEEP_LOADED` scenes are kept.
+    ``mi.traverse`` parameters, its medium) must use :func:`load_scene` instead.
+
+    One scene is kept, and it is released (and garbage collected) *before* another is loaded.
+    The path-tracing kernel calls the scene's shapes, BSDFs and emitters through Dr.Jit's
+    instance registry, and its code holds their registry IDs, which are the lowest ones free
+    when the scene is loaded.  Loaded into an empty registry, every scene of one structure gets
+    the same IDs, so the kernels compiled for its first values serve every later value (a
+    sweep's configurations).  With earlier scenes still alive, each new scene got other IDs and
+    its kernels were compiled again: about 2.7 s per configuration of ``valley.xml`` on 2 cores,
+    8 configurations 7.8 times slower (``reports/sweeps/kernel_reuse.md``).
     """
     variant = set_variant()
     if threads:
@@ -104,14 +110,13 @@ def loaded_scene(parsed: ParsedScene, threads: int | None = None):
         if dr.thread_count() != int(threads):
             dr.set_thread_count(int(threads))
     key = (parsed.digest, variant, json.dumps(parsed.overrides or {}, sort_keys=True, default=str), threads)
-    hit = _LOADED.pop(key, None)
+    hit = _LOADED.get(key)
     if hit is None:
+        _LOADED.clear()
+        gc.collect()  # a scene kept alive by a reference cycle releases its registry IDs now
         scene, desc = load_scene(parsed)
         integrator = scene.integrator()
-        hit = (scene, desc, dict(vars(integrator)) if hasattr(integrator, "__dict__") else {})
-        while len(_LOADED) >= KEEP_LOADED:
-            _LOADED.pop(next(iter(_LOADED)))
-    _LOADED[key] = hit  # the most recently used last
+        hit = _LOADED[key] = (scene, desc, dict(vars(integrator)) if hasattr(integrator, "__dict__") else {})
     scene, desc, settings = hit
     for name, value in settings.items():
         if not name.startswith("_"):
@@ -120,7 +125,7 @@ def loaded_scene(parsed: ParsedScene, threads: int | None = None):
 
 
 def held_scenes() -> list:
-    """The Mitsuba scenes :func:`loaded_scene` keeps in this process, oldest first."""
+    """The Mitsuba scenes :func:`loaded_scene` keeps in this process (none or one)."""
     return [scene for scene, _, _ in _LOADED.values()]
 
 

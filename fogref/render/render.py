@@ -15,10 +15,11 @@ the back end's memory allows, and turns them into means and standard errors.
   file and, up to :data:`HOST_CHANNELS_MAX_PIXELS`, the channels' numpy arithmetic), and the
   passes are as few and as equal as :data:`fogref_plugins.passes.MAX_LANES` allows
   (``benchmarks/render_driver.py``
-  measures the driver against one ``mi.render`` call).  A process keeps the scenes it loaded
-  (:func:`fogref.render.load.loaded_scene`: same input files, variant and overrides), so a
+  measures the driver against one ``mi.render`` call).  A process keeps the scene it loaded
+  last (:func:`fogref.render.load.loaded_scene`: same input files, variant and overrides), so a
   render repeated with another seed skips loading and replays fogpath's frozen passes
-  (``benchmarks/frozen_render.py``).
+  (``benchmarks/frozen_render.py``); that scene is released before another loads, so a new
+  configuration of the scene reuses its compiled kernels (``reports/sweeps/kernel_reuse.md``).
 * **Resumable**: the running sums are checkpointed atomically next to the output
   (``<out>.partial.npz``) every ``checkpoint_seconds`` and on Ctrl-C or SIGTERM; a rerun
   resumes only from a checkpoint whose key (the digest of the scene and of every file it
