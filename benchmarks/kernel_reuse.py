@@ -204,9 +204,9 @@ def main() -> None:
         "Opaque values are not enough on their own: the path-tracing kernel calls the scene's shapes, BSDFs "
         "and emitters through Dr.Jit's instance registry, and its code holds their registry IDs, the lowest "
         "ones free when the scene is loaded.  A scene loaded while earlier ones are alive gets other IDs and "
-        "so other kernels (`loader, 4 kept`).  `loaded_scene` therefore keeps one scene and releases it, "
-        "with a garbage collection, before it loads another; every scene of one structure then gets the "
-        "same IDs and the same kernels "
+        "so other kernels (`loader, 4 kept`).  `loaded_scene` therefore keeps one scene and releases it "
+        "before it loads another (collecting it at once if a reference cycle holds it); every scene of "
+        "one structure then gets the same IDs and the same kernels "
         "(`tests/test_kernel_reuse.py::test_scenes_from_the_loader_reuse_kernels`).",
         "",
     ]

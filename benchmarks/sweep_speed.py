@@ -8,10 +8,11 @@ of main: ``git clone -q /work/main /tmp/base && bash /tmp/base/scripts/setup.sh`
 * **Command**: ``fogref sweep`` on a copy of ``reports/sweeps/unreal_sun_falloff_g/SWEEP.toml``
   (48 configurations, valley, 64x36 px, 16 spp, model ue4 with its Unreal fit), each run from an
   empty truth cache and an empty fit cache (``$FOGREF_CACHE``), the Dr.Jit kernel cache warm
-  (every checkout compiles the same kernels); runs alternate base, [base2, ...,] after, base ...; the
-  wall time of the whole process, the sweep's own "configurations in X s", the CPU time of the
-  process and its workers (user + sys, what the machine's load does not inflate) and the load
-  average before and after each run.
+  (every checkout compiles the same kernels), or empty with ``--empty-kernel-cache`` (``HOME`` a
+  fresh folder per run: a user's first sweep on a machine); runs alternate base, [base2, ...,]
+  after, base ...; the wall time of the whole process, the sweep's own "configurations in X s",
+  the CPU time of the process and its workers (user + sys, what the machine's load does not
+  inflate) and the load average before and after each run.
 * **Phases**: one process per checkout runs ``--phase-configs`` configurations (spread over the
   grid) one after the other, with no cluster, timers put on the functions of each phase
   (the render's parse, load, passes and EXR write; the truth's reads; the model's build, that is
@@ -100,14 +101,17 @@ def _sweep_copy(tree: Path, work: Path) -> Path:
     return work / "SWEEP.toml"
 
 
-def _env(work: Path) -> dict:
+def _env(work: Path, empty_kernel_cache: bool = False) -> dict:
     env = dict(os.environ, FOGREF_CACHE=str(work / "fits-cache"))
     env.pop("PYTHONPATH", None)
+    if empty_kernel_cache:  # Dr.Jit's disk cache is ~/.drjit
+        (work / "home").mkdir(parents=True, exist_ok=True)
+        env["HOME"] = str(work / "home")
     return env
 
 
 # ------------------------------------------------------------------ the command, end to end
-def run_command(tree: Path, work: Path) -> dict:
+def run_command(tree: Path, work: Path, empty_kernel_cache: bool = False) -> dict:
     """``fogref sweep`` of ``tree`` on a fresh copy of the example in ``work``."""
     shutil.rmtree(work, ignore_errors=True)
     sweep = _sweep_copy(tree, work)
@@ -117,7 +121,7 @@ def run_command(tree: Path, work: Path) -> dict:
     p = subprocess.run(
         [str(tree / ".venv" / "bin" / "fogref"), "sweep", str(sweep), "--quiet"],
         cwd=work,
-        env=_env(work),
+        env=_env(work, empty_kernel_cache),
         capture_output=True,
         text=True,
     )
@@ -315,7 +319,8 @@ def report(res: dict) -> str:
         "Sweep: `reports/sweeps/unreal_sun_falloff_g/SWEEP.toml` (valley, sun elevation x "
         "FogHeightFalloff x g, "
         "64x36 px, 16 spp, model ue4 fitted to each truth), a LocalCluster of one single-threaded worker per "
-        "core, every run from an empty truth cache and an empty fit cache, the Dr.Jit kernel cache warm.  "
+        "core, every run from an empty truth cache and an empty fit cache, the Dr.Jit kernel cache "
+        f"{res.get('kernel_cache', 'warm')}.  "
         f"Runs alternate {', '.join(names)}, after, ...  CPU = user + sys of the command and its workers.",
         "",
         "| run | checkout | wall [s] | sweep's 'configurations in' [s] | CPU [s] | "
@@ -407,6 +412,11 @@ def main(argv=None) -> int:
     ap.add_argument(
         "--phase-configs", type=int, default=12, help="configurations of the phase runs (0: none)"
     )
+    ap.add_argument(
+        "--empty-kernel-cache",
+        action="store_true",
+        help="each command run with an empty Dr.Jit kernel cache (HOME a fresh folder)",
+    )
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks" / "sweep_speed"))
     ap.add_argument("--child", nargs=3, help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
@@ -427,13 +437,14 @@ def main(argv=None) -> int:
         "machine": f"{platform.machine()}, {os.cpu_count()} cores",
         "trees": {w: str(t) for w, t in trees.items()},
         "commits": {w: commit_of(t) for w, t in trees.items()},
+        "kernel_cache": "empty (HOME a fresh folder per run)" if a.empty_kernel_cache else "warm",
         "command": [],
     }
     with tempfile.TemporaryDirectory(prefix="fogref-sweep-speed-") as tmp:
         last = {}
         for i in range(a.repeats):
             for which, tree in trees.items():
-                r = run_command(tree, Path(tmp) / f"{which}-{i}")
+                r = run_command(tree, Path(tmp) / f"{which}-{i}", a.empty_kernel_cache)
                 res["command"].append({"which": which, **r})
                 last[which] = Path(tmp) / f"{which}-{i}"
                 print(

@@ -160,3 +160,34 @@ def test_scenes_from_the_loader_reuse_kernels(mitsuba):
     h, img = _hashes_and_image(mi, load("0.35"))
     assert not np.array_equal(img, base_img), "g did not change the render"
     assert h == base_h, f"new kernels {sorted(set(h) - set(base_h))} (the previous scene was kept)"
+
+
+def test_the_loader_collects_garbage_only_for_a_scene_that_outlives_its_release(mitsuba, monkeypatch):
+    """``release_scene`` frees the kept scene's registry IDs: a scene held by a reference cycle is
+    collected at once (with the collector off, it would otherwise hold its IDs), and a scene that
+    nothing else holds costs no collection (a full one takes about 0.1 s in a process with
+    matplotlib and colour-science).  Fails if either is not so."""
+    import weakref
+
+    from fogref.render import load
+    from fogref.scene.parsed import read_scene
+
+    collections, collect = [], gc.collect
+    monkeypatch.setattr(load.gc, "collect", lambda *a: collections.append(1) or collect(*a))
+    scene, _ = load.loaded_scene(read_scene(VALLEY, {**TINY, "g": "0.41"}))
+    ref = weakref.ref(scene.integrator())
+    del scene
+    load.release_scene()
+    assert ref() is None and not collections, "a scene that nothing held was not freed without a collection"
+    scene, _ = load.loaded_scene(read_scene(VALLEY, {**TINY, "g": "0.42"}))
+    ref = weakref.ref(scene.integrator())
+    cycle: list = [scene]
+    cycle.append(cycle)
+    del scene, cycle
+    gc.disable()
+    try:
+        load.release_scene()
+        assert ref() is None, "a scene held by a reference cycle outlived its release"
+    finally:
+        gc.enable()
+    assert collections == [1]

@@ -15,6 +15,7 @@ import gc
 import json
 import math
 import re
+import weakref
 
 import numpy as np
 
@@ -94,7 +95,7 @@ def loaded_scene(parsed: ParsedScene, threads: int | None = None):
     leak into the next.  The scene is shared: a caller that changes other values of it (its
     ``mi.traverse`` parameters, its medium) must use :func:`load_scene` instead.
 
-    One scene is kept, and it is released (and garbage collected) *before* another is loaded.
+    One scene is kept, and it is released *before* another is loaded (:func:`release_scene`).
     The path-tracing kernel calls the scene's shapes, BSDFs and emitters through Dr.Jit's
     instance registry, and its code holds their registry IDs, which are the lowest ones free
     when the scene is loaded.  Loaded into an empty registry, every scene of one structure gets
@@ -112,8 +113,7 @@ def loaded_scene(parsed: ParsedScene, threads: int | None = None):
     key = (parsed.digest, variant, json.dumps(parsed.overrides or {}, sort_keys=True, default=str), threads)
     hit = _LOADED.get(key)
     if hit is None:
-        _LOADED.clear()
-        gc.collect()  # a scene kept alive by a reference cycle releases its registry IDs now
+        release_scene()
         scene, desc = load_scene(parsed)
         integrator = scene.integrator()
         hit = _LOADED[key] = (scene, desc, dict(vars(integrator)) if hasattr(integrator, "__dict__") else {})
@@ -122,6 +122,22 @@ def loaded_scene(parsed: ParsedScene, threads: int | None = None):
         if not name.startswith("_"):
             setattr(scene.integrator(), name, value)
     return scene, copy.deepcopy(desc)
+
+
+def release_scene() -> None:
+    """Drop the scene :func:`loaded_scene` keeps, so that its objects' Dr.Jit registry IDs are
+    free for the next scene.  A scene that outlives the drop (held by a reference cycle, seen by
+    a weak reference to its Python integrator) is collected now; a full collection costs about
+    0.1 s in a process that has imported matplotlib and colour-science, so it is run only then."""
+    integrators = [scene.integrator() for scene, _, _ in _LOADED.values()]
+    try:
+        alive = [weakref.ref(i) for i in integrators]
+    except TypeError:  # a C++ integrator: no weak reference, so collect
+        alive = [lambda: True]
+    _LOADED.clear()
+    del integrators
+    if any(ref() is not None for ref in alive):
+        gc.collect()
 
 
 def held_scenes() -> list:
