@@ -213,3 +213,34 @@ def test_tone_map_is_exposure_clip_srgb():
     assert srgb_oetf(np.array([0.0, 1.0, 2.0, -1.0, np.nan])).tolist() == pytest.approx([0, 1, 1, 0, 0])
     assert srgb_oetf(np.array([0.18]))[0] == pytest.approx(0.4613561, rel=1e-6)
     np.testing.assert_allclose(tone_map(np.full(3, 0.09), 2.0), srgb_oetf(np.full(3, 0.18)))
+
+
+@pytest.mark.parametrize("with_cov", [False, True], ids=["sigma only", "covariance"])
+def test_a_summary_is_the_noise_functions_on_the_whole_images_bit_for_bit(with_cov):
+    """``ErrorMaps.summary`` selects a region's pixels once for its three noise summaries; every
+    value must be the one of ``mse_noise`` and ``mean_noise`` given the whole images and the mask
+    (exact equality: the selection keeps the pixels' order)."""
+    rng = np.random.default_rng(4)
+    r, x = _rand(seed=1), _rand(seed=2)
+    sigma = 0.05 * _rand(seed=3)
+    cov = None
+    if with_cov:
+        a = 0.05 * rng.random((12, 16, 3, 3))
+        cov = a @ np.swapaxes(a, -1, -2)
+        sigma = np.sqrt(np.einsum("...ii->...i", cov))
+    e = E.error_maps(r, x, white=1.0, sigma=sigma, noise_cov=cov, spp=16)
+    mask = rng.random((12, 16)) < 0.4
+    s = e.summary(mask)
+    sel = mask & e.valid
+    rm = M.mse_noise(e.signed, e.sigma, sel, None, cov=e.noise_cov, spp=16)
+    rel = M.mse_noise(e.signed, e.sigma, sel, e.relative_weight, cov=e.noise_cov, spp=16)
+    me = M.mean_noise(e.signed, e.sigma, sel, cov=e.noise_cov)
+    assert s["rmse"] == float(np.sqrt(rm["mse"])) and s["rmse_noise_floor"] == np.sqrt(rm["noise_floor"])
+    assert s["rmse_below_noise"] == rm["below_noise"]
+    assert (s["relmse"], s["relmse_stderr"], s["relmse_noise_floor"]) == (
+        rel["mse"],
+        rel["stderr"],
+        rel["noise_floor"],
+    )
+    assert s["relmse_below_noise"] == rel["below_noise"]
+    assert (s["mean_error"], s["mean_error_stderr"]) == (me["mean"], me["stderr"])

@@ -103,8 +103,15 @@ class ErrorMaps:
         }
         if n == 0:
             return out
-        for name, weight in (("rmse", None), ("relmse", self.relative_weight)):
-            m = mse_noise(self.signed, self.sigma, sel, weight, z, cov=self.noise_cov, spp=self.spp)
+        # the region's pixels of the noise summaries' inputs, selected once for the three
+        signed = np.asarray(self.signed, dtype=np.float64)
+        sigma = np.broadcast_to(np.asarray(self.sigma, dtype=np.float64), signed.shape)[sel]
+        cov = None if self.noise_cov is None else np.broadcast_to(self.noise_cov, signed.shape + (3,))[sel]
+        rel = self.relative_weight
+        rel = None if rel is None else np.broadcast_to(np.asarray(rel, dtype=np.float64), signed.shape)[sel]
+        signed = signed[sel]
+        for name, weight in (("rmse", None), ("relmse", rel)):
+            m = mse_noise(signed, sigma, None, weight, z, cov=cov, spp=self.spp)
             value = m["mse"] if name == "relmse" else float(np.sqrt(m["mse"]))
             if name == "rmse":
                 hi, lo = math.sqrt(m["mse"] + m["stderr"]), math.sqrt(max(m["mse"] - m["stderr"], 0.0))
@@ -122,7 +129,7 @@ class ErrorMaps:
             out.update({name: value, **extra, f"{name}_below_noise": m["below_noise"]})
         if self.relative_weight is None:  # relMSE without its weight: the map's mean, no noise split
             out["relmse"] = float(np.mean(self.relative_squared[sel]))
-        me = mean_noise(self.signed, self.sigma, sel, z, cov=self.noise_cov)
+        me = mean_noise(signed, sigma, None, z, cov=cov)
         out.update(
             {
                 "mean_error": me["mean"],

@@ -275,8 +275,7 @@ def mse_noise(diff, sigma, mask=None, weight=None, z: float = NOISE_Z, cov=None,
         return None
     mse = float(np.mean(w * d * d))
     floor = float(np.mean(w * noise.diagonal(C)))
-    _, var = noise.squared_stat(d, C, spp, w)
-    _, null_var = noise.squared_stat(np.zeros_like(d), C, spp, w)
+    _, var, null_var = noise.squared_stat_and_null(d, C, spp, w)
     stderr, null = math.sqrt(var) / n, math.sqrt(null_var) / n
     return {
         "mse": mse,
