@@ -1,0 +1,155 @@
+"""`fogref compare` on a large truth, before and after: the command and its metrics table.
+-> reports/benchmarks/compare_large.{json,md}
+
+``fogref compare TRUTH --model ue4 --from-scene --no-figures`` on a truth of
+``scenes/valley.xml`` rendered here (960x540, 4 spp, seed 0), each run a fresh process;
+rounds alternate ``before`` (the checkout ``--base``, its ``fogref`` package first on
+``PYTHONPATH`` with this ``.venv``) and ``after`` (this checkout).  In each run the metrics
+table (``fogref.compare.report._metrics_table``: every part's summary over every region) is
+timed apart, by a wrapper the child process puts around it.  Identity: ``metrics.json`` and
+``check.json`` of both equal but for paths.
+
+    .venv/bin/python benchmarks/compare_large.py --base /tmp/compare-base [--rounds 3]
+
+(``git worktree add /tmp/compare-base <commit>`` makes the base.)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from _checkouts import commit_of
+
+ROOT = Path(__file__).resolve().parents[1]
+PY = sys.executable
+SIZE = (960, 540, 4)  # width, height, spp
+#: the child: times the metrics table, then runs the command; prints the table's seconds last
+CHILD = """
+import json, sys, time
+import fogref.compare.report as report
+table = report._metrics_table
+seconds = []
+def timed(*args):
+    t0 = time.perf_counter()
+    out = table(*args)
+    seconds.append(time.perf_counter() - t0)
+    return out
+report._metrics_table = timed
+from fogref.cli import main
+t0 = time.perf_counter()
+code = main(sys.argv[1:])
+print(json.dumps({"wall_s": time.perf_counter() - t0, "table_s": sum(seconds), "code": code}))
+"""
+
+
+def _env(checkout: Path) -> dict:
+    env = {**os.environ, "PYTHONPATH": str(checkout)}
+    env.pop("FOGREF_VARIANT", None)
+    return env
+
+
+def _compare(checkout: Path, truth: Path, out: Path) -> dict:
+    args = ["compare", str(truth), "--model", "ue4", "--from-scene", "--no-figures", "--out", str(out)]
+    p = subprocess.run(
+        [PY, "-c", CHILD, *args], env=_env(checkout), capture_output=True, text=True, cwd=checkout
+    )
+    row = json.loads(p.stdout.strip().splitlines()[-1]) if p.stdout.strip() else {}
+    if row.get("code") not in (0, 1, 3):  # pass, fail, inconclusive: a verdict was reached
+        raise SystemExit(f"compare in {checkout} failed:\n{p.stderr[-3000:]}")
+    return row
+
+
+def _without_paths(x):
+    if isinstance(x, dict):
+        return {k: _without_paths(v) for k, v in x.items() if k not in ("path", "exr", "out_dir")}
+    if isinstance(x, list):
+        return [_without_paths(v) for v in x]
+    return x
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--base", required=True, help="the checkout to compare with (a git worktree)")
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
+    a = ap.parse_args()
+    checkouts = {"before": Path(a.base).resolve(), "after": ROOT}
+    work = Path(tempfile.mkdtemp(prefix="compare-large-"))
+    w, h, spp = SIZE
+    truth = work / f"valley_{w}x{h}.exr"
+    render = ["render", str(ROOT / "scenes" / "valley.xml"), "--spp", str(spp), "--seed", "0"]
+    render += ["--set", f"res={w}", "--set", f"resy={h}", "--out", str(truth), "--quiet", "--no-png"]
+    run = "import sys; from fogref.cli import main; sys.exit(main())"
+    subprocess.run([PY, "-c", run, *render], env=_env(ROOT), check=True, cwd=ROOT)
+    _compare(ROOT, truth, work / "warm")  # the page cache and Python's bytecode, once
+    load = [os.getloadavg()[0]]
+    runs: dict = {m: [] for m in checkouts}
+    for r in range(a.rounds):
+        for mode in list(checkouts)[r % 2 :] + list(checkouts)[: r % 2]:
+            runs[mode].append(_compare(checkouts[mode], truth, work / mode))
+    load.append(os.getloadavg()[0])
+    same = {
+        f: _without_paths(json.loads((work / "before" / f).read_text()))
+        == _without_paths(json.loads((work / "after" / f).read_text()))
+        for f in ("metrics.json", "check.json")
+    }
+    result = {
+        "base": commit_of(checkouts["before"]),
+        "after": commit_of(ROOT),
+        "size": f"{w}x{h}, {spp} spp",
+        "cores": len(os.sched_getaffinity(0)),
+        "load_average": load,
+        "runs": runs,
+        "identical": same,
+    }
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "compare_large.json").write_text(json.dumps(result, indent=1) + "\n")
+    (out / "compare_large.md").write_text(report(result))
+    print(report(result))
+
+
+def _ratio(runs: dict, key: str) -> str:
+    r = sorted(b[key] / x[key] for b, x in zip(runs["before"], runs["after"]))
+    return f"{statistics.median(r):.2f} [{r[0]:.2f}, {r[-1]:.2f}]"
+
+
+def report(r: dict) -> str:
+    """The Markdown page of a run."""
+    runs = r["runs"]
+    md = [
+        "# `fogref compare` on a large truth, before and after",
+        "",
+        f"`benchmarks/compare_large.py`: `fogref compare TRUTH --model ue4 --from-scene --no-figures` on a "
+        f"truth of `scenes/valley.xml` ({r['size']}), each run a fresh process, {len(runs['after'])} rounds "
+        f"alternating the two; {r['cores']} cores, load average (1 min) "
+        + " -> ".join(f"{x:.1f}" for x in r["load_average"])
+        + f".  `before`: {r['base']}; `after`: {r['after']}.  The metrics table (every part's summary over "
+        "every region) is timed inside the same runs.  Ratio: `before` / `after` per round, median "
+        "[smallest, largest].",
+        "",
+        "| | before [s], median | after [s], median | before / after |",
+        "|---|---:|---:|---|",
+    ]
+    for key, name in (("wall_s", "the command"), ("table_s", "its metrics table")):
+        b, x = (statistics.median(v[key] for v in runs[m]) for m in ("before", "after"))
+        md.append(f"| {name} | {b:.2f} | {x:.2f} | {_ratio(runs, key)} |")
+    md += [
+        "",
+        "Identity: "
+        + ", ".join(f"`{f}` {'equal' if ok else 'DIFFERENT'}" for f, ok in r["identical"].items())
+        + " (but for paths).",
+        "",
+    ]
+    return "\n".join(md)
+
+
+if __name__ == "__main__":
+    main()
