@@ -25,7 +25,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from _checkouts import commit_of
+from _checkouts import checkout_env, commit_of, ratio_range
 
 ROOT = Path(__file__).resolve().parents[1]
 PY = sys.executable
@@ -49,16 +49,10 @@ print(json.dumps({"wall_s": time.perf_counter() - t0, "table_s": sum(seconds), "
 """
 
 
-def _env(checkout: Path) -> dict:
-    env = {**os.environ, "PYTHONPATH": str(checkout)}
-    env.pop("FOGREF_VARIANT", None)
-    return env
-
-
 def _compare(checkout: Path, truth: Path, out: Path) -> dict:
     args = ["compare", str(truth), "--model", "ue4", "--from-scene", "--no-figures", "--out", str(out)]
     p = subprocess.run(
-        [PY, "-c", CHILD, *args], env=_env(checkout), capture_output=True, text=True, cwd=checkout
+        [PY, "-c", CHILD, *args], env=checkout_env(checkout), capture_output=True, text=True, cwd=checkout
     )
     row = json.loads(p.stdout.strip().splitlines()[-1]) if p.stdout.strip() else {}
     if row.get("code") not in (0, 1, 3):  # pass, fail, inconclusive: a verdict was reached
@@ -87,7 +81,7 @@ def main() -> None:
     render = ["render", str(ROOT / "scenes" / "valley.xml"), "--spp", str(spp), "--seed", "0"]
     render += ["--set", f"res={w}", "--set", f"resy={h}", "--out", str(truth), "--quiet", "--no-png"]
     run = "import sys; from fogref.cli import main; sys.exit(main())"
-    subprocess.run([PY, "-c", run, *render], env=_env(ROOT), check=True, cwd=ROOT)
+    subprocess.run([PY, "-c", run, *render], env=checkout_env(ROOT), check=True, cwd=ROOT)
     _compare(ROOT, truth, work / "warm")  # the page cache and Python's bytecode, once
     load = [os.getloadavg()[0]]
     runs: dict = {m: [] for m in checkouts}
@@ -116,11 +110,6 @@ def main() -> None:
     print(report(result))
 
 
-def _ratio(runs: dict, key: str) -> str:
-    r = sorted(b[key] / x[key] for b, x in zip(runs["before"], runs["after"]))
-    return f"{statistics.median(r):.2f} [{r[0]:.2f}, {r[-1]:.2f}]"
-
-
 def report(r: dict) -> str:
     """The Markdown page of a run."""
     runs = r["runs"]
@@ -140,7 +129,8 @@ def report(r: dict) -> str:
     ]
     for key, name in (("wall_s", "the command"), ("table_s", "its metrics table")):
         b, x = (statistics.median(v[key] for v in runs[m]) for m in ("before", "after"))
-        md.append(f"| {name} | {b:.2f} | {x:.2f} | {_ratio(runs, key)} |")
+        ratio = ratio_range([v[key] for v in runs["before"]], [v[key] for v in runs["after"]])
+        md.append(f"| {name} | {b:.2f} | {x:.2f} | {ratio} |")
     md += [
         "",
         "Identity: "

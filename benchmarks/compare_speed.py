@@ -42,7 +42,7 @@ import zlib
 from pathlib import Path
 
 import numpy as np
-from _checkouts import commit_of
+from _checkouts import checkout_env, commit_of, ratio_range
 from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -52,16 +52,10 @@ MODES = ("before", "after", "after, 1 process")
 RUN = "import sys; from fogref.cli import main; sys.exit(main())"
 
 
-def _env(checkout: Path) -> dict:
-    env = {**os.environ, "PYTHONPATH": str(checkout)}
-    env.pop("FOGREF_VARIANT", None)
-    return env
-
-
 def _compare(checkout: Path, truth: Path, out: Path, extra: list[str]) -> float:
     cmd = [PY, "-c", RUN, "compare", str(truth), "--model", "ue4", "--from-scene", "--out", str(out), *extra]
     t0 = time.perf_counter()
-    p = subprocess.run(cmd, env=_env(checkout), capture_output=True, text=True, cwd=checkout)
+    p = subprocess.run(cmd, env=checkout_env(checkout), capture_output=True, text=True, cwd=checkout)
     wall = time.perf_counter() - t0
     if p.returncode not in (0, 1, 3):  # pass, fail, inconclusive: a verdict was reached
         raise SystemExit(f"{' '.join(cmd)} exited {p.returncode}:\n{p.stderr[-3000:]}")
@@ -173,7 +167,7 @@ def main() -> None:
                 "--quiet",
                 "--no-png",
             ],
-            env=_env(ROOT),
+            env=checkout_env(ROOT),
             check=True,
             cwd=ROOT,
         )
@@ -217,11 +211,6 @@ def main() -> None:
     print(report(result))
 
 
-def _ratios(times: dict, mode: str) -> str:
-    r = sorted(b / x for b, x in zip(times["before"], times[mode]))
-    return f"{statistics.median(r):.2f} [{r[0]:.2f}, {r[-1]:.2f}]"
-
-
 def report(r: dict) -> str:
     """The Markdown page of a run."""
     md = [
@@ -242,7 +231,7 @@ def report(r: dict) -> str:
     for size, s in r["sizes"].items():
         t = s["times_s"]
         for m in MODES:
-            ratio = "" if m == "before" else _ratios(t, m)
+            ratio = "" if m == "before" else ratio_range(t["before"], t[m])
             each = ", ".join(f"{x:.2f}" for x in t[m])
             md.append(
                 f"| {size} | {m} | {statistics.median(t[m]):.2f} | {each} | {ratio} | "
