@@ -96,6 +96,8 @@ def _is_bool(value) -> bool:
 
 def _to_float(value, name: str, source: str, what: str = "a number") -> float:
     """``value`` (a real number or a string that parses as one) as a float; not a bool."""
+    if type(value) is float:  # the common case, before the slower checks below
+        return value
     if _is_bool(value):
         raise ParameterError(source, name, f"{value!r} is not {what} (a bool)")
     if isinstance(value, str):
@@ -160,14 +162,13 @@ def number(
     fogref.errors.ParameterError: fogref compare: parameter '--sky-distance': -1 is outside (0, inf) m
     """
     x = _to_float(value, name, source)
-    rng = format_range(lo, hi, lo_open, hi_open, unit)
+    if math.isfinite(x) and _in_range(x, lo, hi, lo_open, hi_open):
+        return x
+    rng = format_range(lo, hi, lo_open, hi_open, unit)  # the error's text only
     if not math.isfinite(x):
         raise ParameterError(source, name, f"{_show(x)} is not finite: must be a finite number in {rng}")
-    if not _in_range(x, lo, hi, lo_open, hi_open):
-        raise ParameterError(
-            source, name, f"{_show(value if not isinstance(value, str) else x)} is outside {rng}"
-        )
-    return x
+    shown = _show(value if not isinstance(value, str) else x)
+    raise ParameterError(source, name, f"{shown} is outside {rng}")
 
 
 def number_within(value, name: str, *, source: str, bounds) -> float:
