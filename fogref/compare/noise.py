@@ -130,8 +130,7 @@ def squared_stat(
     (0.0, 0.0018)
     """
     Q, lin, quad = _squared_terms(e, C, w)
-    k, extra = _spp_factors(spp, at_spp)
-    return Q, max(float(lin * k + quad * k * k * extra), 0.0)
+    return Q, _variance(lin, quad, *_spp_factors(spp, at_spp))
 
 
 def squared_stat_and_null(e: np.ndarray, C: np.ndarray, spp: int, w=None) -> tuple[float, float, float]:
@@ -144,13 +143,8 @@ def squared_stat_and_null(e: np.ndarray, C: np.ndarray, spp: int, w=None) -> tup
     True
     """
     Q, lin, quad = _squared_terms(e, C, w)
-    k, extra = _spp_factors(spp, None)
-    null_lin = 0.0  # the linear term of e = 0
-    return (
-        Q,
-        max(float(lin * k + quad * k * k * extra), 0.0),
-        max(float(null_lin * k + quad * k * k * extra), 0.0),
-    )
+    factors = _spp_factors(spp, None)
+    return Q, _variance(lin, quad, *factors), _variance(0.0, quad, *factors)  # e = 0: no linear term
 
 
 def _squared_terms(e, C, w) -> tuple[float, float, float]:
@@ -165,6 +159,11 @@ def _squared_terms(e, C, w) -> tuple[float, float, float]:
     WC = w[..., :, None] * C
     quad = 2.0 * np.einsum("pij,pji->", WC, WC)
     return Q, lin, quad
+
+
+def _variance(lin, quad, k: float, extra: float) -> float:
+    """``Var Q`` from its terms, the covariance scaled by ``k`` (:func:`_spp_factors`), >= 0."""
+    return max(float(lin * k + quad * k * k * extra), 0.0)
 
 
 def _spp_factors(spp: int, at_spp: int | None) -> tuple[float, float]:

@@ -129,14 +129,16 @@ def release_scene() -> None:
     free for the next scene.  A scene that outlives the drop (held by a reference cycle, seen by
     a weak reference to its Python integrator) is collected now; a full collection costs about
     0.1 s in a process that has imported matplotlib and colour-science, so it is run only then."""
-    integrators = [scene.integrator() for scene, _, _ in _LOADED.values()]
+    if not _LOADED:
+        return
+    ((scene, _, _),) = _LOADED.values()
     try:
-        alive = [weakref.ref(i) for i in integrators]
-    except TypeError:  # a C++ integrator: no weak reference, so collect
-        alive = [lambda: True]
+        integrator = weakref.ref(scene.integrator())
+    except TypeError:  # a C++ integrator has no weak reference: collect
+        integrator = None
     _LOADED.clear()
-    del integrators
-    if any(ref() is not None for ref in alive):
+    del scene
+    if integrator is None or integrator() is not None:
         gc.collect()
 
 
