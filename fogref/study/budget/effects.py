@@ -111,6 +111,38 @@ def shapley_parts(truth: Truth, sky_single: np.ndarray, pf, engine, sky_distance
     }
 
 
+def effective_coalition(parts: dict, coalition, fixed=()) -> frozenset:
+    """The effects of ``coalition`` (with ``fixed``, as :func:`coalition_image` takes them) that
+    change its image: :func:`coalition_image` of this set is the coalition's image, bit for bit.
+    Of the 512 coalitions of the nine effects, 212 have distinct images, so the budget's game
+    (:func:`~fogref.study.budget.shapley.shapley_budget`) evaluates each of those once.
+
+    With the engine's lobe in, only the configuration and "multiple" remain (the engine's images
+    replace the physical sun and sky); without it, the configuration counts only when a start
+    distance, the opacity/cutoff or float32 is in (they change the surface's T), the sun's
+    attenuation only with the shadows (the closed form), the phase only for a droplet fog.
+
+    >>> parts = {"phase_ratio": None}
+    >>> sorted(effective_coalition(parts, {"lobe", "shadows", "sky", "refit"}))
+    ['lobe', 'refit']
+    >>> sorted(effective_coalition(parts, {"sun_attenuation", "refit", "phase", "multiple"}))
+    ['multiple']
+    >>> sorted(effective_coalition(parts, {"shadows", "sun_attenuation", "float32"}, ("refit",)))
+    ['float32', 'refit', 'shadows', 'sun_attenuation']
+    """
+    C = set(coalition) | set(fixed)
+    keep = C & {"lobe", "multiple"}
+    if "lobe" in C or C & set(CONFIG_EFFECTS[1:]):
+        keep |= C & set(CONFIG_EFFECTS)
+    if "lobe" not in C:
+        keep |= C & {"shadows", "sky"}
+        if "shadows" in C:
+            keep |= C & {"sun_attenuation"}
+        if parts.get("phase_ratio") is not None:
+            keep |= C & {"phase"}
+    return frozenset(keep)
+
+
 def coalition_image(parts: dict, coalition, fixed=()) -> np.ndarray:
     """The image (H, W, 3) with the effects in ``coalition`` switched to the engine's side.
 

@@ -13,7 +13,14 @@ import math
 
 import numpy as np
 
-from fogref.study.budget.effects import CONFIG_EFFECTS, EFFECTS, PHASE, STEPS, coalition_image
+from fogref.study.budget.effects import (
+    CONFIG_EFFECTS,
+    EFFECTS,
+    PHASE,
+    STEPS,
+    coalition_image,
+    effective_coalition,
+)
 
 #: Side of the square pixel blocks of the bootstrap [pixels].
 BOOTSTRAP_BLOCK = 16
@@ -107,6 +114,10 @@ def shapley_budget(
     the engine's side (see :func:`coalition_image`'s ``fixed``), so the ends stay the truth
     and the model.
 
+    Each distinct image is evaluated once: coalitions with one
+    :func:`~fogref.study.budget.effects.effective_coalition` share its value (212 of the 512
+    coalitions of the nine effects are distinct).
+
     Noise: ``e(C)`` is a sum over pixel blocks (``block`` x ``block``), so the shares are
     re-computed on ``resamples`` bootstrap resamples of the blocks (seeded ``seed``) and
     each share gets their standard deviation, ``share_noise`` (Monte Carlo noise and the
@@ -119,14 +130,21 @@ def shapley_budget(
     effects = list(effects)
     fixed = tuple(k for k in CONFIG_EFFECTS if k not in effects)
     valid = np.asarray(valid, dtype=bool)
-    ids = _block_ids(valid.shape, block)[valid]
-    nb = int(ids.max()) + 1 if ids.size else 1
+    ids = _block_ids(valid.shape, block)
+    nb = int(ids[valid].max()) + 1 if valid.any() else 1
     truth = parts["final"]
+    memo: dict[frozenset, np.ndarray] = {}
 
     def per_block(C):
-        d = coalition_image(parts, C, fixed) - truth
-        e = np.sum(d[valid] ** 2, axis=-1)
-        return np.bincount(ids, weights=e, minlength=nb)
+        key = effective_coalition(parts, C, fixed)
+        if key not in memo:  # a coalition with the image of one already played: its value again
+            d = coalition_image(parts, key, fixed) - truth
+            d *= d
+            e = d[..., 0] + d[..., 1]  # np.sum's order over three channels
+            e += d[..., 2]
+            # every pixel in its block, in the same order, with 0 for the invalid ones: the same sums
+            memo[key] = np.bincount(ids.ravel(), weights=np.where(valid, e, 0.0).ravel(), minlength=nb)[:nb]
+        return memo[key]
 
     phi_blocks = shapley_values(per_block, effects)  # key -> (nb,)
     P = np.stack([phi_blocks[k] for k in effects])  # (k, nb)

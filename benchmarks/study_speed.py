@@ -1,0 +1,152 @@
+"""`fogref study` before and after: the command and its Shapley budgets.
+-> reports/benchmarks/study_speed.{json,md}
+
+``fogref study TRUTH --out OUT --renders RENDERS`` on a truth of ``scenes/valley.xml`` rendered
+here (320x180, 16 spp, seed 0: the scene's own size), each run a fresh process; rounds alternate
+``before`` (the checkout ``--base``, its ``fogref`` package first on ``PYTHONPATH`` with this
+``.venv``) and ``after`` (this checkout).  The budget's extra renders (the sun-less truths and a
+second seed) are made once per checkout before the timed rounds (``--renders``, a cache), so the
+rounds time the study itself.  In each run the four Shapley budgets
+(``fogref.study.budget.shapley_budget``: all coalitions, and the colours in the lobe, for two seeds)
+are timed apart, by a wrapper the child process puts around it.  Identity: ``budget.json`` (but for
+its input paths and the package's docstring), ``fit.json`` and ``compare/metrics.json`` of both
+equal.
+
+    .venv/bin/python benchmarks/study_speed.py --base /tmp/study-base [--rounds 3]
+
+(``git worktree add /tmp/study-base <commit>`` makes the base.)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from _checkouts import checkout_env, commit_of, ratio_range
+
+ROOT = Path(__file__).resolve().parents[1]
+PY = sys.executable
+SIZE = (320, 180, 16)  # width, height, spp
+#: the child: times the Shapley budgets, then runs the command; prints their seconds last
+CHILD = """
+import json, sys, time
+import fogref.study.budget as budget
+shapley_budget = budget.shapley_budget
+seconds = []
+def timed(*args, **kwargs):
+    t0 = time.perf_counter()
+    out = shapley_budget(*args, **kwargs)
+    seconds.append(time.perf_counter() - t0)
+    return out
+budget.shapley_budget = timed
+from fogref.cli import main
+t0 = time.perf_counter()
+code = main(sys.argv[1:])
+print(json.dumps({"wall_s": time.perf_counter() - t0, "shapley_s": sum(seconds), "budgets": len(seconds),
+                  "code": code}))
+"""
+
+
+def _study(checkout: Path, truth: Path, out: Path, renders: Path) -> dict:
+    args = ["study", str(truth), "--out", str(out), "--renders", str(renders)]
+    p = subprocess.run(
+        [PY, "-c", CHILD, *args], env=checkout_env(checkout), capture_output=True, text=True, cwd=checkout
+    )
+    row = json.loads(p.stdout.strip().splitlines()[-1]) if p.stdout.strip() else {}
+    if row.get("code") != 0:
+        raise SystemExit(f"study in {checkout} failed:\n{p.stderr[-3000:]}")
+    return row
+
+
+def _numbers(folder: Path, name: str):
+    """A result file of a study without what names its inputs or documents the package."""
+    doc = json.loads((folder / name).read_text())
+    if name == "budget.json":
+        doc.pop("inputs", None), doc.pop("method", None)
+    if name == "compare/metrics.json":
+        doc.pop("inputs", None), doc.pop("out_dir", None)
+    return doc
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--base", required=True, help="the checkout to compare with (a git worktree)")
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
+    a = ap.parse_args()
+    checkouts = {"before": Path(a.base).resolve(), "after": ROOT}
+    work = Path(tempfile.mkdtemp(prefix="study-speed-"))
+    w, h, spp = SIZE
+    truth = work / f"valley_{w}x{h}.exr"
+    render = ["render", str(ROOT / "scenes" / "valley.xml"), "--spp", str(spp), "--seed", "0"]
+    render += ["--set", f"res={w}", "--set", f"resy={h}", "--out", str(truth), "--quiet", "--no-png"]
+    run = "import sys; from fogref.cli import main; sys.exit(main())"
+    subprocess.run([PY, "-c", run, *render], env=checkout_env(ROOT), check=True, cwd=ROOT)
+    for mode, checkout in checkouts.items():  # the extra renders, and Python's bytecode, once
+        _study(checkout, truth, work / f"warm-{mode}", work / f"renders-{mode}")
+    load = [os.getloadavg()[0]]
+    runs: dict = {m: [] for m in checkouts}
+    for r in range(a.rounds):
+        for mode in list(checkouts)[r % 2 :] + list(checkouts)[: r % 2]:
+            runs[mode].append(_study(checkouts[mode], truth, work / mode, work / f"renders-{mode}"))
+    load.append(os.getloadavg()[0])
+    same = {
+        f: _numbers(work / "before", f) == _numbers(work / "after", f)
+        for f in ("budget.json", "fit.json", "compare/metrics.json")
+    }
+    result = {
+        "base": commit_of(checkouts["before"]),
+        "after": commit_of(ROOT),
+        "size": f"{w}x{h}, {spp} spp",
+        "cores": len(os.sched_getaffinity(0)),
+        "load_average": load,
+        "runs": runs,
+        "identical": same,
+    }
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "study_speed.json").write_text(json.dumps(result, indent=1) + "\n")
+    (out / "study_speed.md").write_text(report(result))
+    print(report(result))
+
+
+def report(r: dict) -> str:
+    """The Markdown page of a run."""
+    runs = r["runs"]
+    md = [
+        "# `fogref study` before and after",
+        "",
+        f"`benchmarks/study_speed.py`: `fogref study TRUTH` on a truth of `scenes/valley.xml` "
+        f"({r['size']}), its extra renders made once before the timed runs, each run a fresh process, "
+        f"{len(runs['after'])} rounds alternating the two; {r['cores']} cores, load average (1 min) "
+        + " -> ".join(f"{x:.1f}" for x in r["load_average"])
+        + f".  `before`: {r['base']}; `after`: {r['after']}.  The {runs['after'][0]['budgets']} Shapley "
+        "budgets (all coalitions and the colours in the lobe, for each of two seeds) are timed inside "
+        "the same runs.  Ratio: `before` / `after` per round, median [smallest, largest].",
+        "",
+        "| | before [s], median | after [s], median | before / after |",
+        "|---|---:|---:|---|",
+    ]
+    for key, name in (("wall_s", "the command"), ("shapley_s", "its Shapley budgets")):
+        b, x = (statistics.median(v[key] for v in runs[m]) for m in ("before", "after"))
+        ratio = ratio_range([v[key] for v in runs["before"]], [v[key] for v in runs["after"]])
+        md.append(f"| {name} | {b:.2f} | {x:.2f} | {ratio} |")
+    md += [
+        "",
+        "Identity: "
+        + ", ".join(f"`{f}` {'equal' if ok else 'DIFFERENT'}" for f, ok in r["identical"].items())
+        + " (`budget.json` but for its input paths and the package's docstring, `metrics.json` but "
+        "for paths).",
+        "",
+    ]
+    return "\n".join(md)
+
+
+if __name__ == "__main__":
+    main()
