@@ -45,10 +45,10 @@ def _api_defaults(cmd: str) -> dict[str, dict[str, object]]:
 
 
 #: (command, option) -> (its default, the API's): the defaults that differ on purpose.
-#: ``--processes``: the command computes a report's error maps and draws its figures on every core;
+#: ``--processes``: the command draws a report's figures on every core;
 #: the Python API in the calling process, because worker processes import a script's main module
 #: (a script without an ``if __name__ == "__main__":`` guard would run again in each).
-DIFFERENT_DEFAULTS = {("compare", "processes"): (None, 1)}
+DIFFERENT_DEFAULTS = {("compare", "processes"): (None, 1), ("study", "processes"): (None, 1)}
 
 
 @pytest.mark.parametrize("cmd", list(COMMANDS))

@@ -59,3 +59,24 @@ def test_cli_study_flag_calls_the_split(tiny_truth, tmp_path, monkeypatch):
     out = str(tmp_path / "s")
     assert main(["study", str(tiny_truth), "--out", out, "--ue-pathtracer"]) == 0
     assert calls == ["study", ("split", out)]
+
+
+def test_cli_study_draws_the_figures_on_every_core_unless_told(tiny_truth, tmp_path, monkeypatch):
+    """``fogref study`` passes ``--processes`` to run_study (default None: one worker per core, as
+    ``fogref compare``); run_study refuses a bad count before any work, naming the parameter."""
+    import fogref.cli.study as cs
+    from fogref.errors import FogrefError
+    from fogref.study.unreal import run_study
+
+    seen = []
+    monkeypatch.setattr(cs, "run_study", lambda *a, **k: seen.append(k["processes"]))
+    monkeypatch.setattr(cs, "write_study_html", lambda *a, **k: "x.html")
+    out = str(tmp_path / "s")
+    assert main(["study", str(tiny_truth), "--out", out]) == 0
+    assert main(["study", str(tiny_truth), "--out", out, "--processes", "3"]) == 0
+    assert seen == [None, 3]
+    assert main(["study", str(tiny_truth), "--out", out, "--processes", "0"]) == 2
+    for bad in (0, 1.5, True):
+        with pytest.raises(FogrefError, match="processes"):
+            run_study(tiny_truth, tmp_path / "bad", processes=bad)
+    assert not (tmp_path / "bad").exists()

@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from fogref.cli.checks import Number, PathArg
+from fogref.cli.checks import Integer, Number, PathArg
 from fogref.cli.spec import option, switch
 from fogref.gbuffer import load_truth
 from fogref.html.reports import write_study_html
@@ -45,6 +45,13 @@ class Options:
     no_compare: bool = switch(
         "skip the fogref.compare report", api=STUDY, api_name="compare_report", negates=True
     )
+    processes: int | None = option(
+        None,
+        "worker processes that draw the comparison's figures",
+        check=Integer(1, 1024),
+        metavar="N",
+        default_text="one per core this process may use; the Python API's default is 1",
+    )
     ue_pathtracer: bool = switch(
         "also split what a UE user sees into raster EHF vs UE's path-traced fog and UE's path-traced "
         "fog vs the exact fog, each with its noise (fogref.study.ue_pathtracer.split_study): a section "
@@ -68,7 +75,15 @@ class Options:
 def run(o: Options, given=frozenset()) -> int:
     named = {"StartDistance": o.start_distance, "FogMaxOpacity": o.max_opacity, "FogCutoffDistance": o.cutoff}
     settings = {k: v for k, v in named.items() if v is not None}
-    run_study(o.exr, o.out, o.renders, scene=o.scene, compare_report=not o.no_compare, settings=settings)
+    run_study(
+        o.exr,
+        o.out,
+        o.renders,
+        scene=o.scene,
+        compare_report=not o.no_compare,
+        settings=settings,
+        processes=o.processes,
+    )
     if o.ue_pathtracer:
         split_study(o.exr, o.out, Path(o.renders) / "ue_pathtracer", scene=o.scene)
 

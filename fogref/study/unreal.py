@@ -30,6 +30,7 @@ import numpy as np
 
 from fogref.atomic import write_text_atomic as write_text
 from fogref.compare import compare
+from fogref.compare.workers import check_processes, start_workers
 from fogref.errors import FogrefError
 from fogref.gbuffer import Truth, load_truth
 from fogref.mapping import PhysicalScene, fit_unreal
@@ -148,14 +149,21 @@ def run_study(
     settings: dict | None = None,
     log=print,
     open_plane: str | Path | None = SCENES_DIR / "open_plane.xml",
+    processes: int | None = 1,
 ) -> dict:
     """Run the whole study; returns the summary dict (also written as ``summary.json``).
 
+    ``processes``: worker processes that draw the comparison's figures, as
+    :func:`fogref.compare.compare` takes it (None: one per core; ``fogref study``'s default); they
+    start here and import matplotlib while the fits run.
+
     FogrefError (before any work) for a truth that :func:`fogref.gbuffer.load_truth`
-    refuses or whose scene changed since it was rendered (:func:`scene_of_truth`).
+    refuses or whose scene changed since it was rendered (:func:`scene_of_truth`), or for a
+    ``processes`` that is not None or an integer >= 1.
     """
 
     t0 = time.perf_counter()
+    check_processes(processes)
     exr = Path(exr)
     truth = load_truth(exr)
     params = truth.params
@@ -182,6 +190,8 @@ def run_study(
     }
 
     # -- 1. fits ------------------------------------------------------------
+    if compare_report:
+        start_workers(processes)  # they import matplotlib while the fits run
     log("fitting Unreal's colours, exponent and start distance ...")
     fit = fit_unreal(pf)  # the one fit (as --from-scene and the sweeps; cached, so the model below reuses it)
     lobe = fit_unreal(pf, sun_attenuation=False, fit_start=False)
@@ -208,7 +218,7 @@ def run_study(
     cmp_summary = None
     if compare_report:
         log("comparing (fogref.compare) ...")
-        rep = compare(truth, model, out / "compare", precision="float32")
+        rep = compare(truth, model, out / "compare", precision="float32", processes=processes)
         m = rep["metrics"]
         cmp_summary = {part: m[part]["all"] for part in ("final", "inscatter", "transmittance")}
 
