@@ -1,12 +1,17 @@
 """What the benchmarks that compare checkouts share: a checkout's commit, the environment that
-runs its ``fogref`` package, and per-round ratios."""
+runs its ``fogref`` package, a command run there with one function timed apart, rounds that
+alternate the checkouts, per-round ratios, and the report's two files."""
 
 from __future__ import annotations
 
+import json
 import os
 import statistics
 import subprocess
+import sys
 from pathlib import Path
+
+from fogref.atomic import write_text_atomic
 
 
 def commit_of(tree: Path) -> str:
@@ -40,3 +45,75 @@ def ratio_range(before: list, after: list) -> str:
     """
     r = sorted(b / x for b, x in zip(before, after))
     return f"{statistics.median(r):.2f} [{r[0]:.2f}, {r[-1]:.2f}]"
+
+
+#: A child process's code: run ``fogref.cli.main(argv)`` with one function timed.  ``argv[1]`` is the
+#: function, ``module:name`` (replaced on its module by a wrapper that sums its seconds), the rest the
+#: command's arguments.  Its last line is JSON: ``wall_s`` (the command), ``part_s`` (the function's
+#: calls together), ``calls`` and the exit ``code``.
+TIMED_COMMAND = """
+import importlib, json, sys, time
+module_name, name = sys.argv[1].split(":")
+module = importlib.import_module(module_name)
+function = getattr(module, name)
+seconds = []
+def timed(*args, **kwargs):
+    t0 = time.perf_counter()
+    out = function(*args, **kwargs)
+    seconds.append(time.perf_counter() - t0)
+    return out
+setattr(module, name, timed)
+from fogref.cli import main
+t0 = time.perf_counter()
+code = main(sys.argv[2:])
+print(json.dumps({"wall_s": time.perf_counter() - t0, "part_s": sum(seconds), "calls": len(seconds),
+                  "code": code}))
+"""
+
+
+def timed_command(checkout: Path, part: str, args: list, codes=(0,)) -> dict:
+    """Run ``fogref ARGS`` with ``checkout``'s package (:func:`checkout_env`, in a fresh process, its
+    working folder the checkout), the function ``part`` (``module:name``) timed apart
+    (:data:`TIMED_COMMAND`); SystemExit with the child's stderr unless its exit code is in ``codes``."""
+    p = subprocess.run(
+        [sys.executable, "-c", TIMED_COMMAND, part, *map(str, args)],
+        env=checkout_env(checkout),
+        capture_output=True,
+        text=True,
+        cwd=checkout,
+    )
+    row = json.loads(p.stdout.strip().splitlines()[-1]) if p.stdout.strip() else {}
+    if row.get("code") not in codes:
+        raise SystemExit(f"fogref {args[0]} in {checkout} failed:\n{p.stderr[-3000:]}")
+    return row
+
+
+def alternating(checkouts: dict, rounds: int, run) -> dict:
+    """``{name: [run(name, checkout) of each round]}``, the checkouts' order rotated every round so
+    that a trend in the machine's load falls on all alike."""
+    names = list(checkouts)
+    runs: dict = {n: [] for n in names}
+    for r in range(rounds):
+        for n in names[r % len(names) :] + names[: r % len(names)]:
+            runs[n].append(run(n, checkouts[n]))
+    return runs
+
+
+def write_report(out: Path, stem: str, result: dict, markdown: str) -> None:
+    """``<stem>.json`` and ``<stem>.md`` in ``out`` (made if missing), each written atomically, and
+    the Markdown printed."""
+    write_text_atomic(Path(out) / f"{stem}.json", json.dumps(result, indent=1) + "\n")
+    write_text_atomic(Path(out) / f"{stem}.md", markdown)
+    print(markdown)
+
+
+def valley_truth(folder: Path, width: int, height: int, spp: int) -> Path:
+    """``folder/valley_<W>x<H>.exr``: ``scenes/valley.xml`` at that size, ``spp`` and seed 0, rendered
+    by this checkout's ``fogref render`` (no PNG)."""
+    root = Path(__file__).resolve().parents[1]
+    truth = Path(folder) / f"valley_{width}x{height}.exr"
+    args = ["render", str(root / "scenes" / "valley.xml"), "--spp", str(spp), "--seed", "0", "--quiet"]
+    args += ["--set", f"res={width}", "--set", f"resy={height}", "--out", str(truth), "--no-png"]
+    run = "import sys; from fogref.cli import main; sys.exit(main())"
+    subprocess.run([sys.executable, "-c", run, *args], env=checkout_env(root), check=True, cwd=root)
+    return truth

@@ -20,44 +20,19 @@ import argparse
 import json
 import os
 import statistics
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
-from _checkouts import checkout_env, commit_of, ratio_range
+from _checkouts import alternating, commit_of, ratio_range, timed_command, valley_truth, write_report
 
 ROOT = Path(__file__).resolve().parents[1]
-PY = sys.executable
 SIZE = (960, 540, 4)  # width, height, spp
-#: the child: times the metrics table, then runs the command; prints the table's seconds last
-CHILD = """
-import json, sys, time
-import fogref.compare.report as report
-table = report._metrics_table
-seconds = []
-def timed(*args):
-    t0 = time.perf_counter()
-    out = table(*args)
-    seconds.append(time.perf_counter() - t0)
-    return out
-report._metrics_table = timed
-from fogref.cli import main
-t0 = time.perf_counter()
-code = main(sys.argv[1:])
-print(json.dumps({"wall_s": time.perf_counter() - t0, "table_s": sum(seconds), "code": code}))
-"""
+TABLE = "fogref.compare.report:_metrics_table"  # timed apart in each run
 
 
 def _compare(checkout: Path, truth: Path, out: Path) -> dict:
-    args = ["compare", str(truth), "--model", "ue4", "--from-scene", "--no-figures", "--out", str(out)]
-    p = subprocess.run(
-        [PY, "-c", CHILD, *args], env=checkout_env(checkout), capture_output=True, text=True, cwd=checkout
-    )
-    row = json.loads(p.stdout.strip().splitlines()[-1]) if p.stdout.strip() else {}
-    if row.get("code") not in (0, 1, 3):  # pass, fail, inconclusive: a verdict was reached
-        raise SystemExit(f"compare in {checkout} failed:\n{p.stderr[-3000:]}")
-    return row
+    args = ["compare", truth, "--model", "ue4", "--from-scene", "--no-figures", "--out", out]
+    return timed_command(checkout, TABLE, args, codes=(0, 1, 3))  # pass, fail, inconclusive: a verdict
 
 
 def _without_paths(x):
@@ -77,17 +52,10 @@ def main() -> None:
     checkouts = {"before": Path(a.base).resolve(), "after": ROOT}
     work = Path(tempfile.mkdtemp(prefix="compare-large-"))
     w, h, spp = SIZE
-    truth = work / f"valley_{w}x{h}.exr"
-    render = ["render", str(ROOT / "scenes" / "valley.xml"), "--spp", str(spp), "--seed", "0"]
-    render += ["--set", f"res={w}", "--set", f"resy={h}", "--out", str(truth), "--quiet", "--no-png"]
-    run = "import sys; from fogref.cli import main; sys.exit(main())"
-    subprocess.run([PY, "-c", run, *render], env=checkout_env(ROOT), check=True, cwd=ROOT)
+    truth = valley_truth(work, w, h, spp)
     _compare(ROOT, truth, work / "warm")  # the page cache and Python's bytecode, once
     load = [os.getloadavg()[0]]
-    runs: dict = {m: [] for m in checkouts}
-    for r in range(a.rounds):
-        for mode in list(checkouts)[r % 2 :] + list(checkouts)[: r % 2]:
-            runs[mode].append(_compare(checkouts[mode], truth, work / mode))
+    runs = alternating(checkouts, a.rounds, lambda mode, checkout: _compare(checkout, truth, work / mode))
     load.append(os.getloadavg()[0])
     same = {
         f: _without_paths(json.loads((work / "before" / f).read_text()))
@@ -103,11 +71,7 @@ def main() -> None:
         "runs": runs,
         "identical": same,
     }
-    out = Path(a.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "compare_large.json").write_text(json.dumps(result, indent=1) + "\n")
-    (out / "compare_large.md").write_text(report(result))
-    print(report(result))
+    write_report(Path(a.out), "compare_large", result, report(result))
 
 
 def report(r: dict) -> str:
@@ -127,7 +91,7 @@ def report(r: dict) -> str:
         "| | before [s], median | after [s], median | before / after |",
         "|---|---:|---:|---|",
     ]
-    for key, name in (("wall_s", "the command"), ("table_s", "its metrics table")):
+    for key, name in (("wall_s", "the command"), ("part_s", "its metrics table")):
         b, x = (statistics.median(v[key] for v in runs[m]) for m in ("before", "after"))
         ratio = ratio_range([v[key] for v in runs["before"]], [v[key] for v in runs["after"]])
         md.append(f"| {name} | {b:.2f} | {x:.2f} | {ratio} |")

@@ -42,7 +42,7 @@ import zlib
 from pathlib import Path
 
 import numpy as np
-from _checkouts import checkout_env, commit_of, ratio_range
+from _checkouts import alternating, checkout_env, commit_of, ratio_range, valley_truth, write_report
 from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -146,37 +146,13 @@ def main() -> None:
     }
     for w, h, spp in SIZES:
         rounds = a.rounds if w * h <= 320 * 180 else max(2, a.rounds // 2)
-        truth = work / f"valley_{w}x{h}.exr"
-        subprocess.run(
-            [
-                PY,
-                "-c",
-                RUN,
-                "render",
-                str(ROOT / "scenes" / "valley.xml"),
-                "--spp",
-                str(spp),
-                "--seed",
-                "0",
-                "--set",
-                f"res={w}",
-                "--set",
-                f"resy={h}",
-                "--out",
-                str(truth),
-                "--quiet",
-                "--no-png",
-            ],
-            env=checkout_env(ROOT),
-            check=True,
-            cwd=ROOT,
-        )
+        truth = valley_truth(work, w, h, spp)
         _compare(ROOT, truth, work / "warm", [])  # the page cache and Python's bytecode, once
-        times: dict = {m: [] for m in MODES}
-        for r in range(rounds):
-            order = MODES[r % 3 :] + MODES[: r % 3]
-            for mode in order:
-                times[mode].append(_compare(checkouts[mode], truth, work / f"{w}x{h}" / mode, extra[mode]))
+        times = alternating(
+            {m: checkouts[m] for m in MODES},
+            rounds,
+            lambda mode, checkout: _compare(checkout, truth, work / f"{w}x{h}" / mode, extra[mode]),
+        )
         load.append(os.getloadavg()[0])
         folders = {m: work / f"{w}x{h}" / m for m in MODES}
         same_metrics = all(_metrics(folders[m]) == _metrics(folders["before"]) for m in MODES)
@@ -204,11 +180,7 @@ def main() -> None:
     }
     load.append(os.getloadavg()[0])
     result["load_average"] = load
-    out = Path(a.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "compare_speed.json").write_text(json.dumps(result, indent=1) + "\n")
-    (out / "compare_speed.md").write_text(report(result))
-    print(report(result))
+    write_report(Path(a.out), "compare_speed", result, report(result))
 
 
 def report(r: dict) -> str:

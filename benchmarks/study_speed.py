@@ -23,45 +23,18 @@ import argparse
 import json
 import os
 import statistics
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
-from _checkouts import checkout_env, commit_of, ratio_range
+from _checkouts import alternating, commit_of, ratio_range, timed_command, valley_truth, write_report
 
 ROOT = Path(__file__).resolve().parents[1]
-PY = sys.executable
 SIZE = (320, 180, 16)  # width, height, spp
-#: the child: times the Shapley budgets, then runs the command; prints their seconds last
-CHILD = """
-import json, sys, time
-import fogref.study.budget as budget
-shapley_budget = budget.shapley_budget
-seconds = []
-def timed(*args, **kwargs):
-    t0 = time.perf_counter()
-    out = shapley_budget(*args, **kwargs)
-    seconds.append(time.perf_counter() - t0)
-    return out
-budget.shapley_budget = timed
-from fogref.cli import main
-t0 = time.perf_counter()
-code = main(sys.argv[1:])
-print(json.dumps({"wall_s": time.perf_counter() - t0, "shapley_s": sum(seconds), "budgets": len(seconds),
-                  "code": code}))
-"""
+BUDGET = "fogref.study.budget:shapley_budget"  # timed apart in each run
 
 
 def _study(checkout: Path, truth: Path, out: Path, renders: Path) -> dict:
-    args = ["study", str(truth), "--out", str(out), "--renders", str(renders)]
-    p = subprocess.run(
-        [PY, "-c", CHILD, *args], env=checkout_env(checkout), capture_output=True, text=True, cwd=checkout
-    )
-    row = json.loads(p.stdout.strip().splitlines()[-1]) if p.stdout.strip() else {}
-    if row.get("code") != 0:
-        raise SystemExit(f"study in {checkout} failed:\n{p.stderr[-3000:]}")
-    return row
+    return timed_command(checkout, BUDGET, ["study", truth, "--out", out, "--renders", renders])
 
 
 def _numbers(folder: Path, name: str):
@@ -83,18 +56,15 @@ def main() -> None:
     checkouts = {"before": Path(a.base).resolve(), "after": ROOT}
     work = Path(tempfile.mkdtemp(prefix="study-speed-"))
     w, h, spp = SIZE
-    truth = work / f"valley_{w}x{h}.exr"
-    render = ["render", str(ROOT / "scenes" / "valley.xml"), "--spp", str(spp), "--seed", "0"]
-    render += ["--set", f"res={w}", "--set", f"resy={h}", "--out", str(truth), "--quiet", "--no-png"]
-    run = "import sys; from fogref.cli import main; sys.exit(main())"
-    subprocess.run([PY, "-c", run, *render], env=checkout_env(ROOT), check=True, cwd=ROOT)
+    truth = valley_truth(work, w, h, spp)
     for mode, checkout in checkouts.items():  # the extra renders, and Python's bytecode, once
         _study(checkout, truth, work / f"warm-{mode}", work / f"renders-{mode}")
     load = [os.getloadavg()[0]]
-    runs: dict = {m: [] for m in checkouts}
-    for r in range(a.rounds):
-        for mode in list(checkouts)[r % 2 :] + list(checkouts)[: r % 2]:
-            runs[mode].append(_study(checkouts[mode], truth, work / mode, work / f"renders-{mode}"))
+    runs = alternating(
+        checkouts,
+        a.rounds,
+        lambda mode, checkout: _study(checkout, truth, work / mode, work / f"renders-{mode}"),
+    )
     load.append(os.getloadavg()[0])
     same = {
         f: _numbers(work / "before", f) == _numbers(work / "after", f)
@@ -109,11 +79,7 @@ def main() -> None:
         "runs": runs,
         "identical": same,
     }
-    out = Path(a.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "study_speed.json").write_text(json.dumps(result, indent=1) + "\n")
-    (out / "study_speed.md").write_text(report(result))
-    print(report(result))
+    write_report(Path(a.out), "study_speed", result, report(result))
 
 
 def report(r: dict) -> str:
@@ -126,14 +92,14 @@ def report(r: dict) -> str:
         f"({r['size']}), its extra renders made once before the timed runs, each run a fresh process, "
         f"{len(runs['after'])} rounds alternating the two; {r['cores']} cores, load average (1 min) "
         + " -> ".join(f"{x:.1f}" for x in r["load_average"])
-        + f".  `before`: {r['base']}; `after`: {r['after']}.  The {runs['after'][0]['budgets']} Shapley "
+        + f".  `before`: {r['base']}; `after`: {r['after']}.  The {runs['after'][0]['calls']} Shapley "
         "budgets (all coalitions and the colours in the lobe, for each of two seeds) are timed inside "
         "the same runs.  Ratio: `before` / `after` per round, median [smallest, largest].",
         "",
         "| | before [s], median | after [s], median | before / after |",
         "|---|---:|---:|---|",
     ]
-    for key, name in (("wall_s", "the command"), ("shapley_s", "its Shapley budgets")):
+    for key, name in (("wall_s", "the command"), ("part_s", "its Shapley budgets")):
         b, x = (statistics.median(v[key] for v in runs[m]) for m in ("before", "after"))
         ratio = ratio_range([v[key] for v in runs["before"]], [v[key] for v in runs["after"]])
         md.append(f"| {name} | {b:.2f} | {x:.2f} | {ratio} |")
