@@ -9,9 +9,10 @@ coalitions) over ``e(all)``.  The shares sum to 100 % and do not depend on any o
 interactions (e.g. shadows only matter while the sun is physical) are split equally between
 the effects involved.  Only the truth and the sun-less render are path traced; the closed
 forms and the engine's 16 configurations are computed once (:func:`shapley_parts`) and
-reused by all coalitions, and coalitions with the same image (:func:`effective_coalition`: 212 of
-the 512) share one evaluation of the error.  Noise: a block bootstrap over the image and, with a second pair
-of renders, the seed-to-seed difference.  **Second, the telescoping chain** below.
+reused by all coalitions, and coalitions with the same image (:func:`effective_coalition`: 212
+of the 512) share one evaluation of the error.  Noise: a block bootstrap over the image and,
+with a second pair of renders, the seed-to-seed difference.  **Second, the telescoping chain**
+below.
 
 **Every model** (:func:`run_budget`): the same Shapley game with another model's engine side
 (:func:`model_engine`: its transmittance and inscatter, the sun lobe split off with

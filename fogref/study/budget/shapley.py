@@ -142,8 +142,9 @@ def shapley_budget(
             d *= d
             e = d[..., 0] + d[..., 1]  # np.sum's order over three channels
             e += d[..., 2]
-            # every pixel in its block, in the same order, with 0 for the invalid ones: the same sums
-            memo[key] = np.bincount(ids.ravel(), weights=np.where(valid, e, 0.0).ravel(), minlength=nb)[:nb]
+            # every pixel in its block, in the same order, 0 for the invalid ones: the same sums
+            weights = np.where(valid, e, 0.0).ravel()
+            memo[key] = np.bincount(ids.ravel(), weights=weights, minlength=nb)[:nb]
         return memo[key]
 
     phi_blocks = shapley_values(per_block, effects)  # key -> (nb,)
