@@ -117,3 +117,34 @@ def valley_truth(folder: Path, width: int, height: int, spp: int) -> Path:
     run = "import sys; from fogref.cli import main; sys.exit(main())"
     subprocess.run([sys.executable, "-c", run, *args], env=checkout_env(root), check=True, cwd=root)
     return truth
+
+
+def before_after(base: Path, rounds: int, run, identical) -> dict:
+    """Rounds alternating ``before`` (the checkout ``base``) and ``after`` (this one), each run
+    ``run(name, checkout)`` (:func:`alternating`); then ``identical()``, the runs' outputs compared.
+    Returns what a report needs: the commits, the cores, the load average (1 min) before and after
+    the rounds, the runs and the identity."""
+    root = Path(__file__).resolve().parents[1]
+    checkouts = {"before": Path(base).resolve(), "after": root}
+    load = [os.getloadavg()[0]]
+    runs = alternating(checkouts, rounds, run)
+    load.append(os.getloadavg()[0])
+    return {
+        "base": commit_of(checkouts["before"]),
+        "after": commit_of(root),
+        "cores": len(os.sched_getaffinity(0)),
+        "load_average": load,
+        "runs": runs,
+        "identical": identical(),
+    }
+
+
+def timing_rows(runs: dict, rows) -> list[str]:
+    """A Markdown table of ``rows`` (``(key, label)``: a seconds field of every run) from
+    :func:`before_after`'s runs: each side's median and the per-round ratio :func:`ratio_range`."""
+    md = ["| | before [s], median | after [s], median | before / after |", "|---|---:|---:|---|"]
+    for key, label in rows:
+        before, after = ([v[key] for v in runs[m]] for m in ("before", "after"))
+        ratio = ratio_range(before, after)
+        md.append(f"| {label} | {statistics.median(before):.2f} | {statistics.median(after):.2f} | {ratio} |")
+    return md

@@ -18,12 +18,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import statistics
 import tempfile
 from pathlib import Path
 
-from _checkouts import alternating, commit_of, ratio_range, timed_command, valley_truth, write_report
+from _checkouts import before_after, timed_command, timing_rows, valley_truth, write_report
 
 ROOT = Path(__file__).resolve().parents[1]
 SIZE = (960, 540, 4)  # width, height, spp
@@ -49,28 +47,20 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
     a = ap.parse_args()
-    checkouts = {"before": Path(a.base).resolve(), "after": ROOT}
     work = Path(tempfile.mkdtemp(prefix="compare-large-"))
     w, h, spp = SIZE
     truth = valley_truth(work, w, h, spp)
     _compare(ROOT, truth, work / "warm")  # the page cache and Python's bytecode, once
-    load = [os.getloadavg()[0]]
-    runs = alternating(checkouts, a.rounds, lambda mode, checkout: _compare(checkout, truth, work / mode))
-    load.append(os.getloadavg()[0])
-    same = {
-        f: _without_paths(json.loads((work / "before" / f).read_text()))
-        == _without_paths(json.loads((work / "after" / f).read_text()))
-        for f in ("metrics.json", "check.json")
-    }
-    result = {
-        "base": commit_of(checkouts["before"]),
-        "after": commit_of(ROOT),
-        "size": f"{w}x{h}, {spp} spp",
-        "cores": len(os.sched_getaffinity(0)),
-        "load_average": load,
-        "runs": runs,
-        "identical": same,
-    }
+
+    def identical() -> dict:
+        return {
+            f: _without_paths(json.loads((work / "before" / f).read_text()))
+            == _without_paths(json.loads((work / "after" / f).read_text()))
+            for f in ("metrics.json", "check.json")
+        }
+
+    run = lambda mode, checkout: _compare(checkout, truth, work / mode)
+    result = {"size": f"{w}x{h}, {spp} spp", **before_after(Path(a.base), a.rounds, run, identical)}
     write_report(Path(a.out), "compare_large", result, report(result))
 
 
@@ -88,13 +78,8 @@ def report(r: dict) -> str:
         "every region) is timed inside the same runs.  Ratio: `before` / `after` per round, median "
         "[smallest, largest].",
         "",
-        "| | before [s], median | after [s], median | before / after |",
-        "|---|---:|---:|---|",
     ]
-    for key, name in (("wall_s", "the command"), ("part_s", "its metrics table")):
-        b, x = (statistics.median(v[key] for v in runs[m]) for m in ("before", "after"))
-        ratio = ratio_range([v[key] for v in runs["before"]], [v[key] for v in runs["after"]])
-        md.append(f"| {name} | {b:.2f} | {x:.2f} | {ratio} |")
+    md += timing_rows(runs, (("wall_s", "the command"), ("part_s", "its metrics table")))
     md += [
         "",
         "Identity: "

@@ -21,12 +21,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import statistics
 import tempfile
 from pathlib import Path
 
-from _checkouts import alternating, commit_of, ratio_range, timed_command, valley_truth, write_report
+from _checkouts import before_after, timed_command, timing_rows, valley_truth, write_report
 
 ROOT = Path(__file__).resolve().parents[1]
 SIZE = (320, 180, 16)  # width, height, spp
@@ -53,32 +51,18 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
     a = ap.parse_args()
-    checkouts = {"before": Path(a.base).resolve(), "after": ROOT}
     work = Path(tempfile.mkdtemp(prefix="study-speed-"))
     w, h, spp = SIZE
     truth = valley_truth(work, w, h, spp)
-    for mode, checkout in checkouts.items():  # the extra renders, and Python's bytecode, once
-        _study(checkout, truth, work / f"warm-{mode}", work / f"renders-{mode}")
-    load = [os.getloadavg()[0]]
-    runs = alternating(
-        checkouts,
-        a.rounds,
-        lambda mode, checkout: _study(checkout, truth, work / mode, work / f"renders-{mode}"),
-    )
-    load.append(os.getloadavg()[0])
-    same = {
-        f: _numbers(work / "before", f) == _numbers(work / "after", f)
-        for f in ("budget.json", "fit.json", "compare/metrics.json")
-    }
-    result = {
-        "base": commit_of(checkouts["before"]),
-        "after": commit_of(ROOT),
-        "size": f"{w}x{h}, {spp} spp",
-        "cores": len(os.sched_getaffinity(0)),
-        "load_average": load,
-        "runs": runs,
-        "identical": same,
-    }
+    for mode, checkout in (("before", Path(a.base).resolve()), ("after", ROOT)):
+        _study(checkout, truth, work / f"warm-{mode}", work / f"renders-{mode}")  # their extra renders
+
+    def identical() -> dict:
+        files = ("budget.json", "fit.json", "compare/metrics.json")
+        return {f: _numbers(work / "before", f) == _numbers(work / "after", f) for f in files}
+
+    run = lambda mode, checkout: _study(checkout, truth, work / mode, work / f"renders-{mode}")
+    result = {"size": f"{w}x{h}, {spp} spp", **before_after(Path(a.base), a.rounds, run, identical)}
     write_report(Path(a.out), "study_speed", result, report(result))
 
 
@@ -96,13 +80,8 @@ def report(r: dict) -> str:
         "budgets (all coalitions and the colours in the lobe, for each of two seeds) are timed inside "
         "the same runs.  Ratio: `before` / `after` per round, median [smallest, largest].",
         "",
-        "| | before [s], median | after [s], median | before / after |",
-        "|---|---:|---:|---|",
     ]
-    for key, name in (("wall_s", "the command"), ("part_s", "its Shapley budgets")):
-        b, x = (statistics.median(v[key] for v in runs[m]) for m in ("before", "after"))
-        ratio = ratio_range([v[key] for v in runs["before"]], [v[key] for v in runs["after"]])
-        md.append(f"| {name} | {b:.2f} | {x:.2f} | {ratio} |")
+    md += timing_rows(runs, (("wall_s", "the command"), ("part_s", "its Shapley budgets")))
     md += [
         "",
         "Identity: "
