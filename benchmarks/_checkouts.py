@@ -4,6 +4,7 @@ alternate the checkouts, per-round ratios, and the report's two files."""
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import statistics
@@ -148,3 +149,14 @@ def timing_rows(runs: dict, rows) -> list[str]:
         ratio = ratio_range(before, after)
         md.append(f"| {label} | {statistics.median(before):.2f} | {statistics.median(after):.2f} | {ratio} |")
     return md
+
+
+def before_after_arguments(doc: str) -> argparse.Namespace:
+    """The command line of a before/after benchmark (``doc``: its module docstring, whose first
+    paragraph describes it): ``--base`` (the checkout to compare with), ``--rounds`` (default 3) and
+    ``--out`` (default ``reports/benchmarks``)."""
+    ap = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    ap.add_argument("--base", required=True, help="the checkout to compare with (a git worktree)")
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--out", default=str(Path(__file__).resolve().parents[1] / "reports" / "benchmarks"))
+    return ap.parse_args()

@@ -16,12 +16,18 @@ timed apart, by a wrapper the child process puts around it.  Identity: ``metrics
 
 from __future__ import annotations
 
-import argparse
 import json
 import tempfile
 from pathlib import Path
 
-from _checkouts import before_after, timed_command, timing_rows, valley_truth, write_report
+from _checkouts import (
+    before_after,
+    before_after_arguments,
+    timed_command,
+    timing_rows,
+    valley_truth,
+    write_report,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 SIZE = (960, 540, 4)  # width, height, spp
@@ -42,11 +48,7 @@ def _without_paths(x):
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--base", required=True, help="the checkout to compare with (a git worktree)")
-    ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
-    a = ap.parse_args()
+    a = before_after_arguments(__doc__)
     work = Path(tempfile.mkdtemp(prefix="compare-large-"))
     w, h, spp = SIZE
     truth = valley_truth(work, w, h, spp)

@@ -28,7 +28,6 @@ but for paths, every figure's pixels equal (decoded), and the viewer's arrays eq
 
 from __future__ import annotations
 
-import argparse
 import io
 import json
 import os
@@ -42,7 +41,15 @@ import zlib
 from pathlib import Path
 
 import numpy as np
-from _checkouts import alternating, checkout_env, commit_of, ratio_range, valley_truth, write_report
+from _checkouts import (
+    alternating,
+    before_after_arguments,
+    checkout_env,
+    commit_of,
+    ratio_range,
+    valley_truth,
+    write_report,
+)
 from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -127,11 +134,7 @@ def _import_seconds(module: str) -> float:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--base", required=True, help="the checkout to compare with (a git worktree)")
-    ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
-    a = ap.parse_args()
+    a = before_after_arguments(__doc__)
     base = Path(a.base).resolve()
     checkouts = {"before": base, "after": ROOT, "after, 1 process": ROOT}
     extra = {"before": [], "after": [], "after, 1 process": ["--processes", "1"]}
