@@ -303,16 +303,18 @@ def _played_without_memo(parts, valid, effects, fixed):
 
 
 @pytest.mark.parametrize("droplets", [False, True])
-@pytest.mark.parametrize("fixed", [(), ("refit",)])
-def test_effective_coalitions_have_the_coalitions_images_and_the_budget_is_unchanged(droplets, fixed):
-    """Every coalition of the nine effects (and "phase" for a droplet fog): its effective coalition's
-    image equals its own bit for bit (one ulp of one pixel is detected), with the surface undefined
-    on some pixels; 212 of the 512 coalitions of the nine are distinct.  The budget, which plays
-    each effective coalition once, gives every effect's value and share bit for bit as the game
-    played coalition by coalition (written here as it was)."""
+@pytest.mark.parametrize("case", ["ue4", "ue4, colours in the lobe", "godot"])
+def test_effective_coalitions_have_the_coalitions_images_and_the_budget_is_unchanged(droplets, case):
+    """Every coalition of the budget's effects (Unreal's nine, or with the colours in the lobe, or
+    Godot's, which lacks Unreal's own, each with "phase" for a droplet fog): its effective
+    coalition's image equals its own bit for bit (one ulp of one pixel is detected), with the
+    surface undefined on some pixels; 212 of the 512 coalitions of the nine are distinct.  The
+    budget, which plays each effective coalition once, gives every effect's value and share bit for
+    bit as the game played coalition by coalition (written here as it was)."""
     import dataclasses
     import itertools
 
+    from fogref.mapping import from_physical
     from fogref.mapping.droplet_fog import droplet_fog
 
     pf, px, sky, lobe, model, parts = _shapley_setup(rel_stderr=0.05)
@@ -320,8 +322,14 @@ def test_effective_coalitions_have_the_coalitions_images_and_the_budget_is_uncha
         pf = dataclasses.replace(
             pf, medium=dataclasses.replace(pf.medium, phase=droplet_fog(None, "radiation").phase)
         )
+    if case == "godot":
+        godot = from_physical("godot", pf)
+        parts = B.shapley_parts(px, sky, pf, B.model_engine(godot))
+        effects = list(B.applicable_effects(godot, None, pf))
+    else:
         parts = B.shapley_parts(px, sky, pf, B.unreal_engine(lobe, model))
-    effects = [k for k in B.EFFECTS if k not in fixed] + (["phase"] if droplets else [])
+        effects = list(B.EFFECTS if case == "ue4" else B.EFFECTS_COLOURS_IN_LOBE) + list(B.phase_effect(pf))
+    fixed = tuple(k for k in B.CONFIG_EFFECTS if k not in effects)  # as shapley_budget holds them
     valid = px.surface_valid.copy()
     valid[: valid.shape[0] // 3, ::3] = False
     distinct = set()
@@ -331,7 +339,7 @@ def test_effective_coalitions_have_the_coalitions_images_and_the_budget_is_uncha
             distinct.add(key)
             got, want = B.coalition_image(parts, key, fixed), B.coalition_image(parts, C, fixed)
             assert got.tobytes() == want.tobytes(), (C, sorted(key))
-    if not droplets and not fixed:
+    if case == "ue4" and not droplets:
         assert len(distinct) == 212
     sh = B.shapley_budget(parts, valid, effects, resamples=20)
     reference = _played_without_memo(parts, valid, effects, fixed)
