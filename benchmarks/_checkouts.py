@@ -14,6 +14,11 @@ from pathlib import Path
 
 from fogref.atomic import write_text_atomic
 
+#: This checkout (the benchmarks' "after").
+ROOT = Path(__file__).resolve().parents[1]
+#: ``python -c FOGREF_MAIN ARGS`` runs ``fogref ARGS`` with the package first on ``sys.path``.
+FOGREF_MAIN = "import sys; from fogref.cli import main; sys.exit(main())"
+
 
 def commit_of(tree: Path) -> str:
     """The short commit of the git work tree ``tree``, with " (with uncommitted changes)" when a
@@ -111,12 +116,10 @@ def write_report(out: Path, stem: str, result: dict, markdown: str) -> None:
 def valley_truth(folder: Path, width: int, height: int, spp: int) -> Path:
     """``folder/valley_<W>x<H>.exr``: ``scenes/valley.xml`` at that size, ``spp`` and seed 0, rendered
     by this checkout's ``fogref render`` (no PNG)."""
-    root = Path(__file__).resolve().parents[1]
     truth = Path(folder) / f"valley_{width}x{height}.exr"
-    args = ["render", str(root / "scenes" / "valley.xml"), "--spp", str(spp), "--seed", "0", "--quiet"]
+    args = ["render", str(ROOT / "scenes" / "valley.xml"), "--spp", str(spp), "--seed", "0", "--quiet"]
     args += ["--set", f"res={width}", "--set", f"resy={height}", "--out", str(truth), "--no-png"]
-    run = "import sys; from fogref.cli import main; sys.exit(main())"
-    subprocess.run([sys.executable, "-c", run, *args], env=checkout_env(root), check=True, cwd=root)
+    subprocess.run([sys.executable, "-c", FOGREF_MAIN, *args], env=checkout_env(ROOT), check=True, cwd=ROOT)
     return truth
 
 
@@ -125,14 +128,13 @@ def before_after(base: Path, rounds: int, run, identical) -> dict:
     ``run(name, checkout)`` (:func:`alternating`); then ``identical()``, the runs' outputs compared.
     Returns what a report needs: the commits, the cores, the load average (1 min) before and after
     the rounds, the runs and the identity."""
-    root = Path(__file__).resolve().parents[1]
-    checkouts = {"before": Path(base).resolve(), "after": root}
+    checkouts = {"before": Path(base).resolve(), "after": ROOT}
     load = [os.getloadavg()[0]]
     runs = alternating(checkouts, rounds, run)
     load.append(os.getloadavg()[0])
     return {
         "base": commit_of(checkouts["before"]),
-        "after": commit_of(root),
+        "after": commit_of(ROOT),
         "cores": len(os.sched_getaffinity(0)),
         "load_average": load,
         "runs": runs,
@@ -158,5 +160,5 @@ def before_after_arguments(doc: str) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=doc.split("\n\n")[0])
     ap.add_argument("--base", required=True, help="the checkout to compare with (a git worktree)")
     ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--out", default=str(Path(__file__).resolve().parents[1] / "reports" / "benchmarks"))
+    ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
     return ap.parse_args()

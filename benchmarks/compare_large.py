@@ -21,6 +21,7 @@ import tempfile
 from pathlib import Path
 
 from _checkouts import (
+    ROOT,
     before_after,
     before_after_arguments,
     timed_command,
@@ -29,7 +30,6 @@ from _checkouts import (
     write_report,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
 SIZE = (960, 540, 4)  # width, height, spp
 TABLE = "fogref.compare.report:_metrics_table"  # timed apart in each run
 

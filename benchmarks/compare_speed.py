@@ -42,6 +42,8 @@ from pathlib import Path
 
 import numpy as np
 from _checkouts import (
+    FOGREF_MAIN,
+    ROOT,
     alternating,
     before_after_arguments,
     checkout_env,
@@ -52,15 +54,14 @@ from _checkouts import (
 )
 from PIL import Image
 
-ROOT = Path(__file__).resolve().parents[1]
 PY = sys.executable
 SIZES = ((320, 180, 16), (64, 36, 16), (960, 540, 4))  # width, height, spp
 MODES = ("before", "after", "after, 1 process")
-RUN = "import sys; from fogref.cli import main; sys.exit(main())"
 
 
 def _compare(checkout: Path, truth: Path, out: Path, extra: list[str]) -> float:
-    cmd = [PY, "-c", RUN, "compare", str(truth), "--model", "ue4", "--from-scene", "--out", str(out), *extra]
+    cmd = [PY, "-c", FOGREF_MAIN, "compare", str(truth), "--model", "ue4", "--from-scene"]
+    cmd += ["--out", str(out), *extra]
     t0 = time.perf_counter()
     p = subprocess.run(cmd, env=checkout_env(checkout), capture_output=True, text=True, cwd=checkout)
     wall = time.perf_counter() - t0

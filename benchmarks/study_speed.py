@@ -24,6 +24,7 @@ import tempfile
 from pathlib import Path
 
 from _checkouts import (
+    ROOT,
     before_after,
     before_after_arguments,
     timed_command,
@@ -32,7 +33,6 @@ from _checkouts import (
     write_report,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
 SIZE = (320, 180, 16)  # width, height, spp
 BUDGET = "fogref.study.budget:shapley_budget"  # timed apart in each run
 
