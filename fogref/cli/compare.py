@@ -17,10 +17,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fogref.atomic import check_output_file
-from fogref.cli.checks import Check, Choice, Integer, Number, PathArg
+from fogref.cli.checks import Check, Choice, Number, PathArg
 from fogref.cli.compare_batch import ImageList, run_batch
 from fogref.cli.engine import engine_model
-from fogref.cli.spec import UsageError, api_arguments, assignments, option, refuse, switch
+from fogref.cli.spec import UsageError, api_arguments, assignments, option, processes_option, refuse, switch
 from fogref.compare import gate
 from fogref.compare.check import check
 from fogref.compare.foreign import ENCODINGS, load_engine_images
@@ -108,13 +108,7 @@ class Options:
         api_name="figures",
         negates=True,
     )
-    processes: int | None = option(
-        None,
-        "worker processes that draw the report's figures",
-        check=Integer(1, 1024),
-        metavar="N",
-        default_text="one per core this process may use; the Python API's default is 1",
-    )
+    processes: int | None = processes_option("the report's figures")
     model: str | None = option(
         None,
         "fog model: a built-in name (e.g. ue4), module.path:Class, or a 'fogref.models' entry point",

@@ -41,7 +41,7 @@ from dataclasses import MISSING, field
 
 from fogref import params
 from fogref.atomic import check_output_file, is_stream, refuse_overwriting_inputs
-from fogref.cli.checks import Assignments, Check, PathArg, Text
+from fogref.cli.checks import Assignments, Check, Integer, PathArg, Text
 from fogref.errors import FogrefError, did_you_mean
 
 __all__ = [
@@ -53,6 +53,7 @@ __all__ = [
     "check_paths",
     "option",
     "parse_options",
+    "processes_option",
     "refuse",
     "switch",
     "toggle",
@@ -164,6 +165,19 @@ def _field(default, given: dict) -> dataclasses.Field:
     """A dataclass field holding an option's metadata: :data:`_BLANK`, the keys of ``given`` overriding."""
     md = {"fogref": {k: given.get(k, blank) for k, blank in _BLANK.items()}}
     return field(metadata=md) if default is MISSING else field(default=default, metadata=md)
+
+
+def processes_option(figures: str):
+    """The ``--processes N`` option of a command that draws ``figures`` on worker processes
+    (:mod:`fogref.compare.workers`): default None, one per core the process may use, where the
+    Python API's default is 1 (a worker imports the caller's main module)."""
+    return option(
+        None,
+        f"worker processes that draw {figures}",
+        check=Integer(1, 1024),
+        metavar="N",
+        default_text="one per core this process may use; the Python API's default is 1",
+    )
 
 
 def switch(

@@ -8,8 +8,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from fogref.cli.checks import Integer, Number, PathArg
-from fogref.cli.spec import option, switch
+from fogref.cli.checks import Number, PathArg
+from fogref.cli.spec import option, processes_option, switch
 from fogref.gbuffer import load_truth
 from fogref.html.reports import write_study_html
 from fogref.study.ue_pathtracer import split_study
@@ -45,13 +45,7 @@ class Options:
     no_compare: bool = switch(
         "skip the fogref.compare report", api=STUDY, api_name="compare_report", negates=True
     )
-    processes: int | None = option(
-        None,
-        "worker processes that draw the comparison's figures",
-        check=Integer(1, 1024),
-        metavar="N",
-        default_text="one per core this process may use; the Python API's default is 1",
-    )
+    processes: int | None = processes_option("the comparison's figures")
     ue_pathtracer: bool = switch(
         "also split what a UE user sees into raster EHF vs UE's path-traced fog and UE's path-traced "
         "fog vs the exact fog, each with its noise (fogref.study.ue_pathtracer.split_study): a section "
