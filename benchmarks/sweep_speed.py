@@ -154,20 +154,77 @@ def _truth_pixels(folder: Path, rows: dict) -> dict:
     return out
 
 
+def _numbers(cell: str):
+    """The numbers of a ``results.csv`` cell, in order (a number, or JSON holding numbers), with
+    its text less those numbers; None for text with no number in it.
+
+    >>> _numbers('{"a": [1.5, 2], "b": "x"}')
+    ([1.5, 2.0], '{"a": [#, #], "b": "x"}')
+    >>> _numbers("0.25"), _numbers("ue4")
+    (([0.25], '#'), None)
+    """
+    try:
+        value = json.loads(cell)
+    except ValueError:
+        return None
+    found: list[float] = []
+
+    def walk(v):
+        if isinstance(v, bool) or v is None or isinstance(v, str):
+            return v
+        if isinstance(v, (int, float)):
+            found.append(float(v))
+            return "#"
+        if isinstance(v, list):
+            return [walk(x) for x in v]
+        return {k: walk(x) for k, x in v.items()}
+
+    shape = json.dumps(walk(value)).replace('"#"', "#")
+    return (found, shape) if found else None
+
+
+def _relative_difference(a: str, b: str) -> float | None:
+    """The largest ``|x - y| / max(|x|, |y|)`` over the numbers of two cells of the same shape
+    (:func:`_numbers`; 0 where both are 0); None when they are not both numbers of one shape.
+
+    >>> _relative_difference("[1.0, 2.0]", "[1.0, 2.5]")
+    0.2
+    >>> _relative_difference("1.0", "x") is None
+    True
+    """
+    na, nb = _numbers(a), _numbers(b)
+    if na is None or nb is None or na[1] != nb[1]:
+        return None
+    x, y = np.array(na[0]), np.array(nb[0])
+    if not (np.isfinite(x).all() and np.isfinite(y).all()):
+        return None if not np.array_equal(x, y, equal_nan=True) else 0.0
+    scale = np.maximum(np.abs(x), np.abs(y))
+    return float(np.max(np.where(scale > 0, np.abs(x - y) / np.where(scale > 0, scale, 1.0), 0.0)))
+
+
 def identical(base: Path, after: Path) -> dict:
-    """Cell by cell (but :data:`RUN_COLUMNS`), pixel by pixel and byte by byte: ``{"ok": bool, ...}``."""
+    """Cell by cell (but :data:`RUN_COLUMNS`), pixel by pixel and byte by byte.
+
+    ``{"ok": every cell, pixel and plot equal, "close": the cells that differ, per column, with
+    their largest relative difference (numbers of one shape), "differ": what differs otherwise
+    (text, pixels, plots, columns), ...}``."""
     rows = [list(csv.DictReader((d / "results.csv").open())) for d in (base, after)]
     key = [{r["config_id"] + "/" + r["model"]: r for r in rs} for rs in rows]
-    differ = []
+    differ, close, n_close = [], {}, 0
     if set(key[0]) != set(key[1]):
         differ.append("the rows' (config_id, model) differ")
     for k in sorted(set(key[0]) & set(key[1])):
         a, b = key[0][k], key[1][k]
         if set(a) != set(b):
             differ.append(f"{k}: columns differ")
-        differ += [
-            f"{k}: {c}: {a[c]!r} != {b.get(c)!r}" for c in a if c not in RUN_COLUMNS and a[c] != b.get(c)
-        ]
+        for c in a:
+            if c in RUN_COLUMNS or a[c] == b.get(c):
+                continue
+            rel = _relative_difference(a[c], b.get(c, ""))
+            if rel is None:
+                differ.append(f"{k}: {c}: {a[c][:80]!r} != {str(b.get(c))[:80]!r}")
+            else:
+                close[c], n_close = max(close.get(c, 0.0), rel), n_close + 1
     px = [_truth_pixels(d / "cache", rows) for d, rows in zip((base, after), key)]
     if px[0] != px[1]:
         differ.append("truth pixels differ: " + ", ".join(n for n in px[0] if px[0].get(n) != px[1].get(n)))
@@ -183,9 +240,11 @@ def identical(base: Path, after: Path) -> dict:
         differ.append("the plots' names differ")
     cells = sum(len(r) - len(RUN_COLUMNS) for r in rows[0])
     return {
-        "ok": not differ,
+        "ok": not differ and not close,
         "rows": len(rows[0]),
         "cells_compared": cells,
+        "cells_close": n_close,
+        "close": dict(sorted(close.items(), key=lambda kv: -kv[1])),
         "truths": len(px[0]),
         "plots": len(pngs),
         "differ": differ[:20],
@@ -345,13 +404,34 @@ def report(res: dict) -> str:
     for n in names:
         ident = res.get("identical", {}).get(n)
         if ident:
+            close = ident.get("close", {})
+            verdict = (
+                "**identical**"
+                if ident["ok"]
+                else "**DIFFERENT**"
+                if ident["differ"]
+                else f"**equal to {max(close.values()):.1e} relative**"
+            )
             L += [
                 "",
-                f"Identity ({n} / after): {'**identical**' if ident['ok'] else '**DIFFERENT**'}: "
+                f"Identity ({n} / after): {verdict}: "
                 f"{ident['rows']} rows, {ident['cells_compared']} cells compared (all but "
                 f"{', '.join(RUN_COLUMNS)}), the pixels of {ident['truths']} truths, "
                 f"and of {ident['plots']} plots.",
             ]
+            if close:
+                L += [
+                    "",
+                    f"{ident['cells_close']} cells hold other numbers (the rest of every cell, every "
+                    "truth's pixels and every plot are the same); the largest relative difference "
+                    "per column:",
+                    "",
+                    "| column | cells' largest relative difference |",
+                    "|---|---:|",
+                    *(f"| `{c}` | {r:.1e} |" for c, r in list(close.items())[:12]),
+                ]
+                if len(close) > 12:
+                    L.append(f"| ({len(close) - 12} more columns) | <= {list(close.values())[12]:.1e} |")
             L += [f"* {d}" for d in ident["differ"]]
     ph = res.get("phases")
     if ph:
@@ -454,7 +534,8 @@ def main(argv=None) -> int:
                 )
         res["identical"] = {w: identical(last[w], last["after"]) for w in trees if w != "after"}
         for w, ident in res["identical"].items():
-            print(f"identical ({w}):", ident["ok"], ident["differ"][:3], flush=True)
+            close = list(ident["close"].items())[:3]
+            print(f"identical ({w}):", ident["ok"], ident["differ"][:3], close, flush=True)
         if a.phase_configs:
             res["phases"] = {
                 w: run_phases(t, Path(tmp) / f"phases-{w}", a.phase_configs) for w, t in trees.items()
