@@ -29,10 +29,10 @@ test process: a registered object of an earlier test that is freed between the t
 case, by its last reference going rather than by a collection, frees a lower ID, and the second
 scene gets it (Dr.Jit hands out the lowest free ID).  The full suite failed once in the power-law
 case with one kernel of another hash, which such an object explains (not proven: Dr.Jit's
-registry can't be read from Python).  So a case renders the pair, the unchanged values and then the changed one, again,
-up to three pairs, until both renders of one pair launch the same kernels
-(:func:`_kernels_of_a_pair`).  A value traced as a literal makes every pair differ, so the test
-keeps its power.
+registry can't be read from Python).  So a case renders the pair, the unchanged values and then
+the changed one, again, up to three pairs, until both renders of one pair launch the same
+kernels (:func:`_kernels_of_a_pair`).  A value traced as a literal makes every pair differ, so
+the test keeps its power.
 """
 
 import gc
