@@ -117,7 +117,7 @@ def _write_stream(path, write) -> None:
         os.unlink(tmp)
 
 
-def atomic_write(path, write) -> Path:
+def atomic_write(path, write, ready=None) -> Path:
     """Call ``write(tmp_path)``, then rename the temporary file onto ``path``.
 
     Parameters
@@ -128,6 +128,10 @@ def atomic_write(path, write) -> Path:
         Callable that writes the whole file at the ``str`` path it is given. The
         temporary file sits in ``path``'s folder and keeps ``path``'s suffix, so
         writers that infer the format from the suffix still work.
+    ready
+        Optional callable, called once the whole file is written and just before it replaces
+        ``path``: it may wait for something that must land first (a file written in another
+        thread).  If it raises, the write is abandoned as if ``write`` had raised.
 
     Returns
     -------
@@ -152,6 +156,8 @@ def atomic_write(path, write) -> Path:
         fd = None
         write(tmp)
         os.chmod(tmp, _file_mode(path))  # mkstemp makes 0600; give the mode a plain open() would
+        if ready is not None:
+            ready()
         os.replace(tmp, path)
     except BaseException:
         if fd is not None:
@@ -211,9 +217,10 @@ def save_figure_atomic(figure, path, dpi: int = FIGURE_DPI) -> Path:
     return atomic_write(path, lambda tmp: figure.savefig(tmp, **options))
 
 
-def savez_atomic(path, **arrays) -> Path:
-    """``numpy.savez`` to ``path`` atomically (``path`` should end in ``.npz``)."""
-    return atomic_write(path, lambda tmp: np.savez(tmp, **arrays))
+def savez_atomic(path, ready=None, **arrays) -> Path:
+    """``numpy.savez`` to ``path`` atomically (``path`` should end in ``.npz``; ``ready`` as in
+    :func:`atomic_write`)."""
+    return atomic_write(path, lambda tmp: np.savez(tmp, **arrays), ready)
 
 
 def set_aside(path, suffix: str) -> Path:

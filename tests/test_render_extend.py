@@ -63,3 +63,31 @@ def test_another_seed_changed_files_or_missing_sums_are_refused(tmp_path, mitsub
         render(scene, out, spp=32, seed=1, **kw)
     render(scene, out, spp=32, seed=2, resume=False, **kw)  # afresh over it
     assert read_exr(out)[1]["fogref.seed"] == 2
+
+
+@pytest.mark.parametrize("failure", [KeyboardInterrupt, OSError])
+def test_sums_never_land_without_their_truth(tmp_path, mitsuba, monkeypatch, failure):
+    """The sums are written in a thread beside the EXR and land only after it: when the EXR's
+    write fails or is interrupted, the earlier truth and its sums are both kept, bitwise, and no
+    temporary file is left.  (Sums that landed regardless would hold the new seed's values.)"""
+    import re
+
+    import fogref.render.render as R
+    from fogref.atomic import temporary_names
+
+    sixteen_spp_passes(monkeypatch)
+    scene = tiny.make(mitsuba, tmp_path / "scene")
+    out = R.render(scene, tmp_path / "x.exr", spp=16, seed=7, progress=False, png=False)
+    before = {p: p.read_bytes() for p in (out, R.moments_path(out))}
+    real = R.write_exr
+
+    def write_then_fail(path, *a, **kw):
+        real(tmp_path / "elsewhere.exr", *a, **kw)  # the EXR's time, without replacing the truth
+        raise failure("the disk went away")
+
+    monkeypatch.setattr(R, "write_exr", write_then_fail)
+    with pytest.raises(failure):
+        R.render(scene, out, spp=16, seed=8, progress=False, png=False, resume=False)
+    assert {p: p.read_bytes() for p in before} == before
+    left = [p.name for p in tmp_path.iterdir() if re.fullmatch(temporary_names(R.moments_path(out)), p.name)]
+    assert left == []

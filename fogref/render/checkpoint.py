@@ -26,20 +26,32 @@ __all__ = ["checkpoint_problem", "record_sha256", "resume", "set_aside_checkpoin
 
 
 def record_sha256(key: str, done: int, sums: np.ndarray, squares: np.ndarray) -> str:
-    """SHA-256 binding a checkpoint's parts: its key, its pass count and its sums' bytes and shapes."""
+    """SHA-256 binding a checkpoint's parts: its key, its pass count and its sums' bytes and shapes.
+
+    The arrays are hashed in place as little-endian float64 in C order, with no copy of their
+    bytes (a 1920x1080 render's sums and squares are 1.2 GB, and copying them took more time
+    than hashing them).
+
+    >>> a, b = np.arange(6.0).reshape(2, 3), np.ones((2, 1), dtype=np.float32)
+    >>> same = f"k\\0{7}\\0{a.shape}\\0{b.shape}\\0".encode() + a.tobytes() + b.astype("<f8").tobytes()
+    >>> record_sha256("k", 7, a, b) == hashlib.sha256(same).hexdigest()
+    True
+    """
     h = hashlib.sha256(f"{key}\0{done}\0{sums.shape}\0{squares.shape}\0".encode())
-    h.update(np.ascontiguousarray(sums, dtype="<f8").tobytes())
-    h.update(np.ascontiguousarray(squares, dtype="<f8").tobytes())
+    for a in (sums, squares):
+        h.update(memoryview(np.ascontiguousarray(a, dtype="<f8")).cast("B"))
     return h.hexdigest()
 
 
-def write_checkpoint(ckpt: Path, state, key: str) -> None:
+def write_checkpoint(ckpt: Path, state, key: str, ready=None) -> None:
     """Write the running state ``(sums, squares, passes done)`` (copied from the device) atomically
-    to ``ckpt`` as one record: the three together with a SHA-256 over them."""
+    to ``ckpt`` as one record: the three together with a SHA-256 over them.  ``ready``: called
+    just before the record replaces ``ckpt`` (:func:`fogref.atomic.atomic_write`)."""
     sums, squares, done = state
     sums, squares = np.asarray(sums, dtype=np.float64), np.asarray(squares, dtype=np.float64)
     savez_atomic(
         ckpt,
+        ready=ready,
         sums=sums,
         squares=squares,
         done=np.array(done),
