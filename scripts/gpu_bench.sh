@@ -2,8 +2,8 @@
 # The GPU figures of reports/benchmarks/gpu.md, as one prepared run on a lent GPU machine.
 #
 # Here:   bash scripts/gpu_pack.sh         (once: .gpu/site-cp312.tar.xz, about 30 MB)
-# Device, in two runs (each under a run's 600 s; one H200 took 250 s and 410 s):
-#   run(command='STEPS="import driver" bash scripts/gpu_bench.sh', carry=[".gpu/site-cp312.tar.xz"], timeout_s=400)
+# Device, in two runs (each under a run's 600 s; on one H200 about 300 s and 410 s):
+#   run(command='STEPS="import driver" bash scripts/gpu_bench.sh', carry=[".gpu/site-cp312.tar.xz"], timeout_s=450)
 #   run(command='STEPS="import ladder attribution" bash scripts/gpu_bench.sh', carry=[...], timeout_s=480)
 # Try it here on the CPU first (same steps, tiny sizes, the 3.11 pack, llvm_ad_rgb):
 #         bash scripts/gpu_pack.sh 3.11 && OUT=/tmp/gpu-out bash scripts/gpu_bench.sh --cpu-smoke
@@ -47,7 +47,7 @@ else
   step 60 import $py -c "import mitsuba as mi, drjit as dr; mi.set_variant('$variant'); print(mi.__version__, dr.__version__)"
   # fogref render against one mi.render at 1920x1080, 1024 spp (target: within 1.1x; the whole
   # truth in 10 s or less), then the default scene's sizes of the CPU report for a ratio
-  step 330 driver $py benchmarks/render_driver.py --variant $variant --repeats 1 \
+  step 400 driver $py benchmarks/render_driver.py --variant $variant --repeats 2 \
     --cases 1920x1080x1024,320x180x64 --out "$OUT/render_driver_gpu"
   # the time-vs-error ladder at 320x180 on the GPU
   step 300 ladder env FOGREF_VARIANT=$variant $py benchmarks/time_vs_error.py --res 320 180 \
