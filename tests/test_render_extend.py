@@ -66,15 +66,18 @@ def test_another_seed_changed_files_or_missing_sums_are_refused(tmp_path, mitsub
 
 
 @pytest.mark.parametrize("failure", [KeyboardInterrupt, OSError])
-def test_sums_never_land_without_their_truth(tmp_path, mitsuba, monkeypatch, failure):
-    """The sums are written in a thread beside the EXR and land only after it: when the EXR's
-    write fails or is interrupted, the earlier truth and its sums are both kept, bitwise, and no
-    temporary file is left.  (Sums that landed regardless would hold the new seed's values.)"""
+@pytest.mark.parametrize("threaded", [True, False], ids=["sums in a thread", "sums after"])
+def test_sums_never_land_without_their_truth(tmp_path, mitsuba, monkeypatch, failure, threaded):
+    """The sums land only after the EXR, also when a large truth writes them in a thread beside
+    it: when the EXR's write fails or is interrupted, the earlier truth and its sums are both
+    kept, bitwise, and no temporary file is left.  (Sums that landed regardless would hold the
+    new seed's values.)"""
     import re
 
     import fogref.render.render as R
     from fogref.atomic import temporary_names
 
+    monkeypatch.setattr(R, "SUMS_THREAD_MIN_PIXELS", 0 if threaded else 10**9)
     sixteen_spp_passes(monkeypatch)
     scene = tiny.make(mitsuba, tmp_path / "scene")
     out = R.render(scene, tmp_path / "x.exr", spp=16, seed=7, progress=False, png=False)

@@ -360,7 +360,7 @@ def render(
         "fogref.render_seconds": {"total": time.perf_counter() - t0, "passes": timings},
     }
     moments = moments_path(out)
-    if keep_moments:  # written beside the EXR, in a thread, and landing only after it:
+    if keep_moments:
         _write_truth_then_sums(out, channels, attrs, exr_compression, moments, (*host, state[2]), key)
     else:
         write_exr(out, channels, attrs, compression=exr_compression)
@@ -371,12 +371,24 @@ def render(
     return out
 
 
+#: From this many pixels on, a truth's sums are written in a thread beside its EXR.  Below, the
+#: thread costs more than it saves: at 32x18 and 64x36 the two writes took 1.45x and 1.2x as long
+#: as one after the other, at 96x54 the same, at 160x90 and 320x180 1.2x and 1.3x less, at
+#: 1920x1080 1.6x less (2 cores; ``reports/benchmarks/truth_write.md``, ``truth_write_small.md``).
+SUMS_THREAD_MIN_PIXELS = 10_000
+
+
 def _write_truth_then_sums(out, channels, attrs, compression, moments, state, key) -> None:
-    """Write the truth ``out`` (:func:`~fogref.exrio.write_exr`) and its float64 sums ``moments``
-    (:func:`~fogref.render.checkpoint.write_checkpoint`) at the same time, the sums in a thread:
-    their SHA-256 and ``np.savez`` overlap the EXR's compression (1.2 GB of sums at 1920x1080).
-    The sums replace ``moments`` only after the truth is in place, and not at all if writing it
-    failed or was interrupted, so sums without their truth are never left."""
+    """Write the truth ``out`` (:func:`~fogref.exrio.write_exr`), then its float64 sums ``moments``
+    (:func:`~fogref.render.checkpoint.write_checkpoint`).  From :data:`SUMS_THREAD_MIN_PIXELS` on,
+    the sums are written in a thread at the same time: their SHA-256 and ``np.savez`` overlap the
+    EXR's compression (1.2 GB of sums at 1920x1080).  Either way the sums replace ``moments`` only
+    after the truth is in place, and not at all if writing it failed or was interrupted, so sums
+    without their truth are never left."""
+    if state[0].shape[0] * state[0].shape[1] < SUMS_THREAD_MIN_PIXELS:
+        write_exr(out, channels, attrs, compression=compression)
+        checkpoint.write_checkpoint(moments, state, key)
+        return
     truth_written: concurrent.futures.Future = concurrent.futures.Future()
     with concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="fogref-moments") as pool:
         sums = pool.submit(checkpoint.write_checkpoint, moments, state, key, truth_written.result)
