@@ -184,7 +184,9 @@ class Case:
 METHODS = {"mi.render": "mi_render", "render()": "render_fn", "CLI": "cli", "mi.render script": "mi_script"}
 
 
-def measure(cases: list, repeats: int, log) -> dict:
+def measure(cases: list, repeats: int, log, after_repeat=None) -> dict:
+    """First calls, then ``repeats`` interleaved rounds; ``after_repeat(summary)`` after each
+    round, with the rounds so far (a run stopped at a time limit keeps its finished rounds)."""
     res = {c.name: {m: {"first_s": None, "steady_s": []} for m in METHODS} for c in cases}
     for c in cases:  # first calls: tracing + compile (or kernel-cache load)
         for m, fn in METHODS.items():
@@ -204,6 +206,14 @@ def measure(cases: list, repeats: int, log) -> dict:
                 t = getattr(c, METHODS[m])(r + 1)
                 res[c.name][m]["steady_s"].append(t)
                 log(f"  repeat {r + 1}    {c.name:18s} {m:17s} {t:7.2f} s")
+        if after_repeat is not None and r + 1 < repeats:
+            after_repeat(summarize(res, cases))
+    return summarize(res, cases)
+
+
+def summarize(res: dict, cases: list) -> dict:
+    """``res`` (first calls and steady times per case and method) with medians, ranges, compile
+    times and the ratios to ``mi.render`` added, in place."""
     for c in cases:
         d = res[c.name]
         for m in METHODS:
@@ -481,6 +491,11 @@ def _md(doc: dict) -> str:
         f"Command: `{doc['command']}`.  Machine: {doc['machine']['cpu']}, {doc['machine']['cores']} cores, "
         f"shared with other jobs while measured (load average {doc['load_before']} before, "
         f"{doc['load_after']} after); Mitsuba {doc['machine']['mitsuba']}, Dr.Jit {doc['machine']['drjit']}.",
+        *(
+            [f"**Partial: {doc['repeats_done']} of {doc['repeats']} repeats** (the run stopped after them)."]
+            if doc.get("repeats_done", doc["repeats"]) < doc["repeats"]
+            else []
+        ),
         "",
         "Scene: `scenes/valley.xml` (pixel-exact, all AOVs, max_depth 16).  Methods: `mi.render` = one "
         "call on a loaded scene; `render()` = `fogref.render.render.render` in the same process (scene "
@@ -590,16 +605,22 @@ def main(argv=None):
     from fogref_plugins.passes import MAX_LANES
 
     doc["max_lanes"] = MAX_LANES
-    with tempfile.TemporaryDirectory(prefix="fogref-bench-") as tmp:
-        doc["runs"] = {"fogpath": measure([Case(w, h, s, Path(tmp)) for w, h, s in cases], a.repeats, log)}
-    doc["load_after"] = _load()
-    if a.reading:
-        doc["reading"] = Path(a.reading).read_text().strip()
     out = Path(a.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.with_suffix(".json").write_text(json.dumps(doc, indent=2) + "\n")
-    out.with_suffix(".md").write_text(_md(doc))
-    log(f"wrote {out.with_suffix('.md')} and .json")
+
+    def write(runs, repeats_done):
+        doc["runs"], doc["repeats_done"], doc["load_after"] = {"fogpath": runs}, repeats_done, _load()
+        out.with_suffix(".json").write_text(json.dumps(doc, indent=2) + "\n")
+        out.with_suffix(".md").write_text(_md(doc))
+        log(f"wrote {out.with_suffix('.md')} and .json ({repeats_done} of {a.repeats} repeats)")
+
+    if a.reading:
+        doc["reading"] = Path(a.reading).read_text().strip()
+    done = iter(range(1, a.repeats))
+    with tempfile.TemporaryDirectory(prefix="fogref-bench-") as tmp:
+        cases_ = [Case(w, h, s, Path(tmp)) for w, h, s in cases]
+        runs = measure(cases_, a.repeats, log, after_repeat=lambda r: write(r, next(done)))
+    write(runs, a.repeats)
 
 
 def main_startup(a, argv) -> None:
