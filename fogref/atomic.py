@@ -31,6 +31,7 @@ OSError: disk full
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 import shutil
@@ -117,7 +118,7 @@ def _write_stream(path, write) -> None:
         os.unlink(tmp)
 
 
-def atomic_write(path, write, ready=None) -> Path:
+def atomic_write(path, write) -> Path:
     """Call ``write(tmp_path)``, then rename the temporary file onto ``path``.
 
     Parameters
@@ -128,10 +129,6 @@ def atomic_write(path, write, ready=None) -> Path:
         Callable that writes the whole file at the ``str`` path it is given. The
         temporary file sits in ``path``'s folder and keeps ``path``'s suffix, so
         writers that infer the format from the suffix still work.
-    ready
-        Optional callable, called once the whole file is written and just before it replaces
-        ``path``: it may wait for something that must land first (a file written in another
-        thread).  If it raises, the write is abandoned as if ``write`` had raised.
 
     Returns
     -------
@@ -147,6 +144,35 @@ def atomic_write(path, write, ready=None) -> Path:
     if is_stream(path):
         _write_stream(path, write)
         return Path(path)
+    with staged_write(path) as tmp:
+        write(tmp)
+    return Path(path)
+
+
+@contextlib.contextmanager
+def staged_write(path):
+    """A temporary file beside ``path`` that replaces it when the ``with`` block ends normally.
+
+    Yields the temporary file's ``str`` path (created empty, in ``path``'s folder, with its
+    suffix; :func:`temporary_names`), to be written during the block, also by another thread
+    that the block waits for.  When the block ends normally, the file takes the mode ``path``
+    had (or a plain ``open()``'s) and replaces ``path``.  When it raises or is interrupted, the
+    file is removed, ``path`` keeps its content, and the exception propagates.  So one file
+    can be written beside another and land only after it (:func:`atomic_write` is one block).
+
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> with staged_write(folder / "a.txt") as tmp:
+    ...     _ = Path(tmp).write_text("first")
+    >>> try:
+    ...     with staged_write(folder / "a.txt") as tmp:
+    ...         _ = Path(tmp).write_text("second")
+    ...         raise OSError("the other file could not be written")
+    ... except OSError:
+    ...     pass
+    >>> [(p.name, p.read_text()) for p in folder.iterdir()]
+    [('a.txt', 'first')]
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd = tmp = None
@@ -154,10 +180,8 @@ def atomic_write(path, write, ready=None) -> Path:
         fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp" + path.suffix, dir=path.parent)
         os.close(fd)
         fd = None
-        write(tmp)
+        yield tmp
         os.chmod(tmp, _file_mode(path))  # mkstemp makes 0600; give the mode a plain open() would
-        if ready is not None:
-            ready()
         os.replace(tmp, path)
     except BaseException:
         if fd is not None:
@@ -168,7 +192,6 @@ def atomic_write(path, write, ready=None) -> Path:
         if tmp is not None and os.path.exists(tmp):
             os.unlink(tmp)
         raise
-    return path
 
 
 def temporary_names(path) -> str:
@@ -217,10 +240,9 @@ def save_figure_atomic(figure, path, dpi: int = FIGURE_DPI) -> Path:
     return atomic_write(path, lambda tmp: figure.savefig(tmp, **options))
 
 
-def savez_atomic(path, ready=None, **arrays) -> Path:
-    """``numpy.savez`` to ``path`` atomically (``path`` should end in ``.npz``; ``ready`` as in
-    :func:`atomic_write`)."""
-    return atomic_write(path, lambda tmp: np.savez(tmp, **arrays), ready)
+def savez_atomic(path, **arrays) -> Path:
+    """``numpy.savez`` to ``path`` atomically (``path`` should end in ``.npz``)."""
+    return atomic_write(path, lambda tmp: np.savez(tmp, **arrays))
 
 
 def set_aside(path, suffix: str) -> Path:

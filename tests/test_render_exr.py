@@ -248,13 +248,14 @@ def test_checkpoint_of_an_edited_scene_is_not_resumed(tmp_path, mitsuba, monkeyp
     assert all(np.array_equal(a[k], b[k]) for k in a)
 
 
-def test_leftover_temporary_checkpoint_is_removed(tmp_path, mitsuba):
-    """A writer killed mid-write (SIGKILL) leaves '<out>.partial.npz.XXXX.tmp.npz'; the next run
+@pytest.mark.parametrize("stale", ["x.exr.partial.npz.abc123.tmp.npz", "x.exr.moments.npz.k3_x9.tmp.npz"])
+def test_leftover_temporary_checkpoint_is_removed(tmp_path, mitsuba, stale):
+    """A writer killed mid-write (SIGKILL) leaves '<out>.partial.npz.XXXX.tmp.npz' (a checkpoint)
+    or '<out>.moments.npz.XXXX.tmp.npz' (the sums, staged while the EXR was written); the next run
     removes it."""
     from fogref.render.render import render
 
-    stale = tmp_path / "x.exr.partial.npz.abc123.tmp.npz"
-    stale.write_bytes(b"partial")
+    (tmp_path / stale).write_bytes(b"partial")
     render(SCENES / "valley.xml", tmp_path / "x.exr", spp=1, overrides=SMALL, progress=False, png=False)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["x.exr", "x.exr.moments.npz"]
 

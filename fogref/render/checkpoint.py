@@ -22,7 +22,14 @@ import numpy as np
 from fogref import gbuffer
 from fogref.atomic import savez_atomic, set_aside
 
-__all__ = ["checkpoint_problem", "record_sha256", "resume", "set_aside_checkpoint", "write_checkpoint"]
+__all__ = [
+    "checkpoint_problem",
+    "checkpoint_record",
+    "record_sha256",
+    "resume",
+    "set_aside_checkpoint",
+    "write_checkpoint",
+]
 
 
 def record_sha256(key: str, done: int, sums: np.ndarray, squares: np.ndarray) -> str:
@@ -43,21 +50,24 @@ def record_sha256(key: str, done: int, sums: np.ndarray, squares: np.ndarray) ->
     return h.hexdigest()
 
 
-def write_checkpoint(ckpt: Path, state, key: str, ready=None) -> None:
-    """Write the running state ``(sums, squares, passes done)`` (copied from the device) atomically
-    to ``ckpt`` as one record: the three together with a SHA-256 over them.  ``ready``: called
-    just before the record replaces ``ckpt`` (:func:`fogref.atomic.atomic_write`)."""
+def checkpoint_record(state, key: str) -> dict:
+    """The arrays of one checkpoint record, for ``np.savez``: the running state ``(sums, squares,
+    passes done)`` (copied from the device) with its key and a SHA-256 over them all."""
     sums, squares, done = state
     sums, squares = np.asarray(sums, dtype=np.float64), np.asarray(squares, dtype=np.float64)
-    savez_atomic(
-        ckpt,
-        ready=ready,
-        sums=sums,
-        squares=squares,
-        done=np.array(done),
-        key=np.array(key),
-        sha256=np.array(record_sha256(key, done, sums, squares)),
-    )
+    return {
+        "sums": sums,
+        "squares": squares,
+        "done": np.array(done),
+        "key": np.array(key),
+        "sha256": np.array(record_sha256(key, done, sums, squares)),
+    }
+
+
+def write_checkpoint(ckpt: Path, state, key: str) -> None:
+    """Write the running state ``(sums, squares, passes done)`` atomically to ``ckpt`` as one
+    record (:func:`checkpoint_record`)."""
+    savez_atomic(ckpt, **checkpoint_record(state, key))
 
 
 #: Per-sample channels bounded by [0, 1]: per pixel, their sums can't exceed the sample count.

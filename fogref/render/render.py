@@ -63,7 +63,7 @@ from fogref_plugins.passes import max_lanes, pass_seed, pass_sizes
 
 from fogref import cluster, gbuffer
 from fogref._version import __version__
-from fogref.atomic import atomic_write, refuse_overwriting_inputs, temporary_names
+from fogref.atomic import atomic_write, refuse_overwriting_inputs, staged_write, temporary_names
 from fogref.display import write_preview
 from fogref.errors import FogrefError
 from fogref.exrio import EXR_COMPRESSIONS, read_exr_header, write_exr
@@ -268,7 +268,7 @@ def render(
         )
     key = json.dumps({**fields, "passes": passes}, sort_keys=True)
     ckpt = checkpoint_path(out)
-    leftovers = re.compile(f"{temporary_names(ckpt)}|{temporary_names(out)}")
+    leftovers = re.compile("|".join(temporary_names(p) for p in (ckpt, out, moments_path(out))))
     for stale in out.parent.glob(f"{out.name}.*.tmp*"):  # a writer killed mid-write (SIGKILL)
         if leftovers.fullmatch(stale.name):
             stale.unlink(missing_ok=True)
@@ -374,31 +374,28 @@ def render(
 #: From this many pixels on, a truth's sums are written in a thread beside its EXR.  Below, the
 #: thread costs more than it saves: at 32x18 and 64x36 the two writes took 1.45x and 1.2x as long
 #: as one after the other, at 96x54 the same, at 160x90 and 320x180 1.2x and 1.3x less, at
-#: 1920x1080 1.6x less (2 cores; ``reports/benchmarks/truth_write.md``, ``truth_write_small.md``).
+#: 1920x1080 1.7x less (2 cores; ``reports/benchmarks/truth_write.md``, ``truth_write_small.md``).
 SUMS_THREAD_MIN_PIXELS = 10_000
 
 
 def _write_truth_then_sums(out, channels, attrs, compression, moments, state, key) -> None:
     """Write the truth ``out`` (:func:`~fogref.exrio.write_exr`), then its float64 sums ``moments``
-    (:func:`~fogref.render.checkpoint.write_checkpoint`).  From :data:`SUMS_THREAD_MIN_PIXELS` on,
-    the sums are written in a thread at the same time: their SHA-256 and ``np.savez`` overlap the
-    EXR's compression (1.2 GB of sums at 1920x1080).  Either way the sums replace ``moments`` only
-    after the truth is in place, and not at all if writing it failed or was interrupted, so sums
-    without their truth are never left."""
+    (one :func:`~fogref.render.checkpoint.checkpoint_record`).  From :data:`SUMS_THREAD_MIN_PIXELS`
+    on, the sums are written in a thread at the same time, to a file staged beside ``moments``
+    (:func:`~fogref.atomic.staged_write`): their SHA-256 and ``np.savez`` overlap the EXR's
+    compression (1.2 GB of sums at 1920x1080).  Either way the sums replace ``moments`` only after
+    the truth is in place, and not at all if writing it failed or was interrupted, so sums without
+    their truth are never left."""
     if state[0].shape[0] * state[0].shape[1] < SUMS_THREAD_MIN_PIXELS:
         write_exr(out, channels, attrs, compression=compression)
         checkpoint.write_checkpoint(moments, state, key)
         return
-    truth_written: concurrent.futures.Future = concurrent.futures.Future()
-    with concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="fogref-moments") as pool:
-        sums = pool.submit(checkpoint.write_checkpoint, moments, state, key, truth_written.result)
-        try:
+    # the block waits for the thread, whatever happens in it: nothing waits on the main thread
+    with staged_write(moments) as sums_file:
+        with concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="fogref-moments") as pool:
+            sums = pool.submit(lambda: np.savez(sums_file, **checkpoint.checkpoint_record(state, key)))
             write_exr(out, channels, attrs, compression=compression)
-        except BaseException:
-            truth_written.set_exception(FogrefError(f"{out} was not written; its sums are not kept"))
-            raise
-        truth_written.set_result(None)
-        sums.result()
+            sums.result()
 
 
 #: What a truth must share with a render that adds samples to it (the key's fields), in words.
