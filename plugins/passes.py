@@ -20,20 +20,44 @@ render (:mod:`fogref.render.distributed`): a render of ``P`` pixels and ``spp`` 
 from __future__ import annotations
 
 import hashlib
+import os
+
+from fogref.errors import FogrefError
 
 #: Lanes (pixels x samples) per pass, by back end: ~50 MB of outputs per pass on the CPU
 #: (2^18 lanes: a 320x180, 72 spp render is 18 passes of 4 spp, so up to 18 workers share it; a pass
-#: of 230400 lanes is ~0.25 s of one core on scenes/valley.xml), ~6.6 GB on a GPU.
+#: of 230400 lanes is ~0.25 s of one core on scenes/valley.xml), ~6.6 GB on a GPU (2^25 lanes: on
+#: an H200, 2^24 took 1.02x and 2^26 0.95x the time, ``reports/benchmarks/gpu.md``).
 MAX_LANES = {"llvm": 1 << 18, "cuda": 1 << 25}
+#: The environment variable that overrides :data:`MAX_LANES` (for a GPU with less memory).
+MAX_LANES_VARIABLE = "FOGREF_MAX_LANES"
 
 
 def max_lanes(variant: str) -> int:
-    """:data:`MAX_LANES` of a Mitsuba variant's back end.
+    """Lanes per pass for a Mitsuba variant: ``$FOGREF_MAX_LANES`` when it is set (an integer
+    from 1 to 2^31 - 1), else :data:`MAX_LANES` of the variant's back end.  Another value of the
+    variable is a :class:`~fogref.errors.FogrefError` naming it and the range.
 
     >>> max_lanes("cuda_ad_rgb") > max_lanes("llvm_ad_rgb")
     True
+    >>> os.environ[MAX_LANES_VARIABLE] = "4096"; max_lanes("cuda_ad_rgb")
+    4096
+    >>> os.environ[MAX_LANES_VARIABLE] = "lots"; max_lanes("cuda_ad_rgb")
+    Traceback (most recent call last):
+    ...
+    fogref.errors.FogrefError: FOGREF_MAX_LANES='lots': the lanes (pixels x samples) per pass must be ...
+    >>> del os.environ[MAX_LANES_VARIABLE]
     """
-    return MAX_LANES["cuda" if variant.startswith("cuda") else "llvm"]
+    value = os.environ.get(MAX_LANES_VARIABLE, "").strip()
+    if not value:
+        return MAX_LANES["cuda" if variant.startswith("cuda") else "llvm"]
+    n = int(value) if value.isdigit() else 0
+    if not 1 <= n <= 2**31 - 1:
+        raise FogrefError(
+            f"{MAX_LANES_VARIABLE}={value!r}: the lanes (pixels x samples) per pass must be an integer "
+            f"from 1 to {2**31 - 1} (unset: {MAX_LANES['llvm']} on the CPU, {MAX_LANES['cuda']} on a GPU)"
+        )
+    return n
 
 
 def pass_sizes(n_pixels: int, spp: int, max_lanes: int) -> list[int]:

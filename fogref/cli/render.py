@@ -56,7 +56,8 @@ class Options:
     )
     variant: str | None = option(
         None,
-        "Mitsuba variant",
+        "Mitsuba variant (a pass holds 2^25 samples on a GPU, about 7 GB: with less memory, set "
+        "$FOGREF_MAX_LANES to fewer, e.g. 8388608)",
         check=Choice(VARIANTS),
         api=API,
         default_text="$FOGREF_VARIANT, else llvm_ad_rgb",

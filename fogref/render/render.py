@@ -59,7 +59,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
-from fogref_plugins.passes import max_lanes, pass_seed, pass_sizes
+from fogref_plugins.passes import MAX_LANES_VARIABLE, max_lanes, pass_seed, pass_sizes
 
 from fogref import cluster, gbuffer
 from fogref._version import __version__
@@ -314,12 +314,17 @@ def render(
                         saved = state[2]
                     last_ckpt = time.perf_counter()
         except (KeyboardInterrupt, RuntimeError, distributed.PassFailed) as e:
-            if isinstance(e, RuntimeError) and "KeyboardInterrupt" not in str(e):
+            out_of_memory = _out_of_memory(e)
+            if isinstance(e, RuntimeError) and "KeyboardInterrupt" not in str(e) and not out_of_memory:
                 raise
             done = state  # one read: the sums and their count
             if done is not None and saved < done[2] < len(passes):
                 with stop.deferred():
                     checkpoint.write_checkpoint(ckpt, done, key)
+            if out_of_memory:
+                raise FogrefError(
+                    _out_of_memory_message(scene_path, out_of_memory, W * H, passes, variant)
+                ) from None
             if (
                 isinstance(e, distributed.PassFailed) and not stop.requested
             ):  # (a Ctrl-C also stops a LocalCluster's workers)
@@ -369,6 +374,51 @@ def render(
         write_preview(np.stack([channels[c] for c in "RGB"], axis=-1), out.with_suffix(".png"))
     ckpt.unlink(missing_ok=True)
     return out
+
+
+#: What Dr.Jit's allocator says when the device (or the host) has no memory left for an array
+#: (``jit_malloc(): out of memory! Could not allocate N bytes of device memory.``: ``jitc_malloc``
+#: in drjit-core's ``src/malloc.cpp``).
+OUT_OF_MEMORY = "jit_malloc(): out of memory"
+
+
+def _out_of_memory(error: BaseException) -> str:
+    """Dr.Jit's out-of-memory message in ``error`` or the exceptions it was raised from (Dr.Jit
+    re-raises a loop's or a frozen function's failure as ``dr.while_loop(): encountered an
+    exception`` from it), its first line; ``""`` if none is.
+
+    >>> try:
+    ...     try:
+    ...         raise RuntimeError(OUT_OF_MEMORY + "! Could not allocate 64 bytes of device memory.")
+    ...     except RuntimeError as oom:
+    ...         raise RuntimeError("dr.while_loop(): encountered an exception.") from oom
+    ... except RuntimeError as e:
+    ...     print(_out_of_memory(e))
+    jit_malloc(): out of memory! Could not allocate 64 bytes of device memory.
+    >>> _out_of_memory(RuntimeError("something else"))
+    ''
+    """
+    seen: set = set()
+    e: BaseException | None = error
+    while e is not None and id(e) not in seen:
+        seen.add(id(e))
+        for line in str(e).splitlines():
+            if OUT_OF_MEMORY in line:
+                return line[line.index(OUT_OF_MEMORY) :].strip()
+        e = e.__cause__ or e.__context__
+    return ""
+
+
+def _out_of_memory_message(scene_path, what: str, pixels: int, passes: list, variant: str) -> str:
+    """The one-line error of a pass that ran out of memory (``what``: Dr.Jit's line): the pass's
+    lanes, and the lanes to try (a quarter) through :data:`fogref_plugins.passes.MAX_LANES_VARIABLE`."""
+    lanes = pixels * max(passes)
+    return (
+        f"{scene_path}: a pass of {lanes} lanes ({pixels} pixels x {max(passes)} spp, {variant}) ran out of "
+        f"memory ({what}); set {MAX_LANES_VARIABLE}={max(lanes // 4, 1)} (lanes per pass, now "
+        f"{max_lanes(variant)}) and render again: a new split of the samples, so the passes done are "
+        "not resumed"
+    )
 
 
 #: From this many pixels on, a truth's sums are written in a thread beside its EXR.  Below, the
