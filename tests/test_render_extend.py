@@ -23,9 +23,16 @@ def sixteen_spp_passes(monkeypatch):
     monkeypatch.setattr(passes, "MAX_LANES", {"llvm": 16 * 48, "cuda": 16 * 48})
 
 
-def test_extending_16_to_32_spp_equals_the_direct_render_bitwise(tmp_path, mitsuba, monkeypatch, capsys):
+@pytest.mark.parametrize("threaded", [True, False], ids=["sums in a thread", "sums after"])
+def test_extending_16_to_32_spp_equals_the_direct_render_bitwise(
+    tmp_path, mitsuba, monkeypatch, capsys, threaded
+):
+    """Also with the sums written in a thread beside the EXR (a large truth's way): the sums it
+    wrote are read back, checksum and all, and extend the truth bit for bit."""
+    import fogref.render.render as R
     from fogref.render.render import moments_path, render
 
+    monkeypatch.setattr(R, "SUMS_THREAD_MIN_PIXELS", 0 if threaded else 10**9)
     sixteen_spp_passes(monkeypatch)
     scene = tiny.make(mitsuba, tmp_path / "scene")
     kw = dict(seed=7, progress=False, png=False)
