@@ -8,8 +8,9 @@ failed write there (``/dev/full``: no space left) is a one-line
 :class:`~fogref.errors.FogrefError`.
 Every fogref output goes through :func:`atomic_write`: EXRs
 (:func:`fogref.exrio.write_exr`), render checkpoints and previews, report text
-and figures.  Before any work, a command compares its outputs with its inputs
-(:func:`refuse_overwriting_inputs`).
+and figures.  :func:`staged_write` is the same with the write in a ``with`` block:
+a truth's sums, written in a thread beside its EXR, land only after it.  Before
+any work, a command compares its outputs with its inputs (:func:`refuse_overwriting_inputs`).
 
 Examples
 --------
