@@ -185,8 +185,8 @@ METHODS = {"mi.render": "mi_render", "render()": "render_fn", "CLI": "cli", "mi.
 
 
 def measure(cases: list, repeats: int, log, after_repeat=None) -> dict:
-    """First calls, then ``repeats`` interleaved rounds; ``after_repeat(summary)`` after each
-    round, with the rounds so far (a run stopped at a time limit keeps its finished rounds)."""
+    """First calls, then ``repeats`` interleaved rounds; ``after_repeat(summary, rounds done)``
+    after each round but the last (a run stopped at a time limit keeps its finished rounds)."""
     res = {c.name: {m: {"first_s": None, "steady_s": []} for m in METHODS} for c in cases}
     for c in cases:  # first calls: tracing + compile (or kernel-cache load)
         for m, fn in METHODS.items():
@@ -207,7 +207,7 @@ def measure(cases: list, repeats: int, log, after_repeat=None) -> dict:
                 res[c.name][m]["steady_s"].append(t)
                 log(f"  repeat {r + 1}    {c.name:18s} {m:17s} {t:7.2f} s")
         if after_repeat is not None and r + 1 < repeats:
-            after_repeat(summarize(res, cases))
+            after_repeat(summarize(res, cases), r + 1)
     return summarize(res, cases)
 
 
@@ -616,10 +616,9 @@ def main(argv=None):
 
     if a.reading:
         doc["reading"] = Path(a.reading).read_text().strip()
-    done = iter(range(1, a.repeats))
     with tempfile.TemporaryDirectory(prefix="fogref-bench-") as tmp:
         cases_ = [Case(w, h, s, Path(tmp)) for w, h, s in cases]
-        runs = measure(cases_, a.repeats, log, after_repeat=lambda r: write(r, next(done)))
+        runs = measure(cases_, a.repeats, log, after_repeat=write)
     write(runs, a.repeats)
 
 

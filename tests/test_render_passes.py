@@ -68,6 +68,7 @@ def test_the_lanes_override_sets_the_split_of_a_truth(tmp_path, mitsuba, monkeyp
     from fogref.exrio import read_exr
     from fogref.render.render import render
 
+    monkeypatch.delenv("FOGREF_MAX_LANES", raising=False)
     assert max_lanes("cuda_ad_rgb") == 1 << 25 and max_lanes("llvm_ad_rgb") == 1 << 18  # unset
     monkeypatch.setenv("FOGREF_MAX_LANES", " 96 ")
     scene = tiny.make(mitsuba, tmp_path / "scene")

@@ -258,7 +258,8 @@ def render(
         "schema": gbuffer.SCHEMA_VERSION,
     }
     base = _truth_to_extend(out, fields, hashes, scene_path, scene_sha) if resume else None
-    passes = pass_sizes(W * H, spp - (sum(base[0]) if base else 0), max_lanes(variant))
+    lanes_per_pass = max_lanes(variant)
+    passes = pass_sizes(W * H, spp - (sum(base[0]) if base else 0), lanes_per_pass)
     if base is not None:
         passes = base[0] + passes
         print(
@@ -323,7 +324,7 @@ def render(
                     checkpoint.write_checkpoint(ckpt, done, key)
             if out_of_memory:
                 raise FogrefError(
-                    _out_of_memory_message(scene_path, out_of_memory, W * H, passes, variant)
+                    _out_of_memory_message(scene_path, out_of_memory, W * H, passes, variant, lanes_per_pass)
                 ) from None
             if (
                 isinstance(e, distributed.PassFailed) and not stop.requested
@@ -409,14 +410,17 @@ def _out_of_memory(error: BaseException) -> str:
     return ""
 
 
-def _out_of_memory_message(scene_path, what: str, pixels: int, passes: list, variant: str) -> str:
+def _out_of_memory_message(
+    scene_path, what: str, pixels: int, passes: list, variant: str, lanes_per_pass: int
+) -> str:
     """The one-line error of a pass that ran out of memory (``what``: Dr.Jit's line): the pass's
-    lanes, and the lanes to try (a quarter) through :data:`fogref_plugins.passes.MAX_LANES_VARIABLE`."""
+    lanes, the render's ``lanes_per_pass`` and the lanes to try (a quarter) through
+    :data:`fogref_plugins.passes.MAX_LANES_VARIABLE`."""
     lanes = pixels * max(passes)
     return (
         f"{scene_path}: a pass of {lanes} lanes ({pixels} pixels x {max(passes)} spp, {variant}) ran out of "
         f"memory ({what}); set {MAX_LANES_VARIABLE}={max(lanes // 4, 1)} (lanes per pass, now "
-        f"{max_lanes(variant)}) and render again: a new split of the samples, so the passes done are "
+        f"{lanes_per_pass}) and render again: a new split of the samples, so the passes done are "
         "not resumed"
     )
 
