@@ -33,7 +33,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from _checkouts import ROOT, alternating, checkout_env, commit_of, ratio_range, write_report
 
 _CHILD = """
 import json, statistics, sys, time
@@ -56,13 +56,14 @@ print(json.dumps({"render_s": total, "passes_s": passes, "writes_s": total - pas
 
 
 def run_child(tree: Path, case, out: Path, renders: int) -> dict:
-    env = {**os.environ, "PYTHONPATH": str(tree), "PYTHONDONTWRITEBYTECODE": "1"}
+    """``renders`` renders of ``case`` by ``tree``'s ``fogref`` (:func:`_checkouts.checkout_env`) in
+    one fresh process: the child's JSON, checked to come from that tree."""
     args = (*case, renders, out, ROOT / "scenes" / "valley.xml")
     r = subprocess.run(
         [sys.executable, "-c", _CHILD, *map(str, args)],
         capture_output=True,
         text=True,
-        env=env,
+        env=checkout_env(tree),
         cwd=tree,
     )
     if r.returncode != 0:
@@ -88,48 +89,34 @@ def main(argv=None):
     ap.add_argument("--name", default="truth_write", help="the reports' file name, without suffix")
     args = ap.parse_args(argv)
     case = tuple(int(x) for x in args.case.split("x"))
-    base_rev = subprocess.run(
-        ["git", "rev-parse", "--short", args.base], capture_output=True, text=True, check=True, cwd=ROOT
-    ).stdout.strip()
-    head = subprocess.run(
-        ["git", "describe", "--always", "--dirty"], capture_output=True, text=True, check=True, cwd=ROOT
-    ).stdout.strip()
     tmp = Path(tempfile.mkdtemp())
     base_tree = tmp / "base"
-    subprocess.run(
-        ["git", "worktree", "add", "-q", "--detach", str(base_tree), base_rev], check=True, cwd=ROOT
-    )
-    trees = {f"base {base_rev}": base_tree, f"this tree {head}": ROOT}
-    rows: dict = {name: [] for name in trees}
-    load = [os.getloadavg()[0]]
+    add = ["git", "worktree", "add", "-q", "--detach", str(base_tree), args.base]
+    subprocess.run(add, check=True, cwd=ROOT)
+    trees = {f"base {commit_of(base_tree)}": base_tree, f"this tree {commit_of(ROOT)}": ROOT}
+    loads = [os.getloadavg()[0]]
+
+    def timed(name, tree):
+        got = run_child(tree, case, tmp / "x.exr", args.renders)
+        print(f"{name:36s} render() {got['render_s']:7.4f} s, writes {got['writes_s']:7.4f} s")
+        loads.append(os.getloadavg()[0])
+        return got
+
     try:
         for tree in trees.values():  # a first call each: kernel cache, page cache
             run_child(tree, case, tmp / "warm.exr", 1)
-        for k in range(args.pairs):
-            order = list(trees) if k % 2 == 0 else list(reversed(trees))
-            for name in order:
-                got = run_child(trees[name], case, tmp / f"{k}.exr", args.renders)
-                rows[name].append(got)
-                print(
-                    f"pair {k} {name:28s} render() {got['render_s']:6.2f} s, writes {got['writes_s']:6.2f} s"
-                )
-                load.append(os.getloadavg()[0])
+        rows = alternating(trees, args.pairs, timed)
     finally:
         subprocess.run(["git", "worktree", "remove", "--force", str(base_tree)], cwd=ROOT)
 
-    def med(name, field):
-        return statistics.median(r[field] for r in rows[name])
-
     names = list(trees)
-    ratio = [a["writes_s"] / b["writes_s"] for a, b in zip(rows[names[0]], rows[names[1]], strict=True)]
     w, h, spp = case
-    cpu = os.cpu_count()
     lines = [
         f"# Writing a {w}x{h} truth: {names[1]} against {names[0]}",
         "",
         f"Command: `python benchmarks/truth_write.py --base {args.base} --case {args.case} "
-        f"--pairs {args.pairs} --renders {args.renders}`.  {cpu} cores, 1-min load average "
-        f"{min(load):.1f}-{max(load):.1f} while measured.  Default scene, `render()` of {args.renders} "
+        f"--pairs {args.pairs} --renders {args.renders}`.  {os.cpu_count()} cores, 1-min load average "
+        f"{min(loads):.1f}-{max(loads):.1f} while measured.  Default scene, `render()` of {args.renders} "
         "seed(s) in a fresh process per tree and pair (`png=False`, `resume=False`, the sums kept; with "
         "several, the median of the renders after the first), the trees alternating; after one "
         "untimed process each.",
@@ -138,23 +125,15 @@ def main(argv=None):
         "|---|---|---|---|",
     ]
     for name in names:
-        rs, ws = [r["render_s"] for r in rows[name]], [r["writes_s"] for r in rows[name]]
+        rs, ps, ws = ([r[k] for r in rows[name]] for k in ("render_s", "passes_s", "writes_s"))
         lines.append(
-            f"| {name} | {med(name, 'render_s'):.4f} [{min(rs):.4f}, {max(rs):.4f}] | "
-            f"{med(name, 'passes_s'):.4f} | {med(name, 'writes_s'):.4f} [{min(ws):.4f}, {max(ws):.4f}] |"
+            f"| {name} | {statistics.median(rs):.4f} [{min(rs):.4f}, {max(rs):.4f}] | "
+            f"{statistics.median(ps):.4f} | {statistics.median(ws):.4f} [{min(ws):.4f}, {max(ws):.4f}] |"
         )
-    lines += [
-        "",
-        f"Writes, base / this tree: {statistics.median(ratio):.2f}x "
-        f"(per pair {min(ratio):.2f}-{max(ratio):.2f}).",
-    ]
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / f"{args.name}.md").write_text("\n".join(lines) + "\n")
-    (out / f"{args.name}.json").write_text(
-        json.dumps({"case": args.case, "rows": rows, "load": load}, indent=1)
-    )
-    print("\n".join(lines))
+    ratio = ratio_range(*([r["writes_s"] for r in rows[n]] for n in names))
+    lines += ["", f"Writes, base / this tree, median [range] of the pairs: {ratio}x."]
+    record = {"case": args.case, "rows": rows, "load": loads}
+    write_report(Path(args.out), args.name, record, "\n".join(lines) + "\n")
 
 
 if __name__ == "__main__":
