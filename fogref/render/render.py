@@ -428,7 +428,7 @@ def _out_of_memory_message(
 #: From this many pixels on, a truth's sums are written in a thread beside its EXR.  Below, the
 #: thread costs more than it saves: at 32x18 and 64x36 the two writes took 1.45x and 1.2x as long
 #: as one after the other, at 96x54 the same, at 160x90 and 320x180 1.2x and 1.3x less, at
-#: 1920x1080 1.7x less (2 cores; ``reports/benchmarks/truth_write.md``, ``truth_write_small.md``).
+#: 1920x1080 1.6x less (2 cores; ``reports/benchmarks/truth_write.md``, ``truth_write_small.md``).
 SUMS_THREAD_MIN_PIXELS = 10_000
 
 
