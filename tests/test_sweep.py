@@ -272,9 +272,13 @@ def test_worker_killed_mid_sweep_is_recorded_and_nothing_else_is_lost(tmp_path):
             except BaseException as e:  # noqa: BLE001 - reported by the assertion below
                 result["error"] = e
 
+        client.wait_for_workers(2)
+        pids = client.run(os.getpid)  # asked before the sweep: between a look and the kill, no round trip
         th = threading.Thread(target=sweep, daemon=True)
         th.start()
-        # wait until one configuration is finished and another is running, then kill its worker
+        # wait until one configuration is finished and another is running, then kill its worker at
+        # once: a round trip between the look and the kill let the worker finish what it was seen
+        # running and start another configuration, which the kill then failed instead
         victim, deadline = None, time.time() + 300
         while victim is None and time.time() < deadline and th.is_alive():
             done = len(list((tmp_path / "configs").glob("*.json")))
@@ -285,13 +289,11 @@ def test_worker_killed_mid_sweep_is_recorded_and_nothing_else_is_lost(tmp_path):
             busy = {w: ks for w, ks in busy.items() if ks}
             if done >= 1 and busy:
                 victim = sorted(busy)[0]
+                killed_pid, in_flight, done_before = pids[victim], busy[victim], done
+                os.kill(killed_pid, signal.SIGKILL)
             else:
                 time.sleep(0.05)
         assert victim is not None, "no configuration was running on a worker"
-        pids = client.run(os.getpid)
-        killed_pid, in_flight = pids[victim], busy[victim]
-        done_before = len(list((tmp_path / "configs").glob("*.json")))
-        os.kill(killed_pid, signal.SIGKILL)
         th.join(timeout=600)
         assert not th.is_alive(), "the sweep did not finish after a worker was killed"
         assert "error" not in result, repr(result.get("error"))
