@@ -29,6 +29,7 @@ from fogref.mapping.unreal import (
     unreal_basis,
 )
 from fogref.mapping.unreal_basis import ColourLoss
+from fogref.media import ExpLayer
 from fogref.study.fit import physical_from_scene
 
 VALLEY = Path(__file__).resolve().parents[1] / "scenes" / "valley.xml"
@@ -90,6 +91,95 @@ def test_brent_search_agrees_with_nelder_mead(name):
     cf, cd, _ = solve_colours(b, target)
     for new, old in ((p.FogInscatteringColor, cf), (p.DirectionalInscatteringColor, cd)):
         assert max(abs(x - y) for x, y in zip(new, old)) <= FIT_RTOL * max(old)
+
+
+def full_start_search(loss: ColourLoss) -> tuple[float, float]:
+    """ColourLoss.minimise without its shortcut: the start grid, then always the bounded Brent search
+    between the best grid start's neighbours, the best start of all it tried."""
+    from scipy.optimize import minimize_scalar
+
+    from fogref.mapping.unreal_basis import START_GRID_CM, START_XATOL_CM
+
+    memo = {}
+
+    def profile(start):
+        if start not in memo:
+            memo[start] = loss.best_exponent(start)
+        return memo[start]
+
+    k = int(np.argmin([profile(s)[1] for s in START_GRID_CM]))
+    bounds = (START_GRID_CM[max(k - 1, 0)], START_GRID_CM[min(k + 1, len(START_GRID_CM) - 1)])
+    minimize_scalar(
+        lambda s: profile(float(s))[1], bounds=bounds, method="bounded", options={"xatol": START_XATOL_CM}
+    )
+    start = min(memo, key=lambda s: memo[s][1])
+    return memo[start][0], start
+
+
+def shortcut_scenes():
+    """Scenes whose fitted start is 0 (the valley, sun 8 and 30 degrees high), between grid starts
+    (dense fog), on inner grid starts (a camera 291 m up in a slow falloff: 300 m at 512 directions)
+    and on the grid's largest (a black sky): each place the start search can end."""
+    valley = physical_from_scene(VALLEY)
+
+    def fog(scale, g, falloff, height, camera_y, sun_elevation, sky):
+        layer = ExpLayer(1.0, falloff, height)
+        medium = replace(valley.medium, sigma_t=tuple(scale * c for c in valley.medium.sigma_t), g=g)
+        pf = replace(
+            valley, medium=replace(medium, layers=(layer,)), sky_radiance=sky, camera=(0.0, camera_y, 0.0)
+        )
+        return with_sun_elevation(pf, sun_elevation)
+
+    return {
+        "valley": valley,
+        "sun30": with_sun_elevation(valley, 30.0),
+        "dense_sun30": scenes()["dense_sun30"],
+        "start_grid": fog(5.955, 0.33, 1.144e-4, -0.643, 291.5, 20.69, (0.216, 0.385, 0.229)),
+        "start_max": fog(8.281, 0.2585, 2.002e-3, -2.293, 38.72, 15.03, (0.0, 0.0, 0.0)),
+    }
+
+
+@pytest.mark.parametrize("name", ["valley", "sun30", "dense_sun30", "start_grid", "start_max"])
+def test_start_search_shortcut_returns_the_full_searchs_fit_bitwise(name):
+    """ColourLoss.minimise skips the Brent search over the start when the best grid start is no
+    worse than the starts 1 cm beside it; its (log10 n, start) must be the full search's bit for bit
+    at 128-1024 directions (one ulp is detected), and the shortcut must have been taken in some of
+    them (it saves work: fewer exponent searches)."""
+    pf = shortcut_scenes()[name]
+    taken = 0  # levels where the shortcut was taken
+    for n_dirs in (128, 256, 512, 1024):
+        views = sample_views(pf.camera, n_dirs=n_dirs)
+        target = physical_single_scattering(pf, views)
+        fast, full = ColourLoss(pf, views, target), ColourLoss(pf, views, target)
+        assert fast.minimise() == full_start_search(full), n_dirs
+        taken += fast.colour_solves < full.colour_solves
+    assert (taken > 0) == (name != "dense_sun30")
+
+
+def test_start_search_shortcut_on_random_fogs_returns_the_full_searchs_fit_bitwise():
+    """As above, on 24 random fogs at 128 directions (density 0.03-30x the valley's, g in
+    [-0.3, 0.95], falloff 1e-4-0.3 /m, camera 0.5-300 m up, sun -5 to 85 degrees, black or blue
+    skies): every (log10 n, start) equal bit for bit, the shortcut taken in some and not in others."""
+    rng = np.random.default_rng(1)
+    valley = physical_from_scene(VALLEY)
+    taken = []
+    for _ in range(24):
+        scale = 10 ** rng.uniform(-1.5, 1.5)
+        medium = replace(
+            valley.medium,
+            sigma_t=tuple(scale * c for c in valley.medium.sigma_t),
+            g=float(rng.uniform(-0.3, 0.95)),
+            layers=(ExpLayer(1.0, float(10 ** rng.uniform(-4, -0.5)), float(rng.uniform(-50, 50))),),
+        )
+        sky = tuple(float(x) for x in rng.uniform(0.0, 0.6, 3) * rng.choice([0.0, 1.0], p=[0.15, 0.85]))
+        pf = replace(valley, medium=medium, sky_radiance=sky, camera=(0.0, float(rng.uniform(0.5, 300)), 0.0))
+        pf = with_sun_elevation(pf, float(rng.uniform(-5, 85)))
+        views = sample_views(pf.camera, n_dirs=128)
+        target = physical_single_scattering(pf, views)
+        fast, full = ColourLoss(pf, views, target), ColourLoss(pf, views, target)
+        assert fast.minimise() == full_start_search(full)
+        taken.append(fast.colour_solves < full.colour_solves)
+    assert any(taken) and not all(taken)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

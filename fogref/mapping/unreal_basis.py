@@ -65,6 +65,8 @@ MAX_START_CM = 1.0e5
 #: Start distances [cm] :meth:`ColourLoss.minimise` tries before refining between the best
 #: one's neighbours.
 START_GRID_CM = (0.0, 1.0e3, 3.0e3, 1.0e4, 3.0e4, MAX_START_CM)
+#: The start search's tolerance [cm] (its ``xatol``).
+START_XATOL_CM = 1.0
 
 
 def base_params(pf: PhysicalScene, **kw: Any) -> UE4FogParams:
@@ -394,7 +396,14 @@ class ColourLoss:
         """The best ``(log10 n, start [cm])``: for each start distance the best exponent
         (:meth:`best_exponent`); the start from :data:`START_GRID_CM`, then a bounded Brent
         search between the best one's neighbours (``xatol`` 1 cm); 0 without ``fit_start``.
-        ``log_n``: a fixed exponent."""
+        ``log_n``: a fixed exponent.
+
+        The search is skipped when the best grid start is no worse than the starts 1 cm (its
+        ``xatol``) on either side of it inside the search's bounds: for a loss with one minimum
+        between those neighbours, the search would end within 1 cm of that grid start.  It then
+        returns the grid start, as the search does whenever it finds nothing better (a start of 0:
+        the lobe from the camera on, what most fog scenes fit).  Those probes are not candidates:
+        when they find a better start, the search runs as if they had not been made."""
         from scipy.optimize import minimize_scalar
 
         memo: dict[float, tuple[float, float]] = {}
@@ -408,11 +417,15 @@ class ColourLoss:
             return profile(0.0)[0], 0.0
         starts = START_GRID_CM
         k = int(np.argmin([profile(s)[1] for s in starts]))
+        lo, hi = starts[max(k - 1, 0)], starts[min(k + 1, len(starts) - 1)]
+        beside = [s for s in (starts[k] - START_XATOL_CM, starts[k] + START_XATOL_CM) if lo <= s <= hi]
+        if all(self.best_exponent(s, log_n)[1] >= memo[starts[k]][1] for s in beside):
+            return memo[starts[k]][0], starts[k]
         minimize_scalar(
             lambda s: profile(float(s))[1],
-            bounds=(starts[max(k - 1, 0)], starts[min(k + 1, len(starts) - 1)]),
+            bounds=(lo, hi),
             method="bounded",
-            options={"xatol": 1.0},
+            options={"xatol": START_XATOL_CM},
         )
         start = min(memo, key=lambda s: memo[s][1])
         return memo[start][0], start
