@@ -18,7 +18,9 @@ of main: ``git clone -q /work/main /tmp/base && bash /tmp/base/scripts/setup.sh`
   grid) one after the other, with no cluster, timers put on the functions of each phase
   (the render's parse, load, passes and EXR write; the truth's reads; the model's build, that is
   the Unreal fit; the comparison's parts) and the table and plots at the end; fixed costs
-  (imports, reading the sweep) apart from per-configuration costs.
+  (imports, reading the sweep) apart from per-configuration costs.  With ``--dask-malloc``, this
+  checkout's phases once more with ``MALLOC_TRIM_THRESHOLD_=65536``, the variable Dask's nanny
+  sets in its workers and fogref's LocalCluster leaves out (a column of its own).
 * **Identity**: the two command runs' ``results.csv`` must agree in every cell but the timings and
   the run's own paths (``scene_path``, ``render_seconds``, ``compare_seconds``, ``worker_pid``,
   ``worker_host``, ``truth_path``, ``truth_cached``, ``truth_sha256``: the truth EXR's header holds
@@ -27,7 +29,7 @@ of main: ``git clone -q /work/main /tmp/base && bash /tmp/base/scripts/setup.sh`
   is compared).
 
     .venv/bin/python benchmarks/sweep_speed.py --base /tmp/base [--base /tmp/base2] [--repeats 1]
-        [--phase-configs 12]
+        [--phase-configs 12] [--dask-malloc]
 """
 
 from __future__ import annotations
@@ -65,6 +67,11 @@ RUN_COLUMNS = (
     "truth_cached",
     "truth_sha256",
 )
+#: What Dask's nanny sets in its workers by default (``distributed.nanny.pre-spawn-environ``) and
+#: fogref's LocalCluster leaves out (:data:`fogref.cluster.WORKER_UNSET_ENV`): ``--dask-malloc``
+#: runs this checkout's phases with it too, under this name.
+DASK_MALLOC_ENV = {"MALLOC_TRIM_THRESHOLD_": "65536"}
+DASK_MALLOC = "after, MALLOC_TRIM_THRESHOLD_=65536"
 #: (module, function, phase) timed in the phase child; indented phases are parts of the one above; a
 #: phase may name two functions (a checkout has one of them).
 PHASES = (
@@ -349,12 +356,13 @@ def phase_child(tree: Path, work: Path, n_configs: int) -> None:
     )
 
 
-def run_phases(tree: Path, work: Path, n_configs: int) -> dict:
+def run_phases(tree: Path, work: Path, n_configs: int, env: dict | None = None) -> dict:
+    """The phase child of ``tree`` (``env``: variables to add to its environment)."""
     load0 = os.getloadavg()
     p = subprocess.run(
         [str(tree / ".venv" / "bin" / "python"), __file__, "--child", str(tree), str(work), str(n_configs)],
         cwd=tree,
-        env=_env(work),
+        env={**_env(work), **(env or {})},
         capture_output=True,
         text=True,
     )
@@ -445,6 +453,7 @@ def report(res: dict) -> str:
             L += [f"* {d}" for d in ident["differ"]]
     ph = res.get("phases")
     if ph:
+        names = [c for c in ph if c != "after"]  # the bases and, with --dask-malloc, after with it
         cols = [*names, "after"]
         n = ph["after"]["configs"]
         loads = ", ".join(f"{c} {ph[c]['load_before'][0]:.1f} -> {ph[c]['load_after'][0]:.1f}" for c in cols)
@@ -507,6 +516,11 @@ def main(argv=None) -> int:
         action="store_true",
         help="each command run with an empty Dr.Jit kernel cache (HOME a fresh folder)",
     )
+    ap.add_argument(
+        "--dask-malloc",
+        action="store_true",
+        help="also a phase run of this checkout with the MALLOC_TRIM_THRESHOLD_ Dask's nanny sets",
+    )
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks" / "sweep_speed"))
     ap.add_argument("--child", nargs=3, help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
@@ -550,6 +564,10 @@ def main(argv=None) -> int:
             res["phases"] = {
                 w: run_phases(t, Path(tmp) / f"phases-{w}", a.phase_configs) for w, t in trees.items()
             }
+            if a.dask_malloc:  # after's phases as in a Dask nanny's worker (a column before after's)
+                dask = run_phases(ROOT, Path(tmp) / "phases-dask", a.phase_configs, DASK_MALLOC_ENV)
+                after = res["phases"].pop("after")
+                res["phases"].update({DASK_MALLOC: dask, "after": after})
     v = (res.get("phases") or {}).get("after", {}).get("versions", {})
     res["versions"] = ", ".join(f"{k} {x}" for k, x in v.items()) or "versions not recorded"
     out = Path(a.out)

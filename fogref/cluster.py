@@ -24,6 +24,7 @@ from fogref.errors import ParameterError
 __all__ = [
     "ADDRESS",
     "WORKER_TIMEOUT",
+    "WORKER_UNSET_ENV",
     "check_worker_timeout",
     "Interrupt",
     "check_scheduler",
@@ -33,6 +34,13 @@ __all__ = [
     "stderr_to",
     "stop",
 ]
+
+#: Variables that Dask's nanny sets in every worker process by default
+#: (``distributed.nanny.pre-spawn-environ``) and a LocalCluster here starts its workers without.
+#: ``MALLOC_TRIM_THRESHOLD_=65536`` turns off glibc's adaptive mmap threshold: every array over 128 KiB
+#: is then mapped, faulted in and unmapped again, and the Unreal fit ran 1.65x slower, a third of it
+#: in the kernel (``reports/benchmarks/sweep_speed.md``).  A variable the user set is kept.
+WORKER_UNSET_ENV = ("MALLOC_TRIM_THRESHOLD_",)
 
 #: A Dask scheduler address: ``tcp://HOST:PORT`` (or another Dask protocol: tls, inproc, ucx, ws, wss),
 #: or ``HOST:PORT``.
@@ -212,6 +220,7 @@ def connect(
     scheduler, or one that has no worker after ``worker_timeout`` seconds, is a one-line
     ParameterError naming ``source``.  More workers than cores is a warning (stderr).
     """
+    import dask
     from dask.distributed import Client, LocalCluster
 
     if scheduler:
@@ -230,8 +239,10 @@ def connect(
             f"than {cores}), and starting them takes a while",
             file=sys.stderr,
         )
-    # the workers' own "Compute Failed" logs are silenced: the callers report failures themselves
-    with stderr_to(log):
+    # the workers' own "Compute Failed" logs are silenced: the callers report failures themselves;
+    # the workers start without the MALLOC_TRIM_THRESHOLD_ the nanny sets by default (WORKER_UNSET_ENV)
+    unset = {f"distributed.nanny.pre-spawn-environ.{k}": None for k in WORKER_UNSET_ENV}
+    with stderr_to(log), dask.config.set(unset):
         cluster = LocalCluster(
             n_workers=n,
             threads_per_worker=1,
