@@ -220,7 +220,7 @@ def connect(
     scheduler, or one that has no worker after ``worker_timeout`` seconds, is a one-line
     ParameterError naming ``source``.  More workers than cores is a warning (stderr).
     """
-    import dask
+    from dask import config as dask_config
     from dask.distributed import Client, LocalCluster
 
     if scheduler:
@@ -242,7 +242,7 @@ def connect(
     # the workers' own "Compute Failed" logs are silenced: the callers report failures themselves;
     # the workers start without the MALLOC_TRIM_THRESHOLD_ the nanny sets by default (WORKER_UNSET_ENV)
     unset = {f"distributed.nanny.pre-spawn-environ.{k}": None for k in WORKER_UNSET_ENV}
-    with stderr_to(log), dask.config.set(unset):
+    with stderr_to(log), dask_config.set(unset):
         cluster = LocalCluster(
             n_workers=n,
             threads_per_worker=1,

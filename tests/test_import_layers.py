@@ -351,7 +351,11 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
     # `fogref render --help` and its option errors answer without it (tests/test_cli_spec.py)
     "fogref.cli.render": {"fogref.render.render.render": HEAVY},
     # dask.distributed 0.8 s: a render or sweep in one process never starts a cluster
-    "fogref.cluster": {"dask.distributed.Client": HEAVY, "dask.distributed.LocalCluster": HEAVY},
+    "fogref.cluster": {
+        "dask.config": HEAVY,
+        "dask.distributed.Client": HEAVY,
+        "dask.distributed.LocalCluster": HEAVY,
+    },
     # scipy.special 0.3 s (scipy.stats 1.0-1.4 s): `fogref compare --help` and the pytest plugin
     # import the checker
     "fogref.compare.check": {"pytest": OPTIONAL, "scipy.special.ndtri": HEAVY},
