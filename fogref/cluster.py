@@ -38,8 +38,8 @@ __all__ = [
 #: Variables that Dask's nanny sets in every worker process by default
 #: (``distributed.nanny.pre-spawn-environ``) and a LocalCluster here starts its workers without.
 #: ``MALLOC_TRIM_THRESHOLD_=65536`` turns off glibc's adaptive mmap threshold: every array over 128 KiB
-#: is then mapped, faulted in and unmapped again, and the Unreal fit ran 1.65x slower, a third of it
-#: in the kernel (``reports/benchmarks/sweep_speed.md``).  A variable the user set is kept.
+#: is then mapped, faulted in and unmapped again, and the Unreal fit took 1.5x the CPU
+#: (``reports/benchmarks/sweep_speed.md``).  A variable the user set is kept.
 WORKER_UNSET_ENV = ("MALLOC_TRIM_THRESHOLD_",)
 
 #: A Dask scheduler address: ``tcp://HOST:PORT`` (or another Dask protocol: tls, inproc, ucx, ws, wss),

@@ -20,7 +20,7 @@ def _worker_env(tmp_path, name: str) -> list:
 
 def test_local_workers_start_without_dasks_malloc_trim_threshold(tmp_path, monkeypatch):
     """Dask's nanny sets MALLOC_TRIM_THRESHOLD_=65536 in its workers, which makes glibc map and unmap
-    every array over 128 KiB (the Unreal fit 1.65x slower); connect's workers start without it, and
+    every array over 128 KiB (the Unreal fit took 1.5x the CPU); connect's workers start without it, and
     keep Dask's other defaults (one BLAS and OpenMP thread)."""
     monkeypatch.delenv("MALLOC_TRIM_THRESHOLD_", raising=False)
     assert _worker_env(tmp_path, "MALLOC_TRIM_THRESHOLD_") == [None]
