@@ -121,6 +121,25 @@ def final_and_multiple_channels():
     return [0, 1, 2] + [3 + names.index(f"multiple.{c}") for c in "RGB"]
 
 
+def part_variances(scene, spp: int, seeds) -> dict:
+    """Per-pixel variance of one sample of each part of :data:`fogref.gbuffer.SQUARED_GROUPS`,
+    summed over pixels and RGB, from a fogpath ``render_moments`` of ``spp`` samples per seed:
+    part -> one value per seed (radiance^2 in the scene's unit, linear Rec.709 RGB)."""
+    from fogref import gbuffer
+
+    integ = scene.integrator()
+    names = ["R", "G", "B"] + integ.aov_names()
+    out: dict = {}
+    for s in seeds:
+        sums, sq = integ.render_moments(scene, 0, s, spp)
+        sums, sq = np.array(sums, np.float64), np.array(sq, np.float64)
+        for k, g in enumerate(gbuffer.SQUARED_GROUPS):
+            idx = [names.index(c) for c in (["R", "G", "B"] if g == "final" else gbuffer.channel_names(g))]
+            m = sums[..., idx] / spp
+            out.setdefault(g, []).append(float((sq[..., 3 * k : 3 * k + 3] / spp - m * m).sum()))
+    return out
+
+
 def chi2_per_pixel(a, b):
     """Mean over pixels and RGB of (difference of the two stacks' means)^2 / (its variance from
     their spreads): ~1 when the two stacks of independent renders estimate the same image."""

@@ -53,7 +53,18 @@ import time
 from pathlib import Path
 
 import _scenes as S
-from _common import ROOT, dr, kernel_profile, machine_info, median, mi, np, timed_render, warm_ladder  # noqa: F401
+from _common import (  # noqa: F401
+    ROOT,
+    dr,
+    kernel_profile,
+    machine_info,
+    median,
+    mi,
+    np,
+    part_variances,
+    timed_render,
+    warm_ladder,
+)
 
 LADDER = (1, 4, 16, 64, 256, 1024)
 REPEATS = {1: 5, 4: 5, 16: 5, 64: 3, 256: 2, 1024: 1}
@@ -81,20 +92,7 @@ def _insc_channels():
 def variance_shares(scene, spp=64, seeds=(31, 32)):
     """Per-pixel variance of one sample of each part, summed over pixels and RGB, as a
     share of the final image's (the parts are correlated: shares need not add to 1)."""
-    from fogref import gbuffer
-
-    integ = scene.integrator()
-    names = ["R", "G", "B"] + integ.aov_names()
-    acc = {}
-    for s in seeds:
-        sums, sq = integ.render_moments(scene, 0, s, spp)
-        sums, sq = np.array(sums, np.float64), np.array(sq, np.float64)
-        k = 0
-        for g in gbuffer.SQUARED_GROUPS:
-            idx = [names.index(c) for c in (["R", "G", "B"] if g == "final" else gbuffer.channel_names(g))]
-            m = sums[..., idx] / spp
-            acc.setdefault(g, []).append(float((sq[..., k : k + 3] / spp - m * m).sum()))
-            k += 3
+    acc = part_variances(scene, spp, seeds)
     tot = float(np.mean(acc["final"]))
     out = {
         g: float(np.mean(v)) / tot
