@@ -13,11 +13,11 @@ The parts are correlated, so neither the parts nor the two lights need add up to
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import time
 from pathlib import Path
 
+from _checkouts import write_report
 from _common import ROOT, machine_info, mi, np, part_variances
 from _scenes import SCENES, build
 
@@ -102,9 +102,7 @@ def main(argv=None) -> int:
         text = prev.read_text(encoding="utf-8")
         if "\n## Reading\n" in text:
             res["reading"] = ["## Reading", *text.split("\n## Reading\n", 1)[1].rstrip("\n").split("\n")]
-    out.with_suffix(".json").write_text(json.dumps(res, indent=1) + "\n", encoding="utf-8")
-    out.with_suffix(".md").write_text(report(res), encoding="utf-8")
-    print(report(res))
+    write_report(out.parent, out.name, res, report(res))
     return 0
 
 
