@@ -44,6 +44,23 @@ from _common import (
     timed_render,
 )
 
+#: The method compared with fogpath's defaults: its label in the tables and JSON, a title, a
+#: description for the report, and its ``fogpath_knobs`` parameters from the arguments.
+#: ``benchmarks/sky_residual.py`` passes its own.
+SUN_GUIDING = {
+    "label": "fogpath_guided",
+    "short": "guided",
+    "title": "Sun-guided phase sampling at medium vertices (benchmark only)",
+    "describe": lambda args: (
+        f"lobe share {args.share}, lobe g = the fog's g (at least 0.5).",
+        "`fogpath_guided`: the phase sample at every medium vertex drawn from `(1 - s) p_HG + s p_lobe`, "
+        "`p_lobe` a Henyey-Greenstein lobe around the direction toward the sun, weight `f / p_mix`, "
+        "`p_mix` also in the MIS weights against the sky (`benchmarks/_fogpath_knobs.py`, "
+        "`SunGuidedPhase`).",
+    ),
+    "knobs": lambda args: {"sun_guiding": args.share},
+}
+
 
 def _stats(imgs, times, spp):
     """(variance per sample of final and multiple, summed over pixels and RGB; median time)."""
@@ -52,8 +69,10 @@ def _stats(imgs, times, spp):
     return float(v[..., :3].sum()), float(v[..., 3:].sum()), median(times)
 
 
-def run_scene(name, args, rng):
-    methods = {"fogpath": {}, "fogpath_guided": {"sun_guiding": args.share}}
+def run_scene(name, args, rng, method=SUN_GUIDING):
+    """fogpath against ``method`` (:data:`SUN_GUIDING`'s form) on the scene ``name``."""
+    label = method["label"]
+    methods = {"fogpath": {}, label: method["knobs"](args)}
     scenes = {
         m: S.build(mi, name, "fogpath", res=args.res, max_depth=args.max_depth, integrator_over=o)
         for m, o in methods.items()
@@ -63,7 +82,7 @@ def run_scene(name, args, rng):
         timed_render(scenes[m], args.spp, 7, ch)
     imgs = {m: [] for m in methods}
     times = {m: [] for m in methods}
-    seed = {"fogpath": 1000, "fogpath_guided": 500_000}
+    seed = {"fogpath": 1000, label: 500_000}
     for r in range(args.renders):
         for m in list(methods)[:: 1 if r % 2 == 0 else -1]:
             img, t = timed_render(scenes[m], args.spp, seed[m] + r, ch)
@@ -82,10 +101,10 @@ def run_scene(name, args, rng):
             "time_s": t,
             "time_iqr_s": [float(np.percentile(times[m], 25)), float(np.percentile(times[m], 75))],
         }
-    d, g = out["fogpath"], out["fogpath_guided"]
+    d, g = out["fogpath"], out[label]
     diff = g["image_mean"] - d["image_mean"]
     se = float(np.hypot(g["image_mean_se"], d["image_mean_se"]))
-    pa, pb = np.stack(imgs["fogpath"])[..., :3], np.stack(imgs["fogpath_guided"])[..., :3]
+    pa, pb = np.stack(imgs["fogpath"])[..., :3], np.stack(imgs[label])[..., :3]
     n = args.renders
     chi2 = chi2_per_pixel(pa, pb)
     h = n // 2  # the same statistic between the two halves of one method's renders: its value without bias
@@ -93,7 +112,7 @@ def run_scene(name, args, rng):
     boot = []
     for _ in range(args.boot):
         ia, ib = rng.integers(0, n, n), rng.integers(0, n, n)
-        a, b = "fogpath", "fogpath_guided"
+        a, b = "fogpath", label
         sa = _stats([imgs[a][i] for i in ia], [times[a][i] for i in ia], args.spp)
         sb = _stats([imgs[b][i] for i in ib], [times[b][i] for i in ib], args.spp)
         boot.append((sa[0] * sa[2] / (sb[0] * sb[2]), sa[1] / sb[1], sa[0] / sb[0]))
@@ -122,34 +141,33 @@ def run_scene(name, args, rng):
     return out
 
 
-def write_md(res, args) -> str:
+def write_md(res, args, method=SUN_GUIDING, script="sun_guiding.py") -> str:
     m = res["machine"]
+    label, short = method["label"], method["short"]
+    settings, description = method["describe"](args)
     null = all("chi2_per_pixel_null" in r["comparison"] for r in res["scenes"].values())
     lines = [
-        "# Sun-guided phase sampling at medium vertices (benchmark only)",
+        f"# {method['title']}",
         "",
-        f"Command: `python benchmarks/sun_guiding.py {res['argv']}`  ",
+        f"Command: `python benchmarks/{script} {res['argv']}`  ",
         f"Machine: {m['cpu']}, {m['cores']} cores (shared), mitsuba {m['mitsuba']}, drjit {m['drjit']}, "
         f"`{m['variant']}`; load average (1 min) {res['load_start'][0]:.1f} at the start, "
         f"{res['load_end'][0]:.1f} at the end "
         f"(5 min: {res['load_start'][1]:.1f}, {res['load_end'][1]:.1f}).  ",
         f"Images {args.res[0]}x{args.res[1]}, max_depth {args.max_depth}; per scene and method "
         f"{args.renders} renders of {args.spp} spp with their own seeds, the two methods interleaved; "
-        f"lobe share {args.share}, lobe g = the fog's g (at least 0.5). Total run {res['total_s']:.0f} s.",
+        f"{settings} Total run {res['total_s']:.0f} s.",
         "",
-        "`fogpath_guided`: the phase sample at every medium vertex drawn from `(1 - s) p_HG + s p_lobe`, "
-        "`p_lobe` a Henyey-Greenstein lobe around the direction toward the sun, weight `f / p_mix`, "
-        "`p_mix` also in the MIS weights against the sky (`benchmarks/_fogpath_knobs.py`, "
-        "`SunGuidedPhase`).",
+        description,
         "",
-        "## Bias: guided against fogpath",
+        f"## Bias: {short} against fogpath",
         "",
-        "| scene | image mean fogpath | image mean guided | rel. diff | z | smallest detectable rel. diff "
-        "| chi2 / pixel |" + (" the same, halves of fogpath / of guided |" if null else ""),
+        f"| scene | image mean fogpath | image mean {short} | rel. diff | z | smallest detectable rel. diff "
+        "| chi2 / pixel |" + (f" the same, halves of fogpath / of {short} |" if null else ""),
         "|---|---|---|---|---|---|---|" + ("---|" if null else ""),
     ]
     for s, r in res["scenes"].items():
-        d, g, c = r["fogpath"], r["fogpath_guided"], r["comparison"]
+        d, g, c = r["fogpath"], r[label], r["comparison"]
         lines.append(
             f"| {s} | {d['image_mean']:.5f} ± {d['image_mean_se']:.5f} | {g['image_mean']:.5f} ± "
             f"{g['image_mean_se']:.5f} | {c['mean_diff_rel']:+.2e} | {c['z']:+.2f} | "
@@ -172,12 +190,12 @@ def write_md(res, args) -> str:
         "",
         "## Variance and equal-time efficiency",
         "",
-        "| scene | var/sample fogpath | var/sample guided | final var ratio [95% CI] | multiple var ratio "
-        "[95% CI] | time fogpath [s] (IQR) | time guided [s] (IQR) | efficiency ratio [95% CI] |",
+        f"| scene | var/sample fogpath | var/sample {short} | final var ratio [95% CI] | multiple var ratio "
+        f"[95% CI] | time fogpath [s] (IQR) | time {short} [s] (IQR) | efficiency ratio [95% CI] |",
         "|---|---|---|---|---|---|---|---|",
     ]
     for s, r in res["scenes"].items():
-        d, g, c = r["fogpath"], r["fogpath_guided"], r["comparison"]
+        d, g, c = r["fogpath"], r[label], r["comparison"]
         f = lambda k: f"{c[k]:.3f} [{c[k + '_ci95'][0]:.3f}, {c[k + '_ci95'][1]:.3f}]"  # noqa: E731
         t = lambda r: f"{r['time_s']:.3f} ({r['time_iqr_s'][0]:.3f}-{r['time_iqr_s'][1]:.3f})"  # noqa: E731
         lines.append(
@@ -186,9 +204,9 @@ def write_md(res, args) -> str:
         )
     lines += [
         "",
-        "Ratios are fogpath / guided: > 1 means the guided sampler has less variance (or, for the "
+        f"Ratios are fogpath / {short}: > 1 means {short} has less variance (or, for the "
         "efficiency ratio, reaches the same RMSE in less time: `(var x median time)` of fogpath over that "
-        "of the guided sampler). Variance per sample summed over pixels and RGB; 95 % intervals from "
+        f"of {short}). Variance per sample summed over pixels and RGB; 95 % intervals from "
         f"{args.boot} bootstrap resamples of the renders (the time's noise included).",
         "",
     ]
@@ -197,8 +215,10 @@ def write_md(res, args) -> str:
     return "\n".join(lines)
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def main(argv=None, method=SUN_GUIDING, script="sun_guiding.py", name="sun_guiding", doc=None):
+    """The command line of this benchmark, or (``method``, ``script``, ``name``, ``doc``) of
+    another method's (``benchmarks/sky_residual.py``)."""
+    ap = argparse.ArgumentParser(description=(doc or __doc__).split("\n\n")[0])
     ap.add_argument("--scenes", nargs="*", default=list(S.SCENES))
     ap.add_argument("--res", type=int, nargs=2, default=(96, 54), metavar=("W", "H"))
     ap.add_argument("--spp", type=int, default=16)
@@ -207,7 +227,7 @@ def main(argv=None):
     ap.add_argument("--max-depth", type=int, default=8)
     ap.add_argument("--boot", type=int, default=1000)
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
-    ap.add_argument("--name", default="sun_guiding")
+    ap.add_argument("--name", default=name)
     ap.add_argument("--reading", default=None, help="a file whose text goes under 'Verdict' in the .md")
     ap.add_argument("--from-json", default=None, help="rewrite the .md of this run's .json (same arguments)")
     args = ap.parse_args(argv)
@@ -219,18 +239,18 @@ def main(argv=None):
         if args.reading:
             res["reading"] = Path(args.reading).read_text().strip()
         (out / f"{args.name}.json").write_text(json.dumps(res, indent=1))
-        (out / f"{args.name}.md").write_text(write_md(res, args))
+        (out / f"{args.name}.md").write_text(write_md(res, args, method, script))
         return
     rng = np.random.default_rng(0)
     t0, load0 = time.perf_counter(), os.getloadavg()
     res = {"machine": machine_info(), "argv": " ".join(sys.argv[1:]), "load_start": list(load0), "scenes": {}}
     for s in args.scenes:
-        res["scenes"][s] = run_scene(s, args, rng)
+        res["scenes"][s] = run_scene(s, args, rng, method)
     res["load_end"], res["total_s"] = list(os.getloadavg()), time.perf_counter() - t0
     if args.reading:
         res["reading"] = Path(args.reading).read_text().strip()
     (out / f"{args.name}.json").write_text(json.dumps(res, indent=1))
-    (out / f"{args.name}.md").write_text(write_md(res, args))
+    (out / f"{args.name}.md").write_text(write_md(res, args, method, script))
 
 
 if __name__ == "__main__":
