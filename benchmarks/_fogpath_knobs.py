@@ -190,7 +190,8 @@ class FogPathKnobs(FogPathIntegrator):
 
     def _sky_residual_vertex(self, tr, sampler, ray, p, t, med, sun_sampled):
         """A medium vertex whose constant sky is ``L H(d_y) + w L (V T - 1{w_y > 0})`` (module doc)
-        and whose other emitters (all delta: checked) are sampled by next-event estimation.
+        and whose other emitters (all delta: checked) are sampled by next-event estimation; the
+        fog's phase function must be Henyey-Greenstein (checked: ``H`` is its closed form).
         Returns what :meth:`_medium_vertex` returns, the phase sample's pdf 0."""
         scene, fog, ops, phase = tr.scene, tr.fog, tr.ops, tr.phase
         sky = self._constant_sky(scene)
@@ -199,6 +200,7 @@ class FogPathKnobs(FogPathIntegrator):
             raise ParameterError(
                 SOURCE, "sky_residual", "needs every emitter but the sky to be a delta light"
             )
+        fog.require_hg("sky_residual's closed-form share of the phase lobe above the horizon")
         mei = self._medium_interaction(ray, p, t)
         Ld = mi.Spectrum(0.0)
         if others:  # the sun: next-event estimation among the emitters but the sky
