@@ -41,8 +41,9 @@ benchmarks that measure them (fogpath itself fixes them:
   below it.  The sun and other delta emitters keep their next-event estimation; the
   continuation's pdf is 0, so an escape from a medium vertex adds no sky (MIS weight 0).
 
-The knobs hold no copy of fogpath's tracing: they override fogpath's ``_sun_sampler`` and
-``_medium_vertex`` (the phase sample), and continuation splitting runs fogpath's own camera
+The knobs hold no copy of fogpath's tracing: they override fogpath's ``_sun_sampler``,
+``_medium_vertex`` (the phase sample; ``sky_residual`` calls fogpath's ``_direct`` for the sun)
+and ``_fingerprint`` (the sky's radiance), and continuation splitting runs fogpath's own camera
 stage (``_camera_hit``, ``_camera_light``), forced-splitting continuation (``_continuation``)
 and path loop (``_trace``) on a wavefront of its own, so what the benchmarks measure is today's
 fogpath.  Importing this module registers the plugin (after ``_common`` set the variant).
@@ -203,20 +204,13 @@ class FogPathKnobs(FogPathIntegrator):
         fog.require_hg("sky_residual's closed-form share of the phase lobe above the horizon")
         mei = self._medium_interaction(ray, p, t)
         Ld = mi.Spectrum(0.0)
-        if others:  # the sun: next-event estimation among the emitters but the sky
-            ds, em_w = self._sample_emitter_but_sky(scene, mei, sampler.next_2d(med), med)
-            infinite = mi.has_flag(ds.emitter.flags(), mi.EmitterFlags.Infinite)
-            shadow = mi.Ray3f(mei.p, ds.d)
-            shadow.maxt = dr.select(infinite, dr.inf, ds.dist * (1.0 - 1e-4))
-            visible = med & (ds.pdf != 0) & ~scene.ray_test(shadow, med)
+        if others:  # the sun: fogpath's next-event estimation among the emitters but the sky
+            Ld, delta = self._direct(tr, sampler, mei, phase, med, but_sky=True)
             if tr.sun_along:  # as fogpath: the sun on this segment is sampled along it
-                visible &= ~sun_sampled
-            f, _ = phase.eval_pdf(tr.phase_ctx, mei, ds.d, med)
-            Tr = self._transmittance(fog, ops, mei.p, ds.d, dr.select(infinite, ops.largest, ds.dist))
-            Ld = dr.select(visible, em_w * f * Tr, 0.0)
+                Ld = dr.select(delta & sun_sampled, 0.0, Ld)
         # the sky: its closed-form share above the horizon plus one phase sample's residual
         # (its direction is the continuation's: each estimate is unbiased on its own)
-        L = self._sky_radiance(scene, ops)
+        L = mi.Spectrum(*ops.params(self._sky_rgb(scene)))
         wo, w, _ = phase.sample(tr.phase_ctx, mei, sampler.next_1d(med), sampler.next_2d(med), med)
         open_ = med & ~scene.ray_test(mi.Ray3f(mei.p, wo), med)
         T = self._transmittance(fog, ops, mei.p, wo, ops.largest)
@@ -225,20 +219,21 @@ class FogPathKnobs(FogPathIntegrator):
         Ld += dr.select(med, L * (self._upper_share(tr, ray.d.y) + residual), 0.0)
         return Ld, wo, w, mi.Float(0.0)
 
-    def _sky_radiance(self, scene, ops):
-        """The constant sky's RGB radiance (a Spectrum of opaque values), read once per render as
-        fogpath reads the scene's values, and in :meth:`_fingerprint` before a pass is recorded."""
-        return mi.Spectrum(*ops.params(self._read_once(scene, "sky_radiance", lambda: self._read_sky(scene))))
+    def _sky_rgb(self, scene):
+        """The constant sky's RGB radiance (Python floats), read once per render as fogpath reads
+        the scene's values, and in :meth:`_fingerprint` before a pass is recorded."""
 
-    def _read_sky(self, scene):
-        v = mi.traverse(self._constant_sky(scene))["radiance.value"]
-        return tuple(float(v[i][0]) for i in range(3)) if len(v) == 3 else (float(v[0][0]),) * 3
+        def read():
+            v = mi.traverse(self._constant_sky(scene))["radiance.value"]
+            return tuple(float(v[i][0]) for i in range(3)) if len(v) == 3 else (float(v[0][0]),) * 3
+
+        return self._read_once(scene, "sky_radiance", read)
 
     def _fingerprint(self, scene, *args):
         """fogpath's, and with ``sky_residual`` the constant sky's radiance, which the trace reads."""
         fp = super()._fingerprint(scene, *args)
         if self.sky_residual and self._constant_sky(scene) is not None:
-            return (fp, self._read_once(scene, "sky_radiance", lambda: self._read_sky(scene)))
+            return (fp, self._sky_rgb(scene))
         return fp
 
     def _upper_share(self, tr, mu):

@@ -568,18 +568,20 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         num = dr.select(is_medium, sigma_t * spectrum(ops.params(fog.albedo)) * Tr, Tr)
         return is_medium, t_end, dr.select(pdf > 0, num / pdf, 0.0)
 
-    def _direct(self, tr, sampler, it, scatter, active):
+    def _direct(self, tr, sampler, it, scatter, active, but_sky=None):
         """Next-event estimation at ``it`` (a medium interaction when ``scatter`` is a
         phase function, else a surface interaction and ``scatter`` its BSDF): emitter
         sample times the closed-form fog transmittance and visibility, times the phase
         function or BSDF, MIS-weighted against it for non-delta emitters.
-        Returns (contribution without the path throughput, is the sample delta).  At a surface with
-        ``sky_at_surfaces = "bsdf"`` a sample of the constant sky contributes 0: the BSDF
-        sample carries the sky alone (:meth:`_sky_by_bsdf`)."""
+        Returns (contribution without the path throughput, is the sample delta).  With ``but_sky``
+        (a trace-time bool) the constant sky is left out: the other emitters are sampled
+        (:meth:`_sample_emitter_but_sky`) and a sample of the sky contributes 0.  Its default:
+        at a surface with ``sky_at_surfaces = "bsdf"``, where the BSDF sample carries the sky
+        alone (:meth:`_sky_by_bsdf`)."""
         scene, fog, ops = tr.scene, tr.fog, tr.ops
         in_medium = isinstance(scatter, mi.PhaseFunction)
         ctx = tr.phase_ctx if in_medium else tr.bsdf_ctx
-        sky_by_bsdf = not in_medium and self._sky_by_bsdf(scene)
+        sky_by_bsdf = (not in_medium and self._sky_by_bsdf(scene)) if but_sky is None else but_sky
         if dr.hint(sky_by_bsdf and len(scene.emitters()) > 1, mode="scalar"):
             ds, em_w = self._sample_emitter_but_sky(scene, it, sampler.next_2d(active), active)
         else:
