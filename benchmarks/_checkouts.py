@@ -105,6 +105,16 @@ def alternating(checkouts: dict, rounds: int, run) -> dict:
     return runs
 
 
+def kept_reading(markdown_path: Path) -> list[str] | None:
+    """The hand-written ``## Reading`` section of an earlier run's report (its heading and the lines
+    after it), to be kept when the report is written again; None when there is none."""
+    path = Path(markdown_path)
+    text = path.read_text(encoding="utf-8") if path.is_file() else ""
+    if "\n## Reading\n" not in text:
+        return None
+    return ["## Reading", *text.split("\n## Reading\n", 1)[1].rstrip("\n").split("\n")]
+
+
 def write_report(out: Path, stem: str, result: dict, markdown: str) -> None:
     """``<stem>.json`` and ``<stem>.md`` in ``out`` (made if missing), each written atomically, and
     the Markdown printed."""

@@ -51,7 +51,7 @@ from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
-from _checkouts import commit_of
+from _checkouts import commit_of, kept_reading
 from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -453,8 +453,8 @@ def report(res: dict) -> str:
             L += [f"* {d}" for d in ident["differ"]]
     ph = res.get("phases")
     if ph:
-        names = [c for c in ph if c != "after"]  # the bases and, with --dask-malloc, after with it
-        cols = [*names, "after"]
+        others = [c for c in ph if c != "after"]  # the bases and, with --dask-malloc, after with it
+        cols = [*others, "after"]
         n = ph["after"]["configs"]
         loads = ", ".join(f"{c} {ph[c]['load_before'][0]:.1f} -> {ph[c]['load_after'][0]:.1f}" for c in cols)
         L += [
@@ -470,9 +470,9 @@ def report(res: dict) -> str:
             "| phase | "
             + " | ".join(f"{c}: wall, CPU per configuration [s]" for c in cols)
             + " | "
-            + " | ".join(f"{c} / after (CPU)" for c in names)
+            + " | ".join(f"{c} / after (CPU)" for c in others)
             + " |",
-            "|---|" + "---|" * (len(cols) + len(names)),
+            "|---|" + "---|" * (len(cols) + len(others)),
         ]
         for k in dict.fromkeys(label for _, _, label in PHASES):
             xs = [ph[c]["phases"].get(k) for c in cols]
@@ -485,7 +485,7 @@ def report(res: dict) -> str:
             L.append(f"| {k.strip()}{part} | " + " | ".join(cells + ratios) + " |")
         tot = {c: sum(ph[c]["per_config_cpu_s"]) for c in cols}
         cells = [f"{_median(ph[c]['per_config_s']):.3f}, {tot[c] / n:.3f}" for c in cols]
-        ratios = [f"{tot[c] / tot['after']:.2f}x" for c in names]
+        ratios = [f"{tot[c] / tot['after']:.2f}x" for c in others]
         L.append(
             "| **a configuration, all of it** (wall median, CPU mean) | " + " | ".join(cells + ratios) + " |"
         )
@@ -571,11 +571,9 @@ def main(argv=None) -> int:
     v = (res.get("phases") or {}).get("after", {}).get("versions", {})
     res["versions"] = ", ".join(f"{k} {x}" for k, x in v.items()) or "versions not recorded"
     out = Path(a.out)
-    prev = out.with_suffix(".md")
-    if prev.is_file():  # the hand-written reading below the tables is kept across reruns
-        text = prev.read_text()
-        if "\n## Reading\n" in text:
-            res["reading"] = ["## Reading", *text.split("\n## Reading\n", 1)[1].rstrip("\n").split("\n")]
+    reading = kept_reading(out.with_suffix(".md"))  # the hand-written reading is kept across reruns
+    if reading:
+        res["reading"] = reading
     out.with_suffix(".json").write_text(json.dumps(res, indent=1, default=str) + "\n")
     out.with_suffix(".md").write_text(report(res))
     print(out.with_suffix(".md").read_text())

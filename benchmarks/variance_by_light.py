@@ -17,7 +17,7 @@ import os
 import time
 from pathlib import Path
 
-from _checkouts import write_report
+from _checkouts import kept_reading, write_report
 from _common import ROOT, machine_info, mi, np, part_variances
 from _scenes import SCENES, build
 
@@ -97,11 +97,9 @@ def main(argv=None) -> int:
         "load_average": [load0, os.getloadavg()[0]],
     }
     out = Path(a.out)
-    prev = out.with_suffix(".md")
-    if prev.is_file():  # the hand-written reading below the tables is kept across reruns
-        text = prev.read_text(encoding="utf-8")
-        if "\n## Reading\n" in text:
-            res["reading"] = ["## Reading", *text.split("\n## Reading\n", 1)[1].rstrip("\n").split("\n")]
+    reading = kept_reading(out.with_suffix(".md"))  # the hand-written reading is kept across reruns
+    if reading:
+        res["reading"] = reading
     write_report(out.parent, out.name, res, report(res))
     return 0
 
