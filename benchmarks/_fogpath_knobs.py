@@ -32,18 +32,8 @@ benchmarks that measure them (fogpath itself fixes them:
 * ``ms_split_max`` (int in [1, 64], default ``4 ms_split``, at most 16): the most
   continuations of one camera ray with ``ms_split_by`` ``"single"`` or ``"stddev"``.
 
-* ``sky_residual`` (bool, default false): at medium vertices a constant sky's light is estimated
-  as ``L_sky H(d_y) + w L_sky (V T - 1{w_y > 0})`` instead of by next-event estimation and the
-  phase sample's escape (:meth:`FogPathKnobs._sky_residual_vertex`): ``H(d_y)`` the share of the
-  phase lobe around the ray's direction ``d`` above the horizon (closed form, tabulated),
-  ``w`` a phase sample of its own with weight ``w``, ``V T`` its visibility and transmittance to
-  the sky.  The difference is zero for open directions above the horizon and blocked ones
-  below it.  The sun and other delta emitters keep their next-event estimation; the
-  continuation's pdf is 0, so an escape from a medium vertex adds no sky (MIS weight 0).
-
-The knobs hold no copy of fogpath's tracing: they override fogpath's ``_sun_sampler``,
-``_medium_vertex`` (the phase sample; ``sky_residual`` calls fogpath's ``_direct`` for the sun)
-and ``_fingerprint`` (the sky's radiance), and continuation splitting runs fogpath's own camera
+The knobs hold no copy of fogpath's tracing: they override fogpath's ``_sun_sampler`` and
+``_medium_vertex`` (the phase sample), and continuation splitting runs fogpath's own camera
 stage (``_camera_hit``, ``_camera_light``), forced-splitting continuation (``_continuation``)
 and path loop (``_trace``) on a wavefront of its own, so what the benchmarks measure is today's
 fogpath.  Importing this module registers the plugin (after ``_common`` set the variant).
@@ -61,8 +51,6 @@ from fogref.errors import ParameterError
 from fogref.media.single_scatter import sun_sampling_mode
 
 SOURCE = "fogpath_knobs"
-#: Degree of ``sky_residual``'s Chebyshev interpolant of the phase lobe's share above the horizon.
-H_DEGREE = 96
 
 
 def hg_lobe_pdf(g: float, cos):
@@ -157,10 +145,6 @@ class FogPathKnobs(FogPathIntegrator):
         if g is not None:
             g = params.number(g, "sun_guiding_g", source=SOURCE, lo=0.0, hi=0.99)
         self.sun_guiding_g = g
-        sky_residual = props.get("sky_residual", False)
-        if not isinstance(sky_residual, bool):
-            raise ParameterError(SOURCE, "sky_residual", f"expected true or false, got {sky_residual!r}")
-        self.sky_residual = sky_residual
         self.ms_split = params.integer(props.get("ms_split", 1), "ms_split", source=SOURCE, lo=1, hi=16)
         self.ms_split_by = str(props.get("ms_split_by", "fixed"))
         params.choice(self.ms_split_by, "ms_split_by", ("fixed", "single", "stddev", "branch"), SOURCE)
@@ -174,10 +158,7 @@ class FogPathKnobs(FogPathIntegrator):
 
     def _medium_vertex(self, tr, sampler, ray, p, t, med, sun_sampled):
         """fogpath's medium vertex, its phase function sampled by :class:`SunGuidedPhase` when
-        ``sun_guiding`` is above 0 and the scene has a sun; with ``sky_residual`` and a constant
-        sky, :meth:`_sky_residual_vertex`."""
-        if self.sky_residual and self._constant_sky(tr.scene) is not None:
-            return self._sky_residual_vertex(tr, sampler, ray, p, t, med, sun_sampled)
+        ``sun_guiding`` is above 0 and the scene has a sun."""
         sun = self._scene_sun(tr.scene) if self.sun_guiding > 0 else None
         if sun is None:
             return super()._medium_vertex(tr, sampler, ray, p, t, med, sun_sampled)
@@ -188,72 +169,6 @@ class FogPathKnobs(FogPathIntegrator):
             return super()._medium_vertex(tr, sampler, ray, p, t, med, sun_sampled)
         finally:
             tr.phase = phase
-
-    def _sky_residual_vertex(self, tr, sampler, ray, p, t, med, sun_sampled):
-        """A medium vertex whose constant sky is ``L H(d_y) + w L (V T - 1{w_y > 0})`` (module doc)
-        and whose other emitters (all delta: checked) are sampled by next-event estimation; the
-        fog's phase function must be Henyey-Greenstein (checked: ``H`` is its closed form).
-        Returns what :meth:`_medium_vertex` returns, the phase sample's pdf 0."""
-        scene, fog, ops, phase = tr.scene, tr.fog, tr.ops, tr.phase
-        sky = self._constant_sky(scene)
-        others = [e for e in scene.emitters() if e is not sky]
-        if not all(mi.has_flag(e.flags(), mi.EmitterFlags.Delta) for e in others):
-            raise ParameterError(
-                SOURCE, "sky_residual", "needs every emitter but the sky to be a delta light"
-            )
-        fog.require_hg("sky_residual's closed-form share of the phase lobe above the horizon")
-        mei = self._medium_interaction(ray, p, t)
-        Ld = mi.Spectrum(0.0)
-        if others:  # the sun: fogpath's next-event estimation among the emitters but the sky
-            Ld, delta = self._direct(tr, sampler, mei, phase, med, but_sky=True)
-            if tr.sun_along:  # as fogpath: the sun on this segment is sampled along it
-                Ld = dr.select(delta & sun_sampled, 0.0, Ld)
-        # the sky: its closed-form share above the horizon plus one phase sample's residual
-        # (its direction is the continuation's: each estimate is unbiased on its own)
-        L = mi.Spectrum(*ops.params(self._sky_rgb(scene)))
-        wo, w, _ = phase.sample(tr.phase_ctx, mei, sampler.next_1d(med), sampler.next_2d(med), med)
-        open_ = med & ~scene.ray_test(mi.Ray3f(mei.p, wo), med)
-        T = self._transmittance(fog, ops, mei.p, wo, ops.largest)
-        up = dr.select(wo.y > 0, 1.0, 0.0)
-        residual = w * (dr.select(open_, T, 0.0) - up)
-        Ld += dr.select(med, L * (self._upper_share(tr, ray.d.y) + residual), 0.0)
-        return Ld, wo, w, mi.Float(0.0)
-
-    def _sky_rgb(self, scene):
-        """The constant sky's RGB radiance (Python floats), read once per render as fogpath reads
-        the scene's values, and in :meth:`_fingerprint` before a pass is recorded."""
-
-        def read():
-            v = mi.traverse(self._constant_sky(scene))["radiance.value"]
-            return tuple(float(v[i][0]) for i in range(3)) if len(v) == 3 else (float(v[0][0]),) * 3
-
-        return self._read_once(scene, "sky_radiance", read)
-
-    def _fingerprint(self, scene, *args):
-        """fogpath's, and with ``sky_residual`` the constant sky's radiance, which the trace reads."""
-        fp = super()._fingerprint(scene, *args)
-        if self.sky_residual and self._constant_sky(scene) is not None:
-            return (fp, self._sky_rgb(scene))
-        return fp
-
-    def _upper_share(self, tr, mu):
-        """``H(mu)``: the share of the fog's Henyey-Greenstein lobe around a direction of vertical
-        cosine ``mu`` above the horizon (:func:`fogref.media.single_scatter.hg_upper_fraction`), as
-        its Chebyshev interpolant of degree :data:`H_DEGREE` (Clenshaw's recurrence on literal
-        coefficients; within 2e-6 of the quadrature for g = 0.6 and 0.85)."""
-        from numpy.polynomial import chebyshev
-
-        from fogref.media.single_scatter import hg_upper_fraction
-
-        g = float(tr.fog.g)
-        if getattr(self, "_h_coefficients", (None,))[0] != g:
-            c = chebyshev.chebinterpolate(lambda x: hg_upper_fraction(g, x), H_DEGREE)
-            self._h_coefficients = (g, [float(v) for v in c])
-        c = self._h_coefficients[1]
-        b1, b2 = mi.Float(0.0), mi.Float(0.0)
-        for ck in reversed(c[1:]):
-            b1, b2 = 2.0 * mu * b1 - b2 + ck, b1
-        return mu * b1 - b2 + c[0]
 
     def _sun_sampler(self, fog, w_sun):
         mode = sun_sampling_mode(fog, w_sun, self.sun_sampling_layers, self.sun_sampling_mixture)

@@ -29,6 +29,7 @@ Methods (``METHODS``):
 
 ``fogpath``      fogref's integrator with the ``heightfog`` medium (analytic free flight).
 ``fogpath_prev`` fogpath with the earlier sky and sun defaults (``sky_at_surfaces = "mis"``,
+                 ``sky_at_media = "mis"``,
                  ``sun_sampling_rays = 1``), measured beside today's defaults.
 ``volpath_hf``   stock ``volpath`` with the ``heightfog`` medium (delta tracking
                  against heightfog's tight per-ray majorant).
@@ -73,7 +74,6 @@ KNOBS = {
     "ms_split",
     "ms_split_by",
     "ms_split_max",
-    "sky_residual",
 }
 #: fogpath without its variance reduction (one sun sample, sun sampling only in unbounded
 #: one-layer fog, no forced splitting, MIS for the sky at surfaces, one sun-sampled segment),
@@ -83,13 +83,14 @@ FOGPATH_BEFORE = {
     "sun_sampling_mixture": False,
     "forced_split": False,
     "sky_at_surfaces": "mis",
+    "sky_at_media": "mis",
     "sun_sampling_rays": 1,
 }
 #: fogpath with forced splitting on the camera ray on / off (all else default): the
 #: benchmarks measure the one that is not fogpath's default beside ``fogpath``
 SPLIT = {"fogpath_split": {"forced_split": True}, "fogpath_nosplit": {"forced_split": False}}
 #: fogpath with one option changed (all else default), measured beside ``fogpath``
-VARIANTS = {"fogpath_prev": {"sky_at_surfaces": "mis", "sun_sampling_rays": 1}}
+VARIANTS = {"fogpath_prev": {"sky_at_surfaces": "mis", "sky_at_media": "mis", "sun_sampling_rays": 1}}
 
 
 def split_method() -> str:

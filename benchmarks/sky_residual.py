@@ -1,15 +1,18 @@
-"""A constant sky's light at medium vertices as a closed form plus a residual, against fogpath's
-defaults: bias and equal-time error on the ladder's scenes.
+"""fogpath's ``sky_at_media``: a constant sky at medium vertices as a closed form plus a residual
+(``residual``) against next-event estimation (``mis``): bias and equal-time error on the ladder's
+scenes.
 
     .venv/bin/python benchmarks/sky_residual.py --renders 32    # 96x54, 16 spp x 32 renders each
 
-``fogpath_sky_residual`` is ``fogpath_knobs`` (``benchmarks/_fogpath_knobs.py``) with
-``sky_residual``: at every medium vertex the sky's light is ``L H(d_y) + w L (V T - 1{w_y > 0})``
-(``H`` the phase lobe's share above the horizon, ``w`` the continuation's own phase sample, ``V T``
-its visibility and transmittance to the sky), the sun keeps its next-event estimation, and an
-escape from a medium vertex adds no sky.  Same measurements as ``benchmarks/sun_guiding.py``
-(bias with its z-score and chi^2 per pixel, variance per sample, equal-time efficiency with
-bootstrap intervals), written to ``reports/benchmarks/sky_residual.{json,md}``.
+At every medium vertex ``residual`` takes the sky's light as ``L H(d_y) + B (1 - H(d_y)) + w (L V T -
+c(w))``: ``H`` the phase lobe's share above the horizon, ``w`` the continuation's own phase sample,
+``V T`` its visibility and transmittance to the sky, ``c(w)`` the sky's radiance ``L`` above the
+horizon and ``B`` below it (the surface under the camera lit by the sky and the sun); the sun
+keeps its next-event estimation, and an escape from a medium vertex adds no sky.  Both columns
+are fogpath with every other default; ``residual`` is forced on every scene, also where
+``sky_at_media = "auto"`` takes ``mis``.  Same measurements as ``benchmarks/sun_guiding.py`` (bias
+with its z-score and chi^2 per pixel, variance per sample, equal-time efficiency with bootstrap
+intervals), written to ``reports/benchmarks/sky_residual.{json,md}``.
 """
 
 from __future__ import annotations
@@ -19,18 +22,21 @@ import sun_guiding
 SKY_RESIDUAL = {
     "label": "fogpath_sky_residual",
     "short": "residual",
-    "title": "A constant sky at medium vertices: closed form plus residual (benchmark only)",
+    "title": "A constant sky at medium vertices: closed form plus residual against next-event estimation",
     "describe": lambda args: (
-        "`sky_residual` on.",
-        "`fogpath_sky_residual`: at every medium vertex the constant sky's light is `L H(d_y) + w L (V T - "
-        "1{w_y > 0})`, `H` the share of the Henyey-Greenstein lobe around the ray's direction above the "
-        "horizon (a Chebyshev interpolant of `fogref.media.single_scatter.hg_upper_fraction`), `w` the "
-        "continuation's phase sample, `V T` its visibility and closed-form transmittance to the sky; the "
-        "sun keeps its next-event estimation, chosen every time; an escape from a medium vertex adds no "
-        "sky (the continuation's pdf is 0 in the MIS weights) (`benchmarks/_fogpath_knobs.py`, "
-        "`_sky_residual_vertex`).",
+        '`fogpath` here is fogpath with `sky_at_media = "mis"` (next-event estimation among all emitters '
+        "and the phase sample, power heuristic).",
+        '`fogpath_sky_residual`: fogpath with `sky_at_media = "residual"`: at every medium vertex the '
+        "constant sky's light is `L H(d_y) + B (1 - H(d_y)) + w (L V T - c(w))`, `H` the share of the "
+        "Henyey-Greenstein lobe around the ray's direction above the horizon (a truncated Legendre series, "
+        "`fogref.media.single_scatter.hg_upper_fraction_series`), `w` the continuation's phase sample, "
+        "`V T` its visibility and closed-form transmittance to the sky, `c(w)` the sky's radiance above "
+        "the horizon and `B` below it (the surface under the camera lit by the sky and the sun); the sun "
+        "keeps its next-event estimation, chosen every time; an escape from a medium vertex adds no sky "
+        "(`plugins/fogpath.py`, `_sky_residual_light`).",
     ),
-    "knobs": lambda args: {"sky_residual": True},
+    "baseline": {"sky_at_media": "mis"},
+    "knobs": lambda args: {"sky_at_media": "residual"},
 }
 
 if __name__ == "__main__":

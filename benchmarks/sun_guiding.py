@@ -45,7 +45,8 @@ from _common import (
 )
 
 #: The method compared with fogpath's defaults: its label in the tables and JSON, a title, a
-#: description for the report, and its ``fogpath_knobs`` parameters from the arguments.
+#: description for the report, and its ``fogpath_knobs`` parameters from the arguments (and
+#: optionally ``baseline``: fogpath's parameters in the column ``fogpath``, default none).
 #: ``benchmarks/sky_residual.py`` passes its own.
 SUN_GUIDING = {
     "label": "fogpath_guided",
@@ -72,7 +73,7 @@ def _stats(imgs, times, spp):
 def run_scene(name, args, rng, method=SUN_GUIDING):
     """fogpath against ``method`` (:data:`SUN_GUIDING`'s form) on the scene ``name``."""
     label = method["label"]
-    methods = {"fogpath": {}, label: method["knobs"](args)}
+    methods = {"fogpath": method.get("baseline", {}), label: method["knobs"](args)}
     scenes = {
         m: S.build(mi, name, "fogpath", res=args.res, max_depth=args.max_depth, integrator_over=o)
         for m, o in methods.items()

@@ -54,13 +54,16 @@ import math
 
 import drjit as dr
 import mitsuba as mi
+import numpy as np
 from fogref_plugins.passes import max_lanes, pass_seed, pass_sizes
 from mitsuba.python.ad.integrators.common import mis_weight  # the module set_variant loaded (not a 2nd copy)
 
 from fogref import gbuffer, params
+from fogref.errors import ParameterError
+from fogref.media import NP, drjit_ops
 from fogref.media import closed_form as cf
-from fogref.media import drjit_ops
 from fogref.media.single_scatter import (
+    hg_upper_fraction_table,
     sample_sun_single_scatter,
     sample_sun_single_scatter_mixture,
     sun_sampling_mode,
@@ -82,6 +85,16 @@ FORCED_SPLIT_DEFAULT = True
 SUN_SAMPLING_RAYS_DEFAULT = 2
 #: ``sky_at_surfaces``'s default (see ``reports/benchmarks/summary.md``)
 SKY_AT_SURFACES_DEFAULT = "bsdf"
+#: ``sky_at_media``'s default (see ``reports/benchmarks/sky_residual.md``)
+SKY_AT_MEDIA_DEFAULT = "auto"
+#: With ``sky_at_media = "auto"``, the residual is used where the camera's transmittance straight
+#: up (mean over RGB) is at least this: below it the fog dims the sky, and next-event estimation
+#: won at equal time (``reports/benchmarks/sky_residual.md``: 0.34 lost, 0.93 won).
+SKY_RESIDUAL_MIN_UP_TRANSMITTANCE = 0.5
+#: ... and the surface straight below the camera has a diffuse reflectance (mean over RGB) of at
+#: most this: a white world lights the fog from below as brightly as the sky, and there next-event
+#: estimation won (``reports/benchmarks/sky_residual.md``).
+SKY_RESIDUAL_MAX_REFLECTANCE = 0.7
 #: Stratified sun samples per camera ray (each one shadow ray)
 #: (``reports/benchmarks/variance_reduction.md``, "+2 sun samples").
 SUN_SAMPLES = 2
@@ -242,12 +255,31 @@ class Trace:
     the scene, its fog (None: vacuum), the Dr.Jit ops, the fog's phase function (None: the fog
     does not scatter) and the phase and BSDF contexts, whether the scene has non-delta emitters
     (``has_smooth``) and any emitter (``has_lights``), and whether the sun's scattering along the
-    camera ray is sampled along it (``sun_along``; then medium vertices on it skip sun NEE)."""
+    camera ray is sampled along it (``sun_along``; then medium vertices on it skip sun NEE), and
+    with ``sky_at_media``'s residual its :class:`SkyResidual` (``sky_residual``, else None)."""
 
-    def __init__(self, scene, fog, phase, sampler, has_delta, has_smooth):
+    def __init__(self, scene, fog, phase, sampler, has_delta, has_smooth, sky_residual=None):
         self.scene, self.fog, self.ops, self.phase = scene, fog, drjit_ops(), phase
         self.phase_ctx, self.bsdf_ctx = mi.PhaseFunctionContext(sampler), mi.BSDFContext()
-        self.has_smooth, self.has_lights, self.sun_along = has_smooth, has_delta or has_smooth, False
+        self.has_delta, self.has_smooth, self.sun_along = has_delta, has_smooth, False
+        self.has_lights, self.sky_residual = has_delta or has_smooth, sky_residual
+
+
+class SkyResidual:
+    """What ``sky_at_media``'s residual reads in Python (trace-time floats): the fog's ``g``,
+    whose phase lobe's share above the horizon is tabulated
+    (:func:`~fogref.media.single_scatter.hg_upper_fraction_table`, :attr:`share`), and the diffuse
+    reflectance ``rho`` and sunlight ``sun`` (RGB radiance) of the surface below the camera
+    (:meth:`FogPathIntegrator._surface_below`), whose radiance under the sky ``L`` is the control
+    variate's light from below the horizon, ``B = rho (L + sun)``."""
+
+    def __init__(self, g, rho, sun):
+        self.g, self.rho, self.sun = float(g), tuple(rho), tuple(sun)
+
+    @property
+    def share(self) -> tuple:
+        """The table of the lobe's share above the horizon on [-1, 1] (kept per ``g``)."""
+        return hg_upper_fraction_table(self.g)
 
 
 class Path:
@@ -367,6 +399,19 @@ class FogPathIntegrator(mi.SamplingIntegrator):
          ``bsdf`` a Lambertian surface that sees the whole sky gets it with zero variance
          (a cosine-weighted sample of a constant radiance).  Other skies always use
          ``mis``.  Default: ``SKY_AT_SURFACES_DEFAULT``.
+     * - sky_at_media
+       - string
+       - How a ``constant`` sky lights medium vertices: ``mis`` (next-event estimation among all
+         emitters and the phase sample, power heuristic) or ``residual``: the sky's light is
+         ``L H(d_y) + w L (V T - 1{w_y > 0})`` (:meth:`_sky_residual_light`), ``H`` the share of
+         the phase lobe around the ray's direction ``d`` above the horizon (closed form), ``w``
+         the continuation's own phase sample, ``V T`` its visibility and transmittance to the
+         sky; next-event estimation keeps the other emitters.  ``residual`` needs a
+         Henyey-Greenstein fog with ``|g|`` up to about 0.94 (``H`` within
+         ``SKY_RESIDUAL_TOLERANCE``), a constant sky and only delta lights besides; asked for
+         elsewhere, the error says what is missing.  ``auto`` takes it where it applies and the
+         camera's transmittance straight up is at least ``SKY_RESIDUAL_MIN_UP_TRANSMITTANCE``,
+         else ``mis`` (:meth:`_sky_residual`).  Default: ``SKY_AT_MEDIA_DEFAULT``.
      * - forced_split
        - bool
        - Forced splitting on the camera ray: every sample traces both branches at
@@ -402,6 +447,8 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         self.forced_split = bool(props.get("forced_split", FORCED_SPLIT_DEFAULT))
         self.sky_at_surfaces = str(props.get("sky_at_surfaces", SKY_AT_SURFACES_DEFAULT))
         params.choice(self.sky_at_surfaces, "sky_at_surfaces", ("mis", "bsdf"), "fogpath")
+        self.sky_at_media = str(props.get("sky_at_media", SKY_AT_MEDIA_DEFAULT))
+        params.choice(self.sky_at_media, "sky_at_media", ("auto", "mis", "residual"), "fogpath")
         diameter = params.number(
             props.get("sun_angular_diameter", 0.0), "sun_angular_diameter", source="fogpath", lo=0.0, hi=10.0
         )
@@ -502,6 +549,68 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         E = p["irradiance.value"]
         E = [float(E[i][0]) for i in range(3)] if len(E) == 3 else [float(E[0][0])] * 3
         return [x / n for x in w], E
+
+    def _sky_residual(self, scene, fog):
+        """The :class:`SkyResidual` when medium vertices take the sky's closed form plus
+        residual (``sky_at_media``), else None (trace-time, read once).  ``fog``: the scene's
+        fog (it scatters).  ``residual`` where it does not apply: a ParameterError naming
+        ``sky_at_media`` and what is missing.  ``auto`` takes it where it applies, the camera's
+        transmittance straight up is at least :data:`SKY_RESIDUAL_MIN_UP_TRANSMITTANCE` and
+        the surface below the camera reflects at most :data:`SKY_RESIDUAL_MAX_REFLECTANCE`."""
+        return self._read_once(scene, "sky_residual", lambda: self._read_sky_residual(scene, fog))
+
+    def sky_at_media_for(self, scene) -> str:
+        """How medium vertices of ``scene`` take its constant sky: ``"residual"`` or ``"mis"``
+        (``sky_at_media`` resolved for the scene; ``"mis"`` also where the fog does not scatter).
+        ``residual`` asked for where it does not apply: the ParameterError a render raises."""
+        fog = self._scene_fog(scene)
+        scatters = fog is not None and fog.scatters
+        return "residual" if scatters and self._sky_residual(scene, fog._obj) is not None else "mis"
+
+    def _read_sky_residual(self, scene, fog):
+        if self.sky_at_media == "mis":
+            return None
+        sky = self._constant_sky(scene)
+        share = None if fog.phase is not None else hg_upper_fraction_table(fog.g)
+        missing = (
+            "a constant sky"
+            if sky is None
+            else "only delta lights besides the sky"
+            if sum(not mi.has_flag(e.flags(), mi.EmitterFlags.Delta) for e in scene.emitters()) > 1
+            else f"a Henyey-Greenstein phase (the fog's is '{fog.phase.label}')"
+            if fog.phase is not None
+            else f"|g| <= 0.94 (g = {fog.g:g}: the lobe's share above the horizon needs a higher degree)"
+            if share is None
+            else None
+        )
+        if missing is not None:
+            if self.sky_at_media == "residual":
+                raise ParameterError("fogpath", "sky_at_media", f"'residual' needs {missing}")
+            return None
+        camera = scene.sensors()[0].world_transform().translation()  # opaque: no kernel per position
+        rho, sun_below = self._surface_below(scene, fog, camera)
+        o = [float(camera[i][0]) for i in range(3)]
+        up = float(np.mean(fog.transmittance(NP, o, (0.0, 1.0, 0.0), math.inf)))
+        nee_wins = up < SKY_RESIDUAL_MIN_UP_TRANSMITTANCE or sum(rho) / 3.0 > SKY_RESIDUAL_MAX_REFLECTANCE
+        if self.sky_at_media == "auto" and nee_wins:
+            return None
+        return SkyResidual(fog.g, rho, sun_below)
+
+    def _surface_below(self, scene, fog, camera):
+        """(``rho``, ``S``) of the surface straight below the camera: its diffuse reflectance and
+        the radiance the sun gives it, unshadowed, ``E max(w_y, 0) T_sun / pi`` (``T_sun`` the
+        fog's transmittance from it toward the sun); RGB, trace-time Python floats, finite, 0
+        when nothing is below the camera."""
+        si = scene.ray_intersect(mi.Ray3f(camera, mi.Vector3f(0.0, -1.0, 0.0)))
+        if not bool(si.is_valid()[0]):
+            return (0.0,) * 3, (0.0,) * 3
+        r = si.bsdf().eval_diffuse_reflectance(si)
+        rho = tuple(float(r[i][0]) if math.isfinite(float(r[i][0])) else 0.0 for i in range(3))
+        sun = self._scene_sun(scene)
+        if sun is None or sun[0][1] <= 0:
+            return rho, (0.0,) * 3
+        T = fog.transmittance(NP, [float(si.p[i][0]) for i in range(3)], tuple(sun[0]), math.inf)
+        return rho, tuple(e * sun[0][1] * float(t) / math.pi for e, t in zip(sun[1], T))
 
     def _sky_by_bsdf(self, scene):
         """Does the BSDF sample alone carry a constant sky at surfaces (trace-time)?"""
@@ -657,14 +766,48 @@ class FogPathIntegrator(mi.SamplingIntegrator):
     def _medium_vertex(self, tr, sampler, ray, p, t, med, sun_sampled):
         """Light sample and phase sample at the medium vertex ``p`` at distance ``t`` on
         ``ray``, on the lanes ``med``.  Where the sun's scattering is sampled along the segment
-        (``tr.sun_along``, on the lanes ``sun_sampled``) its sun NEE is left out.
+        (``tr.sun_along``, on the lanes ``sun_sampled``, a mask or True for every lane) its sun
+        NEE is left out (with the residual, not computed).  With
+        ``sky_at_media``'s residual (``tr.sky_residual``) next-event estimation samples the other
+        emitters, the sky's light is :meth:`_sky_residual_light`, and the phase sample's pdf is 0:
+        an escape from the vertex adds no sky (its MIS weight is 0).
         Returns (contribution without the throughput, direction, phase weight, its pdf)."""
         mei = self._medium_interaction(ray, p, t)
-        Ld, delta = self._direct(tr, sampler, mei, tr.phase, med)
-        if tr.sun_along:  # the sun on this segment is sampled along it
-            Ld = dr.select(delta & sun_sampled, 0.0, Ld)
+        residual = tr.sky_residual is not None
+        Ld = mi.Spectrum(0.0)
+        if not residual:
+            Ld, delta = self._direct(tr, sampler, mei, tr.phase, med)
+            if tr.sun_along:  # the sun on this segment is sampled along it
+                Ld = dr.select(delta & sun_sampled, 0.0, Ld)
+        elif tr.has_delta and not (tr.sun_along and sun_sampled is True):
+            # the delta lights alone; where the sun is sampled along the segment it is the only one
+            on = (med & ~sun_sampled) if tr.sun_along else med
+            Ld = self._direct(tr, sampler, mei, tr.phase, on, but_sky=True)[0]
         wo, w, pdf = tr.phase.sample(tr.phase_ctx, mei, sampler.next_1d(med), sampler.next_2d(med), med)
+        if residual:
+            Ld += self._sky_residual_light(tr, ray, mei.p, wo, w, med)
+            pdf = mi.Float(0.0)
         return Ld, wo, w, pdf
+
+    def _sky_residual_light(self, tr, ray, p, wo, w, active):
+        """The constant sky's light at the medium vertex ``p`` on ``ray`` (direction ``d``):
+        ``L H(d_y) + B (1 - H(d_y)) + w (L V T - c(wo))``.  ``L`` is the sky's radiance (the
+        emitter's, a Dr.Jit input), ``H`` the share of the phase lobe around ``d`` above the horizon
+        (tabulated, :attr:`SkyResidual.share`), ``wo`` and ``w`` the continuation's phase sample
+        and weight, ``V T`` its visibility and transmittance to the sky, and ``c(wo)`` the control
+        variate: ``L`` above the horizon, ``B`` (:class:`SkyResidual`) below it.
+        ``E[w 1{wo_y > 0}] = H(d_y)``, so the terms besides ``w L V T`` have mean 0: unbiased for
+        any geometry and any ``B``.  With an open sky above the horizon, thin fog and a ground
+        as bright as ``B`` below it, what is left to sample is near 0."""
+        scene, ops = tr.scene, tr.ops
+        sr = tr.sky_residual
+        L = self._constant_sky(scene).eval(dr.zeros(mi.SurfaceInteraction3f), active)  # an input, not read
+        B = mi.Spectrum(*ops.params(sr.rho)) * (L + mi.Spectrum(*ops.params(sr.sun)))
+        open_ = active & ~scene.ray_test(mi.Ray3f(p, wo), active)
+        T = self._transmittance(tr.fog, ops, p, wo, ops.largest)
+        H = ops.interp_uniform(ray.d.y, -1.0, 1.0, sr.share)
+        light = L * H + B * (1.0 - H) + w * (L * dr.select(open_, T, 0.0) - dr.select(wo.y > 0, L, B))
+        return dr.select(active, light, 0.0)
 
     def _surface_vertex(self, tr, sampler, ray, si, surf):
         """Light sample (when the scene has lights; else None) and BSDF sample at the surface
@@ -828,7 +971,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         bsdf_sample = draw() if bsdf_first else None
         t_m, w_m, med = self._forced_collision(tr, sampler, ray, D, active)
         p_med = ray.o + ray.d * t_m
-        Ld, wo_m, w_ph, pdf_m = self._medium_vertex(tr, sampler, ray, p_med, t_m, med, mi.Bool(True))
+        Ld, wo_m, w_ph, pdf_m = self._medium_vertex(tr, sampler, ray, p_med, t_m, med, True)
         # q = T / (T + w_medium) >= T: it must not depend on the surface branch's own samples
         # (the ratio estimator `surface` keeps the samples that continued it), and q >= T
         # keeps `surface` defined wherever the old scatter-or-reach choice defined it.
@@ -911,7 +1054,8 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         phase = (
             scene.sensors()[0].get_medium().phase_function() if (fog is not None and fog.scatters) else None
         )
-        return Trace(scene, fog, phase, sampler, has_delta, has_smooth)
+        sky_residual = None if phase is None else self._sky_residual(scene, fog._obj)
+        return Trace(scene, fog, phase, sampler, has_delta, has_smooth, sky_residual)
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
         tr = self._tracing(scene, sampler)
@@ -1106,6 +1250,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
                 None if phase is None else phase.class_name(),
                 self._scene_sun(scene),
                 None if sky is None else (scene.emitters().index(sky), self._sky_selection(scene)),
+                None if fog is None or not fog.scatters else self._sky_residual(scene, fog._obj),
                 settings,
                 list(sensor.film().crop_size()),
                 sensor.sampler().class_name(),
@@ -1116,12 +1261,14 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         )
 
     def _fog_tables(self, scene) -> dict:
-        """The arrays of the fog's interpolation tables (a tabulated phase function's cosines
-        and values; none for Henyey-Greenstein), made before a recording, which takes them as
-        inputs."""
+        """The arrays of the scene's interpolation tables (a tabulated phase function's cosines
+        and values; with ``sky_at_media``'s residual, the phase lobe's share above the horizon),
+        made before a recording, which takes them as inputs."""
         fog = self._scene_fog(scene)
         phase = None if fog is None else fog.phase
-        return drjit_ops().tables(phase.cosines, phase.values) if hasattr(phase, "cosines") else {}
+        columns = (phase.cosines, phase.values) if hasattr(phase, "cosines") else ()
+        sky = None if fog is None or not fog.scatters else self._sky_residual(scene, fog._obj)
+        return drjit_ops().tables(*columns, *(() if sky is None else (sky.share,)))
 
     def _pass_reading(self, tables, scene, sensor, seed, spp, pixel_exact, squares):
         """:meth:`_pass` with Dr.Jit's parameter cache holding only ``tables`` (what a recording

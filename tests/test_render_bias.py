@@ -75,11 +75,31 @@ CASES = {
         dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], phase="mie"),
         56,
     ),
+    # the sky at medium vertices as a closed form plus a residual (fogpath's ``sky_at_media``; the
+    # other cases take next-event estimation, as ``auto`` does over a white ground)
+    "sky residual, forced split, box, camera inside": ([0, 3, -10], dict(falloff=0.0, **BOX), 80),
+    "sky residual, forced split, occluders, exponential, RGB": (
+        [0, 3, -10],
+        dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], **BOX),
+        48,
+    ),
+    "sky residual, unbounded exponential, RGB (no forced split)": (
+        [0, 3, -10],
+        dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065]),
+        96,
+    ),
 }
 #: cases with white occluders above the horizon (cube, roof)
 OCCLUDED_ON = {k: dict(occluders=True) for k in CASES if "occluders" in k}
-#: every case runs with ``forced_split`` set explicitly (on where the case says so)
-OPTIONS = {k: dict(OCCLUDED_ON.get(k, {}), forced_split=k.startswith("forced split")) for k in CASES}
+#: every case runs with ``forced_split`` and ``sky_at_media`` set explicitly (as the case says)
+OPTIONS = {
+    k: dict(
+        OCCLUDED_ON.get(k, {}),
+        forced_split=k.removeprefix("sky residual, ").startswith("forced split"),
+        sky_at_media="residual" if k.startswith("sky residual") else "mis",
+    )
+    for k in CASES
+}
 
 
 def furnace(mi, origin, fog, occluders=False, **integrator):

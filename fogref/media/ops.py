@@ -84,6 +84,16 @@ class NumpyOps:
         clamped to the table's ends."""
         return np.interp(x, xp, fp)
 
+    @staticmethod
+    def interp_uniform(x: Real, lo: float, hi: float, fp: tuple) -> Real:
+        """Linear interpolation of ``fp`` (``len(fp) >= 2`` values at nodes uniform on
+        ``[lo, hi]``) at ``x``, clamped to the ends.
+
+        >>> float(NumpyOps.interp_uniform(0.25, -1.0, 1.0, (0.0, 1.0, 4.0)))
+        1.75
+        """
+        return np.interp(x, np.linspace(lo, hi, len(fp)), fp)
+
 
 class _NullContext:
     def __enter__(self) -> _NullContext:
@@ -267,6 +277,17 @@ class DrJitOps:
         x0, x1 = dr.gather(self.Float, xs, i), dr.gather(self.Float, xs, i + 1)
         f0, f1 = dr.gather(self.Float, fs, i), dr.gather(self.Float, fs, i + 1)
         return dr.lerp(f0, f1, (x - x0) / (x1 - x0))
+
+    def interp_uniform(self, x: Real, lo: float, hi: float, fp: tuple) -> Real:
+        """Linear interpolation of ``fp`` (Python numbers at ``len(fp) >= 2`` nodes uniform on
+        ``[lo, hi]``) at ``x``, clamped to the ends: the interval by one division, two gathers
+        (the table uploaded once, as :meth:`interp`'s)."""
+        dr, n = self.dr, len(fp)
+        fs = self._table(fp)
+        t = (dr.clip(self._f(x), lo, hi) - lo) * ((n - 1) / (hi - lo))
+        i = dr.minimum(dr.uint32_array_t(self.Float)(t), n - 2)
+        f0, f1 = dr.gather(self.Float, fs, i), dr.gather(self.Float, fs, i + 1)
+        return dr.lerp(f0, f1, t - self.Float(i))
 
     @staticmethod
     def _table_key(values: tuple) -> str:
