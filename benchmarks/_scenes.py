@@ -109,7 +109,33 @@ def _diffuse(v):
 
 
 def scene_spec(name: str) -> dict:
-    """Camera, fog, lights and shapes of a benchmark scene, as plain data."""
+    """Camera, fog, lights and shapes of a benchmark scene, as plain data.  ``name`` is a scene of
+    :data:`SCENES`, optionally with changes after ``+``: ``sunNN`` (the sun NN degrees up, same
+    azimuth), ``nosun`` (no sun), ``groundX`` (the ground and rocks grey with reflectance X):
+    ``valley_open+sun60+ground0.4``.
+
+    >>> s = scene_spec("valley_open+sun30+ground0.4")
+    >>> round(-s["sun_dir"][1], 3), s["ground"][1], s["bounds"] is None
+    (0.5, [0.4, 0.4, 0.4], True)
+    """
+    base, *changes = name.split("+")
+    spec = _base_spec(base)
+    for c in changes:
+        if c == "nosun":
+            spec["sun"] = None
+        elif c.startswith("sun"):
+            x, y, z = spec["sun_dir"]
+            e, h = math.radians(float(c[3:])), math.hypot(x, z)
+            spec["sun_dir"] = [x / h * math.cos(e), -math.sin(e), z / h * math.cos(e)]
+        elif c.startswith("ground"):
+            rho = float(c[6:])
+            spec["ground"], spec["rock"] = (spec["ground"][0], [rho] * 3), [rho] * 3
+        else:
+            raise KeyError(f"{name}: unknown change {c!r} (sunNN, nosun, groundX)")
+    return spec
+
+
+def _base_spec(name: str) -> dict:
     if name == "valley":
         a = 100 * math.log(2) ** 2 * 0.02 / 1000  # Unreal FogDensity 0.02 -> 1/m
         b = 100 * math.log(2) * 0.2 / 1000  # FogHeightFalloff 0.2 -> 1/m
@@ -140,7 +166,7 @@ def scene_spec(name: str) -> dict:
         # samples the sun's single scattering from its exact integrand.  Stock
         # volpath + heightfog is fair here too: its sun shadow rays stop at 2R
         # (~8.5 km), where the fog they would still cross has density < 1e-7.
-        spec = scene_spec("valley")
+        spec = _base_spec("valley")
         spec["bounds"] = None
         return spec
     if name == "two_layer":
@@ -322,7 +348,7 @@ def build(
         }
     for i, (c, r) in enumerate(spec["spheres"]):
         d[f"sphere{i}"] = {"type": "sphere", "center": list(c), "radius": r, "bsdf": _diffuse(spec["rock"])}
-    if sun:
+    if sun and spec["sun"] is not None:
         d["sun"] = {"type": "directional", "direction": spec["sun_dir"], "irradiance": _rgb(spec["sun"])}
     if sky:
         d["sky"] = {"type": "constant", "radiance": _rgb(spec["sky"])}

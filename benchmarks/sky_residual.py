@@ -2,7 +2,7 @@
 (``residual``) against next-event estimation (``mis``): bias and equal-time error on the ladder's
 scenes.
 
-    .venv/bin/python benchmarks/sky_residual.py --renders 32    # 96x54, 16 spp x 32 renders each
+    .venv/bin/python benchmarks/sky_residual.py --renders 32    # 96x54, 16 spp x 32 renders each, ~2 min
 
 At every medium vertex ``residual`` takes the sky's light as ``L H(d_y) + B (1 - H(d_y)) + w (L V T -
 c(w))``: ``H`` the phase lobe's share above the horizon, ``w`` the continuation's own phase sample,
@@ -12,12 +12,37 @@ keeps its next-event estimation, and an escape from a medium vertex adds no sky.
 are fogpath with every other default; ``residual`` is forced on every scene, also where
 ``sky_at_media = "auto"`` takes ``mis``.  Same measurements as ``benchmarks/sun_guiding.py`` (bias
 with its z-score and chi^2 per pixel, variance per sample, equal-time efficiency with bootstrap
-intervals), written to ``reports/benchmarks/sky_residual.{json,md}``.
+intervals), written to ``reports/benchmarks/sky_residual.{json,md}``.  Besides the ladder's four
+scenes, the default scenes include :data:`CONDITIONS`: the open valley with a higher sun, without
+the sun, and over brighter ground, where ``auto``'s rule is drawn (each row notes what ``auto``
+takes there).
 """
 
 from __future__ import annotations
 
+import _scenes as S
 import sun_guiding
+
+#: The open valley changed (``_scenes.scene_spec``): a higher sun, no sun, brighter ground.
+CONDITIONS = (
+    "valley_open+sun60",
+    "valley_open+nosun",
+    "valley_open+ground0.4",
+    "valley_open+sun60+ground0.7",
+    "valley_open+nosun+ground0.5",
+    "valley_open+nosun+ground0.9",
+)
+
+
+def auto_takes(scene) -> str:
+    """What ``sky_at_media = "auto"`` takes on ``scene`` (a loaded fogpath scene)."""
+    fp = scene.integrator()
+    kept, fp.sky_at_media = fp.sky_at_media, "auto"
+    try:
+        return "auto: " + fp.sky_at_media_for(scene)
+    finally:
+        fp.sky_at_media = kept
+
 
 SKY_RESIDUAL = {
     "label": "fogpath_sky_residual",
@@ -28,8 +53,9 @@ SKY_RESIDUAL = {
         "and the phase sample, power heuristic).",
         '`fogpath_sky_residual`: fogpath with `sky_at_media = "residual"`: at every medium vertex the '
         "constant sky's light is `L H(d_y) + B (1 - H(d_y)) + w (L V T - c(w))`, `H` the share of the "
-        "Henyey-Greenstein lobe around the ray's direction above the horizon (a truncated Legendre series, "
-        "`fogref.media.single_scatter.hg_upper_fraction_series`), `w` the continuation's phase sample, "
+        "Henyey-Greenstein lobe around the ray's direction above the horizon (a truncated Legendre "
+        "series, tabulated: `fogref.media.single_scatter.hg_upper_fraction_table`), `w` the "
+        "continuation's phase sample, "
         "`V T` its visibility and closed-form transmittance to the sky, `c(w)` the sky's radiance above "
         "the horizon and `B` below it (the surface under the camera lit by the sky and the sun); the sun "
         "keeps its next-event estimation, chosen every time; an escape from a medium vertex adds no sky "
@@ -37,7 +63,14 @@ SKY_RESIDUAL = {
     ),
     "baseline": {"sky_at_media": "mis"},
     "knobs": lambda args: {"sky_at_media": "residual"},
+    "note": auto_takes,
 }
 
 if __name__ == "__main__":
-    sun_guiding.main(method=SKY_RESIDUAL, script="sky_residual.py", name="sky_residual", doc=__doc__)
+    sun_guiding.main(
+        method=SKY_RESIDUAL,
+        script="sky_residual.py",
+        name="sky_residual",
+        doc=__doc__,
+        scenes=(*S.SCENES, *CONDITIONS),
+    )

@@ -46,7 +46,8 @@ from _common import (
 
 #: The method compared with fogpath's defaults: its label in the tables and JSON, a title, a
 #: description for the report, and its ``fogpath_knobs`` parameters from the arguments (and
-#: optionally ``baseline``: fogpath's parameters in the column ``fogpath``, default none).
+#: optionally ``baseline``: fogpath's parameters in the column ``fogpath``, default none, and
+#: ``note``: a remark on each scene from its loaded baseline scene, shown beside its name).
 #: ``benchmarks/sky_residual.py`` passes its own.
 SUN_GUIDING = {
     "label": "fogpath_guided",
@@ -90,6 +91,8 @@ def run_scene(name, args, rng, method=SUN_GUIDING):
             imgs[m].append(img)
             times[m].append(t)
     out = {}
+    if "note" in method:  # a remark on the scene, from its baseline scene
+        out["note"] = method["note"](scenes["fogpath"])
     for m in methods:
         a = np.stack(imgs[m])
         means = a[..., :3].mean(axis=(1, 2, 3))
@@ -200,7 +203,8 @@ def write_md(res, args, method=SUN_GUIDING, script="sun_guiding.py") -> str:
         f = lambda k: f"{c[k]:.3f} [{c[k + '_ci95'][0]:.3f}, {c[k + '_ci95'][1]:.3f}]"  # noqa: E731
         t = lambda r: f"{r['time_s']:.3f} ({r['time_iqr_s'][0]:.3f}-{r['time_iqr_s'][1]:.3f})"  # noqa: E731
         lines.append(
-            f"| {s} | {d['var_final']:.4g} | {g['var_final']:.4g} | {f('final_var_ratio')} | "
+            f"| {s}{' (' + r['note'] + ')' if r.get('note') else ''} | {d['var_final']:.4g} | "
+            f"{g['var_final']:.4g} | {f('final_var_ratio')} | "
             f"{f('multiple_var_ratio')} | {t(d)} | {t(g)} | {f('efficiency_ratio')} |"
         )
     lines += [
@@ -216,11 +220,13 @@ def write_md(res, args, method=SUN_GUIDING, script="sun_guiding.py") -> str:
     return "\n".join(lines)
 
 
-def main(argv=None, method=SUN_GUIDING, script="sun_guiding.py", name="sun_guiding", doc=None):
-    """The command line of this benchmark, or (``method``, ``script``, ``name``, ``doc``) of
-    another method's (``benchmarks/sky_residual.py``)."""
+def main(
+    argv=None, method=SUN_GUIDING, script="sun_guiding.py", name="sun_guiding", doc=None, scenes=S.SCENES
+):
+    """The command line of this benchmark, or (``method``, ``script``, ``name``, ``doc``, the
+    default ``scenes``) of another method's (``benchmarks/sky_residual.py``)."""
     ap = argparse.ArgumentParser(description=(doc or __doc__).split("\n\n")[0])
-    ap.add_argument("--scenes", nargs="*", default=list(S.SCENES))
+    ap.add_argument("--scenes", nargs="*", default=list(scenes))
     ap.add_argument("--res", type=int, nargs=2, default=(96, 54), metavar=("W", "H"))
     ap.add_argument("--spp", type=int, default=16)
     ap.add_argument("--renders", type=int, default=32)
