@@ -22,6 +22,9 @@ lanes).  It has:
   (``sun_sampling``; :func:`fogref.media.single_scatter.sun_sampling_mode`), and forced
   splitting: both branches of the camera ray, the surface and a forced medium collision,
   in every sample (``forced_split``);
+* **a constant sky at medium vertices** as the phase lobe's closed-form share above the horizon
+  plus one phase sample's residual, where that wins (``sky_at_media``,
+  :meth:`FogPathIntegrator._sky_residual_light`);
 * **the parts of the schema** per sample (:class:`Split`):
   ``L = attenuated_surface + single + multiple`` exactly.  How the parts, forced
   splitting and the sun's sampling fit together: ``docs/design.md``, "fogpath".
