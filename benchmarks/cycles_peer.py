@@ -115,12 +115,13 @@ class Cycles:
         shutil.rmtree(self.dir, ignore_errors=True)
 
 
-def mitsuba_scene(mi, S, spec, res, max_depth):
-    """fogpath + heightfog (bounded), the same camera / lights / shapes (y up)."""
+def mitsuba_scene(mi, S, spec, res, max_depth, fogpath=()):
+    """fogpath + heightfog (bounded), the same camera / lights / shapes (y up); ``fogpath``:
+    ``KEY=VALUE`` strings, the integrator's parameters besides its defaults."""
     T = mi.ScalarTransform4f()
     d = {
         "type": "scene",
-        "integrator": {"type": "fogpath", "max_depth": max_depth},
+        "integrator": {"type": "fogpath", "max_depth": max_depth, **dict(kv.split("=", 1) for kv in fogpath)},
         "sensor": {
             "type": "perspective",
             "fov": spec["fov"],
@@ -240,13 +241,14 @@ def run_scene(name, args, py, env):
     res, D = (64, 36), args.max_depth
     out: dict = {"spec": spec, "res": list(res), "max_depth": D}
     t0 = time.perf_counter()
-    scene = mitsuba_scene(mi, S, spec, res, D)
+    scene = mitsuba_scene(mi, S, spec, res, D, args.fogpath)
     fr = {"scene_load_s": time.perf_counter() - t0}
     k = kernel_profile(scene, args.ladder_fr[0], 777)
     fr.update(first_call_s=k["wall_s"], first_call_llvm_backend_s=k["backend_s"])
     fr.update(first_call_codegen_s=k["codegen_s"])
     home = tempfile.mkdtemp(prefix="cycles_peer_home_")  # no ~/.drjit kernel cache: LLVM compiles
     cmd = [sys.executable, __file__, "--cold-child", name, "--max-depth", str(D)]
+    cmd += [f"--fogpath={kv}" for kv in args.fogpath]
     p = subprocess.run(cmd, env={**os.environ, "HOME": home}, capture_output=True, text=True)
     shutil.rmtree(home, ignore_errors=True)
     k = json.loads([x for x in p.stdout.splitlines() if x.startswith("@@MI ")][-1][5:])
@@ -361,7 +363,9 @@ def write_report(res, path_md):
         "Scenes: 64x36, exponential height fog sigma_t = 0.03 exp(-0.06 y) /m, albedo 0.9, HG g 0.5, in "
         "the box [-60, 60] x [-1, 40] x [-60, 60] m; delta sun E = (2, 1.9, 1.7) W/m^2; constant sky "
         "(0.2, 0.3, 0.5); diffuse ground 300 x 300 m; `box` adds one 8 x 12 x 8 m block. "
-        f"fogref: `fogpath` + bounded `heightfog`, max_depth {a['max_depth']}; Cycles: the same scene "
+        f"fogref: `fogpath` + bounded `heightfog`, max_depth {a['max_depth']}"
+        + "".join(f", `{kv}`" for kv in a.get("fogpath", []))
+        + "; Cycles: the same scene "
         f"in z-up (x, y, z) -> (x, -z, y), {a['max_depth'] - 2} bounces of every kind.",
         "",
         "Equal-error ratio = Cycles steady time / fogref steady time at the same RMSE against a fogref "
@@ -448,13 +452,20 @@ def main():
     ap.add_argument("--max-depth", type=int, default=8)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--out", default=str(HERE.parent / "reports" / "benchmarks"))
+    ap.add_argument(
+        "--fogpath",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a fogpath parameter besides its defaults (e.g. sky_at_media=mis); repeatable",
+    )
     ap.add_argument("--cold-child", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.cold_child:  # a fresh process in a fresh $HOME: fogref's first call with LLVM compiling
         import _scenes as S
         from _common import kernel_profile, mi
 
-        sc = mitsuba_scene(mi, S, SCENES[args.cold_child], (64, 36), args.max_depth)
+        sc = mitsuba_scene(mi, S, SCENES[args.cold_child], (64, 36), args.max_depth, args.fogpath)
         print("@@MI " + json.dumps(kernel_profile(sc, 1, 777)))
         return
     py = find_bpy_python(args.bpy_python)

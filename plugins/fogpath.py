@@ -92,11 +92,11 @@ SKY_AT_SURFACES_DEFAULT = "bsdf"
 SKY_AT_MEDIA_DEFAULT = "auto"
 #: With ``sky_at_media = "auto"``, the residual is used where the camera's transmittance straight
 #: up (mean over RGB) is at least this: below it the fog dims the sky, and next-event estimation
-#: won at equal time (``reports/benchmarks/sky_residual.md``: 0.34 lost, 0.93 won).
+#: wins at equal time (``reports/benchmarks/sky_residual.md``: zero_falloff, 0.34, lost).
 SKY_RESIDUAL_MIN_UP_TRANSMITTANCE = 0.5
 #: ... and the surface straight below the camera has a diffuse reflectance (mean over RGB) of at
 #: most this: a white world lights the fog from below as brightly as the sky, and there next-event
-#: estimation won (``reports/benchmarks/sky_residual.md``).
+#: estimation wins (``reports/benchmarks/sky_residual.md``: 0.9 under a sky alone lost).
 SKY_RESIDUAL_MAX_REFLECTANCE = 0.7
 #: Stratified sun samples per camera ray (each one shadow ray)
 #: (``reports/benchmarks/variance_reduction.md``, "+2 sun samples").
@@ -406,15 +406,17 @@ class FogPathIntegrator(mi.SamplingIntegrator):
        - string
        - How a ``constant`` sky lights medium vertices: ``mis`` (next-event estimation among all
          emitters and the phase sample, power heuristic) or ``residual``: the sky's light is
-         ``L H(d_y) + w L (V T - 1{w_y > 0})`` (:meth:`_sky_residual_light`), ``H`` the share of
-         the phase lobe around the ray's direction ``d`` above the horizon (closed form), ``w``
-         the continuation's own phase sample, ``V T`` its visibility and transmittance to the
-         sky; next-event estimation keeps the other emitters.  ``residual`` needs a
-         Henyey-Greenstein fog with ``|g|`` up to about 0.94 (``H`` within
-         ``SKY_RESIDUAL_TOLERANCE``), a constant sky and only delta lights besides; asked for
-         elsewhere, the error says what is missing.  ``auto`` takes it where it applies and the
-         camera's transmittance straight up is at least ``SKY_RESIDUAL_MIN_UP_TRANSMITTANCE``,
-         else ``mis`` (:meth:`_sky_residual`).  Default: ``SKY_AT_MEDIA_DEFAULT``.
+         ``L H(d_y) + B (1 - H(d_y)) + w (L V T - c(w))`` (:meth:`_sky_residual_light`), ``H``
+         the share of the phase lobe around the ray's direction ``d`` above the horizon (closed
+         form, within 7e-7), ``w`` the continuation's own phase sample, ``V T`` its visibility and
+         transmittance to the sky, ``c(w)`` the sky's radiance ``L`` above the horizon and ``B``
+         (the surface below the camera, lit) below it; next-event estimation keeps the delta
+         lights.  ``residual`` needs a Henyey-Greenstein fog with ``|g| <= 0.94``, a constant sky
+         and only delta lights besides; asked for elsewhere, the error says what is missing.
+         ``auto`` takes it where it applies, the camera's transmittance straight up is at least
+         ``SKY_RESIDUAL_MIN_UP_TRANSMITTANCE`` and the surface below the camera reflects at most
+         ``SKY_RESIDUAL_MAX_REFLECTANCE``, else ``mis`` (:meth:`sky_at_media_for` says which).
+         Default: ``SKY_AT_MEDIA_DEFAULT``.
      * - forced_split
        - bool
        - Forced splitting on the camera ray: every sample traces both branches at
@@ -553,27 +555,26 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         E = [float(E[i][0]) for i in range(3)] if len(E) == 3 else [float(E[0][0])] * 3
         return [x / n for x in w], E
 
-    def _sky_residual(self, scene, fog):
+    def _sky_residual(self, scene):
         """The :class:`SkyResidual` when medium vertices take the sky's closed form plus
-        residual (``sky_at_media``), else None (trace-time, read once).  ``fog``: the scene's
-        fog (it scatters).  ``residual`` where it does not apply: a ParameterError naming
+        residual (``sky_at_media``), else None, also for a fog that does not scatter (trace-time,
+        read once).  ``residual`` where it does not apply: a ParameterError naming
         ``sky_at_media`` and what is missing.  ``auto`` takes it where it applies, the camera's
         transmittance straight up is at least :data:`SKY_RESIDUAL_MIN_UP_TRANSMITTANCE` and
         the surface below the camera reflects at most :data:`SKY_RESIDUAL_MAX_REFLECTANCE`."""
-        return self._read_once(scene, "sky_residual", lambda: self._read_sky_residual(scene, fog))
+        return self._read_once(scene, "sky_residual", lambda: self._read_sky_residual(scene))
 
     def sky_at_media_for(self, scene) -> str:
         """How medium vertices of ``scene`` take its constant sky: ``"residual"`` or ``"mis"``
         (``sky_at_media`` resolved for the scene; ``"mis"`` also where the fog does not scatter).
         ``residual`` asked for where it does not apply: the ParameterError a render raises."""
-        fog = self._scene_fog(scene)
-        scatters = fog is not None and fog.scatters
-        return "residual" if scatters and self._sky_residual(scene, fog._obj) is not None else "mis"
+        return "mis" if self._sky_residual(scene) is None else "residual"
 
-    def _read_sky_residual(self, scene, fog):
-        if self.sky_at_media == "mis":
+    def _read_sky_residual(self, scene):
+        fog = self._scene_fog(scene)
+        if self.sky_at_media == "mis" or fog is None or not fog.scatters:
             return None
-        sky = self._constant_sky(scene)
+        fog, sky = fog._obj, self._constant_sky(scene)
         share = None if fog.phase is not None else hg_upper_fraction_table(fog.g)
         missing = (
             "a constant sky"
@@ -1057,8 +1058,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         phase = (
             scene.sensors()[0].get_medium().phase_function() if (fog is not None and fog.scatters) else None
         )
-        sky_residual = None if phase is None else self._sky_residual(scene, fog._obj)
-        return Trace(scene, fog, phase, sampler, has_delta, has_smooth, sky_residual)
+        return Trace(scene, fog, phase, sampler, has_delta, has_smooth, self._sky_residual(scene))
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
         tr = self._tracing(scene, sampler)
@@ -1253,7 +1253,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
                 None if phase is None else phase.class_name(),
                 self._scene_sun(scene),
                 None if sky is None else (scene.emitters().index(sky), self._sky_selection(scene)),
-                None if fog is None or not fog.scatters else self._sky_residual(scene, fog._obj),
+                self._sky_residual(scene),
                 settings,
                 list(sensor.film().crop_size()),
                 sensor.sampler().class_name(),
@@ -1270,7 +1270,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         fog = self._scene_fog(scene)
         phase = None if fog is None else fog.phase
         columns = (phase.cosines, phase.values) if hasattr(phase, "cosines") else ()
-        sky = None if fog is None or not fog.scatters else self._sky_residual(scene, fog._obj)
+        sky = self._sky_residual(scene)
         return drjit_ops().tables(*columns, *(() if sky is None else (sky.share,)))
 
     def _pass_reading(self, tables, scene, sensor, seed, spp, pixel_exact, squares):

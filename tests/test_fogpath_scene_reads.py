@@ -25,7 +25,7 @@ pytestmark = pytest.mark.render
 
 VALLEY = str(Path(__file__).resolve().parents[1] / "scenes" / "valley.xml")
 TINY = {"res": "8", "resy": "6"}
-READS = ("_read_scene_sun", "_read_constant_sky", "_read_sky_selection")
+READS = ("_read_scene_sun", "_read_constant_sky", "_read_sky_selection", "_read_sky_residual")
 
 
 def _sums(scene, seed=3):
