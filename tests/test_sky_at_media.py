@@ -42,7 +42,7 @@ VALLEY = str(Path(__file__).resolve().parents[1] / "scenes" / "valley.xml")
 @pytest.mark.parametrize("g", [-0.93, -0.5, 0.2, 0.6, 0.76, 0.85, 0.9, 0.94])
 def test_the_share_above_the_horizon_is_within_its_tolerance(g):
     """The polynomial against the adaptive quadrature (within 1e-12) at 401 heights, within the
-    1e-7 it promises, at one of the degrees fogpath compiles kernels for."""
+    1e-7 it promises, at one of the degrees it tries."""
     b = hg_upper_fraction_series(g)
     assert 2 * len(b) - 1 in UPPER_FRACTION_DEGREES
     mu = np.linspace(-1.0, 1.0, 401)

@@ -351,8 +351,7 @@ def hg_upper_fraction(g: float, mu0: Real) -> Real:
     return np.array([one(float(m)) for m in mu0])
 
 
-#: Degrees :func:`hg_upper_fraction_series` tries, lowest first: one kernel per degree, so that
-#: fogs of nearby ``g`` share it.
+#: Degrees :func:`hg_upper_fraction_series` tries, lowest first.
 UPPER_FRACTION_DEGREES = (15, 31, 63, 127, 255)
 
 
