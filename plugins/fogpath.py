@@ -606,14 +606,17 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         fog's transmittance from it toward the sun); RGB, trace-time Python floats, finite, 0
         when nothing is below the camera."""
         si = scene.ray_intersect(mi.Ray3f(camera, mi.Vector3f(0.0, -1.0, 0.0)))
-        if not bool(si.is_valid()[0]):
+        r = si.bsdf().eval_diffuse_reflectance(si)  # 0 where nothing is hit
+        read = [dr.select(si.is_valid(), 1.0, 0.0), r[0], r[1], r[2], si.p.x, si.p.y, si.p.z]
+        dr.eval(read)  # one kernel, then plain reads
+        hit, *rgb, px, py, pz = (float(v[0]) for v in read)
+        if hit == 0.0:
             return (0.0,) * 3, (0.0,) * 3
-        r = si.bsdf().eval_diffuse_reflectance(si)
-        rho = tuple(float(r[i][0]) if math.isfinite(float(r[i][0])) else 0.0 for i in range(3))
+        rho = tuple(v if math.isfinite(v) else 0.0 for v in rgb)
         sun = self._scene_sun(scene)
         if sun is None or sun[0][1] <= 0:
             return rho, (0.0,) * 3
-        T = fog.transmittance(NP, [float(si.p[i][0]) for i in range(3)], tuple(sun[0]), math.inf)
+        T = fog.transmittance(NP, [px, py, pz], tuple(sun[0]), math.inf)
         return rho, tuple(e * sun[0][1] * float(t) / math.pi for e, t in zip(sun[1], T))
 
     def _sky_by_bsdf(self, scene):
