@@ -29,7 +29,7 @@ import functools
 import math
 
 import numpy as np
-from numpy.polynomial import chebyshev, legendre
+from numpy.polynomial import legendre
 
 from fogref.errors import ParameterError
 from fogref.media import closed_form as cf
@@ -356,29 +356,27 @@ UPPER_FRACTION_DEGREES = (15, 31, 63, 127, 255)
 
 
 def hg_upper_fraction_series(g: float, tolerance: float = 1e-7) -> tuple[float, ...] | None:
-    """``H(mu0)`` of :func:`hg_upper_fraction` as a polynomial: the odd Chebyshev coefficients
-    ``b_k`` of ``H(mu0) = 1/2 + sum_k b_k T_{2k+1}(mu0)`` (evaluate with :func:`upper_fraction`),
-    within ``tolerance`` of ``H`` on [-1, 1]; None when no degree of
-    :data:`UPPER_FRACTION_DEGREES` gets there (``|g|`` above about 0.945 at 1e-7).
+    """``H(mu0)`` of :func:`hg_upper_fraction` as a polynomial: its Legendre coefficients
+    ``c_0 .. c_n`` (evaluate with ``numpy.polynomial.legendre.legval(mu0, c)``), within
+    ``tolerance`` of ``H`` on [-1, 1]; None when no degree ``n`` of :data:`UPPER_FRACTION_DEGREES`
+    gets there (``|g|`` above about 0.945 at 1e-7).
 
-    The polynomial is the Legendre series of ``H`` truncated at degree ``n``. By the addition
-    theorem, ``H(mu0) = sum_l (2l+1)/2 g^l P_l(mu0) int_0^1 P_l(x) dx``, and
+    By the addition theorem, ``H(mu0) = sum_l (2l+1)/2 g^l P_l(mu0) int_0^1 P_l(x) dx``, and
     ``int_0^1 P_l = (P_{l-1}(0) - P_{l+1}(0)) / (2l+1)`` (0 for even ``l > 0``), so
-    ``H(mu0) = 1/2 + sum_{odd l} g^l (P_{l-1}(0) - P_{l+1}(0)) / 2 P_l(mu0)``.
-    Since ``|P_l| <= 1``, the sum of the left-out coefficients' magnitudes bounds the error;
-    ``n`` is the lowest degree whose bound is at most ``tolerance``.  The Chebyshev form
-    (interpolated at ``n + 1`` nodes, exact for a polynomial of degree ``n``) is evaluated with
-    half the work.  ``g`` in [-0.999, 0.999]; about 1 ms.
+    ``H(mu0) = 1/2 + sum_{odd l} g^l (P_{l-1}(0) - P_{l+1}(0)) / 2 P_l(mu0)``: the series truncated
+    at degree ``n``.  Since ``|P_l| <= 1``, the sum of the left-out coefficients' magnitudes
+    bounds the error; ``n`` is the lowest degree whose bound is at most ``tolerance``.  ``g`` in
+    [-0.999, 0.999]; g = 0 is ``(0.5,)``.  About 1 ms.
 
-    >>> b = hg_upper_fraction_series(0.6)
-    >>> len(b), round(float(upper_fraction(NP, b, 0.3)), 7), round(float(hg_upper_fraction(0.6, 0.3)[0]), 7)
-    (16, 0.6822318, 0.6822318)
+    >>> c = hg_upper_fraction_series(0.6)
+    >>> len(c) - 1, round(float(legendre.legval(0.3, c)), 7), round(float(hg_upper_fraction(0.6, 0.3)[0]), 7)
+    (31, 0.6822318, 0.6822318)
     >>> hg_upper_fraction_series(0.0), hg_upper_fraction_series(0.99) is None
-    ((), True)
+    ((0.5,), True)
     """
     g = float(g)
     if g == 0.0:
-        return ()
+        return (0.5,)
     n_max = UPPER_FRACTION_DEGREES[-1]
     p0 = [1.0]  # P_0(0), P_2(0), ...: P_{2k}(0) = -(2k-1)/(2k) P_{2k-2}(0)
     for k in range(1, n_max // 2 + 2):
@@ -388,12 +386,10 @@ def hg_upper_fraction_series(g: float, tolerance: float = 1e-7) -> tuple[float, 
     # beyond n_max: |P_{2k}(0)| <= 1 / sqrt(pi k), so |c_l| <= |g|^l sqrt(2 / (pi (l - 1)))
     tail = abs(g) ** (n_max + 2) * math.sqrt(2.0 / (math.pi * (n_max + 1))) / (1.0 - g * g)
     for n in UPPER_FRACTION_DEGREES:
-        if float(np.abs(c[odd > n]).sum()) + tail > tolerance:
-            continue
-        full = np.zeros(n + 1)
-        full[0], full[1::2] = 0.5, c[odd <= n]
-        b = chebyshev.chebinterpolate(functools.partial(legendre.legval, c=full), n)[1::2]
-        return tuple(float(v) for v in b)
+        if float(np.abs(c[odd > n]).sum()) + tail <= tolerance:
+            full = np.zeros(n + 1)
+            full[0], full[1::2] = 0.5, c[odd <= n]
+            return tuple(float(v) for v in full)
     return None
 
 
@@ -407,33 +403,18 @@ def hg_upper_fraction_table(g: float) -> tuple[float, ...] | None:
     [-1, 1] (:func:`hg_upper_fraction_series`' polynomial there), for linear interpolation
     (``ops.interp_uniform(mu0, -1.0, 1.0, table)``): within 5e-7 of ``H`` for ``|g| <= 0.94``
     (the interpolation's error is at most ``h^2 max|H''| / 8``, 4.2e-7 at ``g = 0.94``, plus the
-    series' 1e-7; 7e-7 in float32), one table for every ``g`` where a kernel interpolates it.  None where the
-    series is.  A few milliseconds, kept for the last 16 values of ``g``.
+    series' 1e-7; 7e-7 in float32), one table for every ``g`` where a kernel interpolates it.
+    None where the series is.  A few milliseconds, kept for the last 16 values of ``g``.
 
     >>> t = hg_upper_fraction_table(0.6)
     >>> H = float(NP.interp_uniform(0.3, -1.0, 1.0, t))
     >>> len(t), abs(H - float(hg_upper_fraction(0.6, 0.3)[0])) < 5e-7
     (8193, True)
     """
-    b = hg_upper_fraction_series(g)
-    if b is None:
+    c = hg_upper_fraction_series(g)
+    if c is None:
         return None
-    return tuple(float(v) for v in upper_fraction(NP, b, np.linspace(-1.0, 1.0, UPPER_FRACTION_NODES)))
-
-
-def upper_fraction(ops: Ops, b: Real, mu0: Real) -> Real:
-    """``1/2 + sum_k b_k T_{2k+1}(mu0)``: :func:`hg_upper_fraction_series`'s polynomial at
-    ``mu0`` in [-1, 1] (Clenshaw's recurrence in ``T_2(mu0)``: ``T_{2k+3} = 2 T_2 T_{2k+1} - T_{2k-1}``,
-    ``T_{-1} = T_1``, so the sum is ``mu0 (B_0 - B_1)``).  ``b`` Python floats or ``ops`` scalars.
-
-    >>> round(float(upper_fraction(NP, (0.25, 0.0), 0.5)), 12)  # 1/2 + T_1(0.5) / 4
-    0.625
-    """
-    y2 = 2.0 * (2.0 * mu0 * mu0 - 1.0)
-    b0, b1 = 0.0 * mu0, 0.0 * mu0
-    for c in reversed(b):
-        b0, b1 = c + y2 * b0 - b1, b0
-    return 0.5 + mu0 * (b0 - b1)
+    return tuple(float(v) for v in legendre.legval(np.linspace(-1.0, 1.0, UPPER_FRACTION_NODES), c))
 
 
 def _hg_mu(g: float, xi: Real) -> Real:
