@@ -124,8 +124,10 @@ class WideSampler:
 
 class FogPathKnobs(FogPathIntegrator):
     """fogpath with ``sun_sampling_layers``, ``sun_sampling_mixture``, ``sun_samples``,
-    ``sun_guiding`` and ``sun_guiding_g`` read from the plugin's parameters (checked by fogref's
-    validator: one line naming the parameter and range)."""
+    ``sun_guiding``, ``sun_guiding_g``, the ``ms_split`` settings and ``sky_along_segments`` (false:
+    the sky's closed form added at the vertices of segments after the camera ray, as fogpath did
+    before :meth:`FogPathIntegrator._sky_along`) read from the plugin's parameters (checked by
+    fogref's validator: one line naming the parameter and range)."""
 
     def __init__(self, props):
         super().__init__(props)
@@ -145,6 +147,11 @@ class FogPathKnobs(FogPathIntegrator):
         if g is not None:
             g = params.number(g, "sun_guiding_g", source=SOURCE, lo=0.0, hi=0.99)
         self.sun_guiding_g = g
+        along = props.get("sky_along_segments", True)
+        along = {"true": True, "false": False}.get(along, along) if isinstance(along, str) else along
+        if not isinstance(along, bool):
+            raise ParameterError(SOURCE, "sky_along_segments", f"expected true or false, got {along!r}")
+        self.sky_along_segments = along
         self.ms_split = params.integer(props.get("ms_split", 1), "ms_split", source=SOURCE, lo=1, hi=16)
         self.ms_split_by = str(props.get("ms_split_by", "fixed"))
         params.choice(self.ms_split_by, "ms_split_by", ("fixed", "single", "stddev", "branch"), SOURCE)
@@ -156,17 +163,17 @@ class FogPathKnobs(FogPathIntegrator):
             props.get("ms_split_max", min(4 * self.ms_split, 16)), "ms_split_max", source=SOURCE, lo=1, hi=64
         )
 
-    def _medium_vertex(self, tr, sampler, ray, p, t, med, sun_sampled):
+    def _medium_vertex(self, tr, sampler, ray, p, t, med, sun_sampled, closed=True):
         """fogpath's medium vertex, its phase function sampled by :class:`SunGuidedPhase` when
         ``sun_guiding`` is above 0 and the scene has a sun."""
         sun = self._scene_sun(tr.scene) if self.sun_guiding > 0 else None
         if sun is None:
-            return super()._medium_vertex(tr, sampler, ray, p, t, med, sun_sampled)
+            return super()._medium_vertex(tr, sampler, ray, p, t, med, sun_sampled, closed)
         g = self.sun_guiding_g if self.sun_guiding_g is not None else max(float(tr.fog.g), 0.5)
         phase = tr.phase
         tr.phase = SunGuidedPhase(phase, mi.Vector3f(*tr.ops.params(sun[0])), g, self.sun_guiding)
         try:
-            return super()._medium_vertex(tr, sampler, ray, p, t, med, sun_sampled)
+            return super()._medium_vertex(tr, sampler, ray, p, t, med, sun_sampled, closed)
         finally:
             tr.phase = phase
 

@@ -24,7 +24,8 @@ lanes).  It has:
   in every sample (``forced_split``);
 * **a constant sky at medium vertices** as the phase lobe's closed-form share above the horizon
   plus one phase sample's residual, where that wins (``sky_at_media``,
-  :meth:`FogPathIntegrator._sky_residual_light`);
+  :meth:`FogPathIntegrator._sky_residual_light`), the closed form taken as its mean along
+  every segment after the camera ray (:meth:`FogPathIntegrator._sky_along`);
 * **the parts of the schema** per sample (:class:`Split`):
   ``L = attenuated_surface + single + multiple`` exactly.  How the parts, forced
   splitting and the sun's sampling fit together: ``docs/design.md``, "fogpath".
@@ -411,7 +412,10 @@ class FogPathIntegrator(mi.SamplingIntegrator):
          form, within 7e-7), ``w`` the continuation's own phase sample, ``V T`` its visibility and
          transmittance to the sky, ``c(w)`` the sky's radiance ``L`` above the horizon and ``B``
          (the surface below the camera, lit) below it; next-event estimation keeps the delta
-         lights.  ``residual`` needs a Henyey-Greenstein fog with ``|g| <= 0.94``, a constant sky
+         lights.  On the path's segments after the camera ray the closed form ``L H + B (1 - H)``
+         is added as its mean along the segment, ``albedo (1 - T(D)) (L H + B (1 - H))``
+         (:meth:`_sky_along`), and their vertices add the residual alone: same rays, less
+         variance where later vertices carry much of the sky.  ``residual`` needs a Henyey-Greenstein fog with ``|g| <= 0.94``, a constant sky
          and only delta lights besides; asked for elsewhere, the error says what is missing.
          ``auto`` takes it where it applies, the camera's transmittance straight up is at least
          ``SKY_RESIDUAL_MIN_UP_TRANSMITTANCE`` and the surface below the camera reflects at most
@@ -462,6 +466,10 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         self.aovs = bool(props.get("aovs", True))
         self.pixel_exact = bool(props.get("pixel_exact", False))
         self.freeze = bool(props.get("freeze", True))
+        #: with ``sky_at_media``'s residual, the sky's closed form on the path's segments after the
+        #: camera ray is their mean (:meth:`_sky_along`), not added at their vertices; false only in
+        #: ``benchmarks/_fogpath_knobs.py``, which measures it against the vertices' way
+        self.sky_along_segments = True
         self._frozen = _FrozenPasses()
 
     @property
@@ -770,7 +778,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         inside = seen & (dr.squared_norm(ray.d - to_sun) <= ops.param(2.0 * self.sun_one_minus_cos))
         return dr.select(inside, mi.Spectrum(*ops.params([e / omega for e in E_sun])), 0.0)
 
-    def _medium_vertex(self, tr, sampler, ray, p, t, med, sun_sampled):
+    def _medium_vertex(self, tr, sampler, ray, p, t, med, sun_sampled, closed=True):
         """Light sample and phase sample at the medium vertex ``p`` at distance ``t`` on
         ``ray``, on the lanes ``med``.  Where the sun's scattering is sampled along the segment
         (``tr.sun_along``, on the lanes ``sun_sampled``, a mask or True for every lane) its sun
@@ -792,11 +800,11 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             Ld = self._direct(tr, sampler, mei, tr.phase, on, but_sky=True)[0]
         wo, w, pdf = tr.phase.sample(tr.phase_ctx, mei, sampler.next_1d(med), sampler.next_2d(med), med)
         if residual:
-            Ld += self._sky_residual_light(tr, ray, mei.p, wo, w, med)
+            Ld += self._sky_residual_light(tr, ray, mei.p, wo, w, med, closed)
             pdf = mi.Float(0.0)
         return Ld, wo, w, pdf
 
-    def _sky_residual_light(self, tr, ray, p, wo, w, active):
+    def _sky_residual_light(self, tr, ray, p, wo, w, active, closed=True):
         """The constant sky's light at the medium vertex ``p`` on ``ray`` (direction ``d``):
         ``L H(d_y) + B (1 - H(d_y)) + w (L V T - c(wo))``.  ``L`` is the sky's radiance (the
         emitter's, a Dr.Jit input), ``H`` the share of the phase lobe around ``d`` above the horizon
@@ -812,9 +820,27 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         B = mi.Spectrum(*ops.params(sr.rho)) * (L + mi.Spectrum(*ops.params(sr.sun)))
         open_ = active & ~scene.ray_test(mi.Ray3f(p, wo), active)
         T = self._transmittance(tr.fog, ops, p, wo, ops.largest)
-        H = ops.interp_uniform(ray.d.y, -1.0, 1.0, sr.share)
-        light = L * H + B * (1.0 - H) + w * (L * dr.select(open_, T, 0.0) - dr.select(wo.y > 0, L, B))
+        light = w * (L * dr.select(open_, T, 0.0) - dr.select(wo.y > 0, L, B))
+        if closed is not False:
+            light += dr.select(closed, self._sky_closed_form(tr, ray.d, L, B), 0.0)
         return dr.select(active, light, 0.0)
+
+    def _sky_closed_form(self, tr, d, L, B):
+        """``L H(d_y) + B (1 - H(d_y))``: the closed-form part of :meth:`_sky_residual_light`'s light
+        at a medium vertex on a ray of direction ``d``."""
+        H = tr.ops.interp_uniform(d.y, -1.0, 1.0, tr.sky_residual.share)
+        return L * H + B * (1.0 - H)
+
+    def _sky_along(self, tr, ray, D, active):
+        """The closed-form part of the sky's light (:meth:`_sky_closed_form`) integrated along the
+        segment ``[0, D]`` of ``ray``: ``albedo (1 - T(D)) (L H(d_y) + B (1 - H(d_y)))``, the mean of
+        what free flight's vertex on it adds (``E[w_ff 1{vertex}] = albedo (1 - T(D))`` per channel)."""
+        scene, ops, sr = tr.scene, tr.ops, tr.sky_residual
+        L = self._constant_sky(scene).eval(dr.zeros(mi.SurfaceInteraction3f), active)
+        B = mi.Spectrum(*ops.params(sr.rho)) * (L + mi.Spectrum(*ops.params(sr.sun)))
+        T = self._transmittance(tr.fog, ops, ray.o, ray.d, D)
+        albedo = spectrum(ops.params(tr.fog.albedo))
+        return dr.select(active, albedo * (1.0 - T) * self._sky_closed_form(tr, ray.d, L, B), 0.0)
 
     def _surface_vertex(self, tr, sampler, ray, si, surf):
         """Light sample (when the scene has lights; else None) and BSDF sample at the surface
@@ -1093,12 +1119,17 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         prev_it, prev_pdf, prev_delta = p.prev_it, p.prev_pdf, p.prev_delta
         # the sun along the depth-1 segment (its vertices scatter only when max_depth >= 3)
         ss_next = tr.sun_along and self.sun_sampling_rays >= 2 and self.max_depth >= 3
+        along = tr.sky_residual is not None and self.sky_along_segments
         while dr.hint(active, max_iterations=-1, label="fogpath"):
             if dr.hint(ss_next, mode="scalar"):
                 on = active & (depth == 1)
                 D1 = dr.select(si.is_valid(), si.t, ops.largest)
                 ss1 = self._sun_single_scatter(tr, sampler, ray, D1, on, samples=1)
                 split = split.add(dr.select(on, β * ss1, 0.0), medium_first, mi.Bool(False))
+            if dr.hint(along, mode="scalar"):  # the sky's closed form on segments after the camera's
+                on = active & (depth >= 1) & (depth + 1 < self.max_depth)
+                D1 = dr.select(si.is_valid(), si.t, ops.largest)
+                split = split.add(β * self._sky_along(tr, ray, D1, on), medium_first, mi.Bool(False))
             # ---------------- free flight to a medium vertex or the surface ----------------
             is_medium, t_end, w_ff = self._free_flight(
                 tr, sampler, ray, dr.select(si.is_valid(), si.t, dr.inf), active
@@ -1141,7 +1172,10 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             )
             if dr.hint(phase is not None and tr.has_lights, mode="scalar"):
                 sun_sampled = (depth <= 1) if ss_next else (depth == 0)
-                Ld, wo_m, w_m, pdf_m = self._medium_vertex(tr, sampler, ray, p_med, t_end, med, sun_sampled)
+                closed = (depth == 0) if along else True
+                Ld, wo_m, w_m, pdf_m = self._medium_vertex(
+                    tr, sampler, ray, p_med, t_end, med, sun_sampled, closed
+                )
                 split = split.add(β * Ld, medium_first, depth == 0)
                 wo[med], pdf_next[med], w_next[med] = wo_m, pdf_m, w_m
 
