@@ -415,8 +415,9 @@ class FogPathIntegrator(mi.SamplingIntegrator):
          lights.  On the path's segments after the camera ray the closed form ``L H + B (1 - H)``
          is added as its mean along the segment, ``albedo (1 - T(D)) (L H + B (1 - H))``
          (:meth:`_sky_along`), and their vertices add the residual alone: same rays, less
-         variance where later vertices carry much of the sky.  ``residual`` needs a Henyey-Greenstein fog with ``|g| <= 0.94``, a constant sky
-         and only delta lights besides; asked for elsewhere, the error says what is missing.
+         variance where later vertices carry much of the sky.  ``residual`` needs a
+         Henyey-Greenstein fog with ``|g| <= 0.94``, a constant sky and only delta lights
+         besides; asked for elsewhere, the error says what is missing.
          ``auto`` takes it where it applies, the camera's transmittance straight up is at least
          ``SKY_RESIDUAL_MIN_UP_TRANSMITTANCE`` and the surface below the camera reflects at most
          ``SKY_RESIDUAL_MAX_REFLECTANCE``, else ``mis`` (:meth:`sky_at_media_for` says which).
