@@ -122,12 +122,23 @@ class WideSampler:
         return mi.Point2f(self.next_1d(active), self.next_1d(active))
 
 
+def _flag(props, name: str, default: bool = True) -> bool:
+    """The boolean parameter ``name`` (true or false; the strings ``"true"``, ``"false"`` of
+    ``cycles_peer.py --fogpath KEY=VALUE`` too); anything else a ParameterError naming it."""
+    value = props.get(name, default)
+    value = {"true": True, "false": False}.get(value, value) if isinstance(value, str) else value
+    if not isinstance(value, bool):
+        raise ParameterError(SOURCE, name, f"expected true or false, got {value!r}")
+    return value
+
+
 class FogPathKnobs(FogPathIntegrator):
     """fogpath with ``sun_sampling_layers``, ``sun_sampling_mixture``, ``sun_samples``,
-    ``sun_guiding``, ``sun_guiding_g``, the ``ms_split`` settings and ``sky_along_segments`` (false:
+    ``sun_guiding``, ``sun_guiding_g``, the ``ms_split`` settings, ``sky_along_segments`` (false:
     the sky's closed form added at the vertices of segments after the camera ray, as fogpath did
-    before :meth:`FogPathIntegrator._sky_along`) read from the plugin's parameters (checked by
-    fogref's validator: one line naming the parameter and range)."""
+    before :meth:`FogPathIntegrator._sky_along`) and ``surface_control`` (false: no control variate
+    at the surfaces those segments end on) read from the plugin's parameters (checked by fogref's
+    validator: one line naming the parameter and range)."""
 
     def __init__(self, props):
         super().__init__(props)
@@ -147,11 +158,8 @@ class FogPathKnobs(FogPathIntegrator):
         if g is not None:
             g = params.number(g, "sun_guiding_g", source=SOURCE, lo=0.0, hi=0.99)
         self.sun_guiding_g = g
-        along = props.get("sky_along_segments", True)
-        along = {"true": True, "false": False}.get(along, along) if isinstance(along, str) else along
-        if not isinstance(along, bool):
-            raise ParameterError(SOURCE, "sky_along_segments", f"expected true or false, got {along!r}")
-        self.sky_along_segments = along
+        self.sky_along_segments = _flag(props, "sky_along_segments")
+        self.surface_control = _flag(props, "surface_control")
         self.ms_split = params.integer(props.get("ms_split", 1), "ms_split", source=SOURCE, lo=1, hi=16)
         self.ms_split_by = str(props.get("ms_split_by", "fixed"))
         params.choice(self.ms_split_by, "ms_split_by", ("fixed", "single", "stddev", "branch"), SOURCE)

@@ -75,6 +75,7 @@ KNOBS = {
     "ms_split_by",
     "ms_split_max",
     "sky_along_segments",
+    "surface_control",
 }
 #: fogpath without its variance reduction (one sun sample, sun sampling only in unbounded
 #: one-layer fog, no forced splitting, MIS for the sky at surfaces, one sun-sampled segment),

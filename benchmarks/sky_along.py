@@ -23,7 +23,7 @@ from sky_residual import CONDITIONS, auto_takes
 SKY_ALONG = {
     "label": "fogpath_sky_along",
     "short": "along",
-    "title": "The sky's closed form at medium vertices: its mean along each segment against the vertex's value",
+    "title": "The sky's closed form at medium vertices: its mean along each segment, against the vertex's",
     "describe": lambda args: (
         '`fogpath` here is fogpath with `sky_at_media = "residual"` and the closed form added at the '
         "vertices of segments after the camera ray (`sky_along_segments = false`, "

@@ -72,7 +72,7 @@ from fogref.media.single_scatter import (
     sample_sun_single_scatter_mixture,
     sun_sampling_mode,
 )
-from fogref.scene.vocabulary import MAX_DEPTH
+from fogref.scene.vocabulary import MAX_DEPTH, Range
 
 #: The integrator's AOVs (after R,G,B): the per-sample groups of the schema.
 AOV_NAMES = gbuffer.sample_channel_names()
@@ -85,8 +85,10 @@ OPTIMIZE_LOOPS = False
 
 #: ``forced_split``'s default (see ``reports/benchmarks/variance_reduction_changes.md``)
 FORCED_SPLIT_DEFAULT = True
-#: ``sun_sampling_rays``'s default (see ``reports/benchmarks/summary.md``)
-SUN_SAMPLING_RAYS_DEFAULT = 2
+#: ``sun_sampling_rays``'s default: every segment (see ``reports/benchmarks/sun_segments.md``)
+SUN_SAMPLING_RAYS_DEFAULT = -1
+#: ``sun_sampling_rays``'s values: -1 (every segment) or a count of segments
+SUN_SAMPLING_RAYS = Range(None, "depth", -1, 2**31 - 1)
 #: ``sky_at_surfaces``'s default (see ``reports/benchmarks/summary.md``)
 SKY_AT_SURFACES_DEFAULT = "bsdf"
 #: ``sky_at_media``'s default (see ``reports/benchmarks/sky_residual.md``)
@@ -382,10 +384,10 @@ class FogPathIntegrator(mi.SamplingIntegrator):
          Volume: next-event estimation then samples the sun). Default: true.
      * - sun_sampling_rays
        - int
-       - Path segments along which ``sun_sampling`` samples the sun's scattering from its
-         integrand: 1 (the camera ray) or 2 (also the segment after the first vertex, one
-         sample and shadow ray: the sun's share of double scattering; medium vertices on it
-         then skip sun NEE).  Default: ``SUN_SAMPLING_RAYS_DEFAULT``.
+       - Path segments, from the camera ray on, along which ``sun_sampling`` samples the sun's
+         scattering from its integrand: 1 (the camera ray), ``n`` (also the ``n - 1`` segments
+         after it; on each, one sample and shadow ray, and the medium vertices on it skip sun
+         NEE) or -1 (every segment).  Default: ``SUN_SAMPLING_RAYS_DEFAULT``.
      * - sun_angular_diameter
        - float
        - The sun's angular diameter [deg], in [0, 10]: 0 is a delta (Mitsuba's ``directional``);
@@ -447,13 +449,10 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         )
         self.hide_emitters = bool(props.get("hide_emitters", False))
         self.sun_sampling = bool(props.get("sun_sampling", True))
-        self.sun_sampling_rays = params.integer(
-            props.get("sun_sampling_rays", SUN_SAMPLING_RAYS_DEFAULT),
-            "sun_sampling_rays",
-            source="fogpath",
-            lo=1,
-            hi=2,
+        rays = SUN_SAMPLING_RAYS.check(
+            props.get("sun_sampling_rays", SUN_SAMPLING_RAYS_DEFAULT), "sun_sampling_rays", "fogpath"
         )
+        self.sun_sampling_rays = 2**31 - 1 if rays < 0 else rays
         self.forced_split = bool(props.get("forced_split", FORCED_SPLIT_DEFAULT))
         self.sky_at_surfaces = str(props.get("sky_at_surfaces", SKY_AT_SURFACES_DEFAULT))
         params.choice(self.sky_at_surfaces, "sky_at_surfaces", ("mis", "bsdf"), "fogpath")
@@ -471,6 +470,9 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         #: camera ray is their mean (:meth:`_sky_along`), not added at their vertices; false only in
         #: ``benchmarks/_fogpath_knobs.py``, which measures it against the vertices' way
         self.sky_along_segments = True
+        #: with :attr:`sky_along_segments`, a surface a segment after the camera ray ends on subtracts
+        #: ``B`` (the surface below the camera, lit) and the segment adds its mean (:meth:`_sky_along`)
+        self.surface_control = True
         self._frozen = _FrozenPasses()
 
     @property
@@ -816,9 +818,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         any geometry and any ``B``.  With an open sky above the horizon, thin fog and a ground
         as bright as ``B`` below it, what is left to sample is near 0."""
         scene, ops = tr.scene, tr.ops
-        sr = tr.sky_residual
-        L = self._constant_sky(scene).eval(dr.zeros(mi.SurfaceInteraction3f), active)  # an input, not read
-        B = mi.Spectrum(*ops.params(sr.rho)) * (L + mi.Spectrum(*ops.params(sr.sun)))
+        L, B = self._sky_and_below(tr, active)
         open_ = active & ~scene.ray_test(mi.Ray3f(p, wo), active)
         T = self._transmittance(tr.fog, ops, p, wo, ops.largest)
         light = w * (L * dr.select(open_, T, 0.0) - dr.select(wo.y > 0, L, B))
@@ -832,16 +832,26 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         H = tr.ops.interp_uniform(d.y, -1.0, 1.0, tr.sky_residual.share)
         return L * H + B * (1.0 - H)
 
-    def _sky_along(self, tr, ray, D, active):
-        """The closed-form part of the sky's light (:meth:`_sky_closed_form`) integrated along the
-        segment ``[0, D]`` of ``ray``: ``albedo (1 - T(D)) (L H(d_y) + B (1 - H(d_y)))``, the mean of
-        what free flight's vertex on it adds (``E[w_ff 1{vertex}] = albedo (1 - T(D))`` per channel)."""
-        scene, ops, sr = tr.scene, tr.ops, tr.sky_residual
-        L = self._constant_sky(scene).eval(dr.zeros(mi.SurfaceInteraction3f), active)
-        B = mi.Spectrum(*ops.params(sr.rho)) * (L + mi.Spectrum(*ops.params(sr.sun)))
+    def _sky_and_below(self, tr, active):
+        """``(L, B)``: the constant sky's radiance ``L`` (the emitter's, a Dr.Jit input) and ``B =
+        rho (L + sun)``, the surface below the camera lit (:class:`SkyResidual`)."""
+        sr = tr.sky_residual
+        L = self._constant_sky(tr.scene).eval(dr.zeros(mi.SurfaceInteraction3f), active)  # not read
+        return L, mi.Spectrum(*tr.ops.params(sr.rho)) * (L + mi.Spectrum(*tr.ops.params(sr.sun)))
+
+    def _sky_along(self, tr, ray, D, hit, active):
+        """The mean of what the segment ``[0, D]`` of ``ray`` adds through its end: the sky's closed
+        form (:meth:`_sky_closed_form`) at a vertex on it, ``albedo (1 - T(D)) (L H(d_y) + B (1 -
+        H(d_y)))`` (``E[w_ff 1{vertex}] = albedo (1 - T(D))`` per channel), and where it ends on a
+        surface (``hit``) with ``surface_control``, the control variate ``B`` its surface vertex
+        subtracts, ``T(D) B`` (``E[w_ff 1{surface}] = T(D)``)."""
+        ops = tr.ops
+        L, B = self._sky_and_below(tr, active)
         T = self._transmittance(tr.fog, ops, ray.o, ray.d, D)
-        albedo = spectrum(ops.params(tr.fog.albedo))
-        return dr.select(active, albedo * (1.0 - T) * self._sky_closed_form(tr, ray.d, L, B), 0.0)
+        mean = spectrum(ops.params(tr.fog.albedo)) * (1.0 - T) * self._sky_closed_form(tr, ray.d, L, B)
+        if self.surface_control:
+            mean += dr.select(hit, T * B, 0.0)
+        return dr.select(active, mean, 0.0)
 
     def _surface_vertex(self, tr, sampler, ray, si, surf):
         """Light sample (when the scene has lights; else None) and BSDF sample at the surface
@@ -866,7 +876,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
 
     def _sun_single_scatter(self, tr, sampler, ray, D, active, samples=None):
         """The sun's single scattering along the ray (the camera ray, or with
-        ``sun_sampling_rays = 2`` the next segment), sampled from its exact
+        with ``sun_sampling_rays`` above 1 a later segment), sampled from its exact
         integrand (``exact``) or a closed-form mixture proposal with the exact
         weight (``mixture``: bounded fog, several layers), the stratified samples of
         :meth:`_sun_sampler` averaged (``samples``, if given, instead; None when it does not
@@ -1118,19 +1128,21 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         split, β, β_cam, depth, medium_first = p.split, p.β, p.β_cam, p.depth, p.medium_first
         ray, si, active = p.ray, p.si, p.active
         prev_it, prev_pdf, prev_delta = p.prev_it, p.prev_pdf, p.prev_delta
-        # the sun along the depth-1 segment (its vertices scatter only when max_depth >= 3)
+        # the sun along segments after the camera ray, up to sun_sampling_rays (a segment's vertex
+        # scatters only when depth + 1 < max_depth: the depth-1 segment's when max_depth >= 3)
         ss_next = tr.sun_along and self.sun_sampling_rays >= 2 and self.max_depth >= 3
         along = tr.sky_residual is not None and self.sky_along_segments
         while dr.hint(active, max_iterations=-1, label="fogpath"):
             if dr.hint(ss_next, mode="scalar"):
-                on = active & (depth == 1)
+                on = active & (depth >= 1) & (depth < self.sun_sampling_rays) & (depth + 1 < self.max_depth)
                 D1 = dr.select(si.is_valid(), si.t, ops.largest)
                 ss1 = self._sun_single_scatter(tr, sampler, ray, D1, on, samples=1)
                 split = split.add(dr.select(on, β * ss1, 0.0), medium_first, mi.Bool(False))
             if dr.hint(along, mode="scalar"):  # the sky's closed form on segments after the camera's
                 on = active & (depth >= 1) & (depth + 1 < self.max_depth)
                 D1 = dr.select(si.is_valid(), si.t, ops.largest)
-                split = split.add(β * self._sky_along(tr, ray, D1, on), medium_first, mi.Bool(False))
+                hit = si.is_valid()
+                split = split.add(β * self._sky_along(tr, ray, D1, hit, on), medium_first, mi.Bool(False))
             # ---------------- free flight to a medium vertex or the surface ----------------
             is_medium, t_end, w_ff = self._free_flight(
                 tr, sampler, ray, dr.select(si.is_valid(), si.t, dr.inf), active
@@ -1172,7 +1184,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
                 mi.Point3f(p_med),
             )
             if dr.hint(phase is not None and tr.has_lights, mode="scalar"):
-                sun_sampled = (depth <= 1) if ss_next else (depth == 0)
+                sun_sampled = (depth < self.sun_sampling_rays) if ss_next else (depth == 0)
                 closed = (depth == 0) if along else True
                 Ld, wo_m, w_m, pdf_m = self._medium_vertex(
                     tr, sampler, ray, p_med, t_end, med, sun_sampled, closed
@@ -1182,6 +1194,9 @@ class FogPathIntegrator(mi.SamplingIntegrator):
 
             # ---------------- surface vertex: light sample, BSDF sample ----------------
             surf = active & is_surface
+            if dr.hint(along and self.surface_control, mode="scalar"):  # _sky_along added its mean
+                below = -β * self._sky_and_below(tr, surf)[1]
+                split = split.add(dr.select(surf & (depth >= 1), below, 0.0), medium_first, mi.Bool(False))
             Ls, bs, w_b = self._surface_vertex(tr, sampler, ray, si, surf)
             if dr.hint(Ls is not None, mode="scalar"):
                 split = split.add(β * Ls, medium_first, mi.Bool(False))

@@ -163,7 +163,11 @@ LITERAL = (
         ('<integer name="max_depth" value="0"/>', "70", ["'integrator.max_depth'", "{-1} U [1, 2147483647]"]),
         ('<integer name="max_depth" value="4"/>', "190", ["'sensor.fov'", "(0, 180) deg"]),
         ('<integer name="rr_depth" value="-3"/>', "70", ["Mitsuba could not load", "fogpath", "'rr_depth'"]),
-        ('<integer name="sun_sampling_rays" value="3"/>', "70", ["fogpath", "'sun_sampling_rays'", "[1, 2]"]),
+        (
+            '<integer name="sun_sampling_rays" value="0"/>',
+            "70",
+            ["fogpath", "'sun_sampling_rays'", "{-1} U [1, 2147483647]"],
+        ),
         ('<string name="sky_at_surfaces" value="cos"/>', "70", ["fogpath", "'sky_at_surfaces'", "mis, bsdf"]),
         ('<integer name="sun_samples" value="4"/>', "70", ["fogpath", "unreferenced", "sun_samples"]),
         ('<string name="sky_cv" value="all"/>', "70", ["fogpath", "unreferenced", "sky_cv"]),

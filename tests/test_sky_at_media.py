@@ -123,8 +123,9 @@ def test_residual_agrees_with_next_event_estimation_part_by_part(mitsuba, g):
     are below 0.3 % of each mean (asserted; ``multiple``'s are the largest), so a bias of about
     1 % fails.  Checked to fail:
     ``H`` of the opposite direction, the control variate's ``B (1 - H)`` left out, ``T`` left
-    out of the residual, and in the closed form's mean along a segment the albedo left out, or the
-    last segment (whose vertex is not lit at ``max_depth``) counted."""
+    out of the residual, and in the closed form's mean along a segment the albedo left out, the
+    last segment (whose vertex is not lit at ``max_depth``) counted, or ``T(D)`` left out of the
+    surface control variate's mean."""
     mi = mitsuba
     a = _part_means(mi, _scene(mi, "residual", g=g), 48, 256, 100)
     b = _part_means(mi, _scene(mi, "mis", g=g), 48, 256, 9000)
