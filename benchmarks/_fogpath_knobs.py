@@ -136,7 +136,7 @@ class FogPathKnobs(FogPathIntegrator):
     """fogpath with ``sun_sampling_layers``, ``sun_sampling_mixture``, ``sun_samples``,
     ``sun_guiding``, ``sun_guiding_g``, the ``ms_split`` settings, ``sky_along_segments`` (false:
     the sky's closed form added at the vertices of segments after the camera ray, as fogpath did
-    before :meth:`FogPathIntegrator._sky_along`) and ``surface_control`` (false: no control variate
+    before :meth:`FogPathIntegrator._sky_on_segment`) and ``surface_control`` (false: no control variate
     at the surfaces those segments end on) read from the plugin's parameters (checked by fogref's
     validator: one line naming the parameter and range)."""
 
@@ -171,17 +171,17 @@ class FogPathKnobs(FogPathIntegrator):
             props.get("ms_split_max", min(4 * self.ms_split, 16)), "ms_split_max", source=SOURCE, lo=1, hi=64
         )
 
-    def _medium_vertex(self, tr, sampler, ray, p, t, med, sun_sampled, closed=True):
+    def _medium_vertex(self, tr, sampler, ray, p, t, med, sun_sampled, closed=True, deferred=False):
         """fogpath's medium vertex, its phase function sampled by :class:`SunGuidedPhase` when
         ``sun_guiding`` is above 0 and the scene has a sun."""
         sun = self._scene_sun(tr.scene) if self.sun_guiding > 0 else None
         if sun is None:
-            return super()._medium_vertex(tr, sampler, ray, p, t, med, sun_sampled, closed)
+            return super()._medium_vertex(tr, sampler, ray, p, t, med, sun_sampled, closed, deferred)
         g = self.sun_guiding_g if self.sun_guiding_g is not None else max(float(tr.fog.g), 0.5)
         phase = tr.phase
         tr.phase = SunGuidedPhase(phase, mi.Vector3f(*tr.ops.params(sun[0])), g, self.sun_guiding)
         try:
-            return super()._medium_vertex(tr, sampler, ray, p, t, med, sun_sampled, closed)
+            return super()._medium_vertex(tr, sampler, ray, p, t, med, sun_sampled, closed, deferred)
         finally:
             tr.phase = phase
 

@@ -8,7 +8,7 @@ scenes and the open valley's changes of ``benchmarks/sky_residual.py``.
 A segment's vertex, drawn by free flight, carries weight ``w_ff`` with ``E[w_ff 1{vertex before D}] =
 albedo (1 - T(D))`` per channel, and the closed form ``L H(d_y) + B (1 - H(d_y))`` depends only on the
 segment's direction ``d``, so its mean along the segment is exact: ``albedo (1 - T(D)) (L H + B (1 -
-H))`` times the throughput at the segment's start (``plugins/fogpath.py``, ``_sky_along``).  Both
+H))`` times the throughput at the segment's start (``plugins/fogpath.py``, ``_sky_on_segment``).  Both
 columns force the residual on every scene (also where ``sky_at_media = "auto"`` takes next-event
 estimation; each row notes what it takes).  Same measurements as ``benchmarks/sun_guiding.py``,
 written to ``reports/benchmarks/sky_along.{json,md}``.
@@ -31,7 +31,7 @@ SKY_ALONG = {
         '`fogpath_sky_along`: fogpath with `sky_at_media = "residual"` (its default otherwise): on each '
         "segment after the camera ray the closed form `L H(d_y) + B (1 - H(d_y))` is added as its mean "
         "along the segment, `albedo (1 - T(D)) (L H + B (1 - H))`, and the segment's vertex adds the "
-        "residual alone (`plugins/fogpath.py`, `_sky_along`).",
+        "residual alone (`plugins/fogpath.py`, `_sky_on_segment`).",
     ),
     "baseline": {"sky_at_media": "residual", "sky_along_segments": False},
     "knobs": lambda args: {"sky_at_media": "residual"},

@@ -25,7 +25,7 @@ lanes).  It has:
 * **a constant sky at medium vertices** as the phase lobe's closed-form share above the horizon
   plus one phase sample's residual, where that wins (``sky_at_media``,
   :meth:`FogPathIntegrator._sky_residual_light`), the closed form taken as its mean along
-  every segment after the camera ray (:meth:`FogPathIntegrator._sky_along`);
+  every segment after the camera ray (:meth:`FogPathIntegrator._sky_on_segment`);
 * **the parts of the schema** per sample (:class:`Split`):
   ``L = attenuated_surface + single + multiple`` exactly.  How the parts, forced
   splitting and the sun's sampling fit together: ``docs/design.md``, "fogpath".
@@ -416,7 +416,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
          (the surface below the camera, lit) below it; next-event estimation keeps the delta
          lights.  On the path's segments after the camera ray the closed form ``L H + B (1 - H)``
          is added as its mean along the segment, ``albedo (1 - T(D)) (L H + B (1 - H))``
-         (:meth:`_sky_along`), and their vertices add the residual alone: same rays, less
+         (:meth:`_sky_on_segment`), and their vertices add the residual alone: same rays, less
          variance where later vertices carry much of the sky.  ``residual`` needs a
          Henyey-Greenstein fog with ``|g| <= 0.94``, a constant sky and only delta lights
          besides; asked for elsewhere, the error says what is missing.
@@ -467,11 +467,11 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         self.pixel_exact = bool(props.get("pixel_exact", False))
         self.freeze = bool(props.get("freeze", True))
         #: with ``sky_at_media``'s residual, the sky's closed form on the path's segments after the
-        #: camera ray is their mean (:meth:`_sky_along`), not added at their vertices; false only in
+        #: camera ray is their mean (:meth:`_sky_on_segment`), not added at their vertices; false only in
         #: ``benchmarks/_fogpath_knobs.py``, which measures it against the vertices' way
         self.sky_along_segments = True
         #: with :attr:`sky_along_segments`, a surface a segment after the camera ray ends on subtracts
-        #: ``B`` (the surface below the camera, lit) and the segment adds its mean (:meth:`_sky_along`)
+        #: ``B`` (the surface below the camera, lit) and the segment adds its mean (:meth:`_sky_on_segment`)
         self.surface_control = True
         self._frozen = _FrozenPasses()
 
@@ -781,14 +781,16 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         inside = seen & (dr.squared_norm(ray.d - to_sun) <= ops.param(2.0 * self.sun_one_minus_cos))
         return dr.select(inside, mi.Spectrum(*ops.params([e / omega for e in E_sun])), 0.0)
 
-    def _medium_vertex(self, tr, sampler, ray, p, t, med, sun_sampled, closed=True):
+    def _medium_vertex(self, tr, sampler, ray, p, t, med, sun_sampled, closed=True, deferred=False):
         """Light sample and phase sample at the medium vertex ``p`` at distance ``t`` on
         ``ray``, on the lanes ``med``.  Where the sun's scattering is sampled along the segment
         (``tr.sun_along``, on the lanes ``sun_sampled``, a mask or True for every lane) its sun
         NEE is left out (with the residual, not computed).  With
         ``sky_at_media``'s residual (``tr.sky_residual``) next-event estimation samples the other
         emitters, the sky's light is :meth:`_sky_residual_light`, and the phase sample's pdf is 0:
-        an escape from the vertex adds no sky (its MIS weight is 0).
+        an escape from the vertex adds no sky (its MIS weight is 0).  ``closed``: whether (a mask,
+        or True) the vertex adds the residual's closed form; ``deferred`` (trace-time): the residual's
+        sample is left to the segment the path continues on (:meth:`_sky_on_segment`).
         Returns (contribution without the throughput, direction, phase weight, its pdf)."""
         mei = self._medium_interaction(ray, p, t)
         residual = tr.sky_residual is not None
@@ -802,8 +804,12 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             on = (med & ~sun_sampled) if tr.sun_along else med
             Ld = self._direct(tr, sampler, mei, tr.phase, on, but_sky=True)[0]
         wo, w, pdf = tr.phase.sample(tr.phase_ctx, mei, sampler.next_1d(med), sampler.next_2d(med), med)
-        if residual:
+        if residual and not deferred:
             Ld += self._sky_residual_light(tr, ray, mei.p, wo, w, med, closed)
+        elif residual:
+            L, B = self._sky_and_below(tr, med)
+            Ld += dr.select(med & closed, self._sky_closed_form(tr, ray.d, L, B), 0.0)
+        if residual:
             pdf = mi.Float(0.0)
         return Ld, wo, w, pdf
 
@@ -839,19 +845,29 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         L = self._constant_sky(tr.scene).eval(dr.zeros(mi.SurfaceInteraction3f), active)  # not read
         return L, mi.Spectrum(*tr.ops.params(sr.rho)) * (L + mi.Spectrum(*tr.ops.params(sr.sun)))
 
-    def _sky_along(self, tr, ray, D, hit, active):
-        """The mean of what the segment ``[0, D]`` of ``ray`` adds through its end: the sky's closed
-        form (:meth:`_sky_closed_form`) at a vertex on it, ``albedo (1 - T(D)) (L H(d_y) + B (1 -
-        H(d_y)))`` (``E[w_ff 1{vertex}] = albedo (1 - T(D))`` per channel), and where it ends on a
-        surface (``hit``) with ``surface_control``, the control variate ``B`` its surface vertex
-        subtracts, ``T(D) B`` (``E[w_ff 1{surface}] = T(D)``)."""
+    def _sky_on_segment(self, tr, ray, D, hit, along, residual):
+        """What the sky adds on the segment ``[0, D]`` of ``ray`` (``hit``: it ends on a surface),
+        as ``(mean, residual)``, each 0 off its lanes.
+
+        ``mean`` (lanes ``along``): the mean of what the segment adds through its end.  That is the
+        sky's closed form (:meth:`_sky_closed_form`) at a vertex on it, ``albedo (1 - T(D)) (L
+        H(d_y) + B (1 - H(d_y)))`` (``E[w_ff 1{vertex}] = albedo (1 - T(D))`` per channel), and
+        where it ends on a surface, with ``surface_control``, the control variate ``B`` its
+        surface vertex subtracts, ``T(D) B`` (``E[w_ff 1{surface}] = T(D)``).
+
+        ``residual`` (lanes ``residual``, whose segment leaves a medium vertex along its phase
+        sample): that vertex's residual, ``L V T - c(d)`` (:meth:`_sky_residual_light`; the phase
+        weight is in the path's throughput).  The segment's own hit is the visibility ``V`` and,
+        where it escapes, ``T(D)`` is the transmittance to the sky: no ray or transmittance of its
+        own."""
         ops = tr.ops
-        L, B = self._sky_and_below(tr, active)
+        L, B = self._sky_and_below(tr, along | residual)
         T = self._transmittance(tr.fog, ops, ray.o, ray.d, D)
         mean = spectrum(ops.params(tr.fog.albedo)) * (1.0 - T) * self._sky_closed_form(tr, ray.d, L, B)
         if self.surface_control:
             mean += dr.select(hit, T * B, 0.0)
-        return dr.select(active, mean, 0.0)
+        rest = dr.select(hit, 0.0, L * T) - dr.select(ray.d.y > 0, L, B)
+        return dr.select(along, mean, 0.0), dr.select(residual, rest, 0.0)
 
     def _surface_vertex(self, tr, sampler, ray, si, surf):
         """Light sample (when the scene has lights; else None) and BSDF sample at the surface
@@ -1132,17 +1148,20 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         # scatters only when depth + 1 < max_depth: the depth-1 segment's when max_depth >= 3)
         ss_next = tr.sun_along and self.sun_sampling_rays >= 2 and self.max_depth >= 3
         along = tr.sky_residual is not None and self.sky_along_segments
+        pending = mi.Bool(False)  # the segment leaves a medium vertex whose residual it samples
         while dr.hint(active, max_iterations=-1, label="fogpath"):
             if dr.hint(ss_next, mode="scalar"):
                 on = active & (depth >= 1) & (depth < self.sun_sampling_rays) & (depth + 1 < self.max_depth)
                 D1 = dr.select(si.is_valid(), si.t, ops.largest)
                 ss1 = self._sun_single_scatter(tr, sampler, ray, D1, on, samples=1)
                 split = split.add(dr.select(on, β * ss1, 0.0), medium_first, mi.Bool(False))
-            if dr.hint(along, mode="scalar"):  # the sky's closed form on segments after the camera's
+            if dr.hint(along, mode="scalar"):  # the sky on segments after the camera ray
                 on = active & (depth >= 1) & (depth + 1 < self.max_depth)
-                D1 = dr.select(si.is_valid(), si.t, ops.largest)
                 hit = si.is_valid()
-                split = split.add(β * self._sky_along(tr, ray, D1, hit, on), medium_first, mi.Bool(False))
+                D1 = dr.select(hit, si.t, ops.largest)
+                mean, rest = self._sky_on_segment(tr, ray, D1, hit, on, active & pending)
+                split = split.add(β * mean, medium_first, mi.Bool(False))
+                split = split.add(β * rest, medium_first, depth == 1)  # the last vertex's residual
             # ---------------- free flight to a medium vertex or the surface ----------------
             is_medium, t_end, w_ff = self._free_flight(
                 tr, sampler, ray, dr.select(si.is_valid(), si.t, dr.inf), active
@@ -1187,14 +1206,15 @@ class FogPathIntegrator(mi.SamplingIntegrator):
                 sun_sampled = (depth < self.sun_sampling_rays) if ss_next else (depth == 0)
                 closed = (depth == 0) if along else True
                 Ld, wo_m, w_m, pdf_m = self._medium_vertex(
-                    tr, sampler, ray, p_med, t_end, med, sun_sampled, closed
+                    tr, sampler, ray, p_med, t_end, med, sun_sampled, closed, deferred=along
                 )
+                pending = mi.Bool(med)
                 split = split.add(β * Ld, medium_first, depth == 0)
                 wo[med], pdf_next[med], w_next[med] = wo_m, pdf_m, w_m
 
             # ---------------- surface vertex: light sample, BSDF sample ----------------
             surf = active & is_surface
-            if dr.hint(along and self.surface_control, mode="scalar"):  # _sky_along added its mean
+            if dr.hint(along and self.surface_control, mode="scalar"):  # _sky_on_segment added its mean
                 below = -β * self._sky_and_below(tr, surf)[1]
                 split = split.add(dr.select(surf & (depth >= 1), below, 0.0), medium_first, mi.Bool(False))
             Ls, bs, w_b = self._surface_vertex(tr, sampler, ray, si, surf)

@@ -81,7 +81,7 @@ CASES = {
     "sky residual, forced split, occluders, exponential, RGB": (
         [0, 3, -10],
         dict(falloff=0.1, sigma_t=[0.04, 0.05, 0.065], **BOX),
-        96,
+        48,
     ),
     "sky residual, unbounded exponential, RGB (no forced split)": (
         [0, 3, -10],
