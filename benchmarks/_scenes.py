@@ -113,12 +113,14 @@ def _diffuse(v):
 def scene_spec(name: str) -> dict:
     """Camera, fog, lights and shapes of a benchmark scene, as plain data.  ``name`` is a scene of
     :data:`SCENES`, optionally with changes after ``+``: ``sunNN`` (the sun NN degrees up, same
-    azimuth), ``nosun`` (no sun), ``groundX`` (the ground and rocks grey with reflectance X):
-    ``valley_open+sun60+ground0.4``.
+    azimuth), ``nosun`` (no sun), ``groundX`` (the ground and rocks grey with reflectance X),
+    ``fogX`` (the fog's extinction times X): ``valley_open+sun60+ground0.4``.
 
-    >>> s = scene_spec("valley_open+sun30+ground0.4")
+    >>> s = scene_spec("valley_open+sun30+ground0.4+fog2")
     >>> round(-s["sun_dir"][1], 3), s["ground"][1], s["bounds"] is None
     (0.5, [0.4, 0.4, 0.4], True)
+    >>> s["fog"]["sigma_t"] / scene_spec("valley_open")["fog"]["sigma_t"]
+    2.0
     """
     base, *changes = name.split("+")
     spec = _base_spec(base)
@@ -132,8 +134,10 @@ def scene_spec(name: str) -> dict:
         elif c.startswith("ground"):
             rho = float(c[6:])
             spec["ground"], spec["rock"] = (spec["ground"][0], [rho] * 3), [rho] * 3
+        elif c.startswith("fog"):
+            spec["fog"] = dict(spec["fog"], sigma_t=spec["fog"]["sigma_t"] * float(c[3:]))
         else:
-            raise KeyError(f"{name}: unknown change {c!r} (sunNN, nosun, groundX)")
+            raise KeyError(f"{name}: unknown change {c!r} (sunNN, nosun, groundX, fogX)")
     return spec
 
 

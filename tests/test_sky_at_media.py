@@ -144,7 +144,7 @@ def _choice(scene):
 @pytest.mark.render
 def test_auto_takes_the_residual_where_it_wins_and_mis_elsewhere(mitsuba):
     """``auto`` on the valley (thin fog above the camera, dark ground) takes the residual; with
-    the camera in thick fog (transmittance straight up below 0.5), over a white ground
+    the camera in thick fog (transmittance straight up below 0.25), over a white ground
     (reflectance above 0.7), with g = 0.97 or without a sky it takes next-event estimation."""
     mi = mitsuba
     assert _choice(mi.load_file(VALLEY, res="8", resy="6")) == "residual"
