@@ -1,5 +1,5 @@
-"""``fogpath_knobs``: fogpath with its sun samplers' settings as plugin parameters, for the
-benchmarks that measure them (fogpath itself fixes them:
+"""``fogpath_knobs``: fogpath with its sun samplers' and other variance reduction's settings as
+plugin parameters, for the benchmarks that measure them (fogpath itself fixes them:
 :meth:`fogref_plugins.fogpath.FogPathIntegrator._sun_sampler`).
 
 * ``sun_sampling_layers`` (int in [1, 16], default 1): most layers for which the sun's exact
@@ -30,7 +30,13 @@ benchmarks that measure them (fogpath itself fixes them:
   scattering of the sun; ``"stddev"``, ``x`` an estimate of the continuation's standard
   deviation (Neyman allocation) from it and the branch probability;
 * ``ms_split_max`` (int in [1, 64], default ``4 ms_split``, at most 16): the most
-  continuations of one camera ray with ``ms_split_by`` ``"single"`` or ``"stddev"``.
+  continuations of one camera ray with ``ms_split_by`` ``"single"`` or ``"stddev"``;
+* ``sky_along_segments`` (bool, default true: fogpath's way): false adds the residual's closed form
+  and samples its residual at every medium vertex, as fogpath did before
+  :meth:`~fogref_plugins.fogpath.FogPathIntegrator._sky_on_segment`;
+* ``surface_control`` (bool, default true): false leaves out the control variate ``B`` at the
+  surfaces that segments after the camera ray end on.  Both also read ``"true"`` and ``"false"``
+  (``cycles_peer.py --fogpath KEY=VALUE``).
 
 The knobs hold no copy of fogpath's tracing: they override fogpath's ``_sun_sampler`` and
 ``_medium_vertex`` (the phase sample), and continuation splitting runs fogpath's own camera

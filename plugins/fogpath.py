@@ -19,7 +19,8 @@ lanes).  It has:
   Henyey–Greenstein phase; any Mitsuba BSDF; ``max_depth`` and Russian roulette;
 * **variance reduction on the camera ray** (its one stage, :meth:`FogPathIntegrator._camera_ray`):
   the sun's single scattering sampled from its exact integrand or a closed-form mixture
-  (``sun_sampling``; :func:`fogref.media.single_scatter.sun_sampling_mode`), and forced
+  (``sun_sampling``; :func:`fogref.media.single_scatter.sun_sampling_mode`; along every later
+  segment too, ``sun_sampling_rays``), and forced
   splitting: both branches of the camera ray, the surface and a forced medium collision,
   in every sample (``forced_split``);
 * **a constant sky at medium vertices** as the phase lobe's closed-form share above the horizon
@@ -896,7 +897,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
 
     def _sun_single_scatter(self, tr, sampler, ray, D, active, samples=None):
         """The sun's single scattering along the ray (the camera ray, or with
-        with ``sun_sampling_rays`` above 1 a later segment), sampled from its exact
+        ``sun_sampling_rays`` above 1 a later segment), sampled from its exact
         integrand (``exact``) or a closed-form mixture proposal with the exact
         weight (``mixture``: bounded fog, several layers), the stratified samples of
         :meth:`_sun_sampler` averaged (``samples``, if given, instead; None when it does not
