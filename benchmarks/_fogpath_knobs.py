@@ -6,7 +6,7 @@ plugin parameters, for the benchmarks that measure them (fogpath itself fixes th
   sampler is used (more layers: the mixture);
 * ``sun_sampling_mixture`` (bool, default true): the closed-form mixture where the exact
   sampler does not apply;
-* ``sun_samples`` (int in [1, 64], default ``SUN_SAMPLES``, 2): stratified sun samples per
+* ``sun_samples`` (int in [1, 64], default ``SUN_SAMPLES``, 4): stratified sun samples per
   camera ray;
 * ``sun_guiding`` (float in [0, 0.95], default 0: fogpath's phase sampling): the share of a
   Henyey-Greenstein lobe around the direction toward the sun in the phase sample at medium
