@@ -794,9 +794,9 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         NEE is left out (with the residual, not computed).  With
         ``sky_at_media``'s residual (``tr.sky_residual``) next-event estimation samples the other
         emitters, the sky's light is :meth:`_sky_residual_light`, and the phase sample's pdf is 0:
-        an escape from the vertex adds no sky (its MIS weight is 0).  ``closed``: whether (a mask,
-        or True) the vertex adds the residual's closed form; ``deferred`` (trace-time): the residual's
-        sample is left to the segment the path continues on (:meth:`_sky_on_segment`).
+        an escape from the vertex adds no sky (its MIS weight is 0).  ``deferred`` (trace-time): the
+        residual's sample is left to the segment the path continues on (:meth:`_sky_on_segment`),
+        and the vertex adds the closed form only where ``closed`` (a mask, or True).
         Returns (contribution without the throughput, direction, phase weight, its pdf)."""
         mei = self._medium_interaction(ray, p, t)
         residual = tr.sky_residual is not None
@@ -810,16 +810,16 @@ class FogPathIntegrator(mi.SamplingIntegrator):
             on = (med & ~sun_sampled) if tr.sun_along else med
             Ld = self._direct(tr, sampler, mei, tr.phase, on, but_sky=True)[0]
         wo, w, pdf = tr.phase.sample(tr.phase_ctx, mei, sampler.next_1d(med), sampler.next_2d(med), med)
-        if residual and not deferred:
-            Ld += self._sky_residual_light(tr, ray, mei.p, wo, w, med, closed)
-        elif residual:
-            L, B = self._sky_and_below(tr, med)
-            Ld += dr.select(med & closed, self._sky_closed_form(tr, ray.d, L, B), 0.0)
         if residual:
+            if deferred:
+                L, B = self._sky_and_below(tr, med)
+                Ld += dr.select(med & closed, self._sky_closed_form(tr, ray.d, L, B), 0.0)
+            else:
+                Ld += self._sky_residual_light(tr, ray, mei.p, wo, w, med)
             pdf = mi.Float(0.0)
         return Ld, wo, w, pdf
 
-    def _sky_residual_light(self, tr, ray, p, wo, w, active, closed=True):
+    def _sky_residual_light(self, tr, ray, p, wo, w, active):
         """The constant sky's light at the medium vertex ``p`` on ``ray`` (direction ``d``):
         ``L H(d_y) + B (1 - H(d_y)) + w (L V T - c(wo))``.  ``L`` is the sky's radiance (the
         emitter's, a Dr.Jit input), ``H`` the share of the phase lobe around ``d`` above the horizon
@@ -833,10 +833,15 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         L, B = self._sky_and_below(tr, active)
         open_ = active & ~scene.ray_test(mi.Ray3f(p, wo), active)
         T = self._transmittance(tr.fog, ops, p, wo, ops.largest)
-        light = w * (L * dr.select(open_, T, 0.0) - dr.select(wo.y > 0, L, B))
-        if closed is not False:
-            light += dr.select(closed, self._sky_closed_form(tr, ray.d, L, B), 0.0)
+        light = self._sky_closed_form(tr, ray.d, L, B) + w * self._sky_residual_sample(wo, open_, T, L, B)
         return dr.select(active, light, 0.0)
+
+    @staticmethod
+    def _sky_residual_sample(d, open_, T, L, B):
+        """``L V T - c(d)``: the residual's sample along the direction ``d`` (without the phase
+        weight), ``V`` the mask ``open_`` (nothing hit toward the sky), ``T`` the transmittance to
+        the sky, ``c(d)`` ``L`` above the horizon and ``B`` below it."""
+        return L * dr.select(open_, T, 0.0) - dr.select(d.y > 0, L, B)
 
     def _sky_closed_form(self, tr, d, L, B):
         """``L H(d_y) + B (1 - H(d_y))``: the closed-form part of :meth:`_sky_residual_light`'s light
@@ -872,7 +877,7 @@ class FogPathIntegrator(mi.SamplingIntegrator):
         mean = spectrum(ops.params(tr.fog.albedo)) * (1.0 - T) * self._sky_closed_form(tr, ray.d, L, B)
         if self.surface_control:
             mean += dr.select(hit, T * B, 0.0)
-        rest = dr.select(hit, 0.0, L * T) - dr.select(ray.d.y > 0, L, B)
+        rest = self._sky_residual_sample(ray.d, ~hit, T, L, B)
         return dr.select(along, mean, 0.0), dr.select(residual, rest, 0.0)
 
     def _surface_vertex(self, tr, sampler, ray, si, surf):
