@@ -64,6 +64,27 @@ def srgb_encode(linear) -> np.ndarray:
     return np.where(x <= 0.0031308, x * 12.92, 1.055 * np.power(x, 1 / 2.4) - 0.055)
 
 
+def srgb_decode(encoded) -> np.ndarray:
+    """Linear values of sRGB-encoded ones (the inverse of :func:`srgb_encode`).
+
+    Domain: finite values >= 0 (an encoded 1 is linear 1; above 1 the curve goes on).  Range: >= 0.
+    IEC 61966-2-1 computed as colour-science's ``colour.cctf_decoding(x, function="sRGB")``
+    computes it (``x / 12.92`` up to ``12.92 x 0.0031308``, ``((x + 0.055) / 1.055)^2.4`` above),
+    bit for bit, without importing colour:
+
+    >>> import colour
+    >>> x = np.concatenate([np.linspace(0, 1, 100_001), [0.0031308 * 12.92, 4.0]])
+    >>> bool(np.array_equal(srgb_decode(x), colour.cctf_decoding(x, function="sRGB")))
+    True
+    >>> v = np.arange(256) / 255.0
+    >>> bool(np.array_equal(srgb_decode(v), colour.cctf_decoding(v, function="sRGB")))
+    True
+    """
+    x = np.asarray(encoded, dtype=np.float64)
+    curve = np.sign((x + 0.055) / 1.055) * np.abs((x + 0.055) / 1.055) ** np.asarray(2.4)
+    return np.where(0.0031308 * 12.92 >= x, x / 12.92, curve)
+
+
 def tone_map(linear_rgb, exposure: float) -> np.ndarray:
     """Display-referred sRGB in [0, 1]: ``srgb_encode(exposure * linear_rgb)``."""
     return srgb_encode(np.asarray(linear_rgb, dtype=np.float64) * float(exposure))

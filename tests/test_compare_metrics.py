@@ -1,5 +1,8 @@
 """fogref.compare.metrics / binning, fogref.display: hand-computed values and edge cases."""
 
+import subprocess
+import sys
+
 import colour
 import numpy as np
 import pytest
@@ -99,6 +102,30 @@ def test_delta_e2000_maps_are_colour_sciences_delta_e_bit_for_bit():
         assert got.shape == want.shape and got.tobytes() == want.tobytes(), k
         many = P.delta_e2000_maps(r, [x, r], white=white)
         assert many[0].tobytes() == want.tobytes() and not np.any(many[1]), k
+
+
+def test_a_comparison_and_an_srgb_image_do_not_import_colour_science(tmp_path):
+    """compare's metrics (ΔE2000 among them) and an engine's sRGB PNG read in a fresh process leave
+    colour-science unimported: its 0.4.7 import (0.8-1.4 s, its plotting package with pyplot and
+    pandas) was a third of a small ``fogref compare``.  The values are its own (the tests above)."""
+    code = f"""
+import sys
+import numpy as np
+from PIL import Image
+from fogref.compare.foreign import read_image
+from fogref.compare.report import compare_metrics
+from fogref.compare.synthetic import synthetic_truth
+from fogref.models.ue4 import UE4ExponentialHeightFog, UE4FogParams
+fog = UE4ExponentialHeightFog(UE4FogParams())
+m = compare_metrics(synthetic_truth(fog, shape=(9, 16)), fog)
+assert 0.0 <= m["metrics"]["final"]["all"]["delta_e2000_mean"] < 1e3
+Image.fromarray(np.full((2, 3, 3), 188, np.uint8)).save({str(tmp_path / "e.png")!r})
+assert round(float(read_image({str(tmp_path / "e.png")!r}, encoding="srgb")[0, 0, 0]), 3) == 0.503
+print(sorted(k for k in ("colour", "pandas", "matplotlib.pyplot") if k in sys.modules))
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip() == "[]"
 
 
 def test_delta_e2000_default_white_is_the_reference_p99_luminance():

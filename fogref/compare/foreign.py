@@ -52,6 +52,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
+from fogref.display import srgb_decode
 from fogref.errors import FogrefError
 from fogref.exrio import read_exr
 
@@ -200,8 +201,8 @@ def read_image(path, encoding: str = "auto", exposure: float = 1.0, radiance: bo
         ``.exr``, ``.png``, ``.hdr`` or ``.pic``.
     encoding : str
         ``"auto"`` (PNG: sRGB, else linear; see :func:`resolve_encoding`), ``"linear"`` or
-        ``"srgb"`` (decoded with colour-science's IEC 61966-2-1 sRGB EOTF inverse,
-        ``colour.cctf_decoding(x, function="sRGB")``).
+        ``"srgb"`` (decoded with the IEC 61966-2-1 sRGB curve, :func:`fogref.display.srgb_decode`:
+        colour-science's ``colour.cctf_decoding(x, function="sRGB")``, bit for bit).
     exposure : float
         The engine's exposure scale, finite and > 0: values are divided by it when
         ``radiance`` (a transmittance image is not scaled).
@@ -240,9 +241,7 @@ def read_image(path, encoding: str = "auto", exposure: float = 1.0, radiance: bo
             f"{path}: {int(bad.any(-1).sum())} pixel(s) are NaN or infinite, first at (x={xs[0]}, y={ys[0]})"
         )
     if encoding == "srgb":
-        import colour
-
-        img = np.asarray(colour.cctf_decoding(np.clip(img, 0.0, None), function="sRGB"), dtype=np.float64)
+        img = srgb_decode(np.clip(img, 0.0, None))
     return img / float(exposure) if radiance else img
 
 
