@@ -218,6 +218,57 @@ def test_plot_table_draws_each_figure_through_run_with_the_same_bytes(tmp_path):
     assert all(a.read_bytes() == b.read_bytes() for a, b in zip(here, there))
 
 
+def test_plot_table_hands_each_figure_its_points_means_and_error_bars(tmp_path):
+    """What ``plot_table`` gives ``run`` per figure: per model (in name order) every ok
+    configuration's parameter and metric, twice the metric's standard error, the metric's mean per
+    parameter value (hand-computed), a log axis only for a positive metric spanning more than 20x,
+    and a parameter that is not a number as text; nothing of pandas (a worker drawing it needs
+    matplotlib alone)."""
+    import pandas as pd
+
+    p = sweep_toml(tmp_path, MODELS + TINY.replace('plot_metrics = ["final.all.rmse"]', "plots = true"))
+    spec = S.load_sweep(p)
+    df = pd.DataFrame(
+        {
+            "status": ["ok"] * 6 + ["error"],
+            "model": ["ue4", "ue4", "ue4", "godot", "godot", "ue4", "ue4"],
+            "sun_elevation": [5, 20, 5, 20, 20, 20, 5],
+            "g": ["a", "b", "a", "b", "a", "b", "a"],
+            "final.all.rmse": [1.0, 2.0, 3.0, 40.0, 0.5, 4.0, 99.0],
+            "final.all.rmse_stderr": [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7],
+            "final.all.relmse": [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0],
+        }
+    )
+    jobs = []
+
+    def record(f, js):
+        jobs.extend(js)
+        return [b"png"] * len(js)
+
+    S.plot_table(df, spec, tmp_path / "plots", record)
+    by = {(j[2], j[3]): j for j in jobs}
+    assert sorted(by) == [
+        (q, m) for q in ("g", "sun_elevation") for m in ("final.all.relmse", "final.all.rmse")
+    ]
+    series, name, _, _, log = by[("sun_elevation", "final.all.rmse")]
+    assert name == spec.name and log  # 0.5 to 40: more than 20x
+    godot, ue4 = series
+    assert godot == {
+        "model": "godot",
+        "x": [20, 20],
+        "y": [40.0, 0.5],
+        "err": [0.8, 1.0],
+        "mean_x": [20],
+        "mean_y": [20.25],
+    }
+    assert ue4["x"] == [5, 20, 5, 20] and ue4["mean_x"] == [5, 20] and ue4["mean_y"] == [2.0, 3.0]
+    assert ue4["err"] == pytest.approx([0.2, 0.4, 0.6, 1.2])
+    series, _, _, _, log = by[("g", "final.all.relmse")]
+    assert not log and series[1]["x"] == ["a", "b", "a", "b"] and series[1]["mean_x"] == ["a", "b"]
+    assert series[1]["err"] is None  # no noise column
+    assert all(type(v) in (str, int, float, bool, list, dict, type(None)) for j in jobs for v in j)
+
+
 KILL = (
     "[render]\nspp = 4\noverrides = { res = 16, resy = 9, max_depth = 3 }\n"
     '[design]\nkind = "list"\n'

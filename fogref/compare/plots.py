@@ -27,7 +27,9 @@ def heatmap_maps(errors: ErrorMaps) -> ErrorMaps:
     return replace(errors, noise_cov=None, relative_weight=None, delta_e2000_noise=None, flip_noise=None)
 
 
-def _figure(width_in: float, height_in: float):
+def agg_figure(width_in: float, height_in: float):
+    """A matplotlib ``Figure`` of ``width_in`` x ``height_in`` inches on its own Agg canvas (no
+    pyplot: nothing global changes, and nothing to close)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -80,7 +82,7 @@ def plot_error_heatmaps(errors: ErrorMaps, part: str, units: str, path) -> Path:
         (errors.flip, "HDR-FLIP", "[0..1]", "magma", 0.0, 1.0),
     ]
     pw, ph = _panel_size(errors.absolute.shape)
-    fig = _figure(pw * len(panels) + 1.0, ph + 0.8)
+    fig = agg_figure(pw * len(panels) + 1.0, ph + 0.8)
     axes = fig.subplots(1, len(panels))
     fig.subplots_adjust(wspace=0.3)
     import matplotlib
@@ -122,7 +124,7 @@ def plot_side_by_side(reference, model, exposure: float, part: str, units: str, 
         (error_img, "|candidate − truth|"),
     ]
     pw, ph = _panel_size(reference.shape[:2])
-    fig = _figure(pw * 3, ph + 0.8)
+    fig = agg_figure(pw * 3, ph + 0.8)
     axes = fig.subplots(1, 3)
     for ax, (img, title) in zip(axes, images):
         ax.imshow(img, interpolation="nearest")
@@ -150,7 +152,7 @@ def plot_binned_errors(
     :func:`fogref.compare.binning.binned_errors`; ``part_units``: part -> units
     ("1" marks a dimensionless part).  Markers sit at the bin centres.
     """
-    fig = _figure(10.0, 7.0)
+    fig = agg_figure(10.0, 7.0)
     axes = fig.subplots(2, 2, sharex=True).ravel()
     x = np.asarray(binned.get("center", []), dtype=np.float64)
     radiance_units = sorted({u for u in part_units.values() if u != "1"}) or ["radiance"]

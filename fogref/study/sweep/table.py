@@ -153,73 +153,107 @@ def plot_table(df, spec: SweepSpec, plot_dir: Path, run=None) -> list[Path]:
     the metric's Monte Carlo noise column when the table has one.  Returns the paths.
 
     ``run(figure_png, jobs)``: how the figures are drawn, a list of PNGs (bytes) in the order of
-    ``jobs`` (each a tuple of :func:`figure_png`'s arguments); default: one after the other here.
-    :func:`run_sweep` passes its cluster's ``map``, so the figures are drawn on its workers, side by
-    side, and written here.
+    ``jobs`` (each a tuple of :func:`figure_png`'s arguments: plain lists, so a worker drawing
+    them needs matplotlib alone); default: one after the other here.  :func:`run_sweep` passes its
+    cluster's ``map``, so the figures are drawn on its workers, side by side, and written here.
     """
     ok = df[df["status"] == "ok"] if "status" in df.columns else df
     if ok.empty:
         return []
     metrics = [m for m in (spec.plot_metrics or DEFAULT_PLOT_METRICS) if m in ok.columns]
     jobs = [
-        (ok, spec.name, param, metric)
+        (_series(ok, param, metric), spec.name, param, metric, _log_scale(ok[metric]))
         for param in spec.parameters
         if param in ok.columns
         for metric in metrics
     ]
     pngs = run(figure_png, jobs) if run is not None else [figure_png(*job) for job in jobs]
     paths = []
-    for (_, _, param, metric), png in zip(jobs, pngs, strict=True):
+    for (_, _, param, metric, _), png in zip(jobs, pngs, strict=True):
         paths.append(
             atomic_write(plot_dir / f"{metric}_vs_{param}.png", lambda tmp, b=png: Path(tmp).write_bytes(b))
         )
     return paths
 
 
-def figure_png(ok, name: str, param: str, metric: str) -> bytes:
-    """The PNG of :func:`plot_table`'s figure of ``metric`` against ``param`` over the rows ``ok``
-    (``name``: the sweep's, in the title), drawn as :func:`fogref.atomic.save_figure_atomic` saves."""
-    import matplotlib
+def _log_scale(values) -> bool:
+    """A log axis for ``values`` (a column): all positive and spanning more than a factor of 20."""
+    return bool((values > 0).all() and values.max() > 20 * values.min())
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
+def _series(ok, param: str, metric: str) -> list[dict]:
+    """Per model (in name order): its configurations' ``x`` (the parameter; text when any value is
+    not a number), ``y`` (the metric), ``err`` (two standard errors, None without a noise column)
+    and the mean of ``y`` per value of ``x`` (``mean_x``, ``mean_y``, in the parameter's order)."""
     numeric = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in ok[param])
-    fig, ax = plt.subplots(figsize=(5.2, 3.6))
-    for i, (model, g) in enumerate(ok.groupby("model")):
+    noise = _noise_column(ok, metric)
+    out = []
+    for model, g in ok.groupby("model"):
+        mean = g.groupby(param)[metric].mean()
+        out.append(
+            {
+                "model": str(model),
+                "x": (g[param] if numeric else g[param].astype(str)).tolist(),
+                "y": g[metric].tolist(),
+                "err": (2 * g[noise]).tolist() if noise else None,
+                "mean_x": (mean.index if numeric else mean.index.astype(str)).tolist(),
+                "mean_y": mean.tolist(),
+            }
+        )
+    return out
+
+
+def figure_png(series: list[dict], name: str, param: str, metric: str, log: bool) -> bytes:
+    """The PNG of :func:`plot_table`'s figure of ``metric`` against ``param`` (``series``: per model,
+    as :func:`_series` gives them; ``name``: the sweep's, in the title; ``log``: a log y axis),
+    saved as :func:`fogref.atomic.save_figure_atomic` saves.  Drawn with matplotlib's object API;
+    the title's place and the log axis's tick labels are fixed (plain numbers, not mathtext), which
+    spares the layout a third of its work."""
+    from matplotlib.ticker import LogFormatter
+
+    from fogref.compare.plots import agg_figure
+
+    class PlainLogFormatter(LogFormatter):
+        """matplotlib's log-axis labels (which ticks get one) as plain numbers: ``0.06``, ``2e-05``."""
+
+        def _num_to_string(self, x, vmin, vmax):  # the hook matplotlib's own subclasses override
+            return f"{x:g}"
+
+    fig = agg_figure(5.2, 3.6)
+    ax = fig.subplots()
+    for i, s in enumerate(series):
         colour = f"C{i}"  # one colour per model: its points, error bars and mean line
-        x = g[param] if numeric else g[param].astype(str)
-        noise = _noise_column(ok, metric)
-        if noise:
+        label = f"{s['model']}: each configuration"
+        if s["err"] is not None:
             ax.errorbar(
-                x,
-                g[metric],
-                yerr=2 * g[noise],
+                s["x"],
+                s["y"],
+                yerr=s["err"],
                 fmt="o",
                 ms=3,
                 alpha=0.4,
                 capsize=2,
                 color=colour,
-                label=f"{model}: each configuration (±2 standard errors)",
+                label=f"{label} (±2 standard errors)",
             )
         else:
-            ax.plot(x, g[metric], "o", ms=3, alpha=0.4, color=colour, label=f"{model}: each configuration")
-        mean = g.groupby(param)[metric].mean()
+            ax.plot(s["x"], s["y"], "o", ms=3, alpha=0.4, color=colour, label=label)
         ax.plot(
-            mean.index if numeric else mean.index.astype(str),
-            mean.values,
+            s["mean_x"],
+            s["mean_y"],
             "-",
             lw=1.8,
             color=colour,
-            label=f"{model}: mean over the other parameters",
+            label=f"{s['model']}: mean over the other parameters",
         )
     ax.set_xlabel(parameter_label(param), fontsize=8)
     ax.set_ylabel(metric_label(metric), fontsize=8)
-    if (ok[metric] > 0).all() and ok[metric].max() > 20 * ok[metric].min():
+    if log:
         ax.set_yscale("log")
+        ax.yaxis.set_major_formatter(PlainLogFormatter())
+        ax.yaxis.set_minor_formatter(PlainLogFormatter())
     ax.legend(fontsize=7)
-    ax.set_title(f"{name}: {metric} vs {param}", fontsize=9)
+    ax.set_title(f"{name}: {metric} vs {param}", fontsize=9, y=1.0, pad=6.0)
     buf = io.BytesIO()
     fig.savefig(buf, **figure_save_options("png"))
-    plt.close(fig)
     return buf.getvalue()
