@@ -360,10 +360,8 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
     # import the checker
     "fogref.compare.check": {"pytest": OPTIONAL, "scipy.special.ndtri": HEAVY},
     "fogref.compare.intervals": {"scipy.special.stdtrit": HEAVY},
-    # colour 2.3 s: only an image whose encoding asks for it
-    "fogref.compare.foreign": {"colour": HEAVY},
     # flip_evaluator"s libgomp reads OMP_WAIT_POLICY as it loads; it is set just before
-    "fogref.compare.perceptual": {"colour": HEAVY, "flip_evaluator": DOES_WORK},
+    "fogref.compare.perceptual": {"flip_evaluator": DOES_WORK},
     # matplotlib 0.4 s (pyplot 0.9 s): only when figures are written
     "fogref.compare.plots": {
         "matplotlib": HEAVY,
@@ -412,12 +410,14 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
     "fogref.study.budget.report": {"matplotlib": HEAVY, "matplotlib.pyplot": HEAVY},
     # matplotlib 0.4 s (pyplot 0.6 s): only the lobe table's figure
     "fogref.study.fit": {"matplotlib": HEAVY, "matplotlib.pyplot": HEAVY},
+    # colour 0.8-1.4 s (it imports its plotting package): only the spectral study
     "fogref.study.spectral_rgb": {"colour": HEAVY},
     # scipy.stats.qmc 1.4 s: only the random and lhs designs
     "fogref.study.sweep.design": {"scipy.stats.qmc": HEAVY},
     # `fogref sweep --help` and load_sweep import the package; Dask only when a sweep runs
     "fogref.study.sweep.run": {"dask.distributed.as_completed": HEAVY},
-    "fogref.study.sweep.table": {"matplotlib": HEAVY, "matplotlib.pyplot": HEAVY, "pandas": HEAVY},
+    # matplotlib 0.4 s, pandas 0.7 s: only when the table and its figures are written
+    "fogref.study.sweep.table": {"matplotlib.ticker.LogFormatter": HEAVY, "pandas": HEAVY},
     "fogref.study.sweep.task": {
         "distributed.Lock": HEAVY,
         "distributed.get_worker": HEAVY,

@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 from fogref.atomic import atomic_write, figure_save_options, set_aside, write_text_atomic
+from fogref.compare.plots import agg_figure
 from fogref.study.plot_units import HEADLINE_METRICS, metric_label, parameter_label
 from fogref.study.sweep.spec import SweepSpec
 
@@ -210,8 +211,6 @@ def figure_png(series: list[dict], name: str, param: str, metric: str, log: bool
     the title's place and the log axis's tick labels are fixed (plain numbers, not mathtext), which
     spares the layout a third of its work."""
     from matplotlib.ticker import LogFormatter
-
-    from fogref.compare.plots import agg_figure
 
     class PlainLogFormatter(LogFormatter):
         """matplotlib's log-axis labels (which ticks get one) as plain numbers: ``0.06``, ``2e-05``."""
