@@ -26,7 +26,7 @@ of main: ``git clone -q /work/main /tmp/base && bash /tmp/base/scripts/setup.sh`
   ``worker_host``, ``truth_path``, ``truth_cached``, ``truth_sha256``: the truth EXR's header holds
   its render time, so the file's hash differs between any two runs), every truth's pixels must be
   equal bit for bit and every plot's pixels (decoded: the PNGs' zlib level is not part of what
-  is compared).
+  is compared); plots drawn otherwise (a new style) are counted apart from the numbers.
 
     .venv/bin/python benchmarks/sweep_speed.py --base /tmp/base [--base /tmp/base2] [--repeats 1]
         [--phase-configs 12] [--dask-malloc]
@@ -237,10 +237,11 @@ def identical(base: Path, after: Path) -> dict:
     if px[0] != px[1]:
         differ.append("truth pixels differ: " + ", ".join(n for n in px[0] if px[0].get(n) != px[1].get(n)))
     pngs = sorted(p.name for p in (base / "plots").glob("*.png"))
-    differ += [
-        f"plot {n} differs"
+    plots_differ = [
+        n
         for n in pngs
-        if not np.array_equal(
+        if not (after / "plots" / n).is_file()
+        or not np.array_equal(
             np.asarray(Image.open(base / "plots" / n)), np.asarray(Image.open(after / "plots" / n))
         )
     ]
@@ -248,7 +249,8 @@ def identical(base: Path, after: Path) -> dict:
         differ.append("the plots' names differ")
     cells = sum(len(r) - len(RUN_COLUMNS) for r in rows[0])
     return {
-        "ok": not differ and not close,
+        "ok": not differ and not close and not plots_differ,
+        "plots_differ": plots_differ,
         "rows": len(rows[0]),
         "cells_compared": cells,
         "cells_close": n_close,
@@ -423,12 +425,15 @@ def report(res: dict) -> str:
         ident = res.get("identical", {}).get(n)
         if ident:
             close = ident.get("close", {})
+            drawn = ident.get("plots_differ", [])
             verdict = (
                 "**identical**"
                 if ident["ok"]
                 else "**DIFFERENT**"
                 if ident["differ"]
                 else f"**equal to {max(close.values()):.1e} relative**"
+                if close
+                else f"**cells and truths identical; {len(drawn)} of {ident['plots']} plots drawn otherwise**"
             )
             L += [
                 "",
@@ -451,6 +456,8 @@ def report(res: dict) -> str:
                 if len(close) > 12:
                     L.append(f"| ({len(close) - 12} more columns) | <= {list(close.values())[12]:.1e} |")
             L += [f"* {d}" for d in ident["differ"]]
+            if drawn and close:
+                L += ["", f"{len(drawn)} of {ident['plots']} plots are drawn otherwise."]
     ph = res.get("phases")
     if ph:
         others = [c for c in ph if c != "after"]  # the bases and, with --dask-malloc, after with it
