@@ -56,7 +56,8 @@ def ratio_range(before: list, after: list) -> str:
 #: A child process's code: run ``fogref.cli.main(argv)`` with one function timed.  ``argv[1]`` is the
 #: function, ``module:name`` (replaced on its module by a wrapper that sums its seconds), the rest the
 #: command's arguments.  Its last line is JSON: ``wall_s`` (the command), ``part_s`` (the function's
-#: calls together), ``calls`` and the exit ``code``.
+#: calls together), ``calls``, the exit ``code`` and which of the heavy libraries a small command can do
+#: without the process ``imported`` (colour-science, pandas, matplotlib's pyplot).
 TIMED_COMMAND = """
 import importlib, json, sys, time
 module_name, name = sys.argv[1].split(":")
@@ -72,8 +73,10 @@ setattr(module, name, timed)
 from fogref.cli import main
 t0 = time.perf_counter()
 code = main(sys.argv[2:])
-print(json.dumps({"wall_s": time.perf_counter() - t0, "part_s": sum(seconds), "calls": len(seconds),
-                  "code": code}))
+wall = time.perf_counter() - t0
+imported = [m for m in ("colour", "pandas", "matplotlib.pyplot") if m in sys.modules]
+print(json.dumps({"wall_s": wall, "part_s": sum(seconds), "calls": len(seconds), "code": code,
+                  "imported": imported}))
 """
 
 
