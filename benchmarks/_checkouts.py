@@ -166,6 +166,17 @@ def timing_rows(runs: dict, rows) -> list[str]:
     return md
 
 
+def identity_lines(identical: dict, how: str) -> list[str]:
+    """The report's lines on :func:`before_after`'s identity (``{what: equal}``), ``how`` said after
+    it (what was left out of the comparison), and a blank line.
+
+    >>> identity_lines({"`fit.json`": True, "`budget.json`": False}, " (but for paths)")
+    ['', 'Identity: `fit.json` equal, `budget.json` DIFFERENT (but for paths).', '']
+    """
+    states = ", ".join(f"{what} {'equal' if ok else 'DIFFERENT'}" for what, ok in identical.items())
+    return ["", f"Identity: {states}{how}.", ""]
+
+
 def before_after_arguments(doc: str) -> argparse.Namespace:
     """The command line of a before/after benchmark (``doc``: its module docstring, whose first
     paragraph describes it): ``--base`` (the checkout to compare with), ``--rounds`` (default 3) and

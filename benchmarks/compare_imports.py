@@ -13,8 +13,8 @@ process; rounds alternate ``before`` (the checkout ``--base``, its ``fogref`` pa
 
 In each run the ΔE2000 maps (``delta_e2000_maps`` as ``fogref.compare.error_maps`` calls it,
 which imported colour-science on its first call before) are timed apart, and the run lists which
-of colour-science, pandas and matplotlib's pyplot its process imported.  ``wall`` is ``fogref.cli.main``'s time in the
-child, after the interpreter's start.  Identity: every command's ``metrics.json`` equal but for
+of colour-science, pandas and matplotlib's pyplot its process imported.  ``wall`` is
+``fogref.cli.main``'s time in the child, after the interpreter's start.  Identity: every command's ``metrics.json`` equal but for
 paths, between the checkouts.
 
     .venv/bin/python benchmarks/compare_imports.py --base /tmp/base [--rounds 5]
@@ -34,6 +34,7 @@ from _checkouts import (
     ROOT,
     before_after,
     before_after_arguments,
+    identity_lines,
     timed_command,
     timing_rows,
     valley_truth,
@@ -145,13 +146,7 @@ def report(r: dict) -> str:
             for m in ("before", "after")
         ]
         md.append(f"| {label} | {' / '.join(seen[0])} | {' / '.join(seen[1])} |")
-    md += [
-        "",
-        "Identity (`metrics.json` but for paths): "
-        + ", ".join(f"{label} {'equal' if ok else 'DIFFERENT'}" for label, ok in r["identical"].items())
-        + ".",
-        "",
-    ]
+    md += identity_lines(r["identical"], " (`metrics.json` but for paths)")
     return "\n".join(md)
 
 

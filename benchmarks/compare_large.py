@@ -24,6 +24,7 @@ from _checkouts import (
     ROOT,
     before_after,
     before_after_arguments,
+    identity_lines,
     timed_command,
     timing_rows,
     valley_truth,
@@ -82,13 +83,7 @@ def report(r: dict) -> str:
         "",
     ]
     md += timing_rows(runs, (("wall_s", "the command"), ("part_s", "its metrics table")))
-    md += [
-        "",
-        "Identity: "
-        + ", ".join(f"`{f}` {'equal' if ok else 'DIFFERENT'}" for f, ok in r["identical"].items())
-        + " (but for paths).",
-        "",
-    ]
+    md += identity_lines({f"`{f}`": ok for f, ok in r["identical"].items()}, " (but for paths)")
     return "\n".join(md)
 
 

@@ -27,6 +27,7 @@ from _checkouts import (
     ROOT,
     before_after,
     before_after_arguments,
+    identity_lines,
     timed_command,
     timing_rows,
     valley_truth,
@@ -84,14 +85,8 @@ def report(r: dict) -> str:
         "",
     ]
     md += timing_rows(runs, (("wall_s", "the command"), ("part_s", "its Shapley budgets")))
-    md += [
-        "",
-        "Identity: "
-        + ", ".join(f"`{f}` {'equal' if ok else 'DIFFERENT'}" for f, ok in r["identical"].items())
-        + " (`budget.json` but for its input paths and the package's docstring, `metrics.json` but "
-        "for paths).",
-        "",
-    ]
+    how = " (`budget.json` but for its input paths and the package's docstring, `metrics.json` but for paths)"
+    md += identity_lines({f"`{f}`": ok for f, ok in r["identical"].items()}, how)
     return "\n".join(md)
 
 
