@@ -14,8 +14,8 @@ process; rounds alternate ``before`` (the checkout ``--base``, its ``fogref`` pa
 In each run the ΔE2000 maps (``delta_e2000_maps`` as ``fogref.compare.error_maps`` calls it,
 which imported colour-science on its first call before) are timed apart, and the run lists which
 of colour-science, pandas and matplotlib's pyplot its process imported.  ``wall`` is
-``fogref.cli.main``'s time in the child, after the interpreter's start.  Identity: every command's ``metrics.json`` equal but for
-paths, between the checkouts.
+``fogref.cli.main``'s time in the child, after the interpreter's start.  Identity: every
+command's ``metrics.json`` equal but for paths, between the checkouts.
 
     .venv/bin/python benchmarks/compare_imports.py --base /tmp/base [--rounds 5]
 
