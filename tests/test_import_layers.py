@@ -407,9 +407,6 @@ LAZY_IMPORTS: dict[str, dict[str, str]] = {
     "fogref.render.render": {"drjit": DOES_WORK, "mitsuba": DOES_WORK, "tqdm.tqdm": HEAVY},
     "fogref.render.sunsky": {"mitsuba": DOES_WORK},
     "fogref.render.variant": {"drjit": DOES_WORK, "mitsuba": DOES_WORK},
-    "fogref.study.budget.report": {"matplotlib": HEAVY, "matplotlib.pyplot": HEAVY},
-    # matplotlib 0.4 s (pyplot 0.6 s): only the lobe table's figure
-    "fogref.study.fit": {"matplotlib": HEAVY, "matplotlib.pyplot": HEAVY},
     # colour 0.8-1.4 s (it imports its plotting package): only the spectral study
     "fogref.study.spectral_rgb": {"colour": HEAVY},
     # scipy.stats.qmc 1.4 s: only the random and lhs designs

@@ -17,6 +17,7 @@ import numpy as np
 from fogref import mapping
 from fogref.atomic import save_figure_atomic as save_figure
 from fogref.atomic import write_text_atomic as write_text
+from fogref.compare.plots import agg_figure
 from fogref.errors import FogrefError
 from fogref.mapping import PhysicalScene, lobe_fit
 from fogref.media import NP, hg_phase
@@ -101,13 +102,9 @@ def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -
     lines += ["", "![lobe table](lobe_table.png)", ""]
     write_text(out / "lobe_table.md", "\n".join(lines))
 
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     g = np.array([r["g"] for r in rows])
-    fig, ax = plt.subplots(1, 3, figsize=(13, 3.6))
+    fig = agg_figure(13, 3.6)
+    ax = fig.subplots(1, 3)
     n = np.array([np.nan if r["exponent"] is None else r["exponent"] for r in rows])
     n_only = np.array([np.nan if r["lobe_only_exponent"] is None else r["lobe_only_exponent"] for r in rows])
     ax[0].semilogy(g, n, "o-", label="lobe + iso")
@@ -132,7 +129,6 @@ def write_lobe_table(rows: list[dict], out_dir, scene_name: str | None = None) -
     ax[2].legend(fontsize=8), ax[2].grid(alpha=0.3)
     fig.tight_layout()
     save_figure(fig, out / "lobe_table.png")
-    plt.close(fig)
     return doc
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from fogref.atomic import save_figure_atomic as save_figure
+from fogref.compare.plots import agg_figure
 from fogref.engines import ENGINES
 from fogref.study.budget.effects import RENDERED
 
@@ -238,22 +239,14 @@ def _bar_labels(ax, y, values, errors) -> None:
 
 def plot(result: dict, path) -> None:
     """``budget.png``: :func:`budget_figure` of ``result``."""
-    import matplotlib.pyplot as plt
-
-    fig = budget_figure(result)
-    save_figure(fig, path)
-    plt.close(fig)
+    save_figure(budget_figure(result), path)
 
 
 def budget_figure(result: dict):
     """Bar charts: the Shapley shares first (with their noise, when ``result["shapley"]``), then
     each chain step's RMSE (with noise bars) and its chain share of the total; each share labelled
-    beside its bar, inside its axis."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    beside its bar, inside its axis.  A figure on its own Agg canvas (:func:`agg_figure`: no pyplot,
+    no backend changed)."""
     steps = result["steps"]
     labels = [f"[{s['effect']}] {s['label']}" for s in steps]
     rm = [s["rmse"]["all"] for s in steps]
@@ -263,7 +256,8 @@ def budget_figure(result: dict):
     sh = result.get("shapley")
     if sh:
         by = {r["key"]: r for r in sh["effects"]}
-        fig, ax3 = plt.subplots(1, 3, figsize=(20, 4.6), sharey=True)
+        fig = agg_figure(20, 4.6)
+        ax3 = fig.subplots(1, 3, sharey=True)
         a0, ax = ax3[0], ax3[1:]
         sv = [100 * by[s["key"]]["share"] if s["key"] in by else 0.0 for s in steps]
         se = [100 * by[s["key"]]["share_noise"] if s["key"] in by else 0.0 for s in steps]
@@ -276,7 +270,8 @@ def budget_figure(result: dict):
         _bar_labels(a0, y, sv, se)
         a0.grid(axis="x", alpha=0.3)
     else:
-        fig, ax = plt.subplots(1, 2, figsize=(14, 4.6), sharey=True)
+        fig = agg_figure(14, 4.6)
+        ax = fig.subplots(1, 2, sharey=True)
     ax[0].barh(y, rm, xerr=err, color="#4a78b0", capsize=3)
     ax[0].axvline(result["total"]["rmse"]["all"], color="k", ls="--", lw=1, label="total model − truth")
     ax[0].set_yticks(y, labels)
