@@ -67,7 +67,8 @@ def srgb_encode(linear) -> np.ndarray:
 def srgb_decode(encoded) -> np.ndarray:
     """Linear values of sRGB-encoded ones (the inverse of :func:`srgb_encode`).
 
-    Domain: finite values >= 0 (an encoded 1 is linear 1; above 1 the curve goes on).  Range: >= 0.
+    Domain: finite values >= 0 (an encoded 1 is linear 1; above 1 the curve goes on; a NaN or an
+    infinity is a ValueError).  Range: >= 0.
     IEC 61966-2-1 computed as colour-science's ``colour.cctf_decoding(x, function="sRGB")``
     computes it (``x / 12.92`` up to ``12.92 x 0.0031308``, ``((x + 0.055) / 1.055)^2.4`` above),
     bit for bit, without importing colour:
@@ -79,8 +80,15 @@ def srgb_decode(encoded) -> np.ndarray:
     >>> v = np.arange(256) / 255.0
     >>> bool(np.array_equal(srgb_decode(v), colour.cctf_decoding(v, function="sRGB")))
     True
+    >>> srgb_decode([0.5, np.inf])
+    Traceback (most recent call last):
+    ...
+    ValueError: srgb_decode: encoded values must be finite; 1 are NaN or infinite
     """
     x = np.asarray(encoded, dtype=np.float64)
+    bad = np.count_nonzero(~np.isfinite(x))
+    if bad:
+        raise ValueError(f"srgb_decode: encoded values must be finite; {bad} are NaN or infinite")
     curve = np.sign((x + 0.055) / 1.055) * np.abs((x + 0.055) / 1.055) ** np.asarray(2.4)
     return np.where(0.0031308 * 12.92 >= x, x / 12.92, curve)
 

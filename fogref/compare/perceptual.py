@@ -139,9 +139,17 @@ def delta_e_cie2000(lab_1, lab_2) -> np.ndarray:
     >>> a[:9, 1:] = 0.0  # greys: hue undefined
     >>> bool(np.array_equal(delta_e_cie2000(a, b), colour.difference.delta_E_CIE2000(a, b)))
     True
+    >>> delta_e_cie2000([50.0, np.nan, 0.0], [50.0, 0.0, 0.0])
+    Traceback (most recent call last):
+    ...
+    ValueError: delta_e_cie2000: CIELAB values must be finite; 1 are NaN or infinite
     """
-    L_1, a_1, b_1 = _planes(np.asarray(lab_1, dtype=np.float64))
-    L_2, a_2, b_2 = _planes(np.asarray(lab_2, dtype=np.float64))
+    lab_1, lab_2 = np.asarray(lab_1, dtype=np.float64), np.asarray(lab_2, dtype=np.float64)
+    bad = np.count_nonzero(~np.isfinite(lab_1)) + np.count_nonzero(~np.isfinite(lab_2))
+    if bad:
+        raise ValueError(f"delta_e_cie2000: CIELAB values must be finite; {bad} are NaN or infinite")
+    L_1, a_1, b_1 = _planes(lab_1)
+    L_2, a_2, b_2 = _planes(lab_2)
     C_bar_7 = ((np.hypot(a_1, b_1) + np.hypot(a_2, b_2)) / 2) ** 7
     G = 0.5 * (1 - np.sqrt(C_bar_7 / (C_bar_7 + 25**7)))
     a_p_1, a_p_2 = (1 + G) * a_1, (1 + G) * a_2
