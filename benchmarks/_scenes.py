@@ -274,7 +274,8 @@ def grid_medium(mi, spec, n: int):
                 "to_world": T.translate(lo.tolist()).scale((hi - lo).tolist()),
             },
             "phase": {"type": "hg", "g": f["g"]},
-        }
+        },
+        parallel=False,
     )
 
 
@@ -305,7 +306,7 @@ def build(
         integ["type"] = "fogpath_knobs"
     extra = {}
     if method.startswith("fogpath") or method == "volpath_hf":
-        medium = mi.load_dict(heightfog_dict(mi, spec, **(fog_over or {})))
+        medium = mi.load_dict(heightfog_dict(mi, spec, **(fog_over or {})), parallel=False)
     elif method.startswith("grid"):
         medium = grid_medium(mi, spec, int(method[4:]))
     elif method == "homogeneous":
@@ -317,7 +318,8 @@ def build(
                 "sigma_t": f["sigma_t"] * rho,
                 "albedo": f["albedo"],
                 "phase": {"type": "hg", "g": f["g"]},
-            }
+            },
+            parallel=False,
         )
         lo, hi = np.array(spec["bounds"][0]), np.array(spec["bounds"][1])
         extra["fogbox"] = {
@@ -362,4 +364,4 @@ def build(
     # optimize=False: Mitsuba 3.9.1 merges meshes sharing a BSDF and the merged
     # mesh keeps a wrong bbox (the ground rectangle drops out of scene.bbox()), so
     # the directional emitter's shadow rays (2x bounding-sphere radius) fall short.
-    return mi.load_dict(d, optimize=False)
+    return mi.load_dict(d, optimize=False, parallel=False)

@@ -136,7 +136,7 @@ def mitsuba_scene(mi, S, spec, res, max_depth, fogpath=()):
             "to_world": T.look_at(origin=spec["origin"], target=spec["target"], up=[0, 1, 0]),
             "film": {"type": "hdrfilm", "width": res[0], "height": res[1], "rfilter": {"type": "box"}},
             "sampler": {"type": "independent"},
-            "medium": mi.load_dict(S.heightfog_dict(mi, spec)),
+            "medium": mi.load_dict(S.heightfog_dict(mi, spec), parallel=False),
         },
         "ground": {
             "type": "rectangle",
@@ -152,7 +152,7 @@ def mitsuba_scene(mi, S, spec, res, max_depth, fogpath=()):
             "to_world": T.translate(list(t)).rotate([0, 1, 0], ang).scale(list(s)),
             "bsdf": S._diffuse(spec["rock"]),
         }
-    return mi.load_dict(d, optimize=False)
+    return mi.load_dict(d, optimize=False, parallel=False)
 
 
 def rmse(img, ref, var_ref):

@@ -45,7 +45,10 @@ def main():
     from fogref.render.load import load_scene
 
     scene, _ = load_scene(Path(__file__).parents[1] / "scenes" / "valley.xml")
-    methods = {"fogpath": scene.integrator(), "volpath": mi.load_dict({"type": "volpath", "max_depth": 16})}
+    methods = {
+        "fogpath": scene.integrator(),
+        "volpath": mi.load_dict({"type": "volpath", "max_depth": 16}, parallel=False),
+    }
     res = {}
     for name, integ in methods.items():
         times = []

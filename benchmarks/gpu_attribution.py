@@ -72,7 +72,9 @@ def main(argv=None):
     default_lanes = passes.MAX_LANES[backend]
     integrators = {}
     for name, (opts, _) in ROWS.items():
-        integrators[name] = mi.load_dict({"type": "fogpath", "max_depth": 16, "pixel_exact": True, **opts})
+        integrators[name] = mi.load_dict(
+            {"type": "fogpath", "max_depth": 16, "pixel_exact": True, **opts}, parallel=False
+        )
 
     def timed(name, seed):
         opts, lanes = ROWS[name]

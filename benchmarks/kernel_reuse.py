@@ -79,7 +79,7 @@ def _child(mode: str, res: tuple, spp: int) -> list:
             if mode == "loader, 4 kept":
                 kept = [*kept, scene][-4:]
         else:
-            scene = mi.load_file(str(SCENE), **values, g=str(g))
+            scene = mi.load_file(str(SCENE), **values, g=str(g), parallel=False)
         dr.kernel_history()
         dr.set_flag(dr.JitFlag.KernelHistory, True)
         t0 = time.perf_counter()

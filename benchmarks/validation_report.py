@@ -60,7 +60,9 @@ def bias_section(mi, runs: int) -> dict:
             )
             if integ == "fogpath":
                 d["integrator"]["aovs"] = False
-            means[integ] = image_means(mi, mi.load_dict(d), n_runs=runs, spp=1024, seed0=seed0)
+            means[integ] = image_means(
+                mi, mi.load_dict(d, parallel=False), n_runs=runs, spp=1024, seed0=seed0
+            )
         a, b = means["fogpath"], means["volpath"]
         diff = a.mean() / b.mean() - 1
         se = np.sqrt(a.var(ddof=1) / len(a) + b.var(ddof=1) / len(b)) / b.mean()

@@ -31,7 +31,8 @@ def build(name, sun_sampling, res):
     import _fogpath_knobs  # noqa: F401  (registers fogpath_knobs)
 
     integ = mi.load_dict(
-        {"type": "fogpath_knobs", "max_depth": 16, "sun_sampling": sun_sampling, "sun_sampling_layers": 4}
+        {"type": "fogpath_knobs", "max_depth": 16, "sun_sampling": sun_sampling, "sun_sampling_layers": 4},
+        parallel=False,
     )
     return scene, integ
 

@@ -91,7 +91,8 @@ def grid_medium(mi, n=256, **kw):
                 "to_world": T.translate(lo.tolist()).scale((hi - lo).tolist()),
             },
             "phase": {"type": "hg", "g": f["g"]},
-        }
+        },
+        parallel=False,
     )
 
 

@@ -58,7 +58,7 @@ def counted(mitsuba, monkeypatch):
 def test_replays_of_one_scene_give_the_traced_pixels_bitwise(mitsuba, counted):
     import fogref_plugins.fogpath as fpm
 
-    scene = mitsuba.load_file(str(VALLEY), **TINY)
+    scene = mitsuba.load_file(str(VALLEY), **TINY, parallel=False)
     seeds = range(1, fpm.RECORD_FROM_CALL + 4)  # traced, recorded, 3 replays
     frozen = []
     for seed in seeds:
@@ -82,7 +82,7 @@ def _replaying(scene):
 
 @pytest.mark.render
 def test_a_changed_scene_value_gives_the_changed_scenes_traced_pixels(mitsuba, counted):
-    scene = mitsuba.load_file(str(VALLEY), **TINY)
+    scene = mitsuba.load_file(str(VALLEY), **TINY, parallel=False)
     fp = scene.integrator()
     _replaying(scene)
     before, recordings = _sums(scene, 7), fp.n_recordings
@@ -117,7 +117,7 @@ def test_a_changed_scene_value_gives_the_changed_scenes_traced_pixels(mitsuba, c
 def test_a_refused_recording_falls_back_to_tracing_with_one_warning(mitsuba, monkeypatch, capfd):
     import fogref_plugins.fogpath as fpm
 
-    scene = mitsuba.load_file(str(VALLEY), **TINY)
+    scene = mitsuba.load_file(str(VALLEY), **TINY, parallel=False)
     fp = scene.integrator()
     capfd.readouterr()
     # reading the scene while tracing (a wait on an evaluated variable) is what Dr.Jit refuses to record
@@ -135,7 +135,7 @@ def test_a_refused_recording_falls_back_to_tracing_with_one_warning(mitsuba, mon
             f"seed {seed}: the fallback's pixels differ"
         )
     # the JIT state is usable: a new scene records and replays
-    other = mitsuba.load_file(str(VALLEY), **TINY)
+    other = mitsuba.load_file(str(VALLEY), **TINY, parallel=False)
     for seed in (1, 2, 3, 4):
         _sums(other, seed)
     assert other.integrator().n_recordings == 1 and other.integrator().freeze_refused is None
@@ -149,13 +149,13 @@ def test_freeze_off_traces_every_pass(mitsuba, counted, tmp_path):
     )
     path = tmp_path / "valley_traced.xml"
     path.write_text(xml)
-    scene = mitsuba.load_file(str(path), **TINY)
+    scene = mitsuba.load_file(str(path), **TINY, parallel=False)
     fp = scene.integrator()
     assert fp.freeze is False
     for seed in (1, 2, 3, 4):
         sums, _ = fp.render_moments(scene, seed=seed, spp=SPP)
     assert counted[0] == 4 and fp.n_recordings == 0
-    on = mitsuba.load_file(str(VALLEY), **TINY)
+    on = mitsuba.load_file(str(VALLEY), **TINY, parallel=False)
     assert on.integrator().freeze is True
     _replaying(on)
     n = counted[0]
@@ -223,7 +223,7 @@ def test_what_a_caller_sets_on_a_loaded_integrator_does_not_outlive_the_call(mit
 @pytest.mark.render
 def test_mi_render_replays_too(mitsuba):
     """``mi.render`` (fogpath's ``render``: passes of ``render_moments``) goes through the same path."""
-    scene = mitsuba.load_file(str(VALLEY), **TINY)
+    scene = mitsuba.load_file(str(VALLEY), **TINY, parallel=False)
     fp = scene.integrator()
     frozen = [np.array(mitsuba.render(scene, spp=SPP, seed=s)) for s in (1, 2, 3, 4)]
     assert fp.n_recordings == 1
@@ -237,7 +237,7 @@ def test_an_error_of_the_pass_while_recording_is_raised_as_itself(mitsuba, monke
     """Not taken for a refusal: the pass's own exception reaches the caller and freezing stays on."""
     import fogref_plugins.fogpath as fpm
 
-    scene = mitsuba.load_file(str(VALLEY), **TINY)
+    scene = mitsuba.load_file(str(VALLEY), **TINY, parallel=False)
     body = fpm.FogPathIntegrator._pass
     calls = [0]
 
@@ -278,9 +278,10 @@ def test_a_stock_volpath_render_with_heightfog_does_not_stop_later_recordings(mi
     from render_scenes import base_scene, heightfog
 
     stock = mitsuba.load_dict(
-        base_scene(mitsuba, {"type": "volpath", "max_depth": 4}, heightfog(mitsuba), res=(8, 6))
+        base_scene(mitsuba, {"type": "volpath", "max_depth": 4}, heightfog(mitsuba), res=(8, 6)),
+        parallel=False,
     )
-    scene = mitsuba.load_file(str(VALLEY), **TINY)
+    scene = mitsuba.load_file(str(VALLEY), **TINY, parallel=False)
     seeds = range(1, fpm.RECORD_FROM_CALL + 4)
     frozen = []
     for seed in seeds:
@@ -302,7 +303,9 @@ def test_a_droplet_fogs_tabulated_phase_is_recorded_and_replays_the_traced_pixel
 
     table = droplet_fog(None, "radiation").phase
     fog = heightfog(mitsuba, phase=table.as_params(), g=table.mean_cosine)
-    scene = mitsuba.load_dict(base_scene(mitsuba, {"type": "fogpath", "max_depth": 4}, fog, res=(8, 6)))
+    scene = mitsuba.load_dict(
+        base_scene(mitsuba, {"type": "fogpath", "max_depth": 4}, fog, res=(8, 6)), parallel=False
+    )
     seeds = range(1, fpm.RECORD_FROM_CALL + 4)
     frozen = [_sums(scene, seed) for seed in seeds]
     _assert_recorded_and_replayed_the_traced_pixels(scene, seeds, frozen, counted)

@@ -48,7 +48,7 @@ def test_scene_values_are_read_once_per_render(mitsuba, monkeypatch):
         monkeypatch.setattr(common.FogPathIntegrator, name, staticmethod(counted) if static else counted)
     for sun in ("20", "40"):
         calls.clear()
-        scene = mitsuba.load_file(VALLEY, **TINY, sun_elevation=sun)
+        scene = mitsuba.load_file(VALLEY, **TINY, sun_elevation=sun, parallel=False)
         _sums(scene)
         assert calls == Counter({name: 1 for name in READS}), dict(calls)
         assert scene.integrator()._memo is None, "the values read outlive the render"
@@ -57,7 +57,9 @@ def test_scene_values_are_read_once_per_render(mitsuba, monkeypatch):
 def test_reading_once_keeps_the_pixels(mitsuba, monkeypatch):
     import fogref_plugins.fogpath as common
 
-    scenes = {sun: mitsuba.load_file(VALLEY, **TINY, sun_elevation=sun) for sun in ("20", "40")}
+    scenes = {
+        sun: mitsuba.load_file(VALLEY, **TINY, sun_elevation=sun, parallel=False) for sun in ("20", "40")
+    }
     once = {sun: _sums(s) for sun, s in scenes.items()}
     monkeypatch.setattr(common.FogPathIntegrator, "_read_once", lambda self, scene, name, read: read())
     every = {sun: _sums(s) for sun, s in scenes.items()}
@@ -70,7 +72,7 @@ def test_loops_traced_once_keep_the_pixels(mitsuba, monkeypatch):
     import fogref_plugins.fogpath as common
 
     assert common.OPTIMIZE_LOOPS is False
-    scene = mitsuba.load_file(VALLEY, **TINY, sun_elevation="30")
+    scene = mitsuba.load_file(VALLEY, **TINY, sun_elevation="30", parallel=False)
     once = _sums(scene, seed=4)
     monkeypatch.setattr(common, "OPTIMIZE_LOOPS", True)
     twice = _sums(scene, seed=4)

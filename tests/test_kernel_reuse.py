@@ -99,9 +99,12 @@ def _kernels_of_a_pair(mi, load_before, load_after, pairs: int = 3, around_after
 @pytest.mark.parametrize("change", VALLEY_CHANGES, ids=lambda c: next(iter(c)))
 def test_valley_value_reuses_kernels(mitsuba, change):
     mi = mitsuba
-    _hashes_and_image(mi, lambda: mi.load_file(VALLEY, **TINY))  # the process's first render, not compared
+    # the process's first render, not compared
+    _hashes_and_image(mi, lambda: mi.load_file(VALLEY, **TINY, parallel=False))
     (base_h, base_img), (h, img) = _kernels_of_a_pair(
-        mi, lambda: mi.load_file(VALLEY, **TINY), lambda: mi.load_file(VALLEY, **TINY, **change)
+        mi,
+        lambda: mi.load_file(VALLEY, **TINY, parallel=False),
+        lambda: mi.load_file(VALLEY, **TINY, **change, parallel=False),
     )
     assert not np.array_equal(img, base_img), f"{change} did not change the render"
     assert h == base_h, f"{change}: new kernels {sorted(set(h) - set(base_h))} (a value traced as a literal)"
@@ -135,7 +138,7 @@ def test_profile_values_reuse_kernels(mitsuba, name, before, after):
     integrator = {"type": "fogpath", "max_depth": 3}
 
     def scene(kw):
-        return mi.load_dict(base_scene(mi, integrator, heightfog(mi, **kw), res=(8, 6)))
+        return mi.load_dict(base_scene(mi, integrator, heightfog(mi, **kw), res=(8, 6)), parallel=False)
 
     _hashes_and_image(mi, lambda: scene(before))  # the process's first render, not compared
     (base_h, base_img), (h, img) = _kernels_of_a_pair(mi, lambda: scene(before), lambda: scene(after))
@@ -163,11 +166,12 @@ def test_a_nearly_full_parameter_cache_does_not_change_the_kernels(mitsuba):
                 ops.param(1.0 + i)  # a parameter per value, as a long sweep leaves them
             yield
 
-    _hashes_and_image(mi, lambda: mi.load_file(VALLEY, **TINY))  # the process's first render, not compared
+    # the process's first render, not compared
+    _hashes_and_image(mi, lambda: mi.load_file(VALLEY, **TINY, parallel=False))
     (base_h, _), (h, _) = _kernels_of_a_pair(
         mi,
-        lambda: mi.load_file(VALLEY, **TINY),
-        lambda: mi.load_file(VALLEY, **TINY, sigma_t="0.0021"),
+        lambda: mi.load_file(VALLEY, **TINY, parallel=False),
+        lambda: mi.load_file(VALLEY, **TINY, sigma_t="0.0021", parallel=False),
         around_after=nearly_full,
     )
     assert h == base_h, f"new kernels {sorted(set(h) - set(base_h))} after the cache filled up"

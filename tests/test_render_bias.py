@@ -137,7 +137,8 @@ def furnace(mi, origin, fog, occluders=False, **integrator):
             },
             "sky": {"type": "constant", "radiance": 1.0},
             **(OCCLUDERS(mi) if occluders else {}),
-        }
+        },
+        parallel=False,
     )
 
 

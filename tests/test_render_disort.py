@@ -147,7 +147,8 @@ def _scene(mi, medium_phase, umu, phi):
                 "direction": [math.sin(s0), -math.cos(s0), 0.0],
                 "irradiance": 1.0,
             },
-        }
+        },
+        parallel=False,
     )
 
 

@@ -60,11 +60,11 @@ def test_scene_inputs_follow_mitsubas_resolution(tmp_path, mitsuba, monkeypatch)
     over = [i.path.name for i in scene_inputs(scene, {"mesh": "other.obj", "sky": "sky.exr"})]
     assert "other.obj" in over and "box.obj" not in over
     # the same files as Mitsuba loads: the scene renders, and without the mesh it does not
-    mitsuba.load_file(str(scene))
+    mitsuba.load_file(str(scene), parallel=False)
     (tmp_path / "proj" / "meshes" / "rock.obj").unlink()
     assert not [i for i in scene_inputs(scene) if i.path.name == "rock.obj"][0].exists
     with pytest.raises(Exception, match="rock.obj"):
-        mitsuba.load_file(str(scene))
+        mitsuba.load_file(str(scene), parallel=False)
 
 
 def test_digest_changes_with_every_input_and_only_with_them(tmp_path, mitsuba):

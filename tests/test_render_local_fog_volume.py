@@ -34,7 +34,9 @@ CENTRE = (0.0, 5.0, 0.0)
 def _scene(mi):
     medium = {"type": "heightfog", **FOG, **LFV, "lfv_centre": mi.ScalarPoint3f(*CENTRE)}
     integrator = {"type": "fogpath", "max_depth": 2, "pixel_exact": True}
-    return mi.load_dict(base_scene(mi, integrator, medium, res=RES, sun=False, occluder=False))
+    return mi.load_dict(
+        base_scene(mi, integrator, medium, res=RES, sun=False, occluder=False), parallel=False
+    )
 
 
 def _closed_form_T(scene, img):

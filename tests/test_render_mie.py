@@ -83,7 +83,8 @@ def _scene(mi, phase, sun_sampling):
                 "direction": [-x for x in w],
                 "irradiance": {"type": "rgb", "value": E},
             },
-        }
+        },
+        parallel=False,
     ), w
 
 

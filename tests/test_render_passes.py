@@ -15,7 +15,9 @@ RES = (12, 8)
 
 
 def _scene(mi):
-    return mi.load_dict(base_scene(mi, {"type": "fogpath", "max_depth": 4}, heightfog(mi), res=RES))
+    return mi.load_dict(
+        base_scene(mi, {"type": "fogpath", "max_depth": 4}, heightfog(mi), res=RES), parallel=False
+    )
 
 
 @pytest.mark.render

@@ -49,8 +49,12 @@ def test_fogpath_matches_volpath_with_heightfog(mitsuba, profile):
     volpath's delta tracking against the plugin's per-ray majorant."""
     mi = mitsuba
     kw = PROFILES[profile]
-    a = mi.load_dict(base_scene(mi, {"type": "fogpath", "max_depth": 8, "rr_depth": 100}, _medium(mi, kw)))
-    b = mi.load_dict(base_scene(mi, {"type": "volpath", "max_depth": 8, "rr_depth": 100}, _medium(mi, kw)))
+    a = mi.load_dict(
+        base_scene(mi, {"type": "fogpath", "max_depth": 8, "rr_depth": 100}, _medium(mi, kw)), parallel=False
+    )
+    b = mi.load_dict(
+        base_scene(mi, {"type": "volpath", "max_depth": 8, "rr_depth": 100}, _medium(mi, kw)), parallel=False
+    )
     ra, rb = render_runs(mi, a, RUNS, SPP), render_runs(mi, b, RUNS, SPP, seed0=STOCK_SEED0)
     assert np.isfinite(np.stack(ra)).all() and np.isfinite(np.stack(rb)).all()
     assert_agree(ra, rb, block=4, alpha=ALPHA, what=f"fogpath vs volpath+heightfog ({profile})")
@@ -60,8 +64,12 @@ def test_fogpath_matches_volpath_with_builtin_grid(mitsuba):
     """Stock ``heterogeneous`` (has_spectral_extinction=false) on a 2x256x2 grid:
     its interpolation bias is ~(b h)^2/8 ~ 1e-5 relative, far below the noise."""
     mi = mitsuba
-    a = mi.load_dict(base_scene(mi, {"type": "fogpath", "max_depth": 8, "rr_depth": 100}, heightfog(mi)))
-    b = mi.load_dict(base_scene(mi, {"type": "volpath", "max_depth": 8, "rr_depth": 100}, grid_medium(mi)))
+    a = mi.load_dict(
+        base_scene(mi, {"type": "fogpath", "max_depth": 8, "rr_depth": 100}, heightfog(mi)), parallel=False
+    )
+    b = mi.load_dict(
+        base_scene(mi, {"type": "volpath", "max_depth": 8, "rr_depth": 100}, grid_medium(mi)), parallel=False
+    )
     ra, rb = render_runs(mi, a, RUNS, SPP), render_runs(mi, b, RUNS, SPP, seed0=STOCK_SEED0)
     assert_agree(ra, rb, block=4, alpha=ALPHA, what="fogpath vs volpath+heterogeneous grid")
 
@@ -73,7 +81,8 @@ def test_zero_falloff_matches_stock_homogeneous(mitsuba):
     T = mi.ScalarTransform4f()
     lo, hi = np.array([-60.0, -1.0, -60.0]), np.array([60.0, 40.0, 60.0])
     homog = mi.load_dict(
-        {"type": "homogeneous", "sigma_t": 0.03, "albedo": 0.9, "phase": {"type": "hg", "g": 0.5}}
+        {"type": "homogeneous", "sigma_t": 0.03, "albedo": 0.9, "phase": {"type": "hg", "g": 0.5}},
+        parallel=False,
     )
     sb = base_scene(mi, {"type": "volpath", "max_depth": 64, "rr_depth": 100}, homog)
     sb["fogbox"] = {
@@ -85,8 +94,8 @@ def test_zero_falloff_matches_stock_homogeneous(mitsuba):
     sa = base_scene(mi, {"type": "fogpath", "max_depth": 8, "rr_depth": 100}, heightfog(mi, falloff=0.0))
     # volpath counts null-interface crossings as bounces; give it room (max_depth 64)
     # and compare with fogpath at max_depth 8, which both converge to within noise here.
-    ra = render_runs(mi, mi.load_dict(sa), RUNS, SPP)
-    rb = render_runs(mi, mi.load_dict(sb), RUNS, SPP, seed0=STOCK_SEED0)
+    ra = render_runs(mi, mi.load_dict(sa, parallel=False), RUNS, SPP)
+    rb = render_runs(mi, mi.load_dict(sb, parallel=False), RUNS, SPP, seed0=STOCK_SEED0)
     assert_agree(ra, rb, block=4, alpha=ALPHA, what="fogpath(falloff=0) vs homogeneous")
 
 
@@ -105,7 +114,7 @@ def test_fogpath_matches_volpath_with_envmap_sky(mitsuba):
         d = base_scene(mi, {"type": integ, "max_depth": 8, "rr_depth": 100}, heightfog(mi), sky=False)
         d["sky"] = {"type": "envmap", "bitmap": bitmap}
         seed0 = 1000 if integ == "fogpath" else STOCK_SEED0  # the stock method's own seeds
-        runs[integ] = render_runs(mi, mi.load_dict(d), RUNS, SPP, seed0=seed0)
+        runs[integ] = render_runs(mi, mi.load_dict(d, parallel=False), RUNS, SPP, seed0=seed0)
     assert_agree(
         runs["fogpath"], runs["volpath"], block=4, alpha=ALPHA, what="fogpath vs volpath, envmap sky"
     )

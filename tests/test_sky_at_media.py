@@ -147,15 +147,15 @@ def test_auto_takes_the_residual_where_it_wins_and_mis_elsewhere(mitsuba):
     the camera in thick fog (transmittance straight up below 0.25), over a white ground
     (reflectance above 0.7), with g = 0.97 or without a sky it takes next-event estimation."""
     mi = mitsuba
-    assert _choice(mi.load_file(VALLEY, res="8", resy="6")) == "residual"
+    assert _choice(mi.load_file(VALLEY, res="8", resy="6", parallel=False)) == "residual"
     assert _choice(_scene(mi, "auto")) == "residual"
     assert _choice(_scene(mi, "auto", sigma_t=0.3)) == "mis"  # T up ~0.02
     assert _choice(_scene(mi, "auto", g=0.97)) == "mis"
     d = base_scene(mi, {"type": "fogpath"}, heightfog(mi), res=(8, 6))
     d["ground"]["bsdf"]["reflectance"]["value"] = [0.9, 0.9, 0.9]
-    assert _choice(mi.load_dict(d)) == "mis"
+    assert _choice(mi.load_dict(d, parallel=False)) == "mis"
     d = base_scene(mi, {"type": "fogpath"}, heightfog(mi), res=(8, 6), sky=False)
-    assert _choice(mi.load_dict(d)) == "mis"
+    assert _choice(mi.load_dict(d, parallel=False)) == "mis"
 
 
 @pytest.mark.render
@@ -174,11 +174,14 @@ def test_residual_where_it_does_not_apply_says_what_is_missing(mitsuba):
             res=(8, 6),
             sky=name != "sky",
         )
-        scene = mi.load_dict(d)
+        scene = mi.load_dict(d, parallel=False)
         for call in (scene.integrator().render_moments, scene.integrator().sky_at_media_for):
             with pytest.raises(ParameterError, match="sky_at_media") as e:
                 call(scene)
             assert needs in str(e.value) and "fogpath" in str(e.value)
     with pytest.raises(Exception, match="sky_at_media") as e:
-        mi.load_dict(base_scene(mi, {"type": "fogpath", "sky_at_media": "nee"}, heightfog(mi), res=(8, 6)))
+        mi.load_dict(
+            base_scene(mi, {"type": "fogpath", "sky_at_media": "nee"}, heightfog(mi), res=(8, 6)),
+            parallel=False,
+        )
     assert "auto" in str(e.value) and "residual" in str(e.value)

@@ -154,6 +154,28 @@ def test_serial_loading_avoids_mitsubas_sunsky_race(mi):
     assert _load_sunsky_after_python_medium_renders(mi, 60, parallel=False) == 0
 
 
+def test_every_scene_load_outside_fogref_is_serial_too():
+    """The race is not sunsky's alone: a full run of this suite once failed to load an ``envmap``
+    (``basic_string::_M_create``) in a test that called ``mitsuba.load_file`` with Mitsuba's
+    default parallel loading.  Every call of Mitsuba's scene loaders in fogref, its plugins, the
+    tests and the benchmarks passes ``parallel=False`` (read from the source with :mod:`ast`)."""
+    import ast
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    parallel = [
+        f"{p.relative_to(root)}:{n.lineno}"
+        for folder in ("fogref", "plugins", "tests", "benchmarks", "scripts")
+        for p in sorted((root / folder).rglob("*.py"))
+        for n in ast.walk(ast.parse(p.read_text()))
+        if isinstance(n, ast.Call)
+        and isinstance(n.func, ast.Attribute)
+        and n.func.attr in ("load_file", "load_dict", "load_string")
+        and not any(k.arg == "parallel" for k in n.keywords)
+    ]
+    assert not parallel, f"Mitsuba scene loads without parallel=False: {parallel}"
+
+
 @pytest.mark.render
 @pytest.mark.parametrize("diameter", [0.0, 0.5358])
 def test_sun_plus_sky_equals_stock_volpath_with_mitsubas_sunsky(mi, diameter):
@@ -436,7 +458,8 @@ def _sun_disk_of_stock_sunsky(mi, w, place_time: dict) -> tuple[float, float]:
             "sky_scale": 0.0,
             "to_world": mi.ScalarTransform4f().rotate([1, 0, 0], -90),
             **place_time,
-        }
+        },
+        parallel=False,
     )
     w = np.asarray(w, dtype=np.float64)
     t1 = np.cross(w, [1.0, 0.0, 0.0])
@@ -484,7 +507,9 @@ def test_a_sunsky_without_sun_direction_takes_the_sun_mitsuba_gives_it(mi, tmp_p
 
 
 def _default_sun(mi) -> list:
-    em = mi.load_dict({"type": "sunsky", "to_world": mi.ScalarTransform4f().rotate([1, 0, 0], -90)})
+    em = mi.load_dict(
+        {"type": "sunsky", "to_world": mi.ScalarTransform4f().rotate([1, 0, 0], -90)}, parallel=False
+    )
     return list(np.asarray(mi.traverse(em)["sun_direction"], dtype=np.float64).ravel())
 
 

@@ -43,7 +43,7 @@ def _sample(mi, plugin, seed):
     mei = dr.zeros(mi.MediumInteraction3f, N)
     mei.wi = mi.Vector3f(*(float(x) for x in wi))
     mei.sh_frame = mi.Frame3f(mei.wi)
-    sampler = mi.load_dict({"type": "independent"})
+    sampler = mi.load_dict({"type": "independent"}, parallel=False)
     sampler.seed(seed, N)
     ctx = mi.PhaseFunctionContext(sampler)
     wo, w, pdf = plugin.sample(ctx, mei, sampler.next_1d(), sampler.next_2d())
@@ -89,13 +89,13 @@ def test_sampling_chi2(mitsuba, kind):
     mi = mitsuba
     if kind == "hg":
         g = 0.8
-        plugin = mi.load_dict({"type": "hg", "g": g})
+        plugin = mi.load_dict({"type": "hg", "g": g}, parallel=False)
         c = np.linspace(-1, 1, 4097)
         cdf = (1 - g * g) / (2 * g) * (1 / np.sqrt(1 + g * g - 2 * g * c) - 1 / (1 + g))
         edges, probs = _merged((c, np.diff(cdf) / cdf[-1]))
     else:
         table = _tables()[kind]
-        plugin = mi.load_dict(table.as_params())
+        plugin = mi.load_dict(table.as_params(), parallel=False)
         edges, probs = _table_bins(table)
     cos, phi, w, pdf, pdf2 = _sample(mi, plugin, seed=7)
     counts = np.histogram(np.clip(cos, -1, 1), edges)[0]
@@ -114,7 +114,7 @@ def test_sampling_chi2(mitsuba, kind):
 def test_chi2_power(mitsuba):
     """The same test rejects a density 3 % off within 5 deg of forward (Mie phase)."""
     table = _tables()["mie"]
-    cos, *_ = _sample(mitsuba, mitsuba.load_dict(table.as_params()), seed=11)
+    cos, *_ = _sample(mitsuba, mitsuba.load_dict(table.as_params(), parallel=False), seed=11)
     edges, probs = _table_bins(table, scale_peak=1.03)
     counts = np.histogram(np.clip(cos, -1, 1), edges)[0]
     assert _chi2(counts, probs) < ALPHA
@@ -122,4 +122,4 @@ def test_chi2_power(mitsuba):
 
 def test_bad_table_is_one_line(mitsuba):
     with pytest.raises(Exception, match="fogtabphase: parameter 'cosines': must increase strictly"):
-        mitsuba.load_dict({"type": "fogtabphase", "cosines": "-1, 0.5", "values": "1, 1"})
+        mitsuba.load_dict({"type": "fogtabphase", "cosines": "-1, 0.5", "values": "1, 1"}, parallel=False)
