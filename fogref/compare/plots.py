@@ -3,9 +3,12 @@
 Uses matplotlib's object API with the Agg canvas (no pyplot, no global backend
 change, no display needed).  Every figure is written atomically.
 Image row 0 is the top of the picture, as in the EXR.
-Drawing a figure is matplotlib laying it out in Python, on one core: about 0.5 s for a heatmap
-figure, whatever the image size (:mod:`fogref.compare.workers` draws a report's figures side by
-side).
+Drawing a figure is matplotlib laying it out in Python, on one core: about 0.2-0.3 s for a heatmap
+figure and 0.3-0.4 s for a binned one, whatever the image size (:mod:`fogref.compare.workers` draws
+a report's figures side by side).  Every panel title is placed at ``y=1.0``: where matplotlib is
+left to place it, it measures the axes' decorations to clear them, in each of the two layouts of a
+tight bounding box, and the panels here have none above them, so it lands there anyway (the same
+pixels, ``reports/benchmarks/report_figures.md``).
 """
 
 from __future__ import annotations
@@ -92,7 +95,7 @@ def plot_error_heatmaps(errors: ErrorMaps, part: str, units: str, path) -> Path:
         im = ax.imshow(
             np.ma.masked_array(m, ~errors.valid), cmap=cm, vmin=vmin, vmax=vmax, interpolation="nearest"
         )
-        ax.set_title(f"{title} {unit}", fontsize=9)
+        ax.set_title(f"{title} {unit}", fontsize=9, y=1.0)
         ax.set_axis_off()
         fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04).set_label(unit, fontsize=8)
     excluded = int(np.count_nonzero(~errors.valid))
@@ -128,7 +131,7 @@ def plot_side_by_side(reference, model, exposure: float, part: str, units: str, 
     axes = fig.subplots(1, 3)
     for ax, (img, title) in zip(axes, images):
         ax.imshow(img, interpolation="nearest")
-        ax.set_title(title, fontsize=9)
+        ax.set_title(title, fontsize=9, y=1.0)
         ax.set_axis_off()
     note = "" if valid.all() else "; magenta: excluded"
     fig.suptitle(

@@ -1,7 +1,7 @@
 """A report's figures on worker processes, one per core.
 
 A ``fogref compare`` report's ten figures are independent, and each is matplotlib laying it out in
-Python, on one core (threads would not help): about 0.5 s for a heatmap figure at any image size.
+Python, on one core (threads would not help): 0.2-0.4 s a figure at any image size.
 :func:`run_jobs` runs such jobs side by side in worker processes forked from Python's fork
 server, which :func:`start_workers` starts early with :data:`WORKER_IMPORTS` imported, so that
 the imports take another core while the caller reads the truth and computes the error maps.  A

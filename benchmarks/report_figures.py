@@ -1,0 +1,116 @@
+"""A `fogref compare` report's figures before and after: what their layout costs.
+-> reports/benchmarks/report_figures.{json,md}
+
+``fogref compare TRUTH --model ue4 --from-scene`` on truths of ``scenes/valley.xml`` rendered here
+(64x36 and 320x180, 16 spp, seed 0), each run a fresh process, the figures drawn the command's way
+(worker processes, one per core) and with ``--processes 1`` (in the command's process, where their
+cost is the figures' alone).  Rounds alternate ``before`` (the checkout ``--base``, its ``fogref``
+package first on ``PYTHONPATH`` with this ``.venv``) and ``after`` (this checkout).  ``wall`` is
+``fogref.cli.main``'s time in the child; ``figures`` is ``run_jobs``' (the report's ten figures
+drawn, or waited for).  Identity: every run's ``metrics.json`` equal but for paths, and every
+figure's PNG bytes equal, between the checkouts.
+
+    .venv/bin/python benchmarks/report_figures.py --base /tmp/base [--rounds 5]
+
+(``git worktree add /tmp/base <commit>`` or a clone makes the base.)
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import tempfile
+from pathlib import Path
+
+from _checkouts import (
+    ROOT,
+    before_after,
+    before_after_arguments,
+    identity_lines,
+    kept_reading,
+    timed_command,
+    timing_rows,
+    valley_truth,
+    write_report,
+)
+
+FIGURES = "fogref.compare.report:run_jobs"  # the report's figures, as write_report calls them
+SIZES = ((64, 36), (320, 180))
+#: (label, truth size, extra arguments)
+COMMANDS = tuple(
+    (f"compare, {w}x{h}{label}", (w, h), extra)
+    for w, h in SIZES
+    for label, extra in (("", []), (", --processes 1", ["--processes", "1"]))
+)
+
+
+def _metrics(folder: Path) -> dict:
+    doc = json.loads((folder / "metrics.json").read_text())
+    for k in ("inputs", "out_dir", "exr"):
+        doc.pop(k, None)
+    return doc
+
+
+def _pngs(folder: Path) -> dict:
+    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*.png"))}
+
+
+def main() -> None:
+    a = before_after_arguments(__doc__)
+    work = Path(tempfile.mkdtemp(prefix="report-figures-"))
+    truths = {size: valley_truth(work, *size, 16) for size in SIZES}
+
+    def run_all(checkout: Path, out: Path) -> dict:
+        rows = {}
+        for i, (label, size, extra) in enumerate(COMMANDS):
+            argv = ["compare", truths[size], "--model", "ue4", "--from-scene", "--out", out / str(i), *extra]
+            rows[label] = timed_command(checkout, FIGURES, argv, codes=(0, 1, 3))
+        return rows
+
+    for mode, checkout in (("before", Path(a.base).resolve()), ("after", ROOT)):
+        run_all(checkout, work / f"warm-{mode}")  # the fits cached
+
+    def identical() -> dict:
+        same = {}
+        for i, (label, _, _) in enumerate(COMMANDS):
+            before, after = work / "before" / str(i), work / "after" / str(i)
+            same[f"{label}: metrics.json"] = _metrics(before) == _metrics(after)
+            b, f = _pngs(before), _pngs(after)
+            same[f"{label}: its {len(f)} figures"] = bool(f) and b == f
+        return same
+
+    def run(mode: str, checkout: Path) -> dict:
+        rows = run_all(checkout, work / mode)
+        return {f"{label}|{k}": v for label, row in rows.items() for k, v in row.items()}
+
+    result = before_after(Path(a.base), a.rounds, run, identical)
+    md_path = Path(a.out) / "report_figures.md"
+    write_report(Path(a.out), "report_figures", result, report(result, kept_reading(md_path)))
+
+
+def report(r: dict, reading: list[str] | None) -> str:
+    """The Markdown page of a run (``reading``: the hand-written section kept from the last one)."""
+    runs = r["runs"]
+    labels = [c[0] for c in COMMANDS]
+    md = [
+        "# A comparison report's figures, before and after",
+        "",
+        f"`benchmarks/report_figures.py`: `fogref compare TRUTH --model ue4 --from-scene` on truths of "
+        f"`scenes/valley.xml` (16 spp), each run a fresh process, {len(runs['after'])} rounds alternating "
+        f"the two checkouts; {r['cores']} cores, load average (1 min) "
+        + " -> ".join(f"{x:.1f}" for x in r["load_average"])
+        + f".  `before`: {r['base']}; `after`: {r['after']}.  `wall`: `fogref.cli.main` in the child; "
+        "`figures`: `run_jobs`, the report's ten figures drawn (`--processes 1`) or waited for (workers, "
+        "one per core).  Ratio: `before` / `after` per round, median [smallest, largest].",
+        "",
+    ]
+    md += timing_rows(runs, [(f"{label}|wall_s", f"{label}: wall") for label in labels])
+    md += timing_rows(runs, [(f"{label}|part_s", f"{label}: figures") for label in labels])[2:]
+    calls = {statistics.median(run[f"{label}|calls"] for run in runs["after"]) for label in labels}
+    md += [f"\n`run_jobs` calls per run: {', '.join(str(int(c)) for c in sorted(calls))}."]
+    md += identity_lines(r["identical"], " (PNG bytes; metrics.json but for paths)")
+    return "\n".join(md + (reading or [])) + "\n"
+
+
+if __name__ == "__main__":
+    main()
