@@ -1,14 +1,15 @@
-"""A `fogref compare` report's figures before and after: what their layout costs.
+"""A `fogref compare` report's figures, and a study's, before and after: what their drawing costs.
 -> reports/benchmarks/report_figures.{json,md}
 
 ``fogref compare TRUTH --model ue4 --from-scene`` on truths of ``scenes/valley.xml`` rendered here
-(64x36 and 320x180, 16 spp, seed 0), each run a fresh process, the figures drawn the command's way
-(worker processes, one per core) and with ``--processes 1`` (in the command's process, where their
-cost is the figures' alone).  Rounds alternate ``before`` (the checkout ``--base``, its ``fogref``
+(64x36 and 320x180, 16 spp, seed 0), the figures drawn the command's way (worker processes, one per
+core) and with ``--processes 1`` (in the command's process, where their cost is the figures' alone);
+and ``fogref study TRUTH`` at 64x36 (its extra renders made once per checkout before the rounds).
+Each run is a fresh process; rounds alternate ``before`` (the checkout ``--base``, its ``fogref``
 package first on ``PYTHONPATH`` with this ``.venv``) and ``after`` (this checkout).  ``wall`` is
-``fogref.cli.main``'s time in the child; ``figures`` is ``run_jobs``' (the report's ten figures
-drawn, or waited for).  Identity: every run's ``metrics.json`` equal but for paths, and every
-figure's PNG bytes equal, between the checkouts.
+``fogref.cli.main``'s time in the child; ``figures`` is ``fogref.compare.report``'s ``run_jobs``
+(the comparison's ten figures drawn or waited for; not the study's budget figure).  Identity:
+every run's ``metrics.json`` equal but for paths, and every figure's PNG bytes equal.
 
     .venv/bin/python benchmarks/report_figures.py --base /tmp/base [--rounds 5]
 
@@ -36,16 +37,19 @@ from _checkouts import (
 
 FIGURES = "fogref.compare.report:run_jobs"  # the report's figures, as write_report calls them
 SIZES = ((64, 36), (320, 180))
-#: (label, truth size, extra arguments)
+#: (label, truth size, the command's arguments after the truth; "{out}", "{renders}" filled in)
+COMPARE = ["compare", "{truth}", "--model", "ue4", "--from-scene", "--out", "{out}"]
 COMMANDS = tuple(
-    (f"compare, {w}x{h}{label}", (w, h), extra)
+    (f"compare, {w}x{h}{label}", (w, h), COMPARE + extra)
     for w, h in SIZES
     for label, extra in (("", []), (", --processes 1", ["--processes", "1"]))
-)
+) + (("study, 64x36", (64, 36), ["study", "{truth}", "--out", "{out}", "--renders", "{renders}"]),)
 
 
 def _metrics(folder: Path) -> dict:
-    doc = json.loads((folder / "metrics.json").read_text())
+    """``metrics.json`` of a run without its paths (``compare/metrics.json`` of a study)."""
+    own = folder / "metrics.json"
+    doc = json.loads((own if own.is_file() else folder / "compare" / "metrics.json").read_text())
     for k in ("inputs", "out_dir", "exr"):
         doc.pop(k, None)
     return doc
@@ -62,8 +66,9 @@ def main() -> None:
 
     def run_all(checkout: Path, out: Path) -> dict:
         rows = {}
-        for i, (label, size, extra) in enumerate(COMMANDS):
-            argv = ["compare", truths[size], "--model", "ue4", "--from-scene", "--out", out / str(i), *extra]
+        for i, (label, size, args) in enumerate(COMMANDS):
+            fill = {"truth": truths[size], "out": out / str(i), "renders": work / f"renders-{checkout.name}"}
+            argv = [a.format(**{k: str(v) for k, v in fill.items()}) for a in args]
             rows[label] = timed_command(checkout, FIGURES, argv, codes=(0, 1, 3))
         return rows
 
@@ -95,19 +100,25 @@ def report(r: dict, reading: list[str] | None) -> str:
     md = [
         "# A comparison report's figures, before and after",
         "",
-        f"`benchmarks/report_figures.py`: `fogref compare TRUTH --model ue4 --from-scene` on truths of "
-        f"`scenes/valley.xml` (16 spp), each run a fresh process, {len(runs['after'])} rounds alternating "
-        f"the two checkouts; {r['cores']} cores, load average (1 min) "
+        "`benchmarks/report_figures.py`: `fogref compare TRUTH --model ue4 --from-scene` and "
+        "`fogref study TRUTH` on truths of `scenes/valley.xml` (16 spp), each run a fresh process, "
+        f"{len(runs['after'])} rounds alternating the two checkouts; {r['cores']} cores, load average "
+        "(1 min) "
         + " -> ".join(f"{x:.1f}" for x in r["load_average"])
         + f".  `before`: {r['base']}; `after`: {r['after']}.  `wall`: `fogref.cli.main` in the child; "
         "`figures`: `run_jobs`, the report's ten figures drawn (`--processes 1`) or waited for (workers, "
-        "one per core).  Ratio: `before` / `after` per round, median [smallest, largest].",
+        "one per core); not the study's budget figure.  Ratio: `before` / `after` per round, "
+        "median [smallest, largest].",
         "",
     ]
     md += timing_rows(runs, [(f"{label}|wall_s", f"{label}: wall") for label in labels])
     md += timing_rows(runs, [(f"{label}|part_s", f"{label}: figures") for label in labels])[2:]
-    calls = {statistics.median(run[f"{label}|calls"] for run in runs["after"]) for label in labels}
-    md += [f"\n`run_jobs` calls per run: {', '.join(str(int(c)) for c in sorted(calls))}."]
+
+    def calls(label: str, mode: str) -> str:
+        return str(int(statistics.median(x[f"{label}|calls"] for x in runs[mode])))
+
+    per_command = [f"{label} {calls(label, 'before')} and {calls(label, 'after')}" for label in labels]
+    md += [f"\n`run_jobs` calls per run, before and after: {'; '.join(per_command)}."]
     md += identity_lines(r["identical"], " (PNG bytes; metrics.json but for paths)")
     return "\n".join(md + (reading or [])) + "\n"
 

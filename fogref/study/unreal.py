@@ -24,13 +24,14 @@ from __future__ import annotations
 
 import json
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
 from fogref.atomic import write_text_atomic as write_text
 from fogref.compare import compare
-from fogref.compare.workers import check_processes, start_workers
+from fogref.compare.workers import check_processes, run_jobs, start_workers
 from fogref.errors import FogrefError
 from fogref.gbuffer import Truth, load_truth
 from fogref.mapping import PhysicalScene, fit_unreal
@@ -288,7 +289,7 @@ def run_study(
         out / "budget.md",
         B.markdown(res, title=f"Error budget of Unreal's exponential height fog on `{scene_path.stem}`"),
     )
-    B.plot(res, out / "budget.png")
+    run_jobs([partial(B.plot, res, out / "budget.png")], processes)  # matplotlib stays in the workers
 
     summary = {
         "exr": str(exr),
