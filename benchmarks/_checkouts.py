@@ -126,6 +126,18 @@ def write_report(out: Path, stem: str, result: dict, markdown: str) -> None:
     print(markdown)
 
 
+def metrics_without_paths(folder: Path) -> dict:
+    """A comparison's ``metrics.json`` in ``folder`` (a study's ``compare/metrics.json``) without what
+    names paths (``inputs``, ``out_dir``, ``exr``, ``truth.path``): what two checkouts' runs share."""
+    own = Path(folder) / "metrics.json"
+    doc = json.loads((own if own.is_file() else Path(folder) / "compare" / "metrics.json").read_text())
+    for k in ("inputs", "out_dir", "exr"):
+        doc.pop(k, None)
+    if isinstance(doc.get("truth"), dict):
+        doc["truth"].pop("path", None)
+    return doc
+
+
 def valley_truth(folder: Path, width: int, height: int, spp: int) -> Path:
     """``folder/valley_<W>x<H>.exr``: ``scenes/valley.xml`` at that size, ``spp`` and seed 0, rendered
     by this checkout's ``fogref render`` (no PNG)."""

@@ -24,7 +24,6 @@ command's ``metrics.json`` equal but for paths, between the checkouts.
 
 from __future__ import annotations
 
-import json
 import statistics
 import tempfile
 from pathlib import Path
@@ -35,6 +34,7 @@ from _checkouts import (
     before_after,
     before_after_arguments,
     identity_lines,
+    metrics_without_paths,
     timed_command,
     timing_rows,
     valley_truth,
@@ -66,19 +66,6 @@ def _engine_png(truth: Path) -> Path:
     return png
 
 
-def _metrics(folder: Path):
-    """``metrics.json`` of a run without its paths (``compare/metrics.json`` of a study)."""
-    f = (
-        folder / "metrics.json"
-        if (folder / "metrics.json").is_file()
-        else folder / "compare" / "metrics.json"
-    )
-    doc = json.loads(f.read_text())
-    for k in ("inputs", "out_dir"):
-        doc.pop(k, None)
-    return doc
-
-
 def main() -> None:
     a = before_after_arguments(__doc__)
     work = Path(tempfile.mkdtemp(prefix="compare-imports-"))
@@ -99,7 +86,8 @@ def main() -> None:
 
     def identical() -> dict:
         return {
-            label: _metrics(work / "before" / str(i)) == _metrics(work / "after" / str(i))
+            label: metrics_without_paths(work / "before" / str(i))
+            == metrics_without_paths(work / "after" / str(i))
             for i, (label, _, _) in enumerate(COMMANDS)
         }
 

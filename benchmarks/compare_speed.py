@@ -48,6 +48,7 @@ from _checkouts import (
     before_after_arguments,
     checkout_env,
     commit_of,
+    metrics_without_paths,
     ratio_range,
     valley_truth,
     write_report,
@@ -68,13 +69,6 @@ def _compare(checkout: Path, truth: Path, out: Path, extra: list[str]) -> float:
     if p.returncode not in (0, 1, 3):  # pass, fail, inconclusive: a verdict was reached
         raise SystemExit(f"{' '.join(cmd)} exited {p.returncode}:\n{p.stderr[-3000:]}")
     return wall
-
-
-def _metrics(folder: Path) -> dict:
-    m = json.loads((folder / "metrics.json").read_text())
-    m.pop("exr", None)
-    m.get("truth", {}).pop("path", None)
-    return m
 
 
 def _pixels_equal(a: Path, b: Path) -> tuple[int, int]:
@@ -159,7 +153,9 @@ def main() -> None:
         )
         load.append(os.getloadavg()[0])
         folders = {m: work / f"{w}x{h}" / m for m in MODES}
-        same_metrics = all(_metrics(folders[m]) == _metrics(folders["before"]) for m in MODES)
+        same_metrics = all(
+            metrics_without_paths(folders[m]) == metrics_without_paths(folders["before"]) for m in MODES
+        )
         figures = {m: _pixels_equal(folders["before"], folders[m]) for m in MODES[1:]}
         arrays = {m: _viewer_arrays(folders[m]) for m in MODES}
         viewer = {

@@ -18,7 +18,6 @@ every run's ``metrics.json`` equal but for paths, and every figure's PNG bytes e
 
 from __future__ import annotations
 
-import json
 import statistics
 import tempfile
 from pathlib import Path
@@ -29,6 +28,7 @@ from _checkouts import (
     before_after_arguments,
     identity_lines,
     kept_reading,
+    metrics_without_paths,
     timed_command,
     timing_rows,
     valley_truth,
@@ -44,15 +44,6 @@ COMMANDS = tuple(
     for w, h in SIZES
     for label, extra in (("", []), (", --processes 1", ["--processes", "1"]))
 ) + (("study, 64x36", (64, 36), ["study", "{truth}", "--out", "{out}", "--renders", "{renders}"]),)
-
-
-def _metrics(folder: Path) -> dict:
-    """``metrics.json`` of a run without its paths (``compare/metrics.json`` of a study)."""
-    own = folder / "metrics.json"
-    doc = json.loads((own if own.is_file() else folder / "compare" / "metrics.json").read_text())
-    for k in ("inputs", "out_dir", "exr"):
-        doc.pop(k, None)
-    return doc
 
 
 def _pngs(folder: Path) -> dict:
@@ -79,7 +70,7 @@ def main() -> None:
         same = {}
         for i, (label, _, _) in enumerate(COMMANDS):
             before, after = work / "before" / str(i), work / "after" / str(i)
-            same[f"{label}: metrics.json"] = _metrics(before) == _metrics(after)
+            same[f"{label}: metrics.json"] = metrics_without_paths(before) == metrics_without_paths(after)
             b, f = _pngs(before), _pngs(after)
             same[f"{label}: its {len(f)} figures"] = bool(f) and b == f
         return same
