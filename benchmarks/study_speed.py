@@ -28,6 +28,7 @@ from _checkouts import (
     before_after,
     before_after_arguments,
     identity_lines,
+    metrics_without_paths,
     timed_command,
     timing_rows,
     valley_truth,
@@ -44,11 +45,11 @@ def _study(checkout: Path, truth: Path, out: Path, renders: Path) -> dict:
 
 def _numbers(folder: Path, name: str):
     """A result file of a study without what names its inputs or documents the package."""
+    if name == "compare/metrics.json":
+        return metrics_without_paths(folder)
     doc = json.loads((folder / name).read_text())
     if name == "budget.json":
         doc.pop("inputs", None), doc.pop("method", None)
-    if name == "compare/metrics.json":
-        doc.pop("inputs", None), doc.pop("out_dir", None)
     return doc
 
 

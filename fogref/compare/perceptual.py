@@ -24,7 +24,7 @@ import os
 
 import numpy as np
 
-from fogref.compare.metrics import check_pair, require_finite
+from fogref.compare.metrics import check_pair, count_nonfinite, require_finite
 from fogref.display import exposure_white, luminance
 
 #: FLIP's default viewing condition: pixels per degree of visual angle.
@@ -145,7 +145,7 @@ def delta_e_cie2000(lab_1, lab_2) -> np.ndarray:
     ValueError: delta_e_cie2000: CIELAB values must be finite; 1 are NaN or infinite
     """
     lab_1, lab_2 = np.asarray(lab_1, dtype=np.float64), np.asarray(lab_2, dtype=np.float64)
-    bad = np.count_nonzero(~np.isfinite(lab_1)) + np.count_nonzero(~np.isfinite(lab_2))
+    bad = count_nonfinite(lab_1) + count_nonfinite(lab_2)
     if bad:
         raise ValueError(f"delta_e_cie2000: CIELAB values must be finite; {bad} are NaN or infinite")
     L_1, a_1, b_1 = _planes(lab_1)
