@@ -307,6 +307,9 @@ class ColourLoss:
         self._b0_list = np.sum(one.iso[:, None] * y, axis=0).tolist()
         self._yy_list = np.sum(y * y, axis=0).tolist()
         self._sums: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        # cos^n and cos^2n per direction at the exponent grid's values, which every start's search
+        # evaluates (made on the first search)
+        self._grid_powers: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         self._add_start(0.0, one.lobe[self._lit])
 
     def _lit_lobe(self, exponent: float, start_cm: float) -> np.ndarray:
@@ -356,10 +359,15 @@ class ColourLoss:
     def _channels(self, log_n: float, start_cm: float) -> list[tuple[float, float, float]]:
         """:func:`nnls2`'s ``(C_fog, C_dir, sse)`` per channel at exponent ``10**log_n`` and ``start_cm``."""
         iso_g, gg, yg = self.sums(start_cm)
-        cn = self._cos ** (10.0**log_n)
+        cn, cn2 = self._grid_powers.get(log_n) or self._powers(log_n)
         self.colour_solves += 1
-        g01, g11 = float(cn @ iso_g), float((cn * cn) @ gg)
+        g01, g11 = float(cn @ iso_g), float(cn2 @ gg)
         return _nnls2_channels(self._g00, g01, g11, self._b0_list, (cn @ yg).tolist(), self._yy_list)
+
+    def _powers(self, log_n: float) -> tuple[np.ndarray, np.ndarray]:
+        """``(cos^n, cos^2n)`` per direction at ``n = 10**log_n``."""
+        cn = self._cos ** (10.0**log_n)
+        return cn, cn * cn
 
     def solve(self, log_n: float, start_cm: float) -> tuple[np.ndarray, np.ndarray, float]:
         """``(C_fog (3,), C_dir (3,), sse)`` at exponent ``10**log_n`` and ``start_cm`` [cm]."""
@@ -382,6 +390,8 @@ class ColourLoss:
             ln = float(np.clip(log_n, *LOG_N_RANGE))
             return ln, self.sse(ln, start_cm)
         grid = np.linspace(*LOG_N_RANGE, 21)
+        if not self._grid_powers:
+            self._grid_powers = {float(g): self._powers(g) for g in grid}
         values = [self.sse(g, start_cm) for g in grid]
         k = int(np.argmin(values))
         res = minimize_scalar(

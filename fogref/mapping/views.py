@@ -17,6 +17,7 @@ onto the phase function per view direction, ``S(d) = int_{up} L(w) p_HG(w . d) d
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -131,10 +132,13 @@ def physical_single_scattering(
     m = pf.medium
     o, d, D = views.rays()
     out = np.zeros((len(D), 3))
+    # the shape optical depth of each view, shared by the terms that need it (made once, when first asked)
+    tau = functools.cache(lambda: m.optical_depth(NP, o, d, D))
     if sun and max(pf.sun_irradiance) > 0:
         w = pf.sun_direction
         if sun_attenuation:
-            out += np.stack(single_scatter_sun(NP, m, o, d, D, w, pf.sun_irradiance), axis=-1)
+            sun_tau = tau() if w[1] > 0 else None  # a sun below the horizon needs none
+            out += np.stack(single_scatter_sun(NP, m, o, d, D, w, pf.sun_irradiance, sun_tau), axis=-1)
         elif w[1] > 0:
             cos = d[0] * w[0] + d[1] * w[1] + d[2] * w[2]
             p = m.phase_value(NP, cos)
@@ -142,9 +146,9 @@ def physical_single_scattering(
             out += (np.asarray(m.albedo) * np.asarray(pf.sun_irradiance)) * p[:, None] * (1.0 - T)
     if sky and pf.sky_model is not None:
         S = sky_projection(pf, views.d)
-        out += np.stack(single_scatter_sky_projected(NP, m, o, d, D, tuple(S.T)), axis=-1)
+        out += np.stack(single_scatter_sky_projected(NP, m, o, d, D, tuple(S.T), tau()), axis=-1)
     elif sky and max(pf.sky_radiance) > 0:
-        out += np.stack(single_scatter_sky(NP, m, o, d, D, pf.sky_radiance), axis=-1)
+        out += np.stack(single_scatter_sky(NP, m, o, d, D, pf.sky_radiance, tau()), axis=-1)
     return out
 
 

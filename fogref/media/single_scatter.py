@@ -90,10 +90,13 @@ def single_scatter_sun(
     tau_sun_o = medium.sun_optical_depth(ops, o, w_)
     m = 1.0 - d[1] / w_[1]
     tau_sun_end = medium.sun_optical_depth(ops, tuple(o[i] + D * d[i] for i in range(3)), w_)
-    out = []
-    for sig, alb_e in zip(
-        ops.params(medium.sigma_t), ops.params([alb * e for alb, e in zip(medium.albedo, E)])
-    ):
+    sigs, alb_es = ops.params(medium.sigma_t), ops.params([alb * e for alb, e in zip(medium.albedo, E)])
+    integrals, out = [], []
+    for c, (sig, alb_e, first) in enumerate(zip(sigs, alb_es, first_equal(medium.sigma_t))):
+        if first < c:  # a channel with an earlier one's extinction (grey fog): its integral
+            integrals.append(integrals[first])
+            out.append(alb_e * phase * integrals[c])
+            continue
         tc = sig * tau
         # m >= 0: T_sun(o) * tc * phi(m tc), all factors bounded.
         pos = ops.exp(-sig * tau_sun_o) * ops.minimum(tc * cf.phi(ops, ops.maximum(m, 0.0) * tc), ops.largest)
@@ -101,18 +104,45 @@ def single_scatter_sun(
         # exp(-sig (tau_sun(D) + tau)) (1 - exp(m tc)) / (-m), whose exponent is <= 0.
         neg_m = ops.where(m < 0, -m, 1.0)
         neg = ops.exp(-sig * (tau_sun_end + tau)) * (-ops.expm1(-neg_m * tc)) / neg_m
-        integral = ops.where(m < 0, neg, pos)
-        out.append(alb_e * phase * integral)
+        integrals.append(ops.where(m < 0, neg, pos))
+        out.append(alb_e * phase * integrals[c])
     return tuple(out)
 
 
-def single_scatter_sky(ops: Ops, medium: Real, o: Real, d: Real, D: Real, L_sky: Real) -> Real:
+def single_scatter_sky(
+    ops: Ops, medium: Real, o: Real, d: Real, D: Real, L_sky: Real, tau: Real = None
+) -> Real:
     """Single-scattered uniform sky, unoccluded and unattenuated: alpha L (1 - T(D)).
     A non-uniform sky (``sunsky``):
-    :func:`~fogref.media.single_scatter.single_scatter_sky_projected`."""
-    tau = medium.optical_depth(ops, o, d, D)
+    :func:`~fogref.media.single_scatter.single_scatter_sky_projected`.  ``tau``: the shape
+    optical depth over ``[0, D]`` when the caller has it (as :func:`single_scatter_sun` takes it)."""
+    if tau is None:
+        tau = medium.optical_depth(ops, o, d, D)
     alb_L = ops.params([alb * L for alb, L in zip(medium.albedo, L_sky)])
-    return tuple(aL * -ops.expm1(-sig * tau) for sig, aL in zip(ops.params(medium.sigma_t), alb_L))
+    opacity = _opacities(ops, ops.params(medium.sigma_t), first_equal(medium.sigma_t), tau)
+    return tuple(aL * op for aL, op in zip(alb_L, opacity))
+
+
+def _opacities(ops: Ops, sigs: Real, first: list[int], tau: Real) -> list:
+    """``1 - exp(-sigma_c tau)`` per channel of ``sigs``, a channel whose extinction equals an
+    earlier one's (``first``, :func:`first_equal`) that one's."""
+    out: list = []
+    for c, (sig, j) in enumerate(zip(sigs, first)):
+        out.append(out[j] if j < c else -ops.expm1(-sig * tau))
+    return out
+
+
+def first_equal(values) -> list[int]:
+    """Per value, the index of the first value equal to it: a channel's results are an earlier
+    channel's when their parameters are equal.  numpy computes a grey fog's three channels three
+    times unless told; Dr.Jit merges identical arithmetic itself (:meth:`fogref.media.ops.DrJitOps.params`
+    gives equal values one array, by the same rule).
+
+    >>> first_equal((0.5, 0.5, 0.25))
+    [0, 0, 2]
+    """
+    values = list(values)
+    return [values.index(v) for v in values]
 
 
 def _log_x_phi(ops: Ops, X: Real, mX: Real) -> Real:
@@ -488,18 +518,21 @@ def sky_phase_projection(sky: Real, g: float, views: Real, n_xi: int = 48, n_phi
     return out
 
 
-def single_scatter_sky_projected(ops: Ops, medium: Real, o: Real, d: Real, D: Real, S: Real) -> Real:
+def single_scatter_sky_projected(
+    ops: Ops, medium: Real, o: Real, d: Real, D: Real, S: Real, tau: Real = None
+) -> Real:
     """Single-scattered non-uniform sky along ``[0, D]``: ``alpha S(d) (1 - T(D))`` per channel.
 
     ``S``: RGB :func:`sky_phase_projection` for the view ``d`` (a 3-tuple of floats or arrays).
     Same approximation as :func:`single_scatter_sky`: the sky's light is neither occluded nor
     attenuated on its way to the ray (exact in the limit of thin fog: its relative error is at
-    most the largest optical depth from the ray to the sky, ``sigma_t tau_in``)."""
-    tau = medium.optical_depth(ops, o, d, D)
-    return tuple(
-        alb * S_c * -ops.expm1(-sig * tau)
-        for sig, alb, S_c in zip(ops.params(medium.sigma_t), ops.params(medium.albedo), S)
-    )
+    most the largest optical depth from the ray to the sky, ``sigma_t tau_in``).  ``tau``: as in
+    :func:`single_scatter_sky`."""
+    if tau is None:
+        tau = medium.optical_depth(ops, o, d, D)
+    sigs, albs = ops.params(medium.sigma_t), ops.params(medium.albedo)
+    opacity = _opacities(ops, sigs, first_equal(medium.sigma_t), tau)
+    return tuple(alb * S_c * op for alb, S_c, op in zip(albs, S, opacity))
 
 
 def sun_disk_directions(w: Real, angular_diameter_deg: float, n_r: int = 4, n_phi: int = 8) -> Real:
