@@ -91,7 +91,8 @@ def single_scatter_sun(
     m = 1.0 - d[1] / w_[1]
     tau_sun_end = medium.sun_optical_depth(ops, tuple(o[i] + D * d[i] for i in range(3)), w_)
     sigs, alb_es = ops.params(medium.sigma_t), ops.params([alb * e for alb, e in zip(medium.albedo, E)])
-    integrals, out = [], []
+    integrals: list = []
+    out: list = []
     for c, (sig, alb_e, first) in enumerate(zip(sigs, alb_es, first_equal(medium.sigma_t))):
         if first < c:  # a channel with an earlier one's extinction (grey fog): its integral
             integrals.append(integrals[first])
@@ -132,7 +133,7 @@ def _opacities(ops: Ops, sigs: Real, first: list[int], tau: Real) -> list:
     return out
 
 
-def first_equal(values) -> list[int]:
+def first_equal(values: Real) -> list[int]:
     """Per value, the index of the first value equal to it: a channel's results are an earlier
     channel's when their parameters are equal.  numpy computes a grey fog's three channels three
     times unless told; Dr.Jit merges identical arithmetic itself (:meth:`fogref.media.ops.DrJitOps.params`
