@@ -6,7 +6,7 @@
 #   run(command='STEPS="import driver" bash scripts/gpu_bench.sh', carry=[".gpu/site-cp312.tar.xz"], timeout_s=450)
 #   run(command='STEPS="import ladder attribution" bash scripts/gpu_bench.sh', carry=[...], timeout_s=480)
 # Try it here on the CPU first (same steps, tiny sizes, the 3.11 pack, llvm_ad_rgb; the pack holds
-# Mitsuba, Dr.Jit and OpenEXR, and the python must bring NumPy, SciPy, Pillow and matplotlib, as the
+# Mitsuba, Dr.Jit and OpenEXR, and the python must bring NumPy, Pillow and matplotlib, as the
 # device image's does and the venv's does here):
 #         bash scripts/gpu_pack.sh 3.11 && PYTHON=.venv/bin/python OUT=/tmp/gpu-out bash scripts/gpu_bench.sh --cpu-smoke
 #
@@ -22,8 +22,8 @@ mkdir -p "$OUT"
 smoke=0; [ "${1:-}" = --cpu-smoke ] && smoke=1
 py=${PYTHON:-python3}  # the device image's python3 (3.12, with numpy, Pillow, matplotlib)
 tag=$($py -c 'import sys; print(f"cp{sys.version_info[0]}{sys.version_info[1]}")')
-$py -c 'import numpy, scipy, PIL, matplotlib' 2>/dev/null || {
-  echo "gpu_bench: $py lacks NumPy, SciPy, Pillow or matplotlib, which the pack leaves to the python (PYTHON=...)" >&2
+$py -c 'import numpy, PIL, matplotlib' 2>/dev/null || {
+  echo "gpu_bench: $py lacks NumPy, Pillow or matplotlib, which the pack leaves to the python (PYTHON=...)" >&2
   exit 1
 }
 site=$(mktemp -d)
