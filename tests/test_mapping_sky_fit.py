@@ -43,6 +43,11 @@ def test_uniform_sky_keeps_its_closed_form_bit_for_bit():
     ref = np.stack(single_scatter_sun(NP, FOG, o, d, D, ps.sun_direction, ps.sun_irradiance), -1)
     ref = ref + np.stack(single_scatter_sky(NP, FOG, o, d, D, ps.sky_radiance), -1)
     assert np.array_equal(physical_single_scattering(ps, v), ref)
+    # a sun below the horizon adds nothing: the sky's term alone (its optical depth made once, as
+    # when the sun's term shares it)
+    below = PhysicalScene(FOG, (W_SUN[0], -0.1, W_SUN[2]), (3.0, 3.0, 3.0), (0.2, 0.3, 0.5))
+    sky = np.stack(single_scatter_sky(NP, FOG, o, d, D, ps.sky_radiance), -1)
+    assert np.array_equal(physical_single_scattering(below, v), np.zeros_like(sky) + sky)
     # the projection of a uniform sky is L times the phase function's upper fraction
     S = sky_projection(ps, v.d[:40])
     H = np.asarray(hg_upper_fraction(0.6, v.d[:40, 1]), dtype=float).reshape(-1)

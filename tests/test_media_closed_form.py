@@ -279,6 +279,30 @@ def test_single_scatter_vs_quadrature(layers, view):
             assert rel(c, ref) <= 1e-12, (float(c), ref)
 
 
+def test_single_scatter_channels_with_equal_extinctions():
+    """A channel whose extinction equals an earlier one's reuses that channel's integral
+    (``first_equal``); each channel must still be its own: the sun's single scattering against
+    mpmath with that channel's extinction and irradiance (relative 1e-12; a reuse of the wrong
+    channel is off by tens of percent), the sky's opacity bitwise against its per-channel form."""
+    from fogref.media.single_scatter import first_equal, single_scatter_sky
+
+    layers = (ExpLayer(1.0, 0.01, 0.0), ExpLayer(0.4, 0.002, 30.0))
+    sigma, albedo, g, E, L = (0.02, 0.035, 0.02), 0.8, 0.6, (3.0, 2.0, 1.0), (0.5, 1.0, 2.0)
+    assert first_equal(sigma) == [0, 1, 0]
+    med = FogMedium(sigma_t=sigma, albedo=albedo, g=g, layers=layers)
+    o, D, w = (a1(0.0), a1(20.0), a1(0.0)), a1(150.0), (0.6, 0.8, 0.0)
+    for view in [(0.8, 0.6, 0.0), (0.6, -0.8, 0.0)]:
+        d = tuple(a1(v) for v in view)
+        got = single_scatter_sun(NP, med, o, d, D, w, E)
+        for c in range(3):
+            ref = mp_single_scatter(layers, sigma[c], albedo, g, 20.0, view, 150.0, w, E[c])
+            assert rel(got[c], ref) <= 1e-12, (c, float(got[c]), ref)
+        tau = med.optical_depth(NP, o, d, D)
+        sky = single_scatter_sky(NP, med, o, d, D, L)
+        for c in range(3):
+            assert np.array_equal(sky[c], albedo * L[c] * -np.expm1(-sigma[c] * tau)), c
+
+
 # -- the height-profile protocol and its registry ---------------------------------------
 
 PROTOCOL_LAYERS = [
