@@ -226,6 +226,38 @@ def test_compare_metrics_are_the_reports_values_and_write_nothing(
     assert not list(tmp_path.iterdir())
 
 
+def test_no_perceptual_metrics_leaves_out_delta_e_and_flip_only(perturbed_report, exr_path, tmp_path):
+    """``compare(..., perceptual=False)`` (``--no-perceptual``): no ΔE2000 or FLIP metric, binned
+    curve, errors.exr channel or heatmap panel, the page says so, and every other metric, binned
+    value and errors.exr channel equals the full report's (JSON values and float32 bytes: one ulp
+    of any is detected).  Every file is still written, the figures too."""
+    out_full, full = perturbed_report
+    model = BeerLambertFog(sigma=SIGMA * 1.3, ambient=AMBIENT * 0.9)
+    lean = compare(exr_path, model, tmp_path, precision="float32", perceptual=False)
+    for f in EXPECTED_FILES:
+        assert (tmp_path / f).is_file(), f
+
+    def perceptual(key):
+        return key.startswith(("delta_e2000", "flip"))
+
+    for part in PARTS:
+        for region in REGIONS:
+            a, b = full["metrics"][part][region], lean["metrics"][part][region]
+            if a["pixels"]:
+                assert any(perceptual(k) for k in a)
+            assert b == {k: v for k, v in a.items() if not perceptual(k)}, (part, region)
+        for axis in ("distance_m", "sun_angle_deg"):
+            a, b = full["binned"][axis]["parts"][part], lean["binned"][axis]["parts"][part]
+            assert b == {k: v for k, v in a.items() if not perceptual(k)}
+    conventions = lean["conventions"]
+    assert conventions["perceptual"] is False and "flip_params" not in conventions
+    assert full["conventions"]["perceptual"] is True and "flip_params" in full["conventions"]
+    got, want = read_exr(tmp_path / "errors.exr")[0], read_exr(out_full / "errors.exr")[0]
+    assert set(got) == {k for k in want if not k.endswith((".flip", ".deltaE2000"))}
+    assert all(got[k].tobytes() == want[k].tobytes() for k in got)
+    assert "ΔE2000 and FLIP: not computed" in (tmp_path / "index.md").read_text()
+
+
 def test_errors_exr_has_no_nan(perturbed_report):
     out, _ = perturbed_report
     ch, attrs = read_exr(out / "errors.exr")
@@ -372,9 +404,16 @@ def test_cli_from_scene_end_to_end(exr_path, tmp_path, registered_models, capsys
         )
         == 1
     )  # runs; verdict fail (exit 1)
-    assert "report:" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "report:" in printed and "FLIP mean" in printed
     report = _no_nan_json((out / "metrics.json").read_text())
     assert report["metrics"]["final"]["all"]["rmse"] < 2e-7
+    # --no-perceptual reaches compare: no FLIP metric, and the summary line names none
+    lean = tmp_path / "lean"
+    lean_args = ["--no-perceptual", "--no-figures", "--out", str(lean)]
+    main([str(exr_path), "--model", "beer_lambert_test", *lean_args])
+    assert "FLIP" not in capsys.readouterr().out
+    assert "flip_mean" not in _no_nan_json((lean / "metrics.json").read_text())["metrics"]["final"]["all"]
     with pytest.raises(FogrefError, match="from_physical"):
         main([str(exr_path), "--model", "no_physical_test", "--from-scene", "--out", str(tmp_path / "x")])
     with pytest.raises(FogrefError, match="unknown fog model"):

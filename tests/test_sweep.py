@@ -397,3 +397,40 @@ def test_budget_steps_per_configuration(tmp_path):
     assert (
         Path(row["budget.sky_only_truth"]).is_file() and len(list((tmp_path / "cache").rglob("*.exr"))) == 2
     )
+
+
+@pytest.mark.render
+def test_perceptual_false_leaves_out_flip_and_delta_e_columns_only(tmp_path):
+    """``[outputs] perceptual = false``: the configuration's row lacks every ΔE2000 and FLIP column,
+    and every other column is the one of the default sweep, bit for bit (the same truth, one
+    comparison without its perceptual maps).  Its id differs (a default sweep's results are not
+    resumed as its own), the default's id is the one it always had (no such key in it), and the
+    default plots skip the perceptual metrics."""
+    body = MODELS + "[render]\nspp = 4\noverrides = { res = 16, resy = 9, max_depth = 3 }\n"
+    cache = tmp_path / "cache"
+    full = S.load_sweep(sweep_toml(tmp_path / "full", body + "[outputs]\nplots = false\n", cache))
+    lean = S.load_sweep(sweep_toml(tmp_path / "lean", body + "[outputs]\nperceptual = false\n", cache))
+    (cf,), (cl,) = S.build_configs(full), S.build_configs(lean)
+    assert cf["perceptual"] and not cl["perceptual"] and cf["id"] != cl["id"]
+    assert cf["truth"] == cl["truth"]
+    rf, rl = S.run_config(cf)["rows"][0], S.run_config(cl)["rows"][0]
+    perceptual = {k for k in rf if ".delta_e2000" in k or ".flip" in k}
+    assert len(perceptual) >= 24 and not perceptual & set(rl)
+    skip = {"compare_seconds", "render_seconds", "truth_cached"}
+    assert {k: v for k, v in rl.items() if k not in skip} == {
+        k: v for k, v in rf.items() if k not in perceptual | skip
+    }
+    from fogref.study.sweep.table import plot_files, plotted_metrics
+
+    kept = [m for m in plotted_metrics(full) if "delta_e" not in m and "flip" not in m]
+    assert plotted_metrics(lean) == kept
+    assert all("flip" not in p.name and "delta_e" not in p.name for p in plot_files(lean, tmp_path))
+
+
+def test_perceptual_false_refuses_to_plot_a_perceptual_metric(tmp_path):
+    """A plotted ΔE2000 or FLIP metric with ``perceptual = false`` is a one-line error naming the
+    file, ``plot_metrics`` and the metric, not an empty figure."""
+    plotted = 'plot_metrics = ["final.all.rmse", "final.all.flip_mean"]\n'
+    body = MODELS + "[outputs]\nperceptual = false\n" + plotted
+    with pytest.raises(FogrefError, match=r"SWEEP\.toml.*plot_metrics.*final\.all\.flip_mean"):
+        S.load_sweep(sweep_toml(tmp_path, body))

@@ -120,6 +120,7 @@ def test_a_tiny_sweep_runs_on_the_cluster_and_resumes(tmp_path):
         (("[fixed]\n", "[fixed]\nFogDensty = 0.1\n"), ["[fixed]", "FogDensty", "FogDensity"]),
         (("values = [3000.0, 100000.0]", "values = [3000.0, -6000.0]"), ["VolumetricFogDistance", "-6000"]),
         (("[outputs]", "[render]\nspp = 4\n[outputs]"), ["unknown table", "render", "ue_pathtracer"]),
+        (("plots = false", "plots = false\nperceptual = false"), ["[outputs]", "perceptual", "no images"]),
         (('kind = "ue_pathtracer"', 'kind = "closed"'), ["[sweep]", "kind", "ue_pathtracer"]),
         (("distances = [10.0, 1000.0, 3]", "distances = [10.0, 1.0, 3]"), ["[views]", "distances"]),
         (("direction = [0.0, 0.5, 1.0]", "direction = [0, 0, 0]"), ["[sun]", "direction"]),

@@ -144,6 +144,7 @@ def run_batch(o, given, default_out, options: dict) -> int:
             imgs,
             out / name,
             figures=not o.no_figures,
+            perceptual=not o.no_perceptual,
             processes=o.processes,
             check=result,
         )

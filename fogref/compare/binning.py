@@ -3,8 +3,8 @@
 Each bin reports, over its pixels: ``rmse`` (image units), ``rmse_noise_floor``
 (the RMSE a perfect model would get from the truth's noise, image units),
 ``mean_error`` (signed, image units), ``relmse`` (1), ``delta_e2000_mean`` (1) and
-``flip_mean`` (0..1), and ``pixels``: how many of its pixels each part used (a
-part's excluded pixels, see :class:`~fogref.compare.error_maps.ErrorMaps`, are left
+``flip_mean`` (0..1) where the comparison made their maps, and ``pixels``: how many of its
+pixels each part used (a part's excluded pixels, see :class:`~fogref.compare.error_maps.ErrorMaps`, are left
 out).  Bins empty for every part are dropped; a bin empty for one part holds None
 for it, so no value is ever NaN.
 """
@@ -84,7 +84,8 @@ def binned_errors(coordinate, errors: dict[str, ErrorMaps], edges, mask=None) ->
             "rmse_noise_floor": root(mean(e.sigma**2)),
             "mean_error": mean(e.signed),
             "relmse": mean(e.relative_squared),
-            "delta_e2000_mean": mean(e.delta_e2000),
-            "flip_mean": mean(e.flip),
         }
+        for key, m in (("delta_e2000_mean", e.delta_e2000), ("flip_mean", e.flip)):
+            if m is not None:  # computed unless the comparison left the perceptual metrics out
+                out["parts"][part][key] = mean(m)
     return out

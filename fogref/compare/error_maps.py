@@ -37,8 +37,8 @@ class ErrorMaps:
     ``signed``: ``test - reference`` per channel ``(H, W, 3)`` [image units];
     ``absolute``: ``mean_c |x - r|`` [image units]; ``squared``: ``mean_c (x - r)²``
     [units²]; ``relative_squared``: relMSE's per-pixel term [1]; ``delta_e2000`` [1];
-    ``flip`` [0..1].  ``white``: the ΔE exposure white [image units];
-    ``flip_params``: what FLIP used.
+    ``flip`` [0..1] (both None when the perceptual metrics were not asked for).  ``white``: the
+    ΔE exposure white [image units]; ``flip_params``: what FLIP used (empty without FLIP).
 
     ``valid``: ``(H, W)`` bool, the pixels that count.  An invalid pixel (its
     reference undefined, e.g. ``surface`` with zero coverage, or a non-finite model
@@ -57,8 +57,8 @@ class ErrorMaps:
     absolute: np.ndarray
     squared: np.ndarray
     relative_squared: np.ndarray
-    delta_e2000: np.ndarray
-    flip: np.ndarray
+    delta_e2000: np.ndarray | None
+    flip: np.ndarray | None
     white: float
     flip_params: dict
     valid: np.ndarray | None = None
@@ -91,7 +91,7 @@ class ErrorMaps:
         ``mean_error_below_noise``; ``mean_abs_error`` and its
         ``mean_abs_error_noise_floor`` (``sqrt(2/pi) mean sigma``);
         ``max_abs_error``; ``delta_e2000_mean``, ``delta_e2000_p95``, ``flip_mean``
-        and their ``*_noise_floor`` where noise maps exist.
+        (where their maps exist) and their ``*_noise_floor`` where noise maps exist.
         """
         region = np.ones(self.absolute.shape, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
         sel = region & self.valid
@@ -138,11 +138,13 @@ class ErrorMaps:
                 "mean_abs_error": float(np.mean(self.absolute[sel])),
                 "mean_abs_error_noise_floor": float(math.sqrt(2.0 / math.pi) * np.mean(self.sigma[sel])),
                 "max_abs_error": float(np.max(self.absolute[sel])),
-                "delta_e2000_mean": float(np.mean(self.delta_e2000[sel])),
-                "delta_e2000_p95": float(np.percentile(self.delta_e2000[sel], 95)),
-                "flip_mean": float(np.mean(self.flip[sel])),
             }
         )
+        if self.delta_e2000 is not None:
+            out["delta_e2000_mean"] = float(np.mean(self.delta_e2000[sel]))
+            out["delta_e2000_p95"] = float(np.percentile(self.delta_e2000[sel], 95))
+        if self.flip is not None:
+            out["flip_mean"] = float(np.mean(self.flip[sel]))
         if self.delta_e2000_noise is not None:
             out["delta_e2000_mean_noise_floor"] = float(np.mean(self.delta_e2000_noise[sel]))
         if self.flip_noise is not None:
@@ -161,6 +163,7 @@ def error_maps(
     valid=None,
     noise_cov=None,
     spp: int = 0,
+    perceptual: bool = True,
 ) -> ErrorMaps:
     """All per-pixel errors of ``test`` against ``reference`` (both ``(H, W, 3)``).
 
@@ -187,6 +190,10 @@ def error_maps(
         root and the noise draw is correlated as it says.
     spp : int
         The truth's samples per pixel (the noise of its estimated variance), 0: exact.
+    perceptual : bool
+        False: no ΔE2000 or FLIP map (nor their noise floors, nor the noise draw they need):
+        the other maps and every other summary are the same, at a fraction of the cost
+        (FLIP is most of a comparison's work).
 
     Returns
     -------
@@ -219,9 +226,11 @@ def error_maps(
     s = np.where(ok[..., None], s, 0.0)
     if white is None:
         white = exposure_white(r)
-    flip, flip_params = flip_map(r, x, ppd)
-    de_noise = flip_noise = None
-    if np.any(s > 0):  # the ΔE2000/FLIP noise floors, from one seeded draw (0 where sigma is)
+    de = flip = de_noise = flip_noise = None
+    flip_params: dict = {}
+    if perceptual:
+        flip, flip_params = flip_map(r, x, ppd)
+    if perceptual and np.any(s > 0):  # the ΔE2000/FLIP noise floors, from one seeded draw (0 where sigma is)
         draw = np.random.default_rng(0).standard_normal(r.shape)
         if C is None:
             noisy = r + s * draw
@@ -229,7 +238,7 @@ def error_maps(
             noisy = r + np.einsum("...ij,...j->...i", noise.sqrt_psd(C), draw)
         de, de_noise = delta_e2000_maps(r, [x, noisy], white)  # the reference in CIELAB once
         flip_noise, _ = flip_map(r, noisy, ppd)
-    else:
+    elif perceptual:
         (de,) = delta_e2000_maps(r, [x], white)
     return ErrorMaps(
         signed=x - r,

@@ -59,7 +59,7 @@ def _robust_max(m: np.ndarray) -> float:
 
 
 def plot_error_heatmaps(errors: ErrorMaps, part: str, units: str, path) -> Path:
-    """Five heatmaps of one part, each with a colour bar and its units.
+    """Five heatmaps of one part (three without the perceptual maps), each with a colour bar and its units.
 
     The signed error ``model − reference`` (mean over RGB) [``units``] on the
     diverging ``RdBu_r`` map centred at 0 with symmetric limits (red: the model is
@@ -81,9 +81,11 @@ def plot_error_heatmaps(errors: ErrorMaps, part: str, units: str, path) -> Path:
             0.0,
             _robust_max(errors.relative_squared),
         ),
-        (errors.delta_e2000, "ΔE2000", "[1]", "viridis", 0.0, _robust_max(errors.delta_e2000)),
-        (errors.flip, "HDR-FLIP", "[0..1]", "magma", 0.0, 1.0),
     ]
+    if errors.delta_e2000 is not None:  # the perceptual maps, unless the comparison left them out
+        panels.append((errors.delta_e2000, "ΔE2000", "[1]", "viridis", 0.0, _robust_max(errors.delta_e2000)))
+    if errors.flip is not None:
+        panels.append((errors.flip, "HDR-FLIP", "[0..1]", "magma", 0.0, 1.0))
     pw, ph = _panel_size(errors.absolute.shape)
     fig = agg_figure(pw * len(panels) + 1.0, ph + 0.8)
     axes = fig.subplots(1, len(panels))
@@ -179,9 +181,12 @@ def plot_binned_errors(
                 color=style["color"],
                 label=f"{part} noise floor",
             )
-        axes[2].plot(x, _floats(stats["delta_e2000_mean"]), **style)
-        axes[3].plot(x, _floats(stats["flip_mean"]), **style)
-    for ax, label in zip(axes, labels):
+        for ax, key in ((axes[2], "delta_e2000_mean"), (axes[3], "flip_mean")):
+            if key in stats:  # not when the comparison left the perceptual metrics out
+                ax.plot(x, _floats(stats[key]), **style)
+    stats_of = binned.get("parts", {}).values()
+    left_out = bool(stats_of) and not any("flip_mean" in stats for stats in stats_of)  # perceptual off
+    for k, (ax, label) in enumerate(zip(axes, labels)):
         ax.set_ylabel(label, fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
         if log_x:
@@ -189,7 +194,8 @@ def plot_binned_errors(
         if ax.lines:
             ax.legend(fontsize=8)
         else:
-            ax.text(0.5, 0.5, "no data", transform=ax.transAxes, ha="center", va="center")
+            empty = "not computed (no perceptual metrics)" if k >= 2 and left_out else "no data"
+            ax.text(0.5, 0.5, empty, transform=ax.transAxes, ha="center", va="center")
     for ax in axes[2:]:
         ax.set_xlabel(xlabel, fontsize=9)
     fig.suptitle(title, fontsize=10)

@@ -22,8 +22,8 @@ ERRORS_EXR_LAYOUT = """\
 <part>.valid             1 where the part is compared, 0 where excluded (error channels 0 there)
 <part>.abs_error         mean over RGB of |model - reference|
 <part>.rel_sq_error      mean over RGB of (model - reference)^2 / (reference^2 + eps)
-<part>.deltaE2000        CIEDE2000 after exposure normalisation
-<part>.flip              HDR-FLIP
+<part>.deltaE2000        CIEDE2000 after exposure normalisation (not without perceptual metrics)
+<part>.flip              HDR-FLIP (not without perceptual metrics)
 distance                 distance to the surface [m] (0 for sky)
 hit                      1 for surface pixels, 0 for sky
 sun_angle                angle between view ray and sun [deg] (only with a sun)"""
@@ -216,9 +216,13 @@ def index_markdown(report: dict, has_sun: bool, figures: bool, check=None) -> st
             "RMSE and |error| are in each part's units (radiance: the scene's radiance units; "
             "transmittance: 1). relMSE = mean((x−r)²/(r²+ε)), "
             f"ε = {c['relmse_eps']}. Mean error = mean(candidate − truth): > 0 too bright, < 0 too dark. "
-            "ΔE2000: linear sRGB ÷ white → XYZ → CIELAB (D65); "
-            "white = 99th percentile of the reference part's luminance (transmittance: 1). "
-            f"FLIP: HDR-FLIP at {c['flip_ppd']} px/degree."
+            + (
+                "ΔE2000: linear sRGB ÷ white → XYZ → CIELAB (D65); "
+                "white = 99th percentile of the reference part's luminance (transmittance: 1). "
+                f"FLIP: HDR-FLIP at {c['flip_ppd']} px/degree."
+                if c.get("perceptual", True)
+                else "ΔE2000 and FLIP: not computed (the comparison left out its perceptual metrics)."
+            )
         ),
         "",
         (
@@ -260,7 +264,8 @@ def index_markdown(report: dict, has_sun: bool, figures: bool, check=None) -> st
             "",
             "Heatmaps: the signed error (candidate − truth, mean over RGB) on a diverging map centred at 0 "
             "with symmetric limits (red: too bright, blue: too dark), then |error|, relative "
-            "squared error, ΔE2000 and FLIP. Grey: excluded pixels.",
+            + ("squared error, ΔE2000 and FLIP. " if c.get("perceptual", True) else "squared error. ")
+            + "Grey: excluded pixels.",
             "",
         ]
         for part in names:

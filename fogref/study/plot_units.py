@@ -36,6 +36,8 @@ PARAMETER_UNITS = {
     "spp": "samples per pixel",
 }
 DIMENSIONLESS = ("relmse", "rel_", "delta_e2000", "flip")
+#: The names of the perceptual metrics (ΔE2000, HDR-FLIP), which a comparison may leave out.
+PERCEPTUAL = ("delta_e2000", "flip")
 #: The headline metrics of a sweep's table (``<part>.<region>.<name>``): what a sweep plots when its
 #: ``[outputs] plot_metrics`` is not given and what a notebook's sweep table shows first.
 HEADLINE_METRICS = (
@@ -72,3 +74,12 @@ def parameter_label(name: str) -> str:
         units = {t.unit for m in TERMS.values() if (t := m.get(last)) is not None and t.unit}
         unit = units.pop() if len(units) == 1 else None
     return f"{name} [{unit}]" if unit else f"{name} (as in SWEEP.toml)"
+
+
+def is_perceptual(metric: str) -> bool:
+    """Whether ``metric`` (``<part>.<region>.<name>`` or a bare name) is a perceptual one.
+
+    >>> is_perceptual("final.all.flip_mean"), is_perceptual("final.all.rmse")
+    (True, False)
+    """
+    return metric.rsplit(".", 1)[-1].startswith(PERCEPTUAL)

@@ -113,7 +113,8 @@ def _hash(obj, n=16) -> str:
     return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:n]
 
 
-#: What a render configuration's ``id`` hashes (with fogref's version, and ``budget`` when set).
+#: What a render configuration's ``id`` hashes (with fogref's version, ``budget`` when set and
+#: ``perceptual`` when false).
 _ID_KEYS = ("scene_sha256", "inputs_sha256", "overrides", "models", "spp", "seed", "pixel_filter")
 
 
@@ -171,9 +172,12 @@ def build_configs(spec: SweepSpec) -> list[dict]:
                 "pixel_filter": spec.pixel_filter,
                 "truth": str(truth),
                 "budget": bool(getattr(spec, "budget", False)),
+                "perceptual": bool(getattr(spec, "perceptual", True)),
             }
+            # a configuration's id changes with what its result holds; the defaults keep earlier ids
             budget = {"budget": True} if cfg["budget"] else {}
-            cfg["id"] = _hash({k: cfg[k] for k in _ID_KEYS} | {"fogref": __version__} | budget)
+            perceptual = {} if cfg["perceptual"] else {"perceptual": False}
+            cfg["id"] = _hash({k: cfg[k] for k in _ID_KEYS} | {"fogref": __version__} | budget | perceptual)
             out.append(cfg)
     return out
 

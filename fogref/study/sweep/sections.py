@@ -18,6 +18,7 @@ from fogref.mapping.unreal_pathtracer import UEPathTracerSettings, settings_from
 from fogref.models.resolve import resolve_model
 from fogref.models.ue4 import UE4FogParams
 from fogref.render.render import PIXEL_FILTERS
+from fogref.study.plot_units import is_perceptual
 from fogref.study.sweep.values import as_str, toml_bool, toml_error, toml_int, toml_num, toml_src, toml_table
 
 DESIGN_KINDS = ("grid", "list", "random", "lhs")
@@ -246,8 +247,9 @@ def read_execution(path: Path, doc: dict) -> dict:
 
 
 def read_outputs(path: Path, doc: dict, out: Path) -> dict:
-    """``[outputs]``: table name (inside the output folder), plots, plotted metrics, Unreal budget columns."""
-    ou = toml_table(path, doc, "outputs", ("table", "plots", "plot_metrics", "budget"))
+    """``[outputs]``: table name (inside the output folder), plots, plotted metrics, Unreal budget columns,
+    the perceptual metrics (ΔE2000, FLIP: computed unless ``perceptual = false``)."""
+    ou = toml_table(path, doc, "outputs", ("table", "plots", "plot_metrics", "budget", "perceptual"))
     src = toml_src(path, "outputs")
     table = ou.get("table", "results")
     if not isinstance(table, str) or not table.strip():
@@ -264,9 +266,19 @@ def read_outputs(path: Path, doc: dict, out: Path) -> dict:
     metrics = ou.get("plot_metrics")
     if metrics is not None and not (isinstance(metrics, list) and all(isinstance(x, str) for x in metrics)):
         raise ParameterError(src, "plot_metrics", f"{metrics!r} is not a list of metric names")
+    perceptual = toml_bool(ou.get("perceptual", True), "perceptual", src)
+    left_out = [m for m in metrics or () if not perceptual and is_perceptual(m)]
+    if left_out:
+        raise ParameterError(
+            src,
+            "plot_metrics",
+            f"{', '.join(left_out)} cannot be plotted with perceptual = false (ΔE2000 and FLIP are not "
+            "computed); drop them or set perceptual = true",
+        )
     return {
         "table": table,
         "plots": toml_bool(ou.get("plots", True), "plots", src),
         "plot_metrics": metrics,
         "budget": toml_bool(ou.get("budget", False), "budget", src),
+        "perceptual": perceptual,
     }

@@ -14,7 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from fogref import params as P
-from fogref.errors import FogrefError
+from fogref.errors import FogrefError, ParameterError
 from fogref.study.sweep.parameters import design_size, read_parameters
 from fogref.study.sweep.sections import (
     DESIGN_KINDS,
@@ -80,6 +80,8 @@ class SweepSpec:
         Table base name.  plots : bool.  plot_metrics : list of str or None.
     budget : bool
         Unreal's error budget for every "ue4" model.
+    perceptual : bool
+        The comparisons' perceptual metrics (ΔE2000, FLIP); False leaves them out.
     """
 
     def __init__(self, **kw):
@@ -173,5 +175,17 @@ def _closed_form_sweep(path: Path, doc: dict) -> SweepSpec:
         design=design,
         models=[model],
         **read_execution(path, doc),
-        **read_outputs(path, doc, cf["out"]),
+        **_no_perceptual_option(path, read_outputs(path, doc, cf["out"]), doc),
     )
+
+
+def _no_perceptual_option(path: Path, outputs: dict, doc: dict) -> dict:
+    """A closed-form sweep's ``[outputs]``: it compares no images, so ``perceptual`` is refused."""
+    if "perceptual" in (doc.get("outputs") or {}):
+        raise ParameterError(
+            toml_src(path, "outputs"),
+            "perceptual",
+            "a ue_pathtracer sweep compares closed forms, no images: it has no perceptual metrics to "
+            "leave out",
+        )
+    return outputs

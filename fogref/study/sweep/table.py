@@ -14,7 +14,7 @@ from pathlib import Path
 
 from fogref.atomic import atomic_write, figure_save_options, set_aside, write_text_atomic
 from fogref.compare.plots import agg_figure
-from fogref.study.plot_units import HEADLINE_METRICS, metric_label, parameter_label
+from fogref.study.plot_units import HEADLINE_METRICS, is_perceptual, metric_label, parameter_label
 from fogref.study.sweep.spec import SweepSpec
 
 __all__ = [
@@ -22,6 +22,7 @@ __all__ = [
     "figure_png",
     "plot_files",
     "plot_table",
+    "plotted_metrics",
     "read_result",
     "set_aside_result",
     "write_table",
@@ -134,11 +135,15 @@ def plot_files(spec: SweepSpec, plot_dir: Path) -> list[Path]:
     """Every figure :func:`plot_table` may write: ``<metric>_vs_<parameter>.png``."""
     if not spec.plots:
         return []
-    return [
-        plot_dir / f"{m}_vs_{p}.png"
-        for m in (spec.plot_metrics or DEFAULT_PLOT_METRICS)
-        for p in spec.parameters
-    ]
+    return [plot_dir / f"{m}_vs_{p}.png" for m in plotted_metrics(spec) for p in spec.parameters]
+
+
+def plotted_metrics(spec: SweepSpec) -> list[str]:
+    """The metrics a sweep plots: ``[outputs] plot_metrics``, else :data:`DEFAULT_PLOT_METRICS` (less
+    the perceptual ones when the sweep leaves them out)."""
+    if spec.plot_metrics:
+        return list(spec.plot_metrics)
+    return [m for m in DEFAULT_PLOT_METRICS if getattr(spec, "perceptual", True) or not is_perceptual(m)]
 
 
 def _noise_column(df, metric: str) -> str | None:
@@ -161,7 +166,7 @@ def plot_table(df, spec: SweepSpec, plot_dir: Path, run=None) -> list[Path]:
     ok = df[df["status"] == "ok"] if "status" in df.columns else df
     if ok.empty:
         return []
-    metrics = [m for m in (spec.plot_metrics or DEFAULT_PLOT_METRICS) if m in ok.columns]
+    metrics = [m for m in plotted_metrics(spec) if m in ok.columns]
     jobs = [
         (_series(ok, param, metric), spec.name, param, metric, _log_scale(ok[metric]))
         for param in spec.parameters

@@ -134,7 +134,8 @@ def run_config(cfg: dict, drjit_threads: int | None = None) -> dict:
     for m in cfg["models"]:
         tc = time.perf_counter()
         model = build_model(m["name"], m["params"], scene_params if m["from_scene"] else None)
-        report = compare_metrics(truth_data, model)  # compare's metrics; its report files are not kept
+        # compare's metrics (its report files are not kept), the perceptual ones unless left out
+        report = compare_metrics(truth_data, model, perceptual=cfg.get("perceptual", True))
         row = {
             "model": m["label"],
             "model_name": m["name"],
