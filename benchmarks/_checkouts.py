@@ -16,6 +16,8 @@ from fogref.atomic import write_text_atomic
 
 #: This checkout (the benchmarks' "after").
 ROOT = Path(__file__).resolve().parents[1]
+#: The committed example sweep (48 configurations), relative to a checkout.
+EXAMPLE_SWEEP = Path("reports") / "sweeps" / "unreal_sun_falloff_g" / "SWEEP.toml"
 #: ``python -c FOGREF_MAIN ARGS`` runs ``fogref ARGS`` with the package first on ``sys.path``.
 FOGREF_MAIN = "import sys; from fogref.cli import main; sys.exit(main())"
 
@@ -198,3 +200,19 @@ def before_after_arguments(doc: str) -> argparse.Namespace:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
     return ap.parse_args()
+
+
+def example_sweep(tree: Path, work: Path, outputs: dict | None = None) -> Path:
+    """``work/SWEEP.toml``: the example sweep of the checkout ``tree`` (:data:`EXAMPLE_SWEEP`) with its
+    scene by absolute path, its truth cache and outputs in ``work``, and ``outputs`` (key -> TOML
+    value as written) set in its ``[outputs]`` table."""
+    text = (Path(tree) / EXAMPLE_SWEEP).read_text()
+    text = text.replace('"scenes/valley.xml"', f'"{(Path(tree) / "scenes" / "valley.xml").as_posix()}"')
+    text = text.replace('"out/sweep_cache"', f'"{(Path(work) / "cache").as_posix()}"')
+    head, table = text.split("[outputs]\n", 1)
+    for key, value in (outputs or {}).items():
+        lines = [ln for ln in table.splitlines() if not ln.startswith(f"{key} =")]
+        table = "\n".join([f"{key} = {value}", *lines]) + "\n"
+    Path(work).mkdir(parents=True, exist_ok=True)
+    (Path(work) / "SWEEP.toml").write_text(head + "[outputs]\n" + table)
+    return Path(work) / "SWEEP.toml"

@@ -9,19 +9,41 @@ rounds (so neither run fits).  In each run the FLIP maps (``fogref.compare.error
 are timed apart.  Identity: every metric, binned value and ``check.json`` row of ``lean`` equal
 to ``full``'s (JSON values, paths left out), and ``lean`` without any ΔE2000 or FLIP key.
 
-    .venv/bin/python benchmarks/compare_perceptual.py [--rounds 3]
+Then the example sweep (``reports/sweeps/unreal_sun_falloff_g``, 48 configurations) as committed
+(``full``) and with ``[outputs] perceptual = false`` (``lean``), ``fogref sweep --quiet`` in a
+fresh process from empty truth and fit caches, ``--sweep-rounds`` rounds alternating; identity:
+every cell of ``lean``'s table equal to ``full``'s (the rows matched by their parameters; the
+configuration ids, timings and paths left out), and no ΔE2000 or FLIP column in it.
+
+    .venv/bin/python benchmarks/compare_perceptual.py [--rounds 3] [--sweep-rounds 2]
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import os
+import shutil
 import statistics
+import subprocess
+import sys
 import tempfile
+import time
 from pathlib import Path
 
-from _checkouts import ROOT, alternating, commit_of, ratio_range, timed_command, valley_truth, write_report
+from _checkouts import (
+    FOGREF_MAIN,
+    ROOT,
+    alternating,
+    checkout_env,
+    commit_of,
+    example_sweep,
+    ratio_range,
+    timed_command,
+    valley_truth,
+    write_report,
+)
 
 CASES = ((64, 36, 16, False), (320, 180, 16, False), (320, 180, 16, True), (960, 540, 4, False))
 FLIP = "fogref.compare.error_maps:flip_map"  # timed apart in each run
@@ -53,9 +75,57 @@ def _same_but_perceptual(full: Path, lean: Path) -> bool:
     return not leaks and checks[0]["rows"] == checks[1]["rows"]
 
 
+#: Columns of a sweep's table that name the run, its timings or paths, not its results.
+SWEEP_RUN_COLUMNS = {"config_id", "scene_path", "render_seconds", "compare_seconds", "worker_pid"}
+SWEEP_RUN_COLUMNS |= {"worker_host", "truth_path", "truth_cached", "truth_sha256"}
+
+
+def _sweep(work: Path, lean: bool) -> dict:
+    """The example sweep in ``work`` from empty truth and fit caches, ``lean``: without its
+    perceptual metrics; its wall time and the sweep's own 'configurations in' seconds."""
+    shutil.rmtree(work, ignore_errors=True)
+    sweep = example_sweep(ROOT, work, {"perceptual": "false"} if lean else None)
+    env = {**checkout_env(ROOT), "FOGREF_CACHE": str(work / "fits")}
+    t0 = time.perf_counter()
+    p = subprocess.run(
+        [sys.executable, "-c", FOGREF_MAIN, "sweep", str(sweep), "--quiet"],
+        env=env,
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+    )
+    wall = time.perf_counter() - t0
+    if p.returncode != 0:
+        raise SystemExit(f"fogref sweep failed ({p.returncode}):\n{p.stderr[-3000:]}")
+    line = next(x for x in p.stdout.splitlines() if "configurations" in x)
+    return {"wall_s": wall, "configs_s": float(line.split(" in ")[1].split(" s")[0])}
+
+
+def _same_table_but_perceptual(full: Path, lean: Path) -> bool:
+    """Whether every cell of ``lean``'s ``results.csv`` equals ``full``'s (rows matched by their
+    parameters and model, :data:`SWEEP_RUN_COLUMNS` left out) and ``lean`` has no perceptual column."""
+
+    def rows(folder: Path) -> dict:
+        with open(folder / "results.csv", newline="") as f:
+            table = list(csv.DictReader(f))
+        key = ("sun_elevation", "FogHeightFalloff", "g", "model")
+        return {tuple(r[k] for k in key): r for r in table}
+
+    a, b = rows(full), rows(lean)
+    if set(a) != set(b):
+        return False
+    for k, r in b.items():
+        if any(_perceptual(c.rsplit(".", 1)[-1]) for c in r):
+            return False
+        if any(r[c] != a[k][c] for c in r if c not in SWEEP_RUN_COLUMNS):
+            return False
+    return True
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--sweep-rounds", type=int, default=2, help="rounds of the example sweep (0: none)")
     ap.add_argument("--out", default=str(ROOT / "reports" / "benchmarks"))
     a = ap.parse_args()
     work = Path(tempfile.mkdtemp(prefix="compare-perceptual-"))
@@ -75,9 +145,17 @@ def main() -> None:
         same = _same_but_perceptual(folder / "full", folder / "lean")
         cases.append({"case": name, "runs": runs, "identical": same})
         print(name, {m: [round(r["wall_s"], 2) for r in rs] for m, rs in runs.items()}, flush=True)
+    sweep = None
+    if a.sweep_rounds:
+        where = work / "sweep"
+        runs = alternating(
+            {"full": ROOT, "lean": ROOT}, a.sweep_rounds, lambda m, _: _sweep(where / m, m == "lean")
+        )
+        sweep = {"runs": runs, "identical": _same_table_but_perceptual(where / "full", where / "lean")}
+        print("sweep", {m: [round(r["wall_s"], 2) for r in rs] for m, rs in runs.items()}, flush=True)
     load.append(os.getloadavg()[0])
     cores = len(os.sched_getaffinity(0))
-    result = {"commit": commit_of(ROOT), "cores": cores, "load_average": load, "cases": cases}
+    result = {"commit": commit_of(ROOT), "cores": cores, "load_average": load, "cases": cases, "sweep": sweep}
     write_report(Path(a.out), "compare_perceptual", result, report(result))
 
 
@@ -106,6 +184,25 @@ def report(r: dict) -> str:
             f"| {c['case']} | {statistics.median(full):.2f} | {statistics.median(lean):.2f} | "
             f"{ratio_range(full, lean)} | {flip:.2f} | {same} |"
         )
+    if r.get("sweep"):
+        runs = r["sweep"]["runs"]
+        md += [
+            "",
+            f"The example sweep (48 configurations, 64x36, 16 spp, `fogref sweep --quiet` from empty truth "
+            f"and fit caches, {len(runs['full'])} rounds alternating), as committed (`full`) and with "
+            "`[outputs] perceptual = false` (`lean`):",
+            "",
+            "| | full [s] | lean [s] | full / lean |",
+            "|---|---:|---:|---|",
+        ]
+        for key, label in (("wall_s", "the command"), ("configs_s", "its 'configurations in'")):
+            full, lean = ([v[key] for v in runs[m]] for m in ("full", "lean"))
+            md.append(
+                f"| {label} | {statistics.median(full):.2f} | {statistics.median(lean):.2f} | "
+                f"{ratio_range(full, lean)} |"
+            )
+        same = "equal" if r["sweep"]["identical"] else "DIFFERENT"
+        md += ["", f"Every cell of `lean`'s table but the ΔE2000 and FLIP columns against `full`'s: {same}."]
     return "\n".join(md) + "\n"
 
 

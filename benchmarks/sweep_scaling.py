@@ -20,26 +20,15 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-EXAMPLE = ROOT / "reports" / "sweeps" / "unreal_sun_falloff_g" / "SWEEP.toml"
+from _checkouts import ROOT, example_sweep
 
 
 def run(n_workers: int, threads: int, home: str) -> dict:
     """One sweep run from an empty truth cache, the workers' HOME (Dr.Jit disk cache) at ``home``."""
-    import tomllib
-
     from fogref.study.sweep import run_sweep
 
-    text = EXAMPLE.read_text()
-    cache = tomllib.loads(text)["sweep"]["cache"]
     with tempfile.TemporaryDirectory(prefix="fogref-scaling-") as tmp:
-        p = Path(tmp) / "SWEEP.toml"
-        body = text.replace('"scenes/valley.xml"', f'"{(ROOT / "scenes" / "valley.xml").as_posix()}"')
-        p.write_text(
-            body.replace(f'"{cache}"', f'"{(Path(tmp) / "cache").as_posix()}"').replace(
-                "plots = true", "plots = false"
-            )
-        )
+        p = example_sweep(ROOT, Path(tmp), {"plots": "false"})
         old_home = os.environ.get("HOME")
         os.environ["HOME"] = home  # the LocalCluster's worker processes inherit it
         try:

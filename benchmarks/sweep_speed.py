@@ -51,11 +51,10 @@ from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
-from _checkouts import commit_of, kept_reading
+from _checkouts import commit_of, example_sweep, kept_reading
 from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[1]
-EXAMPLE = Path("reports") / "sweeps" / "unreal_sun_falloff_g" / "SWEEP.toml"
 #: Columns of results.csv that hold timings or the run's own paths (module doc).
 RUN_COLUMNS = (
     "scene_path",
@@ -98,17 +97,6 @@ PHASES = (
 )
 
 
-def _sweep_copy(tree: Path, work: Path) -> Path:
-    """``work/SWEEP.toml``: the example of ``tree`` with its scene by absolute path, the truth cache
-    and the outputs in ``work``."""
-    text = (tree / EXAMPLE).read_text()
-    text = text.replace('"scenes/valley.xml"', f'"{(tree / "scenes" / "valley.xml").as_posix()}"')
-    text = text.replace('"out/sweep_cache"', f'"{(work / "cache").as_posix()}"')
-    work.mkdir(parents=True, exist_ok=True)
-    (work / "SWEEP.toml").write_text(text)
-    return work / "SWEEP.toml"
-
-
 def _env(work: Path, empty_kernel_cache: bool = False) -> dict:
     env = dict(os.environ, FOGREF_CACHE=str(work / "fits-cache"))
     env.pop("PYTHONPATH", None)
@@ -122,7 +110,7 @@ def _env(work: Path, empty_kernel_cache: bool = False) -> dict:
 def run_command(tree: Path, work: Path, empty_kernel_cache: bool = False) -> dict:
     """``fogref sweep`` of ``tree`` on a fresh copy of the example in ``work``."""
     shutil.rmtree(work, ignore_errors=True)
-    sweep = _sweep_copy(tree, work)
+    sweep = example_sweep(tree, work)
     load0 = os.getloadavg()
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
@@ -266,7 +254,7 @@ def phase_child(tree: Path, work: Path, n_configs: int) -> None:
     """(Runs in the checkout's own interpreter.)  Print the phases' JSON on the last line of stdout."""
     t_start = time.perf_counter()
     shutil.rmtree(work, ignore_errors=True)
-    sweep = _sweep_copy(tree, work)
+    sweep = example_sweep(tree, work)
     os.environ["FOGREF_CACHE"] = str(work / "fits-cache")
     acc: dict = defaultdict(float)
     cpu: dict = defaultdict(float)
