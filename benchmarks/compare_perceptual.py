@@ -39,6 +39,7 @@ from _checkouts import (
     checkout_env,
     commit_of,
     example_sweep,
+    kept_reading,
     ratio_range,
     timed_command,
     valley_truth,
@@ -156,6 +157,7 @@ def main() -> None:
     load.append(os.getloadavg()[0])
     cores = len(os.sched_getaffinity(0))
     result = {"commit": commit_of(ROOT), "cores": cores, "load_average": load, "cases": cases, "sweep": sweep}
+    result["reading"] = kept_reading(Path(a.out) / "compare_perceptual.md")  # hand-written, kept
     write_report(Path(a.out), "compare_perceptual", result, report(result))
 
 
@@ -203,6 +205,7 @@ def report(r: dict) -> str:
             )
         same = "equal" if r["sweep"]["identical"] else "DIFFERENT"
         md += ["", f"Every cell of `lean`'s table but the ΔE2000 and FLIP columns against `full`'s: {same}."]
+    md += ["", *r["reading"]] if r.get("reading") else []
     return "\n".join(md) + "\n"
 
 
