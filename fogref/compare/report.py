@@ -196,7 +196,7 @@ def compare(
         False leaves out the perceptual metrics, ΔE2000 and HDR-FLIP (their maps, means, noise
         floors, binned curves and heatmaps): every other value is the same, and the comparison
         costs a fraction (FLIP is most of its work: ``fogref compare --no-figures`` 2.2x faster
-        at 320x180, 2.9x at 960x540, ``reports/benchmarks/compare_perceptual.md``).  For a check
+        at 320x180, 2.5-2.9x at 960x540, ``reports/benchmarks/compare_perceptual.md``).  For a check
         or a sweep that reads only the radiometric errors.
 
     Returns

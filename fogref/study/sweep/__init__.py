@@ -53,8 +53,9 @@ Example ``SWEEP.toml``::
     plot_metrics = ["final.all.rmse", "final.all.relmse"]   # default: every final.all.* metric
     budget = false                     # true: Unreal's error budget for every "ue4" model (one extra
                                        # render per configuration: the scene without its sun)
-    perceptual = true                  # false: no ΔE2000 or FLIP columns (FLIP is a quarter of a
-                                       # configuration's work); every other column is the same
+    perceptual = true                  # false: no ΔE2000 or FLIP columns, every other column the
+                                       # same (the example sweep 1.37x faster; FLIP is a quarter of
+                                       # a configuration's work)
 
 Output folder::
 
