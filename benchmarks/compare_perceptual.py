@@ -46,6 +46,8 @@ from _checkouts import (
     write_report,
 )
 
+from fogref.study.plot_units import is_perceptual
+
 CASES = ((64, 36, 16, False), (320, 180, 16, False), (320, 180, 16, True), (960, 540, 4, False))
 FLIP = "fogref.compare.error_maps:flip_map"  # timed apart in each run
 
@@ -56,22 +58,18 @@ def _compare(truth: Path, out: Path, figures: bool, perceptual: bool) -> dict:
     return timed_command(ROOT, FLIP, args, codes=(0, 1, 3))  # pass, fail, inconclusive: a verdict
 
 
-def _perceptual(key: str) -> bool:
-    return key.startswith(("delta_e2000", "flip"))
-
-
 def _same_but_perceptual(full: Path, lean: Path) -> bool:
     """Whether ``lean``'s report is ``full``'s without the perceptual metrics (paths left out)."""
     a, b = (json.loads((f / "metrics.json").read_text()) for f in (full, lean))
     for part, regions in a["metrics"].items():
         for region, s in regions.items():
-            if b["metrics"][part][region] != {k: v for k, v in s.items() if not _perceptual(k)}:
+            if b["metrics"][part][region] != {k: v for k, v in s.items() if not is_perceptual(k)}:
                 return False
     for axis, binned in a["binned"].items():
         for part, s in (binned or {}).get("parts", {}).items():
-            if b["binned"][axis]["parts"][part] != {k: v for k, v in s.items() if not _perceptual(k)}:
+            if b["binned"][axis]["parts"][part] != {k: v for k, v in s.items() if not is_perceptual(k)}:
                 return False
-    leaks = [k for regions in b["metrics"].values() for s in regions.values() for k in s if _perceptual(k)]
+    leaks = [k for regions in b["metrics"].values() for s in regions.values() for k in s if is_perceptual(k)]
     checks = [json.loads((f / "check.json").read_text()) for f in (full, lean)]
     return not leaks and checks[0]["rows"] == checks[1]["rows"]
 
@@ -116,7 +114,7 @@ def _same_table_but_perceptual(full: Path, lean: Path) -> bool:
     if set(a) != set(b):
         return False
     for k, r in b.items():
-        if any(_perceptual(c.rsplit(".", 1)[-1]) for c in r):
+        if any(is_perceptual(c) for c in r):
             return False
         if any(r[c] != a[k][c] for c in r if c not in SWEEP_RUN_COLUMNS):
             return False

@@ -38,7 +38,8 @@ class ErrorMaps:
     ``absolute``: ``mean_c |x - r|`` [image units]; ``squared``: ``mean_c (x - r)²``
     [units²]; ``relative_squared``: relMSE's per-pixel term [1]; ``delta_e2000`` [1];
     ``flip`` [0..1] (both None when the perceptual metrics were not asked for).  ``white``: the
-    ΔE exposure white [image units]; ``flip_params``: what FLIP used (empty without FLIP).
+    ΔE exposure white [image units] (None without ΔE2000, unless given); ``flip_params``: what
+    FLIP used (empty without FLIP).
 
     ``valid``: ``(H, W)`` bool, the pixels that count.  An invalid pixel (its
     reference undefined, e.g. ``surface`` with zero coverage, or a non-finite model
@@ -59,7 +60,7 @@ class ErrorMaps:
     relative_squared: np.ndarray
     delta_e2000: np.ndarray | None
     flip: np.ndarray | None
-    white: float
+    white: float | None
     flip_params: dict
     valid: np.ndarray | None = None
     nonfinite: np.ndarray | None = None
@@ -224,22 +225,22 @@ def error_maps(
     if count_nonfinite(s) or np.any(s < 0):
         raise ValueError("sigma must be finite and >= 0")
     s = np.where(ok[..., None], s, 0.0)
-    if white is None:
-        white = exposure_white(r)
     de = flip = de_noise = flip_noise = None
     flip_params: dict = {}
     if perceptual:
+        if white is None:
+            white = exposure_white(r)
         flip, flip_params = flip_map(r, x, ppd)
-    if perceptual and np.any(s > 0):  # the ΔE2000/FLIP noise floors, from one seeded draw (0 where sigma is)
-        draw = np.random.default_rng(0).standard_normal(r.shape)
-        if C is None:
-            noisy = r + s * draw
-        else:  # correlated as the noise is
-            noisy = r + np.einsum("...ij,...j->...i", noise.sqrt_psd(C), draw)
-        de, de_noise = delta_e2000_maps(r, [x, noisy], white)  # the reference in CIELAB once
-        flip_noise, _ = flip_map(r, noisy, ppd)
-    elif perceptual:
-        (de,) = delta_e2000_maps(r, [x], white)
+        if np.any(s > 0):  # the ΔE2000/FLIP noise floors, from one seeded draw (0 where sigma is)
+            draw = np.random.default_rng(0).standard_normal(r.shape)
+            if C is None:
+                noisy = r + s * draw
+            else:  # correlated as the noise is
+                noisy = r + np.einsum("...ij,...j->...i", noise.sqrt_psd(C), draw)
+            de, de_noise = delta_e2000_maps(r, [x, noisy], white)  # the reference in CIELAB once
+            flip_noise, _ = flip_map(r, noisy, ppd)
+        else:
+            (de,) = delta_e2000_maps(r, [x], white)
     return ErrorMaps(
         signed=x - r,
         absolute=abs_error_map(r, x),
@@ -247,7 +248,7 @@ def error_maps(
         relative_squared=relative_squared_error_map(r, x, eps),
         delta_e2000=de,
         flip=flip,
-        white=float(white),
+        white=None if white is None else float(white),
         flip_params=flip_params,
         valid=ok,
         nonfinite=nonfinite,

@@ -96,16 +96,16 @@ def single_scatter_sun(
     for c, (sig, alb_e, first) in enumerate(zip(sigs, alb_es, first_equal(medium.sigma_t))):
         if first < c:  # a channel with an earlier one's extinction (grey fog): its integral
             integrals.append(integrals[first])
-            out.append(alb_e * phase * integrals[c])
-            continue
-        tc = sig * tau
-        # m >= 0: T_sun(o) * tc * phi(m tc), all factors bounded.
-        pos = ops.exp(-sig * tau_sun_o) * ops.minimum(tc * cf.phi(ops, ops.maximum(m, 0.0) * tc), ops.largest)
-        # m < 0 (looking up more steeply than the sun): fold both exponentials,
-        # exp(-sig (tau_sun(D) + tau)) (1 - exp(m tc)) / (-m), whose exponent is <= 0.
-        neg_m = ops.where(m < 0, -m, 1.0)
-        neg = ops.exp(-sig * (tau_sun_end + tau)) * (-ops.expm1(-neg_m * tc)) / neg_m
-        integrals.append(ops.where(m < 0, neg, pos))
+        else:
+            tc = sig * tau
+            # m >= 0: T_sun(o) * tc * phi(m tc), all factors bounded.
+            t_sun_o = ops.exp(-sig * tau_sun_o)
+            pos = t_sun_o * ops.minimum(tc * cf.phi(ops, ops.maximum(m, 0.0) * tc), ops.largest)
+            # m < 0 (looking up more steeply than the sun): fold both exponentials,
+            # exp(-sig (tau_sun(D) + tau)) (1 - exp(m tc)) / (-m), whose exponent is <= 0.
+            neg_m = ops.where(m < 0, -m, 1.0)
+            neg = ops.exp(-sig * (tau_sun_end + tau)) * (-ops.expm1(-neg_m * tc)) / neg_m
+            integrals.append(ops.where(m < 0, neg, pos))
         out.append(alb_e * phase * integrals[c])
     return tuple(out)
 
