@@ -248,6 +248,25 @@ def test_no_chromium_is_one_clear_line(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+def test_missing_engine_files_are_one_clear_error(chromium, tmp_path):
+    """A page's import (a file, or a folder: the name ends in '/') that is not there is
+    EngineUnavailable naming it and `npm ci`, before the page loads."""
+    from fogref.engines import babylon, threejs
+
+    with Browser(timeout=30) as b:
+        for mod, missing in (
+            (threejs, {"three": tmp_path / "three.module.js"}),
+            (babylon, {"@babylonjs/core/": tmp_path / "core"}),
+        ):
+            with pytest.raises(
+                EngineUnavailable, match=f"{missing[next(iter(missing))].name}: missing .*npm ci"
+            ):
+                b.run_page(mod.PAGE, missing, {})
+        (tmp_path / "core").write_text("a file where the folder should be")
+        with pytest.raises(EngineUnavailable, match="core: missing"):
+            b.run_page(babylon.PAGE, {"@babylonjs/core/": tmp_path / "core"}, {})
+
+
 def test_compare_engine_refuses_other_modes_options(tmp_path):
     exr = tmp_path / "t.exr"
     exr.write_bytes(b"")

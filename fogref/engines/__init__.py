@@ -19,26 +19,25 @@ module            what
 ================  =====================================================================
 
 **An engine is one page and one mapping.** Its module (registered in :data:`ENGINES`) gives
-``MODEL`` (the fogref model whose mapping, ``fogref.mapping``, gives the engine's fog settings
-and whose port is compared), ``PAGE`` (an ES module), ``IMPORTS`` (bare import name -> path
-under ``node_modules``), ``PACKAGE`` (its npm name), ``settings(model)`` (the fog settings the
-page takes, JSON) and ``canvas_port(surface, model, fog_factor)`` (the canvas the port predicts,
-8-bit; none where the port has a canvas output of its own, a result with ``display``:
-Filament), ``port(model, camera)`` (the port for that camera) and optionally ``FOG_COORDINATE``
-(``"depth"``, the default, or ``"distance"``: what the engine's fog reads, see
-:mod:`fogref.engines.port`) and ``view_settings(near, far)`` (the settings the view fixes:
-PlayCanvas's clip planes, which its fog reads) and ``NOTES`` (said in ``engine.json``). The
+``MODEL`` (the fogref model whose mapping, ``fogref.mapping``, gives the engine's fog settings and
+whose port is compared), ``PAGE`` (an ES module), ``IMPORTS`` (bare import name -> path under
+``node_modules``; a name ending in ``/`` maps the modules under a folder), ``PACKAGE`` (its npm
+name), ``settings(model)`` (the fog settings the page takes, JSON) and ``canvas_port(surface, model,
+fog_factor)`` (the canvas the port predicts, 8-bit; none where the port has a canvas output of its
+own, a result with ``display``: Filament), ``port(model, camera)`` (the port for that camera) and
+optionally ``FOG_COORDINATE`` (``"depth"``, the default, or ``"distance"``: what the engine's fog
+reads, see :mod:`fogref.engines.port`) and ``view_settings(near, far)`` (the settings the view
+fixes: PlayCanvas's clip planes, which its fog reads) and ``NOTES`` (said in ``engine.json``). The
 page sets ``window.fogrefRender(spec)`` (it may return a promise) and then ``data-ready`` on
-``<body>``. ``spec``: ``width``, ``height``
-[px]; ``camera`` (``origin`` [m], unit ``forward``, ``up``, ``right``, ``fov_y_deg``, ``near``,
-``far`` [m]); ``shapes`` (base64 float32 world ``positions`` and ``normals`` or null, uint32
-``indices``, linear ``reflectance``); ``sun`` (unit ``direction`` toward it, ``irradiance``) or
-null; ``sky`` (uniform radiance) or null; ``fog`` (``settings``) or null. It returns
-``version``; ``final``, ``surface`` (no fog), ``fog_factor`` (black materials, white fog:
-``1 - T``), ``inscatter`` (black materials, the fog's colour) and ``depth`` (view distance, eye depth,
-0, hit) as base64 float32 RGBA rows bottom-up from a linear float render target; ``canvas``
-(base64 uint8 RGBA) as the engine ships it; optionally ``position`` (the point its fog read,
-minus the camera, float32 RGBA: the port is evaluated there).
+``<body>``. ``spec``: ``width``, ``height`` [px]; ``camera`` (``origin`` [m], unit ``forward``,
+``up``, ``right``, ``fov_y_deg``, ``near``, ``far`` [m]); ``shapes`` (base64 float32 world
+``positions`` and ``normals`` or null, uint32 ``indices``, linear ``reflectance``); ``sun`` (unit
+``direction`` toward it, ``irradiance``) or null; ``sky`` (uniform radiance) or null; ``fog``
+(``settings``) or null. It returns ``version``; ``final``, ``surface`` (no fog), ``fog_factor``
+(black materials, white fog: ``1 - T``), ``inscatter`` (black materials, the fog's colour) and
+``depth`` (view distance, eye depth, 0, hit) as base64 float32 RGBA rows bottom-up from a linear
+float render target; ``canvas`` (base64 uint8 RGBA) as the engine ships it; optionally ``position``
+(the point its fog read, minus the camera, float32 RGBA: the port is evaluated there).
 
 Importing this package does no work; nothing starts until :func:`fogref.engines.render.render_engine`.
 

@@ -33,7 +33,9 @@ __all__ = ["FOG_COORDINATE", "IMPORTS", "MODEL", "PACKAGE", "PAGE", "canvas_port
 MODEL = "babylon"
 PACKAGE = "@babylonjs/core"
 PAGE = Path(__file__).with_name("babylon.js")
-IMPORTS = {"@babylonjs/core": "@babylonjs/core/index.js"}
+#: the page imports the modules it uses from the package's folder (``@babylonjs/core/scene.js``, ...),
+#: not its index (3,400 modules, 3 s of loading in Chromium from file://)
+IMPORTS = {"@babylonjs/core/": "@babylonjs/core"}
 #: Babylon's fog reads ``length(vFogDistance)``, the interpolated view position's length
 FOG_COORDINATE = "distance"
 

@@ -140,22 +140,24 @@ class Browser:
             self._dir.cleanup()
 
     def run_page(self, module: Path, imports: dict[str, Path], spec: dict) -> dict:
-        """Load the ES module ``module`` with ``imports`` (bare name -> file) and return
+        """Load the ES module ``module`` with ``imports`` (bare name -> file; a name ending in
+        ``/`` -> a folder, the import map's prefix for the modules under it) and return
         ``window.fogrefRender(spec)``.
 
-        EngineUnavailable when a file is missing; FogrefError naming the page and the browser's
-        console errors when the page does not get ready or its script throws.
+        EngineUnavailable when a file or folder is missing; FogrefError naming the page and the
+        browser's console errors when the page does not get ready or its script throws.
         """
         from selenium.common.exceptions import JavascriptException, TimeoutException
         from selenium.webdriver.support.ui import WebDriverWait
 
         for name, f in imports.items():
-            if not Path(f).is_file():
+            if not (Path(f).is_dir() if name.endswith("/") else Path(f).is_file()):
                 raise EngineUnavailable(
                     f"{f}: missing ('{name}'); install the engines with `npm ci` (scripts/setup.sh)"
                 )
         page = Path(self._dir.name) / f"{Path(module).stem}.html"
-        importmap = json.dumps({"imports": {k: Path(v).resolve().as_uri() for k, v in imports.items()}})
+        urls = {k: Path(v).resolve().as_uri() + ("/" if k.endswith("/") else "") for k, v in imports.items()}
+        importmap = json.dumps({"imports": urls})
         page.write_text(
             "<!doctype html><html><head><meta charset='utf-8'>"
             f"<script type='importmap'>{importmap}</script></head><body>"
