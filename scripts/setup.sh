@@ -55,10 +55,23 @@ fi
 
 PY=${PYTHON:-python3}
 [ -x .venv/bin/python ] || "$PY" -m venv .venv
-.venv/bin/python -m pip install -q --upgrade pip
-# the locked versions (ruff, mypy, pytest included), then fogref on top of them
-.venv/bin/python -m pip install -q -r requirements.lock
-.venv/bin/python -m pip install -q --no-deps -e .
+# what the installs below depend on: the interpreter, this checkout's place, the lock and
+# pyproject.toml, and site-packages as the last setup left it (a package installed or removed
+# since changes its folder's time).  When a finished setup recorded the same, the installs are
+# skipped (pip's passes that find nothing to do, and the editable build, which runs every time).
+stamp=.venv/.fogref-setup
+setup_inputs() {
+  .venv/bin/python -c 'import os, sys, sysconfig
+print(sys.version, os.getcwd(), os.stat(sysconfig.get_paths()["purelib"]).st_mtime_ns)'
+  cat requirements.lock pyproject.toml | sha256sum
+}
+if [ "$(cat "$stamp" 2>/dev/null)" != "$(setup_inputs)" ]; then
+  rm -f "$stamp"
+  .venv/bin/python -m pip install -q --upgrade pip
+  # the locked versions (ruff, mypy, pytest included), then fogref on top of them
+  .venv/bin/python -m pip install -q -r requirements.lock
+  .venv/bin/python -m pip install -q --no-deps -e .
+fi
 # fogref and its plugins as bytecode: an editable install writes none, and where
 # PYTHONDONTWRITEBYTECODE is set Python never writes it, so every fresh `fogref` process would
 # compile its ~75 modules from source (0.2 s of CPU; reports/benchmarks/render_driver_startup.md)
@@ -69,3 +82,4 @@ PY=${PYTHON:-python3}
   exit 1
 }
 echo "setup: ok ($(.venv/bin/python -c 'import mitsuba; print("mitsuba", mitsuba.__version__)'))"
+setup_inputs > "$stamp"
