@@ -119,6 +119,24 @@ def test_a_render_too_small_for_the_workers_says_so(tmp_path, capsys, cluster):
     ]
 
 
+def test_with_the_progress_bar_the_note_is_a_line_of_its_own(tmp_path, capsys, cluster):
+    """With the bar shown, the note is written above it (``tqdm.write``), not after the bar's text on
+    its line: the last ``\r``-separated part of a stderr line, what a terminal shows, is the note."""
+    from fogref.render.render import render
+
+    render(
+        SCENE,
+        tmp_path / "bar.exr",
+        spp=SPP,
+        seed=SEED,
+        overrides=RES,
+        png=False,
+        scheduler=cluster.scheduler_address,
+    )
+    shown = [line.split("\r")[-1] for line in capsys.readouterr().err.splitlines()]
+    assert any(line.startswith("fogref render: 1152 samples make 1 pass") for line in shown), shown
+
+
 def test_two_workers_give_the_one_process_pixels_bitwise(
     tmp_path, capsys, one_spp_passes, cluster, reference
 ):

@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import concurrent.futures
 import contextlib
+import functools
 import json
 import os
 import re
@@ -286,14 +287,16 @@ def render(
         from tqdm import tqdm
 
         bar = tqdm(total=spp, initial=sum(passes[:saved]), unit="spp", desc=scene_path.name)
+        say = functools.partial(tqdm.write, file=sys.stderr)  # a line of its own above the bar
     else:  # no bar, no tqdm import (a quiet run's start-up skips it)
         bar = contextlib.nullcontext(SimpleNamespace(update=lambda n: None))
+        say = functools.partial(print, file=sys.stderr, flush=True)
     t0, last_ckpt, timings = time.perf_counter(), time.perf_counter(), []
     with cluster.Interrupt() as stop, bar as shown, contextlib.ExitStack() as closing:
         if on_cluster:  # the passes' sums come from Dask workers, in pass order
             j = (scene_path, overrides, digest, variant, seed, pixel_filter)
             source = _cluster_passes(
-                closing, (scheduler, workers, worker_timeout), out, j, passes, saved, stop, W * H
+                closing, (scheduler, workers, worker_timeout), out, j, passes, saved, stop, W * H, say
             )
         else:
             source = _local_passes(integrator, scene, seed, pixel_filter, passes, saved)
@@ -522,7 +525,7 @@ def _local_passes(integrator, scene, seed: int, pixel_filter: str, passes: list,
 
 
 def _cluster_passes(
-    closing, where: tuple, out, render_args: tuple, passes: list, start: int, stop, pixels: int
+    closing, where: tuple, out, render_args: tuple, passes: list, start: int, stop, pixels: int, say
 ):
     """Passes ``start..`` rendered on Dask workers (:mod:`fogref.render.distributed`): ``(k, sums,
     squares, seconds)`` in pass order; ``stop`` (a :class:`fogref.cluster.Interrupt`) requested ends
@@ -530,9 +533,10 @@ def _cluster_passes(
     start at once.  ``where``: the scheduler, the LocalCluster's workers, the seconds to wait for a
     worker.  ``render_args``: the scene, overrides, inputs digest, variant, seed and pixel filter.
     The cluster (a new LocalCluster of ``workers``, or the one of ``scheduler``) is closed when
-    ``closing`` (an ExitStack) ends.  Fewer passes than workers is said on stderr
-    (:func:`fogref.render.distributed.split_note`, ``pixels`` per sample of a pass); each pass
-    redone because its worker was lost, on stderr and in ``<out>.workers.log``."""
+    ``closing`` (an ExitStack) ends.  Fewer passes than workers is said with ``say`` (a line on
+    stderr, above the progress bar if one is shown; :func:`fogref.render.distributed.split_note`,
+    ``pixels`` per sample of a pass); each pass redone because its worker was lost, with ``say``
+    and in ``<out>.workers.log``."""
     if start >= len(passes):
         return
     log = workers_log_path(out)
@@ -545,10 +549,10 @@ def _cluster_passes(
     lanes = max_lanes(render_args[3])
     note = distributed.split_note(pixels * sum(left), len(left), n_workers, lanes, _SOURCE)
     if note:
-        print(note, file=sys.stderr, flush=True)
+        say(note)
 
     def redone(line: str) -> None:
-        print(f"{_SOURCE}: {line}", file=sys.stderr, flush=True)
+        say(f"{_SOURCE}: {line}")
         with open(log, "a", encoding="utf-8") as f:
             f.write(f"{_SOURCE}: {line}\n")
 
