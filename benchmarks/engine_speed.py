@@ -42,22 +42,22 @@ PART = "fogref.engines.render:render_engine"  # Chromium's start, the page's loa
 IMAGES = ("final.exr", "T.exr", "inscatter.exr", "surface.exr", "canvas.png")
 
 
+def _decoded(path: Path) -> dict:
+    """An image's pixels, channel name -> array (a PNG: one array)."""
+    return {"": np.asarray(Image.open(path))} if path.suffix == ".png" else read_exr(path)[0]
+
+
 def _same_outputs(a: Path, b: Path) -> bool:
     """Do two ``fogref engine render`` folders hold the same pixels and the same record (its
     ``seconds`` left out)?"""
-    for name in IMAGES:
-        if name.endswith(".png"):
-            if not np.array_equal(np.asarray(Image.open(a / name)), np.asarray(Image.open(b / name))):
-                return False
-            continue
-        (ca, _), (cb, _) = read_exr(a / name), read_exr(b / name)
-        if sorted(ca) != sorted(cb) or not all(np.array_equal(ca[k], cb[k]) for k in ca):
-            return False
+
+    def same_pixels(x: dict, y: dict) -> bool:
+        return sorted(x) == sorted(y) and all(np.array_equal(x[k], y[k]) for k in x)
 
     def record(folder: Path) -> dict:
         return {k: v for k, v in json.loads((folder / "engine.json").read_text()).items() if k != "seconds"}
 
-    return record(a) == record(b)
+    return all(same_pixels(_decoded(a / n), _decoded(b / n)) for n in IMAGES) and record(a) == record(b)
 
 
 def main() -> None:
@@ -82,11 +82,11 @@ def main() -> None:
 
     result = before_after(Path(args.base), args.rounds, run, identical)
     result["truth"] = {"scene": "scenes/valley.xml", "resolution": [320, 180], "spp": 16, "seed": 0}
-    runs = result["runs"]
+    runs, described = result["runs"], __doc__.split("\n\n")[1]
     md = [
         "# `fogref engine render`, each web engine, before and after",
         "",
-        f"`benchmarks/engine_speed.py`: {__doc__.split(chr(10) + chr(10))[1]}",
+        f"`benchmarks/engine_speed.py`: {described}",
         "",
         f"Base: {result['base']}; after: {result['after']}.  {result['cores']} cores, load average "
         f"(1 min) {result['load_average'][0]:.1f} before and {result['load_average'][1]:.1f} after; "

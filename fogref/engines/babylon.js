@@ -21,8 +21,7 @@ import { Mesh } from "@babylonjs/core/Meshes/mesh.js";
 import { VertexData } from "@babylonjs/core/Meshes/mesh.vertexData.js";
 import { arrayToB64, b64ToArray, triangleCorners, unindexed } from "./page_helpers.js";
 
-const MODES = { LINEAR: Scene.FOGMODE_LINEAR, EXP: Scene.FOGMODE_EXP,
-                EXP2: Scene.FOGMODE_EXP2 };
+const MODES = { LINEAR: Scene.FOGMODE_LINEAR, EXP: Scene.FOGMODE_EXP, EXP2: Scene.FOGMODE_EXP2 };
 
 // The depth pass (as threejs.js's).  G, B: the view position Babylon interpolates across a triangle
 // (as its fog's vFogDistance = (view * worldPos).xyz is interpolated): eye depth and distance.
@@ -96,7 +95,7 @@ window.fogrefRender = async function (spec) {
   const camera = new FreeCamera("camera", new Vector3(...c.origin), scene);
   camera.upVector = new Vector3(...c.up);
   camera.setTarget(new Vector3(c.origin[0] + c.forward[0], c.origin[1] + c.forward[1],
-                                       c.origin[2] + c.forward[2]));
+                               c.origin[2] + c.forward[2]));
   camera.fov = c.fov_y_deg * Math.PI / 180;  // vertical (FOVMODE_VERTICAL_FIXED, the default)
   camera.minZ = c.near;
   camera.maxZ = c.far;

@@ -150,13 +150,15 @@ class Browser:
         from selenium.common.exceptions import JavascriptException, TimeoutException
         from selenium.webdriver.support.ui import WebDriverWait
 
+        urls = {}
         for name, f in imports.items():
-            if not (Path(f).is_dir() if name.endswith("/") else Path(f).is_file()):
+            folder = name.endswith("/")
+            if not (Path(f).is_dir() if folder else Path(f).is_file()):
                 raise EngineUnavailable(
                     f"{f}: missing ('{name}'); install the engines with `npm ci` (scripts/setup.sh)"
                 )
+            urls[name] = Path(f).resolve().as_uri() + ("/" if folder else "")
         page = Path(self._dir.name) / f"{Path(module).stem}.html"
-        urls = {k: Path(v).resolve().as_uri() + ("/" if k.endswith("/") else "") for k, v in imports.items()}
         importmap = json.dumps({"imports": urls})
         page.write_text(
             "<!doctype html><html><head><meta charset='utf-8'>"
